@@ -1,0 +1,31 @@
+# The two set-up commands of the README's Quick start. Both create .venv when it is missing.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+
+.PHONY: run test lint clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $@ $(VENV)/.installed
+
+run: $(VENV)/.installed
+	$(VENV)/bin/catenet run
+
+test: $(VENV)/.installed-test
+	$(PY) -m pytest -n 2 --dist loadfile -q
+
+lint: $(VENV)/.installed-test
+	$(PY) -m pip install --quiet ruff
+	$(VENV)/bin/ruff check catenet tests benchmarks
+
+clean:
+	rm -rf $(VENV) out .pytest_cache

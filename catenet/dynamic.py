@@ -1,0 +1,177 @@
+"""The paper's method: implicit (backward) Euler with mass-proportional damping.
+
+Each step from t_k to t_k + h solves Eq. 10a,
+
+    M ((q - q_k)/h^2 - v_k/h) + mu M (q - q_k)/h + grad E(q) - F = 0,
+
+by Newton from the predictor q_k + h v_k (Eq. 11) with the Jacobian
+M/h^2 + mu M/h + K (Eq. 13); then v_{k+1} = (q - q_k)/h. A step whose Newton iteration
+fails is retried with half the step (never accepted silently); after four good steps the
+step grows back towards ``dt``. Dynamic relaxation: the run stops before ``t_end`` once
+the supports have settled and both the static residual |grad E - F| and the inertial
+force |M v|/h are below rtol times the load scale.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+from catenet.net import Loads, Net
+from catenet.newton import solve
+from catenet.result import Result, finish
+from catenet.static import Workspace, _check_rtol
+
+log = logging.getLogger(__name__)
+
+MAX_CUTS = 20  # the smallest step is dt / 2**MAX_CUTS
+GROW_AFTER = 4
+
+
+def solve_dynamic(
+    net: Net,
+    loads: Loads,
+    *,
+    dt: float,
+    damping: float,
+    t_end: float,
+    rtol: float = 1e-8,
+    x0: np.ndarray | None = None,
+    v0: np.ndarray | None = None,
+    t0: float = 0.0,
+    max_iter: int = 25,
+    stop_at_equilibrium: bool = True,
+    linear: str = "auto",
+    on_step: Callable[[int, float, np.ndarray, np.ndarray], bool | None] | None = None,
+    workspace: Workspace | None = None,
+) -> Result:
+    """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
+    at rest) to ``t_end`` or to equilibrium.
+
+    ``on_step(step, t, x, v)`` sees every accepted step; returning True stops the run
+    there (an interrupted run: ``converged`` is False). Raises ConvergenceError, with the
+    last accepted state in ``state``, when even the smallest step fails.
+    """
+    _check(dt, damping, t_end, t0, rtol)
+    mass = net.mass
+    if not np.all(mass[~net.fixed] > 0):
+        raise ConfigError(
+            "material.density: the free nodes have no mass: the dynamic solver needs "
+            "density > 0 (or use solver.method = 'static')"
+        )
+    ws = workspace or Workspace(net, linear=linear)
+    system = ws.system
+    free = system.free_dofs
+    m_free = np.repeat(mass[~net.fixed], 3)
+    potential = ws.potential(loads)
+    start = time.perf_counter()
+
+    x = net.nodes.copy() if x0 is None else np.array(x0, dtype=np.float64, copy=True)
+    v = np.zeros_like(x) if v0 is None else np.array(v0, dtype=np.float64, copy=True)
+    if x.shape != net.nodes.shape or v.shape != net.nodes.shape:
+        raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
+    x[net.fixed] = loads.support_positions(net, time=t0)
+    settle = loads.settle_time()
+
+    t = t0
+    h = dt
+    good = 0
+    steps = 0
+    iterations = 0
+    residual = 0.0
+    equilibrium = False
+    message = ""
+    interrupted = False
+    x_trial = np.empty_like(x)
+    while t < t_end * (1 - 1e-12) and not equilibrium:
+        h_step = min(h, t_end - t)
+        x_trial[:] = x
+        x_trial.reshape(-1)[free] += h_step * v.reshape(-1)[free]  # Eq. 11
+        x_trial[net.fixed] = loads.support_positions(net, time=t + h_step)
+        y_k = x.reshape(-1)[free]
+        v_k = v.reshape(-1)[free]
+        w = m_free * (1.0 / h_step**2 + damping / h_step)
+        a = (m_free / h_step**2 * (y_k + h_step * v_k) + damping * m_free / h_step * y_k) / w
+        potential.set_inertia(w, a)
+        try:
+            newton = solve(potential, x_trial, rtol=rtol, max_iter=max_iter, label="step")
+            ok = newton.converged
+            why = newton.reason
+        except SingularSystemError as exc:
+            ok, why, newton = False, str(exc), None
+        if newton is not None:
+            iterations += newton.iterations
+        if not ok:
+            h = 0.5 * h_step
+            good = 0
+            log.info("t = %.6g: step %.3g failed (%s); retrying with %.3g", t, h_step, why, h)
+            if h < dt / 2**MAX_CUTS:
+                raise ConvergenceError(
+                    f"dynamic step at t = {t:.6g} s failed even with h = {h_step:.3g} s: {why}",
+                    iterations=iterations,
+                    history=newton.history if newton else [],
+                    state=x.copy(),
+                )
+            continue
+        v = (x_trial - x) / h_step  # Eq. 10c
+        x[:] = x_trial
+        t += h_step
+        steps += 1
+        residual = newton.residual
+        good += 1
+        if h < dt and good >= GROW_AFTER:
+            h = min(dt, 2.0 * h)
+            good = 0
+        if stop_at_equilibrium and t >= settle:
+            equilibrium, residual_static = _at_rest(system, potential, x, v, m_free, h_step, rtol)
+        if on_step is not None and on_step(steps, t, x, v):
+            interrupted = True
+            message = "interrupted"
+            break
+    if not interrupted:
+        message = "equilibrium" if equilibrium else "reached t_end"
+    potential.set_inertia(None, None)
+    return finish(
+        system,
+        loads,
+        x,
+        converged=not interrupted,
+        equilibrium=equilibrium,
+        iterations=iterations,
+        residual=residual_static if equilibrium else residual,
+        steps=steps,
+        time=t,
+        v=v,
+        message=message,
+        wall_time=time.perf_counter() - start,
+        stats=ws.stats(),
+    )
+
+
+def _at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float]:
+    """Static residual and inertial force both below rtol times the load scale."""
+    _, grad = system.gradient(x)
+    r = grad.reshape(-1)[system.free_dofs] - potential.f_free
+    scale = max(potential.f_norm, float(np.linalg.norm(grad)))
+    tol = rtol * scale
+    residual = float(np.linalg.norm(r))
+    inertia = float(np.linalg.norm(m_free * v.reshape(-1)[system.free_dofs])) / h
+    return (residual <= tol and inertia <= tol), residual
+
+
+def _check(dt, damping, t_end, t0, rtol) -> None:
+    problems = []
+    if not (math.isfinite(dt) and dt > 0):
+        problems.append(f"solver.dt = {dt!r}: must be finite and > 0")
+    if not (math.isfinite(damping) and damping >= 0):
+        problems.append(f"solver.damping = {damping!r}: must be finite and >= 0")
+    if not (math.isfinite(t_end) and t_end > t0):
+        problems.append(f"solver.t_end = {t_end!r}: must be finite and > {t0}")
+    if problems:
+        raise ConfigError(problems)
+    _check_rtol(rtol)

@@ -1,0 +1,48 @@
+"""Exception hierarchy. The CLI maps these to exit codes (ConfigError -> 2, the rest -> 1)."""
+
+from __future__ import annotations
+
+
+class CatenetError(Exception):
+    """Base class of every error catenet raises on purpose."""
+
+
+class ConfigError(CatenetError, ValueError):
+    """Bad input: a case file, a command-line value or an argument of the Python API.
+
+    ``problems`` lists every problem found (key path, value, what is accepted), so that
+    a case file with several mistakes is reported in one go.
+    """
+
+    def __init__(self, problems: str | list[str]):
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+class ConvergenceError(CatenetError):
+    """Newton (or the time stepping) did not converge.
+
+    ``history`` holds the residual norms of the failing iteration, ``state`` the last
+    converged positions (N, 3) when there is one.
+    """
+
+    def __init__(self, message: str, *, iterations: int = 0, history=None, state=None):
+        super().__init__(message)
+        self.iterations = iterations
+        self.history = list(history or [])
+        self.state = state
+
+
+class SingularSystemError(ConvergenceError):
+    """A linear solve gave non-finite values or a large residual: a mechanism.
+
+    ``nodes`` are the nodes that lack stiffness (or, failing that, move the most).
+    """
+
+    def __init__(self, message: str, *, nodes=(), **kwargs):
+        super().__init__(message, **kwargs)
+        self.nodes = list(nodes)
+
+
+class OutputError(CatenetError):
+    """A result file could not be written."""

@@ -1,0 +1,211 @@
+"""Builders of nets: a single cable, the paper's square net, an explicit graph."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConfigError
+from catenet.net import Net
+
+
+@dataclass(frozen=True)
+class Material:
+    """Axial stiffness EA [N], mass per length rho*A [kg/m], tension-only switch."""
+
+    EA: float
+    line_density: float = 0.0
+    tension_only: bool = True
+
+    @classmethod
+    def from_E(cls, E: float, *, radius=None, area=None, density=0.0, tension_only=True):
+        """From Young's modulus and a circular radius (A = pi r^2) or an area."""
+        if (radius is None) == (area is None):
+            raise ConfigError("material: give exactly one of radius and area")
+        A = math.pi * radius**2 if area is None else area
+        return cls(EA=E * A, line_density=density * A, tension_only=tension_only)
+
+
+def cable(
+    start,
+    end,
+    nodes: int,
+    material: Material,
+    *,
+    length: float | None = None,
+) -> Net:
+    """A single cable pinned at both ends, ``nodes`` nodes evenly on the chord.
+
+    ``length`` is the unstressed length (default: the chord), shared equally by the
+    ``nodes - 1`` edges. Node 0 is ``start``, node ``nodes - 1`` is ``end``.
+    """
+    start = np.asarray(start, dtype=np.float64)
+    end = np.asarray(end, dtype=np.float64)
+    if nodes < 2:
+        raise ConfigError(f"geometry.nodes = {nodes}: must be >= 2")
+    chord = float(np.linalg.norm(end - start))
+    if not chord > 0:
+        raise ConfigError(f"geometry.end = {end.tolist()}: must differ from geometry.start")
+    if length is None:
+        length = chord
+    if not (math.isfinite(length) and length > 0):
+        raise ConfigError(f"geometry.length = {length!r}: must be finite and > 0")
+    s = np.linspace(0.0, 1.0, nodes)
+    xyz = start[None, :] + s[:, None] * (end - start)[None, :]
+    edges = np.column_stack([np.arange(nodes - 1), np.arange(1, nodes)])
+    return Net.from_arrays(
+        xyz,
+        edges,
+        EA=material.EA,
+        fixed=[0, nodes - 1],
+        rest_length=np.full(nodes - 1, length / (nodes - 1)),
+        line_density=material.line_density,
+        tension_only=material.tension_only,
+    )
+
+
+@dataclass(frozen=True)
+class SquareNet:
+    """The square net of the paper (Sec. 3.2) and the node whose deflection is reported."""
+
+    net: Net
+    center: int
+    size: float
+    n: int
+    alpha: float
+
+
+def square_net(
+    n: int, alpha: float, size: float, edge_length: float, material: Material
+) -> SquareNet:
+    """The paper's square net: ``n`` cables (``n/2`` per family) at angle ``alpha``.
+
+    With d = L/(m+1), u = (cos a, sin a), v = (-sin a, cos a), c_k = (k - (m-1)/2) d:
+    family A is the lines c_k v + t u, family B the lines -c_k u + t v, clipped to the
+    square [-L/2, L/2]^2. Line A_k meets B_j at t = -c_j (on A_k) and t = c_k (on B_j).
+    Every crossing is one shared node; each piece between break points gets
+    ceil(length / edge_length - 1e-9) equal edges. Both ends of every cable are pinned.
+    """
+    if not (isinstance(n, (int, np.integer)) and n >= 2 and n % 2 == 0):
+        raise ConfigError(f"geometry.n = {n!r}: must be an even integer >= 2")
+    if not (math.isfinite(size) and size > 0):
+        raise ConfigError(f"geometry.size = {size!r}: must be finite and > 0")
+    if not (math.isfinite(edge_length) and edge_length > 0):
+        raise ConfigError(f"geometry.edge_length = {edge_length!r}: must be finite and > 0")
+    if not math.isfinite(alpha):
+        raise ConfigError(f"geometry.alpha = {alpha!r}: must be finite (radians)")
+    m = n // 2
+    L = float(size)
+    half = 0.5 * L
+    tol = 1e-9 * L
+    d = L / (m + 1)
+    u = np.array([math.cos(alpha), math.sin(alpha)])
+    v = np.array([-math.sin(alpha), math.cos(alpha)])
+    c = (np.arange(m) - (m - 1) / 2) * d
+
+    # Lines: origin p, direction w. A_k: p = c_k v, w = u.  B_j: p = -c_j u, w = v.
+    lines = [(ck * v, u) for ck in c] + [(-cj * u, v) for cj in c]
+    spans = [_clip(p, w, half, tol) for p, w in lines]
+
+    points: list[np.ndarray] = []
+    index: dict[tuple[int, int], int] = {}  # crossing (k, j) -> node id
+
+    def crossing_node(k: int, j: int) -> int:
+        if (k, j) not in index:
+            index[(k, j)] = len(points)
+            points.append(c[k] * v - c[j] * u)
+        return index[(k, j)]
+
+    fixed: list[int] = []
+    edges: list[tuple[int, int]] = []
+    for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans)):
+        family_a = line_id < m
+        k = line_id if family_a else line_id - m
+        # Break points: (t, node id or None for an end still to be made).
+        breaks: list[tuple[float, int | None]] = []
+        for other in range(m):
+            t = -c[other] if family_a else c[other]
+            if t0 - tol <= t <= t1 + tol:
+                node = crossing_node(k, other) if family_a else crossing_node(other, k)
+                breaks.append((min(max(t, t0), t1), node))
+        breaks.sort()
+        ends = []
+        for t_end in (t0, t1):
+            near = [b for b in breaks if abs(b[0] - t_end) <= tol]
+            if near:
+                ends.append(near[0][1])
+            else:
+                ends.append(len(points))
+                points.append(p + t_end * w)
+                breaks.append((t_end, ends[-1]))
+        fixed.extend(ends)
+        breaks.sort()
+        for (ta, na), (tb, nb) in zip(breaks[:-1], breaks[1:]):
+            seg = tb - ta
+            k_edges = max(1, math.ceil(seg / edge_length - 1e-9))
+            chain = [na]
+            for s in range(1, k_edges):
+                chain.append(len(points))
+                points.append(p + (ta + seg * s / k_edges) * w)
+            chain.append(nb)
+            edges.extend(zip(chain[:-1], chain[1:]))
+
+    xy = np.array(points)
+    nodes = np.column_stack([xy, np.zeros(len(xy))])
+    edges_arr = np.array(edges, dtype=np.int64)
+    net = Net.from_arrays(
+        nodes,
+        edges_arr,
+        EA=material.EA,
+        fixed=sorted(set(fixed)),
+        line_density=material.line_density,
+        tension_only=material.tension_only,
+    )
+    center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
+    return SquareNet(net=net, center=center, size=L, n=int(n), alpha=float(alpha))
+
+
+def _clip(p: np.ndarray, w: np.ndarray, half: float, tol: float) -> tuple[float, float]:
+    """Parameter range of the line p + t w inside the square |x|, |y| <= half."""
+    lo, hi = -math.inf, math.inf
+    for axis in range(2):
+        if abs(w[axis]) < 1e-15:
+            if abs(p[axis]) > half + tol:
+                return (0.0, 0.0)
+            continue
+        a = (-half - p[axis]) / w[axis]
+        b = (half - p[axis]) / w[axis]
+        lo, hi = max(lo, min(a, b)), min(hi, max(a, b))
+    if not hi - lo > tol:
+        raise ConfigError("geometry: a cable of the square net misses the square")
+    return (lo, hi)
+
+
+def pressure_force(net: Net, pressure: float, size: float) -> np.ndarray:
+    """The paper's distributed load: -p L^2 / N in z on every node (N = all nodes)."""
+    f = np.zeros((net.n_nodes, 3))
+    f[:, 2] = -pressure * size**2 / net.n_nodes
+    return f
+
+
+def graph(
+    nodes,
+    edges,
+    fixed,
+    material: Material,
+    *,
+    rest_length=None,
+    EA=None,
+) -> Net:
+    """A net from explicit arrays; ``EA`` per edge overrides the material's."""
+    return Net.from_arrays(
+        nodes,
+        edges,
+        EA=material.EA if EA is None else EA,
+        fixed=fixed,
+        rest_length=rest_length,
+        line_density=material.line_density,
+        tension_only=material.tension_only,
+    )

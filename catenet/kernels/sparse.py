@@ -1,0 +1,40 @@
+"""Scatter of element values into CSR data through a map built once per pattern."""
+
+from __future__ import annotations
+
+from numba import njit
+
+
+@njit(cache=True)
+def scatter(values, target, data):
+    """data[:] = 0; data[target[k]] += values[k] for every k with target[k] >= 0."""
+    for p in range(data.shape[0]):
+        data[p] = 0.0
+    for k in range(values.shape[0]):
+        p = target[k]
+        if p >= 0:
+            data[p] += values[k]
+
+
+@njit(cache=True)
+def add_diagonal(diag_pos, shift, data):
+    """data[diag_pos[d]] += shift[d]: the mass and regularisation terms."""
+    for d in range(diag_pos.shape[0]):
+        data[diag_pos[d]] += shift[d]
+
+
+@njit(cache=True)
+def csr_matvec(indptr, indices, data, x, upper, out):
+    """out = A x for CSR (indptr, indices, data); with ``upper`` the data hold the upper
+    triangle of a symmetric A and the lower part is applied by symmetry."""
+    n = indptr.shape[0] - 1
+    for r in range(n):
+        out[r] = 0.0
+    for r in range(n):
+        acc = 0.0
+        for p in range(indptr[r], indptr[r + 1]):
+            c = indices[p]
+            acc += data[p] * x[c]
+            if upper and c != r:
+                out[c] += data[p] * x[r]
+        out[r] += acc

@@ -1,0 +1,107 @@
+"""Stretching of an edge: U = 1/2 EA eps^2 l0 with eps = |e|/l0 - 1, e = x_j - x_i.
+
+dU/dx_j = EA eps t (t = e/|e|), dU/dx_i = -EA eps t.
+d2U/dx_j2 = (EA/l0) t(x)t + (EA eps/|e|)(I - t(x)t); the blocks at (i,i) and (j,j) take
+this sign, (i,j) and (j,i) the opposite. (The paper's Eq. 8 lacks the 1/|e| of the
+second term's strain derivative: d2eps/de2 = (I - t(x)t)/(l0 |e|).)
+
+With ``tension_only`` an edge with eps < 0 contributes nothing (a slack cable); its 36
+Hessian values are written as zeros so that the sparsity pattern never changes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def stretch_energy(x, edges, l0, ea, tension_only):
+    """Total stretching energy [J] of positions x (N, 3)."""
+    total = 0.0
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
+        if tension_only and eps < 0.0:
+            continue
+        total += 0.5 * ea[k] * eps * eps * l0[k]
+    return total
+
+
+@njit(cache=True)
+def stretch_gradient(x, edges, l0, ea, tension_only, grad):
+    """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
+    nodes) and returns the stretching energy."""
+    total = 0.0
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        eps = length / l0[k] - 1.0
+        if tension_only and eps < 0.0:
+            continue
+        total += 0.5 * ea[k] * eps * eps * l0[k]
+        s = ea[k] * eps / length
+        grad[j, 0] += s * e0
+        grad[j, 1] += s * e1
+        grad[j, 2] += s * e2
+        grad[i, 0] -= s * e0
+        grad[i, 1] -= s * e1
+        grad[i, 2] -= s * e2
+    return total
+
+
+@njit(cache=True)
+def stretch_hessian(x, edges, l0, ea, tension_only, values):
+    """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
+    local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e = np.empty(3)
+        e[0] = x[j, 0] - x[i, 0]
+        e[1] = x[j, 1] - x[i, 1]
+        e[2] = x[j, 2] - x[i, 2]
+        length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+        eps = length / l0[k] - 1.0
+        base = 36 * k
+        if tension_only and eps < 0.0:
+            for a in range(36):
+                values[base + a] = 0.0
+            continue
+        axial = ea[k] / l0[k]
+        geometric = ea[k] * eps / length
+        for a in range(3):
+            ta = e[a] / length
+            for b in range(3):
+                tb = e[b] / length
+                h = (axial - geometric) * ta * tb
+                if a == b:
+                    h += geometric
+                values[base + 6 * a + b] = h
+                values[base + 6 * (a + 3) + b + 3] = h
+                values[base + 6 * a + b + 3] = -h
+                values[base + 6 * (a + 3) + b] = -h
+
+
+@njit(cache=True)
+def stretch_tension(x, edges, l0, ea, tension_only, out):
+    """Axial force EA*eps of every edge [N] (0 when slack and tension-only)."""
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
+        if tension_only and eps < 0.0:
+            out[k] = 0.0
+        else:
+            out[k] = ea[k] * eps

@@ -1,0 +1,317 @@
+"""Sparse direct solvers behind one interface: PARDISO (MKL, via pypardiso) and SciPy.
+
+PARDISO runs its three phases separately: symbolic analysis (11) once per sparsity
+pattern, numeric factorisation (22) per Newton iteration, solve (33) per right-hand side.
+pypardiso's public ``solve`` re-analyses whenever the values change, so this module calls
+the MKL routine that pypardiso loads (``PyPardisoSolver._mkl_pardiso``) with arrays it
+prepares once. pypardiso is pinned to 0.4.x in pyproject.toml and the private entry point
+is exercised by the tests.
+
+Every solve is checked: finite values, a small backward error and, for PARDISO, no
+perturbed pivots. A failing check raises SingularSystemError naming the nodes concerned.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import logging
+import math
+import time
+
+import numpy as np
+
+from catenet.errors import ConfigError, SingularSystemError
+from catenet.kernels.sparse import csr_matvec
+
+log = logging.getLogger(__name__)
+
+BACKWARD_ERROR_TOL = 1e-9
+BACKENDS = ("auto", "pardiso", "scipy")
+
+
+def pardiso_available() -> bool:
+    try:
+        _load_pardiso()
+    except Exception:
+        return False
+    return True
+
+
+@functools.cache
+def _load_pardiso():
+    """pypardiso's wrapper, once per process: finding mkl_rt is slow (ldconfig)."""
+    from pypardiso.pardiso_wrapper import PyPardisoSolver
+
+    return PyPardisoSolver()
+
+
+def resolve_backend(name: str) -> str:
+    """'auto' -> 'pardiso' where MKL loads, else 'scipy'."""
+    if name not in BACKENDS:
+        raise ConfigError(f"solver.linear = {name!r}: must be one of {', '.join(BACKENDS)}")
+    if name == "auto":
+        return "pardiso" if pardiso_available() else "scipy"
+    if name == "pardiso" and not pardiso_available():
+        raise ConfigError(
+            "solver.linear = 'pardiso': pypardiso/MKL is not available on this machine; "
+            "use 'auto' or 'scipy'"
+        )
+    return name
+
+
+def set_threads(threads: int) -> None:
+    """Threads of MKL (PARDISO) and Numba for this process."""
+    if threads < 1:
+        raise ConfigError(f"solver.threads = {threads}: must be >= 1")
+    if pardiso_available():
+        lib = _load_pardiso().libmkl
+        lib.MKL_Set_Num_Threads(ctypes.c_int(threads))
+    import numba
+
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+
+
+class LinearSolver:
+    """Solves A x = b for a fixed pattern (CSR ``indptr``, ``indices``) and changing values.
+
+    ``upper``: the pattern holds the upper triangle of a symmetric matrix.
+    ``dof_node``: node index of every row, to name nodes in errors.
+    """
+
+    name = "base"
+
+    def __init__(self, indptr, indices, *, upper: bool, dof_node: np.ndarray):
+        self.indptr = np.ascontiguousarray(indptr, dtype=np.int32)
+        self.indices = np.ascontiguousarray(indices, dtype=np.int32)
+        self.n = len(self.indptr) - 1
+        self.upper = upper
+        self.dof_node = dof_node
+        self._data = None
+        self._anorm = 0.0
+        self._r = np.empty(self.n)
+        self._analysed = False
+        self.stats = {"analyse": 0, "factorize": 0, "solve": 0}
+        self.seconds = {"analyse": 0.0, "factorize": 0.0, "solve": 0.0}
+
+    def factorize(self, data: np.ndarray) -> None:
+        self._data = data
+        self._anorm = float(np.max(np.abs(data), initial=0.0))
+        if not math.isfinite(self._anorm):
+            raise SingularSystemError(
+                "the system matrix has non-finite entries", nodes=self._nodes(~np.isfinite(data))
+            )
+        if not self._analysed:
+            self.analyse(data)
+        start = time.perf_counter()
+        self._factorize(data)
+        self.seconds["factorize"] += time.perf_counter() - start
+        self.stats["factorize"] += 1
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        start = time.perf_counter()
+        x = self._solve(b)
+        self._check(b, x)
+        self.seconds["solve"] += time.perf_counter() - start
+        self.stats["solve"] += 1
+        return x
+
+    # --- checks --------------------------------------------------------------------------
+    def _check(self, b, x) -> None:
+        if not np.all(np.isfinite(x)):
+            raise SingularSystemError(
+                "the linear solve gave non-finite values (a mechanism or an all-slack region)",
+                nodes=self._node_list(np.flatnonzero(~np.isfinite(x))),
+            )
+        csr_matvec(self.indptr, self.indices, self._data, x, self.upper, self._r)
+        self._r -= b
+        scale = self._anorm * float(np.max(np.abs(x), initial=0.0)) + float(
+            np.max(np.abs(b), initial=0.0)
+        )
+        err = float(np.max(np.abs(self._r), initial=0.0)) / scale if scale > 0 else 0.0
+        if err > BACKWARD_ERROR_TOL:
+            worst = np.argsort(-np.abs(self._r))[:10]
+            raise SingularSystemError(
+                f"the linear solve is inaccurate (backward error {err:.1e}): the system is "
+                "singular or nearly so (a mechanism or an all-slack region)",
+                nodes=self._node_list(worst),
+            )
+
+    def weak_nodes(self) -> list[int]:
+        """Nodes whose DOFs have (almost) no stiffness on the diagonal."""
+        diag = np.zeros(self.n)
+        rows = np.repeat(np.arange(self.n), np.diff(self.indptr))
+        on = rows == self.indices
+        diag[rows[on]] = self._data[on]
+        weak = np.flatnonzero(diag <= 1e-12 * max(self._anorm, 1e-300))
+        return self._node_list(weak)
+
+    def _nodes(self, mask_data) -> list[int]:
+        rows = np.repeat(np.arange(self.n), np.diff(self.indptr))
+        return self._node_list(rows[np.asarray(mask_data)])
+
+    def _node_list(self, dofs) -> list[int]:
+        return sorted({int(self.dof_node[d]) for d in np.asarray(dofs).ravel()})[:20]
+
+    def analyse(self, data: np.ndarray) -> None:
+        """Symbolic analysis of the pattern (a no-op where the backend has none)."""
+        self._analysed = True
+
+    def _factorize(self, data):
+        raise NotImplementedError
+
+    def _solve(self, b):
+        raise NotImplementedError
+
+    def release(self) -> None:
+        """Free the factorisation."""
+
+
+class PardisoSolver(LinearSolver):
+    """MKL PARDISO. ``mtype``: 2 (SPD), -2 (symmetric indefinite), 11 (general)."""
+
+    name = "pardiso"
+
+    def __init__(self, indptr, indices, *, upper: bool, dof_node, mtype: int | None = None):
+        super().__init__(indptr, indices, upper=upper, dof_node=dof_node)
+        self.mtype = (-2 if upper else 11) if mtype is None else mtype
+        if (self.mtype in (2, -2)) != upper:
+            raise ValueError("symmetric PARDISO types need the upper triangle, 11 the full matrix")
+        self._wrapper = _load_pardiso()
+        self._call = self._wrapper._mkl_pardiso
+        self._pt_type = self._wrapper._pt_type[0]
+        self.pt = np.zeros(64, dtype=self._wrapper._pt_type[1])  # PARDISO's handle, ours alone
+        self._perm = np.zeros(0, dtype=np.int32)
+        iparm = np.zeros(64, dtype=np.int32)
+        iparm[0] = 1  # no solver defaults: every value below is ours
+        iparm[1] = 2  # nested dissection (METIS) ordering
+        iparm[7] = 2  # up to two iterative refinement steps
+        iparm[9] = 8 if upper else 13  # pivot perturbation 1e-8 / 1e-13
+        iparm[10] = 0 if upper else 1  # scaling: general matrices only
+        iparm[12] = 0 if upper else 1  # weighted matching: general matrices only
+        iparm[17] = -1  # report nonzeros of the factors
+        iparm[20] = 1  # Bunch-Kaufman pivoting for symmetric indefinite
+        iparm[34] = 1  # zero-based indices: the CSR arrays are passed as they are
+        self.iparm = iparm
+        self._error = ctypes.c_int32(0)
+        self._x = np.empty(self.n)
+        self._b = np.empty(self.n)
+        self._dummy = np.zeros(1)
+
+    def _pardiso(self, phase: int, data: np.ndarray, b: np.ndarray, x: np.ndarray) -> None:
+        i32 = ctypes.POINTER(ctypes.c_int32)
+        f64 = ctypes.POINTER(ctypes.c_double)
+        self._error.value = 0
+        self._call(
+            self.pt.ctypes.data_as(ctypes.POINTER(self._pt_type)),
+            ctypes.byref(ctypes.c_int32(1)),
+            ctypes.byref(ctypes.c_int32(1)),
+            ctypes.byref(ctypes.c_int32(self.mtype)),
+            ctypes.byref(ctypes.c_int32(phase)),
+            ctypes.byref(ctypes.c_int32(self.n)),
+            data.ctypes.data_as(f64),
+            self.indptr.ctypes.data_as(i32),
+            self.indices.ctypes.data_as(i32),
+            self._perm.ctypes.data_as(i32),
+            ctypes.byref(ctypes.c_int32(1)),
+            self.iparm.ctypes.data_as(i32),
+            ctypes.byref(ctypes.c_int32(0)),
+            b.ctypes.data_as(f64),
+            x.ctypes.data_as(f64),
+            ctypes.byref(self._error),
+        )
+        code = self._error.value
+        if code != 0:
+            nodes = self.weak_nodes() if self._data is not None else []
+            if code in (-4, -7):  # zero pivot / diagonal matrix is singular
+                raise SingularSystemError(
+                    f"PARDISO: the system matrix is singular (error {code}): "
+                    "a mechanism or an all-slack region",
+                    nodes=nodes,
+                )
+            if code in (-2, -12):
+                raise MemoryError(f"PARDISO ran out of memory (error {code})")
+            raise SingularSystemError(f"PARDISO failed with error {code} in phase {phase}",
+                                      nodes=nodes)
+
+    def analyse(self, data: np.ndarray) -> None:
+        """Symbolic analysis (ordering and fill-in) of the pattern, once."""
+        start = time.perf_counter()
+        self._pardiso(11, data, self._dummy, self._dummy)
+        self._analysed = True
+        self.seconds["analyse"] += time.perf_counter() - start
+        self.stats["analyse"] += 1
+
+    def _factorize(self, data):
+        self._pardiso(22, data, self._dummy, self._dummy)
+        if self.iparm[13] > 0:  # perturbed pivots: (nearly) singular
+            raise SingularSystemError(
+                f"PARDISO perturbed {int(self.iparm[13])} pivots: the system is singular or "
+                "nearly so (a mechanism or an all-slack region)",
+                nodes=self.weak_nodes(),
+            )
+
+    def _solve(self, b):
+        np.copyto(self._b, b)
+        x = np.empty(self.n)
+        self._pardiso(33, self._data, self._b, x)
+        return x
+
+    @property
+    def inertia(self) -> tuple[int, int]:
+        """(positive, negative) eigenvalue counts of the last symmetric factorisation."""
+        return int(self.iparm[21]), int(self.iparm[22])
+
+    @property
+    def factor_nnz(self) -> int:
+        return int(self.iparm[17])
+
+    def release(self) -> None:
+        if self._analysed:
+            try:
+                self._pardiso(-1, self._dummy, self._dummy, self._dummy)
+            except Exception:  # releasing is best effort
+                pass
+            self._analysed = False
+
+    def __del__(self):
+        self.release()
+
+
+class ScipySolver(LinearSolver):
+    """SciPy's SuperLU: the fallback where MKL is missing (slower: no symbolic reuse)."""
+
+    name = "scipy"
+
+    def __init__(self, indptr, indices, *, upper: bool, dof_node):
+        super().__init__(indptr, indices, upper=upper, dof_node=dof_node)
+        self._lu = None
+
+    def _factorize(self, data):
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+        if self.upper:
+            a = a + sp.triu(a, k=1).T
+        try:
+            self._lu = splu(a.tocsc(), permc_spec="MMD_AT_PLUS_A")
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise SingularSystemError(
+                f"SciPy: {exc}: a mechanism or an all-slack region", nodes=self.weak_nodes()
+            ) from None
+
+    def _solve(self, b):
+        return self._lu.solve(np.asarray(b, dtype=np.float64))
+
+    def release(self) -> None:
+        self._lu = None
+
+
+def make_solver(
+    backend: str, indptr, indices, *, upper: bool, dof_node, mtype: int | None = None
+) -> LinearSolver:
+    backend = resolve_backend(backend)
+    if backend == "pardiso":
+        return PardisoSolver(indptr, indices, upper=upper, dof_node=dof_node, mtype=mtype)
+    return ScipySolver(indptr, indices, upper=upper, dof_node=dof_node)

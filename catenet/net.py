@@ -1,0 +1,272 @@
+"""The discrete net (nodes, edges, rest lengths, stiffness, supports, masses) and its loads.
+
+Both are plain containers of arrays, validated once when built; solvers never change them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from catenet.errors import ConfigError
+
+
+def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
+    try:
+        arr = np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"{name}: cannot be read as an array of {np.dtype(dtype).name}: {exc}")
+    if arr.ndim != 1 + len(shape_tail) or arr.shape[1:] != shape_tail:
+        want = "(n, " + ", ".join(map(str, shape_tail)) + ")" if shape_tail else "(n,)"
+        raise ConfigError(f"{name}: shape {arr.shape}: must be {want}")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Net:
+    """A cable net: ``N`` nodes joined by ``M`` straight elastic edges.
+
+    Attributes
+    ----------
+    nodes : (N, 3) float64, reference positions [m]
+    edges : (M, 2) int64, node indices of each edge
+    rest_length : (M,) float64, unstressed length l0 of each edge [m]
+    EA : (M,) float64, axial stiffness [N]
+    line_density : (M,) float64, mass per unstressed length rho*A [kg/m]
+    fixed : (N,) bool, pinned nodes (all three DOFs)
+    tension_only : edges carry no compression (slack when eps < 0)
+    """
+
+    nodes: np.ndarray
+    edges: np.ndarray
+    rest_length: np.ndarray
+    EA: np.ndarray
+    line_density: np.ndarray
+    fixed: np.ndarray
+    tension_only: bool = True
+
+    @classmethod
+    def from_arrays(
+        cls,
+        nodes,
+        edges,
+        *,
+        EA,
+        fixed,
+        rest_length=None,
+        line_density=0.0,
+        tension_only: bool = True,
+    ) -> Net:
+        """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
+        node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths."""
+        nodes = _as_array("nodes", nodes, np.float64, (3,))
+        edges = _as_array("edges", edges, np.int64, (2,))
+        n, m = len(nodes), len(edges)
+        problems = []
+        if n < 2:
+            problems.append(f"nodes: {n} nodes: a net needs at least 2")
+        if m < 1:
+            problems.append("edges: empty: a net needs at least one edge")
+        if problems:
+            raise ConfigError(problems)
+        if not np.all(np.isfinite(nodes)):
+            bad = np.flatnonzero(~np.isfinite(nodes).all(axis=1))[:5].tolist()
+            problems.append(f"nodes: non-finite coordinates at nodes {bad}: must be finite")
+        bad = np.flatnonzero((edges < 0).any(axis=1) | (edges >= n).any(axis=1))
+        if bad.size:
+            e = int(bad[0])
+            problems.append(
+                f"edges[{e}] = {edges[e].tolist()}: node indices must be in 0..{n - 1}"
+            )
+            raise ConfigError(problems)
+        loops = np.flatnonzero(edges[:, 0] == edges[:, 1])
+        if loops.size:
+            e = int(loops[0])
+            problems.append(f"edges[{e}] = {edges[e].tolist()}: an edge must join two different nodes")
+        key = np.sort(edges, axis=1)
+        _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+        if (counts > 1).any():
+            dup = key[first[np.argmax(counts > 1)]].tolist()
+            problems.append(f"edges: {dup} appears {int(counts.max())} times: edges must be unique")
+        length = np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1)
+        if rest_length is None:
+            l0 = length.copy()
+            zero = np.flatnonzero(~(l0 > 0))
+            if zero.size and not loops.size:
+                e = int(zero[0])
+                problems.append(
+                    f"edges[{e}] = {edges[e].tolist()}: zero length and no rest_length given: "
+                    "nodes of an edge must be distinct points"
+                )
+        else:
+            l0 = _broadcast("rest_length", rest_length, m, problems)
+        EA = _broadcast("EA", EA, m, problems)
+        rho_a = _broadcast("line_density", line_density, m, problems, allow_zero=True)
+        mask = _fixed_mask(fixed, n, problems)
+        if problems:
+            raise ConfigError(problems)
+        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only))
+        net._check_supported()
+        return net
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.nodes)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edges)
+
+    @cached_property
+    def mass(self) -> np.ndarray:
+        """Lumped nodal masses m_i = sum over edges at i of rho A l0 / 2 [kg]."""
+        half = 0.5 * self.line_density * self.rest_length
+        m = np.zeros(self.n_nodes)
+        np.add.at(m, self.edges[:, 0], half)
+        np.add.at(m, self.edges[:, 1], half)
+        return m
+
+    @cached_property
+    def axial_stiffness(self) -> np.ndarray:
+        """Per node, half the sum of EA/l0 of its edges [N/m]: the scale of K's diagonal."""
+        half = 0.5 * self.EA / self.rest_length
+        k = np.zeros(self.n_nodes)
+        np.add.at(k, self.edges[:, 0], half)
+        np.add.at(k, self.edges[:, 1], half)
+        return k
+
+    def with_rest_length(self, rest_length) -> Net:
+        """A copy with other rest lengths (pretension, or a cable of another length)."""
+        return Net.from_arrays(
+            self.nodes,
+            self.edges,
+            EA=self.EA,
+            fixed=self.fixed,
+            rest_length=rest_length,
+            line_density=self.line_density,
+            tension_only=self.tension_only,
+        )
+
+    def components(self) -> np.ndarray:
+        """Connected-component label of every node."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        n = self.n_nodes
+        adj = coo_matrix((np.ones(self.n_edges), (self.edges[:, 0], self.edges[:, 1])), (n, n))
+        return connected_components(adj, directed=False)[1]
+
+    def _check_supported(self) -> None:
+        """Every connected part with a free node needs a support, or it is a mechanism."""
+        problems = []
+        degree = np.bincount(self.edges.ravel(), minlength=self.n_nodes)
+        lonely = np.flatnonzero((degree == 0) & ~self.fixed)
+        if lonely.size:
+            problems.append(
+                f"nodes {lonely[:10].tolist()}: belong to no edge: every free node needs an edge"
+            )
+        labels = self.components()
+        supported = np.zeros(labels.max() + 1, bool)
+        supported[labels[self.fixed]] = True
+        loose = np.flatnonzero(~supported[labels] & (degree > 0))
+        if loose.size:
+            problems.append(
+                f"nodes {loose[:10].tolist()}{' ...' if loose.size > 10 else ''}: "
+                "a part of the net has no support (a mechanism): fix at least one of its nodes"
+            )
+        if not self.fixed.any():
+            problems.append("supports: no node is fixed: fix at least one node")
+        if problems:
+            raise ConfigError(problems)
+
+
+def _broadcast(name, value, m, problems, allow_zero=False) -> np.ndarray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        arr = np.full(m, float(arr))
+    if arr.shape != (m,):
+        problems.append(f"{name}: shape {arr.shape}: must be a scalar or one value per edge ({m})")
+        return np.zeros(m)
+    ok = np.isfinite(arr) & ((arr >= 0) if allow_zero else (arr > 0))
+    if not ok.all():
+        e = int(np.flatnonzero(~ok)[0])
+        need = ">= 0" if allow_zero else "> 0"
+        problems.append(f"{name}[{e}] = {arr[e]!r}: must be finite and {need}")
+    return np.ascontiguousarray(arr)
+
+
+def _fixed_mask(fixed, n, problems) -> np.ndarray:
+    arr = np.asarray(fixed)
+    if arr.dtype == bool:
+        if arr.shape != (n,):
+            problems.append(f"fixed: mask of shape {arr.shape}: must be ({n},)")
+            return np.zeros(n, bool)
+        return arr.copy()
+    try:
+        idx = np.asarray(arr, dtype=np.int64).ravel()
+    except (TypeError, ValueError):
+        problems.append(f"fixed = {fixed!r}: must be a list of node indices")
+        return np.zeros(n, bool)
+    bad = idx[(idx < 0) | (idx >= n)]
+    if bad.size:
+        problems.append(f"fixed: node {int(bad[0])}: node indices must be in 0..{n - 1}")
+        return np.zeros(n, bool)
+    mask = np.zeros(n, bool)
+    mask[idx] = True
+    return mask
+
+
+@dataclass(frozen=True, eq=False)
+class Loads:
+    """What acts on a net: constant nodal forces, gravity and prescribed support motion.
+
+    Attributes
+    ----------
+    force : (N, 3) nodal forces [N] (pressure and point loads), or None
+    gravity : (3,) acceleration [m/s^2] acting on the lumped masses, or None (not computed)
+    support_displacement : (N, 3) final displacement of fixed nodes [m], or None
+    ramp_time : (N,) time over which each support moves linearly to its final place
+        in a dynamic run [s] (0: at once); static runs reach the final place directly
+    """
+
+    force: np.ndarray | None = None
+    gravity: np.ndarray | None = None
+    support_displacement: np.ndarray | None = None
+    ramp_time: np.ndarray | None = field(default=None)
+
+    def external_force(self, net: Net, factor: float = 1.0) -> np.ndarray:
+        """Total external nodal force (N, 3), scaled by a load factor."""
+        f = np.zeros((net.n_nodes, 3))
+        if self.force is not None:
+            f += self.force
+        if self.gravity is not None:
+            f += net.mass[:, None] * np.asarray(self.gravity)[None, :]
+        if factor != 1.0:
+            f *= factor
+        return f
+
+    def support_positions(self, net: Net, *, time: float | None = None, factor: float = 1.0):
+        """Positions of the fixed nodes (K, 3): at ``time`` along each ramp (dynamic), or
+        at ``factor`` of the final displacement (static continuation)."""
+        x = net.nodes[net.fixed].copy()
+        if self.support_displacement is None:
+            return x
+        d = self.support_displacement[net.fixed]
+        if time is None:
+            return x + factor * d
+        ramp = np.zeros(len(d)) if self.ramp_time is None else self.ramp_time[net.fixed]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.where(ramp > 0, np.clip(time / np.where(ramp > 0, ramp, 1.0), 0.0, 1.0), 1.0)
+        return x + s[:, None] * d
+
+    def settle_time(self) -> float:
+        """Time after which every support has reached its final place."""
+        if self.support_displacement is None or self.ramp_time is None:
+            return 0.0
+        return float(np.max(self.ramp_time, initial=0.0))
+
+    @property
+    def moves_supports(self) -> bool:
+        return self.support_displacement is not None and bool(np.any(self.support_displacement))

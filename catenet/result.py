@@ -1,0 +1,55 @@
+"""What a solve returns: the final state, tensions, reactions and how it got there."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from catenet.assembly import System
+from catenet.net import Loads
+
+
+@dataclass
+class Result:
+    """A solved state of a net.
+
+    x : (N, 3) positions [m];  v : (N, 3) velocities [m/s] (dynamic runs) or None
+    tension : (M,) axial forces EA*eps [N], 0 when slack
+    reaction : (N, 3) force each support exerts on the net [N] (0 at free nodes);
+        reactions and applied loads sum to zero at equilibrium
+    converged : the solve met its tolerance (dynamic: every step did, and the run reached
+        t_end or equilibrium);  equilibrium : the state is a static equilibrium
+    iterations : Newton iterations in all;  residual : final |grad| [N]
+    steps : time steps (dynamic) or load steps (static);  time : simulated time [s]
+    max_strain : largest edge strain (tension / EA)
+    stats : counts and seconds per phase (assembly, analyse, factorize, solve)
+    """
+
+    x: np.ndarray
+    tension: np.ndarray
+    reaction: np.ndarray
+    converged: bool
+    iterations: int
+    residual: float
+    steps: int = 1
+    time: float = 0.0
+    v: np.ndarray | None = None
+    equilibrium: bool = False
+    wall_time: float = 0.0
+    message: str = ""
+    max_strain: float = float("nan")
+    history: list[float] = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+
+
+def finish(system: System, loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
+    """Tension and reactions at x, and the Result around them."""
+    net = system.net
+    _, grad = system.gradient(x)
+    f = loads.external_force(net, factor)
+    reaction = np.zeros_like(x)
+    reaction[net.fixed] = grad[net.fixed] - f[net.fixed]
+    tension = system.tension(x)
+    strain = float(np.max(tension / net.EA, initial=0.0))
+    return Result(x=x.copy(), tension=tension, reaction=reaction, max_strain=strain, **fields)
