@@ -67,6 +67,10 @@ class Potential:
         self.w: np.ndarray | None = None  # inertia weights on the free DOFs
         self.a: np.ndarray | None = None
         self.D = np.repeat(system.net.axial_stiffness[~system.net.fixed], 3)
+        # Round-off of the strains: coordinates of size |x| carry an error eps |x|, which
+        # each edge turns into a force error EA eps |x| / l0 at both of its nodes.
+        net = system.net
+        self._k_norm = float(np.sqrt(2.0 * np.sum((net.EA / net.rest_length) ** 2)))
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
 
@@ -87,7 +91,7 @@ class Potential:
         phi = energy - work
         internal = float(np.linalg.norm(grad))
         scale = max(self.f_norm, internal)
-        floor = self.f_norm + 2.0 * internal
+        floor = self.f_norm + 2.0 * internal + self._k_norm * float(np.max(np.abs(x)))
         phi_scale = abs(energy) + abs(work)
         if self.w is not None:
             r = y - self.a
@@ -96,7 +100,7 @@ class Potential:
             phi += 0.5 * float(np.dot(wr, r))
             floor += float(np.linalg.norm(self.w * (np.abs(y) + np.abs(self.a))))
             phi_scale += float(np.dot(self.w, y * y + self.a * self.a))
-        floor *= 64.0 * EPS
+        floor *= 4.0 * EPS
         phi_scale *= 64.0 * EPS
         return phi, g, scale, floor, phi_scale
 

@@ -1,0 +1,52 @@
+"""The ``catenet`` command line. Each command lives in its own module and is imported only
+when it runs, so ``catenet --help`` stays instant (no NumPy, Numba or h5py at start-up).
+
+This package is the only place that prints or exits. Exit codes: 0 success, 1 the run
+failed or did not converge, 2 bad input (usage, case file, values).
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import click
+
+COMMANDS = {
+    "run": ("catenet.cli.run", "Run a case file (or the bundled default) and write HDF5."),
+    "sweep": ("catenet.cli.sweep", "Run a case over a grid of parameter values."),
+    "validate": ("catenet.cli.validate", "Check catenet against the analytic cable solutions."),
+    "bench": ("catenet.cli.bench", "Timing and accuracy studies."),
+    "plot": ("catenet.cli.plot", "Draw figures from a result file or a sweep directory."),
+    "info": ("catenet.cli.info", "Versions, linear-solver backend, threads, JIT cache."),
+}
+
+
+class LazyGroup(click.Group):
+    def list_commands(self, ctx):
+        return list(COMMANDS)
+
+    def get_command(self, ctx, name):
+        if name not in COMMANDS:
+            return None
+        module = importlib.import_module(COMMANDS[name][0])
+        return module.command
+
+    def format_commands(self, ctx, formatter):
+        rows = [(name, help_) for name, (_, help_) in COMMANDS.items()]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("catenet")
+    except PackageNotFoundError:  # running from a source tree
+        return "unknown"
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(_version(), prog_name="catenet")
+def main():
+    """catenet: static and dynamic analysis of elastic cable structures."""

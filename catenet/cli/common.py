@@ -1,0 +1,118 @@
+"""What every command shares: options, logging, error handling and exit codes, progress."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import sys
+import time
+
+import click
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def verbosity_options(f):
+    """-q / -v / --debug on a command; the values reach it as ``quiet``, ``verbose``, ``debug``."""
+    f = click.option("--debug", is_flag=True, help="Show tracebacks and debug logging.")(f)
+    f = click.option("-v", "--verbose", count=True, help="More output (-v: Newton iterations).")(f)
+    f = click.option("-q", "--quiet", is_flag=True, help="Only errors.")(f)
+    return f
+
+
+def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) -> None:
+    level = logging.WARNING
+    if debug or verbose >= 1:
+        level = logging.DEBUG
+    if quiet:
+        level = logging.ERROR
+    logging.basicConfig(
+        level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True
+    )
+    logging.getLogger("numba").setLevel(logging.WARNING)
+    logging.getLogger("matplotlib").setLevel(logging.WARNING)
+
+
+def fail(message: str, code: int) -> None:
+    """One clear message on stderr and the exit code."""
+    click.echo(f"catenet: error: {message}", err=True)
+    sys.exit(code)
+
+
+@contextlib.contextmanager
+def errors_to_exit_codes(debug: bool = False):
+    """Maps catenet's exceptions to one line on stderr and the SPEC's exit codes:
+    ConfigError -> 2; ConvergenceError, OutputError, other CatenetError -> 1. With
+    ``debug`` the traceback is shown as well. Unexpected exceptions are reported as
+    internal errors (exit 1), never as a bare traceback."""
+    from catenet.errors import CatenetError, ConfigError
+
+    try:
+        yield
+    except ConfigError as exc:
+        if debug:
+            raise
+        lines = exc.problems or [str(exc)]
+        if len(lines) == 1:
+            fail(lines[0], EXIT_BAD_INPUT)
+        click.echo(f"catenet: error: {len(lines)} problems in the input:", err=True)
+        for line in lines:
+            click.echo(f"  {line}", err=True)
+        sys.exit(EXIT_BAD_INPUT)
+    except CatenetError as exc:
+        if debug:
+            raise
+        fail(str(exc), EXIT_FAILED)
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        fail("interrupted", 130)
+    except MemoryError as exc:
+        if debug:
+            raise
+        fail(f"out of memory: {exc}", EXIT_FAILED)
+    except OSError as exc:
+        if debug:
+            raise
+        fail(f"{exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), EXIT_FAILED)
+
+
+class Progress:
+    """A one-line progress bar with rate and ETA on a terminal; silent in pipes and with -q.
+
+    ``update(done, total, note="")``; ``close()``.
+    """
+
+    def __init__(self, label: str, *, enabled: bool | None = None, stream=None):
+        self.stream = stream or sys.stderr
+        self.enabled = self.stream.isatty() if enabled is None else enabled
+        self.label = label
+        self.start = time.perf_counter()
+        self._last = 0.0
+        self._shown = False
+
+    def update(self, done: float, total: float, note: str = "") -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self._last < 0.1 and done < total:
+            return
+        self._last = now
+        elapsed = now - self.start
+        frac = min(max(done / total, 0.0), 1.0) if total > 0 else 0.0
+        rate = done / elapsed if elapsed > 0 else 0.0
+        eta = (total - done) / rate if rate > 0 else float("nan")
+        width = 24
+        bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
+        eta_s = f"{eta:6.1f}s" if eta == eta else "   ?  "
+        self.stream.write(
+            f"\r{self.label} [{bar}] {100 * frac:5.1f}%  {rate:8.3g}/s  ETA {eta_s} {note}\x1b[K"
+        )
+        self.stream.flush()
+        self._shown = True
+
+    def close(self) -> None:
+        if self._shown:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._shown = False
