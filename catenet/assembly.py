@@ -70,11 +70,14 @@ class System:
         self._grad = np.zeros((n, 3))
         self.data = np.zeros(self.nnz)
         self.seconds = 0.0  # spent filling gradients and Hessians
+        self.smooth = 0.0  # smoothing mu of the tension-only law (0: exact)
 
     # --- scalar and vector terms -------------------------------------------------------
     def energy(self, x: np.ndarray) -> float:
         net = self.net
-        return stretch_energy(x, net.edges, net.rest_length, net.EA, net.tension_only)
+        return stretch_energy(
+            x, net.edges, net.rest_length, net.EA, net.tension_only, self.smooth
+        )
 
     def gradient(self, x: np.ndarray) -> tuple[float, np.ndarray]:
         """Stretching energy and its gradient (N, 3) on all nodes (supports included: there
@@ -83,7 +86,9 @@ class System:
         start = time.perf_counter()
         g = self._grad
         g.fill(0.0)
-        energy = stretch_gradient(x, net.edges, net.rest_length, net.EA, net.tension_only, g)
+        energy = stretch_gradient(
+            x, net.edges, net.rest_length, net.EA, net.tension_only, self.smooth, g
+        )
         self.seconds += time.perf_counter() - start
         return energy, g
 
@@ -98,7 +103,15 @@ class System:
         """Fills and returns the CSR data of K + diag(shift) on the free DOFs."""
         start = time.perf_counter()
         net = self.net
-        stretch_hessian(x, net.edges, net.rest_length, net.EA, net.tension_only, self._values)
+        stretch_hessian(
+            x,
+            net.edges,
+            net.rest_length,
+            net.EA,
+            net.tension_only,
+            self.smooth,
+            self._values,
+        )
         scatter(self._values, self.target, self.data)
         if shift is not None:
             add_diagonal(self.diag_pos, shift, self.data)

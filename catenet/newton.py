@@ -38,8 +38,11 @@ log = logging.getLogger(__name__)
 EPS = np.finfo(float).eps
 ARMIJO = 1e-4
 MAX_HALVINGS = 30
+MAX_EXPANSIONS = 12
+WOLFE = 0.9  # curvature condition: |slope at the step| <= 0.9 |slope at 0|
 C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
+SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 
 
 @dataclass
@@ -123,20 +126,23 @@ def solve(
     rtol: float,
     max_iter: int,
     c0: float = 0.0,
+    atol: float | None = None,
     label: str = "newton",
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
-    met by raising c, with c = 0 it raises SingularSystemError only if raising c fails."""
+    met by raising c, with c = 0 it raises SingularSystemError only if raising c fails.
+    ``atol`` replaces rtol * scale by a fixed tolerance [N] (never below the floor)."""
     free = potential.system.free_dofs
     xf = x.reshape(-1)
     phi, g, scale, floor, phi_tol = potential.evaluate(x)
     gnorm = float(np.linalg.norm(g))
-    tol = max(rtol * scale, floor)
+    tol = max(rtol * scale if atol is None else atol, floor)
     history = [gnorm]
     c = c0
     factorizations = 0
     stall = 0
+    good = 0  # consecutive well-predicted full steps
     it = 0
     reason = ""
     y_trial = np.empty_like(g)
@@ -173,31 +179,23 @@ def solve(
             if c > C_MAX:
                 reason = "regularisation failed (" + why + ")"
                 return NewtonResult(False, it, gnorm, tol, history, reason, factorizations)
-        # Backtracking line search on Phi (or on |grad Phi| below Phi's round-off).
+        # Decrease of Phi that the quadratic model predicts for the full step (the model's
+        # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
+        predicted = -0.5 * slope + 0.5 * c * float(np.dot(potential.D * dy, dy))
         y0 = xf[free].copy()
-        alpha = 1.0
-        accepted = False
-        for _ in range(MAX_HALVINGS):
-            np.add(y0, alpha * dy, out=y_trial)
-            xf[free] = y_trial
-            phi_t, g_t, scale_t, floor_t, phi_tol_t = potential.evaluate(x)
-            gnorm_t = float(np.linalg.norm(g_t))
-            if math.isfinite(phi_t) and math.isfinite(gnorm_t):
-                if abs(phi_t - phi) > phi_tol:
-                    accepted = phi_t <= phi + ARMIJO * alpha * slope
-                else:
-                    accepted = gnorm_t <= (1.0 - ARMIJO * alpha) * gnorm or gnorm_t <= tol
-            if accepted:
-                break
-            alpha *= 0.5
+        alpha, accepted, rho, trial = _line_search(
+            potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial, True
+        )
+        if accepted:
+            phi_t, g_t, scale_t, floor_t, phi_tol_t, gnorm_t = trial
         if not accepted:
             xf[free] = y0
             phi, g, scale, floor, phi_tol = potential.evaluate(x)
             if gnorm <= 1e3 * floor:
                 reason = "converged (round-off floor)"
                 break
-            c = max(10.0 * c, _c_start(potential, g))
-            log.debug("%s: line search failed; regularisation c -> %.3g", label, c)
+            c = max(4.0 * c, SHRINK * _c_start(potential, g))
+            log.debug("%s: step rejected; regularisation c -> %.3g", label, c)
             if c > C_MAX:
                 reason = "line search failed"
                 break
@@ -205,19 +203,131 @@ def solve(
             continue
         prev = gnorm
         phi, g, scale, floor, phi_tol, gnorm = phi_t, g_t, scale_t, floor_t, phi_tol_t, gnorm_t
-        tol = max(rtol * scale, floor)
+        tol = max(rtol * scale if atol is None else atol, floor)
         history.append(gnorm)
         stall = stall + 1 if gnorm > 0.5 * prev else 0
         log.debug(
-            "%s %3d: |r| = %.3e (tol %.1e)  step %.3g  c = %.2g", label, it, gnorm, tol, alpha, c
+            "%s %3d: |r| = %.3e (tol %.1e)  step %.3g  rho %.2f  c = %.2g",
+            label, it, gnorm, tol, alpha, rho, c,
         )
-        # Regularisation update: full steps shrink it, cut steps grow it.
-        if alpha == 1.0:
-            c = 0.0 if c * 0.1 < C_MIN else c * 0.1
-        elif alpha < 0.25:
-            c = max(4.0 * c, _c_start(potential, g) if c == 0.0 else 0.0)
+        good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
+        c = _update_regularisation(c, alpha, rho, good, potential, g)
     converged = reason.startswith("converged")
     return NewtonResult(converged, it, gnorm, tol, history, reason, factorizations)
+
+
+def _line_search(
+    potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial, backtrack
+):
+    """Step length along dy.
+
+    alpha = 1 when Phi decreases enough (Armijo) and its slope along dy has flattened
+    (|slope| <= WOLFE |slope at 0|), as for every Newton step near the solution. While the
+    slope stays steep (a slack net falling freely: only the regularisation limits the
+    step) the step is lengthened fourfold at a time; once a step is too long, a secant
+    search on the slope inside the bracket [lo, hi] finds a point that satisfies both
+    conditions. The potential of a tension-only net is convex, so the slope along dy is
+    monotone and the bracket sound; elsewhere the search falls back to bisection.
+
+    Without ``backtrack`` a full step that fails is rejected (the caller raises the
+    regularisation instead: a better direction beats a shorter step).
+
+    Returns (alpha, accepted, rho, evaluation at alpha); x holds y0 + alpha dy if accepted.
+    """
+    free = potential.system.free_dofs
+    xf = x.reshape(-1)
+
+    def at(alpha):
+        np.add(y0, alpha * dy, out=y_trial)
+        xf[free] = y_trial
+        phi_t, g_t, scale_t, floor_t, phi_tol_t = potential.evaluate(x)
+        gnorm_t = float(np.linalg.norm(g_t))
+        finite = math.isfinite(phi_t) and math.isfinite(gnorm_t)
+        d_t = float(np.dot(g_t, dy)) if finite else math.inf
+        if abs(phi_t - phi) > phi_tol:
+            ok = finite and phi_t <= phi + ARMIJO * alpha * slope
+        else:  # Phi cannot tell: the gradient norm decides
+            ok = finite and (gnorm_t <= (1.0 - ARMIJO * alpha) * gnorm or gnorm_t <= tol)
+        return (phi_t, g_t.copy(), scale_t, floor_t, phi_tol_t, gnorm_t), d_t, ok
+
+    def flat(d):
+        return abs(d) <= WOLFE * abs(slope)
+
+    ev, d, ok = at(1.0)
+    rho = 0.0
+    if math.isfinite(ev[0]):
+        if abs(ev[0] - phi) > phi_tol and predicted > 0:
+            rho = (phi - ev[0]) / predicted
+        else:
+            rho = 1.0 if ev[5] < gnorm else 0.0
+    if ok and (d >= WOLFE * slope):
+        return 1.0, True, rho, ev
+    best = None  # (alpha, evaluation)
+    if ok:  # still steep at the full step: lengthen it
+        best = (1.0, ev)
+        lo, d_lo, hi, d_hi = 1.0, d, None, None
+        for _ in range(MAX_EXPANSIONS):
+            alpha = 4.0 * lo
+            ev, d, ok = at(alpha)
+            if ok and d < 0.0:
+                best, lo, d_lo = (alpha, ev), alpha, d
+                if flat(d):
+                    hi = None
+                    break
+                continue
+            hi, d_hi = alpha, d
+            if ok and ev[0] < best[1][0]:
+                best = (alpha, ev)
+            break
+    elif backtrack:
+        lo, d_lo, hi, d_hi = 0.0, slope, 1.0, d
+    else:
+        hi = None
+    if hi is not None:
+        for _ in range(MAX_HALVINGS):
+            if math.isfinite(d_hi) and d_hi > 0.0 > d_lo:  # secant, kept off the ends
+                alpha = lo - d_lo * (hi - lo) / (d_hi - d_lo)
+                alpha = min(max(alpha, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo))
+            else:
+                alpha = 0.5 * (lo + hi)
+            ev, d, ok = at(alpha)
+            if ok:
+                if best is None or ev[0] < best[1][0]:
+                    best = (alpha, ev)
+                if flat(d):
+                    break
+                if d < 0.0:
+                    lo, d_lo = alpha, d
+                else:
+                    hi, d_hi = alpha, d
+            else:
+                hi, d_hi = alpha, d
+            if best is not None and hi - lo < 1e-3 * hi:
+                break
+    if best is None:
+        xf[free] = y0
+        return 0.0, False, rho, None
+    alpha, ev = best
+    np.add(y0, alpha * dy, out=y_trial)
+    xf[free] = y_trial
+    return alpha, True, rho, ev
+
+
+def _update_regularisation(c, alpha, rho, good, potential, g) -> float:
+    """Trust-region rule: well-predicted full steps (rho near 1) let c shrink, by 2, 4,
+    8, ... for a run of them; a poorly predicted or shortened step makes it grow; a
+    lengthened one shrinks it."""
+    if alpha > 1.0:
+        c = c / (2.0 * alpha)
+        return 0.0 if c < C_MIN else c
+    if alpha < 1.0:
+        return max(4.0 * c, SHRINK * _c_start(potential, g)) if c == 0.0 else 4.0 * c
+    if rho > 0.75:
+        c = c / 2.0 ** min(good, 6)
+        return 0.0 if c < C_MIN else c
+    if rho < 0.25:
+        return max(2.0 * c, SHRINK * _c_start(potential, g)) if c == 0.0 else 2.0 * c
+    return c
 
 
 def _c_start(potential: Potential, g: np.ndarray) -> float:

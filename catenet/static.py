@@ -17,7 +17,7 @@ from catenet.assembly import System
 from catenet.errors import ConfigError
 from catenet.linsolve import LinearSolver, make_solver
 from catenet.net import Loads, Net
-from catenet.newton import Potential, raise_unconverged, solve
+from catenet.newton import NewtonResult, Potential, raise_unconverged, solve
 from catenet.result import Result, finish
 
 log = logging.getLogger(__name__)
@@ -78,7 +78,7 @@ def solve_static(
     start = time.perf_counter()
     x = _start(net, loads, x0, factor)
     potential = ws.potential(loads, factor)
-    result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
+    result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
     if not result.converged and raise_on_failure:
         raise_unconverged(result, "static equilibrium", state=x)
     return finish(
@@ -95,6 +95,60 @@ def solve_static(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
     )
+
+
+SMOOTH_REDUCTION = 10.0  # mu shrinks tenfold per stage
+SMOOTH_RTOL = 1e-3  # stages before the last are solved loosely
+SMOOTH_END = 1e-3  # smoothing stops once mu is this fraction of the smallest |strain|
+
+
+def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
+    """Newton to equilibrium from x (updated in place).
+
+    A tension-only net that starts with slack edges (a cable whose supports moved
+    inward, a loose net) has no stiffness where it is slack, and Newton steps there are
+    erratic. Such a start goes through a smoothing continuation: the law max(eps, 0) is
+    replaced by (eps + sqrt(eps^2 + mu^2))/2, which keeps every edge slightly taut, with
+    mu from the largest slack strain down tenfold per stage (each stage solved loosely
+    from the last), until mu is negligible against the strains; the last solve uses the
+    exact law to the full tolerance.
+    """
+    system = potential.system
+    net = system.net
+    history: list[float] = []
+    iterations = 0
+    mu = _slack_strain(net, x) if net.tension_only else 0.0
+    # Smoothing inflates the internal forces: the stages are held to the load scale.
+    atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
+    try:
+        while mu > 0.0 and iterations < max_iter:
+            system.smooth = mu
+            stage = solve(
+                potential, x, rtol=SMOOTH_RTOL, atol=atol, max_iter=max_iter - iterations,
+                label=f"static (mu {mu:.1e})",
+            )
+            iterations += stage.iterations
+            history += stage.history
+            strains = system.tension(x) / net.EA
+            taut = np.abs(strains[strains > 0])
+            if not stage.converged or stage.iterations == 0:
+                break
+            if taut.size and mu < SMOOTH_END * float(np.min(taut)):
+                break
+            mu /= SMOOTH_REDUCTION
+    finally:
+        system.smooth = 0.0
+    result = solve(potential, x, rtol=rtol, max_iter=max(max_iter - iterations, 1), label="static")
+    result.iterations += iterations
+    result.history = history + result.history
+    return result
+
+
+def _slack_strain(net: Net, x: np.ndarray) -> float:
+    """The largest compressive strain of the net at x (0 when no edge is slack)."""
+    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    eps = np.linalg.norm(e, axis=1) / net.rest_length - 1.0
+    return float(max(-np.min(eps), 0.0))
 
 
 def continuation(
@@ -136,14 +190,43 @@ def continuation(
 
 
 def _start(net: Net, loads: Loads, x0, factor: float) -> np.ndarray:
+    """The starting guess: x0 (or the reference positions) with the supports put in place.
+    Where supports move, the free nodes follow them by the harmonic extension of the
+    support displacement, so no edge starts out stretched many times its length."""
     if x0 is None:
         x = net.nodes.copy()
     else:
         x = np.array(x0, dtype=np.float64, copy=True)
         if x.shape != net.nodes.shape or not np.all(np.isfinite(x)):
             raise ConfigError(f"x0: shape {x.shape}: must be finite with shape {net.nodes.shape}")
-    x[net.fixed] = loads.support_positions(net, factor=factor)
+    target = loads.support_positions(net, factor=factor)
+    if loads.moves_supports:
+        x += harmonic_extension(net, target - x[net.fixed])
+    x[net.fixed] = target
     return x
+
+
+def harmonic_extension(net: Net, support_shift: np.ndarray) -> np.ndarray:
+    """Displacement (N, 3) that is ``support_shift`` at the fixed nodes and at every free
+    node the average of its neighbours' (weights 1/l0): a graph-Laplacian solve."""
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import spsolve
+
+    n = net.n_nodes
+    u = np.zeros((n, 3))
+    u[net.fixed] = support_shift
+    if not np.any(support_shift):
+        return u
+    i, j = net.edges[:, 0], net.edges[:, 1]
+    w = 1.0 / net.rest_length
+    lap = sp.coo_matrix(
+        (np.concatenate([w, w, -w, -w]), (np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))),
+        shape=(n, n),
+    ).tocsr()
+    free = ~net.fixed
+    rhs = -(lap[free][:, net.fixed] @ support_shift)
+    u[free] = spsolve(lap[free][:, free].tocsc(), rhs).reshape(-1, 3)
+    return u
 
 
 def _check_rtol(rtol: float) -> None:

@@ -5,8 +5,15 @@ d2U/dx_j2 = (EA/l0) t(x)t + (EA eps/|e|)(I - t(x)t); the blocks at (i,i) and (j,
 this sign, (i,j) and (j,i) the opposite. (The paper's Eq. 8 lacks the 1/|e| of the
 second term's strain derivative: d2eps/de2 = (I - t(x)t)/(l0 |e|).)
 
-With ``tension_only`` an edge with eps < 0 contributes nothing (a slack cable); its 36
-Hessian values are written as zeros so that the sparsity pattern never changes.
+Tension-only edges (``tension_only``) use s(eps) = max(eps, 0) in place of eps: a slack
+edge (eps < 0) has no energy, force or stiffness; its 36 Hessian values are written as
+zeros so that the sparsity pattern never changes. With ``smooth`` = mu > 0 they use
+s(eps) = (eps + sqrt(eps^2 + mu^2)) / 2 instead, a smooth law that tends to max(eps, 0)
+as mu -> 0 and keeps every edge slightly taut: the static solver's continuation path.
+In general U = 1/2 EA l0 s^2, dU/deps = EA l0 s s', d2U/deps2 = EA l0 (s'^2 + s s''):
+
+    force on x_j = EA s s' t,
+    Hessian block = (EA/l0)(s'^2 + s s'') t(x)t + (EA s s'/|e|)(I - t(x)t).
 """
 
 from __future__ import annotations
@@ -16,7 +23,23 @@ from numba import njit
 
 
 @njit(cache=True)
-def stretch_energy(x, edges, l0, ea, tension_only):
+def _law(eps, tension_only, smooth):
+    """s, s s' (force / EA) and s'^2 + s s'' (stiffness / (EA/l0)) of the strain law."""
+    if not tension_only:
+        return eps, eps, 1.0
+    if smooth > 0.0:
+        r = np.sqrt(eps * eps + smooth * smooth)
+        s = 0.5 * (eps + r)
+        ds = 0.5 * (1.0 + eps / r)
+        dds = 0.5 * smooth * smooth / (r * r * r)
+        return s, s * ds, ds * ds + s * dds
+    if eps < 0.0:
+        return 0.0, 0.0, 0.0
+    return eps, eps, 1.0
+
+
+@njit(cache=True)
+def stretch_energy(x, edges, l0, ea, tension_only, smooth):
     """Total stretching energy [J] of positions x (N, 3)."""
     total = 0.0
     for k in range(edges.shape[0]):
@@ -26,14 +49,13 @@ def stretch_energy(x, edges, l0, ea, tension_only):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        if tension_only and eps < 0.0:
-            continue
-        total += 0.5 * ea[k] * eps * eps * l0[k]
+        s, _, _ = _law(eps, tension_only, smooth)
+        total += 0.5 * ea[k] * s * s * l0[k]
     return total
 
 
 @njit(cache=True)
-def stretch_gradient(x, edges, l0, ea, tension_only, grad):
+def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
     """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
     nodes) and returns the stretching energy."""
     total = 0.0
@@ -45,21 +67,22 @@ def stretch_gradient(x, edges, l0, ea, tension_only, grad):
         e2 = x[j, 2] - x[i, 2]
         length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
         eps = length / l0[k] - 1.0
-        if tension_only and eps < 0.0:
+        s, force, _ = _law(eps, tension_only, smooth)
+        if force == 0.0 and s == 0.0:
             continue
-        total += 0.5 * ea[k] * eps * eps * l0[k]
-        s = ea[k] * eps / length
-        grad[j, 0] += s * e0
-        grad[j, 1] += s * e1
-        grad[j, 2] += s * e2
-        grad[i, 0] -= s * e0
-        grad[i, 1] -= s * e1
-        grad[i, 2] -= s * e2
+        total += 0.5 * ea[k] * s * s * l0[k]
+        f = ea[k] * force / length
+        grad[j, 0] += f * e0
+        grad[j, 1] += f * e1
+        grad[j, 2] += f * e2
+        grad[i, 0] -= f * e0
+        grad[i, 1] -= f * e1
+        grad[i, 2] -= f * e2
     return total
 
 
 @njit(cache=True)
-def stretch_hessian(x, edges, l0, ea, tension_only, values):
+def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
     """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
     local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
     for k in range(edges.shape[0]):
@@ -71,13 +94,10 @@ def stretch_hessian(x, edges, l0, ea, tension_only, values):
         e[2] = x[j, 2] - x[i, 2]
         length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         eps = length / l0[k] - 1.0
+        _, force, stiffness = _law(eps, tension_only, smooth)
+        axial = ea[k] / l0[k] * stiffness
+        geometric = ea[k] * force / length
         base = 36 * k
-        if tension_only and eps < 0.0:
-            for a in range(36):
-                values[base + a] = 0.0
-            continue
-        axial = ea[k] / l0[k]
-        geometric = ea[k] * eps / length
         for a in range(3):
             ta = e[a] / length
             for b in range(3):
@@ -101,7 +121,5 @@ def stretch_tension(x, edges, l0, ea, tension_only, out):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        if tension_only and eps < 0.0:
-            out[k] = 0.0
-        else:
-            out[k] = ea[k] * eps
+        _, force, _ = _law(eps, tension_only, 0.0)
+        out[k] = ea[k] * force
