@@ -1,0 +1,55 @@
+"""``catenet plot``: figures from a result file or a sweep directory."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+
+
+@click.command(name="plot")
+@click.argument("path", type=click.Path(path_type=Path))
+@click.option(
+    "-o",
+    "--output",
+    "output",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Figure file (.png, .svg or .pdf); default: the result file with .png. "
+    "For a sweep directory: where the sweep figures go.",
+)
+@verbosity_options
+def command(path: Path, output: Path | None, quiet: bool, verbose: int, debug: bool) -> None:
+    """Draw the figures of PATH: a result file (OUT.h5) or a sweep output directory.
+
+    \b
+    Result file: the deformed net over the undeformed one, coloured by tension
+    (colour bar in N), in 3D and in a side view; for runs with a trajectory also
+    the deflection of the probe node (positive down) against time (dynamic runs)
+    or load factor (static runs in steps).
+    Sweep directory: the sweep's figures (catenet.sweepplot).
+
+    Prints the path of every figure written. Exit status 2 for a missing or
+    unreadable file or a file without the result layout.
+    """
+    setup_logging(quiet, verbose, debug)
+    with errors_to_exit_codes(debug):
+        from catenet.errors import CatenetError, ConfigError
+
+        if path.is_dir():
+            try:
+                from catenet.sweepplot import plot_sweep
+            except ImportError as exc:
+                raise CatenetError(f"{path}: sweep figures need catenet.sweepplot: {exc}") from exc
+            files = plot_sweep(path, output)
+        elif not path.exists():
+            raise ConfigError(f"{path}: no such file or directory")
+        else:
+            from catenet.plotting import plot_result
+
+            files = [plot_result(path, output)]
+        if not quiet:
+            for f in files:
+                click.echo(str(f))
