@@ -1,0 +1,174 @@
+"""``catenet sweep``: a case over the Cartesian product of parameter values."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from catenet.cli.common import (
+    EXIT_FAILED,
+    Progress,
+    errors_to_exit_codes,
+    fail,
+    setup_logging,
+    verbosity_options,
+)
+
+
+@click.command(name="sweep")
+@click.argument("case", type=click.Path(path_type=Path))
+@click.option(
+    "-p",
+    "--param",
+    "params",
+    multiple=True,
+    metavar="KEY.PATH=V1,V2,...",
+    help="A swept key and its values: TOML scalars, expressions of pi (pi/4), inclusive "
+    "ranges start:step:stop (0:0.25:0.75). Repeat for more keys; replaces the key's "
+    "values in the case's [sweep] table.",
+)
+@click.option(
+    "-o",
+    "--output",
+    "output",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Sweep directory (default: out/<case name>). Re-running into it resumes.",
+)
+@click.option(
+    "-j",
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: all cores). 1 runs in this process.",
+)
+@click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    default=None,
+    help="Run the jobs on a Dask distributed cluster (e.g. tcp://host:8786).",
+)
+@click.option("--save-runs", is_flag=True, help="Also keep each run's HDF5 file in DIR/runs/.")
+@click.option("--plot", "plot", is_flag=True, help="Draw the sweep figures and report.md after.")
+@verbosity_options
+def command(
+    case: Path,
+    params: tuple[str, ...],
+    output: Path | None,
+    workers: int | None,
+    scheduler: str | None,
+    save_runs: bool,
+    plot: bool,
+    quiet: bool,
+    verbose: int,
+    debug: bool,
+) -> None:
+    """Run CASE over the Cartesian product of the --param values (and of the case's
+    [sweep] table).
+
+    \b
+    Keys under load. (load.pressure, ...) are solved as one continuation per
+    combination of the other keys: each load level starts from the previous
+    equilibrium. Results: DIR/results.csv and DIR/results.h5 (group /table, one
+    dataset per column), one row per case and load level; DIR/results.jsonl is the
+    journal they are made from. A failed case is recorded with its error; a worker
+    process that dies is retried once. Running the same command again skips the
+    finished cases (resume after Ctrl-C or a crash).
+
+    \b
+    Example (the paper's study, Sec. 3.2):
+      catenet sweep configs/sweeps/paper.toml -o out/paper
+      catenet sweep case.toml -p geometry.n=10,18 -p "geometry.alpha=0,pi/4" \\
+          -p load.pressure=10:10:100 -o out/small
+
+    Exit status 0 when every row converged, 1 when some failed, 2 on bad input,
+    130 when interrupted (finished rows are kept).
+    """
+    setup_logging(quiet, verbose, debug)
+    _sigterm_as_interrupt()
+    with errors_to_exit_codes(debug):
+        from catenet import sweep as sw
+
+        spec = sw.load_sweep(case, params)
+        out = output if output is not None else Path("out") / case.stem
+        jobs = spec.jobs
+        n_load = len(jobs[0].levels) if jobs and jobs[0].levels else 1
+        if not quiet:
+            if scheduler:
+                where = f"Dask scheduler {scheduler}"
+            else:
+                k = workers or sw.cores()
+                k_eff = min(k, len(jobs))
+                where = (
+                    "this process"
+                    if k == 1
+                    else f"{k_eff} worker processes x {sw.threads_per_worker(k_eff)} thread(s)"
+                )
+            click.echo(
+                f"sweep: {len(jobs)} case(s) x {n_load} load level(s) = {spec.n_rows} rows "
+                f"on {where} -> {out}",
+                err=True,
+            )
+        progress = Progress("sweep", enabled=False if quiet else None)
+        try:
+            summary = sw.run_sweep(
+                spec,
+                out,
+                workers=workers,
+                scheduler=scheduler,
+                save_runs=save_runs,
+                progress=progress.update,
+            )
+        except KeyboardInterrupt:
+            progress.close()
+            header, done = sw.read_journal(out)
+            rows = sum(len(r["rows"]) for r in done.values())
+            fail(
+                f"interrupted: {rows} of {spec.n_rows} rows done and kept in {out}; "
+                "run the same command again to resume",
+                130,
+            )
+            return
+        finally:
+            progress.close()
+        if not quiet:
+            parts = [f"{summary.total_rows} rows"]
+            if summary.skipped_jobs:
+                parts.append(f"{summary.skipped_jobs} case(s) already done")
+            if summary.retried_jobs:
+                parts.append(f"{len(summary.retried_jobs)} case(s) retried after a worker died")
+            click.echo(
+                f"{', '.join(parts)}; {summary.wall_time:.1f} s. Tables: "
+                f"{out / sw.CSV_FILE}, {out / sw.H5_FILE}",
+                err=True,
+            )
+        if plot:
+            from catenet.sweepplot import plot_sweep
+
+            for path in plot_sweep(out, None):
+                if not quiet:
+                    click.echo(str(path))
+        header, done = sw.read_journal(out)
+        failed = sum(1 for rec in done.values() for r in rec["rows"] if r.get("error"))
+        if failed:
+            click.echo(
+                f"catenet: {failed} of {spec.n_rows} rows failed or did not converge "
+                f"(see the error column of {out / sw.CSV_FILE})",
+                err=True,
+            )
+            sys.exit(EXIT_FAILED)
+
+
+def _sigterm_as_interrupt() -> None:
+    """SIGTERM stops a sweep like Ctrl-C: workers stopped, finished rows kept."""
+    import signal
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. called from a test runner thread)
+        pass
