@@ -484,8 +484,8 @@ def _set_path(root: dict, parts: list[str], value: Any) -> str | None:
         if last:
             cur[part] = value
             return None
-        if part not in cur:
-            cur[part] = {}
+        if part not in cur:  # a new table, or a new array of tables before an index
+            cur[part] = [] if parts[depth + 1].isdigit() else {}
         cur = cur[part]
     return None
 
@@ -704,7 +704,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             )
         if isinstance(load, LoadConfig) and load.gravity is not None and dens == 0:
             ck.add(
-                f"load.gravity = {_show(list(load.gravity))}: gravity needs mass: "
+                f"load.gravity = {_show(data['load']['gravity'])}: gravity needs mass: "
                 "set material.density > 0 (with material.radius or material.area)"
             )
     if isinstance(solver, SolverConfig) and solver.method == "dynamic" and solver.dt > solver.t_end:
@@ -800,10 +800,10 @@ def _parse_cable(ck: _Checker, g: Mapping) -> CableConfig | None:
     if start is not BAD and end is not BAD:
         chord = math.dist(start, end)
         if not chord > 0:
-            ck.bad("geometry.end", list(end), "must differ from geometry.start")
+            ck.bad("geometry.end", g["end"], "must differ from geometry.start")
             return None
         if not math.isfinite(chord):
-            ck.bad("geometry.end", list(end), "too far from geometry.start (the chord overflows)")
+            ck.bad("geometry.end", g["end"], "too far from geometry.start (the chord overflows)")
             return None
         if length is None:
             length = chord
@@ -1025,8 +1025,8 @@ def _index_list(ck: _Checker, v: Any, path: str) -> Any:
 
 
 def _dups(values: list[int]) -> list[int]:
-    u, c = np.unique(np.array(values, dtype=np.int64), return_counts=True)
-    return u[c > 1].tolist()
+    seen: set[int] = set()
+    return sorted({i for i in values if i in seen or seen.add(i)})
 
 
 def _parse_material(ck: _Checker, m_v: Any, kind: str | None, geom) -> MaterialConfig | Any:
@@ -1064,7 +1064,7 @@ def _parse_material(ck: _Checker, m_v: Any, kind: str | None, geom) -> MaterialC
         )
     elif not given & {"E", "EA"} and not per_edge_ea:
         ck.add("material: missing stiffness: give E with radius or area, or EA")
-    if density not in (BAD, 0.0) and not given & {"radius", "area"}:
+    if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:
         ck.add(
             f"material.density = {density!r}: mass needs a cross-section: give "
             "material.radius or material.area (EA alone has no area)"
@@ -1207,10 +1207,11 @@ def estimate_size(geometry: GeometryConfig) -> tuple[float, float, float, str]:
         return float(n), float(m), float(np.count_nonzero(degree > 2)), key
     g = geometry
     m = g.n // 2
-    crossings = float(m) * float(m)
-    pieces = float(g.n) * (m + 1)
-    if crossings > MAX_NODES:  # do not even loop over the cables
-        return crossings + pieces, 2 * crossings + pieces, crossings, "geometry.n"
+    if m * m > MAX_NODES:  # do not even loop over the cables
+        big = float(m * m) if m < 10**150 else math.inf
+        return big, 2 * big, big, "geometry.n"
+    crossings = float(m * m)
+    pieces = float(g.n * (m + 1))
     half = 0.5 * g.size
     d = g.size / (m + 1)
     u = (math.cos(g.alpha), math.sin(g.alpha))
