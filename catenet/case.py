@@ -633,6 +633,10 @@ class _Checker:
             return self.bad(
                 path, v, "must be a non-empty string" if nonempty else "must be a string"
             )
+        try:
+            v.encode("utf-8")
+        except UnicodeEncodeError:  # lone surrogates, e.g. from undecodable arguments
+            return self.bad(path, v, "must be valid Unicode text")
         return v
 
     def vec3(self, v: Any, path: str) -> Any:

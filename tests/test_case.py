@@ -459,6 +459,12 @@ def test_all_mistakes_are_collected():
         assert any(text in p for p in found), (text, found)
 
 
+def test_strings_must_be_unicode_text():
+    one_problem(
+        mutate(cable_dict(), "title", "caf\udce9"), "title = ", "must be valid Unicode text"
+    )
+
+
 def test_integral_floats_are_integers():
     case = parse_case(mutate(square_dict(), "geometry.n", 4.0))
     assert case.geometry.n == 4 and isinstance(case.geometry.n, int)
