@@ -1366,8 +1366,9 @@ def _check_nodes(ck: _Checker, g: GeometryConfig, supports: Any, load: Any) -> N
             ok = [in_range(r, f"supports.fixed[{k}]") for k, r in enumerate(supports.fixed)]
             if all(ok):
                 resolved = [_resolve(r, topo) for r in supports.fixed]
-                if len(set(resolved)) != len(resolved):
-                    dup = next(i for i in resolved if resolved.count(i) > 1)
+                dups = _dups(resolved)
+                if dups:
+                    dup = dups[0]
                     ck.bad(
                         "supports.fixed",
                         list(supports.fixed),
