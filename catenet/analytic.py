@@ -417,7 +417,7 @@ def discrete_catenary(
 
     if inv_ea == 0.0 and total(1e300) <= span:
         raise ConfigError(f"span = {span!r}: an inextensible chain needs span < L0 = {L0!r}")
-    if total(1e-300 * P) >= span:  # only a middle edge with Q = 0 reaches across
+    if total(1e-100 * P) >= span:  # only a middle edge with Q = 0 reaches across
         raise ConfigError(f"span = {span!r}: must exceed the middle edge's rest length {h!r}")
     H = _increasing_root(total, span, max(P, 1e-300))
     T = np.hypot(H, Q)
