@@ -1,0 +1,348 @@
+"""What every study shares: the paper's scenes, thread control, timing, CSV and figures.
+
+Timings on a shared machine are noisy: every study times after a JIT warm-up, repeats
+short runs and keeps the median, and compares settings as ratios measured in one run.
+"""
+
+from __future__ import annotations
+
+import csv
+import ctypes
+import json
+import logging
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+DEFAULT_OUT = Path("benchmarks") / "results"
+
+# The paper's material and load (Sec. 3): E = 10 MPa, r = 1 cm, density 1000 kg/m^3.
+PAPER_E = 10e6
+PAPER_RADIUS = 0.01
+PAPER_DENSITY = 1000.0
+PAPER_PRESSURE = 100.0
+PAPER_EDGE = 0.01
+
+Progress = Callable[[float, float, str], None]
+
+
+@dataclass
+class Study:
+    """What a study leaves behind: its table, its files and what it found."""
+
+    name: str
+    rows: list[dict]
+    csv: Path
+    figure: Path | None = None
+    findings: list[str] = field(default_factory=list)
+    summary: list[str] = field(default_factory=list)
+
+
+def no_progress(done: float, total: float, note: str = "") -> None:
+    """The default progress callback: nothing."""
+
+
+# --- scenes -------------------------------------------------------------------------------
+
+
+def paper_material(tension_only: bool = True):
+    from catenet.geometry import Material
+
+    return Material.from_E(
+        PAPER_E, radius=PAPER_RADIUS, density=PAPER_DENSITY, tension_only=tension_only
+    )
+
+
+def paper_net(n: int, *, alpha: float = 0.0, edge: float = PAPER_EDGE, pressure=PAPER_PRESSURE):
+    """The paper's square net (L = 1 m) and its pressure load: (SquareNet, Loads)."""
+    from catenet.geometry import pressure_force, square_net
+    from catenet.net import Loads
+
+    sq = square_net(n, alpha, 1.0, edge, paper_material())
+    return sq, Loads(force=pressure_force(sq.net, pressure, 1.0))
+
+
+def midpoint_cable(F: float, *, nodes: int = 21, EA: float | None = None, L: float = 1.0,
+                   line_density: float | None = None, tension_only: bool = True):
+    """A straight cable of length L pinned at both ends, force F down on its midpoint
+    node (``nodes`` odd): (Net, Loads, midpoint index)."""
+    import numpy as np
+
+    from catenet.geometry import Material, cable
+    from catenet.net import Loads
+
+    mat = paper_material(tension_only)
+    if EA is not None or line_density is not None:
+        mat = Material(
+            EA=mat.EA if EA is None else EA,
+            line_density=mat.line_density if line_density is None else line_density,
+            tension_only=tension_only,
+        )
+    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
+    mid = (nodes - 1) // 2
+    f = np.zeros((nodes, 3))
+    f[mid, 2] = -F
+    return net, Loads(force=f), mid
+
+
+def compressed_catenary(dL: float, *, nodes: int = 101, L: float = 1.0, ramp: float = 0.0,
+                        EA: float | None = None, tension_only: bool = True):
+    """A cable of length L under its own weight whose ends move inward by dL/2 each (the
+    paper's compressed catenary, Fig. 2a): (Net, Loads)."""
+    import numpy as np
+
+    from catenet.geometry import Material, cable
+    from catenet.net import Loads
+
+    mat = paper_material(tension_only)
+    if EA is not None:
+        mat = Material(EA=EA, line_density=mat.line_density, tension_only=tension_only)
+    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
+    d = np.zeros((nodes, 3))
+    d[0, 0] = dL / 2
+    d[-1, 0] = -dL / 2
+    ramp_time = None
+    if ramp > 0:
+        ramp_time = np.zeros(nodes)
+        ramp_time[[0, -1]] = ramp
+    return net, Loads(gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d,
+                      ramp_time=ramp_time)
+
+
+# --- threads --------------------------------------------------------------------------------
+
+
+def set_threads(k: int) -> None:
+    """Threads of MKL (PARDISO), Numba and every OpenBLAS loaded in this process (NumPy's
+    and SciPy's). catenet.linsolve.set_threads leaves OpenBLAS alone; under load its
+    spinning threads can slow vector operations of 1e4 entries many times over."""
+    from catenet.linsolve import set_threads as set_catenet_threads
+
+    set_catenet_threads(k)
+    for path in _openblas_libraries():
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError:
+            continue
+        for name in (
+            "scipy_openblas_set_num_threads64_",
+            "scipy_openblas_set_num_threads",
+            "openblas_set_num_threads64_",
+            "openblas_set_num_threads",
+        ):
+            fn = getattr(lib, name, None)
+            if fn is not None:
+                fn(ctypes.c_int(k))
+                break
+
+
+def _openblas_libraries() -> list[str]:
+    import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
+    import scipy.linalg  # noqa: F401  (and SciPy's)
+
+    try:
+        with open("/proc/self/maps") as fh:
+            return sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
+    except OSError:
+        return []
+
+
+def thread_env(threads: int | None) -> dict:
+    """Environment of a child process with ``threads`` BLAS/MKL/Numba threads (None: as is)."""
+    env = dict(os.environ)
+    if threads is not None:
+        for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                    "NUMBA_NUM_THREADS"):
+            env[var] = str(threads)
+    else:
+        for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+            env.pop(var, None)
+    return env
+
+
+# --- timing ---------------------------------------------------------------------------------
+
+
+def timed(fn: Callable[[], object]) -> tuple[float, object]:
+    start = time.perf_counter()
+    out = fn()
+    return time.perf_counter() - start, out
+
+
+def repeat(
+    fn: Callable[[], object], repeats: int = 5, warmup: int = 1
+) -> tuple[float, list, object]:
+    """Median wall time of ``fn`` over ``repeats`` runs after ``warmup`` runs:
+    (median seconds, all times, the last return value)."""
+    out = None
+    for _ in range(warmup):
+        out = fn()
+    times = []
+    for _ in range(repeats):
+        t, out = timed(fn)
+        times.append(t)
+    return statistics.median(times), times, out
+
+
+def warm_up() -> None:
+    """Compile (or load from the cache) every kernel on a tiny net, so that no timed run
+    pays for the JIT."""
+    from catenet.dynamic import solve_dynamic
+    from catenet.static import solve_static
+
+    net, loads, _ = midpoint_cable(1.0, nodes=5)
+    solve_static(net, loads)
+    solve_dynamic(net, loads, dt=0.1, damping=1.0, t_end=0.2)
+
+
+def load_average() -> float:
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return float("nan")
+
+
+def run_child(code: str, *, timeout: float, env: dict | None = None) -> dict:
+    """Runs ``code`` in a fresh interpreter; the code writes a JSON object to the path in
+    ``sys.argv[1]``. Returns that object with ``returncode`` and ``wall_seconds``, or
+    ``error`` (the tail of stderr) when the child fails or times out."""
+    with tempfile.TemporaryDirectory(prefix="catenet-bench-") as tmp:
+        path = Path(tmp) / "out.json"
+        start = time.perf_counter()
+        try:
+            proc = subprocess.run(
+                [sys.executable, "-c", code, str(path)],
+                capture_output=True, text=True, timeout=timeout, env=env,
+            )
+        except subprocess.TimeoutExpired:
+            return {"error": f"timed out after {timeout:.0f} s", "returncode": None,
+                    "wall_seconds": time.perf_counter() - start}
+        wall = time.perf_counter() - start
+        out: dict = {}
+        if path.exists():
+            out = json.loads(path.read_text())
+        out["returncode"] = proc.returncode
+        out["wall_seconds"] = wall
+        if proc.returncode != 0 and "error" not in out:
+            out["error"] = (proc.stderr.strip().splitlines() or ["(no stderr)"])[-1][:300]
+        return out
+
+
+# --- output ---------------------------------------------------------------------------------
+
+
+def write_csv(rows: Sequence[dict], path: Path) -> Path:
+    """Rows (dicts) as CSV, columns in order of first appearance; floats with 6 digits."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    columns: list[str] = []
+    for row in rows:
+        for key in row:
+            if key not in columns:
+                columns.append(key)
+    with path.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=columns)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: _fmt(row.get(k, "")) for k in columns})
+    return path
+
+
+def read_csv(path: Path) -> list[dict]:
+    with Path(path).open(newline="") as fh:
+        return [dict(r) for r in csv.DictReader(fh)]
+
+
+def _fmt(value):
+    if isinstance(value, bool) or value is None:
+        return "" if value is None else str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        return f"{value:.6g}"
+    return value
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig, out_dir: Path, name: str) -> Path:
+    path = Path(out_dir) / f"bench-{name}.png"
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    pyplot().close(fig)
+    return path
+
+
+def machine() -> dict:
+    """The machine and software the numbers come from."""
+    info = {
+        "cpu": _cpu_model(),
+        "cores": os.cpu_count(),
+        "system": f"{platform.system()} {platform.release()}",
+        "python": platform.python_version(),
+    }
+    for mod in ("numpy", "scipy", "numba", "pypardiso", "mkl"):
+        info[mod] = _version(mod)
+    info["catenet"] = _version("catenet")
+    try:
+        import resource  # noqa: F401
+
+        with open("/proc/meminfo") as fh:
+            kb = int(fh.readline().split()[1])
+        info["memory_gib"] = round(kb / 2**20, 1)
+    except (OSError, ValueError, ImportError):
+        pass
+    return info
+
+
+def write_machine(out_dir: Path) -> Path:
+    path = Path(out_dir) / "machine.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(machine(), indent=2) + "\n")
+    return path
+
+
+def _cpu_model() -> str:
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name:"):
+                return line.split(":", 1)[1].strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return platform.processor() or "unknown"
+
+
+def _version(dist: str) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(dist)
+    except PackageNotFoundError:
+        return ""
+
+
+def geometric_fit(x: Iterable[float], y: Iterable[float]) -> tuple[float, float]:
+    """Exponent b and prefactor a of y = a x^b by least squares in log-log."""
+    import numpy as np
+
+    lx, ly = np.log(np.asarray(list(x), float)), np.log(np.asarray(list(y), float))
+    b, la = np.polyfit(lx, ly, 1)
+    return float(b), float(np.exp(la))
