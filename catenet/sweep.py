@@ -829,7 +829,15 @@ class _Journal:
     """Append-only, flushed and synced per record."""
 
     def __init__(self, path: Path):
+        with path.open("rb") as fh:  # a line cut short by a crash: start a new one
+            size = fh.seek(0, os.SEEK_END)
+            ragged = False
+            if size > 0:
+                fh.seek(-1, os.SEEK_END)
+                ragged = fh.read(1) != b"\n"
         self.fh = path.open("a", encoding="utf-8")
+        if ragged:
+            self.fh.write("\n")
 
     def write(self, record: dict) -> None:
         self.fh.write(json.dumps(record, allow_nan=True) + "\n")
@@ -1047,6 +1055,11 @@ def run_sweep(
         workers = cores()
     if workers < 1:
         raise ConfigError(f"--workers = {workers}: must be >= 1")
+    if save_runs:
+        try:
+            from catenet.output import ResultWriter  # noqa: F401
+        except ImportError as exc:
+            raise ConfigError(f"--save-runs: needs catenet.output.ResultWriter: {exc}") from None
     jobs = sweep.jobs
     summary = SweepSummary(out, len(jobs), sweep.n_rows)
     out.mkdir(parents=True, exist_ok=True)
@@ -1264,7 +1277,7 @@ def _run_dask(sweep, todo, out, scheduler, save_runs, record, crashed, summary) 
         futures = {}
         for job in todo:
             futures[submit(job)] = job
-        ac = as_completed(list(futures))
+        ac = as_completed(list(futures), loop=client.loop)
         for fut in ac:
             job = futures.pop(fut)
             try:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 
@@ -87,8 +88,7 @@ def command(
     130 when interrupted (finished rows are kept).
     """
     setup_logging(quiet, verbose, debug)
-    _sigterm_as_interrupt()
-    with errors_to_exit_codes(debug):
+    with _sigterm_as_interrupt(), errors_to_exit_codes(debug):
         from catenet import sweep as sw
 
         spec = sw.load_sweep(case, params)
@@ -161,14 +161,21 @@ def command(
             sys.exit(EXIT_FAILED)
 
 
-def _sigterm_as_interrupt() -> None:
-    """SIGTERM stops a sweep like Ctrl-C: workers stopped, finished rows kept."""
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """While the sweep runs, SIGTERM stops it like Ctrl-C: workers stopped, finished
+    rows kept."""
     import signal
 
     def handler(signum, frame):
         raise KeyboardInterrupt
 
     try:
-        signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread (e.g. called from a test runner thread)
-        pass
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
