@@ -765,15 +765,21 @@ def _measure(scene, net, result, np) -> dict:
 
 
 def _save_run(out: Path, index: int, level: int, scene, result) -> str:
-    """The level's HDF5 result file (SPEC section 5) under DIR/runs/; its path relative
+    """The level's HDF5 result file (SPEC section 5, as ``catenet run`` writes it: a
+    static equilibrium is the frame at load factor 1) under DIR/runs/; its path relative
     to DIR."""
     from catenet.output import ResultWriter
 
     rel = Path(RUNS_DIR) / f"job{index:05d}-level{level:03d}.h5"
-    path = out / rel
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with ResultWriter(path, scene, every=1) as writer:
-        writer.frame(1.0, result.x, result.v, result.tension)
+    case = scene.case
+    attrs = {"source": str(getattr(case, "source", "")), "sweep_job": index, "sweep_level": level}
+    every = int(case.output.every)
+    with ResultWriter(out / rel, scene, every=every, xdmf=case.output.xdmf, attrs=attrs) as writer:
+        t = float(result.time) if case.solver.method == "dynamic" else 1.0
+        if not case.solver.method == "dynamic":
+            result.time = t
+        if every > 0:
+            writer.frame(t, result.x, result.v, result.tension)
         writer.result(result)
     return str(rel)
 

@@ -282,6 +282,24 @@ def test_a_failing_case_is_recorded_and_the_sweep_goes_on(small_case, tmp_path):
     assert all(not r["error"] and r["converged"] == "true" for r in rows[2:])
 
 
+def test_save_runs_keeps_each_result_file(small_case, reference, tmp_path):
+    pytest.importorskip("catenet.output")
+    import h5py
+
+    spec = sw.load_sweep(small_case)
+    sw.run_sweep(spec, tmp_path, workers=1, save_runs=True)
+    rows = read_csv(tmp_path)
+    for row, ref in zip(rows, reference, strict=True):
+        with h5py.File(tmp_path / row["run_file"]) as f:
+            x = f["result/x"][:]
+            z0 = f["mesh/nodes"][:, 2]
+            probe = int(f["result"].attrs["probe"]) if "probe" in f["result"].attrs else None
+            assert bool(f["result"].attrs["converged"])
+            assert "square_net" in f.attrs["case"]
+        if probe is not None:
+            assert abs(-(x[probe, 2] - z0[probe]) - ref[3]) <= 1e-10
+
+
 # ---------------------------------------------------------------------------- fit and figures
 
 
