@@ -1,0 +1,198 @@
+"""``catenet run``: solve a case file (or the bundled default) and write its HDF5 result."""
+
+from __future__ import annotations
+
+import signal
+import sys
+from pathlib import Path
+
+import click
+
+from catenet.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_OK,
+    Progress,
+    errors_to_exit_codes,
+    setup_logging,
+    verbosity_options,
+)
+
+EXIT_SIGINT = 130  # interrupted by Ctrl-C (SIGINT), as shells report it
+
+
+class StopFlag:
+    """Set by SIGINT / SIGTERM: the run finishes its current step, writes and closes the
+    file and stops. A second SIGINT aborts at once (KeyboardInterrupt), a second SIGTERM
+    ends the process as usual."""
+
+    def __init__(self):
+        self.signal: int | None = None
+        self._previous: dict[int, object] = {}
+
+    def __call__(self) -> bool:
+        return self.signal is not None
+
+    def _handle(self, signum, frame) -> None:
+        self.signal = signum
+        name = signal.Signals(signum).name
+        again = "Ctrl-C again to abort" if signum == signal.SIGINT else "again to kill"
+        lead = "\n" if sys.stderr.isatty() else ""
+        click.echo(
+            f"{lead}catenet: {name}: stopping after the current step and closing the result "
+            f"file ({again})",
+            err=True,
+        )
+        # The next one of the same kind takes the default way out.
+        restore = signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL
+        signal.signal(signum, restore)
+
+    def __enter__(self) -> StopFlag:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._previous[sig] = signal.signal(sig, self._handle)
+            except ValueError:  # not the main thread: no handlers, Ctrl-C aborts
+                pass
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+        return False
+
+
+@click.command(name="run")
+@click.argument(
+    "case_file",
+    metavar="[CASE.toml]",
+    required=False,
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+)
+@click.option(
+    "-o",
+    "--output",
+    "out",
+    metavar="OUT.h5",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Result file (default: the case's output.file). Missing directories are created.",
+)
+@click.option(
+    "--set",
+    "overrides",
+    metavar="KEY.PATH=VALUE",
+    multiple=True,
+    help="Override a case value, e.g. --set solver.method=dynamic (repeatable).",
+)
+@click.option(
+    "--restart",
+    metavar="OLD.h5",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    default=None,
+    help="Continue a dynamic run from the last frame stored in OLD.h5 (time, positions, "
+    "velocities), writing a new file.",
+)
+@verbosity_options
+def command(
+    case_file: Path | None,
+    out: Path | None,
+    overrides: tuple[str, ...],
+    restart: Path | None,
+    quiet: bool,
+    verbose: int,
+    debug: bool,
+) -> None:
+    """Solve CASE.toml (default: the bundled square net, n = 34, alpha = pi/4) and write
+    the HDF5 result file with its trajectory, plus an XDMF sidecar for ParaView.
+
+    \b
+    Exit status: 0 converged; 1 did not converge, failed while running or was
+    interrupted (130 for Ctrl-C); 2 bad input (case file, --set values, paths).
+    Ctrl-C or SIGTERM stops after the current step: the file is closed with the
+    last state in /result (converged = false). A second Ctrl-C aborts at once.
+    """
+    setup_logging(quiet, verbose, debug)
+    code = EXIT_OK
+    with errors_to_exit_codes(debug):
+        from catenet.case import load_case
+        from catenet.errors import CatenetError, ConfigError
+        from catenet.runner import output_path, run_case
+
+        case = load_case(case_file, overrides)
+        path = output_path(case, out)
+        bar = Progress("t" if case.solver.method == "dynamic" else "load", enabled=None)
+        if quiet:
+            bar.enabled = False
+
+        def progress(done: float, total: float) -> None:
+            unit = " s" if case.solver.method == "dynamic" else ""
+            bar.update(done, total, note=f"{done:.4g}{unit}")
+
+        with StopFlag() as stop:
+            try:
+                result = run_case(case, path, restart=restart, progress=progress, stop=stop)
+            except CatenetError as exc:
+                bar.close()
+                written = getattr(exc, "output", None)
+                if written is not None and not isinstance(exc, ConfigError):
+                    exc.args = (
+                        f"{exc}\n  the last good state is in {written} "
+                        "(/result, converged = false)",
+                    )
+                raise
+            finally:
+                bar.close()
+        if stop.signal is not None:
+            if result.message == "interrupted":
+                where = f"; the state so far is in {path}" if path is not None else ""
+                click.echo(
+                    f"catenet: interrupted at {_where(case, result)}{where} "
+                    "(/result converged = false)",
+                    err=True,
+                )
+            else:  # the signal came during the last step: the run is complete
+                if not quiet:
+                    _summary(case, result, path)
+                click.echo("catenet: stopped by a signal after the run had finished", err=True)
+            code = EXIT_SIGINT if stop.signal == signal.SIGINT else EXIT_FAILED
+        elif not result.converged:
+            click.echo(f"catenet: did not converge: {result.message}", err=True)
+            code = EXIT_FAILED
+        elif not quiet:
+            _summary(case, result, path)
+    sys.exit(code)
+
+
+def _where(case, result) -> str:
+    if case.solver.method == "dynamic":
+        return f"t = {result.time:.6g} s (step {result.steps})"
+    return f"load factor {result.time:.6g} (step {result.steps} of {case.solver.steps})"
+
+
+def _summary(case, result, path: Path | None) -> None:
+    import numpy as np
+
+    s = result.stats
+    state = "yes" if result.converged else "no"
+    detail = result.message or ""
+    if case.solver.method == "dynamic" and not result.equilibrium:
+        detail = f"{detail}; not yet at equilibrium: raise solver.t_end".lstrip("; ")
+    lines = [
+        f"{'case':<12} {case.title or case.source}",
+        f"{'converged':<12} {state} ({detail}; {result.iterations} Newton iterations, "
+        f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} steps, "
+        f"residual {result.residual:.3g} N)",
+        f"{'delta':<12} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
+        f"(node {s['probe']}, L = {s['size']:.6g} m)",
+        f"{'max tension':<12} {float(np.max(result.tension, initial=0.0)):.6g} N   "
+        f"max strain {result.max_strain:.4g}",
+        f"{'wall time':<12} {result.wall_time:.3g} s ({s.get('backend', '?')})",
+    ]
+    if path is not None:
+        side = Path(path).with_suffix(".xdmf")
+        extra = f" (ParaView: {side})" if case.output.xdmf else ""
+        lines.append(f"{'output':<12} {path}{extra}")
+    click.echo("\n".join(lines))
+
+
+__all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_OK", "EXIT_SIGINT", "command"]

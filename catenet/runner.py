@@ -1,0 +1,419 @@
+"""Running a case: build the scene, solve it (static in load steps, or dynamic), and write
+the result file while the run goes on.
+
+``run_case`` checks everything a user can get wrong (the case, the restart file, the
+output path, the linear backend) before it creates the output file, so bad input leaves no
+file behind. Once running it never loses what it has: a run that fails to converge, is
+interrupted (``stop()`` returns True) or is refused a non-finite state closes the file
+with its last good state in /result and ``converged = false``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from catenet.errors import CatenetError, ConfigError, ConvergenceError
+
+log = logging.getLogger(__name__)
+
+__all__ = ["RestartState", "output_path", "read_restart", "run_case"]
+
+Progress = Callable[[float, float], None]
+Stop = Callable[[], bool]
+
+
+@dataclass
+class RestartState:
+    """Where a dynamic run goes on from: time, positions and velocities."""
+
+    path: Path
+    t: float
+    x: np.ndarray
+    v: np.ndarray
+    source: str
+
+
+class _Interrupted(Exception):
+    """Raised from a static step callback when ``stop()`` asks for it."""
+
+
+def output_path(case, out: str | Path | None = None) -> Path | None:
+    """The file a run writes: ``out``, else the case's output.file (None: no file)."""
+    if out is not None:
+        return Path(out)
+    file = case.output.file
+    return Path(file) if file else None
+
+
+def read_restart(path: str | Path, scene) -> RestartState:
+    """The last stored state of an earlier dynamic run of the same net, checked against
+    the scene. Raises ConfigError for a file that does not fit."""
+    from catenet.output import open_result, read_frame
+
+    path = Path(path)
+    label = f"--restart {path}"
+    if scene.case.solver.method != "dynamic":
+        raise ConfigError(
+            f"{label}: only dynamic runs can be restarted (solver.method = "
+            f"{scene.case.solver.method!r}); set solver.method = 'dynamic'"
+        )
+    frame = read_frame(path)
+    with open_result(path) as h5:
+        problems = _mesh_mismatch(h5, scene.net)
+    if problems:
+        raise ConfigError([f"{label}: {p}" for p in problems])
+    if frame.v is None:
+        raise ConfigError(
+            f"{label}: holds no velocities (/trajectory/v or /result/v): it is not the file "
+            "of a dynamic run with output.every > 0"
+        )
+    if not (np.all(np.isfinite(frame.x)) and np.all(np.isfinite(frame.v))):
+        raise ConfigError(f"{label}: its last stored state is not finite")
+    t_end = scene.case.solver.t_end
+    if not frame.t < t_end * (1 - 1e-12):
+        raise ConfigError(
+            f"{label}: its last state is at t = {frame.t:.6g} s, not before solver.t_end = "
+            f"{t_end!r}: raise solver.t_end to go on"
+        )
+    return RestartState(path, frame.t, frame.x, frame.v, frame.source)
+
+
+def _mesh_mismatch(h5, net) -> list[str]:
+    if "mesh" not in h5:
+        return ["has no /mesh: not a catenet result file"]
+    mesh = h5["mesh"]
+    try:
+        nodes = np.asarray(mesh["nodes"])
+        edges = np.asarray(mesh["edges"])
+        rest = np.asarray(mesh["rest_length"])
+        fixed = np.asarray(mesh["fixed"])
+    except KeyError as exc:
+        return [f"/mesh lacks {exc}: not a catenet result file"]
+    if nodes.shape != net.nodes.shape or edges.shape != net.edges.shape:
+        return [
+            f"its net has {len(nodes)} nodes and {len(edges)} edges, the case's "
+            f"{net.n_nodes} and {net.n_edges}: restart with the case that wrote it"
+        ]
+    problems = []
+    if not np.array_equal(edges, net.edges):
+        problems.append("its edges differ from the case's: restart with the case that wrote it")
+    if not np.allclose(rest, net.rest_length, rtol=1e-12, atol=0.0):
+        problems.append("its rest lengths differ from the case's")
+    if not np.array_equal(fixed.astype(bool), net.fixed):
+        problems.append("its supports differ from the case's")
+    return problems
+
+
+def run_case(
+    case,
+    out: str | Path | None = None,
+    *,
+    restart: str | Path | None = None,
+    progress: Progress | None = None,
+    stop: Stop | None = None,
+):
+    """Builds, solves and writes a case; returns the Result.
+
+    ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
+    file of an earlier dynamic run of the same case; the run goes on from its last stored
+    frame (time, positions, velocities) and writes a new file. ``progress(done, total)``
+    is called after every step (time and t_end, or load factor and 1). ``stop()`` is
+    asked after every step; True ends the run there (``converged = False``, message
+    "interrupted").
+
+    ``result.stats`` gains ``delta`` (probe z-deflection, positive down), ``delta_over_L``,
+    ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
+    other run-time errors are re-raised after /result was written, with ``.output`` set.
+    """
+    from catenet.case import build
+    from catenet.linsolve import resolve_backend, set_threads
+    from catenet.output import ResultWriter, check_output_path
+
+    start = time.perf_counter()
+    scene = build(case)
+    solver = case.solver
+    path = output_path(case, out)
+    state = read_restart(restart, scene) if restart is not None else None
+    if path is not None:
+        check_output_path(path)
+        if restart is not None and _same_file(path, Path(restart)):
+            raise ConfigError(
+                f"--restart {restart}: is also the output file: give another one with -o"
+            )
+    backend = resolve_backend(solver.linear)
+    set_threads(solver.threads)
+
+    from catenet.static import Workspace
+
+    ws = Workspace(scene.net, linear=backend)
+    attrs = {"linear_backend": backend, "threads": int(solver.threads)}
+    if state is not None:
+        attrs["restart_from"] = str(state.path)
+        attrs["restart_time"] = float(state.t)
+    if getattr(case, "source", ""):
+        attrs["source"] = str(case.source)
+    writer = (
+        ResultWriter(path, scene, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs)
+        if path is not None
+        else _NoFile()
+    )
+    run = _static if solver.method == "static" else _dynamic
+    with writer:
+        try:
+            result = run(scene, ws, writer, state, progress, stop, start)
+        except CatenetError as exc:
+            exc.output = None if path is None else path
+            if isinstance(exc, ConfigError) and writer.frames == 0:
+                _remove(writer)  # bad input found late: leave nothing behind
+            raise
+    result.stats.update(
+        delta=-float(result.x[scene.probe, 2] - scene.net.nodes[scene.probe, 2]),
+        size=float(scene.size),
+        probe=int(scene.probe),
+        output=None if path is None else str(path),
+        backend=backend,
+    )
+    result.stats["delta_over_L"] = result.stats["delta"] / float(scene.size)
+    return result
+
+
+# --------------------------------------------------------------------------------------------
+# Static: load steps
+# --------------------------------------------------------------------------------------------
+
+
+def _static(scene, ws, writer, state, progress, stop, start):
+    from catenet.result import finish
+    from catenet.static import continuation
+
+    solver = scene.case.solver
+    steps = int(solver.steps)
+    factors = [k / steps for k in range(1, steps + 1)]
+    done: list = []  # (factor, Result) of every equilibrium so far
+
+    def on_step(factor: float, r) -> None:
+        k = len(done) + 1
+        done.append((factor, r))
+        r.time = factor
+        if writer.wants(k) or k == steps:
+            writer.frame(factor, r.x, None, r.tension)
+        if progress is not None:
+            progress(factor, 1.0)
+        if stop is not None and k < steps and stop():
+            raise _Interrupted
+
+    def summed(r, **fields):
+        r.iterations = sum(q.iterations for _, q in done) + fields.pop("extra_iterations", 0)
+        r.steps = len(done)
+        r.wall_time = time.perf_counter() - start
+        for key, value in fields.items():
+            setattr(r, key, value)
+        return r
+
+    try:
+        continuation(
+            scene.net,
+            scene.loads,
+            factors,
+            rtol=solver.rtol,
+            max_iter=solver.max_iter,
+            on_step=on_step,
+            workspace=ws,
+        )
+    except _Interrupted:
+        factor, r = done[-1]
+        res = summed(r, converged=False, message="interrupted")
+        _write_result(writer, res)
+        log.info("interrupted at load factor %.6g", factor)
+        return res
+    except ConvergenceError as exc:
+        x = _usable(exc.state, done[-1][1].x if done else None, scene)
+        factor = done[-1][0] if done else 0.0
+        res = finish(
+            ws.system,
+            scene.loads,
+            x,
+            factor,
+            converged=False,
+            equilibrium=False,
+            iterations=0,
+            residual=float(exc.history[-1]) if exc.history else float("inf"),
+            message=str(exc),
+            time=factor,
+            stats=ws.stats(),
+        )
+        res = summed(res, extra_iterations=int(exc.iterations))
+        _write_result(writer, res, failed=exc)
+        raise
+    except CatenetError as exc:
+        if not done:
+            raise
+        res = summed(done[-1][1], converged=False, equilibrium=False, message=str(exc))
+        _write_result(writer, res, failed=exc)
+        raise
+    res = summed(done[-1][1])
+    res.message = res.message if res.message and res.message != "converged" else "equilibrium"
+    _write_result(writer, res)
+    return res
+
+
+# --------------------------------------------------------------------------------------------
+# Dynamic: the paper's implicit Euler
+# --------------------------------------------------------------------------------------------
+
+
+def _dynamic(scene, ws, writer, state, progress, stop, start):
+    from catenet.dynamic import solve_dynamic
+    from catenet.result import finish
+
+    solver = scene.case.solver
+    net, loads = scene.net, scene.loads
+    t0 = 0.0 if state is None else state.t
+    x0 = net.nodes.copy() if state is None else state.x.copy()
+    v0 = np.zeros_like(x0) if state is None else state.v.copy()
+    x0[net.fixed] = loads.support_positions(net, time=t0)
+    last = {"step": 0, "t": t0, "x": x0.copy(), "v": v0.copy(), "written": -1}
+
+    def keep(step, t, x, v, force=False):
+        if not writer.every:
+            return
+        if (force or writer.wants(step)) and last["written"] != step:
+            writer.frame(t, x, v, ws.system.tension(x))
+            last["written"] = step
+
+    keep(0, t0, x0, v0)
+
+    def on_step(step: int, t: float, x, v) -> bool:
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
+            raise ConvergenceError(
+                f"the state became non-finite at t = {t:.6g} s", state=last["x"].copy()
+            )
+        last.update(step=step, t=t, x=x.copy(), v=v.copy())
+        keep(step, t, x, v)
+        if progress is not None:
+            progress(t, solver.t_end)
+        if stop is not None and stop():
+            keep(step, t, x, v, force=True)
+            return True
+        return False
+
+    try:
+        res = solve_dynamic(
+            net,
+            loads,
+            dt=solver.dt,
+            damping=solver.damping,
+            t_end=solver.t_end,
+            rtol=solver.rtol,
+            x0=x0,
+            v0=v0,
+            t0=t0,
+            on_step=on_step,
+            workspace=ws,
+        )
+    except CatenetError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        # The last accepted step is the state to keep (ConvergenceError.state is the same
+        # positions); make sure it is the file's last frame, then /result.
+        try:
+            keep(last["step"], last["t"], last["x"], last["v"], force=True)
+        except CatenetError:
+            pass
+        res = finish(
+            ws.system,
+            loads,
+            last["x"],
+            converged=False,
+            equilibrium=False,
+            iterations=int(getattr(exc, "iterations", 0)),
+            residual=float(exc.history[-1]) if getattr(exc, "history", None) else float("inf"),
+            steps=last["step"],
+            time=last["t"],
+            v=last["v"],
+            message=str(exc),
+            wall_time=time.perf_counter() - start,
+            stats=ws.stats(),
+        )
+        _write_result(writer, res, failed=exc)
+        raise
+    keep(res.steps, res.time, res.x, res.v, force=True)
+    res.wall_time = time.perf_counter() - start
+    _write_result(writer, res)
+    return res
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------------------------
+
+
+def _write_result(writer, res, failed: BaseException | None = None) -> None:
+    """Writes /result; when the run itself failed, a failure to write is only logged (the
+    run's own error is the one to report)."""
+    if failed is None:
+        writer.result(res)
+        return
+    try:
+        writer.result(res)
+    except CatenetError as exc:
+        log.error("%s", exc)
+
+
+def _usable(state, fallback, scene) -> np.ndarray:
+    """A finite state to report: the error's, else the last equilibrium, else the start."""
+    for x in (state, fallback):
+        if x is not None and np.shape(x) == scene.net.nodes.shape and np.all(np.isfinite(x)):
+            return np.array(x, dtype=np.float64)
+    x = scene.net.nodes.copy()
+    x[scene.net.fixed] = scene.loads.support_positions(scene.net, factor=1.0)
+    return x
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _remove(writer) -> None:
+    for p in (getattr(writer, "path", None), getattr(writer, "sidecar", None)):
+        if p is not None:
+            try:
+                writer.close()
+                Path(p).unlink(missing_ok=True)
+            except OSError:
+                pass
+
+
+class _NoFile:
+    """Stands in for ResultWriter when a run writes no file."""
+
+    every = 0
+    frames = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        return False
+
+    def wants(self, step: int) -> bool:
+        return False
+
+    def frame(self, *args, **kwargs) -> None:
+        pass
+
+    def result(self, res, **attrs) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
