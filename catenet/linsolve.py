@@ -187,8 +187,11 @@ class PardisoSolver(LinearSolver):
         iparm[1] = 2  # nested dissection (METIS) ordering
         iparm[7] = 2  # up to two iterative refinement steps
         iparm[9] = 8 if upper else 13  # pivot perturbation 1e-8 / 1e-13
-        iparm[10] = 0 if upper else 1  # scaling: general matrices only
-        iparm[12] = 0 if upper else 1  # weighted matching: general matrices only
+        # No scaling or weighted matching: PARDISO computes them from the values in the
+        # analysis phase, which runs once per pattern; they would be stale afterwards
+        # (and wrong for good if the first matrix was singular, as at a flat start).
+        iparm[10] = 0
+        iparm[12] = 0
         iparm[17] = -1  # report nonzeros of the factors
         iparm[20] = 1  # Bunch-Kaufman pivoting for symmetric indefinite
         iparm[34] = 1  # zero-based indices: the CSR arrays are passed as they are

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from catenet.assembly import System
 from catenet.net import Loads
+
+if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
+    from catenet.assembly import System
 
 
 @dataclass
@@ -43,7 +46,7 @@ class Result:
     stats: dict = field(default_factory=dict)
 
 
-def finish(system: System, loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
+def finish(system: "System", loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
     """Tension and reactions at x, and the Result around them."""
     net = system.net
     _, grad = system.gradient(x)

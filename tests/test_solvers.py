@@ -1,0 +1,250 @@
+"""Static and dynamic solvers: convergence, agreement with each other, with an
+independent implementation and across linear-solver backends."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import catenet as cn
+from catenet.linsolve import pardiso_available
+from catenet.static import Workspace
+
+MAT = cn.Material.from_E(10e6, radius=0.01, density=1000.0)  # the paper's cable
+EA = MAT.EA
+needs_pardiso = pytest.mark.skipif(not pardiso_available(), reason="MKL is not available here")
+
+
+def net_scene(n=10, alpha=0.0, edge=0.05, p=100.0, gravity=False):
+    sq = cn.square_net(n, alpha, 1.0, edge, MAT)
+    g = np.array([0.0, 0.0, -9.81]) if gravity else None
+    return sq, cn.Loads(force=cn.pressure_force(sq.net, p, 1.0), gravity=g)
+
+
+def catenary_scene(nodes=21, dl=0.2):
+    net = cn.cable([-0.5, 0, 0], [0.5, 0, 0], nodes, MAT)
+    d = np.zeros((nodes, 3))
+    d[0, 0], d[-1, 0] = dl / 2, -dl / 2
+    return net, cn.Loads(gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d)
+
+
+def test_newton_converges_quadratically():
+    """Near the solution the residual falls as r_{k+1} ~ C r_k^2: the observed order
+    log(r_{k+1}/r_k) / log(r_k/r_{k-1}) reaches about 2 before the round-off floor."""
+    sq, loads = net_scene(edge=0.02)
+    r = cn.solve_static(sq.net, loads, rtol=1e-14)
+    h = np.array(r.history)
+    floor = 1e3 * h[-1]
+    orders = [
+        math.log(h[k + 1] / h[k]) / math.log(h[k] / h[k - 1])
+        for k in range(1, len(h) - 1)
+        if h[k + 1] > floor and h[k] < h[k - 1] and h[k + 1] < h[k]
+    ]
+    assert r.converged and r.iterations < 30
+    assert max(orders) > 1.8
+
+
+def test_paper_net_reference_deflection():
+    """n = 34, alpha = pi/4, p = 100 Pa, 1 cm edges: delta/L = 0.0454 (an independent
+    implementation of the same model gives 0.04539)."""
+    sq, loads = net_scene(34, math.pi / 4, 0.01)
+    r = cn.solve_static(sq.net, loads, rtol=1e-10)
+    delta = -(r.x[sq.center, 2] - sq.net.nodes[sq.center, 2])
+    assert delta == pytest.approx(0.0454, abs=5e-5)
+    assert r.iterations < 40
+
+
+def independent_equilibrium(nodes, edges, l0, ea, fixed, f):
+    """A separate implementation of the same model: dense NumPy gradient and Hessian of
+    the tension-only energy, Newton with a Levenberg-Marquardt shift and backtracking."""
+    free = np.repeat(~fixed, 3)
+    x = nodes.copy()
+
+    def parts(x):
+        e = x[edges[:, 1]] - x[edges[:, 0]]
+        length = np.linalg.norm(e, axis=1)
+        eps = length / l0 - 1
+        taut = eps > 0
+        energy = 0.5 * np.sum(ea * l0 * np.where(taut, eps, 0) ** 2) - np.sum(f * x)
+        t = e / length[:, None]
+        force = np.where(taut, ea * eps, 0)[:, None] * t
+        g = np.zeros_like(x)
+        np.add.at(g, edges[:, 1], force)
+        np.subtract.at(g, edges[:, 0], force)
+        g -= f
+        H = np.zeros((x.size, x.size))
+        for k in np.flatnonzero(taut):
+            tt = np.outer(t[k], t[k])
+            block = ea[k] / l0[k] * tt + ea[k] * eps[k] / length[k] * (np.eye(3) - tt)
+            i, j = edges[k]
+            for a, b, s in ((i, i, 1), (j, j, 1), (i, j, -1), (j, i, -1)):
+                H[3 * a : 3 * a + 3, 3 * b : 3 * b + 3] += s * block
+        return energy, g.reshape(-1)[free], H[np.ix_(free, free)]
+
+    lam = 1e-4 * np.max(ea / l0)
+    energy, g, H = parts(x)
+    for _ in range(2000):
+        if np.linalg.norm(g) < 1e-11 * np.linalg.norm(f):
+            return x
+        trial = x.copy()
+        trial.reshape(-1)[free] += np.linalg.solve(H + lam * np.eye(len(g)), -g)
+        e_t, g_t, H_t = parts(trial)
+        if e_t < energy or (abs(e_t - energy) < 1e-13 * abs(energy) and
+                            np.linalg.norm(g_t) < np.linalg.norm(g)):
+            x, energy, g, H = trial, e_t, g_t, H_t
+            lam = lam / 3 if lam > 1e-14 * np.max(ea / l0) else 0.0
+        else:
+            lam = max(10 * lam, 1e-10 * np.max(ea / l0))
+    raise AssertionError("the independent implementation did not converge")
+
+
+def test_square_net_matches_an_independent_implementation():
+    sq, loads = net_scene(10, 0.5, 0.1)
+    net = sq.net
+    r = cn.solve_static(net, loads, rtol=1e-12)
+    x = independent_equilibrium(
+        net.nodes, net.edges, net.rest_length, net.EA, net.fixed, loads.external_force(net)
+    )
+    delta, delta_ref = -r.x[sq.center, 2], -x[sq.center, 2]
+    assert abs(delta - delta_ref) <= 1e-6 * delta_ref
+    assert np.abs(r.x - x).max() <= 1e-6 * delta_ref
+
+
+def test_static_and_dynamic_equilibria_agree():
+    sq, loads = net_scene(10, 0.0, 0.1, gravity=True)
+    s = cn.solve_static(sq.net, loads, rtol=1e-12)
+    d = cn.solve_dynamic(sq.net, loads, dt=0.05, damping=5.0, t_end=200.0, rtol=1e-11)
+    assert d.equilibrium and d.converged and d.time < 200.0
+    assert np.abs(d.x - s.x).max() <= 1e-8 * np.abs(s.x[:, 2]).max()
+
+
+@pytest.mark.parametrize("mu", [0.1, 1.0, 10.0])
+def test_damping_does_not_change_the_equilibrium(mu):
+    """Paper App. A: the damping coefficient changes the transient, not the result."""
+    net, loads = catenary_scene(21, 0.2)
+    s = cn.solve_static(net, loads, rtol=1e-12)
+    d = cn.solve_dynamic(net, loads, dt=0.05, damping=mu, t_end=2000.0, rtol=1e-11)
+    assert d.equilibrium
+    assert np.abs(d.x - s.x).max() <= 1e-8
+
+
+def test_dynamic_follows_the_paper_time_step():
+    """One implicit Euler step from rest under a force F on a free particle between two
+    slack edges: M (q1 - q0)/h^2 + mu M (q1 - q0)/h = F, so q1 - q0 = F h^2 / (M (1 + mu h))."""
+    net = cn.Net.from_arrays(
+        [[-1, 0, 0], [0, 0, 0], [1, 0, 0]], [[0, 1], [1, 2]], EA=1.0, fixed=[0, 2],
+        rest_length=2.0, line_density=1.0,
+    )
+    F, h, mu = 3.0, 0.01, 2.0
+    f = np.zeros((3, 3))
+    f[1, 2] = F
+    r = cn.solve_dynamic(net, cn.Loads(force=f), dt=h, damping=mu, t_end=h,
+                         stop_at_equilibrium=False, rtol=1e-12)
+    M = net.mass[1]
+    assert r.x[1, 2] == pytest.approx(F * h**2 / (M * (1 + mu * h)), rel=1e-12)
+    assert r.v[1, 2] == pytest.approx(F * h / (M * (1 + mu * h)), rel=1e-12)
+
+
+def test_failed_dynamic_steps_are_retried_smaller():
+    """With only two Newton iterations allowed, the long first steps of a sudden load
+    fail; the solver halves them instead of accepting them, and still gets there."""
+    sq, loads = net_scene(10, 0.0, 0.1)
+    s = cn.solve_static(sq.net, loads, rtol=1e-10)
+    d = cn.solve_dynamic(sq.net, loads, dt=1.0, damping=1.0, t_end=500.0, rtol=1e-9,
+                         max_iter=2)
+    assert d.equilibrium
+    assert d.steps > d.time / 1.0  # some steps were shorter than dt
+    assert np.abs(d.x - s.x).max() <= 1e-6 * np.abs(s.x[:, 2]).max()
+
+
+def test_dynamic_needs_mass():
+    net = cn.cable([0, 0, 0], [1, 0, 0], 5, cn.Material(EA=10.0))
+    with pytest.raises(cn.ConfigError, match="density"):
+        cn.solve_dynamic(net, cn.Loads(), dt=0.1, damping=1.0, t_end=1.0)
+
+
+@needs_pardiso
+def test_backends_agree():
+    sq, loads = net_scene(10, 0.3, 0.05)
+    a = cn.solve_static(sq.net, loads, rtol=1e-12, linear="pardiso")
+    b = cn.solve_static(sq.net, loads, rtol=1e-12, linear="scipy")
+    assert a.stats["backend"] == "pardiso" and b.stats["backend"] == "scipy"
+    assert np.abs(a.x - b.x).max() <= 1e-10
+
+
+@needs_pardiso
+@pytest.mark.parametrize("mtype", [2, -2, 11])
+def test_pardiso_matrix_types_agree(mtype):
+    sq, loads = net_scene(10, 0.3, 0.05)
+    ref = cn.solve_static(sq.net, loads, rtol=1e-12, linear="scipy")
+    ws = Workspace(sq.net, mtype=mtype)
+    r = cn.solve_static(sq.net, loads, rtol=1e-12, workspace=ws)
+    assert np.abs(r.x - ref.x).max() <= 1e-10
+    assert ws.solver.stats["analyse"] == 1  # analysed once, refactorised per iteration
+    assert ws.solver.stats["factorize"] >= r.iterations
+
+
+def test_repeated_runs_are_bit_identical():
+    sq, loads = net_scene(10, 0.3, 0.05, gravity=True)
+    a = cn.solve_static(sq.net, loads, rtol=1e-10)
+    b = cn.solve_static(sq.net, loads, rtol=1e-10)
+    assert np.array_equal(a.x, b.x) and a.iterations == b.iterations
+
+
+def test_continuation_traces_a_force_displacement_curve():
+    sq, loads = net_scene(10, 0.0, 0.05)
+    factors = [0.01, 0.1, 0.3, 1.0]
+    seen = []
+    curve = cn.continuation(sq.net, loads, factors, rtol=1e-10,
+                            on_step=lambda f, r: seen.append(f))
+    deltas = [-r.x[sq.center, 2] for r in curve]
+    assert seen == factors and np.all(np.diff(deltas) > 0)
+    direct = cn.solve_static(sq.net, loads, rtol=1e-10)
+    assert np.abs(curve[-1].x - direct.x).max() <= 1e-8 * deltas[-1]
+    # The cable-net law: delta ~ p^(1/3) at small loads (stiffening membrane).
+    slope = math.log(deltas[1] / deltas[0]) / math.log(10.0)
+    assert slope == pytest.approx(1 / 3, abs=0.02)
+
+
+@pytest.mark.parametrize("nodes, dl", [(21, 0.05), (161, 0.2), (641, 0.5)])
+def test_compressed_catenary_in_tens_of_iterations(nodes, dl):
+    """Supports moved inward: every edge starts slack. The smoothing continuation of the
+    static solver reaches the round-off floor in tens of iterations at any resolution."""
+    net, loads = catenary_scene(nodes, dl)
+    r = cn.solve_static(net, loads, rtol=1e-10)
+    assert r.converged and r.iterations <= 40
+    assert r.tension.min() > 0  # a hanging cable is taut everywhere
+    assert_balanced(r, loads, net)
+
+
+def assert_balanced(r, loads, net):
+    """Reactions and loads sum to the sum of the free nodes' residual forces: zero up to
+    the converged residual (sum of n terms <= sqrt(n) |r|) and round-off."""
+    total = r.reaction.sum(axis=0) + loads.external_force(net).sum(axis=0)
+    bound = np.sqrt(3 * net.n_nodes) * r.residual + 1e-12 * np.abs(r.reaction).sum()
+    assert np.linalg.norm(total) <= bound
+
+
+@pytest.mark.parametrize("ea", [1e-2, 1e2, 1e9])
+def test_stiff_and_soft_cables_converge(ea):
+    net, loads = catenary_scene(51, 0.2)
+    net = net.with_rest_length(net.rest_length)
+    soft = cn.Net.from_arrays(net.nodes, net.edges, EA=ea, fixed=net.fixed,
+                              line_density=MAT.line_density)
+    r = cn.solve_static(soft, loads, rtol=1e-10, max_iter=100)
+    assert r.converged
+    assert_balanced(r, loads, soft)
+    # The residual is 1e-10 of the weight unless the strain round-off EA eps |x| / l0
+    # (1e-5 N for EA = 1e9) is larger: no solver gets below that in double precision.
+    weight = np.abs(loads.external_force(soft)).sum()
+    assert r.residual <= max(1e-10 * weight, 4e-16 * ea * 0.5 / 0.02 * np.sqrt(50) * 2)
+
+
+def test_unconverged_static_raises_with_history():
+    sq, loads = net_scene(10, 0.0, 0.05)
+    with pytest.raises(cn.ConvergenceError) as info:
+        cn.solve_static(sq.net, loads, rtol=1e-12, max_iter=3)
+    assert info.value.iterations == 3 and len(info.value.history) >= 2
+    assert info.value.state.shape == sq.net.nodes.shape
