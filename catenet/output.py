@@ -65,6 +65,7 @@ __all__ = [
     "read_frame",
     "recover",
     "sidecar_path",
+    "trajectory_length",
     "write_xdmf",
 ]
 
@@ -147,16 +148,18 @@ def _check_finite(name: str, value, t: float) -> None:
 
 def open_result(path: str | Path):
     """Opens a result file for reading with h5py: normally, or, for the file of a run that
-    was killed while writing (HDF5 refuses it: "file is already open for write"), in SWMR
-    read mode, which reads it as it was at its last flush."""
+    was killed or whose disk filled up while writing (HDF5 refuses it: "file is already
+    open for write", "truncated file"), in SWMR read mode, which reads it as it was at its
+    last flush."""
     import h5py
 
     try:
         return h5py.File(path, "r")
     except OSError as exc:
-        if "already open for write" not in str(exc):
-            raise
-        return h5py.File(path, "r", libver=LIBVER, swmr=True)
+        try:
+            return h5py.File(path, "r", libver=LIBVER, swmr=True)
+        except OSError:
+            raise exc from None
 
 
 @dataclass
@@ -173,11 +176,23 @@ class Frame:
 
 def trajectory_length(h5) -> int:
     """Complete frames in a file: the shortest of the trajectory datasets (a killed run
-    may have extended one dataset more than the others)."""
+    may have extended one dataset more than the others), less trailing frames that never
+    fully reached the disk (they read as NaN, the datasets' fill value)."""
     g = h5.get("trajectory")
     if g is None or "time" not in g:
         return 0
-    return min(g[name].shape[0] for name in ("time", *TRAJECTORY) if name in g)
+    names = [name for name in ("time", *TRAJECTORY) if name in g]
+    n = min(g[name].shape[0] for name in names)
+    while n > 0 and not _complete(g, names, n - 1):
+        n -= 1
+    return n
+
+
+def _complete(g, names, k: int) -> bool:
+    try:
+        return all(np.all(np.isfinite(g[name][k])) for name in names)
+    except (OSError, RuntimeError):  # data beyond the end of a truncated file
+        return False
 
 
 def read_frame(path: str | Path, index: int = -1) -> Frame:
@@ -224,7 +239,7 @@ def recover(path: str | Path, out: str | Path | None = None) -> Path:
     src = Path(path)
     dst = src if out is None else Path(out)
     tmp = dst.with_name(f".{dst.name}.recover-{os.getpid()}")
-    with open_result(src) as h5, h5py.File(tmp, "w") as clean:
+    with open_result(src) as h5, h5py.File(tmp, "w", libver=LIBVER) as clean:
         for key, value in h5.attrs.items():
             clean.attrs[key] = value
         n = trajectory_length(h5)
@@ -232,13 +247,16 @@ def recover(path: str | Path, out: str | Path | None = None) -> Path:
             if name == "trajectory":
                 g = clean.create_group("trajectory")
                 for key, ds in h5["trajectory"].items():
-                    g.create_dataset(
+                    copy = g.create_dataset(
                         key,
                         data=ds[:n],
                         maxshape=(None, *ds.shape[1:]),
                         chunks=ds.chunks,
                         compression=ds.compression,
+                        shuffle=ds.shuffle,
                     )
+                    for attr, value in ds.attrs.items():
+                        copy.attrs[attr] = value
             else:
                 h5.copy(h5[name], clean, name=name)
     os.replace(tmp, dst)
@@ -511,7 +529,11 @@ class ResultWriter:
     def _create_trajectory(self, h5) -> None:
         n, m = self.scene.net.n_nodes, self.scene.net.n_edges
         g = h5.create_group("trajectory")
-        g.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,))
+        # Fill value NaN: a frame that never fully reached the disk (the writer failed or
+        # was killed in the middle of it) reads as NaN, and readers skip it.
+        g.create_dataset(
+            "time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,), fillvalue=np.nan
+        )
         shapes = {"x": (n, 3), "tension": (m,)}
         if self.velocities:
             shapes["v"] = (n, 3)
@@ -531,6 +553,7 @@ class ResultWriter:
                 compression="gzip",
                 compression_opts=4,
                 shuffle=True,
+                fillvalue=np.nan,
             )
         g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
 
@@ -567,7 +590,7 @@ class ResultWriter:
             g["time"].resize((k + 1,))
             g["time"][k] = float(t)  # last: the frame counts once its time is there
             self._h5.flush()
-        except OSError as exc:  # ENOSPC, EIO, quota ...
+        except (OSError, RuntimeError) as exc:  # ENOSPC, EFBIG, EIO, quota ...
             self._fail(exc)
             return
         self.frames += 1
@@ -584,11 +607,13 @@ class ResultWriter:
             self.frames,
             exc,
         )
-        try:
-            self._h5.close()
-        except Exception:  # the file is broken already
-            pass
-        self._h5 = None
+        h5, self._h5 = self._h5, None
+        if h5 is not None:
+            _detach(h5)
+            try:
+                h5.close()
+            except Exception:  # the file is broken already
+                pass
 
     def _write_sidecar(self) -> None:
         if not self.xdmf:
@@ -620,7 +645,7 @@ class ResultWriter:
                 self._h5.flush()
                 self._result_written = True
                 return
-            except OSError as exc:
+            except (OSError, RuntimeError) as exc:
                 self._fail(exc)
         # Writing failed: keep the result in a temporary file.
         first = self.error
@@ -706,6 +731,27 @@ class ResultWriter:
             self._swmr = False
             if self.xdmf and self.error is None and (self.frames or self._result_written):
                 self._write_sidecar()
+
+
+def _detach(h5) -> None:
+    """Points HDF5's file descriptor of a file whose writes fail at /dev/null.
+
+    HDF5 retries the failed writes when the file and its datasets are closed; when those
+    fail again, it keeps their identifiers and crashes at interpreter exit. Writing the
+    rest to /dev/null lets the close succeed, while the file on disk keeps what was
+    flushed before the failure (consistent, thanks to SWMR).
+    """
+    try:
+        fd = h5.id.get_vfd_handle()
+        null = os.open(os.devnull, os.O_RDWR)
+    except Exception:  # another file driver, or no /dev/null: leave it be
+        return
+    try:
+        os.dup2(null, fd)
+    except OSError:
+        pass
+    finally:
+        os.close(null)
 
 
 def result_attrs(res, scene) -> dict:

@@ -1,0 +1,148 @@
+"""Shared fixtures: small case files, the XDMF checker and subprocess helpers."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+CONFIGS = REPO / "configs"
+
+# A small net (225 nodes) that settles in about 170 steps of 0.01 s.
+SMALL_NET = """\
+title = "small net"
+
+[geometry]
+kind = "square_net"
+n = 10
+alpha = 0.0
+size = 1.0
+edge_length = 0.05
+
+[material]
+E = 10e6
+radius = 0.01
+density = 1000.0
+
+[load]
+pressure = 100.0
+
+[solver]
+method = "{method}"
+dt = {dt}
+damping = {damping}
+t_end = {t_end}
+
+[output]
+file = "out/small.h5"
+every = {every}
+"""
+
+
+def small_net(method="dynamic", dt=0.01, damping=1.0, t_end=5.0, every=1) -> str:
+    return SMALL_NET.format(method=method, dt=dt, damping=damping, t_end=t_end, every=every)
+
+
+@pytest.fixture
+def write_case(tmp_path):
+    """write_case(text, name="case.toml") -> path of a case file in tmp_path."""
+
+    def write(text: str, name: str = "case.toml") -> Path:
+        p = tmp_path / name
+        p.write_text(text)
+        return p
+
+    return write
+
+
+def catenet_command(*args: str) -> list[str]:
+    """The command line that runs catenet in a fresh interpreter."""
+    return [sys.executable, "-m", "catenet", *map(str, args)]
+
+
+def subprocess_env() -> dict:
+    env = dict(os.environ)
+    env.pop("PYTHONWARNINGS", None)
+    return env
+
+
+def wait_for_frames(path: Path, frames: int, proc: subprocess.Popen, timeout: float = 120.0):
+    """Polls a result file that a subprocess writes until it has ``frames`` frames."""
+    from catenet.output import open_result, trajectory_length
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            out, err = proc.communicate()
+            raise AssertionError(f"catenet ended early ({proc.returncode}):\n{out}\n{err}")
+        if path.exists():
+            try:
+                with open_result(path) as h5:
+                    if trajectory_length(h5) >= frames:
+                        return
+            except (OSError, KeyError):
+                pass  # not in SWMR mode yet, or the group is being created
+        time.sleep(0.05)
+    proc.kill()
+    raise AssertionError(f"{path}: fewer than {frames} frames after {timeout} s")
+
+
+def check_xdmf(xdmf: Path) -> dict:
+    """Parses an XDMF sidecar and checks every HDF5 reference in it against the file:
+    the file exists (relative to the sidecar), the dataset exists with the declared
+    shape, and each HyperSlab selects a frame inside it. Returns counts for the caller."""
+    import h5py
+
+    tree = ET.parse(xdmf)
+    root = tree.getroot()
+    assert root.tag == "Xdmf" and root.get("Version") == "3.0"
+    domain = root.find("Domain")
+    assert domain is not None
+    checked = {"refs": 0, "slabs": 0, "grids": 0, "times": []}
+    with h5py.File(xdmf.parent / _h5_name(root), "r") as h5:
+        for item in root.iter("DataItem"):
+            if item.get("Format") != "HDF":
+                continue
+            name, _, dataset = item.text.strip().partition(":")
+            assert (xdmf.parent / name).is_file(), name
+            assert dataset in h5, dataset
+            dims = tuple(int(d) for d in item.get("Dimensions").split())
+            assert h5[dataset].shape == dims, (dataset, h5[dataset].shape, dims)
+            checked["refs"] += 1
+        for slab in root.iter("DataItem"):
+            if slab.get("ItemType") != "HyperSlab":
+                continue
+            sel, ref = list(slab)
+            full = tuple(int(d) for d in ref.get("Dimensions").split())
+            rows = np.array(sel.text.split(), dtype=int).reshape(3, len(full))
+            start, stride, count = rows
+            assert tuple(int(d) for d in slab.get("Dimensions").split()) == tuple(count)
+            assert np.all(start + (count - 1) * stride < np.array(full))
+            assert tuple(count[1:]) == full[1:]
+            checked["slabs"] += 1
+        for grid in root.iter("Grid"):
+            if grid.get("GridType") != "Uniform":
+                continue
+            checked["grids"] += 1
+            topo = grid.find("Topology")
+            assert topo.get("TopologyType") == "Polyline"
+            assert topo.get("NodesPerElement") == "2"
+            assert int(topo.get("NumberOfElements")) == len(h5["mesh/edges"])
+            t = grid.find("Time")
+            if t is not None:
+                checked["times"].append(float(t.get("Value")))
+    return checked
+
+
+def _h5_name(root) -> str:
+    for item in root.iter("DataItem"):
+        if item.get("Format") == "HDF":
+            return item.text.strip().partition(":")[0]
+    raise AssertionError("no HDF5 reference in the sidecar")

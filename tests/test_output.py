@@ -1,0 +1,336 @@
+"""The result file (SPEC section 5), its XDMF sidecar, and what survives crashes and full
+disks."""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from conftest import check_xdmf, small_net, subprocess_env, wait_for_frames
+
+import catenet
+from catenet.errors import ConfigError, OutputError
+from catenet.output import (
+    ResultWriter,
+    check_output_path,
+    open_result,
+    read_frame,
+    recover,
+    trajectory_length,
+)
+from catenet.result import Result
+
+
+def make_scene(**kw):
+    from catenet.case import build, parse_case
+
+    return build(parse_case(tomllib.loads(small_net(**kw))))
+
+
+def fake_result(scene, x, *, v=None, converged=True, message="equilibrium"):
+    net = scene.net
+    tension = np.linspace(0.0, 5.0, net.n_edges)
+    reaction = np.zeros_like(x)
+    reaction[net.fixed] = 1.0
+    return Result(
+        x=x,
+        tension=tension,
+        reaction=reaction,
+        converged=converged,
+        iterations=7,
+        residual=1e-9,
+        steps=3,
+        time=0.2,
+        v=v,
+        equilibrium=converged,
+        wall_time=0.5,
+        message=message,
+        max_strain=0.01,
+    )
+
+
+def moved(scene, k):
+    x = scene.net.nodes.copy()
+    x[~scene.net.fixed, 2] -= 0.001 * k
+    return x
+
+
+def test_layout_of_a_dynamic_run(tmp_path):
+    scene = make_scene()
+    net = scene.net
+    path = tmp_path / "new" / "dir" / "run.h5"  # missing directories are created
+    with ResultWriter(path, scene, every=1, attrs={"linear_backend": "scipy"}) as w:
+        for k in range(3):
+            w.frame(0.1 * k, moved(scene, k), np.full((net.n_nodes, 3), 0.5 * k))
+        w.result(fake_result(scene, moved(scene, 2), v=np.zeros((net.n_nodes, 3))))
+    n, m = net.n_nodes, net.n_edges
+    with h5py.File(path, "r") as h5:  # a closed file opens with any HDF5 reader
+        assert h5.attrs["catenet_version"] == catenet.__version__
+        assert h5.attrs["case"] == scene.case.to_toml()
+        assert tomllib.loads(h5.attrs["case"])["solver"]["method"] == "dynamic"
+        assert datetime.datetime.fromisoformat(h5.attrs["created"]).tzinfo is not None
+        for name in ("numpy", "scipy", "numba", "h5py", "hdf5"):
+            assert h5.attrs[f"{name}_version"]
+        assert h5.attrs["linear_backend"] == "scipy"
+        mesh = h5["mesh"]
+        assert mesh["nodes"].shape == (n, 3) and mesh["nodes"].dtype == np.float64
+        assert mesh["edges"].shape == (m, 2) and mesh["edges"].dtype == np.int64
+        assert mesh["rest_length"].shape == (m,) and mesh["EA"].shape == (m,)
+        assert mesh["fixed"].dtype == bool and mesh["fixed"][()].sum() == net.fixed.sum()
+        np.testing.assert_array_equal(mesh["edges"][()], net.edges)
+        traj = h5["trajectory"]
+        np.testing.assert_allclose(traj["time"][()], [0.0, 0.1, 0.2])
+        assert traj["x"].shape == (3, n, 3) and traj["v"].shape == (3, n, 3)
+        assert traj["tension"].shape == (3, m)
+        for name in ("x", "v", "tension"):
+            ds = traj[name]
+            assert ds.maxshape[0] is None and ds.chunks[0] == 1 and ds.compression == "gzip"
+        np.testing.assert_array_equal(traj["x"][1], moved(scene, 1))
+        np.testing.assert_array_equal(traj["v"][2], 1.0)
+        assert np.all(traj["tension"][0] == 0.0)  # the reference state is unstressed
+        res = h5["result"]
+        assert res["x"].shape == (n, 3) and res["tension"].shape == (m,)
+        assert res["reaction"].shape == (n, 3)
+        a = dict(res.attrs)
+        assert a["converged"] and a["equilibrium"] and a["iterations"] == 7 and a["steps"] == 3
+        assert a["message"] == "equilibrium" and a["wall_time"] == 0.5 and a["time"] == 0.2
+        assert a["residual"] == 1e-9 and a["max_strain"] == 0.01
+        assert a["delta"] == pytest.approx(0.002) and a["probe"] == scene.probe
+        assert a["delta_over_L"] == pytest.approx(0.002 / scene.size)
+    found = check_xdmf(path.with_suffix(".xdmf"))
+    assert found["grids"] == 3 and found["times"] == pytest.approx([0.0, 0.1, 0.2])
+    assert found["slabs"] == 9  # x, tension, v of every frame
+
+
+def test_every_zero_writes_no_trajectory(tmp_path):
+    scene = make_scene(method="static", every=0)
+    path = tmp_path / "final.h5"
+    with ResultWriter(path, scene, every=0) as w:
+        w.frame(1.0, moved(scene, 1))  # ignored: the run keeps the final state only
+        w.result(fake_result(scene, moved(scene, 1)))
+    with h5py.File(path, "r") as h5:
+        assert "trajectory" not in h5
+        assert "v" not in h5["result"]  # a static case keeps no velocities
+        np.testing.assert_array_equal(h5["result/x"][()], moved(scene, 1))
+    found = check_xdmf(path.with_suffix(".xdmf"))
+    assert found["grids"] == 1 and found["slabs"] == 0 and found["refs"] == 4
+    text = path.with_suffix(".xdmf").read_text()
+    assert "/result/x" in text and "/result/tension" in text
+
+
+def test_non_finite_frames_are_refused_and_earlier_frames_kept(tmp_path):
+    scene = make_scene()
+    path = tmp_path / "nan.h5"
+    with ResultWriter(path, scene, every=1) as w:
+        w.frame(0.0, moved(scene, 0))
+        w.frame(0.1, moved(scene, 1))
+        bad = moved(scene, 2)
+        bad[3, 1] = np.nan
+        with pytest.raises(OutputError, match="non-finite"):
+            w.frame(0.2, bad)
+        with pytest.raises(OutputError, match="non-finite"):
+            w.frame(0.2, moved(scene, 2), np.full((scene.net.n_nodes, 3), np.inf))
+        with pytest.raises(OutputError, match="non-finite"):
+            w.result(fake_result(scene, bad))
+    with h5py.File(path, "r") as h5:
+        assert trajectory_length(h5) == 2
+        assert np.all(np.isfinite(h5["trajectory/x"][()]))
+    assert check_xdmf(path.with_suffix(".xdmf"))["grids"] == 2
+
+
+def test_output_path_checks_create_nothing(tmp_path):
+    (tmp_path / "a_file").write_text("x")
+    with pytest.raises(ConfigError, match="is a directory"):
+        check_output_path(tmp_path)
+    with pytest.raises(ConfigError, match="not a directory"):
+        check_output_path(tmp_path / "a_file" / "sub" / "out.h5")
+    assert check_output_path(tmp_path / "x" / "y" / "out.h5") == tmp_path / "x" / "y" / "out.h5"
+    assert not (tmp_path / "x").exists()  # checking creates nothing
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_output_path_permission(tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        with pytest.raises(ConfigError, match="permission denied"):
+            check_output_path(locked / "out.h5")
+    finally:
+        locked.chmod(0o700)
+
+
+def test_result_can_be_read_back_as_a_frame(tmp_path):
+    scene = make_scene(every=0)
+    path = tmp_path / "r.h5"
+    v = np.full((scene.net.n_nodes, 3), 0.25)
+    with ResultWriter(path, scene, every=0) as w:
+        w.result(fake_result(scene, moved(scene, 4), v=v))
+    frame = read_frame(path)
+    assert frame.source == "result" and frame.t == 0.2
+    np.testing.assert_array_equal(frame.v, v)
+    with pytest.raises(ConfigError, match="no such result file"):
+        read_frame(tmp_path / "missing.h5")
+
+
+WRITER_SCRIPT = """
+import sys, tomllib, numpy as np
+sys.path.insert(0, {tests!r})
+from conftest import small_net
+from catenet.case import build, parse_case
+from catenet.output import ResultWriter
+scene = build(parse_case(tomllib.loads(small_net())))
+x0 = scene.net.nodes
+with ResultWriter({path!r}, scene, every=1) as w:
+    k = 0
+    while True:
+        w.frame(0.5 * k, x0 + k, np.full_like(x0, k))
+        k += 1
+"""
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.137, 0.31])
+def test_sigkill_leaves_a_readable_file(tmp_path, delay):
+    """A writer killed at an arbitrary moment leaves every flushed frame readable."""
+    path = tmp_path / "killed.h5"
+    script = WRITER_SCRIPT.format(tests=str(Path(__file__).parent), path=str(path))
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script],
+        env=subprocess_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        wait_for_frames(path, 5, proc)
+        time.sleep(delay)
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.communicate()
+    assert proc.returncode == -signal.SIGKILL
+    with open_result(path) as h5:  # the file still carries HDF5's "open for write" mark
+        n = trajectory_length(h5)
+        assert n >= 5
+        g = h5["trajectory"]
+        t = g["time"][:n]
+        np.testing.assert_array_equal(t, 0.5 * np.arange(n))
+        x = g["x"][:n]
+        nodes = h5["mesh/nodes"][()]
+        for k in range(n):
+            np.testing.assert_array_equal(x[k], nodes + k)
+            assert np.all(g["v"][k] == k)
+        assert "result" not in h5
+    frame = read_frame(path)
+    assert frame.index == n - 1 and frame.t == 0.5 * (n - 1)
+    # recover() turns it into an ordinary file with a matching sidecar.
+    recover(path)
+    with h5py.File(path, "r") as h5:
+        assert h5["trajectory/x"].shape[0] == n
+    assert check_xdmf(path.with_suffix(".xdmf"))["grids"] == n
+
+
+FULL_DISK_SCRIPT = """
+import json, resource, signal, sys, tomllib, numpy as np
+sys.path.insert(0, {tests!r})
+from conftest import small_net
+from catenet.case import build, parse_case
+from catenet.errors import OutputError
+from catenet.output import ResultWriter
+from catenet.result import Result
+scene = build(parse_case(tomllib.loads(small_net())))
+net = scene.net
+rng = np.random.default_rng(1)
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # writes beyond the limit fail with EFBIG
+resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))
+out = {{}}
+with ResultWriter({path!r}, scene, every=1) as w:
+    for k in range(200):  # incompressible frames: the limit is reached after a few
+        w.frame(0.1 * k, net.nodes + rng.random(net.nodes.shape), rng.random(net.nodes.shape))
+    x = net.nodes + 0.125
+    res = Result(x=x, tension=np.ones(net.n_edges), reaction=np.zeros_like(x), converged=True,
+                 iterations=3, residual=0.0, steps=200, time=20.0, v=np.zeros_like(x))
+    try:
+        w.result(res)
+    except OutputError as exc:
+        out = dict(message=str(exc), saved_to=str(exc.saved_to), frames=w.frames)
+print(json.dumps(out))
+"""
+
+
+def test_full_disk_keeps_the_result_in_a_temporary_file(tmp_path):
+    path = tmp_path / "full.h5"
+    script = FULL_DISK_SCRIPT.format(
+        tests=str(Path(__file__).parent), path=str(path), limit=120_000
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script],
+        env=subprocess_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out, "writing never failed: the file size limit did not apply"
+    saved = Path(out["saved_to"])
+    try:
+        assert str(saved) in out["message"] and str(path) in out["message"]
+        assert 0 < out["frames"] < 200
+        with h5py.File(saved, "r") as h5:
+            np.testing.assert_array_equal(h5["result/x"][()], h5["mesh/nodes"][()] + 0.125)
+            assert bool(h5["result"].attrs["converged"])
+            assert "failed" in h5.attrs["note"]
+        with open_result(path) as h5:  # the frames written before the failure
+            assert trajectory_length(h5) >= out["frames"] - 1
+        recover(path)  # an ordinary file again, its sidecar matching
+        with h5py.File(path, "r") as h5:
+            assert trajectory_length(h5) >= out["frames"] - 1
+            assert np.all(np.isfinite(h5["trajectory/x"][()]))
+        check_xdmf(path.with_suffix(".xdmf"))
+    finally:
+        saved.unlink(missing_ok=True)
+
+
+def test_xdmf_of_a_static_run_with_steps(tmp_path):
+    from catenet.case import load_case
+    from catenet.runner import run_case
+
+    case_file = tmp_path / "c.toml"
+    case_file.write_text(small_net(method="static", every=1))
+    case = load_case(case_file, ["solver.steps=3"])
+    res = run_case(case, tmp_path / "s.h5")
+    assert res.converged and res.steps == 3
+    found = check_xdmf(tmp_path / "s.xdmf")
+    assert found["times"] == pytest.approx([1 / 3, 2 / 3, 1.0])  # time = load factor
+    with h5py.File(tmp_path / "s.h5", "r") as h5:
+        assert "v" not in h5["trajectory"]
+        np.testing.assert_array_equal(h5["trajectory/x"][-1], h5["result/x"][()])
+
+
+def test_recover_rewrites_a_clean_file(tmp_path):
+    scene = make_scene()
+    path = tmp_path / "ok.h5"
+    with ResultWriter(path, scene, every=1) as w:
+        w.frame(0.0, moved(scene, 0))
+        w.result(fake_result(scene, moved(scene, 0), v=np.zeros((scene.net.n_nodes, 3))))
+    recover(path, tmp_path / "copy.h5")
+    with h5py.File(tmp_path / "copy.h5", "r") as a, h5py.File(path, "r") as b:
+        assert dict(a["result"].attrs) == dict(b["result"].attrs)
+        assert a.attrs["case"] == b.attrs["case"]
+    check_xdmf(tmp_path / "copy.xdmf")
+
+
+def test_writer_refuses_bad_every(tmp_path):
+    with pytest.raises(ConfigError, match="output.every"):
+        ResultWriter(tmp_path / "x.h5", make_scene(), every=-1)
+    assert not (tmp_path / "x.h5").exists()
