@@ -1,0 +1,66 @@
+"""Fast subset of the numerical-stability stress test (``catenet.bench.stress``).
+
+Every scene must end in a right answer: a converged state that passes its check (Eq. 17,
+the exact discrete chain, equilibrium recomputed from the answer, static = dynamic) or a
+clear catenet error where that is right; never another exception, never a NaN. No timing
+assertions. The full matrix runs with ``catenet bench stress``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from catenet.bench import stress
+
+# Scenes where catenet does not give a right answer yet (reported to the solver's
+# developer); strict=False so that a fix shows up as XPASS rather than a failure.
+KNOWN = {
+    "bilateral compressed, no load": (
+        "solve_static returns the straight, uniformly compressed state of a bilateral cable "
+        "(an unstable equilibrium: negative geometric stiffness) as converged, in 0 "
+        "iterations, without a word"
+    ),
+    "supports inward 0.2 L dynamic h=0.1 ramp 0.5 s": (
+        "an edge collapses to zero length in a Newton trial of a dynamic step; the JIT "
+        "Hessian kernel raises ZeroDivisionError instead of a catenet error / step cut"
+    ),
+}
+
+
+def _params():
+    for scene in stress.scenes(quick=True):
+        marks = [pytest.mark.xfail(reason=KNOWN[scene.id], strict=False)] if (
+            scene.id in KNOWN) else []
+        yield pytest.param(scene, id=scene.id, marks=marks)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_thread():
+    from catenet.bench.common import set_threads
+
+    set_threads(1)
+
+
+@pytest.mark.parametrize("scene", list(_params()))
+def test_scene_gives_a_right_answer(scene):
+    row = stress.run_scene(scene)
+    assert not row["status"].startswith("BUG"), row
+    assert row["status"] != "NaN in result", row
+    assert row["passed"], row
+
+
+def test_quick_subset_covers_every_group():
+    groups = {s.group for s in stress.scenes(quick=False)}
+    assert {s.group for s in stress.scenes(quick=True)} == groups
+
+
+def test_equilibrium_error_sees_a_wrong_state():
+    """The check is not vacuous: a state moved off the equilibrium fails it."""
+    from catenet.bench.common import midpoint_cable
+    from catenet.static import solve_static
+
+    net, loads, mid = midpoint_cable(10.0, nodes=11)
+    res = solve_static(net, loads)
+    assert stress.equilibrium_error(net, loads, res) < 1e-8
+    res.x[mid, 2] *= 1.01
+    assert stress.equilibrium_error(net, loads, res) > 1e-4
