@@ -649,6 +649,8 @@ def _solve_levels(task: dict) -> list[dict]:
     ws = None
     ws_net = None
     x_prev = None
+    load_keys = {key for level in levels for key, _ in level}
+    scenes = _Scenes(case_api, pressure_only=load_keys == {"load.pressure"})
     for k, level in enumerate(levels):
         start = time.perf_counter()
         row = _nan_row()
@@ -656,7 +658,7 @@ def _solve_levels(task: dict) -> list[dict]:
         try:
             data = case_api.apply_overrides(task["base"], _overrides(settings + level))
             case = case_api.parse_case(data, source=task["source"], base_dir=base_dir)
-            scene = case_api.build(case)
+            scene = scenes.build(case)
             net = scene.net
             if ws is None or not _same_net(ws_net, net):
                 from catenet.static import Workspace
@@ -683,9 +685,62 @@ def _solve_levels(task: dict) -> list[dict]:
     return rows
 
 
+class _Scenes:
+    """The scenes of a job's load levels. When the only load key is ``load.pressure`` of
+    a square net, the net is built once and each level's loads are the first level's with
+    the pressure part, -p L^2/N per node (SPEC section 2), computed for its p; the second
+    level is also built in full once to check that this gives the same net and forces
+    (else every level is built). Saves a net build per level: 10-40 % of a job."""
+
+    def __init__(self, case_api, *, pressure_only: bool):
+        self.case_api = case_api
+        self.fast = pressure_only
+        self.first = None
+        self.other = None  # the first level's force minus its pressure part
+        self.checked = False
+
+    def build(self, case):
+        import dataclasses
+
+        import numpy as np
+
+        from catenet.geometry import pressure_force
+
+        if not self.fast or self.first is None or case.geometry.kind != "square_net":
+            scene = self.case_api.build(case)
+            if self.fast and self.first is None and case.geometry.kind == "square_net":
+                self.first = scene
+                force = scene.loads.force
+                pressure = pressure_force(scene.net, case.load.pressure, scene.size)
+                self.other = (np.zeros_like(pressure) if force is None else force) - pressure
+            return scene
+        first = self.first
+        force = self.other + pressure_force(first.net, case.load.pressure, first.size)
+        loads = dataclasses.replace(first.loads, force=force)
+        scene = dataclasses.replace(first, case=case, loads=loads)
+        if not self.checked:
+            self.checked = True
+            full = self.case_api.build(case)
+            want = full.loads.external_force(full.net)
+            got = loads.external_force(first.net)
+            scale = float(np.max(np.abs(want), initial=0.0)) or 1.0
+            if not (
+                _same_net(first.net, full.net)
+                and full.probe == first.probe
+                and full.size == first.size
+                and float(np.max(np.abs(want - got), initial=0.0)) <= 1e-14 * scale
+            ):
+                log.debug("pressure levels: the loads are not -p L^2/N: building every level")
+                self.fast = False
+                return full
+        return scene
+
+
 def _same_net(a, b) -> bool:
     import numpy as np
 
+    if a is b:
+        return True
     return (
         a is not None
         and a.nodes.shape == b.nodes.shape
@@ -1118,6 +1173,7 @@ def run_sweep(
             if not todo:
                 pass
             elif scheduler:
+                todo = _largest_first(sweep, todo)
                 _run_dask(sweep, todo, out, scheduler, save_runs, record, crashed, summary)
             elif workers == 1:
                 for job in todo:
@@ -1131,6 +1187,7 @@ def run_sweep(
                     )
                     record(job, run_job(task)["rows"], 1)
             else:
+                todo = _largest_first(sweep, todo)
                 _run_pool(sweep, todo, out, workers, save_runs, record, crashed, summary)
         except KeyboardInterrupt:
             summary.interrupted = True
@@ -1140,6 +1197,27 @@ def run_sweep(
             write_tables(out)
             summary.wall_time = time.perf_counter() - start
     return summary
+
+
+def _largest_first(sweep: Sweep, jobs: list[Job]) -> list[Job]:
+    """Jobs by estimated cost (nodes x load levels), largest first, so that the workers
+    finish together instead of waiting for one large job at the end."""
+    case_api = _case_api()
+    estimate = getattr(case_api, "estimate_size", None)
+    if estimate is None:
+        return jobs
+
+    def cost(job: Job) -> float:
+        try:
+            level = list(job.levels[0]) if job.levels else []
+            data = case_api.apply_overrides(sweep.base, _overrides(list(job.settings) + level))
+            case = case_api.parse_case(data, source=sweep.source, base_dir=Path(sweep.base_dir))
+            return float(estimate(case.geometry)[0]) * max(1, len(job.levels))
+        except Exception:  # a case that fails does so quickly
+            return 0.0
+
+    costs = {job.index: cost(job) for job in jobs}
+    return sorted(jobs, key=lambda job: (-costs[job.index], job.index))
 
 
 def _describe(job: Job) -> str:
