@@ -1107,7 +1107,8 @@ def run_sweep(
     """Run the jobs the journal of ``out`` does not hold yet; regenerate the tables.
 
     ``workers``: processes (default: all cores; 1 runs in this process). ``scheduler``:
-    the address of a Dask scheduler instead. ``progress(done_rows, total_rows, note)``.
+    the address of a Dask scheduler instead. ``progress(done, total, note)`` counts the
+    rows of this call (rows already in the journal are not in ``total``).
     Ctrl-C (KeyboardInterrupt) stops the workers; the finished jobs are kept and the
     tables written before it propagates."""
     out = Path(out)
@@ -1132,9 +1133,11 @@ def run_sweep(
             log.info(
                 "%s: %d of %d jobs already done, skipped", out, summary.skipped_jobs, len(jobs)
             )
-        rows_done = sum(len(rec["rows"]) for rec in done.values())
+        rows_before = sum(len(rec["rows"]) for rec in done.values())
+        rows_todo = summary.total_rows - rows_before
+        rows_done = 0
         if progress:
-            progress(rows_done, summary.total_rows, "")
+            progress(0, rows_todo, f"({rows_before} rows done before)" if rows_before else "")
         journal = _Journal(out / JOURNAL)
         running = out / RUNNING_DIR
         running.mkdir(exist_ok=True)
@@ -1163,7 +1166,7 @@ def run_sweep(
             rows_done += len(rows)
             if progress:
                 failed = f"{summary.failed_rows} failed" if summary.failed_rows else ""
-                progress(rows_done, summary.total_rows, failed)
+                progress(rows_done, rows_todo, failed)
 
         def crashed(job: Job, message: str) -> None:
             journal.write({"kind": "crash", "index": job.index, "error": message})

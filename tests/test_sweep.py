@@ -211,6 +211,13 @@ def test_dask_cluster_gives_the_single_runs(small_case, reference, tmp_path):
     check_rows(tmp_path, reference)
 
 
+def test_scheduler_without_dask_says_how_to_install(small_case, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed fails
+    spec = sw.load_sweep(small_case)
+    with pytest.raises(ConfigError, match=r"pip install catenet\[dask\]"):
+        sw.run_sweep(spec, tmp_path, scheduler="tcp://127.0.0.1:1")
+
+
 def test_resume_skips_finished_cases(small_case, reference, tmp_path):
     spec = sw.load_sweep(small_case)
     sw.run_sweep(spec, tmp_path, workers=1)
