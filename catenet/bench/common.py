@@ -194,6 +194,21 @@ def repeat(
     return statistics.median(times), times, out
 
 
+def interleaved(fns: dict, repeats: int = 5, warmup: int = 1) -> dict:
+    """Times several variants in turn (A B C A B C ...), so that a change in the machine's
+    load hits all of them alike: {key: (median seconds, times, last return value)}."""
+    out = {k: None for k in fns}
+    times: dict = {k: [] for k in fns}
+    for _ in range(warmup):
+        for k, fn in fns.items():
+            out[k] = fn()
+    for _ in range(repeats):
+        for k, fn in fns.items():
+            t, out[k] = timed(fn)
+            times[k].append(t)
+    return {k: (statistics.median(times[k]), times[k], out[k]) for k in fns}
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel on a tiny net, so that no timed run
     pays for the JIT."""

@@ -14,6 +14,8 @@ against catenet's default way of doing the same thing, in one process after a wa
   ``pypardiso.spsolve``; for a static solve, 20 dynamic steps and a 10-step continuation;
 - matrix type: PARDISO mtype -2 (symmetric indefinite, upper triangle), 2 (SPD), 11
   (general, full matrix);
+- iterative refinement: PARDISO's refinement steps after each solve, catenet's setting
+  against none;
 - threads: BLAS/MKL threads left at their defaults against one thread, in child
   processes.
 """
@@ -25,6 +27,7 @@ from pathlib import Path
 
 from catenet.bench.common import (
     Study,
+    interleaved,
     load_average,
     no_progress,
     paper_net,
@@ -66,7 +69,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
                      "seconds": seconds, "iterations": iterations, "error_vs_static": err,
                      "note": note, **extra})
 
-    parts = [_method, _gravity, _output, _analysis, _mtype, _threads]
+    parts = [_method, _gravity, _output, _analysis, _mtype, _refinement, _threads]
     for k, part in enumerate(parts):
         progress(k, len(parts), part.__name__.strip("_"))
         try:
@@ -127,20 +130,15 @@ def _gravity(net, loads, add, study, *, reps, quick, n):
 
     ws = Workspace(net)
     with_g = Loads(force=loads.force, gravity=np.zeros(3))
-    t, _, res = repeat(lambda: solve_static(net, loads, workspace=ws), reps)
-    add("gravity (static)", "no gravity (gravity=None)", True, t, res.x, res.iterations)
-    t, _, res = repeat(lambda: solve_static(net, with_g, workspace=ws), reps)
-    add("gravity (static)", "zero gravity computed", False, t, res.x, res.iterations)
-
-    def dyn(lo):
-        return solve_dynamic(net, lo, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws)
-
-    t, _, res = repeat(lambda: dyn(loads), reps)
-    add("gravity (dynamic)", "no gravity (gravity=None)", True, t, None, res.iterations,
-        note="20 steps")
-    t, _, res = repeat(lambda: dyn(with_g), reps)
-    add("gravity (dynamic)", "zero gravity computed", False, t, None, res.iterations,
-        note="20 steps")
+    cases = {"no gravity (gravity=None)": loads, "zero gravity computed": with_g}
+    static = {k: (lambda lo=lo: solve_static(net, lo, workspace=ws)) for k, lo in cases.items()}
+    for k, (t, _, res) in interleaved(static, reps).items():
+        add("gravity (static)", k, k.startswith("no"), t, res.x, res.iterations)
+    dynamic = {k: (lambda lo=lo: solve_dynamic(net, lo, dt=1e-2, damping=1.0, t_end=0.2,
+                                               workspace=ws)) for k, lo in cases.items()}
+    for k, (t, _, res) in interleaved(dynamic, reps).items():
+        add("gravity (dynamic)", k, k.startswith("no"), t, None, res.iterations,
+            note=f"{res.steps} steps")
     try:
         from catenet.case import build, load_case
     except ImportError:
@@ -230,31 +228,67 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
     from catenet.errors import CatenetError
     from catenet.static import Workspace, solve_static
 
-    for mtype in (-2, 2, 11):
-        default = mtype == -2
-        name = {-2: "mtype -2 (symmetric indefinite)", 2: "mtype 2 (SPD)",
-                11: "mtype 11 (general, full matrix)"}[mtype]
+    names = {-2: "mtype -2 (symmetric indefinite)", 2: "mtype 2 (SPD)",
+             11: "mtype 11 (general, full matrix)"}
+    spaces = {}
+    for mtype in names:
         try:
-            ws = Workspace(net, mtype=mtype)
+            spaces[mtype] = Workspace(net, mtype=mtype)
         except Exception as exc:
-            add("mtype (static)", name, default, float("nan"), note=f"failed: {exc!r}")
+            add("mtype (static)", names[mtype], mtype == -2, float("nan"),
+                note=f"failed: {exc!r}")
             study.findings.append(f"mtype {mtype}: Workspace(net, mtype={mtype}) fails: {exc!r}")
-            continue
-        for label, fn in (
-            ("mtype (static)", lambda ws=ws: solve_static(net, loads, workspace=ws)),
-            ("mtype (dynamic)", lambda ws=ws: solve_dynamic(
-                net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws)),
-        ):
-            try:
-                t, _, res = repeat(fn, reps)
+    for label in ("mtype (static)", "mtype (dynamic)"):
+        fns = {}
+        for mtype, ws in spaces.items():
+            if label.endswith("(static)"):
+                fns[mtype] = lambda ws=ws: solve_static(net, loads, workspace=ws)
+            else:
+                fns[mtype] = lambda ws=ws: solve_dynamic(net, loads, dt=1e-2, damping=1.0,
+                                                         t_end=0.2, workspace=ws)
+            try:  # a failing type is reported, not timed
+                fns[mtype]()
             except CatenetError as exc:
-                add(label, name, default, float("nan"), note=f"failed: {exc}")
-                study.findings.append(f"{label} {name}: {type(exc).__name__}: {exc}")
-                continue
-            add(label, name, default, t, res.x if label.endswith("(static)") else None,
-                res.iterations, factorize_seconds=res.stats.get("factorize_seconds"),
+                del fns[mtype]
+                add(label, names[mtype], mtype == -2, float("nan"), note=f"failed: {exc}")
+                study.findings.append(f"{label} {names[mtype]}: {type(exc).__name__}: {exc}")
+        for mtype, (t, _, res) in interleaved(fns, reps).items():
+            ws = spaces[mtype]
+            add(label, names[mtype], mtype == -2, t,
+                res.x if label.endswith("(static)") else None, res.iterations,
+                factorize_seconds=res.stats.get("factorize_seconds"),
                 solve_seconds=res.stats.get("solve_seconds"), upper=ws.system.upper,
                 factor_nnz=getattr(ws.solver, "factor_nnz", None))
+
+
+def _refinement(net, loads, add, study, *, reps, quick, n):
+    """PARDISO's iterative refinement (iparm[7]) after every solve: catenet's setting
+    against none (catenet checks the backward error of every solve anyway)."""
+    from catenet.dynamic import solve_dynamic
+    from catenet.linsolve import PardisoSolver
+    from catenet.static import Workspace, solve_static
+
+    probe = Workspace(net)
+    if not isinstance(probe.solver, PardisoSolver):
+        return
+    default_steps = int(probe.solver.iparm[7])
+    variants = list(dict.fromkeys((default_steps, 0, 1)))
+
+    def fresh(steps):
+        ws = Workspace(net)
+        ws.solver.iparm[7] = steps
+        return ws
+
+    static = {s: (lambda s=s: solve_static(net, loads, workspace=fresh(s))) for s in variants}
+    dyn_ws = {s: fresh(s) for s in variants}
+    dynamic = {s: (lambda s=s: solve_dynamic(net, loads, dt=1e-2, damping=1.0, t_end=0.2,
+                                             workspace=dyn_ws[s])) for s in variants}
+    for label, fns in (("refinement (static)", static), ("refinement (dynamic)", dynamic)):
+        for s, (t, _, res) in interleaved(fns, reps).items():
+            add(label, f"iparm[8] = {s} refinement steps", s == default_steps, t,
+                res.x if label.endswith("(static)") else None, res.iterations,
+                factorize_seconds=res.stats.get("factorize_seconds"),
+                solve_seconds=res.stats.get("solve_seconds"))
 
 
 _THREADS_CHILD = r"""
