@@ -36,6 +36,7 @@ import logging
 import math
 import os
 import platform
+import re
 import tempfile
 import time
 import xml.etree.ElementTree as ET
@@ -129,6 +130,17 @@ def environment() -> dict[str, str]:
     except ImportError:  # pragma: no cover - h5py is a dependency
         out["hdf5"] = ""
     return out
+
+
+def describe(exc: BaseException) -> str:
+    """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
+    text = str(exc)
+    m = re.search(r"errno = (\d+), error message = '([^']*)'", text)
+    if m:
+        return f"{m.group(2)} (errno {m.group(1)})"
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def _check_finite(name: str, value, t: float) -> None:
@@ -435,6 +447,7 @@ class ResultWriter:
         self.error: BaseException | None = None  # a failed write: frames stop there
         self.saved_to: Path | None = None  # where the result went instead
         self._h5 = None
+        self._datasets: dict = {}
         self._swmr = False
         self._result_written = False
         self._last_xdmf = -math.inf
@@ -482,12 +495,16 @@ class ResultWriter:
             self._write_header(self._h5)
             if self.every > 0:
                 self._create_trajectory(self._h5)
+                # Dataset objects live as long as the file: a temporary one closed while
+                # writes fail would make HDF5 keep its identifier (see _detach).
+                g = self._h5["trajectory"]
+                self._datasets = {name: g[name] for name in g}
                 self._h5.swmr_mode = True
                 self._swmr = True
             self._h5.flush()
         except OSError as exc:
             self._abandon()
-            raise OutputError(f"{self.path}: cannot be written: {exc}") from None
+            raise OutputError(f"{self.path}: cannot be written: {describe(exc)}") from None
         # A sidecar left from an earlier run of this file would now lie: remove it.
         if self.xdmf:
             self.sidecar.unlink(missing_ok=True)
@@ -580,15 +597,15 @@ class ResultWriter:
             raise OutputError(f"refusing to write a frame at t = {t!r}: the time must be finite")
         for name, arr in data.items():
             _check_finite(name, arr, float(t))
-        g = self._h5["trajectory"]
         k = self.frames
         try:
             for name, arr in data.items():
-                ds = g[name]
+                ds = self._datasets[name]
                 ds.resize(k + 1, axis=0)
                 ds[k] = arr
-            g["time"].resize((k + 1,))
-            g["time"][k] = float(t)  # last: the frame counts once its time is there
+            ds = self._datasets["time"]
+            ds.resize((k + 1,))
+            ds[k] = float(t)  # last: the frame counts once its time is there
             self._h5.flush()
         except (OSError, RuntimeError) as exc:  # ENOSPC, EFBIG, EIO, quota ...
             self._fail(exc)
@@ -605,11 +622,12 @@ class ResultWriter:
             "be saved to a temporary file",
             self.path,
             self.frames,
-            exc,
+            describe(exc),
         )
         h5, self._h5 = self._h5, None
         if h5 is not None:
             _detach(h5)
+            self._datasets = {}
             try:
                 h5.close()
             except Exception:  # the file is broken already
@@ -653,17 +671,17 @@ class ResultWriter:
             self.saved_to = self._save_elsewhere(res, attrs)
         except Exception as exc:
             err = OutputError(
-                f"{self.path}: writing failed ({first}); saving the result to the temporary "
-                f"directory {tempfile.gettempdir()} failed as well ({exc}): the result exists "
-                "only in memory"
+                f"{self.path}: writing failed ({describe(first)}); saving the result to the "
+                f"temporary directory {tempfile.gettempdir()} failed as well ({describe(exc)}): "
+                "the result exists only in memory"
             )
             err.result = res
             err.saved_to = None
             raise err from None
         kept = f" (it keeps {self.frames} trajectory frames)" if self.frames else ""
         err = OutputError(
-            f"{self.path}: writing failed ({first}){kept}; the final state was saved to "
-            f"{self.saved_to} instead"
+            f"{self.path}: writing failed ({describe(first)}){kept}; the final state was "
+            f"saved to {self.saved_to} instead"
         )
         err.result = res
         err.saved_to = self.saved_to
@@ -676,9 +694,7 @@ class ResultWriter:
         if self._h5 is None:
             raise OSError(errno.EBADF, "the result file is not open", str(self.path))
         if self._swmr:
-            self._h5.close()
-            self._h5 = None
-            self._swmr = False
+            self._close_file()
             self._h5 = h5py.File(self.path, "r+", libver=LIBVER)
 
     def _write_result(self, h5, res, attrs: dict) -> None:
@@ -710,7 +726,7 @@ class ResultWriter:
             with h5py.File(tmp, "w", libver=LIBVER) as h5:
                 self._write_header(h5)
                 h5.attrs["note"] = (
-                    f"saved here because writing {self.path} failed ({self.error}); "
+                    f"saved here because writing {self.path} failed ({describe(self.error)}); "
                     f"the trajectory ({self.frames} frames) is in that file"
                 )
                 self._write_result(h5, res, attrs)
@@ -720,15 +736,34 @@ class ResultWriter:
         return tmp
 
     # --- closing ---------------------------------------------------------------------------
+    def _close_file(self) -> None:
+        """Flushes and closes the file. When that fails, the file is detached (see
+        ``_detach``) and closed all the same, and the error re-raised."""
+        h5 = self._h5
+        try:
+            h5.flush()
+            self._datasets = {}
+            h5.close()
+        except (OSError, RuntimeError):
+            _detach(h5)
+            self._datasets = {}
+            try:
+                h5.close()
+            except Exception:  # closed as far as it goes
+                pass
+            raise
+        finally:
+            self._h5 = None
+            self._swmr = False
+
     def close(self) -> None:
         """Closes the file and writes the final sidecar (consistent with the file)."""
         if self._h5 is not None:
             try:
-                self._h5.close()
-            except Exception as exc:  # a broken file: nothing more to save
-                log.warning("%s: closing failed: %s", self.path, exc)
-            self._h5 = None
-            self._swmr = False
+                self._close_file()
+            except (OSError, RuntimeError) as exc:  # a broken file: nothing more to save
+                self.error = self.error or exc
+                log.warning("%s: closing failed: %s", self.path, describe(exc))
             if self.xdmf and self.error is None and (self.frames or self._result_written):
                 self._write_sidecar()
 

@@ -64,9 +64,14 @@ def read_restart(path: str | Path, scene) -> RestartState:
             f"{label}: only dynamic runs can be restarted (solver.method = "
             f"{scene.case.solver.method!r}); set solver.method = 'dynamic'"
         )
-    frame = read_frame(path)
-    with open_result(path) as h5:
-        problems = _mesh_mismatch(h5, scene.net)
+    try:
+        frame = read_frame(path)
+        with open_result(path) as h5:
+            problems = _mesh_mismatch(h5, scene.net)
+    except ConfigError as exc:
+        raise ConfigError([f"--restart: {p}" for p in exc.problems]) from None
+    except OSError as exc:
+        raise ConfigError(f"{label}: cannot be read: {exc}") from None
     if problems:
         raise ConfigError([f"{label}: {p}" for p in problems])
     if frame.v is None:
