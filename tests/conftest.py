@@ -146,3 +146,9 @@ def _h5_name(root) -> str:
         if item.get("Format") == "HDF":
             return item.text.strip().partition(":")[0]
     raise AssertionError("no HDF5 reference in the sidecar")
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "markers", "slow: takes seconds (large nets, time stepping); still part of every run"
+    )
