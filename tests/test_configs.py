@@ -94,10 +94,12 @@ def test_nets_stiffen_with_n_and_soften_with_alpha():
     names = {
         (n, a): f"fig4{letter}_n{n}_alpha_{a}"
         for letter, (n, a) in zip(
-            "abcdefghi", [(n, a) for n in (10, 22, 34) for a in ("0", "pi6", "pi4")]
+            "abcdefghi",
+            [(n, a) for n in (10, 22, 34) for a in ("0", "pi6", "pi4")],
+            strict=True,
         )
     }
-    deltas = {key: r["delta"] for key, r in zip(names, need(*names.values()))}
+    deltas = {key: r["delta"] for key, r in zip(names, need(*names.values()), strict=True)}
     for a in ("0", "pi6", "pi4"):
         assert deltas[10, a] > deltas[22, a] > deltas[34, a]
     for n in (10, 22, 34):
