@@ -180,7 +180,8 @@ def _summary(case, result, path: Path | None) -> None:
     lines = [
         f"{'case':<12} {case.title or case.source}",
         f"{'converged':<12} {state} ({detail}; {result.iterations} Newton iterations, "
-        f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} steps, "
+        f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
+        f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
         f"{'delta':<12} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
         f"(node {s['probe']}, L = {s['size']:.6g} m)",
