@@ -76,6 +76,7 @@ RESULT_COLUMNS = (
     "run_file",
 )
 MAX_VALUES = 100_000
+MAX_VALIDATED = 5_000  # combinations checked as cases before a sweep starts
 THREAD_VARIABLES = (
     "MKL_NUM_THREADS",
     "NUMBA_NUM_THREADS",
@@ -523,14 +524,18 @@ def make_sweep(
     for param in params:  # each value on its own first: one message per bad value
         for value in param.values:
             _validate(case_api, base, [(param.key, value)], source, base_dir, problems)
-    if not problems:
-        for job in sweep.jobs:
-            for level in job.levels or ((),):
-                _validate(
-                    case_api, base, list(job.settings) + list(level), source, base_dir, problems
-                )
-                if len(problems) >= 20:
-                    break
+    if not problems:  # then the combinations (a few ms each: the first MAX_VALIDATED)
+        combos = (
+            list(job.settings) + list(level)
+            for job in sweep.jobs
+            for level in (job.levels or ((),))
+        )
+        for settings in itertools.islice(combos, MAX_VALIDATED):
+            _validate(case_api, base, settings, source, base_dir, problems)
+            if len(problems) >= 20:
+                break
+        if sweep.n_rows > MAX_VALIDATED:
+            log.info("validated the first %d of %d combinations", MAX_VALIDATED, sweep.n_rows)
     if problems:
         raise ConfigError(problems)
     return sweep
@@ -1198,6 +1203,8 @@ def run_sweep(
         finally:
             journal.close()
             write_tables(out)
+            with contextlib.suppress(OSError):
+                running.rmdir()  # empty unless a worker died
             summary.wall_time = time.perf_counter() - start
     return summary
 
@@ -1274,6 +1281,7 @@ def _run_pool(sweep, todo, out, workers, save_runs, record, crashed, summary) ->
     pending = list(todo)
     isolate: list[Job] = []
     running = out / RUNNING_DIR
+    blind = 0  # pool breaks that no started job explains
     while pending or isolate:
         if pending:
             batch, pending = pending, []
@@ -1286,18 +1294,25 @@ def _run_pool(sweep, todo, out, workers, save_runs, record, crashed, summary) ->
             with contextlib.suppress(OSError):
                 (running / str(job.index)).unlink()
         broken: list[Job] = []
-        with _worker_environment(threads):
+        env = _worker_environment(threads)  # processes start at submit: keep it until then
+        env.__enter__()
+        try:
             pool = ProcessPoolExecutor(
                 width, mp_context=ctx, initializer=_init_worker, initargs=(threads,)
             )
+        except BaseException:
+            env.__exit__(None, None, None)
+            raise
         try:
-            futures = {
-                pool.submit(
-                    run_job,
-                    _task(sweep, job, out, save_runs=save_runs, threads=threads, crash_hook=True),
-                ): job
-                for job in batch
-            }
+            futures = {}
+            try:
+                for job in batch:
+                    task = _task(
+                        sweep, job, out, save_runs=save_runs, threads=threads, crash_hook=True
+                    )
+                    futures[pool.submit(run_job, task)] = job
+            finally:
+                env.__exit__(None, None, None)
             for fut in as_completed(futures):
                 job = futures[fut]
                 try:
@@ -1314,8 +1329,15 @@ def _run_pool(sweep, todo, out, workers, save_runs, record, crashed, summary) ->
         if not broken:
             continue
         started = [job for job in broken if (running / str(job.index)).exists()]
-        if not started:  # a worker died outside any job: run them all again
-            started = []
+        if not started:  # a worker died outside any job (at start-up?)
+            blind += 1
+            if blind >= 2:
+                message = "worker processes die before running a job (see the log above)"
+                for job in broken:
+                    summary.crashed_jobs.append(job.index)
+                    crashed(job, message)
+                    record(job, _failed_rows(job, message), crashes.get(job.index, 0) + 1)
+                broken = []
         for job in broken:
             if job not in started:
                 pending.append(job)
@@ -1328,7 +1350,6 @@ def _run_pool(sweep, todo, out, workers, save_runs, record, crashed, summary) ->
                 record(job, _failed_rows(job, message + ", twice: not retried again"), 2)
             else:
                 isolate.append(job)
-        pending.sort(key=lambda j: j.index)
 
 
 def _terminate(pool) -> None:
@@ -1352,6 +1373,7 @@ def _run_dask(sweep, todo, out, scheduler, save_runs, record, crashed, summary) 
         raise CatenetError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
     crashes: dict[int, int] = {}
     tag = sweep.fingerprint[:8]
+    futures: dict = {}
     try:
 
         def submit(job: Job):
@@ -1361,7 +1383,6 @@ def _run_dask(sweep, todo, out, scheduler, save_runs, record, crashed, summary) 
                 run_job, task, key=f"catenet-sweep-{tag}-{job.index}-{attempt}", pure=False
             )
 
-        futures = {}
         for job in todo:
             futures[submit(job)] = job
         ac = as_completed(list(futures), loop=client.loop)

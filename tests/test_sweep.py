@@ -409,3 +409,32 @@ def test_cli_interrupted_and_resumed(tmp_path):
     assert len(rows) == 80 and all(r["converged"] == "true" for r in rows)
     if done < 80:
         assert "already done" in result.stderr
+
+
+def test_bundled_paper_case_runs_from_the_command_line(tmp_path):
+    """configs/sweeps/paper.toml with a few of its values, as in docs/readme-sweep.md."""
+    out = tmp_path / "paper"
+    result = CliRunner().invoke(
+        sweep_command,
+        [
+            str(PAPER),
+            "-p",
+            "geometry.n=10",
+            "-p",
+            "geometry.alpha=0",
+            "-p",
+            "load.pressure=10,100",
+            "-o",
+            str(out),
+            "-j",
+            "1",
+            "--plot",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    rows = read_csv(out)
+    assert [r["load.pressure"] for r in rows] == ["10", "100"]
+    # the paper's n = 10, alpha = 0 net at p = 100 Pa (F_bar = 0.032): delta/L = 0.056
+    assert float(rows[1]["delta_over_L"]) == pytest.approx(0.0564, abs=5e-4)
+    report = (out / "report.md").read_text()
+    assert "Fig. 7 skipped" in report and "Fig. 8 skipped" in report
