@@ -92,6 +92,11 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
         raise ConfigError(f"{what} = {text!r}: must be a file path")
     if p.is_dir():
         raise ConfigError(f"{what} {text!r}: is a directory: give a file path such as out/run.h5")
+    if p.suffix.lower() == ".xdmf":
+        raise ConfigError(
+            f"{what} {text!r}: .xdmf is the name of the ParaView sidecar: give the HDF5 file, "
+            "such as out/run.h5"
+        )
     if p.exists() or p.is_symlink():
         if not p.is_file():
             raise ConfigError(f"{what} {text!r}: exists and is not a regular file")

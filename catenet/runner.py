@@ -148,6 +148,9 @@ def run_case(
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
         check_output_path(path)
+        source = Path(getattr(case, "source", "") or "")
+        if source.is_file() and _same_file(path, source):
+            raise ConfigError(f"output file {str(path)!r}: is the case file itself")
         if restart is not None and _same_file(path, Path(restart)):
             raise ConfigError(
                 f"--restart {restart}: is also the output file: give another one with -o"

@@ -124,6 +124,8 @@ def test_dynamic_run_trajectory_and_xdmf(tmp_path, write_case):
         (["--set", "geometry.n=7"], "geometry.n"),
         (["-o", "{tmp}/a_file/out.h5"], "not a directory"),
         (["-o", "{tmp}"], "directory"),
+        (["-o", "{tmp}/run.xdmf"], "sidecar"),
+        (["-o", "{tmp}/case.toml"], "case file itself"),
         (["--restart", "{tmp}/a_file"], "--restart"),
         (["--set", "solver.method=static", "--restart", "{tmp}/old.h5"], "only dynamic"),
     ],
