@@ -467,6 +467,11 @@ class ResultWriter:
         return False
 
     @property
+    def has_result(self) -> bool:
+        """Whether /result was written (to this file)."""
+        return self._result_written
+
+    @property
     def sidecar(self) -> Path:
         return sidecar_path(self.path)
 

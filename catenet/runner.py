@@ -135,7 +135,8 @@ def run_case(
 
     ``result.stats`` gains ``delta`` (probe z-deflection, positive down), ``delta_over_L``,
     ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
-    other run-time errors are re-raised after /result was written, with ``.output`` set.
+    other run-time errors are re-raised after /result was written, with ``.output`` set
+    to the file that holds it (None when none does).
     """
     from catenet.case import build
     from catenet.linsolve import resolve_backend, set_threads
@@ -177,7 +178,7 @@ def run_case(
         try:
             result = run(scene, ws, writer, state, progress, stop, start)
         except CatenetError as exc:
-            exc.output = None if path is None else path
+            exc.output = path if writer.has_result else None
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
@@ -407,6 +408,7 @@ class _NoFile:
 
     every = 0
     frames = 0
+    has_result = False
 
     def __enter__(self):
         return self

@@ -364,3 +364,48 @@ def test_readme_commands(tmp_path, monkeypatch):
     exec(compile(code, "readme-cli.md", "exec"), {})
     with h5py.File("out/fig4a.h5", "r") as h5:
         assert bool(h5["result"].attrs["converged"])
+
+
+def fake_dynamic(fail_at: int, nan: bool):
+    """A solve_dynamic that takes ``fail_at`` steps of 0.01 s, then fails: with a
+    ConvergenceError, or by producing a NaN state."""
+    from catenet.errors import ConvergenceError
+
+    def solve(net, loads, *, x0, v0, t0, on_step, dt, **kw):
+        x, v = x0.copy(), np.full_like(x0, 0.5)
+        for step in range(1, fail_at + 1):
+            x = x.copy()
+            x[~net.fixed, 2] -= 1e-3
+            if on_step(step, t0 + step * dt, x, v):
+                raise AssertionError("not stopped here")
+        if nan:
+            x = x.copy()
+            x[~net.fixed, 2] = np.nan
+            on_step(fail_at + 1, t0 + (fail_at + 1) * dt, x, v)
+        raise ConvergenceError("dynamic step failed", iterations=9, history=[1.0], state=x)
+
+    return solve
+
+
+@pytest.mark.parametrize("nan", [False, True], ids=["no-convergence", "non-finite"])
+def test_dynamic_failure_keeps_the_last_good_step(tmp_path, write_case, monkeypatch, nan):
+    import catenet.dynamic
+
+    monkeypatch.setattr(catenet.dynamic, "solve_dynamic", fake_dynamic(4, nan))
+    case = write_case(small_net(every=3))
+    out = tmp_path / "fail.h5"
+    r = invoke("run", case, "-o", out)
+    assert r.exit_code == 1, r.output
+    assert ("non-finite" if nan else "dynamic step failed") in r.stderr
+    assert str(out) in r.stderr and "Traceback" not in r.output
+    with h5py.File(out, "r") as h5:
+        a = h5["result"].attrs
+        assert not a["converged"] and a["steps"] == 4 and a["time"] == pytest.approx(0.04)
+        t = h5["trajectory/time"][()]
+        np.testing.assert_allclose(t, [0.0, 0.03, 0.04])  # every 3rd step, and the last good
+        x = h5["result/x"][()]
+        assert np.all(np.isfinite(h5["trajectory/x"][()])) and np.all(np.isfinite(x))
+        np.testing.assert_array_equal(h5["trajectory/x"][-1], x)
+        free = ~h5["mesh/fixed"][()]
+        np.testing.assert_allclose(x[free, 2], -4e-3)
+    check_xdmf(out.with_suffix(".xdmf"))
