@@ -53,7 +53,10 @@ log = logging.getLogger(__name__)
 # SWMR needs the file format of HDF5 1.10; a newer upper bound ("latest") would let the
 # HDF5 library in use write structures that the HDF5 bundled with ParaView cannot read.
 LIBVER = ("v110", "v110")
-XDMF_REWRITE_SECONDS = 1.0  # while running, the sidecar is rewritten at most this often
+# While running, the sidecar is rewritten at most once a second, and (for long runs, whose
+# sidecar takes a while to write) at most 5 % of the time.
+XDMF_REWRITE_SECONDS = 1.0
+XDMF_SHARE = 0.05
 MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
 TRAJECTORY = ("x", "v", "tension")
 
@@ -455,7 +458,7 @@ class ResultWriter:
         self._datasets: dict = {}
         self._swmr = False
         self._result_written = False
-        self._last_xdmf = -math.inf
+        self._next_xdmf = -math.inf
 
     # --- context ---------------------------------------------------------------------------
     def __enter__(self) -> ResultWriter:
@@ -622,7 +625,7 @@ class ResultWriter:
             return
         self.frames += 1
         self.times.append(float(t))
-        if self.xdmf and time.monotonic() - self._last_xdmf >= XDMF_REWRITE_SECONDS:
+        if self.xdmf and time.monotonic() >= self._next_xdmf:
             self._write_sidecar()
 
     def _fail(self, exc: BaseException) -> None:
@@ -647,6 +650,7 @@ class ResultWriter:
         if not self.xdmf:
             return
         net = self.scene.net
+        start = time.monotonic()
         try:
             write_xdmf(
                 self.sidecar,
@@ -658,7 +662,8 @@ class ResultWriter:
             )
         except OSError as exc:
             log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, exc)
-        self._last_xdmf = time.monotonic()
+        now = time.monotonic()
+        self._next_xdmf = now + max(XDMF_REWRITE_SECONDS, (now - start) / XDMF_SHARE)
 
     # --- result ----------------------------------------------------------------------------
     def result(self, res, **attrs) -> None:
