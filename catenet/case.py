@@ -382,6 +382,11 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
             raise ConfigError(f"{p}: cannot read the case file: {exc.strerror or exc}") from None
         base_dir = p.parent
     data = parse_toml(raw, source)
+    sweep = data.pop("sweep", None)  # the grid of `catenet sweep`; a single run ignores it
+    if sweep is not None and not isinstance(sweep, dict):
+        raise ConfigError(
+            f"sweep = {sweep!r}: must be a table of key.path = [values] (read by catenet sweep)"
+        )
     if overrides:
         data = apply_overrides(data, overrides)
     return parse_case(data, source=source, base_dir=base_dir)

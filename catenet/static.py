@@ -172,6 +172,8 @@ def continuation(
     results: list[Result] = []
     x = x0
     for k, factor in enumerate(factors):
+        if k >= 2:  # secant predictor through the last two equilibria
+            x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
         try:
             r = solve_static(
                 net, loads, x0=x, factor=float(factor), rtol=rtol, max_iter=max_iter,
@@ -187,6 +189,24 @@ def continuation(
         if on_step is not None:
             on_step(float(factor), r)
     return results
+
+
+def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:
+    """The equilibrium at load level ``level`` extrapolated by the Lagrange polynomial
+    through the given equilibria (two: a secant, three: a parabola) at their levels.
+    Levels must be distinct; with one state it is returned as it is."""
+    if len(states) != len(levels):
+        raise ValueError("predict: one level per state")
+    if len(set(levels)) != len(levels):
+        return np.array(states[-1], copy=True)
+    x = np.zeros_like(states[-1])
+    for i, (xi, si) in enumerate(zip(states, levels)):
+        w = 1.0
+        for j, sj in enumerate(levels):
+            if j != i:
+                w *= (level - sj) / (si - sj)
+        x += w * xi
+    return x
 
 
 def _start(net: Net, loads: Loads, x0, factor: float) -> np.ndarray:

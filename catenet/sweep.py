@@ -468,16 +468,18 @@ def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
     with the ``params`` (``"key.path=v1,v2"``) added; a key given in both takes the
     command line's values. Every combination is validated as a case (ConfigError listing
     the problems) before anything runs."""
+    from catenet.case import parse_toml
+
     path = Path(path)
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such case file") from None
     except IsADirectoryError:
         raise ConfigError(f"{path}: is a directory, not a case file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the case file: {exc.strerror or exc}") from None
+    data = parse_toml(raw, str(path))
     table = data.pop("sweep", None)
     merged: dict[str, Param] = {}
     if table is not None:
@@ -654,6 +656,8 @@ def _solve_levels(task: dict) -> list[dict]:
     ws = None
     ws_net = None
     x_prev = None
+    path: list = []  # (load level, equilibrium) of the current net, for the predictor
+    reference = None  # the external force of the path's first level
     load_keys = {key for level in levels for key, _ in level}
     scenes = _Scenes(case_api, pressure_only=load_keys == {"load.pressure"})
     for k, level in enumerate(levels):
@@ -669,9 +673,19 @@ def _solve_levels(task: dict) -> list[dict]:
                 from catenet.static import Workspace
 
                 ws = Workspace(net, linear=case.solver.linear)
-                ws_net, x_prev = net, None
-            result = _solve(case, ws_net, scene.loads, ws, x_prev)
+                ws_net, x_prev, path = net, None, []
+            force = scene.loads.external_force(ws_net)
+            if not path:
+                reference = force
+            level_of = _load_level(force, reference)
+            x0 = x_prev
+            if case.solver.method == "static" and level_of is not None and len(path) >= 2:
+                from catenet.static import predict
+
+                x0 = predict([x for _, x in path[-2:]], [s for s, _ in path[-2:]], level_of)
+            result = _solve(case, ws_net, scene.loads, ws, x0)
             x_prev = result.x
+            path = path + [(level_of, result.x)] if level_of is not None else []
             row.update(_measure(scene, ws_net, result, np))
             if task["save_runs"]:
                 row["run_file"] = _save_run(Path(task["out"]), task["index"], k, scene, result)
@@ -680,6 +694,7 @@ def _solve_levels(task: dict) -> list[dict]:
             state = getattr(exc, "state", None)
             if state is not None and ws_net is not None and np.shape(state) == ws_net.nodes.shape:
                 x_prev = np.asarray(state)
+            path = []
             row["iterations"] = int(getattr(exc, "iterations", 0) or 0)
             log.info("job %s level %s %s: %s", task["index"], k, values, row["error"])
         except Exception as exc:  # an unexpected failure of one case must not end the sweep
@@ -758,6 +773,20 @@ def _same_net(a, b) -> bool:
         and np.array_equal(a.fixed, b.fixed)
         and np.array_equal(a.line_density, b.line_density)
     )
+
+
+def _load_level(force, reference) -> float | None:
+    """The multiple of ``reference`` that ``force`` is, or None when it is not one (then
+    the levels of a job are not proportional and no equilibrium is predicted)."""
+    import numpy as np
+
+    ref2 = float(np.vdot(reference, reference))
+    if ref2 == 0.0:
+        return None
+    level = float(np.vdot(force, reference)) / ref2
+    if np.linalg.norm(force - level * reference) > 1e-9 * np.linalg.norm(force):
+        return None
+    return level
 
 
 def _solve(case, net, loads, ws, x_prev):

@@ -95,7 +95,14 @@ def mutate(data: dict, path: str, value) -> dict:
     return out
 
 
-DELETE = object()
+class _Delete:
+    """Marks a key to remove; its repr is stable, so test ids match across workers."""
+
+    def __repr__(self):
+        return "DELETE"
+
+
+DELETE = _Delete()
 
 
 # --------------------------------------------------------------------------- default case
