@@ -897,3 +897,18 @@ def test_garbage_files_give_config_error(tmp_path, raw):
     path.write_bytes(raw)
     with pytest.raises(ConfigError):
         load_case(path)
+
+
+def test_a_sweep_table_is_left_to_catenet_sweep(tmp_path):
+    path = tmp_path / "study.toml"
+    path.write_text(
+        '[geometry]\nkind = "square_net"\nn = 10\nalpha = 0.0\nsize = 1.0\nedge_length = 0.1\n'
+        "[material]\nE = 10e6\nradius = 0.01\n[load]\npressure = 10.0\n"
+        '[sweep]\n"geometry.n" = [10, 18]\n'
+    )
+    case = load_case(path)
+    assert case.geometry.n == 10
+    text = path.read_text().replace('[sweep]\n"geometry.n" = [10, 18]\n', "")
+    path.write_text("sweep = 3\n" + text)
+    with pytest.raises(ConfigError, match="sweep = 3"):
+        load_case(path)

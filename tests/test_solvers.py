@@ -248,3 +248,16 @@ def test_unconverged_static_raises_with_history():
         cn.solve_static(sq.net, loads, rtol=1e-12, max_iter=3)
     assert info.value.iterations == 3 and len(info.value.history) >= 2
     assert info.value.state.shape == sq.net.nodes.shape
+
+
+def test_predictor_is_exact_for_linear_paths_and_cheapens_load_curves():
+    from catenet.static import predict
+
+    a, b = np.array([[0.0, 1.0, 2.0]]), np.array([[1.0, 3.0, 2.0]])
+    assert np.allclose(predict([a, b], [1.0, 2.0], 4.0), a + 3 * (b - a))
+    assert np.allclose(predict([a, b], [2.0, 2.0], 4.0), b)  # no extrapolation
+    sq, loads = net_scene(10, 0.0, 0.05)
+    levels = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]
+    curve = cn.continuation(sq.net, loads, levels, rtol=1e-10)
+    later = [r.iterations for r in curve[2:]]
+    assert max(later) <= 4  # each level from the extrapolated pair, not from scratch
