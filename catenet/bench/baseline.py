@@ -58,6 +58,7 @@ def baseline_static(nodes, edges, rest_length, EA, fixed, force, *, tension_only
     phase).
     """
     import time
+    import warnings
 
     import numpy as np
     import scipy.sparse as sp
@@ -147,7 +148,9 @@ def baseline_static(nodes, edges, rest_length, EA, fixed, force, *, tension_only
             a = hessian(x, c)
             t1 = time.perf_counter()
             try:
-                dy = spsolve(a, -g)
+                with warnings.catch_warnings():  # SciPy warns of a singular matrix
+                    warnings.simplefilter("ignore")
+                    dy = spsolve(a, -g)
                 ok = bool(np.all(np.isfinite(dy))) and float(g @ dy) < 0
             except Exception:  # a singular matrix: raise the regularisation
                 ok = False
@@ -304,7 +307,9 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             f"x{r['ratio_to_catenet']:6.1f}  {r['iterations']:3d} it  "
             f"error {r['max_error_rel']:.1e}"
         )
-        if r["max_error_rel"] > 1e-5:
+        # Prestrained rows compare other nets (their error is against catenet on the same
+        # pretensioned net, or against the unprestrained one): not a finding.
+        if r["max_error_rel"] > 1e-5 and "prestrain" not in r["method"]:
             study.findings.append(
                 f"{r['method']} on n = {r['n']}: equilibrium differs from catenet's by "
                 f"{r['max_error_rel']:.1e} of delta"
