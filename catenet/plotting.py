@@ -126,9 +126,11 @@ def read_result(path: str | Path) -> ResultFile:
         raise ConfigError(f"{path}: cannot be read: {exc}") from exc
     if not is_h5:
         raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
+    from catenet.output import open_result, trajectory_length
+
     problems: list[str] = []
     try:
-        with h5py.File(path, "r") as h5:
+        with open_result(path) as h5:  # also the file of a killed run
             missing = [name for name in REQUIRED if name not in h5]
             nodes = _dataset(h5, "/mesh/nodes", path, (3,), np.float64, problems)
             edges = _dataset(h5, "/mesh/edges", path, (2,), np.int64, problems)
@@ -141,7 +143,7 @@ def read_result(path: str | Path) -> ResultFile:
             traj = h5.get("/trajectory/x")
             n_frames = 0
             if traj is not None and hasattr(traj, "shape") and traj.ndim == 3:
-                n_frames = traj.shape[0]
+                n_frames = min(traj.shape[0], trajectory_length(h5))
             elif traj is not None:
                 problems.append(f"{path}: /trajectory/x must have shape (T, N, 3)")
             from_trajectory = False
@@ -191,7 +193,7 @@ def read_result(path: str | Path) -> ResultFile:
                 probe = probe_node(nodes, fixed)
             series_t = series_delta = None
             if n_frames > 1 and traj.shape[1:] == (n, 3):
-                z = np.asarray(traj[:, probe, 2], dtype=np.float64)
+                z = np.asarray(traj[:n_frames, probe, 2], dtype=np.float64)
                 series_delta = nodes[probe, 2] - z
                 if time is not None and len(time) >= n_frames:
                     series_t = time[:n_frames]
