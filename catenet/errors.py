@@ -40,8 +40,12 @@ class SingularSystemError(ConvergenceError):
     """
 
     def __init__(self, message: str, *, nodes=(), **kwargs):
+        self.nodes = [int(n) for n in nodes]
+        if self.nodes:
+            shown = ", ".join(map(str, self.nodes[:10]))
+            more = f" and {len(self.nodes) - 10} more" if len(self.nodes) > 10 else ""
+            message = f"{message}; nodes concerned: {shown}{more}"
         super().__init__(message, **kwargs)
-        self.nodes = list(nodes)
 
 
 class OutputError(CatenetError):

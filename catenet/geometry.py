@@ -10,6 +10,9 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.net import Net
 
+#: The largest net the builders make (the case loader also checks memory beforehand).
+MAX_NODES = 50_000_000
+
 
 @dataclass(frozen=True)
 class Material:
@@ -43,8 +46,8 @@ def cable(
     """
     start = np.asarray(start, dtype=np.float64)
     end = np.asarray(end, dtype=np.float64)
-    if nodes < 2:
-        raise ConfigError(f"geometry.nodes = {nodes}: must be >= 2")
+    if not 2 <= nodes <= MAX_NODES:
+        raise ConfigError(f"geometry.nodes = {nodes}: must be in 2..{MAX_NODES}")
     chord = float(np.linalg.norm(end - start))
     if not chord > 0:
         raise ConfigError(f"geometry.end = {end.tolist()}: must differ from geometry.start")
@@ -97,6 +100,13 @@ def square_net(
     if not math.isfinite(alpha):
         raise ConfigError(f"geometry.alpha = {alpha!r}: must be finite (radians)")
     m = n // 2
+    # Each cable is at most L sqrt(2) long: a bound on the nodes before building anything.
+    bound = m * m + n * (size * math.sqrt(2.0) / edge_length + 1.0)
+    if not bound <= MAX_NODES:
+        raise ConfigError(
+            f"geometry.edge_length = {edge_length!r}, geometry.n = {n}: the net could have "
+            f"about {bound:.2g} nodes; catenet builds at most {MAX_NODES:.0e}"
+        )
     L = float(size)
     half = 0.5 * L
     tol = 1e-9 * L
