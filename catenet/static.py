@@ -81,7 +81,7 @@ def solve_static(
     result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
     if not result.converged and raise_on_failure:
         raise_unconverged(result, "static equilibrium", state=x)
-    return finish(
+    out = finish(
         ws.system,
         loads,
         x,
@@ -95,6 +95,25 @@ def solve_static(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
     )
+    loose = loose_nodes(net, out.tension)
+    if loose.size:
+        log.warning(
+            "%d free nodes hang on slack edges only (nodes %s%s): nothing fixes their "
+            "position, the equilibrium there is not unique",
+            loose.size, ", ".join(map(str, loose[:10])), " ..." if loose.size > 10 else "",
+        )
+    return out
+
+
+def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
+    """Free nodes all of whose edges are slack (tension-only, zero tension)."""
+    if not net.tension_only:
+        return np.zeros(0, dtype=np.int64)
+    taut = tension > 0
+    held = np.zeros(net.n_nodes, bool)
+    held[net.edges[taut, 0]] = True
+    held[net.edges[taut, 1]] = True
+    return np.flatnonzero(~held & ~net.fixed)
 
 
 SMOOTH_REDUCTION = 10.0  # mu shrinks tenfold per stage

@@ -261,3 +261,15 @@ def test_predictor_is_exact_for_linear_paths_and_cheapens_load_curves():
     curve = cn.continuation(sq.net, loads, levels, rtol=1e-10)
     later = [r.iterations for r in curve[2:]]
     assert max(later) <= 4  # each level from the extrapolated pair, not from scratch
+
+
+def test_nodes_on_slack_edges_only_are_reported(caplog):
+    """A cable whose ends moved inward, with no load: every edge is slack, any position
+    of the free nodes is an equilibrium; the solver says so instead of pretending."""
+    net = cn.cable([-0.5, 0, 0], [0.5, 0, 0], 5, MAT)
+    d = np.zeros((5, 3))
+    d[0, 0], d[-1, 0] = 0.1, -0.1
+    with caplog.at_level("WARNING", logger="catenet.static"):
+        r = cn.solve_static(net, cn.Loads(support_displacement=d))
+    assert r.converged and not r.tension.any()
+    assert "3 free nodes hang on slack edges only" in caplog.text
