@@ -123,18 +123,15 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
         b, _ = geometric_fit([r["dofs"] for r in ok], [r["total_seconds"] for r in ok])
         bf, _ = geometric_fit([r["dofs"] for r in ok],
                               [max(r["factorize_seconds"], 1e-9) for r in ok])
-        big = [r for r in ok if r["dofs"] >= 5e4] if sum(
-            r["dofs"] >= 5e4 for r in ok) >= 2 else ok
-        bm, _ = geometric_fit([r["dofs"] for r in big],
-                              [max(r["peak_rss_mib"] - r["rss_after_import_mib"], 1.0)
-                               for r in big])
+        top = ok[-1]
+        per_dof = (top["peak_rss_mib"] - top["rss_after_import_mib"]) * 1024 / top["dofs"]
         study.summary.append(
             f"fitted exponents (DOF >= 5e3): total time ~ DOF^{b:.2f}, "
-            f"factorisation ~ DOF^{bf:.2f}, memory above start-up ~ DOF^{bm:.2f} (DOF >= 5e4)")
+            f"factorisation ~ DOF^{bf:.2f}; memory at {top['dofs']} DOF: {per_dof:.2g} KiB "
+            f"per DOF above the {top['rss_after_import_mib']:.0f} MiB after start-up")
         for r in rows:
             r["fit_exponent_total"] = b
             r["fit_exponent_factorize"] = bf
-            r["fit_exponent_memory"] = bm
     write_csv(rows, study.csv)
     study.figure = figure(rows, out_dir)
     for r in rows:

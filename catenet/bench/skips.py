@@ -347,7 +347,7 @@ def figure(rows, out_dir):
 
     plt = pyplot()
     skips = list(dict.fromkeys(r["skip"] for r in rows))
-    fig, ax = plt.subplots(figsize=(9, 0.45 * len(rows) + 1.2))
+    fig, ax = plt.subplots(figsize=(10, 0.24 * len(rows) + 1.0))
     labels, values, colors = [], [], []
     for s in skips:
         for r in (r for r in rows if r["skip"] == s):
