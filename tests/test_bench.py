@@ -20,8 +20,9 @@ def _rows(path):
 def test_bench_step_size_quick_writes_csv_figure_and_report(tmp_path):
     out = tmp_path / "results"
     docs = tmp_path / "docs"
-    r = CliRunner().invoke(main, ["bench", "step-size", "report", "--quick", "-o", str(out),
-                                  "--docs", str(docs)])
+    r = CliRunner().invoke(
+        main, ["bench", "step-size", "report", "--quick", "-o", str(out), "--docs", str(docs)]
+    )
     assert r.exit_code == 0, r.output
     rows = _rows(out / "step-size.csv")
     assert {"n", "h", "wall_seconds", "steps", "time_ratio", "error_vs_static"} <= set(rows[0])
@@ -62,8 +63,9 @@ def test_baseline_reaches_catenets_equilibrium():
     sq, loads = paper_net(10, edge=0.05)
     net = sq.net
     ref = solve_static(net, loads, rtol=1e-10)
-    x, info = baseline_static(net.nodes, net.edges, net.rest_length, net.EA, net.fixed,
-                              loads.external_force(net))
+    x, info = baseline_static(
+        net.nodes, net.edges, net.rest_length, net.EA, net.fixed, loads.external_force(net)
+    )
     assert info["converged"]
     delta = -ref.x[sq.center, 2]
     assert np.max(np.abs(x - ref.x)) < 1e-6 * delta
@@ -93,9 +95,11 @@ def test_bench_solver_variants_give_the_same_answer():
 def test_pareto_front_marks_non_dominated_rows():
     from catenet.bench.pareto import _front
 
-    rows = [{"case": "a", "seconds": 1.0, "error": 1e-3},
-            {"case": "a", "seconds": 2.0, "error": 1e-6},
-            {"case": "a", "seconds": 3.0, "error": 1e-3},
-            {"case": "b", "seconds": 9.0, "error": 1.0}]
+    rows = [
+        {"case": "a", "seconds": 1.0, "error": 1e-3},
+        {"case": "a", "seconds": 2.0, "error": 1e-6},
+        {"case": "a", "seconds": 3.0, "error": 1e-3},
+        {"case": "b", "seconds": 9.0, "error": 1.0},
+    ]
     _front(rows)
     assert [r["pareto"] for r in rows] == [True, True, False, True]

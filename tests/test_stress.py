@@ -29,8 +29,9 @@ KNOWN = {
 
 def _params():
     for scene in stress.scenes(quick=True):
-        marks = [pytest.mark.xfail(reason=KNOWN[scene.id], strict=False)] if (
-            scene.id in KNOWN) else []
+        marks = (
+            [pytest.mark.xfail(reason=KNOWN[scene.id], strict=False)] if (scene.id in KNOWN) else []
+        )
         yield pytest.param(scene, id=scene.id, marks=marks)
 
 

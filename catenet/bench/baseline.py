@@ -48,8 +48,19 @@ ARMIJO = 1e-4
 # --- THE BASELINE: plain NumPy + SciPy + pypardiso ------------------------------------------
 
 
-def baseline_static(nodes, edges, rest_length, EA, fixed, force, *, tension_only=True,
-                    rtol=1e-8, max_iter=200, solver="pypardiso"):
+def baseline_static(
+    nodes,
+    edges,
+    rest_length,
+    EA,
+    fixed,
+    force,
+    *,
+    tension_only=True,
+    rtol=1e-8,
+    max_iter=200,
+    solver="pypardiso",
+):
     """Static equilibrium by regularised Newton, in plain NumPy (the baseline).
 
     nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,) bool, force (N, 3).
@@ -194,8 +205,13 @@ def baseline_static(nodes, edges, rest_length, EA, fixed, force, *, tension_only
         if c < 1e-12:
             c = 0.0
         log.debug("baseline %3d: |r| = %.3e  step %.3g  c = %.3g", it, gnorm, alpha, c)
-    info = {"iterations": it, "residual": gnorm, "converged": gnorm <= tol,
-            "assembly_seconds": seconds["assembly"], "solve_seconds": seconds["solve"]}
+    info = {
+        "iterations": it,
+        "residual": gnorm,
+        "converged": gnorm <= tol,
+        "assembly_seconds": seconds["assembly"],
+        "solve_seconds": seconds["solve"],
+    }
     return x, info
 
 
@@ -251,8 +267,17 @@ json.dump(out, open(sys.argv[1], "w"))
 """
 
 
-def opensees_static(net, force, *, prestrain=1e-4, steps=10, tol=None, system="UmfPack",
-                    algorithm=("Newton",), timeout=600.0) -> dict:
+def opensees_static(
+    net,
+    force,
+    *,
+    prestrain=1e-4,
+    steps=10,
+    tol=None,
+    system="UmfPack",
+    algorithm=("Newton",),
+    timeout=600.0,
+) -> dict:
     """The net as OpenSees corotTruss elements (tension-only elastic material with a small
     pretension ``prestrain``, which a flat net needs for a regular first stiffness), under
     ``force`` in ``steps`` load increments, Newton with a NormUnbalance test. Runs in a
@@ -263,10 +288,18 @@ def opensees_static(net, force, *, prestrain=1e-4, steps=10, tol=None, system="U
     import numpy as np
 
     tol = float(1e-8 * np.linalg.norm(force)) if tol is None else tol
-    data = {"nodes": net.nodes.tolist(), "edges": net.edges.tolist(),
-            "fixed": net.fixed.tolist(), "force": np.asarray(force).tolist(),
-            "EA": float(net.EA[0]), "prestrain": prestrain, "steps": steps, "tol": tol,
-            "system": system, "algorithm": list(algorithm)}
+    data = {
+        "nodes": net.nodes.tolist(),
+        "edges": net.edges.tolist(),
+        "fixed": net.fixed.tolist(),
+        "force": np.asarray(force).tolist(),
+        "EA": float(net.EA[0]),
+        "prestrain": prestrain,
+        "steps": steps,
+        "tol": tol,
+        "system": system,
+        "algorithm": list(algorithm),
+    }
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
         json.dump(data, fh)
         path = fh.name
@@ -298,7 +331,8 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             if r["n"] == n:
                 r["ratio_to_catenet"] = r["seconds"] / base["seconds"]
                 r["ratio_per_iteration"] = (r["seconds"] / max(r["iterations"], 1)) / (
-                    base["seconds"] / max(base["iterations"], 1))
+                    base["seconds"] / max(base["iterations"], 1)
+                )
     write_csv(rows, study.csv)
     study.figure = figure(rows, out_dir)
     for r in rows:
@@ -334,15 +368,33 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
 
     def row(method, seconds, x, iterations, times=(), reference=ref.x, **extra):
         err = float(np.max(np.abs(x - reference))) / scale
-        rows.append({"n": n, "dofs": 3 * int((~net.fixed).sum()), "method": method,
-                     "seconds": seconds, "iterations": iterations,
-                     "max_error_rel": err, "repeats": len(times),
-                     "seconds_min": min(times) if times else seconds, **extra})
+        rows.append(
+            {
+                "n": n,
+                "dofs": 3 * int((~net.fixed).sum()),
+                "method": method,
+                "seconds": seconds,
+                "iterations": iterations,
+                "max_error_rel": err,
+                "repeats": len(times),
+                "seconds_min": min(times) if times else seconds,
+                **extra,
+            }
+        )
 
     def split(res):
         s = res.stats
-        return {k: s[k] for k in ("setup_seconds", "assembly_seconds", "analyse_seconds",
-                                   "factorize_seconds", "solve_seconds") if k in s}
+        return {
+            k: s[k]
+            for k in (
+                "setup_seconds",
+                "assembly_seconds",
+                "analyse_seconds",
+                "factorize_seconds",
+                "solve_seconds",
+            )
+            if k in s
+        }
 
     args = (net.nodes, net.edges, net.rest_length, net.EA, net.fixed, f)
     ws = Workspace(net)
@@ -365,20 +417,40 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
     for method, (t, times, res) in main.items():
         if method.startswith("baseline"):
             x, info = res
-            row(method, t, x, info["iterations"], times,
-                assembly_seconds=info["assembly_seconds"], solve_seconds=info["solve_seconds"])
+            row(
+                method,
+                t,
+                x,
+                info["iterations"],
+                times,
+                assembly_seconds=info["assembly_seconds"],
+                solve_seconds=info["solve_seconds"],
+            )
         else:
             row(method, t, res.x, res.iterations, times, **split(res))
     t, times, res = repeat(lambda: solve_static(net, loads, linear="scipy"), few)
     row("catenet (scipy)", t, res.x, res.iterations, times, **split(res))
     ws_sym = install(Workspace(net, linear="scipy"), SymmetricSuperLU)
     t, times, res = repeat(lambda: solve_static(net, loads, workspace=ws_sym), few)
-    row("catenet (scipy, SuperLU symmetric mode: proposed)", t, res.x, res.iterations, times,
-        **split(res))
+    row(
+        "catenet (scipy, SuperLU symmetric mode: proposed)",
+        t,
+        res.x,
+        res.iterations,
+        times,
+        **split(res),
+    )
     if not quick:
         t, times, (x, info) = repeat(lambda: baseline_static(*args, solver="scipy"), few)
-        row("baseline numpy+scipy", t, x, info["iterations"], times,
-            assembly_seconds=info["assembly_seconds"], solve_seconds=info["solve_seconds"])
+        row(
+            "baseline numpy+scipy",
+            t,
+            x,
+            info["iterations"],
+            times,
+            assembly_seconds=info["assembly_seconds"],
+            solve_seconds=info["solve_seconds"],
+        )
     if n == 34 and not quick:
         opensees_rows(net, loads, f, scale, row, study)
 
@@ -403,9 +475,15 @@ def opensees_rows(net, loads, f, scale, row, study) -> None:
     pre_net = net.with_rest_length(net.rest_length / (1.0 + pre))
     t, times, res = repeat(lambda: solve_static(pre_net, loads), 3)
     row("catenet (pardiso), prestrain 1e-4", t, res.x, res.iterations, times)
-    row(f"OpenSees {out.get('version', '')} corotTruss, prestrain 1e-4, 20 load steps",
-        out["seconds"], np.array(out["x"]), out.get("iterations", 0), (out["seconds"],),
-        reference=res.x, build_seconds=out["build_seconds"])
+    row(
+        f"OpenSees {out.get('version', '')} corotTruss, prestrain 1e-4, 20 load steps",
+        out["seconds"],
+        np.array(out["x"]),
+        out.get("iterations", 0),
+        (out["seconds"],),
+        reference=res.x,
+        build_seconds=out["build_seconds"],
+    )
 
 
 def figure(rows, out_dir):
@@ -429,5 +507,3 @@ def figure(rows, out_dir):
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     return save_figure(fig, out_dir, NAME)
-
-

@@ -83,8 +83,7 @@ def _time(cmd: list[str], env: dict, repeats: int, cwd: str) -> tuple[float, lis
     err = ""
     for _ in range(repeats):
         start = time.perf_counter()
-        proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=cwd,
-                              timeout=600)
+        proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=cwd, timeout=600)
         times.append(time.perf_counter() - start)
         if proc.returncode != 0:
             err = (proc.stderr.strip().splitlines() or ["?"])[-1][:200]
@@ -105,15 +104,25 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             run_cmd = [sys.executable, "-c", _SOLVE]
             run_label = "python -c solve_static (default case)"
             study.findings.append("cold-start: catenet run is missing; timed solve_static")
-        plan = [("catenet --help", [*exe, "--help"], None),
-                ("python -c 'import catenet'", [sys.executable, "-c", "import catenet"], None)]
+        plan = [
+            ("catenet --help", [*exe, "--help"], None),
+            ("python -c 'import catenet'", [sys.executable, "-c", "import catenet"], None),
+        ]
         for k, (label, cmd, _) in enumerate(plan):
             progress(k, 6, label)
             for env_threads in (None,):
                 t, times, err = _time(cmd, thread_env(env_threads), reps, tmp)
-                rows.append({"command": label, "numba_cache": "", "threads": "as installed",
-                             "seconds": t, "runs": len(times), "seconds_max": max(times),
-                             "error": err})
+                rows.append(
+                    {
+                        "command": label,
+                        "numba_cache": "",
+                        "threads": "as installed",
+                        "seconds": t,
+                        "runs": len(times),
+                        "seconds_max": max(times),
+                        "error": err,
+                    }
+                )
         k = 2
         for env_threads, tlabel in ((None, "as installed"), (1, "1")):
             cache = Path(tmp) / f"numba-cache-{tlabel.replace(' ', '-')}"
@@ -122,19 +131,39 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             env["NUMBA_CACHE_DIR"] = str(cache)
             progress(k, 6, f"{run_label}, cold, threads {tlabel}")
             t, times, err = _time(run_cmd, env, 1, tmp)
-            rows.append({"command": run_label, "numba_cache": "empty (JIT compiles)",
-                         "threads": tlabel, "seconds": t, "runs": 1, "seconds_max": t,
-                         "error": err})
+            rows.append(
+                {
+                    "command": run_label,
+                    "numba_cache": "empty (JIT compiles)",
+                    "threads": tlabel,
+                    "seconds": t,
+                    "runs": 1,
+                    "seconds_max": t,
+                    "error": err,
+                }
+            )
             progress(k + 1, 6, f"{run_label}, warm, threads {tlabel}")
             t, times, err = _time(run_cmd, env, reps, tmp)
-            rows.append({"command": run_label, "numba_cache": "warm", "threads": tlabel,
-                         "seconds": t, "runs": len(times), "seconds_max": max(times),
-                         "error": err})
+            rows.append(
+                {
+                    "command": run_label,
+                    "numba_cache": "warm",
+                    "threads": tlabel,
+                    "seconds": t,
+                    "runs": len(times),
+                    "seconds_max": max(times),
+                    "error": err,
+                }
+            )
             k += 2
         code = _HELP_MODULES.replace("HEAVY", repr(HEAVY))
         mods_file = Path(tmp) / "modules.txt"
-        subprocess.run([sys.executable, "-c", code, str(mods_file)], capture_output=True,
-                       timeout=120, env=thread_env(None))
+        subprocess.run(
+            [sys.executable, "-c", code, str(mods_file)],
+            capture_output=True,
+            timeout=120,
+            env=thread_env(None),
+        )
         heavy = mods_file.read_text().split() if mods_file.exists() else ["(unknown)"]
     progress(6, 6, "")
     load = load_average()
@@ -153,11 +182,13 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
     if heavy:
         study.findings.append(
             f"catenet --help imports {', '.join(heavy)} (through catenet/__init__.py); it "
-            "should import none of them")
+            "should import none of them"
+        )
     warm = [r for r in rows if r["numba_cache"] == "warm" and r["threads"] == "as installed"]
     if warm and warm[0]["seconds"] > 3.0:
-        study.findings.append(f"cold-start: warm {run_label} takes {warm[0]['seconds']:.2f} s "
-                              "(target 3 s)")
+        study.findings.append(
+            f"cold-start: warm {run_label} takes {warm[0]['seconds']:.2f} s (target 3 s)"
+        )
     for r in rows:
         if r["error"]:
             study.findings.append(f"cold-start: {r['command']} failed: {r['error']}")
@@ -168,8 +199,12 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
 def figure(rows, out_dir):
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 3.2))
-    labels = [f"{r['command']}\n{r['numba_cache']} threads {r['threads']}".replace(
-        " threads as installed", "") for r in rows]
+    labels = [
+        f"{r['command']}\n{r['numba_cache']} threads {r['threads']}".replace(
+            " threads as installed", ""
+        )
+        for r in rows
+    ]
     ax.barh(range(len(rows)), [r["seconds"] for r in rows], color="tab:blue")
     ax.set_yticks(range(len(rows)), labels, fontsize=7)
     ax.invert_yaxis()

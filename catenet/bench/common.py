@@ -72,8 +72,15 @@ def paper_net(n: int, *, alpha: float = 0.0, edge: float = PAPER_EDGE, pressure=
     return sq, Loads(force=pressure_force(sq.net, pressure, 1.0))
 
 
-def midpoint_cable(F: float, *, nodes: int = 21, EA: float | None = None, L: float = 1.0,
-                   line_density: float | None = None, tension_only: bool = True):
+def midpoint_cable(
+    F: float,
+    *,
+    nodes: int = 21,
+    EA: float | None = None,
+    L: float = 1.0,
+    line_density: float | None = None,
+    tension_only: bool = True,
+):
     """A straight cable of length L pinned at both ends, force F down on its midpoint
     node (``nodes`` odd): (Net, Loads, midpoint index)."""
     import numpy as np
@@ -95,8 +102,15 @@ def midpoint_cable(F: float, *, nodes: int = 21, EA: float | None = None, L: flo
     return net, Loads(force=f), mid
 
 
-def compressed_catenary(dL: float, *, nodes: int = 101, L: float = 1.0, ramp: float = 0.0,
-                        EA: float | None = None, tension_only: bool = True):
+def compressed_catenary(
+    dL: float,
+    *,
+    nodes: int = 101,
+    L: float = 1.0,
+    ramp: float = 0.0,
+    EA: float | None = None,
+    tension_only: bool = True,
+):
     """A cable of length L under its own weight whose ends move inward by dL/2 each (the
     paper's compressed catenary, Fig. 2a): (Net, Loads)."""
     import numpy as np
@@ -115,8 +129,9 @@ def compressed_catenary(dL: float, *, nodes: int = 101, L: float = 1.0, ramp: fl
     if ramp > 0:
         ramp_time = np.zeros(nodes)
         ramp_time[[0, -1]] = ramp
-    return net, Loads(gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d,
-                      ramp_time=ramp_time)
+    return net, Loads(
+        gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d, ramp_time=ramp_time
+    )
 
 
 # --- threads --------------------------------------------------------------------------------
@@ -161,8 +176,12 @@ def thread_env(threads: int | None) -> dict:
     """Environment of a child process with ``threads`` BLAS/MKL/Numba threads (None: as is)."""
     env = dict(os.environ)
     if threads is not None:
-        for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                    "NUMBA_NUM_THREADS"):
+        for var in (
+            "OMP_NUM_THREADS",
+            "MKL_NUM_THREADS",
+            "OPENBLAS_NUM_THREADS",
+            "NUMBA_NUM_THREADS",
+        ):
             env[var] = str(threads)
     else:
         for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
@@ -237,11 +256,17 @@ def run_child(code: str, *, timeout: float, env: dict | None = None) -> dict:
         try:
             proc = subprocess.run(
                 [sys.executable, "-c", code, str(path)],
-                capture_output=True, text=True, timeout=timeout, env=env,
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                env=env,
             )
         except subprocess.TimeoutExpired:
-            return {"error": f"timed out after {timeout:.0f} s", "returncode": None,
-                    "wall_seconds": time.perf_counter() - start}
+            return {
+                "error": f"timed out after {timeout:.0f} s",
+                "returncode": None,
+                "wall_seconds": time.perf_counter() - start,
+            }
         wall = time.perf_counter() - start
         out: dict = {}
         if path.exists():

@@ -69,13 +69,27 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             seconds, delta, extra = _solve(job, budget, quick)
         except Exception as exc:  # a CatenetError is a result too: record it
             log.warning("pareto: %s: %r", job, exc)
-            rows.append({**job, "seconds": float("nan"), "error": float("nan"),
-                         "note": f"{type(exc).__name__}: {exc}"})
+            rows.append(
+                {
+                    **job,
+                    "seconds": float("nan"),
+                    "error": float("nan"),
+                    "note": f"{type(exc).__name__}: {exc}",
+                }
+            )
             study.findings.append(f"pareto {job}: {type(exc).__name__}: {exc}")
             continue
         err = abs(delta - refs[case]) / refs[case]
-        rows.append({**job, "seconds": seconds, "error": err, "delta": delta,
-                     "delta_ref": refs[case], **extra})
+        rows.append(
+            {
+                **job,
+                "seconds": seconds,
+                "error": err,
+                "delta": delta,
+                "delta_ref": refs[case],
+                **extra,
+            }
+        )
     progress(len(plan), len(plan), "")
     _front(rows)
     write_csv(rows, study.csv)
@@ -97,16 +111,18 @@ def _plan(quick: bool) -> list[dict]:
     cat_nodes = (21, 101) if quick else (11, 21, 51, 101, 201, 401)
     net_edges = (0.02, 0.01) if quick else (0.04, 0.02, 0.01, 0.005)
     steps = (0.1, 1.0) if quick else (1e-3, 1e-2, 1e-1, 1.0)
-    for case, sizes, key in (("cable", cable_nodes, "nodes"), ("catenary", cat_nodes, "nodes"),
-                             ("net", net_edges, "edge")):
+    for case, sizes, key in (
+        ("cable", cable_nodes, "nodes"),
+        ("catenary", cat_nodes, "nodes"),
+        ("net", net_edges, "edge"),
+    ):
         for size in sizes:
             for rtol in rtols:
                 plan.append({"case": case, "method": "static", key: size, "rtol": rtol})
         mid = 101 if case != "net" else PAPER_EDGE
         for h in steps if case != "net" else [s for s in steps if s >= 1e-2]:
-            for rtol in ((1e-8,) if quick else (1e-4, 1e-6, 1e-8)):
-                plan.append({"case": case, "method": "dynamic", key: mid, "h": h,
-                             "rtol": rtol})
+            for rtol in (1e-8,) if quick else (1e-4, 1e-6, 1e-8):
+                plan.append({"case": case, "method": "dynamic", key: mid, "h": h, "rtol": rtol})
     for job in plan:
         if "edge" not in job:
             job["edge"] = 1.0 / (job["nodes"] - 1)
@@ -132,23 +148,36 @@ def _solve(job: dict, budget: float, quick: bool):
     size = job.get("nodes", job["edge"])
     if job["method"] == "static":
         net, loads, probe = _scene(job["case"], size)
-        t, _, res = repeat(lambda: solve_static(net, loads, rtol=job["rtol"]),
-                           3 if net.n_nodes < 2e4 else 1)
-        return t, -float(res.x[probe, 2]), {"iterations": res.iterations, "steps": 1,
-                                              "dofs": 3 * int((~net.fixed).sum())}
+        t, _, res = repeat(
+            lambda: solve_static(net, loads, rtol=job["rtol"]), 3 if net.n_nodes < 2e4 else 1
+        )
+        return (
+            t,
+            -float(res.x[probe, 2]),
+            {"iterations": res.iterations, "steps": 1, "dofs": 3 * int((~net.fixed).sum())},
+        )
     net, loads, probe = _scene(job["case"], size, ramp=0.5 if job["case"] == "catenary" else 0)
     start = time.perf_counter()
 
     def stop(step, t, x, v):
         return time.perf_counter() - start > budget
 
-    res = solve_dynamic(net, loads, dt=job["h"], damping=1.0, t_end=500.0, rtol=job["rtol"],
-                        on_step=stop)
+    res = solve_dynamic(
+        net, loads, dt=job["h"], damping=1.0, t_end=500.0, rtol=job["rtol"], on_step=stop
+    )
     t = time.perf_counter() - start
-    return t, -float(res.x[probe, 2]), {
-        "iterations": res.iterations, "steps": res.steps, "equilibrium": res.equilibrium,
-        "capped": res.message == "interrupted", "simulated_seconds": res.time,
-        "dofs": 3 * int((~net.fixed).sum())}
+    return (
+        t,
+        -float(res.x[probe, 2]),
+        {
+            "iterations": res.iterations,
+            "steps": res.steps,
+            "equilibrium": res.equilibrium,
+            "capped": res.message == "interrupted",
+            "simulated_seconds": res.time,
+            "dofs": 3 * int((~net.fixed).sum()),
+        },
+    )
 
 
 def reference(case: str) -> float:
@@ -185,8 +214,11 @@ def _front(rows: list[dict]) -> None:
         if not math.isfinite(r.get("error", math.nan)):
             continue
         r["pareto"] = not any(
-            o is not r and o["case"] == r["case"] and math.isfinite(o["error"])
-            and o["seconds"] <= r["seconds"] and o["error"] <= r["error"]
+            o is not r
+            and o["case"] == r["case"]
+            and math.isfinite(o["error"])
+            and o["seconds"] <= r["seconds"]
+            and o["error"] <= r["error"]
             and (o["seconds"] < r["seconds"] or o["error"] < r["error"])
             for o in rows
         )
@@ -206,17 +238,36 @@ def recommend(rows: list[dict]) -> list[dict]:
     for case in dict.fromkeys(r["case"] for r in rows):
         for target in TARGETS:
             for method in ("any", "dynamic"):
-                ok = [r for r in rows if r["case"] == case and r.get("error", math.inf)
-                      <= target and (method == "any" or r["method"] == method)]
+                ok = [
+                    r
+                    for r in rows
+                    if r["case"] == case
+                    and r.get("error", math.inf) <= target
+                    and (method == "any" or r["method"] == method)
+                ]
                 if not ok:
-                    out.append({"case": case, "target": target, "method": method,
-                                "setting": "none reached this", "seconds": float("nan"),
-                                "error": float("nan")})
+                    out.append(
+                        {
+                            "case": case,
+                            "target": target,
+                            "method": method,
+                            "setting": "none reached this",
+                            "seconds": float("nan"),
+                            "error": float("nan"),
+                        }
+                    )
                     continue
                 best = min(ok, key=lambda r: r["seconds"])
-                out.append({"case": case, "target": target, "method": method,
-                            "setting": _setting(best), "seconds": best["seconds"],
-                            "error": best["error"]})
+                out.append(
+                    {
+                        "case": case,
+                        "target": target,
+                        "method": method,
+                        "setting": _setting(best),
+                        "seconds": best["seconds"],
+                        "error": best["error"],
+                    }
+                )
     return out
 
 
@@ -230,13 +281,25 @@ def figure(rows, out_dir):
             pts = [r for r in sel if r["method"] == method]
             if not pts:
                 continue
-            sc = ax.scatter([r["seconds"] for r in pts], [max(r["error"], 1e-16) for r in pts],
-                            c=[math.log10(r["rtol"]) for r in pts], cmap="viridis",
-                            marker=marker, label=method, vmin=-10, vmax=-3,
-                            edgecolors="k" if method == "dynamic" else "none")
+            sc = ax.scatter(
+                [r["seconds"] for r in pts],
+                [max(r["error"], 1e-16) for r in pts],
+                c=[math.log10(r["rtol"]) for r in pts],
+                cmap="viridis",
+                marker=marker,
+                label=method,
+                vmin=-10,
+                vmax=-3,
+                edgecolors="k" if method == "dynamic" else "none",
+            )
         front = sorted((r for r in sel if r["pareto"]), key=lambda r: r["seconds"])
-        ax.plot([r["seconds"] for r in front], [max(r["error"], 1e-16) for r in front], "k-",
-                lw=0.8, label="Pareto front")
+        ax.plot(
+            [r["seconds"] for r in front],
+            [max(r["error"], 1e-16) for r in front],
+            "k-",
+            lw=0.8,
+            label="Pareto front",
+        )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("run time [s]")

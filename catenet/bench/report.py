@@ -94,46 +94,75 @@ def _summary(results: Path) -> list[str]:
     out = ["### In short", ""]
     base = _load(results, "baseline") or []
     cat = next((r for r in base if r["n"] == "34" and r["method"] == "catenet (pardiso)"), None)
-    bl = next((r for r in base if r["n"] == "34" and r["method"] == "baseline numpy+pypardiso"),
-              None)
-    prop = next((r for r in base if r["n"] == "34" and "proposed" in r["method"]
-                 and "pardiso" in r["method"]), None)
+    bl = next(
+        (r for r in base if r["n"] == "34" and r["method"] == "baseline numpy+pypardiso"), None
+    )
+    prop = next(
+        (
+            r
+            for r in base
+            if r["n"] == "34" and "proposed" in r["method"] and "pardiso" in r["method"]
+        ),
+        None,
+    )
     if cat:
-        line = (f"- **Static equilibrium of the paper's n = 34 net ({cat['dofs']} DOF): "
-                f"{_s(cat['seconds'])} s** warm, one thread")
+        line = (
+            f"- **Static equilibrium of the paper's n = 34 net ({cat['dofs']} DOF): "
+            f"{_s(cat['seconds'])} s** warm, one thread"
+        )
         if bl:
-            line += (f", {_s(bl['ratio_to_catenet'], '{:.1f}')}x faster than a plain NumPy/"
-                     "pypardiso implementation of the same method")
+            line += (
+                f", {_s(bl['ratio_to_catenet'], '{:.1f}')}x faster than a plain NumPy/"
+                "pypardiso implementation of the same method"
+            )
         if prop:
-            line += (f" ({_s(prop['seconds'])} s and "
-                     f"{_s(_f(bl['seconds']) / _f(prop['seconds']), '{:.1f}')}x with the two "
-                     "PARDISO settings below)" if bl else "")
+            line += (
+                f" ({_s(prop['seconds'])} s and "
+                f"{_s(_f(bl['seconds']) / _f(prop['seconds']), '{:.1f}')}x with the two "
+                "PARDISO settings below)"
+                if bl
+                else ""
+            )
         out.append(line + ".")
     steps = _load(results, "step-size") or []
     dyn = [r for r in steps if r["n"] == "34" and r["equilibrium"] == "True"]
     if dyn:
         fast = min(dyn, key=lambda r: _f(r["wall_seconds"]))
         slow = max(dyn, key=lambda r: _f(r["wall_seconds"]))
-        out.append(f"- The paper's own method, dynamic relaxation of the same net: "
-                   f"{_s(fast['wall_seconds'])} s (h = {_s(fast['h'], '{:g}')} s) to "
-                   f"{_s(slow['wall_seconds'])} s (h = {_s(slow['h'], '{:g}')} s) to "
-                   "equilibrium, against the paper's < 20 s.")
+        out.append(
+            f"- The paper's own method, dynamic relaxation of the same net: "
+            f"{_s(fast['wall_seconds'])} s (h = {_s(fast['h'], '{:g}')} s) to "
+            f"{_s(slow['wall_seconds'])} s (h = {_s(slow['h'], '{:g}')} s) to "
+            "equilibrium, against the paper's < 20 s."
+        )
     scale = [r for r in (_load(results, "scale") or []) if r.get("dofs")]
     if scale:
         top = scale[-1]
-        out.append(f"- {top['dofs']} DOF: {_s(top['total_seconds'])} s, peak "
-                   f"{_s(_f(top['peak_rss_mib']) / 1024, '{:.2f}')} GiB.")
+        out.append(
+            f"- {top['dofs']} DOF: {_s(top['total_seconds'])} s, peak "
+            f"{_s(_f(top['peak_rss_mib']) / 1024, '{:.2f}')} GiB."
+        )
     cold = _load(results, "cold-start") or []
-    warm = next((r for r in cold if r["numba_cache"] == "warm"
-                 and r["threads"] == "as installed"), None)
-    first = next((r for r in cold if r["numba_cache"].startswith("empty")
-                  and r["threads"] == "as installed"), None)
+    warm = next(
+        (r for r in cold if r["numba_cache"] == "warm" and r["threads"] == "as installed"), None
+    )
+    first = next(
+        (
+            r
+            for r in cold
+            if r["numba_cache"].startswith("empty") and r["threads"] == "as installed"
+        ),
+        None,
+    )
     helps = next((r for r in cold if r["command"] == "catenet --help"), None)
     if warm and first:
-        out.append(f"- `{warm['command'].split(' (')[0]}` on the default case: "
-                   f"{_s(first['seconds'])} s the first time (JIT compilation), "
-                   f"{_s(warm['seconds'])} s after; `catenet --help` {_s(helps['seconds'])} s."
-                   if helps else "")
+        out.append(
+            f"- `{warm['command'].split(' (')[0]}` on the default case: "
+            f"{_s(first['seconds'])} s the first time (JIT compilation), "
+            f"{_s(warm['seconds'])} s after; `catenet --help` {_s(helps['seconds'])} s."
+            if helps
+            else ""
+        )
     stress = _load(results, "stress") or []
     if stress:
         ok = sum(r["passed"] == "True" for r in stress)
@@ -147,12 +176,15 @@ def _summary(results: Path) -> list[str]:
         if default and alt:
             best = min(alt, key=lambda r: _f(r["seconds"]))
             if _f(best["ratio_to_default"]) < 0.8:
-                slower.append(f"{what}: {best['variant']} takes "
-                              f"{_s(best['ratio_to_default'], '{:.2f}')}x the default's time")
+                slower.append(
+                    f"{what}: {best['variant']} takes "
+                    f"{_s(best['ratio_to_default'], '{:.2f}')}x the default's time"
+                )
     if slower:
-        out += ["- Defaults that are not the faster choice (measured below; differences under "
-                "about 20 % are within the noise of a shared machine): " + "; ".join(slower)
-                + "."]
+        out += [
+            "- Defaults that are not the faster choice (measured below; differences under "
+            "about 20 % are within the noise of a shared machine): " + "; ".join(slower) + "."
+        ]
     return out + [""]
 
 
@@ -172,19 +204,41 @@ def _static(results: Path) -> list[str]:
             f"{_s(cat.get('analyse_seconds'))} s, numeric factorisation "
             f"{_s(cat.get('factorize_seconds'))} s, solves {_s(cat.get('solve_seconds'))} s; "
             "the rest is the Newton loop's vector work)"
-            + (f", **{_s(base['ratio_to_catenet'], '{:.1f}')} times faster** than the plain "
-               "NumPy + `scipy.sparse` + `pypardiso.spsolve` implementation of the same "
-               "model and Newton method (`catenet/bench/baseline.py`), which reaches the same "
-               f"equilibrium (to {_s(base['max_error_rel'], '{:.0e}')} of delta)."
-               if base else "."),
+            + (
+                f", **{_s(base['ratio_to_catenet'], '{:.1f}')} times faster** than the plain "
+                "NumPy + `scipy.sparse` + `pypardiso.spsolve` implementation of the same "
+                "model and Newton method (`catenet/bench/baseline.py`), which reaches the same "
+                f"equilibrium (to {_s(base['max_error_rel'], '{:.0e}')} of delta)."
+                if base
+                else "."
+            ),
             "",
         ]
     out += _table(
-        ["n", "DOF", "method", "time [s]", "x catenet", "Newton it.", "x catenet per it.",
-         "max |x - x_ref| / delta"],
-        [[r["n"], r["dofs"], r["method"], _s(r["seconds"]), _s(r["ratio_to_catenet"], "{:.1f}"),
-          r["iterations"], _s(r.get("ratio_per_iteration"), "{:.1f}"),
-          _s(r["max_error_rel"], "{:.0e}")] for r in rows])
+        [
+            "n",
+            "DOF",
+            "method",
+            "time [s]",
+            "x catenet",
+            "Newton it.",
+            "x catenet per it.",
+            "max |x - x_ref| / delta",
+        ],
+        [
+            [
+                r["n"],
+                r["dofs"],
+                r["method"],
+                _s(r["seconds"]),
+                _s(r["ratio_to_catenet"], "{:.1f}"),
+                r["iterations"],
+                _s(r.get("ratio_per_iteration"), "{:.1f}"),
+                _s(r["max_error_rel"], "{:.0e}"),
+            ]
+            for r in rows
+        ],
+    )
     out += [
         "",
         "OpenSees rows (where present) solve the same net as `corotTruss` elements with a "
@@ -206,23 +260,53 @@ def _step_size(results: Path) -> list[str]:
     rows = _load(results, "step-size")
     if not rows:
         return []
-    out = ["### Time against step size (paper Fig. B10)", "",
-           "Dynamic relaxation (implicit Euler, mu = 1) of the paper's nets (alpha = 0, "
-           "p = 100 Pa, 1 cm edges) from rest until the static residual and the inertial "
-           "force fall below rtol = 1e-8 of the load; runs that had not arrived within their "
-           "wall-time budget are marked capped (the ratio is still measured over the "
-           "simulated time reached). Error: max |x - x_static| / delta_static.", ""]
+    out = [
+        "### Time against step size (paper Fig. B10)",
+        "",
+        "Dynamic relaxation (implicit Euler, mu = 1) of the paper's nets (alpha = 0, "
+        "p = 100 Pa, 1 cm edges) from rest until the static residual and the inertial "
+        "force fall below rtol = 1e-8 of the load; runs that had not arrived within their "
+        "wall-time budget are marked capped (the ratio is still measured over the "
+        "simulated time reached). Error: max |x - x_static| / delta_static.",
+        "",
+    ]
     out += _table(
-        ["n", "DOF", "h [s]", "wall [s]", "steps", "Newton it./step", "wall / simulated",
-         "equilibrium", "error vs static"],
-        [[r["n"], r["dofs"], _s(r["h"], "{:g}"), _s(r["wall_seconds"]), r["steps"],
-          _s(r["iterations_per_step"], "{:.2f}"), _s(r["time_ratio"]),
-          "yes" if r["equilibrium"] == "True" else "capped", _s(r["error_vs_static"], "{:.0e}")]
-         for r in rows])
+        [
+            "n",
+            "DOF",
+            "h [s]",
+            "wall [s]",
+            "steps",
+            "Newton it./step",
+            "wall / simulated",
+            "equilibrium",
+            "error vs static",
+        ],
+        [
+            [
+                r["n"],
+                r["dofs"],
+                _s(r["h"], "{:g}"),
+                _s(r["wall_seconds"]),
+                r["steps"],
+                _s(r["iterations_per_step"], "{:.2f}"),
+                _s(r["time_ratio"]),
+                "yes" if r["equilibrium"] == "True" else "capped",
+                _s(r["error_vs_static"], "{:.0e}"),
+            ]
+            for r in rows
+        ],
+    )
     statics = {r["n"]: r["static_seconds"] for r in rows}
-    out += ["", "The static solve of the same nets (one run, rtol 1e-10) takes "
-            + ", ".join(f"{_s(v)} s (n = {k})" for k, v in statics.items()) + ".", "",
-            "![time against step size](figures/bench-step-size.png)", ""]
+    out += [
+        "",
+        "The static solve of the same nets (one run, rtol 1e-10) takes "
+        + ", ".join(f"{_s(v)} s (n = {k})" for k, v in statics.items())
+        + ".",
+        "",
+        "![time against step size](figures/bench-step-size.png)",
+        "",
+    ]
     return out
 
 
@@ -231,17 +315,47 @@ def _scale(results: Path) -> list[str]:
     if not rows:
         return []
     ok = [r for r in rows if r.get("dofs")]
-    out = ["### Scale: 1e3 to 1e6 DOF", "",
-           "Static equilibrium of the square net refined both ways (n = 34 k cables, 1 cm / k "
-           "edges), each size in a fresh process on one thread; peak memory is the process's "
-           "`ru_maxrss` (it sees MKL's allocations).", ""]
+    out = [
+        "### Scale: 1e3 to 1e6 DOF",
+        "",
+        "Static equilibrium of the square net refined both ways (n = 34 k cables, 1 cm / k "
+        "edges), each size in a fresh process on one thread; peak memory is the process's "
+        "`ru_maxrss` (it sees MKL's allocations).",
+        "",
+    ]
     out += _table(
-        ["DOF", "Newton it.", "total [s]", "set-up", "assembly", "analysis", "factorisation",
-         "solves", "rest", "factor nnz", "peak RSS [MiB]", "build net [s]"],
-        [[r["dofs"], r["iterations"], _s(r["total_seconds"]), _s(r["setup_seconds"]),
-          _s(r["assembly_seconds"]), _s(r["analyse_seconds"]), _s(r["factorize_seconds"]),
-          _s(r["solve_seconds"]), _s(r["other_seconds"]), _s(r["factor_nnz"], "{:.3g}"),
-          _s(r["peak_rss_mib"], "{:.0f}"), _s(r["build_seconds"])] for r in ok])
+        [
+            "DOF",
+            "Newton it.",
+            "total [s]",
+            "set-up",
+            "assembly",
+            "analysis",
+            "factorisation",
+            "solves",
+            "rest",
+            "factor nnz",
+            "peak RSS [MiB]",
+            "build net [s]",
+        ],
+        [
+            [
+                r["dofs"],
+                r["iterations"],
+                _s(r["total_seconds"]),
+                _s(r["setup_seconds"]),
+                _s(r["assembly_seconds"]),
+                _s(r["analyse_seconds"]),
+                _s(r["factorize_seconds"]),
+                _s(r["solve_seconds"]),
+                _s(r["other_seconds"]),
+                _s(r["factor_nnz"], "{:.3g}"),
+                _s(r["peak_rss_mib"], "{:.0f}"),
+                _s(r["build_seconds"]),
+            ]
+            for r in ok
+        ],
+    )
     fit = [r for r in ok if _f(r["dofs"]) >= 5e3]
     big = [r for r in ok if _f(r["dofs"]) >= 5e4]
     if len(fit) >= 3:
@@ -250,25 +364,32 @@ def _scale(results: Path) -> list[str]:
         dofs = [_f(r["dofs"]) for r in fit]
         b = geometric_fit(dofs, [_f(r["total_seconds"]) for r in fit])[0]
         bf = geometric_fit(dofs, [_f(r["factorize_seconds"]) for r in fit])[0]
-        line = (f"Fitted exponents (DOF >= 5e3): total time ~ DOF^{b:.2f}, numeric "
-                f"factorisation ~ DOF^{bf:.2f}")
+        line = (
+            f"Fitted exponents (DOF >= 5e3): total time ~ DOF^{b:.2f}, numeric "
+            f"factorisation ~ DOF^{bf:.2f}"
+        )
         top = ok[-1]
         above = _f(top["peak_rss_mib"]) - _f(top["rss_after_import_mib"])
         if above > 0:
-            line += (f"; memory: {_s(above * 1024 / _f(top['dofs']), '{:.2g}')} KiB per DOF above "
-                     f"the {_s(top['rss_after_import_mib'], '{:.0f}')} MiB of a process that "
-                     "has loaded NumPy, Numba and MKL (smaller sizes stay within it)")
+            line += (
+                f"; memory: {_s(above * 1024 / _f(top['dofs']), '{:.2g}')} KiB per DOF above "
+                f"the {_s(top['rss_after_import_mib'], '{:.0f}')} MiB of a process that "
+                "has loaded NumPy, Numba and MKL (smaller sizes stay within it)"
+            )
         out += ["", line + "."]
         del big
         n34 = next((r for r in ok if r["n"] == "34"), None)
         top = ok[-1]
         if n34:
-            out += ["", f"The n = 34 net ({n34['dofs']} DOF) takes {_s(n34['total_seconds'])} s "
-                    f"here; the largest size, {top['dofs']} DOF, {_s(top['total_seconds'])} s "
-                    f"with a peak of {_s(_f(top['peak_rss_mib']) / 1024, '{:.2f}')} GiB. At "
-                    "every size the numeric factorisation and the triangular solves (with "
-                    "PARDISO's iterative refinement) take most of the time; assembly is a "
-                    "few per cent."]
+            out += [
+                "",
+                f"The n = 34 net ({n34['dofs']} DOF) takes {_s(n34['total_seconds'])} s "
+                f"here; the largest size, {top['dofs']} DOF, {_s(top['total_seconds'])} s "
+                f"with a peak of {_s(_f(top['peak_rss_mib']) / 1024, '{:.2f}')} GiB. At "
+                "every size the numeric factorisation and the triangular solves (with "
+                "PARDISO's iterative refinement) take most of the time; assembly is a "
+                "few per cent.",
+            ]
     failed = [r for r in rows if r.get("error")]
     for r in failed:
         out += ["", f"n = {r['n']}, edge {r['edge']}: {r['error']}"]
@@ -280,39 +401,68 @@ def _pareto(results: Path) -> list[str]:
     best = _load(results, "pareto-best")
     if not best:
         return []
-    out = ["### Run time against error: which settings for which accuracy", "",
-           "Three scenes against references they converge to: the midpoint-loaded cable "
-           "(F = 0.01 EA, Eq. 17: the discrete model is exact, so only the solver errs), the "
-           "compressed catenary (dL/L = 0.2, the exact elastic catenary: discretisation "
-           "error O(edge^2) plus the solver's) and the n = 34 net (Richardson extrapolation "
-           "of 5, 2.5 and 1.25 mm edges with the observed order, about 1). Error: relative "
-           "error of the mid-span / centre deflection. Fastest setting found for each "
-           "target:", ""]
+    out = [
+        "### Run time against error: which settings for which accuracy",
+        "",
+        "Three scenes against references they converge to: the midpoint-loaded cable "
+        "(F = 0.01 EA, Eq. 17: the discrete model is exact, so only the solver errs), the "
+        "compressed catenary (dL/L = 0.2, the exact elastic catenary: discretisation "
+        "error O(edge^2) plus the solver's) and the n = 34 net (Richardson extrapolation "
+        "of 5, 2.5 and 1.25 mm edges with the observed order, about 1). Error: relative "
+        "error of the mid-span / centre deflection. Fastest setting found for each "
+        "target:",
+        "",
+    ]
     out += _table(
-        ["scene", "error <=", "fastest setting", "time [s]", "error", "fastest dynamic",
-         "time [s]"],
-        [[a["case"], _s(a["target"], "{:.0e}"), a["setting"], _s(a["seconds"]),
-          _s(a["error"], "{:.1e}"), d["setting"], _s(d["seconds"])]
-         for a, d in zip(best[0::2], best[1::2], strict=True)])
+        [
+            "scene",
+            "error <=",
+            "fastest setting",
+            "time [s]",
+            "error",
+            "fastest dynamic",
+            "time [s]",
+        ],
+        [
+            [
+                a["case"],
+                _s(a["target"], "{:.0e}"),
+                a["setting"],
+                _s(a["seconds"]),
+                _s(a["error"], "{:.1e}"),
+                d["setting"],
+                _s(d["seconds"]),
+            ]
+            for a, d in zip(best[0::2], best[1::2], strict=True)
+        ],
+    )
     rows = _load(results, "pareto") or []
     net = sorted({_f(r["edge"]) for r in rows if r["case"] == "net" and r["method"] == "static"})
     errs = []
     for e in net:
-        sel = [r for r in rows if r["case"] == "net" and r["method"] == "static"
-               and _f(r["edge"]) == e and _f(r["rtol"]) <= 1e-8]
+        sel = [
+            r
+            for r in rows
+            if r["case"] == "net"
+            and r["method"] == "static"
+            and _f(r["edge"]) == e
+            and _f(r["rtol"]) <= 1e-8
+        ]
         if sel:
             errs.append(f"{e * 1e3:g} mm: {_s(min(_f(r['error']) for r in sel), '{:.1e}')}")
     if errs:
-        out += ["", "The net's centre deflection converges only at about first order in the "
-                "edge length (the paper's load puts p L^2 / N on every node, whatever its "
-                "share of cable), so the paper's 1 cm edges carry a discretisation error of "
-                "about half a per cent: error of delta at rtol 1e-8 for edge " + ", ".join(errs)
-                + "."]
+        out += [
+            "",
+            "The net's centre deflection converges only at about first order in the "
+            "edge length (the paper's load puts p L^2 / N on every node, whatever its "
+            "share of cable), so the paper's 1 cm edges carry a discretisation error of "
+            "about half a per cent: error of delta at rtol 1e-8 for edge " + ", ".join(errs) + ".",
+        ]
     out += [
         "",
         "Recommendations:",
         "",
-        "- For an equilibrium, use `solver.method = \"static\"`: it is the fastest way to "
+        '- For an equilibrium, use `solver.method = "static"`: it is the fastest way to '
         "every accuracy in every scene" + _static_vs_dynamic(results) + ".",
         "- `rtol` costs little: Newton converges quadratically, so going from 1e-4 to 1e-8 "
         "adds one or two iterations. Keep the default 1e-8; the error is then set by the "
@@ -323,7 +473,7 @@ def _pareto(results: Path) -> list[str]:
         "A cable under point loads only (straight pieces) is exact with any number of "
         "edges. For 1e-2 on a net the paper's 1 cm edges suffice; 1e-3 needs edges of "
         "about 2 mm (extrapolated from the first-order error above).",
-        "- Dynamic relaxation (`method = \"dynamic\"`) is for the motion itself; if it is "
+        '- Dynamic relaxation (`method = "dynamic"`) is for the motion itself; if it is '
         "used to reach an equilibrium, take the largest step (h = 1 s arrives in a handful "
         "of steps; the final state does not depend on h or mu) rather than a small h, whose "
         "cost grows as 1/h.",
@@ -340,24 +490,47 @@ def _static_vs_dynamic(results: Path) -> str:
     if not sel:
         return ""
     static = _f(next(iter(sel.values()))["static_seconds"])
-    parts = [f"{_f(sel[h]['wall_seconds']) / static:.0f} times with h = {h:g} s"
-             for h in (1.0, 0.01) if h in sel]
-    return ("; dynamic relaxation of the n = 34 net to the same tolerance takes "
-            + " and ".join(parts) + " as long") if parts else ""
+    parts = [
+        f"{_f(sel[h]['wall_seconds']) / static:.0f} times with h = {h:g} s"
+        for h in (1.0, 0.01)
+        if h in sel
+    ]
+    return (
+        (
+            "; dynamic relaxation of the n = 34 net to the same tolerance takes "
+            + " and ".join(parts)
+            + " as long"
+        )
+        if parts
+        else ""
+    )
 
 
 def _skips(results: Path) -> list[str]:
     rows = _load(results, "skips")
     if not rows:
         return []
-    out = ["### What each skip saves", "",
-           "Each variant against catenet's default (marked *) on the n = 34 net, one process, "
-           "medians of repeats.", ""]
+    out = [
+        "### What each skip saves",
+        "",
+        "Each variant against catenet's default (marked *) on the n = 34 net, one process, "
+        "medians of repeats.",
+        "",
+    ]
     out += _table(
         ["what", "variant", "time [s]", "x default", "Newton it.", "note"],
-        [[r["skip"], r["variant"] + (" *" if r["default"] == "True" else ""),
-          _s(r["seconds"]), _s(r["ratio_to_default"], "{:.2f}"), r["iterations"],
-          r["note"].replace("|", "/")] for r in rows])
+        [
+            [
+                r["skip"],
+                r["variant"] + (" *" if r["default"] == "True" else ""),
+                _s(r["seconds"]),
+                _s(r["ratio_to_default"], "{:.2f}"),
+                r["iterations"],
+                r["note"].replace("|", "/"),
+            ]
+            for r in rows
+        ],
+    )
     out += ["", "![skips](figures/bench-skips.png)", ""]
     return out
 
@@ -366,14 +539,20 @@ def _cold(results: Path) -> list[str]:
     rows = _load(results, "cold-start")
     if not rows:
         return []
-    out = ["### Cold start", "",
-           "Fresh processes, as a user runs them; `empty` Numba cache: `NUMBA_CACHE_DIR` "
-           "points at a new directory, so every kernel is compiled.", ""]
-    out += _table(["command", "Numba cache", "threads", "time [s]", "runs"],
-                  [[r["command"], r["numba_cache"], r["threads"], _s(r["seconds"]), r["runs"]]
-                   for r in rows])
-    heavy = next((r.get("heavy_modules_imported") for r in rows
-                  if r.get("heavy_modules_imported")), None)
+    out = [
+        "### Cold start",
+        "",
+        "Fresh processes, as a user runs them; `empty` Numba cache: `NUMBA_CACHE_DIR` "
+        "points at a new directory, so every kernel is compiled.",
+        "",
+    ]
+    out += _table(
+        ["command", "Numba cache", "threads", "time [s]", "runs"],
+        [[r["command"], r["numba_cache"], r["threads"], _s(r["seconds"]), r["runs"]] for r in rows],
+    )
+    heavy = next(
+        (r.get("heavy_modules_imported") for r in rows if r.get("heavy_modules_imported")), None
+    )
     if heavy:
         out += ["", f"Heavy modules imported by `catenet --help`: {heavy}."]
     out += ["", "![cold start](figures/bench-cold-start.png)", ""]
@@ -385,18 +564,33 @@ def _stress(results: Path) -> list[str]:
     if not rows:
         return []
     passed = sum(r["passed"] == "True" for r in rows)
-    out = ["### Numerical-stability stress test", "",
-           f"{passed} of {len(rows)} hard scenes give a right answer (a converged state that "
-           "passes its check, or a clear catenet error where that is right). Loads from 1e-9 "
-           "to 0.5 EA, EA from 1e-2 to 1e9 N, h from 1e-6 to 1e3 s, damping 0 to 1e3, "
-           "zero-slack cables under self-weight, supports moved in by half the span and more, "
-           "bilateral cables in compression, point loads on a net, a 1e5-edge cable and "
-           "random graphs. Checks: Eq. 17, the exact discrete chain, equilibrium (residual and "
-           "reaction balance recomputed from the answer), static = dynamic.", ""]
-    out += _table(["scene", "outcome", "check", "value", "Newton it.", "time [s]", "right"],
-                  [[r["id"], r["status"], r.get("check", ""), _s(r.get("value"), "{:.1e}"),
-                    r.get("iterations", ""), _s(r["seconds"], "{:.2f}"),
-                    "yes" if r["passed"] == "True" else "**no**"] for r in rows])
+    out = [
+        "### Numerical-stability stress test",
+        "",
+        f"{passed} of {len(rows)} hard scenes give a right answer (a converged state that "
+        "passes its check, or a clear catenet error where that is right). Loads from 1e-9 "
+        "to 0.5 EA, EA from 1e-2 to 1e9 N, h from 1e-6 to 1e3 s, damping 0 to 1e3, "
+        "zero-slack cables under self-weight, supports moved in by half the span and more, "
+        "bilateral cables in compression, point loads on a net, a 1e5-edge cable and "
+        "random graphs. Checks: Eq. 17, the exact discrete chain, equilibrium (residual and "
+        "reaction balance recomputed from the answer), static = dynamic.",
+        "",
+    ]
+    out += _table(
+        ["scene", "outcome", "check", "value", "Newton it.", "time [s]", "right"],
+        [
+            [
+                r["id"],
+                r["status"],
+                r.get("check", ""),
+                _s(r.get("value"), "{:.1e}"),
+                r.get("iterations", ""),
+                _s(r["seconds"], "{:.2f}"),
+                "yes" if r["passed"] == "True" else "**no**",
+            ]
+            for r in rows
+        ],
+    )
     bad = [r for r in rows if r["passed"] != "True"]
     if bad:
         out += ["", "Scenes without a right answer (reported to be fixed in the solver):", ""]

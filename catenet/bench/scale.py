@@ -33,8 +33,15 @@ NAME = "scale"
 TITLE = "Static solve from 1e3 to 1e6 DOF"
 
 # (cables n, edge length [m]): about 1e3, 3e3, 1e4, 3e4, 1e5, 3e5, 1e6 DOF.
-SIZES = ((10, 1 / 30), (18, 1 / 55), (34, 0.01), (58, 1 / 170), (108, 1 / 320),
-         (188, 1 / 550), (340, 1 / 1000))
+SIZES = (
+    (10, 1 / 30),
+    (18, 1 / 55),
+    (34, 0.01),
+    (58, 1 / 170),
+    (108, 1 / 320),
+    (188, 1 / 550),
+    (340, 1 / 1000),
+)
 QUICK_MAX_DOF = 1.5e5
 TIMEOUT = 900.0
 
@@ -76,8 +83,9 @@ json.dump(out, open(sys.argv[1], "w"))
 """
 
 
-def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1,
-        sizes=None) -> Study:
+def run(
+    out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1, sizes=None
+) -> Study:
     import json
 
     sizes = sizes or SIZES
@@ -100,20 +108,39 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
         r = out["run"]
         dofs = int(r["dofs"])
         newton = r["total_seconds"] - sum(
-            r.get(k, 0.0) for k in ("setup_seconds", "assembly_seconds", "analyse_seconds",
-                                    "factorize_seconds", "solve_seconds"))
-        row.update({
-            "nodes": out["nodes"], "edges": out["edges"], "dofs": dofs, "nnz": r["nnz"],
-            "factor_nnz": r["factor_nnz"], "iterations": out["iterations"],
-            "converged": out["converged"], "build_seconds": out["build_seconds"],
-            "total_seconds": r["total_seconds"], "setup_seconds": r["setup_seconds"],
-            "assembly_seconds": r["assembly_seconds"], "analyse_seconds": r["analyse_seconds"],
-            "factorize_seconds": r["factorize_seconds"], "solve_seconds": r["solve_seconds"],
-            "other_seconds": newton, "repeats": len(out["total_all"]),
-            "peak_rss_mib": out["peak_rss_mib"],
-            "rss_after_import_mib": out["rss_after_import_mib"],
-            "delta": out["delta"], "child_wall_seconds": out["wall_seconds"],
-        })
+            r.get(k, 0.0)
+            for k in (
+                "setup_seconds",
+                "assembly_seconds",
+                "analyse_seconds",
+                "factorize_seconds",
+                "solve_seconds",
+            )
+        )
+        row.update(
+            {
+                "nodes": out["nodes"],
+                "edges": out["edges"],
+                "dofs": dofs,
+                "nnz": r["nnz"],
+                "factor_nnz": r["factor_nnz"],
+                "iterations": out["iterations"],
+                "converged": out["converged"],
+                "build_seconds": out["build_seconds"],
+                "total_seconds": r["total_seconds"],
+                "setup_seconds": r["setup_seconds"],
+                "assembly_seconds": r["assembly_seconds"],
+                "analyse_seconds": r["analyse_seconds"],
+                "factorize_seconds": r["factorize_seconds"],
+                "solve_seconds": r["solve_seconds"],
+                "other_seconds": newton,
+                "repeats": len(out["total_all"]),
+                "peak_rss_mib": out["peak_rss_mib"],
+                "rss_after_import_mib": out["rss_after_import_mib"],
+                "delta": out["delta"],
+                "child_wall_seconds": out["wall_seconds"],
+            }
+        )
         rows.append(row)
         if not out["converged"]:
             study.findings.append(f"scale: n = {n}: static solve did not converge")
@@ -121,14 +148,16 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
     ok = [r for r in rows if "dofs" in r and r["dofs"] >= 5e3]
     if len(ok) >= 3:
         b, _ = geometric_fit([r["dofs"] for r in ok], [r["total_seconds"] for r in ok])
-        bf, _ = geometric_fit([r["dofs"] for r in ok],
-                              [max(r["factorize_seconds"], 1e-9) for r in ok])
+        bf, _ = geometric_fit(
+            [r["dofs"] for r in ok], [max(r["factorize_seconds"], 1e-9) for r in ok]
+        )
         top = ok[-1]
         per_dof = (top["peak_rss_mib"] - top["rss_after_import_mib"]) * 1024 / top["dofs"]
         study.summary.append(
             f"fitted exponents (DOF >= 5e3): total time ~ DOF^{b:.2f}, "
             f"factorisation ~ DOF^{bf:.2f}; memory at {top['dofs']} DOF: {per_dof:.2g} KiB "
-            f"per DOF above the {top['rss_after_import_mib']:.0f} MiB after start-up")
+            f"per DOF above the {top['rss_after_import_mib']:.0f} MiB after start-up"
+        )
         for r in rows:
             r["fit_exponent_total"] = b
             r["fit_exponent_factorize"] = bf
@@ -153,13 +182,24 @@ def figure(rows, out_dir):
     ok = [r for r in rows if "dofs" in r]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     d = [r["dofs"] for r in ok]
-    parts = [("total_seconds", "total"), ("setup_seconds", "set-up"),
-             ("assembly_seconds", "assembly"), ("analyse_seconds", "symbolic analysis"),
-             ("factorize_seconds", "factorisation"), ("solve_seconds", "solves"),
-             ("other_seconds", "Newton loop (rest)"), ("build_seconds", "building the net")]
+    parts = [
+        ("total_seconds", "total"),
+        ("setup_seconds", "set-up"),
+        ("assembly_seconds", "assembly"),
+        ("analyse_seconds", "symbolic analysis"),
+        ("factorize_seconds", "factorisation"),
+        ("solve_seconds", "solves"),
+        ("other_seconds", "Newton loop (rest)"),
+        ("build_seconds", "building the net"),
+    ]
     for key, label in parts:
-        ax1.loglog(d, [max(r[key], 1e-6) for r in ok], "o-" if key == "total_seconds" else ".--",
-                   label=label, lw=2 if key == "total_seconds" else 1)
+        ax1.loglog(
+            d,
+            [max(r[key], 1e-6) for r in ok],
+            "o-" if key == "total_seconds" else ".--",
+            label=label,
+            lw=2 if key == "total_seconds" else 1,
+        )
     ax1.set_xlabel("DOF")
     ax1.set_ylabel("wall time [s]")
     ax1.legend(fontsize=7)

@@ -47,8 +47,9 @@ NAME = "skips"
 TITLE = "What each skip saves"
 
 
-def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1,
-        n: int = 34) -> Study:
+def run(
+    out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1, n: int = 34
+) -> Study:
     import numpy as np
 
     from catenet.static import solve_static
@@ -65,9 +66,18 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
 
     def add(skip, variant, default, seconds, x=None, iterations=None, note="", **extra):
         err = float(np.max(np.abs(x - ref.x))) / scale if x is not None else float("nan")
-        rows.append({"skip": skip, "variant": variant, "default": default,
-                     "seconds": seconds, "iterations": iterations, "error_vs_static": err,
-                     "note": note, **extra})
+        rows.append(
+            {
+                "skip": skip,
+                "variant": variant,
+                "default": default,
+                "seconds": seconds,
+                "iterations": iterations,
+                "error_vs_static": err,
+                "note": note,
+                **extra,
+            }
+        )
 
     parts = [_method, _gravity, _output, _analysis, _mtype, _refinement, _threads]
     for k, part in enumerate(parts):
@@ -86,8 +96,13 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
         for r in sel:
             r["ratio_to_default"] = r["seconds"] / base["seconds"] if base else float("nan")
         if base:
-            faster = [r for r in sel if not r["default"] and r["seconds"] < 0.8 * base["seconds"]
-                      and not r["note"].startswith("failed")]
+            faster = [
+                r
+                for r in sel
+                if not r["default"]
+                and r["seconds"] < 0.8 * base["seconds"]
+                and not r["note"].startswith("failed")
+            ]
             for r in faster:
                 study.findings.append(
                     f"{skip}: the default ({base['variant']}, {base['seconds']:.3g} s) is "
@@ -116,9 +131,18 @@ def _method(net, loads, add, study, *, reps, quick, n):
     add("method", "static (solve_static)", True, t, res.x, res.iterations)
     t, _, res = repeat(
         lambda: solve_dynamic(net, loads, dt=1e-2, damping=1.0, t_end=10.0, workspace=ws),
-        1 if quick else 2, warmup=0)
-    add("method", "dynamic relaxation (dt 1e-2, mu 1)", False, t, res.x, res.iterations,
-        note=f"{res.steps} steps, {res.message}")
+        1 if quick else 2,
+        warmup=0,
+    )
+    add(
+        "method",
+        "dynamic relaxation (dt 1e-2, mu 1)",
+        False,
+        t,
+        res.x,
+        res.iterations,
+        note=f"{res.steps} steps, {res.message}",
+    )
 
 
 def _gravity(net, loads, add, study, *, reps, quick, n):
@@ -134,22 +158,33 @@ def _gravity(net, loads, add, study, *, reps, quick, n):
     static = {k: (lambda lo=lo: solve_static(net, lo, workspace=ws)) for k, lo in cases.items()}
     for k, (t, _, res) in interleaved(static, reps).items():
         add("gravity (static)", k, k.startswith("no"), t, res.x, res.iterations)
-    dynamic = {k: (lambda lo=lo: solve_dynamic(net, lo, dt=1e-2, damping=1.0, t_end=0.2,
-                                               workspace=ws)) for k, lo in cases.items()}
+    dynamic = {
+        k: (lambda lo=lo: solve_dynamic(net, lo, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws))
+        for k, lo in cases.items()
+    }
     for k, (t, _, res) in interleaved(dynamic, reps).items():
-        add("gravity (dynamic)", k, k.startswith("no"), t, None, res.iterations,
-            note=f"{res.steps} steps")
+        add(
+            "gravity (dynamic)",
+            k,
+            k.startswith("no"),
+            t,
+            None,
+            res.iterations,
+            note=f"{res.steps} steps",
+        )
     try:
         from catenet.case import build, load_case
     except ImportError:
-        study.findings.append("gravity: catenet.case not available: the default case's "
-                              "gravity was not checked")
+        study.findings.append(
+            "gravity: catenet.case not available: the default case's gravity was not checked"
+        )
         return
     scene = build(load_case(None))
     if scene.loads.gravity is not None:
         study.findings.append(
             f"gravity: the default case (no [load] gravity) builds Loads.gravity = "
-            f"{scene.loads.gravity!r}: it should be None so that none is computed")
+            f"{scene.loads.gravity!r}: it should be None so that none is computed"
+        )
     else:
         study.summary.append("gravity: the default case builds Loads.gravity = None: good")
 
@@ -164,8 +199,13 @@ def _output(net, loads, add, study, *, reps, quick, n):
         study.findings.append(f"output: not measured ({exc}): catenet.runner/case missing")
         return
     with tempfile.TemporaryDirectory(prefix="catenet-bench-") as tmp:
-        base = ["geometry.alpha=0.0", "solver.method='dynamic'", "solver.dt=0.01",
-                "solver.t_end=0.5", f"geometry.n={n}"]
+        base = [
+            "geometry.alpha=0.0",
+            "solver.method='dynamic'",
+            "solver.dt=0.01",
+            "solver.t_end=0.5",
+            f"geometry.n={n}",
+        ]
         fns = {}
         for every in (1, 0):
             case = load_case(None, [*base, f"output.every={every}"])
@@ -180,13 +220,22 @@ def _output(net, loads, add, study, *, reps, quick, n):
         for every, (t, _, res) in interleaved(fns, reps).items():
             out = Path(tmp) / f"every{every}.h5"
             size = out.stat().st_size if out.exists() else 0
-            add("output (dynamic, 50 steps)", f"every = {every}", every == 1, t, None,
-                res.iterations, note=f"file {size / 1e6:.2f} MB", file_bytes=size)
+            add(
+                "output (dynamic, 50 steps)",
+                f"every = {every}",
+                every == 1,
+                t,
+                None,
+                res.iterations,
+                note=f"file {size / 1e6:.2f} MB",
+                file_bytes=size,
+            )
         case = load_case(None, ["geometry.alpha=0.0", f"geometry.n={n}"])
         if case.output.every != 0:
             study.summary.append(
                 f"output: the default case writes every = {case.output.every} (SPEC default); "
-                "a static run has one frame, so this costs nothing there")
+                "a static run has one frame, so this costs nothing there"
+            )
 
 
 def _analysis(net, loads, add, study, *, reps, quick, n):
@@ -194,24 +243,49 @@ def _analysis(net, loads, add, study, *, reps, quick, n):
     from catenet.dynamic import solve_dynamic
     from catenet.static import Workspace, continuation, solve_static
 
-    variants = [("analyse once (Workspace)", True, None),
-                ("analyse every factorisation", False, ReanalysingPardiso),
-                ("pypardiso.spsolve", False, PypardisoSpsolve)]
+    variants = [
+        ("analyse once (Workspace)", True, None),
+        ("analyse every factorisation", False, ReanalysingPardiso),
+        ("pypardiso.spsolve", False, PypardisoSpsolve),
+    ]
     for name, default, cls in variants:
         ws = Workspace(net)
         if cls is not None:
             install(ws, cls)
         t, _, res = repeat(lambda ws=ws: solve_static(net, loads, workspace=ws), reps)
-        add("analysis (static)", name, default, t, res.x, res.iterations,
-            analyse_count=res.stats.get("analyse_count"))
-        t, _, res = repeat(lambda ws=ws: solve_dynamic(
-            net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws), reps)
-        add("analysis (dynamic)", name, default, t, None, res.iterations,
-            note=f"{res.steps} steps", analyse_count=res.stats.get("analyse_count"))
+        add(
+            "analysis (static)",
+            name,
+            default,
+            t,
+            res.x,
+            res.iterations,
+            analyse_count=res.stats.get("analyse_count"),
+        )
+        t, _, res = repeat(
+            lambda ws=ws: solve_dynamic(net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws),
+            reps,
+        )
+        add(
+            "analysis (dynamic)",
+            name,
+            default,
+            t,
+            None,
+            res.iterations,
+            note=f"{res.steps} steps",
+            analyse_count=res.stats.get("analyse_count"),
+        )
     factors = [0.1 * k for k in range(1, 11)]
     t, _, res = repeat(lambda: continuation(net, loads, factors), 1 if quick else 3)
-    add("analysis (10 load steps)", "one Workspace (continuation)", True, t, res[-1].x,
-        sum(r.iterations for r in res))
+    add(
+        "analysis (10 load steps)",
+        "one Workspace (continuation)",
+        True,
+        t,
+        res[-1].x,
+        sum(r.iterations for r in res),
+    )
 
     def separate():
         x = None
@@ -222,8 +296,14 @@ def _analysis(net, loads, add, study, *, reps, quick, n):
         return out
 
     t, _, res = repeat(separate, 1 if quick else 3)
-    add("analysis (10 load steps)", "a new Workspace per step", False, t, res[-1].x,
-        sum(r.iterations for r in res))
+    add(
+        "analysis (10 load steps)",
+        "a new Workspace per step",
+        False,
+        t,
+        res[-1].x,
+        sum(r.iterations for r in res),
+    )
 
 
 def _mtype(net, loads, add, study, *, reps, quick, n):
@@ -231,15 +311,17 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
     from catenet.errors import CatenetError
     from catenet.static import Workspace, solve_static
 
-    names = {-2: "mtype -2 (symmetric indefinite)", 2: "mtype 2 (SPD)",
-             11: "mtype 11 (general, full matrix)"}
+    names = {
+        -2: "mtype -2 (symmetric indefinite)",
+        2: "mtype 2 (SPD)",
+        11: "mtype 11 (general, full matrix)",
+    }
     spaces = {}
     for mtype in names:
         try:
             spaces[mtype] = Workspace(net, mtype=mtype)
         except Exception as exc:
-            add("mtype (static)", names[mtype], mtype == -2, float("nan"),
-                note=f"failed: {exc!r}")
+            add("mtype (static)", names[mtype], mtype == -2, float("nan"), note=f"failed: {exc!r}")
             study.findings.append(f"mtype {mtype}: Workspace(net, mtype={mtype}) fails: {exc!r}")
     for label in ("mtype (static)", "mtype (dynamic)"):
         fns = {}
@@ -247,8 +329,9 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
             if label.endswith("(static)"):
                 fns[mtype] = lambda ws=ws: solve_static(net, loads, workspace=ws)
             else:
-                fns[mtype] = lambda ws=ws: solve_dynamic(net, loads, dt=1e-2, damping=1.0,
-                                                         t_end=0.2, workspace=ws)
+                fns[mtype] = lambda ws=ws: solve_dynamic(
+                    net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws
+                )
             try:  # a failing type is reported, not timed
                 fns[mtype]()
             except CatenetError as exc:
@@ -257,11 +340,18 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
                 study.findings.append(f"{label} {names[mtype]}: {type(exc).__name__}: {exc}")
         for mtype, (t, _, res) in interleaved(fns, reps).items():
             ws = spaces[mtype]
-            add(label, names[mtype], mtype == -2, t,
-                res.x if label.endswith("(static)") else None, res.iterations,
+            add(
+                label,
+                names[mtype],
+                mtype == -2,
+                t,
+                res.x if label.endswith("(static)") else None,
+                res.iterations,
                 factorize_seconds=res.stats.get("factorize_seconds"),
-                solve_seconds=res.stats.get("solve_seconds"), upper=ws.system.upper,
-                factor_nnz=getattr(ws.solver, "factor_nnz", None))
+                solve_seconds=res.stats.get("solve_seconds"),
+                upper=ws.system.upper,
+                factor_nnz=getattr(ws.solver, "factor_nnz", None),
+            )
 
 
 def _refinement(net, loads, add, study, *, reps, quick, n):
@@ -284,14 +374,26 @@ def _refinement(net, loads, add, study, *, reps, quick, n):
 
     static = {s: (lambda s=s: solve_static(net, loads, workspace=fresh(s))) for s in variants}
     dyn_ws = {s: fresh(s) for s in variants}
-    dynamic = {s: (lambda s=s: solve_dynamic(net, loads, dt=1e-2, damping=1.0, t_end=0.2,
-                                             workspace=dyn_ws[s])) for s in variants}
+    dynamic = {
+        s: (
+            lambda s=s: solve_dynamic(
+                net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=dyn_ws[s]
+            )
+        )
+        for s in variants
+    }
     for label, fns in (("refinement (static)", static), ("refinement (dynamic)", dynamic)):
         for s, (t, _, res) in interleaved(fns, reps).items():
-            add(label, f"iparm[8] = {s} refinement steps", s == default_steps, t,
-                res.x if label.endswith("(static)") else None, res.iterations,
+            add(
+                label,
+                f"iparm[8] = {s} refinement steps",
+                s == default_steps,
+                t,
+                res.x if label.endswith("(static)") else None,
+                res.iterations,
                 factorize_seconds=res.stats.get("factorize_seconds"),
-                solve_seconds=res.stats.get("solve_seconds"))
+                solve_seconds=res.stats.get("solve_seconds"),
+            )
 
 
 _THREADS_CHILD = r"""
@@ -327,8 +429,11 @@ def _threads(net, loads, add, study, *, reps, quick, n):
         ("one thread everywhere (OPENBLAS/MKL_NUM_THREADS=1)", False, 1, "default"),
     ]
     for name, default, env_threads, mode in variants:
-        code = _THREADS_CHILD.replace("mode = sys.argv[2]", f"mode = {mode!r}").replace(
-            "int(sys.argv[3])", str(n)).replace("QUICK", str(bool(quick)))
+        code = (
+            _THREADS_CHILD.replace("mode = sys.argv[2]", f"mode = {mode!r}")
+            .replace("int(sys.argv[3])", str(n))
+            .replace("QUICK", str(bool(quick)))
+        )
         out = run_child(code, timeout=600, env=thread_env(env_threads))
         if "error" in out:
             add("threads (static)", name, default, float("nan"), note=f"failed: {out['error']}")
@@ -337,9 +442,9 @@ def _threads(net, loads, add, study, *, reps, quick, n):
         add("threads (static)", name, default, out["static"], note=note)
         if "dynamic" in out:
             add("threads (dynamic, 30 steps)", name, default, out["dynamic"], note=note)
-    study.summary.append(f"threads measured at load average {load_average():.1f} "
-                         f"(other processes share the cores)")
-
+    study.summary.append(
+        f"threads measured at load average {load_average():.1f} (other processes share the cores)"
+    )
 
 
 def figure(rows, out_dir):

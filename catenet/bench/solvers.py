@@ -37,8 +37,12 @@ class SymmetricSuperLU(ScipySolver):
         if self.upper:
             a = a + sp.triu(a, k=1).T
         try:
-            self._lu = splu(a.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
+            self._lu = splu(
+                a.tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
         except RuntimeError as exc:
             raise SingularSystemError(
                 f"SciPy: {exc}: a mechanism or an all-slack region", nodes=self.weak_nodes()
@@ -69,6 +73,7 @@ def install(workspace, cls, **kwargs):
     """Replaces the linear solver of ``workspace`` by ``cls`` on the same pattern."""
     system = workspace.system
     dof_node = np.flatnonzero(~system.net.fixed).repeat(3)
-    workspace.solver = cls(system.indptr, system.indices, upper=system.upper,
-                           dof_node=dof_node, **kwargs)
+    workspace.solver = cls(
+        system.indptr, system.indices, upper=system.upper, dof_node=dof_node, **kwargs
+    )
     return workspace

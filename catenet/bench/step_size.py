@@ -63,35 +63,41 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             def stop(step, t, x, v, start=start):
                 return time.perf_counter() - start > budget
 
-            res = solve_dynamic(net, loads, dt=h, damping=1.0, t_end=T_END, workspace=ws,
-                                on_step=stop)
+            res = solve_dynamic(
+                net, loads, dt=h, damping=1.0, t_end=T_END, workspace=ws, on_step=stop
+            )
             wall = time.perf_counter() - start
             err = float(np.max(np.abs(res.x - ref.x))) / delta_ref
-            rows.append({
-                "n": n,
-                "dofs": ws.system.n_free,
-                "h": h,
-                "wall_seconds": wall,
-                "steps": res.steps,
-                "newton_iterations": res.iterations,
-                "iterations_per_step": res.iterations / max(res.steps, 1),
-                "simulated_seconds": res.time,
-                "time_ratio": wall / res.time if res.time > 0 else float("nan"),
-                "equilibrium": bool(res.equilibrium),
-                "capped": res.message == "interrupted",
-                "error_vs_static": err,
-                "delta": -float(res.x[sq.center, 2]),
-                "delta_static": delta_ref,
-                "static_seconds": ref.wall_time,
-            })
+            rows.append(
+                {
+                    "n": n,
+                    "dofs": ws.system.n_free,
+                    "h": h,
+                    "wall_seconds": wall,
+                    "steps": res.steps,
+                    "newton_iterations": res.iterations,
+                    "iterations_per_step": res.iterations / max(res.steps, 1),
+                    "simulated_seconds": res.time,
+                    "time_ratio": wall / res.time if res.time > 0 else float("nan"),
+                    "equilibrium": bool(res.equilibrium),
+                    "capped": res.message == "interrupted",
+                    "error_vs_static": err,
+                    "delta": -float(res.x[sq.center, 2]),
+                    "delta_static": delta_ref,
+                    "static_seconds": ref.wall_time,
+                }
+            )
             done += 1
     progress(total, total, "")
     csv = write_csv(rows, Path(out_dir) / f"{NAME}.csv")
     fig = figure(rows, out_dir)
     study = Study(NAME, rows, csv, fig)
     for r in rows:
-        state = ("equilibrium" if r["equilibrium"]
-                 else f"capped at {r['simulated_seconds']:.1f} s simulated")
+        state = (
+            "equilibrium"
+            if r["equilibrium"]
+            else f"capped at {r['simulated_seconds']:.1f} s simulated"
+        )
         study.summary.append(
             f"n = {r['n']:2d}  h = {r['h']:<6g} {r['wall_seconds']:7.2f} s  "
             f"{r['steps']:6d} steps  {r['iterations_per_step']:.2f} it/step  "
@@ -111,8 +117,13 @@ def figure(rows, out_dir):
             if r["capped"]:
                 ax1.plot(r["h"], r["time_ratio"], "x", color="k", ms=9)
         ok = [r for r in sel if r["equilibrium"]]
-        ax2.loglog([r["h"] for r in ok], [r["wall_seconds"] for r in ok], "o-",
-                   color=line.get_color(), label=f"n = {n}")
+        ax2.loglog(
+            [r["h"] for r in ok],
+            [r["wall_seconds"] for r in ok],
+            "o-",
+            color=line.get_color(),
+            label=f"n = {n}",
+        )
         if sel:
             ax2.axhline(sel[0]["static_seconds"], color=line.get_color(), ls=":", lw=1)
     ax1.set_xlabel("time step h [s]")

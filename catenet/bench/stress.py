@@ -94,23 +94,39 @@ def finite(res) -> bool:
     arrays = [res.x, res.tension, res.reaction] + ([res.v] if res.v is not None else [])
     scalars = [res.residual]
     return all(bool(np.all(np.isfinite(a))) for a in arrays) and all(
-        math.isfinite(s) for s in scalars)
+        math.isfinite(s) for s in scalars
+    )
 
 
 def _eq_row(check, value, tol, results, net, loads, note="", factor=1.0):
     """A row whose answer must also be an equilibrium (when the solver says so)."""
-    eq = max((equilibrium_error(net, loads, r, factor) for r in results if r.equilibrium),
-             default=0.0)
-    return {"results": results, "check": check, "value": value, "tol": tol,
-            "equilibrium_error": eq, "note": note}
+    eq = max(
+        (equilibrium_error(net, loads, r, factor) for r in results if r.equilibrium), default=0.0
+    )
+    return {
+        "results": results,
+        "check": check,
+        "value": value,
+        "tol": tol,
+        "equilibrium_error": eq,
+        "note": note,
+    }
 
 
 # --- scenes ---------------------------------------------------------------------------------
 
 
-def midpoint_load(F_bar: float | None = None, F: float | None = None, EA: float | None = None,
-                  nodes: int = 21, method: str = "static", h: float = 1e-2,
-                  damping: float = 1.0, steps: int | None = None, budget: float = 10.0):
+def midpoint_load(
+    F_bar: float | None = None,
+    F: float | None = None,
+    EA: float | None = None,
+    nodes: int = 21,
+    method: str = "static",
+    h: float = 1e-2,
+    damping: float = 1.0,
+    steps: int | None = None,
+    budget: float = 10.0,
+):
     """Cable (L = 1) under a midpoint load, against Eq. 17."""
     from catenet import analytic
     from catenet.dynamic import solve_dynamic
@@ -135,24 +151,40 @@ def midpoint_load(F_bar: float | None = None, F: float | None = None, EA: float 
     if method == "dynamic" and not res.equilibrium:
         # Stopped before equilibrium (few steps of a tiny h, or capped): bounded motion.
         ok_bound = 0.0 <= delta <= 2.5 * exact or abs(delta) < 1e-12
-        return _eq_row("bounded", 0.0 if ok_bound else delta / exact, 1.0, [res], net, loads,
-                       note=f"{res.steps} steps to t = {res.time:.3g} s, {res.message}")
+        return _eq_row(
+            "bounded",
+            0.0 if ok_bound else delta / exact,
+            1.0,
+            [res],
+            net,
+            loads,
+            note=f"{res.steps} steps to t = {res.time:.3g} s, {res.message}",
+        )
     err = abs(delta - exact) / exact
-    return _eq_row("eq17", err, 1e-6, [res], net, loads,
-                   note=f"delta/L = {delta:.4g}, max strain {strain:.3g}")
+    return _eq_row(
+        "eq17", err, 1e-6, [res], net, loads, note=f"delta/L = {delta:.4g}, max strain {strain:.3g}"
+    )
 
 
-def self_weight(dL: float = 0.0, nodes: int = 101, EA: float | None = None,
-                method: str = "static", h: float = 1e-2, ramp: float = 1.0,
-                tension_only: bool = True, budget: float = 20.0):
+def self_weight(
+    dL: float = 0.0,
+    nodes: int = 101,
+    EA: float | None = None,
+    method: str = "static",
+    h: float = 1e-2,
+    ramp: float = 1.0,
+    tension_only: bool = True,
+    budget: float = 20.0,
+):
     """Cable of length 1 under its own weight, supports moved inward by dL (0: a straight
     zero-slack cable), against the exact discrete chain."""
     from catenet import analytic
     from catenet.dynamic import solve_dynamic
     from catenet.static import solve_static
 
-    net, loads = compressed_catenary(dL, nodes=nodes, EA=EA, tension_only=tension_only,
-                                     ramp=ramp if method == "dynamic" else 0.0)
+    net, loads = compressed_catenary(
+        dL, nodes=nodes, EA=EA, tension_only=tension_only, ramp=ramp if method == "dynamic" else 0.0
+    )
     EA_ = float(net.EA[0])
     w = float(net.line_density[0]) * 9.81
     exact = analytic.discrete_catenary(1.0, EA_, w, 1.0 - dL, nodes - 1).sag
@@ -166,17 +198,36 @@ def self_weight(dL: float = 0.0, nodes: int = 101, EA: float | None = None,
 
         res = solve_dynamic(net, loads, dt=h, damping=1.0, t_end=1e4, on_step=stop)
         if not res.equilibrium:
-            return _eq_row("chain", math.inf, 1e-6, [res], net, loads,
-                           note=f"no equilibrium within {budget:g} s wall ({res.steps} steps, "
-                                f"t = {res.time:.3g} s)")
+            return _eq_row(
+                "chain",
+                math.inf,
+                1e-6,
+                [res],
+                net,
+                loads,
+                note=f"no equilibrium within {budget:g} s wall ({res.steps} steps, "
+                f"t = {res.time:.3g} s)",
+            )
     mid = (nodes - 1) // 2
     sag = -float(res.x[mid, 2])
-    return _eq_row("chain", abs(sag - exact) / exact, 1e-6, [res], net, loads,
-                   note=f"sag {sag:.6g} m, chain {exact:.6g} m")
+    return _eq_row(
+        "chain",
+        abs(sag - exact) / exact,
+        1e-6,
+        [res],
+        net,
+        loads,
+        note=f"sag {sag:.6g} m, chain {exact:.6g} m",
+    )
 
 
-def bilateral_compression(dL: float = 0.1, nodes: int = 21, gravity: bool = False,
-                          perturb: float = 0.0, method: str = "static"):
+def bilateral_compression(
+    dL: float = 0.1,
+    nodes: int = 21,
+    gravity: bool = False,
+    perturb: float = 0.0,
+    method: str = "static",
+):
     """A bilateral (tension_only=False) straight cable whose supports move inward by dL.
 
     Without a transverse load the straight, uniformly compressed state is an equilibrium,
@@ -190,13 +241,13 @@ def bilateral_compression(dL: float = 0.1, nodes: int = 21, gravity: bool = Fals
     from catenet.dynamic import solve_dynamic
     from catenet.static import solve_static
 
-    net, loads = compressed_catenary(dL, nodes=nodes, tension_only=False,
-                                     ramp=0.5 if method == "dynamic" else 0.0)
+    net, loads = compressed_catenary(
+        dL, nodes=nodes, tension_only=False, ramp=0.5 if method == "dynamic" else 0.0
+    )
     if not gravity:
         from catenet.net import Loads
 
-        loads = Loads(support_displacement=loads.support_displacement,
-                      ramp_time=loads.ramp_time)
+        loads = Loads(support_displacement=loads.support_displacement, ramp_time=loads.ramp_time)
     x0 = None
     if perturb:
         rng = np.random.default_rng(0)
@@ -214,14 +265,31 @@ def bilateral_compression(dL: float = 0.1, nodes: int = 21, gravity: bool = Fals
         w = float(net.line_density[0]) * 9.81
         exact = analytic.discrete_catenary(1.0, float(net.EA[0]), w, 1.0 - dL, nodes - 1).sag
         sag = -float(res.x[(nodes - 1) // 2, 2])
-        return _eq_row("chain", abs(sag - exact) / exact, 1e-6, [res], net, loads,
-                       note=f"min strain {-compressed:.3g}")
+        return _eq_row(
+            "chain",
+            abs(sag - exact) / exact,
+            1e-6,
+            [res],
+            net,
+            loads,
+            note=f"min strain {-compressed:.3g}",
+        )
     straight = float(np.max(np.abs(res.x[:, 1:]))) < 1e-9
     value = 1.0 if (straight and compressed > 1e-6) else 0.0
-    return _eq_row("unstable", value, 0.5, [res], net, loads,
-                   note=("straight compressed state (unstable) returned as converged"
-                         if value else f"buckled or relaxed: min strain {-compressed:.3g}")
-                   + f"; {res.message}")
+    return _eq_row(
+        "unstable",
+        value,
+        0.5,
+        [res],
+        net,
+        loads,
+        note=(
+            "straight compressed state (unstable) returned as converged"
+            if value
+            else f"buckled or relaxed: min strain {-compressed:.3g}"
+        )
+        + f"; {res.message}",
+    )
 
 
 def net_point_load(F: float = 5.0, n: int = 10, h: float = 0.05):
@@ -246,8 +314,15 @@ def net_point_load(F: float = 5.0, n: int = 10, h: float = 0.05):
     rd = solve_dynamic(net, loads, dt=h, damping=1.0, t_end=200.0)
     scale = max(float(np.max(np.abs(rs.x - net.nodes))), 1e-300)
     diff = float(np.max(np.abs(rs.x - rd.x))) / scale if rd.equilibrium else math.inf
-    return _eq_row("static = dynamic", diff, 1e-5, [rs, rd], net, loads,
-                   note=f"node {node}, dynamic: {rd.steps} steps, {rd.message}")
+    return _eq_row(
+        "static = dynamic",
+        diff,
+        1e-5,
+        [rs, rd],
+        net,
+        loads,
+        note=f"node {node}, dynamic: {rd.steps} steps, {rd.message}",
+    )
 
 
 def net_pressure(load_bar: float = 1e-3, n: int = 10, dynamic: bool = False):
@@ -270,13 +345,20 @@ def net_pressure(load_bar: float = 1e-3, n: int = 10, dynamic: bool = False):
         results.append(rd)
         scale = max(float(np.max(np.abs(rs.x - net.nodes))), 1e-300)
         diff = float(np.max(np.abs(rs.x - rd.x))) / scale if rd.equilibrium else math.inf
-    return _eq_row("static = dynamic" if dynamic else "equilibrium", diff, 1e-5, results,
-                   net, loads, note=f"delta/L = {-rs.x[sq.center, 2]:.4g}, "
-                                    f"max strain {rs.max_strain:.3g}")
+    return _eq_row(
+        "static = dynamic" if dynamic else "equilibrium",
+        diff,
+        1e-5,
+        results,
+        net,
+        loads,
+        note=f"delta/L = {-rs.x[sq.center, 2]:.4g}, max strain {rs.max_strain:.3g}",
+    )
 
 
-def random_graph(seed: int = 0, n_nodes: int = 60, support_share: float = 0.15,
-                 dynamic: bool = True):
+def random_graph(
+    seed: int = 0, n_nodes: int = 60, support_share: float = 0.15, dynamic: bool = True
+):
     """A random planar net (Delaunay edges of random points, random heights) with random
     supports and random point loads plus gravity. Right answers: a ConfigError (a part
     without support), or static and dynamic equilibria that agree."""
@@ -318,8 +400,9 @@ def random_graph(seed: int = 0, n_nodes: int = 60, support_share: float = 0.15,
         scale = max(float(np.max(np.abs(rs.x - net.nodes))), 1e-300)
         diff = float(np.max(np.abs(rs.x - rd.x))) / scale if rd.equilibrium else math.inf
         note += f"; dynamic {rd.steps} steps, {rd.message}"
-    return _eq_row("static = dynamic" if dynamic else "equilibrium", diff, 1e-5, results,
-                   net, loads, note=note)
+    return _eq_row(
+        "static = dynamic" if dynamic else "equilibrium", diff, 1e-5, results, net, loads, note=note
+    )
 
 
 def scenes(quick: bool = False) -> list[Scene]:
@@ -335,41 +418,109 @@ def scenes(quick: bool = False) -> list[Scene]:
         add(f"midpoint F=1N EA={ea:g}", "EA range", midpoint_load, F=1.0, EA=ea)
     for h in (1e-6, 1e-4, 1e-2, 1.0, 1e3):
         steps = 200 if h <= 1e-4 else None
-        add(f"midpoint dynamic h={h:g}", "time step range", midpoint_load, F_bar=1e-2,
-            method="dynamic", h=h, steps=steps, quick_=h >= 1e-4)
+        add(
+            f"midpoint dynamic h={h:g}",
+            "time step range",
+            midpoint_load,
+            F_bar=1e-2,
+            method="dynamic",
+            h=h,
+            steps=steps,
+            quick_=h >= 1e-4,
+        )
     for mu in (0.0, 1e-2, 1.0, 1e2, 1e3):
-        add(f"midpoint dynamic mu={mu:g}", "damping range", midpoint_load, F_bar=1e-2,
-            method="dynamic", h=1e-2, damping=mu, quick_=mu in (0.0, 1e3))
+        add(
+            f"midpoint dynamic mu={mu:g}",
+            "damping range",
+            midpoint_load,
+            F_bar=1e-2,
+            method="dynamic",
+            h=1e-2,
+            damping=mu,
+            quick_=mu in (0.0, 1e3),
+        )
     add("zero-slack self-weight static", "self-weight", self_weight, dL=0.0)
     add("zero-slack self-weight EA=1e9", "self-weight", self_weight, dL=0.0, EA=1e9)
-    add("zero-slack self-weight dynamic", "self-weight", self_weight, dL=0.0,
-        method="dynamic", h=1e-2, quick_=False)
+    add(
+        "zero-slack self-weight dynamic",
+        "self-weight",
+        self_weight,
+        dL=0.0,
+        method="dynamic",
+        h=1e-2,
+        quick_=False,
+    )
     add("supports inward L/2 static", "moved supports", self_weight, dL=0.5)
-    add("supports inward L/2 dynamic", "moved supports", self_weight, dL=0.5,
-        method="dynamic", h=1e-2, ramp=1.0, quick_=False)
+    add(
+        "supports inward L/2 dynamic",
+        "moved supports",
+        self_weight,
+        dL=0.5,
+        method="dynamic",
+        h=1e-2,
+        ramp=1.0,
+        quick_=False,
+    )
     add("supports inward 0.9 L static", "moved supports", self_weight, dL=0.9)
-    add("supports inward 0.2 L dynamic h=0.1 ramp 0.5 s", "moved supports", self_weight,
-        dL=0.2, method="dynamic", h=0.1, ramp=0.5)
-    add("supports inward L/2 dynamic h=1e3 ramp 1 s", "moved supports", self_weight,
-        dL=0.5, method="dynamic", h=1e3, ramp=1.0)
+    add(
+        "supports inward 0.2 L dynamic h=0.1 ramp 0.5 s",
+        "moved supports",
+        self_weight,
+        dL=0.2,
+        method="dynamic",
+        h=0.1,
+        ramp=0.5,
+    )
+    add(
+        "supports inward L/2 dynamic h=1e3 ramp 1 s",
+        "moved supports",
+        self_weight,
+        dL=0.5,
+        method="dynamic",
+        h=1e3,
+        ramp=1.0,
+    )
     errs = ("ConvergenceError", "SingularSystemError")
     add("bilateral compressed, no load", "bilateral", bilateral_compression, errors_ok=errs)
-    add("bilateral compressed, perturbed start", "bilateral", bilateral_compression,
-        perturb=1e-3, errors_ok=errs)
-    add("bilateral compressed, dynamic", "bilateral", bilateral_compression,
-        method="dynamic", perturb=1e-3, errors_ok=errs, quick_=False)
+    add(
+        "bilateral compressed, perturbed start",
+        "bilateral",
+        bilateral_compression,
+        perturb=1e-3,
+        errors_ok=errs,
+    )
+    add(
+        "bilateral compressed, dynamic",
+        "bilateral",
+        bilateral_compression,
+        method="dynamic",
+        perturb=1e-3,
+        errors_ok=errs,
+        quick_=False,
+    )
     add("bilateral compressed, gravity", "bilateral", bilateral_compression, gravity=True)
     add("net point load", "net", net_point_load)
-    add("net point load F=0.5 EA", "net", net_point_load, F=0.5 * paper_material().EA,
-        quick_=False)
+    add("net point load F=0.5 EA", "net", net_point_load, F=0.5 * paper_material().EA, quick_=False)
     for lb in (1e-9, 1e-3, 0.5):
         add(f"net p L^2/EA={lb:g}", "net", net_pressure, load_bar=lb, quick_=lb != 1e-3)
-    add("net p L^2/EA=1e-3 static=dynamic", "net", net_pressure, load_bar=1e-3, dynamic=True,
-        quick_=False)
+    add(
+        "net p L^2/EA=1e-3 static=dynamic",
+        "net",
+        net_pressure,
+        load_bar=1e-3,
+        dynamic=True,
+        quick_=False,
+    )
     add("cable 1e5 edges", "size", midpoint_load, F_bar=1e-2, nodes=100_001)
     for seed in range(6):
-        add(f"random graph seed={seed}", "random graphs", random_graph, seed=seed,
-            errors_ok=("ConfigError",), quick_=seed < 3)
+        add(
+            f"random graph seed={seed}",
+            "random graphs",
+            random_graph,
+            seed=seed,
+            errors_ok=("ConfigError",),
+            quick_=seed < 3,
+        )
     return [s for s in out if s.quick] if quick else out
 
 
@@ -377,21 +528,30 @@ def run_scene(scene: Scene) -> dict:
     """Runs one scene; never raises. ``passed``: a right answer (see the module doc)."""
     from catenet.errors import CatenetError
 
-    row = {"id": scene.id, "group": scene.group,
-           "params": ", ".join(f"{k}={v}" for k, v in scene.params.items())}
+    row = {
+        "id": scene.id,
+        "group": scene.group,
+        "params": ", ".join(f"{k}={v}" for k, v in scene.params.items()),
+    }
     start = time.perf_counter()
     try:
         out = scene.fn(**scene.params)
     except CatenetError as exc:
         name = type(exc).__name__
-        row.update(status=f"error: {name}", passed=name in scene.errors_ok,
-                   message=str(exc).splitlines()[0][:300],
-                   iterations=getattr(exc, "iterations", None),
-                   history=_history(getattr(exc, "history", [])))
+        row.update(
+            status=f"error: {name}",
+            passed=name in scene.errors_ok,
+            message=str(exc).splitlines()[0][:300],
+            iterations=getattr(exc, "iterations", None),
+            history=_history(getattr(exc, "history", [])),
+        )
     except Exception as exc:  # not a catenet error: always a finding
         log.warning("stress %s: %r", scene.id, exc)
-        row.update(status=f"BUG: {type(exc).__name__}", passed=False,
-                   message=f"{type(exc).__name__}: {exc}"[:300])
+        row.update(
+            status=f"BUG: {type(exc).__name__}",
+            passed=False,
+            message=f"{type(exc).__name__}: {exc}"[:300],
+        )
     else:
         results = out["results"]
         ok_finite = all(finite(r) for r in results)
@@ -403,12 +563,18 @@ def run_scene(scene: Scene) -> dict:
         status = "converged" if converged else "not converged"
         if not ok_finite:
             status = "NaN in result"
-        row.update(status=status, passed=passed, check=out["check"], value=value, tol=tol,
-                   equilibrium_error=eq,
-                   iterations=sum(r.iterations for r in results),
-                   steps=sum(r.steps for r in results),
-                   message=out.get("note", ""),
-                   history=_history(results[0].history))
+        row.update(
+            status=status,
+            passed=passed,
+            check=out["check"],
+            value=value,
+            tol=tol,
+            equilibrium_error=eq,
+            iterations=sum(r.iterations for r in results),
+            steps=sum(r.steps for r in results),
+            message=out.get("note", ""),
+            history=_history(results[0].history),
+        )
     row["seconds"] = time.perf_counter() - start
     row["slow"] = row["seconds"] > SLOW_SECONDS
     return row

@@ -23,20 +23,49 @@ CHOICES = (*STUDIES, "all", "report")
 
 @click.command(name="bench")
 @click.argument("studies", nargs=-1, required=True, type=click.Choice(CHOICES))
-@click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("benchmarks") / "results", show_default=True,
-              help="Directory for the CSV tables and figures.")
+@click.option(
+    "-o",
+    "--output",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=Path("benchmarks") / "results",
+    show_default=True,
+    help="Directory for the CSV tables and figures.",
+)
 @click.option("--quick", is_flag=True, help="Smaller versions of the studies (~3 min in all).")
-@click.option("--threads", type=click.IntRange(min=1), default=1, show_default=True,
-              help="BLAS/MKL/Numba threads of the in-process studies.")
-@click.option("--docs", "docs_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("docs"), show_default=True,
-              help="report: where readme-performance.md and figures/ go.")
-@click.option("--strict", is_flag=True, help="Exit with status 1 when a study has findings "
-              "(e.g. a stress scene without a right answer).")
+@click.option(
+    "--threads",
+    type=click.IntRange(min=1),
+    default=1,
+    show_default=True,
+    help="BLAS/MKL/Numba threads of the in-process studies.",
+)
+@click.option(
+    "--docs",
+    "docs_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=Path("docs"),
+    show_default=True,
+    help="report: where readme-performance.md and figures/ go.",
+)
+@click.option(
+    "--strict",
+    is_flag=True,
+    help="Exit with status 1 when a study has findings "
+    "(e.g. a stress scene without a right answer).",
+)
 @verbosity_options
-def command(studies, out_dir: Path, quick: bool, threads: int, docs_dir: Path, strict: bool,
-            quiet: bool, verbose: int, debug: bool) -> None:
+def command(
+    studies,
+    out_dir: Path,
+    quick: bool,
+    threads: int,
+    docs_dir: Path,
+    strict: bool,
+    quiet: bool,
+    verbose: int,
+    debug: bool,
+) -> None:
     """Run timing and accuracy studies; each writes OUTPUT/<study>.csv and
     OUTPUT/bench-<study>.png.
 
@@ -59,7 +88,7 @@ def command(studies, out_dir: Path, quick: bool, threads: int, docs_dir: Path, s
     with errors_to_exit_codes(debug):
         names: list[str] = []
         for s in studies:
-            for name in (STUDIES if s == "all" else (s,)):
+            for name in STUDIES if s == "all" else (s,):
                 if name not in names:
                     names.append(name)
         findings: list[str] = []
@@ -89,15 +118,19 @@ def _run_one(name: str, out_dir: Path, quick: bool, threads: int, quiet: bool) -
     progress = Progress(name, enabled=None if not quiet else False)
     start = time.perf_counter()
     try:
-        result = module.run(out_dir, quick=quick, threads=threads,
-                            progress=lambda done, total, note="": progress.update(done, total,
-                                                                                  note))
+        result = module.run(
+            out_dir,
+            quick=quick,
+            threads=threads,
+            progress=lambda done, total, note="": progress.update(done, total, note),
+        )
     finally:
         progress.close()
     if not quiet:
         click.echo(f"== {name}: {module.TITLE} ({time.perf_counter() - start:.1f} s)")
         for line in result.summary:
             click.echo(f"  {line}")
-        click.echo(f"  table: {result.csv}" + (f"  figure: {result.figure}"
-                                                if result.figure else ""))
+        click.echo(
+            f"  table: {result.csv}" + (f"  figure: {result.figure}" if result.figure else "")
+        )
     return result.findings
