@@ -21,8 +21,9 @@ KNOWN = {
         "iterations, without a word"
     ),
     "supports inward 0.2 L dynamic h=0.1 ramp 0.5 s": (
-        "an edge collapses to zero length in a Newton trial of a dynamic step; the JIT "
-        "Hessian kernel raises ZeroDivisionError instead of a catenet error / step cut"
+        "the first step (h = 0.1) fails, the retry with h = 0.05 moves support node 0 by "
+        "exactly one rest length onto free node 1 (still at rest): a zero-length edge, and "
+        "the JIT Hessian kernel raises ZeroDivisionError instead of a catenet error / step cut"
     ),
 }
 
