@@ -22,10 +22,11 @@ from collections.abc import Callable
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+from catenet.kernels.sparse import norm
 from catenet.net import Loads, Net
 from catenet.newton import solve
 from catenet.result import Result, finish
-from catenet.static import Workspace, _check_rtol
+from catenet.static import HarmonicExtension, Workspace, _check_rtol
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +78,7 @@ def solve_dynamic(
         raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
     x[net.fixed] = loads.support_positions(net, time=t0)
     settle = loads.settle_time()
+    follow = HarmonicExtension(net) if loads.moves_supports and settle > t0 else None
 
     t = t0
     h = dt
@@ -92,7 +94,13 @@ def solve_dynamic(
         h_step = min(h, t_end - t)
         x_trial[:] = x
         x_trial.reshape(-1)[free] += h_step * v.reshape(-1)[free]  # Eq. 11
-        x_trial[net.fixed] = loads.support_positions(net, time=t + h_step)
+        supports = loads.support_positions(net, time=t + h_step)
+        if follow is not None and t < settle:
+            # The free nodes follow what Eq. 11 does not foresee of the supports' motion
+            # (a start, a stop, a change of speed): the net is carried along instead of
+            # being run over by a support.
+            x_trial += follow(supports - x[net.fixed] - h_step * v[net.fixed])
+        x_trial[net.fixed] = supports
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]
         w = m_free * (1.0 / h_step**2 + damping / h_step)
@@ -157,10 +165,10 @@ def _at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float]:
     """Static residual and inertial force both below rtol times the load scale."""
     _, grad = system.gradient(x)
     r = grad.reshape(-1)[system.free_dofs] - potential.f_free
-    scale = max(potential.f_norm, float(np.linalg.norm(grad)))
+    scale = max(potential.f_norm, float(norm(grad.reshape(-1))))
     tol = rtol * scale
-    residual = float(np.linalg.norm(r))
-    inertia = float(np.linalg.norm(m_free * v.reshape(-1)[system.free_dofs])) / h
+    residual = float(norm(r.reshape(-1)))
+    inertia = float(norm(m_free * v.reshape(-1)[system.free_dofs])) / h
     return (residual <= tol and inertia <= tol), residual
 
 

@@ -130,7 +130,7 @@ def square_net(
 
     fixed: list[int] = []
     edges: list[tuple[int, int]] = []
-    for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans)):
+    for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans, strict=True)):
         family_a = line_id < m
         k = line_id if family_a else line_id - m
         # Break points: (t, node id or None for an end still to be made).
@@ -152,7 +152,7 @@ def square_net(
                 breaks.append((t_end, ends[-1]))
         fixed.extend(ends)
         breaks.sort()
-        for (ta, na), (tb, nb) in zip(breaks[:-1], breaks[1:]):
+        for (ta, na), (tb, nb) in zip(breaks[:-1], breaks[1:], strict=True):
             seg = tb - ta
             k_edges = max(1, math.ceil(seg / edge_length - 1e-9))
             chain = [na]
@@ -160,7 +160,7 @@ def square_net(
                 chain.append(len(points))
                 points.append(p + (ta + seg * s / k_edges) * w)
             chain.append(nb)
-            edges.extend(zip(chain[:-1], chain[1:]))
+            edges.extend(zip(chain[:-1], chain[1:], strict=True))
 
     xy = np.array(points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])

@@ -61,7 +61,8 @@ def resolve_backend(name: str) -> str:
 
 
 def set_threads(threads: int) -> None:
-    """Threads of MKL (PARDISO) and Numba for this process."""
+    """Threads of MKL (PARDISO), Numba and every OpenBLAS loaded in this process (NumPy's
+    and SciPy's: left alone, its spinning threads slow short vector operations down)."""
     if threads < 1:
         raise ConfigError(f"solver.threads = {threads}: must be >= 1")
     if pardiso_available():
@@ -70,6 +71,33 @@ def set_threads(threads: int) -> None:
     import numba
 
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    for path in _openblas_libraries():
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError:
+            continue
+        for name in (
+            "scipy_openblas_set_num_threads64_",
+            "scipy_openblas_set_num_threads",
+            "openblas_set_num_threads64_",
+            "openblas_set_num_threads",
+        ):
+            fn = getattr(lib, name, None)
+            if fn is not None:
+                fn(ctypes.c_int(threads))
+                break
+
+
+def _openblas_libraries() -> list[str]:
+    """Paths of the OpenBLAS libraries mapped into this process (Linux; else none)."""
+    import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
+    import scipy.linalg  # noqa: F401  (and SciPy's)
+
+    try:
+        with open("/proc/self/maps") as fh:
+            return sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
+    except OSError:
+        return []
 
 
 class LinearSolver:
@@ -111,10 +139,26 @@ class LinearSolver:
     def solve(self, b: np.ndarray) -> np.ndarray:
         start = time.perf_counter()
         x = self._solve(b)
-        self._check(b, x)
+        try:
+            self._check(b, x)
+        except SingularSystemError:
+            if not self._refine(b, x):
+                raise
+            self._check(b, x)
         self.seconds["solve"] += time.perf_counter() - start
         self.stats["solve"] += 1
         return x
+
+    def _refine(self, b: np.ndarray, x: np.ndarray, steps: int = 3) -> bool:
+        """Iterative refinement in place: x += A^-1 (b - A x), a few times. False where
+        the solution is not finite (nothing to refine)."""
+        if not np.all(np.isfinite(x)):
+            return False
+        for _ in range(steps):
+            csr_matvec(self.indptr, self.indices, self._data, x, self.upper, self._r)
+            x += self._solve(b - self._r)
+        self.stats["refine"] = self.stats.get("refine", 0) + 1
+        return True
 
     # --- checks --------------------------------------------------------------------------
     def _check(self, b, x) -> None:
@@ -157,6 +201,11 @@ class LinearSolver:
         """Symbolic analysis of the pattern (a no-op where the backend has none)."""
         self._analysed = True
 
+    def negative_eigenvalues(self) -> int | None:
+        """Negative eigenvalues of the last factorised matrix, where the factorisation
+        tells (symmetric indefinite), else None."""
+        return None
+
     def _factorize(self, data):
         raise NotImplementedError
 
@@ -185,7 +234,7 @@ class PardisoSolver(LinearSolver):
         iparm = np.zeros(64, dtype=np.int32)
         iparm[0] = 1  # no solver defaults: every value below is ours
         iparm[1] = 2  # nested dissection (METIS) ordering
-        iparm[7] = 2  # up to two iterative refinement steps
+        iparm[7] = 0  # no iterative refinement: solve() refines only when its check fails
         iparm[9] = 8 if upper else 13  # pivot perturbation 1e-8 / 1e-13
         # No scaling or weighted matching: PARDISO computes them from the values in the
         # analysis phase, which runs once per pattern; they would be stale afterwards
@@ -234,8 +283,9 @@ class PardisoSolver(LinearSolver):
                 )
             if code in (-2, -12):
                 raise MemoryError(f"PARDISO ran out of memory (error {code})")
-            raise SingularSystemError(f"PARDISO failed with error {code} in phase {phase}",
-                                      nodes=nodes)
+            raise SingularSystemError(
+                f"PARDISO failed with error {code} in phase {phase}", nodes=nodes
+            )
 
     def analyse(self, data: np.ndarray) -> None:
         """Symbolic analysis (ordering and fill-in) of the pattern, once."""
@@ -259,6 +309,9 @@ class PardisoSolver(LinearSolver):
         x = np.empty(self.n)
         self._pardiso(33, self._data, self._b, x)
         return x
+
+    def negative_eigenvalues(self) -> int | None:
+        return int(self.iparm[22]) if self.mtype == -2 else None
 
     @property
     def inertia(self) -> tuple[int, int]:
@@ -297,8 +350,13 @@ class ScipySolver(LinearSolver):
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
         if self.upper:
             a = a + sp.triu(a, k=1).T
-        try:
-            self._lu = splu(a.tocsc(), permc_spec="MMD_AT_PLUS_A")
+        try:  # symmetric mode: diagonal pivots keep the fill of a symmetric ordering
+            self._lu = splu(
+                a.tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
         except RuntimeError as exc:  # "Factor is exactly singular"
             raise SingularSystemError(
                 f"SciPy: {exc}: a mechanism or an all-slack region", nodes=self.weak_nodes()
@@ -306,6 +364,14 @@ class ScipySolver(LinearSolver):
 
     def _solve(self, b):
         return self._lu.solve(np.asarray(b, dtype=np.float64))
+
+    def negative_eigenvalues(self) -> int | None:
+        """With symmetric pivoting (row order = column order) A = P' L U P and U's
+        diagonal is the D of an LDL' factorisation: its signs are the inertia."""
+        lu = self._lu
+        if lu is None or not np.array_equal(lu.perm_r, lu.perm_c):
+            return None
+        return int(np.count_nonzero(lu.U.diagonal() < 0))
 
     def release(self) -> None:
         self._lu = None

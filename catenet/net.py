@@ -17,7 +17,9 @@ def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarra
     try:
         arr = np.ascontiguousarray(value, dtype=dtype)
     except (TypeError, ValueError) as exc:
-        raise ConfigError(f"{name}: cannot be read as an array of {np.dtype(dtype).name}: {exc}")
+        raise ConfigError(
+            f"{name}: cannot be read as an array of {np.dtype(dtype).name}: {exc}"
+        ) from None
     if arr.ndim != 1 + len(shape_tail) or arr.shape[1:] != shape_tail:
         want = "(n, " + ", ".join(map(str, shape_tail)) + ")" if shape_tail else "(n,)"
         raise ConfigError(f"{name}: shape {arr.shape}: must be {want}")
@@ -84,7 +86,9 @@ class Net:
         loops = np.flatnonzero(edges[:, 0] == edges[:, 1])
         if loops.size:
             e = int(loops[0])
-            problems.append(f"edges[{e}] = {edges[e].tolist()}: an edge must join two different nodes")
+            problems.append(
+                f"edges[{e}] = {edges[e].tolist()}: an edge must join two different nodes"
+            )
         key = np.sort(edges, axis=1)
         _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
         if (counts > 1).any():

@@ -31,6 +31,7 @@ import numpy as np
 
 from catenet.assembly import System
 from catenet.errors import ConvergenceError, SingularSystemError
+from catenet.kernels.sparse import dot, norm
 from catenet.linsolve import LinearSolver
 
 log = logging.getLogger(__name__)
@@ -66,7 +67,7 @@ class Potential:
         self.solver = solver
         self.force = force  # (N, 3) external force
         self.f_free = force.reshape(-1)[system.free_dofs].copy()
-        self.f_norm = float(np.linalg.norm(force))
+        self.f_norm = float(norm(force.reshape(-1)))
         self.w: np.ndarray | None = None  # inertia weights on the free DOFs
         self.a: np.ndarray | None = None
         self.D = np.repeat(system.net.axial_stiffness[~system.net.fixed], 3)
@@ -87,12 +88,12 @@ class Potential:
         """Phi, grad Phi (free DOFs), the load scale, the gradient's round-off floor and
         the round-off level of Phi."""
         energy, grad = self.system.gradient(x)
-        work = float(np.dot(self.force.reshape(-1), x.reshape(-1)))
+        work = float(dot(self.force.reshape(-1), x.reshape(-1)))
         y = self.free(x)
         g = self._g
         np.subtract(grad.reshape(-1)[self.system.free_dofs], self.f_free, out=g)
         phi = energy - work
-        internal = float(np.linalg.norm(grad))
+        internal = float(norm(grad.reshape(-1)))
         scale = max(self.f_norm, internal)
         floor = self.f_norm + 2.0 * internal + self._k_norm * float(np.max(np.abs(x)))
         phi_scale = abs(energy) + abs(work)
@@ -100,9 +101,9 @@ class Potential:
             r = y - self.a
             wr = self.w * r
             g += wr
-            phi += 0.5 * float(np.dot(wr, r))
-            floor += float(np.linalg.norm(self.w * (np.abs(y) + np.abs(self.a))))
-            phi_scale += float(np.dot(self.w, y * y + self.a * self.a))
+            phi += 0.5 * float(dot(wr, r))
+            floor += float(norm(self.w * (np.abs(y) + np.abs(self.a))))
+            phi_scale += float(dot(self.w, y * y + self.a * self.a))
         floor *= 4.0 * EPS
         phi_scale *= 64.0 * EPS
         return phi, g, scale, floor, phi_scale
@@ -136,7 +137,7 @@ def solve(
     free = potential.system.free_dofs
     xf = x.reshape(-1)
     phi, g, scale, floor, phi_tol = potential.evaluate(x)
-    gnorm = float(np.linalg.norm(g))
+    gnorm = float(norm(g.reshape(-1)))
     tol = max(rtol * scale if atol is None else atol, floor)
     history = [gnorm]
     c = c0
@@ -166,7 +167,7 @@ def solve(
                 potential.factorize(x, c)
                 factorizations += 1
                 dy = potential.solver.solve(-g)
-                slope = float(np.dot(g, dy))
+                slope = float(dot(g, dy))
                 if slope < 0.0:
                     break
                 why = "not a descent direction"
@@ -181,7 +182,7 @@ def solve(
                 return NewtonResult(False, it, gnorm, tol, history, reason, factorizations)
         # Decrease of Phi that the quadratic model predicts for the full step (the model's
         # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
-        predicted = -0.5 * slope + 0.5 * c * float(np.dot(potential.D * dy, dy))
+        predicted = -0.5 * slope + 0.5 * c * float(dot(potential.D * dy, dy))
         y0 = xf[free].copy()
         alpha, accepted, rho, trial = _line_search(
             potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial, True
@@ -208,7 +209,13 @@ def solve(
         stall = stall + 1 if gnorm > 0.5 * prev else 0
         log.debug(
             "%s %3d: |r| = %.3e (tol %.1e)  step %.3g  rho %.2f  c = %.2g",
-            label, it, gnorm, tol, alpha, rho, c,
+            label,
+            it,
+            gnorm,
+            tol,
+            alpha,
+            rho,
+            c,
         )
         good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
         c = _update_regularisation(c, alpha, rho, good, potential, g)
@@ -238,7 +245,7 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
         return None
     xf[free] = y0 + dy
     g_new = potential.evaluate(x)[1]
-    new = float(np.linalg.norm(g_new))
+    new = float(norm(g_new.reshape(-1)))
     if math.isfinite(new) and new < gnorm:
         return new
     xf[free] = y0
@@ -270,9 +277,9 @@ def _line_search(
         np.add(y0, alpha * dy, out=y_trial)
         xf[free] = y_trial
         phi_t, g_t, scale_t, floor_t, phi_tol_t = potential.evaluate(x)
-        gnorm_t = float(np.linalg.norm(g_t))
+        gnorm_t = float(norm(g_t.reshape(-1)))
         finite = math.isfinite(phi_t) and math.isfinite(gnorm_t)
-        d_t = float(np.dot(g_t, dy)) if finite else math.inf
+        d_t = float(dot(g_t, dy)) if finite else math.inf
         if abs(phi_t - phi) > phi_tol:
             ok = finite and phi_t <= phi + ARMIJO * alpha * slope
         else:  # Phi cannot tell: the gradient norm decides

@@ -10,7 +10,7 @@ and the final state (``/result``) at the end::
     /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs)
     /result             attrs: converged, iterations, residual, steps, wall_time,
                         equilibrium, message, time, delta, delta_over_L, probe, size,
-                        max_strain, max_tension
+                        max_strain, max_tension, stable (1/0; -1: not checked)
 
 Crash safety: the file is created with ``libver=LIBVER`` and the trajectory is written
 in SWMR mode (single writer, multiple readers), flushed after every frame. HDF5 then
@@ -827,6 +827,8 @@ def result_attrs(res, scene) -> dict:
         "size": float(scene.size),
         "max_strain": strain if math.isfinite(strain) else 0.0,
         "max_tension": float(np.max(tension, initial=0.0)),
+        # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
+        "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
     }
 
 

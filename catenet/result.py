@@ -26,6 +26,9 @@ class Result:
     iterations : Newton iterations in all;  residual : final |grad| [N]
     steps : time steps (dynamic) or load steps (static);  time : simulated time [s]
     max_strain : largest edge strain (tension / EA)
+    stable : for bilateral nets, whether the stiffness at the equilibrium is positive
+        definite (False: an unstable equilibrium, e.g. a straight cable in compression);
+        None where not checked (tension-only nets are never unstable)
     stats : counts and seconds per phase (assembly, analyse, factorize, solve)
     """
 
@@ -42,11 +45,12 @@ class Result:
     wall_time: float = 0.0
     message: str = ""
     max_strain: float = float("nan")
+    stable: bool | None = None
     history: list[float] = field(default_factory=list)
     stats: dict = field(default_factory=dict)
 
 
-def finish(system: "System", loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
+def finish(system: System, loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
     """Tension and reactions at x, and the Result around them."""
     net = system.net
     _, grad = system.gradient(x)

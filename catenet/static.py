@@ -14,10 +14,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from catenet.assembly import System
-from catenet.errors import ConfigError
+from catenet.errors import ConfigError, SingularSystemError
 from catenet.linsolve import LinearSolver, make_solver
 from catenet.net import Loads, Net
-from catenet.newton import NewtonResult, Potential, raise_unconverged, solve
+from catenet.newton import Potential, raise_unconverged, solve
 from catenet.result import Result, finish
 
 log = logging.getLogger(__name__)
@@ -28,13 +28,19 @@ class Workspace:
     reused by every solve on that net: load steps, time steps, sweeps over loads."""
 
     def __init__(self, net: Net, *, linear: str = "auto", mtype: int | None = None):
+        if mtype is None:  # Cholesky where the matrices are positive (semi)definite
+            mtype = 2 if net.tension_only else -2
         upper = mtype != 11
         self.net = net
         start = time.perf_counter()
         self.system = System(net, upper=upper)
         dof_node = np.flatnonzero(~net.fixed).repeat(3)
         self.solver: LinearSolver = make_solver(
-            linear, self.system.indptr, self.system.indices, upper=upper, dof_node=dof_node,
+            linear,
+            self.system.indptr,
+            self.system.indices,
+            upper=upper,
+            dof_node=dof_node,
             mtype=mtype,
         )
         self.setup_seconds = time.perf_counter() - start
@@ -95,14 +101,36 @@ def solve_static(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
     )
+    if not net.tension_only and result.converged:
+        out.stable = _stable(ws, potential, x)
+        if out.stable is False:
+            log.warning(
+                "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
+                "(compressed bilateral edges: any disturbance makes the net buckle away)"
+            )
     loose = loose_nodes(net, out.tension)
     if loose.size:
         log.warning(
             "%d free nodes hang on slack edges only (nodes %s%s): nothing fixes their "
             "position, the equilibrium there is not unique",
-            loose.size, ", ".join(map(str, loose[:10])), " ..." if loose.size > 10 else "",
+            loose.size,
+            ", ".join(map(str, loose[:10])),
+            " ..." if loose.size > 10 else "",
         )
     return out
+
+
+def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
+    """Whether the stiffness matrix at x is positive definite (None: cannot tell here).
+    Only bilateral nets can lose stability: tension-only stiffness is never negative."""
+    if ws.solver.name == "pardiso" and getattr(ws.solver, "mtype", None) != -2:
+        return None
+    try:
+        potential.factorize(x, 0.0)
+    except SingularSystemError:
+        return False  # singular at equilibrium: neutral at best
+    negative = ws.solver.negative_eigenvalues()
+    return None if negative is None else negative == 0
 
 
 def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
@@ -143,7 +171,11 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
         while mu > 0.0 and iterations < max_iter:
             system.smooth = mu
             stage = solve(
-                potential, x, rtol=SMOOTH_RTOL, atol=atol, max_iter=max_iter - iterations,
+                potential,
+                x,
+                rtol=SMOOTH_RTOL,
+                atol=atol,
+                max_iter=max_iter - iterations,
                 label=f"static (mu {mu:.1e})",
             )
             iterations += stage.iterations
@@ -195,7 +227,12 @@ def continuation(
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
         try:
             r = solve_static(
-                net, loads, x0=x, factor=float(factor), rtol=rtol, max_iter=max_iter,
+                net,
+                loads,
+                x0=x,
+                factor=float(factor),
+                rtol=rtol,
+                max_iter=max_iter,
                 workspace=ws,
             )
         except Exception as exc:
@@ -219,7 +256,7 @@ def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float)
     if len(set(levels)) != len(levels):
         return np.array(states[-1], copy=True)
     x = np.zeros_like(states[-1])
-    for i, (xi, si) in enumerate(zip(states, levels)):
+    for i, (xi, si) in enumerate(zip(states, levels, strict=True)):
         w = 1.0
         for j, sj in enumerate(levels):
             if j != i:
@@ -245,27 +282,43 @@ def _start(net: Net, loads: Loads, x0, factor: float) -> np.ndarray:
     return x
 
 
-def harmonic_extension(net: Net, support_shift: np.ndarray) -> np.ndarray:
-    """Displacement (N, 3) that is ``support_shift`` at the fixed nodes and at every free
-    node the average of its neighbours' (weights 1/l0): a graph-Laplacian solve."""
-    import scipy.sparse as sp
-    from scipy.sparse.linalg import spsolve
+class HarmonicExtension:
+    """Displacements of the free nodes that follow given support displacements: at every
+    free node the average of its neighbours' (weights 1/l0), the solution of a graph-
+    Laplacian system factorised once per net. Moved supports carry the net with them
+    instead of running over their neighbours."""
 
-    n = net.n_nodes
-    u = np.zeros((n, 3))
-    u[net.fixed] = support_shift
-    if not np.any(support_shift):
+    def __init__(self, net: Net):
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        n = net.n_nodes
+        i, j = net.edges[:, 0], net.edges[:, 1]
+        w = 1.0 / net.rest_length
+        lap = sp.coo_matrix(
+            (
+                np.concatenate([w, w, -w, -w]),
+                (np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i])),
+            ),
+            shape=(n, n),
+        ).tocsr()
+        self.net = net
+        self.free = ~net.fixed
+        self._coupling = lap[self.free][:, net.fixed].tocsr()
+        self._lu = splu(lap[self.free][:, self.free].tocsc())
+
+    def __call__(self, support_shift: np.ndarray) -> np.ndarray:
+        """Displacement (N, 3): ``support_shift`` (K, 3) at the fixed nodes."""
+        u = np.zeros((self.net.n_nodes, 3))
+        u[self.net.fixed] = support_shift
+        if np.any(support_shift):
+            u[self.free] = self._lu.solve(-(self._coupling @ support_shift))
         return u
-    i, j = net.edges[:, 0], net.edges[:, 1]
-    w = 1.0 / net.rest_length
-    lap = sp.coo_matrix(
-        (np.concatenate([w, w, -w, -w]), (np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))),
-        shape=(n, n),
-    ).tocsr()
-    free = ~net.fixed
-    rhs = -(lap[free][:, net.fixed] @ support_shift)
-    u[free] = spsolve(lap[free][:, free].tocsc(), rhs).reshape(-1, 3)
-    return u
+
+
+def harmonic_extension(net: Net, support_shift: np.ndarray) -> np.ndarray:
+    """The displacement (N, 3) of HarmonicExtension for one support shift."""
+    return HarmonicExtension(net)(support_shift)
 
 
 def _check_rtol(rtol: float) -> None:

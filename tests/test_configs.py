@@ -35,6 +35,12 @@ def test_configs_exist():
 
 @pytest.mark.parametrize("path", list(params()))
 def test_config_runs(path, tmp_path):
+    RESULTS[path.stem] = run_config(path, tmp_path)
+
+
+def run_config(path, tmp_path) -> dict:
+    """Runs one example case as `catenet run` does, checks its file, returns what the
+    physics tests need."""
     case = load_case(path)
     out = tmp_path / f"{path.stem}.h5"
     res = run_case(case, out)
@@ -45,7 +51,7 @@ def test_config_runs(path, tmp_path):
         series = h5["trajectory/x"][:, int(a["probe"]), 2] if "trajectory" in h5 else None
     assert a["converged"] and a["delta"] > 0
     check_xdmf(out.with_suffix(".xdmf"))
-    RESULTS[path.stem] = {
+    return {
         "delta": res.stats["delta"],
         "L": res.stats["size"],
         "time": res.time,
@@ -63,33 +69,35 @@ def load_scene_EA(case):
     return build(case).net.EA
 
 
-def need(*names):
-    missing = [n for n in names if n not in RESULTS]
-    if missing:
-        pytest.skip(f"needs the runs of {', '.join(missing)} (run the whole file)")
+def need(tmp_path, *names):
+    """The runs of the named cases: from test_config_runs when it ran in this process,
+    else run here (tests may be spread over processes)."""
+    for name in names:
+        if name not in RESULTS:
+            RESULTS[name] = run_config(CONFIGS / f"{name}.toml", tmp_path)
     return [RESULTS[n] for n in names]
 
 
-def test_catenary_follows_eqs_14_15():
+def test_catenary_follows_eqs_14_15(tmp_path):
     """Each load step k moves the ends by 0.01 k: the sag follows the inextensible catenary
     at Delta L / L = 0.02 k, to the discretisation error (101 nodes) and the small stretch
     under self-weight (rho g A L / EA ~ 1e-3)."""
-    (r,) = need("catenary")
+    (r,) = need(tmp_path, "catenary")
     sags = -np.asarray(r["series"])
     expected = [analytic.catenary_sag(1.0, 0.02 * k) for k in range(1, 11)]
     np.testing.assert_allclose(r["times"], np.arange(1, 11) / 10)
     np.testing.assert_allclose(sags, expected, rtol=5e-3)
 
 
-def test_midpoint_load_follows_eq_17():
-    (r,) = need("midpoint_load")
+def test_midpoint_load_follows_eq_17(tmp_path):
+    (r,) = need(tmp_path, "midpoint_load")
     F = 94.25 * np.arange(1, 11) / 10
     expected = [analytic.midpoint_load_deflection(f, 1.0, r["EA"]) for f in F]
     np.testing.assert_allclose(-np.asarray(r["series"]), expected, rtol=1e-6)
     assert r["max_strain"] < 0.05  # the paper's limit of linear elasticity
 
 
-def test_nets_stiffen_with_n_and_soften_with_alpha():
+def test_nets_stiffen_with_n_and_soften_with_alpha(tmp_path):
     """Fig. 4 and 7: more cables deflect less; turning them from 0 to pi/4 deflects more."""
     names = {
         (n, a): f"fig4{letter}_n{n}_alpha_{a}"
@@ -99,7 +107,8 @@ def test_nets_stiffen_with_n_and_soften_with_alpha():
             strict=True,
         )
     }
-    deltas = {key: r["delta"] for key, r in zip(names, need(*names.values()), strict=True)}
+    runs = need(tmp_path, *names.values())
+    deltas = {key: r["delta"] for key, r in zip(names, runs, strict=True)}
     for a in ("0", "pi6", "pi4"):
         assert deltas[10, a] > deltas[22, a] > deltas[34, a]
     for n in (10, 22, 34):
@@ -107,10 +116,10 @@ def test_nets_stiffen_with_n_and_soften_with_alpha():
     assert all(0.02 < d < 0.1 for d in deltas.values())
 
 
-def test_damping_changes_the_way_not_the_equilibrium():
+def test_damping_changes_the_way_not_the_equilibrium(tmp_path):
     """App. A: the same equilibrium for mu = 0.1, 1, 10, equal to the static one of
     Fig. 4a, reached long before t_end (dynamic relaxation stops at rest)."""
-    runs = need("damping_mu0.1", "damping_mu1", "damping_mu10", "fig4a_n10_alpha_0")
+    runs = need(tmp_path, "damping_mu0.1", "damping_mu1", "damping_mu10", "fig4a_n10_alpha_0")
     static = runs[-1]["delta"]
     for r in runs[:-1]:
         assert r["delta"] == pytest.approx(static, rel=1e-6)

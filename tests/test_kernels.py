@@ -69,13 +69,15 @@ def test_hessian_blocks_match_finite_differences(seed, tension_only, smooth):
     net, rng = random_net(seed, tension_only)
     x = net.nodes + 0.05 * rng.standard_normal(net.nodes.shape)
     values = np.empty(36 * net.n_edges)
-    stretch_hessian(
-        x, net.edges, net.rest_length, net.EA, net.tension_only, smooth, values
-    )
+    stretch_hessian(x, net.edges, net.rest_length, net.EA, net.tension_only, smooth, values)
     blocks = values.reshape(-1, 6, 6)
     for k, (i, j) in enumerate(net.edges):
         sub = cn.Net.from_arrays(
-            x[[i, j]], [[0, 1]], EA=net.EA[k], fixed=[0], rest_length=net.rest_length[k],
+            x[[i, j]],
+            [[0, 1]],
+            EA=net.EA[k],
+            fixed=[0],
+            rest_length=net.rest_length[k],
             tension_only=tension_only,
         )
         xe = x[[i, j]].copy()
@@ -84,9 +86,7 @@ def test_hessian_blocks_match_finite_differences(seed, tension_only, smooth):
             xp, xm = xe.copy(), xe.copy()
             xp.reshape(-1)[b] += D
             xm.reshape(-1)[b] -= D
-            fd[:, b] = (gradient(sub, xp, smooth) - gradient(sub, xm, smooth)).reshape(-1) / (
-                2 * D
-            )
+            fd[:, b] = (gradient(sub, xp, smooth) - gradient(sub, xm, smooth)).reshape(-1) / (2 * D)
         scale = max(np.abs(blocks[k]).max(), 1e-12)
         assert np.allclose(blocks[k], fd, atol=1e-6 * scale), f"edge {k}"
 
@@ -95,8 +95,9 @@ def test_paper_eq8_lacks_the_length_factor():
     """The transverse stiffness of a stretched edge is EA eps / |e| (this code), not
     EA eps / l0 (the paper's Eq. 8 as printed): they differ by (1 + eps)."""
     l0, EA, eps = 1.0, 100.0, 0.5
-    net = cn.Net.from_arrays([[0, 0, 0], [1 + eps, 0, 0]], [[0, 1]], EA=EA, fixed=[0],
-                             rest_length=l0, tension_only=False)
+    net = cn.Net.from_arrays(
+        [[0, 0, 0], [1 + eps, 0, 0]], [[0, 1]], EA=EA, fixed=[0], rest_length=l0, tension_only=False
+    )
     values = np.empty(36)
     stretch_hessian(net.nodes, net.edges, net.rest_length, net.EA, False, 0.0, values)
     transverse = values.reshape(6, 6)[4, 4]  # d2U / dy_j^2
@@ -105,8 +106,9 @@ def test_paper_eq8_lacks_the_length_factor():
 
 
 def test_slack_edge_contributes_nothing_but_keeps_its_entries():
-    net = cn.Net.from_arrays([[0, 0, 0], [0.5, 0, 0]], [[0, 1]], EA=1.0, fixed=[0],
-                             rest_length=1.0, tension_only=True)
+    net = cn.Net.from_arrays(
+        [[0, 0, 0], [0.5, 0, 0]], [[0, 1]], EA=1.0, fixed=[0], rest_length=1.0, tension_only=True
+    )
     assert energy(net, net.nodes) == 0.0
     assert not gradient(net, net.nodes).any()
     system = System(net)
@@ -120,8 +122,9 @@ def test_assembled_matrix_equals_dense_hessian(upper):
     """The reduced CSR matrix (supports eliminated, upper triangle or full) equals the
     dense sum of the edge blocks restricted to the free DOFs."""
     net, rng = random_net(7, True, n=15, m=40)
-    net = cn.Net.from_arrays(net.nodes, net.edges, EA=net.EA, fixed=[0, 3],
-                             rest_length=net.rest_length)
+    net = cn.Net.from_arrays(
+        net.nodes, net.edges, EA=net.EA, fixed=[0, 3], rest_length=net.rest_length
+    )
     x = net.nodes + 0.02 * rng.standard_normal(net.nodes.shape)
     system = System(net, upper=upper)
     shift = rng.uniform(1.0, 2.0, system.n_free)

@@ -27,7 +27,9 @@ numbers = st.one_of(
     st.integers(-(10**12), 10**12),
     st.sampled_from([0, -1, 1e-300, 1e300, math.nan, math.inf, -math.inf]),
 )
-junk = st.one_of(numbers, st.text(max_size=5), st.none(), st.booleans(), st.lists(numbers, max_size=4))
+junk = st.one_of(
+    numbers, st.text(max_size=5), st.none(), st.booleans(), st.lists(numbers, max_size=4)
+)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -36,7 +38,9 @@ junk = st.one_of(numbers, st.text(max_size=5), st.none(), st.booleans(), st.list
         st.lists(st.lists(numbers, min_size=0, max_size=4), max_size=6),
         junk,
     ),
-    edges=st.one_of(st.lists(st.lists(st.integers(-3, 8), min_size=0, max_size=3), max_size=8), junk),
+    edges=st.one_of(
+        st.lists(st.lists(st.integers(-3, 8), min_size=0, max_size=3), max_size=8), junk
+    ),
     fixed=st.one_of(st.lists(st.integers(-3, 8), max_size=4), junk),
     ea=st.one_of(numbers, st.lists(numbers, max_size=8)),
     rest=st.one_of(st.none(), numbers, st.lists(numbers, max_size=8)),
@@ -90,23 +94,68 @@ every = 1
 """
 
 KEYS = [
-    "geometry.n", "geometry.alpha", "geometry.size", "geometry.edge_length", "geometry.kind",
-    "material.E", "material.radius", "material.density", "material.tension_only",
-    "load.pressure", "load.gravity", "solver.method", "solver.dt", "solver.damping",
-    "solver.t_end", "solver.rtol", "solver.linear", "solver.threads", "solver.steps",
-    "solver.max_iter", "output.every", "output.file", "nonsense.key", "geometry",
+    "geometry.n",
+    "geometry.alpha",
+    "geometry.size",
+    "geometry.edge_length",
+    "geometry.kind",
+    "material.E",
+    "material.radius",
+    "material.density",
+    "material.tension_only",
+    "load.pressure",
+    "load.gravity",
+    "solver.method",
+    "solver.dt",
+    "solver.damping",
+    "solver.t_end",
+    "solver.rtol",
+    "solver.linear",
+    "solver.threads",
+    "solver.steps",
+    "solver.max_iter",
+    "output.every",
+    "output.file",
+    "nonsense.key",
+    "geometry",
 ]
 VALUES = st.one_of(
-    st.sampled_from(["nan", "inf", "-inf", "-1", "0", "1e400", "[]", "[1, 2]", '"x"', "true",
-                     "{a = 1}", "[0, 0, -9.81]", "2", "0.5", "dynamic", "1e-300", "3.5", "",
-                     "=", "[[1]]", "'pardiso'", "1e9"]),
+    st.sampled_from(
+        [
+            "nan",
+            "inf",
+            "-inf",
+            "-1",
+            "0",
+            "1e400",
+            "[]",
+            "[1, 2]",
+            '"x"',
+            "true",
+            "{a = 1}",
+            "[0, 0, -9.81]",
+            "2",
+            "0.5",
+            "dynamic",
+            "1e-300",
+            "3.5",
+            "",
+            "=",
+            "[[1]]",
+            "'pardiso'",
+            "1e9",
+        ]
+    ),
     st.text(alphabet=st.characters(blacklist_categories=("Cs",)), max_size=8),
 )
 
 
 @pytest.mark.filterwarnings("ignore")
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-          HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=60,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(sets=st.lists(st.tuples(st.sampled_from(KEYS), VALUES), min_size=1, max_size=3))
 def test_no_command_line_input_gives_a_traceback(tmp_path_factory, sets):
     """Random --set overrides of a small case: exit 0 (ran), 1 (ran, failed) or 2 (bad

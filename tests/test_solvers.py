@@ -91,8 +91,9 @@ def independent_equilibrium(nodes, edges, l0, ea, fixed, f):
         trial = x.copy()
         trial.reshape(-1)[free] += np.linalg.solve(H + lam * np.eye(len(g)), -g)
         e_t, g_t, H_t = parts(trial)
-        if e_t < energy or (abs(e_t - energy) < 1e-13 * abs(energy) and
-                            np.linalg.norm(g_t) < np.linalg.norm(g)):
+        if e_t < energy or (
+            abs(e_t - energy) < 1e-13 * abs(energy) and np.linalg.norm(g_t) < np.linalg.norm(g)
+        ):
             x, energy, g, H = trial, e_t, g_t, H_t
             lam = lam / 3 if lam > 1e-14 * np.max(ea / l0) else 0.0
         else:
@@ -134,14 +135,19 @@ def test_dynamic_follows_the_paper_time_step():
     """One implicit Euler step from rest under a force F on a free particle between two
     slack edges: M (q1 - q0)/h^2 + mu M (q1 - q0)/h = F, so q1 - q0 = F h^2 / (M (1 + mu h))."""
     net = cn.Net.from_arrays(
-        [[-1, 0, 0], [0, 0, 0], [1, 0, 0]], [[0, 1], [1, 2]], EA=1.0, fixed=[0, 2],
-        rest_length=2.0, line_density=1.0,
+        [[-1, 0, 0], [0, 0, 0], [1, 0, 0]],
+        [[0, 1], [1, 2]],
+        EA=1.0,
+        fixed=[0, 2],
+        rest_length=2.0,
+        line_density=1.0,
     )
     F, h, mu = 3.0, 0.01, 2.0
     f = np.zeros((3, 3))
     f[1, 2] = F
-    r = cn.solve_dynamic(net, cn.Loads(force=f), dt=h, damping=mu, t_end=h,
-                         stop_at_equilibrium=False, rtol=1e-12)
+    r = cn.solve_dynamic(
+        net, cn.Loads(force=f), dt=h, damping=mu, t_end=h, stop_at_equilibrium=False, rtol=1e-12
+    )
     M = net.mass[1]
     assert r.x[1, 2] == pytest.approx(F * h**2 / (M * (1 + mu * h)), rel=1e-12)
     assert r.v[1, 2] == pytest.approx(F * h / (M * (1 + mu * h)), rel=1e-12)
@@ -152,8 +158,7 @@ def test_failed_dynamic_steps_are_retried_smaller():
     fail; the solver halves them instead of accepting them, and still gets there."""
     sq, loads = net_scene(10, 0.0, 0.1)
     s = cn.solve_static(sq.net, loads, rtol=1e-10)
-    d = cn.solve_dynamic(sq.net, loads, dt=1.0, damping=1.0, t_end=500.0, rtol=1e-9,
-                         max_iter=2)
+    d = cn.solve_dynamic(sq.net, loads, dt=1.0, damping=1.0, t_end=500.0, rtol=1e-9, max_iter=2)
     assert d.equilibrium
     assert d.steps > d.time / 1.0  # some steps were shorter than dt
     assert np.abs(d.x - s.x).max() <= 1e-6 * np.abs(s.x[:, 2]).max()
@@ -197,8 +202,7 @@ def test_continuation_traces_a_force_displacement_curve():
     sq, loads = net_scene(10, 0.0, 0.05)
     factors = [0.01, 0.1, 0.3, 1.0]
     seen = []
-    curve = cn.continuation(sq.net, loads, factors, rtol=1e-10,
-                            on_step=lambda f, r: seen.append(f))
+    curve = cn.continuation(sq.net, loads, factors, rtol=1e-10, on_step=lambda f, r: seen.append(f))
     deltas = [-r.x[sq.center, 2] for r in curve]
     assert seen == factors and np.all(np.diff(deltas) > 0)
     direct = cn.solve_static(sq.net, loads, rtol=1e-10)
@@ -231,8 +235,9 @@ def assert_balanced(r, loads, net):
 def test_stiff_and_soft_cables_converge(ea):
     net, loads = catenary_scene(51, 0.2)
     net = net.with_rest_length(net.rest_length)
-    soft = cn.Net.from_arrays(net.nodes, net.edges, EA=ea, fixed=net.fixed,
-                              line_density=MAT.line_density)
+    soft = cn.Net.from_arrays(
+        net.nodes, net.edges, EA=ea, fixed=net.fixed, line_density=MAT.line_density
+    )
     r = cn.solve_static(soft, loads, rtol=1e-10, max_iter=100)
     assert r.converged
     assert_balanced(r, loads, soft)
@@ -273,3 +278,25 @@ def test_nodes_on_slack_edges_only_are_reported(caplog):
         r = cn.solve_static(net, cn.Loads(support_displacement=d))
     assert r.converged and not r.tension.any()
     assert "3 free nodes hang on slack edges only" in caplog.text
+
+
+@pytest.mark.parametrize("linear", ["auto", "scipy"])
+def test_an_unstable_equilibrium_is_flagged(linear, caplog):
+    """A straight bilateral cable compressed by its supports is in equilibrium, an
+    unstable one (no bending stiffness): flagged, not passed off as a plain answer."""
+    net = cn.Net.from_arrays(
+        [[x, 0, 0] for x in np.linspace(0, 1, 11)],
+        [[k, k + 1] for k in range(10)],
+        EA=100.0,
+        fixed=[0, 10],
+        tension_only=False,
+    )
+    d = np.zeros((11, 3))
+    d[10, 0] = -0.1
+    with caplog.at_level("WARNING", logger="catenet.static"):
+        r = cn.solve_static(net, cn.Loads(support_displacement=d), linear=linear)
+    assert r.converged and r.stable is False
+    assert "unstable" in caplog.text
+    # Stretched instead of compressed: stable.
+    r = cn.solve_static(net, cn.Loads(support_displacement=-d), linear=linear)
+    assert r.stable is True

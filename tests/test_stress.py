@@ -12,28 +12,10 @@ import pytest
 
 from catenet.bench import stress
 
-# Scenes where catenet does not give a right answer yet (reported to the solver's
-# developer); strict=False so that a fix shows up as XPASS rather than a failure.
-KNOWN = {
-    "bilateral compressed, no load": (
-        "solve_static returns the straight, uniformly compressed state of a bilateral cable "
-        "(an unstable equilibrium: negative geometric stiffness) as converged, in 0 "
-        "iterations, without a word"
-    ),
-    "supports inward 0.2 L dynamic h=0.1 ramp 0.5 s": (
-        "the first step (h = 0.1) fails, the retry with h = 0.05 moves support node 0 by "
-        "exactly one rest length onto free node 1 (still at rest): a zero-length edge, and "
-        "the JIT Hessian kernel raises ZeroDivisionError instead of a catenet error / step cut"
-    ),
-}
-
 
 def _params():
     for scene in stress.scenes(quick=True):
-        marks = (
-            [pytest.mark.xfail(reason=KNOWN[scene.id], strict=False)] if (scene.id in KNOWN) else []
-        )
-        yield pytest.param(scene, id=scene.id, marks=marks)
+        yield pytest.param(scene, id=scene.id)
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -7,7 +7,6 @@ short runs and keeps the median, and compares settings as ratios measured in one
 from __future__ import annotations
 
 import csv
-import ctypes
 import json
 import logging
 import math
@@ -138,38 +137,10 @@ def compressed_catenary(
 
 
 def set_threads(k: int) -> None:
-    """Threads of MKL (PARDISO), Numba and every OpenBLAS loaded in this process (NumPy's
-    and SciPy's). catenet.linsolve.set_threads leaves OpenBLAS alone; under load its
-    spinning threads can slow vector operations of 1e4 entries many times over."""
+    """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.linsolve.set_threads."""
     from catenet.linsolve import set_threads as set_catenet_threads
 
     set_catenet_threads(k)
-    for path in _openblas_libraries():
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for name in (
-            "scipy_openblas_set_num_threads64_",
-            "scipy_openblas_set_num_threads",
-            "openblas_set_num_threads64_",
-            "openblas_set_num_threads",
-        ):
-            fn = getattr(lib, name, None)
-            if fn is not None:
-                fn(ctypes.c_int(k))
-                break
-
-
-def _openblas_libraries() -> list[str]:
-    import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
-    import scipy.linalg  # noqa: F401  (and SciPy's)
-
-    try:
-        with open("/proc/self/maps") as fh:
-            return sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
-    except OSError:
-        return []
 
 
 def thread_env(threads: int | None) -> dict:

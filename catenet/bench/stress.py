@@ -235,7 +235,8 @@ def bilateral_compression(
     off the line. Right answers: a catenet error, or a state that is an equilibrium and not
     the unstable straight one (every edge back near its rest length: buckled), or, with
     gravity, the hanging chain. The straight compressed state returned as converged is
-    reported (``unstable``) as a silent unstable answer."""
+    reported (``unstable``) as a silent unstable answer unless the result flags it
+    (``Result.stable is False``, with a warning), which is a right answer."""
     import numpy as np
 
     from catenet.dynamic import solve_dynamic
@@ -275,7 +276,8 @@ def bilateral_compression(
             note=f"min strain {-compressed:.3g}",
         )
     straight = float(np.max(np.abs(res.x[:, 1:]))) < 1e-9
-    value = 1.0 if (straight and compressed > 1e-6) else 0.0
+    flagged = getattr(res, "stable", None) is False
+    value = 1.0 if (straight and compressed > 1e-6 and not flagged) else 0.0
     return _eq_row(
         "unstable",
         value,
@@ -286,6 +288,8 @@ def bilateral_compression(
         note=(
             "straight compressed state (unstable) returned as converged"
             if value
+            else "straight compressed state, flagged unstable"
+            if flagged and straight
             else f"buckled or relaxed: min strain {-compressed:.3g}"
         )
         + f"; {res.message}",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 
@@ -38,3 +39,22 @@ def csr_matvec(indptr, indices, data, x, upper, out):
             if upper and c != r:
                 out[c] += data[p] * x[r]
         out[r] += acc
+
+
+@njit(cache=True)
+def dot(a, b):
+    """a . b in one thread: BLAS would spawn threads for vectors this short, which costs
+    more than it saves (much more on a loaded machine)."""
+    total = 0.0
+    for k in range(a.shape[0]):
+        total += a[k] * b[k]
+    return total
+
+
+@njit(cache=True)
+def norm(a):
+    """The 2-norm of a, in one thread (see ``dot``)."""
+    total = 0.0
+    for k in range(a.shape[0]):
+        total += a[k] * a[k]
+    return np.sqrt(total)

@@ -10,6 +10,11 @@ edge (eps < 0) has no energy, force or stiffness; its 36 Hessian values are writ
 zeros so that the sparsity pattern never changes. With ``smooth`` = mu > 0 they use
 s(eps) = (eps + sqrt(eps^2 + mu^2)) / 2 instead, a smooth law that tends to max(eps, 0)
 as mu -> 0 and keeps every edge slightly taut: the static solver's continuation path.
+
+Zero-length edges are refused at input; one that arises during an iteration (a support
+stepping onto its neighbour) is slack when tension-only and contributes nothing, else
+its direction is undefined and the kernels give inf/NaN (error_model="numpy": no
+exception), which the solvers' finite checks turn into a rejected step.
 In general U = 1/2 EA l0 s^2, dU/deps = EA l0 s s', d2U/deps2 = EA l0 (s'^2 + s s''):
 
     force on x_j = EA s s' t,
@@ -22,7 +27,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _law(eps, tension_only, smooth):
     """s, s s' (force / EA) and s'^2 + s s'' (stiffness / (EA/l0)) of the strain law."""
     if not tension_only:
@@ -38,7 +43,7 @@ def _law(eps, tension_only, smooth):
     return eps, eps, 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stretch_energy(x, edges, l0, ea, tension_only, smooth):
     """Total stretching energy [J] of positions x (N, 3)."""
     total = 0.0
@@ -54,7 +59,7 @@ def stretch_energy(x, edges, l0, ea, tension_only, smooth):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
     """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
     nodes) and returns the stretching energy."""
@@ -81,7 +86,7 @@ def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
     """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
     local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
@@ -95,9 +100,13 @@ def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
         length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         eps = length / l0[k] - 1.0
         _, force, stiffness = _law(eps, tension_only, smooth)
+        base = 36 * k
+        if stiffness == 0.0 and force == 0.0:  # slack: no division by a length
+            for a in range(36):
+                values[base + a] = 0.0
+            continue
         axial = ea[k] / l0[k] * stiffness
         geometric = ea[k] * force / length
-        base = 36 * k
         for a in range(3):
             ta = e[a] / length
             for b in range(3):
@@ -111,7 +120,7 @@ def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
                 values[base + 6 * (a + 3) + b] = -h
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def stretch_tension(x, edges, l0, ea, tension_only, out):
     """Axial force EA*eps of every edge [N] (0 when slack and tension-only)."""
     for k in range(edges.shape[0]):
