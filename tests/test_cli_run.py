@@ -348,24 +348,6 @@ def test_info():
         assert word in r.stdout
 
 
-def test_readme_commands(tmp_path, monkeypatch):
-    """The commands and the Python snippet of docs/readme-cli.md run as written."""
-    from conftest import CONFIGS, REPO
-
-    text = (REPO / "docs" / "readme-cli.md").read_text()
-    monkeypatch.chdir(tmp_path)
-    r = invoke("run", CONFIGS / "fig4a_n10_alpha_0.toml", "-o", "out/fig4a.h5")
-    assert r.exit_code == 0, r.output
-    assert "catenet run configs/fig4a_n10_alpha_0.toml -o out/fig4a.h5" in text
-    snippet = text.split("```python\n")[1].split("```")[0]
-    exec(compile(snippet, "readme-cli.md", "exec"), {})
-    line = next(ln for ln in text.splitlines() if ln.startswith("python -c"))
-    code = line.split('"', 1)[1].rsplit('"', 1)[0].replace("out/run.h5", "out/fig4a.h5")
-    exec(compile(code, "readme-cli.md", "exec"), {})
-    with h5py.File("out/fig4a.h5", "r") as h5:
-        assert bool(h5["result"].attrs["converged"])
-
-
 def fake_dynamic(fail_at: int, nan: bool):
     """A solve_dynamic that takes ``fail_at`` steps of 0.01 s, then fails: with a
     ConvergenceError, or by producing a NaN state."""

@@ -412,7 +412,7 @@ def test_cli_interrupted_and_resumed(tmp_path):
 
 
 def test_bundled_paper_case_runs_from_the_command_line(tmp_path):
-    """configs/sweeps/paper.toml with a few of its values, as in docs/readme-sweep.md."""
+    """configs/sweeps/paper.toml with a few of its values, as in the README."""
     out = tmp_path / "paper"
     result = CliRunner().invoke(
         sweep_command,
@@ -442,7 +442,7 @@ def test_bundled_paper_case_runs_from_the_command_line(tmp_path):
 
 @pytest.mark.slow
 def test_the_paper_study_as_documented(tmp_path):
-    """`catenet sweep configs/sweeps/paper.toml -o out/paper --plot` (docs/readme-sweep.md):
+    """`catenet sweep configs/sweeps/paper.toml -o out/paper --plot` (the README):
     390 rows on 2 workers, the figures, and the numbers the README reports: the collapse
     onto delta_bar = C f(alpha) (F_bar/n)^beta holds to 1 % RMS with beta = 1/3 and
     D = 1.21 (the paper: 1.31)."""

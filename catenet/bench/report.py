@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import json
+import os
 import logging
 import math
 import shutil
@@ -62,8 +63,29 @@ def write_report(results_dir: Path, docs_dir: Path) -> Path:
             log.warning("report: section %s skipped: %r", section.__name__, exc)
     lines += _reproduce()
     path = docs / "readme-performance.md"
-    path.write_text("\n".join(lines).rstrip() + "\n")
+    text = "\n".join(lines).rstrip() + "\n"
+    path.write_text(text)
+    splice_readme(docs.parent / "README.md", text, docs)
     return path
+
+
+BEGIN, END = "<!-- performance:begin -->", "<!-- performance:end -->"
+
+
+def splice_readme(readme: Path, text: str, docs: Path) -> bool:
+    """Puts the performance section into the README between its markers (figure links
+    made relative to the README). False when there is no README or no markers."""
+    if not readme.exists():
+        return False
+    old = readme.read_text()
+    if BEGIN not in old or END not in old:
+        return False
+    rel = os.path.relpath(docs / "figures", readme.parent)
+    body = text.replace("](figures/", f"]({rel}/")
+    head, rest = old.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    readme.write_text(f"{head}{BEGIN}\n{body}{END}{tail}")
+    return True
 
 
 def _header(m: dict) -> list[str]:
