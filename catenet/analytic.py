@@ -426,3 +426,84 @@ def discrete_catenary(
     x = np.concatenate([[0.0], np.cumsum(dx)])
     z = np.concatenate([[0.0], np.cumsum(dz)])
     return DiscreteCatenary(x=x, z=z, tension=T, H=H)
+
+
+@dataclass(frozen=True)
+class InclinedCatenary:
+    """The elastic catenary between supports at different heights (or a buoyant line).
+
+    z is UP here. ``H`` is the horizontal tension, ``V`` the upward force of the left
+    support on the cable; ``x(s)``, ``z(s)`` the position of the material point at
+    unstretched arc length s from the left support.
+    """
+
+    L0: float
+    EA: float
+    w: float
+    span: float
+    rise: float
+    H: float
+    V: float
+
+    def x(self, s):
+        s = np.asarray(s, dtype=float)
+        H, V, w = self.H, self.V, self.w
+        return H * s / self.EA + (H / w) * (np.arcsinh((w * s - V) / H) - np.arcsinh(-V / H))
+
+    def z(self, s):
+        s = np.asarray(s, dtype=float)
+        H, V, w = self.H, self.V, self.w
+        return (w * s * s / 2 - V * s) / self.EA + (
+            np.sqrt(H * H + (w * s - V) ** 2) - np.sqrt(H * H + V * V)
+        ) / w
+
+    def tension(self, s):
+        """Tension T(s) [N] of the material point at s."""
+        s = np.asarray(s, dtype=float)
+        return np.sqrt(self.H**2 + (self.w * s - self.V) ** 2)
+
+
+def inclined_catenary(L0: float, EA: float, w: float, span: float, rise: float) -> InclinedCatenary:
+    """The exact elastic catenary (Irvine, *Cable Structures*, 1981, Sec. 2.3) of a cable of
+    unstretched length L0 and stiffness EA under a weight w per unstretched length (w < 0:
+    a buoyant line, pushed up), its right support ``span`` to the side of and ``rise``
+    above the left one.
+
+    Derivation, z up. The segment [0, s] is held by the left support with (-H, V), carries
+    its weight (0, -w s) and is pulled along the tangent at s by the tension, so the
+    tension's components are (H, w s - V) and T = sqrt(H^2 + (w s - V)^2). With
+    dp/ds = 1 + T/EA (Hooke, the continuum limit of the edge law):
+
+        dx/ds = H/EA + H/T,   dz/ds = (w s - V)/EA + (w s - V)/T,
+
+        x(s) = H s/EA + (H/w)[asinh((w s - V)/H) - asinh(-V/H)],
+        z(s) = (w s^2/2 - V s)/EA + (sqrt(H^2 + (w s - V)^2) - sqrt(H^2 + V^2))/w.
+
+    H and V solve x(L0) = span, z(L0) = rise (Newton from the level-support solution;
+    the residual is checked). Equal heights and w > 0 give V = w L0 / 2 and the
+    ``elastic_catenary`` above.
+    """
+    from scipy.optimize import root
+
+    L0 = _positive("L0", L0)
+    EA = _positive("EA", EA)
+    span = _positive("span", span)
+    if not (math.isfinite(w) and w != 0.0):
+        raise ValueError(f"w = {w!r}: must be finite and non-zero")
+    chord = math.hypot(span, rise)
+    if not chord < L0 * (1 + abs(w) * L0 / EA):
+        raise ValueError("the cable is too short to hang between the supports: no catenary")
+    level = elastic_catenary(L0, EA, abs(w), chord)
+    H0 = level.H * span / chord
+    V0 = w * L0 / 2 - H0 * rise / span
+
+    def residual(p):
+        c = InclinedCatenary(L0, EA, w, span, rise, math.exp(p[0]), p[1])
+        return [(c.x(L0) - span) / L0, (c.z(L0) - rise) / L0]
+
+    sol = root(residual, [math.log(H0), V0], method="hybr", options={"xtol": 1e-15})
+    cat = InclinedCatenary(L0, EA, w, span, rise, math.exp(sol.x[0]), float(sol.x[1]))
+    err = max(abs(r) for r in residual(sol.x))
+    if not err < 1e-12:
+        raise ArithmeticError(f"inclined catenary: end conditions met only to {err:.1e}")
+    return cat

@@ -71,12 +71,14 @@ class System:
         self.data = np.zeros(self.nnz)
         self.seconds = 0.0  # spent filling gradients and Hessians
         self.smooth = 0.0  # smoothing mu of the tension-only law (0: exact)
+        self.EA = net.EA  # the stiffness the kernels use (scaled during continuation)
+        self.stiffness_factor = 1.0
 
     # --- scalar and vector terms -------------------------------------------------------
     def energy(self, x: np.ndarray) -> float:
         net = self.net
         return stretch_energy(
-            x, net.edges, net.rest_length, net.EA, net.tension_only, self.smooth
+            x, net.edges, net.rest_length, self.EA, net.tension_only, self.smooth
         )
 
     def gradient(self, x: np.ndarray) -> tuple[float, np.ndarray]:
@@ -87,10 +89,16 @@ class System:
         g = self._grad
         g.fill(0.0)
         energy = stretch_gradient(
-            x, net.edges, net.rest_length, net.EA, net.tension_only, self.smooth, g
+            x, net.edges, net.rest_length, self.EA, net.tension_only, self.smooth, g
         )
         self.seconds += time.perf_counter() - start
         return energy, g
+
+    def scale_stiffness(self, factor: float) -> None:
+        """Let the kernels use factor * EA (1: the net's own), for the static solver's
+        stiffness continuation of nearly inextensible nets."""
+        self.stiffness_factor = float(factor)
+        self.EA = self.net.EA if factor == 1.0 else self.net.EA * factor
 
     def tension(self, x: np.ndarray) -> np.ndarray:
         net = self.net
@@ -107,7 +115,7 @@ class System:
             x,
             net.edges,
             net.rest_length,
-            net.EA,
+            self.EA,
             net.tension_only,
             self.smooth,
             self._values,

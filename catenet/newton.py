@@ -43,6 +43,7 @@ MAX_EXPANSIONS = 12
 WOLFE = 0.9  # curvature condition: |slope at the step| <= 0.9 |slope at 0|
 C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
+STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has converged
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 
 
@@ -70,13 +71,19 @@ class Potential:
         self.f_norm = float(norm(force.reshape(-1)))
         self.w: np.ndarray | None = None  # inertia weights on the free DOFs
         self.a: np.ndarray | None = None
-        self.D = np.repeat(system.net.axial_stiffness[~system.net.fixed], 3)
+        self._D = np.repeat(system.net.axial_stiffness[~system.net.fixed], 3)
         # Round-off of the strains: coordinates of size |x| carry an error eps |x|, which
         # each edge turns into a force error EA eps |x| / l0 at both of its nodes.
         net = system.net
         self._k_norm = float(np.sqrt(2.0 * np.sum((net.EA / net.rest_length) ** 2)))
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
+
+    @property
+    def D(self) -> np.ndarray:
+        """Diagonal of the axial stiffness on the free DOFs, at the stiffness in use."""
+        factor = self.system.stiffness_factor
+        return self._D if factor == 1.0 else self._D * factor
 
     def set_inertia(self, w: np.ndarray | None, a: np.ndarray | None) -> None:
         self.w, self.a = w, a
@@ -95,7 +102,8 @@ class Potential:
         phi = energy - work
         internal = float(norm(grad.reshape(-1)))
         scale = max(self.f_norm, internal)
-        floor = self.f_norm + 2.0 * internal + self._k_norm * float(np.max(np.abs(x)))
+        strains = self._k_norm * self.system.stiffness_factor * float(np.max(np.abs(x)))
+        floor = self.f_norm + 2.0 * internal + strains
         phi_scale = abs(energy) + abs(work)
         if self.w is not None:
             r = y - self.a
@@ -154,7 +162,7 @@ def solve(
         if gnorm <= tol:
             reason = "converged"
             break
-        if stall >= 3 and gnorm <= 1e3 * floor:
+        if stall >= 3 and gnorm <= STALL_FLOOR * floor:
             reason = "converged (round-off floor)"
             break
         if it >= max_iter:
@@ -192,7 +200,7 @@ def solve(
         if not accepted:
             xf[free] = y0
             phi, g, scale, floor, phi_tol = potential.evaluate(x)
-            if gnorm <= 1e3 * floor:
+            if gnorm <= STALL_FLOOR * floor:
                 reason = "converged (round-off floor)"
                 break
             c = max(4.0 * c, SHRINK * _c_start(potential, g))
@@ -375,10 +383,11 @@ def _c_start(potential: Potential, g: np.ndarray) -> float:
     return float(min(max(np.max(per_dof, initial=0.0), C_MIN * 10), C_MAX))
 
 
-def raise_unconverged(result: NewtonResult, what: str, state=None) -> None:
+def raise_unconverged(result: NewtonResult, what: str, state=None, hint: str = "") -> None:
+    count = "" if "iterations" in result.reason else f" after {result.iterations} Newton iterations"
     raise ConvergenceError(
-        f"{what}: {result.reason} after {result.iterations} Newton iterations "
-        f"(residual {result.residual:.3e} N, tolerance {result.tolerance:.1e} N)",
+        f"{what}: {result.reason}{count} (residual {result.residual:.3e} N, tolerance "
+        f"{result.tolerance:.1e} N){hint}",
         iterations=result.iterations,
         history=result.history,
         state=state,

@@ -86,7 +86,14 @@ def solve_static(
     potential = ws.potential(loads, factor)
     result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
     if not result.converged and raise_on_failure:
-        raise_unconverged(result, "static equilibrium", state=x)
+        hint = ""
+        if result.tolerance > 1e-2 * potential.f_norm:
+            hint = (
+                ": the round-off level of this net's forces (EA eps_mach |x| / l0 per edge) "
+                "is comparable to its loads, more than double precision can resolve; use "
+                "fewer, longer edges or check EA"
+            )
+        raise_unconverged(result, "static equilibrium", state=x, hint=hint)
     out = finish(
         ws.system,
         loads,
@@ -147,52 +154,83 @@ def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
 SMOOTH_REDUCTION = 10.0  # mu shrinks tenfold per stage
 SMOOTH_RTOL = 1e-3  # stages before the last are solved loosely
 SMOOTH_END = 1e-3  # smoothing stops once mu is this fraction of the smallest |strain|
+STIFF_STRAIN = 1e-6  # nets strained less than this by their loads: stiffness continuation
+STIFF_STEP = 100.0  # EA grows a hundredfold per stage
 
 
 def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
-    """Newton to equilibrium from x (updated in place).
+    """Newton to equilibrium from x (updated in place), through two continuations when
+    the start calls for them; the last solve always uses the exact law and stiffness to
+    the full tolerance.
 
-    A tension-only net that starts with slack edges (a cable whose supports moved
-    inward, a loose net) has no stiffness where it is slack, and Newton steps there are
-    erratic. Such a start goes through a smoothing continuation: the law max(eps, 0) is
-    replaced by (eps + sqrt(eps^2 + mu^2))/2, which keeps every edge slightly taut, with
-    mu from the largest slack strain down tenfold per stage (each stage solved loosely
-    from the last), until mu is negligible against the strains; the last solve uses the
-    exact law to the full tolerance.
+    - Nearly inextensible nets (strain scale |f| / EA below STIFF_STRAIN): Newton's
+      quadratic model holds only for rotations below sqrt(strain), so the net is solved
+      first with EA scaled down to strains of about 1e-3, then with EA raised a hundred-
+      fold per stage, each stage from the last (the shape hardly changes between them).
+    - Tension-only nets that start with slack edges (a cable whose supports moved inward,
+      a loose net) have no stiffness where slack, and Newton steps there are erratic: the
+      law max(eps, 0) is replaced by (eps + sqrt(eps^2 + mu^2))/2, which keeps every edge
+      slightly taut, with mu from the largest slack strain down tenfold per stage until
+      it is negligible against the strains.
+
+    Intermediate stages are solved loosely (SMOOTH_RTOL of the load scale).
     """
     system = potential.system
     net = system.net
     history: list[float] = []
     iterations = 0
-    mu = _slack_strain(net, x) if net.tension_only else 0.0
-    # Smoothing inflates the internal forces: the stages are held to the load scale.
+    # Stages are held to the load scale: smoothing and scaling change the internal forces.
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
+    strain = _strain_scale(net, potential)
+    factors = []
+    if 0.0 < strain < STIFF_STRAIN:
+        factor = strain / 1e-3
+        while factor < 1.0:
+            factors.append(factor)
+            factor *= STIFF_STEP
+    mu = _slack_strain(net, x) if net.tension_only else 0.0
+
+    def stage(label: str) -> bool:
+        nonlocal iterations, history
+        result = solve(
+            potential, x, rtol=SMOOTH_RTOL, atol=atol, max_iter=max_iter - iterations,
+            label=f"static ({label})",
+        )
+        iterations += result.iterations
+        history += result.history
+        return result.converged and result.iterations > 0
+
     try:
-        while mu > 0.0 and iterations < max_iter:
-            system.smooth = mu
-            stage = solve(
-                potential,
-                x,
-                rtol=SMOOTH_RTOL,
-                atol=atol,
-                max_iter=max_iter - iterations,
-                label=f"static (mu {mu:.1e})",
-            )
-            iterations += stage.iterations
-            history += stage.history
-            strains = system.tension(x) / net.EA
-            taut = np.abs(strains[strains > 0])
-            if not stage.converged or stage.iterations == 0:
-                break
-            if taut.size and mu < SMOOTH_END * float(np.min(taut)):
-                break
-            mu /= SMOOTH_REDUCTION
+        for k, factor in enumerate(factors + [1.0]):
+            system.scale_stiffness(factor)
+            if k == 0:  # the smoothing continuation, at the first stiffness
+                while mu > 0.0 and iterations < max_iter:
+                    system.smooth = mu
+                    if not stage(f"EA x {factor:.1e}, mu {mu:.1e}"):
+                        break
+                    strains = system.tension(x) / system.EA
+                    taut = strains[strains > 0]
+                    if taut.size and mu < SMOOTH_END * float(np.min(taut)):
+                        break
+                    mu /= SMOOTH_REDUCTION
+                system.smooth = 0.0
+            if factor < 1.0 and iterations < max_iter:
+                stage(f"EA x {factor:.1e}")
     finally:
         system.smooth = 0.0
+        system.scale_stiffness(1.0)
     result = solve(potential, x, rtol=rtol, max_iter=max(max_iter - iterations, 1), label="static")
+    if not result.converged and iterations >= max_iter - 1:
+        result.reason = f"no convergence in {max_iter} iterations"
     result.iterations += iterations
     result.history = history + result.history
     return result
+
+
+def _strain_scale(net: Net, potential: Potential) -> float:
+    """The strain the loads can cause at most, |f|_1 / min EA (0 without loads): an
+    estimate of how stiff the net is against what acts on it."""
+    return float(np.abs(potential.force).sum() / np.min(net.EA))
 
 
 def _slack_strain(net: Net, x: np.ndarray) -> float:

@@ -300,3 +300,25 @@ def test_an_unstable_equilibrium_is_flagged(linear, caplog):
     # Stretched instead of compressed: stable.
     r = cn.solve_static(net, cn.Loads(support_displacement=-d), linear=linear)
     assert r.stable is True
+
+
+@pytest.mark.parametrize("nodes", [41, 161, 641])
+def test_nearly_inextensible_cable_in_tens_of_iterations(nodes):
+    """EA = 1e9 N under its own weight (strains of 1e-9): the stiffness continuation
+    (EA scaled down, then raised a hundredfold per stage) keeps Newton within tens of
+    iterations at any resolution."""
+    mat = cn.Material(EA=1e9, line_density=MAT.line_density)
+    net = cn.cable([0.0, 0.0, 0.0], [1.0, 0.0, -0.3], nodes, mat, length=1.3)
+    loads = cn.Loads(gravity=np.array([0.0, 0.0, -9.81]))
+    r = cn.solve_static(net, loads, rtol=1e-10)
+    assert r.converged and r.iterations <= 60
+    assert_balanced(r, loads, net)
+
+
+def test_a_net_too_stiff_for_double_precision_is_explained():
+    """EA = 1e12 N on 1.6 mm edges: the force round-off (EA eps |x| / l0, about 16 N)
+    exceeds the whole weight (4 N); no solver can resolve it, and the error says why."""
+    mat = cn.Material(EA=1e12, line_density=MAT.line_density)
+    net = cn.cable([0.0, 0.0, 0.0], [1.0, 0.0, -0.3], 801, mat, length=1.3)
+    with pytest.raises(cn.ConvergenceError, match="double precision"):
+        cn.solve_static(net, cn.Loads(gravity=np.array([0.0, 0.0, -9.81])), max_iter=60)

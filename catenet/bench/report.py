@@ -8,9 +8,9 @@
 from __future__ import annotations
 
 import json
-import os
 import logging
 import math
+import os
 import shutil
 from pathlib import Path
 
