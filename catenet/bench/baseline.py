@@ -35,7 +35,6 @@ from catenet.bench.common import (
     warm_up,
     write_csv,
 )
-from catenet.bench.solvers import SymmetricSuperLU, install
 
 log = logging.getLogger(__name__)
 
@@ -355,7 +354,6 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
     """Every method on the paper's net with ``n`` cables; one row each."""
     import numpy as np
 
-    from catenet.linsolve import PardisoSolver
     from catenet.static import Workspace, solve_static
 
     repeats = 3 if quick else 7
@@ -405,14 +403,6 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
         "catenet (pardiso, reused Workspace)": lambda: solve_static(net, loads, workspace=ws),
         "baseline numpy+pypardiso": lambda: baseline_static(*args),
     }
-    if isinstance(ws.solver, PardisoSolver):
-
-        def proposed():  # the two settings the skips study finds faster
-            w = Workspace(net, mtype=2)
-            w.solver.iparm[7] = 0
-            return solve_static(net, loads, workspace=w)
-
-        fns["catenet (pardiso, mtype 2, no refinement: proposed)"] = proposed
     main = interleaved(fns, repeats)
     for method, (t, times, res) in main.items():
         if method.startswith("baseline"):
@@ -430,16 +420,6 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
             row(method, t, res.x, res.iterations, times, **split(res))
     t, times, res = repeat(lambda: solve_static(net, loads, linear="scipy"), few)
     row("catenet (scipy)", t, res.x, res.iterations, times, **split(res))
-    ws_sym = install(Workspace(net, linear="scipy"), SymmetricSuperLU)
-    t, times, res = repeat(lambda: solve_static(net, loads, workspace=ws_sym), few)
-    row(
-        "catenet (scipy, SuperLU symmetric mode: proposed)",
-        t,
-        res.x,
-        res.iterations,
-        times,
-        **split(res),
-    )
     if not quick:
         t, times, (x, info) = repeat(lambda: baseline_static(*args, solver="scipy"), few)
         row(

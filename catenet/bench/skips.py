@@ -12,7 +12,8 @@ against catenet's default way of doing the same thing, in one process after a wa
   (needs ``catenet.runner``);
 - symbolic analysis: once per net (Workspace) against once per factorisation, and against
   ``pypardiso.spsolve``; for a static solve, 20 dynamic steps and a 10-step continuation;
-- matrix type: PARDISO mtype -2 (symmetric indefinite, upper triangle), 2 (SPD), 11
+- matrix type: PARDISO mtype 2 (SPD: catenet's choice for tension-only nets), -2 (symmetric
+  indefinite: bilateral nets), 11
   (general, full matrix);
 - iterative refinement: PARDISO's refinement steps after each solve, catenet's setting
   against none;
@@ -316,12 +317,19 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
         2: "mtype 2 (SPD)",
         11: "mtype 11 (general, full matrix)",
     }
+    default = getattr(Workspace(net).solver, "mtype", None)  # what catenet picks for this net
     spaces = {}
     for mtype in names:
         try:
             spaces[mtype] = Workspace(net, mtype=mtype)
         except Exception as exc:
-            add("mtype (static)", names[mtype], mtype == -2, float("nan"), note=f"failed: {exc!r}")
+            add(
+                "mtype (static)",
+                names[mtype],
+                mtype == default,
+                float("nan"),
+                note=f"failed: {exc!r}",
+            )
             study.findings.append(f"mtype {mtype}: Workspace(net, mtype={mtype}) fails: {exc!r}")
     for label in ("mtype (static)", "mtype (dynamic)"):
         fns = {}
@@ -336,14 +344,14 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
                 fns[mtype]()
             except CatenetError as exc:
                 del fns[mtype]
-                add(label, names[mtype], mtype == -2, float("nan"), note=f"failed: {exc}")
+                add(label, names[mtype], mtype == default, float("nan"), note=f"failed: {exc}")
                 study.findings.append(f"{label} {names[mtype]}: {type(exc).__name__}: {exc}")
         for mtype, (t, _, res) in interleaved(fns, reps).items():
             ws = spaces[mtype]
             add(
                 label,
                 names[mtype],
-                mtype == -2,
+                mtype == default,
                 t,
                 res.x if label.endswith("(static)") else None,
                 res.iterations,
