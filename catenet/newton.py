@@ -11,14 +11,19 @@ Jacobian is Eq. 13.
 
 Each iteration solves (J + c D) dy = -grad Phi, J = K + diag(w), D the diagonal of the
 axial stiffness. c >= 0 is a Levenberg-Marquardt / pseudo-transient regularisation: it
-makes a flat, unstressed net (K singular) solvable and shrinks to zero as steps succeed,
-which restores Newton's quadratic convergence. The step length comes from a backtracking
-(Armijo) line search on Phi; where differences of Phi fall below round-off the norm of the
-gradient serves as the merit function instead.
+makes a flat, unstressed net (K singular) solvable. It follows a trust-region rule on the
+ratio of actual to predicted decrease of Phi and reaches zero as steps succeed, which
+restores Newton's quadratic convergence. The step length comes from a line search on the
+slope of Phi along the step (Armijo and curvature conditions): the full step where it
+suffices, longer steps while the slope stays steep (a slack net falling freely), a secant
+search inside a bracket otherwise. Where differences of Phi fall below round-off the norm
+of the gradient is the merit function instead.
 
 Convergence: |grad Phi| <= max(rtol * scale, floor), where scale is the load scale (the
 larger of |f| and |internal force|, supports included) and floor the round-off level of
-the gradient. A residual that stalls near the floor is converged as well.
+the gradient (which includes the strains' round-off, EA eps |x| / l0 per edge). A residual
+that stalls within STALL_FLOOR times the floor is converged as well; when the floor, not
+the tolerance, ended the run, one more Newton step is taken if it lowers the residual.
 """
 
 from __future__ import annotations
@@ -118,12 +123,9 @@ class Potential:
 
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""
-        shift = self._shift
+        shift = np.multiply(c, self.D, out=self._shift)
         if self.w is not None:
-            np.multiply(c, self.D, out=shift)
             shift += self.w
-        else:
-            np.multiply(c, self.D, out=shift)
         data = self.system.hessian(x, shift if (c > 0 or self.w is not None) else None)
         self.solver.factorize(data)
 
@@ -134,7 +136,6 @@ def solve(
     *,
     rtol: float,
     max_iter: int,
-    c0: float = 0.0,
     atol: float | None = None,
     label: str = "newton",
 ) -> NewtonResult:
@@ -148,7 +149,7 @@ def solve(
     gnorm = float(norm(g.reshape(-1)))
     tol = max(rtol * scale if atol is None else atol, floor)
     history = [gnorm]
-    c = c0
+    c = 0.0  # regularisation: raised when the matrix is singular or a step fails
     factorizations = 0
     stall = 0
     good = 0  # consecutive well-predicted full steps
@@ -193,10 +194,8 @@ def solve(
         predicted = -0.5 * slope + 0.5 * c * float(dot(potential.D * dy, dy))
         y0 = xf[free].copy()
         alpha, accepted, rho, trial = _line_search(
-            potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial, True
+            potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial
         )
-        if accepted:
-            phi_t, g_t, scale_t, floor_t, phi_tol_t, gnorm_t = trial
         if not accepted:
             xf[free] = y0
             phi, g, scale, floor, phi_tol = potential.evaluate(x)
@@ -211,7 +210,7 @@ def solve(
             stall += 1
             continue
         prev = gnorm
-        phi, g, scale, floor, phi_tol, gnorm = phi_t, g_t, scale_t, floor_t, phi_tol_t, gnorm_t
+        phi, g, scale, floor, phi_tol, gnorm = trial
         tol = max(rtol * scale if atol is None else atol, floor)
         history.append(gnorm)
         stall = stall + 1 if gnorm > 0.5 * prev else 0
@@ -260,9 +259,7 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
     return None
 
 
-def _line_search(
-    potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial, backtrack
-):
+def _line_search(potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial):
     """Step length along dy.
 
     alpha = 1 when Phi decreases enough (Armijo) and its slope along dy has flattened
@@ -272,9 +269,6 @@ def _line_search(
     search on the slope inside the bracket [lo, hi] finds a point that satisfies both
     conditions. The potential of a tension-only net is convex, so the slope along dy is
     monotone and the bracket sound; elsewhere the search falls back to bisection.
-
-    Without ``backtrack`` a full step that fails is rejected (the caller raises the
-    regularisation instead: a better direction beats a shorter step).
 
     Returns (alpha, accepted, rho, evaluation at alpha); x holds y0 + alpha dy if accepted.
     """
@@ -323,10 +317,8 @@ def _line_search(
             if ok and ev[0] < best[1][0]:
                 best = (alpha, ev)
             break
-    elif backtrack:
-        lo, d_lo, hi, d_hi = 0.0, slope, 1.0, d
     else:
-        hi = None
+        lo, d_lo, hi, d_hi = 0.0, slope, 1.0, d
     if hi is not None:
         for _ in range(MAX_HALVINGS):
             if math.isfinite(d_hi) and d_hi > 0.0 > d_lo:  # secant, kept off the ends
