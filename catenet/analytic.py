@@ -39,11 +39,13 @@ from catenet.errors import ConfigError
 __all__ = [
     "DiscreteCatenary",
     "ElasticCatenary",
+    "InclinedCatenary",
     "catenary_parameter",
     "catenary_sag",
     "catenary_shape",
     "discrete_catenary",
     "elastic_catenary",
+    "inclined_catenary",
     "midpoint_load_deflection",
     "midpoint_load_force",
     "midpoint_load_shape",

@@ -372,14 +372,7 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
     else:
         p = Path(path)
         source = str(p)
-        try:
-            raw = p.read_bytes()
-        except FileNotFoundError:
-            raise ConfigError(f"{p}: no such case file") from None
-        except IsADirectoryError:
-            raise ConfigError(f"{p}: is a directory, not a case file") from None
-        except OSError as exc:
-            raise ConfigError(f"{p}: cannot read the case file: {exc.strerror or exc}") from None
+        raw = read_case_bytes(p)
         base_dir = p.parent
     data = parse_toml(raw, source)
     sweep = data.pop("sweep", None)  # the grid of `catenet sweep`; a single run ignores it
@@ -390,6 +383,18 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
     if overrides:
         data = apply_overrides(data, overrides)
     return parse_case(data, source=source, base_dir=base_dir)
+
+
+def read_case_bytes(path: Path) -> bytes:
+    """The bytes of a case file; ConfigError naming the path when it cannot be read."""
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such case file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a directory, not a case file") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the case file: {exc.strerror or exc}") from None
 
 
 def parse_toml(raw: bytes | str, source: str) -> dict:

@@ -468,18 +468,10 @@ def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
     with the ``params`` (``"key.path=v1,v2"``) added; a key given in both takes the
     command line's values. Every combination is validated as a case (ConfigError listing
     the problems) before anything runs."""
-    from catenet.case import parse_toml
+    from catenet.case import parse_toml, read_case_bytes
 
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such case file") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a directory, not a case file") from None
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the case file: {exc.strerror or exc}") from None
-    data = parse_toml(raw, str(path))
+    data = parse_toml(read_case_bytes(path), str(path))
     table = data.pop("sweep", None)
     merged: dict[str, Param] = {}
     if table is not None:

@@ -7,28 +7,7 @@ derivation of every formula (paper Eqs. 14-17, the exact elastic catenary of Irv
 *Cable Structures*, 1981, and the exact discrete chain).
 """
 
-from catenet.analytic import (
-    DiscreteCatenary,
-    ElasticCatenary,
-    catenary_parameter,
-    catenary_sag,
-    catenary_shape,
-    discrete_catenary,
-    elastic_catenary,
-    midpoint_load_deflection,
-    midpoint_load_force,
-    midpoint_load_shape,
-)
+from catenet import analytic as _analytic
+from catenet.analytic import *  # noqa: F403  (the closed forms, re-exported)
 
-__all__ = [
-    "DiscreteCatenary",
-    "ElasticCatenary",
-    "catenary_parameter",
-    "catenary_sag",
-    "catenary_shape",
-    "discrete_catenary",
-    "elastic_catenary",
-    "midpoint_load_deflection",
-    "midpoint_load_force",
-    "midpoint_load_shape",
-]
+__all__ = list(_analytic.__all__)
