@@ -27,6 +27,7 @@ from catenet.net import Loads, Net
 from catenet.newton import solve
 from catenet.result import Result, finish
 from catenet.static import HarmonicExtension, Workspace, _check_rtol
+from catenet.terms import Inertia
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +70,8 @@ def solve_dynamic(
     system = ws.system
     free = system.free_dofs
     m_free = np.repeat(mass[~net.fixed], 3)
-    potential = ws.potential(loads)
+    inertia = Inertia(free)  # the step's inertia and damping, refilled every step
+    potential = ws.potential(loads, steps=(inertia,))
     start = time.perf_counter()
 
     x = net.nodes.copy() if x0 is None else np.array(x0, dtype=np.float64, copy=True)
@@ -105,7 +107,7 @@ def solve_dynamic(
         v_k = v.reshape(-1)[free]
         w = m_free * (1.0 / h_step**2 + damping / h_step)
         a = (m_free / h_step**2 * (y_k + h_step * v_k) + damping * m_free / h_step * y_k) / w
-        potential.set_inertia(w, a)
+        inertia.set_step(w, a)
         try:
             newton = solve(potential, x_trial, rtol=rtol, max_iter=max_iter, label="step")
             ok = newton.converged
@@ -143,7 +145,6 @@ def solve_dynamic(
             break
     if not interrupted:
         message = "equilibrium" if equilibrium else "reached t_end"
-    potential.set_inertia(None, None)
     return finish(
         system,
         loads,

@@ -11,6 +11,7 @@ from functools import cached_property
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.laws import Law
 
 
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -39,6 +40,8 @@ class Net:
     line_density : (M,) float64, mass per unstressed length rho*A [kg/m]
     fixed : (N,) bool, pinned nodes (all three DOFs)
     tension_only : edges carry no compression (slack when eps < 0)
+    law : the material law of every edge (default: the paper's linear law, with
+        ``tension_only`` for every edge)
     """
 
     nodes: np.ndarray
@@ -48,6 +51,12 @@ class Net:
     line_density: np.ndarray
     fixed: np.ndarray
     tension_only: bool = True
+    law: Law | None = None
+
+    def __post_init__(self):
+        if self.law is None:
+            law = Law.uniform(len(self.edges), tension_only=self.tension_only)
+            object.__setattr__(self, "law", law)
 
     @classmethod
     def from_arrays(

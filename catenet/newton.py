@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +39,7 @@ from catenet.assembly import System
 from catenet.errors import ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import dot, norm
 from catenet.linsolve import LinearSolver
+from catenet.terms import ExternalForce, Term
 
 log = logging.getLogger(__name__)
 
@@ -66,67 +68,72 @@ class NewtonResult:
 
 
 class Potential:
-    """Phi on the free DOFs of a net; evaluates value and gradient, fills the Jacobian."""
+    """Phi on the free DOFs of a net: the sum of energy terms (``catenet.terms``), with
+    the supports held in place. Evaluates value and gradient, fills the Jacobian.
 
-    def __init__(self, system: System, solver: LinearSolver, force: np.ndarray):
+    ``system`` sums the internal terms (stretching and whatever else the scene names),
+    ``force`` (N, 3) is the external force (the linear term -f.x), ``steps`` are the
+    terms of a time step (inertia and damping), whose values change from step to step.
+    """
+
+    def __init__(
+        self,
+        system: System,
+        solver: LinearSolver,
+        force: np.ndarray,
+        steps: Sequence[Term] = (),
+    ):
         self.system = system
         self.solver = solver
-        self.force = force  # (N, 3) external force
-        self.f_free = force.reshape(-1)[system.free_dofs].copy()
-        self.f_norm = float(norm(force.reshape(-1)))
-        self.w: np.ndarray | None = None  # inertia weights on the free DOFs
-        self.a: np.ndarray | None = None
-        self._D = np.repeat(system.net.axial_stiffness[~system.net.fixed], 3)
-        # Round-off of the strains: coordinates of size |x| carry an error eps |x|, which
-        # each edge turns into a force error EA eps |x| / l0 at both of its nodes.
-        net = system.net
-        self._k_norm = float(np.sqrt(2.0 * np.sum((net.EA / net.rest_length) ** 2)))
+        external = ExternalForce(force)
+        self.force = external.force  # (N, 3) external force
+        self.f_free = external.flat[system.free_dofs].copy()
+        self.f_norm = external.norm
+        self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
+        self.steps = tuple(steps)
+        self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
 
-    @property
-    def D(self) -> np.ndarray:
-        """Diagonal of the axial stiffness on the free DOFs, at the stiffness in use."""
-        factor = self.system.stiffness_factor
-        return self._D if factor == 1.0 else self._D * factor
-
-    def set_inertia(self, w: np.ndarray | None, a: np.ndarray | None) -> None:
-        self.w, self.a = w, a
+    def with_system(self, system: System) -> Potential:
+        """The same loads and step terms on other internal terms of the same pattern."""
+        return Potential(system, self.solver, self.force, self.steps)
 
     def free(self, x: np.ndarray) -> np.ndarray:
         return x.reshape(-1)[self.system.free_dofs]
 
     def evaluate(self, x: np.ndarray) -> tuple[float, np.ndarray, float, float, float]:
         """Phi, grad Phi (free DOFs), the load scale, the gradient's round-off floor and
-        the round-off level of Phi."""
+        the round-off level of Phi.
+
+        The load scale is the larger of |f| and |internal force| (supports included).
+        The floor adds the round-off of every term: forces of size |f| and |internal|,
+        and the strains' (coordinates of size |x| carry an error eps |x|, which each edge
+        turns into a force error EA eps |x| / l0 at both of its nodes)."""
         energy, grad = self.system.gradient(x)
-        work = float(dot(self.force.reshape(-1), x.reshape(-1)))
-        y = self.free(x)
+        internal = float(norm(grad.reshape(-1)))
+        strains, phi_scale = self.system.roundoff(x)
+        work = 0.0 if self.external is None else -self.external.energy(x)
+        phi = energy - work
+        floor = self.f_norm + 2.0 * internal + strains
+        phi_scale += abs(work)
+        for term in self.steps:
+            e = term.gradient(x, grad)
+            phi += e
+            g_level, e_level = term.roundoff(x, e)
+            floor += g_level
+            phi_scale += e_level
         g = self._g
         np.subtract(grad.reshape(-1)[self.system.free_dofs], self.f_free, out=g)
-        phi = energy - work
-        internal = float(norm(grad.reshape(-1)))
         scale = max(self.f_norm, internal)
-        strains = self._k_norm * self.system.stiffness_factor * float(np.max(np.abs(x)))
-        floor = self.f_norm + 2.0 * internal + strains
-        phi_scale = abs(energy) + abs(work)
-        if self.w is not None:
-            r = y - self.a
-            wr = self.w * r
-            g += wr
-            phi += 0.5 * float(dot(wr, r))
-            floor += float(norm(self.w * (np.abs(y) + np.abs(self.a))))
-            phi_scale += float(dot(self.w, y * y + self.a * self.a))
         floor *= 4.0 * EPS
         phi_scale *= 64.0 * EPS
         return phi, g, scale, floor, phi_scale
 
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""
-        shift = np.multiply(c, self.D, out=self._shift)
-        if self.w is not None:
-            shift += self.w
-        data = self.system.hessian(x, shift if (c > 0 or self.w is not None) else None)
+        shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
+        data = self.system.hessian(x, shift, self.steps)
         self.solver.factorize(data)
 
 

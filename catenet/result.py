@@ -25,7 +25,7 @@ class Result:
         t_end or equilibrium);  equilibrium : the state is a static equilibrium
     iterations : Newton iterations in all;  residual : final |grad| [N]
     steps : time steps (dynamic) or load steps (static);  time : simulated time [s]
-    max_strain : largest edge strain (tension / EA)
+    max_strain : largest edge strain (|e|/l0 - 1; 0 when none is stretched)
     stable : for bilateral nets, whether the stiffness at the equilibrium is positive
         definite (False: an unstable equilibrium, e.g. a straight cable in compression);
         None where not checked (tension-only nets are never unstable)
@@ -51,12 +51,16 @@ class Result:
 
 
 def finish(system: System, loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
-    """Tension and reactions at x, and the Result around them."""
+    """Tension and reactions at x (``catenet.measures``), and the Result around them."""
+    from catenet import measures
+
     net = system.net
     _, grad = system.gradient(x)
-    f = loads.external_force(net, factor)
-    reaction = np.zeros_like(x)
-    reaction[net.fixed] = grad[net.fixed] - f[net.fixed]
-    tension = system.tension(x)
-    strain = float(np.max(tension / net.EA, initial=0.0))
-    return Result(x=x.copy(), tension=tension, reaction=reaction, max_strain=strain, **fields)
+    reaction = measures.reaction(net, grad, loads.external_force(net, factor))
+    return Result(
+        x=x.copy(),
+        tension=system.tension(x),
+        reaction=reaction,
+        max_strain=measures.max_strain(net, x),
+        **fields,
+    )

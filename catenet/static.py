@@ -18,22 +18,34 @@ from catenet.errors import ConfigError, SingularSystemError
 from catenet.linsolve import LinearSolver, make_solver
 from catenet.net import Loads, Net
 from catenet.newton import Potential, raise_unconverged, solve
+from catenet.measures import loose_nodes, slack_strain, strain
 from catenet.result import Result, finish
+from catenet.terms import Stretch, Term
 
 log = logging.getLogger(__name__)
 
 
 class Workspace:
-    """A net's system (pattern) and linear solver (symbolic analysis), built once and
-    reused by every solve on that net: load steps, time steps, sweeps over loads."""
+    """A net's system (its energy terms and their pattern) and linear solver (symbolic
+    analysis), built once and reused by every solve on that net: load steps, time steps,
+    sweeps over loads. ``terms``: the scene's internal terms besides the stretching of
+    the edges (springs, contact, ...)."""
 
-    def __init__(self, net: Net, *, linear: str = "auto", mtype: int | None = None):
+    def __init__(
+        self,
+        net: Net,
+        *,
+        linear: str = "auto",
+        mtype: int | None = None,
+        terms: Sequence[Term] = (),
+    ):
+        all_terms = (Stretch(net), *terms)
         if mtype is None:  # Cholesky where the matrices are positive (semi)definite
-            mtype = 2 if net.tension_only else -2
+            mtype = 2 if all(t.convex for t in all_terms) else -2
         upper = mtype != 11
         self.net = net
         start = time.perf_counter()
-        self.system = System(net, upper=upper)
+        self.system = System(net, all_terms, upper=upper)
         dof_node = np.flatnonzero(~net.fixed).repeat(3)
         self.solver: LinearSolver = make_solver(
             linear,
@@ -45,8 +57,12 @@ class Workspace:
         )
         self.setup_seconds = time.perf_counter() - start
 
-    def potential(self, loads: Loads, factor: float = 1.0) -> Potential:
-        return Potential(self.system, self.solver, loads.external_force(self.net, factor))
+    def potential(
+        self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()
+    ) -> Potential:
+        """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""
+        force = loads.external_force(self.net, factor)
+        return Potential(self.system, self.solver, force, steps)
 
     def stats(self) -> dict:
         s = self.solver
@@ -85,9 +101,13 @@ def solve_static(
     x = _start(net, loads, x0, factor)
     potential = ws.potential(loads, factor)
     result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
+    if result.converged and result.tolerance > potential.f_norm > 0:
+        # Held only to a round-off floor above the loads: no digit of the answer is sure.
+        result.converged = False
+        result.reason = "the forces' round-off floor exceeds the loads"
     if not result.converged and raise_on_failure:
         hint = ""
-        if result.tolerance > 1e-2 * potential.f_norm:
+        if result.tolerance > ROUNDOFF_HINT * potential.f_norm:
             hint = (
                 ": the round-off level of this net's forces (EA eps_mach |x| / l0 per edge) "
                 "is comparable to its loads, more than double precision can resolve; use "
@@ -108,7 +128,7 @@ def solve_static(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
     )
-    if not net.tension_only and result.converged:
+    if not net.law.all_tension_only and result.converged:
         out.stable = _stable(ws, potential, x)
         if out.stable is False:
             log.warning(
@@ -140,17 +160,7 @@ def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
     return None if negative is None else negative == 0
 
 
-def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
-    """Free nodes all of whose edges are slack (tension-only, zero tension)."""
-    if not net.tension_only:
-        return np.zeros(0, dtype=np.int64)
-    taut = tension > 0
-    held = np.zeros(net.n_nodes, bool)
-    held[net.edges[taut, 0]] = True
-    held[net.edges[taut, 1]] = True
-    return np.flatnonzero(~held & ~net.fixed)
-
-
+ROUNDOFF_HINT = 1e-2  # a failure held to a tolerance above this share of |f| is round-off
 SMOOTH_REDUCTION = 10.0  # mu shrinks tenfold per stage
 SMOOTH_RTOL = 1e-3  # stages before the last are solved loosely
 SMOOTH_END = 1e-3  # smoothing stops once mu is this fraction of the smallest |strain|
@@ -177,48 +187,50 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     """
     system = potential.system
     net = system.net
+    stretch = system.stretch
+    others = tuple(t for t in system.terms if t is not stretch)
     history: list[float] = []
     iterations = 0
     # Stages are held to the load scale: smoothing and scaling change the internal forces.
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
-    strain = _strain_scale(net, potential)
+    scale = _strain_scale(net, potential)
     factors = []
-    if 0.0 < strain < STIFF_STRAIN:
-        factor = strain / 1e-3
+    if 0.0 < scale < STIFF_STRAIN:
+        factor = scale / 1e-3
         while factor < 1.0:
             factors.append(factor)
             factor *= STIFF_STEP
-    mu = _slack_strain(net, x) if net.tension_only else 0.0
+    mu = slack_strain(net, x) if stretch.law.any_tension_only else 0.0
 
-    def stage(label: str) -> bool:
+    def stage(term: Stretch, label: str) -> bool:
+        """One loose solve with the stretching ``term`` in place of the exact one."""
         nonlocal iterations, history
         result = solve(
-            potential, x, rtol=SMOOTH_RTOL, atol=atol, max_iter=max_iter - iterations,
+            potential.with_system(system.with_terms((term, *others))),
+            x,
+            rtol=SMOOTH_RTOL,
+            atol=atol,
+            max_iter=max_iter - iterations,
             label=f"static ({label})",
         )
         iterations += result.iterations
         history += result.history
         return result.converged and result.iterations > 0
 
-    try:
-        for k, factor in enumerate(factors + [1.0]):
-            system.scale_stiffness(factor)
-            if k == 0:  # the smoothing continuation, at the first stiffness
-                while mu > 0.0 and iterations < max_iter:
-                    system.smooth = mu
-                    if not stage(f"EA x {factor:.1e}, mu {mu:.1e}"):
-                        break
-                    strains = system.tension(x) / system.EA
-                    taut = strains[strains > 0]
-                    if taut.size and mu < SMOOTH_END * float(np.min(taut)):
-                        break
-                    mu /= SMOOTH_REDUCTION
-                system.smooth = 0.0
-            if factor < 1.0 and iterations < max_iter:
-                stage(f"EA x {factor:.1e}")
-    finally:
-        system.smooth = 0.0
-        system.scale_stiffness(1.0)
+    for k, factor in enumerate(factors + [1.0]):
+        scaled = stretch.scaled(factor)
+        if k == 0:  # the smoothing continuation, at the first stiffness
+            while mu > 0.0 and iterations < max_iter:
+                smooth = scaled.with_law(stretch.law.smoothed(mu))
+                if not stage(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
+                    break
+                strains = strain(net, x)
+                taut = strains[strains > 0]
+                if taut.size and mu < SMOOTH_END * float(np.min(taut)):
+                    break
+                mu /= SMOOTH_REDUCTION
+        if factor < 1.0 and iterations < max_iter:
+            stage(scaled, f"EA x {factor:.1e}")
     result = solve(potential, x, rtol=rtol, max_iter=max(max_iter - iterations, 1), label="static")
     if not result.converged and iterations >= max_iter - 1:
         result.reason = f"no convergence in {max_iter} iterations"
@@ -231,13 +243,6 @@ def _strain_scale(net: Net, potential: Potential) -> float:
     """The strain the loads can cause at most, |f|_1 / min EA (0 without loads): an
     estimate of how stiff the net is against what acts on it."""
     return float(np.abs(potential.force).sum() / np.min(net.EA))
-
-
-def _slack_strain(net: Net, x: np.ndarray) -> float:
-    """The largest compressive strain of the net at x (0 when no edge is slack)."""
-    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
-    eps = np.linalg.norm(e, axis=1) / net.rest_length - 1.0
-    return float(max(-np.min(eps), 0.0))
 
 
 def continuation(

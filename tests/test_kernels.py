@@ -35,13 +35,19 @@ def random_net(seed: int, tension_only: bool, n: int = 12, m: int = 25):
     return net, rng
 
 
+def law_args(net):
+    """The stretch kernels' arguments of a net: edges, rest lengths, EA and its law."""
+    law = net.law
+    return net.edges, net.rest_length, net.EA, law.kind, law.params, law.tension_only
+
+
 def energy(net, x, smooth=0.0):
-    return stretch_energy(x, net.edges, net.rest_length, net.EA, net.tension_only, smooth)
+    return stretch_energy(x, *law_args(net), smooth)
 
 
 def gradient(net, x, smooth=0.0):
     g = np.zeros_like(x)
-    stretch_gradient(x, net.edges, net.rest_length, net.EA, net.tension_only, smooth, g)
+    stretch_gradient(x, *law_args(net), smooth, g)
     return g
 
 
@@ -69,7 +75,7 @@ def test_hessian_blocks_match_finite_differences(seed, tension_only, smooth):
     net, rng = random_net(seed, tension_only)
     x = net.nodes + 0.05 * rng.standard_normal(net.nodes.shape)
     values = np.empty(36 * net.n_edges)
-    stretch_hessian(x, net.edges, net.rest_length, net.EA, net.tension_only, smooth, values)
+    stretch_hessian(x, *law_args(net), smooth, values)
     blocks = values.reshape(-1, 6, 6)
     for k, (i, j) in enumerate(net.edges):
         sub = cn.Net.from_arrays(
@@ -99,7 +105,7 @@ def test_paper_eq8_lacks_the_length_factor():
         [[0, 0, 0], [1 + eps, 0, 0]], [[0, 1]], EA=EA, fixed=[0], rest_length=l0, tension_only=False
     )
     values = np.empty(36)
-    stretch_hessian(net.nodes, net.edges, net.rest_length, net.EA, False, 0.0, values)
+    stretch_hessian(net.nodes, *law_args(net), 0.0, values)
     transverse = values.reshape(6, 6)[4, 4]  # d2U / dy_j^2
     assert transverse == pytest.approx(EA * eps / (l0 * (1 + eps)))
     assert transverse != pytest.approx(EA * eps / l0)
@@ -131,7 +137,7 @@ def test_assembled_matrix_equals_dense_hessian(upper):
     system.hessian(x, shift)
     got = system.matrix().toarray()
     values = np.empty(36 * net.n_edges)
-    stretch_hessian(x, net.edges, net.rest_length, net.EA, True, 0.0, values)
+    stretch_hessian(x, *law_args(net), 0.0, values)
     dense = np.zeros((3 * net.n_nodes, 3 * net.n_nodes))
     for k, (i, j) in enumerate(net.edges):
         dofs = np.r_[3 * i : 3 * i + 3, 3 * j : 3 * j + 3]

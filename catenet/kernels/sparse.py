@@ -58,3 +58,12 @@ def norm(a):
     for k in range(a.shape[0]):
         total += a[k] * a[k]
     return np.sqrt(total)
+
+
+@njit(cache=True)
+def scatter_add(values, target, data):
+    """data[target[k]] += values[k] for every k with target[k] >= 0."""
+    for k in range(values.shape[0]):
+        p = target[k]
+        if p >= 0:
+            data[p] += values[k]

@@ -1,24 +1,27 @@
-"""Stretching of an edge: U = 1/2 EA eps^2 l0 with eps = |e|/l0 - 1, e = x_j - x_i.
+"""Stretching of an edge: U = EA l0 w(eps) with eps = |e|/l0 - 1, e = x_j - x_i.
 
-dU/dx_j = EA eps t (t = e/|e|), dU/dx_i = -EA eps t.
-d2U/dx_j2 = (EA/l0) t(x)t + (EA eps/|e|)(I - t(x)t); the blocks at (i,i) and (j,j) take
-this sign, (i,j) and (j,i) the opposite. (The paper's Eq. 8 lacks the 1/|e| of the
-second term's strain derivative: d2eps/de2 = (I - t(x)t)/(l0 |e|).)
+The material law of an edge is the dimensionless strain energy density w(eps) (per unit
+rest length and per unit EA, EA the small-strain axial stiffness); ``catenet.kernels.laws``
+gives w, w' and w'' for every law id. With the force N = EA w'(eps):
 
-Tension-only edges (``tension_only``) use s(eps) = max(eps, 0) in place of eps: a slack
-edge (eps < 0) has no energy, force or stiffness; its 36 Hessian values are written as
-zeros so that the sparsity pattern never changes. With ``smooth`` = mu > 0 they use
-s(eps) = (eps + sqrt(eps^2 + mu^2)) / 2 instead, a smooth law that tends to max(eps, 0)
-as mu -> 0 and keeps every edge slightly taut: the static solver's continuation path.
+    dU/dx_j = N t (t = e/|e|),  dU/dx_i = -N t,
+    d2U/dx_j2 = (EA/l0) w''(eps) t(x)t + (N/|e|)(I - t(x)t);
+
+the blocks at (i,i) and (j,j) take this sign, (i,j) and (j,i) the opposite. (The paper's
+Eq. 8 lacks the 1/|e| of the second term's strain derivative: d2eps/de2 =
+(I - t(x)t)/(l0 |e|).) The paper's linear law is w = eps^2/2: U = 1/2 EA eps^2 l0.
+
+Every law is data handed to these kernels per edge, never state: ``law`` (M,) holds the
+law ids, ``params`` (M, P) their parameters, ``tension_only`` (M,) the switch that makes
+an edge slack (no energy, force or stiffness) while eps < 0, and ``smooth`` > 0 replaces
+that switch by a smooth one (the static solver's continuation; see ``laws.tension_only``).
+A slack edge writes its 36 Hessian values as zeros so that the sparsity pattern never
+changes.
 
 Zero-length edges are refused at input; one that arises during an iteration (a support
 stepping onto its neighbour) is slack when tension-only and contributes nothing, else
 its direction is undefined and the kernels give inf/NaN (error_model="numpy": no
 exception), which the solvers' finite checks turn into a rejected step.
-In general U = 1/2 EA l0 s^2, dU/deps = EA l0 s s', d2U/deps2 = EA l0 (s'^2 + s s''):
-
-    force on x_j = EA s s' t,
-    Hessian block = (EA/l0)(s'^2 + s s'') t(x)t + (EA s s'/|e|)(I - t(x)t).
 """
 
 from __future__ import annotations
@@ -26,25 +29,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True, error_model="numpy")
-def _law(eps, tension_only, smooth):
-    """s, s s' (force / EA) and s'^2 + s s'' (stiffness / (EA/l0)) of the strain law."""
-    if not tension_only:
-        return eps, eps, 1.0
-    if smooth > 0.0:
-        r = np.sqrt(eps * eps + smooth * smooth)
-        s = 0.5 * (eps + r)
-        ds = 0.5 * (1.0 + eps / r)
-        dds = 0.5 * smooth * smooth / (r * r * r)
-        return s, s * ds, ds * ds + s * dds
-    if eps < 0.0:
-        return 0.0, 0.0, 0.0
-    return eps, eps, 1.0
+from catenet.kernels.laws import strain_energy
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_energy(x, edges, l0, ea, tension_only, smooth):
+def stretch_energy(x, edges, l0, ea, law, params, tension_only, smooth):
     """Total stretching energy [J] of positions x (N, 3)."""
     total = 0.0
     for k in range(edges.shape[0]):
@@ -54,13 +43,13 @@ def stretch_energy(x, edges, l0, ea, tension_only, smooth):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        s, _, _ = _law(eps, tension_only, smooth)
-        total += 0.5 * ea[k] * s * s * l0[k]
+        w, _, _ = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
+        total += ea[k] * l0[k] * w
     return total
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
+def stretch_gradient(x, edges, l0, ea, law, params, tension_only, smooth, grad):
     """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
     nodes) and returns the stretching energy."""
     total = 0.0
@@ -72,10 +61,10 @@ def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
         e2 = x[j, 2] - x[i, 2]
         length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
         eps = length / l0[k] - 1.0
-        s, force, _ = _law(eps, tension_only, smooth)
-        if force == 0.0 and s == 0.0:
+        w, force, _ = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
+        if force == 0.0 and w == 0.0:
             continue
-        total += 0.5 * ea[k] * s * s * l0[k]
+        total += ea[k] * l0[k] * w
         f = ea[k] * force / length
         grad[j, 0] += f * e0
         grad[j, 1] += f * e1
@@ -87,7 +76,7 @@ def stretch_gradient(x, edges, l0, ea, tension_only, smooth, grad):
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
+def stretch_hessian(x, edges, l0, ea, law, params, tension_only, smooth, values):
     """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
     local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
     for k in range(edges.shape[0]):
@@ -99,7 +88,7 @@ def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
         e[2] = x[j, 2] - x[i, 2]
         length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         eps = length / l0[k] - 1.0
-        _, force, stiffness = _law(eps, tension_only, smooth)
+        _, force, stiffness = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
         base = 36 * k
         if stiffness == 0.0 and force == 0.0:  # slack: no division by a length
             for a in range(36):
@@ -121,8 +110,8 @@ def stretch_hessian(x, edges, l0, ea, tension_only, smooth, values):
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_tension(x, edges, l0, ea, tension_only, out):
-    """Axial force EA*eps of every edge [N] (0 when slack and tension-only)."""
+def stretch_tension(x, edges, l0, ea, law, params, tension_only, out):
+    """Axial force EA w'(eps) of every edge [N] (0 when slack and tension-only)."""
     for k in range(edges.shape[0]):
         i = edges[k, 0]
         j = edges[k, 1]
@@ -130,5 +119,5 @@ def stretch_tension(x, edges, l0, ea, tension_only, out):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        _, force, _ = _law(eps, tension_only, 0.0)
+        _, force, _ = strain_energy(law[k], params[k], eps, tension_only[k], 0.0)
         out[k] = ea[k] * force

@@ -1,0 +1,71 @@
+"""Derived measures of a state, in one place: strain, tension, reactions, deflection.
+
+Everything a result, a result file, a figure or a sweep table reports about a state is
+computed here from the positions and the net's material law, never re-derived elsewhere:
+the strain is geometric (|e|/l0 - 1) whatever the law, the tension is the law's axial
+force (``catenet.kernels.stretch.stretch_tension``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from catenet.net import Net
+
+
+def strain(net: Net, x: np.ndarray) -> np.ndarray:
+    """Engineering strain |e|/l0 - 1 of every edge at positions x (N, 3)."""
+    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    return np.linalg.norm(e, axis=1) / net.rest_length - 1.0
+
+
+def tension(net: Net, x: np.ndarray, law=None) -> np.ndarray:
+    """Axial force of every edge [N] under its law (0 when slack and tension-only)."""
+    from catenet.kernels.stretch import stretch_tension
+
+    law = net.law if law is None else law
+    out = np.empty(net.n_edges)
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    stretch_tension(
+        x, net.edges, net.rest_length, net.EA, law.kind, law.params, law.tension_only, out
+    )
+    return out
+
+
+def max_strain(net: Net, x: np.ndarray) -> float:
+    """The largest edge strain, 0 when no edge is stretched."""
+    return float(max(np.max(strain(net, x), initial=0.0), 0.0))
+
+
+def slack_strain(net: Net, x: np.ndarray) -> float:
+    """The largest compressive strain at x (0 when no edge is shorter than its rest length)."""
+    return float(max(-np.min(strain(net, x)), 0.0))
+
+
+def slack_edges(net: Net, x: np.ndarray) -> int:
+    """How many edges are shorter than their rest length."""
+    return int(np.count_nonzero(strain(net, x) < 0.0))
+
+
+def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Force each support exerts on the net (N, 3) (0 at free nodes): it balances the
+    internal forces (the gradient of the internal terms) and the applied loads there."""
+    r = np.zeros_like(internal_gradient)
+    r[net.fixed] = internal_gradient[net.fixed] - force[net.fixed]
+    return r
+
+
+def deflection(net: Net, x: np.ndarray, probe: int) -> float:
+    """z-displacement of the probe node, positive downward (the paper's delta)."""
+    return -float(x[probe, 2] - net.nodes[probe, 2])
+
+
+def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
+    """Free nodes all of whose edges are slack (tension-only, zero tension)."""
+    if not net.law.any_tension_only:
+        return np.zeros(0, dtype=np.int64)
+    taut = (tension > 0) | ~net.law.tension_only
+    held = np.zeros(net.n_nodes, bool)
+    held[net.edges[taut, 0]] = True
+    held[net.edges[taut, 1]] = True
+    return np.flatnonzero(~held & ~net.fixed)

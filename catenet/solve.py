@@ -1,0 +1,220 @@
+"""One solve path: a scene under solver settings, static (in load steps) or dynamic.
+
+``catenet run``, ``catenet sweep``, the benchmark studies and ``catenet validate`` all call
+``solve``; nothing else dispatches on the method. A scene is anything with ``net``,
+``loads`` and (optionally) ``terms``, the internal energy terms it adds to the stretching
+of its edges: a case's ``Scene`` or a ``Problem`` made in Python.
+
+Static runs find the equilibria at load factors k/steps, k = 1..steps, each from the
+last (a force-displacement curve; one step: the equilibrium directly). Dynamic runs are
+the paper's implicit Euler from a start state to t_end or to equilibrium. ``on_step``
+sees every equilibrium or time step as a ``Step``; returning True stops the run there
+(the result is then not converged, its message "interrupted"). A run that fails raises
+ConvergenceError whose ``state``, ``velocity``, ``time``, ``steps`` and ``iterations``
+describe the last good state, so that callers can keep it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from catenet.errors import CatenetError, ConfigError, ConvergenceError
+from catenet.net import Loads, Net
+from catenet.result import Result
+from catenet.static import Workspace, continuation
+
+METHODS = ("static", "dynamic")
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How to solve (the case's [solver] table; see SPEC section 3)."""
+
+    method: str = "static"
+    dt: float = 1e-2
+    damping: float = 1.0
+    t_end: float = 10.0
+    rtol: float = 1e-8
+    max_iter: int = 200
+    steps: int = 1
+    linear: str = "auto"
+
+    @classmethod
+    def of(cls, config: Any, **changes) -> Settings:
+        """The settings in any object with these attributes (a case's SolverConfig)."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        values = {n: getattr(config, n) for n in names if hasattr(config, n)}
+        return cls(**{**values, **changes})
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ConfigError(
+                f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"
+            )
+        if self.steps < 1:
+            raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A scene made in Python: a net, its loads and further internal energy terms."""
+
+    net: Net
+    loads: Loads
+    terms: tuple = ()
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a run starts: positions (N, 3), velocities (dynamic) and time."""
+
+    x: np.ndarray | None = None
+    v: np.ndarray | None = None
+    t: float = 0.0
+
+
+@dataclass
+class Step:
+    """An equilibrium of a static run (``time`` = load factor, ``result`` its Result) or
+    an accepted time step of a dynamic run (``v`` the velocities)."""
+
+    index: int
+    time: float
+    x: np.ndarray
+    v: np.ndarray | None = None
+    result: Result | None = None
+
+
+OnStep = Callable[[Step], bool | None]
+
+
+def workspace(scene, settings: Settings, **kwargs) -> Workspace:
+    """The workspace of a scene: its terms' pattern and the linear solver's analysis."""
+    return Workspace(
+        scene.net, linear=settings.linear, terms=getattr(scene, "terms", ()), **kwargs
+    )
+
+
+def solve(
+    scene,
+    settings: Settings,
+    *,
+    workspace: Workspace | None = None,
+    start: Start | None = None,
+    on_step: OnStep | None = None,
+) -> Result:
+    """Solves ``scene`` as ``settings`` say (see the module docstring)."""
+    ws = workspace if workspace is not None else globals()["workspace"](scene, settings)
+    start = start or Start()
+    if settings.method == "dynamic":
+        return _dynamic(scene, settings, ws, start, on_step)
+    return _static(scene, settings, ws, start, on_step)
+
+
+class _Stop(Exception):
+    """Raised from the continuation's callback when on_step asks to stop."""
+
+
+def _static(scene, settings, ws, start, on_step) -> Result:
+    begin = time.perf_counter()
+    steps = settings.steps
+    factors = [k / steps for k in range(1, steps + 1)]
+    done: list[Result] = []
+
+    def seen(factor: float, r: Result) -> None:
+        done.append(r)
+        r.time = factor
+        if on_step is not None and on_step(Step(len(done), factor, r.x, None, r)):
+            raise _Stop
+
+    def total(r: Result, **fields) -> Result:
+        r.iterations = sum(q.iterations for q in done)
+        r.steps = len(done)
+        r.wall_time = time.perf_counter() - begin
+        for key, value in fields.items():
+            setattr(r, key, value)
+        return r
+
+    try:
+        continuation(
+            scene.net,
+            scene.loads,
+            factors,
+            x0=start.x,
+            rtol=settings.rtol,
+            max_iter=settings.max_iter,
+            on_step=seen,
+            workspace=ws,
+        )
+    except _Stop:
+        if len(done) < steps:
+            return total(done[-1], converged=False, message="interrupted")
+    except CatenetError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        state = getattr(exc, "state", None)
+        _annotate(
+            exc,
+            state if state is not None or not done else done[-1].x,
+            None,
+            done[-1].time if done else 0.0,
+            len(done),
+            sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0)),
+        )
+        raise
+    r = total(done[-1])
+    if not r.message or r.message == "converged":
+        r.message = "equilibrium"
+    return r
+
+
+def _dynamic(scene, settings, ws, start, on_step) -> Result:
+    from catenet.dynamic import solve_dynamic
+
+    net, loads = scene.net, scene.loads
+    x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
+    v0 = np.zeros_like(x0) if start.v is None else np.array(start.v, dtype=np.float64)
+    x0[net.fixed] = loads.support_positions(net, time=start.t)
+    last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy()}
+
+    def seen(step: int, t: float, x, v) -> bool:
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
+            raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
+        last.update(steps=step, t=t, x=x.copy(), v=v.copy())
+        if on_step is None:
+            return False
+        return bool(on_step(Step(step, t, x, v)))
+
+    try:
+        return solve_dynamic(
+            net,
+            loads,
+            dt=settings.dt,
+            damping=settings.damping,
+            t_end=settings.t_end,
+            rtol=settings.rtol,
+            x0=x0,
+            v0=v0,
+            t0=start.t,
+            on_step=seen,
+            workspace=ws,
+        )
+    except CatenetError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        iterations = int(getattr(exc, "iterations", 0))
+        _annotate(exc, last["x"], last["v"], last["t"], last["steps"], iterations)
+        raise
+
+
+def _annotate(exc, x, v, t, steps, iterations) -> None:
+    """What a failed run keeps: the last good state, its time, steps and iterations."""
+    exc.state, exc.velocity, exc.time, exc.steps, exc.iterations = x, v, t, steps, iterations
+    if not hasattr(exc, "history"):
+        exc.history = []

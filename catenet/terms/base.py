@@ -1,0 +1,128 @@
+"""The interface every energy term implements, and the registry of terms by name.
+
+A term is one physical contribution E(x) to the potential a solver minimises, as a
+function of the node positions x (N, 3):
+
+- ``pattern()``: the global DOF indices (rows, cols) of its Hessian values (dof = 3 node
+  + axis), asked once, when a workspace builds the sparsity pattern; None when it has no
+  Hessian (a linear term).
+- ``gradient(x, grad)``: adds dE/dx into ``grad`` (N, 3) and returns E.
+- ``energy(x)``: E alone.
+- ``hessian(x, values)``: writes its Hessian values, in the order of ``pattern()``, into
+  ``values`` (a preallocated slice of the assembled values).
+- ``roundoff(x, energy)``: the round-off levels of its gradient norm and of its energy,
+  which set the floor below which Newton's residual and decrease cannot be resolved.
+- ``stiffness()``: per node (N,), the scale of its Hessian diagonal (the regularisation of
+  a singular start scales with it), or None.
+
+``role`` says how a solver uses the term: "internal" terms belong to the structure
+(stretching, springs, contact; support reactions balance them), "external" ones are the
+linear potential -f.x of applied loads (their force sets the load scale), "step" terms
+belong to one time step (inertia and damping). ``convex`` terms have a positive
+semidefinite Hessian everywhere, which lets the linear solver use Cholesky.
+
+The values are computed by ``@njit(cache=True)`` kernels (``catenet.kernels``) over flat
+arrays; the classes hold the arrays and call them. ``check_derivatives`` is the finite
+difference check that every term passes in the tests.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+#: Terms by name: a new term is one module that defines it plus one ``register`` call.
+TERMS: dict[str, type[Term]] = {}
+
+
+def register(name: str) -> Callable[[type[Term]], type[Term]]:
+    """Class decorator: make a term known by ``name``."""
+
+    def add(cls: type[Term]) -> type[Term]:
+        if name in TERMS and TERMS[name] is not cls:
+            raise ValueError(f"a term named {name!r} is registered already: {TERMS[name]}")
+        cls.name = name
+        TERMS[name] = cls
+        return cls
+
+    return add
+
+
+class Term:
+    """Base class of energy terms (see the module docstring)."""
+
+    name = "term"
+    role = "internal"
+    convex = True
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray] | None:
+        return None
+
+    def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        raise NotImplementedError
+
+    def energy(self, x: np.ndarray) -> float:
+        return self.gradient(x, np.zeros_like(x))
+
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
+        """Writes the Hessian values (only terms with a pattern have any)."""
+
+    def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
+        return 0.0, abs(energy)
+
+    def stiffness(self) -> np.ndarray | None:
+        return None
+
+
+def node_block_pattern(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of the 3x3 blocks of the given nodes, row-major per block: the
+    pattern of a term acting on each node by itself (springs, ground contact)."""
+    dofs = 3 * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(3)  # (K, 3)
+    rows = np.repeat(dofs, 3, axis=1).ravel()
+    cols = np.tile(dofs, (1, 3)).ravel()
+    return rows, cols
+
+
+def check_derivatives(term: Term, x: np.ndarray, *, step: float = 1e-6) -> tuple[float, float]:
+    """Largest relative errors of the term's gradient against central differences of its
+    energy, and of its Hessian against central differences of its gradient, at x (N, 3).
+    Both are O(step^2) plus round-off: about 1e-8 for smooth terms with step = 1e-6."""
+    x = np.array(x, dtype=np.float64)
+    n = x.size
+    grad = np.zeros_like(x)
+    term.gradient(x, grad)
+    fd = np.zeros(n)
+    flat = x.reshape(-1)
+    h = step * max(1.0, float(np.max(np.abs(x))))
+    for d in range(n):
+        keep = flat[d]
+        flat[d] = keep + h
+        up = term.energy(x)
+        flat[d] = keep - h
+        down = term.energy(x)
+        flat[d] = keep
+        fd[d] = (up - down) / (2 * h)
+    g = grad.reshape(-1)
+    grad_err = float(np.max(np.abs(g - fd))) / max(float(np.max(np.abs(g))), 1e-300)
+
+    pattern = term.pattern()
+    dense = np.zeros((n, n))
+    if pattern is not None:
+        rows, cols = pattern
+        values = np.zeros(len(rows))
+        term.hessian(x, values)
+        np.add.at(dense, (rows, cols), values)
+    fd_h = np.zeros((n, n))
+    for d in range(n):
+        keep = flat[d]
+        up, down = np.zeros_like(x), np.zeros_like(x)
+        flat[d] = keep + h
+        term.gradient(x, up)
+        flat[d] = keep - h
+        term.gradient(x, down)
+        flat[d] = keep
+        fd_h[:, d] = (up - down).reshape(-1) / (2 * h)
+    scale = max(float(np.max(np.abs(dense))), float(np.max(np.abs(fd_h))), 1e-300)
+    hess_err = float(np.max(np.abs(dense - fd_h))) / scale
+    return grad_err, hess_err

@@ -1,0 +1,93 @@
+"""Stretching of the edges: the net's own energy, under its material law."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from catenet.kernels.stretch import (
+    stretch_energy,
+    stretch_gradient,
+    stretch_hessian,
+    stretch_tension,
+)
+from catenet.laws import Law
+from catenet.net import Net
+from catenet.terms.base import Term, register
+
+
+@register("stretch")
+@dataclass(frozen=True, eq=False)
+class Stretch(Term):
+    """U = sum over edges of EA l0 w(eps) (``catenet.kernels.stretch``).
+
+    ``law``: the edges' material law (default: the net's, the paper's linear law);
+    ``scale``: a factor on EA (the static solver's stiffness continuation; 1: the net's).
+    ``with_law`` and ``scaled`` give variants that share the arrays and the pattern.
+    """
+
+    net: Net
+    law: Law | None = None
+    scale: float = 1.0
+    role = "internal"
+
+    def __post_init__(self):
+        if self.law is None:
+            object.__setattr__(self, "law", self.net.law)
+
+    @property
+    def convex(self) -> bool:  # tension-only stiffness is never negative
+        return self.law.all_tension_only
+
+    @cached_property
+    def EA(self) -> np.ndarray:
+        return self.net.EA if self.scale == 1.0 else self.net.EA * self.scale
+
+    def with_law(self, law: Law) -> Stretch:
+        return dataclasses.replace(self, law=law)
+
+    def scaled(self, scale: float) -> Stretch:
+        return dataclasses.replace(self, scale=float(scale))
+
+    def _args(self):
+        net, law = self.net, self.law
+        return (net.edges, net.rest_length, self.EA, law.kind, law.params, law.tension_only)
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        e = self.net.edges
+        local = np.concatenate([3 * e[:, :1] + np.arange(3), 3 * e[:, 1:] + np.arange(3)], axis=1)
+        rows = np.repeat(local, 6, axis=1).ravel()  # value 6a+b has row local[a]
+        cols = np.tile(local, (1, 6)).ravel()  #               and col local[b]
+        return rows, cols
+
+    def energy(self, x: np.ndarray) -> float:
+        return stretch_energy(x, *self._args(), self.law.smooth)
+
+    def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        return stretch_gradient(x, *self._args(), self.law.smooth, grad)
+
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
+        stretch_hessian(x, *self._args(), self.law.smooth, values)
+
+    def tension(self, x: np.ndarray) -> np.ndarray:
+        """Axial force of every edge [N] under the exact (unsmoothed) law."""
+        out = np.empty(self.net.n_edges)
+        stretch_tension(x, *self._args(), out)
+        return out
+
+    @cached_property
+    def _k_norm(self) -> float:
+        return float(np.sqrt(2.0 * np.sum((self.EA / self.net.rest_length) ** 2)))
+
+    def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
+        """Coordinates of size |x| carry an error eps |x|, which each edge turns into a
+        force error EA eps |x| / l0 at both of its nodes (times eps: see Potential)."""
+        return self._k_norm * float(np.max(np.abs(x))), abs(energy)
+
+    def stiffness(self) -> np.ndarray:
+        """Per node, half the sum of EA/l0 of its edges [N/m]."""
+        net = self.net
+        return net.axial_stiffness if self.scale == 1.0 else net.axial_stiffness * self.scale
