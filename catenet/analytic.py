@@ -1,8 +1,8 @@
 """Closed-form solutions of single cables, each with its derivation, for validation.
 
-These are the reference answers of ``catenet validate`` (``catenet.validation``) and of the
-tests (``tests/analytic.py`` re-exports this module): they live in the package because the
-command needs them at run time.
+These are the reference answers of ``catenet validate`` (``catenet.studies.validation``) and
+of the tests (``tests/analytic.py`` re-exports this module): they live in the package because
+the command needs them at run time.
 
 Conventions. A cable is pinned at two supports at the same height, a span apart, with the
 mid-span at x = 0 for the paper's formulas (Eqs. 14-17). The paper's ``z`` points up, so a

@@ -15,8 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
-
 #: Law ids of the kernels (``catenet.kernels.laws.density`` branches on them).
 LINEAR = 0
 

@@ -21,13 +21,23 @@ def strain(net: Net, x: np.ndarray) -> np.ndarray:
 
 def tension(net: Net, x: np.ndarray, law=None) -> np.ndarray:
     """Axial force of every edge [N] under its law (0 when slack and tension-only)."""
+    return edge_tension(x, net.edges, net.rest_length, net.EA, net.law if law is None else law)
+
+
+def edge_tension(x, edges, rest_length, EA, law) -> np.ndarray:
+    """Axial forces [N] of edges given as arrays (as a result file stores them)."""
     from catenet.kernels.stretch import stretch_tension
 
-    law = net.law if law is None else law
-    out = np.empty(net.n_edges)
-    x = np.ascontiguousarray(x, dtype=np.float64)
+    out = np.empty(len(edges))
     stretch_tension(
-        x, net.edges, net.rest_length, net.EA, law.kind, law.params, law.tension_only, out
+        np.ascontiguousarray(x, dtype=np.float64),
+        np.ascontiguousarray(edges, dtype=np.int64),
+        np.ascontiguousarray(rest_length, dtype=np.float64),
+        np.ascontiguousarray(EA, dtype=np.float64),
+        law.kind,
+        law.params,
+        law.tension_only,
+        out,
     )
     return out
 
@@ -55,9 +65,11 @@ def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.n
     return r
 
 
-def deflection(net: Net, x: np.ndarray, probe: int) -> float:
-    """z-displacement of the probe node, positive downward (the paper's delta)."""
-    return -float(x[probe, 2] - net.nodes[probe, 2])
+def deflection(nodes: np.ndarray, x: np.ndarray, probe: int):
+    """z-displacement of the probe node from its reference position ``nodes[probe]``,
+    positive downward (the paper's delta); ``x`` (N, 3) or a trajectory (T, N, 3)."""
+    d = np.asarray(nodes)[probe, 2] - np.asarray(x)[..., probe, 2]
+    return float(d) if np.ndim(d) == 0 else d
 
 
 def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:

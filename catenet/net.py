@@ -88,9 +88,7 @@ class Net:
         bad = np.flatnonzero((edges < 0).any(axis=1) | (edges >= n).any(axis=1))
         if bad.size:
             e = int(bad[0])
-            problems.append(
-                f"edges[{e}] = {edges[e].tolist()}: node indices must be in 0..{n - 1}"
-            )
+            problems.append(f"edges[{e}] = {edges[e].tolist()}: node indices must be in 0..{n - 1}")
             raise ConfigError(problems)
         loops = np.flatnonzero(edges[:, 0] == edges[:, 1])
         if loops.size:

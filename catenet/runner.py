@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet.errors import CatenetError, ConfigError, ConvergenceError
+from catenet.errors import CatenetError, ConfigError
 
 log = logging.getLogger(__name__)
 
@@ -40,10 +40,6 @@ class RestartState:
     source: str
 
 
-class _Interrupted(Exception):
-    """Raised from a static step callback when ``stop()`` asks for it."""
-
-
 def output_path(case, out: str | Path | None = None) -> Path | None:
     """The file a run writes: ``out``, else the case's output.file (None: no file)."""
     if out is not None:
@@ -55,7 +51,7 @@ def output_path(case, out: str | Path | None = None) -> Path | None:
 def read_restart(path: str | Path, scene) -> RestartState:
     """The last stored state of an earlier dynamic run of the same net, checked against
     the scene. Raises ConfigError for a file that does not fit."""
-    from catenet.output import open_result, read_frame
+    from catenet.output import read_frame, read_mesh
 
     path = Path(path)
     label = f"--restart {path}"
@@ -66,12 +62,11 @@ def read_restart(path: str | Path, scene) -> RestartState:
         )
     try:
         frame = read_frame(path)
-        with open_result(path) as h5:
-            problems = _mesh_mismatch(h5, scene.net)
     except ConfigError as exc:
         raise ConfigError([f"--restart: {p}" for p in exc.problems]) from None
     except OSError as exc:
         raise ConfigError(f"{label}: cannot be read: {exc}") from None
+    problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
     if problems:
         raise ConfigError([f"{label}: {p}" for p in problems])
     if frame.v is None:
@@ -90,17 +85,9 @@ def read_restart(path: str | Path, scene) -> RestartState:
     return RestartState(path, frame.t, frame.x, frame.v, frame.source)
 
 
-def _mesh_mismatch(h5, net) -> list[str]:
-    if "mesh" not in h5:
-        return ["has no /mesh: not a catenet result file"]
-    mesh = h5["mesh"]
-    try:
-        nodes = np.asarray(mesh["nodes"])
-        edges = np.asarray(mesh["edges"])
-        rest = np.asarray(mesh["rest_length"])
-        fixed = np.asarray(mesh["fixed"])
-    except KeyError as exc:
-        return [f"/mesh lacks {exc}: not a catenet result file"]
+def _mesh_mismatch(mesh, net) -> list[str]:
+    """How the net of a result file (an ``output.Mesh``) differs from the case's."""
+    nodes, edges, rest, fixed = mesh.nodes, mesh.edges, mesh.rest_length, mesh.fixed
     if nodes.shape != net.nodes.shape or edges.shape != net.edges.shape:
         return [
             f"its net has {len(nodes)} nodes and {len(edges)} edges, the case's "
@@ -138,6 +125,8 @@ def run_case(
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
     """
+    from catenet import measures
+    from catenet import solve as sv
     from catenet.case import build
     from catenet.linsolve import resolve_backend, set_threads
     from catenet.output import ResultWriter, check_output_path
@@ -158,10 +147,8 @@ def run_case(
             )
     backend = resolve_backend(solver.linear)
     set_threads(solver.threads)
-
-    from catenet.static import Workspace
-
-    ws = Workspace(scene.net, linear=backend)
+    settings = sv.Settings.of(solver, linear=backend)
+    ws = sv.workspace(scene, settings)
     attrs = {"linear_backend": backend, "threads": int(solver.threads)}
     if state is not None:
         attrs["restart_from"] = str(state.path)
@@ -173,188 +160,97 @@ def run_case(
         if path is not None
         else _NoFile()
     )
-    run = _static if solver.method == "static" else _dynamic
     with writer:
         try:
-            result = run(scene, ws, writer, state, progress, stop, start)
+            result = _run(scene, settings, ws, writer, state, progress, stop, start)
         except CatenetError as exc:
             exc.output = path if writer.has_result else None
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
+    delta = measures.deflection(scene.net.nodes, result.x, scene.probe)
     result.stats.update(
-        delta=-float(result.x[scene.probe, 2] - scene.net.nodes[scene.probe, 2]),
+        delta=delta,
         size=float(scene.size),
         probe=int(scene.probe),
         output=None if path is None else str(path),
         backend=backend,
     )
-    result.stats["delta_over_L"] = result.stats["delta"] / float(scene.size)
+    result.stats["delta_over_L"] = delta / float(scene.size)
     return result
 
 
-# --------------------------------------------------------------------------------------------
-# Static: load steps
-# --------------------------------------------------------------------------------------------
-
-
-def _static(scene, ws, writer, state, progress, stop, start):
-    from catenet.result import finish
-    from catenet.static import continuation
-
-    solver = scene.case.solver
-    steps = int(solver.steps)
-    factors = [k / steps for k in range(1, steps + 1)]
-    done: list = []  # (factor, Result) of every equilibrium so far
-
-    def on_step(factor: float, r) -> None:
-        k = len(done) + 1
-        done.append((factor, r))
-        r.time = factor
-        if writer.wants(k) or k == steps:
-            writer.frame(factor, r.x, None, r.tension)
-        if progress is not None:
-            progress(factor, 1.0)
-        if stop is not None and k < steps and stop():
-            raise _Interrupted
-
-    def summed(r, **fields):
-        r.iterations = sum(q.iterations for _, q in done) + fields.pop("extra_iterations", 0)
-        r.steps = len(done)
-        r.wall_time = time.perf_counter() - start
-        for key, value in fields.items():
-            setattr(r, key, value)
-        return r
-
-    try:
-        continuation(
-            scene.net,
-            scene.loads,
-            factors,
-            rtol=solver.rtol,
-            max_iter=solver.max_iter,
-            on_step=on_step,
-            workspace=ws,
-        )
-    except _Interrupted:
-        factor, r = done[-1]
-        res = summed(r, converged=False, message="interrupted")
-        _write_result(writer, res)
-        log.info("interrupted at load factor %.6g", factor)
-        return res
-    except ConvergenceError as exc:
-        x = _usable(exc.state, done[-1][1].x if done else None, scene)
-        factor = done[-1][0] if done else 0.0
-        res = finish(
-            ws.system,
-            scene.loads,
-            x,
-            factor,
-            converged=False,
-            equilibrium=False,
-            iterations=0,
-            residual=float(exc.history[-1]) if exc.history else float("inf"),
-            message=str(exc),
-            time=factor,
-            stats=ws.stats(),
-        )
-        res = summed(res, extra_iterations=int(exc.iterations))
-        _write_result(writer, res, failed=exc)
-        raise
-    except CatenetError as exc:
-        if not done:
-            raise
-        res = summed(done[-1][1], converged=False, equilibrium=False, message=str(exc))
-        _write_result(writer, res, failed=exc)
-        raise
-    res = summed(done[-1][1])
-    res.message = res.message if res.message and res.message != "converged" else "equilibrium"
-    _write_result(writer, res)
-    return res
-
-
-# --------------------------------------------------------------------------------------------
-# Dynamic: the paper's implicit Euler
-# --------------------------------------------------------------------------------------------
-
-
-def _dynamic(scene, ws, writer, state, progress, stop, start):
-    from catenet.dynamic import solve_dynamic
+def _run(scene, settings, ws, writer, state, progress, stop, begin):
+    """Solves through the one solve path, writing frames as the steps come; on failure
+    or interruption the last good state becomes /result (converged = false)."""
+    from catenet import solve as sv
     from catenet.result import finish
 
-    solver = scene.case.solver
-    net, loads = scene.net, scene.loads
-    t0 = 0.0 if state is None else state.t
-    x0 = net.nodes.copy() if state is None else state.x.copy()
-    v0 = np.zeros_like(x0) if state is None else state.v.copy()
-    x0[net.fixed] = loads.support_positions(net, time=t0)
-    last = {"step": 0, "t": t0, "x": x0.copy(), "v": v0.copy(), "written": -1}
+    dynamic = settings.method == "dynamic"
+    total = settings.t_end if dynamic else 1.0
+    start = None
+    written = {"step": -1}
 
-    def keep(step, t, x, v, force=False):
-        if not writer.every:
-            return
-        if (force or writer.wants(step)) and last["written"] != step:
-            writer.frame(t, x, v, ws.system.tension(x))
-            last["written"] = step
+    def keep(step, t, x, v, tension=None, force=False) -> None:
+        if (force or writer.wants(step)) and written["step"] != step:
+            writer.frame(t, x, v, ws.system.tension(x) if tension is None else tension)
+            written["step"] = step
 
-    keep(0, t0, x0, v0)
+    if dynamic:
+        start = sv.Start(t=0.0) if state is None else sv.Start(state.x, state.v, state.t)
+        x0 = scene.net.nodes.copy() if state is None else state.x.copy()
+        x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
+        v0 = np.zeros_like(x0) if state is None else state.v
+        keep(0, start.t, x0, v0)
 
-    def on_step(step: int, t: float, x, v) -> bool:
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
-            raise ConvergenceError(
-                f"the state became non-finite at t = {t:.6g} s", state=last["x"].copy()
-            )
-        last.update(step=step, t=t, x=x.copy(), v=v.copy())
-        keep(step, t, x, v)
+    def on_step(step: sv.Step) -> bool:
+        last = step.index == settings.steps and not dynamic
+        tension = step.result.tension if step.result is not None else None
+        keep(step.index, step.time, step.x, step.v, tension, force=last)
         if progress is not None:
-            progress(t, solver.t_end)
+            progress(step.time, total)
         if stop is not None and stop():
-            keep(step, t, x, v, force=True)
+            keep(step.index, step.time, step.x, step.v, tension, force=dynamic)
             return True
         return False
 
     try:
-        res = solve_dynamic(
-            net,
-            loads,
-            dt=solver.dt,
-            damping=solver.damping,
-            t_end=solver.t_end,
-            rtol=solver.rtol,
-            x0=x0,
-            v0=v0,
-            t0=t0,
-            on_step=on_step,
-            workspace=ws,
-        )
+        res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
     except CatenetError as exc:
-        if isinstance(exc, ConfigError):
+        if isinstance(exc, ConfigError) or not hasattr(exc, "steps"):
             raise
-        # The last accepted step is the state to keep (ConvergenceError.state is the same
-        # positions); make sure it is the file's last frame, then /result.
-        try:
-            keep(last["step"], last["t"], last["x"], last["v"], force=True)
-        except CatenetError:
-            pass
+        x = _usable(exc.state, None, scene)
+        t = float(exc.time)
+        if dynamic:  # the last good state is the file's last frame, then /result
+            try:
+                keep(exc.steps, t, x, exc.velocity, force=True)
+            except CatenetError:
+                pass
         res = finish(
             ws.system,
-            loads,
-            last["x"],
+            scene.loads,
+            x,
+            1.0 if dynamic else t,
             converged=False,
             equilibrium=False,
             iterations=int(getattr(exc, "iterations", 0)),
             residual=float(exc.history[-1]) if getattr(exc, "history", None) else float("inf"),
-            steps=last["step"],
-            time=last["t"],
-            v=last["v"],
+            steps=int(exc.steps),
+            time=t,
+            v=exc.velocity,
             message=str(exc),
-            wall_time=time.perf_counter() - start,
+            wall_time=time.perf_counter() - begin,
             stats=ws.stats(),
         )
         _write_result(writer, res, failed=exc)
         raise
-    keep(res.steps, res.time, res.x, res.v, force=True)
-    res.wall_time = time.perf_counter() - start
+    if dynamic:
+        keep(res.steps, res.time, res.x, res.v, force=True)
+    else:
+        res.wall_time = time.perf_counter() - begin
+    if res.message == "interrupted":
+        log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
+    res.wall_time = time.perf_counter() - begin
     _write_result(writer, res)
     return res
 

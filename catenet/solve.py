@@ -24,26 +24,27 @@ from typing import Any
 
 import numpy as np
 
+from catenet.case.sections import METHODS, SolverConfig
 from catenet.errors import CatenetError, ConfigError, ConvergenceError
 from catenet.net import Loads, Net
 from catenet.result import Result
 from catenet.static import Workspace, continuation
 
-METHODS = ("static", "dynamic")
+_CASE = SolverConfig()  # the defaults, declared once with the case's [solver] keys
 
 
 @dataclass(frozen=True)
 class Settings:
-    """How to solve (the case's [solver] table; see SPEC section 3)."""
+    """How to solve: the case's [solver] keys (SPEC section 3) that a solve uses."""
 
-    method: str = "static"
-    dt: float = 1e-2
-    damping: float = 1.0
-    t_end: float = 10.0
-    rtol: float = 1e-8
-    max_iter: int = 200
-    steps: int = 1
-    linear: str = "auto"
+    method: str = _CASE.method
+    dt: float = _CASE.dt
+    damping: float = _CASE.damping
+    t_end: float = _CASE.t_end
+    rtol: float = _CASE.rtol
+    max_iter: int = _CASE.max_iter
+    steps: int = _CASE.steps
+    linear: str = _CASE.linear
 
     @classmethod
     def of(cls, config: Any, **changes) -> Settings:
@@ -96,9 +97,7 @@ OnStep = Callable[[Step], bool | None]
 
 def workspace(scene, settings: Settings, **kwargs) -> Workspace:
     """The workspace of a scene: its terms' pattern and the linear solver's analysis."""
-    return Workspace(
-        scene.net, linear=settings.linear, terms=getattr(scene, "terms", ()), **kwargs
-    )
+    return Workspace(scene.net, linear=settings.linear, terms=getattr(scene, "terms", ()), **kwargs)
 
 
 def solve(

@@ -16,9 +16,9 @@ import numpy as np
 from catenet.assembly import System
 from catenet.errors import ConfigError, SingularSystemError
 from catenet.linsolve import LinearSolver, make_solver
+from catenet.measures import loose_nodes, slack_strain, strain
 from catenet.net import Loads, Net
 from catenet.newton import Potential, raise_unconverged, solve
-from catenet.measures import loose_nodes, slack_strain, strain
 from catenet.result import Result, finish
 from catenet.terms import Stretch, Term
 
@@ -57,9 +57,7 @@ class Workspace:
         )
         self.setup_seconds = time.perf_counter() - start
 
-    def potential(
-        self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()
-    ) -> Potential:
+    def potential(self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()) -> Potential:
         """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""
         force = loads.external_force(self.net, factor)
         return Potential(self.system, self.solver, force, steps)
@@ -136,6 +134,10 @@ def solve_static(
                 "(compressed bilateral edges: any disturbance makes the net buckle away)"
             )
     loose = loose_nodes(net, out.tension)
+    for term in ws.system.terms:  # nodes that another term (a spring, contact) holds
+        pattern = term.pattern() if not isinstance(term, Stretch) else None
+        if pattern is not None and loose.size:
+            loose = np.setdiff1d(loose, pattern[0] // 3)
     if loose.size:
         log.warning(
             "%d free nodes hang on slack edges only (nodes %s%s): nothing fixes their "

@@ -44,7 +44,7 @@ def test_bench_rejects_an_unknown_study(tmp_path):
 
 
 def test_scale_study_runs_a_size_in_a_child_process(tmp_path):
-    from catenet.bench import scale
+    from catenet.studies.bench import scale
 
     study = scale.run(tmp_path, sizes=[(10, 1 / 30)])
     (row,) = study.rows
@@ -56,9 +56,9 @@ def test_scale_study_runs_a_size_in_a_child_process(tmp_path):
 def test_baseline_reaches_catenets_equilibrium():
     """The plain NumPy/pypardiso baseline solves the same model to the same state."""
     pytest.importorskip("pypardiso")
-    from catenet.bench.baseline import baseline_static
-    from catenet.bench.common import paper_net
     from catenet.static import solve_static
+    from catenet.studies.bench.baseline import baseline_static
+    from catenet.studies.bench.common import paper_net
 
     sq, loads = paper_net(10, edge=0.05)
     net = sq.net
@@ -74,10 +74,10 @@ def test_baseline_reaches_catenets_equilibrium():
 def test_bench_solver_variants_give_the_same_answer():
     """The solver variants the studies time against catenet (re-analysing PARDISO,
     pypardiso.spsolve) solve to catenet's answer."""
-    from catenet.bench.common import paper_net
-    from catenet.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
     from catenet.linsolve import pardiso_available
     from catenet.static import Workspace, solve_static
+    from catenet.studies.bench.common import paper_net
+    from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
     sq, loads = paper_net(10, edge=0.05)
     ref = solve_static(sq.net, loads, linear="scipy")
@@ -93,7 +93,7 @@ def test_bench_solver_variants_give_the_same_answer():
 
 
 def test_pareto_front_marks_non_dominated_rows():
-    from catenet.bench.pareto import _front
+    from catenet.studies.bench.pareto import _front
 
     rows = [
         {"case": "a", "seconds": 1.0, "error": 1e-3},

@@ -4,9 +4,12 @@ guard, the TOML round trip and building scenes of each geometry kind."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 import tomllib
+from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -14,14 +17,20 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from catenet import case as C
+from catenet import geometry as geo
 from catenet.case import (
     Case,
+    GeometryConfig,
     SquareNetConfig,
     apply_overrides,
     build,
+    guard,
     load_case,
     parse_case,
+    readme,
 )
+from catenet.case.keys import declared, integer, real
+from catenet.case.kinds.base import Built, Topology, resolve
 from catenet.errors import ConfigError
 
 # --------------------------------------------------------------------------- fixtures
@@ -634,11 +643,11 @@ def test_memory_guard_refuses_a_net_too_fine_for_this_machine():
 
 
 def test_memory_guard_uses_physical_memory(monkeypatch):
-    monkeypatch.setattr(C, "physical_memory", lambda: 2**12)  # 4 KiB
+    monkeypatch.setattr(guard, "physical_memory", lambda: 2**12)  # 4 KiB
     one_problem(
         square_dict(), "geometry.edge_length = 0.25", "need about", "this machine has 0 GiB"
     )
-    monkeypatch.setattr(C, "physical_memory", lambda: None)  # unknown: only the hard cap
+    monkeypatch.setattr(guard, "physical_memory", lambda: None)  # unknown: only the hard cap
     parse_case(square_dict())
 
 
@@ -655,7 +664,7 @@ def test_estimates_follow_the_built_net():
     for n, el in [(34, 0.01), (10, 0.05), (2, 1.0)]:
         cfg = SquareNetConfig(n=n, alpha=math.pi / 4, size=1.0, edge_length=el)
         nodes, edges, _, _ = C.estimate_size(cfg)
-        net = C.geo.square_net(n, math.pi / 4, 1.0, el, C.geo.Material(EA=1.0)).net
+        net = geo.square_net(n, math.pi / 4, 1.0, el, geo.Material(EA=1.0)).net
         assert net.n_edges <= edges <= 1.3 * net.n_edges + 2 * n
         assert net.n_nodes <= nodes
     # The default case needs well under a gigabyte.
@@ -832,6 +841,9 @@ def _at(obj, path):
     return obj
 
 
+SOLVER_KEYS = [k.name for k in declared(C.SolverConfig)]
+
+
 @st.composite
 def mutated_cases(draw):
     base = draw(st.sampled_from([cable_dict, square_dict, graph_dict, full_graph_dict]))()
@@ -849,7 +861,7 @@ def mutated_cases(draw):
                 parent.pop(path[-1])
         else:
             table = _at(base, draw(st.sampled_from(_tables(base))))
-            key = draw(st.one_of(st.text(max_size=8), st.sampled_from(list(C._SOLVER_KEYS))))
+            key = draw(st.one_of(st.text(max_size=8), st.sampled_from(SOLVER_KEYS)))
             table[key] = draw(GARBAGE)
     return base
 
@@ -912,3 +924,75 @@ def test_a_sweep_table_is_left_to_catenet_sweep(tmp_path):
     path.write_text("sweep = 3\n" + text)
     with pytest.raises(ConfigError, match="sweep = 3"):
         load_case(path)
+
+
+# --------------------------------------------------------------------------- declarations
+
+
+def test_readme_table_of_keys_is_generated_from_the_declarations():
+    """The README's table of case keys is what the declarations give (regenerate it with
+    `python -m catenet.case.readme README.md`)."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert readme.readme_table(text) == readme.section_text()
+
+
+@dataclasses.dataclass(frozen=True)
+class RingConfig(GeometryConfig):
+    """A toy kind for the test below: ``nodes`` nodes on a circle of ``radius`` in the
+    xy-plane, joined in a loop, nodes 0 and nodes/2 pinned."""
+
+    kind: ClassVar[str] = "ring"
+    node_names: ClassVar[tuple[str, ...]] = ("top",)
+    default_supports: ClassVar[str] = "nodes 0 and nodes/2"
+
+    radius: float = real(gt=0, missing="the radius [m]", unit="m", doc="radius")
+    nodes: int = integer(8, ge=4, even=True, doc="node count")
+
+    def estimate_size(self):
+        return float(self.nodes), float(self.nodes), 0.0, "geometry.nodes"
+
+    def topology(self):
+        n = self.nodes
+        return Topology(n, frozenset({0, n // 2}), {"top": n // 4})
+
+    def build(self, material, fixed):
+        n = self.nodes
+        t = 2 * np.pi * np.arange(n) / n
+        xyz = self.radius * np.column_stack([np.cos(t), np.sin(t), np.zeros(n)])
+        edges = [(i, (i + 1) % n) for i in range(n)]
+        names = {"top": n // 4}
+        pinned = [0, n // 2] if fixed is None else [resolve(r, names) for r in fixed]
+        return Built(geo.graph(xyz, edges, pinned, material), n // 4, 2 * self.radius, names)
+
+
+def test_a_new_geometry_kind_is_one_class_and_its_registration(monkeypatch):
+    """What the registry promises: a kind registered by name is parsed (with the usual
+    messages), guarded, written back, built and documented without any other change."""
+    monkeypatch.setitem(C.KINDS, "ring", RingConfig)
+    data = {
+        "geometry": {"kind": "ring", "radius": 2.0},
+        "material": {"EA": 100.0},
+        "load": {"point": [{"node": "top", "force": [0, 0, -1]}]},
+    }
+    case = parse_case(data)
+    assert case.geometry == RingConfig(radius=2.0, nodes=8)
+    assert parse_case(tomllib.loads(case.to_toml())) == case
+    assert "pressure" not in case.to_dict()["load"]
+    scene = build(case)
+    assert (scene.net.n_nodes, scene.probe, scene.size) == (8, 2, 4.0)
+    assert scene.loads.force[2, 2] == -1.0
+    one_problem(mutate(data, "geometry.nodes", 5), "geometry.nodes = 5: must be an even integer")
+    one_problem(mutate(data, "geometry.radius", DELETE), "geometry.radius: missing: the radius")
+    one_problem(mutate(data, "geometry.raduis", 1), "did you mean 'radius'?")
+    one_problem(mutate(data, "load.point.0.node", 8), "load.point[0].node = 8: must be a node")
+    one_problem(mutate(data, "load.pressure", 1.0), "only for geometry.kind = 'square_net'")
+    assert "| `geometry.radius` |" in readme.keys_table()
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(allow_nan=False), st.lists(st.lists(st.floats(allow_nan=False), max_size=3)))
+def test_toml_writer_keeps_every_float_bit_for_bit(x, nested):
+    back = tomllib.loads(C.dumps_toml({"x": x, "t": {"nested": nested}}))
+    assert math.copysign(1.0, back["x"]) == math.copysign(1.0, x) and back["x"] == x
+    assert back["t"]["nested"] == nested
+    assert math.isnan(tomllib.loads(C.dumps_toml({"x": math.nan}))["x"])

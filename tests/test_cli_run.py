@@ -8,6 +8,7 @@ import re
 import resource
 import signal
 import subprocess
+import sys
 import tomllib
 
 import h5py
@@ -326,6 +327,42 @@ def test_python_m_catenet_and_help(tmp_path, write_case):
     )
     assert proc.returncode == 0, proc.stderr
     assert "converged" in proc.stdout
+
+
+IMPORTS = """
+import sys
+from catenet.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as exc:
+    code = exc.code or 0
+heavy = ("numpy", "numba", "scipy", "h5py", "catenet.studies", "catenet.sweep")
+print("IMPORTED", *sorted(m for m in heavy if m in sys.modules))
+sys.exit(code)
+"""
+
+
+def imported_by(*args) -> list[str]:
+    """The heavy modules a catenet command imports (run in a fresh interpreter)."""
+    proc = subprocess.run(
+        [sys.executable, "-c", IMPORTS, *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=subprocess_env(),
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    line = [ln for ln in proc.stdout.splitlines() if ln.startswith("IMPORTED")][-1]
+    return line.split()[1:]
+
+
+def test_help_imports_no_numpy_and_run_no_studies(tmp_path, write_case):
+    assert imported_by("--help") == []
+    assert imported_by("run", "--help") == []
+    case = write_case(small_net(method="static"))
+    modules = imported_by("run", case, "-o", tmp_path / "r.h5", "-q")
+    assert "numpy" in modules and "catenet.studies" not in modules
+    assert "catenet.sweep" not in modules
 
 
 def test_info():

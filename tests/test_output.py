@@ -252,7 +252,7 @@ def test_sigkill_leaves_a_readable_file(tmp_path, delay):
     frame = read_frame(path)
     assert frame.index == n - 1 and frame.t == 0.5 * (n - 1)
     # catenet plot reads it as it is (its last flushed frame stands in for /result).
-    from catenet.plotting import read_result
+    from catenet.output import read_result
 
     shown = read_result(path)
     np.testing.assert_array_equal(shown.x, frame.x)

@@ -63,7 +63,11 @@ def test_readme_runs_as_written(tmp_path, monkeypatch):
             exec(compile(text, "README.md", "exec"), {"__name__": "readme"})
             continue
         done = subprocess.run(
-            shlex.split(text), cwd=tmp_path, env=env, capture_output=True, text=True,
+            shlex.split(text),
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
             timeout=600,
         )
         if error is None:

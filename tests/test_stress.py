@@ -1,4 +1,4 @@
-"""Fast subset of the numerical-stability stress test (``catenet.bench.stress``).
+"""Fast subset of the numerical-stability stress test (``catenet.studies.bench.stress``).
 
 Every scene must end in a right answer: a converged state that passes its check (Eq. 17,
 the exact discrete chain, equilibrium recomputed from the answer, static = dynamic) or a
@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from catenet.bench import stress
+from catenet.studies.bench import stress
+from catenet.studies.bench.stress_scenes import equilibrium_error
 
 
 def _params():
@@ -20,7 +21,7 @@ def _params():
 
 @pytest.fixture(scope="module", autouse=True)
 def _one_thread():
-    from catenet.bench.common import set_threads
+    from catenet.studies.bench.common import set_threads
 
     set_threads(1)
 
@@ -40,11 +41,11 @@ def test_quick_subset_covers_every_group():
 
 def test_equilibrium_error_sees_a_wrong_state():
     """The check is not vacuous: a state moved off the equilibrium fails it."""
-    from catenet.bench.common import midpoint_cable
     from catenet.static import solve_static
+    from catenet.studies.bench.common import midpoint_cable
 
     net, loads, mid = midpoint_cable(10.0, nodes=11)
     res = solve_static(net, loads)
-    assert stress.equilibrium_error(net, loads, res) < 1e-8
+    assert equilibrium_error(net, loads, res) < 1e-8
     res.x[mid, 2] *= 1.01
-    assert stress.equilibrium_error(net, loads, res) > 1e-4
+    assert equilibrium_error(net, loads, res) > 1e-4

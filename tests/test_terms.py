@@ -150,7 +150,11 @@ def test_stretch_term_passes_finite_differences(tension_only):
     length = np.linalg.norm(nodes[e[:, 1]] - nodes[e[:, 0]], axis=1)
     rest = length * rng.uniform(0.8, 1.2, len(edges))  # some slack, some taut
     net = cn.Net.from_arrays(
-        nodes, edges, EA=rng.uniform(1, 5, len(edges)), fixed=[0], rest_length=rest,
+        nodes,
+        edges,
+        EA=rng.uniform(1, 5, len(edges)),
+        fixed=[0],
+        rest_length=rest,
         tension_only=tension_only,
     )
     term = Stretch(net)

@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
-from catenet.validation import Row, format_table, observed_order
+from catenet.studies.validation import Row, format_table, observed_order
 
 
 def invoke(*args):
@@ -144,7 +144,7 @@ def test_plot_writes_a_figure(tmp_path, suffix, frames, method):
 
 
 def test_plot_default_output_and_probe(tmp_path):
-    from catenet.plotting import read_result
+    from catenet.output import read_result
 
     h5 = write_result(tmp_path / "run.h5", frames=5, method="dynamic", with_result=False)
     res = invoke("plot", str(h5))
@@ -180,7 +180,7 @@ def test_plot_bad_format_exits_2(tmp_path):
     assert res.exit_code == 2 and ".png, .svg, .pdf" in res.output
 
 
-def test_plot_directory_goes_to_sweepplot(tmp_path, monkeypatch):
+def test_plot_directory_goes_to_the_sweep_figures(tmp_path, monkeypatch):
     calls = []
 
     def plot_sweep(directory, out):
@@ -188,7 +188,7 @@ def test_plot_directory_goes_to_sweepplot(tmp_path, monkeypatch):
         return [tmp_path / "a.png", tmp_path / "b.png"]
 
     monkeypatch.setitem(
-        sys.modules, "catenet.sweepplot", types.SimpleNamespace(plot_sweep=plot_sweep)
+        sys.modules, "catenet.studies.square_net", types.SimpleNamespace(plot_sweep=plot_sweep)
     )
     res = invoke("plot", str(tmp_path))
     assert res.exit_code == 0, res.output

@@ -1,4 +1,4 @@
-"""``catenet bench``: timing and accuracy studies (code in ``catenet.bench``)."""
+"""``catenet bench``: timing and accuracy studies (code in ``catenet.studies.bench``)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from catenet.cli.common import (
     verbosity_options,
 )
 
-# Kept here (not imported from catenet.bench) so that `catenet bench --help` stays light.
+# Kept here (not imported from catenet.studies.bench) so that `catenet bench --help` stays light.
 STUDIES = ("step-size", "pareto", "scale", "baseline", "skips", "cold-start", "stress")
 CHOICES = (*STUDIES, "all", "report")
 
@@ -97,7 +97,7 @@ def command(
                 continue
             findings += _run_one(name, out_dir, quick, threads, quiet)
         if "report" in studies:
-            from catenet.bench.report import write_report
+            from catenet.studies.bench.report import write_report
 
             path = write_report(out_dir, docs_dir)
             if not quiet:
@@ -109,8 +109,8 @@ def command(
 
 
 def _run_one(name: str, out_dir: Path, quick: bool, threads: int, quiet: bool) -> list[str]:
-    from catenet.bench import study
-    from catenet.bench.common import write_machine
+    from catenet.studies.bench import study
+    from catenet.studies.bench.common import write_machine
 
     out_dir.mkdir(parents=True, exist_ok=True)
     write_machine(out_dir)

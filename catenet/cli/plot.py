@@ -29,7 +29,7 @@ def command(path: Path, output: Path | None, quiet: bool, verbose: int, debug: b
     (colour bar in N), in 3D and in a side view; for runs with a trajectory also
     the deflection of the probe node (positive down) against time (dynamic runs)
     or load factor (static runs in steps).
-    Sweep directory: the sweep's figures (catenet.sweepplot).
+    Sweep directory: the sweep's figures (catenet.studies.square_net).
 
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
@@ -40,9 +40,11 @@ def command(path: Path, output: Path | None, quiet: bool, verbose: int, debug: b
 
         if path.is_dir():
             try:
-                from catenet.sweepplot import plot_sweep
+                from catenet.studies.square_net import plot_sweep
             except ImportError as exc:
-                raise CatenetError(f"{path}: sweep figures need catenet.sweepplot: {exc}") from exc
+                raise CatenetError(
+                    f"{path}: sweep figures need catenet.studies.square_net: {exc}"
+                ) from exc
             files = plot_sweep(path, output)
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")

@@ -40,7 +40,7 @@ def command(output: Path | None, quiet: bool, verbose: int, debug: bool) -> None
         if output is not None and not output.resolve().parent.is_dir():
             raise ConfigError(f"--output = {str(output)!r}: its directory does not exist")
 
-        from catenet import validation
+        from catenet.studies import validation
 
         rows = validation.run()
         if not quiet:

@@ -40,8 +40,13 @@ def register(name: str) -> Callable[[type[Term]], type[Term]]:
     """Class decorator: make a term known by ``name``."""
 
     def add(cls: type[Term]) -> type[Term]:
-        if name in TERMS and TERMS[name] is not cls:
-            raise ValueError(f"a term named {name!r} is registered already: {TERMS[name]}")
+        old = TERMS.get(name)
+        same = old is not None and (old.__module__, old.__qualname__) == (
+            cls.__module__,
+            cls.__qualname__,
+        )  # the same class defined again (a module or notebook cell run twice)
+        if old is not None and not same:
+            raise ValueError(f"a term named {name!r} is registered already: {old}")
         cls.name = name
         TERMS[name] = cls
         return cls

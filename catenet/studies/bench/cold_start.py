@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     Study,
     load_average,
     no_progress,

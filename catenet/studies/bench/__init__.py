@@ -11,13 +11,13 @@ from __future__ import annotations
 import importlib
 
 STUDIES = {
-    "step-size": "catenet.bench.step_size",
-    "pareto": "catenet.bench.pareto",
-    "scale": "catenet.bench.scale",
-    "baseline": "catenet.bench.baseline",
-    "skips": "catenet.bench.skips",
-    "cold-start": "catenet.bench.cold_start",
-    "stress": "catenet.bench.stress",
+    "step-size": "catenet.studies.bench.step_size",
+    "pareto": "catenet.studies.bench.pareto",
+    "scale": "catenet.studies.bench.scale",
+    "baseline": "catenet.studies.bench.baseline",
+    "skips": "catenet.studies.bench.skips",
+    "cold-start": "catenet.studies.bench.cold_start",
+    "stress": "catenet.studies.bench.stress",
 }
 
 

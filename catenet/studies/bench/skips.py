@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     Study,
     interleaved,
     load_average,
@@ -240,9 +240,9 @@ def _output(net, loads, add, study, *, reps, quick, n):
 
 
 def _analysis(net, loads, add, study, *, reps, quick, n):
-    from catenet.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
     from catenet.dynamic import solve_dynamic
     from catenet.static import Workspace, continuation, solve_static
+    from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
     variants = [
         ("analyse once (Workspace)", True, None),
@@ -406,7 +406,7 @@ def _refinement(net, loads, add, study, *, reps, quick, n):
 
 _THREADS_CHILD = r"""
 import json, sys, time, statistics
-from catenet.bench.common import paper_net, warm_up, load_average
+from catenet.studies.bench.common import paper_net, warm_up, load_average
 mode = sys.argv[2]
 if mode == "catenet-threads-1":
     from catenet.linsolve import set_threads

@@ -25,7 +25,7 @@ import math
 import time
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     PAPER_EDGE,
     Study,
     compressed_catenary,
@@ -142,14 +142,14 @@ def _scene(case: str, size, *, ramp: float = 0.0):
 
 
 def _solve(job: dict, budget: float, quick: bool):
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
+    from catenet import solve as sv
 
     size = job.get("nodes", job["edge"])
     if job["method"] == "static":
         net, loads, probe = _scene(job["case"], size)
+        settings = sv.Settings(rtol=job["rtol"])
         t, _, res = repeat(
-            lambda: solve_static(net, loads, rtol=job["rtol"]), 3 if net.n_nodes < 2e4 else 1
+            lambda: sv.solve(sv.Problem(net, loads), settings), 3 if net.n_nodes < 2e4 else 1
         )
         return (
             t,
@@ -159,12 +159,11 @@ def _solve(job: dict, budget: float, quick: bool):
     net, loads, probe = _scene(job["case"], size, ramp=0.5 if job["case"] == "catenary" else 0)
     start = time.perf_counter()
 
-    def stop(step, t, x, v):
+    def stop(step: sv.Step) -> bool:
         return time.perf_counter() - start > budget
 
-    res = solve_dynamic(
-        net, loads, dt=job["h"], damping=1.0, t_end=500.0, rtol=job["rtol"], on_step=stop
-    )
+    settings = sv.Settings("dynamic", dt=job["h"], damping=1.0, t_end=500.0, rtol=job["rtol"])
+    res = sv.solve(sv.Problem(net, loads), settings, on_step=stop)
     t = time.perf_counter() - start
     return (
         t,

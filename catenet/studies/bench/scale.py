@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     Study,
     geometric_fit,
     no_progress,
@@ -51,7 +51,7 @@ args = json.loads(sys.argv[2]) if len(sys.argv) > 2 else ARGS
 out = {}
 def rss():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # MiB (Linux: KiB)
-from catenet.bench.common import paper_net, warm_up
+from catenet.studies.bench.common import paper_net, warm_up
 from catenet.static import Workspace, solve_static
 warm_up()
 out["rss_after_import_mib"] = rss()

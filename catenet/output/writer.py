@@ -1,16 +1,7 @@
-"""Result files: the HDF5 layout of SPEC section 5 and an XDMF sidecar for ParaView.
+"""Writing a result file (the layout in ``catenet.output``) while a run goes on.
 
 ``ResultWriter`` writes the mesh when it opens, appends trajectory frames as a run goes
-and the final state (``/result``) at the end::
-
-    /                   attrs: catenet_version, case (resolved TOML), created, software
-                        versions (<name>_version), linear_backend, threads
-    /mesh/nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,)
-    /trajectory/time (T,), x (T, N, 3), v (T, N, 3) (dynamic runs), tension (T, M)
-    /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs)
-    /result             attrs: converged, iterations, residual, steps, wall_time,
-                        equilibrium, message, time, delta, delta_over_L, probe, size,
-                        max_strain, max_tension, stable (1/0; -1: not checked)
+and the final state (``/result``) at the end; the XDMF sidecar follows it.
 
 Crash safety: the file is created with ``libver=LIBVER`` and the trajectory is written
 in SWMR mode (single writer, multiple readers), flushed after every frame. HDF5 then
@@ -35,53 +26,33 @@ import errno
 import logging
 import math
 import os
-import platform
 import re
 import tempfile
 import time
-import xml.etree.ElementTree as ET
-from collections.abc import Iterable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from catenet import measures
 from catenet.errors import ConfigError, OutputError
+from catenet.output.metadata import environment, result_attrs
+from catenet.output.reader import LIBVER, TRAJECTORY
+from catenet.output.xdmf import sidecar_path, write_xdmf
 
 log = logging.getLogger(__name__)
 
-# SWMR needs the file format of HDF5 1.10; a newer upper bound ("latest") would let the
-# HDF5 library in use write structures that the HDF5 bundled with ParaView cannot read.
-LIBVER = ("v110", "v110")
 # While running, the sidecar is rewritten at most once a second, and (for long runs, whose
 # sidecar takes a while to write) at most 5 % of the time.
 XDMF_REWRITE_SECONDS = 1.0
 XDMF_SHARE = 0.05
 MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
-TRAJECTORY = ("x", "v", "tension")
 
-__all__ = [
-    "Frame",
-    "ResultWriter",
-    "check_output_path",
-    "environment",
-    "open_result",
-    "read_frame",
-    "recover",
-    "sidecar_path",
-    "trajectory_length",
-    "write_xdmf",
-]
+__all__ = ["ResultWriter", "check_output_path"]
 
 
 # --------------------------------------------------------------------------------------------
-# Paths and environment
+# Paths and errors
 # --------------------------------------------------------------------------------------------
-
-
-def sidecar_path(path: str | Path) -> Path:
-    """The XDMF sidecar of a result file: ``OUT.xdmf`` next to ``OUT.h5``."""
-    return Path(path).with_suffix(".xdmf")
 
 
 def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
@@ -119,27 +90,6 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     return p
 
 
-def environment() -> dict[str, str]:
-    """Versions of catenet, Python and the libraries it runs on ('' where missing)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    import catenet
-
-    out = {"catenet": catenet.__version__, "python": platform.python_version()}
-    for name in ("numpy", "scipy", "numba", "h5py", "click", "pypardiso", "mkl"):
-        try:
-            out[name] = version(name)
-        except PackageNotFoundError:
-            out[name] = ""
-    try:
-        import h5py
-
-        out["hdf5"] = h5py.version.hdf5_version
-    except ImportError:  # pragma: no cover - h5py is a dependency
-        out["hdf5"] = ""
-    return out
-
-
 def describe(exc: BaseException) -> str:
     """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
     text = str(exc)
@@ -159,256 +109,6 @@ def _check_finite(name: str, value, t: float) -> None:
             f"refusing to write a non-finite state at t = {t:.6g}: {name} has {bad} NaN or "
             "infinite values (the solution diverged); the frames before it are kept"
         )
-
-
-# --------------------------------------------------------------------------------------------
-# Reading (also files of killed runs)
-# --------------------------------------------------------------------------------------------
-
-
-def open_result(path: str | Path):
-    """Opens a result file for reading with h5py: normally, or, for the file of a run that
-    was killed or whose disk filled up while writing (HDF5 refuses it: "file is already
-    open for write", "truncated file"), in SWMR read mode, which reads it as it was at its
-    last flush."""
-    import h5py
-
-    try:
-        return h5py.File(path, "r")
-    except OSError as exc:
-        try:
-            return h5py.File(path, "r", libver=LIBVER, swmr=True)
-        except OSError:
-            raise exc from None
-
-
-@dataclass
-class Frame:
-    """One stored state: time (or load factor), positions, velocities (None: not
-    stored), and where it came from ("trajectory" frame ``index`` or "result")."""
-
-    t: float
-    x: np.ndarray
-    v: np.ndarray | None
-    source: str
-    index: int
-
-
-def trajectory_length(h5) -> int:
-    """Complete frames in a file: the shortest of the trajectory datasets (a killed run
-    may have extended one dataset more than the others), less trailing frames that never
-    fully reached the disk (they read as NaN, the datasets' fill value)."""
-    g = h5.get("trajectory")
-    if g is None or "time" not in g:
-        return 0
-    names = [name for name in ("time", *TRAJECTORY) if name in g]
-    n = min(g[name].shape[0] for name in names)
-    while n > 0 and not _complete(g, names, n - 1):
-        n -= 1
-    return n
-
-
-def _complete(g, names, k: int) -> bool:
-    try:
-        return all(np.all(np.isfinite(g[name][k])) for name in names)
-    except (OSError, RuntimeError):  # data beyond the end of a truncated file
-        return False
-
-
-def read_frame(path: str | Path, index: int = -1) -> Frame:
-    """A stored state of a result file: trajectory frame ``index`` (default: the last),
-    else, for a file without a trajectory, ``/result``. Raises ConfigError for a file that
-    is missing, not HDF5 or holds no state."""
-    p = Path(path)
-    if not p.is_file():
-        raise ConfigError(f"{path}: no such result file")
-    try:
-        h5 = open_result(p)
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read as an HDF5 result file: {exc}") from None
-    with h5:
-        n = trajectory_length(h5)
-        if n > 0:
-            k = index if index >= 0 else n + index
-            if not 0 <= k < n:
-                raise ConfigError(f"{path}: has {n} frames: frame {index} does not exist")
-            g = h5["trajectory"]
-            v = np.asarray(g["v"][k], dtype=np.float64) if "v" in g else None
-            return Frame(
-                float(g["time"][k]), np.asarray(g["x"][k], dtype=np.float64), v, "trajectory", k
-            )
-        if "result" in h5 and "x" in h5["result"]:
-            r = h5["result"]
-            v = np.asarray(r["v"], dtype=np.float64) if "v" in r else None
-            return Frame(
-                float(r.attrs.get("time", 0.0)),
-                np.asarray(r["x"], dtype=np.float64),
-                v,
-                "result",
-                -1,
-            )
-    raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
-
-
-def recover(path: str | Path, out: str | Path | None = None) -> Path:
-    """Copies the readable part of a result file (in particular one left by a killed run,
-    which ordinary HDF5 readers refuse) into a clean file, ``out`` or ``path`` itself,
-    and rewrites the XDMF sidecar to match. Returns the clean file's path."""
-    import h5py
-
-    src = Path(path)
-    dst = src if out is None else Path(out)
-    tmp = dst.with_name(f".{dst.name}.recover-{os.getpid()}")
-    with open_result(src) as h5, h5py.File(tmp, "w", libver=LIBVER) as clean:
-        for key, value in h5.attrs.items():
-            clean.attrs[key] = value
-        n = trajectory_length(h5)
-        for name in h5:
-            if name == "trajectory":
-                g = clean.create_group("trajectory")
-                for key, ds in h5["trajectory"].items():
-                    copy = g.create_dataset(
-                        key,
-                        data=ds[:n],
-                        maxshape=(None, *ds.shape[1:]),
-                        chunks=ds.chunks,
-                        compression=ds.compression,
-                        shuffle=ds.shuffle,
-                    )
-                    for attr, value in ds.attrs.items():
-                        copy.attrs[attr] = value
-            else:
-                h5.copy(h5[name], clean, name=name)
-    os.replace(tmp, dst)
-    _write_sidecar_for(dst)
-    return dst
-
-
-def _write_sidecar_for(path: Path) -> None:
-    with open_result(path) as h5:
-        n_nodes, n_edges = len(h5["mesh/nodes"]), len(h5["mesh/edges"])
-        n = trajectory_length(h5)
-        times = list(np.asarray(h5["trajectory/time"][:n], dtype=float)) if n else []
-        has_v = "trajectory" in h5 and "v" in h5["trajectory"]
-        has_result = "result" in h5 and "x" in h5["result"]
-    if times or has_result:
-        write_xdmf(
-            sidecar_path(path),
-            path.name,
-            n_nodes=n_nodes,
-            n_edges=n_edges,
-            times=times,
-            velocities=has_v,
-        )
-
-
-# --------------------------------------------------------------------------------------------
-# XDMF
-# --------------------------------------------------------------------------------------------
-
-
-def _hdf_item(parent, h5name: str, dataset: str, dims: Iterable[int], number: str = "Float"):
-    item = ET.SubElement(
-        parent,
-        "DataItem",
-        Format="HDF",
-        NumberType=number,
-        Precision="8",
-        Dimensions=" ".join(map(str, dims)),
-    )
-    item.text = f"{h5name}:{dataset}"
-    return item
-
-
-def _slab(parent, h5name: str, dataset: str, k: int, full: tuple[int, ...]):
-    """Frame k of a (T, ...) dataset as an XDMF HyperSlab."""
-    rest = full[1:]
-    count = (1, *rest)
-    slab = ET.SubElement(
-        parent,
-        "DataItem",
-        ItemType="HyperSlab",
-        Dimensions=" ".join(map(str, count)),
-        Type="HyperSlab",
-    )
-    sel = ET.SubElement(
-        slab, "DataItem", Dimensions=f"3 {len(full)}", Format="XML", NumberType="Int"
-    )
-    start = (k, *(0 for _ in rest))
-    stride = tuple(1 for _ in full)
-    sel.text = " ".join(" ".join(map(str, row)) for row in (start, stride, count))
-    _hdf_item(slab, h5name, dataset, full)
-    return slab
-
-
-def _grid(parent, name: str, h5name: str, n_nodes: int, n_edges: int):
-    grid = ET.SubElement(parent, "Grid", Name=name, GridType="Uniform")
-    topo = ET.SubElement(
-        grid,
-        "Topology",
-        TopologyType="Polyline",
-        NodesPerElement="2",
-        NumberOfElements=str(n_edges),
-    )
-    _hdf_item(topo, h5name, "/mesh/edges", (n_edges, 2), number="Int")
-    return grid
-
-
-def _attribute(grid, name: str, center: str, kind: str):
-    return ET.SubElement(grid, "Attribute", Name=name, AttributeType=kind, Center=center)
-
-
-def write_xdmf(
-    path: str | Path,
-    h5name: str,
-    *,
-    n_nodes: int,
-    n_edges: int,
-    times: list[float],
-    velocities: bool = False,
-) -> None:
-    """Writes the XDMF 3 sidecar of a result file (atomically: a temporary file renamed).
-
-    With ``times`` (the trajectory's frames): a Temporal collection with one Polyline grid
-    per frame, geometry and tension read from frame k of /trajectory/x and
-    /trajectory/tension by HyperSlab. Without: one grid of /result/x and /result/tension.
-    ``h5name`` is the HDF5 file as the sidecar names it (relative to the sidecar).
-    """
-    root = ET.Element("Xdmf", Version="3.0")
-    domain = ET.SubElement(root, "Domain")
-    n_t = len(times)
-    if n_t:
-        series = ET.SubElement(
-            domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"
-        )
-        for k, t in enumerate(times):
-            grid = _grid(series, f"frame {k}", h5name, n_nodes, n_edges)
-            ET.SubElement(grid, "Time", Value=repr(float(t)))
-            geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            _slab(geom, h5name, "/trajectory/x", k, (n_t, n_nodes, 3))
-            att = _attribute(grid, "tension", "Cell", "Scalar")
-            _slab(att, h5name, "/trajectory/tension", k, (n_t, n_edges))
-            if velocities:
-                att = _attribute(grid, "velocity", "Node", "Vector")
-                _slab(att, h5name, "/trajectory/v", k, (n_t, n_nodes, 3))
-    else:
-        grid = _grid(domain, "result", h5name, n_nodes, n_edges)
-        geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-        _hdf_item(geom, h5name, "/result/x", (n_nodes, 3))
-        att = _attribute(grid, "tension", "Cell", "Scalar")
-        _hdf_item(att, h5name, "/result/tension", (n_edges,))
-        att = _attribute(grid, "reaction", "Node", "Vector")
-        _hdf_item(att, h5name, "/result/reaction", (n_nodes, 3))
-    ET.indent(root, space=" ")
-    text = '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 # --------------------------------------------------------------------------------------------
@@ -601,9 +301,7 @@ class ResultWriter:
         x = np.asarray(x, dtype=np.float64)
         if x.shape != net.nodes.shape:
             raise OutputError(f"frame x: shape {x.shape}: must be {net.nodes.shape}")
-        if tension is None:
-            tension = _tension(net, x)
-        data = {"x": x, "tension": np.asarray(tension, dtype=np.float64)}
+        data = {"x": x, "tension": self._stored_tension(x, tension)}
         if self.velocities:
             data["v"] = np.zeros_like(x) if v is None else np.asarray(v, dtype=np.float64)
         if not math.isfinite(float(t)):
@@ -627,6 +325,13 @@ class ResultWriter:
         self.times.append(float(t))
         if self.xdmf and time.monotonic() >= self._next_xdmf:
             self._write_sidecar()
+
+    def _stored_tension(self, x, tension) -> np.ndarray:
+        """The tensions stored with positions x: as given, else computed from the law (the
+        one place where the writer derives a measure)."""
+        if tension is None:
+            tension = measures.tension(self.scene.net, x)
+        return np.asarray(tension, dtype=np.float64)
 
     def _fail(self, exc: BaseException) -> None:
         self.error = exc
@@ -714,13 +419,11 @@ class ResultWriter:
 
     def _write_result(self, h5, res, attrs: dict) -> None:
         scene = self.scene
-        net = scene.net
         if "result" in h5:
             del h5["result"]
         g = h5.create_group("result")
         g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
-        tension = res.tension if res.tension is not None else _tension(net, res.x)
-        g.create_dataset("tension", data=np.asarray(tension, dtype=np.float64))
+        g.create_dataset("tension", data=self._stored_tension(res.x, res.tension))
         reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
         g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
         v = getattr(res, "v", None)
@@ -802,39 +505,3 @@ def _detach(h5) -> None:
         pass
     finally:
         os.close(null)
-
-
-def result_attrs(res, scene) -> dict:
-    """The /result attributes of a Result: SPEC section 5 plus what a user reads first."""
-    net = scene.net
-    probe = int(scene.probe)
-    delta = -float(res.x[probe, 2] - net.nodes[probe, 2])
-    tension = np.asarray(res.tension) if res.tension is not None else np.zeros(0)
-    residual = float(res.residual)
-    strain = float(res.max_strain)
-    return {
-        "converged": bool(res.converged),
-        "iterations": int(res.iterations),
-        "residual": residual if not math.isnan(residual) else math.inf,
-        "steps": int(res.steps),
-        "wall_time": float(res.wall_time),
-        "equilibrium": bool(res.equilibrium),
-        "message": str(res.message or ""),
-        "time": float(res.time),
-        "delta": delta,
-        "delta_over_L": delta / float(scene.size),
-        "probe": probe,
-        "size": float(scene.size),
-        "max_strain": strain if math.isfinite(strain) else 0.0,
-        "max_tension": float(np.max(tension, initial=0.0)),
-        # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
-        "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
-    }
-
-
-def _tension(net, x: np.ndarray) -> np.ndarray:
-    """EA * eps of every edge at x (0 when slack and tension-only)."""
-    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
-    eps = np.linalg.norm(e, axis=1) / net.rest_length - 1.0
-    t = net.EA * eps
-    return np.maximum(t, 0.0) if net.tension_only else t

@@ -21,7 +21,7 @@ import json
 import logging
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     Study,
     interleaved,
     no_progress,

@@ -164,7 +164,6 @@ def midpoint_load_rows(
     """Case (i): midpoint deflection delta/L against Eq. 17 (see the module docstring)."""
     from catenet.geometry import cable
     from catenet.net import Loads
-    from catenet.static import solve_static
 
     material = _material()
     EA, L = material.EA, LENGTH
@@ -185,7 +184,7 @@ def midpoint_load_rows(
             force[(n - 1) // 2, 2] = -f_bar * EA
             note = ""
             try:
-                res = solve_static(net, Loads(force=force), rtol=RTOL)
+                res = _solve(net, Loads(force=force))
                 value = -res.x[(n - 1) // 2, 2] / L
             except ConvergenceError as exc:
                 log.warning("%s, N = %d: %s", name, n, exc)
@@ -207,6 +206,14 @@ def midpoint_load_rows(
     return rows
 
 
+def _solve(net, loads, x0=None):
+    """The static equilibrium through catenet's one solve path."""
+    from catenet import solve as sv
+
+    problem = sv.Problem(net, loads)
+    return sv.solve(problem, sv.Settings(rtol=RTOL), start=sv.Start(x=x0))
+
+
 def _interpolate(x_coarse: np.ndarray, n: int) -> np.ndarray:
     """Positions of a coarse equilibrium at n evenly spaced material points."""
     s_old = np.linspace(0.0, 1.0, len(x_coarse))
@@ -221,7 +228,6 @@ def catenary_rows(
     discrete chain and Eq. 15 (see the module docstring)."""
     from catenet.geometry import cable
     from catenet.net import Loads
-    from catenet.static import solve_static
 
     material = _material()
     EA, L = material.EA, LENGTH
@@ -244,14 +250,14 @@ def catenary_rows(
             loads = Loads(gravity=np.array([0.0, 0.0, -GRAVITY]), support_displacement=move)
             note = ""
             try:
-                res = solve_static(net, loads, rtol=RTOL)
+                res = _solve(net, loads)
             except ConvergenceError as exc:
                 log.warning("%s, N = %d, from the straight cable: %s", name, n, exc)
                 note = f"no convergence from the straight cable ({exc})"
                 res = None
                 if x_prev is not None:
                     try:
-                        res = solve_static(net, loads, x0=_interpolate(x_prev, n), rtol=RTOL)
+                        res = _solve(net, loads, _interpolate(x_prev, n))
                         note += "; converged from the coarser equilibrium"
                     except ConvergenceError as exc2:
                         note += f"; nor from the coarser equilibrium ({exc2})"

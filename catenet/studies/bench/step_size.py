@@ -15,7 +15,7 @@ import logging
 import time
 from pathlib import Path
 
-from catenet.bench.common import (
+from catenet.studies.bench.common import (
     Study,
     no_progress,
     paper_net,

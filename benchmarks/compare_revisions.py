@@ -1,0 +1,96 @@
+"""`catenet run` of the paper's densest net against another revision, in one run.
+
+Checks out REV (default: the commit before HEAD) into a temporary git worktree and times
+whole `catenet run configs/fig4i_n34_alpha_pi4.toml` processes of both trees, interleaved
+(A B A B ...) so that the load of a shared machine falls on both alike, after one warm-up
+run of each (Numba's cache is per tree). Prints the medians and their ratio and writes
+benchmarks/results/revisions.csv.
+
+Usage: python benchmarks/compare_revisions.py [--base REV] [--repeat N] [--case PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_once(tree: Path, case: Path, out: Path) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    start = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "catenet", "run", str(case), "-o", str(out), "-q"],
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise SystemExit(f"catenet run failed in {tree}:\n{proc.stderr}")
+    return seconds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--base", default="HEAD~1", help="the revision to compare with")
+    parser.add_argument("--repeat", type=int, default=15)
+    parser.add_argument("--case", default="configs/fig4i_n34_alpha_pi4.toml")
+    parser.add_argument("-o", "--out", default=str(ROOT / "benchmarks" / "results"))
+    args = parser.parse_args()
+    case = (ROOT / args.case).resolve()
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base), args.base],
+            check=True,
+        )
+        try:
+            trees = {"this": ROOT, args.base: base}
+            times: dict[str, list[float]] = {name: [] for name in trees}
+            for name, tree in trees.items():  # warm Numba's cache of each tree
+                run_once(tree, case, Path(tmp) / f"{len(times[name])}.h5")
+            for k in range(args.repeat):
+                for name, tree in trees.items():
+                    times[name].append(run_once(tree, case, Path(tmp) / f"{name[:4]}{k}.h5"))
+        finally:
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)], check=False
+            )
+    median = {name: statistics.median(t) for name, t in times.items()}
+    ratio = median["this"] / median[args.base]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "revisions.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["tree", "revision", "median_s", "min_s", "runs"])
+        for name, t in times.items():
+            rev = subprocess.run(
+                [
+                    "git",
+                    "-C",
+                    str(ROOT),
+                    "rev-parse",
+                    "--short",
+                    "HEAD" if name == "this" else name,
+                ],
+                capture_output=True,
+                text=True,
+            ).stdout.strip()
+            w.writerow([name, rev, f"{median[name]:.4f}", f"{min(t):.4f}", len(t)])
+    for name in trees:
+        print(f"{name:>10}: median {median[name]:.3f} s, min {min(times[name]):.3f} s")
+    print(f"ratio this / {args.base}: {ratio:.3f}")
+
+
+if __name__ == "__main__":
+    main()

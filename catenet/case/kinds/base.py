@@ -1,0 +1,128 @@
+"""What a geometry kind is: a frozen dataclass whose fields declare its keys, and whose
+methods parse them, estimate the size of the net, name its nodes and build it.
+
+A new kind subclasses ``GeometryConfig`` in its own module and is registered in
+catenet/case/kinds/__init__.py.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar, NamedTuple
+
+from catenet.case.keys import BAD, Checker, Context, Declared, parse_keys
+from catenet.net import Net
+
+
+@dataclass(frozen=True)
+class Topology:
+    """What node references are checked against: the node count, the nodes pinned
+    unless supports.fixed says otherwise, and the named nodes."""
+
+    n_nodes: int
+    default_fixed: frozenset[int]
+    names: dict[str, int]
+
+
+class Built(NamedTuple):
+    """A geometry built: the net (with its supports and rest lengths), the probe node
+    whose z-deflection is reported, the length scale L of delta/L and the named nodes."""
+
+    net: Net
+    probe: int
+    size: float
+    names: dict[str, int]
+
+
+def resolve(ref: int | str, names: dict[str, int]) -> int:
+    """A node index from an index or a node name."""
+    return names[ref] if isinstance(ref, str) else ref
+
+
+def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
+    """The net with the supports ``fixed`` (node references; None: its own) and every
+    rest length divided by 1 + prestrain."""
+    if fixed is None and not prestrain:
+        return net
+    mask = net.fixed if fixed is None else sorted(resolve(r, names) for r in fixed)
+    return Net.from_arrays(
+        net.nodes,
+        net.edges,
+        EA=net.EA,
+        fixed=mask,
+        rest_length=net.rest_length / (1.0 + prestrain),
+        line_density=net.line_density,
+        tension_only=net.tension_only,
+    )
+
+
+def with_prefix(message: str, fixed_key: str = "geometry.fixed") -> str:
+    """A Net builder message with the case key path of what it names."""
+    if message.startswith(("geometry", "supports", "material", "load", "solver")):
+        return message
+    if message.startswith("nodes "):  # "nodes [3, 4]: ..." lists node indices
+        return "geometry: " + message
+    for name, key in (
+        ("nodes", "geometry.nodes"),
+        ("edges", "geometry.edges"),
+        ("rest_length", "geometry.rest_length"),
+        ("EA", "geometry.EA"),
+        ("line_density", "material.density (line density)"),
+        ("fixed", fixed_key),
+    ):
+        if re.match(rf"{name}[\[:= ]", message):
+            return key + message[len(name) :]
+    return "geometry: " + message
+
+
+class GeometryConfig(Declared):
+    """Base of the geometry kinds; ``kind`` is the name ``geometry.kind`` gives.
+
+    Class attributes: ``summary`` (a line for the README), ``node_names`` (names a node
+    reference may use besides indices),
+    ``default_supports`` (what is pinned without supports.fixed, as messages say it),
+    ``pressure`` (whether load.pressure applies), ``lazy_topology`` (the topology needs
+    a build: check node references only when there are any).
+    """
+
+    kind: ClassVar[str] = ""
+    summary: ClassVar[str] = ""
+    node_names: ClassVar[tuple[str, ...]] = ()
+    default_supports: ClassVar[str] = ""
+    pressure: ClassVar[bool] = False
+    lazy_topology: ClassVar[bool] = False
+
+    @classmethod
+    def parse(cls, ck: Checker, g: dict, base_dir: Path) -> GeometryConfig | None:
+        """The kind's keys of the [geometry] table (unknown keys are checked before);
+        None when any is bad (the problems are in ``ck``)."""
+        values = parse_keys(ck, g, cls, "geometry", Context(kind=cls))
+        return None if BAD in values.values() else cls(**values)
+
+    @classmethod
+    def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
+        """Whether the geometry (None: given but broken) sets EA, so that the material
+        need not."""
+        return False
+
+    def estimate_size(self) -> tuple[float, float, float, str]:
+        """(nodes, edges, junctions, key path of what drives the size), estimated from
+        the parameters alone, before anything is built."""
+        raise NotImplementedError
+
+    def topology(self) -> Topology:
+        raise NotImplementedError
+
+    def check_supports(self, ck: Checker, fixed: set[int], fixed_key: str) -> None:
+        """Problems of the supports ``fixed`` (named by ``fixed_key``) once every node
+        reference is sound."""
+
+    def build(self, material: Any, fixed: Any) -> Built:
+        """The net of ``material`` (a catenet.geometry.Material) pinned at the node
+        references ``fixed`` (None: the kind's default supports)."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, **super().to_dict()}

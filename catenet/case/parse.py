@@ -1,0 +1,186 @@
+"""A whole case: the top-level table, the geometry by kind, the sections, the rules
+between sections and the node references, all checked before anything is computed."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from catenet.case.guard import guard_size
+from catenet.case.keys import (
+    BAD,
+    MISSING,
+    Checker,
+    Context,
+    declared,
+    names,
+    parse_table,
+    show,
+    text,
+    value,
+)
+from catenet.case.kinds import KINDS, GeometryConfig
+from catenet.case.nodes import check_nodes
+from catenet.case.sections import (
+    LoadConfig,
+    MaterialConfig,
+    OutputConfig,
+    SolverConfig,
+    SupportsConfig,
+    parse_material,
+    parse_output,
+    parse_solver,
+)
+from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
+from catenet.errors import ConfigError
+
+
+@dataclass(frozen=True, kw_only=True)
+class Case:
+    """A validated case; ``source`` (the file it came from) is not compared."""
+
+    title: str = text("", doc="free text")
+    geometry: GeometryConfig
+    material: MaterialConfig
+    supports: SupportsConfig
+    load: LoadConfig
+    solver: SolverConfig
+    output: OutputConfig
+    source: str = field(default="<dict>", compare=False)
+
+    def to_dict(self) -> dict:
+        """The resolved case: every default filled in, plain TOML types only."""
+        load = self.load.to_dict()
+        if not self.geometry.pressure:
+            load.pop("pressure")
+        return {
+            "title": self.title,
+            "geometry": self.geometry.to_dict(),
+            "material": self.material.to_dict(),
+            "supports": self.supports.to_dict(),
+            "load": load,
+            "solver": self.solver.to_dict(),
+            "output": self.output.to_dict(),
+        }
+
+    def to_toml(self) -> str:
+        """The resolved case as TOML text; ``parse_case(tomllib.loads(text))`` gives it back."""
+        return dumps_toml(self.to_dict())
+
+
+#: The keys of the top-level table.
+TOP_KEYS = (*names(Case), "geometry", "material", "supports", "load", "solver", "output")
+
+
+def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
+    """Read, override and validate a case file; ``None`` is the bundled default case."""
+    if path is None:
+        resource = resources.files("catenet") / "data" / "default.toml"
+        source = "catenet/data/default.toml"
+        raw = resource.read_bytes()
+        base_dir = Path.cwd()
+    else:
+        p = Path(path)
+        source = str(p)
+        raw = read_case_bytes(p)
+        base_dir = p.parent
+    data = parse_toml(raw, source)
+    sweep = data.pop("sweep", None)  # the grid of `catenet sweep`; a single run ignores it
+    if sweep is not None and not isinstance(sweep, dict):
+        raise ConfigError(
+            f"sweep = {sweep!r}: must be a table of key.path = [values] (read by catenet sweep)"
+        )
+    if overrides:
+        data = apply_overrides(data, overrides)
+    return parse_case(data, source=source, base_dir=base_dir)
+
+
+def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = None) -> Case:
+    """Validate a case table (as read from TOML) and resolve every default.
+
+    Raises ConfigError listing every problem. ``source`` names the case in messages and
+    gives the default output file ``out/<stem>.h5``; ``base_dir`` (default: the current
+    directory) is where ``geometry.file`` is looked up.
+    """
+    base_dir = Path.cwd() if base_dir is None else Path(base_dir)
+    ck = Checker()
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{source}: the case must be a table of sections, not {show(data)}")
+    ck.keys(data, "", TOP_KEYS)
+
+    (title_key,) = declared(Case)
+    title = value(ck, data, title_key, "", Context())
+
+    geometry, kind = _parse_geometry(ck, data, base_dir)
+    ctx = Context(kind=kind)
+    material = parse_material(ck, data.get("material", MISSING), ctx, geometry)
+    supports = parse_table(ck, data.get("supports", {}), SupportsConfig, "supports", ctx)
+    load = parse_table(ck, data.get("load", {}), LoadConfig, "load", ctx)
+    solver = parse_solver(ck, data.get("solver", {}), ctx)
+    output = parse_output(ck, data.get("output", {}), ctx, source)
+
+    # Rules between sections.
+    if isinstance(material, MaterialConfig):
+        dens = material.density
+        if isinstance(solver, SolverConfig) and solver.method == "dynamic" and dens == 0:
+            ck.add(
+                f"material.density = {dens!r}: solver.method = 'dynamic' needs mass: "
+                "must be > 0 (with material.radius or material.area)"
+            )
+        if isinstance(load, LoadConfig) and load.gravity is not None and dens == 0:
+            ck.add(
+                f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
+                "set material.density > 0 (with material.radius or material.area)"
+            )
+    if isinstance(solver, SolverConfig) and solver.method == "dynamic" and solver.dt > solver.t_end:
+        ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {solver.t_end!r}")
+
+    # Node references need the node count (and, for square nets, the built topology):
+    # only once the geometry itself is sound.
+    if geometry is not None:
+        check_nodes(ck, geometry, supports, load)
+
+    if ck.problems:
+        raise ConfigError(ck.problems)
+    return Case(
+        title=title,
+        geometry=geometry,
+        material=material,
+        supports=supports,
+        load=load,
+        solver=solver,
+        output=output,
+        source=source,
+    )
+
+
+def _parse_geometry(
+    ck: Checker, data: Mapping, base_dir: Path
+) -> tuple[GeometryConfig | None, type[GeometryConfig] | None]:
+    """The geometry (None when any key is bad) and its kind (None when unknown)."""
+    kinds = " | ".join(map(repr, KINDS))
+    if "geometry" not in data:
+        ck.add(f"geometry: missing: the case needs a [geometry] table with kind = {kinds}")
+        return None, None
+    g = ck.table(data["geometry"], "geometry")
+    if g is None:
+        return None, None
+    if "kind" not in g:
+        ck.add("geometry.kind: missing: one of " + ", ".join(map(repr, KINDS)))
+        return None, None
+    name = ck.string(g["kind"], "geometry.kind", choices=tuple(KINDS))
+    if name is BAD:
+        return None, None
+    kind = KINDS[name]
+    ck.keys(g, "geometry", ("kind", *names(kind)), f" for kind {name!r}")
+    before = len(ck.problems)
+    cfg = kind.parse(ck, g, base_dir)
+    if len(ck.problems) > before or cfg is None:
+        return None, kind
+    guard_size(ck, cfg)
+    return (cfg if len(ck.problems) == before else None), kind
+
+
+__all__ = ["Case", "load_case", "parse_case"]

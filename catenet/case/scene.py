@@ -1,0 +1,83 @@
+"""A case built: the net, its loads, the probe node and the length scale."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet import geometry as geo
+from catenet.case.keys import show
+from catenet.case.kinds.base import resolve, with_prefix
+from catenet.case.parse import Case
+from catenet.errors import ConfigError
+from catenet.net import Loads, Net
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A case built: the net, its loads, the probe node (whose z-deflection is "delta"),
+    the length scale L of delta/L, and the energy terms the case adds to the stretching
+    of the edges (``catenet.terms``; none for the paper's cases)."""
+
+    case: Case
+    net: Net
+    loads: Loads
+    probe: int
+    size: float
+    terms: tuple = ()
+
+
+def build(case: Case) -> Scene:
+    """The net, loads, probe node and length scale of a case."""
+    try:
+        return _build(case)
+    except ConfigError as exc:
+        key = "supports.fixed" if case.supports.fixed is not None else "geometry.fixed"
+        raise ConfigError([with_prefix(p, key) for p in exc.problems]) from None
+
+
+def _build(case: Case) -> Scene:
+    mat = case.material
+    ea = mat.axial_stiffness
+    material = geo.Material(
+        EA=1.0 if ea is None else ea,  # None only for a graph with EA per edge
+        line_density=mat.line_density,
+        tension_only=mat.tension_only,
+    )
+    built = case.geometry.build(material, case.supports.fixed)
+    loads = _loads(case, built.net, built.names, built.size)
+    return Scene(
+        case=case, net=built.net, loads=loads, probe=int(built.probe), size=float(built.size)
+    )
+
+
+def _loads(case: Case, net: Net, names: dict[str, int], size: float) -> Loads:
+    ld = case.load
+    force = None
+    if case.geometry.pressure and ld.pressure != 0.0:
+        force = geo.pressure_force(net, ld.pressure, size)
+    for k, pt in enumerate(ld.points):
+        i = resolve(pt.node, names)
+        if not 0 <= i < net.n_nodes:
+            raise ConfigError(
+                f"load.point[{k}].node = {show(pt.node)}: must be a node index in "
+                f"0..{net.n_nodes - 1}"
+            )
+        if force is None:
+            force = np.zeros((net.n_nodes, 3))
+        force[i] += pt.force
+    gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)
+    disp = ramp = None
+    if case.supports.moves:
+        disp = np.zeros((net.n_nodes, 3))
+        ramp = np.zeros(net.n_nodes)
+        for k, mv in enumerate(case.supports.moves):
+            i = resolve(mv.node, names)
+            if not (0 <= i < net.n_nodes and net.fixed[i]):
+                raise ConfigError(
+                    f"supports.move[{k}].node = {show(mv.node)}: must be a fixed node"
+                )
+            disp[i] = mv.displacement
+            ramp[i] = mv.duration
+    return Loads(force=force, gravity=gravity, support_displacement=disp, ramp_time=ramp)

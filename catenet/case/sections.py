@@ -1,0 +1,301 @@
+"""The sections of a case besides the geometry: material, supports, load, solver, output.
+
+Each section is a frozen dataclass whose fields declare its keys (catenet/case/keys.py);
+the parse functions add the rules between keys of one section.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from catenet.case.keys import (
+    BAD,
+    MISSING,
+    Checker,
+    Context,
+    Declared,
+    boolean,
+    choice,
+    integer,
+    key,
+    names,
+    node,
+    parse_keys,
+    real,
+    show,
+    tables,
+    text,
+    vec3,
+)
+from catenet.case.kinds import KINDS
+from catenet.errors import ConfigError
+
+METHODS = ("static", "dynamic")
+LINEAR = ("auto", "pardiso", "scipy")
+
+Vec3 = tuple[float, float, float]
+NodeRef = int | str
+
+
+# --------------------------------------------------------------------------- material
+
+
+@dataclass(frozen=True)
+class MaterialConfig(Declared):
+    """Either E with radius or area, or EA directly; density needs radius or area."""
+
+    E: float | None = real(
+        None, gt=0, write="given", unit="Pa", doc="Young's modulus (with radius or area), or EA"
+    )
+    radius: float | None = real(
+        None, gt=0, write="given", unit="m", doc="radius of the round cross-section, A = pi r^2"
+    )
+    area: float | None = real(
+        None, gt=0, write="given", unit="m^2", doc="cross-section A (instead of radius)"
+    )
+    EA: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="N",
+        doc="axial stiffness directly, instead of E (radius or area then only give mass)",
+    )
+    density: float = real(
+        0.0,
+        ge=0,
+        unit="kg/m^3",
+        doc="needs radius or area; must be > 0 for dynamic runs and for gravity",
+    )
+    tension_only: bool = boolean(True, doc="cables go slack in compression")
+
+    @property
+    def cross_section(self) -> float | None:
+        """Area A [m^2] from radius or area, None when only EA is given."""
+        if self.area is not None:
+            return self.area
+        if self.radius is not None:
+            return math.pi * self.radius**2
+        return None
+
+    @property
+    def axial_stiffness(self) -> float | None:
+        """EA [N]: E * A, or EA as given (None for a graph with EA per edge only)."""
+        if self.EA is not None:
+            return self.EA
+        if self.E is not None and self.cross_section is not None:
+            return self.E * self.cross_section
+        return None
+
+    @property
+    def line_density(self) -> float:
+        """rho * A [kg/m]."""
+        a = self.cross_section
+        return 0.0 if a is None else self.density * a
+
+
+def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> MaterialConfig | Any:
+    """The [material] table; ``geometry`` (None when broken) may give EA per edge."""
+    if m_v is MISSING:
+        ck.add(
+            "material: missing: the case needs a [material] table (E with radius or area, or EA)"
+        )
+        return BAD
+    m = ck.table(m_v, "material")
+    if m is None:
+        return BAD
+    ck.keys(m, "material", names(MaterialConfig))
+    v = parse_keys(ck, m, MaterialConfig, "material", ctx)
+    given = {k for k in ("E", "radius", "area", "EA") if k in m}
+    per_edge_ea = ctx.kind is not None and ctx.kind.gives_stiffness(geometry)
+    if {"radius", "area"} <= given:
+        ck.add(
+            f"material.area = {show(m['area'])}: give material.radius or material.area, not both"
+        )
+    if "E" in given and "EA" in given:
+        ck.add(
+            f"material.EA = {show(m['EA'])}: give material.E (with radius or area) or "
+            "material.EA, not both"
+        )
+    elif "E" in given and not given & {"radius", "area"}:
+        ck.add(
+            f"material.E = {show(m['E'])}: needs a cross-section: give material.radius or "
+            "material.area (or give material.EA instead of E)"
+        )
+    elif not given & {"E", "EA"} and not per_edge_ea:
+        ck.add("material: missing stiffness: give E with radius or area, or EA")
+    density = v["density"]
+    if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:
+        ck.add(
+            f"material.density = {density!r}: mass needs a cross-section: give "
+            "material.radius or material.area (EA alone has no area)"
+        )
+    if BAD in v.values():
+        return BAD
+    return MaterialConfig(**v)
+
+
+# --------------------------------------------------------------------------- supports
+
+
+@dataclass(frozen=True)
+class MoveConfig(Declared):
+    """A support that moves by ``displacement`` over ``duration`` seconds."""
+
+    node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
+    displacement: Vec3 = vec3(missing="[dx, dy, dz] [m]", unit="m", doc="[dx, dy, dz]")
+    duration: float = real(
+        0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
+    )
+
+
+def _node_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    if not isinstance(v, (list, tuple)) or not v:
+        return ck.bad(path, v, "must be a non-empty array of nodes")
+    refs = [ck.node_ref(x, f"{path}[{k}]", ctx.kind) for k, x in enumerate(v)]
+    return BAD if BAD in refs else tuple(refs)
+
+
+@dataclass(frozen=True)
+class SupportsConfig(Declared):
+    """``fixed``: the pinned nodes, replacing the geometry's default supports (None: the
+    defaults); ``moves``: prescribed motions of pinned nodes."""
+
+    fixed: tuple[NodeRef, ...] | None = key(
+        _node_list,
+        "a non-empty array of nodes (indices or names)",
+        None,
+        write="given",
+        shown="the geometry's own",
+        doc="pinned nodes, replacing the geometry's default supports",
+    )
+    moves: tuple[MoveConfig, ...] = tables(
+        MoveConfig, name="move", doc="moving supports: only fixed nodes move, each once"
+    )
+
+
+# --------------------------------------------------------------------------- load
+
+
+@dataclass(frozen=True)
+class PointLoadConfig(Declared):
+    """A constant force [N] on one node."""
+
+    node: NodeRef = node(missing="the loaded node", doc="the loaded node")
+    force: Vec3 = vec3(
+        missing="[fx, fy, fz] [N]", unit="N", doc="[fx, fy, fz]; forces on one node add up"
+    )
+
+
+def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    p = ck.real(v, path)
+    kind = ctx.kind
+    if p not in (BAD, 0.0) and kind is not None and not kind.pressure:
+        takes = " or ".join(repr(name) for name, cls in KINDS.items() if cls.pressure)
+        ck.add(
+            f"{path} = {p!r}: only for geometry.kind = {takes} "
+            f"(this is {kind.kind!r}): use [[load.point]] or load.gravity"
+        )
+    return p
+
+
+@dataclass(frozen=True)
+class LoadConfig(Declared):
+    """Pressure p [Pa] (square_net), gravity [m/s^2] (None: none) and point loads."""
+
+    pressure: float = key(
+        _pressure,
+        "a number, finite (square nets only)",
+        0.0,
+        unit="Pa",
+        doc="-p L^2 / N in z on every node",
+    )
+    gravity: Vec3 | None = vec3(
+        None, write="given", shown="none", unit="m/s^2", doc="[gx, gy, gz] on the lumped masses"
+    )
+    points: tuple[PointLoadConfig, ...] = tables(
+        PointLoadConfig, name="point", doc="constant point loads"
+    )
+
+
+# --------------------------------------------------------------------------- solver
+
+
+@dataclass(frozen=True)
+class SolverConfig(Declared):
+    """How to solve: see docs/DESIGN.md (solver section) for the meaning of each key."""
+
+    method: str = choice(
+        "static", METHODS, doc="equilibrium directly, or the paper's damped implicit Euler"
+    )
+    dt: float = real(1e-2, gt=0, unit="s", doc="dynamic: time step")
+    damping: float = real(1.0, ge=0, unit="1/s", doc="dynamic: mass damping mu")
+    t_end: float = real(10.0, gt=0, unit="s", doc="dynamic: end time")
+    rtol: float = real(1e-8, gt=0, lt=1, doc="Newton tolerance")
+    linear: str = choice("auto", LINEAR, doc="linear solver (auto: PARDISO where available)")
+    threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
+    max_iter: int = integer(200, ge=1, doc="static: Newton iterations")
+    steps: int = integer(1, ge=1, doc="static: load steps (equilibria at k/steps of the load)")
+
+
+def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:
+    s = ck.table(s_v, "solver")
+    if s is None:
+        return BAD
+    ck.keys(s, "solver", names(SolverConfig))
+    v = parse_keys(ck, s, SolverConfig, "solver", ctx)
+    if v["linear"] == "pardiso":
+        from catenet.linsolve import resolve_backend
+
+        try:
+            resolve_backend("pardiso")
+        except ConfigError as exc:
+            ck.problems.extend(exc.problems)
+    if BAD in v.values():
+        return BAD
+    return SolverConfig(**v)
+
+
+# --------------------------------------------------------------------------- output
+
+
+@dataclass(frozen=True)
+class OutputConfig(Declared):
+    """Result file, trajectory stride (0: final state only) and XDMF sidecar switch."""
+
+    file: str = text(
+        None,
+        nonempty=True,
+        computed=True,
+        shown='`"out/<case file name>.h5"`',
+        doc="the result file (HDF5)",
+    )
+    every: int = integer(1, ge=0, doc="keep every k-th step (0: the final state only)")
+    xdmf: bool = boolean(True, doc="write the XDMF sidecar (for ParaView)")
+
+
+def parse_output(ck: Checker, o_v: Any, ctx: Context, source: str) -> OutputConfig | Any:
+    """The [output] table; the file defaults to out/<stem of the case file>.h5."""
+    o = ck.table(o_v, "output")
+    if o is None:
+        return BAD
+    ck.keys(o, "output", names(OutputConfig))
+    v = parse_keys(ck, o, OutputConfig, "output", ctx)
+    if v["file"] is None:
+        stem = "case" if source.startswith("<") else (Path(source).stem or "case")
+        v["file"] = f"out/{stem}.h5"
+    if BAD in v.values():
+        return BAD
+    return OutputConfig(**v)
+
+
+#: The sections after the geometry, in the order they are parsed and written.
+SECTIONS: dict[str, type] = {
+    "material": MaterialConfig,
+    "supports": SupportsConfig,
+    "load": LoadConfig,
+    "solver": SolverConfig,
+    "output": OutputConfig,
+}

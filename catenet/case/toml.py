@@ -1,0 +1,138 @@
+"""Case files as TOML: reading (errors name the file, line and column), ``--set``
+overrides of the raw table, and writing a resolved case back (with tomli-w)."""
+
+from __future__ import annotations
+
+import copy
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+
+from catenet.case.keys import show
+from catenet.errors import ConfigError
+
+
+def read_case_bytes(path: Path) -> bytes:
+    """The bytes of a case file; ConfigError naming the path when it cannot be read."""
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such case file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a directory, not a case file") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the case file: {exc.strerror or exc}") from None
+
+
+def parse_toml(raw: bytes | str, source: str) -> dict:
+    """TOML text (bytes are decoded as UTF-8) to a dict; errors name source, line and column."""
+    if isinstance(raw, bytes):
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line, col = _line_col(raw[: exc.start].decode("utf-8", "replace"))
+            raise ConfigError(
+                f"{source}: line {line}, column {col}: not UTF-8 text (a TOML file must be UTF-8)"
+            ) from None
+    else:
+        text = raw
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        raise ConfigError(f"{source}: nested too deeply to be a case file") from None
+    except ValueError as exc:  # tomllib.TOMLDecodeError is a ValueError
+        msg = str(exc)
+        m = re.match(r"(?s)(.*) \(at line (\d+), column (\d+)\)$", msg)
+        if m:
+            reason, line, col = m.group(1), m.group(2), m.group(3)
+        else:
+            line, col = _line_col(text)
+            reason = re.sub(r" \(at end of document\)$", "", msg)
+        reason = reason[:1].lower() + reason[1:]
+        raise ConfigError(f"{source}: line {line}, column {col}: {reason}") from None
+
+
+def _line_col(text: str) -> tuple[int, int]:
+    """Line and column (both from 1) just after ``text``."""
+    lines = text.split("\n")
+    return len(lines), len(lines[-1]) + 1
+
+
+def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
+    """A copy of ``data`` with every ``key.path=value`` set. The value is read as a TOML
+    value (``3``, ``0.5``, ``[1, 2, 3]``, ``true``, ``"text"``), else taken as a plain
+    string. A number as a path part indexes an array of tables (the next free index
+    appends a table)."""
+    out = copy.deepcopy(dict(data))
+    problems: list[str] = []
+    for ov in overrides:
+        if not isinstance(ov, str) or "=" not in ov:
+            problems.append(f"override {ov!r}: must be key.path=value (e.g. solver.method=dynamic)")
+            continue
+        key, _, text = ov.partition("=")
+        parts = [p.strip() for p in key.strip().split(".")]
+        if not all(parts):
+            problems.append(
+                f"override {ov!r}: key path {key.strip()!r}: empty part: must be like a.b.c"
+            )
+            continue
+        value = _override_value(text.strip())
+        problem = _set_path(out, parts, value)
+        if problem:
+            problems.append(f"override {ov!r}: {problem}")
+    if problems:
+        raise ConfigError(problems)
+    return out
+
+
+def _override_value(text: str) -> Any:
+    try:
+        parsed = tomllib.loads(f"v = {text}")
+    except (ValueError, RecursionError):
+        return text
+    if set(parsed) != {"v"}:
+        return text
+    return parsed["v"]
+
+
+def _set_path(root: dict, parts: list[str], value: Any) -> str | None:
+    cur: Any = root
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        here = ".".join(parts[:depth]) or "<top>"
+        if isinstance(cur, list):
+            if not part.isdigit() or int(part) > len(cur):
+                return (
+                    f"{here} is an array of {len(cur)} tables: "
+                    f"{'.'.join(parts[: depth + 1])} needs an index 0..{len(cur)}"
+                )
+            i = int(part)
+            if i == len(cur):
+                cur.append({})
+            if last:
+                cur[i] = value
+                return None
+            if not isinstance(cur[i], (dict, list)):
+                cur[i] = {}
+            cur = cur[i]
+            continue
+        if not isinstance(cur, dict):
+            return f"{here} = {show(cur)} is not a table: cannot set {'.'.join(parts)}"
+        if last:
+            cur[part] = value
+            return None
+        if part not in cur:  # a new table, or a new array of tables before an index
+            cur[part] = [] if parts[depth + 1].isdigit() else {}
+        cur = cur[part]
+    return None
+
+
+def dumps_toml(data: Mapping) -> str:
+    """TOML text of a table of tables, arrays of tables, strings, numbers, booleans and
+    (nested) arrays: enough for a resolved case. Floats are written with repr (nan and
+    inf as such), so they read back bit for bit."""
+    return tomli_w.dumps(data)

@@ -1,0 +1,53 @@
+"""Result files: the HDF5 layout of SPEC section 5 and an XDMF sidecar for ParaView.
+
+::
+
+    /                   attrs: catenet_version, case (resolved TOML), created, software
+                        versions (<name>_version), linear_backend, threads
+    /mesh/nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,)
+    /trajectory/time (T,), x (T, N, 3), v (T, N, 3) (dynamic runs), tension (T, M)
+    /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs)
+    /result             attrs: converged, iterations, residual, steps, wall_time,
+                        equilibrium, message, time, delta, delta_over_L, probe, size,
+                        max_strain, max_tension, stable (1/0; -1: not checked)
+
+Modules: ``writer`` (``ResultWriter``: the file while a run goes on, crash safety, full
+disks; ``check_output_path``), ``metadata`` (software versions, the /result attributes),
+``reader`` (``read_result``, ``read_frame``, ``read_mesh``, ``open_result``, ``recover``:
+the only code that reads the layout, also of killed runs), ``xdmf`` (the sidecar).
+"""
+
+from catenet.output.metadata import environment, result_attrs
+from catenet.output.reader import (
+    Frame,
+    Mesh,
+    ResultFile,
+    open_result,
+    probe_node,
+    read_frame,
+    read_mesh,
+    read_result,
+    recover,
+    trajectory_length,
+)
+from catenet.output.writer import ResultWriter, check_output_path
+from catenet.output.xdmf import sidecar_path, write_xdmf
+
+__all__ = [
+    "Frame",
+    "Mesh",
+    "ResultFile",
+    "ResultWriter",
+    "check_output_path",
+    "environment",
+    "open_result",
+    "probe_node",
+    "read_frame",
+    "read_mesh",
+    "read_result",
+    "recover",
+    "result_attrs",
+    "sidecar_path",
+    "trajectory_length",
+    "write_xdmf",
+]

@@ -1,0 +1,63 @@
+"""What a result file records about its run besides the states: the versions of the
+software that wrote it (root attributes ``<name>_version``) and the /result attributes
+(SPEC section 5)."""
+
+from __future__ import annotations
+
+import math
+import platform
+
+import numpy as np
+
+from catenet import measures
+
+__all__ = ["environment", "result_attrs"]
+
+
+def environment() -> dict[str, str]:
+    """Versions of catenet, Python and the libraries it runs on ('' where missing)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    import catenet
+
+    out = {"catenet": catenet.__version__, "python": platform.python_version()}
+    for name in ("numpy", "scipy", "numba", "h5py", "click", "pypardiso", "mkl"):
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = ""
+    try:
+        import h5py
+
+        out["hdf5"] = h5py.version.hdf5_version
+    except ImportError:  # pragma: no cover - h5py is a dependency
+        out["hdf5"] = ""
+    return out
+
+
+def result_attrs(res, scene) -> dict:
+    """The /result attributes of a Result: SPEC section 5 plus what a user reads first."""
+    net = scene.net
+    probe = int(scene.probe)
+    delta = measures.deflection(net.nodes, res.x, probe)
+    tension = np.asarray(res.tension) if res.tension is not None else np.zeros(0)
+    residual = float(res.residual)
+    strain = float(res.max_strain)
+    return {
+        "converged": bool(res.converged),
+        "iterations": int(res.iterations),
+        "residual": residual if not math.isnan(residual) else math.inf,
+        "steps": int(res.steps),
+        "wall_time": float(res.wall_time),
+        "equilibrium": bool(res.equilibrium),
+        "message": str(res.message or ""),
+        "time": float(res.time),
+        "delta": delta,
+        "delta_over_L": delta / float(scene.size),
+        "probe": probe,
+        "size": float(scene.size),
+        "max_strain": strain if math.isfinite(strain) else 0.0,
+        "max_tension": float(np.max(tension, initial=0.0)),
+        # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
+        "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
+    }

@@ -1,0 +1,472 @@
+"""Reading result files (SPEC section 5), also those of killed runs: the one module that
+knows where a result file keeps what.
+
+- ``read_result(path)`` -> ``ResultFile``: mesh, attributes, final state (``/result``, or
+  the last complete frame of a run that stopped before writing it) and trajectory access,
+  with every layout problem reported at once (``catenet plot``).
+- ``read_frame(path, index)`` -> ``Frame``: one stored state (``--restart``, tests).
+- ``read_mesh(path)`` -> ``Mesh``: the net a file was written for (``--restart``).
+- ``open_result`` and ``trajectory_length``: the h5py file and its complete frames, for
+  tools that look at the datasets themselves; ``recover`` rewrites a killed run's file as
+  an ordinary one.
+
+A killed run's file carries HDF5's "open for writing" mark: ``open_result`` reads it in
+SWMR mode, as it was at its last flush. Frames that never fully reached the disk (shorter
+datasets, or NaN, the datasets' fill value) are not counted.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from catenet import measures
+from catenet.errors import ConfigError
+from catenet.output.xdmf import sidecar_path, write_xdmf
+
+log = logging.getLogger(__name__)
+
+# SWMR needs the file format of HDF5 1.10; a newer upper bound ("latest") would let the
+# HDF5 library in use write structures that the HDF5 bundled with ParaView cannot read.
+LIBVER = ("v110", "v110")
+TRAJECTORY = ("x", "v", "tension")  # per-frame datasets of /trajectory, besides time
+REQUIRED = ("/mesh/nodes", "/mesh/edges")
+
+__all__ = [
+    "LIBVER",
+    "Frame",
+    "Mesh",
+    "ResultFile",
+    "open_result",
+    "probe_node",
+    "read_frame",
+    "read_mesh",
+    "read_result",
+    "recover",
+    "trajectory_length",
+]
+
+
+# --------------------------------------------------------------------------------------------
+# The HDF5 file and its complete frames
+# --------------------------------------------------------------------------------------------
+
+
+def open_result(path: str | Path):
+    """Opens a result file for reading with h5py: normally, or, for the file of a run that
+    was killed or whose disk filled up while writing (HDF5 refuses it: "file is already
+    open for write", "truncated file"), in SWMR read mode, which reads it as it was at its
+    last flush."""
+    import h5py
+
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        try:
+            return h5py.File(path, "r", libver=LIBVER, swmr=True)
+        except OSError:
+            raise exc from None
+
+
+def trajectory_length(h5) -> int:
+    """Complete frames in a file: the shortest of the trajectory datasets (a killed run
+    may have extended one dataset more than the others), less trailing frames that never
+    fully reached the disk (they read as NaN, the datasets' fill value)."""
+    g = h5.get("trajectory")
+    if g is None or "time" not in g:
+        return 0
+    names = [name for name in ("time", *TRAJECTORY) if name in g]
+    n = min(g[name].shape[0] for name in names)
+    while n > 0 and not _complete(g, names, n - 1):
+        n -= 1
+    return n
+
+
+def _complete(g, names, k: int) -> bool:
+    try:
+        return all(np.all(np.isfinite(g[name][k])) for name in names)
+    except (OSError, RuntimeError):  # data beyond the end of a truncated file
+        return False
+
+
+# --------------------------------------------------------------------------------------------
+# One stored state
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Frame:
+    """One stored state: time (or load factor), positions, velocities (None: not
+    stored), where it came from ("trajectory" frame ``index`` or "result"), and the
+    tensions stored with it (None: not stored)."""
+
+    t: float
+    x: np.ndarray
+    v: np.ndarray | None
+    source: str
+    index: int
+    tension: np.ndarray | None = None
+
+
+def _array(g, name: str) -> np.ndarray | None:
+    return np.asarray(g[name], dtype=np.float64) if name in g else None
+
+
+def _trajectory_frame(h5, k: int) -> Frame:
+    g = h5["trajectory"]
+    v = np.asarray(g["v"][k], dtype=np.float64) if "v" in g else None
+    tension = np.asarray(g["tension"][k], dtype=np.float64) if "tension" in g else None
+    x = np.asarray(g["x"][k], dtype=np.float64)
+    return Frame(float(g["time"][k]), x, v, "trajectory", k, tension)
+
+
+def _frame_index(path, n: int, index: int) -> int:
+    k = index if index >= 0 else n + index
+    if not 0 <= k < n:
+        raise ConfigError(f"{path}: has {n} frames: frame {index} does not exist")
+    return k
+
+
+def read_frame(path: str | Path, index: int = -1) -> Frame:
+    """A stored state of a result file: trajectory frame ``index`` (default: the last),
+    else, for a file without a trajectory, ``/result``. Raises ConfigError for a file that
+    is missing, not HDF5 or holds no state."""
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"{path}: no such result file")
+    try:
+        h5 = open_result(p)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read as an HDF5 result file: {exc}") from None
+    with h5:
+        n = trajectory_length(h5)
+        if n > 0:
+            return _trajectory_frame(h5, _frame_index(path, n, index))
+        if "result" in h5 and "x" in h5["result"]:
+            r = h5["result"]
+            t = float(r.attrs.get("time", 0.0))
+            x = np.asarray(r["x"], dtype=np.float64)
+            return Frame(t, x, _array(r, "v"), "result", -1, _array(r, "tension"))
+    raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
+
+
+# --------------------------------------------------------------------------------------------
+# The net a file was written for
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Mesh:
+    """The net of a result file (/mesh): nodes (N, 3) reference positions [m], edges (M, 2)
+    node indices, rest_length and EA (M,) [m], [N], fixed (N,) bool pinned nodes. In a
+    ``ResultFile`` the last three are None when a file does not hold them (in the right
+    shape); ``read_mesh`` requires all but EA."""
+
+    nodes: np.ndarray
+    edges: np.ndarray
+    rest_length: np.ndarray | None
+    EA: np.ndarray | None
+    fixed: np.ndarray | None
+
+
+def read_mesh(path: str | Path, *, what: str | None = None) -> Mesh:
+    """The mesh of a result file, all of nodes, edges, rest lengths and supports present.
+    Raises ConfigError naming ``what`` (default: the path) for a file without them."""
+    what = str(path) if what is None else what
+    try:
+        with open_result(path) as h5:
+            if "mesh" not in h5:
+                raise ConfigError(f"{what}: has no /mesh: not a catenet result file")
+            mesh = h5["mesh"]
+            try:
+                nodes = np.asarray(mesh["nodes"])
+                edges = np.asarray(mesh["edges"])
+                rest = np.asarray(mesh["rest_length"])
+                fixed = np.asarray(mesh["fixed"])
+            except KeyError as exc:
+                raise ConfigError(f"{what}: /mesh lacks {exc}: not a catenet result file") from None
+            EA = np.asarray(mesh["EA"]) if "EA" in mesh else None
+    except OSError as exc:
+        raise ConfigError(f"{what}: cannot be read: {exc}") from None
+    return Mesh(nodes, edges, rest, EA, fixed)
+
+
+# --------------------------------------------------------------------------------------------
+# The whole file, checked
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class ResultFile:
+    """A result file as read by ``read_result``.
+
+    mesh: the net (``Mesh``); attrs: the root attributes (the resolved case as TOML,
+    versions, ...), case: that TOML parsed ({} when missing or invalid), result_attrs:
+    those of /result ({} without). x (N, 3): the final positions, /result/x, or the last
+    complete trajectory frame for a run that stopped before writing it
+    (``from_trajectory``); tension (M,) [N]: the tensions stored with them (None: not
+    stored); converged: /result's flag (None: unknown); probe: the node whose deflection
+    is reported (/result's attribute, else ``probe_node``). times: the times (or load
+    factors) of the complete trajectory frames, ``frame(k)`` reads one; series_t /
+    series_delta: time and probe deflection (positive down) when there is more than one.
+    """
+
+    path: Path
+    mesh: Mesh
+    x: np.ndarray
+    tension: np.ndarray | None
+    probe: int
+    attrs: dict = field(default_factory=dict)
+    case: dict = field(default_factory=dict)
+    result_attrs: dict = field(default_factory=dict)
+    converged: bool | None = None
+    times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    series_t: np.ndarray | None = None
+    series_delta: np.ndarray | None = None
+    from_trajectory: bool = False  # x is the last trajectory frame (no /result/x)
+
+    @property
+    def title(self) -> str:
+        title = self.case.get("title") if isinstance(self.case.get("title"), str) else ""
+        return title or self.path.name
+
+    @property
+    def method(self) -> str | None:
+        """The case's solver.method ("static", "dynamic"; None when unknown)."""
+        method = self.case.get("solver", {}).get("method") if self.case else None
+        return method if isinstance(method, str) else None
+
+    @property
+    def delta(self) -> float:
+        """Final deflection of the probe node [m], positive downward."""
+        return measures.deflection(self.mesh.nodes, self.x, self.probe)
+
+    @property
+    def n_frames(self) -> int:
+        """Complete trajectory frames."""
+        return len(self.times)
+
+    def frame(self, index: int) -> Frame:
+        """Trajectory frame ``index`` (negative: from the end)."""
+        k = _frame_index(self.path, self.n_frames, index)
+        with open_result(self.path) as h5:
+            return _trajectory_frame(h5, k)
+
+
+def probe_node(nodes: np.ndarray, fixed: np.ndarray | None = None) -> int:
+    """The node whose deflection is reported when the file does not say: the free node
+    nearest the centre of the x-y bounding box (the midpoint of a cable with an odd node
+    count, the centre of a square net)."""
+    lo, hi = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
+    dist = np.hypot(*(nodes[:, :2] - 0.5 * (lo + hi)).T)
+    if fixed is not None and not fixed.all():
+        dist = np.where(fixed, np.inf, dist)
+    return int(np.argmin(dist))
+
+
+def _dataset(h5, name: str, path: Path, shape_tail: tuple, dtype, problems: list[str]):
+    obj = h5.get(name)
+    if obj is None:
+        return None
+    if not hasattr(obj, "shape"):
+        problems.append(f"{path}: {name} is a group: must be a dataset")
+        return None
+    arr = np.asarray(obj[()])
+    if arr.ndim != 1 + len(shape_tail) or tuple(arr.shape[1:]) != shape_tail:
+        want = "(n" + "".join(f", {k}" for k in shape_tail) + ")"
+        problems.append(f"{path}: {name} has shape {arr.shape}: must be {want}")
+        return None
+    try:
+        return arr.astype(dtype)
+    except (TypeError, ValueError):
+        problems.append(f"{path}: {name} is not numeric")
+        return None
+
+
+def read_result(path: str | Path) -> ResultFile:
+    """Reads a result file, checking the SPEC §5 layout; raises ConfigError listing every
+    problem found.
+
+    /result/x may be missing (a run that stopped before writing it): the last complete
+    trajectory frame stands in, with its tensions. /mesh/fixed of the wrong shape counts
+    as missing.
+    """
+    import h5py
+
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(f"{path}: no such file or directory")
+    if not path.is_file():
+        raise ConfigError(f"{path}: not a file")
+    try:
+        is_h5 = h5py.is_hdf5(path)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read: {exc}") from exc
+    if not is_h5:
+        raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
+
+    problems: list[str] = []
+    try:
+        with open_result(path) as h5:  # also the file of a killed run
+            missing = [name for name in REQUIRED if name not in h5]
+            nodes = _dataset(h5, "/mesh/nodes", path, (3,), np.float64, problems)
+            edges = _dataset(h5, "/mesh/edges", path, (2,), np.int64, problems)
+            fixed = _dataset(h5, "/mesh/fixed", path, (), bool, problems)
+            x = _dataset(h5, "/result/x", path, (3,), np.float64, problems)
+            tension = _dataset(h5, "/result/tension", path, (), np.float64, problems)
+            rest = _dataset(h5, "/mesh/rest_length", path, (), np.float64, problems)
+            EA = _dataset(h5, "/mesh/EA", path, (), np.float64, problems)
+            time = _dataset(h5, "/trajectory/time", path, (), np.float64, problems)
+            traj = h5.get("/trajectory/x")
+            n_frames = 0
+            if traj is not None and hasattr(traj, "shape") and traj.ndim == 3:
+                n_frames = min(traj.shape[0], trajectory_length(h5))
+            elif traj is not None:
+                problems.append(f"{path}: /trajectory/x must have shape (T, N, 3)")
+            from_trajectory = False
+            if x is None and "/result/x" not in h5:
+                if n_frames > 0:
+                    x = np.asarray(traj[n_frames - 1], dtype=np.float64)
+                    from_trajectory = True
+                    t_traj = h5.get("/trajectory/tension")
+                    if tension is None and t_traj is not None and t_traj.ndim == 2:
+                        if t_traj.shape[0] >= n_frames:
+                            tension = np.asarray(t_traj[n_frames - 1], dtype=np.float64)
+                else:
+                    missing.append("/result/x")
+            if missing:
+                problems.insert(
+                    0,
+                    f"{path}: missing {', '.join(missing)}: not a catenet result file "
+                    "(layout of SPEC §5: /mesh/nodes, /mesh/edges, /result/x, ...)",
+                )
+            if problems:
+                raise ConfigError(problems)
+            n, m = len(nodes), len(edges)
+            if x.shape != nodes.shape:
+                problems.append(f"{path}: /result/x has shape {x.shape}: must be {nodes.shape}")
+            if m and (edges.min() < 0 or edges.max() >= n):
+                problems.append(f"{path}: /mesh/edges: node indices must be in 0..{n - 1}")
+            if fixed is not None and fixed.shape != (n,):
+                fixed = None
+            for name, arr in (("tension", tension), ("rest_length", rest), ("EA", EA)):
+                if arr is not None and arr.shape != (m,):
+                    problems.append(f"{path}: {name} has {len(arr)} values: must be {m}")
+            if problems:
+                raise ConfigError(problems)
+            attrs = dict(h5.attrs)
+            case = _case(attrs.get("case"), path)
+            result_attrs = dict(h5["/result"].attrs) if "/result" in h5 else {}
+            converged = bool(result_attrs["converged"]) if "converged" in result_attrs else None
+            probe = None
+            if "probe" in result_attrs:
+                try:
+                    probe = int(result_attrs["probe"])
+                except (TypeError, ValueError):
+                    probe = None
+                if probe is not None and not 0 <= probe < n:
+                    probe = None
+            if probe is None:
+                probe = probe_node(nodes, fixed)
+            times = np.zeros(0)
+            if n_frames and time is not None:
+                times = time[:n_frames]
+            series_t = series_delta = None
+            if n_frames > 1 and traj.shape[1:] == (n, 3):
+                xp = np.asarray(traj[:n_frames, probe : probe + 1], dtype=np.float64)
+                series_delta = measures.deflection(nodes[probe : probe + 1], xp, 0)
+                if time is not None and len(time) >= n_frames:
+                    series_t = time[:n_frames]
+                else:
+                    series_t = np.arange(n_frames, dtype=np.float64)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read as HDF5: {exc}") from exc
+    return ResultFile(
+        path=path,
+        mesh=Mesh(nodes, edges, rest, EA, fixed),
+        x=x,
+        tension=tension,
+        probe=probe,
+        attrs=attrs,
+        case=case,
+        result_attrs=result_attrs,
+        converged=converged,
+        times=times,
+        series_t=series_t,
+        series_delta=series_delta,
+        from_trajectory=from_trajectory,
+    )
+
+
+def _case(text, path: Path) -> dict:
+    if text is None:
+        return {}
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    try:
+        return tomllib.loads(str(text))
+    except tomllib.TOMLDecodeError as exc:
+        log.warning("%s: the case attribute is not valid TOML (%s); plotting without it", path, exc)
+        return {}
+
+
+# --------------------------------------------------------------------------------------------
+# Recovering a killed run's file
+# --------------------------------------------------------------------------------------------
+
+
+def recover(path: str | Path, out: str | Path | None = None) -> Path:
+    """Copies the readable part of a result file (in particular one left by a killed run,
+    which ordinary HDF5 readers refuse) into a clean file, ``out`` or ``path`` itself,
+    and rewrites the XDMF sidecar to match. Returns the clean file's path."""
+    import h5py
+
+    src = Path(path)
+    dst = src if out is None else Path(out)
+    tmp = dst.with_name(f".{dst.name}.recover-{os.getpid()}")
+    with open_result(src) as h5, h5py.File(tmp, "w", libver=LIBVER) as clean:
+        for key, value in h5.attrs.items():
+            clean.attrs[key] = value
+        n = trajectory_length(h5)
+        for name in h5:
+            if name == "trajectory":
+                g = clean.create_group("trajectory")
+                for key, ds in h5["trajectory"].items():
+                    copy = g.create_dataset(
+                        key,
+                        data=ds[:n],
+                        maxshape=(None, *ds.shape[1:]),
+                        chunks=ds.chunks,
+                        compression=ds.compression,
+                        shuffle=ds.shuffle,
+                    )
+                    for attr, value in ds.attrs.items():
+                        copy.attrs[attr] = value
+            else:
+                h5.copy(h5[name], clean, name=name)
+    os.replace(tmp, dst)
+    _write_sidecar_for(dst)
+    return dst
+
+
+def _write_sidecar_for(path: Path) -> None:
+    with open_result(path) as h5:
+        n_nodes, n_edges = len(h5["mesh/nodes"]), len(h5["mesh/edges"])
+        n = trajectory_length(h5)
+        times = list(np.asarray(h5["trajectory/time"][:n], dtype=float)) if n else []
+        has_v = "trajectory" in h5 and "v" in h5["trajectory"]
+        has_result = "result" in h5 and "x" in h5["result"]
+    if times or has_result:
+        write_xdmf(
+            sidecar_path(path),
+            path.name,
+            n_nodes=n_nodes,
+            n_edges=n_edges,
+            times=times,
+            velocities=has_v,
+        )
