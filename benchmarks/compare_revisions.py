@@ -3,8 +3,9 @@
 Checks out REV (default: the commit before HEAD) into a temporary git worktree and times
 whole `catenet run configs/fig4i_n34_alpha_pi4.toml` processes of both trees, interleaved
 (A B A B ...) so that the load of a shared machine falls on both alike, after one warm-up
-run of each (Numba's cache is per tree). Prints the medians and their ratio and writes
-benchmarks/results/revisions.csv.
+run of each (Numba's cache is per tree). Prints the medians and their ratio, and how far
+the two trees' results differ (largest difference of /result/x and /result/tension,
+relative to their largest entry), and writes benchmarks/results/revisions.csv.
 
 Usage: python benchmarks/compare_revisions.py [--base REV] [--repeat N] [--case PATH]
 """
@@ -40,6 +41,18 @@ def run_once(tree: Path, case: Path, out: Path) -> float:
     return seconds
 
 
+def _differences(a: Path, b: Path) -> dict[str, float]:
+    import h5py
+    import numpy as np
+
+    out = {}
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        for key in ("x", "tension"):
+            u, w = np.asarray(fa["result"][key]), np.asarray(fb["result"][key])
+            out[key] = float(np.max(np.abs(u - w)) / max(np.max(np.abs(u)), 1e-300))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--base", default="HEAD~1", help="the revision to compare with")
@@ -57,8 +70,9 @@ def main() -> None:
         try:
             trees = {"this": ROOT, args.base: base}
             times: dict[str, list[float]] = {name: [] for name in trees}
-            for name, tree in trees.items():  # warm Numba's cache of each tree
-                run_once(tree, case, Path(tmp) / f"{len(times[name])}.h5")
+            for k, tree in enumerate(trees.values()):  # warm each tree's Numba cache
+                run_once(tree, case, Path(tmp) / f"warm{k}.h5")
+            differ = _differences(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
             for k in range(args.repeat):
                 for name, tree in trees.items():
                     times[name].append(run_once(tree, case, Path(tmp) / f"{name[:4]}{k}.h5"))
@@ -72,7 +86,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "revisions.csv", "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["tree", "revision", "median_s", "min_s", "runs"])
+        w.writerow(["tree", "revision", "median_s", "min_s", "runs", "dx_rel", "dtension_rel"])
         for name, t in times.items():
             rev = subprocess.run(
                 [
@@ -86,10 +100,15 @@ def main() -> None:
                 capture_output=True,
                 text=True,
             ).stdout.strip()
-            w.writerow([name, rev, f"{median[name]:.4f}", f"{min(t):.4f}", len(t)])
+            w.writerow(
+                [name, rev, f"{median[name]:.4f}", f"{min(t):.4f}", len(t)]
+                + [f"{differ['x']:.3e}", f"{differ['tension']:.3e}"]
+            )
     for name in trees:
         print(f"{name:>10}: median {median[name]:.3f} s, min {min(times[name]):.3f} s")
     print(f"ratio this / {args.base}: {ratio:.3f}")
+    for key, value in differ.items():
+        print(f"largest relative difference of /result/{key}: {value:.2e}")
 
 
 if __name__ == "__main__":
