@@ -71,6 +71,19 @@ def eq_row(check, value, tol, results, net, loads, note="", factor=1.0):
 # --- scenes ---------------------------------------------------------------------------------
 
 
+def _solve(net, loads, method: str, *, dt: float, damping: float, t_end: float, budget: float):
+    """A scene through catenet's solve path; dynamic runs stop after ``budget`` seconds."""
+    from catenet import solve as sv
+
+    start = time.perf_counter()
+
+    def stop(step: sv.Step) -> bool:
+        return time.perf_counter() - start > budget
+
+    settings = sv.Settings(method, dt=dt, damping=damping, t_end=t_end)
+    return sv.solve(sv.Problem(net, loads), settings, on_step=stop if method == "dynamic" else None)
+
+
 def midpoint_load(
     F_bar: float | None = None,
     F: float | None = None,
@@ -84,23 +97,13 @@ def midpoint_load(
 ):
     """Cable (L = 1) under a midpoint load, against Eq. 17."""
     from catenet import analytic
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
 
     EA = paper_material().EA if EA is None else EA
     F = F_bar * EA if F is None else F
     net, loads, mid = midpoint_cable(F, nodes=nodes, EA=EA)
     exact = analytic.midpoint_load_deflection(F, 1.0, EA)
-    if method == "static":
-        res = solve_static(net, loads)
-    else:
-        start = time.perf_counter()
-        t_end = steps * h if steps else 1e6 * h
-
-        def stop(step, t, x, v):
-            return time.perf_counter() - start > budget
-
-        res = solve_dynamic(net, loads, dt=h, damping=damping, t_end=t_end, on_step=stop)
+    t_end = steps * h if steps else 1e6 * h
+    res = _solve(net, loads, method, dt=h, damping=damping, t_end=t_end, budget=budget)
     delta = -float(res.x[mid, 2])
     strain = res.max_strain
     if method == "dynamic" and not res.equilibrium:
@@ -134,8 +137,6 @@ def self_weight(
     """Cable of length 1 under its own weight, supports moved inward by dL (0: a straight
     zero-slack cable), against the exact discrete chain."""
     from catenet import analytic
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
 
     net, loads = compressed_catenary(
         dL, nodes=nodes, EA=EA, tension_only=tension_only, ramp=ramp if method == "dynamic" else 0.0
@@ -143,15 +144,8 @@ def self_weight(
     EA_ = float(net.EA[0])
     w = float(net.line_density[0]) * 9.81
     exact = analytic.discrete_catenary(1.0, EA_, w, 1.0 - dL, nodes - 1).sag
-    if method == "static":
-        res = solve_static(net, loads)
-    else:
-        start = time.perf_counter()
-
-        def stop(step, t, x, v):
-            return time.perf_counter() - start > budget
-
-        res = solve_dynamic(net, loads, dt=h, damping=1.0, t_end=1e4, on_step=stop)
+    res = _solve(net, loads, method, dt=h, damping=1.0, t_end=1e4, budget=budget)
+    if method == "dynamic":
         if not res.equilibrium:
             return eq_row(
                 "chain",
