@@ -1,9 +1,10 @@
 """Material laws of the edges, as data: which law every edge follows and its parameters.
 
 The stretch kernels get a ``Law`` explicitly (law id, parameters and tension-only switch
-per edge, and the smoothing of the switch); nothing about the law is state of a solver.
-Each law is the strain energy density w(eps) of ``catenet.kernels.laws`` with w''(0) = 1,
-so EA is its small-strain stiffness and every law reduces to the paper's at small strain.
+per edge, the shared table rows, and the smoothing of the switch); nothing about the law is
+state of a solver. Each law is the strain energy density w(eps) of ``catenet.kernels.laws``
+with w''(0) = 1, so EA is its small-strain stiffness and every law reduces to the paper's at
+small strain.
 
 ``LAWS`` names the laws users choose from (the case key ``material.law``).
 """
@@ -11,54 +12,83 @@ so EA is its small-strain stiffness and every law reduces to the paper's at smal
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from catenet.errors import ConfigError
+
 #: Law ids of the kernels (``catenet.kernels.laws.density`` branches on them).
 LINEAR = 0
+NEO_HOOKEAN = 1
+HENCKY = 2
+TABLE = 3
 
 
 @dataclass(frozen=True)
 class LawInfo:
-    """A law users can name: its kernel id, parameter names and what it is."""
+    """A law users can name: its kernel id, what it is, and the largest strain it is meant
+    for (a warning says when a result goes beyond it; a table's is its last point)."""
 
     id: int
-    params: tuple[str, ...]
     doc: str
+    max_strain: float = math.inf
 
 
 LAWS = {
-    "linear": LawInfo(LINEAR, (), "the paper's: tension EA eps (small strain)"),
+    "linear": LawInfo(LINEAR, "the paper's: tension EA eps (small strain)", 0.05),
+    "neo_hookean": LawInfo(
+        NEO_HOOKEAN, "1D incompressible neo-Hookean: EA (lambda - lambda^-2) / 3 (large strain)"
+    ),
+    "hencky": LawInfo(
+        HENCKY, "logarithmic strain: EA ln(lambda) / lambda (force peaks at eps = e - 1)", 1.0
+    ),
+    "table": LawInfo(TABLE, "piecewise-linear tension against strain (material.table)"),
 }
 
 
 @dataclass(frozen=True, eq=False)
 class Law:
-    """Per edge: law id ``kind`` (M,), parameters ``params`` (M, P), ``tension_only`` (M,);
-    ``smooth`` > 0 smooths the tension-only switch (the static solver's continuation)."""
+    """Per edge: law id ``kind`` (M,), parameters ``params`` (M, 2), ``tension_only`` (M,);
+    ``table`` (K, 3) holds the rows (eps, N/EA, w) of every tabulated law (a table edge's
+    params are its first row and row count); ``smooth`` > 0 smooths the tension-only switch
+    (the static solver's continuation)."""
 
     kind: np.ndarray
     params: np.ndarray
     tension_only: np.ndarray
+    table: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((2, 3)))
     smooth: float = 0.0
 
     @classmethod
-    def uniform(cls, n_edges: int, name: str = "linear", *, tension_only=True, params=()):
-        """Every edge of one law; ``tension_only`` a bool or one per edge."""
-        info = LAWS[name]
-        p = np.zeros((n_edges, max(len(info.params), 1)))
-        p[:, : len(params)] = params
+    def uniform(cls, n_edges: int, name: str = "linear", *, tension_only=True, table=None):
+        """Every edge of one law; ``tension_only`` a bool or one per edge; ``table`` the
+        (strain, tension / EA) points of the "table" law (see ``table_rows``)."""
+        if name not in LAWS:
+            raise ConfigError(f"material.law = {name!r}: must be one of {', '.join(LAWS)}")
+        params = np.zeros((n_edges, 2))
+        rows = np.zeros((2, 3))
+        if name == "table":
+            if table is None:
+                raise ConfigError("material.table: missing: the table law needs its points")
+            rows = np.asarray(table, dtype=np.float64)
+            params[:, 1] = len(rows)
         only = np.broadcast_to(np.asarray(tension_only, dtype=np.bool_), (n_edges,))
         return cls(
-            kind=np.full(n_edges, info.id, dtype=np.int64),
-            params=np.ascontiguousarray(p),
+            kind=np.full(n_edges, LAWS[name].id, dtype=np.int64),
+            params=np.ascontiguousarray(params),
             tension_only=np.ascontiguousarray(only),
+            table=np.ascontiguousarray(rows),
         )
 
     def smoothed(self, smooth: float) -> Law:
         """The same law with the tension-only switch smoothed by ``smooth`` (0: exact)."""
         return dataclasses.replace(self, smooth=float(smooth))
+
+    def with_tension_only(self, tension_only) -> Law:
+        only = np.broadcast_to(np.asarray(tension_only, dtype=np.bool_), self.kind.shape)
+        return dataclasses.replace(self, tension_only=np.ascontiguousarray(only))
 
     @property
     def any_tension_only(self) -> bool:
@@ -67,3 +97,71 @@ class Law:
     @property
     def all_tension_only(self) -> bool:
         return bool(self.tension_only.all())
+
+    @property
+    def convex(self) -> bool:
+        """Whether every edge's energy is convex in x (tension-only edges of laws whose
+        force does not fall with strain): the matrices are then positive semidefinite."""
+        if not self.all_tension_only:
+            return False
+        return not np.any(self.kind == HENCKY)
+
+    def max_strain(self) -> np.ndarray:
+        """Per edge, the largest strain its law is meant for."""
+        by_id = {info.id: info.max_strain for info in LAWS.values()}
+        out = np.array([by_id[int(k)] for k in range(max(by_id) + 1)])[self.kind]
+        table = self.kind == TABLE
+        if table.any():
+            last = (self.params[table, 0] + self.params[table, 1] - 1).astype(np.int64)
+            out[table] = self.table[last, 0]
+        return out
+
+    def strain_for_tension(self, tension: np.ndarray, EA: np.ndarray) -> np.ndarray:
+        """Per edge, the strain at which it carries ``tension`` [N] (NaN where it cannot:
+        compression in a tension-only edge, or beyond what the law reaches)."""
+        from catenet.kernels.laws import strain_for_force
+
+        tension = np.broadcast_to(np.asarray(tension, dtype=np.float64), self.kind.shape)
+        out = np.empty(len(self.kind))
+        for k in range(len(out)):
+            if self.tension_only[k] and tension[k] < 0.0:
+                out[k] = np.nan
+                continue
+            out[k] = strain_for_force(self.kind[k], self.params[k], self.table, tension[k] / EA[k])
+        return out
+
+
+def table_rows(points, *, path: str = "material.table") -> tuple[np.ndarray, float]:
+    """The kernel rows (eps, N/EA, w) and EA of a user table of (strain, tension [N]) points.
+
+    The points must have strictly increasing strains > 0 and non-decreasing tensions with
+    a positive first one; (0, 0) is the table's first row. EA is the first segment's slope,
+    so that N/EA has slope 1 at eps = 0 like every law. Raises ConfigError otherwise."""
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 1 or not np.all(np.isfinite(pts)):
+        raise ConfigError(
+            f"{path} = {np.asarray(points).tolist()!r}: must be [[strain, tension], ...]: "
+            "finite numbers, at least one point"
+        )
+    if pts[0, 0] == 0.0 and pts[0, 1] == 0.0:
+        pts = pts[1:]
+    if len(pts) < 1 or not pts[0, 0] > 0.0:
+        raise ConfigError(f"{path}: strains must start above 0 ((0, 0) is implied)")
+    strain = np.concatenate([[0.0], pts[:, 0]])
+    tension = np.concatenate([[0.0], pts[:, 1]])
+    if np.any(np.diff(strain) <= 0.0):
+        k = int(np.flatnonzero(np.diff(strain) <= 0.0)[0])
+        raise ConfigError(
+            f"{path}[{k}] = {pts[k].tolist()}: strains must increase strictly (monotone table)"
+        )
+    if np.any(np.diff(tension) < 0.0) or not tension[1] > 0.0:
+        bad = np.flatnonzero(np.diff(tension) < 0.0)
+        k = int(bad[0]) if bad.size else 0
+        raise ConfigError(
+            f"{path}[{k}] = {pts[k].tolist()}: tensions must not decrease and the first must "
+            "be > 0 (monotone table)"
+        )
+    EA = tension[1] / strain[1]
+    n = tension / EA
+    w = np.concatenate([[0.0], np.cumsum(0.5 * (n[1:] + n[:-1]) * np.diff(strain))])
+    return np.column_stack([strain, n, w]), float(EA)

@@ -36,6 +36,7 @@ def edge_tension(x, edges, rest_length, EA, law) -> np.ndarray:
         np.ascontiguousarray(EA, dtype=np.float64),
         law.kind,
         law.params,
+        law.table,
         law.tension_only,
         out,
     )

@@ -69,9 +69,12 @@ class Net:
         rest_length=None,
         line_density=0.0,
         tension_only: bool = True,
+        law: Law | None = None,
     ) -> Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
-        node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths."""
+        node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
+        ``law`` (one entry per edge) defaults to the paper's linear law with
+        ``tension_only`` for every edge."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
         edges = _as_array("edges", edges, np.int64, (2,))
         n, m = len(nodes), len(edges)
@@ -116,9 +119,11 @@ class Net:
         EA = _broadcast("EA", EA, m, problems)
         rho_a = _broadcast("line_density", line_density, m, problems, allow_zero=True)
         mask = _fixed_mask(fixed, n, problems)
+        if law is not None and len(law.kind) != m:
+            problems.append(f"law: {len(law.kind)} entries: must have one per edge ({m})")
         if problems:
             raise ConfigError(problems)
-        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only))
+        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law)
         net._check_supported()
         return net
 
@@ -158,6 +163,7 @@ class Net:
             rest_length=rest_length,
             line_density=self.line_density,
             tension_only=self.tension_only,
+            law=self.law,
         )
 
     def components(self) -> np.ndarray:

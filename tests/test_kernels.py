@@ -38,7 +38,7 @@ def random_net(seed: int, tension_only: bool, n: int = 12, m: int = 25):
 def law_args(net):
     """The stretch kernels' arguments of a net: edges, rest lengths, EA and its law."""
     law = net.law
-    return net.edges, net.rest_length, net.EA, law.kind, law.params, law.tension_only
+    return net.edges, net.rest_length, net.EA, law.kind, law.params, law.table, law.tension_only
 
 
 def energy(net, x, smooth=0.0):

@@ -235,10 +235,11 @@ class Key:
     ``default`` is the value when the key is absent (REQUIRED: a problem); ``computed``
     keys are absent as None and filled in by their section (the chord, the file name),
     so their dataclass field has no default. ``write`` says when ``to_dict`` writes the
-    key: "always", "given" (not when None or empty) or "never". ``missing`` is what the
-    message for an absent required key asks for; ``shown`` is the default as the README
-    shows it, when it is not a plain value. A ``null`` key given as None (from Python or
-    a JSON file) is as absent.
+    key: "always", "given" (not when None or empty), "changed" (not when it is the
+    default: keys added later, so that older resolved cases read the same) or "never".
+    ``missing`` is what the message for an absent required key asks for; ``shown`` is the
+    default as the README shows it, when it is not a plain value. A ``null`` key given as
+    None (from Python or a JSON file) is as absent.
     """
 
     check: Check
@@ -402,6 +403,8 @@ class Declared:
         for k in declared(type(self)):
             v = getattr(self, k.attr)
             if k.write == "never" or (k.write == "given" and (v is None or v == ())):
+                continue
+            if k.write == "changed" and v == k.default:
                 continue
             out[k.name] = plain(v)
         return out

@@ -122,6 +122,14 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     output = parse_output(ck, data.get("output", {}), ctx, source)
 
     # Rules between sections.
+    if isinstance(material, MaterialConfig) and material.prestress is not None:
+        g = data.get("geometry") if isinstance(data.get("geometry"), Mapping) else {}
+        for other in ("length", "rest_length", "prestrain"):
+            if other in g:
+                ck.add(
+                    f"material.prestress = {material.prestress!r}: gives the rest lengths; "
+                    f"give it or geometry.{other}, not both"
+                )
     if isinstance(material, MaterialConfig):
         dens = material.density
         if isinstance(solver, SolverConfig) and solver.method == "dynamic" and dens == 0:

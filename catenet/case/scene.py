@@ -11,6 +11,7 @@ from catenet.case.keys import show
 from catenet.case.kinds.base import resolve, with_prefix
 from catenet.case.parse import Case
 from catenet.errors import ConfigError
+from catenet.laws import Law, table_rows
 from catenet.net import Loads, Net
 
 
@@ -46,9 +47,42 @@ def _build(case: Case) -> Scene:
         tension_only=mat.tension_only,
     )
     built = case.geometry.build(material, case.supports.fixed)
-    loads = _loads(case, built.net, built.names, built.size)
-    return Scene(
-        case=case, net=built.net, loads=loads, probe=int(built.probe), size=float(built.size)
+    net = _with_law(case, built.net)
+    loads = _loads(case, net, built.names, built.size)
+    return Scene(case=case, net=net, loads=loads, probe=int(built.probe), size=float(built.size))
+
+
+def _with_law(case: Case, net: Net) -> Net:
+    """The net under the case's material law, with the rest lengths that give every edge
+    ``material.prestress`` in the given geometry (U = EA l0 w(eps): the tension
+    EA w'(eps) equals the prestress at eps = |e|/l0 - 1, so l0 = |e| / (1 + eps))."""
+    mat = case.material
+    if mat.law == "linear" and mat.prestress is None:
+        return net  # the builders' default: the paper's law
+    rows = table_rows(mat.table)[0] if mat.law == "table" else None
+    law = Law.uniform(net.n_edges, mat.law, tension_only=net.law.tension_only, table=rows)
+    rest = net.rest_length
+    if mat.prestress is not None:
+        length = np.linalg.norm(net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]], axis=1)
+        eps = law.strain_for_tension(mat.prestress, net.EA)
+        bad = np.flatnonzero(~(np.isfinite(eps) & (eps > -1.0)))
+        if bad.size:
+            k = int(bad[0])
+            raise ConfigError(
+                f"material.prestress = {mat.prestress!r}: edge {k} cannot carry it under "
+                f"law {mat.law!r} (EA = {net.EA[k]:.6g} N): its rest length would not be "
+                "positive, or the law never reaches that tension"
+            )
+        rest = length / (1.0 + eps)
+    return Net.from_arrays(
+        net.nodes,
+        net.edges,
+        EA=net.EA,
+        fixed=net.fixed,
+        rest_length=rest,
+        line_density=net.line_density,
+        tension_only=net.tension_only,
+        law=law,
     )
 
 

@@ -32,6 +32,7 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS
 from catenet.errors import ConfigError
+from catenet.laws import LAWS, table_rows
 
 METHODS = ("static", "dynamic")
 LINEAR = ("auto", "pardiso", "scipy")
@@ -41,6 +42,21 @@ NodeRef = int | str
 
 
 # --------------------------------------------------------------------------- material
+
+
+def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A monotone tension-strain table, as a tuple of (strain, tension) pairs."""
+    if not isinstance(v, (list, tuple)) or not all(
+        isinstance(p, (list, tuple)) and len(p) == 2 for p in v
+    ):
+        return ck.bad(path, v, "must be [[strain, tension], ...]: pairs of numbers")
+    try:
+        table_rows(v, path=path)
+    except (ConfigError, TypeError, ValueError) as exc:
+        problems = getattr(exc, "problems", None) or [f"{path} = {show(v)}: {exc}"]
+        ck.problems.extend(problems)
+        return BAD
+    return tuple((float(a), float(b)) for a, b in v)
 
 
 @dataclass(frozen=True)
@@ -70,6 +86,23 @@ class MaterialConfig(Declared):
         doc="needs radius or area; must be > 0 for dynamic runs and for gravity",
     )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
+    law: str = choice(
+        "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"
+    )
+    table: tuple | None = key(
+        _check_table,
+        "[[strain, tension], ...]: strains increasing from above 0, tensions not decreasing",
+        None,
+        write="given",
+        unit="-, N",
+        doc='law = "table": tension against strain; its first slope is EA',
+    )
+    prestress: float | None = real(
+        None,
+        write="given",
+        unit="N",
+        doc="tension of every edge in the given geometry (rest lengths derived from it)",
+    )
 
     @property
     def cross_section(self) -> float | None:
@@ -82,7 +115,10 @@ class MaterialConfig(Declared):
 
     @property
     def axial_stiffness(self) -> float | None:
-        """EA [N]: E * A, or EA as given (None for a graph with EA per edge only)."""
+        """EA [N]: E * A, or EA as given, or the table's first slope (None for a graph
+        with EA per edge only)."""
+        if self.table is not None:
+            return table_rows(self.table)[1]
         if self.EA is not None:
             return self.EA
         if self.E is not None and self.cross_section is not None:
@@ -124,8 +160,24 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
             f"material.E = {show(m['E'])}: needs a cross-section: give material.radius or "
             "material.area (or give material.EA instead of E)"
         )
-    elif not given & {"E", "EA"} and not per_edge_ea:
+    elif not given & {"E", "EA"} and not per_edge_ea and v["law"] != "table":
         ck.add("material: missing stiffness: give E with radius or area, or EA")
+    if v["law"] == "table":
+        if "table" not in m:
+            ck.add("material.table: missing: law = 'table' needs [[strain, tension], ...]")
+        for k in sorted(given & {"E", "EA"}):
+            ck.add(
+                f"material.{k} = {show(m[k])}: the table gives the stiffness with law = "
+                "'table' (radius or area give the mass only)"
+            )
+    elif "table" in m and v["law"] is not BAD:
+        ck.add(f"material.table: only with material.law = 'table' (this is {v['law']!r})")
+    prestress = v["prestress"]
+    if prestress not in (None, BAD) and prestress < 0 and v["tension_only"] is True:
+        ck.add(
+            f"material.prestress = {prestress!r}: tension-only cables carry no compression: "
+            "must be >= 0 (or set material.tension_only = false for struts)"
+        )
     density = v["density"]
     if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:
         ck.add(

@@ -12,7 +12,8 @@ Eq. 8 lacks the 1/|e| of the second term's strain derivative: d2eps/de2 =
 (I - t(x)t)/(l0 |e|).) The paper's linear law is w = eps^2/2: U = 1/2 EA eps^2 l0.
 
 Every law is data handed to these kernels per edge, never state: ``law`` (M,) holds the
-law ids, ``params`` (M, P) their parameters, ``tension_only`` (M,) the switch that makes
+law ids, ``params`` (M, 2) their parameters, ``table`` (K, 3) the rows of tabulated
+laws, ``tension_only`` (M,) the switch that makes
 an edge slack (no energy, force or stiffness) while eps < 0, and ``smooth`` > 0 replaces
 that switch by a smooth one (the static solver's continuation; see ``laws.tension_only``).
 A slack edge writes its 36 Hessian values as zeros so that the sparsity pattern never
@@ -33,7 +34,7 @@ from catenet.kernels.laws import strain_energy
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_energy(x, edges, l0, ea, law, params, tension_only, smooth):
+def stretch_energy(x, edges, l0, ea, law, params, table, tension_only, smooth):
     """Total stretching energy [J] of positions x (N, 3)."""
     total = 0.0
     for k in range(edges.shape[0]):
@@ -43,13 +44,13 @@ def stretch_energy(x, edges, l0, ea, law, params, tension_only, smooth):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        w, _, _ = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
+        w, _, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
         total += ea[k] * l0[k] * w
     return total
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_gradient(x, edges, l0, ea, law, params, tension_only, smooth, grad):
+def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth, grad):
     """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
     nodes) and returns the stretching energy."""
     total = 0.0
@@ -61,7 +62,7 @@ def stretch_gradient(x, edges, l0, ea, law, params, tension_only, smooth, grad):
         e2 = x[j, 2] - x[i, 2]
         length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
         eps = length / l0[k] - 1.0
-        w, force, _ = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
+        w, force, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
         if force == 0.0 and w == 0.0:
             continue
         total += ea[k] * l0[k] * w
@@ -76,7 +77,7 @@ def stretch_gradient(x, edges, l0, ea, law, params, tension_only, smooth, grad):
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_hessian(x, edges, l0, ea, law, params, tension_only, smooth, values):
+def stretch_hessian(x, edges, l0, ea, law, params, table, tension_only, smooth, values):
     """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
     local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
     for k in range(edges.shape[0]):
@@ -88,7 +89,7 @@ def stretch_hessian(x, edges, l0, ea, law, params, tension_only, smooth, values)
         e[2] = x[j, 2] - x[i, 2]
         length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         eps = length / l0[k] - 1.0
-        _, force, stiffness = strain_energy(law[k], params[k], eps, tension_only[k], smooth)
+        _, force, stiffness = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
         base = 36 * k
         if stiffness == 0.0 and force == 0.0:  # slack: no division by a length
             for a in range(36):
@@ -110,7 +111,7 @@ def stretch_hessian(x, edges, l0, ea, law, params, tension_only, smooth, values)
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_tension(x, edges, l0, ea, law, params, tension_only, out):
+def stretch_tension(x, edges, l0, ea, law, params, table, tension_only, out):
     """Axial force EA w'(eps) of every edge [N] (0 when slack and tension-only)."""
     for k in range(edges.shape[0]):
         i = edges[k, 0]
@@ -119,5 +120,5 @@ def stretch_tension(x, edges, l0, ea, law, params, tension_only, out):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        _, force, _ = strain_energy(law[k], params[k], eps, tension_only[k], 0.0)
+        _, force, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], 0.0)
         out[k] = ea[k] * force

@@ -29,6 +29,14 @@ density 1000 kg/m^3, so EA = 3141.6 N and w = rho A g = 3.082 N/m):
     0.904 %, 0.126 % and 0.044 %, of which the exact elastic catenary accounts for 0.902 %,
     0.124 % and 0.040 %; the rest is the discretisation error).
 
+(iii) Material laws. A bar of the paper's cable (EA = 3141.6 N, rest length L) fixed at one
+    end and pulled along its axis at the other, for every law of ``catenet.laws.LAWS``
+    (the table law with a three-segment table whose first slope is EA). The bar stays
+    straight, so its strain solves EA w'(eps) = F exactly. At F = 1e-4 EA every law must
+    give the paper's strain F/EA to 1e-3 relative (they differ at O(eps)), and at the force
+    of 50 % strain under each law (neo-Hookean F/EA = (lambda - lambda^-2)/3, Hencky
+    ln(lambda)/lambda, the table's interpolation) the strain must be 0.5 to 1e-9.
+
 Every solve starts from catenet's default guess (the straight cable with its supports
 moved). Should Newton fail from there, case (ii) retries from the previous resolution's
 equilibrium interpolated onto the finer mesh and says so in the row's note.
@@ -313,14 +321,79 @@ def catenary_rows(
     return rows
 
 
+#: The table law of case (iii): (strain, tension / EA) points, first slope 1.
+LAW_TABLE = ((0.1, 0.1), (0.3, 0.16), (0.8, 0.5))
+SMALL_FORCE = 1e-4  # F/EA of the small-strain rows
+SMALL_TOL = 1e-3  # every law is the paper's to O(eps)
+LARGE_STRAIN = 0.5
+
+
+def _law_force(name: str, eps: float) -> float:
+    """N/EA of each law at strain eps, written out (independent of the kernels)."""
+    lam = 1.0 + eps
+    if name == "neo_hookean":
+        return (lam - lam**-2) / 3.0
+    if name == "hencky":
+        return math.log(lam) / lam
+    if name == "table":
+        strain, force = zip(*((0.0, 0.0), *LAW_TABLE), strict=True)
+        return float(np.interp(eps, strain, force))
+    return eps
+
+
+def law_rows() -> list[Row]:
+    """Case (iii): every material law on a bar, at small strain and at 50 % strain."""
+    from catenet.laws import LAWS, Law, table_rows
+    from catenet.net import Loads, Net
+
+    material = _material()
+    EA, L = material.EA, LENGTH
+    rows = []
+    for name in LAWS:
+        table = None
+        if name == "table":
+            table = table_rows([(e, f * EA) for e, f in LAW_TABLE])[0]
+        law = Law.uniform(1, name, tension_only=False, table=table)
+        net = Net.from_arrays([[0, 0, 0], [L, 0, 0]], [[0, 1]], EA=EA, fixed=[0], law=law)
+        for f_bar, exact, tol, what in (
+            (SMALL_FORCE, SMALL_FORCE, SMALL_TOL, "small strain, against the paper's law"),
+            (_law_force(name, LARGE_STRAIN), LARGE_STRAIN, EXACT_TOL, "50 % strain"),
+        ):
+            force = np.zeros((2, 3))
+            force[1, 0] = f_bar * EA
+            note = ""
+            try:
+                strain = _solve(net, Loads(force=force)).x[1, 0] / L - 1.0
+            except ConvergenceError as exc:
+                strain, note = math.nan, f"no convergence: {exc}"
+            err = _rel(strain, exact)
+            rows.append(
+                Row(
+                    f"law {name}: {what}",
+                    "strain",
+                    2,
+                    strain,
+                    exact,
+                    err,
+                    tolerance=tol,
+                    passed=err <= tol,
+                    note=note,
+                )
+            )
+    return rows
+
+
 def run(progress: Callable[[str], None] | None = None) -> list[Row]:
-    """Every row of the validation table: case (i), then case (ii)."""
+    """Every row of the validation table: cases (i), (ii) and (iii)."""
     if progress:
         progress("midpoint load (Eqs. 16-17)")
     rows = midpoint_load_rows()
     if progress:
         progress("compressed catenary (Eqs. 14-15, elastic catenary)")
     rows += catenary_rows()
+    if progress:
+        progress("material laws (small strain, 50 % strain)")
+    rows += law_rows()
     return rows
 
 

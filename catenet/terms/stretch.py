@@ -39,8 +39,8 @@ class Stretch(Term):
             object.__setattr__(self, "law", self.net.law)
 
     @property
-    def convex(self) -> bool:  # tension-only stiffness is never negative
-        return self.law.all_tension_only
+    def convex(self) -> bool:  # tension-only edges of a stiffening law
+        return self.law.convex
 
     @cached_property
     def EA(self) -> np.ndarray:
@@ -54,7 +54,15 @@ class Stretch(Term):
 
     def _args(self):
         net, law = self.net, self.law
-        return (net.edges, net.rest_length, self.EA, law.kind, law.params, law.tension_only)
+        return (
+            net.edges,
+            net.rest_length,
+            self.EA,
+            law.kind,
+            law.params,
+            law.table,
+            law.tension_only,
+        )
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         e = self.net.edges
