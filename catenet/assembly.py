@@ -190,7 +190,8 @@ class System:
             values = self._values.get(target.size)
             if values is None:
                 values = self._values[target.size] = np.empty(target.size)
-            term.hessian(x, values)
+            if term.hessian(x, values) is False:
+                continue  # the term says its values are all zero (no contact)
             scatter_add(values, target, data)
         if shift is not None:
             add_diagonal(self.diag_pos, shift, data)

@@ -103,6 +103,7 @@ def solve_dynamic(
             # being run over by a support.
             x_trial += follow(supports - x[net.fixed] - h_step * v[net.fixed])
         x_trial[net.fixed] = supports
+        x_trial[:] = potential.toward(x, x_trial)  # a predictor inside an obstacle is cut
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]
         w = m_free * (1.0 / h_step**2 + damping / h_step)

@@ -92,6 +92,9 @@ class Potential:
         self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
         self.steps = tuple(steps)
         self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
+        # Terms that bound a step (obstacles: the first contact along it).
+        self._limits = [t for t in system.terms if hasattr(t, "max_step")]
+        self._dx = np.zeros_like(self.force) if self._limits else None
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
 
@@ -101,6 +104,29 @@ class Potential:
 
     def free(self, x: np.ndarray) -> np.ndarray:
         return x.reshape(-1)[self.system.free_dofs]
+
+    def max_step(self, x: np.ndarray, dy: np.ndarray) -> float:
+        """The largest multiple of the step dy (free DOFs) from x that keeps every node
+        outside every obstacle (inf when there are none)."""
+        if not self._limits:
+            return math.inf
+        self._dx.reshape(-1)[self.system.free_dofs] = dy
+        return min(t.max_step(x, self._dx) for t in self._limits)
+
+    def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
+        """``target`` if the straight path of the free nodes from x to it keeps every node
+        outside every obstacle, else their point ``share`` of the way to the first contact
+        (supports stay where ``target`` puts them)."""
+        if not self._limits:
+            return target
+        dx = target - x
+        t = min(o.max_step(x, dx) for o in self._limits)
+        if t > 1.0:
+            return target
+        out = target.copy()
+        free = self.system.free.reshape(-1, 3)
+        out[free] = x[free] + share * t * dx[free]
+        return out
 
     def evaluate(self, x: np.ndarray) -> tuple[float, np.ndarray, float, float, float]:
         """Phi, grad Phi (free DOFs), the load scale, the gradient's round-off floor and
@@ -257,6 +283,8 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
         dy = potential.solver.solve(-g)
     except SingularSystemError:
         return None
+    if potential.max_step(x, dy) <= 1.0:
+        return None  # the full step would touch an obstacle
     xf[free] = y0 + dy
     g_new = potential.evaluate(x)[1]
     new = float(norm(g_new.reshape(-1)))
@@ -281,8 +309,12 @@ def _line_search(potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicte
     """
     free = potential.system.free_dofs
     xf = x.reshape(-1)
+    cap = potential.max_step(x, dy)  # steps of this length or longer touch an obstacle
+    refused = (math.inf, None, 0.0, 0.0, 0.0, math.inf), math.inf, False
 
     def at(alpha):
+        if alpha >= cap:
+            return refused
         np.add(y0, alpha * dy, out=y_trial)
         xf[free] = y_trial
         phi_t, g_t, scale_t, floor_t, phi_tol_t = potential.evaluate(x)

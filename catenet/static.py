@@ -168,6 +168,7 @@ SMOOTH_RTOL = 1e-3  # stages before the last are solved loosely
 SMOOTH_END = 1e-3  # smoothing stops once mu is this fraction of the smallest |strain|
 STIFF_STRAIN = 1e-6  # nets strained less than this by their loads: stiffness continuation
 STIFF_STEP = 100.0  # EA grows a hundredfold per stage
+CONTACT_STRAIN = 3e-2  # nets that touch obstacles start the stiffness continuation here
 
 
 def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
@@ -197,8 +198,12 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
     scale = _strain_scale(net, potential)
     factors = []
-    if 0.0 < scale < STIFF_STRAIN:
-        factor = scale / 1e-3
+    # With contact the soft start matters more: a stiff chain pressed onto an obstacle
+    # takes Newton steps its barrier cannot follow; it starts at strains of CONTACT_STRAIN.
+    contact = any(hasattr(t, "max_step") for t in system.terms)
+    start, below = (CONTACT_STRAIN, CONTACT_STRAIN) if contact else (1e-3, STIFF_STRAIN)
+    if 0.0 < scale < below:
+        factor = scale / start
         while factor < 1.0:
             factors.append(factor)
             factor *= STIFF_STEP
