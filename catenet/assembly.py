@@ -13,13 +13,16 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from catenet.kernels.sparse import add_diagonal, scatter_add
 from catenet.net import Net
 from catenet.terms import Stretch, Term
+
+if TYPE_CHECKING:  # SciPy is imported where a matrix is asked for: not on a run's path
+    import scipy.sparse as sp
 
 
 class System:
@@ -200,6 +203,8 @@ class System:
 
     def matrix(self, data: np.ndarray | None = None) -> sp.csr_matrix:
         """The (reduced) matrix as SciPy CSR, full (both triangles) even when stored upper."""
+        import scipy.sparse as sp
+
         data = self.data if data is None else data
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_free, self.n_free))
         if self.upper:

@@ -51,13 +51,19 @@ def solve_dynamic(
     linear: str = "auto",
     on_step: Callable[[int, float, np.ndarray, np.ndarray], bool | None] | None = None,
     workspace: Workspace | None = None,
+    on_rest: Callable[[float], None] | None = None,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
 
     ``on_step(step, t, x, v)`` sees every accepted step; returning True stops the run
     there (an interrupted run: ``converged`` is False). Raises ConvergenceError, with the
-    last accepted state in ``state``, when even the smallest step fails.
+    last accepted state in ``state``, when even the smallest step fails. ``on_rest(ratio)``
+    follows dynamic relaxation (before ``on_step``, once the supports have settled):
+    max(static residual, inertial force) / tolerance, at most 1 at rest.
+
+    Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
+    with one rounding while the step is dt), not sums of the steps' round-off.
     """
     _check(dt, damping, t_end, t0, rtol)
     mass = net.mass
@@ -83,6 +89,7 @@ def solve_dynamic(
     follow = HarmonicExtension(net) if loads.moves_supports and settle > t0 else None
 
     t = t0
+    quantum = dt / 2**MAX_CUTS  # every step is a multiple of it, until t_end cuts one short
     h = dt
     good = 0
     steps = 0
@@ -131,7 +138,7 @@ def solve_dynamic(
             continue
         v = (x_trial - x) / h_step  # Eq. 10c
         x[:] = x_trial
-        t += h_step
+        t = _advance(t, h_step, t0, t_end, quantum)
         steps += 1
         residual = newton.residual
         good += 1
@@ -139,7 +146,11 @@ def solve_dynamic(
             h = min(dt, 2.0 * h)
             good = 0
         if stop_at_equilibrium and t >= settle:
-            equilibrium, residual_static = _at_rest(system, potential, x, v, m_free, h_step, rtol)
+            equilibrium, residual_static, ratio = _at_rest(
+                system, potential, x, v, m_free, h_step, rtol
+            )
+            if on_rest is not None:
+                on_rest(ratio)
         if on_step is not None and on_step(steps, t, x, v):
             interrupted = True
             message = "interrupted"
@@ -163,15 +174,28 @@ def solve_dynamic(
     )
 
 
-def _at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float]:
-    """Static residual and inertial force both below rtol times the load scale."""
+def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> float:
+    """t + h without accumulated round-off: t_end when the step ends there, else, for a
+    step of a whole number of quanta (every step but one cut short by t_end), the grid
+    point t0 + k quantum next to t + h."""
+    if h == t_end - t:
+        return t_end
+    if (h / quantum).is_integer():
+        return t0 + round((t + h - t0) / quantum) * quantum
+    return t + h
+
+
+def _at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, float]:
+    """Static residual and inertial force both below rtol times the load scale; the
+    residual and the larger of the two over that tolerance."""
     _, grad = system.gradient(x)
     r = grad.reshape(-1)[system.free_dofs] - potential.f_free
     scale = max(potential.f_norm, float(norm(grad.reshape(-1))))
     tol = rtol * scale
     residual = float(norm(r.reshape(-1)))
     inertia = float(norm(m_free * v.reshape(-1)[system.free_dofs])) / h
-    return (residual <= tol and inertia <= tol), residual
+    ratio = max(residual, inertia) / tol if tol > 0 else math.inf
+    return (residual <= tol and inertia <= tol), residual, ratio
 
 
 def _check(dt, damping, t_end, t0, rtol) -> None:

@@ -33,6 +33,11 @@ class ConvergenceError(CatenetError):
         self.state = state
 
 
+class Interrupted(ConvergenceError):
+    """A solve stopped on request (a signal) between two Newton iterations; like
+    ConvergenceError it carries the last good state once the solve path has added it."""
+
+
 class SingularSystemError(ConvergenceError):
     """A linear solve gave non-finite values or a large residual: a mechanism.
 

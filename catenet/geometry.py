@@ -165,14 +165,22 @@ def square_net(
     xy = np.array(points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])
     edges_arr = np.array(edges, dtype=np.int64)
-    net = Net.from_arrays(
-        nodes,
-        edges_arr,
-        EA=material.EA,
-        fixed=sorted(set(fixed)),
-        line_density=material.line_density,
-        tension_only=material.tension_only,
-    )
+    try:
+        net = Net.from_arrays(
+            nodes,
+            edges_arr,
+            EA=material.EA,
+            fixed=sorted(set(fixed)),
+            line_density=material.line_density,
+            tension_only=material.tension_only,
+        )
+    except ConfigError as exc:  # e.g. edges that round to zero length in a tiny square
+        raise ConfigError(
+            [
+                f"geometry.size = {size!r}, geometry.edge_length = {edge_length!r}: {p}"
+                for p in exc.problems
+            ]
+        ) from None
     center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
     return SquareNet(net=net, center=center, size=L, n=int(n), alpha=float(alpha))
 

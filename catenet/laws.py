@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -89,6 +90,12 @@ class Law:
     def with_tension_only(self, tension_only) -> Law:
         only = np.broadcast_to(np.asarray(tension_only, dtype=np.bool_), self.kind.shape)
         return dataclasses.replace(self, tension_only=np.ascontiguousarray(only))
+
+    @cached_property
+    def kernel_kind(self) -> np.ndarray | None:
+        """``kind`` as the kernels take it: None where every edge follows the linear law,
+        so that they are compiled (and loaded from the JIT cache) without the other laws."""
+        return None if np.all(self.kind == LINEAR) else self.kind
 
     @property
     def any_tension_only(self) -> bool:

@@ -1,11 +1,16 @@
-"""Sparse direct solvers behind one interface: PARDISO (MKL, via pypardiso) and SciPy.
+"""Sparse direct solvers behind one interface: PARDISO (MKL) and SciPy.
 
 PARDISO runs its three phases separately: symbolic analysis (11) once per sparsity
 pattern, numeric factorisation (22) per Newton iteration, solve (33) per right-hand side.
 pypardiso's public ``solve`` re-analyses whenever the values change, so this module calls
-the MKL routine that pypardiso loads (``PyPardisoSolver._mkl_pardiso``) with arrays it
-prepares once. pypardiso is pinned to 0.4.x in pyproject.toml and the private entry point
-is exercised by the tests.
+MKL's ``pardiso`` routine itself, with the argument types pypardiso declares, on arrays it
+prepares once. pypardiso stays the dependency that installs MKL (the ``mkl`` wheel), but
+it is not imported: its import builds a solver that searches the file system for
+``mkl_rt`` (ldconfig, a recursive glob of sys.prefix). ``mkl_runtime`` finds the library
+once, directly: ``$CATENET_MKL_RT`` (or pypardiso's ``$PYPARDISO_MKL_RT``) when set, else
+the ``mkl`` wheel's ``lib`` directory under sys.prefix (or the user base), else the
+dynamic loader's search path. Where MKL is absent, ``solver.linear = "auto"`` falls back
+to SciPy with one warning and ``"pardiso"`` is refused with the places searched.
 
 Every solve is checked: finite values, a small backward error and, for PARDISO, no
 perturbed pivots. A failing check raises SingularSystemError naming the nodes concerned.
@@ -15,8 +20,11 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import glob
 import logging
 import math
+import os
+import sys
 import time
 
 import numpy as np
@@ -28,36 +36,143 @@ log = logging.getLogger(__name__)
 
 BACKWARD_ERROR_TOL = 1e-9
 BACKENDS = ("auto", "pardiso", "scipy")
+MKL_ENV = "CATENET_MKL_RT"  # path of MKL's runtime library (libmkl_rt), overrides the search
+_MKL_ENVS = (MKL_ENV, "PYPARDISO_MKL_RT")
+# The runtime's names: Linux (the mkl wheel ships .so.2 or .so.3), macOS, Windows.
+_MKL_NAMES = (
+    "libmkl_rt.so.3",
+    "libmkl_rt.so.2",
+    "libmkl_rt.so",
+    "libmkl_rt.2.dylib",
+    "libmkl_rt.dylib",
+    "mkl_rt.2.dll",
+    "mkl_rt.dll",
+)
 
 
-def pardiso_available() -> bool:
-    try:
-        _load_pardiso()
-    except Exception:
-        return False
-    return True
+class MklNotFound(ImportError):
+    """MKL's runtime library could not be loaded (the message says where it was sought)."""
+
+
+class MklRuntime:
+    """MKL's runtime library, loaded once: ``libmkl`` (the ctypes library), ``path``
+    (where it was found) and its ``pardiso`` routine with pypardiso's argument types."""
+
+    def __init__(self, lib: ctypes.CDLL, path: str):
+        self.libmkl = lib
+        self.path = path
+        wide = ctypes.sizeof(ctypes.c_void_p) == 8  # PARDISO's handle: 64 pointers
+        self._pt_type = (ctypes.c_int64, np.int64) if wide else (ctypes.c_int32, np.int32)
+        i32 = ctypes.POINTER(ctypes.c_int32)
+        fn = lib.pardiso
+        fn.argtypes = [ctypes.POINTER(self._pt_type[0]), i32, i32, i32, i32, i32,
+                       ctypes.c_void_p, i32, i32, i32, i32, i32, i32,
+                       ctypes.c_void_p, ctypes.c_void_p, i32]  # fmt: skip
+        fn.restype = None
+        self._mkl_pardiso = fn
+
+
+def mkl_candidates() -> tuple[str | None, list[str]]:
+    """(the override variable that is set or None, the paths to try in order). Without
+    an override: the library files in the ``lib`` (``Library/bin`` on Windows) directory
+    of sys.prefix, the base prefix and the user base, then the bare names, which the
+    dynamic loader looks up on its own search path (LD_LIBRARY_PATH, ld.so.cache)."""
+    for var in _MKL_ENVS:
+        value = os.environ.get(var, "").strip()
+        if value:
+            return var, [value]
+    import site
+
+    roots = []
+    for prefix in (sys.prefix, sys.base_prefix, getattr(site, "USER_BASE", None)):
+        if prefix and prefix not in roots:
+            roots.append(prefix)
+    paths = []
+    for root in roots:
+        for sub in ("lib", os.path.join("Library", "bin")):
+            folder = os.path.join(root, sub)
+            names = set(os.listdir(folder)) if os.path.isdir(folder) else set()
+            paths += [os.path.join(folder, n) for n in _MKL_NAMES if n in names]
+            # Other versions (libmkl_rt.so.4, ...), the highest first.
+            extra = sorted(glob.glob(os.path.join(glob.escape(folder), "*mkl_rt*")), reverse=True)
+            paths += [p for p in extra if p not in paths and not p.endswith((".a", ".lib"))]
+    return None, paths + list(_MKL_NAMES)
 
 
 @functools.cache
-def _load_pardiso():
-    """pypardiso's wrapper, once per process: finding mkl_rt is slow (ldconfig)."""
-    from pypardiso.pardiso_wrapper import PyPardisoSolver
+def _find_mkl(key: tuple) -> MklRuntime | MklNotFound:
+    """The runtime (or why it is missing), once per override setting."""
+    var, paths = mkl_candidates()
+    errors = []
+    for path in paths:
+        try:
+            lib = ctypes.CDLL(path)
+            lib.pardiso  # noqa: B018  (an mkl_rt without PARDISO is no use)
+        except (OSError, AttributeError) as exc:
+            errors.append(f"{path}: {exc}")
+            continue
+        log.debug("MKL runtime: %s", path)
+        return MklRuntime(lib, path)
+    if var is not None:
+        return MklNotFound(
+            f"{var} = {paths[0]!r}: MKL's runtime library cannot be loaded from there "
+            f"({errors[0] if errors else 'not found'}); point it to libmkl_rt (e.g. "
+            f"{os.path.join(sys.prefix, 'lib', _MKL_NAMES[0])}) or unset it"
+        )
+    return MklNotFound(
+        f"MKL's runtime library (libmkl_rt) was not found in {sys.prefix}/lib or on the "
+        f"loader's path: install it (pip install mkl, or pypardiso) or set {MKL_ENV} to "
+        "its path"
+    )
 
-    return PyPardisoSolver()
+
+def mkl_runtime() -> MklRuntime:
+    """MKL's runtime library, found and loaded once per process; raises MklNotFound."""
+    found = _find_mkl(tuple(os.environ.get(v, "") for v in _MKL_ENVS))
+    if isinstance(found, MklNotFound):
+        raise MklNotFound(str(found))
+    return found
+
+
+def mkl_problem() -> str:
+    """Why MKL's runtime cannot be used ('' where it can)."""
+    try:
+        mkl_runtime()
+    except MklNotFound as exc:
+        return str(exc)
+    return ""
+
+
+def pardiso_available() -> bool:
+    return not mkl_problem()
+
+
+def _load_pardiso() -> MklRuntime:
+    """MKL's runtime with its ``pardiso`` routine (kept for callers of the old name)."""
+    return mkl_runtime()
+
+
+_warned: set[str] = set()
 
 
 def resolve_backend(name: str) -> str:
     """'auto' -> 'pardiso' where MKL loads, else 'scipy'."""
     if name not in BACKENDS:
         raise ConfigError(f"solver.linear = {name!r}: must be one of {', '.join(BACKENDS)}")
-    if name == "auto":
-        return "pardiso" if pardiso_available() else "scipy"
-    if name == "pardiso" and not pardiso_available():
+    if name == "scipy":
+        return name
+    if pardiso_available():
+        return "pardiso"
+    why = mkl_problem() or "MKL's runtime library could not be used"
+    if name == "pardiso":
         raise ConfigError(
-            "solver.linear = 'pardiso': pypardiso/MKL is not available on this machine; "
+            f"solver.linear = 'pardiso': MKL is not available on this machine: {why}; "
             "use 'auto' or 'scipy'"
         )
-    return name
+    if why not in _warned:  # once per process (and per override)
+        _warned.add(why)
+        log.warning("%s: solving with SciPy's SuperLU instead of PARDISO (slower)", why)
+    return "scipy"
 
 
 def set_threads(threads: int) -> None:
@@ -66,8 +181,7 @@ def set_threads(threads: int) -> None:
     if threads < 1:
         raise ConfigError(f"solver.threads = {threads}: must be >= 1")
     if pardiso_available():
-        lib = _load_pardiso().libmkl
-        lib.MKL_Set_Num_Threads(ctypes.c_int(threads))
+        mkl_runtime().libmkl.MKL_Set_Num_Threads(ctypes.c_int(threads))
     import numba
 
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
@@ -226,7 +340,7 @@ class PardisoSolver(LinearSolver):
         self.mtype = (-2 if upper else 11) if mtype is None else mtype
         if (self.mtype in (2, -2)) != upper:
             raise ValueError("symmetric PARDISO types need the upper triangle, 11 the full matrix")
-        self._wrapper = _load_pardiso()
+        self._wrapper = mkl_runtime()
         self._call = self._wrapper._mkl_pardiso
         self._pt_type = self._wrapper._pt_type[0]
         self.pt = np.zeros(64, dtype=self._wrapper._pt_type[1])  # PARDISO's handle, ours alone

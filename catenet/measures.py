@@ -34,7 +34,7 @@ def edge_tension(x, edges, rest_length, EA, law) -> np.ndarray:
         np.ascontiguousarray(edges, dtype=np.int64),
         np.ascontiguousarray(rest_length, dtype=np.float64),
         np.ascontiguousarray(EA, dtype=np.float64),
-        law.kind,
+        law.kernel_kind,
         law.params,
         law.table,
         law.tension_only,
@@ -82,3 +82,18 @@ def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
     held[net.edges[taut, 0]] = True
     held[net.edges[taut, 1]] = True
     return np.flatnonzero(~held & ~net.fixed)
+
+
+def cable_stats(net: Net, x: np.ndarray, tension: np.ndarray, edge_cable: np.ndarray, n: int):
+    """Per cable (``edge_cable`` (M,): each edge's cable index in 0..n-1, -1: none): the
+    largest tension [N] and the slack fraction, the share of the cable's unstressed length
+    in edges shorter than their rest length (as ``slack_edges`` counts them)."""
+    on = edge_cable >= 0
+    c = edge_cable[on]
+    top = np.full(n, -np.inf)
+    np.maximum.at(top, c, np.asarray(tension)[on])
+    top[~np.isfinite(top)] = 0.0
+    l0 = net.rest_length[on]
+    slack = np.bincount(c, weights=l0 * (strain(net, x)[on] < 0.0), minlength=n)
+    total = np.bincount(c, weights=l0, minlength=n)
+    return top, slack / np.where(total > 0, total, 1.0)

@@ -153,8 +153,9 @@ class Net:
         np.add.at(k, self.edges[:, 1], half)
         return k
 
-    def with_rest_length(self, rest_length) -> Net:
-        """A copy with other rest lengths (pretension, or a cable of another length)."""
+    def with_rest_length(self, rest_length, law: Law | None = None) -> Net:
+        """A copy with other rest lengths (pretension, or a cable of another length) and,
+        if given, another material law."""
         return Net.from_arrays(
             self.nodes,
             self.edges,
@@ -163,17 +164,30 @@ class Net:
             rest_length=rest_length,
             line_density=self.line_density,
             tension_only=self.tension_only,
-            law=self.law,
+            law=self.law if law is None else law,
         )
 
     def components(self) -> np.ndarray:
-        """Connected-component label of every node."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-
-        n = self.n_nodes
-        adj = coo_matrix((np.ones(self.n_edges), (self.edges[:, 0], self.edges[:, 1])), (n, n))
-        return connected_components(adj, directed=False)[1]
+        """Connected-component label (0, 1, ... in order of first node) of every node:
+        union-find in NumPy, every edge hooking the larger of its two roots under the
+        smaller, then pointer jumping until every node points at its root (a few passes;
+        no SciPy on a run's path)."""
+        parent = np.arange(self.n_nodes)
+        i, j = self.edges[:, 0], self.edges[:, 1]
+        while True:
+            ri, rj = parent[i], parent[j]
+            differ = ri != rj
+            if not differ.any():
+                break
+            lo, hi = np.minimum(ri, rj)[differ], np.maximum(ri, rj)[differ]
+            parent[hi] = lo  # roots only, always to a smaller index: no cycles
+            while True:
+                up = parent[parent]
+                if np.array_equal(up, parent):
+                    break
+                parent = up
+        root = parent == np.arange(self.n_nodes)
+        return (np.cumsum(root) - 1)[parent]
 
     def _check_supported(self) -> None:
         """Every connected part with a free node needs a support, or it is a mechanism."""

@@ -24,19 +24,23 @@ larger of |f| and |internal force|, supports included) and floor the round-off l
 the gradient (which includes the strains' round-off, EA eps |x| / l0 per edge). A residual
 that stalls within STALL_FLOOR times the floor is converged as well; when the floor, not
 the tolerance, ended the run, one more Newton step is taken if it lowers the residual.
+A run in which neither the residual nor Phi falls beyond round-off for STAGNATION
+iterations stops at once ("stagnated") instead of spending the rest of max_iter; inside
+``interruptible(stop)`` every iteration asks ``stop()`` first and raises Interrupted.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from catenet.assembly import System
-from catenet.errors import ConvergenceError, SingularSystemError
+from catenet.errors import ConvergenceError, Interrupted, SingularSystemError
 from catenet.kernels.sparse import dot, norm
 from catenet.linsolve import LinearSolver
 from catenet.terms import ExternalForce, Term
@@ -52,6 +56,22 @@ C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
 STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has converged
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
+STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
+PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
+
+_stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
+
+
+@contextlib.contextmanager
+def interruptible(stop: Callable[[], bool] | None):
+    """While inside, every Newton iteration first asks ``stop()``; True raises Interrupted
+    (a signal handler's flag: a long solve stops within one iteration, not one step)."""
+    global _stop
+    previous, _stop = _stop, stop
+    try:
+        yield
+    finally:
+        _stop = previous
 
 
 @dataclass
@@ -186,6 +206,7 @@ def solve(
     factorizations = 0
     stall = 0
     good = 0  # consecutive well-predicted full steps
+    best, best_phi, moved = gnorm, phi, 0  # the iteration of the last progress: stagnation
     it = 0
     reason = ""
     y_trial = np.empty_like(g)
@@ -201,6 +222,17 @@ def solve(
             break
         if it >= max_iter:
             reason = f"no convergence in {max_iter} iterations"
+            break
+        if _stop is not None and _stop():
+            raise Interrupted(
+                f"{label}: interrupted after {it} Newton iterations", iterations=it, history=history
+            )
+        if it - moved >= STAGNATION:
+            reason = (
+                f"stagnated: neither the residual nor the energy has decreased beyond round-off "
+                f"in {STAGNATION} iterations (best residual {best:.3e} N, round-off floor "
+                f"{floor:.1e} N)"
+            )
             break
         it += 1
         # Newton direction, raising c until the matrix is regular and dy a descent direction.
@@ -247,6 +279,10 @@ def solve(
         tol = max(rtol * scale if atol is None else atol, floor)
         history.append(gnorm)
         stall = stall + 1 if gnorm > 0.5 * prev else 0
+        if gnorm < best * (1.0 - PROGRESS) and best - gnorm > floor:
+            best, moved = gnorm, it
+        if phi < best_phi - phi_tol:
+            best_phi, moved = phi, it
         log.debug(
             "%s %3d: |r| = %.3e (tol %.1e)  step %.3g  rho %.2f  c = %.2g",
             label,

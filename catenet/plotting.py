@@ -10,6 +10,9 @@ no window. Bad input raises ``ConfigError`` naming the file and what is wrong wi
 from __future__ import annotations
 
 import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +35,97 @@ def edge_tension(x, edges, rest_length, EA, tension_only: bool = True) -> np.nda
 
     law = Law.uniform(len(edges), tension_only=tension_only)
     return measures.edge_tension(x, edges, rest_length, EA, law)
+
+
+@dataclass
+class PaperCurve:
+    """One of the paper's validation plots a result file is a run of (Figs. 2e, 2f):
+    catenet's points along the load steps, the closed form, and the shape of the last
+    step in closed form (x along the chord from its middle, z up)."""
+
+    title: str
+    xlabel: str
+    ylabel: str
+    x: np.ndarray
+    y: np.ndarray
+    x_closed: np.ndarray
+    y_closed: np.ndarray
+    closed_label: str
+    shape: Callable[[np.ndarray], np.ndarray]
+    shape_label: str
+
+
+def paper_curve(res) -> PaperCurve | None:
+    """The paper's plot for a cable case of Sec. 3.1 run in load steps, else None:
+
+    - supports moved symmetrically inward along a horizontal chord under gravity (the
+      compressed catenary, Fig. 2e): delta/L against Delta L/L with Eq. 15, shape Eq. 14;
+    - a downward force on the midpoint node, no gravity (Fig. 2f): delta/L against F/EA
+      with Eq. 17, shape Eq. 16.
+
+    Each load step is a frame at load factor s: the moves (and gravity) or the force
+    scaled by s. Inextensible Eq. 15 does not depend on g, so the scaled gravity of the
+    catenary steps does not matter there.
+    """
+    from catenet import analytic
+
+    case = res.case or {}
+    g = case.get("geometry", {})
+    if g.get("kind") != "cable" or res.series_t is None or res.method != "static":
+        return None
+    start, end = np.asarray(g.get("start", []), float), np.asarray(g.get("end", []), float)
+    if start.shape != (3,) or end.shape != (3,) or start[2] != end[2]:
+        return None
+    L = float(g.get("length", np.linalg.norm(end - start)))
+    chord = end - start
+    unit = chord / np.linalg.norm(chord)
+    s = np.asarray(res.series_t, float)
+    delta = np.asarray(res.series_delta, float)
+    moves = case.get("supports", {}).get("move", [])
+    load = case.get("load", {})
+    if len(moves) == 2 and load.get("gravity") and not load.get("point"):
+        inward = [float(np.dot(m["displacement"], unit)) for m in moves]
+        d = sorted(inward)
+        if not (d[0] < 0 < d[1] and math.isclose(-d[0], d[1], rel_tol=1e-9)):
+            return None
+        dl = 2.0 * d[1] / L  # Delta L / L at load factor 1
+        grid = np.linspace(0.0, dl, 200)[1:]
+        sag = np.array([analytic.catenary_sag(1.0, v) for v in grid])
+        return PaperCurve(
+            "paper Fig. 2e: sag against shortening",
+            "end shortening ΔL/L [-]",
+            "mid-span sag δ/L [-]",
+            s * dl,
+            delta / L,
+            np.concatenate([[0.0], grid]),
+            np.concatenate([[0.0], sag]),
+            "Eq. 15 (inextensible catenary)",
+            lambda x: L * analytic.catenary_shape(np.asarray(x) / L, 1.0, dl),
+            f"Eq. 14 at ΔL/L = {dl:.3g}",
+        )
+    points = load.get("point", [])
+    if len(points) == 1 and not load.get("gravity") and not moves and res.mesh.EA is not None:
+        force = np.asarray(points[0]["force"], float)
+        if points[0]["node"] not in ("midpoint", res.probe) or force[:2].any() or force[2] >= 0:
+            return None
+        EA = float(res.mesh.EA[0])
+        f_max = -force[2] / EA
+        grid = np.linspace(0.0, f_max, 200)
+        closed = np.array([analytic.midpoint_load_deflection(f * EA, L, EA) for f in grid])
+        delta_end = analytic.midpoint_load_deflection(f_max * EA, L, EA)
+        return PaperCurve(
+            "paper Fig. 2f: deflection against load",
+            "load F/EA [-]",
+            "midpoint deflection δ/L [-]",
+            s * f_max,
+            delta / L,
+            grid,
+            closed / L,
+            "Eq. 17",
+            lambda x: analytic.midpoint_load_shape(np.asarray(x), delta_end, L),
+            f"Eq. 16 at F/EA = {f_max:.3g}",
+        )
+    return None
 
 
 def default_output(path: str | Path) -> Path:
@@ -58,19 +152,35 @@ def _limits(*arrays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lo - pad, hi + pad
 
 
-def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 150) -> Path:
+def plot_result(
+    path: str | Path, out: str | Path | None = None, *, dpi: int = 150, scale: float = 1.0
+) -> Path:
     """Draws the figure of the result file ``path`` into ``out`` (.png, .svg or .pdf;
-    default: ``path`` with the suffix .png) and returns ``out``.
-
-    Panels: the deformed net (coloured by tension, colour bar in N) over the undeformed
-    one (grey) in 3D and in a side view (x-z, or y-z when the net is longer along y),
-    supports as red dots, the probe node marked; with a trajectory of more than one frame
-    also the probe's deflection (positive down) against time (dynamic runs) or load
-    factor (static runs in steps).
-    """
+    default: ``path`` with the suffix .png) and returns ``out`` (see ``figure``)."""
     res = read_result(path)  # ConfigError for anything but a result file
     out = check_output(default_output(path) if out is None else out)
+    fig = figure(res, scale=scale)
+    fig.savefig(out, dpi=dpi)
+    log.info("wrote %s", out)
+    return out
 
+
+def figure(res, *, scale: float = 1.0):
+    """The figure of a result (a ``catenet.output.ResultFile``), a matplotlib Figure.
+
+    Panels: the deformed net, coloured by tension over the range of the data (colour bar
+    in N), over the undeformed one (dashed grey, drawn above the grid) in 3D and in a
+    side view (x-z, or y-z when the net is longer along y), supports as red dots, the
+    probe node marked; displacements drawn ``scale`` times (said in the title when not 1).
+    The 3D box keeps true proportions except that no axis is shorter than 40 % of the
+    longest (then the z label says it is stretched). With a trajectory of more than one
+    frame also the probe's deflection (positive down) against time (dynamic runs) or
+    load factor (static runs in steps); for the paper's single-cable cases (``paper_curve``)
+    that panel has the paper's axes and closed form, and the side view the closed-form
+    shape.
+    """
+    if not (math.isfinite(scale) and scale > 0):
+        raise ConfigError(f"--scale = {scale!r}: must be a number > 0")
     import matplotlib
 
     matplotlib.rcParams["svg.hashsalt"] = "catenet"  # reproducible SVG ids
@@ -83,24 +193,27 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
     mesh = res.mesh
-    nodes, x, edges, fixed = mesh.nodes, res.x, mesh.edges, mesh.fixed
+    nodes, edges, fixed = mesh.nodes, mesh.edges, mesh.fixed
+    x = nodes + scale * (res.x - nodes)
     seg_ref = nodes[edges]  # (M, 2, 3)
     seg_def = x[edges]
     tension = res.tension
     # a file that stores no tensions (not written by catenet): computed from the mesh
     if tension is None and mesh.rest_length is not None and mesh.EA is not None:
         only = bool(res.case.get("material", {}).get("tension_only", True)) if res.case else True
-        tension = edge_tension(x, edges, mesh.rest_length, mesh.EA, only)
+        tension = edge_tension(res.x, edges, mesh.rest_length, mesh.EA, only)
     if tension is not None and len(tension) and np.all(np.isfinite(tension)):
         t_min, t_max = float(tension.min()), float(tension.max())
         if t_min < 0.0 < t_max:  # compression (bilateral edges): diverging colours
             norm, cmap = TwoSlopeNorm(0.0, t_min, t_max), colormaps["coolwarm"]
-        else:
-            lo, hi = min(t_min, 0.0), max(t_max, 0.0)
-            norm, cmap = Normalize(lo, hi if hi > lo else lo + 1.0), colormaps["viridis"]
+        else:  # the range of the data, not from 0: a prestressed net is not one colour
+            uniform = t_max - t_min <= 1e-9 * max(abs(t_max), abs(t_min))  # round-off only
+            pad = (0.05 * abs(t_max) or 1.0) if uniform else 0.0
+            norm, cmap = Normalize(t_min - pad, t_max + pad), colormaps["viridis"]
     else:
         tension, norm, cmap = None, None, None
 
+    curve = paper_curve(res)
     series = res.series_delta is not None
     fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
     FigureCanvasAgg(fig)
@@ -108,9 +221,10 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
     ncols = 3 if series else 2
     ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
     ax2 = fig.add_subplot(1, ncols, 2)
+    undeformed = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
 
     # 3D view
-    ax3.add_collection3d(Line3DCollection(seg_ref, colors="0.75", linewidths=0.6, linestyles="--"))
+    ax3.add_collection3d(Line3DCollection(seg_ref, **undeformed))
     lines3 = Line3DCollection(seg_def, linewidths=1.4)
     if tension is not None:
         lines3.set_array(tension)
@@ -120,9 +234,11 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
         lines3.set_color("C0")
     ax3.add_collection3d(lines3)
     lo, hi = _limits(seg_ref, seg_def)
-    # true proportions, but no axis thinner than 30 % of the longest (a cable in a plane,
-    # a flat net): its box would collapse and its tick labels pile up
-    mid, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.15 * float(np.max(hi - lo)))
+    # true proportions, but no axis shorter than 40 % of the longest (a flat net: its
+    # deflection would be squashed into a sliver)
+    longest = float(np.max(hi - lo))
+    mid, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.2 * longest)
+    stretched = bool(half[2] > 0.5 * (hi - lo)[2] * (1 + 1e-9))
     for setter, a, b in zip(
         (ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), mid - half, mid + half, strict=True
     ):
@@ -135,21 +251,17 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
         ax3.scatter(f[:, 0], f[:, 1], f[:, 2], color="red", s=8, depthshade=False)
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("y [m]")
-    ax3.set_zlabel("z [m]", labelpad=1)
+    ax3.set_zlabel("z [m] (stretched)" if stretched else "z [m]", labelpad=1)
     ax3.set_title("3D view")
 
     # side view: the horizontal axis along which the net is longer
     h = 0 if np.ptp(nodes[:, 0]) >= np.ptp(nodes[:, 1]) else 1
+    ax2.set_axisbelow(True)  # the grid under the nets: z = 0 hides no undeformed line
+    ax2.grid(True, lw=0.3, zorder=0)
     ax2.add_collection(
-        LineCollection(
-            seg_ref[:, :, [h, 2]],
-            colors="0.75",
-            linewidths=0.6,
-            linestyles="--",
-            label="undeformed",
-        )
+        LineCollection(seg_ref[:, :, [h, 2]], label="undeformed", zorder=2, **undeformed)
     )
-    lines2 = LineCollection(seg_def[:, :, [h, 2]], linewidths=1.4, label="deformed")
+    lines2 = LineCollection(seg_def[:, :, [h, 2]], linewidths=1.4, label="deformed", zorder=3)
     if tension is not None:
         lines2.set_array(tension)
         lines2.set_cmap(cmap)
@@ -157,12 +269,23 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
     else:
         lines2.set_color("C0")
     ax2.add_collection(lines2)
+    if curve is not None and scale == 1.0:
+        centre = 0.5 * (nodes[0] + nodes[-1])
+        span = np.linspace(float(np.min(x[:, h])), float(np.max(x[:, h])), 301)
+        z = curve.shape(span - centre[h]) + centre[2]
+        ax2.plot(span, z, ":", color="k", lw=1.2, label=curve.shape_label, zorder=4)
     if fixed is not None and fixed.any():
         f = x[fixed]
-        ax2.plot(f[:, h], f[:, 2], "o", color="red", ms=3, label="supports")
+        ax2.plot(f[:, h], f[:, 2], "o", color="red", ms=3, label="supports", zorder=5)
     p = res.probe
     ax2.plot(
-        [x[p, h]], [x[p, 2]], "x", color="k", ms=7, label=f"probe node {p}: δ = {res.delta:.4g} m"
+        [x[p, h]],
+        [x[p, 2]],
+        "x",
+        color="k",
+        ms=7,
+        zorder=5,
+        label=f"probe node {p}: δ = {res.delta:.4g} m",
     )
     ax2.update_datalim(np.column_stack([[lo[h], hi[h]], [lo[2], hi[2]]]))
     ax2.autoscale_view()
@@ -171,34 +294,43 @@ def plot_result(path: str | Path, out: str | Path | None = None, *, dpi: int = 1
     ax2.set_ylabel("z [m]")
     ax2.set_title("side view")
     ax2.legend(loc="best", fontsize="small")
-    ax2.grid(True, lw=0.3)
 
     if tension is not None:
         cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
-        cb.set_label("tension [N]")
+        cb.set_label(f"tension [N], {t_min:.6g} to {t_max:.6g}")
 
     if series:
         ax_t = fig.add_subplot(1, ncols, 3)
-        t, d = res.series_t, res.series_delta
-        ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
-        if res.method == "dynamic":
-            ax_t.set_xlabel("time t [s]")
-            ax_t.set_title("probe deflection against time")
-        elif res.method == "static":
-            ax_t.set_xlabel("load factor [-]")
-            ax_t.set_title("probe deflection against load")
-        else:
-            ax_t.set_xlabel("/trajectory/time")
-            ax_t.set_title("probe deflection along the trajectory")
-        ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
         ax_t.grid(True, lw=0.3)
+        t, d = res.series_t, res.series_delta
+        if curve is not None:
+            ax_t.plot(
+                curve.x_closed, curve.y_closed, "-", color="k", lw=1.0, label=curve.closed_label
+            )
+            ax_t.plot(curve.x, curve.y, "o", color="C0", ms=4, label="catenet (load steps)")
+            ax_t.set_xlabel(curve.xlabel)
+            ax_t.set_ylabel(curve.ylabel)
+            ax_t.set_title(curve.title)
+            ax_t.legend(loc="best", fontsize="small")
+        else:
+            ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
+            if res.method == "dynamic":
+                ax_t.set_xlabel("time t [s]")
+                ax_t.set_title("probe deflection against time")
+            elif res.method == "static":
+                ax_t.set_xlabel("load factor [-]")
+                ax_t.set_title("probe deflection against load")
+            else:
+                ax_t.set_xlabel("/trajectory/time")
+                ax_t.set_title("probe deflection along the trajectory")
+            ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
 
     status = ""
     if res.converged is False:
         status = " (NOT converged)"
     if res.from_trajectory:
         status += " (last trajectory frame)"
+    if scale != 1.0:
+        status += f" (displacements × {scale:g})"
     fig.suptitle(f"{res.title}{status}")
-    fig.savefig(out, dpi=dpi)
-    log.info("wrote %s", out)
-    return out
+    return fig

@@ -23,9 +23,9 @@ from catenet.errors import CatenetError, ConfigError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RestartState", "output_path", "read_restart", "run_case"]
+__all__ = ["RestartState", "output_path", "read_restart", "refuse_formfind", "run_case"]
 
-Progress = Callable[[float, float], None]
+Progress = Callable[..., None]
 Stop = Callable[[], bool]
 
 
@@ -103,6 +103,17 @@ def _mesh_mismatch(mesh, net) -> list[str]:
     return problems
 
 
+def refuse_formfind(case) -> None:
+    """A case with a [formfind] table describes a net still to be form-found: running it
+    would analyse its starting geometry. ConfigError saying what to do instead."""
+    if getattr(case, "formfind", None) is not None:
+        src = getattr(case, "source", "") or "CASE.toml"
+        raise ConfigError(
+            f"formfind: {src} is a form-finding case: find its shape with `catenet formfind "
+            f"{src} -o OUT.h5`, then run the case OUT.toml it writes"
+        )
+
+
 def run_case(
     case,
     out: str | Path | None = None,
@@ -110,34 +121,43 @@ def run_case(
     restart: str | Path | None = None,
     progress: Progress | None = None,
     stop: Stop | None = None,
+    interrupt: Stop | None = None,
 ):
     """Builds, solves and writes a case; returns the Result.
 
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
     frame (time, positions, velocities) and writes a new file. ``progress(done, total)``
-    is called after every step (time and t_end, or load factor and 1). ``stop()`` is
+    is called after every step (time and t_end, or load factor and 1); dynamic runs add
+    ``rest``, how far the state is from rest (``catenet.solve.Step.rest``). ``stop()`` is
     asked after every step; True ends the run there (``converged = False``, message
-    "interrupted").
+    "interrupted"). ``interrupt()`` (a signal handler's flag: it must be cheap) is asked
+    before every Newton iteration as well, so that a long step stops too: the run ends as
+    interrupted with the last equilibrium (static) or time step (dynamic).
 
     ``result.stats`` gains ``delta`` (probe z-deflection, positive down), ``delta_over_L``,
     ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
     """
-    from catenet import measures
+    from catenet import advice, measures
     from catenet import solve as sv
     from catenet.case import build
+    from catenet.clock import Clock
     from catenet.linsolve import resolve_backend, set_threads
     from catenet.output import ResultWriter, check_output_path
 
     start = time.perf_counter()
+    clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
+    refuse_formfind(case)
+    path = output_path(case, out)
+    if path is not None:  # before anything is built: a bad path is found at once
+        check_output_path(path)
+        _probe_directory(path)
     scene = build(case)
     solver = case.solver
-    path = output_path(case, out)
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
-        check_output_path(path)
         source = Path(getattr(case, "source", "") or "")
         if source.is_file() and _same_file(path, source):
             raise ConfigError(f"output file {str(path)!r}: is the case file itself")
@@ -145,10 +165,21 @@ def run_case(
             raise ConfigError(
                 f"--restart {restart}: is also the output file: give another one with -o"
             )
+    for message in advice.ignored_solver_keys(solver):
+        log.warning("%s", message)
+    trajectory = None
+    if path is not None:
+        trajectory = advice.trajectory(case, scene.net, 0.0 if state is None else state.t)
+    if trajectory is not None:
+        if trajectory.bytes > advice.WARN_BYTES:
+            log.warning("%s", trajectory.message())
+        else:
+            log.info("trajectory: up to %s", advice.format_bytes(trajectory.bytes))
     backend = resolve_backend(solver.linear)
     set_threads(solver.threads)
     settings = sv.Settings.of(solver, linear=backend)
-    ws = sv.workspace(scene, settings)
+    with clock.solving():
+        ws = sv.workspace(scene, settings)
     attrs = {"linear_backend": backend, "threads": int(solver.threads)}
     if state is not None:
         attrs["restart_from"] = str(state.path)
@@ -162,28 +193,46 @@ def run_case(
     )
     with writer:
         try:
-            result = _run(scene, settings, ws, writer, state, progress, stop, start)
+            result = _run(
+                scene, settings, ws, writer, state, progress, stop, interrupt, start, clock
+            )
         except CatenetError as exc:
             exc.output = path if writer.has_result else None
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
     delta = measures.deflection(scene.net.nodes, result.x, scene.probe)
+    beyond = advice.strain_beyond_law(scene.net, result.x)
+    if beyond:
+        log.warning("%s", beyond)
     result.stats.update(
         delta=delta,
         size=float(scene.size),
         probe=int(scene.probe),
         output=None if path is None else str(path),
         backend=backend,
+        strain_warning=beyond or "",
+        trajectory_bytes=0 if trajectory is None else trajectory.bytes,
     )
     result.stats["delta_over_L"] = delta / float(scene.size)
+    cables = getattr(scene, "cables", None)
+    if cables is not None:  # per cable: the largest tension and the slack share
+        top, slack = measures.cable_stats(
+            scene.net, result.x, result.tension, cables.edge, len(cables.names)
+        )
+        result.stats["cables"] = {
+            name: {"max_tension": float(t), "slack_fraction": float(s)}
+            for name, t, s in zip(cables.names, top, slack, strict=True)
+        }
     return result
 
 
-def _run(scene, settings, ws, writer, state, progress, stop, begin):
+def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None):
     """Solves through the one solve path, writing frames as the steps come; on failure
     or interruption the last good state becomes /result (converged = false)."""
     from catenet import solve as sv
+    from catenet.errors import Interrupted
+    from catenet.newton import interruptible
     from catenet.result import finish
 
     dynamic = settings.method == "dynamic"
@@ -191,9 +240,15 @@ def _run(scene, settings, ws, writer, state, progress, stop, begin):
     start = None
     written = {"step": -1}
 
+    if clock is None:
+        from catenet.clock import Clock
+
+        clock = Clock()
+
     def keep(step, t, x, v, tension=None, force=False) -> None:
         if (force or writer.wants(step)) and written["step"] != step:
-            writer.frame(t, x, v, ws.system.tension(x) if tension is None else tension)
+            with clock.aside():  # writing is neither start-up nor solving
+                writer.frame(t, x, v, ws.system.tension(x) if tension is None else tension)
             written["step"] = step
 
     if dynamic:
@@ -208,17 +263,22 @@ def _run(scene, settings, ws, writer, state, progress, stop, begin):
         tension = step.result.tension if step.result is not None else None
         keep(step.index, step.time, step.x, step.v, tension, force=last)
         if progress is not None:
-            progress(step.time, total)
+            if dynamic:
+                progress(step.time, total, rest=step.rest)
+            else:
+                progress(step.time, total)
         if stop is not None and stop():
             keep(step.index, step.time, step.x, step.v, tension, force=dynamic)
             return True
         return False
 
     try:
-        res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
+        with interruptible(interrupt), clock.solving():
+            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
     except CatenetError as exc:
         if isinstance(exc, ConfigError) or not hasattr(exc, "steps"):
             raise
+        stopped = isinstance(exc, Interrupted)
         x = _usable(exc.state, None, scene)
         t = float(exc.time)
         if dynamic:  # the last good state is the file's last frame, then /result
@@ -238,10 +298,14 @@ def _run(scene, settings, ws, writer, state, progress, stop, begin):
             steps=int(exc.steps),
             time=t,
             v=exc.velocity,
-            message=str(exc),
+            message="interrupted" if stopped else str(exc),
             wall_time=time.perf_counter() - begin,
-            stats=ws.stats(),
+            stats={**ws.stats(), **_times(clock)},
         )
+        if stopped:  # within a step: like a stop between steps, not a failure
+            log.info("interrupted during %s", "a time step" if dynamic else "a load step")
+            _write_result(writer, res)
+            return res
         _write_result(writer, res, failed=exc)
         raise
     if dynamic:
@@ -251,8 +315,14 @@ def _run(scene, settings, ws, writer, state, progress, stop, begin):
     if res.message == "interrupted":
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
     res.wall_time = time.perf_counter() - begin
+    res.stats.update(_times(clock))
     _write_result(writer, res)
     return res
+
+
+def _times(clock) -> dict:
+    """The run's start-up and solve seconds (``catenet.clock.Clock``)."""
+    return {"startup_seconds": clock.startup, "solve_seconds": clock.solve}
 
 
 # --------------------------------------------------------------------------------------------
@@ -280,6 +350,26 @@ def _usable(state, fallback, scene) -> np.ndarray:
     x = scene.net.nodes.copy()
     x[scene.net.fixed] = scene.loads.support_positions(scene.net, factor=1.0)
     return x
+
+
+def _probe_directory(path: Path) -> None:
+    """Creates and removes a file in the nearest existing directory of ``path``: what
+    permissions alone do not tell (a read-only or special file system, root's access
+    to /proc) is found before anything is computed. Raises ConfigError in one sentence."""
+    import tempfile
+
+    parent = Path(path).absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    try:
+        with tempfile.TemporaryFile(dir=parent, prefix=".catenet-probe-"):
+            pass
+    except OSError as exc:
+        why = exc.strerror or type(exc).__name__
+        raise ConfigError(
+            f"output file {str(path)!r}: cannot be written: creating a file in {parent} "
+            f"fails ({why}); give a path in a writable directory with -o or output.file"
+        ) from None
 
 
 def _same_file(a: Path, b: Path) -> bool:

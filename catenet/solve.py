@@ -83,13 +83,16 @@ class Start:
 @dataclass
 class Step:
     """An equilibrium of a static run (``time`` = load factor, ``result`` its Result) or
-    an accepted time step of a dynamic run (``v`` the velocities)."""
+    an accepted time step of a dynamic run (``v`` the velocities; ``rest``: how far the
+    state is from rest, max(static residual, inertial force) / tolerance, at most 1 at
+    rest; nan until the supports have settled)."""
 
     index: int
     time: float
     x: np.ndarray
     v: np.ndarray | None = None
     result: Result | None = None
+    rest: float = float("nan")
 
 
 OnStep = Callable[[Step], bool | None]
@@ -180,7 +183,10 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
     v0 = np.zeros_like(x0) if start.v is None else np.array(start.v, dtype=np.float64)
     x0[net.fixed] = loads.support_positions(net, time=start.t)
-    last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy()}
+    last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy(), "rest": float("nan")}
+
+    def rest(ratio: float) -> None:
+        last["rest"] = ratio
 
     def seen(step: int, t: float, x, v) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
@@ -188,7 +194,7 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
         last.update(steps=step, t=t, x=x.copy(), v=v.copy())
         if on_step is None:
             return False
-        return bool(on_step(Step(step, t, x, v)))
+        return bool(on_step(Step(step, t, x, v, rest=last["rest"])))
 
     try:
         return solve_dynamic(
@@ -203,6 +209,7 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
             t0=start.t,
             on_step=seen,
             workspace=ws,
+            on_rest=rest,
         )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):

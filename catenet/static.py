@@ -194,6 +194,22 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     others = tuple(t for t in system.terms if t is not stretch)
     history: list[float] = []
     iterations = 0
+    if _compressed_bilateral(stretch, x):
+        # Bilateral edges in compression: the straight compressed state is an unstable
+        # equilibrium beside the sagging one, and the Hessian is indefinite around it, so
+        # Newton from the start stalls near it. Where the sagging state has every edge in
+        # tension it is the tension-only equilibrium: that one first (its smoothing
+        # continuation handles the compressed edges as slack), then the exact law from
+        # there (converged at once where no edge ends in compression).
+        taut = stretch.with_law(stretch.law.with_tension_only(True))
+        first = equilibrium(
+            potential.with_system(system.with_terms((taut, *others))),
+            x,
+            rtol=rtol,
+            max_iter=max_iter,
+        )
+        iterations += first.iterations
+        history += first.history
     # Stages are held to the load scale: smoothing and scaling change the internal forces.
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
     scale = _strain_scale(net, potential)
@@ -244,6 +260,14 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     result.iterations += iterations
     result.history = history + result.history
     return result
+
+
+def _compressed_bilateral(stretch: Stretch, x: np.ndarray) -> bool:
+    """Whether some bilateral edge (not tension-only) is compressed at x."""
+    law = stretch.law
+    if law.all_tension_only:
+        return False
+    return bool(np.any((strain(stretch.net, x) < 0.0) & ~law.tension_only))
 
 
 def _strain_scale(net: Net, potential: Potential) -> float:

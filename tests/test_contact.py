@@ -19,6 +19,8 @@ edge length.
 from __future__ import annotations
 
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -144,3 +146,94 @@ def test_no_node_ever_enters_a_sphere_that_catches_a_falling_net(dt):
     assert r.converged
     assert min(gaps) > 0.0
     assert ball.gap(r.x).min() < ball.dhat  # it did touch
+
+
+# --------------------------------------------------------------------------- cases
+
+
+def ball_case(**changes) -> dict:
+    case = {
+        "title": "a net catching a ball",
+        "geometry": {"kind": "square_net", "n": 10, "alpha": 0.3, "size": 1.0, "edge_length": 0.05},
+        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
+        "load": {"pressure": 300.0, "gravity": [0, 0, -9.81]},
+        "obstacle": [
+            {"kind": "sphere", "center": [0, 0, -0.23], "radius": 0.2, "distance": 0.01},
+            {"kind": "plane", "point": [0, 0, -0.6]},
+        ],
+        "solver": {"method": "dynamic", "dt": 0.01, "damping": 5.0, "t_end": 0.3},
+    }
+    case.update(changes)
+    return case
+
+
+def test_a_case_names_its_obstacles_and_the_scene_carries_their_terms():
+    from catenet.case import build, parse_case
+
+    case = parse_case(ball_case())
+    scene = build(case)
+    kinds = [type(t).__name__ for t in scene.terms]
+    assert kinds == ["Sphere", "Plane"]
+    ball, ground = scene.terms
+    assert ball.dhat == 0.01 and ground.dhat == pytest.approx(1e-3)  # 1e-3 of L = 1 m
+    assert parse_case(tomllib.loads(case.to_toml())) == case  # the resolved case reads back
+    r = solve(scene, Settings.of(case.solver))
+    assert ball.gap(r.x).min() > 0.0 and ground.gap(r.x).min() > 0.0
+    assert parse_case(ball_case(obstacle=[])).obstacles == ()
+
+
+@pytest.mark.parametrize(
+    "obstacle, message",
+    [
+        (
+            {"kind": "sphere", "center": [0, 0, -0.1], "radius": 0.2},
+            "obstacle[0] (kind 'sphere'): node",
+        ),
+        (
+            {"kind": "sphere", "center": [0, 0, -1], "radius": -0.2},
+            "obstacle[0].radius = -0.2: must be finite and > 0",
+        ),
+        ({"kind": "sphere", "radius": 0.2}, "obstacle[0].center: missing"),
+        ({"kind": "cube"}, "obstacle[0].kind = 'cube': must be one of 'plane', 'sphere'"),
+        ({"kind": "plane", "nromal": [0, 0, 1]}, "did you mean 'normal'?"),
+        ({"kind": "plane", "normal": [0, 0, 0]}, "obstacle[0].normal = [0.0, 0.0, 0.0]"),
+        ({"kind": "plane", "point": [0, 0, 0.1]}, "starts inside or on it"),
+    ],
+)
+def test_bad_obstacles_exit_2_with_their_key_path(tmp_path, obstacle, message):
+    from click.testing import CliRunner
+
+    from catenet.case import dumps_toml
+    from catenet.cli import main
+
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(ball_case(obstacle=[obstacle])))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
+    assert res.exit_code == 2, res.output
+    assert message in res.output
+    assert not (tmp_path / "out.h5").exists()
+
+
+CONTACT_CONFIGS = sorted((Path(__file__).parents[1] / "configs" / "contact").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", CONTACT_CONFIGS, ids=lambda p: p.stem)
+def test_contact_examples_run_and_keep_every_node_outside(path, tmp_path):
+    from catenet.case import build, load_case
+    from catenet.runner import run_case
+
+    case = load_case(path)
+    assert path.read_text().startswith("# "), "an example says in its first lines what it shows"
+    r = run_case(case, tmp_path / "out.h5")
+    assert r.converged
+    scene = build(case)
+    assert scene.terms
+    for term in scene.terms:
+        assert term.gap(r.x).min() > 0.0
+    assert min(term.gap(r.x).min() for term in scene.terms) < max(t.dhat for t in scene.terms)
+    contact = np.zeros_like(r.x)
+    for term in scene.terms:
+        term.gradient(r.x, contact)
+    load = scene.loads.external_force(scene.net)
+    total = r.reaction.sum(axis=0) + load.sum(axis=0) - contact.sum(axis=0)
+    assert np.abs(total).max() < 1e-6 * np.abs(load).sum()

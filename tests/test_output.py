@@ -237,7 +237,9 @@ def test_sigkill_leaves_a_readable_file(tmp_path, delay):
         proc.send_signal(signal.SIGKILL)
         proc.communicate()
     assert proc.returncode == -signal.SIGKILL
-    with open_result(path) as h5:  # the file still carries HDF5's "open for write" mark
+    with h5py.File(path, "r") as h5:  # an ordinary file: it is only ever replaced whole
+        assert trajectory_length(h5) >= 5
+    with open_result(path) as h5:
         n = trajectory_length(h5)
         assert n >= 5
         g = h5["trajectory"]
@@ -358,3 +360,101 @@ def test_writer_refuses_bad_every(tmp_path):
     with pytest.raises(ConfigError, match="output.every"):
         ResultWriter(tmp_path / "x.h5", make_scene(), every=-1)
     assert not (tmp_path / "x.h5").exists()
+
+
+# --------------------------------------------------------------------------------------------
+# Flushing in batches into a file that is only ever replaced whole
+# --------------------------------------------------------------------------------------------
+
+
+def ticking(step: float = 10.0):
+    """A clock for the writer's flush interval that advances ``step`` s per reading."""
+    now = [0.0]
+
+    def clock() -> float:
+        now[0] += step
+        return now[0]
+
+    return clock
+
+
+def frames_on_disk(path) -> int:
+    with h5py.File(path, "r") as h5:  # a plain reader opens the file at any moment
+        return trajectory_length(h5)
+
+
+def test_frames_reach_the_file_in_batches_by_count_and_by_time(tmp_path):
+    scene = make_scene()
+    path = tmp_path / "batches.h5"
+    spare = tmp_path / ".batches.h5.spare"
+    with ResultWriter(path, scene, every=1, flush_seconds=1e9, flush_frames=3) as w:
+        assert frames_on_disk(path) == 0 and spare.exists()
+        w.frame(0.0, moved(scene, 0))  # the first frame at once
+        assert frames_on_disk(path) == 1 and w.flushes == 1
+        for k in range(1, 7):
+            w.frame(0.1 * k, moved(scene, k))
+        assert frames_on_disk(path) == 7 and w.flushes == 3  # 1 + 3 + 3
+        w.frame(0.7, moved(scene, 7))
+        assert frames_on_disk(path) == 7 and w.pending == 1  # in memory until the next flush
+        assert check_xdmf(path.with_suffix(".xdmf"))["grids"] == 7  # in step with the file
+    assert frames_on_disk(path) == 8 and not spare.exists()
+    assert check_xdmf(path.with_suffix(".xdmf"))["grids"] == 8
+    # By wall time: frames 10 s apart, flushed every second: each frame at once.
+    with ResultWriter(tmp_path / "each.h5", scene, every=1, flush_seconds=1.0) as w:
+        w.clock = ticking()
+        for k in range(4):
+            w.frame(0.1 * k, moved(scene, k))
+            assert frames_on_disk(tmp_path / "each.h5") == k + 1
+        assert w.flushes == 4
+    with h5py.File(tmp_path / "each.h5", "r") as h5:
+        for k in range(4):  # what was given, bit for bit
+            np.testing.assert_array_equal(h5["trajectory/x"][k], moved(scene, k))
+
+
+def test_a_reader_holding_the_file_open_keeps_its_version(tmp_path):
+    """The version a reader has open is never written to: the writer copies instead."""
+    scene = make_scene()
+    path = tmp_path / "held.h5"
+    with ResultWriter(path, scene, every=1) as w:
+        w.clock = ticking()  # every frame flushed
+        w.frame(0.0, moved(scene, 0))
+        w.frame(0.1, moved(scene, 1))
+        with h5py.File(path, "r") as held:  # a reader (ParaView, say) keeps it open
+            w.frame(0.2, moved(scene, 2))
+            w.frame(0.3, moved(scene, 3))
+            assert trajectory_length(held) == 2
+            np.testing.assert_array_equal(held["trajectory/x"][1], moved(scene, 1))
+        w.frame(0.4, moved(scene, 4))
+    with h5py.File(path, "r") as h5:
+        assert trajectory_length(h5) == 5
+        for k in range(5):
+            np.testing.assert_array_equal(h5["trajectory/x"][k], moved(scene, k))
+    check_xdmf(path.with_suffix(".xdmf"))
+
+
+def test_spares_of_a_killed_run_are_removed_by_the_next(tmp_path):
+    scene = make_scene()
+    path = tmp_path / "again.h5"
+    for name in (".again.h5.spare", ".again.h5.prev"):
+        (tmp_path / name).write_bytes(b"left by a killed run")
+    with ResultWriter(path, scene, every=1) as w:
+        assert not (tmp_path / ".again.h5.prev").exists()
+        w.frame(0.0, moved(scene, 0))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["again.h5", "again.xdmf"]
+
+
+def test_the_flush_studys_per_frame_writer_stores_what_the_writer_stores(tmp_path):
+    """``catenet bench flush`` compares the writer with catenet's earlier per-frame SWMR
+    writer: both store the same frames, bit for bit."""
+    from catenet.studies.bench.flush import swmr_writer_class
+
+    scene = make_scene()
+    rng = np.random.default_rng(3)
+    frames = [(0.1 * k, moved(scene, k) + rng.random((scene.net.n_nodes, 3))) for k in range(5)]
+    for name, cls in (("old.h5", swmr_writer_class()), ("new.h5", ResultWriter)):
+        with cls(tmp_path / name, scene, every=1) as w:
+            for t, x in frames:
+                w.frame(t, x, 2 * x)
+    with h5py.File(tmp_path / "new.h5", "r") as new, open_result(tmp_path / "old.h5") as old:
+        for name in ("time", "x", "v", "tension"):
+            np.testing.assert_array_equal(new["trajectory"][name], old["trajectory"][name])

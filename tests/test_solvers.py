@@ -322,3 +322,172 @@ def test_a_net_too_stiff_for_double_precision_is_explained():
     net = cn.cable([0.0, 0.0, 0.0], [1.0, 0.0, -0.3], 801, mat, length=1.3)
     with pytest.raises(cn.ConvergenceError, match="double precision"):
         cn.solve_static(net, cn.Loads(gravity=np.array([0.0, 0.0, -9.81])), max_iter=60)
+
+
+# --- MKL's runtime, found once and directly (issue 13) -----------------------------------
+
+
+@pytest.fixture
+def fresh_mkl_lookup(monkeypatch):
+    """A lookup that starts over (the runtime is found once per process and override)."""
+    import catenet.linsolve as ls
+
+    ls._find_mkl.cache_clear()
+    monkeypatch.setattr(ls, "_warned", set())
+    yield ls
+    ls._find_mkl.cache_clear()
+
+
+def test_missing_mkl_falls_back_to_scipy_with_one_warning(fresh_mkl_lookup, monkeypatch, caplog):
+    """CATENET_MKL_RT pointing nowhere: MKL is absent; 'auto' solves with SciPy and says
+    so once, 'pardiso' is refused with the variable and what to do."""
+    ls = fresh_mkl_lookup
+    monkeypatch.setenv("CATENET_MKL_RT", "/nowhere/libmkl_rt.so.2")
+    with caplog.at_level("WARNING", logger="catenet.linsolve"):
+        assert ls.resolve_backend("auto") == "scipy"
+        assert ls.resolve_backend("auto") == "scipy"
+        sq, loads = net_scene(6, edge=0.1)
+        r = cn.solve_static(sq.net, loads)
+    assert r.converged and r.stats["backend"] == "scipy"
+    warnings = [m for m in caplog.messages if "CATENET_MKL_RT" in m]
+    assert len(warnings) == 1, caplog.messages
+    assert "/nowhere/libmkl_rt.so.2" in warnings[0] and "SciPy" in warnings[0]
+    assert not ls.pardiso_available()
+    with pytest.raises(cn.ConfigError, match="solver.linear = 'pardiso'.*CATENET_MKL_RT"):
+        ls.resolve_backend("pardiso")
+
+
+def test_mkl_missing_everywhere_names_the_override(fresh_mkl_lookup, monkeypatch):
+    """No library in any place searched (the lookup simulated empty): the message says
+    where catenet looked and which variable points it to the library."""
+    ls = fresh_mkl_lookup
+    for var in ("CATENET_MKL_RT", "PYPARDISO_MKL_RT"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setattr(ls, "mkl_candidates", lambda: (None, ["/nowhere/libmkl_rt.so.9"]))
+    with pytest.raises(ls.MklNotFound, match="CATENET_MKL_RT"):
+        ls.mkl_runtime()
+    assert ls.mkl_problem().startswith("MKL's runtime library (libmkl_rt) was not found")
+
+
+@needs_pardiso
+def test_mkl_is_found_directly_and_without_pypardiso(fresh_mkl_lookup, monkeypatch, caplog):
+    """The mkl wheel's library is found under sys.prefix (or where the override points),
+    without a warning, and PARDISO solves through it; pypardiso is never imported."""
+    import subprocess
+    import sys
+
+    ls = fresh_mkl_lookup
+    monkeypatch.delenv("CATENET_MKL_RT", raising=False)
+    monkeypatch.delenv("PYPARDISO_MKL_RT", raising=False)
+    path = ls.mkl_runtime().path
+    monkeypatch.setenv("CATENET_MKL_RT", path)
+    with caplog.at_level("WARNING", logger="catenet.linsolve"):
+        assert ls.resolve_backend("auto") == "pardiso"
+        sq, loads = net_scene(6, edge=0.1)
+        assert cn.solve_static(sq.net, loads).stats["backend"] == "pardiso"
+    assert ls.mkl_runtime().path == path and not caplog.messages
+    code = (
+        "import sys, catenet as cn, numpy as np\n"
+        "sq = cn.square_net(6, 0.0, 1.0, 0.1, cn.Material(EA=1e4, line_density=0.1))\n"
+        "r = cn.solve_static(sq.net, cn.Loads(force=cn.pressure_force(sq.net, 1.0, 1.0)))\n"
+        "assert r.stats['backend'] == 'pardiso'\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] == 'pypardiso'"
+        " or m.startswith('scipy.sparse')))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+
+
+def test_components_label_every_part_of_a_graph():
+    """Union-find in NumPy (no SciPy): labels agree with SciPy's connected components on
+    random graphs, numbered in order of their first node."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(7)
+    for n, m in [(1, 0), (2, 1), (40, 25), (500, 300), (3000, 3200)]:
+        for _ in range(5):
+            edges = rng.integers(0, n, (m, 2)) if m else np.zeros((0, 2), dtype=np.int64)
+            edges = edges[edges[:, 0] != edges[:, 1]] if m else edges
+            stub = type("Stub", (), {"n_nodes": n, "edges": edges})()
+            labels = cn.Net.components(stub)
+            ref = connected_components(
+                coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (n, n)),
+                directed=False,
+            )[1]
+            _, first, inverse = np.unique(ref, return_index=True, return_inverse=True)
+            rank = np.argsort(np.argsort(first))
+            assert np.array_equal(labels, rank[inverse])
+    # A net with an unsupported part is refused (the check that uses the labels).
+    with pytest.raises(cn.ConfigError, match="has no support"):
+        cn.Net.from_arrays(
+            [[0, 0, 0], [1, 0, 0], [5, 0, 0], [6, 0, 0]],
+            [[0, 1], [2, 3]],
+            EA=1.0,
+            fixed=[0],
+        )
+
+
+def test_linear_nets_use_kernels_without_the_other_laws():
+    """Every edge linear: the kernels get law None and compile without the other laws;
+    the numbers are those of the general kernels, bit for bit."""
+    from catenet.kernels.stretch import stretch_gradient, stretch_hessian, stretch_tension
+    from catenet.laws import Law
+
+    sq, loads = net_scene(6, edge=0.1)
+    net = sq.net
+    law = net.law
+    assert law.kernel_kind is None
+    rng = np.random.default_rng(3)
+    x = net.nodes + 0.01 * rng.standard_normal(net.nodes.shape)
+    args = (net.edges, net.rest_length, net.EA)
+    for smooth in (0.0, 1e-3):
+        for kind in (None, law.kind):
+            g = np.zeros_like(x)
+            e = stretch_gradient(x, *args, kind, law.params, law.table, law.tension_only,
+                                 smooth, g)  # fmt: skip
+            h = np.zeros(36 * net.n_edges)
+            stretch_hessian(x, *args, kind, law.params, law.table, law.tension_only, smooth, h)
+            t = np.zeros(net.n_edges)
+            stretch_tension(x, *args, kind, law.params, law.table, law.tension_only, t)
+            if kind is None:
+                ref = (e, g, h, t)
+            else:
+                assert e == ref[0]
+                for a, b in zip((g, h, t), ref[1:], strict=True):
+                    assert np.array_equal(a, b)
+    mixed = Law.uniform(net.n_edges, "hencky")
+    assert mixed.kernel_kind is mixed.kind
+
+
+# --- bilateral cables compressed by their supports (issue 13) ----------------------------
+
+
+@pytest.mark.parametrize(
+    "ratio, dL", [(1e2, 0.9), (1e6 / 9.81, 0.1), (1e5, 0.5), (1e9, 0.01), (1e9, 0.3)]
+)
+def test_compressed_bilateral_cable_hangs_like_the_tension_only_one(ratio, dL):
+    """A bilateral cable (the paper's own energy) under light self-weight whose supports
+    moved inward, in one load step: the hanging chain, every edge in tension, the same
+    state as the tension-only cable's (it used to stall near the unstable straight state:
+    200 iterations, residual 50 N, for EA = 1e6 N, rho A = 1 kg/m, 10 %)."""
+    from catenet import analytic
+
+    nodes, w = 41, 9.81
+    results = []
+    for tension_only in (True, False):
+        mat = cn.Material(EA=ratio * w, line_density=1.0, tension_only=tension_only)
+        net = cn.cable([-0.5, 0, 0], [0.5, 0, 0], nodes, mat)
+        d = np.zeros((nodes, 3))
+        d[0, 0], d[-1, 0] = dL / 2, -dL / 2
+        loads = cn.Loads(gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d)
+        r = cn.solve_static(net, loads)
+        assert r.converged and r.iterations < 100
+        assert np.min(r.tension) > 0.0
+        results.append(r)
+    bilateral = results[1]
+    assert bilateral.stable is True
+    exact = analytic.discrete_catenary(1.0, ratio * w, w, 1.0 - dL, nodes - 1).sag
+    assert -bilateral.x[nodes // 2, 2] == pytest.approx(exact, rel=1e-6)
+    assert np.max(np.abs(bilateral.x - results[0].x)) < 1e-6 * exact

@@ -200,6 +200,8 @@ class Checker:
                 return BAD
             if v in names:
                 return v
+            if getattr(kind, "node_sets", False) and v.strip():
+                return v  # a node set of the geometry: checked against its topology
             return self.bad(path, v, f"must be a node index{alts} (geometry.kind = {kind.kind!r})")
         i = as_int(v)
         if i is None or i < 0:

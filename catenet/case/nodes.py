@@ -1,12 +1,14 @@
-"""Node references (indices and names such as "center") checked against the geometry:
-in range, supports listed once, only fixed nodes move and each once."""
+"""Node references (indices, names such as "center", a graph's node sets) and cable names
+checked against the geometry: in range, known, supports listed once, only fixed nodes move
+and each once."""
 
 from __future__ import annotations
 
+import difflib
 from typing import Any
 
 from catenet.case.keys import Checker, duplicates, show
-from catenet.case.kinds.base import GeometryConfig, with_prefix
+from catenet.case.kinds.base import GeometryConfig, Topology, expand, with_prefix
 from catenet.case.sections import LoadConfig, SupportsConfig
 from catenet.errors import ConfigError
 
@@ -20,7 +22,9 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any) -> bool:
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
     if isinstance(load, LoadConfig):
-        refs += [p.node for p in load.points]
+        refs += [p.node for p in load.points if p.node is not None]
+        if any(p.cable is not None for p in (*load.points, *load.lines)):
+            return True
     return any(isinstance(r, int) for r in refs) or bool(
         isinstance(supports, SupportsConfig) and supports.moves
     )
@@ -42,6 +46,9 @@ def check_nodes(ck: Checker, g: GeometryConfig, supports: Any, load: Any) -> Non
         if isinstance(ref, int) and ref >= n:
             ck.bad(path, ref, f"must be a node index in 0..{n - 1} (or a named node)")
             return False
+        if isinstance(ref, str) and ref not in topo.names and ref not in topo.sets:
+            ck.add(_unknown_name(path, ref, topo))
+            return False
         return True
 
     def resolve(ref) -> int:
@@ -55,15 +62,15 @@ def check_nodes(ck: Checker, g: GeometryConfig, supports: Any, load: Any) -> Non
             fixed_key = "supports.fixed"
             ok = [in_range(r, f"supports.fixed[{k}]") for k, r in enumerate(supports.fixed)]
             if all(ok):
-                resolved = [resolve(r) for r in supports.fixed]
-                dups = duplicates(resolved)
+                single = [r for r in supports.fixed if r not in topo.sets]
+                dups = duplicates([resolve(r) for r in single])
                 if dups:
                     ck.bad(
                         "supports.fixed",
                         list(supports.fixed),
                         f"node {dups[0]} appears more than once: list each node once",
                     )
-                fixed = set(resolved)
+                fixed = {i for r in supports.fixed for i in expand(r, topo.names, topo.sets)}
             else:
                 fixed = set()
         seen: dict[int, int] = {}
@@ -71,21 +78,55 @@ def check_nodes(ck: Checker, g: GeometryConfig, supports: Any, load: Any) -> Non
             path = f"supports.move[{k}].node"
             if not in_range(mv.node, path):
                 continue
-            i = resolve(mv.node)
-            if fixed and i not in fixed:
-                shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
-                ck.add(
-                    f"{path} = {shown}: is not a fixed node: only supports move "
-                    f"(fixed: {fixed_key})"
-                )
-            if i in seen:
-                ck.add(
-                    f"{path} = {show(mv.node)}: node {i} already moves in "
-                    f"supports.move[{seen[i]}]: one move per node"
-                )
-            seen[i] = k
+            for i in expand(mv.node, topo.names, topo.sets):
+                if fixed and i not in fixed:
+                    shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
+                    ck.add(
+                        f"{path} = {shown}: is not a fixed node: only supports move "
+                        f"(fixed: {fixed_key})"
+                    )
+                if i in seen:
+                    ck.add(
+                        f"{path} = {show(mv.node)}: node {i} already moves in "
+                        f"supports.move[{seen[i]}]: one move per node"
+                    )
+                seen[i] = k
     if isinstance(load, LoadConfig):
         for k, pt in enumerate(load.points):
-            in_range(pt.node, f"load.point[{k}].node")
+            if pt.node is not None:
+                in_range(pt.node, f"load.point[{k}].node")
+            else:
+                _known_cable(ck, f"load.point[{k}].cable", pt.cable, g, topo)
+        for k, ln in enumerate(load.lines):
+            if ln.cable is not None:
+                _known_cable(ck, f"load.line[{k}].cable", ln.cable, g, topo)
     if len(ck.problems) == before:
         g.check_supports(ck, fixed, fixed_key)
+
+
+def _unknown_name(path: str, ref: str, topo: Topology) -> str:
+    """The message for a string that names no node and no node set."""
+    known = [*topo.names, *topo.sets]
+    hint = difflib.get_close_matches(ref, known, n=1)
+    mean = f"; did you mean {hint[0]!r}?" if hint else ""
+    return (
+        f"{path} = {ref!r}: must be a node index or one of {', '.join(map(repr, known))} "
+        f"(named nodes and the node sets of [geometry.sets]){mean}"
+    )
+
+
+def _known_cable(ck: Checker, path: str, name: str, g: GeometryConfig, topo: Topology) -> None:
+    """A problem unless ``name`` is one of the geometry's cables."""
+    if name in topo.cables:
+        return
+    if not topo.cables:
+        ck.add(
+            f"{path} = {name!r}: this geometry has no cables (geometry.kind = {g.kind!r}; "
+            "cables are a graph's [[geometry.cable]])"
+        )
+        return
+    hint = difflib.get_close_matches(name, topo.cables, n=1)
+    mean = f"; did you mean {hint[0]!r}?" if hint else ""
+    ck.add(
+        f"{path} = {name!r}: no such cable (accepted: {', '.join(map(repr, topo.cables))}){mean}"
+    )

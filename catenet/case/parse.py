@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from catenet.case.formfind import FormfindConfig, check_formfind_case, parse_formfind
 from catenet.case.guard import guard_size
 from catenet.case.keys import (
     BAD,
@@ -23,6 +24,7 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS, GeometryConfig
 from catenet.case.nodes import check_nodes
+from catenet.case.obstacles import parse_obstacles
 from catenet.case.sections import (
     LoadConfig,
     MaterialConfig,
@@ -48,6 +50,8 @@ class Case:
     load: LoadConfig
     solver: SolverConfig
     output: OutputConfig
+    formfind: FormfindConfig | None = None  # read by `catenet formfind` only
+    obstacles: tuple = ()  # [[obstacle]]: rigid bodies the net cannot enter
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -55,7 +59,7 @@ class Case:
         load = self.load.to_dict()
         if not self.geometry.pressure:
             load.pop("pressure")
-        return {
+        out = {
             "title": self.title,
             "geometry": self.geometry.to_dict(),
             "material": self.material.to_dict(),
@@ -64,6 +68,11 @@ class Case:
             "solver": self.solver.to_dict(),
             "output": self.output.to_dict(),
         }
+        if self.formfind is not None:
+            out["formfind"] = self.formfind.to_dict()
+        if self.obstacles:
+            out["obstacle"] = [o.to_dict() for o in self.obstacles]
+        return out
 
     def to_toml(self) -> str:
         """The resolved case as TOML text; ``parse_case(tomllib.loads(text))`` gives it back."""
@@ -71,7 +80,17 @@ class Case:
 
 
 #: The keys of the top-level table.
-TOP_KEYS = (*names(Case), "geometry", "material", "supports", "load", "solver", "output")
+TOP_KEYS = (
+    *names(Case),
+    "geometry",
+    "material",
+    "supports",
+    "load",
+    "solver",
+    "output",
+    "formfind",
+    "obstacle",
+)
 
 
 def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
@@ -120,6 +139,11 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     load = parse_table(ck, data.get("load", {}), LoadConfig, "load", ctx)
     solver = parse_solver(ck, data.get("solver", {}), ctx)
     output = parse_output(ck, data.get("output", {}), ctx, source)
+    obstacles = parse_obstacles(ck, data.get("obstacle"), ctx)
+    formfind = None
+    if "formfind" in data:
+        formfind = parse_formfind(ck, data["formfind"], ctx)
+        check_formfind_case(ck, data)
 
     # Rules between sections.
     if isinstance(material, MaterialConfig) and material.prestress is not None:
@@ -130,6 +154,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
                     f"material.prestress = {material.prestress!r}: gives the rest lengths; "
                     f"give it or geometry.{other}, not both"
                 )
+    if isinstance(material, MaterialConfig) and geometry is not None:
+        geometry.check_material(ck, material)  # a graph's cables override [material]
     if isinstance(material, MaterialConfig):
         dens = material.density
         if isinstance(solver, SolverConfig) and solver.method == "dynamic" and dens == 0:
@@ -160,6 +186,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         load=load,
         solver=solver,
         output=output,
+        formfind=formfind,
+        obstacles=obstacles,
         source=source,
     )
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from catenet.case.formfind import FormfindConfig
 from catenet.case.keys import REQUIRED, Key, declared
 from catenet.case.kinds import KINDS
+from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
 from catenet.case.sections import SECTIONS
 
@@ -71,6 +73,10 @@ def keys_table() -> str:
         rows += _rows("geometry", declared(kind))
     for name, section in SECTIONS.items():
         rows += _rows(name, declared(section))
+    rows += _rows("formfind", declared(FormfindConfig))  # catenet formfind only
+    for name, obstacle in OBSTACLES.items():
+        rows.append(f'| **`[[obstacle]]` kind = "{name}"** | | | {obstacle.__doc__.strip()} |')
+        rows += [r for r in _rows("obstacle[k]", declared(obstacle)) if ".kind`" not in r]
     return "\n".join(rows)
 
 

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from catenet import geometry as geo
 from catenet.case.keys import show
-from catenet.case.kinds.base import resolve, with_prefix
+from catenet.case.kinds.base import expand, with_prefix
+from catenet.case.kinds.cables import line_force
+from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.errors import ConfigError
 from catenet.laws import Law, table_rows
@@ -19,7 +22,9 @@ from catenet.net import Loads, Net
 class Scene:
     """A case built: the net, its loads, the probe node (whose z-deflection is "delta"),
     the length scale L of delta/L, and the energy terms the case adds to the stretching
-    of the edges (``catenet.terms``; none for the paper's cases)."""
+    of the edges (``catenet.terms``; none for the paper's cases). ``cables`` names the
+    cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
+    None: no cables)."""
 
     case: Case
     net: Net
@@ -27,6 +32,7 @@ class Scene:
     probe: int
     size: float
     terms: tuple = ()
+    cables: Any = None
 
 
 def build(case: Case) -> Scene:
@@ -46,10 +52,19 @@ def _build(case: Case) -> Scene:
         line_density=mat.line_density,
         tension_only=mat.tension_only,
     )
-    built = case.geometry.build(material, case.supports.fixed)
-    net = _with_law(case, built.net)
-    loads = _loads(case, net, built.names, built.size)
-    return Scene(case=case, net=net, loads=loads, probe=int(built.probe), size=float(built.size))
+    built = case.geometry.build_case(case, material)
+    net = built.net if built.final else _with_law(case, built.net)
+    loads = _loads(case, net, built.names, built.size, built)
+    terms = obstacle_terms(case.obstacles, net, loads, float(built.size))
+    return Scene(
+        case=case,
+        net=net,
+        loads=loads,
+        probe=int(built.probe),
+        size=float(built.size),
+        terms=terms,
+        cables=built.cables,
+    )
 
 
 def _with_law(case: Case, net: Net) -> Net:
@@ -74,44 +89,45 @@ def _with_law(case: Case, net: Net) -> Net:
                 "positive, or the law never reaches that tension"
             )
         rest = length / (1.0 + eps)
-    return Net.from_arrays(
-        net.nodes,
-        net.edges,
-        EA=net.EA,
-        fixed=net.fixed,
-        rest_length=rest,
-        line_density=net.line_density,
-        tension_only=net.tension_only,
-        law=law,
-    )
+    return net.with_rest_length(rest, law)
 
 
-def _loads(case: Case, net: Net, names: dict[str, int], size: float) -> Loads:
+def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:
+    """The loads: pressure, point loads (on a node, each node of a node set, or the node
+    at a position along a cable), line loads along cables (lumped as the self-weight),
+    gravity and support motion."""
     ld = case.load
+    sets = built.sets
     force = None
     if case.geometry.pressure and ld.pressure != 0.0:
         force = geo.pressure_force(net, ld.pressure, size)
     for k, pt in enumerate(ld.points):
-        i = resolve(pt.node, names)
-        if not 0 <= i < net.n_nodes:
-            raise ConfigError(
-                f"load.point[{k}].node = {show(pt.node)}: must be a node index in "
-                f"0..{net.n_nodes - 1}"
-            )
-        if force is None:
-            force = np.zeros((net.n_nodes, 3))
-        force[i] += pt.force
+        nodes = (built.at_nodes[k],) if pt.cable is not None else expand(pt.node, names, sets)
+        for i in nodes:
+            if not 0 <= i < net.n_nodes:
+                raise ConfigError(
+                    f"load.point[{k}].node = {show(pt.node)}: must be a node index in "
+                    f"0..{net.n_nodes - 1}"
+                )
+            if force is None:
+                force = np.zeros((net.n_nodes, 3))
+            force[i] += pt.force
+    for ln in ld.lines:
+        on = np.ones(net.n_edges, dtype=bool)
+        if ln.cable is not None:
+            on = built.cables.edge == built.cables.names.index(ln.cable)
+        force = line_force(net, on, ln.force, force)
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)
     disp = ramp = None
     if case.supports.moves:
         disp = np.zeros((net.n_nodes, 3))
         ramp = np.zeros(net.n_nodes)
         for k, mv in enumerate(case.supports.moves):
-            i = resolve(mv.node, names)
-            if not (0 <= i < net.n_nodes and net.fixed[i]):
-                raise ConfigError(
-                    f"supports.move[{k}].node = {show(mv.node)}: must be a fixed node"
-                )
-            disp[i] = mv.displacement
-            ramp[i] = mv.duration
+            for i in expand(mv.node, names, sets):
+                if not (0 <= i < net.n_nodes and net.fixed[i]):
+                    raise ConfigError(
+                        f"supports.move[{k}].node = {show(mv.node)}: must be a fixed node"
+                    )
+                disp[i] = mv.displacement
+                ramp[i] = mv.duration
     return Loads(force=force, gravity=gravity, support_displacement=disp, ramp_time=ramp)

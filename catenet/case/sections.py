@@ -24,6 +24,7 @@ from catenet.case.keys import (
     names,
     node,
     parse_keys,
+    parse_table,
     real,
     show,
     tables,
@@ -231,13 +232,72 @@ class SupportsConfig(Declared):
 # --------------------------------------------------------------------------- load
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PointLoadConfig(Declared):
-    """A constant force [N] on one node."""
+    """A constant force [N] on one node, on each node of a node set, or at a position
+    along a cable (``cable`` and ``at``: the edge there is split so that a node carries
+    it)."""
 
-    node: NodeRef = node(missing="the loaded node", doc="the loaded node")
+    node: NodeRef | None = node(
+        None, write="given", shown="none", doc="the loaded node, or a node set (each node)"
+    )
+    cable: str | None = text(
+        None, nonempty=True, write="given", doc="graph: the loaded cable (instead of node)"
+    )
+    at: float | None = real(
+        None,
+        ge=0,
+        need="finite, in 0..1",
+        write="given",
+        doc="with cable: where, as a fraction of the cable's length from its first node",
+    )
     force: Vec3 = vec3(
         missing="[fx, fy, fz] [N]", unit="N", doc="[fx, fy, fz]; forces on one node add up"
+    )
+
+
+def _point_tables(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """The point loads, each on a node (or node set) or at a position along a cable."""
+    items = []
+    for k, t in enumerate(ck.array_of_tables(v, path)):
+        here = f"{path}[{k}]"
+        pt = parse_table(ck, t, PointLoadConfig, here, ctx)
+        items.append(pt)
+        if pt is BAD:
+            continue
+        if (pt.node is None) == (pt.cable is None):
+            what = "both" if pt.node is not None else "neither"
+            ck.add(
+                f"{here}: gives {what} of node and cable: give a node (or node set), or a "
+                "cable with at"
+            )
+        elif pt.cable is not None and pt.at is None:
+            ck.add(f"{here}.at: missing: with cable, the position along it (0..1 of its length)")
+        elif pt.cable is None and pt.at is not None:
+            ck.add(f"{here}.at = {pt.at!r}: only with cable (a point load on a node needs none)")
+        elif pt.at is not None and pt.at > 1.0:
+            ck.bad(f"{here}.at", pt.at, "must be finite, in 0..1 (a fraction of the cable length)")
+        else:
+            continue
+        items[-1] = BAD
+    return BAD if BAD in items else tuple(items)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LineLoadConfig(Declared):
+    """A distributed force per unit unstressed length [N/m] along a cable (or along every
+    edge), lumped to the nodes as the self-weight is: half of each edge's share to each
+    of its ends."""
+
+    cable: str | None = text(
+        None,
+        nonempty=True,
+        write="given",
+        shown="every edge",
+        doc="graph: the loaded cable (without it, every edge: all cables)",
+    )
+    force: Vec3 = vec3(
+        missing="[fx, fy, fz] [N/m]", unit="N/m", doc="[fx, fy, fz] per unit unstressed length"
     )
 
 
@@ -255,7 +315,8 @@ def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 @dataclass(frozen=True)
 class LoadConfig(Declared):
-    """Pressure p [Pa] (square_net), gravity [m/s^2] (None: none) and point loads."""
+    """Pressure p [Pa] (square_net), gravity [m/s^2] (None: none), point loads and
+    distributed loads along cables."""
 
     pressure: float = key(
         _pressure,
@@ -267,8 +328,17 @@ class LoadConfig(Declared):
     gravity: Vec3 | None = vec3(
         None, write="given", shown="none", unit="m/s^2", doc="[gx, gy, gz] on the lumped masses"
     )
-    points: tuple[PointLoadConfig, ...] = tables(
-        PointLoadConfig, name="point", doc="constant point loads"
+    points: tuple[PointLoadConfig, ...] = key(
+        _point_tables,
+        "an array of tables",
+        (),
+        section=PointLoadConfig,
+        write="given",
+        name="point",
+        doc="constant point loads",
+    )
+    lines: tuple[LineLoadConfig, ...] = tables(
+        LineLoadConfig, name="line", doc="distributed loads per unit length of cable"
     )
 
 

@@ -14,9 +14,12 @@ import click
 COMMANDS = {
     "run": ("catenet.cli.run", "Run a case file (or the bundled default) and write HDF5."),
     "sweep": ("catenet.cli.sweep", "Run a case over a grid of parameter values."),
+    "formfind": ("catenet.cli.formfind", "Find a net's shape from force densities or targets."),
     "validate": ("catenet.cli.validate", "Check catenet against the analytic cable solutions."),
     "bench": ("catenet.cli.bench", "Timing and accuracy studies."),
     "plot": ("catenet.cli.plot", "Draw figures from a result file or a sweep directory."),
+    "export": ("catenet.cli.export", "Write a result file's frames as VTU, VTK or XDMF files."),
+    "repair": ("catenet.cli.repair", "Make a result file open in every reader (killed runs)."),
     "info": ("catenet.cli.info", "Versions, linear-solver backend, threads, JIT cache."),
 }
 

@@ -17,7 +17,17 @@ from catenet.cli.common import (
 )
 
 # Kept here (not imported from catenet.studies.bench) so that `catenet bench --help` stays light.
-STUDIES = ("step-size", "pareto", "scale", "baseline", "skips", "cold-start", "stress")
+STUDIES = (
+    "step-size",
+    "pareto",
+    "scale",
+    "baseline",
+    "skips",
+    "cold-start",
+    "stress",
+    "formfind",
+    "flush",
+)
 CHOICES = (*STUDIES, "all", "report")
 
 
@@ -77,6 +87,7 @@ def command(
     skips       what skipping saves: static, gravity, output, re-analysis, mtype, threads
     cold-start  catenet --help, catenet run with an empty and a warm JIT cache
     stress      hard scenes: right answer or a clear error, never a NaN
+    formfind    force density method on roofs of 1e3 to 1e5 edges (--quick: to 1e4)
     all         every study above, in this order
     report      docs/readme-performance.md and docs/figures/ from OUTPUT's CSV files
                 (give it after the studies to run them first: all report)

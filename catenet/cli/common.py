@@ -6,6 +6,7 @@ import contextlib
 import logging
 import sys
 import time
+from pathlib import Path
 
 import click
 
@@ -18,6 +19,30 @@ def verbosity_options(f):
     f = click.option("-v", "--verbose", count=True, help="More output (-v: Newton iterations).")(f)
     f = click.option("-q", "--quiet", is_flag=True, help="Only errors.")(f)
     return f
+
+
+def case_options(output_help: str, example: str):
+    """The -o/--output and --set options of the commands that read a case file."""
+
+    def add(f):
+        f = click.option(
+            "--set",
+            "overrides",
+            metavar="KEY.PATH=VALUE",
+            multiple=True,
+            help=f"Override a case value, e.g. --set {example} (repeatable).",
+        )(f)
+        return click.option(
+            "-o",
+            "--output",
+            "out",
+            metavar="OUT.h5",
+            type=click.Path(dir_okay=False, path_type=Path),
+            default=None,
+            help=output_help,
+        )(f)
+
+    return add
 
 
 def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) -> None:
@@ -80,7 +105,8 @@ def errors_to_exit_codes(debug: bool = False):
 class Progress:
     """A one-line progress bar with rate and ETA on a terminal; silent in pipes and with -q.
 
-    ``update(done, total, note="")``; ``close()``.
+    ``update(done, total, note="", eta=True)`` (``eta=False``: the bar and the note only,
+    for progress whose rate says nothing about what is left); ``close()``.
     """
 
     def __init__(self, label: str, *, enabled: bool | None = None, stream=None):
@@ -91,7 +117,7 @@ class Progress:
         self._last = 0.0
         self._shown = False
 
-    def update(self, done: float, total: float, note: str = "") -> None:
+    def update(self, done: float, total: float, note: str = "", eta: bool = True) -> None:
         if not self.enabled:
             return
         now = time.perf_counter()
@@ -101,13 +127,15 @@ class Progress:
         elapsed = now - self.start
         frac = min(max(done / total, 0.0), 1.0) if total > 0 else 0.0
         rate = done / elapsed if elapsed > 0 else 0.0
-        eta = (total - done) / rate if rate > 0 else float("nan")
+        left = (total - done) / rate if rate > 0 else float("nan")
         width = 24
         bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
-        eta_s = f"{eta:6.1f}s" if eta == eta else "   ?  "
-        self.stream.write(
-            f"\r{self.label} [{bar}] {100 * frac:5.1f}%  {rate:8.3g}/s  ETA {eta_s} {note}\x1b[K"
-        )
+        if eta:
+            eta_s = f"{left:6.1f}s" if left == left else "   ?  "
+            timing = f"  {rate:8.3g}/s  ETA {eta_s}"
+        else:
+            timing = ""
+        self.stream.write(f"\r{self.label} [{bar}] {100 * frac:5.1f}%{timing} {note}\x1b[K")
         self.stream.flush()
         self._shown = True
 

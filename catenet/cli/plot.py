@@ -20,15 +20,26 @@ from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_op
     help="Figure file (.png, .svg or .pdf); default: the result file with .png. "
     "For a sweep directory: where the sweep figures go.",
 )
+@click.option(
+    "--scale",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="Draw displacements this many times larger (small deflections become visible).",
+)
 @verbosity_options
-def command(path: Path, output: Path | None, quiet: bool, verbose: int, debug: bool) -> None:
+def command(
+    path: Path, output: Path | None, scale: float, quiet: bool, verbose: int, debug: bool
+) -> None:
     """Draw the figures of PATH: a result file (OUT.h5) or a sweep output directory.
 
     \b
     Result file: the deformed net over the undeformed one, coloured by tension
-    (colour bar in N), in 3D and in a side view; for runs with a trajectory also
-    the deflection of the probe node (positive down) against time (dynamic runs)
-    or load factor (static runs in steps).
+    (colour bar in N over the range of the data), in 3D and in a side view; for
+    runs with a trajectory also the deflection of the probe node (positive down)
+    against time (dynamic runs) or load factor (static runs in steps). The
+    paper's single-cable cases get the paper's axes and closed forms (Figs.
+    2e-2f, Eqs. 14-17).
     Sweep directory: the sweep's figures (catenet.studies.square_net).
 
     Prints the path of every figure written. Exit status 2 for a missing or
@@ -51,7 +62,7 @@ def command(path: Path, output: Path | None, quiet: bool, verbose: int, debug: b
         else:
             from catenet.plotting import plot_result
 
-            files = [plot_result(path, output)]
+            files = [plot_result(path, output, scale=scale)]
         if not quiet:
             for f in files:
                 click.echo(str(f))

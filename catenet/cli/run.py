@@ -13,6 +13,7 @@ from catenet.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
     Progress,
+    case_options,
     errors_to_exit_codes,
     setup_logging,
     verbosity_options,
@@ -68,21 +69,9 @@ class StopFlag:
     required=False,
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
 )
-@click.option(
-    "-o",
-    "--output",
-    "out",
-    metavar="OUT.h5",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="Result file (default: the case's output.file). Missing directories are created.",
-)
-@click.option(
-    "--set",
-    "overrides",
-    metavar="KEY.PATH=VALUE",
-    multiple=True,
-    help="Override a case value, e.g. --set solver.method=dynamic (repeatable).",
+@case_options(
+    "Result file (default: the case's output.file). Missing directories are created.",
+    "solver.method=dynamic",
 )
 @click.option(
     "--restart",
@@ -120,17 +109,24 @@ def command(
 
         case = load_case(case_file, overrides)
         path = output_path(case, out)
-        bar = Progress("t" if case.solver.method == "dynamic" else "load", enabled=None)
+        dynamic = case.solver.method == "dynamic"
+        bar = Progress("rest" if dynamic else "load", enabled=None)
         if quiet:
             bar.enabled = False
+        relax = Relaxation()
 
-        def progress(done: float, total: float) -> None:
-            unit = " s" if case.solver.method == "dynamic" else ""
-            bar.update(done, total, note=f"{done:.4g}{unit}")
+        def progress(done: float, total: float, rest: float = float("nan")) -> None:
+            if dynamic:  # toward rest, not t_end: dynamic relaxation stops at equilibrium
+                frac, note = relax.update(done, rest)
+                bar.update(frac, 1.0, note=note, eta=False)
+            else:
+                bar.update(done, total, note=f"{done:.4g}")
 
         with StopFlag() as stop:
             try:
-                result = run_case(case, path, restart=restart, progress=progress, stop=stop)
+                result = run_case(
+                    case, path, restart=restart, progress=progress, stop=stop, interrupt=stop
+                )
             except CatenetError as exc:
                 bar.close()
                 written = getattr(exc, "output", None)
@@ -163,14 +159,50 @@ def command(
     sys.exit(code)
 
 
+class Relaxation:
+    """The progress of dynamic relaxation toward rest, on a log scale: the state's
+    distance from rest (max(static residual, inertial force) / tolerance, 1 at rest)
+    against the largest seen, so the bar fills as the residual falls decade by decade."""
+
+    def __init__(self):
+        self.first = 1.0
+
+    def update(self, t: float, rest: float) -> tuple[float, str]:
+        import math
+
+        if math.isnan(rest):  # not measured while the supports still move
+            return 0.0, f"t = {t:.4g} s (supports moving)"
+        if math.isinf(rest):
+            return 0.0, f"t = {t:.4g} s"
+        self.first = max(self.first, rest)
+        frac = 1.0 if rest <= 1.0 else 1.0 - math.log(rest) / math.log(self.first)
+        return frac, f"t = {t:.4g} s, residual {rest:.2g} x tolerance"
+
+
 def _where(case, result) -> str:
     if case.solver.method == "dynamic":
         return f"t = {result.time:.6g} s (step {result.steps})"
     return f"load factor {result.time:.6g} (step {result.steps} of {case.solver.steps})"
 
 
+def _times(result) -> str:
+    """The wall time of the process so far, split into the solve and the start-up."""
+    s = result.stats
+    if "solve_seconds" not in s:
+        return f"{'wall time':<12} {result.wall_time:.3g} s ({s.get('backend', '?')})"
+    from catenet.clock import since_process_start
+
+    return (
+        f"{'wall time':<12} {since_process_start():.3g} s: solve {s['solve_seconds']:.3g} s "
+        f"({s.get('backend', '?')}), start-up {s['startup_seconds']:.3g} s (imports, case, "
+        "JIT cache)"
+    )
+
+
 def _summary(case, result, path: Path | None) -> None:
     import numpy as np
+
+    from catenet.advice import LARGE_BYTES, format_bytes
 
     s = result.stats
     state = "yes" if result.converged else "no"
@@ -186,12 +218,28 @@ def _summary(case, result, path: Path | None) -> None:
         f"{'delta':<12} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
         f"(node {s['probe']}, L = {s['size']:.6g} m)",
         f"{'max tension':<12} {float(np.max(result.tension, initial=0.0)):.6g} N   "
-        f"max strain {result.max_strain:.4g}",
-        f"{'wall time':<12} {result.wall_time:.3g} s ({s.get('backend', '?')})",
+        f"max strain {result.max_strain:.4g}"
+        + (
+            " (beyond the material law's range: see the warning)" if s.get("strain_warning") else ""
+        ),
+        _times(result),
     ]
+    for name, c in s.get("cables", {}).items():  # a graph's cables, one line each
+        lines.insert(
+            -1,
+            f"{'cable':<12} {name}: max tension {c['max_tension']:.6g} N, "
+            f"slack {100 * c['slack_fraction']:.3g} % of its length",
+        )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""
+        estimate = int(s.get("trajectory_bytes", 0))
+        if estimate >= LARGE_BYTES:
+            size = Path(path).stat().st_size if Path(path).is_file() else 0
+            extra += (
+                f"; {format_bytes(size)} written, {format_bytes(estimate)} estimated "
+                "before the run (output.every keeps fewer frames)"
+            )
         lines.append(f"{'output':<12} {path}{extra}")
     click.echo("\n".join(lines))
 

@@ -99,10 +99,21 @@ def density(law, params, table, eps):
 
 
 @njit(cache=True, error_model="numpy")
-def strain_energy(law, params, table, eps, tension_only, smooth):
-    """w, w' and w'' (derivatives by eps) of a law composed with the tension-only switch."""
+def edge_density(law, params, table, k, eps):
+    """w, w', w'' of edge k: ``law`` holds the law id of every edge, or is None where
+    every edge follows the linear law. Numba prunes the branch on None when it compiles,
+    so a net of linear edges compiles (and loads) none of the other laws."""
+    if law is None:
+        return linear(eps)
+    return density(law[k], params[k], table, eps)
+
+
+@njit(cache=True, error_model="numpy")
+def strain_energy(law, params, table, k, eps, tension_only, smooth):
+    """w, w' and w'' (derivatives by eps) of edge k's law (``edge_density``) composed with
+    the tension-only switch."""
     if not tension_only:
-        return density(law, params, table, eps)
+        return edge_density(law, params, table, k, eps)
     if smooth > 0.0:
         r = np.sqrt(eps * eps + smooth * smooth)
         s = 0.5 * (eps + r)
@@ -111,8 +122,8 @@ def strain_energy(law, params, table, eps, tension_only, smooth):
     elif eps < 0.0:
         return 0.0, 0.0, 0.0
     else:
-        return density(law, params, table, eps)
-    w, dw, ddw = density(law, params, table, s)
+        return edge_density(law, params, table, k, eps)
+    w, dw, ddw = edge_density(law, params, table, k, s)
     return w, dw * ds, ddw * ds * ds + dw * dds
 
 

@@ -12,10 +12,11 @@ Eq. 8 lacks the 1/|e| of the second term's strain derivative: d2eps/de2 =
 (I - t(x)t)/(l0 |e|).) The paper's linear law is w = eps^2/2: U = 1/2 EA eps^2 l0.
 
 Every law is data handed to these kernels per edge, never state: ``law`` (M,) holds the
-law ids, ``params`` (M, 2) their parameters, ``table`` (K, 3) the rows of tabulated
-laws, ``tension_only`` (M,) the switch that makes
-an edge slack (no energy, force or stiffness) while eps < 0, and ``smooth`` > 0 replaces
-that switch by a smooth one (the static solver's continuation; see ``laws.tension_only``).
+law ids (or is None when every edge is linear: the kernels are then compiled without the
+other laws, see ``Law.kernel_kind``), ``params`` (M, 2) their parameters, ``table`` (K, 3)
+the rows of tabulated laws, ``tension_only`` (M,) the switch that makes an edge slack (no
+energy, force or stiffness) while eps < 0, and ``smooth`` > 0 replaces that switch by a
+smooth one (the static solver's continuation; see ``laws.tension_only``).
 A slack edge writes its 36 Hessian values as zeros so that the sparsity pattern never
 changes.
 
@@ -44,7 +45,7 @@ def stretch_energy(x, edges, l0, ea, law, params, table, tension_only, smooth):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        w, _, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
+        w, _, _ = strain_energy(law, params, table, k, eps, tension_only[k], smooth)
         total += ea[k] * l0[k] * w
     return total
 
@@ -62,7 +63,7 @@ def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth,
         e2 = x[j, 2] - x[i, 2]
         length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
         eps = length / l0[k] - 1.0
-        w, force, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
+        w, force, _ = strain_energy(law, params, table, k, eps, tension_only[k], smooth)
         if force == 0.0 and w == 0.0:
             continue
         total += ea[k] * l0[k] * w
@@ -89,7 +90,7 @@ def stretch_hessian(x, edges, l0, ea, law, params, table, tension_only, smooth, 
         e[2] = x[j, 2] - x[i, 2]
         length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         eps = length / l0[k] - 1.0
-        _, force, stiffness = strain_energy(law[k], params[k], table, eps, tension_only[k], smooth)
+        _, force, stiffness = strain_energy(law, params, table, k, eps, tension_only[k], smooth)
         base = 36 * k
         if stiffness == 0.0 and force == 0.0:  # slack: no division by a length
             for a in range(36):
@@ -120,5 +121,5 @@ def stretch_tension(x, edges, l0, ea, law, params, table, tension_only, out):
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
-        _, force, _ = strain_energy(law[k], params[k], table, eps, tension_only[k], 0.0)
+        _, force, _ = strain_energy(law, params, table, k, eps, tension_only[k], 0.0)
         out[k] = ea[k] * force

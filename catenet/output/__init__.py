@@ -10,13 +10,20 @@
     /result             attrs: converged, iterations, residual, steps, wall_time,
                         equilibrium, message, time, delta, delta_over_L, probe, size,
                         max_strain, max_tension, stable (1/0; -1: not checked)
+    /xdmf/x/<k>, /xdmf/tension/<k>, /xdmf/v/<k>: frame k of the trajectory, for the XDMF
+                        sidecar (virtual datasets: views of /trajectory, no data)
 
 Modules: ``writer`` (``ResultWriter``: the file while a run goes on, crash safety, full
-disks; ``check_output_path``), ``metadata`` (software versions, the /result attributes),
-``reader`` (``read_result``, ``read_frame``, ``read_mesh``, ``open_result``, ``recover``:
-the only code that reads the layout, also of killed runs), ``xdmf`` (the sidecar).
+disks), ``files`` (``check_output_path``, the spare copy, atomic publishing),
+``metadata`` (software versions, the /result attributes),
+``reader`` (``read_result``, ``read_frame``, ``read_mesh``, ``open_result``: the only
+code that reads the layout, also of killed runs), ``repair`` (``recover``, ``repair``:
+files that need mending), ``xdmf`` (the
+sidecar and the per-frame views /xdmf/<name>/<k> it names), ``export`` (frames to other
+formats through meshio).
 """
 
+from catenet.output.files import check_output_path, remove_spares
 from catenet.output.metadata import environment, result_attrs
 from catenet.output.reader import (
     Frame,
@@ -27,15 +34,16 @@ from catenet.output.reader import (
     read_frame,
     read_mesh,
     read_result,
-    recover,
     trajectory_length,
 )
-from catenet.output.writer import ResultWriter, check_output_path
-from catenet.output.xdmf import sidecar_path, write_xdmf
+from catenet.output.repair import Repair, recover, repair
+from catenet.output.writer import ResultWriter
+from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 
 __all__ = [
     "Frame",
     "Mesh",
+    "Repair",
     "ResultFile",
     "ResultWriter",
     "check_output_path",
@@ -46,8 +54,11 @@ __all__ = [
     "read_mesh",
     "read_result",
     "recover",
+    "remove_spares",
+    "repair",
     "result_attrs",
     "sidecar_path",
     "trajectory_length",
+    "write_views",
     "write_xdmf",
 ]

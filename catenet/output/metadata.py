@@ -60,4 +60,10 @@ def result_attrs(res, scene) -> dict:
         "max_tension": float(np.max(tension, initial=0.0)),
         # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
         "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
+        # catenet run: seconds of the solve (the engine) and of the start-up before it
+        # (imports, the case, the JIT cache); -1 where not measured
+        **{
+            f"{k}_time": float(res.stats.get(f"{k}_seconds", -1.0) if res.stats else -1.0)
+            for k in ("solve", "startup")
+        },
     }

@@ -7,18 +7,19 @@ knows where a result file keeps what.
 - ``read_frame(path, index)`` -> ``Frame``: one stored state (``--restart``, tests).
 - ``read_mesh(path)`` -> ``Mesh``: the net a file was written for (``--restart``).
 - ``open_result`` and ``trajectory_length``: the h5py file and its complete frames, for
-  tools that look at the datasets themselves; ``recover`` rewrites a killed run's file as
-  an ordinary one.
+  tools that look at the datasets themselves (``catenet.output.repair`` rewrites a file
+  that needs it as an ordinary one).
 
-A killed run's file carries HDF5's "open for writing" mark: ``open_result`` reads it in
-SWMR mode, as it was at its last flush. Frames that never fully reached the disk (shorter
-datasets, or NaN, the datasets' fill value) are not counted.
+The writer only ever replaces a result file whole, so a killed run's file is an ordinary
+HDF5 file. Files written in place (by earlier catenet versions, in SWMR mode) carry HDF5's
+"open for writing" mark after a kill: ``open_result`` reads them in SWMR mode, as they
+were at their last flush. Frames that never fully reached the disk (shorter datasets, or
+NaN, the datasets' fill value) are not counted.
 """
 
 from __future__ import annotations
 
 import logging
-import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,7 +28,6 @@ import numpy as np
 
 from catenet import measures
 from catenet.errors import ConfigError
-from catenet.output.xdmf import sidecar_path, write_xdmf
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +47,6 @@ __all__ = [
     "read_frame",
     "read_mesh",
     "read_result",
-    "recover",
     "trajectory_length",
 ]
 
@@ -413,60 +412,3 @@ def _case(text, path: Path) -> dict:
     except tomllib.TOMLDecodeError as exc:
         log.warning("%s: the case attribute is not valid TOML (%s); plotting without it", path, exc)
         return {}
-
-
-# --------------------------------------------------------------------------------------------
-# Recovering a killed run's file
-# --------------------------------------------------------------------------------------------
-
-
-def recover(path: str | Path, out: str | Path | None = None) -> Path:
-    """Copies the readable part of a result file (in particular one left by a killed run,
-    which ordinary HDF5 readers refuse) into a clean file, ``out`` or ``path`` itself,
-    and rewrites the XDMF sidecar to match. Returns the clean file's path."""
-    import h5py
-
-    src = Path(path)
-    dst = src if out is None else Path(out)
-    tmp = dst.with_name(f".{dst.name}.recover-{os.getpid()}")
-    with open_result(src) as h5, h5py.File(tmp, "w", libver=LIBVER) as clean:
-        for key, value in h5.attrs.items():
-            clean.attrs[key] = value
-        n = trajectory_length(h5)
-        for name in h5:
-            if name == "trajectory":
-                g = clean.create_group("trajectory")
-                for key, ds in h5["trajectory"].items():
-                    copy = g.create_dataset(
-                        key,
-                        data=ds[:n],
-                        maxshape=(None, *ds.shape[1:]),
-                        chunks=ds.chunks,
-                        compression=ds.compression,
-                        shuffle=ds.shuffle,
-                    )
-                    for attr, value in ds.attrs.items():
-                        copy.attrs[attr] = value
-            else:
-                h5.copy(h5[name], clean, name=name)
-    os.replace(tmp, dst)
-    _write_sidecar_for(dst)
-    return dst
-
-
-def _write_sidecar_for(path: Path) -> None:
-    with open_result(path) as h5:
-        n_nodes, n_edges = len(h5["mesh/nodes"]), len(h5["mesh/edges"])
-        n = trajectory_length(h5)
-        times = list(np.asarray(h5["trajectory/time"][:n], dtype=float)) if n else []
-        has_v = "trajectory" in h5 and "v" in h5["trajectory"]
-        has_result = "result" in h5 and "x" in h5["result"]
-    if times or has_result:
-        write_xdmf(
-            sidecar_path(path),
-            path.name,
-            n_nodes=n_nodes,
-            n_edges=n_edges,
-            times=times,
-            velocities=has_v,
-        )

@@ -1,17 +1,18 @@
 """Writing a result file (the layout in ``catenet.output``) while a run goes on.
 
-``ResultWriter`` writes the mesh when it opens, appends trajectory frames as a run goes
-and the final state (``/result``) at the end; the XDMF sidecar follows it.
+``ResultWriter`` writes the mesh when it opens, takes trajectory frames as a run goes and
+the final state (``/result``) at the end; the XDMF sidecar follows the file.
 
-Crash safety: the file is created with ``libver=LIBVER`` and the trajectory is written
-in SWMR mode (single writer, multiple readers), flushed after every frame. HDF5 then
-orders its metadata writes so that the file on disk is consistent at every moment: a run
-killed at any point (SIGKILL, power loss) leaves a file with every frame up to the last
-flushed one. Such a file still carries HDF5's "open for writing" mark, which ordinary
-readers refuse; ``open_result`` reads it in SWMR mode, and ``recover`` (or HDF5's
-``h5clear -s``) turns it into an ordinary file. A run that ends, fails or is interrupted
-closes the file properly. ``/result`` is written after the SWMR phase (HDF5 cannot create
-objects in SWMR mode), so a killed run has no ``/result``.
+Crash safety: the result file is never written in place. Frames gather in memory and are
+flushed in batches (after ``flush_seconds`` of wall time, ``flush_frames`` frames or
+``MAX_PENDING_BYTES``, whichever comes first, and at once for the first frame) into a
+hidden spare copy, a closed HDF5 file that then replaces the result file in one
+``os.replace`` (``catenet.output.files``); the replaced version becomes the spare and gets
+the same batch. So the result file is at every moment a complete, closed HDF5 file that any
+reader opens (h5py, ParaView, meshio, also while the run goes on), and a run killed at any
+point (SIGKILL, power loss) leaves every frame up to the last flush. The sidecar is
+rewritten after each flush and names only frames in the file. A run that ends, fails or is
+interrupted flushes what is left; /result is written with the last batch.
 
 Nothing non-finite is ever written: a frame or result with NaN or inf is refused with
 ``OutputError`` and the frames before it are kept. When writing fails mid-run (a full
@@ -22,11 +23,9 @@ the system's temporary directory, naming it in the ``OutputError`` it raises.
 from __future__ import annotations
 
 import datetime
-import errno
 import logging
 import math
 import os
-import re
 import tempfile
 import time
 from pathlib import Path
@@ -35,70 +34,31 @@ import numpy as np
 
 from catenet import measures
 from catenet.errors import ConfigError, OutputError
+from catenet.output.files import (
+    check_output_path,
+    copy_atomically,
+    describe,
+    detach,
+    publish,
+    remove_spares,
+    spare_paths,
+)
 from catenet.output.metadata import environment, result_attrs
 from catenet.output.reader import LIBVER, TRAJECTORY
-from catenet.output.xdmf import sidecar_path, write_xdmf
+from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 
 log = logging.getLogger(__name__)
 
-# While running, the sidecar is rewritten at most once a second, and (for long runs, whose
-# sidecar takes a while to write) at most 5 % of the time.
-XDMF_REWRITE_SECONDS = 1.0
-XDMF_SHARE = 0.05
+# Frames reach the file at least this often (wall time) ...
+FLUSH_SECONDS = 1.0
+# ... and after this many frames or bytes held in memory, whichever comes first;
+FLUSH_FRAMES = 1000
+MAX_PENDING_BYTES = 64 * 2**20
+# a flush (written twice, the sidecar rewritten) takes at most this share of the run's time.
+FLUSH_SHARE = 0.05
 MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
 
 __all__ = ["ResultWriter", "check_output_path"]
-
-
-# --------------------------------------------------------------------------------------------
-# Paths and errors
-# --------------------------------------------------------------------------------------------
-
-
-def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
-    """Checks, without creating anything, that ``path`` can be written: it is not a
-    directory, an existing file there is writable, and its nearest existing parent is a
-    writable directory (missing directories are created when the file is opened).
-    Raises ConfigError naming the path; returns the path."""
-    p = Path(path)
-    text = str(path)
-    if not text.strip():
-        raise ConfigError(f"{what} = {text!r}: must be a file path")
-    if p.is_dir():
-        raise ConfigError(f"{what} {text!r}: is a directory: give a file path such as out/run.h5")
-    if p.suffix.lower() == ".xdmf":
-        raise ConfigError(
-            f"{what} {text!r}: .xdmf is the name of the ParaView sidecar: give the HDF5 file, "
-            "such as out/run.h5"
-        )
-    if p.exists() or p.is_symlink():
-        if not p.is_file():
-            raise ConfigError(f"{what} {text!r}: exists and is not a regular file")
-        if not os.access(p, os.W_OK):
-            raise ConfigError(
-                f"{what} {text!r}: exists and cannot be overwritten (permission denied)"
-            )
-    parent = p.absolute().parent
-    while not parent.exists():
-        if parent.is_symlink():  # a dangling link
-            raise ConfigError(f"{what} {text!r}: {parent} is a broken symbolic link")
-        parent = parent.parent
-    if not parent.is_dir():
-        raise ConfigError(f"{what} {text!r}: {parent} is not a directory")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise ConfigError(f"{what} {text!r}: cannot write in {parent} (permission denied)")
-    return p
-
-
-def describe(exc: BaseException) -> str:
-    """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
-    text = str(exc)
-    m = re.search(r"errno = (\d+), error message = '([^']*)'", text)
-    if m:
-        return f"{m.group(2)} (errno {m.group(1)})"
-    if isinstance(exc, OSError) and exc.strerror:
-        return exc.strerror
-    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def _check_finite(name: str, value, t: float) -> None:
@@ -111,6 +71,36 @@ def _check_finite(name: str, value, t: float) -> None:
         )
 
 
+# HDF5's filters on the trajectory's datasets (byte shuffle, then deflate level 4): the
+# writer compresses each frame once itself and writes the chunk to both copies.
+_FILTERS = ((2, ()), (1, (4,)))  # (H5Z_FILTER_SHUFFLE, ...), (H5Z_FILTER_DEFLATE, level)
+
+
+def _filters(ds) -> tuple:
+    plist = ds.id.get_create_plist()
+    out = []
+    for i in range(plist.get_nfilters()):
+        code, _, values, _ = plist.get_filter(i)
+        out.append((code, tuple(values) if code != 2 else ()))
+    return tuple(out)
+
+
+def _encode(batch) -> dict[str, list[bytes]]:
+    """Each frame's arrays as HDF5 stores a one-frame chunk with ``_FILTERS``: bytes
+    shuffled (all first bytes of the float64 values, then all second bytes, ...), then
+    zlib-compressed at level 4."""
+    import zlib
+
+    if not batch:
+        return {}
+    out: dict[str, list[bytes]] = {name: [] for name in batch[0][1]}
+    for _, data in batch:
+        for name, arr in data.items():
+            raw = np.ascontiguousarray(arr, dtype="<f8").view(np.uint8).reshape(-1, 8)
+            out[name].append(zlib.compress(raw.T.tobytes(), 4))
+    return out
+
+
 # --------------------------------------------------------------------------------------------
 # Writer
 # --------------------------------------------------------------------------------------------
@@ -121,9 +111,13 @@ class ResultWriter:
 
     ``every``: the run keeps every k-th step as a trajectory frame (0: only the final
     state, and the file has no /trajectory group). The writer stores what it is given:
-    ``frame`` appends (the caller picks which steps, see ``wants``), ``result`` writes
-    /result. ``velocities`` (default: dynamic cases) adds /trajectory/v and /result/v;
-    ``attrs`` are extra root attributes.
+    ``frame`` takes a frame (the caller picks which steps, see ``wants``), ``result``
+    writes /result. ``velocities`` (default: dynamic cases) adds /trajectory/v and
+    /result/v; ``attrs`` are extra root attributes. ``flush_seconds`` and ``flush_frames``
+    (0: no limit) say how often frames reach the file (see the module's docstring).
+
+    ``frames`` counts the frames in the file, ``pending`` those in memory, ``flushes``
+    and ``flush_time`` [s] the flushes so far and the wall time they took.
 
     Use it as a context manager; the file is complete and closed on exit, also when the
     block raises (frames kept, no /result unless ``result`` was called).
@@ -138,6 +132,8 @@ class ResultWriter:
         xdmf: bool = True,
         velocities: bool | None = None,
         attrs: dict | None = None,
+        flush_seconds: float = FLUSH_SECONDS,
+        flush_frames: int = FLUSH_FRAMES,
     ):
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 0:
             raise ConfigError(f"output.every = {every!r}: must be an integer >= 0")
@@ -150,15 +146,22 @@ class ResultWriter:
             velocities = getattr(solver, "method", "static") == "dynamic"
         self.velocities = bool(velocities)
         self.attrs = dict(attrs or {})
+        self.flush_seconds = float(flush_seconds)
+        self.flush_frames = int(flush_frames)
         self.frames = 0
         self.times: list[float] = []
+        self.flushes = 0
+        self.flush_time = 0.0
         self.error: BaseException | None = None  # a failed write: frames stop there
         self.saved_to: Path | None = None  # where the result went instead
-        self._h5 = None
-        self._datasets: dict = {}
-        self._swmr = False
+        self._spare, self._prev = spare_paths(self.path)
+        self._pending: list[tuple[float, dict]] = []
+        self._pending_bytes = 0
+        self._open = False
         self._result_written = False
-        self._next_xdmf = -math.inf
+        self._next_flush = -math.inf
+        self._copy_rate = 1e-9  # s per byte copied, measured (a first guess: 1 GB/s)
+        self.clock = time.monotonic  # the wall clock of the flush interval
 
     # --- context ---------------------------------------------------------------------------
     def __enter__(self) -> ResultWriter:
@@ -175,6 +178,11 @@ class ResultWriter:
         return self._result_written
 
     @property
+    def pending(self) -> int:
+        """Frames taken but not yet in the file."""
+        return len(self._pending)
+
+    @property
     def sidecar(self) -> Path:
         return sidecar_path(self.path)
 
@@ -184,7 +192,7 @@ class ResultWriter:
 
     # --- opening ---------------------------------------------------------------------------
     def open(self) -> None:
-        """Creates the file (and missing parent directories) and writes the mesh."""
+        """Creates the file (and missing parent directories) with the mesh."""
         import h5py
 
         check_output_path(self.path)
@@ -195,41 +203,30 @@ class ResultWriter:
                 f"output file {str(self.path)!r}: cannot create its directory: "
                 f"{exc.strerror or exc}"
             ) from None
+        remove_spares(self.path)  # left by a killed run
         try:
-            self._h5 = h5py.File(self.path, "w", libver=LIBVER)
+            h5 = h5py.File(self._spare, "w", libver=LIBVER)
         except OSError as exc:
-            hint = ""
-            if "lock" in str(exc).lower():
-                hint = " (is it open in another program, such as ParaView or HDFView?)"
             raise ConfigError(
-                f"output file {str(self.path)!r}: cannot be created{hint}: {exc}"
+                f"output file {str(self.path)!r}: cannot be created: {describe(exc)}"
             ) from None
         try:
-            self._write_header(self._h5)
-            if self.every > 0:
-                self._create_trajectory(self._h5)
-                # Dataset objects live as long as the file: a temporary one closed while
-                # writes fail would make HDF5 keep its identifier (see _detach).
-                g = self._h5["trajectory"]
-                self._datasets = {name: g[name] for name in g}
-                self._h5.swmr_mode = True
-                self._swmr = True
-            self._h5.flush()
+            with h5:
+                self._write_header(h5)
+                if self.every > 0:
+                    self._create_trajectory(h5)
+            copy_atomically(self._spare, self.path)
         except OSError as exc:
             self._abandon()
             raise OutputError(f"{self.path}: cannot be written: {describe(exc)}") from None
+        self._open = True
         # A sidecar left from an earlier run of this file would now lie: remove it.
         if self.xdmf:
             self.sidecar.unlink(missing_ok=True)
 
     def _abandon(self) -> None:
-        """Closes and removes a file that could not even get its header."""
-        try:
-            if self._h5 is not None:
-                self._h5.close()
-        except Exception:  # best effort: the file is being removed
-            pass
-        self._h5 = None
+        """Removes a file that could not even get its header."""
+        remove_spares(self.path)
         self.path.unlink(missing_ok=True)
 
     def _write_header(self, h5) -> None:
@@ -255,12 +252,19 @@ class ResultWriter:
         mesh.create_dataset("fixed", data=np.asarray(net.fixed, dtype=bool))
         mesh.attrs["probe"] = int(scene.probe)
         mesh.attrs["size"] = float(scene.size)
+        cables = getattr(scene, "cables", None)
+        if cables is not None:  # a graph's cables: the cable of every edge (-1: none)
+            import h5py
+
+            mesh.create_dataset("cable", data=np.asarray(cables.edge, dtype=np.int64))
+            mesh.attrs["cable_names"] = np.array(cables.names, dtype=h5py.string_dtype())
 
     def _create_trajectory(self, h5) -> None:
         n, m = self.scene.net.n_nodes, self.scene.net.n_edges
         g = h5.create_group("trajectory")
-        # Fill value NaN: a frame that never fully reached the disk (the writer failed or
-        # was killed in the middle of it) reads as NaN, and readers skip it.
+        # Fill value NaN: a frame that never fully reached the disk (a file written by a
+        # killed earlier catenet version, or copied while incomplete) reads as NaN, and readers
+        # skip it.
         g.create_dataset(
             "time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,), fillvalue=np.nan
         )
@@ -289,42 +293,34 @@ class ResultWriter:
 
     # --- frames ----------------------------------------------------------------------------
     def frame(self, t: float, x, v=None, tension=None) -> None:
-        """Appends a frame and flushes it to disk. ``v`` None stores zeros (when the file
-        keeps velocities); ``tension`` None is computed from x. Raises OutputError for a
-        non-finite frame (not written). A failed write (a full disk) is remembered, and
-        frames stop: the run goes on and ``result`` saves the final state elsewhere."""
+        """Takes a frame (a copy); it reaches the file with the next flush. ``v`` None
+        stores zeros (when the file keeps velocities); ``tension`` None is computed from x.
+        Raises OutputError for a non-finite frame (not kept). A failed write (a full disk)
+        is remembered, and frames stop: the run goes on and ``result`` saves the final
+        state elsewhere."""
         if self.every == 0 or self.error is not None:
             return
-        if self._h5 is None:
+        if not self._open:
             raise OutputError(f"{self.path}: the writer is not open")
         net = self.scene.net
-        x = np.asarray(x, dtype=np.float64)
+        x = np.array(x, dtype=np.float64)  # a copy: the caller may reuse its arrays
         if x.shape != net.nodes.shape:
             raise OutputError(f"frame x: shape {x.shape}: must be {net.nodes.shape}")
-        data = {"x": x, "tension": self._stored_tension(x, tension)}
+        data = {"x": x, "tension": np.array(self._stored_tension(x, tension))}
         if self.velocities:
-            data["v"] = np.zeros_like(x) if v is None else np.asarray(v, dtype=np.float64)
+            data["v"] = np.zeros_like(x) if v is None else np.array(v, dtype=np.float64)
         if not math.isfinite(float(t)):
             raise OutputError(f"refusing to write a frame at t = {t!r}: the time must be finite")
         for name, arr in data.items():
             _check_finite(name, arr, float(t))
-        k = self.frames
-        try:
-            for name, arr in data.items():
-                ds = self._datasets[name]
-                ds.resize(k + 1, axis=0)
-                ds[k] = arr
-            ds = self._datasets["time"]
-            ds.resize((k + 1,))
-            ds[k] = float(t)  # last: the frame counts once its time is there
-            self._h5.flush()
-        except (OSError, RuntimeError) as exc:  # ENOSPC, EFBIG, EIO, quota ...
-            self._fail(exc)
-            return
-        self.frames += 1
-        self.times.append(float(t))
-        if self.xdmf and time.monotonic() >= self._next_xdmf:
-            self._write_sidecar()
+        self._pending.append((float(t), data))
+        self._pending_bytes += sum(arr.nbytes for arr in data.values())
+        if (
+            self.clock() >= self._next_flush
+            or (self.flush_frames > 0 and len(self._pending) >= self.flush_frames)
+            or self._pending_bytes >= MAX_PENDING_BYTES
+        ):
+            self.flush()
 
     def _stored_tension(self, x, tension) -> np.ndarray:
         """The tensions stored with positions x: as given, else computed from the law (the
@@ -333,29 +329,127 @@ class ResultWriter:
             tension = measures.tension(self.scene.net, x)
         return np.asarray(tension, dtype=np.float64)
 
+    def flush(self, result: tuple | None = None) -> bool:
+        """Writes the pending frames (and ``result``: (Result, attrs), /result) into the
+        spare, publishes it as the result file and brings the new spare up to date.
+        Returns False after a failed write (``error`` set)."""
+        if self.error is not None or not self._open:
+            return False
+        batch = self._pending
+        if not batch and result is None:
+            return True
+        start = time.perf_counter()
+        n0 = self.frames
+        encoded = _encode(batch)  # compressed once, written twice (or copied)
+        if not self._write_spare(batch, encoded, n0, result):
+            return False
+        written = time.perf_counter() - start
+        try:
+            publish(self._spare, self.path, self._prev)
+        except OSError as exc:
+            self._fail(exc)
+            return False
+        self._pending, self._pending_bytes = [], 0
+        self.frames += len(batch)
+        self.times.extend(t for t, _ in batch)
+        if result is not None:
+            self._result_written = True
+        self._write_sidecar()  # right after the file: it names only frames in the file
+        if result is None and batch and not self._update_spare(batch, encoded, n0, written):
+            return False
+        cost = time.perf_counter() - start
+        self.flushes += 1
+        self.flush_time += cost
+        self._next_flush = self.clock() + max(self.flush_seconds, cost / FLUSH_SHARE)
+        return True
+
+    def _update_spare(self, batch, encoded, n0: int, written: float) -> bool:
+        """Brings the spare (the version just replaced) up to date: by appending the batch
+        again, or, where that is predicted to take longer (small files, many frames), by
+        copying the published file."""
+        size = self.path.stat().st_size
+        if self._copy_rate * size >= written:
+            return self._write_spare(batch, encoded, n0, again=True)
+        start = time.perf_counter()
+        try:
+            copy_atomically(self.path, self._spare)
+        except OSError:  # try the other way before giving up
+            return self._write_spare(batch, encoded, n0, again=True)
+        self._copy_rate = (time.perf_counter() - start) / max(size, 1)
+        return True
+
+    def _write_spare(self, batch, encoded, n0: int, result=None, again: bool = False) -> bool:
+        """Appends ``batch`` (frames n0, n0 + 1, ...; ``encoded``: see ``_encode``) and
+        ``result`` to the spare.
+        ``again``: the spare is the version just replaced; when it cannot be opened (a
+        reader holds it), it is replaced by a copy of the published file."""
+        import h5py
+
+        h5 = None
+        # Dataset objects live as long as the file: one closed while writes fail would make
+        # HDF5 keep its identifier and crash at exit (see ``files.detach``).
+        held: list = []
+        try:
+            h5 = h5py.File(self._spare, "r+", libver=LIBVER, rdcc_nbytes=0)
+            if batch:
+                self._append(h5, batch, encoded, n0, held)
+            if result is not None:
+                self._write_result(h5, *result)
+            h5.close()
+            return True
+        except (OSError, RuntimeError) as exc:
+            failure = exc
+        if h5 is not None:
+            detach(h5)
+            held.clear()
+            try:
+                h5.close()
+            except Exception:  # the spare is broken already: it is replaced or dropped
+                pass
+        if again:
+            try:
+                copy_atomically(self.path, self._spare)
+                return True
+            except OSError as exc:
+                failure = exc
+        self._fail(failure)
+        return False
+
+    def _append(self, h5, batch, encoded, n0: int, held: list) -> None:
+        g = h5["trajectory"]
+        n1 = n0 + len(batch)
+        for name in batch[0][1]:
+            held.append(ds := g[name])
+            ds.resize(n1, axis=0)
+            if ds.chunks == (1, *ds.shape[1:]) and _FILTERS == _filters(ds):
+                zeros = (0,) * (ds.ndim - 1)
+                for k, chunk in enumerate(encoded[name], start=n0):
+                    ds.id.write_direct_chunk((k, *zeros), chunk)
+            else:  # frames split into several chunks: HDF5 compresses them
+                ds[n0:n1] = np.stack([data[name] for _, data in batch])
+        held.append(ds := g["time"])
+        ds.resize((n1,))
+        ds[n0:n1] = [t for t, _ in batch]  # last: a frame counts once its time is there
+        if self.xdmf:
+            write_views(h5, n0, n1)
+
     def _fail(self, exc: BaseException) -> None:
         self.error = exc
+        lost = f"; {len(self._pending)} frames not written" if self._pending else ""
         log.warning(
-            "%s: writing failed after %d frames (%s); the run goes on, its final state will "
-            "be saved to a temporary file",
+            "%s: writing failed after %d frames (%s)%s; the run goes on, its final state "
+            "will be saved to a temporary file",
             self.path,
             self.frames,
             describe(exc),
+            lost,
         )
-        h5, self._h5 = self._h5, None
-        if h5 is not None:
-            _detach(h5)
-            self._datasets = {}
-            try:
-                h5.close()
-            except Exception:  # the file is broken already
-                pass
+        self._pending, self._pending_bytes = [], 0
 
     def _write_sidecar(self) -> None:
-        if not self.xdmf:
+        if not self.xdmf or not (self.frames or self._result_written):
             return
         net = self.scene.net
-        start = time.monotonic()
         try:
             write_xdmf(
                 self.sidecar,
@@ -366,25 +460,20 @@ class ResultWriter:
                 velocities=self.velocities,
             )
         except OSError as exc:
-            log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, exc)
-        now = time.monotonic()
-        self._next_xdmf = now + max(XDMF_REWRITE_SECONDS, (now - start) / XDMF_SHARE)
+            log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, describe(exc))
 
     # --- result ----------------------------------------------------------------------------
     def result(self, res, **attrs) -> None:
-        """Writes /result (final state and its attributes; ``attrs`` add to them). After a
-        failed write, saves root attributes, mesh and /result to a temporary file and
-        raises OutputError naming it (with ``.result`` and ``.saved_to`` set)."""
+        """Writes /result (final state and its attributes; ``attrs`` add to them) with the
+        pending frames. After a failed write, saves root attributes, mesh and /result to a
+        temporary file and raises OutputError naming it (with ``.result`` and
+        ``.saved_to`` set)."""
         _check_finite("x", res.x, float(getattr(res, "time", 0.0)))
         if self.error is None:
-            try:
-                self._reopen_for_result()
-                self._write_result(self._h5, res, attrs)
-                self._h5.flush()
-                self._result_written = True
+            if not self._open:
+                raise OutputError(f"{self.path}: the writer is not open")
+            if self.flush(result=(res, attrs)):
                 return
-            except (OSError, RuntimeError) as exc:
-                self._fail(exc)
         # Writing failed: keep the result in a temporary file.
         first = self.error
         try:
@@ -407,23 +496,21 @@ class ResultWriter:
         err.saved_to = self.saved_to
         raise err
 
-    def _reopen_for_result(self) -> None:
-        """HDF5 creates no objects in SWMR mode: close that phase and reopen."""
-        import h5py
-
-        if self._h5 is None:
-            raise OSError(errno.EBADF, "the result file is not open", str(self.path))
-        if self._swmr:
-            self._close_file()
-            self._h5 = h5py.File(self.path, "r+", libver=LIBVER)
-
     def _write_result(self, h5, res, attrs: dict) -> None:
         scene = self.scene
         if "result" in h5:
             del h5["result"]
         g = h5.create_group("result")
         g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
-        g.create_dataset("tension", data=self._stored_tension(res.x, res.tension))
+        tension = self._stored_tension(res.x, res.tension)
+        g.create_dataset("tension", data=tension)
+        cables = getattr(scene, "cables", None)
+        if cables is not None:
+            top, slack = measures.cable_stats(
+                scene.net, res.x, tension, cables.edge, len(cables.names)
+            )
+            g.create_dataset("cable_max_tension", data=top)
+            g.create_dataset("cable_slack_fraction", data=slack)
         reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
         g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
         v = getattr(res, "v", None)
@@ -454,54 +541,16 @@ class ResultWriter:
         return tmp
 
     # --- closing ---------------------------------------------------------------------------
-    def _close_file(self) -> None:
-        """Flushes and closes the file. When that fails, the file is detached (see
-        ``_detach``) and closed all the same, and the error re-raised."""
-        h5 = self._h5
-        try:
-            h5.flush()
-            self._datasets = {}
-            h5.close()
-        except (OSError, RuntimeError):
-            _detach(h5)
-            self._datasets = {}
-            try:
-                h5.close()
-            except Exception:  # closed as far as it goes
-                pass
-            raise
-        finally:
-            self._h5 = None
-            self._swmr = False
-
     def close(self) -> None:
-        """Closes the file and writes the final sidecar (consistent with the file)."""
-        if self._h5 is not None:
+        """Flushes the pending frames and removes the spare: the file is final."""
+        if not self._open:
+            return
+        try:
+            if self._pending:
+                self.flush()
+        finally:
+            self._open = False
             try:
-                self._close_file()
-            except (OSError, RuntimeError) as exc:  # a broken file: nothing more to save
-                self.error = self.error or exc
-                log.warning("%s: closing failed: %s", self.path, describe(exc))
-            if self.xdmf and self.error is None and (self.frames or self._result_written):
-                self._write_sidecar()
-
-
-def _detach(h5) -> None:
-    """Points HDF5's file descriptor of a file whose writes fail at /dev/null.
-
-    HDF5 retries the failed writes when the file and its datasets are closed; when those
-    fail again, it keeps their identifiers and crashes at interpreter exit. Writing the
-    rest to /dev/null lets the close succeed, while the file on disk keeps what was
-    flushed before the failure (consistent, thanks to SWMR).
-    """
-    try:
-        fd = h5.id.get_vfd_handle()
-        null = os.open(os.devnull, os.O_RDWR)
-    except Exception:  # another file driver, or no /dev/null: leave it be
-        return
-    try:
-        os.dup2(null, fd)
-    except OSError:
-        pass
-    finally:
-        os.close(null)
+                remove_spares(self.path)
+            except OSError as exc:
+                log.warning("%s: cannot remove the spare copy: %s", self._spare, describe(exc))

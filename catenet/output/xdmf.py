@@ -1,9 +1,19 @@
-"""The XDMF 3 sidecar of a result file, for ParaView: ``OUT.xdmf`` next to ``OUT.h5``.
+"""The XDMF 3 sidecar of a result file: ``OUT.xdmf`` next to ``OUT.h5``, for ParaView and
+VTK (pyvista), meshio's time-series reader, and ``meshio.read`` for a file that holds only
+its final state.
 
-The sidecar holds no data: it points at the HDF5 datasets (the mesh's edges, and per frame
-the trajectory's positions, tensions and velocities by HyperSlab, or the final state in
-/result) and is rewritten as a run goes on. Writing it is all this module does: the writer
-(``catenet.output.writer``) and ``recover`` (``catenet.output.reader``) say what to write.
+The sidecar holds no data: every DataItem names a whole HDF5 dataset. A trajectory is a
+Temporal collection with one Polyline grid per frame; frame k's geometry, tensions and
+velocities are the datasets ``/xdmf/x/k``, ``/xdmf/tension/k`` and ``/xdmf/v/k``: virtual
+datasets (HDF5 1.10) that map frame k of ``/trajectory/x`` and the others, so they cost
+metadata only and the trajectory stays where SPEC section 5 puts it. (meshio reads whole
+datasets only, not XDMF HyperSlabs, hence these views.) Each frame also carries its
+positions as the point attribute ``position``: meshio's time-series reader takes the
+geometry of the first grid only. A file without a trajectory gets one grid of /result.
+
+``write_views`` adds the views of new frames to an open file; ``write_xdmf`` writes the
+sidecar (atomically). The writer (``catenet.output.writer``) and ``recover``
+(``catenet.output.reader``) say what to write.
 """
 
 from __future__ import annotations
@@ -13,12 +23,54 @@ import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["sidecar_path", "write_xdmf"]
+import numpy as np
+
+VIEWS = "xdmf"  # the group of the per-frame views
+
+__all__ = ["VIEWS", "sidecar_path", "write_views", "write_xdmf"]
 
 
 def sidecar_path(path: str | Path) -> Path:
     """The XDMF sidecar of a result file: ``OUT.xdmf`` next to ``OUT.h5``."""
     return Path(path).with_suffix(".xdmf")
+
+
+# --------------------------------------------------------------------------------------------
+# Per-frame views in the HDF5 file
+# --------------------------------------------------------------------------------------------
+
+
+def write_views(h5, start: int, stop: int) -> None:
+    """Adds the views ``/xdmf/<name>/<k>`` of frames ``start <= k < stop`` (which have
+    none yet) of every per-frame dataset of /trajectory (besides time) to an open,
+    writable file. A view maps one frame of its source (same file, named "."), so a
+    trajectory that grows later keeps its views valid."""
+    from h5py import h5d, h5p, h5s, h5t
+
+    traj = h5.get("trajectory")
+    if traj is None or stop <= start:
+        return
+    base = h5p.create(h5p.DATASET_CREATE)
+    base.set_fill_value(np.array(np.nan))
+    for name in ("x", "tension", "v"):
+        if name not in traj:
+            continue
+        tail = tuple(traj[name].shape[1:])
+        group = h5.require_group(f"{VIEWS}/{name}").id
+        view = h5s.create_simple(tail)
+        whole = h5s.create_simple((stop, *tail), (h5s.UNLIMITED, *tail))
+        target = f"/trajectory/{name}".encode()
+        zeros = (0,) * len(tail)
+        for k in range(start, stop):
+            dcpl = base.copy()
+            whole.select_hyperslab((k, *zeros), (1, *tail))
+            dcpl.set_virtual(view, b".", target, whole)
+            h5d.create(group, str(k).encode(), h5t.IEEE_F64LE, view, dcpl=dcpl).close()
+
+
+# --------------------------------------------------------------------------------------------
+# The sidecar
+# --------------------------------------------------------------------------------------------
 
 
 def _hdf_item(parent, h5name: str, dataset: str, dims: Iterable[int], number: str = "Float"):
@@ -34,28 +86,7 @@ def _hdf_item(parent, h5name: str, dataset: str, dims: Iterable[int], number: st
     return item
 
 
-def _slab(parent, h5name: str, dataset: str, k: int, full: tuple[int, ...]):
-    """Frame k of a (T, ...) dataset as an XDMF HyperSlab."""
-    rest = full[1:]
-    count = (1, *rest)
-    slab = ET.SubElement(
-        parent,
-        "DataItem",
-        ItemType="HyperSlab",
-        Dimensions=" ".join(map(str, count)),
-        Type="HyperSlab",
-    )
-    sel = ET.SubElement(
-        slab, "DataItem", Dimensions=f"3 {len(full)}", Format="XML", NumberType="Int"
-    )
-    start = (k, *(0 for _ in rest))
-    stride = tuple(1 for _ in full)
-    sel.text = " ".join(" ".join(map(str, row)) for row in (start, stride, count))
-    _hdf_item(slab, h5name, dataset, full)
-    return slab
-
-
-def _grid(parent, name: str, h5name: str, n_nodes: int, n_edges: int):
+def _grid(parent, name: str, h5name: str, n_edges: int):
     grid = ET.SubElement(parent, "Grid", Name=name, GridType="Uniform")
     topo = ET.SubElement(
         grid,
@@ -83,30 +114,31 @@ def write_xdmf(
 ) -> None:
     """Writes the XDMF 3 sidecar of a result file (atomically: a temporary file renamed).
 
-    With ``times`` (the trajectory's frames): a Temporal collection with one Polyline grid
-    per frame, geometry and tension read from frame k of /trajectory/x and
-    /trajectory/tension by HyperSlab. Without: one grid of /result/x and /result/tension.
-    ``h5name`` is the HDF5 file as the sidecar names it (relative to the sidecar).
+    With ``times`` (the trajectory's frames, whose views ``write_views`` wrote): a
+    Temporal collection with one Polyline grid per frame. Without: one grid of /result/x,
+    /result/tension and /result/reaction. ``h5name`` is the HDF5 file as the sidecar names
+    it (relative to the sidecar).
     """
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")
-    n_t = len(times)
-    if n_t:
+    if len(times):
         series = ET.SubElement(
             domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"
         )
         for k, t in enumerate(times):
-            grid = _grid(series, f"frame {k}", h5name, n_nodes, n_edges)
-            ET.SubElement(grid, "Time", Value=repr(float(t)))
+            grid = _grid(series, f"frame {k}", h5name, n_edges)
             geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            _slab(geom, h5name, "/trajectory/x", k, (n_t, n_nodes, 3))
+            _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
+            ET.SubElement(grid, "Time", Value=repr(float(t)))
             att = _attribute(grid, "tension", "Cell", "Scalar")
-            _slab(att, h5name, "/trajectory/tension", k, (n_t, n_edges))
+            _hdf_item(att, h5name, f"/{VIEWS}/tension/{k}", (n_edges,))
+            att = _attribute(grid, "position", "Node", "Vector")
+            _hdf_item(att, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
             if velocities:
                 att = _attribute(grid, "velocity", "Node", "Vector")
-                _slab(att, h5name, "/trajectory/v", k, (n_t, n_nodes, 3))
+                _hdf_item(att, h5name, f"/{VIEWS}/v/{k}", (n_nodes, 3))
     else:
-        grid = _grid(domain, "result", h5name, n_nodes, n_edges)
+        grid = _grid(domain, "result", h5name, n_edges)
         geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
         _hdf_item(geom, h5name, "/result/x", (n_nodes, 3))
         att = _attribute(grid, "tension", "Cell", "Scalar")

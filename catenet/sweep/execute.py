@@ -21,7 +21,7 @@ from catenet.sweep.journal import (
     write_tables,
 )
 from catenet.sweep.solve import RUNNING_DIR, failed_rows, make_task, run_job
-from catenet.sweep.workers import cores, run_dask, run_pool, threads_per_worker
+from catenet.sweep.workers import connect_dask, cores, run_dask, run_pool, threads_per_worker
 
 log = logging.getLogger(__name__)
 
@@ -108,7 +108,19 @@ def run_sweep(
             raise ConfigError(f"--save-runs: needs catenet.output.ResultWriter: {exc}") from None
     jobs = sweep.jobs
     summary = SweepSummary(out, len(jobs), sweep.n_rows)
-    out.mkdir(parents=True, exist_ok=True)
+    client = connect_dask(scheduler) if scheduler else None  # before DIR exists
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        _run(sweep, out, jobs, summary, client, workers, save_runs, progress)
+    finally:
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close()
+        summary.wall_time = time.perf_counter() - start
+    return summary
+
+
+def _run(sweep, out, jobs, summary, client, workers, save_runs, progress) -> None:
     with directory_lock(out):
         done = prepare_directory(sweep, out)
         todo = [job for job in jobs if job.index not in done]
@@ -137,9 +149,9 @@ def run_sweep(
         try:
             if not todo:
                 pass
-            elif scheduler:
+            elif client is not None:
                 tag = sweep.fingerprint[:8]
-                run_dask(_largest_first(sweep, todo), task, recorder, scheduler, tag)
+                run_dask(_largest_first(sweep, todo), task, recorder, client, tag)
             elif workers == 1:
                 for job in todo:
                     result = run_job(task(job, threads_per_worker(1), False))
@@ -154,8 +166,6 @@ def run_sweep(
             write_tables(out)
             with contextlib.suppress(OSError):
                 running.rmdir()  # empty unless a worker died
-            summary.wall_time = time.perf_counter() - start
-    return summary
 
 
 def _largest_first(sweep: Sweep, jobs: list[Job]) -> list[Job]:

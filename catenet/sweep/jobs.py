@@ -187,6 +187,9 @@ def make_sweep(
     case = case_api()
     base_dir = Path(base_dir)
     base_case = case.parse_case(base, source=source, base_dir=base_dir)
+    from catenet.runner import refuse_formfind
+
+    refuse_formfind(base_case)
     sweep = Sweep(
         source=source,
         base_dir=str(base_dir.resolve()),

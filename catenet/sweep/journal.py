@@ -66,20 +66,37 @@ def prepare_directory(sweep: Sweep, out: Path) -> dict[int, dict]:
 
 @contextlib.contextmanager
 def directory_lock(out: Path):
-    """Hold DIR's lock file; ConfigError when another sweep holds it."""
+    """Hold DIR's lock file ``.lock`` while the sweep runs and remove it at the end (also
+    after an error or Ctrl-C); ConfigError when another sweep holds it.
+
+    The file is removed while still locked; a sweep that opened it just before and locks
+    it just after finds it gone from DIR (another inode than ``.lock`` now names) and
+    takes the lock afresh, so two sweeps never both hold it."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
         yield
         return
-    fh = (out / ".lock").open("w")
-    try:
+    path = out / ".lock"
+    while True:
+        fh = path.open("a")
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            fh.close()
             raise ConfigError(f"{out}: another sweep is writing into this directory") from None
+        try:
+            current = os.stat(path).st_ino
+        except FileNotFoundError:
+            current = None
+        if current == os.fstat(fh.fileno()).st_ino:
+            break
+        fh.close()  # removed by the sweep that held it: lock the new one
+    try:
         yield
     finally:
+        with contextlib.suppress(OSError):
+            path.unlink()
         fh.close()
 
 

@@ -46,13 +46,19 @@ def run_job(task: dict) -> dict:
     """Solve one job's load levels in turn, each from the previous equilibrium.
 
     Never raises for a failing case: every row carries its error. Returns
-    ``{"index": ..., "rows": [...], "pid": ...}``."""
+    ``{"index": ..., "rows": [...], "pid": ..., "attempts": ...}``: ``attempts`` counts
+    the starts of the job since the marker ``DIR/.running/<index>`` ("pid attempt") was
+    last cleared, so a start after a worker died mid-job (a Dask scheduler reruns such a
+    task by itself) knows it is the second."""
     out = Path(task["out"])
     index = task["index"]
     marker = out / RUNNING_DIR / str(index)
+    attempt = 1
     if task.get("crash_hook"):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            attempt = int(marker.read_text().split()[1]) + 1  # left by a start that died
         with contextlib.suppress(OSError):
-            marker.write_text(str(os.getpid()))
+            marker.write_text(f"{os.getpid()} {attempt}")
         _test_crash(out, index)
     try:
         from catenet.linsolve import set_threads
@@ -63,7 +69,7 @@ def run_job(task: dict) -> dict:
         if task.get("crash_hook"):
             with contextlib.suppress(OSError):
                 marker.unlink()
-    return {"index": index, "rows": rows, "pid": os.getpid()}
+    return {"index": index, "rows": rows, "pid": os.getpid(), "attempts": attempt}
 
 
 def _test_crash(out: Path, index: int) -> None:

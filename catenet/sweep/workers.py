@@ -35,6 +35,8 @@ THREAD_VARIABLES = (
 DIED = "worker process died while running this job (crashed or killed)"
 NEVER_STARTED = "worker processes die before running a job (see the log above)"
 TWICE = ", twice: not retried again"
+RERUN = "dask worker died while running this job ({} time(s)); the scheduler ran it again"
+CONNECT_TIMEOUT = "20s"  # for the scheduler to answer
 
 
 def cores() -> int:
@@ -161,19 +163,28 @@ def _terminate(pool) -> None:
             proc.terminate()
 
 
-def run_dask(todo: list, task, recorder, scheduler: str, tag: str) -> None:
-    """The jobs on a Dask cluster, one task each (MKL and Numba threads 1 per task: a
-    Dask worker runs as many tasks at once as it has threads). A task whose worker is
-    lost beyond the scheduler's own retries (KilledWorker, lost connection) is run once
-    more, then recorded as failed."""
+def connect_dask(scheduler: str):
+    """A Dask client of the scheduler at ``scheduler``; ConfigError without Dask,
+    CatenetError when it cannot be reached (before anything is written)."""
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise ConfigError("--scheduler needs Dask distributed: pip install catenet[dask]") from None
     try:
-        client = Client(scheduler, timeout="20s", set_as_default=False)
-    except (OSError, TimeoutError) as exc:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
         raise CatenetError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
+
+
+def run_dask(todo: list, task, recorder, client, tag: str) -> None:
+    """The jobs on a Dask cluster (``client`` of ``connect_dask``), one task each (MKL and
+    Numba threads 1 per task: a Dask worker runs as many tasks at once as it has
+    threads). A task whose worker is lost beyond the scheduler's own retries
+    (KilledWorker, lost connection) is run once more, then recorded as failed. A job
+    the scheduler itself ran again after its worker died is recorded too (the task
+    reports how often it was started, see ``run_job``)."""
+    from distributed import as_completed
+
     crashes: dict[int, int] = {}
     futures: dict = {}
     try:
@@ -203,11 +214,12 @@ def run_dask(todo: list, task, recorder, scheduler: str, tag: str) -> None:
                     futures[new] = job
                     ac.add(new)
                 continue
-            recorder.done(job, result["rows"], crashes.get(job.index, 0) + 1)
+            ours = crashes.get(job.index, 0) + 1
+            started = int(result.get("attempts", 1))
+            if started > ours:  # the scheduler ran it again after its worker died
+                recorder.crashed(job, RERUN.format(started - ours))
+            recorder.done(job, result["rows"], max(ours, started))
     except BaseException:
         with contextlib.suppress(Exception):
             client.cancel(list(futures))
         raise
-    finally:
-        with contextlib.suppress(Exception):
-            client.close()

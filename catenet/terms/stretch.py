@@ -58,7 +58,7 @@ class Stretch(Term):
             net.edges,
             net.rest_length,
             self.EA,
-            law.kind,
+            law.kernel_kind,
             law.params,
             law.table,
             law.tension_only,

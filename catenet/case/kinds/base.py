@@ -8,7 +8,8 @@ catenet/case/kinds/__init__.py.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, NamedTuple
 
@@ -19,26 +20,46 @@ from catenet.net import Net
 @dataclass(frozen=True)
 class Topology:
     """What node references are checked against: the node count, the nodes pinned
-    unless supports.fixed says otherwise, and the named nodes."""
+    unless supports.fixed says otherwise, the named nodes, the node sets (a name for
+    several nodes, ``[geometry.sets]``) and the names of the cables."""
 
     n_nodes: int
     default_fixed: frozenset[int]
     names: dict[str, int]
+    sets: Mapping[str, tuple[int, ...]] = field(default_factory=dict)
+    cables: tuple[str, ...] = ()
 
 
 class Built(NamedTuple):
     """A geometry built: the net (with its supports and rest lengths), the probe node
-    whose z-deflection is reported, the length scale L of delta/L and the named nodes."""
+    whose z-deflection is reported, the length scale L of delta/L and the named nodes.
+
+    A kind that applies the case's material law and prestress itself says so with
+    ``final`` (else the scene does, uniformly); ``sets`` are its node sets, ``cables``
+    its cables (a ``catenet.case.kinds.cables.CableIndex``, None: none) and ``at_nodes``
+    the node of each load.point given by a position along a cable (by its index)."""
 
     net: Net
     probe: int
     size: float
     names: dict[str, int]
+    final: bool = False
+    sets: Mapping[str, tuple[int, ...]] = {}
+    cables: Any = None
+    at_nodes: Mapping[int, int] = {}
 
 
 def resolve(ref: int | str, names: dict[str, int]) -> int:
     """A node index from an index or a node name."""
     return names[ref] if isinstance(ref, str) else ref
+
+
+def expand(ref: int | str, names: Mapping[str, int], sets: Mapping) -> tuple[int, ...]:
+    """The nodes a reference stands for: an index or a node name (one node), or the name
+    of a node set (each of its nodes)."""
+    if isinstance(ref, str) and ref in sets:
+        return tuple(sets[ref])
+    return (resolve(ref, names),)
 
 
 def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
@@ -60,7 +81,7 @@ def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
 
 def with_prefix(message: str, fixed_key: str = "geometry.fixed") -> str:
     """A Net builder message with the case key path of what it names."""
-    if message.startswith(("geometry", "supports", "material", "load", "solver")):
+    if message.startswith(("geometry", "supports", "material", "load", "solver", "obstacle")):
         return message
     if message.startswith("nodes "):  # "nodes [3, 4]: ..." lists node indices
         return "geometry: " + message
@@ -84,7 +105,8 @@ class GeometryConfig(Declared):
     reference may use besides indices),
     ``default_supports`` (what is pinned without supports.fixed, as messages say it),
     ``pressure`` (whether load.pressure applies), ``lazy_topology`` (the topology needs
-    a build: check node references only when there are any).
+    a build: check node references only when there are any), ``node_sets`` (node
+    references may name node sets and cables of the instance, checked with its topology).
     """
 
     kind: ClassVar[str] = ""
@@ -93,6 +115,7 @@ class GeometryConfig(Declared):
     default_supports: ClassVar[str] = ""
     pressure: ClassVar[bool] = False
     lazy_topology: ClassVar[bool] = False
+    node_sets: ClassVar[bool] = False
 
     @classmethod
     def parse(cls, ck: Checker, g: dict, base_dir: Path) -> GeometryConfig | None:
@@ -123,6 +146,15 @@ class GeometryConfig(Declared):
         """The net of ``material`` (a catenet.geometry.Material) pinned at the node
         references ``fixed`` (None: the kind's default supports)."""
         raise NotImplementedError
+
+    def check_material(self, ck: Checker, material: Any) -> None:
+        """Problems of the case's [material] (a sound ``MaterialConfig``) with this
+        geometry (a graph's cables override it)."""
+
+    def build_case(self, case: Any, material: Any) -> Built:
+        """The net of a whole case (``material``: the catenet.geometry.Material of its
+        [material]); kinds that need more of the case than the supports override it."""
+        return self.build(material, case.supports.fixed)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, **super().to_dict()}

@@ -1,8 +1,9 @@
-"""geometry.kind = "graph": an explicit net, inline or from a JSON file."""
+"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, OBJ, or a line
+mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets and
+per-edge arrays (rest length, EA, tension-only switch, prestress)."""
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,11 +24,15 @@ from catenet.case.keys import (
     names,
     parse_keys,
     real,
+    tables,
     text,
     value,
 )
-from catenet.case.kinds.base import Built, GeometryConfig, Topology, resolve, with_prefix
+from catenet.case.kinds import cables as cb
+from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
+from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
 from catenet.errors import ConfigError
+from catenet.laws import Law, table_rows
 from catenet.net import Net
 
 Vec3 = tuple[float, float, float]
@@ -48,7 +53,8 @@ def _array(ck: Checker, v: Any, path: str, shape: tuple[int, int], convert, need
     ``need`` describes one item."""
     least, width = shape
     if not isinstance(v, (list, tuple)) or len(v) < least:
-        return ck.bad(path, v, f"must be an array of at least {least} {need.split(':')[0]}")
+        some = f"at least {least} " if least else ""
+        return ck.bad(path, v, f"must be an array of {some}{need.split(':')[0]}")
     out, bad = [], []
     for i, q in enumerate(v):
         item = None
@@ -68,24 +74,40 @@ def _points(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 
 def _pairs(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    return _array(ck, v, path, (1, 2), _index, "[i, j]: two node indices (integers >= 0)")
+    return _array(ck, v, path, (0, 2), _index, "[i, j]: two node indices (integers >= 0)")
 
 
-def _per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """One number > 0 per edge."""
-    if not isinstance(v, (list, tuple)):
-        return ck.bad(path, v, "must be an array with one number > 0 per edge")
-    vals = [as_float(x) for x in v]
-    bad = [
-        (f"{path}[{k}]", v[k])
-        for k, x in enumerate(vals)
-        if x is None or not (math.isfinite(x) and x > 0)
-    ]
-    ck.first(bad, "must be finite and > 0")
-    edges = ctx.values.get("edges")
-    if edges is not None and edges is not BAD and len(v) != len(edges):
-        return ck.bad(path, v, f"has {len(v)} values: must have one per edge ({len(edges)})")
-    return BAD if bad else tuple(vals)
+def _per_edge_of(what: str, convert, need: str):
+    """A check of one value per edge (of geometry.edges): ``convert`` gives the clean
+    value or None, ``need`` says what one must be."""
+
+    def check(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+        if not isinstance(v, (list, tuple)):
+            return ck.bad(path, v, f"must be an array with one {what} per edge")
+        vals = [convert(x) for x in v]
+        ck.first([(f"{path}[{k}]", v[k]) for k, x in enumerate(vals) if x is None], need)
+        edges = ctx.values.get("edges")
+        if edges is not None and edges is not BAD and len(v) != len(edges):
+            return ck.bad(
+                path,
+                v,
+                f"has {len(v)} values: must have one per edge ({len(edges)}) of geometry.edges",
+            )
+        return BAD if None in vals else tuple(vals)
+
+    return check
+
+
+def _positive(x: Any) -> float | None:
+    f = _finite(x)
+    return f if f is not None and f > 0 else None
+
+
+def _bool(x: Any) -> bool | None:
+    return bool(x) if isinstance(x, (bool, np.bool_)) else None
+
+
+_per_edge = _per_edge_of("number > 0", _positive, "must be finite and > 0")
 
 
 def _index_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
@@ -108,14 +130,18 @@ def _index_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 @dataclass(frozen=True)
 class GraphConfig(GeometryConfig):
-    """An explicit net. ``fixed`` are its default supports; ``rest_length`` and ``EA``
-    (per edge) are optional. ``file`` records where the data came from (not compared, and
-    the resolved case holds the data itself)."""
+    """An explicit net. ``fixed`` are its default supports; ``rest_length``, ``EA``,
+    ``tension_only`` and ``prestress`` (per edge of ``edges``) are optional; ``cable``
+    adds cables through the given nodes, ``sets`` names groups of them. ``file`` records
+    where the data came from (not compared, and the resolved case holds the data)."""
 
     kind: ClassVar[str] = "graph"
-    summary: ClassVar[str] = "an explicit net, inline or from a JSON file"
+    summary: ClassVar[str] = (
+        "an explicit net (inline, JSON, OBJ or a meshio line mesh), with optional cables"
+    )
     node_names: ClassVar[tuple[str, ...]] = ("center",)
     default_supports: ClassVar[str] = "geometry.fixed"
+    node_sets: ClassVar[bool] = True
 
     nodes: tuple[Vec3, ...] = key(
         _points,
@@ -126,9 +152,11 @@ class GraphConfig(GeometryConfig):
     )
     edges: tuple[tuple[int, int], ...] = key(
         _pairs,
-        "an array of at least 1 [i, j] (node indices)",
-        missing="[[i, j], ...] (at least 1 edge)",
-        doc="the edges, each joining two distinct nodes once",
+        "an array of [i, j] (node indices)",
+        (),
+        write="given",
+        shown="none (then cables)",
+        doc="the edges, each joining two distinct nodes once; at least 1, or cables",
     )
     rest_length: tuple[float, ...] | None = key(
         _per_edge,
@@ -150,6 +178,25 @@ class GraphConfig(GeometryConfig):
         unit="N",
         doc="axial stiffness of each edge",
     )
+    tension_only: tuple[bool, ...] | None = key(
+        _per_edge_of("true or false", _bool, "must be true or false"),
+        "an array with one true or false per edge",
+        None,
+        write="given",
+        null=True,
+        shown="material.tension_only",
+        doc="whether each edge goes slack in compression (false: a strut)",
+    )
+    prestress: tuple[float, ...] | None = key(
+        _per_edge_of("finite number", _finite, "must be a finite number"),
+        "an array with one finite number per edge",
+        None,
+        write="given",
+        null=True,
+        shown="material.prestress",
+        unit="N",
+        doc="tension of each edge in the given geometry (rest length derived from it)",
+    )
     fixed: tuple[int, ...] = key(
         _index_list,
         "an array of node indices",
@@ -159,12 +206,25 @@ class GraphConfig(GeometryConfig):
     prestrain: float = real(
         0.0, gt=-1, doc="rest lengths = initial / (1 + prestrain); not with rest_length"
     )
+    edge_length: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        shown="none: a segment is one edge",
+        unit="m",
+        doc="cables: longest edge after splitting each segment",
+    )
+    sets: cb.NodeSets | None = cb.sets_key()
+    cables: tuple[cb.CableConfig, ...] = tables(
+        cb.CableConfig, name="cable", doc="cables: named polylines through the given nodes"
+    )
     file: str | None = text(
         None,
         nonempty=True,
         write="never",
         compare=False,
-        doc="a JSON file (relative to the case file) of nodes, edges, rest_length, EA, fixed",
+        doc="a JSON file of the keys above (relative to the case file), an OBJ file of "
+        "polylines, or a line mesh meshio reads (.vtu, .vtk, .msh: nodes and edges)",
     )
 
     @classmethod
@@ -179,22 +239,27 @@ class GraphConfig(GeometryConfig):
             file = value(ck, g, by_name["file"], "geometry", ctx)
             if file is BAD:
                 return None
-            inline = [k for k in _DATA if k in g]
+            held = MESH_KEYS if is_mesh(file) else _DATA
+            inline = [k for k in held if k in g]
             if inline:
                 ck.add(
                     f"geometry.{inline[0]}: give the graph in geometry.file or inline, not both "
-                    f"(geometry.file = {file!r} holds {', '.join(_DATA)})"
+                    f"(geometry.file = {file!r} holds {', '.join(held)})"
                 )
                 return None
-            src = _read_graph_file(ck, file, base_dir)
+            src = read_net_file(ck, file, base_dir, _DATA)
             if src is None:
                 return None
+            if is_mesh(file):
+                src = {**{k: g[k] for k in _DATA if k in g}, **src}
             suffix = f" (in geometry.file = {file!r})"
         sub = Checker()
-        if file is not None:
+        if file is not None and not is_mesh(file):
             sub.keys(src, "geometry", _DATA, " in a graph file")
         data = _parse_data(sub, src, pre)
-        ck.problems.extend(msg + suffix for msg in sub.problems)
+        for msg in sub.problems:
+            from_file = not is_mesh(file or "") or msg.startswith(MESH_KEYS, len("geometry."))
+            ck.add(msg + (suffix if from_file else ""))
         if data is None or sub.problems or pre is BAD:
             return None
         return cls(**data, prestrain=pre, file=file)
@@ -205,12 +270,27 @@ class GraphConfig(GeometryConfig):
 
     def estimate_size(self) -> tuple[float, float, float, str]:
         n, m = len(self.nodes), len(self.edges)
-        degree = np.bincount(np.array(self.edges, dtype=np.int64).ravel(), minlength=n)
+        lines = self._polylines()
+        pairs = [*self.edges, *(p for line in lines for p in zip(line[:-1], line[1:], strict=True))]
+        degree = np.bincount(np.array(pairs, dtype=np.int64).reshape(-1).ravel(), minlength=n)
+        extra_nodes, extra_edges = cb.estimate(self._xyz(), lines, self._hs())
         key = "geometry.file" if self.file else "geometry.nodes"
-        return float(n), float(m), float(np.count_nonzero(degree > 2)), key
+        own = [k for k, c in enumerate(self.cables) if c.edge_length is not None]
+        if self.cables and (self.edge_length is not None or not own):
+            key = "geometry.edge_length"
+        elif own:
+            key = f"geometry.cable[{own[0]}].edge_length"
+        junctions = float(np.count_nonzero(degree > 2))
+        return float(n + extra_nodes), float(m + extra_edges), junctions, key
 
     def topology(self) -> Topology:
-        return Topology(len(self.nodes), frozenset(self.fixed), {"center": _center(self.nodes)})
+        return Topology(
+            len(self.nodes),
+            frozenset(self.fixed),
+            {"center": _center(self.nodes)},
+            self._sets(),
+            tuple(c.name for c in self.cables),
+        )
 
     def check_supports(self, ck: Checker, fixed: set[int], fixed_key: str) -> None:
         if not fixed:
@@ -219,29 +299,160 @@ class GraphConfig(GeometryConfig):
                 "(geometry.fixed or supports.fixed)"
             )
             return
+        mesh = self._mesh()
+        rest = self.rest_length if not self.cables else None
         try:
-            Net.from_arrays(
-                self.nodes, self.edges, EA=1.0, fixed=sorted(fixed), rest_length=self.rest_length
-            )
+            Net.from_arrays(mesh.nodes, mesh.edges, EA=1.0, fixed=sorted(fixed), rest_length=rest)
         except ConfigError as exc:
             ck.problems.extend(with_prefix(p, fixed_key) for p in exc.problems)
 
+    def check_material(self, ck: Checker, material: Any) -> None:
+        cb.cable_materials(ck, material, self.cables)
+
     def build(self, material: geo.Material, fixed: Any) -> Built:
-        probe = _center(self.nodes)
-        names = {"center": probe}
-        pinned = list(self.fixed) if fixed is None else [resolve(r, names) for r in fixed]
-        rest = self.rest_length
-        if self.prestrain:
-            xyz = np.asarray(self.nodes, dtype=np.float64)
-            e = np.asarray(self.edges, dtype=np.int64)
-            rest = np.linalg.norm(xyz[e[:, 1]] - xyz[e[:, 0]], axis=1) / (1.0 + self.prestrain)
-        net = geo.graph(self.nodes, self.edges, pinned, material, rest_length=rest, EA=self.EA)
-        size = float(np.linalg.norm(net.nodes.max(axis=0) - net.nodes.min(axis=0)))
-        return Built(net, probe, size, names)
+        """The net with ``material`` on every edge of the graph's own and of its cables
+        (the per-edge arrays where given; no per-cable material, law or prestress:
+        ``build_case`` gives the case's whole net)."""
+        mesh = self._mesh()
+        probe, names, sets = _center(self.nodes), {"center": _center(self.nodes)}, self._sets()
+        pinned = self._pinned(fixed, names, sets)
+        m0 = len(self.edges)
+        own = mesh.cable < 0
+        rest = None
+        if self.rest_length is not None or self.prestrain:
+            rest = _lengths(mesh.nodes, mesh.edges) / (1.0 + self.prestrain)
+            if self.rest_length is not None:
+                rest[:m0] = self.rest_length
+        EA = np.full(len(mesh.edges), material.EA)
+        if self.EA is not None:
+            EA[own] = self.EA
+        only = np.full(len(mesh.edges), material.tension_only)
+        if self.tension_only is not None:
+            only[own] = self.tension_only
+        net = Net.from_arrays(
+            mesh.nodes,
+            mesh.edges,
+            EA=EA,
+            fixed=pinned,
+            rest_length=rest,
+            line_density=material.line_density,
+            tension_only=bool(only.all()),
+            law=Law.uniform(len(mesh.edges), tension_only=only),
+        )
+        return Built(net, probe, _size(net), names, sets=sets, cables=self._index(mesh))
+
+    def build_case(self, case: Any, material: geo.Material) -> Built:
+        """The case's net: each edge of the graph's own under [material] and its per-edge
+        arrays, each cable's under its material; rest lengths from the prestress (per
+        edge, per cable, or material.prestress) in the given geometry, else from
+        rest_length or prestrain; the node of each point load along a cable."""
+        at: dict[int, list[tuple[float, int]]] = {}
+        order = {c.name: k for k, c in enumerate(self.cables)}
+        for k, pt in enumerate(case.load.points):
+            if pt.cable is not None:
+                at.setdefault(order[pt.cable], []).append((pt.at, k))
+        mesh = self._mesh(at)
+        probe, names, sets = _center(self.nodes), {"center": _center(self.nodes)}, self._sets()
+        pinned = self._pinned(case.supports.fixed, names, sets)
+        length = _lengths(mesh.nodes, mesh.edges)
+        base = case.material
+        m0 = len(self.edges)
+        mats = cb.cable_materials(Checker(), base, self.cables)
+        EA = np.empty(len(mesh.edges))
+        rho = np.empty(len(mesh.edges))
+        rest = length / (1.0 + self.prestrain)
+        if self.rest_length is not None:
+            rest[:m0] = self.rest_length
+        laws = []
+        for c, mat in enumerate([base, *mats]):
+            sel = mesh.cable == c - 1
+            n = int(np.count_nonzero(sel))
+            ea = mat.axial_stiffness
+            EA[sel] = self.EA if c == 0 and self.EA is not None else ea
+            rho[sel] = mat.line_density
+            only = mat.tension_only
+            if c == 0 and self.tension_only is not None:
+                only = np.asarray(self.tension_only, dtype=bool)
+            rows = table_rows(mat.table)[0] if mat.law == "table" else None
+            law = Law.uniform(n, mat.law, tension_only=only, table=rows)
+            laws.append(law)
+            t0 = mat.prestress
+            if c == 0 and self.prestress is not None:
+                t0 = np.asarray(self.prestress)
+            if t0 is None:
+                continue
+            if c == 0:
+                what = _prestress_key(self.prestress is not None)
+            elif self.cables[c - 1].prestress is not None:
+                what = lambda k, c=c: f"geometry.cable[{c - 1}].prestress"  # noqa: E731
+            elif base.prestress != mat.prestress:
+                what = lambda k, c=c: f"geometry.cable[{c - 1}].material.prestress"  # noqa: E731
+            else:
+                what = _prestress_key(False)
+            rest[sel] = cb.rest_from_prestress(law, t0, EA[sel], length[sel], what)
+        net = Net.from_arrays(
+            mesh.nodes,
+            mesh.edges,
+            EA=EA,
+            fixed=pinned,
+            rest_length=rest,
+            line_density=rho,
+            tension_only=all(lw.all_tension_only for lw in laws),
+            law=cb.concat_laws(laws),
+        )
+        cables = self._index(mesh)
+        return Built(net, probe, _size(net), names, True, sets, cables, mesh.at_nodes)
+
+    # --- helpers --------------------------------------------------------------------------
+    def _xyz(self) -> np.ndarray:
+        return np.asarray(self.nodes, dtype=np.float64)
+
+    def _sets(self) -> dict[str, tuple[int, ...]]:
+        return self.sets.as_dict() if self.sets is not None else {}
+
+    def _hs(self) -> list:
+        return [c.edge_length or self.edge_length for c in self.cables]
+
+    def _polylines(self) -> list[tuple[int, ...]]:
+        if not self.cables:
+            return []
+        lines = cb.polylines(
+            Checker(), self.cables, self._xyz(), (), self._sets(), {"center": _center(self.nodes)}
+        )
+        if lines is None:  # checked when parsed
+            raise ConfigError("geometry.cable: invalid cables")
+        return lines
+
+    def _mesh(self, at=None) -> cb.CableMesh:
+        return cb.cable_mesh(self._xyz(), np.asarray(self.edges), self._polylines(), self._hs(), at)
+
+    def _pinned(self, fixed: Any, names: dict, sets: dict) -> list[int]:
+        if fixed is None:
+            return list(self.fixed)
+        return sorted({i for r in fixed for i in expand(r, names, sets)})
+
+    def _index(self, mesh: cb.CableMesh) -> cb.CableIndex | None:
+        if not self.cables:
+            return None
+        return cb.CableIndex(tuple(c.name for c in self.cables), mesh.cable)
 
 
 #: The keys that give the net (inline, or in the JSON file of geometry.file).
 _DATA = tuple(n for n in names(GraphConfig) if n not in ("prestrain", "file"))
+
+
+def _prestress_key(per_edge: bool):
+    if per_edge:
+        return lambda k: f"geometry.prestress[{k}]"
+    return lambda k: f"material.prestress (edge {k})"
+
+
+def _lengths(xyz: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(xyz[edges[:, 1]] - xyz[edges[:, 0]], axis=1)
+
+
+def _size(net: Net) -> float:
+    return float(np.linalg.norm(net.nodes.max(axis=0) - net.nodes.min(axis=0)))
 
 
 def _center(nodes) -> int:
@@ -249,37 +460,6 @@ def _center(nodes) -> int:
     xyz = np.asarray(nodes, dtype=np.float64)
     mid = 0.5 * (xyz.min(axis=0) + xyz.max(axis=0))
     return int(np.argmin(np.linalg.norm(xyz - mid, axis=1)))
-
-
-def _read_graph_file(ck: Checker, file: str, base_dir: Path) -> dict | None:
-    path = Path(file) if Path(file).is_absolute() else base_dir / file
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        ck.add(f"geometry.file = {file!r}: no such file ({path})")
-        return None
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = getattr(exc, "strerror", None) or str(exc)
-        ck.add(f"geometry.file = {file!r}: cannot read {path}: {reason}")
-        return None
-    try:
-        obj = json.loads(text)
-    except json.JSONDecodeError as exc:
-        ck.add(
-            f"geometry.file = {file!r}: not valid JSON: {exc.msg} at line {exc.lineno}, "
-            f"column {exc.colno}"
-        )
-        return None
-    except (ValueError, RecursionError) as exc:
-        ck.add(f"geometry.file = {file!r}: not valid JSON: {exc}")
-        return None
-    if not isinstance(obj, dict):
-        ck.add(
-            f"geometry.file = {file!r}: must hold a JSON object with keys "
-            f"{', '.join(_DATA)}, not {type(obj).__name__}"
-        )
-        return None
-    return obj
 
 
 def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
@@ -291,7 +471,25 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
             f"geometry.prestrain = {pre!r}: give geometry.rest_length or geometry.prestrain, "
             "not both"
         )
-    if BAD in v.values():
+    if v["prestress"] not in (None, BAD):
+        for other in ("rest_length", "prestrain"):
+            if v.get(other) not in (None, BAD) or (other == "prestrain" and pre not in (BAD, 0.0)):
+                ck.add(
+                    f"geometry.prestress: gives the rest lengths of the edges: give it or "
+                    f"geometry.{other}, not both"
+                )
+    if v["cables"] not in ((), BAD) and pre not in (BAD, 0.0):
+        if any(c.prestress is not None for c in v["cables"]):
+            ck.add(
+                f"geometry.prestrain = {pre!r}: a cable's prestress gives its rest lengths: "
+                "give geometry.prestrain or prestress, not both"
+            )
+    if v["edges"] == () and v["cables"] == ():
+        ck.add(
+            "geometry.edges: missing: [[i, j], ...] (at least 1 edge), or cables "
+            "([[geometry.cable]] with nodes = [i, j, ...])"
+        )
+    if BAD in v.values() or ck.problems:
         return None
     nodes, edges, fixed = v["nodes"], v["edges"], v["fixed"]
     n = len(nodes)
@@ -301,7 +499,7 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
     ck.first(bad_fixed, f"must be a node index in 0..{n - 1}")
     if bad_idx or bad_fixed:
         return None
-    e_arr = np.array(edges, dtype=np.int64)
+    e_arr = np.array(edges, dtype=np.int64).reshape(-1, 2)
     xyz = np.array(nodes, dtype=np.float64)
     loops = np.flatnonzero(e_arr[:, 0] == e_arr[:, 1])
     ck.first(
@@ -335,4 +533,9 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
         [(f"geometry.edges[{k}]", list(edges[k])) for k in huge],
         "its length overflows: coordinates too large",
     )
-    return v
+    if v["cables"] and not ck.problems:
+        sets = v["sets"].as_dict() if v["sets"] is not None else {}
+        cb.polylines(ck, v["cables"], xyz, edges, sets, {"center": _center(nodes)})
+    elif v["sets"] is not None and not ck.problems:
+        cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(), {})
+    return None if ck.problems else v

@@ -12,6 +12,7 @@ import numpy as np
 from catenet import geometry as geo
 from catenet.case.keys import integer, real
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, refit
+from catenet.case.kinds.warn import angle_warning, warn_once
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,17 @@ class SquareNetConfig(GeometryConfig):
         doc="longest edge after splitting the pieces between joints",
     )
     prestrain: float = real(0.0, gt=-1, doc="rest lengths = initial / (1 + prestrain)")
+
+    @classmethod
+    def parse(cls, ck, g, base_dir):
+        """The keys, and a warning for an angle that looks like degrees (45 taken as 45 rad
+        is a valid but surely unintended net)."""
+        config = super().parse(ck, g, base_dir)
+        if config is not None:
+            message = angle_warning("geometry.alpha", config.alpha)
+            if message:
+                warn_once(message)
+        return config
 
     def estimate_size(self) -> tuple[float, float, float, str]:
         """Every cable's length inside the square over edge_length, plus one edge per

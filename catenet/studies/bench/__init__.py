@@ -18,6 +18,8 @@ STUDIES = {
     "skips": "catenet.studies.bench.skips",
     "cold-start": "catenet.studies.bench.cold_start",
     "stress": "catenet.studies.bench.stress",
+    "flush": "catenet.studies.bench.flush",
+    "formfind": "catenet.studies.bench.formfind",
 }
 
 

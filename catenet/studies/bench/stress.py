@@ -38,6 +38,7 @@ from catenet.studies.bench.common import (
     write_csv,
 )
 from catenet.studies.bench.stress_scenes import (
+    bilateral_chain,
     bilateral_compression,
     finite,
     midpoint_load,
@@ -164,6 +165,27 @@ def scenes(quick: bool = False) -> list[Scene]:
         quick_=False,
     )
     add("bilateral compressed, gravity", "bilateral", bilateral_compression, gravity=True)
+    # Issue 13: EA / weight from 1e2 to 1e9, supports moved inward by 1 % to 90 %, one load
+    # step; the quick subset keeps the corners and the issue's own scene (EA = 1e6 N,
+    # rho A = 1 kg/m, 10 %).
+    for ratio in (1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9):
+        for dL in (0.01, 0.1, 0.3, 0.5, 0.9):
+            corner = ratio in (1e2, 1e9) and dL in (0.01, 0.9)
+            add(
+                f"bilateral chain EA/W={ratio:g} inward {dL:g}",
+                "bilateral sweep",
+                bilateral_chain,
+                ratio=ratio,
+                dL=dL,
+                quick_=corner,
+            )
+    add(
+        "bilateral chain EA=1e6 N rho A=1 kg/m inward 0.1",
+        "bilateral sweep",
+        bilateral_chain,
+        ratio=1e6 / 9.81,
+        dL=0.1,
+    )
     add("net point load", "net", net_point_load)
     add("net point load F=0.5 EA", "net", net_point_load, F=0.5 * paper_material().EA, quick_=False)
     for lb in (1e-9, 1e-3, 0.5):

@@ -245,6 +245,43 @@ def bilateral_compression(
     )
 
 
+def bilateral_chain(ratio: float = 1e5, dL: float = 0.1, nodes: int = 41, rho_a: float = 1.0):
+    """A bilateral cable (tension_only = false, the paper's own energy) of length 1 m under
+    its own weight (rho A = ``rho_a`` kg/m, W = rho A g L), EA = ``ratio`` W, supports moved
+    inward by dL, solved in one load step. Compressed at the start, it must reach the
+    hanging chain, as the tension-only cable does: the exact discrete chain, converged,
+    every edge ending in tension (else the check value is inf)."""
+    import numpy as np
+
+    from catenet import analytic
+    from catenet.geometry import Material, cable
+    from catenet.net import Loads
+
+    w = rho_a * 9.81
+    EA = ratio * w
+    net = cable(
+        [-0.5, 0, 0], [0.5, 0, 0], nodes, Material(EA=EA, line_density=rho_a, tension_only=False)
+    )
+    d = np.zeros((nodes, 3))
+    d[0, 0], d[-1, 0] = dL / 2, -dL / 2
+    loads = Loads(gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d)
+    res = _solve(net, loads, "static", dt=1.0, damping=1.0, t_end=1.0, budget=math.inf)
+    exact = analytic.discrete_catenary(1.0, EA, w, 1.0 - dL, nodes - 1).sag
+    sag = -float(res.x[(nodes - 1) // 2, 2])
+    least = float(np.min(res.tension))
+    value = abs(sag - exact) / exact if res.converged and least > 0.0 else math.inf
+    return eq_row(
+        "chain",
+        value,
+        1e-6,
+        [res],
+        net,
+        loads,
+        note=f"sag {sag:.6g} m, chain {exact:.6g} m, least tension {least:.3g} N, "
+        f"{res.iterations} Newton iterations, {res.steps} load step",
+    )
+
+
 def net_point_load(F: float = 5.0, n: int = 10, h: float = 0.05):
     """A point load on one off-centre node of the paper's net (alpha = 0, 1 cm edges):
     static and dynamic agree and both are equilibria. Cables away from the load stay

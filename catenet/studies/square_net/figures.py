@@ -13,6 +13,21 @@ from catenet.studies.square_net.fit import PAPER_D, ScalingFit, f_alpha, fit_cos
 
 P_FIG7 = 10.0  # Pa, the paper's Fig. 7
 
+#: Okabe-Ito colours without their yellow: told apart by colour-blind readers and in print.
+COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
+MARKERS = "os^Dv<>ph*"
+LINES = ("-", "--", "-.", ":")
+
+
+def style(k: int) -> dict:
+    """Colour, marker and line style of the k-th curve of a figure: each differs from
+    its neighbours' in all three, so curves stay apart even in grey print."""
+    return {
+        "color": COLOURS[k % len(COLOURS)],
+        "marker": MARKERS[k % len(MARKERS)],
+        "ls": LINES[k % len(LINES)],
+    }
+
 
 def _figure(ncols: int, width: float = 5.0, height: float = 4.0):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -26,18 +41,14 @@ def _figure(ncols: int, width: float = 5.0, height: float = 4.0):
 
 def _curves(ax, d: SweepData, group: np.ndarray, label) -> int:
     """delta_bar against F_bar, one curve per value of ``group``; the number drawn."""
-    import matplotlib as mpl
-
     values = unique(group)
-    cmap = mpl.colormaps["viridis"]
     drawn = 0
     for k, g in enumerate(values):
         m = near(group, g)
         if np.count_nonzero(m) < 2:
             continue
         order = np.argsort(d.F_bar[m])
-        color = cmap(k / max(len(values) - 1, 1))
-        ax.plot(d.F_bar[m][order], d.delta_bar[m][order], "o-", ms=3.5, color=color, label=label(g))
+        ax.plot(d.F_bar[m][order], d.delta_bar[m][order], ms=3.5, label=label(g), **style(k))
         drawn += 1
     ax.set_xlabel(r"$\bar F = pL^2/EA$")
     ax.set_ylabel(r"$\bar\delta = \delta/L$")
@@ -104,22 +115,14 @@ def fig7(d: SweepData, path: Path, notes: list[str]) -> Path | None:
     if ns.size < 2 and alphas.size < 2:
         notes.append("Fig. 7 skipped: needs several n or several α.")
         return None
-    import matplotlib as mpl
-
     fig, axes = _figure(2)
-    cmap = mpl.colormaps["viridis"]
     ax = axes[0]
     if ns.size >= 2:
         for k, a in enumerate(alphas):
             m = near(sub.alpha, a)
             order = np.argsort(sub.n[m])
             ax.plot(
-                sub.n[m][order],
-                sub.delta_bar[m][order],
-                "o-",
-                ms=4,
-                color=cmap(k / max(len(alphas) - 1, 1)),
-                label=alpha_label(a),
+                sub.n[m][order], sub.delta_bar[m][order], ms=4, label=alpha_label(a), **style(k)
             )
         ax.legend(fontsize=8)
     else:
@@ -134,18 +137,20 @@ def fig7(d: SweepData, path: Path, notes: list[str]) -> Path | None:
         for k, nv in enumerate(ns):
             m = near(sub.n, nv)
             order = np.argsort(sub.alpha[m])
-            color = cmap(k / max(len(ns) - 1, 1))
+            st = style(k)
             ax.plot(
                 sub.alpha[m][order],
                 sub.delta_bar[m][order],
-                "o",
+                ls="none",
+                marker=st["marker"],
                 ms=5,
-                color=color,
+                color=st["color"],
                 label=f"n = {int(nv)}",
             )
             if np.count_nonzero(m) >= 3:
                 a0, b0, _, _ = fit_cosine(sub.alpha[m], sub.delta_bar[m])
-                ax.plot(grid, a0 + b0 * np.cos(4 * grid + np.pi), "-", lw=1, color=color)
+                curve = a0 + b0 * np.cos(4 * grid + np.pi)
+                ax.plot(grid, curve, ls=st["ls"], lw=1, color=st["color"])
         ax.legend(fontsize=8, title="lines: a + b cos(4α+π)", title_fontsize=8)
     else:
         notes.append("Fig. 7b skipped: one value of α.")
@@ -161,14 +166,11 @@ def fig8(d: SweepData, fit: ScalingFit | None, path: Path, notes: list[str]) -> 
     if fit is None:
         notes.append("Fig. 8 skipped: the scaling law could not be fitted (see above).")
         return None
-    import matplotlib as mpl
-
     fig, axes = _figure(2)
     x = d.F_bar / d.n
     y = d.delta_bar / f_alpha(d.alpha, fit.D)
     ns, alphas = unique(d.n), unique(d.alpha)
-    markers = "os^Dv<>ph*"
-    cmap = mpl.colormaps["viridis"]
+    markers = MARKERS
     resid = np.log(y) - np.log(fit.C * x**fit.beta)
     for i, nv in enumerate(ns):
         for j, a in enumerate(alphas):
@@ -176,7 +178,7 @@ def fig8(d: SweepData, fit: ScalingFit | None, path: Path, notes: list[str]) -> 
             if not m.any():
                 continue
             kw = dict(
-                color=cmap(i / max(len(ns) - 1, 1)),
+                color=COLOURS[i % len(COLOURS)],
                 marker=markers[j % len(markers)],
                 ls="none",
                 ms=4,
@@ -184,29 +186,31 @@ def fig8(d: SweepData, fit: ScalingFit | None, path: Path, notes: list[str]) -> 
             )
             label = f"n = {int(nv)}" if j == 0 else None
             axes[0].loglog(x[m], y[m], label=label, **kw)
-            axes[1].semilogx(x[m], resid[m], **kw)
+            axes[1].semilogx(x[m], resid[m], label=label, **kw)
     xs = np.geomspace(x.min(), x.max(), 50)
     axes[0].loglog(
         xs, fit.C * xs**fit.beta, "k-", lw=1, label=rf"$C(\bar F/n)^{{\beta}}$, β = {fit.beta:.3f}"
     )
-    for j, a in enumerate(alphas):
-        axes[0].plot(
-            [],
-            [],
-            color="gray",
-            marker=markers[j % len(markers)],
-            ls="none",
-            mfc="none",
-            label=alpha_label(a),
-        )
+    for ax in axes:  # the marker of each alpha, once per panel
+        for j, a in enumerate(alphas):
+            ax.plot(
+                [],
+                [],
+                color="gray",
+                marker=markers[j % len(markers)],
+                ls="none",
+                mfc="none",
+                label=alpha_label(a),
+            )
     axes[0].set_xlabel(r"$\bar F/n$")
     axes[0].set_ylabel(r"$\bar\delta/f(\alpha)$")
     axes[0].set_title(f"Fig. 8: D = {fit.D:.3f} ± {fit.sigma_D:.3f} (paper: {PAPER_D})")
     axes[0].legend(fontsize=7, ncol=2)
     axes[0].grid(alpha=0.3, which="both")
-    axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].axhline(0.0, color="k", lw=0.8, label="master curve")
     axes[1].set_xlabel(r"$\bar F/n$")
-    axes[1].set_ylabel("log residual about the master curve")
+    axes[1].set_ylabel(r"residual $\ln(\bar\delta/f) - \ln(C(\bar F/n)^{\beta})$ (natural log)")
+    axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     axes[1].set_title(f"RMS {fit.rms_log:.3f} (≈ {100 * math.expm1(fit.rms_log):.1f} %)")
     axes[1].grid(alpha=0.3)
     fig.savefig(path, dpi=130)

@@ -1,0 +1,158 @@
+"""What a run is told besides its result: before it, the solver keys its method ignores and
+the size of the trajectory it will write; after it, edges strained beyond the range their
+material law is meant for.
+
+Each check returns its message (None or an empty list when there is nothing to say); the
+runner logs them as warnings, and ``catenet run`` shows them on stderr.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A trajectory estimated above this many bytes is warned about before the run.
+WARN_BYTES = 1 << 30
+#: ... and above this many, its estimate is named in the run's summary.
+LARGE_BYTES = 100 << 20
+#: The size ``output.every`` is suggested for.
+TARGET_BYTES = 256 << 20
+
+#: Newton iterations of one dynamic time step (``catenet.dynamic.solve_dynamic``).
+DYNAMIC_MAX_ITER = 25
+
+_STATIC_ONLY = ("steps", "max_iter")
+_DYNAMIC_ONLY = ("dt", "damping", "t_end")
+
+
+def ignored_solver_keys(solver) -> list[str]:
+    """Messages for the [solver] keys that ``solver.method`` ignores and that the case sets
+    to something else than their default (a default is ignored silently)."""
+    default = type(solver)()
+    method = solver.method
+    out = []
+    if method == "dynamic":
+        if solver.steps != default.steps:
+            out.append(
+                f"solver.steps = {solver.steps}: ignored with solver.method = 'dynamic' (load "
+                "steps are for static runs; a dynamic run applies the full load from t = 0)"
+            )
+        if solver.max_iter != default.max_iter:
+            out.append(
+                f"solver.max_iter = {solver.max_iter}: ignored with solver.method = 'dynamic' "
+                f"(each time step takes at most {DYNAMIC_MAX_ITER} Newton iterations and is "
+                "halved when they do not suffice)"
+            )
+    else:
+        for key in _DYNAMIC_ONLY:
+            value = getattr(solver, key)
+            if value != getattr(default, key):
+                out.append(
+                    f"solver.{key} = {value!r}: ignored with solver.method = {method!r} (only "
+                    "dynamic runs use it; set solver.method = 'dynamic' or remove the key)"
+                )
+    return out
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """The estimated size of a run's trajectory: at most ``frames`` frames of ``frame``
+    bytes each (a dynamic run that reaches equilibrium early writes fewer)."""
+
+    frames: int
+    frame: int
+    every: int
+
+    @property
+    def bytes(self) -> int:
+        return self.frames * self.frame
+
+    def suggestion(self) -> int:
+        """An ``output.every`` that keeps the trajectory near TARGET_BYTES (a 1, 2 or 5
+        times a power of ten)."""
+        factor = self.bytes / TARGET_BYTES
+        want = max(2, math.ceil(self.every * factor))
+        exp = 10 ** int(math.floor(math.log10(want)))
+        for m in (1, 2, 5, 10):
+            if m * exp >= want:
+                return m * exp
+        return 10 * exp  # pragma: no cover - the loop always returns
+
+    def message(self) -> str:
+        k = self.suggestion()
+        smaller = Trajectory(self._frames_with(k), self.frame, k)
+        return (
+            f"the trajectory will take up to {format_bytes(self.bytes)} ({self.frames} frames "
+            f"of {format_bytes(self.frame)}, output.every = {self.every}): set output.every = "
+            f"{k} to keep every {k}th step (about {format_bytes(smaller.bytes)}), or "
+            "output.every = 0 to keep the final state only"
+        )
+
+    def _frames_with(self, every: int) -> int:
+        return max(1, math.ceil(self.frames * self.every / every))
+
+
+def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
+    """The size of the trajectory ``case`` will write for ``net`` (None: no trajectory,
+    output.every = 0). Per frame: positions (N x 3), tensions (M), velocities (N x 3,
+    dynamic) and the time, 8 bytes each. Frames: dynamic, the initial state, every
+    ``every``-th of the (t_end - t0) / dt steps and the last; static, every ``every``-th
+    of the load steps and the last."""
+    every = int(case.output.every)
+    if every <= 0:
+        return None
+    solver = case.solver
+    n, m = int(net.n_nodes), int(net.n_edges)
+    if solver.method == "dynamic":
+        steps = max(1, math.ceil((solver.t_end - t0) / solver.dt * (1 - 1e-12)))
+        frames = 1 + math.ceil(steps / every)
+        values = 6 * n + m
+    else:
+        frames = math.ceil(solver.steps / every)
+        values = 3 * n + m
+    return Trajectory(frames, 8 * (values + 1), every)
+
+
+def format_bytes(n: float) -> str:
+    """1536 -> '1.5 KiB'."""
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB"):
+        if abs(n) < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} TiB"  # pragma: no cover
+
+
+def strain_beyond_law(net, x: np.ndarray) -> str | None:
+    """A message when edges at positions ``x`` are strained beyond the range their law is
+    meant for (``catenet.laws.LAWS[name].max_strain``; a table's last point), else None."""
+    from catenet import measures
+    from catenet.laws import LAWS, TABLE
+
+    eps = measures.strain(net, x)
+    limit = net.law.max_strain()
+    over = eps > limit
+    if not np.any(over):
+        return None
+    names = {info.id: name for name, info in LAWS.items()}
+    worst = int(np.argmax(np.where(over, eps, -np.inf)))
+    parts = []
+    for kind in np.unique(net.law.kind[over]):
+        on = over & (net.law.kind == kind)
+        name = names.get(int(kind), str(kind))
+        bound = float(np.min(limit[on]))
+        count, of = int(np.count_nonzero(on)), int(np.count_nonzero(net.law.kind == kind))
+        parts.append(f"{count} of {of} edges of the {name} law (meant for strains <= {bound:.3g})")
+    kinds = set(int(k) for k in np.unique(net.law.kind[over]))
+    if kinds == {TABLE}:
+        advice = "extend material.table to larger strains or lower the load"
+    else:
+        advice = (
+            "use a large-strain law (material.law = 'neo_hookean') or lower the load; the "
+            "result is not physical as it stands"
+        )
+    return (
+        f"strain {float(eps[worst]):.3g} at edge {worst} is beyond the material law's range: "
+        f"{', '.join(parts)}: {advice}"
+    )

@@ -1,0 +1,145 @@
+"""The [formfind] table: how ``catenet formfind`` finds the shape of a case's net.
+
+The force density method (``method = "linear"``) takes a force density q [N/m] per edge
+(``force_density``: one number for every edge, or one per edge) and gives the shape in one
+sparse solve. ``method = "forces"`` and ``"lengths"`` adjust the force densities until every
+edge carries its target tension ``force`` [N] or has its target length ``length`` [m], to
+the relative tolerance ``tol``. ``catenet run`` refuses a case with this table (it would
+analyse the unfound starting geometry): form-find it first, then run the case it writes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from catenet.case.keys import (
+    BAD,
+    Checker,
+    Context,
+    Declared,
+    as_float,
+    choice,
+    integer,
+    key,
+    names,
+    parse_keys,
+    real,
+    show,
+)
+
+FORMFIND_METHODS = ("linear", "forces", "lengths")
+
+#: What each method needs besides the force densities: its target key.
+TARGETS = {"forces": "force", "lengths": "length"}
+
+
+def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """One number > 0 (every edge) or an array of them (one per edge, counted when the
+    net is built)."""
+    if isinstance(v, (list, tuple)):
+        if not v:
+            return ck.bad(path, v, "must be a number > 0 or a non-empty array, one per edge")
+        vals = [as_float(x) for x in v]
+        bad = [
+            (f"{path}[{k}]", v[k])
+            for k, x in enumerate(vals)
+            if x is None or not (math.isfinite(x) and x > 0)
+        ]
+        ck.first(bad, "must be finite and > 0")
+        return BAD if bad else tuple(vals)
+    f = as_float(v)
+    if f is None or not (math.isfinite(f) and f > 0):
+        return ck.bad(path, v, "must be a number, finite and > 0, or an array of them per edge")
+    return f
+
+
+def _per_edge(default: Any = None, **kw) -> Any:
+    return key(
+        _number_or_per_edge,
+        "a number > 0, or an array of them (one per edge)",
+        default,
+        write="given",
+        **kw,
+    )
+
+
+@dataclass(frozen=True)
+class FormfindConfig(Declared):
+    """How to find the shape; see the module docstring."""
+
+    method: str = choice(
+        "linear",
+        FORMFIND_METHODS,
+        doc="linear: the force densities as given; forces, lengths: meet the targets",
+    )
+    force_density: float | tuple[float, ...] | None = _per_edge(
+        shown="linear: required; else the start",
+        unit="N/m",
+        doc="q = tension / length of every edge (lengths without loads: their geometric mean)",
+    )
+    force: float | tuple[float, ...] | None = _per_edge(
+        unit="N", doc='method = "forces": the tension of every edge'
+    )
+    length: float | tuple[float, ...] | None = _per_edge(
+        unit="m", doc='method = "lengths": the length of every edge'
+    )
+    tol: float = real(1e-9, gt=0, lt=1, doc="forces, lengths: relative tolerance on the targets")
+    max_iter: int = integer(100, ge=1, doc="forces, lengths: iterations (one factorisation each)")
+
+
+def parse_formfind(ck: Checker, f_v: Any, ctx: Context) -> FormfindConfig | Any:
+    """The [formfind] table with the rules between its keys."""
+    f = ck.table(f_v, "formfind")
+    if f is None:
+        return BAD
+    ck.keys(f, "formfind", names(FormfindConfig))
+    v = parse_keys(ck, f, FormfindConfig, "formfind", ctx)
+    method = v["method"]
+    if method == "linear" and "force_density" not in f:
+        ck.add(
+            "formfind.force_density: missing: method = 'linear' needs the force density "
+            "q [N/m] (one number, or one per edge)"
+        )
+    for m, target in TARGETS.items():
+        if method is BAD:
+            break
+        if method == m and target not in f:
+            ck.add(f"formfind.{target}: missing: method = {m!r} needs its targets")
+        elif method != m and target in f:
+            ck.add(
+                f"formfind.{target} = {show(f[target])}: only with method = {m!r} "
+                f"(this is {method!r})"
+            )
+    if BAD in v.values():
+        return BAD
+    return FormfindConfig(**v)
+
+
+def check_formfind_case(ck: Checker, data: Any) -> None:
+    """Problems of the other sections that form finding cannot honour: the rest lengths
+    it derives itself, and support motions."""
+    geometry = data.get("geometry") if isinstance(data.get("geometry"), dict) else {}
+    material = data.get("material") if isinstance(data.get("material"), dict) else {}
+    supports = data.get("supports") if isinstance(data.get("supports"), dict) else {}
+    for k in ("rest_length", "length", "prestrain"):
+        if k in geometry:
+            ck.add(
+                f"geometry.{k} = {show(geometry[k])}: form finding derives the rest lengths "
+                "from the forces it finds: remove it (or remove [formfind])"
+            )
+    if "prestress" in material:
+        ck.add(
+            f"material.prestress = {show(material['prestress'])}: form finding gives every "
+            "edge its tension: remove it (target tensions: formfind.method = 'forces' with "
+            "formfind.force)"
+        )
+    if "move" in supports:
+        ck.add(
+            "supports.move: form finding holds the fixed nodes where the geometry puts "
+            "them: give them their final positions there"
+        )
+
+
+__all__ = ["FORMFIND_METHODS", "FormfindConfig", "check_formfind_case", "parse_formfind"]

@@ -1,0 +1,145 @@
+"""Reading a graph from ``geometry.file``: a JSON object of the graph's keys, a Wavefront
+OBJ file of polylines (``v`` and ``l`` lines, read here), or any line mesh that meshio
+reads (``.vtu``, ``.vtk`` unstructured grids, ``.msh``, ...: its ``line`` cells are the
+edges; meshio is imported only then, and is optional).
+
+A mesh file gives the nodes and edges; the other graph keys (supports, node sets, cables,
+per-edge arrays) stay in the case file. Problems are recorded in a Checker with the key
+``geometry.file`` and the file's path.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from catenet.case.keys import Checker
+
+log = logging.getLogger(__name__)
+
+#: What a mesh file gives (the graph's other keys stay in the case file).
+MESH_KEYS = ("nodes", "edges")
+
+
+def is_mesh(file: str) -> bool:
+    """Whether ``file`` is read as a mesh (OBJ or a meshio format), not as JSON."""
+    return Path(file).suffix.lower() not in ("", ".json")
+
+
+def read_net_file(ck: Checker, file: str, base_dir: Path, keys: tuple[str, ...]) -> dict | None:
+    """The graph's keys from ``file`` (relative to ``base_dir``); ``keys`` are those a
+    JSON file may hold. None when it cannot be read (the problem is in ``ck``)."""
+    path = Path(file) if Path(file).is_absolute() else base_dir / file
+    label = f"geometry.file = {file!r}"
+    if not path.is_file():
+        what = "is a directory" if path.is_dir() else "no such file"
+        ck.add(f"{label}: {what} ({path})")
+        return None
+    if not is_mesh(file):
+        return _read_json(ck, path, label, keys)
+    if path.suffix.lower() == ".obj":
+        return _read_obj(ck, path, label)
+    return _read_meshio(ck, path, label)
+
+
+def _read_text(ck: Checker, path: Path, label: str) -> str | None:
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        ck.add(f"{label}: cannot read {path}: {reason}")
+        return None
+
+
+def _read_json(ck: Checker, path: Path, label: str, keys: tuple[str, ...]) -> dict | None:
+    text = _read_text(ck, path, label)
+    if text is None:
+        return None
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        ck.add(f"{label}: not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")
+        return None
+    except (ValueError, RecursionError) as exc:
+        ck.add(f"{label}: not valid JSON: {exc}")
+        return None
+    if not isinstance(obj, dict):
+        ck.add(
+            f"{label}: must hold a JSON object with keys {', '.join(keys)}, "
+            f"not {type(obj).__name__}"
+        )
+        return None
+    return obj
+
+
+def _read_obj(ck: Checker, path: Path, label: str) -> dict | None:
+    """Vertices (``v x y z``) and polylines (``l i j k ...``, 1-based, negative indices
+    count back from the last vertex so far); faces and the rest are ignored."""
+    text = _read_text(ck, path, label)
+    if text is None:
+        return None
+    nodes: list[list[float]] = []
+    edges: list[list[int]] = []
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        parts = raw.split("#", 1)[0].split()
+        if not parts or parts[0] not in ("v", "l"):
+            continue
+        try:
+            if parts[0] == "v":
+                xyz = [float(c) for c in parts[1:4]]
+                if len(xyz) < 2:
+                    raise ValueError("a vertex needs x and y")
+                nodes.append(xyz + [0.0] * (3 - len(xyz)))
+                continue
+            idx = [int(p.split("/")[0]) for p in parts[1:]]
+        except ValueError as exc:
+            ck.add(f"{label}: line {lineno}: {raw.strip()!r}: {exc}")
+            return None
+        idx = [i - 1 if i > 0 else len(nodes) + i for i in idx]
+        if len(idx) < 2 or any(not 0 <= i < len(nodes) for i in idx):
+            ck.add(
+                f"{label}: line {lineno}: {raw.strip()!r}: a polyline needs at least 2 "
+                f"vertices defined before it (1..{len(nodes)})"
+            )
+            return None
+        edges += [[a, b] for a, b in zip(idx[:-1], idx[1:], strict=True)]
+    if not edges:
+        ck.add(f"{label}: holds no polylines (OBJ 'l' lines): nothing to make edges of")
+        return None
+    return {"nodes": nodes, "edges": edges}
+
+
+def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
+    try:
+        import meshio
+    except ImportError:
+        ck.add(
+            f"{label}: reading {path.suffix} files needs the Python package meshio, which "
+            "is not installed (pip install meshio), or give the graph as JSON or OBJ"
+        )
+        return None
+    try:
+        mesh = meshio.read(path)
+    except Exception as exc:  # meshio raises many kinds for a file it cannot read
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        ck.add(f"{label}: meshio cannot read it: {reason}")
+        return None
+    lines = [c.data for c in mesh.cells if c.type == "line"]
+    if not lines:
+        found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
+        ck.add(f"{label}: holds no line cells (it has {found}): catenet reads a mesh's lines")
+        return None
+    other = sorted({c.type for c in mesh.cells if c.type != "line"})
+    if other:
+        log.warning("%s: ignoring its cells of type %s", path, ", ".join(other))
+    points = np.asarray(mesh.points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        ck.add(f"{label}: its points have shape {points.shape}: must be 2D or 3D")
+        return None
+    if points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(len(points))])
+    edges = np.concatenate([np.asarray(d, dtype=np.int64) for d in lines])
+    return {"nodes": points.tolist(), "edges": edges.tolist()}

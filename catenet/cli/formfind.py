@@ -1,0 +1,81 @@
+"""``catenet formfind``: find the shape of a case's net by the force density method."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from catenet.cli.common import (
+    EXIT_OK,
+    case_options,
+    errors_to_exit_codes,
+    setup_logging,
+    verbosity_options,
+)
+
+
+@click.command(name="formfind")
+@click.argument(
+    "case_file", metavar="CASE.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path)
+)
+@case_options(
+    "Result file (default: the case's output.file); the case OUT.toml goes beside it.",
+    "formfind.force_density=2",
+)
+@verbosity_options
+def command(
+    case_file: Path,
+    out: Path | None,
+    overrides: tuple[str, ...],
+    quiet: bool,
+    verbose: int,
+    debug: bool,
+) -> None:
+    """Find the shape of CASE.toml's net that carries the forces its [formfind] table
+    asks for (force densities, target forces or target lengths), and write the result
+    file OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
+    lengths that carry those forces, which `catenet run OUT.toml` reproduces.
+
+    \b
+    Exit status: 0 found; 1 failed while running; 2 bad input (case file, --set values,
+    paths, force densities that make nodes coincide, targets that cannot be met).
+    """
+    setup_logging(quiet, verbose, debug)
+    with errors_to_exit_codes(debug):
+        from catenet.case import load_case
+        from catenet.formfind import write_formfind
+
+        case = load_case(case_file, overrides)
+        written = write_formfind(case, out)
+        if not quiet:
+            _summary(written)
+    sys.exit(EXIT_OK)
+
+
+def _summary(written) -> None:
+    import numpy as np
+
+    f = written.found
+    force = f.force
+    detail = (
+        "one factorisation"
+        if f.method == "linear"
+        else f"{f.iterations} iterations, {f.factorizations} factorisations, "
+        f"targets met to {f.residual:.2g}"
+    )
+    lines = [
+        f"{'case':<12} {written.case.title or written.case.source}",
+        f"{'method':<12} {f.method} ({detail})",
+        f"{'net':<12} {f.net.n_nodes} nodes, {f.net.n_edges} edges, "
+        f"{int(np.count_nonzero(f.net.fixed))} fixed",
+        f"{'tension':<12} {float(force.min()):.6g} .. {float(force.max()):.6g} N",
+        f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
+        f"{'output':<12} {written.result_file}",
+        f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
+    ]
+    click.echo("\n".join(lines))
+
+
+__all__ = ["command"]

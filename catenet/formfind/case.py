@@ -1,0 +1,197 @@
+"""Form finding of a case: the shape its [formfind] table asks for, the graph case that
+``catenet run`` reproduces it with, and the result file (SPEC section 5) beside it.
+
+The case written (``to_case``) is a graph: the form-found positions, the edges, EA per
+edge and the rest lengths l0 = L / (1 + eps) at which each edge carries its force N = q L
+under the case's law, its fixed nodes, and the case's material, solver and output
+settings. The loads the shape was found under go with it (point loads and pressure as
+nodal forces per node, gravity as such), so that ``catenet run`` on it without further
+load starts in equilibrium and reproduces the shape and forces.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from catenet.errors import ConfigError
+from catenet.formfind.fdm import FormFound, formfind
+
+log = logging.getLogger(__name__)
+
+PREFIX = "formfind."
+
+
+def formfind_scene(scene) -> FormFound:
+    """The shape of a case's scene as its [formfind] table says."""
+    cfg = scene.case.formfind
+    if cfg is None:
+        raise ConfigError(
+            "formfind: missing: the case needs a [formfind] table (force_density = q [N/m])"
+        )
+    return formfind(
+        scene,
+        cfg.force_density,
+        method=cfg.method,
+        force=cfg.force,
+        length=cfg.length,
+        tol=cfg.tol,
+        max_iter=cfg.max_iter,
+        linear=scene.case.solver.linear,
+        prefix=PREFIX,
+    )
+
+
+def to_case(found: FormFound, case=None, *, output_file: str | None = None) -> dict:
+    """The graph case (a dict of TOML tables) that holds the form-found net. ``case``: the
+    case it was found from (its title, material, loads, solver and output settings); None
+    for a net made in Python (its law must then be the linear one)."""
+    net = found.net
+    rest = found.rest_length(PREFIX + "force_density")
+    geometry = {
+        "kind": "graph",
+        "nodes": found.x.tolist(),
+        "edges": net.edges.tolist(),
+        "rest_length": rest.tolist(),
+        "EA": net.EA.tolist(),
+        "fixed": np.flatnonzero(net.fixed).tolist(),
+    }
+    load: dict = {}
+    const = found.load.copy()
+    if case is not None and case.load.gravity is not None:
+        load["gravity"] = list(case.load.gravity)
+        const -= _weight(net, rest, case.load.gravity)
+    nodes = np.flatnonzero(np.any(const != 0.0, axis=1))
+    if nodes.size:
+        load["point"] = [{"node": int(i), "force": const[i].tolist()} for i in nodes]
+    if case is None:
+        if np.any(net.law.kind != 0):
+            raise ConfigError("to_case: a net under a nonlinear law needs the case it came from")
+        material = {"tension_only": bool(net.law.tension_only.all())}
+        out = {"title": "form found", "material": material}
+    else:
+        material = case.material.to_dict()
+        material.pop("prestress", None)
+        out = {
+            "title": case.title,
+            "material": material,
+            "solver": case.solver.to_dict(),
+            "output": case.output.to_dict(),
+        }
+    out["geometry"] = geometry
+    out["load"] = load
+    if output_file is not None:
+        out.setdefault("output", {})["file"] = output_file
+    order = ("title", "geometry", "material", "load", "solver", "output")
+    return {k: out[k] for k in order if k in out}
+
+
+def _weight(net, rest: np.ndarray, gravity) -> np.ndarray:
+    half = 0.5 * net.line_density * rest
+    mass = np.bincount(net.edges[:, 0], half, net.n_nodes)
+    mass += np.bincount(net.edges[:, 1], half, net.n_nodes)
+    return mass[:, None] * np.asarray(gravity, dtype=np.float64)[None, :]
+
+
+@dataclass
+class Written:
+    """What ``write_formfind`` made: the shape, the case it wrote (parsed) and the files."""
+
+    found: FormFound
+    case: object
+    result_file: Path
+    case_file: Path
+
+
+def case_file_for(out: Path) -> Path:
+    """The case file written beside the result file ``out``: OUT.toml."""
+    return out.with_suffix(".toml")
+
+
+def write_formfind(case, out: str | Path | None = None) -> Written:
+    """Form-finds ``case`` and writes the result file ``out`` (default: the case's
+    output.file) and the case OUT.toml beside it. Nothing is written when the input is
+    bad or the targets cannot be met."""
+    from catenet.case import build, dumps_toml, parse_case
+    from catenet.output import ResultWriter, check_output_path
+
+    start = time.perf_counter()
+    out = Path(case.output.file if out is None else out)
+    toml_path = case_file_for(out)
+    check_output_path(out)
+    check_output_path(toml_path, what="case file")
+    source = Path(getattr(case, "source", "") or "")
+    for p in (out, toml_path):
+        if source.is_file() and p.exists() and p.resolve() == source.resolve():
+            raise ConfigError(f"output file {str(p)!r}: is the case file itself: give another -o")
+    scene = build(case)
+    found = formfind_scene(scene)
+    run_file = str(out.with_name(out.stem + "_run" + out.suffix))
+    data = to_case(found, case, output_file=run_file)
+    text = _header(case, found, out) + dumps_toml(data)
+    written = parse_case(data, source=str(toml_path), base_dir=toml_path.parent)
+    result_scene = build(written)
+    res = _result(found, result_scene, time.perf_counter() - start)
+    attrs = {
+        "linear_backend": found.backend,
+        "source": str(getattr(case, "source", "")),
+        "formfind_method": found.method,
+        "formfind_case": str(toml_path),
+    }
+    with ResultWriter(
+        out, result_scene, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs
+    ) as writer:
+        if writer.wants(0):
+            writer.frame(1.0, res.x, None, res.tension)
+        writer.result(
+            res,
+            formfind_residual=float(found.residual),
+            factorizations=int(found.factorizations),
+        )
+    toml_path.parent.mkdir(parents=True, exist_ok=True)
+    toml_path.write_text(text, encoding="utf-8")
+    return Written(found, written, out, toml_path)
+
+
+def _header(case, found: FormFound, out: Path) -> str:
+    src = getattr(case, "source", "") or "<dict>"
+    return (
+        f"# Form found by `catenet formfind {src}` (method = {found.method!r}; result file "
+        f"{out}).\n# `catenet run` on this case, without further load, reproduces the shape "
+        "and the forces.\n\n"
+    )
+
+
+def _result(found: FormFound, scene, wall_time: float):
+    """The form-found state as a Result of the written scene (tensions from its law)."""
+    from catenet import measures
+    from catenet.result import Result
+
+    net = scene.net
+    tension = measures.tension(net, found.x)
+    e = found.x[net.edges[:, 1]] - found.x[net.edges[:, 0]]
+    w = (tension / np.linalg.norm(e, axis=1))[:, None] * e
+    grad = np.zeros_like(found.x)
+    np.subtract.at(grad, net.edges[:, 0], w)
+    np.add.at(grad, net.edges[:, 1], w)
+    load = scene.loads.external_force(net)
+    free = ~net.fixed
+    residual = float(np.max(np.abs(grad[free] - load[free]), initial=0.0))
+    return Result(
+        x=found.x.copy(),
+        tension=tension,
+        reaction=measures.reaction(net, grad, load),
+        converged=True,
+        iterations=int(found.iterations),
+        residual=residual,
+        steps=1,
+        time=1.0,
+        equilibrium=True,
+        wall_time=wall_time,
+        message=f"form found ({found.method})",
+        max_strain=measures.max_strain(net, found.x),
+    )

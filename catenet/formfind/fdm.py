@@ -1,0 +1,458 @@
+"""The force density method on a net: shape from force densities, and force densities
+from target forces or lengths.
+
+With a force density q_e = N_e / L_e [N/m] per edge, equilibrium of the free nodes under
+nodal loads p is linear (Schek 1974):
+
+    sum over edges e at i of q_e (x_i - x_j) = p_i,   i.e.   D x_f = p_f - C_f^T Q C_x x_x,
+
+with C the edge-node incidence (row e: -1 at its first node, +1 at its second), split
+into free (f) and fixed (x) columns, Q = diag(q) and D = C_f^T Q C_f, symmetric positive
+definite for q > 0 when every part of the net is held. One factorisation of D serves the
+three coordinates. The pattern of D comes from the topology once (``Pattern``); each new
+q refills its values, so PARDISO analyses once and refactorises numerically.
+
+Gravity acts on the lumped masses of the net the result describes, m = rho A l0 / 2 per
+edge end, and l0 = L / (1 + eps(N)) depends on the shape found: the loads are updated
+from the shape and the shape solved again with the same factorisation until they agree
+to round-off, so that the net written out carries exactly the loads it was found under.
+
+The nonlinear methods adjust s = log q (q stays positive) by least squares
+(scipy.optimize.least_squares, trust region, LSMR) until every edge meets its target
+force (q L = N) or length (L = L_target). The Jacobian is an operator from the same
+factorisation: with u = C x, dL = -sum_c (u_c / L) * C_f D^-1 C_f^T (u_c * dq), and its
+transpose alike (D is symmetric). Without loads, target lengths fix q only up to a common
+factor: the geometric mean of q is then set to ``q`` (default 1 N/m).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError
+from catenet.net import Net
+
+log = logging.getLogger(__name__)
+
+METHODS = ("linear", "forces", "lengths")
+GRAVITY_ITER = 100  # load updates of the gravity fixed point
+DENSE_EDGES = 2000  # nonlinear methods: a dense Jacobian up to this many edges
+WARM_STEPS = 20  # forces: fixed-point updates before the least squares
+
+
+def per_edge(value, m: int, name: str, *, required: bool = True) -> np.ndarray | None:
+    """One number or one per edge, each finite and > 0, as an (M,) array; ``name`` is
+    the key path messages give."""
+    if value is None:
+        if required:
+            raise ConfigError(f"{name}: missing: one number > 0, or one per edge ({m})")
+        return None
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        arr = np.full(m, float(arr))
+    if arr.shape != (m,):
+        raise ConfigError(
+            f"{name}: has {arr.size} values: must be one number or one per edge ({m})"
+        )
+    bad = np.flatnonzero(~(np.isfinite(arr) & (arr > 0)))
+    if bad.size:
+        k = int(bad[0])
+        where = f"{name}[{k}]" if np.ndim(value) else name
+        more = f" ({bad.size} edges)" if bad.size > 1 else ""
+        raise ConfigError(f"{where} = {float(arr[k])!r}: must be finite and > 0{more}")
+    return np.ascontiguousarray(arr)
+
+
+class Pattern:
+    """The sparsity of D (upper triangle, CSR) from the topology, and where each edge's
+    force density goes in it."""
+
+    def __init__(self, net: Net):
+        self.net = net
+        free = ~net.fixed
+        self.free_nodes = np.flatnonzero(free)
+        nf = len(self.free_nodes)
+        index = np.full(net.n_nodes, -1, dtype=np.int64)
+        index[self.free_nodes] = np.arange(nf)
+        a, b = index[net.edges[:, 0]], index[net.edges[:, 1]]
+        self.index, self.a, self.b = index, a, b
+        both = (a >= 0) & (b >= 0)
+        rows = np.concatenate([np.arange(nf), np.minimum(a, b)[both]])
+        cols = np.concatenate([np.arange(nf), np.maximum(a, b)[both]])
+        order = np.lexsort((cols, rows))
+        pos = np.empty(len(rows), dtype=np.int64)
+        pos[order] = np.arange(len(rows))
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=nf))])
+        self.indices = cols[order]
+        self.nnz = len(rows)
+        # Scatter: each edge adds q to the diagonal of its free ends and -q off it.
+        ea, eb, eo = np.flatnonzero(a >= 0), np.flatnonzero(b >= 0), np.flatnonzero(both)
+        self._edge = np.concatenate([ea, eb, eo])
+        self._slot = np.concatenate([pos[a[ea]], pos[b[eb]], pos[nf:]])
+        self._sign = np.concatenate([np.ones(len(ea) + len(eb)), -np.ones(len(eo))])
+
+    @property
+    def n_free(self) -> int:
+        return len(self.free_nodes)
+
+    def values(self, q: np.ndarray) -> np.ndarray:
+        return np.bincount(self._slot, weights=self._sign * q[self._edge], minlength=self.nnz)
+
+    def spread(self, w: np.ndarray) -> np.ndarray:
+        """C_f^T w: per free node, the sum of w over its edges (+ at the second end)."""
+        out = np.zeros((self.n_free, *w.shape[1:]))
+        on_a, on_b = self.a >= 0, self.b >= 0
+        np.add.at(out, self.b[on_b], w[on_b])
+        np.subtract.at(out, self.a[on_a], w[on_a])
+        return out
+
+    def gather(self, z: np.ndarray) -> np.ndarray:
+        """C_f z: per edge, z at its second free end minus z at its first (0 if fixed)."""
+        pad = np.concatenate([z, np.zeros((1, *z.shape[1:]))])
+        return pad[self.b] - pad[self.a]
+
+
+@dataclass
+class FormFound:
+    """A form-found net: positions ``x`` (N, 3), force densities ``q`` (M,), the nodal
+    loads ``load`` (N, 3) it carries, and how it was found. ``force`` = q L, ``length``
+    = L; ``rest_length()`` and ``to_net()`` under the net's law and EA."""
+
+    net: Net
+    x: np.ndarray
+    q: np.ndarray
+    load: np.ndarray
+    method: str = "linear"
+    iterations: int = 0
+    factorizations: int = 1
+    residual: float = 0.0  # largest relative miss of the targets (0: linear)
+    wall_time: float = 0.0
+    backend: str = ""
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def length(self) -> np.ndarray:
+        e = self.x[self.net.edges[:, 1]] - self.x[self.net.edges[:, 0]]
+        return np.linalg.norm(e, axis=1)
+
+    @property
+    def force(self) -> np.ndarray:
+        """Tension N = q L of every edge [N]."""
+        return self.q * self.length
+
+    def rest_length(self, name: str = "force_density") -> np.ndarray:
+        """Rest lengths l0 = L / (1 + eps) with N(eps) = q L under the net's law; a
+        tension the law cannot carry is a ConfigError naming ``name``."""
+        return rest_lengths(self.net, self.force, self.length, name)
+
+    def to_net(self) -> Net:
+        """The net at the form-found shape, with the rest lengths that carry its forces."""
+        net = self.net
+        return Net.from_arrays(
+            self.x,
+            net.edges,
+            EA=net.EA,
+            fixed=net.fixed,
+            rest_length=self.rest_length(),
+            line_density=net.line_density,
+            tension_only=net.tension_only,
+            law=net.law,
+        )
+
+    def to_case(self, case=None, *, output_file: str | None = None) -> dict:
+        """The graph case (a dict of TOML tables) that ``catenet run`` reproduces this
+        shape with (see ``catenet.formfind.case.to_case``)."""
+        from catenet.formfind.case import to_case
+
+        return to_case(self, case, output_file=output_file)
+
+    def reaction(self) -> np.ndarray:
+        """Force each support exerts on the net (N, 3), 0 at free nodes; reactions and
+        loads sum to zero."""
+        e = self.x[self.net.edges[:, 1]] - self.x[self.net.edges[:, 0]]
+        w = self.q[:, None] * e  # tension times the unit vector from first to second end
+        grad = np.zeros_like(self.x)
+        np.subtract.at(grad, self.net.edges[:, 0], w)
+        np.add.at(grad, self.net.edges[:, 1], w)
+        r = np.zeros_like(self.x)
+        r[self.net.fixed] = grad[self.net.fixed] - self.load[self.net.fixed]
+        return r
+
+
+def rest_lengths(net: Net, force: np.ndarray, length: np.ndarray, name: str) -> np.ndarray:
+    eps = net.law.strain_for_tension(force, net.EA)
+    l0 = length / (1.0 + eps)
+    bad = np.flatnonzero(~(np.isfinite(l0) & (l0 > 0)))
+    if bad.size:
+        k = int(bad[0])
+        raise ConfigError(
+            f"{name}: edge {k} (nodes {net.edges[k].tolist()}) would carry N = "
+            f"{force[k]:.6g} N, which its law (EA = {net.EA[k]:.6g} N) cannot carry with a "
+            f"positive rest length ({bad.size} edges in all): lower the force densities or "
+            "targets"
+        )
+    return l0
+
+
+class _Shape:
+    """The shape for given force densities: factorisation, loads, solves."""
+
+    def __init__(self, net, force, gravity, linear: str, q_name: str):
+        from catenet.linsolve import make_solver, resolve_backend
+
+        self.net, self.force, self.gravity, self.q_name = net, force, gravity, q_name
+        self.pattern = p = Pattern(net)
+        self.backend = resolve_backend(linear)
+        self.solver = None
+        if p.n_free:
+            self.solver = make_solver(
+                self.backend, p.indptr, p.indices, upper=True, dof_node=p.free_nodes, mtype=2
+            )
+        self.factorizations = 0
+        self.solves = 0
+        self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
+        self.weighs = gravity is not None and bool(np.any(net.line_density > 0))
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        self.solves += b.shape[1]
+        return np.column_stack([self.solver.solve(np.ascontiguousarray(c)) for c in b.T])
+
+    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (N, 3) and the loads (N, 3) at them, for force densities q."""
+        net, p = self.net, self.pattern
+        x = net.nodes.copy()
+        load = self.force.copy()
+        if self.solver is None:
+            return x, load
+        self.solver.factorize(p.values(q))
+        self.factorizations += 1
+        fixed_part = np.zeros((net.n_edges, 3))
+        ends = net.edges
+        fa, fb = net.fixed[ends[:, 0]], net.fixed[ends[:, 1]]
+        fixed_part[fa] -= q[fa, None] * x[ends[fa, 0]]  # -C_x x_x, weighted
+        fixed_part[fb] += q[fb, None] * x[ends[fb, 1]]
+        rhs_fixed = -p.spread(fixed_part)
+        for _ in range(GRAVITY_ITER):
+            x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
+            if not self.weighs:
+                return x, load
+            new = self.force + self._weight(x, q)
+            change = float(np.max(np.abs(new - load)))
+            load = new
+            if change <= 1e-14 * max(float(np.max(np.abs(new))), 1e-300):
+                x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
+                return x, load
+        raise ConvergenceError(
+            f"form finding: the self-weight did not settle after {GRAVITY_ITER} load "
+            "updates (the weight is too large for these force densities): raise them"
+        )
+
+    def _weight(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        net = self.net
+        length = _lengths(net, x)
+        l0 = rest_lengths(net, q * length, length, self.q_name)
+        half = 0.5 * net.line_density * l0
+        mass = np.bincount(net.edges[:, 0], half, net.n_nodes)
+        mass += np.bincount(net.edges[:, 1], half, net.n_nodes)
+        return mass[:, None] * np.asarray(self.gravity)[None, :]
+
+
+def _lengths(net: Net, x: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
+
+
+def _zero_lengths(net: Net, x: np.ndarray, size: float, name: str) -> None:
+    length = _lengths(net, x)
+    zero = np.flatnonzero(~(length > 1e-12 * size))
+    if zero.size:
+        pairs = ", ".join(f"{k} (nodes {net.edges[k].tolist()})" for k in zero[:5])
+        more = f" and {zero.size - 5} more" if zero.size > 5 else ""
+        raise ConfigError(
+            f"{name}: the shape found has edges of zero length: {pairs}{more}: their nodes "
+            "coincide; choose force densities that keep them apart (e.g. uniform q)"
+        )
+
+
+def formfind(
+    scene_or_net,
+    q=None,
+    *,
+    loads=None,
+    method: str = "linear",
+    force=None,
+    length=None,
+    tol: float = 1e-9,
+    max_iter: int = 100,
+    linear: str = "auto",
+    prefix: str = "",
+) -> FormFound:
+    """The shape of a net by the force density method (see the module docstring).
+
+    ``scene_or_net``: a case's Scene (its net and loads) or a Net (then ``loads``, a
+    ``catenet.net.Loads``, may give point forces and gravity). The net gives the topology,
+    the fixed nodes and their positions, EA, the law and the line density; the positions
+    of its free nodes are ignored. ``q`` [N/m]: one force density for every edge or one
+    per edge (required for ``method = "linear"``; the start otherwise). ``method``:
+    "linear", "forces" (targets ``force`` [N]) or "lengths" (targets ``length`` [m]),
+    each one number or one per edge, met to the relative tolerance ``tol`` within
+    ``max_iter`` iterations. ``prefix`` goes before key names in messages ("formfind."
+    for a case). Raises ConfigError for bad input or targets that cannot be met.
+    """
+    start = time.perf_counter()
+    net = getattr(scene_or_net, "net", scene_or_net)
+    if loads is None:
+        loads = getattr(scene_or_net, "loads", None)
+    if method not in METHODS:
+        raise ConfigError(f"{prefix}method = {method!r}: must be one of {', '.join(METHODS)}")
+    if loads is not None and loads.moves_supports:
+        raise ConfigError("supports.move: form finding holds the fixed nodes where they are")
+    m = net.n_edges
+    q_name = f"{prefix}force_density"
+    q = per_edge(q, m, q_name, required=method == "linear")
+    const = np.zeros((net.n_nodes, 3)) if loads is None or loads.force is None else loads.force
+    gravity = None if loads is None else loads.gravity
+    shape = _Shape(net, np.array(const, dtype=np.float64), gravity, linear, q_name)
+    if method == "linear":
+        x, load = shape(q)
+        iterations, residual = 1, 0.0
+    else:
+        target_name = f"{prefix}{'force' if method == 'forces' else 'length'}"
+        target = per_edge(force if method == "forces" else length, m, target_name)
+        if not (isinstance(tol, (int, float)) and 0 < tol < 1):
+            raise ConfigError(f"{prefix}tol = {tol!r}: must be a number > 0 and < 1")
+        x, load, q, iterations, residual = _targets(
+            shape, method, target, q, float(tol), int(max_iter), target_name
+        )
+    _zero_lengths(net, x, shape.size, q_name)
+    found = FormFound(
+        net=net,
+        x=x,
+        q=q,
+        load=load,
+        method=method,
+        iterations=iterations,
+        factorizations=shape.factorizations,
+        residual=residual,
+        backend=shape.backend,
+        stats={"solves": shape.solves, "n_free": shape.pattern.n_free},
+    )
+    found.rest_length(q_name)  # the law must carry every force: say so now
+    found.wall_time = time.perf_counter() - start
+    log.info(
+        "form found (%s): %d factorisations, %d solves, %.3g s",
+        method,
+        found.factorizations,
+        shape.solves,
+        found.wall_time,
+    )
+    return found
+
+
+def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
+    """Force densities that meet the targets: least squares in s = log q."""
+    from scipy.optimize import least_squares
+    from scipy.sparse.linalg import LinearOperator
+
+    net, p = shape.net, shape.pattern
+    m = net.n_edges
+    if q0 is None:  # forces: N / L of the given geometry; lengths: 1 N/m
+        geo = _lengths(net, net.nodes)
+        ok = geo > 0
+        q0 = np.ones(m) if method == "lengths" or not ok.all() else target / geo
+    if method == "forces":  # the classical update q <- N / L: cheap, near the answer fast
+        for _ in range(min(WARM_STEPS, max_iter)):
+            x, _ = shape(q0)
+            q0 = target / np.maximum(_lengths(net, x), 1e-300 * shape.size)
+    cache: dict = {}
+
+    def state(s):
+        key = s.tobytes()
+        if cache.get("key") != key:
+            q = np.exp(np.clip(s, -700.0, 700.0))
+            x, load = shape(q)
+            u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+            length = np.linalg.norm(u, axis=1)
+            cache.update(key=key, q=q, x=x, load=load, u=u, L=length)
+        return cache
+
+    def residual(s):
+        c = state(s)
+        if method == "forces":
+            return c["q"] * c["L"] / target - 1.0
+        return c["L"] / target - 1.0
+
+    def jacobian(s):
+        c = state(s)
+        q, u = c["q"], c["u"]
+        length = np.maximum(c["L"], 1e-300)
+        k = lambda w: p.gather(shape.solve(p.spread(w)))  # noqa: E731  C_f D^-1 C_f^T w
+
+        def d_len(dq):  # dL for dq
+            return -np.sum(u / length[:, None] * k(u * dq[:, None]), axis=1)
+
+        def d_len_t(z):  # its transpose
+            return -np.sum(u * k(u / length[:, None] * z[:, None]), axis=1)
+
+        if m <= DENSE_EDGES:  # the Jacobian itself: exact trust-region steps
+            inv = shape.solve(np.eye(p.n_free))
+            k_full = p.gather(p.gather(inv).T)  # C_f D^-1 C_f^T, (M, M)
+            j_len = -sum(np.outer(u[:, c] / length, u[:, c]) * k_full for c in range(3))
+            if method == "forces":
+                return (np.diag(length) + q[:, None] * j_len) * (q / target[:, None])
+            return j_len * (q / target[:, None])
+        if method == "forces":
+
+            def mv(ds):
+                dq = q * np.ravel(ds)
+                return (length * dq + q * d_len(dq)) / target
+
+            def rmv(w):
+                w = np.ravel(w) / target
+                return q * (length * w + d_len_t(q * w))
+        else:
+
+            def mv(ds):
+                return d_len(q * np.ravel(ds)) / target
+
+            def rmv(w):
+                return q * d_len_t(np.ravel(w) / target)
+
+        return LinearOperator((m, m), matvec=mv, rmatvec=rmv, dtype=np.float64)
+
+    prefix = name[: name.rfind(".") + 1]
+    fit = least_squares(
+        residual,
+        np.log(q0),
+        jac=jacobian,
+        method="trf",
+        tr_solver="exact" if m <= DENSE_EDGES else "lsmr",
+        tr_options={} if m <= DENSE_EDGES else {"atol": 1e-12, "btol": 1e-12},
+        ftol=1e-15,
+        xtol=1e-15,
+        gtol=1e-15,
+        max_nfev=max_iter,
+    )
+    c = state(fit.x)
+    r = residual(fit.x)
+    worst = int(np.argmax(np.abs(r)))
+    miss = float(np.abs(r[worst]))
+    if not miss <= tol:
+        what = "tension" if method == "forces" else "length"
+        got = c["q"][worst] * c["L"][worst] if method == "forces" else c["L"][worst]
+        raise ConfigError(
+            f"{name}: cannot be met to {prefix}tol = {tol:g}: edge {worst} (nodes "
+            f"{net.edges[worst].tolist()}) has {what} {got:.9g}, target {target[worst]:.9g} "
+            f"(relative miss {miss:.2e} after {fit.nfev} iterations): give reachable "
+            "targets (an edge between fixed nodes keeps its length), or raise "
+            f"{prefix}max_iter"
+        )
+    q, x, load = c["q"], c["x"], c["load"]
+    if method == "lengths" and not np.any(shape.force) and not shape.weighs:
+        mean = math.exp(float(np.mean(np.log(q0))))
+        q = q * (mean / math.exp(float(np.mean(np.log(q)))))  # the shape does not change
+    return x, load, q, int(fit.nfev), miss

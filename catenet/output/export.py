@@ -1,0 +1,173 @@
+"""A result file's states in other formats, one file per frame, through meshio
+(``catenet export``): for tools that take one mesh per file.
+
+Each frame becomes a line mesh: points at the frame's positions, one line cell per edge,
+point data ``displacement`` (from the reference geometry), ``fixed`` (1.0: supported) and,
+where stored, ``velocity`` (dynamic runs) or ``reaction`` (the final state); cell data
+``tension`` [N], ``rest_length`` [m] and ``EA`` [N]. The frames are the trajectory's, or
+the final state (/result) of a file without one. VTK formats also get a ParaView
+collection (``STEM.pvd``) that gives every file its time.
+
+meshio is an optional dependency (``pip install meshio`` or ``catenet[export]``): it is
+imported only here, when a file is exported.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from catenet.errors import CatenetError, ConfigError
+from catenet.output.reader import Frame, open_result, read_mesh, trajectory_length
+
+log = logging.getLogger(__name__)
+
+# format -> (file extension, meshio's writer name)
+FORMATS = {"vtu": ("vtu", "vtu"), "vtk": ("vtk", "vtk"), "xdmf": ("xdmf", "xdmf")}
+PVD = ("vtu", "vtk")  # formats that get a .pvd collection
+
+__all__ = ["FORMATS", "Export", "export", "select_frames"]
+
+
+@dataclass
+class Export:
+    """What ``export`` wrote: the files (one per frame, in order), their times, and the
+    ParaView collection (None: not for this format)."""
+
+    files: list[Path]
+    times: list[float]
+    collection: Path | None
+
+
+def _meshio():
+    try:
+        import meshio
+    except ImportError as exc:
+        raise CatenetError(
+            "catenet export needs meshio, which is not installed: pip install meshio "
+            f"(or pip install 'catenet[export]') ({exc})"
+        ) from None
+    return meshio
+
+
+def select_frames(spec: str, n: int) -> list[int]:
+    """The frame indices that ``--frames`` names among n: "all", "last", an index k
+    (negative: from the end) or a slice "start:stop[:step]" (Python's rules)."""
+    text = spec.strip().lower()
+    what = f"--frames {spec!r}"
+    if text == "all":
+        return list(range(n))
+    if text == "last":
+        return [n - 1] if n else []
+    if re.fullmatch(r"-?\d+", text):
+        k = int(text)
+        if not -n <= k < n:
+            raise ConfigError(f"{what}: the file has {n} frames (0 to {n - 1})")
+        return [k % n]
+    m = re.fullmatch(r"(-?\d*):(-?\d*)(?::(-?\d*))?", text)
+    if not m:
+        raise ConfigError(f"{what}: must be all, last, an index or start:stop[:step]")
+    start, stop, step = (int(g) if g else None for g in m.groups())
+    if step == 0:
+        raise ConfigError(f"{what}: the step must not be 0")
+    picked = list(range(n))[slice(start, stop, step)]
+    if not picked:
+        raise ConfigError(f"{what}: selects none of the file's {n} frames")
+    return picked
+
+
+def _frames(path: Path, spec: str) -> list[Frame]:
+    with open_result(path) as h5:
+        n = trajectory_length(h5)
+        if n:
+            g = h5["trajectory"]
+            out = []
+            for k in select_frames(spec, n):
+                v = np.asarray(g["v"][k], dtype=np.float64) if "v" in g else None
+                tension = np.asarray(g["tension"][k], dtype=np.float64)
+                x = np.asarray(g["x"][k], dtype=np.float64)
+                out.append(Frame(float(g["time"][k]), x, v, "trajectory", k, tension))
+            return out
+        if "result" in h5 and "x" in h5["result"]:
+            r = h5["result"]
+            select_frames(spec, 1)  # checks the spec
+            frame = Frame(
+                float(r.attrs.get("time", 1.0)),
+                np.asarray(r["x"], dtype=np.float64),
+                np.asarray(r["v"], dtype=np.float64) if "v" in r else None,
+                "result",
+                -1,
+                np.asarray(r["tension"], dtype=np.float64) if "tension" in r else None,
+            )
+            frame.reaction = np.asarray(r["reaction"]) if "reaction" in r else None
+            return [frame]
+    raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
+
+
+def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames="all") -> Export:
+    """Writes the frames of a result file (``frames``: see ``select_frames``) in format
+    ``fmt`` (one of ``FORMATS``) into ``out_dir`` (default: ``STEM-FMT`` beside the
+    file), as ``STEM_K.ext`` with K the frame's index; returns what was written."""
+    path = Path(path)
+    if fmt not in FORMATS:
+        raise ConfigError(f"--to {fmt!r}: must be one of {', '.join(FORMATS)}")
+    if not path.is_file():
+        raise ConfigError(f"{path}: no such result file")
+    meshio = _meshio()
+    mesh = read_mesh(path)
+    states = _frames(path, str(frames))
+    out = Path(out_dir) if out_dir is not None else path.with_name(f"{path.stem}-{fmt}")
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"-o {out}: exists and is not a directory")
+    out.mkdir(parents=True, exist_ok=True)
+    ext, writer = FORMATS[fmt]
+    width = max(4, len(str(max(f.index for f in states))))
+    cells = [("line", np.asarray(mesh.edges, dtype=np.int64))]
+    files = []
+    for f in states:
+        name = f"{path.stem}_{f.index:0{width}d}" if f.index >= 0 else f"{path.stem}_result"
+        point_data = {
+            "displacement": f.x - mesh.nodes,
+            "fixed": np.asarray(mesh.fixed, dtype=np.float64),  # VTK reads no int types
+        }
+        if f.v is not None:
+            point_data["velocity"] = f.v
+        if getattr(f, "reaction", None) is not None:
+            point_data["reaction"] = f.reaction
+        cell_data = {}
+        for key, value in (
+            ("tension", f.tension),
+            ("rest_length", mesh.rest_length),
+            ("EA", mesh.EA),
+        ):
+            if value is not None:
+                cell_data[key] = [np.asarray(value, dtype=np.float64)]
+        target = out / f"{name}.{ext}"
+        meshio.write(
+            target,
+            meshio.Mesh(f.x, cells, point_data=point_data, cell_data=cell_data),
+            file_format=writer,
+        )
+        files.append(target)
+    times = [f.t for f in states]
+    collection = _write_pvd(out / f"{path.stem}.pvd", files, times) if fmt in PVD else None
+    log.info("%s: %d frames written to %s", path, len(files), out)
+    return Export(files, times, collection)
+
+
+def _write_pvd(target: Path, files: list[Path], times: list[float]) -> Path:
+    """ParaView's collection of the files, each with its time."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1")
+    coll = ET.SubElement(root, "Collection")
+    for f, t in zip(files, times, strict=True):
+        rel = os.path.relpath(f, target.parent)
+        ET.SubElement(coll, "DataSet", timestep=repr(float(t)), part="0", file=rel)
+    ET.indent(root, space=" ")
+    target.write_text('<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n")
+    return target

@@ -1,0 +1,147 @@
+"""The files behind a result file: checking an output path before a run, the hidden
+spare copy the writer keeps beside it, publishing a new version atomically, and one-line
+accounts of I/O errors.
+
+A result file ``OUT.h5`` is only ever replaced whole (``os.replace``), never written in
+place: a reader, or a run killed at any moment, always finds a complete, closed HDF5 file.
+While a run goes on, ``.OUT.h5.spare`` (and for an instant ``.OUT.h5.prev``) beside it
+holds the next version; both are removed when the run ends, and by ``catenet repair``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from pathlib import Path
+
+from catenet.errors import ConfigError
+
+__all__ = [
+    "check_output_path",
+    "copy_atomically",
+    "describe",
+    "detach",
+    "publish",
+    "remove_spares",
+    "spare_paths",
+]
+
+
+def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
+    """Checks, without creating anything, that ``path`` can be written: it is not a
+    directory, an existing file there is writable, and its nearest existing parent is a
+    writable directory (missing directories are created when the file is opened).
+    Raises ConfigError naming the path; returns the path."""
+    p = Path(path)
+    text = str(path)
+    if not text.strip():
+        raise ConfigError(f"{what} = {text!r}: must be a file path")
+    if p.is_dir():
+        raise ConfigError(f"{what} {text!r}: is a directory: give a file path such as out/run.h5")
+    if p.suffix.lower() == ".xdmf":
+        raise ConfigError(
+            f"{what} {text!r}: .xdmf is the name of the ParaView sidecar: give the HDF5 file, "
+            "such as out/run.h5"
+        )
+    if p.exists() or p.is_symlink():
+        if not p.is_file():
+            raise ConfigError(f"{what} {text!r}: exists and is not a regular file")
+        if not os.access(p, os.W_OK):
+            raise ConfigError(
+                f"{what} {text!r}: exists and cannot be overwritten (permission denied)"
+            )
+    parent = p.absolute().parent
+    while not parent.exists():
+        if parent.is_symlink():  # a dangling link
+            raise ConfigError(f"{what} {text!r}: {parent} is a broken symbolic link")
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ConfigError(f"{what} {text!r}: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ConfigError(f"{what} {text!r}: cannot write in {parent} (permission denied)")
+    return p
+
+
+def describe(exc: BaseException) -> str:
+    """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
+    text = str(exc)
+    m = re.search(r"errno = (\d+), error message = '([^']*)'", text)
+    if m:
+        return f"{m.group(2)} (errno {m.group(1)})"
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def spare_paths(path: str | Path) -> tuple[Path, Path]:
+    """The hidden files beside a result file while it is written: the spare (the next
+    version, written while the published one stays untouched) and the previous version
+    (an instant's hard link while they swap)."""
+    p = Path(path)
+    return p.with_name(f".{p.name}.spare"), p.with_name(f".{p.name}.prev")
+
+
+def remove_spares(path: str | Path) -> list[Path]:
+    """Removes the hidden files a killed writer left beside ``path``; returns them."""
+    path = Path(path)
+    spare, prev = spare_paths(path)
+    copies = (path.with_name(f".{path.name}.copy"), spare.with_name(f".{spare.name}.copy"))
+    gone = []
+    for p in (spare, prev, *copies):
+        if p.exists() or p.is_symlink():
+            p.unlink(missing_ok=True)
+            gone.append(p)
+    return gone
+
+
+def publish(spare: Path, path: Path, prev: Path) -> None:
+    """Makes the closed file ``spare`` the result file ``path`` in one step (a reader sees
+    the old version or the new, never a mix) and leaves the version it replaces at
+    ``spare``, a separate file, to be brought up to date and published next time (a copy
+    of the new version where there is no old one, or no hard links)."""
+    linked = False
+    if path.exists():
+        try:
+            prev.unlink(missing_ok=True)
+            os.link(path, prev)
+            linked = True
+        except OSError:  # a file system without hard links
+            pass
+    os.replace(spare, path)
+    if linked:
+        os.replace(prev, spare)
+    else:
+        copy_atomically(path, spare)
+
+
+def copy_atomically(src: Path, dst: Path) -> None:
+    """Replaces ``dst`` by a copy of ``src`` in one step."""
+    tmp = dst.with_name(f".{dst.name}.copy")
+    try:
+        shutil.copyfile(src, tmp)
+        os.replace(tmp, dst)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def detach(h5) -> None:
+    """Points HDF5's file descriptor of a file whose writes fail at /dev/null.
+
+    HDF5 retries the failed writes when the file and its datasets are closed; when those
+    fail again, it keeps their identifiers and crashes at interpreter exit. Writing the
+    rest to /dev/null lets the close succeed. The writer only ever writes into its spare:
+    the published result file keeps its last version.
+    """
+    try:
+        fd = h5.id.get_vfd_handle()
+        null = os.open(os.devnull, os.O_RDWR)
+    except Exception:  # another file driver, or no /dev/null: leave it be
+        return
+    try:
+        os.dup2(null, fd)
+    except OSError:
+        pass
+    finally:
+        os.close(null)
