@@ -56,6 +56,33 @@ def ignored_solver_keys(solver) -> list[str]:
     return out
 
 
+def ignored_histories(case) -> list[str]:
+    """Messages for what a static run ignores of a case's time dependence: every load's
+    and support motion's ``history`` (a static run applies each load and displacement in
+    full, at the load factor 1 of its last load step) and the initial velocities of
+    ``[[mass]]`` (point masses still weigh under gravity)."""
+    if case.solver.method != "static":
+        return []
+    paths = ["load.history"] if case.load.history is not None else []
+    for name, items in (("load.point", case.load.points), ("load.line", case.load.lines)):
+        paths += [f"{name}[{k}].history" for k, it in enumerate(items) if it.history is not None]
+    moves = case.supports.moves
+    paths += [f"supports.move[{k}].history" for k, m in enumerate(moves) if m.history is not None]
+    out = [
+        f"{path}: ignored with solver.method = 'static' (a static run applies the load or "
+        "displacement in full, the history's factor only acts in dynamic runs; set "
+        "solver.method = 'dynamic')"
+        for path in paths
+    ]
+    for k, m in enumerate(getattr(case, "masses", ())):
+        if m.velocity is not None:
+            out.append(
+                f"mass[{k}].velocity = {list(m.velocity)}: ignored with solver.method = "
+                "'static' (initial velocities start dynamic runs only)"
+            )
+    return out
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """The estimated size of a run's trajectory: at most ``frames`` frames of ``frame``

@@ -7,9 +7,11 @@ Each step from t_k to t_k + h solves Eq. 10a,
 by Newton from the predictor q_k + h v_k (Eq. 11) with the Jacobian
 M/h^2 + mu M/h + K (Eq. 13); then v_{k+1} = (q - q_k)/h. A step whose Newton iteration
 fails is retried with half the step (never accepted silently); after four good steps the
-step grows back towards ``dt``. Dynamic relaxation: the run stops before ``t_end`` once
-the supports have settled and both the static residual |grad E - F| and the inertial
-force |M v|/h are below rtol times the load scale.
+step grows back towards ``dt``. With ``reuse``, Newton keeps its factorisation across iterations
+and steps (modified Newton) while h stays; a step that fails with a kept matrix is
+retried once with fresh ones before its h is halved. Dynamic relaxation: the run stops
+before ``t_end`` once the supports have settled and both the static residual
+|grad E - F| and the inertial force |M v|/h are below rtol times the load scale.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import norm
 from catenet.net import Loads, Net
-from catenet.newton import solve
+from catenet.newton import Reuse, solve
 from catenet.result import Result, finish
 from catenet.static import HarmonicExtension, Workspace, _check_rtol
 from catenet.terms import Inertia
@@ -52,6 +54,7 @@ def solve_dynamic(
     on_step: Callable[[int, float, np.ndarray, np.ndarray], bool | None] | None = None,
     workspace: Workspace | None = None,
     on_rest: Callable[[float], None] | None = None,
+    reuse: bool = False,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -61,6 +64,11 @@ def solve_dynamic(
     last accepted state in ``state``, when even the smallest step fails. ``on_rest(ratio)``
     follows dynamic relaxation (before ``on_step``, once the supports have settled):
     max(static residual, inertial force) / tolerance, at most 1 at rest.
+
+    ``reuse=True``: modified Newton, the factorisation kept across iterations and steps
+    (about 2x faster on the paper's relaxation; off by default: its path differs within
+    the tolerance, so a run at rest stops a few steps apart and a restart does not
+    repeat the uninterrupted run exactly). ``reuse=False``: a factorisation per iteration.
 
     Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
     with one rounding while the step is dt), not sums of the steps' round-off.
@@ -99,6 +107,8 @@ def solve_dynamic(
     message = ""
     interrupted = False
     x_trial = np.empty_like(x)
+    kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
+    fresh = False  # this step's retry with fresh factorisations (its kept one failed)
     while t < t_end * (1 - 1e-12) and not equilibrium:
         h_step = min(h, t_end - t)
         x_trial[:] = x
@@ -110,20 +120,42 @@ def solve_dynamic(
             # being run over by a support.
             x_trial += follow(supports - x[net.fixed] - h_step * v[net.fixed])
         x_trial[net.fixed] = supports
+        if loads.varies:  # loads with a time history act with their value at t + h
+            potential.set_force(loads.external_force(net, time=t + h_step))
         x_trial[:] = potential.toward(x, x_trial)  # a predictor inside an obstacle is cut
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]
         w = m_free * (1.0 / h_step**2 + damping / h_step)
         a = (m_free / h_step**2 * (y_k + h_step * v_k) + damping * m_free / h_step * y_k) / w
         inertia.set_step(w, a)
+        if kept is not None:
+            kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
         try:
-            newton = solve(potential, x_trial, rtol=rtol, max_iter=max_iter, label="step")
+            newton = solve(
+                potential,
+                x_trial,
+                rtol=rtol,
+                max_iter=max_iter,
+                label="step",
+                reuse=None if fresh else kept,
+            )
             ok = newton.converged
             why = newton.reason
         except SingularSystemError as exc:
             ok, why, newton = False, str(exc), None
         if newton is not None:
             iterations += newton.iterations
+        if not ok and kept is not None and not fresh:
+            fresh = True  # with a kept factorisation: once more with fresh ones, same h
+            kept.drop()
+            log.info(
+                "t = %.6g: step %.3g failed (%s); retrying with fresh factorisations",
+                t,
+                h_step,
+                why,
+            )
+            continue
+        fresh = False
         if not ok:
             h = 0.5 * h_step
             good = 0
@@ -165,6 +197,7 @@ def solve_dynamic(
         equilibrium=equilibrium,
         iterations=iterations,
         residual=residual_static if equilibrium else residual,
+        load_time=t,
         steps=steps,
         time=t,
         v=v,

@@ -237,7 +237,12 @@ class LinearSolver:
         self.seconds = {"analyse": 0.0, "factorize": 0.0, "solve": 0.0}
 
     def factorize(self, data: np.ndarray) -> None:
-        self._data = data
+        # A copy: a kept factorisation (modified Newton) is checked against the matrix it
+        # was factorised from, not against the caller's array refilled since.
+        if self._data is None or self._data.shape != data.shape:
+            self._data = np.empty_like(data, dtype=np.float64)
+        np.copyto(self._data, data)
+        data = self._data
         self._anorm = float(np.max(np.abs(data), initial=0.0))
         if not math.isfinite(self._anorm):
             raise SingularSystemError(

@@ -87,13 +87,15 @@ def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
 def cable_stats(net: Net, x: np.ndarray, tension: np.ndarray, edge_cable: np.ndarray, n: int):
     """Per cable (``edge_cable`` (M,): each edge's cable index in 0..n-1, -1: none): the
     largest tension [N] and the slack fraction, the share of the cable's unstressed length
-    in edges shorter than their rest length (as ``slack_edges`` counts them)."""
+    in tension-only edges shorter than their rest length (a strut in compression is not
+    slack)."""
     on = edge_cable >= 0
     c = edge_cable[on]
     top = np.full(n, -np.inf)
     np.maximum.at(top, c, np.asarray(tension)[on])
     top[~np.isfinite(top)] = 0.0
     l0 = net.rest_length[on]
-    slack = np.bincount(c, weights=l0 * (strain(net, x)[on] < 0.0), minlength=n)
+    loose = (strain(net, x) < 0.0) & net.law.tension_only
+    slack = np.bincount(c, weights=l0 * loose[on], minlength=n)
     total = np.bincount(c, weights=l0, minlength=n)
     return top, slack / np.where(total > 0, total, 1.0)

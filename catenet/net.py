@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +43,8 @@ class Net:
     tension_only : edges carry no compression (slack when eps < 0)
     law : the material law of every edge (default: the paper's linear law, with
         ``tension_only`` for every edge)
+    point_mass : (N,) float64, lumped masses added at the nodes [kg] (corner masses of
+        a tether net), or None; part of ``mass``, so gravity and inertia act on them
     """
 
     nodes: np.ndarray
@@ -52,6 +55,7 @@ class Net:
     fixed: np.ndarray
     tension_only: bool = True
     law: Law | None = None
+    point_mass: np.ndarray | None = None
 
     def __post_init__(self):
         if self.law is None:
@@ -70,11 +74,13 @@ class Net:
         line_density=0.0,
         tension_only: bool = True,
         law: Law | None = None,
+        point_mass=None,
     ) -> Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
         ``law`` (one entry per edge) defaults to the paper's linear law with
-        ``tension_only`` for every edge."""
+        ``tension_only`` for every edge; ``point_mass`` (N,) [kg] adds to the lumped
+        masses."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
         edges = _as_array("edges", edges, np.int64, (2,))
         n, m = len(nodes), len(edges)
@@ -121,9 +127,11 @@ class Net:
         mask = _fixed_mask(fixed, n, problems)
         if law is not None and len(law.kind) != m:
             problems.append(f"law: {len(law.kind)} entries: must have one per edge ({m})")
+        if point_mass is not None:
+            point_mass = _broadcast("point_mass", point_mass, n, problems, allow_zero=True)
         if problems:
             raise ConfigError(problems)
-        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law)
+        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law, point_mass)
         net._check_supported()
         return net
 
@@ -137,11 +145,14 @@ class Net:
 
     @cached_property
     def mass(self) -> np.ndarray:
-        """Lumped nodal masses m_i = sum over edges at i of rho A l0 / 2 [kg]."""
+        """Lumped nodal masses m_i = sum over edges at i of rho A l0 / 2 [kg], plus the
+        point masses."""
         half = 0.5 * self.line_density * self.rest_length
         m = np.zeros(self.n_nodes)
         np.add.at(m, self.edges[:, 0], half)
         np.add.at(m, self.edges[:, 1], half)
+        if self.point_mass is not None:
+            m += self.point_mass
         return m
 
     @cached_property
@@ -165,6 +176,21 @@ class Net:
             line_density=self.line_density,
             tension_only=self.tension_only,
             law=self.law if law is None else law,
+            point_mass=self.point_mass,
+        )
+
+    def with_point_mass(self, point_mass) -> Net:
+        """A copy with these point masses (N,) [kg] at the nodes (replacing any)."""
+        return Net.from_arrays(
+            self.nodes,
+            self.edges,
+            EA=self.EA,
+            fixed=self.fixed,
+            rest_length=self.rest_length,
+            line_density=self.line_density,
+            tension_only=self.tension_only,
+            law=self.law,
+            point_mass=point_mass,
         )
 
     def components(self) -> np.ndarray:
@@ -251,36 +277,62 @@ def _fixed_mask(fixed, n, problems) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Loads:
-    """What acts on a net: constant nodal forces, gravity and prescribed support motion.
+    """What acts on a net: nodal forces, gravity and prescribed support motion, each
+    constant or following a time history (``catenet.history.History``) in dynamic runs.
 
     Attributes
     ----------
-    force : (N, 3) nodal forces [N] (pressure and point loads), or None
+    force : (N, 3) constant nodal forces [N] (pressure and point loads), or None
     gravity : (3,) acceleration [m/s^2] acting on the lumped masses, or None (not computed)
     support_displacement : (N, 3) final displacement of fixed nodes [m], or None
     ramp_time : (N,) time over which each support moves linearly to its final place
         in a dynamic run [s] (0: at once); static runs reach the final place directly
+    parts : ((N, 3) force, History) pairs: forces that follow a history in dynamic runs
+    gravity_history : the history of gravity, or None (constant)
+    support_history : (node indices, History) pairs: supports whose displacement is
+        factor(t) times ``support_displacement`` in dynamic runs (instead of a ramp)
+
+    Static runs (``time`` None) take every load and displacement at its full value: a
+    history's factor is used in dynamic runs only.
     """
 
     force: np.ndarray | None = None
     gravity: np.ndarray | None = None
     support_displacement: np.ndarray | None = None
     ramp_time: np.ndarray | None = field(default=None)
+    parts: tuple = ()
+    gravity_history: Any = None
+    support_history: tuple = ()
 
-    def external_force(self, net: Net, factor: float = 1.0) -> np.ndarray:
-        """Total external nodal force (N, 3), scaled by a load factor."""
+    def external_force(
+        self, net: Net, factor: float = 1.0, time: float | None = None
+    ) -> np.ndarray:
+        """Total external nodal force (N, 3) at ``time`` (each history's factor then;
+        None: every load in full), scaled by a load factor."""
         f = np.zeros((net.n_nodes, 3))
         if self.force is not None:
             f += self.force
+        for force, history in self.parts:
+            s = 1.0 if time is None else history(time)
+            if s != 0.0:
+                f += s * force
         if self.gravity is not None:
-            f += net.mass[:, None] * np.asarray(self.gravity)[None, :]
+            g = 1.0 if time is None or self.gravity_history is None else self.gravity_history(time)
+            if g != 0.0:
+                f += (g * net.mass)[:, None] * np.asarray(self.gravity)[None, :]
         if factor != 1.0:
             f *= factor
         return f
 
+    @property
+    def varies(self) -> bool:
+        """Whether the external force follows a history (dynamic runs evaluate it at
+        every step)."""
+        return bool(self.parts) or (self.gravity is not None and self.gravity_history is not None)
+
     def support_positions(self, net: Net, *, time: float | None = None, factor: float = 1.0):
-        """Positions of the fixed nodes (K, 3): at ``time`` along each ramp (dynamic), or
-        at ``factor`` of the final displacement (static continuation)."""
+        """Positions of the fixed nodes (K, 3): at ``time`` along each ramp or history
+        (dynamic), or at ``factor`` of the final displacement (static continuation)."""
         x = net.nodes[net.fixed].copy()
         if self.support_displacement is None:
             return x
@@ -290,13 +342,30 @@ class Loads:
         ramp = np.zeros(len(d)) if self.ramp_time is None else self.ramp_time[net.fixed]
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(ramp > 0, np.clip(time / np.where(ramp > 0, ramp, 1.0), 0.0, 1.0), 1.0)
+        if self.support_history:
+            full = np.ones(net.n_nodes)
+            for nodes, history in self.support_history:
+                full[nodes] = history(time)
+            moved = np.zeros(net.n_nodes, bool)
+            for nodes, _ in self.support_history:
+                moved[nodes] = True
+            s = np.where(moved[net.fixed], full[net.fixed], s)
         return x + s[:, None] * d
 
     def settle_time(self) -> float:
-        """Time after which every support has reached its final place."""
-        if self.support_displacement is None or self.ramp_time is None:
-            return 0.0
-        return float(np.max(self.ramp_time, initial=0.0))
+        """Time after which nothing changes: every support has reached its final place
+        and every history its last point."""
+        t = 0.0
+        if self.support_displacement is not None and self.ramp_time is not None:
+            t = float(np.max(self.ramp_time, initial=0.0))
+        ends = [h.end for _, h in (*self.parts, *self.support_history)]
+        if self.gravity is not None and self.gravity_history is not None:
+            ends.append(self.gravity_history.end)
+        return max([t, *ends])
+
+    @property
+    def has_histories(self) -> bool:
+        return bool(self.parts or self.support_history or self.gravity_history is not None)
 
     @property
     def moves_supports(self) -> bool:

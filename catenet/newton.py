@@ -27,6 +27,13 @@ the tolerance, ended the run, one more Newton step is taken if it lowers the res
 A run in which neither the residual nor Phi falls beyond round-off for STAGNATION
 iterations stops at once ("stagnated") instead of spending the rest of max_iter; inside
 ``interruptible(stop)`` every iteration asks ``stop()`` first and raises Interrupted.
+
+Modified Newton (``reuse=Reuse()``; ``solve_dynamic(reuse=True)``): each iteration solves with
+the last factorised matrix, kept across iterations and solves, while it converges: its step must be
+a descent direction, accepted by the line search, and cut the residual by REUSE_RATE; else
+the next iteration factorises afresh (a rejected step is retried with a fresh matrix before
+c grows). Kept steps leave c alone. The convergence test is on the true residual, so the
+solution is the same; every solve is still checked against the matrix it came from.
 """
 
 from __future__ import annotations
@@ -58,6 +65,7 @@ STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has con
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
+REUSE_RATE = 0.03  # a kept factorisation whose step cuts the residual less is refreshed
 
 _stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
 
@@ -85,6 +93,39 @@ class NewtonResult:
     history: list[float] = field(default_factory=list)
     reason: str = ""
     factorizations: int = 0
+    reused: int = 0  # iterations that solved with a kept factorisation (modified Newton)
+
+
+class Reuse:
+    """The factorisation modified Newton keeps across iterations and solves: which
+    potential and regularisation c it belongs to and the solver's factorisation count
+    when it was made (any other factorisation on the solver makes it stale). ``keep(key)``
+    drops it when the key changes (a time step's h: the inertia diagonal changes)."""
+
+    def __init__(self):
+        self._owner = None  # (potential, c, solver's factorisation count)
+        self._key = None
+
+    def keep(self, key) -> None:
+        if key != self._key:
+            self._key = key
+            self._owner = None
+
+    def valid(self, potential: Potential, c: float) -> bool:
+        own = self._owner
+        return (
+            own is not None
+            and own[0] is potential
+            and own[1] == c
+            and own[2] == potential.solver.stats["factorize"]
+        )
+
+    def mark(self, potential: Potential, c: float) -> None:
+        """The solver now holds the matrix of ``potential`` with regularisation c."""
+        self._owner = (potential, c, potential.solver.stats["factorize"])
+
+    def drop(self) -> None:
+        self._owner = None
 
 
 class Potential:
@@ -117,6 +158,15 @@ class Potential:
         self._dx = np.zeros_like(self.force) if self._limits else None
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
+
+    def set_force(self, force: np.ndarray) -> None:
+        """Replaces the external force (N, 3) in place: a time-varying load's value at a
+        time step, without rebuilding the potential (the pattern and solver stay)."""
+        external = ExternalForce(force)
+        self.force = external.force
+        self.f_free = external.flat[self.system.free_dofs].copy()
+        self.f_norm = external.norm
+        self.external = external if self.f_norm > 0 else None
 
     def with_system(self, system: System) -> Potential:
         """The same loads and step terms on other internal terms of the same pattern."""
@@ -191,11 +241,13 @@ def solve(
     max_iter: int,
     atol: float | None = None,
     label: str = "newton",
+    reuse: Reuse | None = None,
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
     met by raising c, with c = 0 it raises SingularSystemError only if raising c fails.
-    ``atol`` replaces rtol * scale by a fixed tolerance [N] (never below the floor)."""
+    ``atol`` replaces rtol * scale by a fixed tolerance [N] (never below the floor).
+    ``reuse``: modified Newton with the factorisation it keeps (module docstring)."""
     free = potential.system.free_dofs
     xf = x.reshape(-1)
     phi, g, scale, floor, phi_tol = potential.evaluate(x)
@@ -204,6 +256,7 @@ def solve(
     history = [gnorm]
     c = 0.0  # regularisation: raised when the matrix is singular or a step fails
     factorizations = 0
+    reused = 0
     stall = 0
     good = 0  # consecutive well-predicted full steps
     best, best_phi, moved = gnorm, phi, 0  # the iteration of the last progress: stagnation
@@ -235,14 +288,28 @@ def solve(
             )
             break
         it += 1
+        kept = reuse is not None and reuse.valid(potential, c)
+        if kept:  # modified Newton: the kept matrix, if it gives a descent direction
+            try:
+                dy = potential.solver.solve(-g)
+                slope = float(dot(g, dy))
+            except SingularSystemError:
+                slope = math.nan
+            if not slope < 0.0:
+                kept = False
+                reuse.drop()
+            else:
+                reused += 1
         # Newton direction, raising c until the matrix is regular and dy a descent direction.
-        while True:
+        while not kept:
             try:
                 potential.factorize(x, c)
                 factorizations += 1
                 dy = potential.solver.solve(-g)
                 slope = float(dot(g, dy))
                 if slope < 0.0:
+                    if reuse is not None:
+                        reuse.mark(potential, c)
                     break
                 why = "not a descent direction"
             except SingularSystemError as exc:
@@ -253,7 +320,7 @@ def solve(
             log.debug("%s: %s; regularisation c -> %.3g", label, why, c)
             if c > C_MAX:
                 reason = "regularisation failed (" + why + ")"
-                return NewtonResult(False, it, gnorm, tol, history, reason, factorizations)
+                return NewtonResult(False, it, gnorm, tol, history, reason, factorizations, reused)
         # Decrease of Phi that the quadratic model predicts for the full step (the model's
         # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
         predicted = -0.5 * slope + 0.5 * c * float(dot(potential.D * dy, dy))
@@ -267,6 +334,9 @@ def solve(
             if gnorm <= STALL_FLOOR * floor:
                 reason = "converged (round-off floor)"
                 break
+            if kept:  # a fresh matrix before a larger c
+                reuse.drop()
+                continue
             c = max(4.0 * c, SHRINK * _c_start(potential, g))
             log.debug("%s: step rejected; regularisation c -> %.3g", label, c)
             if c > C_MAX:
@@ -293,6 +363,10 @@ def solve(
             rho,
             c,
         )
+        if kept:  # c stays; a slow step refreshes the matrix
+            if gnorm > REUSE_RATE * prev:
+                reuse.drop()
+            continue
         good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
         c = _update_regularisation(c, alpha, rho, good, potential, g)
     converged = reason.startswith("converged")
@@ -300,13 +374,16 @@ def solve(
     if converged and gnorm > target and math.isfinite(gnorm):
         # The round-off floor, not the tolerance, ended the run: one more Newton step
         # often lands far below the floor (the iteration was still quadratic).
+        count = potential.solver.stats["factorize"]
         better = _polish(potential, x, g, gnorm)
+        if reuse is not None and potential.solver.stats["factorize"] > count:
+            reuse.mark(potential, 0.0)  # J at a point next to the solution: worth keeping
         if better is not None:
             gnorm = better
             history.append(gnorm)
             it += 1
             factorizations += 1
-    return NewtonResult(converged, it, gnorm, tol, history, reason, factorizations)
+    return NewtonResult(converged, it, gnorm, tol, history, reason, factorizations, reused)
 
 
 def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) -> float | None:

@@ -50,13 +50,22 @@ class Result:
     stats: dict = field(default_factory=dict)
 
 
-def finish(system: System, loads: Loads, x: np.ndarray, factor: float = 1.0, **fields) -> Result:
-    """Tension and reactions at x (``catenet.measures``), and the Result around them."""
+def finish(
+    system: System,
+    loads: Loads,
+    x: np.ndarray,
+    factor: float = 1.0,
+    *,
+    load_time: float | None = None,
+    **fields,
+) -> Result:
+    """Tension and reactions at x (``catenet.measures``), and the Result around them;
+    ``load_time``: the time of a dynamic state (loads with a history at their value then)."""
     from catenet import measures
 
     net = system.net
     _, grad = system.gradient(x)
-    reaction = measures.reaction(net, grad, loads.external_force(net, factor))
+    reaction = measures.reaction(net, grad, loads.external_force(net, factor, time=load_time))
     return Result(
         x=x.copy(),
         tension=system.tension(x),

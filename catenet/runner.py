@@ -165,7 +165,7 @@ def run_case(
             raise ConfigError(
                 f"--restart {restart}: is also the output file: give another one with -o"
             )
-    for message in advice.ignored_solver_keys(solver):
+    for message in advice.ignored_solver_keys(solver) + advice.ignored_histories(case):
         log.warning("%s", message)
     trajectory = None
     if path is not None:
@@ -252,10 +252,14 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             written["step"] = step
 
     if dynamic:
-        start = sv.Start(t=0.0) if state is None else sv.Start(state.x, state.v, state.t)
+        v_start = getattr(scene, "velocity", None)  # [[mass]] velocity: initial velocities
+        if state is None:
+            start = sv.Start(v=v_start, t=0.0)
+        else:
+            start = sv.Start(state.x, state.v, state.t)
         x0 = scene.net.nodes.copy() if state is None else state.x.copy()
         x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
-        v0 = np.zeros_like(x0) if state is None else state.v
+        v0 = start.v if start.v is not None else np.zeros_like(x0)
         keep(0, start.t, x0, v0)
 
     def on_step(step: sv.Step) -> bool:
@@ -291,6 +295,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             scene.loads,
             x,
             1.0 if dynamic else t,
+            load_time=t if dynamic else None,
             converged=False,
             equilibrium=False,
             iterations=int(getattr(exc, "iterations", 0)),

@@ -73,7 +73,8 @@ class Problem:
 
 @dataclass(frozen=True)
 class Start:
-    """Where a run starts: positions (N, 3), velocities (dynamic) and time."""
+    """Where a run starts: positions (N, 3), velocities (dynamic; None: the scene's
+    initial velocities, if any, else at rest) and time."""
 
     x: np.ndarray | None = None
     v: np.ndarray | None = None
@@ -181,7 +182,9 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
 
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
-    v0 = np.zeros_like(x0) if start.v is None else np.array(start.v, dtype=np.float64)
+    v_scene = getattr(scene, "velocity", None)  # a case's [[mass]] velocities
+    v = start.v if start.v is not None else v_scene
+    v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
     x0[net.fixed] = loads.support_positions(net, time=start.t)
     last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy(), "rest": float("nan")}
 

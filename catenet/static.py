@@ -194,13 +194,15 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     others = tuple(t for t in system.terms if t is not stretch)
     history: list[float] = []
     iterations = 0
-    if _compressed_bilateral(stretch, x):
+    if _compressed_bilateral(stretch, x) and not _definite(potential, x):
         # Bilateral edges in compression: the straight compressed state is an unstable
         # equilibrium beside the sagging one, and the Hessian is indefinite around it, so
         # Newton from the start stalls near it. Where the sagging state has every edge in
         # tension it is the tension-only equilibrium: that one first (its smoothing
         # continuation handles the compressed edges as slack), then the exact law from
-        # there (converged at once where no edge ends in compression).
+        # there (converged at once where no edge ends in compression). A compressed strut
+        # that other edges hold (a guyed mast: the Hessian at the start is positive
+        # definite) is solved directly: the detour would let it fall over.
         taut = stretch.with_law(stretch.law.with_tension_only(True))
         first = equilibrium(
             potential.with_system(system.with_terms((taut, *others))),
@@ -260,6 +262,18 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     result.iterations += iterations
     result.history = history + result.history
     return result
+
+
+def _definite(potential: Potential, x: np.ndarray) -> bool:
+    """Whether the stiffness at x is positive definite (False where the solver cannot
+    tell: then the caller takes the safe path)."""
+    if getattr(potential.solver, "mtype", -2) != -2:
+        return False
+    try:
+        potential.factorize(x, 0.0)
+    except SingularSystemError:
+        return False
+    return potential.solver.negative_eigenvalues() == 0
 
 
 def _compressed_bilateral(stretch: Stretch, x: np.ndarray) -> bool:

@@ -355,3 +355,22 @@ def test_written_case_round_trips_and_keeps_settings(tmp_path):
     assert parse_case(tomllib.loads(text)) == back
     from_python = to_case(written.found)  # a net from Python: EA per edge, linear law
     assert parse_case(from_python).geometry.rest_length == back.geometry.rest_length
+
+
+@pytest.mark.parametrize("method", ["forces"])
+def test_nonlinear_methods_converge_by_newton_without_the_fallback(method, caplog):
+    """Newton on log q (GMRES on the Jacobian operator, one factorisation per iterate)
+    meets the targets; the least squares stays a fallback it does not need here."""
+    import logging
+
+    nodes, edges, fixed = grid(11, 2.0, lambda x, y: 0.4 * x * y)
+    rng = np.random.default_rng(2)
+    net = Net.from_arrays(nodes, edges, EA=1e6, fixed=fixed)
+    truth = formfind(net, rng.uniform(1.0, 3.0, len(edges)))
+    target = truth.force if method == "forces" else truth.length
+    with caplog.at_level(logging.INFO, logger="catenet.formfind.fdm"):
+        found = formfind(net, 2.0, method=method, tol=1e-10, **{method[:-1]: target})
+    assert not [m for m in caplog.messages if "least squares" in m]
+    got = found.force if method == "forces" else found.length
+    assert np.max(np.abs(got / target - 1)) <= 1e-10
+    assert found.factorizations == found.iterations < 60

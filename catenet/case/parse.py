@@ -23,6 +23,7 @@ from catenet.case.keys import (
     value,
 )
 from catenet.case.kinds import KINDS, GeometryConfig
+from catenet.case.masses import parse_masses
 from catenet.case.nodes import check_nodes
 from catenet.case.obstacles import parse_obstacles
 from catenet.case.sections import (
@@ -52,6 +53,7 @@ class Case:
     output: OutputConfig
     formfind: FormfindConfig | None = None  # read by `catenet formfind` only
     obstacles: tuple = ()  # [[obstacle]]: rigid bodies the net cannot enter
+    masses: tuple = ()  # [[mass]]: point masses and initial velocities at nodes
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -72,6 +74,8 @@ class Case:
             out["formfind"] = self.formfind.to_dict()
         if self.obstacles:
             out["obstacle"] = [o.to_dict() for o in self.obstacles]
+        if self.masses:
+            out["mass"] = [m.to_dict() for m in self.masses]
         return out
 
     def to_toml(self) -> str:
@@ -90,6 +94,7 @@ TOP_KEYS = (
     "output",
     "formfind",
     "obstacle",
+    "mass",
 )
 
 
@@ -140,6 +145,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     solver = parse_solver(ck, data.get("solver", {}), ctx)
     output = parse_output(ck, data.get("output", {}), ctx, source)
     obstacles = parse_obstacles(ck, data.get("obstacle"), ctx)
+    masses = parse_masses(ck, data.get("mass"), ctx)
     formfind = None
     if "formfind" in data:
         formfind = parse_formfind(ck, data["formfind"], ctx)
@@ -188,6 +194,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         output=output,
         formfind=formfind,
         obstacles=obstacles,
+        masses=masses,
         source=source,
     )
 

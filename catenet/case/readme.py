@@ -13,6 +13,7 @@ from pathlib import Path
 from catenet.case.formfind import FormfindConfig
 from catenet.case.keys import REQUIRED, Key, declared
 from catenet.case.kinds import KINDS
+from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
 from catenet.case.sections import SECTIONS
@@ -77,6 +78,8 @@ def keys_table() -> str:
     for name, obstacle in OBSTACLES.items():
         rows.append(f'| **`[[obstacle]]` kind = "{name}"** | | | {obstacle.__doc__.strip()} |')
         rows += [r for r in _rows("obstacle[k]", declared(obstacle)) if ".kind`" not in r]
+    rows.append(f"| `[[mass]]` | an array of tables | none | {MassConfig.__doc__.strip()} |")
+    rows += _rows("mass[k]", declared(MassConfig))
     return "\n".join(rows)
 
 

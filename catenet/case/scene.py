@@ -11,9 +11,11 @@ from catenet import geometry as geo
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
+from catenet.case.masses import point_masses
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.errors import ConfigError
+from catenet.history import History
 from catenet.laws import Law, table_rows
 from catenet.net import Loads, Net
 
@@ -24,7 +26,8 @@ class Scene:
     the length scale L of delta/L, and the energy terms the case adds to the stretching
     of the edges (``catenet.terms``; none for the paper's cases). ``cables`` names the
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
-    None: no cables)."""
+    None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
+    at rest)."""
 
     case: Case
     net: Net
@@ -33,6 +36,7 @@ class Scene:
     size: float
     terms: tuple = ()
     cables: Any = None
+    velocity: np.ndarray | None = None
 
 
 def build(case: Case) -> Scene:
@@ -54,6 +58,9 @@ def _build(case: Case) -> Scene:
     )
     built = case.geometry.build_case(case, material)
     net = built.net if built.final else _with_law(case, built.net)
+    point_mass, velocity = point_masses(getattr(case, "masses", ()), net, built.names, built.sets)
+    if point_mass is not None:
+        net = net.with_point_mass(point_mass)
     loads = _loads(case, net, built.names, built.size, built)
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size))
     return Scene(
@@ -64,6 +71,7 @@ def _build(case: Case) -> Scene:
         size=float(built.size),
         terms=terms,
         cables=built.cables,
+        velocity=velocity,
     )
 
 
@@ -98,9 +106,17 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
     gravity and support motion."""
     ld = case.load
     sets = built.sets
-    force = None
+    constant = np.zeros((net.n_nodes, 3))
+    timed: dict[tuple, np.ndarray] = {}  # a force per history table: loads that share one
+
+    def target(history: tuple | None) -> np.ndarray:
+        history = ld.history if history is None else history
+        if history is None:
+            return constant
+        return timed.setdefault(history, np.zeros((net.n_nodes, 3)))
+
     if case.geometry.pressure and ld.pressure != 0.0:
-        force = geo.pressure_force(net, ld.pressure, size)
+        target(None)[:] += geo.pressure_force(net, ld.pressure, size)
     for k, pt in enumerate(ld.points):
         nodes = (built.at_nodes[k],) if pt.cable is not None else expand(pt.node, names, sets)
         for i in nodes:
@@ -109,16 +125,18 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
                     f"load.point[{k}].node = {show(pt.node)}: must be a node index in "
                     f"0..{net.n_nodes - 1}"
                 )
-            if force is None:
-                force = np.zeros((net.n_nodes, 3))
-            force[i] += pt.force
+            target(pt.history)[i] += pt.force
     for ln in ld.lines:
         on = np.ones(net.n_edges, dtype=bool)
         if ln.cable is not None:
             on = built.cables.edge == built.cables.names.index(ln.cable)
-        force = line_force(net, on, ln.force, force)
+        line_force(net, on, ln.force, target(ln.history))
+    force = constant if constant.any() else None
+    parts = tuple((f, History(h)) for h, f in timed.items() if f.any())
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)
+    g_history = History(ld.history) if gravity is not None and ld.history is not None else None
     disp = ramp = None
+    moving: dict[tuple, list[int]] = {}
     if case.supports.moves:
         disp = np.zeros((net.n_nodes, 3))
         ramp = np.zeros(net.n_nodes)
@@ -130,4 +148,14 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
                     )
                 disp[i] = mv.displacement
                 ramp[i] = mv.duration
-    return Loads(force=force, gravity=gravity, support_displacement=disp, ramp_time=ramp)
+                if mv.history is not None:
+                    moving.setdefault(mv.history, []).append(i)
+    return Loads(
+        force=force,
+        gravity=gravity,
+        support_displacement=disp,
+        ramp_time=ramp,
+        parts=parts,
+        gravity_history=g_history,
+        support_history=tuple((np.array(n), History(h)) for h, n in moving.items()),
+    )

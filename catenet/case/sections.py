@@ -33,6 +33,7 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS
 from catenet.errors import ConfigError
+from catenet.history import NEED, history_problem
 from catenet.laws import LAWS, table_rows
 
 METHODS = ("static", "dynamic")
@@ -190,17 +191,44 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
     return MaterialConfig(**v)
 
 
+# --------------------------------------------------------------------------- histories
+
+
+def _check_history(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A time history [[t, factor], ...] (catenet/history.py) as a tuple of pairs."""
+    problem = history_problem(v)
+    if problem:
+        return ck.bad(path, v, problem)
+    duration = ctx.values.get("duration")
+    if duration not in (None, BAD, 0.0):
+        return ck.bad(
+            path,
+            v,
+            f"give duration (a linear ramp, here {duration!r} s) or history, not both",
+        )
+    return tuple((float(t), float(f)) for t, f in v)
+
+
+def history_key(doc: str) -> Any:
+    """The ``history`` key of a load or support motion."""
+    return key(_check_history, NEED, None, write="given", shown="none", unit="s, -", doc=doc)
+
+
 # --------------------------------------------------------------------------- supports
 
 
 @dataclass(frozen=True)
 class MoveConfig(Declared):
-    """A support that moves by ``displacement`` over ``duration`` seconds."""
+    """A support that moves by ``displacement`` over ``duration`` seconds, or by
+    factor(t) times it along a ``history`` (dynamic runs)."""
 
     node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
     displacement: Vec3 = vec3(missing="[dx, dy, dz] [m]", unit="m", doc="[dx, dy, dz]")
     duration: float = real(
         0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
+    )
+    history: tuple | None = history_key(
+        "dynamic: displacement times factor(t), instead of a ramp over duration"
     )
 
 
@@ -234,9 +262,9 @@ class SupportsConfig(Declared):
 
 @dataclass(frozen=True, kw_only=True)
 class PointLoadConfig(Declared):
-    """A constant force [N] on one node, on each node of a node set, or at a position
-    along a cable (``cable`` and ``at``: the edge there is split so that a node carries
-    it)."""
+    """A force [N] (constant, or along a history in dynamic runs) on one node, on each
+    node of a node set, or at a position along a cable (``cable`` and ``at``: the edge
+    there is split so that a node carries it)."""
 
     node: NodeRef | None = node(
         None, write="given", shown="none", doc="the loaded node, or a node set (each node)"
@@ -254,6 +282,7 @@ class PointLoadConfig(Declared):
     force: Vec3 = vec3(
         missing="[fx, fy, fz] [N]", unit="N", doc="[fx, fy, fz]; forces on one node add up"
     )
+    history: tuple | None = history_key("dynamic: force times factor(t) (none: load.history)")
 
 
 def _point_tables(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
@@ -299,6 +328,7 @@ class LineLoadConfig(Declared):
     force: Vec3 = vec3(
         missing="[fx, fy, fz] [N/m]", unit="N/m", doc="[fx, fy, fz] per unit unstressed length"
     )
+    history: tuple | None = history_key("dynamic: force times factor(t) (none: load.history)")
 
 
 def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
@@ -335,10 +365,14 @@ class LoadConfig(Declared):
         section=PointLoadConfig,
         write="given",
         name="point",
-        doc="constant point loads",
+        doc="point loads",
     )
     lines: tuple[LineLoadConfig, ...] = tables(
         LineLoadConfig, name="line", doc="distributed loads per unit length of cable"
+    )
+    history: tuple | None = history_key(
+        "dynamic: pressure and gravity times factor(t), and each point or line load "
+        "without its own history (none: constant)"
     )
 
 

@@ -27,6 +27,7 @@ STUDIES = (
     "stress",
     "formfind",
     "flush",
+    "reuse",
 )
 CHOICES = (*STUDIES, "all", "report")
 
@@ -88,6 +89,8 @@ def command(
     cold-start  catenet --help, catenet run with an empty and a warm JIT cache
     stress      hard scenes: right answer or a clear error, never a NaN
     formfind    force density method on roofs of 1e3 to 1e5 edges (--quick: to 1e4)
+    reuse       modified Newton in dynamic runs (n = 34 relaxation, a net on a sphere)
+                against a factorisation per iteration; an obstacle never touched
     all         every study above, in this order
     report      docs/readme-performance.md and docs/figures/ from OUTPUT's CSV files
                 (give it after the studies to run them first: all report)

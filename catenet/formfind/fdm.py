@@ -17,7 +17,9 @@ edge end, and l0 = L / (1 + eps(N)) depends on the shape found: the loads are up
 from the shape and the shape solved again with the same factorisation until they agree
 to round-off, so that the net written out carries exactly the loads it was found under.
 
-The nonlinear methods adjust s = log q (q stays positive) by least squares
+Target forces: the classical update q <- N / L for a start, then Newton on s = log q
+(q stays positive), each step from GMRES on the Jacobian operator below (``_newton``).
+Target lengths, and forces where Newton stalls, adjust s by least squares
 (scipy.optimize.least_squares, trust region, LSMR) until every edge meets its target
 force (q L = N) or length (L = L_target). The Jacobian is an operator from the same
 factorisation: with u = C x, dL = -sum_c (u_c / L) * C_f D^-1 C_f^T (u_c * dq), and its
@@ -34,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from catenet.errors import ConfigError, ConvergenceError
+from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.net import Net
 
 log = logging.getLogger(__name__)
@@ -42,7 +44,8 @@ log = logging.getLogger(__name__)
 METHODS = ("linear", "forces", "lengths")
 GRAVITY_ITER = 100  # load updates of the gravity fixed point
 DENSE_EDGES = 2000  # nonlinear methods: a dense Jacobian up to this many edges
-WARM_STEPS = 20  # forces: fixed-point updates before the least squares
+WARM_STEPS = 20  # forces: fixed-point updates before Newton
+MAX_STEP = 1.0  # Newton: no force density changes by more than a factor e per step
 
 
 def per_edge(value, m: int, name: str, *, required: bool = True) -> np.ndarray | None:
@@ -368,6 +371,16 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
         for _ in range(min(WARM_STEPS, max_iter)):
             x, _ = shape(q0)
             q0 = target / np.maximum(_lengths(net, x), 1e-300 * shape.size)
+    spent = shape.factorizations
+    # Newton first for target forces; for target lengths it stalls on ill-conditioned
+    # nets (d L / d q is nearly singular there), so those go to the least squares at once.
+    found = (
+        _newton(shape, method, target, q0, tol, max_iter - spent) if method == "forces" else None
+    )
+    if found is not None:
+        x, load, q, iterations, miss = found
+        return x, load, _mean_kept(shape, method, q, q0), iterations + spent, miss
+    log.info("form finding: Newton on the force densities stalled: least squares")
     cache: dict = {}
 
     def state(s):
@@ -452,7 +465,86 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
             f"{prefix}max_iter"
         )
     q, x, load = c["q"], c["x"], c["load"]
+    return x, load, _mean_kept(shape, method, q, q0), int(fit.nfev), miss
+
+
+def _mean_kept(shape: _Shape, method: str, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """Target lengths without loads fix q only up to a factor: the start's geometric mean
+    (the shape does not change)."""
     if method == "lengths" and not np.any(shape.force) and not shape.weighs:
         mean = math.exp(float(np.mean(np.log(q0))))
-        q = q * (mean / math.exp(float(np.mean(np.log(q)))))  # the shape does not change
-    return x, load, q, int(fit.nfev), miss
+        return q * (mean / math.exp(float(np.mean(np.log(q)))))
+    return q
+
+
+def _newton(shape: _Shape, method, target, q0, tol, max_iter):
+    """Newton on s = log q, each step's linear system solved by GMRES with the Jacobian
+    as an operator (three solves with the current factorisation per product), steps
+    halved until the largest miss falls. Returns (x, load, q, iterations, miss), or None
+    when it stalls or runs out of iterations (the caller falls back to least squares)."""
+    import inspect
+
+    from scipy.sparse.linalg import LinearOperator, gmres
+
+    net, p = shape.net, shape.pattern
+    m = net.n_edges
+    tol_key = "rtol" if "rtol" in inspect.signature(gmres).parameters else "tol"
+
+    def state(s):
+        q = np.exp(np.clip(s, -700.0, 700.0))
+        try:
+            x, load = shape(q)
+        except (SingularSystemError, ConvergenceError, ConfigError):
+            return None  # a step too far: the caller halves it
+        u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+        length = np.linalg.norm(u, axis=1)
+        if not np.all(length > 0):
+            return None
+        got = q * length if method == "forces" else length
+        return q, x, load, u, length, np.log(got / target)  # r: the log of the miss
+
+    def miss(r):
+        return float(np.max(np.abs(np.expm1(r))))
+
+    scale_free = method == "lengths" and not np.any(shape.force) and not shape.weighs
+    s = np.log(q0)
+    now = state(s)
+    if now is None:
+        return None
+    iterations = 1
+    while iterations < max_iter:
+        q, x, load, u, length, r = now
+        if miss(r) <= tol:
+            return x, load, q, iterations, miss(r)
+        unit = u / length[:, None]
+
+        def d_log_len(ds, q=q, unit=unit, length=length):  # d log L / d s
+            dq = q * np.ravel(ds)
+            z = p.gather(shape.solve(p.spread(unit * dq[:, None] * length[:, None])))
+            return -np.sum(unit * z, axis=1) / length
+
+        if method == "forces":
+            jac = LinearOperator((m, m), matvec=lambda v: np.ravel(v) + d_log_len(v))
+        else:
+            jac = LinearOperator((m, m), matvec=d_log_len)
+        forcing = min(1e-2, math.sqrt(float(np.max(np.abs(r)))))
+        step, _ = gmres(jac, -r, restart=60, maxiter=5, atol=0.0, **{tol_key: forcing})
+        if not np.all(np.isfinite(step)):
+            return None
+        if scale_free:  # a common factor of q changes nothing: no step along it
+            step -= np.mean(step)
+        step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
+        worst = float(np.max(np.abs(r)))
+        for _ in range(30):  # halve until the largest miss falls
+            trial = state(s + step)
+            iterations += 1
+            if trial is not None and float(np.max(np.abs(trial[5]))) < worst:
+                break
+            step *= 0.5
+            if iterations >= max_iter:
+                return None
+        else:
+            return None
+        s = s + step
+        now = trial
+    return None

@@ -81,7 +81,8 @@ def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
 
 def with_prefix(message: str, fixed_key: str = "geometry.fixed") -> str:
     """A Net builder message with the case key path of what it names."""
-    if message.startswith(("geometry", "supports", "material", "load", "solver", "obstacle")):
+    sections = ("geometry", "supports", "material", "load", "solver", "obstacle", "mass")
+    if message.startswith(sections):
         return message
     if message.startswith("nodes "):  # "nodes [3, 4]: ..." lists node indices
         return "geometry: " + message

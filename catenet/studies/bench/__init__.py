@@ -20,6 +20,7 @@ STUDIES = {
     "stress": "catenet.studies.bench.stress",
     "flush": "catenet.studies.bench.flush",
     "formfind": "catenet.studies.bench.formfind",
+    "reuse": "catenet.studies.bench.reuse",
 }
 
 
