@@ -41,6 +41,8 @@ def write_report(results_dir: Path, docs_dir: Path) -> Path:
         sections.pareto,
         sections.skips,
         sections.cold_start,
+        sections.formfind,
+        sections.flush,
         sections.stress,
     ):
         try:

@@ -456,3 +456,62 @@ def stress(results: Path) -> list[str]:
         out += [f"- {r['id']}: {r['status']}; {r.get('message', '')}" for r in bad]
     out += ["", "![stress test](figures/bench-stress.png)", ""]
     return out
+
+
+def formfind(results: Path) -> list[str]:
+    rows = read_study(results, "formfind")
+    if not rows:
+        return []
+    out = [
+        "### Form finding",
+        "",
+        "The force density method on square roofs (`catenet bench formfind`), set-up "
+        "included: the linear method is one sparse factorisation for the three coordinates; "
+        "`plain spsolve` assembles the same system with scipy.sparse products and calls "
+        "`spsolve` per coordinate; `forces` meets "
+        "a target force in every edge (Newton on log q).",
+        "",
+    ]
+    out += md_table(
+        ["edges", "linear [s]", "SciPy backend [s]", "plain spsolve [s]", "forces [s]"],
+        [
+            [
+                r["edges"],
+                as_text(r["linear_s"]),
+                as_text(r["scipy_s"]),
+                as_text(r["plain_s"]),
+                as_text(r["forces_s"]) if r.get("forces_s") else "-",
+            ]
+            for r in rows
+        ],
+    )
+    out += ["", "![form finding](figures/bench-formfind.png)", ""]
+    return out
+
+
+def flush(results: Path) -> list[str]:
+    rows = read_study(results, "flush")
+    if not rows:
+        return []
+    out = [
+        "### Writing trajectories",
+        "",
+        "1000 dynamic steps keeping every frame (`catenet bench flush`): frames flushed in "
+        "batches into a spare file that replaces the result file whole, against the earlier "
+        "per-frame flush in place; the frames of both files are bitwise equal.",
+        "",
+    ]
+    out += md_table(
+        ["scheme", "DOF", "steps", "time [s]", "ratio to per-frame flush"],
+        [
+            [
+                r["scheme"],
+                r["dofs"],
+                r["steps"],
+                as_text(r["wall_seconds"]),
+                as_text(r["ratio_to_per_frame"]),
+            ]
+            for r in rows
+        ],
+    )
+    return out + [""]
