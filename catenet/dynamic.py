@@ -122,6 +122,7 @@ def solve_dynamic(
         x_trial[net.fixed] = supports
         if loads.varies:  # loads with a time history act with their value at t + h
             potential.set_force(loads.external_force(net, time=t + h_step))
+        potential.begin_step(x, t + h_step)
         x_trial[:] = potential.toward(x, x_trial)  # a predictor inside an obstacle is cut
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]

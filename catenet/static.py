@@ -98,6 +98,7 @@ def solve_static(
     start = time.perf_counter()
     x = _start(net, loads, x0, factor)
     potential = ws.potential(loads, factor)
+    potential.begin_step(x)
     result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
     if result.converged and result.tolerance > potential.f_norm > 0:
         # Held only to a round-off floor above the loads: no digit of the answer is sure.

@@ -79,6 +79,12 @@ class Term:
     def stiffness(self) -> np.ndarray | None:
         return None
 
+    def begin_step(self, x: np.ndarray, time: float | None) -> None:
+        """Called before every static load step (``time`` None) and every dynamic time
+        step (``time``: the step's end) with the last accepted state x (N, 3). A term
+        whose energy depends on the step (lagged friction, an obstacle on a prescribed
+        path) updates itself here; the pattern must not change. Default: nothing."""
+
 
 def node_block_pattern(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) of the 3x3 blocks of the given nodes, row-major per block: the
