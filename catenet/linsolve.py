@@ -185,6 +185,7 @@ def set_threads(threads: int) -> None:
     import numba
 
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    os.environ["OPENBLAS_NUM_THREADS"] = str(threads)  # for an OpenBLAS loaded later
     for path in _openblas_libraries():
         try:
             lib = ctypes.CDLL(path)
@@ -203,9 +204,10 @@ def set_threads(threads: int) -> None:
 
 
 def _openblas_libraries() -> list[str]:
-    """Paths of the OpenBLAS libraries mapped into this process (Linux; else none)."""
+    """Paths of the OpenBLAS libraries mapped into this process (Linux; else none).
+    SciPy's is not loaded for this (importing scipy.linalg costs 0.1-0.3 s of start-up):
+    one loaded later reads OPENBLAS_NUM_THREADS, which ``set_threads`` sets."""
     import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
-    import scipy.linalg  # noqa: F401  (and SciPy's)
 
     try:
         with open("/proc/self/maps") as fh:
