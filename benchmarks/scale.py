@@ -1,4 +1,5 @@
-"""Static solve from 1e3 to 1e6 DOF: time split and peak memory.
+"""Static solve from 1e3 to 1e7 DOF: time split, peak memory against the memory guard's
+estimate, and PARDISO's ordering and out-of-core choices at 1e6 DOF.
 
 A thin script: the study is `catenet.studies.bench.scale` (so that `catenet bench scale` works from
 an installed package). Usage: `python benchmarks/scale.py [-o DIR] [--quick]`, the options of

@@ -17,12 +17,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from catenet.kernels.pattern import (
+    block_pattern,
+    pattern_csr,
+    pattern_entries,
+    pattern_locate,
+)
 from catenet.kernels.sparse import add_diagonal, scatter_add
 from catenet.net import Net
 from catenet.terms import Stretch, Term
 
 if TYPE_CHECKING:  # SciPy is imported where a matrix is asked for: not on a run's path
     import scipy.sparse as sp
+
+_NO_ELEMS = np.zeros((0, 2), dtype=np.int64)
+_NO_DOFS = np.zeros(0, dtype=np.int64)
 
 
 class System:
@@ -48,49 +57,90 @@ class System:
         self._reduced[self.free_dofs] = np.arange(self.n_free)
 
         # The pattern: every term's entries on free DOFs, and the diagonal.
-        width = max(self.n_free, 1)
-        parts, kept = [], []
-        for term in self.terms:
-            keys, keep = self._keys(term)
-            parts.append(keys[keep])
-            kept.append(keep)
-        diag = np.arange(self.n_free, dtype=np.int64)
-        parts.append(diag * width + diag)
-        unique, inverse = np.unique(np.concatenate(parts), return_inverse=True)
-        self._unique = unique
-        urows = unique // width
-        self.indices = (unique % width).astype(np.int32)
-        self.indptr = np.zeros(self.n_free + 1, dtype=np.int32)
-        np.cumsum(np.bincount(urows, minlength=self.n_free), out=self.indptr[1:])
-        self.nnz = int(unique.size)
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
-        start = 0
-        for term, keep in zip(self.terms, kept, strict=True):
-            target = np.full(keep.size, -1, dtype=np.int64)
-            count = int(keep.sum())
-            target[np.flatnonzero(keep)] = inverse[start : start + count]
-            start += count
+        found = self._block_pattern() or self._entry_pattern()
+        self.indptr, self.indices, targets, self.diag_pos = found
+        self.nnz = int(self.indices.size)
+        for term, target in zip(self.terms, targets, strict=True):
             self._remember(term, target)
-        self.diag_pos = inverse[start:].astype(np.int64)
 
         self._values: dict[int, np.ndarray] = {}
         self._grad = np.zeros((n, 3))
         self._energies = [0.0] * len(self.terms)
         self.data = np.zeros(self.nnz)
         self.seconds = 0.0  # spent filling gradients and Hessians
+        self.convex = all(t.convex for t in self.terms)  # of the last ``hessian`` (see there)
 
     # --- pattern -----------------------------------------------------------------------
-    def _keys(self, term: Term) -> tuple[np.ndarray, np.ndarray]:
-        """Keys row * n_free + col of a term's entries on free DOFs, and which count."""
+    def _block_pattern(self) -> tuple | None:
+        """The pattern at node level (catenet.kernels.pattern.block_pattern): the edges'
+        node adjacency as 3x3 blocks, when every free node has an edge and the other
+        terms' entries fall into it (node-local terms do); else None."""
+        net = self.net
+        stretch = [t for t in self.terms if isinstance(t, Stretch) and t.net is net]
+        if not stretch or self.n_free == 0:
+            return None
+        edges = np.ascontiguousarray(net.edges, dtype=np.int64)
+        touched = np.bincount(edges.ravel(), minlength=net.n_nodes) > 0
+        if not touched[~net.fixed].all():
+            return None
+        rank = np.full(net.n_nodes, -1, dtype=np.int64)
+        rank[~net.fixed] = np.arange(self.n_free // 3)
+        indptr, indices, edge_target, diag = block_pattern(
+            edges, rank, self.n_free // 3, self.upper
+        )
+        targets = []
+        for term in self.terms:
+            if isinstance(term, Stretch) and term.net is net:
+                targets.append(edge_target)
+                continue
+            _, rows, cols, count = self._entries(term)
+            target = np.empty(count, dtype=np.int64)
+            args = (indptr, indices, rows, cols, self._reduced, self.upper, target)
+            if count and pattern_locate(*args):
+                return None  # the term couples DOFs the edges do not
+            targets.append(target)
+        return indptr, indices, targets, diag
+
+    def _entry_pattern(self) -> tuple:
+        """The pattern from every entry of every term (catenet.kernels.pattern): bucketed
+        by row and made unique per row, no global sort."""
+        upper = self.upper
+        sources = [self._entries(term) for term in self.terms]
+        sources.append((_NO_ELEMS, self.free_dofs, self.free_dofs, self.n_free))
+        offsets = np.cumsum([0] + [s[3] for s in sources])
+        start = np.zeros(self.n_free + 1, dtype=np.int64)
+        empty_i32, empty_i64 = np.zeros(0, np.int32), np.zeros(0, np.int64)
+        for elems, rows, cols, _ in sources:
+            pattern_entries(
+                elems, rows, cols, self._reduced, upper, start, empty_i32, empty_i64, 0, False
+            )
+        np.cumsum(start, out=start)
+        cursor = start[:-1].copy()
+        colbuf = np.empty(int(start[-1]), dtype=np.int32)
+        srcbuf = np.empty(int(start[-1]), dtype=np.int64)
+        for (elems, rows, cols, _), offset in zip(sources, offsets, strict=False):
+            pattern_entries(
+                elems, rows, cols, self._reduced, upper, cursor, colbuf, srcbuf, offset, True
+            )
+        del cursor
+        indptr, indices, pos = pattern_csr(start, colbuf, srcbuf, int(offsets[-1]))
+        targets = [pos[offsets[k] : offsets[k + 1]] for k in range(len(self.terms))]
+        return indptr, indices, targets, pos[offsets[-2] :]
+
+    @staticmethod
+    def _entries(term: Term) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """A term's entries (elements, rows, cols, count of values): the stretching gives
+        its edges (row-major 6x6 blocks of their two nodes), every other term its pattern."""
+        if isinstance(term, Stretch):
+            edges = np.ascontiguousarray(term.net.edges, dtype=np.int64)
+            return edges, _NO_DOFS, _NO_DOFS, 36 * edges.shape[0]
         pattern = term.pattern()
         if pattern is None:
-            return np.zeros(0, np.int64), np.zeros(0, bool)
-        rows = self._reduced[pattern[0]]
-        cols = self._reduced[pattern[1]]
-        keep = (rows >= 0) & (cols >= 0)
-        if self.upper:
-            keep &= rows <= cols
-        return rows * max(self.n_free, 1) + cols, keep
+            return _NO_ELEMS, _NO_DOFS, _NO_DOFS, 0
+        rows = np.ascontiguousarray(pattern[0], dtype=np.int64)
+        cols = np.ascontiguousarray(pattern[1], dtype=np.int64)
+        return _NO_ELEMS, rows, cols, rows.size
 
     @staticmethod
     def _pattern_key(term: Term) -> object:
@@ -109,16 +159,19 @@ class System:
         hit = self._targets.get(id(key))
         if hit is not None and hit[0] is key:
             return hit[1]
-        keys, keep = self._keys(term)
-        pos = np.searchsorted(self._unique, keys[keep])
-        pos = np.minimum(pos, max(self.nnz - 1, 0))
-        if keep.any() and not np.array_equal(self._unique[pos], keys[keep]):
-            raise ValueError(
-                f"term {term.name!r} couples DOFs outside the workspace's sparsity pattern: "
-                "build the workspace with it"
-            )
-        target = np.full(keep.size, -1, dtype=np.int64)
-        target[np.flatnonzero(keep)] = pos
+        pattern = term.pattern()
+        if pattern is None:
+            target = np.zeros(0, dtype=np.int64)
+        else:
+            rows = np.ascontiguousarray(pattern[0], dtype=np.int64)
+            cols = np.ascontiguousarray(pattern[1], dtype=np.int64)
+            target = np.empty(rows.size, dtype=np.int64)
+            args = (self.indptr, self.indices, rows, cols, self._reduced, self.upper, target)
+            if pattern_locate(*args):
+                raise ValueError(
+                    f"term {term.name!r} couples DOFs outside the workspace's sparsity "
+                    "pattern: build the workspace with it"
+                )
         self._remember(term, target)
         return target
 
@@ -182,10 +235,14 @@ class System:
         self, x: np.ndarray, shift: np.ndarray | None = None, extra: Sequence[Term] = ()
     ) -> np.ndarray:
         """Fills and returns the CSR data of the Hessian of the terms (and of ``extra``
-        terms, such as a time step's inertia) plus diag(shift) on the free DOFs."""
+        terms, such as a time step's inertia) plus diag(shift) on the free DOFs.
+        Afterwards ``convex`` says whether only convex terms contributed (a non-convex
+        obstacle out of reach writes nothing): then the matrix is positive semidefinite
+        and the linear solver may use Cholesky for it."""
         start = time.perf_counter()
         data = self.data
         data.fill(0.0)
+        definite = True  # every term that wrote values is convex (see ``convex``)
         for term in (*self.terms, *extra):
             target = self.target(term)
             if not target.size:
@@ -195,9 +252,11 @@ class System:
                 values = self._values[target.size] = np.empty(target.size)
             if term.hessian(x, values) is False:
                 continue  # the term says its values are all zero (no contact)
+            definite = definite and term.convex
             scatter_add(values, target, data)
         if shift is not None:
             add_diagonal(self.diag_pos, shift, data)
+        self.convex = definite
         self.seconds += time.perf_counter() - start
         return data
 

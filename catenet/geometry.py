@@ -8,10 +8,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.memory import fits
 from catenet.net import Net
 
 #: The largest net the builders make (the case loader also checks memory beforehand).
 MAX_NODES = 50_000_000
+
+
+def _check_size(nodes: float, edges: float, where: str) -> None:
+    """ConfigError for a net of more than MAX_NODES nodes or one whose solve could not fit
+    in this machine's memory at all (the case loader asks for a margin beforehand)."""
+    if not nodes <= MAX_NODES:
+        raise ConfigError(
+            f"{where}: the net could have about {nodes:.2g} nodes; catenet builds at most "
+            f"{MAX_NODES:.0e}"
+        )
+    ok, need, total = fits(nodes, edges)
+    if not ok:
+        raise ConfigError(
+            f"{where}: the net could have about {nodes:.2g} nodes and its solve need about "
+            f"{need / 2**30:.2g} GiB; this machine has {total / 2**30:.0f} GiB"
+        )
 
 
 @dataclass(frozen=True)
@@ -48,6 +65,7 @@ def cable(
     end = np.asarray(end, dtype=np.float64)
     if not 2 <= nodes <= MAX_NODES:
         raise ConfigError(f"geometry.nodes = {nodes}: must be in 2..{MAX_NODES}")
+    _check_size(nodes, nodes - 1, f"geometry.nodes = {nodes}")
     chord = float(np.linalg.norm(end - start))
     if not chord > 0:
         raise ConfigError(f"geometry.end = {end.tolist()}: must differ from geometry.start")
@@ -102,11 +120,7 @@ def square_net(
     m = n // 2
     # Each cable is at most L sqrt(2) long: a bound on the nodes before building anything.
     bound = m * m + n * (size * math.sqrt(2.0) / edge_length + 1.0)
-    if not bound <= MAX_NODES:
-        raise ConfigError(
-            f"geometry.edge_length = {edge_length!r}, geometry.n = {n}: the net could have "
-            f"about {bound:.2g} nodes; catenet builds at most {MAX_NODES:.0e}"
-        )
+    _check_size(bound, bound, f"geometry.edge_length = {edge_length!r}, geometry.n = {n}")
     L = float(size)
     half = 0.5 * L
     tol = 1e-9 * L
@@ -119,17 +133,24 @@ def square_net(
     lines = [(ck * v, u) for ck in c] + [(-cj * u, v) for cj in c]
     spans = [_clip(p, w, half, tol) for p, w in lines]
 
+    # Node positions in blocks (one row per node, in the order of their ids) and edges in
+    # blocks of chains: the nodes along a piece are made at once, not one by one.
     points: list[np.ndarray] = []
+    count = [0]  # nodes made so far
     index: dict[tuple[int, int], int] = {}  # crossing (k, j) -> node id
+
+    def add(block: np.ndarray) -> int:
+        points.append(block.reshape(-1, 2))
+        count[0] += points[-1].shape[0]
+        return count[0] - points[-1].shape[0]
 
     def crossing_node(k: int, j: int) -> int:
         if (k, j) not in index:
-            index[(k, j)] = len(points)
-            points.append(c[k] * v - c[j] * u)
+            index[(k, j)] = add(c[k] * v - c[j] * u)
         return index[(k, j)]
 
     fixed: list[int] = []
-    edges: list[tuple[int, int]] = []
+    edges: list[np.ndarray] = []
     for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans, strict=True)):
         family_a = line_id < m
         k = line_id if family_a else line_id - m
@@ -147,24 +168,21 @@ def square_net(
             if near:
                 ends.append(near[0][1])
             else:
-                ends.append(len(points))
-                points.append(p + t_end * w)
+                ends.append(add(p + t_end * w))
                 breaks.append((t_end, ends[-1]))
         fixed.extend(ends)
         breaks.sort()
         for (ta, na), (tb, nb) in zip(breaks[:-1], breaks[1:], strict=True):
             seg = tb - ta
             k_edges = max(1, math.ceil(seg / edge_length - 1e-9))
-            chain = [na]
-            for s in range(1, k_edges):
-                chain.append(len(points))
-                points.append(p + (ta + seg * s / k_edges) * w)
-            chain.append(nb)
-            edges.extend(zip(chain[:-1], chain[1:], strict=True))
+            steps = np.arange(1, k_edges)
+            first = add(p + (ta + seg * steps / k_edges)[:, None] * w)
+            chain = np.concatenate([[na], first + steps - 1, [nb]]).astype(np.int64)
+            edges.append(np.column_stack([chain[:-1], chain[1:]]))
 
-    xy = np.array(points)
+    xy = np.concatenate(points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])
-    edges_arr = np.array(edges, dtype=np.int64)
+    edges_arr = np.concatenate(edges)
     try:
         net = Net.from_arrays(
             nodes,

@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import catenet as cn
+from catenet import geometry
 from catenet.cli import main
 
 MAT = cn.Material.from_E(10e6, radius=0.01, density=1000.0)
@@ -64,12 +65,30 @@ def test_net_from_arrays_accepts_or_explains(nodes, edges, fixed, ea, rest):
     edge=numbers,
 )
 def test_square_net_accepts_or_explains(n, alpha, size, edge):
-    try:
-        sq = cn.square_net(n, alpha, size, edge, MAT)
-    except cn.ConfigError as exc:
-        assert "geometry." in str(exc)
-        return
-    assert sq.net.n_nodes >= 3 and sq.net.fixed.any()
+    # Hostile sizes stay small here: at the real cap (MAX_NODES, or what this machine's
+    # memory takes) hypothesis builds nets of millions of nodes, minutes and GiB each,
+    # and several test processes at once can run the machine out of memory.
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(geometry, "MAX_NODES", 200_000)
+        try:
+            sq = cn.square_net(n, alpha, size, edge, MAT)
+        except cn.ConfigError as exc:
+            assert "geometry." in str(exc)
+            return
+    assert 3 <= sq.net.n_nodes <= 200_000 and sq.net.fixed.any()
+
+
+def test_builders_refuse_a_net_this_machine_cannot_hold(monkeypatch):
+    """The Python API checks memory too (the case loader does so with a margin before):
+    a net whose solve cannot fit is a ConfigError naming the key, never an OOM kill."""
+    from catenet import memory
+
+    monkeypatch.setattr(memory, "physical_memory", lambda: 2**30)  # 1 GiB
+    with pytest.raises(cn.ConfigError, match=r"geometry.edge_length = 0.0001.*GiB; this mach"):
+        cn.square_net(34, 0.3, 1.0, 1e-4, MAT)  # ~7e5 nodes: about 1.9 GiB
+    with pytest.raises(cn.ConfigError, match=r"geometry.nodes = 2000000: .*1 GiB"):
+        cn.cable([0, 0, 0], [1, 0, 0], 2_000_000, MAT)
+    assert cn.square_net(34, 0.3, 1.0, 1e-2, MAT).net.n_nodes > 1000  # a small one is fine
 
 
 BASE_CASE = """

@@ -1,0 +1,131 @@
+"""The CSR pattern built per row (catenet.kernels.pattern) is the one a global np.unique
+of the keys row * n + col gives: same indptr, indices and position of every value."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import catenet as cn
+from catenet.assembly import System
+from catenet.terms import Stretch, Term
+from catenet.terms.contact import Plane
+from catenet.terms.inertia import Inertia
+
+
+def reference(net, terms, upper):
+    """The former construction: keys of every kept entry, one np.unique over them all."""
+    free = np.repeat(~net.fixed, 3)
+    free_dofs = np.flatnonzero(free)
+    n_free = free_dofs.size
+    reduced = np.full(3 * net.n_nodes, -1, dtype=np.int64)
+    reduced[free_dofs] = np.arange(n_free)
+    width = max(n_free, 1)
+    parts, kept = [], []
+    for term in terms:
+        pattern = term.pattern()
+        rows, cols = reduced[pattern[0]], reduced[pattern[1]]
+        keep = (rows >= 0) & (cols >= 0)
+        if upper:
+            keep &= rows <= cols
+        parts.append((rows * width + cols)[keep])
+        kept.append(keep)
+    diag = np.arange(n_free, dtype=np.int64)
+    parts.append(diag * width + diag)
+    unique, inverse = np.unique(np.concatenate(parts), return_inverse=True)
+    indptr = np.zeros(n_free + 1, dtype=np.int32)
+    np.cumsum(np.bincount(unique // width, minlength=n_free), out=indptr[1:])
+    targets, start = [], 0
+    for keep in kept:
+        target = np.full(keep.size, -1, dtype=np.int64)
+        count = int(keep.sum())
+        target[np.flatnonzero(keep)] = inverse[start : start + count]
+        start += count
+        targets.append(target)
+    return indptr, (unique % width).astype(np.int32), targets, inverse[start:]
+
+
+def random_net(seed, n=40, m=60, fixed=(0, 3, 7)):
+    """A chain through every node plus random chords, some edges from the higher node."""
+    rng = np.random.default_rng(seed)
+    nodes = rng.uniform(-1.0, 1.0, (n, 3))
+    pairs = {(k, k + 1) for k in range(n - 1)}
+    pairs |= {tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(m)}
+    edges = np.array(sorted(pairs), dtype=np.int64)
+    rng.shuffle(edges)
+    edges[::3] = edges[::3, ::-1]
+    return cn.Net.from_arrays(nodes, edges, EA=1.0, fixed=list(fixed))
+
+
+class Coupling(Term):
+    """Couples the x DOFs of two nodes (a term the pattern may lack)."""
+
+    def __init__(self, i, j):
+        self.rows = np.array([3 * i, 3 * j, 3 * i, 3 * j])
+        self.cols = np.array([3 * i, 3 * j, 3 * j, 3 * i])
+
+    def pattern(self):
+        return self.rows, self.cols
+
+
+@pytest.mark.parametrize("upper", [True, False])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_pattern_equals_the_global_unique_of_its_keys(upper, seed):
+    net = random_net(seed)
+    free = np.flatnonzero(~net.fixed)
+    terms = [
+        Stretch(net),
+        Plane(free[::2], [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1),
+        Inertia(np.flatnonzero(np.repeat(~net.fixed, 3))[5:]),
+    ]
+    system = System(net, terms, upper=upper)
+    indptr, indices, targets, diag = reference(net, terms, upper)
+    assert system.indptr.dtype == indptr.dtype and system.indices.dtype == indices.dtype
+    assert np.array_equal(system.indptr, indptr)
+    assert np.array_equal(system.indices, indices)
+    assert system.nnz == indices.size
+    for term, target in zip(terms, targets, strict=True):
+        assert np.array_equal(system.target(term), target)
+    assert np.array_equal(system.diag_pos, diag)
+    # the same from every entry (the path for terms that couple nodes without an edge)
+    got = system._entry_pattern()
+    assert np.array_equal(got[0], indptr) and np.array_equal(got[1], indices)
+    for mine, target in zip(got[2], targets, strict=True):
+        assert np.array_equal(mine, target)
+    assert np.array_equal(got[3], diag)
+
+
+def test_pattern_of_the_square_net_and_of_nets_without_free_nodes():
+    sq = cn.square_net(6, 0.3, 1.0, 1 / 7, cn.Material(EA=1.0))
+    system = System(sq.net)
+    indptr, indices, targets, diag = reference(sq.net, [Stretch(sq.net)], True)
+    assert np.array_equal(system.indptr, indptr) and np.array_equal(system.indices, indices)
+    assert np.array_equal(system.target(system.stretch), targets[0])
+    assert np.array_equal(system.diag_pos, diag)
+    held = cn.Net.from_arrays(np.eye(3), [[0, 1], [1, 2]], EA=1.0, fixed=[0, 1, 2])
+    empty = System(held)
+    assert empty.n_free == 0 and empty.nnz == 0 and np.array_equal(empty.indptr, [0])
+    assert np.all(empty.target(empty.stretch) == -1)
+
+
+def test_a_term_outside_the_pattern_is_refused_and_one_inside_is_placed():
+    net = random_net(3)
+    system = System(net)
+    free = np.flatnonzero(~net.fixed)
+    ground = Plane(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)  # node blocks: fit
+    i, j = net.edges[5]
+    along = Coupling(i, j)
+    _, _, targets, _ = reference(net, [Stretch(net), ground, along], True)
+    assert np.array_equal(system.target(ground), targets[1])
+    assert np.array_equal(system.target(along), targets[2])
+    linked = {tuple(e) for e in net.edges.tolist()} | {tuple(e[::-1]) for e in net.edges.tolist()}
+    a, b = next((a, b) for a in free for b in free if a != b and (a, b) not in linked)
+    with pytest.raises(ValueError, match="outside the workspace's sparsity pattern"):
+        system.target(Coupling(a, b))
+    terms = [Stretch(net), Coupling(a, b)]
+    wide = System(net, terms)  # built from every entry: the edges' blocks lack (a, b)
+    indptr, indices, targets, diag = reference(net, terms, True)
+    assert np.array_equal(wide.indptr, indptr) and np.array_equal(wide.indices, indices)
+    assert np.array_equal(wide.target(terms[1]), targets[1]) and (targets[1] >= 0).sum() == 3
+    assert np.array_equal(wide.target(terms[0]), targets[0])
+    assert np.array_equal(wide.diag_pos, diag)
