@@ -93,6 +93,73 @@ def test_obj_polylines(tmp_path):
     assert "line 2: 'l 1 2': a polyline needs at least 2 vertices defined before it" in found[0]
 
 
+NET_CSV = """# a net saved from a spreadsheet
+x,y,z
+0,0,0
+2,0,0
+4,0,0.5
+2,2,0
+i,j,
+0,1,
+1,2
+3,1
+"""
+
+
+def test_csv_nodes_and_edges_tables(tmp_path):
+    """One sheet, two tables: nodes under x,y,z and edges under i,j; comma, semicolon
+    (European spreadsheets) or tab, a byte-order mark and empty trailing cells; the
+    graph runs like the same net given inline."""
+    data = {
+        "geometry": {"kind": "graph", "file": "n.csv", "fixed": [0, 2, 3]},
+        "material": {"EA": 1e4},
+        "load": {"point": [{"node": 1, "force": [0, 0, -10]}]},
+    }
+    for sep, bom in ((",", ""), (";", "\ufeff"), ("\t", "")):
+        (tmp_path / "n.csv").write_text(bom + NET_CSV.replace(",", sep), encoding="utf-8")
+        case = parse_case(data, base_dir=tmp_path)
+        assert case.geometry.nodes == ((0, 0, 0), (2, 0, 0), (4, 0, 0.5), (2, 2, 0))
+        assert case.geometry.edges == ((0, 1), (1, 2), (3, 1))
+    assert parse_case(tomllib.loads(case.to_toml())) == case  # the data is inlined
+    inline = copy.deepcopy(data)
+    inline["geometry"] = {
+        "kind": "graph",
+        "nodes": [list(p) for p in case.geometry.nodes],
+        "edges": [list(e) for e in case.geometry.edges],
+        "fixed": [0, 2, 3],
+    }
+    a, b = run_case(parse_case(data, base_dir=tmp_path)), run_case(parse_case(inline))
+    assert np.array_equal(a.x, b.x) and a.converged
+    (tmp_path / "xy.csv").write_text("i,j\n0,1\nX,Y\n0,0\n1,0\n".replace("X,Y", "x,y"))
+    data["geometry"].update(file="xy.csv", fixed=[0, 1])  # edges first, 2D nodes (z = 0)
+    data["load"]["point"][0]["node"] = 0
+    assert parse_case(data, base_dir=tmp_path).geometry.nodes == ((0, 0, 0), (1, 0, 0))
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("0,0,0\n", "line 1: '0,0,0': must start with a header row 'x,y,z' or 'x,y' or 'i,j'"),
+        ("x,y,z\n0,0,0\n1,0\n", "line 3: '1,0': has 2 cells: the nodes table has 3 columns"),
+        ("x,y,z\n0,0,a\n", "line 2: '0,0,a': the nodes table holds finite numbers"),
+        ("x,y,z\n0,0,0\n1,0,0\ni,j\n0,1.5\n", "line 5: '0,1.5': the edges table holds node"),
+        ("x,y,z\n0,0,0\n1,0,0\ni,j\n0,2\n", "line 5: '0,2': node 2 is not a row of the nodes"),
+        ("x,y,z\n0,0,0\n1,0,0\n", "has no edges: give a header row 'i,j' and a row per one"),
+        ("x,y,z\n0,0,0\nx,y,z\n", "line 3: 'x,y,z': a second nodes table"),
+    ],
+)
+def test_bad_csv_nets_name_the_line(tmp_path, text, message):
+    (tmp_path / "n.csv").write_text(text)
+    data = {"geometry": {"kind": "graph", "file": "n.csv", "fixed": [0]}, "material": {"EA": 1.0}}
+    found = problems(data, base_dir=tmp_path)
+    assert len(found) == 1 and found[0].startswith("geometry.file = 'n.csv': ")
+    assert message in found[0], found
+    case = tmp_path / "c.toml"
+    case.write_text(dumps_toml(data))
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+    assert done.exit_code == 2 and message in done.output
+
+
 def test_meshio_missing_is_named(tmp_path, monkeypatch):
     (tmp_path / "n.vtu").write_text("")
     monkeypatch.setitem(sys.modules, "meshio", None)
@@ -325,3 +392,30 @@ def test_a_json_graph_may_hold_cables_sets_and_per_edge_arrays(tmp_path):
         "geometry.cable[0].nodes[1] = 7: is no node: must be a node index in 0..3 "
         "(in geometry.file = 'net.json')"
     ]
+
+
+# --------------------------------------------------------------------------- named nodes
+
+
+def test_center_of_a_cable_only_net_is_a_free_node_that_moves(tmp_path):
+    """Every given node of two crossing cables is an anchor: 'center' (the probe, and a
+    load's node) is the free node of the built net nearest the bounding box's centre (a
+    cable subdivision), so the deflection reported is the net's, not a support's 0."""
+    data = two_cables()
+    data["load"] = {"point": [{"node": "center", "force": [0, 0, -50]}]}
+    scene = build(parse_case(data))
+    c = scene.probe
+    assert c >= 4 and not scene.net.fixed[c]  # a subdivision node, free
+    mid = 0.5 * (scene.net.nodes.min(axis=0) + scene.net.nodes.max(axis=0))
+    free = np.flatnonzero(~scene.net.fixed)
+    dist = np.linalg.norm(scene.net.nodes - mid, axis=1)
+    assert dist[c] == pytest.approx(dist[free].min())
+    result = run_case(parse_case(data), tmp_path / "c.h5")
+    assert result.stats["probe"] == c and result.stats["delta"] > 1e-4
+    # A net whose middle node is free keeps it; one whose middle node is a support
+    # moves 'center' to the nearest free node.
+    data = straight()
+    assert build(parse_case(data)).probe == 1
+    data["geometry"]["fixed"] = [0, 1, 2]
+    scene = build(parse_case(data))
+    assert scene.probe != 1 and not scene.net.fixed[scene.probe]

@@ -374,3 +374,86 @@ def test_nonlinear_methods_converge_by_newton_without_the_fallback(method, caplo
     got = found.force if method == "forces" else found.length
     assert np.max(np.abs(got / target - 1)) <= 1e-10
     assert found.factorizations == found.iterations < 60
+
+
+def test_target_lengths_on_a_roof_of_a_thousand_edges_converge_by_newton(caplog):
+    """A 1012-edge saddle roof, target lengths from a linear form finding with force
+    densities spread over a factor 3, started from uniform q: damped Newton on log q (one
+    sparse saddle-point solve per step) meets every length to 1e-9, without the least
+    squares, and the shape is the one the lengths came from."""
+    import logging
+
+    nodes, edges, fixed = grid(23, 15.0, lambda x, y: 3.0 * (x**2 - y**2) / 225.0)
+    assert len(edges) == 1012
+    net = Net.from_arrays(nodes, edges, EA=8e6, fixed=fixed)
+    truth = formfind(net, np.random.default_rng(0).uniform(1e4, 3e4, len(edges)))
+    with caplog.at_level(logging.INFO, logger="catenet.formfind.fdm"):
+        found = formfind(net, 2e4, method="lengths", length=truth.length, tol=1e-9)
+    assert not [m for m in caplog.messages if "least squares" in m]
+    assert np.max(np.abs(found.length / truth.length - 1)) <= 1e-9
+    assert found.residual <= 1e-9 and found.iterations < 60
+    np.testing.assert_allclose(found.x, truth.x, rtol=0, atol=1e-6)
+    # Lengths fix q up to a factor only (and not at all between two fixed nodes): the
+    # ratios of the others are the truth's.
+    acts = ~(fixed[edges[:, 0]] & fixed[edges[:, 1]])
+    ratio = found.q[acts] / truth.q[acts]
+    np.testing.assert_allclose(ratio / ratio.mean(), 1.0, rtol=1e-6)
+
+
+def test_incompatible_target_lengths_are_reported_with_the_worst_edge():
+    """Every edge of a 220-edge saddle net asked to be 0.1 m long while the boundary
+    spans 4 m: no force densities give that; Newton's damped steps stop lowering the
+    misses and the message names the worst edge, its length and the target."""
+    nodes, edges, fixed = grid(11, 2.0, lambda x, y: 0.4 * x * y)
+    net = Net.from_arrays(nodes, edges, EA=1e6, fixed=fixed)
+    free = ~(fixed[edges[:, 0]] & fixed[edges[:, 1]])
+    target = np.where(free, 0.1, formfind(net, 1.0).length)  # boundary edges as they are
+    with pytest.raises(ConfigError) as err:
+        formfind(net, method="lengths", length=target, max_iter=200)
+    msg = str(err.value)
+    assert msg.startswith("length: cannot be met to tol = 1e-09: edge ")
+    assert "target 0.1" in msg and "the targets are not compatible" in msg
+    # An edge between fixed nodes whose target differs from its length is named at once.
+    target[~free] *= 1.5
+    with pytest.raises(ConfigError, match="an edge between two fixed nodes keeps its length"):
+        formfind(net, method="lengths", length=target)
+
+
+def test_bench_loaded_roof_row_and_report_line(tmp_path):
+    """The formfind study's loaded roof (small here): form found, tension-only, loaded by
+    snow, converged with reactions balancing the snow, and timed against a square net's
+    static solve in the same run; the report prints its line."""
+    from catenet.studies.bench.common import write_csv
+    from catenet.studies.bench.formfind import SNOW, loaded
+    from catenet.studies.bench.report_sections import formfind as section
+
+    row = loaded(23, (10, 1 / 30), repeats=1)
+    assert row["loaded_converged"] and row["loaded_dofs"] == 3 * 21 * 21
+    assert row["loaded_reaction_balance_n"] <= 1e-8 * SNOW * 30.0**2
+    assert 0.0 < row["loaded_max_deflection_m"] < 1.0
+    assert row["loaded_over_square"] == pytest.approx(
+        row["loaded_static_s"] / row["square_static_s"]
+    )
+    write_csv(
+        [{"edges": 1012, "linear_s": 0.01, "scipy_s": 0.01, "plain_s": 0.01}, row],
+        tmp_path / "formfind.csv",
+    )
+    text = "\n".join(section(tmp_path))
+    assert f"A form-found roof of {row['loaded_dofs']} DOF (tension-only) under snow" in text
+
+
+@pytest.mark.parametrize("method", ["forces", "lengths"])
+def test_targets_under_self_weight_converge_with_the_weights_jacobian(method):
+    """A heavy net (its weight comparable to its tension): the Newton system carries the
+    weight's change with the shape and the force densities (l0 = L / (1 + eps(q L))),
+    so the targets are met to 1e-9 in a few steps, not at a linear rate."""
+    nodes, edges, fixed = grid(11, 2.0, lambda x, y: 0.4 * x * y)
+    net = Net.from_arrays(nodes, edges, EA=1e6, fixed=fixed, line_density=0.5)
+    loads = Loads(gravity=np.array([0.0, 0.0, -9.81]))
+    truth = formfind(net, np.random.default_rng(3).uniform(10, 30, len(edges)), loads=loads)
+    target = truth.force if method == "forces" else truth.length
+    found = formfind(net, 20.0, loads=loads, method=method, **{method[:-1]: target})
+    got = found.force if method == "forces" else found.length
+    assert np.max(np.abs(got / target - 1)) <= 1e-9
+    assert found.iterations <= 40  # (forces: 20 of them the fixed-point start)
+    np.testing.assert_allclose(found.x, truth.x, rtol=0, atol=1e-7)

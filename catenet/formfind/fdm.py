@@ -17,14 +17,15 @@ edge end, and l0 = L / (1 + eps(N)) depends on the shape found: the loads are up
 from the shape and the shape solved again with the same factorisation until they agree
 to round-off, so that the net written out carries exactly the loads it was found under.
 
-Target forces: the classical update q <- N / L for a start, then Newton on s = log q
-(q stays positive), each step from GMRES on the Jacobian operator below (``_newton``).
-Target lengths, and forces where Newton stalls, adjust s by least squares
-(scipy.optimize.least_squares, trust region, LSMR) until every edge meets its target
-force (q L = N) or length (L = L_target). The Jacobian is an operator from the same
-factorisation: with u = C x, dL = -sum_c (u_c / L) * C_f D^-1 C_f^T (u_c * dq), and its
-transpose alike (D is symmetric). Without loads, target lengths fix q only up to a common
-factor: the geometric mean of q is then set to ``q`` (default 1 N/m).
+Target forces: the classical update q <- N / L for a start; then, for target forces
+(q L = N) and target lengths (L = L_target) alike, Newton on s = log q (q stays
+positive), each step one sparse saddle-point solve (``catenet.formfind.newton``: the
+Jacobian dL/dq = -diag(1/L) B^T D3^-1 B without forming it). Where Newton stalls (the
+targets are not compatible), a small net (up to ``LSQ_EDGES`` edges) gets the best fit by
+least squares (scipy.optimize.least_squares, trust region, dense Jacobian) for the
+message; a larger one is reported at Newton's best state. Without loads, target lengths
+fix q only up to a common factor: the geometric mean of q is then set to ``q`` (default
+1 N/m).
 """
 
 from __future__ import annotations
@@ -36,16 +37,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+from catenet.errors import ConfigError, ConvergenceError
+from catenet.formfind.newton import Stalled, newton
 from catenet.net import Net
 
 log = logging.getLogger(__name__)
 
 METHODS = ("linear", "forces", "lengths")
 GRAVITY_ITER = 100  # load updates of the gravity fixed point
-DENSE_EDGES = 2000  # nonlinear methods: a dense Jacobian up to this many edges
 WARM_STEPS = 20  # forces: fixed-point updates before Newton
-MAX_STEP = 1.0  # Newton: no force density changes by more than a factor e per step
+LSQ_EDGES = 200  # where Newton stalls: least squares (the best fit) up to this many edges
 
 
 def per_edge(value, m: int, name: str, *, required: bool = True) -> np.ndarray | None:
@@ -357,9 +358,9 @@ def formfind(
 
 
 def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
-    """Force densities that meet the targets: least squares in s = log q."""
+    """Force densities that meet the targets: Newton on s = log q (``newton``); where
+    it stalls on a small net, least squares gives the best fit the message reports."""
     from scipy.optimize import least_squares
-    from scipy.sparse.linalg import LinearOperator
 
     net, p = shape.net, shape.pattern
     m = net.n_edges
@@ -372,15 +373,17 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
             x, _ = shape(q0)
             q0 = target / np.maximum(_lengths(net, x), 1e-300 * shape.size)
     spent = shape.factorizations
-    # Newton first for target forces; for target lengths it stalls on ill-conditioned
-    # nets (d L / d q is nearly singular there), so those go to the least squares at once.
-    found = (
-        _newton(shape, method, target, q0, tol, max_iter - spent) if method == "forces" else None
-    )
-    if found is not None:
-        x, load, q, iterations, miss = found
+    scale_free = method == "lengths" and not np.any(shape.force) and not shape.weighs
+    try:
+        x, load, q, iterations, miss = newton(
+            shape, method, target, q0, tol, max(max_iter - spent, 1), scale_free
+        )
         return x, load, _mean_kept(shape, method, q, q0), iterations + spent, miss
-    log.info("form finding: Newton on the force densities stalled: least squares")
+    except Stalled as exc:
+        if exc.best is None or m > LSQ_EDGES:
+            raise _unmet(net, method, target, exc, tol, name, spent) from None
+        log.info("form finding: Newton stalled (%s): least squares", exc.why)
+        stall = exc
     cache: dict = {}
 
     def state(s):
@@ -399,73 +402,61 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
             return c["q"] * c["L"] / target - 1.0
         return c["L"] / target - 1.0
 
-    def jacobian(s):
+    def jacobian(s):  # dense (a small net): exact trust-region steps
         c = state(s)
         q, u = c["q"], c["u"]
         length = np.maximum(c["L"], 1e-300)
-        k = lambda w: p.gather(shape.solve(p.spread(w)))  # noqa: E731  C_f D^-1 C_f^T w
-
-        def d_len(dq):  # dL for dq
-            return -np.sum(u / length[:, None] * k(u * dq[:, None]), axis=1)
-
-        def d_len_t(z):  # its transpose
-            return -np.sum(u * k(u / length[:, None] * z[:, None]), axis=1)
-
-        if m <= DENSE_EDGES:  # the Jacobian itself: exact trust-region steps
-            inv = shape.solve(np.eye(p.n_free))
-            k_full = p.gather(p.gather(inv).T)  # C_f D^-1 C_f^T, (M, M)
-            j_len = -sum(np.outer(u[:, c] / length, u[:, c]) * k_full for c in range(3))
-            if method == "forces":
-                return (np.diag(length) + q[:, None] * j_len) * (q / target[:, None])
-            return j_len * (q / target[:, None])
+        inv = shape.solve(np.eye(p.n_free))
+        k_full = p.gather(p.gather(inv).T)  # C_f D^-1 C_f^T, (M, M)
+        j_len = -sum(np.outer(u[:, c] / length, u[:, c]) * k_full for c in range(3))
         if method == "forces":
+            return (np.diag(length) + q[:, None] * j_len) * (q / target[:, None])
+        return j_len * (q / target[:, None])
 
-            def mv(ds):
-                dq = q * np.ravel(ds)
-                return (length * dq + q * d_len(dq)) / target
-
-            def rmv(w):
-                w = np.ravel(w) / target
-                return q * (length * w + d_len_t(q * w))
-        else:
-
-            def mv(ds):
-                return d_len(q * np.ravel(ds)) / target
-
-            def rmv(w):
-                return q * d_len_t(np.ravel(w) / target)
-
-        return LinearOperator((m, m), matvec=mv, rmatvec=rmv, dtype=np.float64)
-
-    prefix = name[: name.rfind(".") + 1]
     fit = least_squares(
         residual,
         np.log(q0),
         jac=jacobian,
         method="trf",
-        tr_solver="exact" if m <= DENSE_EDGES else "lsmr",
-        tr_options={} if m <= DENSE_EDGES else {"atol": 1e-12, "btol": 1e-12},
+        tr_solver="exact",
         ftol=1e-15,
         xtol=1e-15,
         gtol=1e-15,
         max_nfev=max_iter,
     )
     c = state(fit.x)
-    r = residual(fit.x)
-    worst = int(np.argmax(np.abs(r)))
-    miss = float(np.abs(r[worst]))
+    miss = float(np.max(np.abs(residual(fit.x))))
     if not miss <= tol:
-        what = "tension" if method == "forces" else "length"
-        got = c["q"][worst] * c["L"][worst] if method == "forces" else c["L"][worst]
-        raise ConfigError(
-            f"{name}: cannot be met to {prefix}tol = {tol:g}: edge {worst} (nodes "
-            f"{net.edges[worst].tolist()}) has {what} {got:.9g}, target {target[worst]:.9g} "
-            f"(relative miss {miss:.2e} after {fit.nfev} iterations): give reachable "
-            "targets (an edge between fixed nodes keeps its length), or raise "
-            f"{prefix}max_iter"
-        )
+        best = (c["x"], c["load"], c["q"], np.log1p(residual(fit.x)))
+        stall = Stalled(stall.why, best, stall.iterations + int(fit.nfev))
+        raise _unmet(net, method, target, stall, tol, name, spent)
     q, x, load = c["q"], c["x"], c["load"]
-    return x, load, _mean_kept(shape, method, q, q0), int(fit.nfev), miss
+    return x, load, _mean_kept(shape, method, q, q0), int(fit.nfev) + spent, miss
+
+
+def _unmet(net, method, target, stall, tol, name, spent) -> ConfigError:
+    """The message for targets not met: the worst edge at the best state reached."""
+    prefix = name[: name.rfind(".") + 1]
+    if stall.best is None:
+        return ConfigError(f"{name}: cannot be met: {stall.why}: give other targets")
+    x, r = stall.best[0], stall.best[-1]
+    worst = int(np.argmax(np.abs(r)))
+    length = _lengths(net, x)[worst]
+    q = stall.best[2][worst]
+    got, what = (q * length, "tension") if method == "forces" else (length, "length")
+    miss = float(abs(math.expm1(r[worst])))
+    iterations = stall.iterations + spent
+    if stall.why == "max_iter":
+        why = f"{prefix}max_iter = {iterations} reached: raise it"
+    else:
+        why = f"{stall.why}: the targets are not compatible"
+    return ConfigError(
+        f"{name}: cannot be met to {prefix}tol = {tol:g}: edge {worst} (nodes "
+        f"{net.edges[worst].tolist()}) has {what} {got:.9g}, target {target[worst]:.9g} "
+        f"(relative miss {miss:.2e} after {iterations} iterations; {why}): give reachable "
+        "targets (an edge between fixed nodes keeps its length; a free node's edges "
+        "must close up)"
+    )
 
 
 def _mean_kept(shape: _Shape, method: str, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
@@ -475,76 +466,3 @@ def _mean_kept(shape: _Shape, method: str, q: np.ndarray, q0: np.ndarray) -> np.
         mean = math.exp(float(np.mean(np.log(q0))))
         return q * (mean / math.exp(float(np.mean(np.log(q)))))
     return q
-
-
-def _newton(shape: _Shape, method, target, q0, tol, max_iter):
-    """Newton on s = log q, each step's linear system solved by GMRES with the Jacobian
-    as an operator (three solves with the current factorisation per product), steps
-    halved until the largest miss falls. Returns (x, load, q, iterations, miss), or None
-    when it stalls or runs out of iterations (the caller falls back to least squares)."""
-    import inspect
-
-    from scipy.sparse.linalg import LinearOperator, gmres
-
-    net, p = shape.net, shape.pattern
-    m = net.n_edges
-    tol_key = "rtol" if "rtol" in inspect.signature(gmres).parameters else "tol"
-
-    def state(s):
-        q = np.exp(np.clip(s, -700.0, 700.0))
-        try:
-            x, load = shape(q)
-        except (SingularSystemError, ConvergenceError, ConfigError):
-            return None  # a step too far: the caller halves it
-        u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
-        length = np.linalg.norm(u, axis=1)
-        if not np.all(length > 0):
-            return None
-        got = q * length if method == "forces" else length
-        return q, x, load, u, length, np.log(got / target)  # r: the log of the miss
-
-    def miss(r):
-        return float(np.max(np.abs(np.expm1(r))))
-
-    scale_free = method == "lengths" and not np.any(shape.force) and not shape.weighs
-    s = np.log(q0)
-    now = state(s)
-    if now is None:
-        return None
-    iterations = 1
-    while iterations < max_iter:
-        q, x, load, u, length, r = now
-        if miss(r) <= tol:
-            return x, load, q, iterations, miss(r)
-        unit = u / length[:, None]
-
-        def d_log_len(ds, q=q, unit=unit, length=length):  # d log L / d s
-            dq = q * np.ravel(ds)
-            z = p.gather(shape.solve(p.spread(unit * dq[:, None] * length[:, None])))
-            return -np.sum(unit * z, axis=1) / length
-
-        if method == "forces":
-            jac = LinearOperator((m, m), matvec=lambda v: np.ravel(v) + d_log_len(v))
-        else:
-            jac = LinearOperator((m, m), matvec=d_log_len)
-        forcing = min(1e-2, math.sqrt(float(np.max(np.abs(r)))))
-        step, _ = gmres(jac, -r, restart=60, maxiter=5, atol=0.0, **{tol_key: forcing})
-        if not np.all(np.isfinite(step)):
-            return None
-        if scale_free:  # a common factor of q changes nothing: no step along it
-            step -= np.mean(step)
-        step *= min(1.0, MAX_STEP / max(float(np.max(np.abs(step))), 1e-300))
-        worst = float(np.max(np.abs(r)))
-        for _ in range(30):  # halve until the largest miss falls
-            trial = state(s + step)
-            iterations += 1
-            if trial is not None and float(np.max(np.abs(trial[5]))) < worst:
-                break
-            step *= 0.5
-            if iterations >= max_iter:
-                return None
-        else:
-            return None
-        s = s + step
-        now = trial
-    return None

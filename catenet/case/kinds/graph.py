@@ -1,4 +1,4 @@
-"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, OBJ, or a line
+"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, CSV, OBJ, or a line
 mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets and
 per-edge arrays (rest length, EA, tension-only switch, prestress)."""
 
@@ -137,7 +137,7 @@ class GraphConfig(GeometryConfig):
 
     kind: ClassVar[str] = "graph"
     summary: ClassVar[str] = (
-        "an explicit net (inline, JSON, OBJ or a meshio line mesh), with optional cables"
+        "an explicit net (inline, JSON, CSV, OBJ or a meshio line mesh), with optional cables"
     )
     node_names: ClassVar[tuple[str, ...]] = ("center",)
     default_supports: ClassVar[str] = "geometry.fixed"
@@ -148,7 +148,7 @@ class GraphConfig(GeometryConfig):
         "an array of at least 2 [x, y, z]",
         missing="[[x, y, z], ...] (at least 2 nodes)",
         unit="m",
-        doc="node positions; center is the node nearest the bounding box's centre",
+        doc="node positions; center is the free node nearest the bounding box's centre",
     )
     edges: tuple[tuple[int, int], ...] = key(
         _pairs,
@@ -223,8 +223,10 @@ class GraphConfig(GeometryConfig):
         nonempty=True,
         write="never",
         compare=False,
-        doc="a JSON file of the keys above (relative to the case file), an OBJ file of "
-        "polylines, or a line mesh meshio reads (.vtu, .vtk, .msh: nodes and edges)",
+        doc="a JSON file of the keys above (relative to the case file); or nodes and edges "
+        "from a CSV sheet (a table under the header x,y,z, a row per node, and one under i,j, "
+        "a row per edge, node k the k-th row from 0; comma, semicolon or tab), an OBJ file of "
+        "polylines, or a line mesh meshio reads (.vtu, .vtk, .msh)",
     )
 
     @classmethod
@@ -287,7 +289,7 @@ class GraphConfig(GeometryConfig):
         return Topology(
             len(self.nodes),
             frozenset(self.fixed),
-            {"center": _center(self.nodes)},
+            {"center": _center(self.nodes, self.fixed)},
             self._sets(),
             tuple(c.name for c in self.cables),
         )
@@ -314,7 +316,9 @@ class GraphConfig(GeometryConfig):
         (the per-edge arrays where given; no per-cable material, law or prestress:
         ``build_case`` gives the case's whole net)."""
         mesh = self._mesh()
-        probe, names, sets = _center(self.nodes), {"center": _center(self.nodes)}, self._sets()
+        sets = self._sets()
+        names = self._names(mesh, fixed, sets)
+        probe = names["center"]
         pinned = self._pinned(fixed, names, sets)
         m0 = len(self.edges)
         own = mesh.cable < 0
@@ -352,7 +356,9 @@ class GraphConfig(GeometryConfig):
             if pt.cable is not None:
                 at.setdefault(order[pt.cable], []).append((pt.at, k))
         mesh = self._mesh(at)
-        probe, names, sets = _center(self.nodes), {"center": _center(self.nodes)}, self._sets()
+        sets = self._sets()
+        names = self._names(mesh, case.supports.fixed, sets)
+        probe = names["center"]
         pinned = self._pinned(case.supports.fixed, names, sets)
         length = _lengths(mesh.nodes, mesh.edges)
         base = case.material
@@ -416,15 +422,23 @@ class GraphConfig(GeometryConfig):
     def _polylines(self) -> list[tuple[int, ...]]:
         if not self.cables:
             return []
-        lines = cb.polylines(
-            Checker(), self.cables, self._xyz(), (), self._sets(), {"center": _center(self.nodes)}
-        )
+        names = {"center": _center(self.nodes, self.fixed)}
+        lines = cb.polylines(Checker(), self.cables, self._xyz(), (), self._sets(), names)
         if lines is None:  # checked when parsed
             raise ConfigError("geometry.cable: invalid cables")
         return lines
 
     def _mesh(self, at=None) -> cb.CableMesh:
         return cb.cable_mesh(self._xyz(), np.asarray(self.edges), self._polylines(), self._hs(), at)
+
+    def _names(self, mesh: cb.CableMesh, fixed: Any, sets: dict) -> dict[str, int]:
+        """'center': the free node of the built net (cable subdivisions too) nearest the
+        bounding box's centre (a cable-only net's given nodes are often all supports)."""
+        given = {"center": _center(self.nodes, self.fixed)}
+        if fixed is not None and "center" in fixed:
+            return given
+        held = self._pinned(fixed, given, sets)
+        return {"center": _center(mesh.nodes, held)}
 
     def _pinned(self, fixed: Any, names: dict, sets: dict) -> list[int]:
         if fixed is None:
@@ -455,11 +469,15 @@ def _size(net: Net) -> float:
     return float(np.linalg.norm(net.nodes.max(axis=0) - net.nodes.min(axis=0)))
 
 
-def _center(nodes) -> int:
-    """The node nearest the centre of the bounding box."""
+def _center(nodes, fixed=()) -> int:
+    """The node nearest the bounding box's centre, not in ``fixed`` (unless all are)."""
     xyz = np.asarray(nodes, dtype=np.float64)
     mid = 0.5 * (xyz.min(axis=0) + xyz.max(axis=0))
-    return int(np.argmin(np.linalg.norm(xyz - mid, axis=1)))
+    dist = np.linalg.norm(xyz - mid, axis=1)
+    held = [i for i in fixed if 0 <= i < len(xyz)]
+    if len(held) < len(xyz):
+        dist[held] = np.inf
+    return int(np.argmin(dist))
 
 
 def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
@@ -535,7 +553,7 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
     )
     if v["cables"] and not ck.problems:
         sets = v["sets"].as_dict() if v["sets"] is not None else {}
-        cb.polylines(ck, v["cables"], xyz, edges, sets, {"center": _center(nodes)})
+        cb.polylines(ck, v["cables"], xyz, edges, sets, {"center": _center(nodes, fixed)})
     elif v["sets"] is not None and not ck.problems:
         cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(), {})
     return None if ck.problems else v

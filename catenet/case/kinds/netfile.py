@@ -1,7 +1,8 @@
-"""Reading a graph from ``geometry.file``: a JSON object of the graph's keys, a Wavefront
-OBJ file of polylines (``v`` and ``l`` lines, read here), or any line mesh that meshio
-reads (``.vtu``, ``.vtk`` unstructured grids, ``.msh``, ...: its ``line`` cells are the
-edges; meshio is imported only then, and is optional).
+"""Reading a graph from ``geometry.file``: a JSON object of the graph's keys, a CSV file
+of two tables (nodes ``x,y,z`` and edges ``i,j``, as a spreadsheet saves them: see
+``_read_csv``), a Wavefront OBJ file of polylines (``v`` and ``l`` lines, read here), or
+any line mesh that meshio reads (``.vtu``, ``.vtk`` unstructured grids, ``.msh``, ...:
+its ``line`` cells are the edges; meshio is imported only then, and is optional).
 
 A mesh file gives the nodes and edges; the other graph keys (supports, node sets, cables,
 per-edge arrays) stay in the case file. Problems are recorded in a Checker with the key
@@ -42,6 +43,8 @@ def read_net_file(ck: Checker, file: str, base_dir: Path, keys: tuple[str, ...])
         return _read_json(ck, path, label, keys)
     if path.suffix.lower() == ".obj":
         return _read_obj(ck, path, label)
+    if path.suffix.lower() in (".csv", ".txt"):
+        return _read_csv(ck, path, label)
     return _read_meshio(ck, path, label)
 
 
@@ -110,6 +113,81 @@ def _read_obj(ck: Checker, path: Path, label: str) -> dict | None:
         ck.add(f"{label}: holds no polylines (OBJ 'l' lines): nothing to make edges of")
         return None
     return {"nodes": nodes, "edges": edges}
+
+
+CSV_HEADERS = {("x", "y", "z"): "nodes", ("x", "y"): "nodes", ("i", "j"): "edges"}
+
+
+def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
+    """Two tables in one sheet, each under its header row: ``x,y,z`` (or ``x,y``, z = 0)
+    then one row per node, and ``i,j`` then one row per edge (node k is the k-th row of
+    the nodes table, counting from 0). Separators: comma, semicolon or tab (the first
+    header's); blank lines, empty trailing cells and lines starting with # are skipped."""
+    import csv
+
+    text = _read_text(ck, path, label)
+    if text is None:
+        return None
+    lines = text.lstrip("\ufeff").splitlines()  # (Excel writes a byte-order mark)
+    first = next((ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")), "")
+    sep = next((c for c in (";", "\t", ",") if c in first), ",")
+    tables: dict[str, list] = {"nodes": [], "edges": []}
+    seen: set[str] = set()
+    table = None
+    accepted = " or ".join(repr(",".join(h)) for h in CSV_HEADERS)
+    for lineno, row in enumerate(csv.reader(lines, delimiter=sep), 1):
+        cells = [c.strip() for c in row]
+        while cells and not cells[-1]:
+            cells.pop()
+        if not cells or cells[0].startswith("#"):
+            continue
+        shown = sep.join(row).strip()
+        header = tuple(c.lower() for c in cells)
+        if header in CSV_HEADERS:
+            table = CSV_HEADERS[header]
+            if table in seen:
+                ck.add(f"{label}: line {lineno}: {shown!r}: a second {table} table")
+                return None
+            seen.add(table)
+            width = len(header)
+            continue
+        if table is None:
+            ck.add(f"{label}: line {lineno}: {shown!r}: must start with a header row {accepted}")
+            return None
+        if len(cells) != width:
+            ck.add(
+                f"{label}: line {lineno}: {shown!r}: has {len(cells)} cells: the {table} "
+                f"table has {width} columns"
+            )
+            return None
+        try:
+            if table == "nodes":
+                xyz = [float(c) for c in cells]
+                if not all(map(np.isfinite, xyz)):
+                    raise ValueError
+                tables["nodes"].append(xyz + [0.0] * (3 - width))
+            else:
+                tables["edges"].append([int(c) for c in cells])
+        except ValueError:
+            need = "finite numbers" if table == "nodes" else "node indices (0, 1, ...)"
+            ck.add(f"{label}: line {lineno}: {shown!r}: the {table} table holds {need}")
+            return None
+        if table == "edges":
+            n = len(tables["nodes"]) if "nodes" in seen else None
+            bad = [k for k in tables["edges"][-1] if k < 0 or (n is not None and k >= n)]
+            if bad:
+                rows = f"0..{n - 1}" if n is not None else "counting from 0"
+                ck.add(
+                    f"{label}: line {lineno}: {shown!r}: node {bad[0]} is not a row of the "
+                    f"nodes table ({rows})"
+                )
+                return None
+    missing = [t for t in ("nodes", "edges") if not tables[t]]
+    if missing:
+        head = "'x,y,z'" if missing[0] == "nodes" else "'i,j'"
+        ck.add(f"{label}: has no {missing[0]}: give a header row {head} and a row per one")
+        return None
+    return tables
 
 
 def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:

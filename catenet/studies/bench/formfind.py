@@ -4,9 +4,15 @@ Per net (a square grid with a saddle boundary, uniform q, its own weight off): t
 method with catenet's default backend (one factorisation of D = C_f^T Q C_f for the three
 coordinates, pattern and scatter from the topology), the same with SciPy's SuperLU, and a
 plain implementation for reference (D assembled with scipy.sparse products, spsolve per
-coordinate); the "forces" method (least squares on log q) to targets from a linear
-solution with other force densities. Times are medians of interleaved repeats, the
-ratios taken within the run.
+coordinate); the "forces" and "lengths" methods (damped Newton on log q) to the
+forces and lengths of a linear solution with other force densities. Times are medians
+of interleaved repeats, the ratios taken within the run.
+
+Loaded: the roof of about 1e5 DOF (LOADED_N: 183 x 183 nodes) form-found (uniform q),
+made tension-only, then its nonlinear static analysis under snow (SNOW [N/m^2] on the
+plan area, lumped at the free nodes), each from a new Workspace, interleaved with the
+static solve of the paper's square net of the same DOF count (``paper_net``, as in the
+scale study): their ratio is the cost of the loaded analysis in static solves.
 """
 
 from __future__ import annotations
@@ -34,6 +40,9 @@ TITLE = "Form finding (force density method)"
 SIZES = (23, 71, 224)  # grid side: about 1e3, 1e4 and 1e5 edges
 QUICK_SIZES = (23, 71)
 FORCES_MAX_EDGES = 2_000  # the nonlinear method on the smallest net only
+LOADED_N, LOADED_SQUARE = 183, (108, 1 / 320)  # ~1e5 DOF each (98 283 and 97 848)
+QUICK_LOADED_N, QUICK_LOADED_SQUARE = 58, (34, 0.01)  # ~1e4 DOF each
+SNOW = 1000.0  # N/m^2
 
 
 def roof(n: int):
@@ -117,10 +126,21 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
                 forces_factorizations=ff.factorizations,
                 forces_residual=ff.residual,
             )
+            goal = formfind(net, rng.uniform(1.0e4, 3.0e4, net.n_edges)).length
+            sec, fl = timed(
+                lambda net=net, q=q, g=goal: formfind(net, q, method="lengths", length=g, tol=1e-9)
+            )
+            row.update(
+                lengths_s=sec, lengths_iterations=fl.iterations, lengths_residual=fl.residual
+            )
         rows.append(row)
+    progress(len(sizes), len(sizes), "loaded roof")
+    n, square = (QUICK_LOADED_N, QUICK_LOADED_SQUARE) if quick else (LOADED_N, LOADED_SQUARE)
+    rows.append(loaded(n, square, repeats=1 if not quick else 2))
     progress(len(sizes), len(sizes))
     csv = write_csv(rows, out_dir / f"{NAME}.csv")
     figure = _figure(rows, out_dir)
+    last = rows.pop()  # the loaded roof: its own lines
     ten = min(rows, key=lambda r: abs(r["edges"] - 1e4))
     backend = ten["backend"]
     summary = [
@@ -134,7 +154,18 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
         )
         for r in rows
     ]
+    summary.append(
+        f"loaded roof, {last['loaded_dofs']} DOF: form finding {last['loaded_formfind_s']:.2f} s, "
+        f"static analysis under snow {last['loaded_static_s']:.2f} s "
+        f"({last['loaded_iterations']} Newton iterations); square net, "
+        f"{last['square_dofs']} DOF: {last['square_static_s']:.2f} s "
+        f"({last['square_iterations']}): ratio {last['loaded_over_square']:.2f} "
+        f"({last['loaded_total_over_square']:.2f} with the form finding)"
+    )
+    rows.append(last)
     findings = []
+    if not last["loaded_converged"]:
+        findings.append("formfind: the loaded roof did not converge")
     if ten["linear_s"] >= 1.0:
         findings.append(
             f"formfind: the linear method on {ten['edges']} edges took {ten['linear_s']:.2f} s "
@@ -145,7 +176,56 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
     return Study(NAME, rows, csv, figure, findings, summary)
 
 
+def loaded(n: int, square: tuple, *, repeats: int) -> dict:
+    """The form-found roof's static analysis under snow against the square net's static
+    solve of the same size, interleaved: one row."""
+    from catenet.formfind import formfind
+    from catenet.net import Loads, Net
+    from catenet.static import Workspace, solve_static
+    from catenet.studies.bench.common import paper_net
+
+    net = roof(n)
+    found = formfind(net, 2.0e4)  # (warm: timed below, interleaved)
+    built = Net.from_arrays(
+        found.x,
+        net.edges,
+        EA=net.EA,
+        fixed=net.fixed,
+        rest_length=found.rest_length(),
+        tension_only=True,
+    )
+    snow = np.zeros((net.n_nodes, 3))
+    snow[~net.fixed, 2] = -SNOW * (30.0 / (n - 1)) ** 2
+    sq, sq_loads = paper_net(square[0], edge=square[1])
+    fns = {
+        "formfind": lambda: formfind(net, 2.0e4),
+        "roof": lambda: solve_static(built, Loads(force=snow), workspace=Workspace(built)),
+        "square": lambda: solve_static(sq.net, sq_loads, workspace=Workspace(sq.net)),
+    }
+    t = interleaved(fns, repeats=repeats, warmup=1)
+    res, ref, ff_s = t["roof"][2], t["square"][2], t["formfind"][0]
+    reaction = float(np.abs(res.reaction.sum(axis=0) + snow.sum(axis=0)).max())
+    return {
+        "edges": net.n_edges,
+        "free_nodes": int(np.count_nonzero(~net.fixed)),
+        "backend": found.backend,
+        "loaded_dofs": 3 * int(np.count_nonzero(~net.fixed)),
+        "loaded_formfind_s": ff_s,
+        "loaded_static_s": t["roof"][0],
+        "loaded_iterations": res.iterations,
+        "loaded_converged": bool(res.converged),
+        "loaded_max_deflection_m": float(np.max(found.x[:, 2] - res.x[:, 2])),
+        "loaded_reaction_balance_n": reaction,
+        "square_dofs": 3 * int(np.count_nonzero(~sq.net.fixed)),
+        "square_static_s": t["square"][0],
+        "square_iterations": ref.iterations,
+        "loaded_over_square": t["roof"][0] / t["square"][0],
+        "loaded_total_over_square": (ff_s + t["roof"][0]) / t["square"][0],
+    }
+
+
 def _figure(rows, out_dir: Path) -> Path:
+    rows = [r for r in rows if r.get("linear_s")]
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     m = [r["edges"] for r in rows]
@@ -158,6 +238,9 @@ def _figure(rows, out_dir: Path) -> Path:
     forces = [(r["edges"], r["forces_s"]) for r in rows if "forces_s" in r]
     if forces:
         ax.loglog(*zip(*forces, strict=True), "s--", label='method = "forces"')
+    lengths = [(r["edges"], r["lengths_s"]) for r in rows if r.get("lengths_s")]
+    if lengths:
+        ax.loglog(*zip(*lengths, strict=True), "D--", label='method = "lengths"')
     ax.set_xlabel("edges")
     ax.set_ylabel("wall time [s]")
     ax.set_title("Form finding of a cable-net roof")

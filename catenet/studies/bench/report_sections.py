@@ -163,93 +163,6 @@ def step_size(results: Path) -> list[str]:
     return out
 
 
-def scale(results: Path) -> list[str]:
-    rows = read_study(results, "scale")
-    if not rows:
-        return []
-    ok = [r for r in rows if r.get("dofs")]
-    out = [
-        "### Scale: 1e3 to 1e6 DOF",
-        "",
-        "Static equilibrium of the square net refined both ways (n = 34 k cables, 1 cm / k "
-        "edges), each size in a fresh process on one thread; peak memory is the process's "
-        "`ru_maxrss` (it sees MKL's allocations).",
-        "",
-    ]
-    out += md_table(
-        [
-            "DOF",
-            "Newton it.",
-            "total [s]",
-            "set-up",
-            "assembly",
-            "analysis",
-            "factorisation",
-            "solves",
-            "rest",
-            "factor nnz",
-            "peak RSS [MiB]",
-            "build net [s]",
-        ],
-        [
-            [
-                r["dofs"],
-                r["iterations"],
-                as_text(r["total_seconds"]),
-                as_text(r["setup_seconds"]),
-                as_text(r["assembly_seconds"]),
-                as_text(r["analyse_seconds"]),
-                as_text(r["factorize_seconds"]),
-                as_text(r["solve_seconds"]),
-                as_text(r["other_seconds"]),
-                as_text(r["factor_nnz"], "{:.3g}"),
-                as_text(r["peak_rss_mib"], "{:.0f}"),
-                as_text(r["build_seconds"]),
-            ]
-            for r in ok
-        ],
-    )
-    fit = [r for r in ok if as_float(r["dofs"]) >= 5e3]
-    big = [r for r in ok if as_float(r["dofs"]) >= 5e4]
-    if len(fit) >= 3:
-        from catenet.studies.bench.common import geometric_fit
-
-        dofs = [as_float(r["dofs"]) for r in fit]
-        b = geometric_fit(dofs, [as_float(r["total_seconds"]) for r in fit])[0]
-        bf = geometric_fit(dofs, [as_float(r["factorize_seconds"]) for r in fit])[0]
-        line = (
-            f"Fitted exponents (DOF >= 5e3): total time ~ DOF^{b:.2f}, numeric "
-            f"factorisation ~ DOF^{bf:.2f}"
-        )
-        top = ok[-1]
-        above = as_float(top["peak_rss_mib"]) - as_float(top["rss_after_import_mib"])
-        if above > 0:
-            line += (
-                f"; memory: {as_text(above * 1024 / as_float(top['dofs']), '{:.2g}')} KiB "
-                f"per DOF above the {as_text(top['rss_after_import_mib'], '{:.0f}')} MiB "
-                "of a process that has loaded NumPy, Numba and MKL (smaller sizes stay within it)"
-            )
-        out += ["", line + "."]
-        del big
-        n34 = next((r for r in ok if r["n"] == "34"), None)
-        top = ok[-1]
-        if n34:
-            out += [
-                "",
-                f"The n = 34 net ({n34['dofs']} DOF) takes {as_text(n34['total_seconds'])} s "
-                f"here; the largest size, {top['dofs']} DOF, {as_text(top['total_seconds'])} s "
-                f"with a peak of {as_text(as_float(top['peak_rss_mib']) / 1024, '{:.2f}')} GiB. At "
-                "every size the numeric factorisation and the triangular solves (with "
-                "PARDISO's iterative refinement) take most of the time; assembly is a "
-                "few per cent.",
-            ]
-    failed = [r for r in rows if r.get("error")]
-    for r in failed:
-        out += ["", f"n = {r['n']}, edge {r['edge']}: {r['error']}"]
-    out += ["", "![scale](figures/bench-scale.png)", ""]
-    return out
-
-
 def pareto(results: Path) -> list[str]:
     best = read_study(results, "pareto-best")
     if not best:
@@ -468,12 +381,20 @@ def formfind(results: Path) -> list[str]:
         "The force density method on square roofs (`catenet bench formfind`), set-up "
         "included: the linear method is one sparse factorisation for the three coordinates; "
         "`plain spsolve` assembles the same system with scipy.sparse products and calls "
-        "`spsolve` per coordinate; `forces` meets "
-        "a target force in every edge (Newton on log q).",
+        "`spsolve` per coordinate; `forces` and `lengths` meet a target force or length "
+        "in every edge to 1e-9 (damped Newton on log q, one sparse saddle-point solve per "
+        "step).",
         "",
     ]
     out += md_table(
-        ["edges", "linear [s]", "SciPy backend [s]", "plain spsolve [s]", "forces [s]"],
+        [
+            "edges",
+            "linear [s]",
+            "SciPy backend [s]",
+            "plain spsolve [s]",
+            "forces [s]",
+            "lengths [s]",
+        ],
         [
             [
                 r["edges"],
@@ -481,10 +402,25 @@ def formfind(results: Path) -> list[str]:
                 as_text(r["scipy_s"]),
                 as_text(r["plain_s"]),
                 as_text(r["forces_s"]) if r.get("forces_s") else "-",
+                as_text(r["lengths_s"]) if r.get("lengths_s") else "-",
             ]
             for r in rows
+            if r.get("linear_s")
         ],
     )
+    for r in rows:
+        if r.get("loaded_static_s"):
+            out += [
+                "",
+                f"A form-found roof of {r['loaded_dofs']} DOF (tension-only) under snow: its "
+                f"nonlinear static analysis takes {as_text(r['loaded_static_s'])} s "
+                f"({r['loaded_iterations']} Newton iterations), "
+                f"{as_text(r['loaded_over_square'])} times the static solve of the paper's "
+                f"square net of {r['square_dofs']} DOF in the same run "
+                f"({as_text(r['square_static_s'])} s); with the form finding "
+                f"({as_text(r['loaded_formfind_s'])} s), "
+                f"{as_text(r['loaded_total_over_square'])} times.",
+            ]
     out += ["", "![form finding](figures/bench-formfind.png)", ""]
     return out
 
