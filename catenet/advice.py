@@ -24,7 +24,7 @@ TARGET_BYTES = 256 << 20
 DYNAMIC_MAX_ITER = 25
 
 _STATIC_ONLY = ("steps", "max_iter")
-_DYNAMIC_ONLY = ("dt", "damping", "t_end")
+_DYNAMIC_ONLY = ("dt", "damping", "t_end", "integrator", "rho_inf")
 
 
 def ignored_solver_keys(solver) -> list[str]:
@@ -34,6 +34,12 @@ def ignored_solver_keys(solver) -> list[str]:
     method = solver.method
     out = []
     if method == "dynamic":
+        if solver.integrator != "newmark" and solver.rho_inf != default.rho_inf:
+            out.append(
+                f"solver.rho_inf = {solver.rho_inf!r}: ignored with solver.integrator = "
+                f"{solver.integrator!r} (it is the newmark integrator's high-frequency "
+                "dissipation; set solver.integrator = 'newmark' or remove the key)"
+            )
         if solver.steps != default.steps:
             out.append(
                 f"solver.steps = {solver.steps}: ignored with solver.method = 'dynamic' (load "

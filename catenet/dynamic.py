@@ -24,6 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+from catenet.integrators import RHO_INF, make
 from catenet.kernels.sparse import norm
 from catenet.net import Loads, Net
 from catenet.newton import Reuse, solve
@@ -55,6 +56,8 @@ def solve_dynamic(
     workspace: Workspace | None = None,
     on_rest: Callable[[float], None] | None = None,
     reuse: bool = False,
+    integrator: str = "implicit_euler",
+    rho_inf: float = RHO_INF,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -70,10 +73,14 @@ def solve_dynamic(
     the tolerance, so a run at rest stops a few steps apart and a restart does not
     repeat the uninterrupted run exactly). ``reuse=False``: a factorisation per iteration.
 
+    ``integrator``: "implicit_euler" (the paper's) or "newmark" (second order, its
+    high-frequency dissipation ``rho_inf``; catenet/integrators.py).
+
     Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
     with one rounding while the step is dt), not sums of the steps' round-off.
     """
     _check(dt, damping, t_end, t0, rtol)
+    scheme = make(integrator, rho_inf)
     mass = net.mass
     if not np.all(mass[~net.fixed] > 0):
         raise ConfigError(
@@ -84,6 +91,9 @@ def solve_dynamic(
     system = ws.system
     free = system.free_dofs
     m_free = np.repeat(mass[~net.fixed], 3)
+    if net.bodies:  # mu damps the net, not a rigid body's flight (catenet/terms/body.py)
+        body = np.repeat(np.flatnonzero(~net.fixed) >= net.n_net, 3)
+        damping = np.where(body, 0.0, damping)
     inertia = Inertia(free)  # the step's inertia and damping, refilled every step
     potential = ws.potential(loads, steps=(inertia,))
     start = time.perf_counter()
@@ -107,12 +117,13 @@ def solve_dynamic(
     message = ""
     interrupted = False
     x_trial = np.empty_like(x)
+    scheme.begin(potential_at(potential, loads, net, t0), x, v, m_free, damping)
     kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
     fresh = False  # this step's retry with fresh factorisations (its kept one failed)
     while t < t_end * (1 - 1e-12) and not equilibrium:
         h_step = min(h, t_end - t)
         x_trial[:] = x
-        x_trial.reshape(-1)[free] += h_step * v.reshape(-1)[free]  # Eq. 11
+        scheme.predict(x_trial, v, free, h_step)  # Eq. 11 for implicit Euler
         supports = loads.support_positions(net, time=t + h_step)
         if follow is not None and t < settle:
             # The free nodes follow what Eq. 11 does not foresee of the supports' motion
@@ -126,9 +137,7 @@ def solve_dynamic(
         x_trial[:] = potential.toward(x, x_trial)  # a predictor inside an obstacle is cut
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]
-        w = m_free * (1.0 / h_step**2 + damping / h_step)
-        a = (m_free / h_step**2 * (y_k + h_step * v_k) + damping * m_free / h_step * y_k) / w
-        inertia.set_step(w, a)
+        inertia.set_step(*scheme.weights(m_free, y_k, v_k, h_step, damping))
         if kept is not None:
             kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
         try:
@@ -169,7 +178,7 @@ def solve_dynamic(
                     state=x.copy(),
                 )
             continue
-        v = (x_trial - x) / h_step  # Eq. 10c
+        v = scheme.accept(x_trial, x, v, free, h_step)  # Eq. 10c for implicit Euler
         x[:] = x_trial
         t = _advance(t, h_step, t0, t_end, quantum)
         steps += 1
@@ -243,3 +252,10 @@ def _check(dt, damping, t_end, t0, rtol) -> None:
     if problems:
         raise ConfigError(problems)
     _check_rtol(rtol)
+
+
+def potential_at(potential, loads, net, t):
+    """The potential with the loads' value at time t (a time history's, else as built)."""
+    if loads.varies:
+        potential.set_force(loads.external_force(net, time=t))
+    return potential

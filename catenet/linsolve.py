@@ -235,10 +235,15 @@ class LinearSolver:
         self._anorm = 0.0
         self._r = np.empty(self.n)
         self._analysed = False
+        self._checked = False  # the last factorisation's first solve passed its check
         self.stats = {"analyse": 0, "factorize": 0, "solve": 0}
         self.seconds = {"analyse": 0.0, "factorize": 0.0, "solve": 0.0}
 
-    def factorize(self, data: np.ndarray) -> None:
+    def factorize(self, data: np.ndarray, definite: bool = False) -> None:
+        """Factorises the matrix with values ``data``. ``definite``: the caller knows it
+        is positive semidefinite (only convex terms filled it), so a backend set up for
+        symmetric indefinite matrices may use Cholesky for this one."""
+        self._select(definite)
         # A copy: a kept factorisation (modified Newton) is checked against the matrix it
         # was factorised from, not against the caller's array refilled since.
         if self._data is None or self._data.shape != data.shape:
@@ -253,19 +258,29 @@ class LinearSolver:
         if not self._analysed:
             self.analyse(data)
         start = time.perf_counter()
+        self._checked = False
         self._factorize(data)
         self.seconds["factorize"] += time.perf_counter() - start
         self.stats["factorize"] += 1
 
     def solve(self, b: np.ndarray) -> np.ndarray:
+        """A^-1 b. The first solve after each factorisation checks its backward error
+        (refining where it is too large, raising SingularSystemError where that fails):
+        factors that pass are accurate, so later solves with them (modified Newton's kept
+        factorisation) check only that the result is finite."""
         start = time.perf_counter()
         x = self._solve(b)
-        try:
-            self._check(b, x)
-        except SingularSystemError:
-            if not self._refine(b, x):
-                raise
-            self._check(b, x)
+        if self._checked:
+            if not np.all(np.isfinite(x)):
+                self._check(b, x)  # raises, naming the nodes
+        else:
+            try:
+                self._check(b, x)
+                self._checked = True  # (factors that needed refinement are checked again)
+            except SingularSystemError:
+                if not self._refine(b, x):
+                    raise
+                self._check(b, x)
         self.seconds["solve"] += time.perf_counter() - start
         self.stats["solve"] += 1
         return x
@@ -322,6 +337,9 @@ class LinearSolver:
         """Symbolic analysis of the pattern (a no-op where the backend has none)."""
         self._analysed = True
 
+    def _select(self, definite: bool) -> None:
+        """Chooses the factorisation for the next matrix (see ``factorize``)."""
+
     def negative_eigenvalues(self) -> int | None:
         """Negative eigenvalues of the last factorised matrix, where the factorisation
         tells (symmetric indefinite), else None."""
@@ -338,7 +356,12 @@ class LinearSolver:
 
 
 class PardisoSolver(LinearSolver):
-    """MKL PARDISO. ``mtype``: 2 (SPD), -2 (symmetric indefinite), 11 (general)."""
+    """MKL PARDISO. ``mtype``: 2 (SPD), -2 (symmetric indefinite), 11 (general).
+
+    With mtype -2, a matrix the caller calls definite (``factorize(definite=True)``: an
+    obstacle's non-convex term is out of reach) is factorised by Cholesky (mtype 2) in a
+    second PARDISO handle with its own symbolic analysis, made once: a scene with an idle
+    obstacle costs what the same scene without it costs. ``kind`` is the type in use."""
 
     name = "pardiso"
 
@@ -351,6 +374,8 @@ class PardisoSolver(LinearSolver):
         self._call = self._wrapper._mkl_pardiso
         self._pt_type = self._wrapper._pt_type[0]
         self.pt = np.zeros(64, dtype=self._wrapper._pt_type[1])  # PARDISO's handle, ours alone
+        self.kind = self.mtype  # the type of the handle in use (2 for definite matrices)
+        self._handles: dict[int, tuple[np.ndarray, bool]] = {}  # the other types' handles
         self._perm = np.zeros(0, dtype=np.int32)
         iparm = np.zeros(64, dtype=np.int32)
         iparm[0] = 1  # no solver defaults: every value below is ours
@@ -379,7 +404,7 @@ class PardisoSolver(LinearSolver):
             self.pt.ctypes.data_as(ctypes.POINTER(self._pt_type)),
             ctypes.byref(ctypes.c_int32(1)),
             ctypes.byref(ctypes.c_int32(1)),
-            ctypes.byref(ctypes.c_int32(self.mtype)),
+            ctypes.byref(ctypes.c_int32(self.kind)),
             ctypes.byref(ctypes.c_int32(phase)),
             ctypes.byref(ctypes.c_int32(self.n)),
             data.ctypes.data_as(f64),
@@ -431,12 +456,24 @@ class PardisoSolver(LinearSolver):
         self._pardiso(33, self._data, self._b, x)
         return x
 
+    def _select(self, definite: bool) -> None:
+        kind = 2 if (definite and self.mtype == -2) else self.mtype
+        if kind != self.kind:  # swap handles: each keeps its own symbolic analysis
+            self._handles[self.kind] = (self.pt, self._analysed)
+            fresh = (np.zeros(64, dtype=self._wrapper._pt_type[1]), False)
+            self.pt, self._analysed = self._handles.pop(kind, fresh)
+            self.kind = kind
+
     def negative_eigenvalues(self) -> int | None:
-        return int(self.iparm[22]) if self.mtype == -2 else None
+        if self.mtype != -2:
+            return None
+        return 0 if self.kind == 2 else int(self.iparm[22])  # Cholesky: positive definite
 
     @property
     def inertia(self) -> tuple[int, int]:
         """(positive, negative) eigenvalue counts of the last symmetric factorisation."""
+        if self.kind == 2 and self.mtype == -2:
+            return self.n, 0
         return int(self.iparm[21]), int(self.iparm[22])
 
     @property
@@ -444,6 +481,15 @@ class PardisoSolver(LinearSolver):
         return int(self.iparm[17])
 
     def release(self) -> None:
+        self._release()
+        pt, kind = self.pt, self.kind
+        for other, (handle, analysed) in list(self._handles.items()):  # the idle handles
+            self.pt, self._analysed, self.kind = handle, analysed, other
+            self._release()
+            self._handles[other] = (handle, False)
+        self.pt, self._analysed, self.kind = pt, False, kind
+
+    def _release(self) -> None:
         if self._analysed:
             try:
                 self._pardiso(-1, self._dummy, self._dummy, self._dummy)

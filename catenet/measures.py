@@ -79,6 +79,7 @@ def loose_nodes(net: Net, tension: np.ndarray) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     taut = (tension > 0) | ~net.law.tension_only
     held = np.zeros(net.n_nodes, bool)
+    held[net.n_nodes - net.bodies :] = True  # a moving body's centre has no edges
     held[net.edges[taut, 0]] = True
     held[net.edges[taut, 1]] = True
     return np.flatnonzero(~held & ~net.fixed)

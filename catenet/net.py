@@ -18,7 +18,7 @@ from catenet.laws import Law
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
     try:
         arr = np.ascontiguousarray(value, dtype=dtype)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ConfigError(
             f"{name}: cannot be read as an array of {np.dtype(dtype).name}: {exc}"
         ) from None
@@ -45,6 +45,8 @@ class Net:
         ``tension_only`` for every edge)
     point_mass : (N,) float64, lumped masses added at the nodes [kg] (corner masses of
         a tether net), or None; part of ``mass``, so gravity and inertia act on them
+    bodies : how many of the last nodes are the centres of rigid bodies (no edges, their
+        mass in ``point_mass``; ``catenet.terms.body``), 0 for a net alone
     """
 
     nodes: np.ndarray
@@ -56,6 +58,7 @@ class Net:
     tension_only: bool = True
     law: Law | None = None
     point_mass: np.ndarray | None = None
+    bodies: int = 0
 
     def __post_init__(self):
         if self.law is None:
@@ -75,6 +78,7 @@ class Net:
         tension_only: bool = True,
         law: Law | None = None,
         point_mass=None,
+        bodies: int = 0,
     ) -> Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
@@ -131,13 +135,18 @@ class Net:
             point_mass = _broadcast("point_mass", point_mass, n, problems, allow_zero=True)
         if problems:
             raise ConfigError(problems)
-        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law, point_mass)
+        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law, point_mass, bodies)
         net._check_supported()
         return net
 
     @property
     def n_nodes(self) -> int:
         return len(self.nodes)
+
+    @property
+    def n_net(self) -> int:
+        """The nodes of the net itself: all but the trailing body centres."""
+        return len(self.nodes) - self.bodies
 
     @property
     def n_edges(self) -> int:
@@ -177,6 +186,7 @@ class Net:
             tension_only=self.tension_only,
             law=self.law if law is None else law,
             point_mass=self.point_mass,
+            bodies=self.bodies,
         )
 
     def with_point_mass(self, point_mass) -> Net:
@@ -191,6 +201,7 @@ class Net:
             tension_only=self.tension_only,
             law=self.law,
             point_mass=point_mass,
+            bodies=self.bodies,
         )
 
     def components(self) -> np.ndarray:
@@ -220,6 +231,7 @@ class Net:
         problems = []
         degree = np.bincount(self.edges.ravel(), minlength=self.n_nodes)
         lonely = np.flatnonzero((degree == 0) & ~self.fixed)
+        lonely = lonely[lonely < self.n_nodes - self.bodies]  # a body's centre has none
         if lonely.size:
             problems.append(
                 f"nodes {lonely[:10].tolist()}: belong to no edge: every free node needs an edge"

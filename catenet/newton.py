@@ -30,10 +30,12 @@ iterations stops at once ("stagnated") instead of spending the rest of max_iter;
 
 Modified Newton (``reuse=Reuse()``; ``solve_dynamic(reuse=True)``): each iteration solves with
 the last factorised matrix, kept across iterations and solves, while it converges: its step must be
-a descent direction, accepted by the line search, and cut the residual by REUSE_RATE; else
-the next iteration factorises afresh (a rejected step is retried with a fresh matrix before
-c grows). Kept steps leave c alone. The convergence test is on the true residual, so the
-solution is the same; every solve is still checked against the matrix it came from.
+a descent direction, accepted by the line search, and cut the residual by REUSE_RATE (or be
+on course to reach the tolerance within REUSE_AHEAD more steps at its rate: cheaper than a
+new factorisation); else the next iteration factorises afresh (a rejected step is retried
+with a fresh matrix before c grows). Kept steps leave c alone. The convergence test is on
+the true residual, so the solution is the same; the first solve with each factorisation
+checks its backward error, later ones (``LinearSolver.solve``) that they are finite.
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumb
 STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
 REUSE_RATE = 0.03  # a kept factorisation whose step cuts the residual less is refreshed
+REUSE_AHEAD = 2  # ... unless this many more steps at its rate reach the tolerance
 
 _stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
 
@@ -236,7 +239,8 @@ class Potential:
         """Fills J + c D at x and factorises it."""
         shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
         data = self.system.hessian(x, shift, self.steps)
-        self.solver.factorize(data)
+        # Cholesky while no non-convex term (an obstacle out of reach) contributes.
+        self.solver.factorize(data, definite=self.system.convex)
 
 
 def solve(
@@ -370,7 +374,7 @@ def solve(
             c,
         )
         if kept:  # c stays; a slow step refreshes the matrix
-            if gnorm > REUSE_RATE * prev:
+            if gnorm > REUSE_RATE * prev and not _converges_soon(gnorm, prev, tol):
                 reuse.drop()
             continue
         good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
@@ -390,6 +394,13 @@ def solve(
             it += 1
             factorizations += 1
     return NewtonResult(converged, it, gnorm, tol, history, reason, factorizations, reused)
+
+
+def _converges_soon(gnorm: float, prev: float, tol: float) -> bool:
+    """Whether REUSE_AHEAD more steps that cut the residual as the last did (from prev to
+    gnorm, by less than half) reach tol: cheaper than a new factorisation."""
+    rate = gnorm / prev
+    return rate < 0.5 and gnorm * rate**REUSE_AHEAD <= tol
 
 
 def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) -> float | None:

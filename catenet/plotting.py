@@ -233,7 +233,10 @@ def figure(res, *, scale: float = 1.0):
     else:
         lines3.set_color("C0")
     ax3.add_collection3d(lines3)
-    lo, hi = _limits(seg_ref, seg_def)
+    from catenet.plot_bodies import Balls
+
+    balls = Balls(res, scale)  # moving spheres (none: draws nothing)
+    lo, hi = _limits(seg_ref, seg_def, *balls.extent())
     # true proportions, but no axis shorter than 40 % of the longest (a flat net: its
     # deflection would be squashed into a sliver)
     longest = float(np.max(hi - lo))
@@ -249,6 +252,7 @@ def figure(res, *, scale: float = 1.0):
     if fixed is not None and fixed.any():
         f = x[fixed]
         ax3.scatter(f[:, 0], f[:, 1], f[:, 2], color="red", s=8, depthshade=False)
+    balls.draw3d(ax3)
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("y [m]")
     ax3.set_zlabel("z [m] (stretched)" if stretched else "z [m]", labelpad=1)
@@ -287,6 +291,7 @@ def figure(res, *, scale: float = 1.0):
         zorder=5,
         label=f"probe node {p}: δ = {res.delta:.4g} m",
     )
+    balls.draw2d(ax2, h)
     ax2.update_datalim(np.column_stack([[lo[h], hi[h]], [lo[2], hi[2]]]))
     ax2.autoscale_view()
     ax2.set_aspect("equal", adjustable="datalim")
@@ -324,6 +329,7 @@ def figure(res, *, scale: float = 1.0):
                 ax_t.set_xlabel("/trajectory/time")
                 ax_t.set_title("probe deflection along the trajectory")
             ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
+            balls.draw_series(ax_t)
 
     status = ""
     if res.converged is False:

@@ -26,6 +26,7 @@ import numpy as np
 
 from catenet.case.sections import METHODS, SolverConfig
 from catenet.errors import CatenetError, ConfigError, ConvergenceError
+from catenet.integrators import INTEGRATORS
 from catenet.net import Loads, Net
 from catenet.result import Result
 from catenet.static import Workspace, continuation
@@ -45,6 +46,9 @@ class Settings:
     max_iter: int = _CASE.max_iter
     steps: int = _CASE.steps
     linear: str = _CASE.linear
+    integrator: str = _CASE.integrator
+    reuse: bool = _CASE.reuse
+    rho_inf: float = _CASE.rho_inf
 
     @classmethod
     def of(cls, config: Any, **changes) -> Settings:
@@ -58,6 +62,12 @@ class Settings:
             raise ConfigError(
                 f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"
             )
+        if self.integrator not in INTEGRATORS:
+            raise ConfigError(
+                f"solver.integrator = {self.integrator!r}: must be one of {', '.join(INTEGRATORS)}"
+            )
+        if not 0.0 <= self.rho_inf <= 1.0:
+            raise ConfigError(f"solver.rho_inf = {self.rho_inf!r}: must be in [0, 1]")
         if self.steps < 1:
             raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")
 
@@ -213,6 +223,9 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
             on_step=seen,
             workspace=ws,
             on_rest=rest,
+            integrator=settings.integrator,
+            rho_inf=settings.rho_inf,
+            reuse=settings.reuse,
         )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):

@@ -86,20 +86,26 @@ def solve_static(
     linear: str = "auto",
     workspace: Workspace | None = None,
     raise_on_failure: bool = True,
+    accepted: np.ndarray | None = None,
 ) -> Result:
     """Static equilibrium of ``net`` under ``loads`` scaled by ``factor``.
 
     ``x0`` (N, 3) is the starting guess (default: the reference positions); supports are
-    put at their prescribed places. Raises ConvergenceError when Newton fails (with the
-    residual history), unless ``raise_on_failure`` is False.
+    put at their prescribed places. ``accepted``: the last accepted state this load step
+    starts from, which the terms' ``begin_step`` sees (lagged friction measures slip
+    from it; default: x0, else the reference positions). Raises ConvergenceError when
+    Newton fails (with the residual history), unless ``raise_on_failure`` is False.
     """
     _check_rtol(rtol)
     ws = workspace or Workspace(net, linear=linear)
     start = time.perf_counter()
     x = _start(net, loads, x0, factor)
     potential = ws.potential(loads, factor)
-    potential.begin_step(x)
+    if accepted is None:
+        accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
+    potential.begin_step(accepted)
     result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
+    result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
     if result.converged and result.tolerance > potential.f_norm > 0:
         # Held only to a round-off floor above the loads: no digit of the answer is sure.
         result.converged = False
@@ -148,6 +154,29 @@ def solve_static(
             " ..." if loose.size > 10 else "",
         )
     return out
+
+
+LAG_ROUNDS = 20  # a static load step re-solved at most this often for its lagged terms
+LAG_RTOL = 1e-6  # until their lagged quantities change less than this share
+
+
+def _relag(potential: Potential, x: np.ndarray, result, *, rtol: float, max_iter: int):
+    """A static load step has no time: terms with lagged quantities (friction: the normal
+    forces of the step's start) have them updated at the equilibrium found (``relag``,
+    returning the relative change) and the step is solved again from there, until they
+    change less than LAG_RTOL (fixed-point iteration; what is left after LAG_ROUNDS stays
+    lagged, as in a dynamic step)."""
+    lagged = [t for t in potential.system.terms if hasattr(t, "relag")]
+    for _ in range(LAG_ROUNDS if lagged else 0):
+        if not result.converged or max(t.relag(x) for t in lagged) <= LAG_RTOL:
+            return result
+        again = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static (lagged terms)")
+        again.iterations += result.iterations
+        again.history = result.history + again.history
+        result = again
+    if lagged and result.converged:
+        log.info("lagged terms still change after %d re-solves of a load step", LAG_ROUNDS)
+    return result
 
 
 def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
@@ -323,6 +352,7 @@ def continuation(
                 rtol=rtol,
                 max_iter=max_iter,
                 workspace=ws,
+                accepted=results[-1].x if results else x0,
             )
         except Exception as exc:
             if results and hasattr(exc, "state"):

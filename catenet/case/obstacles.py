@@ -1,10 +1,13 @@
-"""Obstacles of a case (``[[obstacle]]``): rigid frictionless bodies the net cannot enter.
+"""Obstacles of a case (``[[obstacle]]``): rigid bodies the net cannot enter.
 
 Each kind owns its keys and builds its energy term (``catenet.terms.contact``), registered
 by name in ``OBSTACLES``. Common keys: ``distance`` (the barrier's activation distance
 dhat, default 1e-3 of the scene's length scale) and ``stiffness`` (kappa [N/m], default:
-the barrier holds the mean nodal load at half that distance). A new kind is one class
-here and one line in ``OBSTACLES``.
+the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f >= 0,
+default 0: frictionless) adds Coulomb friction on a fixed obstacle beside its barrier
+(``catenet.terms.friction``), with ``slip`` (the distance below which a node sticks,
+default the activation distance). A new kind is one class here and one line in
+``OBSTACLES`` (and a ``normals(x)`` method on its term, or friction cannot use it).
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from catenet.case.keys import (
     show,
     vec3,
 )
+from catenet.case.sections import history_key
+from catenet.case.shapes import BoxObstacle, CapsuleObstacle, MeshObstacle
 from catenet.errors import ConfigError
 
 DISTANCE_SHARE = 1e-3  # default activation distance, of the scene's length scale
@@ -45,6 +50,10 @@ class PlaneObstacle(Declared):
     stiffness: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
     )
+    friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
+    slip: float | None = real(
+        None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"
+    )
 
     def check(self, ck: Checker, path: str) -> None:
         if not any(self.normal):
@@ -58,7 +67,7 @@ class PlaneObstacle(Declared):
 
 @dataclass(frozen=True, kw_only=True)
 class SphereObstacle(Declared):
-    """A fixed rigid ball."""
+    """A rigid ball: fixed, a rigid body (`mass`) or on a path (`velocity` and no `mass`)."""
 
     kind: str = choice("sphere", ("sphere",), doc="a ball")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="sphere: centre")
@@ -69,9 +78,40 @@ class SphereObstacle(Declared):
     stiffness: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
     )
+    friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
+    slip: float | None = real(
+        None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"
+    )
+    mass: float | None = real(
+        None, gt=0, write="given", unit="kg", doc="sphere: a rigid body of this mass (moves)"
+    )
+    velocity: tuple | None = vec3(
+        None,
+        write="given",
+        shown="none",
+        unit="m/s",
+        doc="sphere: initial velocity of a body; without mass, the path's velocity",
+    )
+    history: tuple | None = history_key(
+        "sphere on a path: its velocity is factor(t) times velocity (dynamic runs)"
+    )
+
+    @property
+    def moves(self) -> bool:
+        """A rigid body or a ball on a prescribed path (a node of its own)."""
+        return self.mass is not None or self.velocity is not None
 
     def check(self, ck: Checker, path: str) -> None:
-        pass
+        if self.friction > 0 and self.moves:
+            ck.add(
+                f"{path}.friction = {self.friction!r}: friction acts on fixed obstacles only; "
+                "a moving sphere (mass or velocity) takes friction = 0"
+            )
+        if self.history is not None and (self.velocity is None or self.mass is not None):
+            ck.add(
+                f"{path}.history: scales the velocity of a sphere on a prescribed path: "
+                "give velocity and no mass"
+            )
 
     def term(self, nodes, kappa: float, dhat: float):
         from catenet.terms.contact import Sphere
@@ -81,10 +121,11 @@ class SphereObstacle(Declared):
 
 #: Obstacle kinds by name.
 OBSTACLES: dict[str, type] = {"plane": PlaneObstacle, "sphere": SphereObstacle}
+OBSTACLES.update(box=BoxObstacle, capsule=CapsuleObstacle, mesh=MeshObstacle)  # case/shapes.py
 
 
-def parse_obstacles(ck: Checker, value: Any, ctx: Context) -> tuple | Any:
-    """The ``[[obstacle]]`` array of tables (absent: none)."""
+def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tuple | Any:
+    """The ``[[obstacle]]`` array of tables (absent: none); files relative to ``base_dir``."""
     if value is None:
         return ()
     items = ck.array_of_tables(value, "obstacle")
@@ -105,6 +146,8 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context) -> tuple | Any:
         parsed = parse_table(ck, {k2: v for k2, v in t.items() if k2 in names(cls)}, cls, path, ctx)
         if parsed is not BAD:
             parsed.check(ck, path)
+            if hasattr(parsed, "resolve"):  # a mesh reads its file
+                parsed = parsed.resolve(ck, path, base_dir)
         out.append(parsed)
     return BAD if BAD in out else tuple(out)
 
@@ -114,11 +157,13 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     (with the obstacle's key path) for an obstacle that a node of the net starts in."""
     if not obstacles:
         return ()
-    nodes = np.flatnonzero(~net.fixed)
+    nodes = np.flatnonzero(~net.fixed[: net.n_net])  # a moving body's centre is no contact node
     force = loads.external_force(net)[nodes]
     per_node = float(np.mean(np.linalg.norm(force, axis=1))) if len(nodes) else 0.0
     terms = []
     for k, obs in enumerate(obstacles):
+        if getattr(obs, "moves", False):
+            continue  # a node of its own: catenet.case.bodies
         dhat = obs.distance if obs.distance is not None else DISTANCE_SHARE * size
         if per_node <= 0.0:  # no loads: the force that strains an edge by dhat / l0
             per_node = float(np.mean(net.EA / net.rest_length)) * dhat
@@ -141,4 +186,9 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
         if not math.isfinite(kappa):
             raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
         terms.append(term)
+        if obs.friction > 0:  # Coulomb friction rides on the barrier (catenet.terms.friction)
+            from catenet.terms.friction import Friction
+
+            slip = obs.slip if obs.slip is not None else dhat
+            terms.append(Friction(term, mu=obs.friction, slip=slip))
     return tuple(terms)

@@ -144,7 +144,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     load = parse_table(ck, data.get("load", {}), LoadConfig, "load", ctx)
     solver = parse_solver(ck, data.get("solver", {}), ctx)
     output = parse_output(ck, data.get("output", {}), ctx, source)
-    obstacles = parse_obstacles(ck, data.get("obstacle"), ctx)
+    obstacles = parse_obstacles(ck, data.get("obstacle"), ctx, base_dir)
     masses = parse_masses(ck, data.get("mass"), ctx)
     formfind = None
     if "formfind" in data:

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from catenet import geometry as geo
+from catenet.case.bodies import add_bodies
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
@@ -27,7 +28,8 @@ class Scene:
     of the edges (``catenet.terms``; none for the paper's cases). ``cables`` names the
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
-    at rest)."""
+    at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
+    are the net's last nodes (``Net.bodies``)."""
 
     case: Case
     net: Net
@@ -37,6 +39,7 @@ class Scene:
     terms: tuple = ()
     cables: Any = None
     velocity: np.ndarray | None = None
+    bodies: tuple = ()
 
 
 def build(case: Case) -> Scene:
@@ -62,7 +65,10 @@ def _build(case: Case) -> Scene:
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
     loads = _loads(case, net, built.names, built.size, built)
-    terms = obstacle_terms(case.obstacles, net, loads, float(built.size))
+    net, loads, velocity, body_terms, bodies = add_bodies(
+        case, net, loads, velocity, float(built.size)
+    )
+    terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     return Scene(
         case=case,
         net=net,
@@ -72,6 +78,7 @@ def _build(case: Case) -> Scene:
         terms=terms,
         cables=built.cables,
         velocity=velocity,
+        bodies=bodies,
     )
 
 

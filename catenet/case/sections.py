@@ -34,6 +34,7 @@ from catenet.case.keys import (
 from catenet.case.kinds import KINDS
 from catenet.errors import ConfigError
 from catenet.history import NEED, history_problem
+from catenet.integrators import INTEGRATORS, RHO_INF
 from catenet.laws import LAWS, table_rows
 
 METHODS = ("static", "dynamic")
@@ -379,6 +380,14 @@ class LoadConfig(Declared):
 # --------------------------------------------------------------------------- solver
 
 
+def _check_unit_interval(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A number in [0, 1]."""
+    f = ck.real(v, path, ge=0.0, need="in [0, 1]")
+    if f is not BAD and f > 1.0:
+        return ck.bad(path, v, "must be in [0, 1]")
+    return f
+
+
 @dataclass(frozen=True)
 class SolverConfig(Declared):
     """How to solve: see docs/DESIGN.md (solver section) for the meaning of each key."""
@@ -388,7 +397,29 @@ class SolverConfig(Declared):
     )
     dt: float = real(1e-2, gt=0, unit="s", doc="dynamic: time step")
     damping: float = real(1.0, ge=0, unit="1/s", doc="dynamic: mass damping mu")
+    integrator: str = choice(
+        "implicit_euler",
+        INTEGRATORS,
+        write="changed",
+        doc="dynamic: the paper's implicit Euler (first order, damps numerically) or "
+        "newmark (second order)",
+    )
+    rho_inf: float = key(
+        _check_unit_interval,
+        "a number in [0, 1]",
+        RHO_INF,
+        write="changed",
+        doc="newmark: spectral radius at h omega -> inf (1: average acceleration, "
+        "no numerical damping)",
+    )
     t_end: float = real(10.0, gt=0, unit="s", doc="dynamic: end time")
+    reuse: bool = boolean(
+        False,
+        write="changed",
+        doc="dynamic: keep the factorisation across Newton iterations and time steps while "
+        "it converges (modified Newton: same answer to rtol, 2-3x faster; a --restart then "
+        "repeats the uninterrupted run only to rtol)",
+    )
     rtol: float = real(1e-8, gt=0, lt=1, doc="Newton tolerance")
     linear: str = choice("auto", LINEAR, doc="linear solver (auto: PARDISO where available)")
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")

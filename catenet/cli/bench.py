@@ -28,6 +28,7 @@ STUDIES = (
     "formfind",
     "flush",
     "reuse",
+    "integrators",
 )
 CHOICES = (*STUDIES, "all", "report")
 
@@ -88,9 +89,12 @@ def command(
     skips       what skipping saves: static, gravity, output, re-analysis, mtype, threads
     cold-start  catenet --help, catenet run with an empty and a warm JIT cache
     stress      hard scenes: right answer or a clear error, never a NaN
-    formfind    force density method on roofs of 1e3 to 1e5 edges (--quick: to 1e4)
+    formfind    force density method on roofs of 1e3 to 1e5 edges (--quick: to 1e4);
+                a form-found 1e5-DOF roof under snow against a static solve
     reuse       modified Newton in dynamic runs (n = 34 relaxation, a net on a sphere)
                 against a factorisation per iteration; an obstacle never touched
+    integrators numerical damping of implicit Euler and newmark against h omega; time
+                to rest of the damping study (mu = 0.1, 1, 10) with each
     all         every study above, in this order
     report      docs/readme-performance.md and docs/figures/ from OUTPUT's CSV files
                 (give it after the studies to run them first: all report)

@@ -4,7 +4,9 @@
 Each frame becomes a line mesh: points at the frame's positions, one line cell per edge,
 point data ``displacement`` (from the reference geometry), ``fixed`` (1.0: supported) and,
 where stored, ``velocity`` (dynamic runs) or ``reaction`` (the final state); cell data
-``tension`` [N], ``rest_length`` [m] and ``EA`` [N]. The frames are the trajectory's, or
+``tension`` [N], ``rest_length`` [m] and ``EA`` [N]. Moving spheres (/mesh/bodies) add
+a vertex cell at each centre with cell data ``radius`` [m] (NaN on the edges; not in
+XDMF, whose mixed cells meshio cannot read back). The frames are the trajectory's, or
 the final state (/result) of a file without one. VTK formats also get a ParaView
 collection (``STEM.pvd``) that gives every file its time.
 
@@ -24,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
+from catenet.output.bodies import body_nodes
 from catenet.output.reader import Frame, open_result, read_mesh, trajectory_length
 
 log = logging.getLogger(__name__)
@@ -129,6 +132,11 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
     ext, writer = FORMATS[fmt]
     width = max(4, len(str(max(f.index for f in states))))
     cells = [("line", np.asarray(mesh.edges, dtype=np.int64))]
+    body, radius = body_nodes(path)  # moving spheres: a vertex cell each, with its radius
+    if fmt == "xdmf":  # meshio reads no vertex cells back from its mixed XDMF topology
+        body = body[:0]
+    if body.size:
+        cells.append(("vertex", body[:, None]))
     files = []
     for f in states:
         name = f"{path.stem}_{f.index:0{width}d}" if f.index >= 0 else f"{path.stem}_result"
@@ -148,6 +156,10 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
         ):
             if value is not None:
                 cell_data[key] = [np.asarray(value, dtype=np.float64)]
+                if body.size:
+                    cell_data[key].append(np.full(body.size, np.nan))
+        if body.size:
+            cell_data["radius"] = [np.full(len(mesh.edges), np.nan), radius]
         target = out / f"{name}.{ext}"
         meshio.write(
             target,

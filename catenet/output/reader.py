@@ -44,6 +44,7 @@ __all__ = [
     "ResultFile",
     "open_result",
     "probe_node",
+    "read_bodies",
     "read_frame",
     "read_mesh",
     "read_result",
@@ -412,3 +413,11 @@ def _case(text, path: Path) -> dict:
     except tomllib.TOMLDecodeError as exc:
         log.warning("%s: the case attribute is not valid TOML (%s); plotting without it", path, exc)
         return {}
+
+
+def read_bodies(path: str | Path):
+    """The moving spheres of a result file (/mesh/bodies) with their centres' trajectory:
+    ``catenet.output.bodies.read_bodies``."""
+    from catenet.output.bodies import read_bodies as read
+
+    return read(path)

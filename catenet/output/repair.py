@@ -77,10 +77,19 @@ def write_sidecar_for(path: str | Path) -> Path | None:
         times = list(np.asarray(h5["trajectory/time"][:n], dtype=float)) if n else []
         has_v = "trajectory" in h5 and "v" in h5["trajectory"]
         has_result = "result" in h5 and "x" in h5["result"]
+        bodies = len(h5["mesh/bodies/node"]) if "mesh/bodies/node" in h5 else 0
     if not (times or has_result):
         return None
     side = sidecar_path(path)
-    write_xdmf(side, path.name, n_nodes=n_nodes, n_edges=n_edges, times=times, velocities=has_v)
+    write_xdmf(
+        side,
+        path.name,
+        n_nodes=n_nodes,
+        n_edges=n_edges,
+        times=times,
+        velocities=has_v,
+        bodies=bodies,
+    )
     return side
 
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from catenet import measures
 from catenet.errors import ConfigError, OutputError
+from catenet.output.bodies import write_bodies
 from catenet.output.files import (
     check_output_path,
     copy_atomically,
@@ -252,6 +253,7 @@ class ResultWriter:
         mesh.create_dataset("fixed", data=np.asarray(net.fixed, dtype=bool))
         mesh.attrs["probe"] = int(scene.probe)
         mesh.attrs["size"] = float(scene.size)
+        write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)
         cables = getattr(scene, "cables", None)
         if cables is not None:  # a graph's cables: the cable of every edge (-1: none)
             import h5py
@@ -458,6 +460,7 @@ class ResultWriter:
                 n_edges=net.n_edges,
                 times=self.times,
                 velocities=self.velocities,
+                bodies=net.bodies,
             )
         except OSError as exc:
             log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, describe(exc))

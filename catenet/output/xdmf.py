@@ -111,16 +111,39 @@ def write_xdmf(
     n_edges: int,
     times: list[float],
     velocities: bool = False,
+    bodies: int = 0,
 ) -> None:
     """Writes the XDMF 3 sidecar of a result file (atomically: a temporary file renamed).
 
     With ``times`` (the trajectory's frames, whose views ``write_views`` wrote): a
     Temporal collection with one Polyline grid per frame. Without: one grid of /result/x,
     /result/tension and /result/reaction. ``h5name`` is the HDF5 file as the sidecar names
-    it (relative to the sidecar).
+    it (relative to the sidecar). ``bodies`` > 0 (the centres of moving spheres, the last
+    nodes): a Temporal collection "bodies" before the net's, one Polyvertex grid of the
+    centres (/mesh/bodies/node) per frame with their ``radius`` (a Sphere glyph scaled by
+    it draws the balls); meshio's time-series reader takes the last collection, the net's.
     """
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")
+    if len(times) and bodies:
+        series = ET.SubElement(
+            domain, "Grid", Name="bodies", GridType="Collection", CollectionType="Temporal"
+        )
+        for k, t in enumerate(times):
+            grid = ET.SubElement(series, "Grid", Name=f"bodies {k}", GridType="Uniform")
+            topo = ET.SubElement(
+                grid,
+                "Topology",
+                TopologyType="Polyvertex",
+                NodesPerElement="1",
+                NumberOfElements=str(bodies),
+            )
+            _hdf_item(topo, h5name, "/mesh/bodies/node", (bodies,), number="Int")
+            geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+            _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
+            ET.SubElement(grid, "Time", Value=repr(float(t)))
+            att = _attribute(grid, "radius", "Cell", "Scalar")
+            _hdf_item(att, h5name, "/mesh/bodies/radius", (bodies,))
     if len(times):
         series = ET.SubElement(
             domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"

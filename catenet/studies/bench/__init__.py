@@ -21,6 +21,7 @@ STUDIES = {
     "flush": "catenet.studies.bench.flush",
     "formfind": "catenet.studies.bench.formfind",
     "reuse": "catenet.studies.bench.reuse",
+    "integrators": "catenet.studies.bench.integrators",
 }
 
 

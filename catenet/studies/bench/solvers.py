@@ -3,6 +3,8 @@
 - ``ReanalysingPardiso``: catenet's PARDISO wrapper that repeats the symbolic analysis
   before every factorisation, i.e. what a solver without pattern reuse pays.
 - ``PypardisoSpsolve``: ``pypardiso.spsolve`` on the full matrix every Newton step.
+- ``CheckingEverySolve``, ``IndefiniteThroughout``: catenet's wrapper as it was before
+  two speed-ups of dynamic runs (``catenet bench reuse`` measures both against today's).
 
 ``install(workspace, cls)`` swaps the solver of a ``catenet.static.Workspace``.
 """
@@ -18,10 +20,10 @@ from catenet.linsolve import LinearSolver, PardisoSolver
 class ReanalysingPardiso(PardisoSolver):
     name = "pardiso (analyse every factorisation)"
 
-    def factorize(self, data):
+    def factorize(self, data, definite=False):
         if self._analysed:
             self.release()  # drop the symbolic analysis: the next factorize redoes it
-        super().factorize(data)
+        super().factorize(data, definite)
 
 
 class PypardisoSpsolve(LinearSolver):
@@ -52,3 +54,24 @@ def install(workspace, cls, **kwargs):
         system.indptr, system.indices, upper=system.upper, dof_node=dof_node, **kwargs
     )
     return workspace
+
+
+class CheckingEverySolve(PardisoSolver):
+    """catenet's PARDISO wrapper as it was before the backward-error check was left to
+    each factorisation's first solve: every solve checked (a matrix-vector product more)."""
+
+    name = "pardiso (every solve checked)"
+
+    def solve(self, b):
+        self._checked = False
+        return super().solve(b)
+
+
+class IndefiniteThroughout(PardisoSolver):
+    """catenet's PARDISO wrapper as it was before it kept Cholesky for the matrices of an
+    obstacle out of reach: a non-convex term makes every factorisation indefinite."""
+
+    name = "pardiso (indefinite throughout)"
+
+    def _select(self, definite):
+        pass

@@ -1,0 +1,197 @@
+"""The time integrators of dynamic runs, each a step of one incremental potential.
+
+Every scheme turns a time step from (x_n, v_n) over h into the minimisation of
+
+    Phi(x) = 1/2 sum_d w_d (x_d - a_d)^2 + E(x) - f(t_{n+1}) . x
+
+over the free DOFs (``terms.Inertia`` holds w and a), so that the same Newton iteration,
+line search, step halving, obstacle cap and predictor cut serve every scheme. A scheme
+says w and a (``weights``), where Newton starts (``predict``) and the new velocities
+from the solution (``accept``).
+
+``implicit_euler`` (the default, the paper's Eqs. 10-13): w = M (1/h^2 + mu/h),
+v_{n+1} = (x_{n+1} - x_n)/h. First order; it damps every mode numerically, by a ratio
+of about h omega / 2 of critical (Fig. A.9's runs at dt = 0.01 s settle in about the
+same time whatever mu).
+
+``newmark``: Newmark's method in the Bossak (WBZ-alpha) form of the generalized-alpha
+family (Wood, Bossak & Zienkiewicz 1980; Chung & Hulbert 1993 with alpha_f = 0):
+
+    M ((1 - alpha_m) a_{n+1} + alpha_m a_n) + mu M v_{n+1} + grad E(x_{n+1}) = f(t_{n+1})
+    x_{n+1} = x_n + h v_n + h^2 ((1/2 - beta) a_n + beta a_{n+1})
+    v_{n+1} = v_n + h ((1 - gamma) a_n + gamma a_{n+1})
+
+with alpha_m = (rho_inf - 1)/(rho_inf + 1), gamma = 1/2 - alpha_m,
+beta = (1 - alpha_m)^2 / 4. It is second order (damped or not), unconditionally stable
+for linear systems, and ``rho_inf`` (solver.rho_inf, in [0, 1]) is its spectral radius at
+h omega -> infinity: rho_inf = 1 is the plain average-acceleration (trapezoidal) rule,
+which conserves the energy of a linear system and damps nothing; below 1 the modes that
+the step cannot resolve (the axial modes of a cable net, h omega ~ 10-100 at the paper's
+dt) lose a factor of about rho_inf per step while the resolved ones keep their amplitude
+to O((h omega)^3) per period. Why this form:
+
+- Eliminating a_{n+1} and v_{n+1} leaves the equation of motion as the gradient of the
+  incremental potential above with w = M ((1 - alpha_m)/(beta h^2) + mu gamma/(beta h)):
+  the stretching, contact and loads are evaluated at x_{n+1} itself (alpha_f = 0), so an
+  obstacle's barrier and its line-search cap keep every accepted state, not an
+  intermediate point, outside it. HHT-alpha and the full generalized-alpha method put the
+  internal forces at a mean of x_n and x_{n+1}, and the state x_{n+1} would be an
+  extrapolation past the point the barrier guards.
+- The mass-proportional damping mu M v_{n+1} enters with the same Newmark velocity, so
+  the damped scheme is second order too (tests/test_integrators.py checks the order).
+- Plain average acceleration (rho_inf = 1) is energy conserving only for linear systems:
+  on the paper's tension-only net (a kink in the stiffness at zero strain, axial modes
+  far beyond 1/h) its undamped high modes ring for ever, since mass-proportional
+  damping gives mode omega only the ratio mu / (2 omega), and the net never comes to
+  rest. High-frequency dissipation removes them in a few dozen steps.
+- The default rho_inf = 0.8 is measured, not guessed: the paper's n = 10 net relaxed
+  with mu = 1 comes to rest at every step from 0.01 s to 1 s with rho_inf <= 0.8, while
+  with 0.9 it falls into a limit cycle (slack and taut edges trading energy, about
+  0.13 m from equilibrium, for ever) once the lowest mode is unresolved (h = 0.1 s,
+  h omega_1 = 4). At h omega = 0.42 (the damping study's lowest mode at dt = 0.01 s) it
+  damps by 0.11 % of critical against implicit Euler's 20 %. Where the lowest modes are
+  well resolved, rho_inf = 0.9 to 1 damps them less still (configs/dynamics/).
+
+The scheme's acceleration a_n is part of its state. A run starts (t = 0 or a restart
+from a result file, which stores x and v) with the physical acceleration
+M^-1 (f - grad E - mu M v); with rho_inf = 1 that is the scheme's own a_n, so a restart
+repeats the uninterrupted run to the Newton tolerance. With rho_inf < 1 the scheme's
+a_n is a filtered acceleration, and a restart differs from the uninterrupted run by a
+transient of the size of the discretisation error.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from catenet.errors import ConfigError
+
+INTEGRATORS = ("implicit_euler", "newmark")
+RHO_INF = 0.8  # solver.rho_inf's default (module docstring)
+
+
+class ImplicitEuler:
+    """The paper's backward Euler (Eqs. 10-13); its state is (x, v)."""
+
+    name = "implicit_euler"
+    order = 1
+
+    def begin(self, potential, x, v, m_free, damping) -> None:
+        """Nothing to derive at the start of a run."""
+
+    def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None:
+        """Newton's start (Eq. 11): x_trial (a copy of x_n) += h v_n on the free DOFs."""
+        x_trial.reshape(-1)[free] += h * v.reshape(-1)[free]
+
+    def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
+        """w and a of the step's inertia term (Eq. 10a as a gradient)."""
+        w = m_free * (1.0 / h**2 + damping / h)
+        a = (m_free / h**2 * (y_k + h * v_k) + damping * m_free / h * y_k) / w
+        return w, a
+
+    def accept(self, x_new, x, v, free, h) -> np.ndarray:
+        """The velocities of the accepted step (Eq. 10c)."""
+        return (x_new - x) / h
+
+
+class Newmark:
+    """Newmark's method with Bossak's high-frequency dissipation (module docstring); its
+    state is (x, v, a), a on the free DOFs."""
+
+    name = "newmark"
+    order = 2
+
+    def __init__(self, rho_inf: float = RHO_INF):
+        if not (isinstance(rho_inf, (int, float)) and math.isfinite(rho_inf)):
+            raise ConfigError(f"solver.rho_inf = {rho_inf!r}: must be a number in [0, 1]")
+        if not 0.0 <= rho_inf <= 1.0:
+            raise ConfigError(f"solver.rho_inf = {rho_inf!r}: must be in [0, 1]")
+        self.rho_inf = float(rho_inf)
+        self.alpha_m = (self.rho_inf - 1.0) / (self.rho_inf + 1.0)
+        self.gamma = 0.5 - self.alpha_m
+        self.beta = 0.25 * (1.0 - self.alpha_m) ** 2
+        self.a: np.ndarray | None = None  # the scheme's acceleration, free DOFs
+        self._p: np.ndarray | None = None  # this step's x_n + h v_n + h^2 (1/2 - beta) a_n
+
+    def begin(self, potential, x, v, m_free, damping) -> None:
+        """The physical acceleration at the start, M^-1 (f - grad E - mu M v)."""
+        system = potential.system
+        _, grad = system.gradient(x)
+        force = potential.f_free - grad.reshape(-1)[system.free_dofs]
+        self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
+
+    def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None:
+        """Newton's start: x_n + h v_n + h^2/2 a_n (constant acceleration over the step)."""
+        x_trial.reshape(-1)[free] += h * v.reshape(-1)[free] + (0.5 * h * h) * self.a
+
+    def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
+        """w and a of the step's inertia term: the equation of motion above with
+        a_{n+1} = (x - p)/(beta h^2), p = x_n + h v_n + h^2 (1/2 - beta) a_n."""
+        a_n, beta, gamma, am = self.a, self.beta, self.gamma, self.alpha_m
+        p = y_k + h * v_k + (h * h * (0.5 - beta)) * a_n
+        self._p = p
+        w = m_free * ((1.0 - am) / (beta * h * h) + damping * gamma / (beta * h))
+        rest = m_free * (am * a_n + damping * (v_k + h * (1.0 - gamma) * a_n))
+        return w, p - rest / w
+
+    def accept(self, x_new, x, v, free, h) -> np.ndarray:
+        """The new velocities (and acceleration) of the accepted step; supports'
+        velocities are their mean over the step."""
+        y_new = x_new.reshape(-1)[free]
+        a_new = (y_new - self._p) / (self.beta * h * h)
+        out = (x_new - x) / h
+        v_k = v.reshape(-1)[free]
+        out.reshape(-1)[free] = v_k + h * ((1.0 - self.gamma) * self.a + self.gamma * a_new)
+        self.a = a_new
+        return out
+
+
+def make(name: str = "implicit_euler", rho_inf: float = RHO_INF):
+    """The scheme called ``name`` (solver.integrator)."""
+    if name == "implicit_euler":
+        return ImplicitEuler()
+    if name == "newmark":
+        return Newmark(rho_inf)
+    raise ConfigError(f"solver.integrator = {name!r}: must be one of {', '.join(INTEGRATORS)}")
+
+
+def amplification(name: str, h_omega: float, xi: float = 0.0, rho_inf: float = RHO_INF):
+    """The matrix taking a scheme's state to the next for one oscillator
+    x'' + 2 xi omega x' + omega^2 x = 0 at step h omega, with omega = 1 and h = h omega:
+    (x, v) for implicit Euler, (x, v, a) for newmark (its spectral analysis: the principal
+    eigenvalues give the numerical damping and period error, the others the dissipation of
+    the unresolved modes)."""
+    s, z = float(h_omega), float(xi)
+    if name == "implicit_euler":
+        # (1 + 2 z s + s^2) v1 = v0 - s x0; x1 = x0 + s v1
+        d = 1.0 + 2.0 * z * s + s * s
+        v_x, v_v = -s / d, 1.0 / d
+        return np.array([[1.0 + s * v_x, s * v_v], [v_x, v_v]])
+    nm = make(name, rho_inf)
+    out = np.empty((3, 3))
+    for col, (x0, v0, a0) in enumerate(np.eye(3)):
+        p = x0 + s * v0 + s * s * (0.5 - nm.beta) * a0
+        # (1 - am) a1 + am a0 + 2 z v1 + x1 = 0 with x1 = p + beta s^2 a1 and
+        # v1 = v0 + s ((1 - gamma) a0 + gamma a1)
+        lhs = (1.0 - nm.alpha_m) + 2.0 * z * s * nm.gamma + nm.beta * s * s
+        rhs = -(nm.alpha_m * a0 + 2.0 * z * (v0 + s * (1.0 - nm.gamma) * a0) + p)
+        a1 = rhs / lhs
+        v1 = v0 + s * ((1.0 - nm.gamma) * a0 + nm.gamma * a1)
+        out[:, col] = (p + nm.beta * s * s * a1, v1, a1)
+    return out
+
+
+def numerical_damping(name: str, h_omega: float, rho_inf: float = RHO_INF) -> tuple[float, float]:
+    """(damping ratio, relative period error) that the scheme adds to an undamped mode at
+    step h omega: from its principal eigenvalues r exp(+-i Omega h),
+    xi = -ln(r) / (Omega h) and T_numerical / T - 1 = h omega / (Omega h) - 1; for an
+    overdamped (real) principal root the ratio is 1 and the period infinite."""
+    lam = np.linalg.eigvals(amplification(name, h_omega, 0.0, rho_inf))
+    pair = lam[np.abs(lam.imag) > 1e-14]
+    if pair.size == 0:
+        return 1.0, math.inf
+    top = pair[np.argmax(np.abs(pair))]
+    angle = abs(math.atan2(top.imag, top.real))
+    return -math.log(abs(top)) / angle, h_omega / angle - 1.0

@@ -1,0 +1,162 @@
+"""Moving rigid spheres: a ball whose centre is a node of the net, two-way coupled.
+
+A rigid ball (``[[obstacle]] kind = "sphere"`` with ``mass``) is one node appended to
+the net (``Net.bodies``: no edges, the ball's mass lumped there, so gravity and inertia
+act on it as on any node). ``Ball`` is the log-barrier of the fixed sphere
+(``catenet.terms.contact``) between every free net node and that centre: the contact
+force acts on both, the implicit step integrates net and ball together, and the line
+search is capped at the first contact of the relative motion (``max_step``), so no node
+is ever inside the ball, at any step size. The paper's mass-proportional damping mu
+acts on the net only (``catenet.dynamic``): a ball flies free and loses its energy to
+the damped net it lands on.
+
+A ball on a prescribed path (a sphere with ``velocity`` and no ``mass``) is the same
+node, held on its path c(t) by ``Guide``, a stiff spring k |x_c - c(t)|^2 / 2 whose
+anchor moves at every time step (``begin_step``). The ball is never teleported: each
+step moves it within the same Newton solve as the net, capped at the first contact, so
+nodes cannot be swallowed; where the net resists, the ball lags its path by
+force / k (``Guide.lag``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from catenet.kernels.body import pair_gap, pair_gradient, pair_hessian, pair_max_step
+from catenet.terms.base import Term, node_block_pattern, register
+
+
+@register("ball")
+class Ball(Term):
+    """Barrier contact of ``nodes`` with the ball of ``radius`` centred at node ``center``
+    (kappa [N/m], activation distance dhat [m]); ``n_nodes`` of the net with the ball."""
+
+    role = "internal"
+    convex = False  # as the fixed sphere: indefinite near contact
+
+    def __init__(self, nodes, center: int, radius: float, *, kappa, dhat, n_nodes: int):
+        if not (math.isfinite(kappa) and kappa > 0 and math.isfinite(dhat) and dhat > 0):
+            raise ValueError(f"ball: kappa = {kappa!r}, dhat = {dhat!r}: must be > 0")
+        if not (math.isfinite(radius) and radius > 0):
+            raise ValueError(f"ball: radius = {radius!r}: must be > 0")
+        self.nodes = np.ascontiguousarray(nodes, dtype=np.int64)
+        self.center = int(center)
+        if self.center in set(self.nodes.tolist()):
+            raise ValueError("ball: the centre node must not be one of the contact nodes")
+        self.radius = float(radius)
+        self.kappa = float(kappa)
+        self.dhat = float(dhat)
+        self.n_nodes = int(n_nodes)
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        dof = np.arange(3)
+        ni = 3 * self.nodes[:, None] + dof  # (K, 3)
+        nc = np.broadcast_to(3 * self.center + dof, ni.shape)
+        blocks = []
+        for r, c in ((ni, ni), (ni, nc), (nc, ni)):
+            blocks.append((np.repeat(r, 3, axis=1), np.tile(c, (1, 3))))  # (K, 9) each
+        rows = np.concatenate([b[0] for b in blocks], axis=1).ravel()
+        cols = np.concatenate([b[1] for b in blocks], axis=1).ravel()
+        rc, cc = node_block_pattern(np.array([self.center]))
+        return np.concatenate([rows, rc]), np.concatenate([cols, cc])
+
+    def gradient(self, x, grad):
+        args = (x, self.nodes, self.center, self.radius, self.kappa, self.dhat, grad)
+        return pair_gradient(*args)
+
+    def energy(self, x):
+        return self.gradient(x, np.zeros_like(x))
+
+    def hessian(self, x, values):
+        args = (x, self.nodes, self.center, self.radius, self.kappa, self.dhat, values)
+        return pair_hessian(*args) > 0
+
+    def stiffness(self) -> np.ndarray:
+        k = np.zeros(self.n_nodes)
+        k[self.center] = self.kappa  # the ball's scale, for the regularisation
+        return k
+
+    def gap(self, x) -> np.ndarray:
+        """Each contact node's distance to the ball's surface (> 0 outside)."""
+        out = np.empty(len(self.nodes))
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        pair_gap(x, self.nodes, self.center, self.radius, out)
+        return out
+
+    def max_step(self, x, dx) -> float:
+        return pair_max_step(x, dx, self.nodes, self.center, self.radius)
+
+
+class Path:
+    """The centre c(t) = c0 + velocity * integral_0^t f of a ball on a prescribed path,
+    with f the ``history`` factor (1 without one): the velocity at t is velocity f(t)."""
+
+    def __init__(self, start, velocity, history=None):
+        self.start = np.asarray(start, dtype=np.float64)
+        self.velocity = np.asarray(velocity, dtype=np.float64)
+        self.history = history
+
+    def distance(self, t: float) -> float:
+        """integral_0^t f (exact for the piecewise linear factor)."""
+        h = self.history
+        if h is None:
+            return t
+        ts = np.concatenate([[0.0], h.times[(h.times > 0.0) & (h.times < t)], [t]])
+        fs = np.interp(ts, h.times, h.factors)
+        return float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(ts)))
+
+    def __call__(self, t: float) -> np.ndarray:
+        return self.start + self.velocity * self.distance(t)
+
+
+@register("guide")
+class Guide(Term):
+    """The spring k |x_c - anchor|^2 / 2 holding node ``center`` on ``path``: the anchor is
+    path(t) at the end of every time step; static load steps keep it where it is."""
+
+    role = "internal"
+    convex = True
+
+    def __init__(self, center: int, path: Path, stiffness: float, *, n_nodes: int):
+        if not (math.isfinite(stiffness) and stiffness > 0):
+            raise ValueError(f"guide: stiffness = {stiffness!r}: must be > 0")
+        self.center = int(center)
+        self.path = path
+        self.k = float(stiffness)
+        self.anchor = path(0.0).copy()
+        self.n_nodes = int(n_nodes)
+
+    def begin_step(self, x, time) -> None:
+        if time is not None:
+            self.anchor = self.path(time)
+
+    def pattern(self):
+        return node_block_pattern(np.array([self.center]))
+
+    def gradient(self, x, grad):
+        u = x[self.center] - self.anchor
+        grad[self.center] += self.k * u
+        return 0.5 * self.k * float(u @ u)
+
+    def energy(self, x):
+        u = x[self.center] - self.anchor
+        return 0.5 * self.k * float(u @ u)
+
+    def hessian(self, x, values):
+        values[:] = 0.0
+        values[0::4] = self.k  # the 3x3 identity, row-major: entries 0, 4, 8
+        return True
+
+    def roundoff(self, x, energy):
+        return self.k * float(np.abs(self.anchor).max() + np.abs(x[self.center]).max()), abs(energy)
+
+    def stiffness(self) -> np.ndarray:
+        k = np.zeros(self.n_nodes)
+        k[self.center] = self.k
+        return k
+
+    def lag(self, x) -> float:
+        """How far the ball is behind its path [m]."""
+        return float(np.linalg.norm(x[self.center] - self.anchor))
