@@ -34,6 +34,10 @@ _NO_ELEMS = np.zeros((0, 2), dtype=np.int64)
 _NO_DOFS = np.zeros(0, dtype=np.int64)
 
 
+#: Below this many Hessian values (about 1e5 edges), the pattern is made by one np.unique
+#: (milliseconds, nothing to compile); above it, at node level by a kernel (linear time).
+SMALL_PATTERN = 4_000_000
+
 class System:
     """The internal energy terms of a net (default: its stretching) on its free DOFs.
 
@@ -58,7 +62,10 @@ class System:
 
         # The pattern: every term's entries on free DOFs, and the diagonal.
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
-        found = self._block_pattern() or self._entry_pattern()
+        if self._entry_count() <= SMALL_PATTERN:
+            found = self._unique_pattern()
+        else:
+            found = self._block_pattern() or self._entry_pattern()
         self.indptr, self.indices, targets, self.diag_pos = found
         self.nnz = int(self.indices.size)
         for term, target in zip(self.terms, targets, strict=True):
@@ -101,6 +108,41 @@ class System:
                 return None  # the term couples DOFs the edges do not
             targets.append(target)
         return indptr, indices, targets, diag
+
+    def _entry_count(self) -> int:
+        """How many Hessian values the terms have (36 per edge for the stretching)."""
+        return sum(self._entries(term)[3] for term in self.terms)
+
+    def _unique_pattern(self) -> tuple:
+        """The pattern by one np.unique over the keys row * n + col of every kept entry:
+        for small systems, where it takes milliseconds and the kernels of the other two
+        ways would first have to compile (seconds on a first run; the same arrays)."""
+        width = max(self.n_free, 1)
+        parts, kept = [], []
+        for term in self.terms:
+            pattern = term.pattern()
+            if pattern is None:
+                kept.append(np.zeros(0, bool))
+                continue
+            rows, cols = self._reduced[pattern[0]], self._reduced[pattern[1]]
+            keep = (rows >= 0) & (cols >= 0)
+            if self.upper:
+                keep &= rows <= cols
+            parts.append((rows * width + cols)[keep])
+            kept.append(keep)
+        diag = np.arange(self.n_free, dtype=np.int64)
+        parts.append(diag * width + diag)
+        unique, inverse = np.unique(np.concatenate(parts), return_inverse=True)
+        indptr = np.zeros(self.n_free + 1, dtype=np.int32)
+        np.cumsum(np.bincount(unique // width, minlength=self.n_free), out=indptr[1:])
+        targets, start = [], 0
+        for keep in kept:
+            target = np.full(keep.size, -1, dtype=np.int64)
+            count = int(keep.sum())
+            target[np.flatnonzero(keep)] = inverse[start : start + count]
+            start += count
+            targets.append(target)
+        return indptr, (unique % width).astype(np.int32), targets, inverse[start:]
 
     def _entry_pattern(self) -> tuple:
         """The pattern from every entry of every term (catenet.kernels.pattern): bucketed

@@ -13,6 +13,14 @@ from catenet.terms.contact import Plane
 from catenet.terms.inertia import Inertia
 
 
+@pytest.fixture(autouse=True)
+def kernels_for_every_size(monkeypatch):
+    """These tests check the kernels' ways, which System takes above SMALL_PATTERN."""
+    import catenet.assembly
+
+    monkeypatch.setattr(catenet.assembly, "SMALL_PATTERN", -1)
+
+
 def reference(net, terms, upper):
     """The former construction: keys of every kept entry, one np.unique over them all."""
     free = np.repeat(~net.fixed, 3)
@@ -129,3 +137,23 @@ def test_a_term_outside_the_pattern_is_refused_and_one_inside_is_placed():
     assert np.array_equal(wide.target(terms[1]), targets[1]) and (targets[1] >= 0).sum() == 3
     assert np.array_equal(wide.target(terms[0]), targets[0])
     assert np.array_equal(wide.diag_pos, diag)
+
+
+@pytest.mark.parametrize("upper", [True, False])
+def test_small_systems_take_np_unique_and_get_the_same_arrays(monkeypatch, upper):
+    """Below SMALL_PATTERN values the pattern comes from one np.unique (no kernel to
+    compile on a first run); the arrays are the kernels' to the last entry."""
+    import catenet.assembly
+
+    net = random_net(5)
+    free = np.flatnonzero(~net.fixed)
+    terms = [Stretch(net), Plane(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)]
+    by_kernels = System(net, terms, upper=upper)
+    monkeypatch.setattr(catenet.assembly, "SMALL_PATTERN", 10**9)
+    small = System(net, terms, upper=upper)
+    assert small._entry_count() <= catenet.assembly.SMALL_PATTERN
+    for name in ("indptr", "indices", "diag_pos"):
+        a, b = getattr(small, name), getattr(by_kernels, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+    for term in terms:
+        assert np.array_equal(small.target(term), by_kernels.target(term))

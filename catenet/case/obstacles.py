@@ -186,7 +186,7 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
         if not math.isfinite(kappa):
             raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
         terms.append(term)
-        if obs.friction > 0:  # Coulomb friction rides on the barrier (catenet.terms.friction)
+        if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
             from catenet.terms.friction import Friction
 
             slip = obs.slip if obs.slip is not None else dhat

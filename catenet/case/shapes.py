@@ -28,7 +28,6 @@ def _stiffness():
 class BoxObstacle(Declared):
     """A fixed rigid box (a piece of debris, a block), optionally rotated."""
 
-    friction = 0.0  # frictionless (not a key of these kinds)
 
     kind: str = choice("box", ("box",), doc="a box")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="box: centre")
@@ -59,7 +58,6 @@ class BoxObstacle(Declared):
 class CapsuleObstacle(Declared):
     """A fixed rigid capsule (a boom, a pipe): all within `radius` of `start`-`end`."""
 
-    friction = 0.0  # frictionless (not a key of these kinds)
 
     kind: str = choice("capsule", ("capsule",), doc="a capsule")
     start: tuple = vec3(
@@ -84,7 +82,6 @@ class CapsuleObstacle(Declared):
 class MeshObstacle(Declared):
     """A fixed rigid body given by a closed triangle surface (a satellite, a rock)."""
 
-    friction = 0.0  # frictionless (not a key of these kinds)
 
     kind: str = choice("mesh", ("mesh",), doc="a closed triangle mesh from a file")
     file: str = text(

@@ -84,7 +84,7 @@ def command(
     \b
     step-size   dynamic relaxation time against h (paper Fig. B10), n = 10, 22, 34
     pareto      run time against error (method, h, rtol, edge length)
-    scale       static solve from 1e3 to 1e6 DOF (--quick: to 1e5): time split, memory
+    scale       static solve from 1e3 to 1e7 DOF (--quick: to 1e5): time split, memory
     baseline    catenet against plain NumPy/SciPy/pypardiso (and OpenSees if it imports)
     skips       what skipping saves: static, gravity, output, re-analysis, mtype, threads
     cold-start  catenet --help, catenet run with an empty and a warm JIT cache

@@ -160,7 +160,13 @@ def block_pattern(edges, rank, n_nodes, upper):
                 seen[j] = i
                 nbr[w] = j
                 w += 1
-        nbr[w0:w].sort()
+        for p in range(w0 + 1, w):  # insertion sort: a node has few neighbours, and
+            j = nbr[p]  # it compiles in a fraction of the time of ndarray.sort
+            q = p - 1
+            while q >= w0 and nbr[q] > j:
+                nbr[q + 1] = nbr[q]
+                q -= 1
+            nbr[q + 1] = j
         lo[i] = w0
         hi[i] = w
         if upper:
