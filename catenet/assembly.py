@@ -38,6 +38,7 @@ _NO_DOFS = np.zeros(0, dtype=np.int64)
 #: (milliseconds, nothing to compile); above it, at node level by a kernel (linear time).
 SMALL_PATTERN = 4_000_000
 
+
 class System:
     """The internal energy terms of a net (default: its stretching) on its free DOFs.
 

@@ -14,6 +14,7 @@ from catenet.memory import (  # noqa: F401  (re-exported)
     physical_memory,
 )
 
+
 def estimate_size(geometry: GeometryConfig) -> tuple[float, float, float, str]:
     """(nodes, edges, junctions, key path of what drives the size), estimated from the
     parameters alone (see each kind's ``estimate_size``)."""

@@ -28,7 +28,6 @@ def _stiffness():
 class BoxObstacle(Declared):
     """A fixed rigid box (a piece of debris, a block), optionally rotated."""
 
-
     kind: str = choice("box", ("box",), doc="a box")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="box: centre")
     half_size: tuple = vec3(
@@ -58,7 +57,6 @@ class BoxObstacle(Declared):
 class CapsuleObstacle(Declared):
     """A fixed rigid capsule (a boom, a pipe): all within `radius` of `start`-`end`."""
 
-
     kind: str = choice("capsule", ("capsule",), doc="a capsule")
     start: tuple = vec3(
         missing="[x, y, z] of one end of the axis [m]", unit="m", doc="capsule: axis start"
@@ -81,7 +79,6 @@ class CapsuleObstacle(Declared):
 @dataclass(frozen=True, kw_only=True)
 class MeshObstacle(Declared):
     """A fixed rigid body given by a closed triangle surface (a satellite, a rock)."""
-
 
     kind: str = choice("mesh", ("mesh",), doc="a closed triangle mesh from a file")
     file: str = text(
