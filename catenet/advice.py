@@ -130,9 +130,9 @@ class Trajectory:
 def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
     """The size of the trajectory ``case`` will write for ``net`` (None: no trajectory,
     output.every = 0). Per frame: positions (N x 3), tensions (M), velocities (N x 3,
-    dynamic) and the time, 8 bytes each. Frames: dynamic, the initial state, every
-    ``every``-th of the (t_end - t0) / dt steps and the last; static, every ``every``-th
-    of the load steps and the last."""
+    dynamic), the newmark scheme's accelerations (N x 3) and the time, 8 bytes each.
+    Frames: dynamic, the initial state, every ``every``-th of the (t_end - t0) / dt steps
+    and the last; static, every ``every``-th of the load steps and the last."""
     every = int(case.output.every)
     if every <= 0:
         return None
@@ -141,7 +141,7 @@ def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
     if solver.method == "dynamic":
         steps = max(1, math.ceil((solver.t_end - t0) / solver.dt * (1 - 1e-12)))
         frames = 1 + math.ceil(steps / every)
-        values = 6 * n + m
+        values = (9 if solver.integrator == "newmark" else 6) * n + m
     else:
         frames = math.ceil(solver.steps / every)
         values = 3 * n + m

@@ -24,7 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
-from catenet.integrators import RHO_INF, make
+from catenet.integrators import RHO_INF, Newmark, make
 from catenet.kernels.sparse import norm
 from catenet.net import Loads, Net
 from catenet.newton import Reuse, solve
@@ -58,6 +58,8 @@ def solve_dynamic(
     reuse: bool = False,
     integrator: str = "implicit_euler",
     rho_inf: float = RHO_INF,
+    a0: np.ndarray | None = None,
+    a_out: np.ndarray | None = None,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -74,7 +76,11 @@ def solve_dynamic(
     repeat the uninterrupted run exactly). ``reuse=False``: a factorisation per iteration.
 
     ``integrator``: "implicit_euler" (the paper's) or "newmark" (second order, its
-    high-frequency dissipation ``rho_inf``; catenet/integrators.py).
+    high-frequency dissipation ``rho_inf``; catenet/integrators.py). Its acceleration
+    state (N, 3), 0 at the supports: ``a0`` the start's (a restart's stored one; None:
+    the physical acceleration), ``a_out`` an array kept equal to it after the start and
+    every accepted step, and the result's ``a``; implicit Euler has none (``a0`` ignored,
+    ``a_out`` left alone, the result's ``a`` None).
 
     Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
     with one rounding while the step is dt), not sums of the steps' round-off.
@@ -90,10 +96,7 @@ def solve_dynamic(
     ws = workspace or Workspace(net, linear=linear)
     system = ws.system
     free = system.free_dofs
-    m_free = np.repeat(mass[~net.fixed], 3)
-    if net.bodies:  # mu damps the net, not a rigid body's flight (catenet/terms/body.py)
-        body = np.repeat(np.flatnonzero(~net.fixed) >= net.n_net, 3)
-        damping = np.where(body, 0.0, damping)
+    m_free, damping = _mass_and_damping(net, damping)
     inertia = Inertia(free)  # the step's inertia and damping, refilled every step
     potential = ws.potential(loads, steps=(inertia,))
     start = time.perf_counter()
@@ -117,7 +120,11 @@ def solve_dynamic(
     message = ""
     interrupted = False
     x_trial = np.empty_like(x)
-    scheme.begin(potential_at(potential, loads, net, t0), x, v, m_free, damping)
+    if a0 is not None and np.shape(a0) != net.nodes.shape:
+        raise ConfigError(f"a0: must have shape {net.nodes.shape}")
+    a_free = None if a0 is None else np.asarray(a0, dtype=np.float64).reshape(-1)[free]
+    scheme.begin(potential_at(potential, loads, net, t0), x, v, m_free, damping, a_free)
+    _store(scheme, a_out, free)
     kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
     fresh = False  # this step's retry with fresh factorisations (its kept one failed)
     while t < t_end * (1 - 1e-12) and not equilibrium:
@@ -144,7 +151,7 @@ def solve_dynamic(
             newton = solve(
                 potential,
                 x_trial,
-                rtol=rtol,
+                rtol=rtol * scheme.step_rtol,
                 max_iter=max_iter,
                 label="step",
                 reuse=None if fresh else kept,
@@ -179,6 +186,7 @@ def solve_dynamic(
                 )
             continue
         v = scheme.accept(x_trial, x, v, free, h_step)  # Eq. 10c for implicit Euler
+        _store(scheme, a_out, free)
         x[:] = x_trial
         t = _advance(t, h_step, t0, t_end, quantum)
         steps += 1
@@ -211,10 +219,43 @@ def solve_dynamic(
         steps=steps,
         time=t,
         v=v,
+        a=None if scheme.a is None else _store(scheme, np.zeros_like(x), free),
         message=message,
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
     )
+
+
+def _mass_and_damping(net: Net, damping: float):
+    """The free DOFs' masses and mass-proportional damping (mu damps the net, not a rigid
+    body's flight: catenet/terms/body.py)."""
+    m_free = np.repeat(net.mass[~net.fixed], 3)
+    if net.bodies:
+        body = np.repeat(np.flatnonzero(~net.fixed) >= net.n_net, 3)
+        damping = np.where(body, 0.0, damping)
+    return m_free, damping
+
+
+def _store(scheme, out: np.ndarray | None, free: np.ndarray) -> np.ndarray | None:
+    """The scheme's acceleration state into ``out`` (N, 3) on the free DOFs (if both
+    exist); returns ``out``."""
+    if out is not None and scheme.a is not None:
+        out.reshape(-1)[free] = scheme.a
+    return out
+
+
+def start_acceleration(
+    net: Net, loads: Loads, x, v, *, damping: float, t: float, workspace: Workspace
+) -> np.ndarray:
+    """The physical acceleration M^-1 (f(t) - grad E(x)) - mu v (N, 3), 0 at the
+    supports: the newmark scheme's state at the start of a run (solve_dynamic without
+    ``a0``), for the result file's first frame."""
+    x = np.asarray(x, dtype=np.float64)
+    m_free, mu = _mass_and_damping(net, damping)
+    scheme = Newmark()
+    potential = potential_at(workspace.potential(loads), loads, net, t)
+    scheme.begin(potential, x, np.asarray(v, dtype=np.float64), m_free, mu)
+    return _store(scheme, np.zeros_like(x), workspace.system.free_dofs)
 
 
 def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> float:

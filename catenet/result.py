@@ -18,6 +18,8 @@ class Result:
     """A solved state of a net.
 
     x : (N, 3) positions [m];  v : (N, 3) velocities [m/s] (dynamic runs) or None
+    a : (N, 3) the integrator's acceleration state [m/s^2] (newmark runs; 0 at the
+        supports), which a restart goes on from, or None
     tension : (M,) axial forces EA*eps [N], 0 when slack
     reaction : (N, 3) force each support exerts on the net [N] (0 at free nodes);
         reactions and applied loads sum to zero at equilibrium
@@ -48,6 +50,7 @@ class Result:
     stable: bool | None = None
     history: list[float] = field(default_factory=list)
     stats: dict = field(default_factory=dict)
+    a: np.ndarray | None = None
 
 
 def finish(

@@ -31,13 +31,15 @@ Stop = Callable[[], bool]
 
 @dataclass
 class RestartState:
-    """Where a dynamic run goes on from: time, positions and velocities."""
+    """Where a dynamic run goes on from: time, positions, velocities and the newmark
+    scheme's acceleration state (None: not in the file, or not a newmark case)."""
 
     path: Path
     t: float
     x: np.ndarray
     v: np.ndarray
     source: str
+    a: np.ndarray | None = None
 
 
 def output_path(case, out: str | Path | None = None) -> Path | None:
@@ -82,7 +84,16 @@ def read_restart(path: str | Path, scene) -> RestartState:
             f"{label}: its last state is at t = {frame.t:.6g} s, not before solver.t_end = "
             f"{t_end!r}: raise solver.t_end to go on"
         )
-    return RestartState(path, frame.t, frame.x, frame.v, frame.source)
+    a = frame.a if scene.case.solver.integrator == "newmark" else None
+    if a is not None and not (a.shape == frame.x.shape and np.all(np.isfinite(a))):
+        raise ConfigError(f"{label}: its stored accelerations (/trajectory/a) are not usable")
+    if a is None and scene.case.solver.integrator == "newmark":
+        log.info(
+            "%s: holds no newmark acceleration state: the run goes on from the physical "
+            "acceleration (not exactly as the uninterrupted run would)",
+            label,
+        )
+    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a)
 
 
 def _mesh_mismatch(mesh, net) -> list[str]:
@@ -127,7 +138,8 @@ def run_case(
 
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
-    frame (time, positions, velocities) and writes a new file. ``progress(done, total)``
+    frame (time, positions, velocities and, for newmark, the scheme's acceleration state)
+    and writes a new file. ``progress(done, total)``
     is called after every step (time and t_end, or load factor and 1); dynamic runs add
     ``rest``, how far the state is from rest (``catenet.solve.Step.rest``). ``stop()`` is
     asked after every step; True ends the run there (``converged = False``, message
@@ -186,8 +198,16 @@ def run_case(
         attrs["restart_time"] = float(state.t)
     if getattr(case, "source", ""):
         attrs["source"] = str(case.source)
+    newmark = solver.method == "dynamic" and solver.integrator == "newmark"
     writer = (
-        ResultWriter(path, scene, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs)
+        ResultWriter(
+            path,
+            scene,
+            every=case.output.every,
+            xdmf=case.output.xdmf,
+            accelerations=newmark,
+            attrs=attrs,
+        )
         if path is not None
         else _NoFile()
     )
@@ -245,10 +265,11 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
 
         clock = Clock()
 
-    def keep(step, t, x, v, tension=None, force=False) -> None:
+    def keep(step, t, x, v, tension=None, force=False, a=None) -> None:
         if (force or writer.wants(step)) and written["step"] != step:
             with clock.aside():  # writing is neither start-up nor solving
-                writer.frame(t, x, v, ws.system.tension(x) if tension is None else tension)
+                tension = ws.system.tension(x) if tension is None else tension
+                writer.frame(t, x, v, tension, a=a)
             written["step"] = step
 
     if dynamic:
@@ -256,23 +277,30 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         if state is None:
             start = sv.Start(v=v_start, t=0.0)
         else:
-            start = sv.Start(state.x, state.v, state.t)
+            start = sv.Start(state.x, state.v, state.t, state.a)
         x0 = scene.net.nodes.copy() if state is None else state.x.copy()
         x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
         v0 = start.v if start.v is not None else np.zeros_like(x0)
-        keep(0, start.t, x0, v0)
+        a0 = start.a
+        if a0 is None and settings.integrator == "newmark" and writer.wants(0):
+            from catenet.dynamic import start_acceleration
+
+            a0 = start_acceleration(
+                scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
+            )
+        keep(0, start.t, x0, v0, a=a0)
 
     def on_step(step: sv.Step) -> bool:
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
-        keep(step.index, step.time, step.x, step.v, tension, force=last)
+        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
         if progress is not None:
             if dynamic:
                 progress(step.time, total, rest=step.rest)
             else:
                 progress(step.time, total)
         if stop is not None and stop():
-            keep(step.index, step.time, step.x, step.v, tension, force=dynamic)
+            keep(step.index, step.time, step.x, step.v, tension, force=dynamic, a=step.a)
             return True
         return False
 
@@ -287,7 +315,9 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         t = float(exc.time)
         if dynamic:  # the last good state is the file's last frame, then /result
             try:
-                keep(exc.steps, t, x, exc.velocity, force=True)
+                keep(
+                    exc.steps, t, x, exc.velocity, force=True, a=getattr(exc, "acceleration", None)
+                )
             except CatenetError:
                 pass
         res = finish(
@@ -303,6 +333,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             steps=int(exc.steps),
             time=t,
             v=exc.velocity,
+            a=getattr(exc, "acceleration", None),
             message="interrupted" if stopped else str(exc),
             wall_time=time.perf_counter() - begin,
             stats={**ws.stats(), **_times(clock)},
@@ -314,7 +345,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         _write_result(writer, res, failed=exc)
         raise
     if dynamic:
-        keep(res.steps, res.time, res.x, res.v, force=True)
+        keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
     else:
         res.wall_time = time.perf_counter() - begin
     if res.message == "interrupted":

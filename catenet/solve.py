@@ -84,19 +84,22 @@ class Problem:
 @dataclass(frozen=True)
 class Start:
     """Where a run starts: positions (N, 3), velocities (dynamic; None: the scene's
-    initial velocities, if any, else at rest) and time."""
+    initial velocities, if any, else at rest), time and the newmark scheme's
+    acceleration state (N, 3) (a restart's; None: the physical acceleration)."""
 
     x: np.ndarray | None = None
     v: np.ndarray | None = None
     t: float = 0.0
+    a: np.ndarray | None = None
 
 
 @dataclass
 class Step:
     """An equilibrium of a static run (``time`` = load factor, ``result`` its Result) or
-    an accepted time step of a dynamic run (``v`` the velocities; ``rest``: how far the
-    state is from rest, max(static residual, inertial force) / tolerance, at most 1 at
-    rest; nan until the supports have settled)."""
+    an accepted time step of a dynamic run (``v`` the velocities, ``a`` the newmark
+    scheme's acceleration state, else None; ``rest``: how far the state is from rest,
+    max(static residual, inertial force) / tolerance, at most 1 at rest; nan until the
+    supports have settled)."""
 
     index: int
     time: float
@@ -104,6 +107,7 @@ class Step:
     v: np.ndarray | None = None
     result: Result | None = None
     rest: float = float("nan")
+    a: np.ndarray | None = None
 
 
 OnStep = Callable[[Step], bool | None]
@@ -197,6 +201,8 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
     v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
     x0[net.fixed] = loads.support_positions(net, time=start.t)
     last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy(), "rest": float("nan")}
+    accel = np.zeros_like(x0) if settings.integrator == "newmark" else None
+    last["a"] = None if start.a is None else np.array(start.a, dtype=np.float64)
 
     def rest(ratio: float) -> None:
         last["rest"] = ratio
@@ -204,10 +210,11 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
     def seen(step: int, t: float, x, v) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
             raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
-        last.update(steps=step, t=t, x=x.copy(), v=v.copy())
+        a = None if accel is None else accel.copy()
+        last.update(steps=step, t=t, x=x.copy(), v=v.copy(), a=a)
         if on_step is None:
             return False
-        return bool(on_step(Step(step, t, x, v, rest=last["rest"])))
+        return bool(on_step(Step(step, t, x, v, rest=last["rest"], a=a)))
 
     try:
         return solve_dynamic(
@@ -226,17 +233,24 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
             integrator=settings.integrator,
             rho_inf=settings.rho_inf,
             reuse=settings.reuse,
+            a0=start.a,
+            a_out=accel,
         )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
             raise
         iterations = int(getattr(exc, "iterations", 0))
+        if last["steps"] == 0 and accel is not None:
+            last["a"] = accel.copy()  # the start's state: solve_dynamic set it first
         _annotate(exc, last["x"], last["v"], last["t"], last["steps"], iterations)
+        exc.acceleration = last["a"]
         raise
 
 
 def _annotate(exc, x, v, t, steps, iterations) -> None:
-    """What a failed run keeps: the last good state, its time, steps and iterations."""
+    """What a failed run keeps: the last good state, its time, steps and iterations
+    (a dynamic run's also its acceleration state, ``acceleration``: None when none)."""
     exc.state, exc.velocity, exc.time, exc.steps, exc.iterations = x, v, t, steps, iterations
+    exc.acceleration = None
     if not hasattr(exc, "history"):
         exc.history = []

@@ -187,20 +187,33 @@ def test_spectral_properties():
 
 
 def test_a_restart_repeats_the_uninterrupted_run():
-    """Average acceleration continues from (x, v) exactly (to the Newton tolerance); with
-    rho_inf < 1 the restart starts from the physical acceleration and differs from the
-    uninterrupted run by a transient within the discretisation error."""
+    """Going on from the scheme's whole state (x, v and its acceleration a) repeats the
+    uninterrupted run to round-off, also with rho_inf < 1, where a is a filtered
+    acceleration. Without a (a file that does not store it) the restart starts from the
+    physical acceleration: exact for average acceleration, and with rho_inf < 1 a
+    transient within the discretisation error (h against h/2)."""
     for rho_inf in (1.0, RHO_INF):
         whole = string_run("newmark", 1e-3, 0.1, rho_inf=rho_inf)
         half = string_run("newmark", 1e-3, 0.05, rho_inf=rho_inf)
-        rest = string_run("newmark", 1e-3, 0.1, rho_inf=rho_inf, x0=half.x, v0=half.v, t0=half.time)
+        assert half.a.shape == half.x.shape and np.all(half.a[[0, -1]] == 0.0)
+        moved = np.abs(whole.x - string()[0].nodes).max()
+        state = {"x0": half.x, "v0": half.v, "t0": half.time}
+        exact = string_run("newmark", 1e-3, 0.1, rho_inf=rho_inf, a0=half.a, **state)
+        assert exact.time == whole.time and exact.steps == half.steps == 50
+        assert np.abs(exact.x - whole.x).max() <= 1e-12 * moved
+        np.testing.assert_allclose(exact.a, whole.a, rtol=0, atol=1e-9 * np.abs(whole.a).max())
+        rest = string_run("newmark", 1e-3, 0.1, rho_inf=rho_inf, **state)
         assert rest.time == whole.time and rest.steps == half.steps == 50
         off = np.abs(rest.x - whole.x).max()
         if rho_inf == 1.0:
-            assert off < 1e-12 * np.abs(whole.x - string()[0].nodes).max()
+            assert off < 1e-12 * moved
         else:  # well within the discretisation error (h against h/2)
             finer = string_run("newmark", 5e-4, 0.1, rho_inf=rho_inf)
-            assert 0.0 < off < 0.2 * np.abs(finer.x - whole.x).max()
+            assert 1e-9 * moved < off < 0.2 * np.abs(finer.x - whole.x).max()
+    euler = string_run("implicit_euler", 1e-3, 0.01, a0=np.ones_like(whole.x))
+    assert euler.a is None  # implicit Euler has no acceleration state
+    with pytest.raises(ConfigError, match=r"a0: must have shape \(11, 3\)"):
+        string_run("newmark", 1e-3, 0.01, a0=np.zeros(3))
 
 
 def cable_case(t_end: float, **solver) -> dict:
@@ -234,6 +247,98 @@ def test_runner_restart_and_velocities_of_a_newmark_case(tmp_path):
     with h5py.File(tmp_path / "whole.h5", "r") as h5:  # the resolved case names the scheme
         solver = tomllib.loads(h5.attrs["case"])["solver"]
     assert (solver["integrator"], solver["rho_inf"]) == ("newmark", 1.0)
+
+
+def test_catenet_run_restart_of_a_dissipative_newmark_run_is_exact(tmp_path):
+    """With rho_inf < 1 the result file keeps the scheme's acceleration state with every
+    frame and /result (/trajectory/a, /result/a), and `catenet run --restart` goes on
+    from it: the restarted run repeats the uninterrupted one to round-off. A file without
+    it (an older one) restarts from the physical acceleration, as before; implicit Euler
+    files do not store it."""
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+    from catenet.output import read_frame
+    from catenet.output.repair import recover
+
+    case = tmp_path / "case.toml"
+    case.write_text(parse_case(cable_case(0.2, rho_inf=0.8)).to_toml())
+
+    def run(*args):
+        r = CliRunner().invoke(main, ["run", str(case), *map(str, args)])
+        assert r.exit_code == 0, r.output
+        with h5py.File(args[1], "r") as h5:
+            return {k: h5[f"result/{k}"][()] for k in ("x", "v", "a") if k in h5["result"]}
+
+    whole = run("-o", tmp_path / "whole.h5")
+    run("-o", tmp_path / "first.h5", "--set", "solver.t_end=0.1")
+    second = run("-o", tmp_path / "second.h5", "--restart", tmp_path / "first.h5")
+    moved = np.abs(whole["x"][:, 2]).max()
+    assert moved > 1e-3
+    assert np.abs(second["x"] - whole["x"]).max() <= 1e-12 * moved
+    assert np.abs(second["v"] - whole["v"]).max() <= 1e-12 * np.abs(whole["v"]).max()
+    assert np.abs(second["a"] - whole["a"]).max() <= 1e-9 * np.abs(whole["a"]).max()
+
+    first = read_frame(tmp_path / "first.h5")
+    with h5py.File(tmp_path / "first.h5", "r") as h5:
+        frames = h5["trajectory/a"][()]
+        fixed = h5["mesh/fixed"][()]
+        np.testing.assert_array_equal(h5["result/a"][()], first.a)
+    assert frames.shape == (5, 11, 3) and first.t == pytest.approx(0.1)
+    assert np.all(frames[:, fixed] == 0.0)
+    # The first frame holds the start's physical acceleration: gravity less mu v.
+    start = read_frame(tmp_path / "first.h5", 0)
+    free = ~fixed
+    expected = -9.81 - 0.5 * start.v[free, 2]
+    np.testing.assert_allclose(frames[0][free, 2], expected, rtol=1e-6)
+    np.testing.assert_array_equal(
+        read_frame(recover(tmp_path / "first.h5", tmp_path / "c.h5")).a, first.a
+    )
+
+    # An older file: no acceleration state, the restart starts from the physical one.
+    with h5py.File(tmp_path / "c.h5", "r+") as h5:
+        del h5["trajectory/a"], h5["result/a"]
+    assert read_frame(tmp_path / "c.h5").a is None
+    r = CliRunner().invoke(
+        main,
+        ["run", str(case), "-v", "-o", str(tmp_path / "o.h5"), "--restart", str(tmp_path / "c.h5")],
+    )
+    assert r.exit_code == 0 and "holds no newmark acceleration state" in r.output
+    old = read_frame(tmp_path / "o.h5")
+    off = np.abs(old.x - whole["x"]).max()
+    assert 1e-9 * moved < off < 1e-2 * moved
+
+    # implicit Euler keeps no acceleration state
+    euler = run("-o", tmp_path / "euler.h5", "--set", "solver.integrator=implicit_euler")
+    assert "a" not in euler
+    with h5py.File(tmp_path / "euler.h5", "r") as h5:
+        assert "a" not in h5["trajectory"] and "v" in h5["trajectory"]
+
+
+@pytest.mark.parametrize("how", ["stop", "interrupt"])
+def test_an_interrupted_newmark_run_restarts_exactly(tmp_path, how):
+    """A run stopped between steps (stop) or within one (interrupt, as Ctrl-C) keeps the
+    acceleration state of its last good step with the last frame and /result; the
+    restart repeats the uninterrupted run to round-off."""
+    case = parse_case(cable_case(0.2, rho_inf=0.8))
+    whole = run_case(case, tmp_path / "whole.h5")
+    calls = {"n": 0}
+
+    def ask():
+        calls["n"] += 1
+        return calls["n"] >= (7 if how == "stop" else 15)
+
+    kw = {"stop": ask} if how == "stop" else {"interrupt": ask}
+    part = run_case(case, tmp_path / "part.h5", **kw)
+    assert part.message == "interrupted" and 0 < part.steps < whole.steps
+    assert part.a is not None and np.any(part.a != 0.0)
+    with h5py.File(tmp_path / "part.h5", "r") as h5:
+        np.testing.assert_array_equal(h5["trajectory/a"][-1], part.a)
+        np.testing.assert_array_equal(h5["result/a"][()], part.a)
+    rest = run_case(case, tmp_path / "rest.h5", restart=tmp_path / "part.h5")
+    assert part.steps + rest.steps == whole.steps
+    moved = np.abs(whole.x[:, 2]).max()
+    assert np.abs(rest.x - whole.x).max() <= 1e-12 * moved
 
 
 # --------------------------------------------------------------------------- the keys

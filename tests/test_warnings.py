@@ -197,6 +197,15 @@ def test_trajectory_estimate_bounds_the_file(tmp_path, write_case):
     assert result.stats["trajectory_bytes"] == est.bytes
     static = case_of(write_case, STATIC, "solver.steps=7", "output.every=3")
     assert advice.trajectory(static, build(static).net).frames == 3  # 3, 6 and 7
+    # newmark files keep the scheme's accelerations too
+    newmark = case_of(write_case, small_net(t_end=0.1, every=2), "solver.integrator=newmark")
+    run_case(newmark, tmp_path / "n.h5")
+    est = advice.trajectory(newmark, build(newmark).net)
+    with h5py.File(tmp_path / "n.h5") as h5:
+        g = h5["trajectory"]
+        frames = len(g["time"])
+        stored = sum(g[k][:frames].nbytes for k in ("x", "v", "a", "tension", "time"))
+    assert est.bytes == stored
     none = case_of(write_case, STATIC, "output.every=0")
     assert advice.trajectory(none, build(none).net) is None
 

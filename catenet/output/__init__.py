@@ -5,8 +5,10 @@
     /                   attrs: catenet_version, case (resolved TOML), created, software
                         versions (<name>_version), linear_backend, threads
     /mesh/nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,)
-    /trajectory/time (T,), x (T, N, 3), v (T, N, 3) (dynamic runs), tension (T, M)
-    /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs)
+    /trajectory/time (T,), x (T, N, 3), v (T, N, 3) (dynamic runs), a (T, N, 3)
+                        (newmark runs: the scheme's acceleration state), tension (T, M)
+    /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs),
+                        a (N, 3) (newmark runs)
     /result             attrs: converged, iterations, residual, steps, wall_time,
                         equilibrium, message, time, delta, delta_over_L, probe, size,
                         max_strain, max_tension, stable (1/0; -1: not checked)

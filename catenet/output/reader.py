@@ -34,7 +34,7 @@ log = logging.getLogger(__name__)
 # SWMR needs the file format of HDF5 1.10; a newer upper bound ("latest") would let the
 # HDF5 library in use write structures that the HDF5 bundled with ParaView cannot read.
 LIBVER = ("v110", "v110")
-TRAJECTORY = ("x", "v", "tension")  # per-frame datasets of /trajectory, besides time
+TRAJECTORY = ("x", "v", "a", "tension")  # per-frame datasets of /trajectory, besides time
 REQUIRED = ("/mesh/nodes", "/mesh/edges")
 
 __all__ = [
@@ -102,8 +102,9 @@ def _complete(g, names, k: int) -> bool:
 @dataclass
 class Frame:
     """One stored state: time (or load factor), positions, velocities (None: not
-    stored), where it came from ("trajectory" frame ``index`` or "result"), and the
-    tensions stored with it (None: not stored)."""
+    stored), where it came from ("trajectory" frame ``index`` or "result"), the
+    tensions stored with it and the integrator's acceleration state (newmark runs; None:
+    not stored)."""
 
     t: float
     x: np.ndarray
@@ -111,6 +112,7 @@ class Frame:
     source: str
     index: int
     tension: np.ndarray | None = None
+    a: np.ndarray | None = None
 
 
 def _array(g, name: str) -> np.ndarray | None:
@@ -122,7 +124,8 @@ def _trajectory_frame(h5, k: int) -> Frame:
     v = np.asarray(g["v"][k], dtype=np.float64) if "v" in g else None
     tension = np.asarray(g["tension"][k], dtype=np.float64) if "tension" in g else None
     x = np.asarray(g["x"][k], dtype=np.float64)
-    return Frame(float(g["time"][k]), x, v, "trajectory", k, tension)
+    a = np.asarray(g["a"][k], dtype=np.float64) if "a" in g else None
+    return Frame(float(g["time"][k]), x, v, "trajectory", k, tension, a)
 
 
 def _frame_index(path, n: int, index: int) -> int:
@@ -151,7 +154,8 @@ def read_frame(path: str | Path, index: int = -1) -> Frame:
             r = h5["result"]
             t = float(r.attrs.get("time", 0.0))
             x = np.asarray(r["x"], dtype=np.float64)
-            return Frame(t, x, _array(r, "v"), "result", -1, _array(r, "tension"))
+            v, tension, a = _array(r, "v"), _array(r, "tension"), _array(r, "a")
+            return Frame(t, x, v, "result", -1, tension, a)
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 

@@ -35,6 +35,7 @@ import numpy as np
 from catenet import measures
 from catenet.errors import ConfigError, OutputError
 from catenet.output.bodies import write_bodies
+from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (
     check_output_path,
     copy_atomically,
@@ -72,36 +73,6 @@ def _check_finite(name: str, value, t: float) -> None:
         )
 
 
-# HDF5's filters on the trajectory's datasets (byte shuffle, then deflate level 4): the
-# writer compresses each frame once itself and writes the chunk to both copies.
-_FILTERS = ((2, ()), (1, (4,)))  # (H5Z_FILTER_SHUFFLE, ...), (H5Z_FILTER_DEFLATE, level)
-
-
-def _filters(ds) -> tuple:
-    plist = ds.id.get_create_plist()
-    out = []
-    for i in range(plist.get_nfilters()):
-        code, _, values, _ = plist.get_filter(i)
-        out.append((code, tuple(values) if code != 2 else ()))
-    return tuple(out)
-
-
-def _encode(batch) -> dict[str, list[bytes]]:
-    """Each frame's arrays as HDF5 stores a one-frame chunk with ``_FILTERS``: bytes
-    shuffled (all first bytes of the float64 values, then all second bytes, ...), then
-    zlib-compressed at level 4."""
-    import zlib
-
-    if not batch:
-        return {}
-    out: dict[str, list[bytes]] = {name: [] for name in batch[0][1]}
-    for _, data in batch:
-        for name, arr in data.items():
-            raw = np.ascontiguousarray(arr, dtype="<f8").view(np.uint8).reshape(-1, 8)
-            out[name].append(zlib.compress(raw.T.tobytes(), 4))
-    return out
-
-
 # --------------------------------------------------------------------------------------------
 # Writer
 # --------------------------------------------------------------------------------------------
@@ -114,7 +85,9 @@ class ResultWriter:
     state, and the file has no /trajectory group). The writer stores what it is given:
     ``frame`` takes a frame (the caller picks which steps, see ``wants``), ``result``
     writes /result. ``velocities`` (default: dynamic cases) adds /trajectory/v and
-    /result/v; ``attrs`` are extra root attributes. ``flush_seconds`` and ``flush_frames``
+    /result/v; ``accelerations`` (newmark runs) adds /trajectory/a and /result/a, the
+    scheme's acceleration state that a restart goes on from; ``attrs`` are extra root
+    attributes. ``flush_seconds`` and ``flush_frames``
     (0: no limit) say how often frames reach the file (see the module's docstring).
 
     ``frames`` counts the frames in the file, ``pending`` those in memory, ``flushes``
@@ -132,6 +105,7 @@ class ResultWriter:
         every: int,
         xdmf: bool = True,
         velocities: bool | None = None,
+        accelerations: bool = False,
         attrs: dict | None = None,
         flush_seconds: float = FLUSH_SECONDS,
         flush_frames: int = FLUSH_FRAMES,
@@ -146,6 +120,7 @@ class ResultWriter:
             solver = getattr(getattr(scene, "case", None), "solver", None)
             velocities = getattr(solver, "method", "static") == "dynamic"
         self.velocities = bool(velocities)
+        self.accelerations = bool(accelerations)
         self.attrs = dict(attrs or {})
         self.flush_seconds = float(flush_seconds)
         self.flush_frames = int(flush_frames)
@@ -273,6 +248,8 @@ class ResultWriter:
         shapes = {"x": (n, 3), "tension": (m,)}
         if self.velocities:
             shapes["v"] = (n, 3)
+        if self.accelerations:
+            shapes["a"] = (n, 3)
         for name in TRAJECTORY:
             if name not in shapes:
                 continue
@@ -294,9 +271,10 @@ class ResultWriter:
         g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
 
     # --- frames ----------------------------------------------------------------------------
-    def frame(self, t: float, x, v=None, tension=None) -> None:
-        """Takes a frame (a copy); it reaches the file with the next flush. ``v`` None
-        stores zeros (when the file keeps velocities); ``tension`` None is computed from x.
+    def frame(self, t: float, x, v=None, tension=None, a=None) -> None:
+        """Takes a frame (a copy); it reaches the file with the next flush. ``v`` (``a``)
+        None stores zeros when the file keeps velocities (accelerations); ``tension`` None
+        is computed from x.
         Raises OutputError for a non-finite frame (not kept). A failed write (a full disk)
         is remembered, and frames stop: the run goes on and ``result`` saves the final
         state elsewhere."""
@@ -311,6 +289,8 @@ class ResultWriter:
         data = {"x": x, "tension": np.array(self._stored_tension(x, tension))}
         if self.velocities:
             data["v"] = np.zeros_like(x) if v is None else np.array(v, dtype=np.float64)
+        if self.accelerations:
+            data["a"] = np.zeros_like(x) if a is None else np.array(a, dtype=np.float64)
         if not math.isfinite(float(t)):
             raise OutputError(f"refusing to write a frame at t = {t!r}: the time must be finite")
         for name, arr in data.items():
@@ -342,7 +322,7 @@ class ResultWriter:
             return True
         start = time.perf_counter()
         n0 = self.frames
-        encoded = _encode(batch)  # compressed once, written twice (or copied)
+        encoded = encode(batch)  # compressed once, written twice (or copied)
         if not self._write_spare(batch, encoded, n0, result):
             return False
         written = time.perf_counter() - start
@@ -381,7 +361,7 @@ class ResultWriter:
         return True
 
     def _write_spare(self, batch, encoded, n0: int, result=None, again: bool = False) -> bool:
-        """Appends ``batch`` (frames n0, n0 + 1, ...; ``encoded``: see ``_encode``) and
+        """Appends ``batch`` (frames n0, n0 + 1, ...; ``encoded``: see ``chunks.encode``) and
         ``result`` to the spare.
         ``again``: the spare is the version just replaced; when it cannot be opened (a
         reader holds it), it is replaced by a copy of the published file."""
@@ -423,7 +403,7 @@ class ResultWriter:
         for name in batch[0][1]:
             held.append(ds := g[name])
             ds.resize(n1, axis=0)
-            if ds.chunks == (1, *ds.shape[1:]) and _FILTERS == _filters(ds):
+            if ds.chunks == (1, *ds.shape[1:]) and FILTERS == filters(ds):
                 zeros = (0,) * (ds.ndim - 1)
                 for k, chunk in enumerate(encoded[name], start=n0):
                     ds.id.write_direct_chunk((k, *zeros), chunk)
@@ -519,6 +499,9 @@ class ResultWriter:
         v = getattr(res, "v", None)
         if self.velocities and v is not None and np.all(np.isfinite(v)):
             g.create_dataset("v", data=np.asarray(v, dtype=np.float64))
+        a = getattr(res, "a", None)
+        if self.accelerations and a is not None and np.all(np.isfinite(a)):
+            g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
         for key, value in result_attrs(res, scene).items():
             g.attrs[key] = value
         for key, value in attrs.items():

@@ -15,6 +15,7 @@ import os
 import shutil
 from pathlib import Path
 
+from catenet.studies.bench import integrators, report_reuse, report_scale
 from catenet.studies.bench import report_sections as sections
 from catenet.studies.bench.report_sections import as_float, as_text, read_study
 
@@ -37,13 +38,15 @@ def write_report(results_dir: Path, docs_dir: Path) -> Path:
         _summary,
         sections.static,
         sections.step_size,
-        sections.scale,
+        report_scale.scale,
         sections.pareto,
         sections.skips,
         sections.cold_start,
         sections.formfind,
         sections.flush,
+        report_reuse.reuse,
         sections.stress,
+        integrators.section,
     ):
         try:
             lines += section(results)
@@ -145,7 +148,11 @@ def _summary(results: Path) -> list[str]:
             f"{as_text(slow['wall_seconds'])} s (h = {as_text(slow['h'], '{:g}')} s) to "
             "equilibrium, against the paper's < 20 s."
         )
-    scale = [r for r in (read_study(results, "scale") or []) if r.get("dofs")]
+    scale = [
+        r
+        for r in (read_study(results, "scale") or [])
+        if r.get("dofs") and r.get("variant", "default") == "default"
+    ]
     if scale:
         top = scale[-1]
         out.append(
