@@ -214,7 +214,7 @@ def _reproduce() -> list[str]:
         "### Reproducing",
         "",
         "```",
-        "catenet bench all -o benchmarks/results            # every study (~15 min)",
+        "catenet bench all -o benchmarks/results            # every study (~25 min)",
         "catenet bench all --quick -o /tmp/bench             # a smaller version (~3 min)",
         "catenet bench scale -o benchmarks/results           # one study",
         "catenet bench report -o benchmarks/results --docs docs   # this section",
