@@ -31,6 +31,7 @@ from catenet.newton import Reuse, solve
 from catenet.result import Result, finish
 from catenet.static import HarmonicExtension, Workspace, _check_rtol
 from catenet.terms import Inertia
+from catenet.terms.moving import carry, moves
 
 log = logging.getLogger(__name__)
 
@@ -107,6 +108,7 @@ def solve_dynamic(
         raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
     x[net.fixed] = loads.support_positions(net, time=t0)
     settle = loads.settle_time()
+    moving = moves(potential, t0)  # an obstacle on a prescribed motion, at its t0 pose
     follow = HarmonicExtension(net) if loads.moves_supports and settle > t0 else None
 
     t = t0
@@ -141,7 +143,11 @@ def solve_dynamic(
         if loads.varies:  # loads with a time history act with their value at t + h
             potential.set_force(loads.external_force(net, time=t + h_step))
         potential.begin_step(x, t + h_step)
-        x_trial[:] = potential.toward(x, x_trial)  # a predictor inside an obstacle is cut
+        try:  # nodes a moving obstacle may reach ride with it (catenet/terms/moving.py)
+            base = carry(potential, x, x_trial, t, t + h_step, net.fixed)
+        except ConvergenceError as exc:
+            raise ConvergenceError(str(exc), iterations=iterations, state=x.copy()) from None
+        x_trial[:] = potential.toward(base, x_trial)  # a predictor inside an obstacle is cut
         y_k = x.reshape(-1)[free]
         v_k = v.reshape(-1)[free]
         inertia.set_step(*scheme.weights(m_free, y_k, v_k, h_step, damping))
@@ -195,7 +201,7 @@ def solve_dynamic(
         if h < dt and good >= GROW_AFTER:
             h = min(dt, 2.0 * h)
             good = 0
-        if stop_at_equilibrium and t >= settle:
+        if stop_at_equilibrium and t >= settle and not moving:  # it runs to t_end
             equilibrium, residual_static, ratio = _at_rest(
                 system, potential, x, v, m_free, h_step, rtol
             )

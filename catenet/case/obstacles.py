@@ -173,6 +173,8 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
 
             kappa = default_stiffness(per_node, dhat)
         term = obs.term(nodes, kappa, dhat)
+        if hasattr(term, "carry"):  # on a prescribed motion: its name in messages
+            term.label = f"obstacle[{k}] (kind {obs.kind!r})"
         gap = term.gap(net.nodes)
         inside = np.flatnonzero(~(gap > 0.0))
         if inside.size:

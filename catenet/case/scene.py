@@ -15,6 +15,7 @@ from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
+from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.history import History
 from catenet.laws import Law, table_rows
@@ -65,6 +66,7 @@ def _build(case: Case) -> Scene:
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
     loads = _loads(case, net, built.names, built.size, built)
+    check_motion(case)  # a moving box, capsule or mesh: dynamic runs only
     net, loads, velocity, body_terms, bodies = add_bodies(
         case, net, loads, velocity, float(built.size)
     )

@@ -1,7 +1,9 @@
 """``[[obstacle]]`` kinds box, capsule and mesh (registered in ``case.obstacles``): their
 keys, checks and terms (``catenet.terms.shapes``). A mesh file is read with meshio
 (``.stl``, ``.obj``, ``.ply``, ``.vtk``, ...), its path relative to the case file, and
-must be a closed surface: it is read and checked when the case is parsed.
+must be a closed surface: it is read and checked when the case is parsed. Each may move
+on a prescribed rigid motion in dynamic runs (``velocity``, ``angular_velocity`` about its
+centre, its axis' midpoint or the mesh's ``offset``, ``history``): ``catenet.terms.moving``.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.sections import history_key
+from catenet.errors import ConfigError
 
 
 def _distance():
@@ -24,9 +28,58 @@ def _stiffness():
     return real(None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)")
 
 
+def _velocity():
+    return vec3(
+        None,
+        write="given",
+        shown="none",
+        unit="m/s",
+        doc="box/capsule/mesh: moves at this velocity",
+    )
+
+
+def _spin(about: str):
+    return vec3(
+        None,
+        write="given",
+        shown="none",
+        unit="rad/s",
+        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about}",
+    )
+
+
+def _history():
+    return history_key("moving box/capsule/mesh: velocities times factor(t) (dynamic runs)")
+
+
+class _Motion:
+    """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
+    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only."""
+
+    @property
+    def rigid_motion(self) -> bool:
+        return self.velocity is not None or self.angular_velocity is not None
+
+    def _check_motion(self, ck: Checker, path: str) -> None:
+        if self.history is not None and not self.rigid_motion:
+            ck.add(
+                f"{path}.history: scales a prescribed motion: give velocity or "
+                "angular_velocity with it"
+            )
+
+    def _moving(self, shape, origin, reach: float):
+        if not self.rigid_motion:
+            return shape
+        from catenet.history import History
+        from catenet.terms.moving import Moving
+
+        hist = History(self.history, path="history") if self.history else None
+        return Moving(shape, origin, self.velocity, self.angular_velocity, hist, reach=reach)
+
+
 @dataclass(frozen=True, kw_only=True)
-class BoxObstacle(Declared):
-    """A fixed rigid box (a piece of debris, a block), optionally rotated."""
+class BoxObstacle(_Motion, Declared):
+    """A rigid box (debris, a block), optionally rotated; fixed, or moving and tumbling."""
 
     kind: str = choice("box", ("box",), doc="a box")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="box: centre")
@@ -39,23 +92,28 @@ class BoxObstacle(Declared):
     angle: float = real(0.0, unit="rad", doc="box: turn about `axis` (0: edges along x, y, z)")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    velocity: tuple | None = _velocity()
+    angular_velocity: tuple | None = _spin("its centre")
+    history: tuple | None = _history()
 
     def check(self, ck: Checker, path: str) -> None:
         if not all(h > 0 for h in self.half_size):
             ck.add(f"{path}.half_size = {list(self.half_size)}: must be 3 numbers > 0")
         if not any(self.axis):
             ck.add(f"{path}.axis = {list(self.axis)}: must not be zero")
+        self._check_motion(ck, path)
 
     def term(self, nodes, kappa: float, dhat: float):
         from catenet.terms.shapes import Box, rotation
 
         R = rotation(self.axis, self.angle)
-        return Box(nodes, self.center, self.half_size, R, kappa=kappa, dhat=dhat)
+        box = Box(nodes, self.center, self.half_size, R, kappa=kappa, dhat=dhat)
+        return self._moving(box, self.center, float(np.linalg.norm(self.half_size)))
 
 
 @dataclass(frozen=True, kw_only=True)
-class CapsuleObstacle(Declared):
-    """A fixed rigid capsule (a boom, a pipe): all within `radius` of `start`-`end`."""
+class CapsuleObstacle(_Motion, Declared):
+    """A rigid capsule (a boom, a pipe): all within `radius` of `start`-`end`; may move."""
 
     kind: str = choice("capsule", ("capsule",), doc="a capsule")
     start: tuple = vec3(
@@ -65,20 +123,27 @@ class CapsuleObstacle(Declared):
     radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="capsule: radius")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    velocity: tuple | None = _velocity()
+    angular_velocity: tuple | None = _spin("the midpoint of start-end")
+    history: tuple | None = _history()
 
     def check(self, ck: Checker, path: str) -> None:
         if self.start == self.end:
             ck.add(f"{path}.end = {list(self.end)}: must differ from {path}.start")
+        self._check_motion(ck, path)
 
     def term(self, nodes, kappa: float, dhat: float):
         from catenet.terms.shapes import Capsule
 
-        return Capsule(nodes, self.start, self.end, self.radius, kappa=kappa, dhat=dhat)
+        capsule = Capsule(nodes, self.start, self.end, self.radius, kappa=kappa, dhat=dhat)
+        a, b = np.asarray(self.start), np.asarray(self.end)
+        reach = 0.5 * float(np.linalg.norm(b - a)) + self.radius
+        return self._moving(capsule, 0.5 * (a + b), reach)
 
 
 @dataclass(frozen=True, kw_only=True)
-class MeshObstacle(Declared):
-    """A fixed rigid body given by a closed triangle surface (a satellite, a rock)."""
+class MeshObstacle(_Motion, Declared):
+    """A rigid body given by a closed triangle surface (a satellite, a rock); may move."""
 
     kind: str = choice("mesh", ("mesh",), doc="a closed triangle mesh from a file")
     file: str = text(
@@ -90,9 +155,12 @@ class MeshObstacle(Declared):
     offset: tuple = vec3((0.0, 0.0, 0.0), unit="m", doc="mesh: added to its (scaled) coordinates")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    velocity: tuple | None = _velocity()
+    angular_velocity: tuple | None = _spin("the point `offset`")
+    history: tuple | None = _history()
 
     def check(self, ck: Checker, path: str) -> None:
-        pass
+        self._check_motion(ck, path)
 
     def resolve(self, ck: Checker, path: str, base_dir: Path | None) -> MeshObstacle:
         """This obstacle with ``file`` made absolute, once the file reads as a closed
@@ -115,7 +183,10 @@ class MeshObstacle(Declared):
         from catenet.terms.shapes import Mesh
 
         V, T = self.surface()
-        return Mesh(nodes, V, T, kappa=kappa, dhat=dhat)
+        mesh = Mesh(nodes, V, T, kappa=kappa, dhat=dhat)
+        origin = np.asarray(self.offset, dtype=np.float64)
+        reach = float(np.linalg.norm(V - origin, axis=1).max())
+        return self._moving(mesh, origin, reach)
 
 
 def read_surface(file: str) -> tuple[np.ndarray, np.ndarray]:
@@ -155,3 +226,19 @@ def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndar
     V.setflags(write=False)
     T.setflags(write=False)
     return V, T
+
+
+def check_motion(case) -> None:
+    """Raises ConfigError (key path) for a box, capsule or mesh on a prescribed motion
+    in a run that is not dynamic."""
+    if case.solver.method == "dynamic":
+        return
+    for k, obs in enumerate(case.obstacles):
+        if getattr(obs, "rigid_motion", False):
+            key = "velocity" if obs.velocity is not None else "angular_velocity"
+            value = getattr(obs, key)
+            raise ConfigError(
+                f"obstacle[{k}].{key} = {list(value)}: a {obs.kind} on a prescribed motion "
+                "moves in dynamic runs only: set solver.method = 'dynamic', or drop "
+                "velocity and angular_velocity"
+            )

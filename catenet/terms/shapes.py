@@ -2,6 +2,7 @@
 and a closed triangle mesh (a satellite, a rock). Kernels in ``catenet.kernels.shapes``
 and ``catenet.kernels.mesh``; each kind's ``max_step`` is the exact first contact along
 a step, so the no-penetration guarantee of the plane and the sphere holds for them too.
+On a prescribed motion (translating, tumbling) they are wrapped by ``catenet.terms.moving``.
 """
 
 from __future__ import annotations

@@ -27,8 +27,8 @@ def scale(results: Path) -> list[str]:
         "",
         "Static equilibrium of the square net refined both ways (n = 34 k cables, 1 cm / k "
         "edges), each size in a fresh process on one thread; peak memory is the process's "
-        "resident high-water mark (VmHWM; it sees MKL's allocations), the guard's estimate is what `catenet run` "
-        "checks against the machine's memory before building anything "
+        "resident high-water mark (VmHWM; it sees MKL's allocations), the guard's estimate "
+        "is what `catenet run` checks against the machine's memory before building anything "
         "(`catenet.case.guard.estimate_memory`).",
         "",
     ]

@@ -1,0 +1,222 @@
+"""Obstacles on a prescribed rigid motion: a box, a capsule or a mesh that translates
+with ``velocity`` and turns with ``angular_velocity`` about its reference point (a
+tumbling piece of debris), as a wrapper around the fixed shape's term.
+
+The pose at time t is c(t) = c0 + v F(t), R(t) = exp(F(t) [w]x) (Rodrigues), F the
+integral of the history factor (F(t) = t without one). The wrapped shape stays where it
+was built (its pose at t = 0) and works in that body frame: a point x is seen there as
+x_b = c0 + R^T (x - c); gradients turn back as R g_b and the Hessian's node blocks as
+R H_b R^T (the pattern is the shape's). ``begin_step(x, time)`` sets the pose at the
+step's end, so every Newton iterate of a step sees one fixed obstacle and the barrier
+and the exact first contact of ``max_step`` keep their guarantee within the step.
+
+Between steps the obstacle jumps from pose(t_n) to pose(t_n+1), which could swallow a
+node near it. ``carry`` (called by the time stepping before its predictor is cut back to
+the first contact) moves every free node that the obstacle may reach in the step
+rigidly with it, in the predictor and in the point the cut-back starts from: rigid
+motion keeps a node's gap, so every step starts with every node outside. A support the
+obstacle reaches stops the run (ConvergenceError naming obstacle and node).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from catenet.errors import ConvergenceError
+from catenet.terms.base import Term
+from catenet.terms.body import Path
+
+#: Nodes closer than SWEEP_SAFETY times the obstacle's largest displacement in a step
+#: (plus the activation distance) ride with it into the step.
+SWEEP_SAFETY = 2.0
+
+
+def rotation_vector(w, angle: float) -> np.ndarray:
+    """exp(angle [w/|w|]x): the rotation by ``angle`` about the unit vector of w."""
+    from catenet.terms.shapes import rotation
+
+    return np.eye(3) if angle == 0.0 else rotation(w, angle)
+
+
+class Moving(Term):
+    """The obstacle term ``shape`` (built at its pose at t = 0) moving rigidly: its
+    reference point ``origin`` translates with ``velocity`` [m/s] and the body turns
+    with ``angular_velocity`` [rad/s] about that point, both scaled by ``history``
+    (a ``catenet.history.History``; None: 1). ``reach``: the largest distance from the
+    origin to a point of the obstacle [m]."""
+
+    role = "internal"
+    convex = False
+
+    def __init__(
+        self,
+        shape,
+        origin,
+        velocity=None,
+        angular_velocity=None,
+        history=None,
+        *,
+        reach: float,
+        label: str = "a moving obstacle",
+    ):
+        self.shape = shape
+        self.nodes = shape.nodes
+        self.kappa, self.dhat = shape.kappa, shape.dhat
+        self.origin = np.asarray(origin, dtype=np.float64).copy()
+        v = np.zeros(3) if velocity is None else np.asarray(velocity, dtype=np.float64)
+        w = np.zeros(3) if angular_velocity is None else np.asarray(angular_velocity, float)
+        if not (np.all(np.isfinite(v)) and np.all(np.isfinite(w)) and math.isfinite(reach)):
+            raise ValueError("moving obstacle: velocity and angular velocity must be finite")
+        self.velocity, self.omega = v, w
+        self.path = Path(self.origin, v, history)
+        self.reach = float(reach)
+        self.label = label
+        self.center, self.R = self.pose(0.0)
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(c(t), R(t)): the origin's place and the body's rotation at time t."""
+        return self._pose(self.path.distance(t))
+
+    def _pose(self, f: float) -> tuple[np.ndarray, np.ndarray]:
+        """The pose after the motion's integral ``f`` (F(t), t without a history)."""
+        spin = float(np.linalg.norm(self.omega))
+        return self.origin + self.velocity * f, rotation_vector(self.omega, spin * f)
+
+    def set_pose(self, t: float) -> None:
+        self.center, self.R = self.pose(t)
+
+    def begin_step(self, x, time) -> None:
+        if time is not None:
+            self.set_pose(time)
+        self.shape.begin_step(self._body(x), time)
+
+    def _body(self, x, center=None, R=None) -> np.ndarray:
+        """Points x (N, 3) in the body frame (the shape's pose at t = 0)."""
+        c = self.center if center is None else center
+        R = self.R if R is None else R
+        return self.origin + (np.asarray(x) - c) @ R
+
+    def world(self, p) -> np.ndarray:
+        """Body-frame points p (K, 3) where the obstacle has them now."""
+        return self.center + (np.asarray(p) - self.origin) @ self.R.T
+
+    def pattern(self):
+        return self.shape.pattern()
+
+    def gap(self, x):
+        return self.shape.gap(self._body(x))
+
+    def gradient(self, x, grad):
+        g = np.zeros_like(x)
+        energy = self.shape.gradient(self._body(x), g)
+        grad[self.nodes] += g[self.nodes] @ self.R.T
+        return energy
+
+    def energy(self, x):
+        return self.shape.energy(self._body(x))
+
+    def hessian(self, x, values):
+        active = self.shape.hessian(self._body(x), values)
+        H = values.reshape(-1, 3, 3)
+        H[:] = np.einsum("ij,kjl,ml->kim", self.R, H, self.R)
+        return active
+
+    def max_step(self, x, dx):
+        return self.shape.max_step(self._body(x), np.asarray(dx) @ self.R)
+
+    def sweep(self, t0: float, t1: float) -> float:
+        """The largest displacement of any point of the obstacle from t0 to t1 [m]."""
+        f = abs(self.path.distance(t1) - self.path.distance(t0))
+        return f * (float(np.linalg.norm(self.velocity)) + np.linalg.norm(self.omega) * self.reach)
+
+    def carry(self, base, trial, t0: float, t1: float, fixed) -> int:
+        """Moves the free nodes the obstacle may reach from t0 to t1 (gap at pose(t0)
+        below SWEEP_SAFETY times its sweep plus the activation distance) rigidly with it,
+        in ``base`` (the step's start, as the cut-back sees it) and ``trial`` (its
+        predictor), in place; returns how many. Raises ConvergenceError when a support
+        (``fixed``, a mask of all nodes) is inside or on the obstacle at t1."""
+        c0, R0 = self.pose(t0)
+        c1, R1 = self.pose(t1)
+        self.center, self.R = c1, R1
+        supports = np.flatnonzero(fixed)
+        if supports.size:
+            hit = self._reaches(trial, supports, t0, t1)
+            if hit is not None:
+                i, t_hit = hit
+                where = ", ".join(f"{v:.6g}" for v in trial[i])
+                raise ConvergenceError(
+                    f"{self.label} reaches support node {i} at [{where}] "
+                    f"at t = {t_hit:.6g} s: a moving obstacle must not run over a "
+                    "support; change its motion or the supports"
+                )
+        move = self.sweep(t0, t1)
+        if move == 0.0:
+            return 0
+        gap = self.shape.gap(self._body(base, c0, R0))
+        near = self.nodes[gap < SWEEP_SAFETY * move + self.dhat]
+        if near.size:
+            M = R1 @ R0.T
+            base[near] = c1 + (base[near] - c0) @ M.T
+            trial[near] = c1 + (trial[near] - c0) @ M.T
+        return int(near.size)
+
+    def _reaches(self, x, supports, t0: float, t1: float, max_iter: int = 200):
+        """(node, time) of the first support (at its place in x) the obstacle reaches
+        between t0 and t1, else None: conservative advancement, the obstacle's points
+        moving at most ``sweep`` over the step, so it advances by gap / rate at a time."""
+        probe = _Probe(self.shape, supports)
+        f0, f1 = self.path.distance(t0), self.path.distance(t1)
+        rate = self.sweep(t0, t1)  # per unit of the step's fraction s
+        s = 1.0 if rate == 0.0 else 0.0
+        for _ in range(max_iter):
+            c, R = self._pose(f0 + s * (f1 - f0))
+            gap = probe.gap(self._body(x, c, R))
+            k = int(np.argmin(gap))
+            if not gap[k] > 1e-9 * max(self.reach, self.dhat):
+                return int(supports[k]), t0 + s * (t1 - t0)
+            if s >= 1.0:
+                return None
+            s = min(1.0, s + float(gap[k]) / rate)
+        c, R = self._pose(f1)  # grazing for max_iter advances: the end pose decides
+        gap = probe.gap(self._body(x, c, R))
+        k = int(np.argmin(gap))
+        return (int(supports[k]), t1) if not gap[k] > 0.0 else None
+
+
+class _Probe:
+    """The shape's gap at other nodes (the supports)."""
+
+    def __init__(self, shape, nodes):
+        self.shape, self.nodes = shape, np.ascontiguousarray(nodes, dtype=np.int64)
+
+    def gap(self, x):
+        keep = self.shape.nodes
+        try:
+            self.shape.nodes = self.nodes
+            return self.shape.gap(x)
+        finally:
+            self.shape.nodes = keep
+
+
+def carry(potential, base, trial, t0: float, t1: float, fixed) -> np.ndarray:
+    """``base`` (the step's start) with the nodes every moving obstacle of the potential
+    may reach from t0 to t1 carried along with it, in a copy, and in ``trial`` in place
+    (``Moving.carry``); ``base`` itself when there is none."""
+    movers = [t for t in potential.system.terms if isinstance(t, Moving)]
+    if not movers:
+        return base
+    base = base.copy()
+    for term in movers:
+        term.carry(base, trial, t0, t1, fixed)
+    return base
+
+
+def moves(potential, t0: float = 0.0) -> bool:
+    """Whether any obstacle of the potential is on a prescribed motion; puts each at
+    its pose at ``t0`` (a run's start)."""
+    movers = [t for t in potential.system.terms if isinstance(t, Moving)]
+    for term in movers:
+        term.set_pose(t0)
+    return bool(movers)
