@@ -381,10 +381,6 @@ def test_balls_stop_at_the_ground_at_fixed_spheres_and_at_each_other():
 
 
 def test_a_ball_warns_of_obstacles_it_passes_through(caplog):
-    from catenet.case.obstacles import OBSTACLES
-
-    if "box" not in OBSTACLES:
-        pytest.skip("no box obstacles in this build")
     case = catch_case(coarse=True)
     case["obstacle"].append(
         {"kind": "box", "center": [3.0, 0.0, 0.0], "half_size": [0.1, 0.1, 0.1]}
