@@ -171,7 +171,8 @@ def figure(res, *, scale: float = 1.0):
     Panels: the deformed net, coloured by tension over the range of the data (colour bar
     in N), over the undeformed one (dashed grey, drawn above the grid) in 3D and in a
     side view (x-z, or y-z when the net is longer along y), supports as red dots, the
-    probe node marked; displacements drawn ``scale`` times (said in the title when not 1).
+    probe node marked; displacements drawn ``scale`` times (said in the title when not 1);
+    the case's obstacles in light grey (``catenet.plot_bodies``, ``catenet.plot_obstacles``).
     The 3D box keeps true proportions except that no axis is shorter than 40 % of the
     longest (then the z label says it is stretched). With a trajectory of more than one
     frame also the probe's deflection (positive down) against time (dynamic runs) or
@@ -234,9 +235,12 @@ def figure(res, *, scale: float = 1.0):
         lines3.set_color("C0")
     ax3.add_collection3d(lines3)
     from catenet.plot_bodies import Balls
+    from catenet.plot_obstacles import Obstacles
 
     balls = Balls(res, scale)  # moving spheres (none: draws nothing)
+    obstacles = Obstacles(res)  # the case's other obstacles (none: draws nothing)
     lo, hi = _limits(seg_ref, seg_def, *balls.extent())
+    lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
     # true proportions, but no axis shorter than 40 % of the longest (a flat net: its
     # deflection would be squashed into a sliver)
     longest = float(np.max(hi - lo))
@@ -253,6 +257,7 @@ def figure(res, *, scale: float = 1.0):
         f = x[fixed]
         ax3.scatter(f[:, 0], f[:, 1], f[:, 2], color="red", s=8, depthshade=False)
     balls.draw3d(ax3)
+    obstacles.draw3d(ax3, mid - half, mid + half)
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("y [m]")
     ax3.set_zlabel("z [m] (stretched)" if stretched else "z [m]", labelpad=1)
@@ -292,6 +297,7 @@ def figure(res, *, scale: float = 1.0):
         label=f"probe node {p}: δ = {res.delta:.4g} m",
     )
     balls.draw2d(ax2, h)
+    obstacles.draw2d(ax2, h, lo, hi)
     ax2.update_datalim(np.column_stack([[lo[h], hi[h]], [lo[2], hi[2]]]))
     ax2.autoscale_view()
     ax2.set_aspect("equal", adjustable="datalim")

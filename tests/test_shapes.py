@@ -508,6 +508,16 @@ def test_the_capture_example_runs_short_and_makes_a_figure_and_a_trajectory(tmp_
     res = CliRunner().invoke(main, ["plot", str(out), "-o", str(tmp_path / "capture.png")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "capture.png").stat().st_size > 10_000
+    # the figure draws the box where it is at the end of the run (catenet/plot_obstacles.py)
+    from catenet.plot_obstacles import plotted_time, shapes
+
+    assert plotted_time(read_result(out)) == pytest.approx(0.6)
+    (drawn,) = shapes(read_result(out))
+    box.set_pose(0.6)
+    signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+    corners = box.world(box.shape.center + (signs * box.shape.half) @ box.shape.axes.T)
+    got = np.concatenate(drawn.polys)
+    assert all(np.min(np.linalg.norm(got - c, axis=1)) < 1e-9 for c in corners)
 
 
 def capture_near(dt: float) -> dict:

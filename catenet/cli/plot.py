@@ -37,7 +37,8 @@ def command(
     Result file: the deformed net over the undeformed one, coloured by tension
     (colour bar in N over the range of the data), in 3D and in a side view; for
     runs with a trajectory also the deflection of the probe node (positive down)
-    against time (dynamic runs) or load factor (static runs in steps). The
+    against time (dynamic runs) or load factor (static runs in steps). The case's
+    obstacles are drawn in light grey (a moving one where it is at the end). The
     paper's single-cable cases get the paper's axes and closed forms (Figs.
     2e-2f, Eqs. 14-17).
     Sweep directory: the sweep's figures (catenet.studies.square_net).
