@@ -110,50 +110,6 @@ def box_feature(x, center, axes, half, n, P):
 
 
 @njit(cache=True, error_model="numpy")
-def box_gap(x, nodes, center, axes, half, out):
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        out[k] = box_feature(x[nodes[k]], center, axes, half, n, P)
-
-
-@njit(cache=True, error_model="numpy")
-def box_gradient(x, nodes, center, axes, half, kappa, dhat, grad):
-    """Adds the box barrier's gradient at ``nodes``; returns the energy."""
-    total = 0.0
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        i = nodes[k]
-        d = box_feature(x[i], center, axes, half, n, P)
-        if d >= dhat:
-            continue
-        b, db, _ = barrier(d, dhat)
-        total += kappa * b
-        if d > 0.0:
-            for a in range(3):
-                grad[i, a] += kappa * db * n[a]
-    return total
-
-
-@njit(cache=True, error_model="numpy")
-def box_hessian(x, nodes, center, axes, half, kappa, dhat, values):
-    """Writes the 3x3 blocks of the box barrier at ``nodes``; returns how many act."""
-    active = 0
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        d = box_feature(x[nodes[k]], center, axes, half, n, P)
-        if d >= dhat or d <= 0.0:
-            _zero_block(values, k)
-            continue
-        active += 1
-        _, db, ddb = barrier(d, dhat)
-        _block(values, k, kappa, db, ddb, d, n, P)
-    return active
-
-
-@njit(cache=True, error_model="numpy")
 def box_max_step(x, dx, nodes, center, axes, half):
     """The largest t with every node outside the box along x + t dx: the first entry of
     each node's line into the box (slab test in the box's frame; inf if none)."""
@@ -222,50 +178,6 @@ def capsule_feature(x, a, b, radius, n, P):
 
 
 @njit(cache=True, error_model="numpy")
-def capsule_gap(x, nodes, a, b, radius, out):
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        out[k] = capsule_feature(x[nodes[k]], a, b, radius, n, P)
-
-
-@njit(cache=True, error_model="numpy")
-def capsule_gradient(x, nodes, a, b, radius, kappa, dhat, grad):
-    """Adds the capsule barrier's gradient at ``nodes``; returns the energy."""
-    total = 0.0
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        i = nodes[k]
-        d = capsule_feature(x[i], a, b, radius, n, P)
-        if d >= dhat:
-            continue
-        bb, db, _ = barrier(d, dhat)
-        total += kappa * bb
-        if d > 0.0:
-            for j in range(3):
-                grad[i, j] += kappa * db * n[j]
-    return total
-
-
-@njit(cache=True, error_model="numpy")
-def capsule_hessian(x, nodes, a, b, radius, kappa, dhat, values):
-    """Writes the 3x3 blocks of the capsule barrier at ``nodes``; returns how many act."""
-    active = 0
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    for k in range(nodes.shape[0]):
-        d = capsule_feature(x[nodes[k]], a, b, radius, n, P)
-        if d >= dhat or d <= 0.0:
-            _zero_block(values, k)
-            continue
-        active += 1
-        _, db, ddb = barrier(d, dhat)
-        _block(values, k, kappa, db, ddb, d, n, P)
-    return active
-
-
-@njit(cache=True, error_model="numpy")
 def capsule_max_step(x, dx, nodes, a, b, radius):
     """The largest t with every node outside the capsule along x + t dx: the first of
     the entries into the two end balls and through the lateral surface of the cylinder
@@ -302,3 +214,62 @@ def capsule_max_step(x, dx, nodes, a, b, radius):
                     t = min(t, tc)
         t_max = min(t_max, t)
     return t_max
+
+
+# ------------------------------------------------ box and capsule: one gap, gradient, Hessian
+
+BOX = 0  # geom: centre (3), axes (3x3, row-major), half sizes (3)
+CAPSULE = 1  # geom: end a (3), end b (3), radius
+
+
+@njit(cache=True, error_model="numpy")
+def shape_feature(kind, x, geom, n, P):
+    """The gap of point x to the box or capsule ``geom`` (packed as BOX or CAPSULE says),
+    with its unit gradient n and projection P (module docstring)."""
+    if kind == BOX:
+        return box_feature(x, geom[0:3], geom[3:12].reshape((3, 3)), geom[12:15], n, P)
+    return capsule_feature(x, geom[0:3], geom[3:6], geom[6], n, P)
+
+
+@njit(cache=True, error_model="numpy")
+def shape_gap(kind, x, nodes, geom, out):
+    n = np.empty(3)
+    P = np.empty((3, 3))
+    for k in range(nodes.shape[0]):
+        out[k] = shape_feature(kind, x[nodes[k]], geom, n, P)
+
+
+@njit(cache=True, error_model="numpy")
+def shape_gradient(kind, x, nodes, geom, kappa, dhat, grad):
+    """Adds the barrier's gradient at ``nodes``; returns the energy."""
+    total = 0.0
+    n = np.empty(3)
+    P = np.empty((3, 3))
+    for k in range(nodes.shape[0]):
+        i = nodes[k]
+        d = shape_feature(kind, x[i], geom, n, P)
+        if d >= dhat:
+            continue
+        b, db, _ = barrier(d, dhat)
+        total += kappa * b
+        if d > 0.0:
+            for a in range(3):
+                grad[i, a] += kappa * db * n[a]
+    return total
+
+
+@njit(cache=True, error_model="numpy")
+def shape_hessian(kind, x, nodes, geom, kappa, dhat, values):
+    """Writes the 3x3 blocks of the barrier at ``nodes``; returns how many act."""
+    active = 0
+    n = np.empty(3)
+    P = np.empty((3, 3))
+    for k in range(nodes.shape[0]):
+        d = shape_feature(kind, x[nodes[k]], geom, n, P)
+        if d >= dhat or d <= 0.0:
+            _zero_block(values, k)
+            continue
+        active += 1
+        _, db, ddb = barrier(d, dhat)
+        _block(values, k, kappa, db, ddb, d, n, P)
+    return active

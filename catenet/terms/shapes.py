@@ -13,14 +13,13 @@ import numpy as np
 
 from catenet.kernels.mesh import build_grid, mesh_gap, mesh_gradient, mesh_hessian, mesh_max_step
 from catenet.kernels.shapes import (
-    box_gap,
-    box_gradient,
-    box_hessian,
+    BOX,
+    CAPSULE,
     box_max_step,
-    capsule_gap,
-    capsule_gradient,
-    capsule_hessian,
     capsule_max_step,
+    shape_gap,
+    shape_gradient,
+    shape_hessian,
 )
 from catenet.terms.base import register
 from catenet.terms.contact import Obstacle
@@ -36,12 +35,31 @@ def rotation(axis, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * (K @ K)
 
 
-@register("box")
-class Box(Obstacle):
-    """The outside of a box: ``center``, ``half`` sizes along its axes, which are the
-    columns of ``axes`` (a rotation matrix; identity: aligned with x, y, z)."""
+class _Shape(Obstacle):
+    """A box or capsule: the barrier through one set of kernels (``kind``, ``geom``
+    packed as ``catenet.kernels.shapes`` says); each kind gives its ``max_step``."""
 
     convex = False
+    kind: int
+    geom: np.ndarray
+
+    def gap(self, x):
+        out = np.empty(len(self.nodes))
+        shape_gap(self.kind, x, self.nodes, self.geom, out)
+        return out
+
+    def gradient(self, x, grad):
+        return shape_gradient(self.kind, x, self.nodes, self.geom, self.kappa, self.dhat, grad)
+
+    def hessian(self, x, values):
+        args = (self.kind, x, self.nodes, self.geom, self.kappa, self.dhat, values)
+        return shape_hessian(*args) > 0
+
+
+@register("box")
+class Box(_Shape):
+    """The outside of a box: ``center``, ``half`` sizes along its axes, which are the
+    columns of ``axes`` (a rotation matrix; identity: aligned with x, y, z)."""
 
     def __init__(self, nodes, center, half, axes=None, *, kappa: float, dhat: float):
         super().__init__(nodes, kappa=kappa, dhat=dhat)
@@ -53,30 +71,16 @@ class Box(Obstacle):
         if R.shape != (3, 3) or not np.allclose(R.T @ R, np.eye(3), atol=1e-9):
             raise ValueError("box: axes must be a rotation matrix")
         self.axes = np.ascontiguousarray(R)
-
-    def _args(self):
-        return self.center, self.axes, self.half
-
-    def gap(self, x):
-        out = np.empty(len(self.nodes))
-        box_gap(x, self.nodes, *self._args(), out)
-        return out
-
-    def gradient(self, x, grad):
-        return box_gradient(x, self.nodes, *self._args(), self.kappa, self.dhat, grad)
-
-    def hessian(self, x, values):
-        return box_hessian(x, self.nodes, *self._args(), self.kappa, self.dhat, values) > 0
+        self.kind = BOX
+        self.geom = np.concatenate([self.center, self.axes.ravel(), self.half])
 
     def max_step(self, x, dx):
-        return box_max_step(x, dx, self.nodes, *self._args())
+        return box_max_step(x, dx, self.nodes, self.center, self.axes, self.half)
 
 
 @register("capsule")
-class Capsule(Obstacle):
+class Capsule(_Shape):
     """The outside of a capsule: the points within ``radius`` of the segment a-b."""
-
-    convex = False
 
     def __init__(self, nodes, a, b, radius: float, *, kappa: float, dhat: float):
         super().__init__(nodes, kappa=kappa, dhat=dhat)
@@ -87,19 +91,8 @@ class Capsule(Obstacle):
         if not np.linalg.norm(self.b - self.a) > 0:
             raise ValueError("capsule: the two end points must differ")
         self.radius = float(radius)
-
-    def gap(self, x):
-        out = np.empty(len(self.nodes))
-        capsule_gap(x, self.nodes, self.a, self.b, self.radius, out)
-        return out
-
-    def gradient(self, x, grad):
-        args = (x, self.nodes, self.a, self.b, self.radius, self.kappa, self.dhat, grad)
-        return capsule_gradient(*args)
-
-    def hessian(self, x, values):
-        args = (x, self.nodes, self.a, self.b, self.radius, self.kappa, self.dhat, values)
-        return capsule_hessian(*args) > 0
+        self.kind = CAPSULE
+        self.geom = np.concatenate([self.a, self.b, [self.radius]])
 
     def max_step(self, x, dx):
         return capsule_max_step(x, dx, self.nodes, self.a, self.b, self.radius)
