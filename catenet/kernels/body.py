@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.contact import barrier
+from catenet.kernels.contact import ball_root, barrier, sphere_block
 
 
 @njit(cache=True, error_model="numpy")
@@ -72,15 +72,12 @@ def pair_hessian(x, nodes, c, radius, kappa, dhat, values):
         _, db, ddb = barrier(d, dhat)
         for a in range(3):
             n[a] /= rho
-        for a in range(3):
-            for b in range(3):
-                h = kappa * (ddb - db / rho) * n[a] * n[b]
-                if a == b:
-                    h += kappa * db / rho
-                values[27 * k + 3 * a + b] = h
-                values[27 * k + 9 + 3 * a + b] = -h
-                values[27 * k + 18 + 3 * a + b] = -h
-                cc[3 * a + b] += h
+        sphere_block(kappa, db, ddb, rho, n, values, 27 * k)
+        for a in range(9):
+            h = values[27 * k + a]
+            values[27 * k + 9 + a] = -h
+            values[27 * k + 18 + a] = -h
+            cc[a] += h
     for a in range(9):
         values[base + a] = cc[a]
     return active
@@ -93,23 +90,11 @@ def pair_max_step(x, dx, nodes, c, radius):
     t_max = np.inf
     for k in range(nodes.shape[0]):
         i = nodes[k]
-        a = 0.0
-        b = 0.0
-        q = -radius * radius
-        for j in range(3):
-            u = x[i, j] - x[c, j]
-            du = dx[i, j] - dx[c, j]
-            a += du * du
-            b += 2.0 * u * du
-            q += u * u
-        if a == 0.0 or b >= 0.0:
-            continue  # no relative motion, or moving apart
-        disc = b * b - 4.0 * a * q
-        if disc < 0.0:
-            continue
-        t = (-b - np.sqrt(disc)) / (2.0 * a)
+        u = (x[i, 0] - x[c, 0], x[i, 1] - x[c, 1], x[i, 2] - x[c, 2])
+        du = (dx[i, 0] - dx[c, 0], dx[i, 1] - dx[c, 1], dx[i, 2] - dx[c, 2])
+        t = ball_root(u, du, radius)
         if t < t_max:
-            t_max = max(t, 0.0)
+            t_max = t
     return t_max
 
 

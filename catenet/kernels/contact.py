@@ -132,12 +132,7 @@ def sphere_hessian(x, nodes, center, radius, kappa, dhat, values):
         _, db, ddb = barrier(d, dhat)
         for a in range(3):
             n[a] /= rho
-        for a in range(3):
-            for c in range(3):
-                h = kappa * (ddb - db / rho) * n[a] * n[c]
-                if a == c:
-                    h += kappa * db / rho
-                values[9 * k + 3 * a + c] = h
+        sphere_block(kappa, db, ddb, rho, n, values, 9 * k)
     return active
 
 
@@ -148,20 +143,35 @@ def sphere_max_step(x, dx, nodes, center, radius):
     t_max = np.inf
     for k in range(nodes.shape[0]):
         i = nodes[k]
-        a = 0.0
-        b = 0.0
-        c = -radius * radius
-        for j in range(3):
-            u = x[i, j] - center[j]
-            a += dx[i, j] * dx[i, j]
-            b += 2.0 * u * dx[i, j]
-            c += u * u
-        if a == 0.0 or b >= 0.0:
-            continue  # not moving, or moving away from the centre
-        disc = b * b - 4.0 * a * c
-        if disc < 0.0:
-            continue
-        t = (-b - np.sqrt(disc)) / (2.0 * a)
+        u = (x[i, 0] - center[0], x[i, 1] - center[1], x[i, 2] - center[2])
+        t = ball_root(u, (dx[i, 0], dx[i, 1], dx[i, 2]), radius)
         if t < t_max:
-            t_max = max(t, 0.0)
+            t_max = t
     return t_max
+
+
+@njit(cache=True, error_model="numpy")
+def sphere_block(kappa, db, ddb, rho, n, out, at):
+    """Writes the 3x3 Hessian block kappa ((b'' - b'/rho) n n^T + b'/rho I) of the barrier
+    on a gap d = rho - R (n the unit direction from the centre) at out[at:at + 9]."""
+    for a in range(3):
+        for c in range(3):
+            h = kappa * (ddb - db / rho) * n[a] * n[c]
+            if a == c:
+                h += kappa * db / rho
+            out[at + 3 * a + c] = h
+
+
+@njit(cache=True, error_model="numpy")
+def ball_root(u, du, radius):
+    """The first t >= 0 with |u + t du| = R (u, du: 3-tuples, a point relative to a ball's
+    centre and its relative motion); inf when it never gets there or moves away."""
+    a = du[0] * du[0] + du[1] * du[1] + du[2] * du[2]
+    b = 2.0 * (u[0] * du[0] + u[1] * du[1] + u[2] * du[2])
+    c = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - radius * radius
+    if a == 0.0 or b >= 0.0:
+        return np.inf  # not moving, or moving away from the centre
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return np.inf
+    return max((-b - np.sqrt(disc)) / (2.0 * a), 0.0)

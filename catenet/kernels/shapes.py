@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.contact import barrier
+from catenet.kernels.contact import ball_root, barrier
 
 # --------------------------------------------------------------------------- shared
 
@@ -55,20 +55,8 @@ def _zero_block(values, k):
 @njit(cache=True, error_model="numpy")
 def _ball_root(x, dx, center, radius):
     """The first t >= 0 with |x + t dx - c| = R (inf: never, or moving away)."""
-    a = 0.0
-    b = 0.0
-    c = -radius * radius
-    for j in range(3):
-        u = x[j] - center[j]
-        a += dx[j] * dx[j]
-        b += 2.0 * u * dx[j]
-        c += u * u
-    if a == 0.0 or b >= 0.0:
-        return np.inf
-    disc = b * b - 4.0 * a * c
-    if disc < 0.0:
-        return np.inf
-    return max((-b - np.sqrt(disc)) / (2.0 * a), 0.0)
+    u = (x[0] - center[0], x[1] - center[1], x[2] - center[2])
+    return ball_root(u, (dx[0], dx[1], dx[2]), radius)
 
 
 # --------------------------------------------------------------------------- box
