@@ -12,6 +12,7 @@ import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import CONFIGS
 from test_cables import one, problems, straight, two_cables
 
 from catenet.case import build, dumps_toml, load_case, parse_case
@@ -419,3 +420,46 @@ def test_center_of_a_cable_only_net_is_a_free_node_that_moves(tmp_path):
     data["geometry"]["fixed"] = [0, 1, 2]
     scene = build(parse_case(data))
     assert scene.probe != 1 and not scene.net.fixed[scene.probe]
+
+
+def test_output_probe_picks_the_reported_node(tmp_path):
+    """output.probe names the node whose deflection is delta: an index, a node name or a
+    set of one node, in a graph and in a square net; the run reports it."""
+    data = straight(prestress=100.0)
+    data["load"] = {"point": [{"node": 1, "force": [0, 0, -50]}]}
+    data["geometry"]["sets"] = {"knee": [1]}
+    for ref, node in ((1, 1), ("knee", 1), ("center", 1)):
+        data["output"] = {"probe": ref}
+        assert build(parse_case(data)).probe == node
+    data["geometry"]["nodes"] += [[0, 0, 3], [-1.5, -0.5, 5]]  # a free node 3 on cable d
+    data["geometry"]["fixed"] = [0, 2, 4]
+    data["geometry"]["cable"].append({"name": "d", "nodes": [1, 3, 4], "prestress": 100.0})
+    data["output"] = {"probe": 3}
+    result = run_case(parse_case(data), tmp_path / "p.h5")
+    x0 = build(parse_case(data)).net.nodes
+    with h5py.File(tmp_path / "p.h5") as f:
+        z = f["result/x"][3, 2]
+    assert result.stats["probe"] == 3
+    assert abs(result.stats["delta"]) > 1e-3
+    assert result.stats["delta"] == pytest.approx(x0[3, 2] - z, rel=1e-12)
+    assert parse_case(data).output.probe == 3
+    assert "probe = 3" in dumps_toml(parse_case(data).to_dict())
+    with open(CONFIGS / "fig4a_n10_alpha_0.toml", "rb") as f:
+        square = tomllib.load(f)
+    square["output"] = {"probe": 7}
+    assert build(parse_case(square)).probe == 7
+
+
+@pytest.mark.parametrize(
+    ("ref", "message"),
+    [
+        (99, "output.probe = 99: must be a node index in 0..3"),
+        ("anchors", "output.probe = 'anchors': the node set has 4 nodes: the probe must be one"),
+        ("nowhere", "output.probe = 'nowhere': must be a node index or one of"),
+        (-1, "output.probe = -1: must be a node index (an integer >= 0)"),
+    ],
+)
+def test_a_bad_probe_is_named(ref, message):
+    data = two_cables()
+    data["output"] = {"probe": ref}
+    assert any(message in p for p in problems(data)), problems(data)

@@ -13,12 +13,12 @@ from catenet.case.sections import LoadConfig, SupportsConfig
 from catenet.errors import ConfigError
 
 
-def _needs_topology(g: GeometryConfig, supports: Any, load: Any) -> bool:
+def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = None) -> bool:
     """A kind whose topology needs a build (square nets) is built to check node
     references only when there are any."""
     if not g.lazy_topology:
         return True
-    refs = []
+    refs = [probe]
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
     if isinstance(load, LoadConfig):
@@ -30,10 +30,13 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any) -> bool:
     )
 
 
-def check_nodes(ck: Checker, g: GeometryConfig, supports: Any, load: Any) -> None:
-    """Every node reference of the supports and loads (each BAD when its section failed)
-    against the geometry ``g``."""
-    if not _needs_topology(g, supports, load):
+def check_nodes(
+    ck: Checker, g: GeometryConfig, supports: Any, load: Any, output: Any = None
+) -> None:
+    """Every node reference of the supports, loads and output probe (each BAD when its
+    section failed) against the geometry ``g``."""
+    probe = getattr(output, "probe", None)
+    if not _needs_topology(g, supports, load, probe):
         return
     try:
         topo = g.topology()
@@ -100,6 +103,13 @@ def check_nodes(ck: Checker, g: GeometryConfig, supports: Any, load: Any) -> Non
         for k, ln in enumerate(load.lines):
             if ln.cable is not None:
                 _known_cable(ck, f"load.line[{k}].cable", ln.cable, g, topo)
+    if probe is not None and in_range(probe, "output.probe"):
+        many = expand(probe, topo.names, topo.sets)
+        if len(many) != 1:
+            ck.add(
+                f"output.probe = {probe!r}: the node set has {len(many)} nodes: "
+                "the probe must be one node (an index, a node name or a set of one node)"
+            )
     if len(ck.problems) == before:
         g.check_supports(ck, fixed, fixed_key)
 

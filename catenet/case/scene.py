@@ -75,7 +75,7 @@ def _build(case: Case) -> Scene:
         case=case,
         net=net,
         loads=loads,
-        probe=int(built.probe),
+        probe=_probe(case, built),
         size=float(built.size),
         terms=terms,
         cables=built.cables,
@@ -107,6 +107,14 @@ def _with_law(case: Case, net: Net) -> Net:
             )
         rest = length / (1.0 + eps)
     return net.with_rest_length(rest, law)
+
+
+def _probe(case: Case, built: Any) -> int:
+    """The node whose z-deflection is delta: output.probe, else the geometry's."""
+    ref = getattr(case.output, "probe", None)
+    if ref is None:
+        return int(built.probe)
+    return int(expand(ref, built.names, built.sets or {})[0])
 
 
 def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:

@@ -450,7 +450,8 @@ def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:
 
 @dataclass(frozen=True)
 class OutputConfig(Declared):
-    """Result file, trajectory stride (0: final state only) and XDMF sidecar switch."""
+    """Result file, trajectory stride (0: final state only), XDMF sidecar switch and the
+    probe node (None: the geometry's)."""
 
     file: str = text(
         None,
@@ -461,6 +462,13 @@ class OutputConfig(Declared):
     )
     every: int = integer(1, ge=0, doc="keep every k-th step (0: the final state only)")
     xdmf: bool = boolean(True, doc="write the XDMF sidecar (for ParaView)")
+    probe: NodeRef | None = node(
+        None,
+        write="given",
+        shown="the geometry's own (e.g. `center`)",
+        doc="the node whose z-deflection is reported as delta: an index, a node name, "
+        "or a node set of one node",
+    )
 
 
 def parse_output(ck: Checker, o_v: Any, ctx: Context, source: str) -> OutputConfig | Any:
