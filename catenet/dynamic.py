@@ -142,7 +142,7 @@ def solve_dynamic(
         x_trial[net.fixed] = supports
         if loads.varies:  # loads with a time history act with their value at t + h
             potential.set_force(loads.external_force(net, time=t + h_step))
-        potential.begin_step(x, t + h_step)
+        potential.begin_step(x, t + h_step, t)
         try:  # nodes a moving obstacle may reach ride with it (catenet/terms/moving.py)
             base = carry(potential, x, x_trial, t, t + h_step, net.fixed)
         except ConvergenceError as exc:

@@ -171,11 +171,13 @@ class Potential:
         self.f_norm = external.norm
         self.external = external if self.f_norm > 0 else None
 
-    def begin_step(self, x: np.ndarray, time: float | None = None) -> None:
-        """Tells every term a new load step (``time`` None) or time step (ending at
-        ``time``) starts from the accepted state x (``Term.begin_step``)."""
+    def begin_step(
+        self, x: np.ndarray, time: float | None = None, start: float | None = None
+    ) -> None:
+        """Tells every term a new load step (``time`` None) or time step (from ``start``,
+        the time of x, to ``time``) starts from the accepted state x (``Term.begin_step``)."""
         for term in (*self.system.terms, *self.steps):
-            term.begin_step(x, time)
+            term.begin_step(x, time, start)
 
     def with_system(self, system: System) -> Potential:
         """The same loads and step terms on other internal terms of the same pattern."""

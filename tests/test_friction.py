@@ -341,7 +341,7 @@ def rough_case(**obstacle) -> dict:
         ({"frictoin": 0.5}, "did you mean 'friction'?"),
         (
             {"kind": "sphere", "center": [0, 0, -5], "radius": 1.0, "velocity": [0, 0, 1]},
-            "obstacle[0].friction = 1.0: friction acts on fixed obstacles only",
+            "obstacle[0].friction = 1.0: a moving sphere (mass or velocity) is frictionless",
         ),
     ],
 )

@@ -4,10 +4,11 @@ Each kind owns its keys and builds its energy term (``catenet.terms.contact``), 
 by name in ``OBSTACLES``. Common keys: ``distance`` (the barrier's activation distance
 dhat, default 1e-3 of the scene's length scale) and ``stiffness`` (kappa [N/m], default:
 the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f >= 0,
-default 0: frictionless) adds Coulomb friction on a fixed obstacle beside its barrier
-(``catenet.terms.friction``), with ``slip`` (the distance below which a node sticks,
-default the activation distance). A new kind is one class here and one line in
-``OBSTACLES`` (and a ``normals(x)`` method on its term, or friction cannot use it).
+default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a fixed
+sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
+surface; ``catenet.terms.friction``), with ``slip`` (the distance below which a node
+sticks, default the activation distance); a moving sphere (a ball) is frictionless. A new
+kind is one class here and one line in ``OBSTACLES``.
 """
 
 from __future__ import annotations
@@ -104,8 +105,9 @@ class SphereObstacle(Declared):
     def check(self, ck: Checker, path: str) -> None:
         if self.friction > 0 and self.moves:
             ck.add(
-                f"{path}.friction = {self.friction!r}: friction acts on fixed obstacles only; "
-                "a moving sphere (mass or velocity) takes friction = 0"
+                f"{path}.friction = {self.friction!r}: a moving sphere (mass or velocity) "
+                "is frictionless (it has no spin): friction = 0; friction acts on planes, "
+                "fixed spheres, boxes, capsules and meshes"
             )
         if self.history is not None and (self.velocity is None or self.mass is not None):
             ck.add(

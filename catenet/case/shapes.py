@@ -4,6 +4,8 @@ keys, checks and terms (``catenet.terms.shapes``). A mesh file is read with mesh
 must be a closed surface: it is read and checked when the case is parsed. Each may move
 on a prescribed rigid motion in dynamic runs (``velocity``, ``angular_velocity`` about its
 centre, its axis' midpoint or the mesh's ``offset``, ``history``): ``catenet.terms.moving``.
+Each takes Coulomb friction (``friction``, ``slip``) as the plane and the sphere do,
+relative to its moving surface when it moves (``catenet.terms.friction``).
 """
 
 from __future__ import annotations
@@ -26,6 +28,16 @@ def _distance():
 
 def _stiffness():
     return real(None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)")
+
+
+def _friction():
+    return real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
+
+
+def _slip():
+    return real(
+        None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"
+    )
 
 
 def _velocity():
@@ -92,6 +104,8 @@ class BoxObstacle(_Motion, Declared):
     angle: float = real(0.0, unit="rad", doc="box: turn about `axis` (0: edges along x, y, z)")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    friction: float = _friction()
+    slip: float | None = _slip()
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("its centre")
     history: tuple | None = _history()
@@ -123,6 +137,8 @@ class CapsuleObstacle(_Motion, Declared):
     radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="capsule: radius")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    friction: float = _friction()
+    slip: float | None = _slip()
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the midpoint of start-end")
     history: tuple | None = _history()
@@ -155,6 +171,8 @@ class MeshObstacle(_Motion, Declared):
     offset: tuple = vec3((0.0, 0.0, 0.0), unit="m", doc="mesh: added to its (scaled) coordinates")
     distance: float | None = _distance()
     stiffness: float | None = _stiffness()
+    friction: float = _friction()
+    slip: float | None = _slip()
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the point `offset`")
     history: tuple | None = _history()

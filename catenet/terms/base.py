@@ -79,11 +79,12 @@ class Term:
     def stiffness(self) -> np.ndarray | None:
         return None
 
-    def begin_step(self, x: np.ndarray, time: float | None) -> None:
+    def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time
-        step (``time``: the step's end) with the last accepted state x (N, 3). A term
-        whose energy depends on the step (lagged friction, an obstacle on a prescribed
-        path) updates itself here; the pattern must not change. Default: nothing."""
+        step (``time``: the step's end, ``start``: its start, the time of x) with the
+        last accepted state x (N, 3). A term whose energy depends on the step (lagged
+        friction, an obstacle on a prescribed path) updates itself here; the pattern
+        must not change. Default: nothing."""
 
 
 def node_block_pattern(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -128,7 +128,7 @@ class Guide(Term):
         self.anchor = path(0.0).copy()
         self.n_nodes = int(n_nodes)
 
-    def begin_step(self, x, time) -> None:
+    def begin_step(self, x, time, start=None) -> None:
         if time is not None:
             self.anchor = self.path(time)
 

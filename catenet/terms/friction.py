@@ -24,8 +24,15 @@ the normal force at the step's start, and a node that touches down during a step
 friction from the next step on. A static load step has no time: it is re-solved with
 lambda and n taken at its equilibrium (``relag``; ``catenet.static``) until they agree,
 so a static result does not depend on the lag (nor, much, on the number of load steps).
-Friction acts against motion relative to a fixed obstacle (its anchor is a point in
-space).
+
+On an obstacle on a prescribed rigid motion (``catenet.terms.moving``: a conveyor, a
+tumbling box) friction acts against motion relative to the obstacle's surface: lambda, the
+normals and the anchors are taken at the step's start with the obstacle at its pose
+then, and the anchors and normals ride with the obstacle to its pose at the step's end,
+where the step is solved. A node sticking to a moving obstacle is carried along with it;
+a sliding one feels mu_f lambda against its slip over the surface. The normals come from
+the obstacle's ``normals(x)``, else from the direction of its barrier's gradient, the
+gradient of its gap (the only normals that matter are those where the barrier acts).
 """
 
 from __future__ import annotations
@@ -41,21 +48,31 @@ from catenet.kernels.friction import (
     update_anchors,
 )
 from catenet.terms.base import Term, node_block_pattern, register
+from catenet.terms.contact import Plane, Sphere
 
 
 def contact_normals(obstacle, x: np.ndarray) -> np.ndarray:
     """Unit outward normals (K, 3) of ``obstacle`` at its nodes' positions in x: its own
-    ``normals(x)`` where it has one, the plane's normal, or the sphere's radial
-    direction."""
+    ``normals(x)`` where it has one, the plane's normal, the sphere's radial direction,
+    else the direction of the barrier's force (minus its gradient: the gap's gradient)
+    where the barrier acts and +z elsewhere, where no normal force needs one."""
     own = getattr(obstacle, "normals", None)
     if own is not None:
         return np.ascontiguousarray(own(x), dtype=np.float64)
-    if hasattr(obstacle, "normal"):
+    if isinstance(obstacle, Plane):
         return np.ascontiguousarray(np.broadcast_to(obstacle.normal, (len(obstacle.nodes), 3)))
-    if hasattr(obstacle, "center"):
+    if isinstance(obstacle, Sphere):
         r = x[obstacle.nodes] - obstacle.center
         return np.ascontiguousarray(r / np.linalg.norm(r, axis=1)[:, None])
-    raise TypeError(f"friction: obstacle {type(obstacle).__name__} gives no contact normals")
+    grad = np.zeros_like(x)
+    obstacle.gradient(x, grad)
+    g = -grad[obstacle.nodes]
+    size = np.linalg.norm(g, axis=1)
+    out = np.zeros_like(g)
+    out[:, 2] = 1.0
+    acts = size > 0.0
+    out[acts] = g[acts] / size[acts, None]
+    return out
 
 
 @register("friction")
@@ -86,9 +103,13 @@ class Friction(Term):
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return node_block_pattern(self.nodes)
 
-    def begin_step(self, x: np.ndarray, time: float | None) -> None:
-        """The lagged normal forces, normals and anchors at the accepted state x."""
+    def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
+        """The lagged normal forces, normals and anchors at the accepted state x (time
+        ``start``); on a moving obstacle, carried with it to its pose at ``time``."""
         obs = self.obstacle
+        moves = time is not None and start is not None and hasattr(obs, "rigid")
+        if moves:
+            obs.set_pose(start)  # the pose of the accepted state
         was = self.weight > 0.0
         normal_forces(np.ascontiguousarray(obs.gap(x)), obs.kappa, obs.dhat, self.normal_force)
         np.multiply(self.mu, self.normal_force, out=self.weight)
@@ -96,6 +117,12 @@ class Friction(Term):
         self.dragged = update_anchors(
             x, self.nodes, self.normal, self.weight, was, self.anchor, self.slip
         )
+        if moves:
+            _, R0 = obs.pose(start)
+            _, R1 = obs.pose(time)
+            self.anchor[:] = obs.rigid(self.anchor, start, time)
+            self.normal[:] = self.normal @ (R1 @ R0.T).T
+            obs.set_pose(time)  # where the step is solved
 
     def relag(self, x: np.ndarray) -> float:
         """Normal forces and normals taken at x instead of the step's start (anchors

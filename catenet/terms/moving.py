@@ -87,10 +87,10 @@ class Moving(Term):
     def set_pose(self, t: float) -> None:
         self.center, self.R = self.pose(t)
 
-    def begin_step(self, x, time) -> None:
+    def begin_step(self, x, time, start=None) -> None:
         if time is not None:
             self.set_pose(time)
-        self.shape.begin_step(self._body(x), time)
+        self.shape.begin_step(self._body(x), time, start)
 
     def _body(self, x, center=None, R=None) -> np.ndarray:
         """Points x (N, 3) in the body frame (the shape's pose at t = 0)."""
