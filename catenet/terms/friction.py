@@ -107,7 +107,7 @@ class Friction(Term):
         """The lagged normal forces, normals and anchors at the accepted state x (time
         ``start``); on a moving obstacle, carried with it to its pose at ``time``."""
         obs = self.obstacle
-        moves = time is not None and start is not None and hasattr(obs, "rigid")
+        moves = time is not None and start is not None and hasattr(obs, "set_pose")
         if moves:
             obs.set_pose(start)  # the pose of the accepted state
         was = self.weight > 0.0
@@ -117,11 +117,12 @@ class Friction(Term):
         self.dragged = update_anchors(
             x, self.nodes, self.normal, self.weight, was, self.anchor, self.slip
         )
-        if moves:
-            _, R0 = obs.pose(start)
-            _, R1 = obs.pose(time)
-            self.anchor[:] = obs.rigid(self.anchor, start, time)
-            self.normal[:] = self.normal @ (R1 @ R0.T).T
+        if moves:  # the obstacle's rigid motion over the step
+            c0, R0 = obs.pose(start)
+            c1, R1 = obs.pose(time)
+            turn = R1 @ R0.T
+            self.anchor[:] = c1 + (self.anchor - c0) @ turn.T
+            self.normal[:] = self.normal @ turn.T
             obs.set_pose(time)  # where the step is solved
 
     def relag(self, x: np.ndarray) -> float:
