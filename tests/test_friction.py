@@ -124,10 +124,11 @@ def resting_gap(force: float) -> float:
     return brentq(lambda d: -KAPPA * barrier(d, DHAT)[1] - force, 1e-12, DHAT * (1 - 1e-12))
 
 
-def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0):
-    """Node 1 resting on the plane z = 0 under ``force`` (3,), tied to support 0 one metre
-    away by a bilateral spring of stiffness ``spring`` (None: a slack tie) that moves
-    ``pull`` away from it."""
+def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0, obstacle=None):
+    """Node 1 resting on the plane z = 0 (or on ``obstacle``, a term on node 1 whose
+    surface passes there) under ``force`` (3,), tied to support 0 one metre away by a
+    bilateral spring of stiffness ``spring`` (None: a slack tie) that moves ``pull``
+    away from it."""
     gap = resting_gap(-force[2])
     tie = dict(EA=spring, tension_only=False) if spring else dict(EA=1.0, rest_length=20.0)
     net = Net.from_arrays(
@@ -138,8 +139,9 @@ def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0):
     move = np.zeros((2, 3))
     move[0, 0] = -pull
     loads = Loads(force=f, support_displacement=move if pull else None)
-    plane = Plane(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
-    return Problem(net, loads, (plane, Friction(plane, mu=mu, slip=slip)))
+    if obstacle is None:
+        obstacle = Plane(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
+    return Problem(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
 
 
 @pytest.mark.parametrize("steps", [1, 4])

@@ -10,13 +10,12 @@ import math
 
 import numpy as np
 import pytest
-from test_friction import DHAT, KAPPA, resting_gap
+from test_friction import DHAT, KAPPA, block
 from test_moving_shapes import moving_shapes, near
 from test_shapes import CUBE_T, CUBE_V
 
 from catenet.case import build, parse_case
-from catenet.net import Loads, Net
-from catenet.solve import Problem, Settings, solve
+from catenet.solve import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.friction import Friction, contact_normals
 from catenet.terms.moving import Moving
@@ -85,23 +84,6 @@ def test_anchors_and_normals_ride_with_the_obstacle_over_the_step():
 # --------------------------------------------------------------------------- closed forms
 
 
-def on_top(obstacle, *, mu, slip, force, mass=0.0, spring=None, pull=0.0):
-    """Node 1 resting on the top face (z = 0) of ``obstacle`` under ``force``, tied to
-    support 0 one metre away along x by a bilateral spring ``spring`` (None: slack) that
-    moves ``pull`` away from it (as test_friction.block on a plane)."""
-    gap = resting_gap(-force[2])
-    tie = dict(EA=spring, tension_only=False) if spring else dict(EA=1.0, rest_length=20.0)
-    net = Net.from_arrays(
-        [[-1.0, 0, gap], [0.0, 0, gap]], [[0, 1]], fixed=[0], point_mass=[0, mass], **tie
-    )
-    f = np.zeros((2, 3))
-    f[1] = force
-    move = np.zeros((2, 3))
-    move[0, 0] = -pull
-    loads = Loads(force=f, support_displacement=move if pull else None)
-    return Problem(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
-
-
 def tops(kinds=("box", "capsule", "mesh")):
     """Obstacles on node 1 whose top is z = 0 near the origin, straight along x (the
     capsule's axis lies along x)."""
@@ -122,7 +104,7 @@ def test_a_block_on_a_box_capsule_or_mesh_top_sticks_below_mu_n_and_slides_to_it
     mu, N, k, slip = 0.5, 10.0, 100.0, 1e-3
     obstacle = tops()[index]
     r = solve(
-        on_top(obstacle, mu=mu, slip=slip, force=[0, 0, -N], spring=k, pull=pull),
+        block(mu=mu, slip=slip, force=[0, 0, -N], spring=k, pull=pull, obstacle=obstacle),
         Settings("static", rtol=1e-10, steps=2),
     )
     assert r.converged
@@ -141,7 +123,7 @@ def conveyor(velocity, *, mu, spring=None, angular=None, mass=1.0, N=20.0, axis=
     center = [axis[0], axis[1], -1.0]
     box = Box(one, center, [5.0, 5.0, 1.0], np.eye(3), kappa=KAPPA, dhat=DHAT)
     belt = Moving(box, center, velocity, angular, reach=8.0)
-    return on_top(belt, mu=mu, slip=1e-4, force=[0, 0, -N], mass=mass, spring=spring)
+    return block(mu=mu, slip=1e-4, force=[0, 0, -N], mass=mass, spring=spring, obstacle=belt)
 
 
 def test_a_node_on_a_conveyor_box_slides_until_it_sticks_then_travels_with_it():
