@@ -4,7 +4,6 @@ per-edge arrays (rest length, EA, tension-only switch, prestress)."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
@@ -16,10 +15,7 @@ from catenet.case.keys import (
     BAD,
     Checker,
     Context,
-    as_float,
-    as_int,
     declared,
-    duplicates,
     key,
     names,
     parse_keys,
@@ -29,6 +25,7 @@ from catenet.case.keys import (
     value,
 )
 from catenet.case.kinds import cables as cb
+from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
 from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
 from catenet.errors import ConfigError
@@ -36,96 +33,6 @@ from catenet.laws import Law, table_rows
 from catenet.net import Net
 
 Vec3 = tuple[float, float, float]
-
-
-def _finite(c: Any) -> float | None:
-    f = as_float(c)
-    return f if f is not None and math.isfinite(f) else None
-
-
-def _index(c: Any) -> int | None:
-    i = as_int(c)
-    return i if i is not None and i >= 0 else None
-
-
-def _array(ck: Checker, v: Any, path: str, shape: tuple[int, int], convert, need: str) -> Any:
-    """An array of at least shape[0] items, each shape[1] values that ``convert`` accepts;
-    ``need`` describes one item."""
-    least, width = shape
-    if not isinstance(v, (list, tuple)) or len(v) < least:
-        some = f"at least {least} " if least else ""
-        return ck.bad(path, v, f"must be an array of {some}{need.split(':')[0]}")
-    out, bad = [], []
-    for i, q in enumerate(v):
-        item = None
-        if isinstance(q, (list, tuple)) and len(q) == width:
-            item = tuple(convert(c) for c in q)
-            if None in item:
-                item = None
-        if item is None:
-            bad.append((f"{path}[{i}]", q))
-        out.append(item)
-    ck.first(bad, f"must be {need}")
-    return BAD if bad else tuple(out)
-
-
-def _points(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    return _array(ck, v, path, (2, 3), _finite, "[x, y, z]: 3 finite numbers")
-
-
-def _pairs(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    return _array(ck, v, path, (0, 2), _index, "[i, j]: two node indices (integers >= 0)")
-
-
-def _per_edge_of(what: str, convert, need: str):
-    """A check of one value per edge (of geometry.edges): ``convert`` gives the clean
-    value or None, ``need`` says what one must be."""
-
-    def check(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-        if not isinstance(v, (list, tuple)):
-            return ck.bad(path, v, f"must be an array with one {what} per edge")
-        vals = [convert(x) for x in v]
-        ck.first([(f"{path}[{k}]", v[k]) for k, x in enumerate(vals) if x is None], need)
-        edges = ctx.values.get("edges")
-        if edges is not None and edges is not BAD and len(v) != len(edges):
-            return ck.bad(
-                path,
-                v,
-                f"has {len(v)} values: must have one per edge ({len(edges)}) of geometry.edges",
-            )
-        return BAD if None in vals else tuple(vals)
-
-    return check
-
-
-def _positive(x: Any) -> float | None:
-    f = _finite(x)
-    return f if f is not None and f > 0 else None
-
-
-def _bool(x: Any) -> bool | None:
-    return bool(x) if isinstance(x, (bool, np.bool_)) else None
-
-
-_per_edge = _per_edge_of("number > 0", _positive, "must be finite and > 0")
-
-
-def _index_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    if not isinstance(v, (list, tuple)):
-        return ck.bad(path, v, "must be an array of node indices")
-    out, bad = [], []
-    for k, x in enumerate(v):
-        i = as_int(x)
-        if i is None or i < 0:
-            bad.append((f"{path}[{k}]", x))
-        out.append(i)
-    ck.first(bad, "must be a node index (an integer >= 0)")
-    if bad:
-        return BAD
-    dup = duplicates(out)
-    if dup:
-        return ck.bad(path, v, f"node {dup[0]} appears more than once: list each node once")
-    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -144,14 +51,14 @@ class GraphConfig(GeometryConfig):
     node_sets: ClassVar[bool] = True
 
     nodes: tuple[Vec3, ...] = key(
-        _points,
+        gk.points,
         "an array of at least 2 [x, y, z]",
         missing="[[x, y, z], ...] (at least 2 nodes)",
         unit="m",
         doc="node positions; center is the free node nearest the bounding box's centre",
     )
     edges: tuple[tuple[int, int], ...] = key(
-        _pairs,
+        gk.pairs,
         "an array of [i, j] (node indices)",
         (),
         write="given",
@@ -159,7 +66,7 @@ class GraphConfig(GeometryConfig):
         doc="the edges, each joining two distinct nodes once; at least 1, or cables",
     )
     rest_length: tuple[float, ...] | None = key(
-        _per_edge,
+        gk.per_edge,
         "an array with one number > 0 per edge",
         None,
         write="given",
@@ -169,7 +76,7 @@ class GraphConfig(GeometryConfig):
         doc="unstressed length of each edge",
     )
     EA: tuple[float, ...] | None = key(
-        _per_edge,
+        gk.per_edge,
         "an array with one number > 0 per edge",
         None,
         write="given",
@@ -179,7 +86,7 @@ class GraphConfig(GeometryConfig):
         doc="axial stiffness of each edge",
     )
     tension_only: tuple[bool, ...] | None = key(
-        _per_edge_of("true or false", _bool, "must be true or false"),
+        gk.per_edge_of("true or false", gk.boolean, "must be true or false"),
         "an array with one true or false per edge",
         None,
         write="given",
@@ -188,7 +95,7 @@ class GraphConfig(GeometryConfig):
         doc="whether each edge goes slack in compression (false: a strut)",
     )
     prestress: tuple[float, ...] | None = key(
-        _per_edge_of("finite number", _finite, "must be a finite number"),
+        gk.per_edge_of("finite number", gk.finite, "must be a finite number"),
         "an array with one finite number per edge",
         None,
         write="given",
@@ -198,7 +105,7 @@ class GraphConfig(GeometryConfig):
         doc="tension of each edge in the given geometry (rest length derived from it)",
     )
     fixed: tuple[int, ...] = key(
-        _index_list,
+        gk.index_list,
         "an array of node indices",
         (),
         doc="default supports (required unless supports.fixed)",
