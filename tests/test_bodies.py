@@ -380,20 +380,18 @@ def test_balls_stop_at_the_ground_at_fixed_spheres_and_at_each_other():
     assert (gaps.min(axis=0)[[0, 2, 3]] < 0.005).all()  # each came within the barrier
 
 
-def test_a_ball_warns_of_obstacles_it_passes_through(caplog):
+def test_a_ball_no_longer_passes_through_a_box(caplog):
+    """Boxes, capsules and meshes stop a ball too (tests/test_ball_shapes.py): no more
+    "does not collide" warning, a barrier on the ball's centre instead."""
     case = catch_case(coarse=True)
     case["obstacle"].append(
         {"kind": "box", "center": [3.0, 0.0, 0.0], "half_size": [0.1, 0.1, 0.1]}
     )
     with caplog.at_level("WARNING"):
-        build(parse_case(case))
-    assert "obstacle[0] (a moving sphere) does not collide with obstacle[1] (kind 'box')" in (
-        caplog.text
-    )
-    caplog.clear()
-    with caplog.at_level("WARNING"):
-        build(parse_case(catch_case(coarse=True)))
+        scene = build(parse_case(case))
     assert "does not collide" not in caplog.text
+    c = scene.net.n_nodes - 1
+    assert [type(t).__name__ for t in scene.terms if list(t.nodes) == [c]] == ["Box"]
 
 
 def test_a_ball_that_starts_on_the_ground_is_refused():

@@ -5,7 +5,9 @@ Each moving sphere becomes one node appended to the net (``Net.bodies``, after e
 node, in the order of the ``[[obstacle]]`` tables): its mass lumped there (gravity acts
 on it through ``load.gravity``), its initial velocity in ``Scene.velocity``, and its
 terms (``catenet.terms.body``): the barrier with every free net node, and for a path,
-the spring that holds it there. Loads are padded with zeros for the new nodes.
+the spring that holds it there; and its barrier against every other obstacle, that
+obstacle's own term on the centre, grown by the radius (``_collisions``,
+``catenet.terms.collide``). Loads are padded with zeros for the new nodes.
 """
 
 from __future__ import annotations
@@ -131,9 +133,9 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
 def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: float, nodes):
     """The terms that stop the ball of ``obstacle[k]`` (centre ``node``) at the other
     obstacles, exact for its shape: a plane moved out by the radius, a fixed sphere grown
-    by it, another moving sphere (of a later table) as a ball of the summed radii. Other
-    kinds do not stop it (a warning says so). Raises ConfigError for a ball that starts
-    inside or on one of them."""
+    by it, another moving sphere (of a later table) as a ball of the summed radii, a box,
+    capsule or mesh (fixed or moving) grown by it (``catenet.terms.collide``). Raises
+    ConfigError for a ball that starts inside or on one of them."""
     from catenet.case.obstacles import DISTANCE_SHARE
     from catenet.terms.body import Ball
     from catenet.terms.contact import Plane, Sphere, default_stiffness
@@ -159,15 +161,8 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
             term = Plane([node], point, normal, kappa=kappa, dhat=dhat)
         elif other.kind == "sphere":
             term = Sphere([node], other.center, other.radius + me.radius, kappa=kappa, dhat=dhat)
-        else:
-            log.warning(
-                "obstacle[%d] (a moving sphere) does not collide with obstacle[%d] (kind %r): "
-                "only planes, spheres and other moving spheres stop it",
-                k,
-                i,
-                other.kind,
-            )
-            continue
+        else:  # box, capsule, mesh: the centre against the shape grown by the radius
+            term = other.term([node], kappa, dhat, offset=me.radius)
         gap = float(term.gap(net.nodes)[0])
         if not gap > 0.0:
             raise ConfigError(

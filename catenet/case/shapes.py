@@ -79,14 +79,20 @@ class _Motion:
                 "angular_velocity with it"
             )
 
-    def _moving(self, shape, origin, reach: float):
+    def _moving(self, shape, origin, reach: float, offset: float = 0.0):
+        """``shape`` on the prescribed motion, if any; ``offset``: a ball's radius (the
+        shape grown by it, ``catenet.terms.collide``), which guards no supports."""
         if not self.rigid_motion:
             return shape
         from catenet.history import History
         from catenet.terms.moving import Moving
 
         hist = History(self.history, path="history") if self.history else None
-        return Moving(shape, origin, self.velocity, self.angular_velocity, hist, reach=reach)
+        term = Moving(
+            shape, origin, self.velocity, self.angular_velocity, hist, reach=reach + offset
+        )
+        term.guards_supports = offset == 0.0
+        return term
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -117,12 +123,14 @@ class BoxObstacle(_Motion, Declared):
             ck.add(f"{path}.axis = {list(self.axis)}: must not be zero")
         self._check_motion(ck, path)
 
-    def term(self, nodes, kappa: float, dhat: float):
+    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
+        (the box rounded by r)."""
         from catenet.terms.shapes import Box, rotation
 
         R = rotation(self.axis, self.angle)
-        box = Box(nodes, self.center, self.half_size, R, kappa=kappa, dhat=dhat)
-        return self._moving(box, self.center, float(np.linalg.norm(self.half_size)))
+        box = Box(nodes, self.center, self.half_size, R, kappa=kappa, dhat=dhat, offset=offset)
+        return self._moving(box, self.center, float(np.linalg.norm(self.half_size)), offset)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -148,13 +156,16 @@ class CapsuleObstacle(_Motion, Declared):
             ck.add(f"{path}.end = {list(self.end)}: must differ from {path}.start")
         self._check_motion(ck, path)
 
-    def term(self, nodes, kappa: float, dhat: float):
+    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
+        (the capsule of radius + r, exact)."""
         from catenet.terms.shapes import Capsule
 
-        capsule = Capsule(nodes, self.start, self.end, self.radius, kappa=kappa, dhat=dhat)
+        radius = self.radius + offset
+        capsule = Capsule(nodes, self.start, self.end, radius, kappa=kappa, dhat=dhat)
         a, b = np.asarray(self.start), np.asarray(self.end)
         reach = 0.5 * float(np.linalg.norm(b - a)) + self.radius
-        return self._moving(capsule, 0.5 * (a + b), reach)
+        return self._moving(capsule, 0.5 * (a + b), reach, offset)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -197,14 +208,16 @@ class MeshObstacle(_Motion, Declared):
         V, T = read_surface(self.file)
         return V * self.scale + np.asarray(self.offset), T
 
-    def term(self, nodes, kappa: float, dhat: float):
+    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
+        (the mesh grown by r)."""
         from catenet.terms.shapes import Mesh
 
         V, T = self.surface()
-        mesh = Mesh(nodes, V, T, kappa=kappa, dhat=dhat)
+        mesh = Mesh(nodes, V, T, kappa=kappa, dhat=dhat, offset=offset)
         origin = np.asarray(self.offset, dtype=np.float64)
         reach = float(np.linalg.norm(V - origin, axis=1).max())
-        return self._moving(mesh, origin, reach)
+        return self._moving(mesh, origin, reach, offset)
 
 
 def read_surface(file: str) -> tuple[np.ndarray, np.ndarray]:

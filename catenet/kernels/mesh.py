@@ -13,6 +13,13 @@ first contact along a step (``mesh_max_step``) walks the cells the node's ray cr
 (Amanatides and Woo) and stops at the first cell that holds a hit before the ray leaves
 it, so the cost per node is the cells crossed, not the triangles.
 
+Offset (a rigid ball's centre against the mesh, ``catenet.terms.collide``): with r > 0
+the gap is d - r, the distance to the mesh grown by r, with the curvature over d (see
+``catenet.kernels.shapes``); the grid must then list the triangles within dhat + r, and
+the first contact is the exact entry of the ray into the union, over the triangles, of
+each triangle grown by r: its prism of half-thickness r (clipped by the five planes) and
+the capsules of radius r on its three edges (their end balls are the vertex balls).
+
 Feature codes: 0 face, 1..3 vertex k-1, 4..6 edge k-4 (from vertex k-4 to the next).
 """
 
@@ -22,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from catenet.kernels.contact import barrier
-from catenet.kernels.shapes import _block, _zero_block
+from catenet.kernels.shapes import _block, _zero_block, capsule_entry
 
 EPS_BARY = 1e-9  # barycentric tolerance of the ray test: a grazing ray counts as a hit
 
@@ -151,25 +158,27 @@ def _projection(V, T, t, code, n, P):
 
 
 @njit(cache=True, error_model="numpy")
-def mesh_gradient(x, nodes, V, T, fn, en, vn, lo, h, dims, start, items, kappa, dhat, grad):
-    """Adds the mesh barrier's gradient at ``nodes``; returns the energy."""
+def mesh_gradient(x, nodes, V, T, fn, en, vn, lo, h, dims, start, items, kappa, dhat, off, grad):
+    """Adds the mesh barrier's gradient at ``nodes`` (gap: distance - ``off``); returns
+    the energy."""
     total = 0.0
     p = np.empty(3)
     for k in range(nodes.shape[0]):
         i = nodes[k]
         d, _, _ = _nearest(x[i], V, T, fn, en, vn, lo, h, dims, start, items, p)
-        if d >= dhat:
+        g = d - off
+        if g >= dhat:
             continue
-        b, db, _ = barrier(d, dhat)
+        b, db, _ = barrier(g, dhat)
         total += kappa * b
-        if d > 0.0:
+        if g > 0.0:
             for a in range(3):
                 grad[i, a] += kappa * db * (x[i, a] - p[a]) / d
     return total
 
 
 @njit(cache=True, error_model="numpy")
-def mesh_hessian(x, nodes, V, T, fn, en, vn, lo, h, dims, start, items, kappa, dhat, values):
+def mesh_hessian(x, nodes, V, T, fn, en, vn, lo, h, dims, start, items, kappa, dhat, off, values):
     """Writes the 3x3 blocks of the mesh barrier at ``nodes``; returns how many act."""
     active = 0
     p = np.empty(3)
@@ -178,22 +187,23 @@ def mesh_hessian(x, nodes, V, T, fn, en, vn, lo, h, dims, start, items, kappa, d
     for k in range(nodes.shape[0]):
         i = nodes[k]
         d, t, code = _nearest(x[i], V, T, fn, en, vn, lo, h, dims, start, items, p)
-        if d >= dhat or d <= 0.0:
+        g = d - off
+        if g >= dhat or g <= 0.0:
             _zero_block(values, k)
             continue
         active += 1
-        _, db, ddb = barrier(d, dhat)
+        _, db, ddb = barrier(g, dhat)
         for a in range(3):
             n[a] = (x[i, a] - p[a]) / d
         _projection(V, T, t, code, n, P)
-        _block(values, k, kappa, db, ddb, d, n, P)
+        _block(values, k, kappa, db, ddb, d, n, P)  # curvature over d: the offset's too
     return active
 
 
 @njit(cache=True, error_model="numpy")
-def mesh_gap(x, nodes, V, T, fn, en, vn, box_lo, box_hi, out):
+def mesh_gap(x, nodes, V, T, fn, en, vn, box_lo, box_hi, off, out):
     """Signed distance of every node to the whole mesh (every triangle, those whose
-    bounding box is farther than the best so far skipped)."""
+    bounding box is farther than the best so far skipped), minus ``off``."""
     p = np.empty(3)
     q = np.empty(3)
     for k in range(nodes.shape[0]):
@@ -213,7 +223,7 @@ def mesh_gap(x, nodes, V, T, fn, en, vn, box_lo, box_hi, out):
             if d2 < best:
                 best, best_t, best_code = d2, t, code
                 p[:] = q
-        out[k] = _signed(xi, V, T, fn, en, vn, best_t, best_code, p)
+        out[k] = _signed(xi, V, T, fn, en, vn, best_t, best_code, p) - off
 
 
 @njit(cache=True, error_model="numpy")
@@ -243,8 +253,56 @@ def _ray_triangle(x, v, A, B, C):
 
 
 @njit(cache=True, error_model="numpy")
-def _first_hit(x, v, V, T, lo, h, dims, start, items):
-    """The first t >= 0 at which the ray x + t v meets the mesh (inf: never)."""
+def _prism_entry(x, v, A, B, C, n, r):
+    """The first t >= 0 at which x + t v is in the prism {p + s n: p in ABC, |s| <= r}
+    (n the unit normal of ABC by its vertex order; inf: never): Cyrus-Beck clipping by
+    its two caps and three sides (outward side normals e x n)."""
+    enter = -np.inf
+    leave = np.inf
+    m = np.empty(3)
+    for face in range(5):
+        if face < 2:
+            sign = 1.0 if face == 0 else -1.0
+            for a in range(3):
+                m[a] = sign * n[a]
+            lim = sign * _dot(n[0], n[1], n[2], A[0], A[1], A[2]) + r
+        else:
+            P0 = A if face == 2 else (B if face == 3 else C)
+            P1 = B if face == 2 else (C if face == 3 else A)
+            ex, ey, ez = P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2]
+            m[0] = ey * n[2] - ez * n[1]
+            m[1] = ez * n[0] - ex * n[2]
+            m[2] = ex * n[1] - ey * n[0]
+            lim = _dot(m[0], m[1], m[2], P0[0], P0[1], P0[2])
+        num = lim - _dot(m[0], m[1], m[2], x[0], x[1], x[2])  # >= 0: inside at t = 0
+        den = _dot(m[0], m[1], m[2], v[0], v[1], v[2])
+        if den == 0.0:
+            if num < 0.0:
+                return np.inf
+            continue
+        t = num / den
+        if den > 0.0:
+            leave = min(leave, t)
+        else:
+            enter = max(enter, t)
+    if enter > leave or leave < 0.0:
+        return np.inf
+    return max(enter, 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _grown_triangle_entry(x, v, A, B, C, n, r):
+    """The first t >= 0 at which x + t v is within r of triangle ABC (inf: never)."""
+    t = _prism_entry(x, v, A, B, C, n, r)
+    t = min(t, capsule_entry(x, v, A, B, r))
+    t = min(t, capsule_entry(x, v, B, C, r))
+    return min(t, capsule_entry(x, v, C, A, r))
+
+
+@njit(cache=True, error_model="numpy")
+def _first_hit(x, v, V, T, fn, off, lo, h, dims, start, items):
+    """The first t >= 0 at which the ray x + t v meets the mesh, grown by ``off`` > 0
+    (inf: never)."""
     t0 = 0.0
     t1 = np.inf
     for a in range(3):
@@ -283,7 +341,11 @@ def _first_hit(x, v, V, T, lo, h, dims, start, items):
         c = (idx[0] * dims[1] + idx[1]) * dims[2] + idx[2]
         for j in range(start[c], start[c + 1]):
             t = items[j]
-            best = min(best, _ray_triangle(x, v, V[T[t, 0]], V[T[t, 1]], V[T[t, 2]]))
+            A, B, C = V[T[t, 0]], V[T[t, 1]], V[T[t, 2]]
+            if off > 0.0:
+                best = min(best, _grown_triangle_entry(x, v, A, B, C, fn[t], off))
+            else:
+                best = min(best, _ray_triangle(x, v, A, B, C))
         a = 0
         if t_next[1] < t_next[a]:
             a = 1
@@ -299,15 +361,16 @@ def _first_hit(x, v, V, T, lo, h, dims, start, items):
 
 
 @njit(cache=True, error_model="numpy")
-def mesh_max_step(x, dx, nodes, V, T, lo, h, dims, start, items):
-    """The largest t with every node outside the mesh along x + t dx: the first time a
-    node's ray meets a triangle (inf if none)."""
+def mesh_max_step(x, dx, nodes, V, T, fn, off, lo, h, dims, start, items):
+    """The largest t with every node outside the mesh (grown by ``off``) along x + t dx:
+    the first time a node's ray meets a (grown) triangle (inf if none)."""
     t_max = np.inf
     for k in range(nodes.shape[0]):
         i = nodes[k]
         if dx[i, 0] == 0.0 and dx[i, 1] == 0.0 and dx[i, 2] == 0.0:
             continue
-        t_max = min(t_max, _first_hit(x[i], dx[i], V, T, lo, h, dims, start, items))
+        hit = _first_hit(x[i], dx[i], V, T, fn, off, lo, h, dims, start, items)
+        t_max = min(t_max, hit)
     return t_max
 
 

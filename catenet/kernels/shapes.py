@@ -24,6 +24,15 @@ slab test for the box, the first root over the lateral cylinder and the two end 
 for the capsule, and a ray-triangle test over the cells of a uniform grid that the ray
 crosses for the mesh (barycentric tolerance 1e-9: a ray grazing an edge counts as a hit,
 which is conservative). The line search never tries a step at or beyond it.
+
+Offset surfaces (a rigid ball's centre against a shape, ``catenet.terms.collide``): the
+gap is g = d - r, the centre's distance to the shape minus the ball's radius r, i.e. the
+distance to the Minkowski sum of the shape and the ball. The Hessian is then
+kappa (b''(g) n n^T + b'(g) (P - n n^T) / d), the curvature still over the true distance d
+(``_fold`` writes P so that the shared ``_block`` divides by d, not g). A capsule grows its
+radius. The box's first contact is the exact entry of the ray into the rounded box: the
+union of the box with its faces moved out by r along each axis (three slabs), and of the
+12 capsules of radius r on its edges (their end balls are the 8 corner balls).
 """
 
 from __future__ import annotations
@@ -57,6 +66,15 @@ def _ball_root(x, dx, center, radius):
     """The first t >= 0 with |x + t dx - c| = R (inf: never, or moving away)."""
     u = (x[0] - center[0], x[1] - center[1], x[2] - center[2])
     return ball_root(u, (dx[0], dx[1], dx[2]), radius)
+
+
+@njit(cache=True, error_model="numpy")
+def _fold(P, n, f):
+    """P := f (P - n n^T) + n n^T: the shared ``_block`` divides the curvature by the gap
+    g; with f = g / d it is divided by the distance d whose Hessian it is."""
+    for j in range(3):
+        for c in range(3):
+            P[j, c] = f * (P[j, c] - n[j] * n[c]) + n[j] * n[c]
 
 
 # --------------------------------------------------------------------------- box
@@ -98,33 +116,70 @@ def box_feature(x, center, axes, half, n, P):
 
 
 @njit(cache=True, error_model="numpy")
-def box_max_step(x, dx, nodes, center, axes, half):
-    """The largest t with every node outside the box along x + t dx: the first entry of
-    each node's line into the box (slab test in the box's frame; inf if none)."""
+def _slab_entry(q, v, half):
+    """The first t >= 0 at which q + t v is in the box |q_a| <= half_a (box frame; inf:
+    never): the slab test."""
+    enter = -np.inf
+    leave = np.inf
+    for a in range(3):
+        if v[a] == 0.0:
+            if abs(q[a]) > half[a]:
+                return np.inf
+            continue
+        t1 = (-half[a] - q[a]) / v[a]
+        t2 = (half[a] - q[a]) / v[a]
+        enter = max(enter, min(t1, t2))
+        leave = min(leave, max(t1, t2))
+    if enter > leave or leave < 0.0:
+        return np.inf
+    return max(enter, 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _rounded_entry(q, v, half, r):
+    """The first t >= 0 at which q + t v is within r of the box (box frame): the first
+    entry into the three slabs grown by r along one axis and the 12 edge capsules."""
+    t = np.inf
+    grown = np.empty(3)
+    p0 = np.empty(3)
+    p1 = np.empty(3)
+    for a in range(3):
+        for j in range(3):
+            grown[j] = half[j] + (r if j == a else 0.0)
+        t = min(t, _slab_entry(q, v, grown))
+        b, c = (a + 1) % 3, (a + 2) % 3
+        for sb in (-1.0, 1.0):
+            for sc in (-1.0, 1.0):
+                p0[a] = -half[a]
+                p1[a] = half[a]
+                p0[b] = sb * half[b]
+                p1[b] = sb * half[b]
+                p0[c] = sc * half[c]
+                p1[c] = sc * half[c]
+                t = min(t, capsule_entry(q, v, p0, p1, r))
+    return t
+
+
+@njit(cache=True, error_model="numpy")
+def box_max_step(x, dx, nodes, center, axes, half, offset):
+    """The largest t with every node outside the box (grown by ``offset``: the rounded
+    box) along x + t dx: the first entry of each node's line (inf if none)."""
     t_max = np.inf
+    q = np.empty(3)
+    v = np.empty(3)
     for k in range(nodes.shape[0]):
         i = nodes[k]
-        enter = -np.inf
-        leave = np.inf
-        miss = False
         for a in range(3):
-            q = 0.0
-            v = 0.0
+            q[a] = 0.0
+            v[a] = 0.0
             for j in range(3):
-                q += axes[j, a] * (x[i, j] - center[j])
-                v += axes[j, a] * dx[i, j]
-            if v == 0.0:
-                if abs(q) > half[a]:
-                    miss = True
-                    break
-                continue
-            t1 = (-half[a] - q) / v
-            t2 = (half[a] - q) / v
-            enter = max(enter, min(t1, t2))
-            leave = min(leave, max(t1, t2))
-        if miss or enter > leave or leave < 0.0:
-            continue
-        t_max = min(t_max, max(enter, 0.0))
+                q[a] += axes[j, a] * (x[i, j] - center[j])
+                v[a] += axes[j, a] * dx[i, j]
+        if offset > 0.0:
+            t = _rounded_entry(q, v, half, offset)
+        else:
+            t = _slab_entry(q, v, half)
+        t_max = min(t_max, t)
     return t_max
 
 
@@ -157,56 +212,57 @@ def capsule_feature(x, a, b, radius, n, P):
     for j in range(3):
         for c in range(3):
             P[j, c] = (1.0 if j == c else 0.0) - (w[j] * w[c] / ww if middle else 0.0)
-    # hess d = (P - n n^T) / rho, not / d: fold the ratio into P for the shared _block.
-    f = d / rho
-    for j in range(3):
-        for c in range(3):
-            P[j, c] = f * (P[j, c] - n[j] * n[c]) + n[j] * n[c]
+    _fold(P, n, d / rho)  # hess d = (P - n n^T) / rho, not / d
     return d
 
 
 @njit(cache=True, error_model="numpy")
-def capsule_max_step(x, dx, nodes, a, b, radius):
-    """The largest t with every node outside the capsule along x + t dx: the first of
-    the entries into the two end balls and through the lateral surface of the cylinder
-    between them (the capsule is their union; inf if none)."""
-    w = np.empty(3)
+def capsule_entry(x, v, a, b, radius):
+    """The first t >= 0 at which x + t v is in the capsule (segment a-b, radius): the
+    first of the entries into the two end balls and through the lateral surface of the
+    cylinder between them (the capsule is their union; inf if none)."""
+    t = min(_ball_root(x, v, a, radius), _ball_root(x, v, b, radius))
     ww = 0.0
+    ys = 0.0
+    vs = 0.0
     for j in range(3):
-        w[j] = b[j] - a[j]
-        ww += w[j] * w[j]
+        w = b[j] - a[j]
+        ww += w * w
+        ys += (x[j] - a[j]) * w
+        vs += v[j] * w
+    A = 0.0
+    B = 0.0
+    C = -radius * radius
+    for j in range(3):
+        w = b[j] - a[j]
+        y = x[j] - a[j] - ys / ww * w
+        u = v[j] - vs / ww * w
+        A += u * u
+        B += 2.0 * y * u
+        C += y * y
+    if A > 0.0 and B < 0.0 and C > 0.0:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            tc = (-B - np.sqrt(disc)) / (2.0 * A)
+            s = (ys + tc * vs) / ww
+            if 0.0 <= s <= 1.0:
+                t = min(t, tc)
+    return t
+
+
+@njit(cache=True, error_model="numpy")
+def capsule_max_step(x, dx, nodes, a, b, radius):
+    """The largest t with every node outside the capsule along x + t dx (inf if none)."""
     t_max = np.inf
     for k in range(nodes.shape[0]):
         i = nodes[k]
-        t = min(_ball_root(x[i], dx[i], a, radius), _ball_root(x[i], dx[i], b, radius))
-        ys = 0.0
-        vs = 0.0
-        for j in range(3):
-            ys += (x[i, j] - a[j]) * w[j]
-            vs += dx[i, j] * w[j]
-        A = 0.0
-        B = 0.0
-        C = -radius * radius
-        for j in range(3):
-            y = x[i, j] - a[j] - ys / ww * w[j]
-            v = dx[i, j] - vs / ww * w[j]
-            A += v * v
-            B += 2.0 * y * v
-            C += y * y
-        if A > 0.0 and B < 0.0 and C > 0.0:
-            disc = B * B - 4.0 * A * C
-            if disc >= 0.0:
-                tc = (-B - np.sqrt(disc)) / (2.0 * A)
-                s = (ys + tc * vs) / ww
-                if 0.0 <= s <= 1.0:
-                    t = min(t, tc)
-        t_max = min(t_max, t)
+        t_max = min(t_max, capsule_entry(x[i], dx[i], a, b, radius))
     return t_max
 
 
 # ------------------------------------------------ box and capsule: one gap, gradient, Hessian
 
-BOX = 0  # geom: centre (3), axes (3x3, row-major), half sizes (3)
+BOX = 0  # geom: centre (3), axes (3x3, row-major), half sizes (3), offset (rounding)
 CAPSULE = 1  # geom: end a (3), end b (3), radius
 
 
@@ -215,7 +271,11 @@ def shape_feature(kind, x, geom, n, P):
     """The gap of point x to the box or capsule ``geom`` (packed as BOX or CAPSULE says),
     with its unit gradient n and projection P (module docstring)."""
     if kind == BOX:
-        return box_feature(x, geom[0:3], geom[3:12].reshape((3, 3)), geom[12:15], n, P)
+        d = box_feature(x, geom[0:3], geom[3:12].reshape((3, 3)), geom[12:15], n, P)
+        g = d - geom[15]
+        if geom[15] > 0.0 and g > 0.0:
+            _fold(P, n, g / d)  # the rounded box: curvature over d, not g
+        return g
     return capsule_feature(x, geom[0:3], geom[3:6], geom[6], n, P)
 
 

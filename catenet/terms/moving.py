@@ -14,7 +14,9 @@ Between steps the obstacle jumps from pose(t_n) to pose(t_n+1), which could swal
 node near it. ``carry`` (called by the time stepping before its predictor is cut back to
 the first contact) moves every free node that the obstacle may reach in the step
 rigidly with it, in the predictor and in the point the cut-back starts from: rigid
-motion keeps a node's gap, so every step starts with every node outside. A support the
+motion keeps a node's gap, so every step starts with every node outside. A node is
+carried by one obstacle at most, and the contacts of a carried rigid ball (or the ball
+resting on a carried node) come along (``catenet.terms.collide.spread``). A support the
 obstacle reaches stops the run (ConvergenceError naming obstacle and node).
 """
 
@@ -49,6 +51,10 @@ class Moving(Term):
 
     role = "internal"
     convex = False
+    #: Whether ``carry`` stops the run at a support the obstacle reaches (False for a
+    #: ball's centre against it: the shape grown by the ball's radius is no obstacle to
+    #: the supports; the net's own term guards them).
+    guards_supports = True
 
     def __init__(
         self,
@@ -131,16 +137,17 @@ class Moving(Term):
         f = abs(self.path.distance(t1) - self.path.distance(t0))
         return f * (float(np.linalg.norm(self.velocity)) + np.linalg.norm(self.omega) * self.reach)
 
-    def carry(self, base, trial, t0: float, t1: float, fixed) -> int:
+    def carry(self, base, trial, t0: float, t1: float, fixed, moved=None, index=0) -> int:
         """Moves the free nodes the obstacle may reach from t0 to t1 (gap at pose(t0)
         below SWEEP_SAFETY times its sweep plus the activation distance) rigidly with it,
         in ``base`` (the step's start, as the cut-back sees it) and ``trial`` (its
-        predictor), in place; returns how many. Raises ConvergenceError when a support
-        (``fixed``, a mask of all nodes) is inside or on the obstacle at t1."""
-        c0, R0 = self.pose(t0)
+        predictor), in place; returns how many. ``moved`` (per node, the ``index`` of
+        the obstacle that carried it, -1: none) skips nodes carried already and records
+        these. Raises ConvergenceError when a support (``fixed``, a mask of all nodes) is
+        inside or on the obstacle at t1."""
         c1, R1 = self.pose(t1)
         self.center, self.R = c1, R1
-        supports = np.flatnonzero(fixed)
+        supports = np.flatnonzero(fixed) if self.guards_supports else np.empty(0, np.int64)
         if supports.size:
             hit = self._reaches(trial, supports, t0, t1)
             if hit is not None:
@@ -154,13 +161,22 @@ class Moving(Term):
         move = self.sweep(t0, t1)
         if move == 0.0:
             return 0
+        c0, R0 = self.pose(t0)
         gap = self.shape.gap(self._body(base, c0, R0))
         near = self.nodes[gap < SWEEP_SAFETY * move + self.dhat]
+        if moved is not None:
+            near = near[moved[near] < 0]
+            moved[near] = index
         if near.size:
-            M = R1 @ R0.T
-            base[near] = c1 + (base[near] - c0) @ M.T
-            trial[near] = c1 + (trial[near] - c0) @ M.T
+            base[near] = self.rigid(base[near], t0, t1)
+            trial[near] = self.rigid(trial[near], t0, t1)
         return int(near.size)
+
+    def rigid(self, points, t0: float, t1: float) -> np.ndarray:
+        """Points (K, 3) moved rigidly with the obstacle from pose(t0) to pose(t1)."""
+        c0, R0 = self.pose(t0)
+        c1, R1 = self.pose(t1)
+        return c1 + (points - c0) @ (R1 @ R0.T).T
 
     def _reaches(self, x, supports, t0: float, t1: float, max_iter: int = 200):
         """(node, time) of the first support (at its place in x) the obstacle reaches
@@ -203,13 +219,18 @@ class _Probe:
 def carry(potential, base, trial, t0: float, t1: float, fixed) -> np.ndarray:
     """``base`` (the step's start) with the nodes every moving obstacle of the potential
     may reach from t0 to t1 carried along with it, in a copy, and in ``trial`` in place
-    (``Moving.carry``); ``base`` itself when there is none."""
+    (``Moving.carry``; then the contacts of carried balls, ``collide.spread``); ``base``
+    itself when there is none."""
     movers = [t for t in potential.system.terms if isinstance(t, Moving)]
     if not movers:
         return base
-    base = base.copy()
-    for term in movers:
-        term.carry(base, trial, t0, t1, fixed)
+    from catenet.terms.collide import spread
+
+    start, base = base, base.copy()
+    moved = np.full(len(base), -1, dtype=np.int64)
+    for k, term in enumerate(movers):
+        term.carry(base, trial, t0, t1, fixed, moved, k)
+    spread(potential.system.terms, movers, start, base, trial, moved, t0, t1)
     return base
 
 

@@ -59,10 +59,14 @@ class _Shape(Obstacle):
 @register("box")
 class Box(_Shape):
     """The outside of a box: ``center``, ``half`` sizes along its axes, which are the
-    columns of ``axes`` (a rotation matrix; identity: aligned with x, y, z)."""
+    columns of ``axes`` (a rotation matrix; identity: aligned with x, y, z); with an
+    ``offset`` r > 0, the outside of the box rounded by r (a ball's centre against it)."""
 
-    def __init__(self, nodes, center, half, axes=None, *, kappa: float, dhat: float):
+    def __init__(self, nodes, center, half, axes=None, *, kappa, dhat, offset: float = 0.0):
         super().__init__(nodes, kappa=kappa, dhat=dhat)
+        if not (math.isfinite(offset) and offset >= 0):
+            raise ValueError(f"box: offset = {offset!r}: must be >= 0")
+        self.offset = float(offset)
         self.center = np.asarray(center, dtype=np.float64)
         self.half = np.asarray(half, dtype=np.float64)
         if not (self.half.shape == (3,) and np.all(self.half > 0)):
@@ -72,10 +76,11 @@ class Box(_Shape):
             raise ValueError("box: axes must be a rotation matrix")
         self.axes = np.ascontiguousarray(R)
         self.kind = BOX
-        self.geom = np.concatenate([self.center, self.axes.ravel(), self.half])
+        self.geom = np.concatenate([self.center, self.axes.ravel(), self.half, [self.offset]])
 
     def max_step(self, x, dx):
-        return box_max_step(x, dx, self.nodes, self.center, self.axes, self.half)
+        args = (self.nodes, self.center, self.axes, self.half, self.offset)
+        return box_max_step(x, dx, *args)
 
 
 @register("capsule")
@@ -163,12 +168,16 @@ def pseudo_normals(V, T) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 @register("mesh")
 class Mesh(Obstacle):
     """The outside of a closed triangle mesh (``vertices`` (nv, 3), ``triangles``
-    (nt, 3)), e.g. a satellite; see ``closed_surface`` for what it must be."""
+    (nt, 3)), e.g. a satellite; see ``closed_surface`` for what it must be. With an
+    ``offset`` r > 0, the outside of the mesh grown by r (a ball's centre against it)."""
 
     convex = False
 
-    def __init__(self, nodes, vertices, triangles, *, kappa: float, dhat: float):
+    def __init__(self, nodes, vertices, triangles, *, kappa, dhat, offset: float = 0.0):
         super().__init__(nodes, kappa=kappa, dhat=dhat)
+        if not (math.isfinite(offset) and offset >= 0):
+            raise ValueError(f"mesh: offset = {offset!r}: must be >= 0")
+        self.offset = float(offset)
         V, T = closed_surface(vertices, triangles)
         self.vertices, self.triangles = V, T
         self.fn, self.en, self.vn = pseudo_normals(V, T)
@@ -176,10 +185,10 @@ class Mesh(Obstacle):
         self.tri_lo = np.ascontiguousarray(tri.min(axis=1))
         self.tri_hi = np.ascontiguousarray(tri.max(axis=1))
         extent = float(np.median((self.tri_hi - self.tri_lo).max(axis=1)))
-        pad = 1.01 * self.dhat
+        pad = 1.01 * (self.dhat + self.offset)  # every triangle within a gap of dhat
         lo = V.min(axis=0) - pad
         span = V.max(axis=0) + pad - lo
-        h = max(extent, 2.0 * self.dhat, float(span.max()) / 256)
+        h = max(extent, 2.0 * pad / 1.01, float(span.max()) / 256)
         while np.prod(np.ceil(span / h)) > MAX_CELLS:
             h *= 1.5
         self.lo, self.h = lo, h
@@ -194,19 +203,20 @@ class Mesh(Obstacle):
 
     def gap(self, x):
         out = np.empty(len(self.nodes))
-        mesh_gap(x, self.nodes, *self._surface(), self.tri_lo, self.tri_hi, out)
+        mesh_gap(x, self.nodes, *self._surface(), self.tri_lo, self.tri_hi, self.offset, out)
         return out
 
     def gradient(self, x, grad):
-        args = (*self._surface(), *self._grid(), self.kappa, self.dhat, grad)
+        args = (*self._surface(), *self._grid(), self.kappa, self.dhat, self.offset, grad)
         return mesh_gradient(x, self.nodes, *args)
 
     def hessian(self, x, values):
-        args = (*self._surface(), *self._grid(), self.kappa, self.dhat, values)
+        args = (*self._surface(), *self._grid(), self.kappa, self.dhat, self.offset, values)
         return mesh_hessian(x, self.nodes, *args) > 0
 
     def max_step(self, x, dx):
-        return mesh_max_step(x, dx, self.nodes, self.vertices, self.triangles, *self._grid())
+        args = (self.vertices, self.triangles, self.fn, self.offset, *self._grid())
+        return mesh_max_step(x, dx, self.nodes, *args)
 
     def surface(self) -> tuple[np.ndarray, np.ndarray]:
         """(vertices, triangles) as used (outward orientation)."""
