@@ -130,7 +130,8 @@ class Trajectory:
 def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
     """The size of the trajectory ``case`` will write for ``net`` (None: no trajectory,
     output.every = 0). Per frame: positions (N x 3), tensions (M), velocities (N x 3,
-    dynamic), the newmark scheme's accelerations (N x 3) and the time, 8 bytes each.
+    dynamic), the newmark scheme's accelerations (N x 3), moving obstacles' poses and
+    surfaces (``catenet.output.obstacles``) and the time, 8 bytes each.
     Frames: dynamic, the initial state, every ``every``-th of the (t_end - t0) / dt steps
     and the last; static, every ``every``-th of the load steps and the last."""
     every = int(case.output.every)
@@ -142,6 +143,9 @@ def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
         steps = max(1, math.ceil((solver.t_end - t0) / solver.dt * (1 - 1e-12)))
         frames = 1 + math.ceil(steps / every)
         values = (9 if solver.integrator == "newmark" else 6) * n + m
+        from catenet.output.obstacles import frame_values
+
+        values += frame_values(case, n)  # moving obstacles: pose and surface
     else:
         frames = math.ceil(solver.steps / every)
         values = 3 * n + m

@@ -61,90 +61,11 @@ def plotted_time(res) -> float:
     return float(res.times[-1]) if len(res.times) else 0.0
 
 
-def _vec(d: dict, key: str, default=None) -> np.ndarray | None:
-    v = d.get(key, default)
-    return None if v is None else np.asarray(v, dtype=np.float64).reshape(3)
-
-
-def _pose(d: dict, origin: np.ndarray, t: float):
-    """(origin at t, rotation at t) of an obstacle on a prescribed rigid motion (the
-    t = 0 pose without ``velocity`` and ``angular_velocity``)."""
-    v, w = _vec(d, "velocity"), _vec(d, "angular_velocity")
-    if v is None and w is None:
-        return origin, np.eye(3)
-    from catenet.terms.moving import Moving
-
-    history = None
-    if d.get("history") is not None:
-        from catenet.history import History
-
-        history = History(d["history"], path="history")
-    # the term's own pose (c(t), R(t)); the wrapped shape is not used for it
-    dummy = type("Still", (), {"nodes": np.zeros(0, np.int64), "kappa": 0.0, "dhat": 0.0})
-    return Moving(dummy(), origin, v, w, history, reach=1.0).pose(t)
-
-
-def _sphere_grid(c, r, n_u: int = 36, n_v: int = 18) -> list:
-    u = np.linspace(0.0, 2 * np.pi, n_u + 1)
-    v = np.linspace(0.0, np.pi, n_v + 1)
-    P = np.stack(
-        [
-            c[0] + r * np.outer(np.sin(v), np.cos(u)),
-            c[1] + r * np.outer(np.sin(v), np.sin(u)),
-            c[2] + r * np.outer(np.cos(v), np.ones_like(u)),
-        ],
-        axis=-1,
-    )
-    return _quads(P)
-
-
-def _quads(P: np.ndarray) -> list:
-    """The quads of a (m, n, 3) grid of points."""
-    q = np.stack([P[:-1, :-1], P[:-1, 1:], P[1:, 1:], P[1:, :-1]], axis=2)
-    return list(q.reshape(-1, 4, 3))
-
-
-def _box(d: dict, t: float) -> list:
-    from catenet.terms.shapes import rotation
-
-    c0, half = _vec(d, "center"), _vec(d, "half_size")
-    R0 = rotation(_vec(d, "axis", (0.0, 0.0, 1.0)), float(d.get("angle", 0.0)))
-    c, R = _pose(d, c0, t)
-    signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
-    corners = c + (signs * half) @ (R @ R0).T  # index 4 i + 2 j + k, 0/1 for -/+
-    faces = [
-        (0, 1, 3, 2),
-        (4, 5, 7, 6),
-        (0, 1, 5, 4),
-        (2, 3, 7, 6),
-        (0, 2, 6, 4),
-        (1, 3, 7, 5),
-    ]
-    return [corners[list(f)] for f in faces]
-
-
-def _capsule(d: dict, t: float, n: int = 24) -> list:
-    a0, b0, r = _vec(d, "start"), _vec(d, "end"), float(d["radius"])
-    mid0 = 0.5 * (a0 + b0)
-    c, R = _pose(d, mid0, t)
-    a, b = c + R @ (a0 - mid0), c + R @ (b0 - mid0)
-    axis = b - a
-    e = axis / np.linalg.norm(axis)
-    p = np.cross(e, [1.0, 0.0, 0.0] if abs(e[0]) < 0.9 else [0.0, 1.0, 0.0])
-    p /= np.linalg.norm(p)
-    q = np.cross(e, p)
-    u = np.linspace(0.0, 2 * np.pi, n + 1)
-    ring = np.cos(u)[:, None] * p + np.sin(u)[:, None] * q  # (n+1, 3)
-    polys = _quads(np.stack([a + r * ring, b + r * ring]))  # the cylinder
-    s = np.linspace(0.0, 0.5 * np.pi, n // 4 + 1)
-    for end, sign in ((a, -1.0), (b, 1.0)):  # the caps: quarter meridians swept round
-        P = end + r * (np.cos(s)[:, None, None] * ring[None] + sign * np.sin(s)[:, None, None] * e)
-        polys += _quads(P)
-    return polys
-
-
 def shapes(res, t: float | None = None) -> list[Shape]:
-    """The obstacles of ``res``'s case at time ``t`` (default: the plotted state's)."""
+    """The obstacles of ``res``'s case at time ``t`` (default: the plotted state's), as
+    ``catenet.obstacle_surfaces`` builds them."""
+    from catenet.obstacle_surfaces import surface
+
     items = res.case.get("obstacle") if isinstance(res.case, dict) else None
     if not isinstance(items, list):
         return []
@@ -153,34 +74,18 @@ def shapes(res, t: float | None = None) -> list[Shape]:
     for k, d in enumerate(items):
         if not isinstance(d, dict):
             continue
-        kind = d.get("kind")
         moving = d.get("velocity") is not None or d.get("angular_velocity") is not None
-        label = f"obstacle[{k}]: {'moving ' if moving else ''}{kind}"
+        label = f"obstacle[{k}]: {'moving ' if moving else ''}{d.get('kind')}"
         try:
-            if kind == "plane":
-                n = _vec(d, "normal", (0.0, 0.0, 1.0))
-                out.append(
-                    Shape(
-                        kind, label, point=_vec(d, "point", (0, 0, 0)), normal=n / np.linalg.norm(n)
-                    )
-                )
-            elif kind == "sphere":
-                if d.get("mass") is not None or d.get("velocity") is not None:
-                    continue  # a moving ball: catenet.plot_bodies
-                c, r = _vec(d, "center"), float(d["radius"])
-                out.append(Shape(kind, label, _sphere_grid(c, r)))
-            elif kind == "box":
-                out.append(Shape(kind, label, _box(d, t)))
-            elif kind == "capsule":
-                out.append(Shape(kind, label, _capsule(d, t)))
-            elif kind == "mesh":
-                from catenet.case.shapes import read_surface
-
-                V, T = read_surface(str(d["file"]))
-                V = V * float(d.get("scale", 1.0)) + _vec(d, "offset", (0, 0, 0))
-                origin = _vec(d, "offset", (0, 0, 0))
-                c, R = _pose(d, origin, t)
-                out.append(Shape(kind, label, vertices=c + (V - origin) @ R.T, triangles=T))
+            s = surface(d, k)
+            if s is None:
+                continue  # a moving ball: catenet.plot_bodies
+            if s.kind == "plane":
+                out.append(Shape(s.kind, label, point=s.point, normal=s.normal))
+            elif s.kind == "mesh":
+                out.append(Shape(s.kind, label, vertices=s.at(t), triangles=s.faces))
+            else:
+                out.append(Shape(s.kind, label, list(s.at(t)[s.faces])))
         except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
             log.warning("%s: %s not drawn: %s", res.path, label, exc)
     return out

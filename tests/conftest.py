@@ -73,6 +73,17 @@ def subprocess_env() -> dict:
     return env
 
 
+def spawn(*args: str) -> subprocess.Popen:
+    """``catenet *args`` in a fresh interpreter, its output captured as text."""
+    return subprocess.Popen(
+        catenet_command(*args),
+        env=subprocess_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
 def wait_for_frames(path: Path, frames: int, proc: subprocess.Popen, timeout: float = 120.0):
     """Polls a result file that a subprocess writes until it has ``frames`` frames."""
     from catenet.output import open_result, trajectory_length
@@ -92,6 +103,21 @@ def wait_for_frames(path: Path, frames: int, proc: subprocess.Popen, timeout: fl
         time.sleep(0.05)
     proc.kill()
     raise AssertionError(f"{path}: fewer than {frames} frames after {timeout} s")
+
+
+def read_with_vtk(xdmf: Path):
+    """An XDMF sidecar as VTK's XDMF reader (ParaView's) reads it, wrapped by pyvista
+    (pyvista's own XdmfReader (0.49) fails on a file without times: it asks for the
+    first time step), and the VTK errors and warnings it raised."""
+    import pyvista as pv
+    import vtk
+
+    with pv.VtkErrorCatcher() as caught:
+        reader = vtk.vtkXdmfReader()
+        reader.SetFileName(str(xdmf))
+        reader.Update()
+        data = pv.wrap(reader.GetOutputDataObject(0))
+    return data, caught.events
 
 
 def check_xdmf(xdmf: Path) -> dict:
@@ -121,15 +147,29 @@ def check_xdmf(xdmf: Path) -> dict:
             checked["refs"] += 1
             parts = dataset.strip("/").split("/")
             if parts[0] == "xdmf" and tuple(parts) not in views:
-                views.add(tuple(parts))
-                k = int(parts[2])
-                source = h5[f"trajectory/{parts[1]}"]
+                views.add(tuple(parts))  # /xdmf/<source in /trajectory>/<k>
+                k = int(parts[-1])
+                source = h5["trajectory/" + "/".join(parts[1:-1])]
                 assert k < source.shape[0], dataset
                 assert np.array_equal(h5[dataset][()], source[k]), dataset
         checked["slabs"] = len(views)
         times = h5["trajectory/time"][()] if "trajectory/time" in h5 else np.zeros(0)
+        checked["others"] = 0  # obstacles' and balls' grids
+        for series in root.iter("Grid"):
+            if series.get("CollectionType") == "Temporal":
+                got = [float(g.find("Time").get("Value")) for g in series.findall("Grid")]
+                assert got == list(times[: len(got)]), series.get("Name")
         for grid in root.iter("Grid"):
             if grid.get("GridType") != "Uniform":
+                continue
+            topo = grid.find("Topology")
+            if topo.get("TopologyType") != "Polyline":  # an obstacle's surface or the balls
+                assert topo.get("TopologyType") in ("Triangle", "Polyvertex"), grid.get("Name")
+                cells = h5[topo.find("DataItem").text.strip().partition(":")[2]][()]
+                points = grid.find("Geometry/DataItem").get("Dimensions").split()[0]
+                assert len(cells) == int(topo.get("NumberOfElements"))
+                assert cells.min() >= 0 and cells.max() < int(points), grid.get("Name")
+                checked["others"] += 1
                 continue
             checked["grids"] += 1
             topo = grid.find("Topology")

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 from click.testing import CliRunner
-from conftest import catenet_command, check_xdmf, small_net, subprocess_env
+from conftest import catenet_command, check_xdmf, read_with_vtk, small_net, subprocess_env
 
 from catenet.case import load_case
 from catenet.cli import main
@@ -104,14 +104,8 @@ def test_meshio_read_and_pyvista_read_a_final_state(tmp_path, write_case):
     np.testing.assert_array_equal(mesh.point_data["reaction"], reaction)
     # VTK's XDMF reader (ParaView's). pyvista's own XdmfReader (0.49) fails on a file
     # without times (it asks for the first time step), so it is wrapped here.
-    import vtk
-
-    with pv.VtkErrorCatcher() as caught:
-        reader = vtk.vtkXdmfReader()
-        reader.SetFileName(str(out.with_suffix(".xdmf")))
-        reader.Update()
-        grid = pv.wrap(reader.GetOutputDataObject(0))
-    assert not caught.events
+    grid, events = read_with_vtk(out.with_suffix(".xdmf"))
+    assert not events
     np.testing.assert_array_equal(grid.points, x)
     np.testing.assert_array_equal(grid.cell_data["tension"], tension)
 

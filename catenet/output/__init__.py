@@ -14,13 +14,17 @@
                         max_strain, max_tension, stable (1/0; -1: not checked)
     /xdmf/x/<k>, /xdmf/tension/<k>, /xdmf/v/<k>: frame k of the trajectory, for the XDMF
                         sidecar (virtual datasets: views of /trajectory, no data)
+    /mesh/bodies, /mesh/obstacles, /trajectory/obstacles, /result/obstacles,
+    /xdmf/obstacles/<k>/vertices/<f>: moving spheres (``bodies``) and the other obstacles'
+                        surfaces and moving ones' frames (``obstacles``)
 
 Modules: ``writer`` (``ResultWriter``: the file while a run goes on, crash safety, full
 disks), ``files`` (``check_output_path``, the spare copy, atomic publishing),
 ``metadata`` (software versions, the /result attributes),
 ``reader`` (``read_result``, ``read_frame``, ``read_mesh``, ``open_result``: the only
 code that reads the layout, also of killed runs), ``repair`` (``recover``, ``repair``:
-files that need mending), ``xdmf`` (the
+files that need mending), ``bodies`` and ``obstacles`` (moving spheres; the obstacles'
+surfaces, ``read_obstacles``), ``xdmf`` (the
 sidecar and the per-frame views /xdmf/<name>/<k> it names), ``export`` (frames to other
 formats through meshio).
 """
@@ -36,6 +40,7 @@ from catenet.output.reader import (
     read_bodies,
     read_frame,
     read_mesh,
+    read_obstacles,
     read_result,
     trajectory_length,
 )
@@ -56,6 +61,7 @@ __all__ = [
     "read_bodies",
     "read_frame",
     "read_mesh",
+    "read_obstacles",
     "read_result",
     "recover",
     "remove_spares",

@@ -47,6 +47,7 @@ __all__ = [
     "read_bodies",
     "read_frame",
     "read_mesh",
+    "read_obstacles",
     "read_result",
     "trajectory_length",
 ]
@@ -423,5 +424,13 @@ def read_bodies(path: str | Path):
     """The moving spheres of a result file (/mesh/bodies) with their centres' trajectory:
     ``catenet.output.bodies.read_bodies``."""
     from catenet.output.bodies import read_bodies as read
+
+    return read(path)
+
+
+def read_obstacles(path: str | Path):
+    """The fixed and moving obstacles of a result file (/mesh/obstacles) with the moving
+    ones' frames: ``catenet.output.obstacles.read_obstacles``."""
+    from catenet.output.obstacles import read_obstacles as read
 
     return read(path)

@@ -18,8 +18,9 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output.files import remove_spares
+from catenet.output.obstacles import grids as obstacle_grids
 from catenet.output.reader import LIBVER, TRAJECTORY, open_result, trajectory_length
-from catenet.output.xdmf import VIEWS, sidecar_path, write_views, write_xdmf
+from catenet.output.xdmf import VIEWS, sidecar_path, view_sources, write_views, write_xdmf
 
 __all__ = ["Repair", "recover", "repair"]
 
@@ -44,20 +45,7 @@ def recover(path: str | Path, out: str | Path | None = None) -> Path:
                 if name != "trajectory":
                     h5.copy(h5[name], clean, name=name)
                     continue
-                g = clean.create_group("trajectory")
-                for key, ds in h5["trajectory"].items():
-                    copy = g.create_dataset(
-                        key,
-                        data=ds[:n],
-                        maxshape=(None, *ds.shape[1:]),
-                        chunks=ds.chunks,
-                        compression=ds.compression,
-                        compression_opts=ds.compression_opts,
-                        shuffle=ds.shuffle,
-                        fillvalue=ds.fillvalue,
-                    )
-                    for attr, value in ds.attrs.items():
-                        copy.attrs[attr] = value
+                _copy_frames(h5["trajectory"], clean.create_group("trajectory"), n)
             write_views(clean, 0, n)
         os.replace(tmp, dst)
     except BaseException:
@@ -65,6 +53,28 @@ def recover(path: str | Path, out: str | Path | None = None) -> Path:
         raise
     write_sidecar_for(dst)
     return dst
+
+
+def _copy_frames(src, dst, n: int) -> None:
+    """Copies the first n frames of every dataset in the group ``src`` (and its groups:
+    the moving obstacles') into the empty group ``dst``, extendable as the writer made
+    them."""
+    for key, ds in src.items():
+        if not hasattr(ds, "shape"):
+            _copy_frames(ds, dst.create_group(key), n)
+            continue
+        copy = dst.create_dataset(
+            key,
+            data=ds[:n],
+            maxshape=(None, *ds.shape[1:]),
+            chunks=ds.chunks,
+            compression=ds.compression,
+            compression_opts=ds.compression_opts,
+            shuffle=ds.shuffle,
+            fillvalue=ds.fillvalue,
+        )
+        for attr, value in ds.attrs.items():
+            copy.attrs[attr] = value
 
 
 def write_sidecar_for(path: str | Path) -> Path | None:
@@ -78,6 +88,7 @@ def write_sidecar_for(path: str | Path) -> Path | None:
         has_v = "trajectory" in h5 and "v" in h5["trajectory"]
         has_result = "result" in h5 and "x" in h5["result"]
         bodies = len(h5["mesh/bodies/node"]) if "mesh/bodies/node" in h5 else 0
+        obstacles = obstacle_grids(h5)
     if not (times or has_result):
         return None
     side = sidecar_path(path)
@@ -89,6 +100,7 @@ def write_sidecar_for(path: str | Path) -> Path | None:
         times=times,
         velocities=has_v,
         bodies=bodies,
+        obstacles=obstacles,
     )
     return side
 
@@ -128,8 +140,8 @@ def _problems(path: Path) -> list[str]:
         views = h5.get(VIEWS)
         missing = [
             name
-            for name in ("x", "tension", "v")
-            if name in g and n and (views is None or f"{name}/{n - 1}" not in views)
+            for name in view_sources(g)
+            if n and (views is None or f"{name}/{n - 1}" not in views)
         ]
         if missing:
             problems.append(f"no per-frame views of {', '.join(missing)} for the XDMF sidecar")

@@ -46,6 +46,7 @@ from catenet.output.files import (
     spare_paths,
 )
 from catenet.output.metadata import environment, result_attrs
+from catenet.output.obstacles import Obstacles
 from catenet.output.reader import LIBVER, TRAJECTORY
 from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 
@@ -122,6 +123,7 @@ class ResultWriter:
         self.velocities = bool(velocities)
         self.accelerations = bool(accelerations)
         self.attrs = dict(attrs or {})
+        self.obstacles = Obstacles(scene)  # their surfaces and poses (catenet.output.obstacles)
         self.flush_seconds = float(flush_seconds)
         self.flush_frames = int(flush_frames)
         self.frames = 0
@@ -229,6 +231,7 @@ class ResultWriter:
         mesh.attrs["probe"] = int(scene.probe)
         mesh.attrs["size"] = float(scene.size)
         write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)
+        self.obstacles.write_mesh(mesh)  # /mesh/obstacles
         cables = getattr(scene, "cables", None)
         if cables is not None:  # a graph's cables: the cable of every edge (-1: none)
             import h5py
@@ -269,6 +272,7 @@ class ResultWriter:
                 fillvalue=np.nan,
             )
         g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
+        self.obstacles.create_trajectory(g)  # moving obstacles' poses and surfaces
 
     # --- frames ----------------------------------------------------------------------------
     def frame(self, t: float, x, v=None, tension=None, a=None) -> None:
@@ -409,6 +413,7 @@ class ResultWriter:
                     ds.id.write_direct_chunk((k, *zeros), chunk)
             else:  # frames split into several chunks: HDF5 compresses them
                 ds[n0:n1] = np.stack([data[name] for _, data in batch])
+        self.obstacles.append(g, [t for t, _ in batch], n0, held)
         held.append(ds := g["time"])
         ds.resize((n1,))
         ds[n0:n1] = [t for t, _ in batch]  # last: a frame counts once its time is there
@@ -441,6 +446,7 @@ class ResultWriter:
                 times=self.times,
                 velocities=self.velocities,
                 bodies=net.bodies,
+                obstacles=self.obstacles.grids(),
             )
         except OSError as exc:
             log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, describe(exc))
@@ -502,6 +508,7 @@ class ResultWriter:
         a = getattr(res, "a", None)
         if self.accelerations and a is not None and np.all(np.isfinite(a)):
             g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
+        self.obstacles.write_result(g, float(getattr(res, "time", math.nan)))
         for key, value in result_attrs(res, scene).items():
             g.attrs[key] = value
         for key, value in attrs.items():

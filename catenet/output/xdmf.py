@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 VIEWS = "xdmf"  # the group of the per-frame views
 
-__all__ = ["VIEWS", "sidecar_path", "write_views", "write_xdmf"]
+__all__ = ["VIEWS", "sidecar_path", "view_sources", "write_views", "write_xdmf"]
 
 
 def sidecar_path(path: str | Path) -> Path:
@@ -40,11 +40,22 @@ def sidecar_path(path: str | Path) -> Path:
 # --------------------------------------------------------------------------------------------
 
 
+def view_sources(traj) -> list[str]:
+    """The per-frame datasets of a /trajectory group that have views, relative to it: x,
+    tension, v and each moving obstacle's vertices (``catenet.output.obstacles``)."""
+    names = [name for name in ("x", "tension", "v") if name in traj]
+    obstacles = traj.get("obstacles")
+    if obstacles is not None:
+        keys = sorted(obstacles, key=int)
+        names += [f"obstacles/{k}/vertices" for k in keys if "vertices" in obstacles[k]]
+    return names
+
+
 def write_views(h5, start: int, stop: int) -> None:
     """Adds the views ``/xdmf/<name>/<k>`` of frames ``start <= k < stop`` (which have
-    none yet) of every per-frame dataset of /trajectory (besides time) to an open,
-    writable file. A view maps one frame of its source (same file, named "."), so a
-    trajectory that grows later keeps its views valid."""
+    none yet) of every per-frame dataset ``view_sources`` names to an open, writable
+    file. A view maps one frame of its source (same file, named "."), so a trajectory
+    that grows later keeps its views valid."""
     from h5py import h5d, h5p, h5s, h5t
 
     traj = h5.get("trajectory")
@@ -52,9 +63,7 @@ def write_views(h5, start: int, stop: int) -> None:
         return
     base = h5p.create(h5p.DATASET_CREATE)
     base.set_fill_value(np.array(np.nan))
-    for name in ("x", "tension", "v"):
-        if name not in traj:
-            continue
+    for name in view_sources(traj):
         tail = tuple(traj[name].shape[1:])
         group = h5.require_group(f"{VIEWS}/{name}").id
         view = h5s.create_simple(tail)
@@ -86,21 +95,53 @@ def _hdf_item(parent, h5name: str, dataset: str, dims: Iterable[int], number: st
     return item
 
 
-def _grid(parent, name: str, h5name: str, n_edges: int):
+def _uniform(parent, name: str, h5name: str, topology: str, per: int, count: int, cells: str):
+    """A Uniform grid of ``count`` cells of ``per`` nodes each (the dataset ``cells``)."""
     grid = ET.SubElement(parent, "Grid", Name=name, GridType="Uniform")
     topo = ET.SubElement(
         grid,
         "Topology",
-        TopologyType="Polyline",
-        NodesPerElement="2",
-        NumberOfElements=str(n_edges),
+        TopologyType=topology,
+        NodesPerElement=str(per),
+        NumberOfElements=str(count),
     )
-    _hdf_item(topo, h5name, "/mesh/edges", (n_edges, 2), number="Int")
+    _hdf_item(topo, h5name, cells, (count, per), number="Int")
     return grid
+
+
+def _grid(parent, name: str, h5name: str, n_edges: int):
+    return _uniform(parent, name, h5name, "Polyline", 2, n_edges, "/mesh/edges")
 
 
 def _attribute(grid, name: str, center: str, kind: str):
     return ET.SubElement(grid, "Attribute", Name=name, AttributeType=kind, Center=center)
+
+
+def _surface(parent, name: str, h5name: str, grid, geometry: str):
+    """A Uniform grid of an obstacle's triangles with the vertices ``geometry``."""
+    out = _uniform(parent, name, h5name, "Triangle", 3, grid.triangles, grid.topology)
+    geom = ET.SubElement(out, "Geometry", GeometryType="XYZ")
+    _hdf_item(geom, h5name, geometry, (grid.vertices, 3))
+    return out
+
+
+def _obstacles(domain, h5name: str, obstacles: Sequence, times) -> None:
+    """The obstacles' grids (see ``write_xdmf``)."""
+    still = [g for g in obstacles if not g.moving or not len(times)]
+    if still:
+        spatial = ET.SubElement(
+            domain, "Grid", Name="obstacles", GridType="Collection", CollectionType="Spatial"
+        )
+        for g in still:
+            _surface(spatial, g.name, h5name, g, g.final if g.moving else g.path("vertices"))
+    for g in obstacles:
+        if g.moving and len(times):
+            series = ET.SubElement(
+                domain, "Grid", Name=g.name, GridType="Collection", CollectionType="Temporal"
+            )
+            for k, t in enumerate(times):
+                grid = _surface(series, f"{g.name} {k}", h5name, g, g.frame(k))
+                ET.SubElement(grid, "Time", Value=repr(float(t)))
 
 
 def write_xdmf(
@@ -112,6 +153,7 @@ def write_xdmf(
     times: list[float],
     velocities: bool = False,
     bodies: int = 0,
+    obstacles: Sequence = (),
 ) -> None:
     """Writes the XDMF 3 sidecar of a result file (atomically: a temporary file renamed).
 
@@ -122,9 +164,14 @@ def write_xdmf(
     nodes): a Temporal collection "bodies" before the net's, one Polyvertex grid of the
     centres (/mesh/bodies/node) per frame with their ``radius`` (a Sphere glyph scaled by
     it draws the balls); meshio's time-series reader takes the last collection, the net's.
+    ``obstacles`` (``catenet.output.obstacles.ObstacleGrid``), first: a Spatial collection
+    "obstacles" of a Triangle grid per fixed obstacle (and per moving one at /result's
+    time when there are no frames), then a Temporal collection per moving obstacle with
+    a Triangle grid per frame.
     """
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")
+    _obstacles(domain, h5name, obstacles, times)
     if len(times) and bodies:
         series = ET.SubElement(
             domain, "Grid", Name="bodies", GridType="Collection", CollectionType="Temporal"
