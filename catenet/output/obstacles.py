@@ -168,14 +168,17 @@ class Obstacles:
     ``grids`` (for the sidecar)."""
 
     def __init__(self, scene):
-        from catenet.obstacle_surfaces import surface
-
         case = getattr(scene, "case", None)
         obstacles = getattr(case, "obstacles", ()) or ()
+        self.items = []
+        self.moving = []
+        if not obstacles:
+            return
+        from catenet.obstacle_surfaces import surface
+
         net = scene.net
         cover = net.nodes[: getattr(net, "n_net", net.n_nodes)]
         cap = frame_cap(net.n_nodes)
-        self.items = []
         for k, obs in enumerate(obstacles):
             s = surface(obs.to_dict(), k, cover)
             if s is not None:
