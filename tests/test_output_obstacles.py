@@ -402,3 +402,39 @@ def test_repair_restores_missing_obstacle_views(run, tmp_path):
     (first,) = [o for o in read_obstacles(out) if o.moving]
     np.testing.assert_array_equal(moving.frames, first.frames)
     np.testing.assert_array_equal(moving.final, first.final)
+
+
+@pytest.mark.parametrize("fmt", ["vtu", "xdmf"])
+def test_export_writes_each_obstacle_beside_the_net(run, tmp_path, fmt):
+    """catenet export: a fixed obstacle once, a moving one at every exported frame (its
+    stored surface there), and in the ParaView collection a part per obstacle at every
+    time."""
+    from catenet.output.export import export
+
+    path, _ = run
+    stored = {o.index: o for o in read_obstacles(path)}
+    done = export(path, fmt, tmp_path / fmt, frames="1:4")
+    assert sorted(done.obstacles) == sorted(stored)
+    for k, files in done.obstacles.items():
+        o = stored[k]
+        if not o.moving:
+            assert len(files) == 1
+            got = meshio.read(files[0])
+            assert np.array_equal(got.points, o.vertices)
+            assert np.array_equal(got.cells_dict["triangle"], o.triangles)
+            continue
+        assert len(files) == 3
+        for f, frame in zip(files, (1, 2, 3), strict=True):
+            got = meshio.read(f)
+            assert np.array_equal(got.points, o.frames[frame])
+            assert np.array_equal(got.cells_dict["triangle"], o.frame_triangles)
+    if fmt == "xdmf":
+        assert done.collection is None
+        return
+    root = ET.parse(done.collection).getroot()
+    sets = root.find("Collection").findall("DataSet")
+    assert len(sets) == 3 * (1 + len(stored))
+    parts = {(d.get("timestep"), d.get("part")) for d in sets}
+    assert len(parts) == len(sets)  # one file per part and time
+    for d in sets:
+        assert (done.collection.parent / d.get("file")).is_file()

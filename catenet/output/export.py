@@ -7,8 +7,12 @@ where stored, ``velocity`` (dynamic runs) or ``reaction`` (the final state); cel
 ``tension`` [N], ``rest_length`` [m] and ``EA`` [N]. Moving spheres (/mesh/bodies) add
 a vertex cell at each centre with cell data ``radius`` [m] (NaN on the edges; not in
 XDMF, whose mixed cells meshio cannot read back). The frames are the trajectory's, or
-the final state (/result) of a file without one. VTK formats also get a ParaView
-collection (``STEM.pvd``) that gives every file its time.
+the final state (/result) of a file without one. Every other obstacle (/mesh/obstacles,
+``catenet.output.obstacles``) is a triangle surface of its own: ``STEM_obstacleJ.ext``
+once for a fixed one, ``STEM_obstacleJ_K.ext`` at every exported frame for a moving one
+(J its ``[[obstacle]]`` index). VTK formats also get a ParaView collection
+(``STEM.pvd``) that gives every file its time, the net as part 0 and each obstacle as a
+part of its own.
 
 meshio is an optional dependency (``pip install meshio`` or ``catenet[export]``): it is
 imported only here, when a file is exported.
@@ -20,13 +24,14 @@ import logging
 import os
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.output.bodies import body_nodes
+from catenet.output.obstacles import read_obstacles
 from catenet.output.reader import Frame, open_result, read_mesh, trajectory_length
 
 log = logging.getLogger(__name__)
@@ -40,12 +45,14 @@ __all__ = ["FORMATS", "Export", "export", "select_frames"]
 
 @dataclass
 class Export:
-    """What ``export`` wrote: the files (one per frame, in order), their times, and the
-    ParaView collection (None: not for this format)."""
+    """What ``export`` wrote: the net's files (one per frame, in order), their times, the
+    ParaView collection (None: not for this format) and, per obstacle index, its files
+    (one for a fixed obstacle, one per frame for a moving one)."""
 
     files: list[Path]
     times: list[float]
     collection: Path | None
+    obstacles: dict[int, list[Path]] = field(default_factory=dict)
 
 
 def _meshio():
@@ -168,18 +175,53 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
         )
         files.append(target)
     times = [f.t for f in states]
-    collection = _write_pvd(out / f"{path.stem}.pvd", files, times) if fmt in PVD else None
+    solids = _obstacles(meshio, path, states, out, ext, writer, width)
+    parts = [files] + [w if len(w) == len(files) else w * len(files) for w in solids.values()]
+    collection = _write_pvd(out / f"{path.stem}.pvd", parts, times) if fmt in PVD else None
     log.info("%s: %d frames written to %s", path, len(files), out)
-    return Export(files, times, collection)
+    return Export(files, times, collection, solids)
 
 
-def _write_pvd(target: Path, files: list[Path], times: list[float]) -> Path:
-    """ParaView's collection of the files, each with its time."""
+def _obstacles(meshio, path: Path, states, out: Path, ext: str, writer: str, width: int):
+    """Writes every obstacle's surface: once for a fixed one, at every state for a
+    moving one (its frame's surface, or /result's for the final state); returns the
+    files per obstacle index."""
+    written: dict[int, list[Path]] = {}
+    for o in read_obstacles(path):
+        stem = f"{path.stem}_obstacle{o.index}"
+        if not o.moving:
+            target = out / f"{stem}.{ext}"
+            surface = meshio.Mesh(o.vertices, [("triangle", o.triangles)])
+            meshio.write(target, surface, file_format=writer)
+            written[o.index] = [target]
+            continue
+        files = []
+        for f in states:
+            if f.index >= 0:
+                stored = o.frames
+                name = f"{stem}_{f.index:0{width}d}"
+                points = None if stored is None else stored[f.index]
+            else:
+                name, points = f"{stem}_result", o.final
+            if points is None:  # a file of an older catenet: no surface at this state
+                break
+            target = out / f"{name}.{ext}"
+            surface = meshio.Mesh(points, [("triangle", o.frame_triangles)])
+            meshio.write(target, surface, file_format=writer)
+            files.append(target)
+        if len(files) == len(states):
+            written[o.index] = files
+    return written
+
+
+def _write_pvd(target: Path, parts: list[list[Path]], times: list[float]) -> Path:
+    """ParaView's collection: at each time, the files of every part (the net is part 0)."""
     root = ET.Element("VTKFile", type="Collection", version="0.1")
     coll = ET.SubElement(root, "Collection")
-    for f, t in zip(files, times, strict=True):
-        rel = os.path.relpath(f, target.parent)
-        ET.SubElement(coll, "DataSet", timestep=repr(float(t)), part="0", file=rel)
+    for k, t in enumerate(times):
+        for part, files in enumerate(parts):
+            rel = os.path.relpath(files[k], target.parent)
+            ET.SubElement(coll, "DataSet", timestep=repr(float(t)), part=str(part), file=rel)
     ET.indent(root, space=" ")
     target.write_text('<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n")
     return target
