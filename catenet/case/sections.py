@@ -417,7 +417,7 @@ class SolverConfig(Declared):
         False,
         write="changed",
         doc="dynamic: keep the factorisation across Newton iterations and time steps while "
-        "it converges (modified Newton: same answer to rtol, 2-3x faster; a --restart then "
+        "it converges (modified Newton: same answer to rtol, 1.5-2x faster; a --restart then "
         "repeats the uninterrupted run only to rtol)",
     )
     rtol: float = real(1e-8, gt=0, lt=1, doc="Newton tolerance")
