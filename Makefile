@@ -9,12 +9,16 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 
+# catenet is installed editable: its bytecode is compiled here once, so that every start
+# reads it (Python writes none itself where PYTHONDONTWRITEBYTECODE is set).
 $(VENV)/.installed: pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e .
+	$(PY) -m compileall -q catenet
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e ".[test]"
+	$(PY) -m compileall -q catenet
 	touch $@ $(VENV)/.installed
 
 run: $(VENV)/.installed
