@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.contact import ball_root, barrier, sphere_block
+from catenet.kernels.contact import ball_root, sphere_block, sphere_force
 
 
 @njit(cache=True, error_model="numpy")
@@ -35,13 +35,8 @@ def pair_gradient(x, nodes, c, radius, kappa, dhat, grad):
         u0 = x[i, 0] - x[c, 0]
         u1 = x[i, 1] - x[c, 1]
         u2 = x[i, 2] - x[c, 2]
-        rho = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        d = rho - radius
-        if d >= dhat:
-            continue
-        b, db, _ = barrier(d, dhat)
-        total += kappa * b
-        f = kappa * db / rho
+        energy, f = sphere_force(u0, u1, u2, radius, kappa, dhat)
+        total += energy
         grad[i, 0] += f * u0
         grad[i, 1] += f * u1
         grad[i, 2] += f * u2
@@ -55,24 +50,14 @@ def pair_gradient(x, nodes, c, radius, kappa, dhat, grad):
 def pair_hessian(x, nodes, c, radius, kappa, dhat, values):
     """Writes the blocks described in the module docstring; returns how many nodes act."""
     active = 0
-    n = np.empty(3)
+    u = np.empty(3)
     cc = np.zeros(9)
     base = 27 * nodes.shape[0]
     for k in range(nodes.shape[0]):
         i = nodes[k]
         for a in range(3):
-            n[a] = x[i, a] - x[c, a]
-        rho = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-        d = rho - radius
-        if d >= dhat:
-            for a in range(27):
-                values[27 * k + a] = 0.0
-            continue
-        active += 1
-        _, db, ddb = barrier(d, dhat)
-        for a in range(3):
-            n[a] /= rho
-        sphere_block(kappa, db, ddb, rho, n, values, 27 * k)
+            u[a] = x[i, a] - x[c, a]
+        active += sphere_block(u, radius, kappa, dhat, values, 27 * k)
         for a in range(9):
             h = values[27 * k + a]
             values[27 * k + 9 + a] = -h

@@ -100,13 +100,8 @@ def sphere_gradient(x, nodes, center, radius, kappa, dhat, grad):
         u0 = x[i, 0] - center[0]
         u1 = x[i, 1] - center[1]
         u2 = x[i, 2] - center[2]
-        rho = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        d = rho - radius
-        if d >= dhat:
-            continue
-        b, db, _ = barrier(d, dhat)
-        total += kappa * b
-        f = kappa * db / rho
+        energy, f = sphere_force(u0, u1, u2, radius, kappa, dhat)
+        total += energy
         grad[i, 0] += f * u0
         grad[i, 1] += f * u1
         grad[i, 2] += f * u2
@@ -117,22 +112,12 @@ def sphere_gradient(x, nodes, center, radius, kappa, dhat, grad):
 def sphere_hessian(x, nodes, center, radius, kappa, dhat, values):
     """Writes the 3x3 blocks of the sphere barrier at ``nodes``; returns how many act."""
     active = 0
-    n = np.empty(3)
+    u = np.empty(3)
     for k in range(nodes.shape[0]):
         i = nodes[k]
         for a in range(3):
-            n[a] = x[i, a] - center[a]
-        rho = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-        d = rho - radius
-        if d >= dhat:
-            for a in range(9):
-                values[9 * k + a] = 0.0
-            continue
-        active += 1
-        _, db, ddb = barrier(d, dhat)
-        for a in range(3):
-            n[a] /= rho
-        sphere_block(kappa, db, ddb, rho, n, values, 9 * k)
+            u[a] = x[i, a] - center[a]
+        active += sphere_block(u, radius, kappa, dhat, values, 9 * k)
     return active
 
 
@@ -151,15 +136,39 @@ def sphere_max_step(x, dx, nodes, center, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def sphere_block(kappa, db, ddb, rho, n, out, at):
+def sphere_force(u0, u1, u2, radius, kappa, dhat):
+    """(energy, f) of the barrier on the gap d = |u| - R of a point at u from a ball's
+    centre: its gradient with respect to the point is f u (0, 0 out of reach)."""
+    rho = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    d = rho - radius
+    if d >= dhat:
+        return 0.0, 0.0
+    b, db, _ = barrier(d, dhat)
+    return kappa * b, kappa * db / rho
+
+
+@njit(cache=True, error_model="numpy")
+def sphere_block(u, radius, kappa, dhat, out, at):
     """Writes the 3x3 Hessian block kappa ((b'' - b'/rho) n n^T + b'/rho I) of the barrier
-    on a gap d = rho - R (n the unit direction from the centre) at out[at:at + 9]."""
+    on the gap d = rho - R of a point at u (3,) from a ball's centre (rho = |u|,
+    n = u / rho; u is overwritten by n) at out[at:at + 9], zeros out of reach; returns 1
+    where the barrier acts, else 0."""
+    rho = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    d = rho - radius
+    if d >= dhat:
+        for a in range(9):
+            out[at + a] = 0.0
+        return 0
+    _, db, ddb = barrier(d, dhat)
+    for a in range(3):
+        u[a] /= rho
     for a in range(3):
         for c in range(3):
-            h = kappa * (ddb - db / rho) * n[a] * n[c]
+            h = kappa * (ddb - db / rho) * u[a] * u[c]
             if a == c:
                 h += kappa * db / rho
             out[at + 3 * a + c] = h
+    return 1
 
 
 @njit(cache=True, error_model="numpy")
