@@ -22,35 +22,9 @@ def kernels_for_every_size(monkeypatch):
 
 
 def reference(net, terms, upper):
-    """The former construction: keys of every kept entry, one np.unique over them all."""
-    free = np.repeat(~net.fixed, 3)
-    free_dofs = np.flatnonzero(free)
-    n_free = free_dofs.size
-    reduced = np.full(3 * net.n_nodes, -1, dtype=np.int64)
-    reduced[free_dofs] = np.arange(n_free)
-    width = max(n_free, 1)
-    parts, kept = [], []
-    for term in terms:
-        pattern = term.pattern()
-        rows, cols = reduced[pattern[0]], reduced[pattern[1]]
-        keep = (rows >= 0) & (cols >= 0)
-        if upper:
-            keep &= rows <= cols
-        parts.append((rows * width + cols)[keep])
-        kept.append(keep)
-    diag = np.arange(n_free, dtype=np.int64)
-    parts.append(diag * width + diag)
-    unique, inverse = np.unique(np.concatenate(parts), return_inverse=True)
-    indptr = np.zeros(n_free + 1, dtype=np.int32)
-    np.cumsum(np.bincount(unique // width, minlength=n_free), out=indptr[1:])
-    targets, start = [], 0
-    for keep in kept:
-        target = np.full(keep.size, -1, dtype=np.int64)
-        count = int(keep.sum())
-        target[np.flatnonzero(keep)] = inverse[start : start + count]
-        start += count
-        targets.append(target)
-    return indptr, (unique % width).astype(np.int32), targets, inverse[start:]
+    """The np.unique way (System._unique_pattern, which small systems take): keys of every
+    kept entry, one np.unique over them all."""
+    return System(net, terms, upper=upper)._unique_pattern()
 
 
 def random_net(seed, n=40, m=60, fixed=(0, 3, 7)):
