@@ -80,6 +80,7 @@ class Moving(Term):
         self.reach = float(reach)
         self.label = label
         self.center, self.R = self.pose(0.0)
+        self._x = self._g = self._dx = None  # body-frame buffers (_local)
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(c(t), R(t)): the origin's place and the body's rotation at time t."""
@@ -111,26 +112,44 @@ class Moving(Term):
     def pattern(self):
         return self.shape.pattern()
 
+    def _local(self, x, name: str = "_x", turn_only: bool = False) -> np.ndarray:
+        """The rows of x (N, 3) at the obstacle's nodes in the body frame (``turn_only``:
+        a displacement, turned only), in a buffer kept across evaluations; the shape's
+        kernels read no other row. Saves a full (N, 3) copy per Newton evaluation."""
+        buf = getattr(self, name)
+        if buf is None or buf.shape != np.shape(x):
+            buf = np.zeros(np.shape(x))
+            setattr(self, name, buf)
+        rows = np.asarray(x)[self.nodes]
+        if turn_only:
+            buf[self.nodes] = rows @ self.R
+        else:
+            buf[self.nodes] = self.origin + (rows - self.center) @ self.R
+        return buf
+
     def gap(self, x):
-        return self.shape.gap(self._body(x))
+        return self.shape.gap(self._local(x))
 
     def gradient(self, x, grad):
-        g = np.zeros_like(x)
-        energy = self.shape.gradient(self._body(x), g)
+        if self._g is None or self._g.shape != np.shape(x):
+            self._g = np.zeros(np.shape(x))
+        g = self._g
+        energy = self.shape.gradient(self._local(x), g)
         grad[self.nodes] += g[self.nodes] @ self.R.T
+        g[self.nodes] = 0.0  # the shape adds at its nodes only: the buffer is zero again
         return energy
 
     def energy(self, x):
-        return self.shape.energy(self._body(x))
+        return self.shape.energy(self._local(x))
 
     def hessian(self, x, values):
-        active = self.shape.hessian(self._body(x), values)
+        active = self.shape.hessian(self._local(x), values)
         H = values.reshape(-1, 3, 3)
         H[:] = np.einsum("ij,kjl,ml->kim", self.R, H, self.R)
         return active
 
     def max_step(self, x, dx):
-        return self.shape.max_step(self._body(x), np.asarray(dx) @ self.R)
+        return self.shape.max_step(self._local(x), self._local(dx, "_dx", turn_only=True))
 
     def sweep(self, t0: float, t1: float) -> float:
         """The largest displacement of any point of the obstacle from t0 to t1 [m]."""
