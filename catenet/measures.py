@@ -66,6 +66,17 @@ def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.n
     return r
 
 
+def contact_force(system, x: np.ndarray) -> np.ndarray:
+    """Force (N, 3) that every internal term besides the edges' stretching (obstacles,
+    rigid bodies, friction) exerts on each node: minus the sum of their gradients. Zero
+    for a net held by its edges and supports alone."""
+    force = np.zeros_like(x)
+    for term in system.terms:
+        if term is not system.stretch:
+            term.gradient(x, force)
+    return np.negative(force, out=force)
+
+
 def deflection(nodes: np.ndarray, x: np.ndarray, probe: int):
     """z-displacement of the probe node from its reference position ``nodes[probe]``,
     positive downward (the paper's delta); ``x`` (N, 3) or a trajectory (T, N, 3)."""

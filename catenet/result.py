@@ -21,8 +21,10 @@ class Result:
     a : (N, 3) the integrator's acceleration state [m/s^2] (newmark runs; 0 at the
         supports), which a restart goes on from, or None
     tension : (M,) axial forces EA*eps [N], 0 when slack
-    reaction : (N, 3) force each support exerts on the net [N] (0 at free nodes);
-        reactions and applied loads sum to zero at equilibrium
+    reaction : (N, 3) force each support exerts on the net [N] (0 at free nodes)
+    contact_force : (N, 3) force that obstacles, bodies and friction (every internal
+        term besides the edges' stretching) exert on each node [N]; at equilibrium
+        reactions, contact forces and applied loads sum to zero
     converged : the solve met its tolerance (dynamic: every step did, and the run reached
         t_end or equilibrium);  equilibrium : the state is a static equilibrium
     iterations : Newton iterations in all;  residual : final |grad| [N]
@@ -32,6 +34,7 @@ class Result:
         definite (False: an unstable equilibrium, e.g. a straight cable in compression);
         None where not checked (tension-only nets are never unstable)
     stats : counts and seconds per phase (assembly, analyse, factorize, solve)
+    diagnosis : what makes an unstable equilibrium unstable (``catenet.diagnose``), or ""
     """
 
     x: np.ndarray
@@ -51,6 +54,8 @@ class Result:
     history: list[float] = field(default_factory=list)
     stats: dict = field(default_factory=dict)
     a: np.ndarray | None = None
+    contact_force: np.ndarray | None = None
+    diagnosis: str = ""
 
 
 def finish(
@@ -73,6 +78,7 @@ def finish(
         x=x.copy(),
         tension=system.tension(x),
         reaction=reaction,
+        contact_force=measures.contact_force(system, x),
         max_strain=measures.max_strain(net, x),
         **fields,
     )

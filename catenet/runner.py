@@ -236,6 +236,16 @@ def run_case(
     )
     result.stats["delta_over_L"] = delta / float(scene.size)
     cables = getattr(scene, "cables", None)
+    if result.stable is False:  # name the mechanism's nodes and cables
+        from catenet.diagnose import describe_unstable
+
+        result.diagnosis = describe_unstable(
+            ws.system.stretch,
+            result.x,
+            ~scene.net.fixed,
+            None if cables is None else cables.names,
+            None if cables is None else cables.edge,
+        )
     if cables is not None:  # per cable: the largest tension and the slack share
         top, slack = measures.cable_stats(
             scene.net, result.x, result.tension, cables.edge, len(cables.names)

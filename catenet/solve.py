@@ -30,6 +30,7 @@ from catenet.integrators import INTEGRATORS
 from catenet.net import Loads, Net
 from catenet.result import Result
 from catenet.static import Workspace, continuation
+from catenet.static import _start as start_state
 
 _CASE = SolverConfig()  # the defaults, declared once with the case's [solver] keys
 
@@ -175,12 +176,17 @@ def _static(scene, settings, ws, start, on_step) -> Result:
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
             raise
+        # The last good state: the last equilibrium (a load step's or a cut-back's
+        # sub-step's), else the start at load factor 0; never an unconverged iterate.
         state = getattr(exc, "state", None)
+        factor = float(getattr(exc, "factor", done[-1].time if done else 0.0))
+        if state is None:
+            state, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
         _annotate(
             exc,
-            state if state is not None or not done else done[-1].x,
+            state,
             None,
-            done[-1].time if done else 0.0,
+            factor,
             len(done),
             sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0)),
         )

@@ -10,11 +10,13 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from catenet.assembly import System
-from catenet.errors import ConfigError, SingularSystemError
+from catenet.diagnose import describe_unstable
+from catenet.errors import ConfigError, ConvergenceError, Interrupted, SingularSystemError
 from catenet.linsolve import LinearSolver, make_solver
 from catenet.measures import loose_nodes, slack_strain, strain
 from catenet.net import Loads, Net
@@ -94,12 +96,14 @@ def solve_static(
     put at their prescribed places. ``accepted``: the last accepted state this load step
     starts from, which the terms' ``begin_step`` sees (lagged friction measures slip
     from it; default: x0, else the reference positions). Raises ConvergenceError when
-    Newton fails (with the residual history), unless ``raise_on_failure`` is False.
+    Newton fails (with the residual history and, as ``state``, the start: never an
+    unconverged iterate), unless ``raise_on_failure`` is False.
     """
     _check_rtol(rtol)
     ws = workspace or Workspace(net, linear=linear)
     start = time.perf_counter()
     x = _start(net, loads, x0, factor)
+    begin = x.copy()  # what a failure reports: the start, never an unconverged iterate
     potential = ws.potential(loads, factor)
     if accepted is None:
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
@@ -118,7 +122,7 @@ def solve_static(
                 "is comparable to its loads, more than double precision can resolve; use "
                 "fewer, longer edges or check EA"
             )
-        raise_unconverged(result, "static equilibrium", state=x, hint=hint)
+        raise_unconverged(result, "static equilibrium", state=begin, hint=hint)
     out = finish(
         ws.system,
         loads,
@@ -136,9 +140,11 @@ def solve_static(
     if not net.law.all_tension_only and result.converged:
         out.stable = _stable(ws, potential, x)
         if out.stable is False:
+            out.diagnosis = describe_unstable(ws.system.stretch, x, ~net.fixed)
             log.warning(
                 "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
-                "(compressed bilateral edges: any disturbance makes the net buckle away)"
+                "(compressed bilateral edges: any disturbance makes the net buckle away): %s",
+                out.diagnosis,
             )
     loose = loose_nodes(net, out.tension)
     for term in ws.system.terms:  # nodes that another term (a spring, contact) holds
@@ -195,6 +201,7 @@ def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
 ROUNDOFF_HINT = 1e-2  # a failure held to a tolerance above this share of |f| is round-off
 SMOOTH_REDUCTION = 10.0  # mu shrinks tenfold per stage
 SMOOTH_RTOL = 1e-3  # stages before the last are solved loosely
+SMOOTH_STAGES = 30  # at most this many smoothing stages (mu down by 1e30)
 SMOOTH_END = 1e-3  # smoothing stops once mu is this fraction of the smallest |strain|
 STIFF_STRAIN = 1e-6  # nets strained less than this by their loads: stiffness continuation
 STIFF_STEP = 100.0  # EA grows a hundredfold per stage
@@ -216,7 +223,8 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
       slightly taut, with mu from the largest slack strain down tenfold per stage until
       it is negligible against the strains.
 
-    Intermediate stages are solved loosely (SMOOTH_RTOL of the load scale).
+    Intermediate stages are solved loosely (SMOOTH_RTOL of the load scale). ``max_iter``
+    bounds each Newton solve (every stage and the last), not their sum.
     """
     system = potential.system
     net = system.net
@@ -265,7 +273,7 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
             x,
             rtol=SMOOTH_RTOL,
             atol=atol,
-            max_iter=max_iter - iterations,
+            max_iter=max_iter,
             label=f"static ({label})",
         )
         iterations += result.iterations
@@ -275,7 +283,7 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
     for k, factor in enumerate(factors + [1.0]):
         scaled = stretch.scaled(factor)
         if k == 0:  # the smoothing continuation, at the first stiffness
-            while mu > 0.0 and iterations < max_iter:
+            for _ in range(SMOOTH_STAGES if mu > 0.0 else 0):
                 smooth = scaled.with_law(stretch.law.smoothed(mu))
                 if not stage(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
                     break
@@ -284,11 +292,9 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
                 if taut.size and mu < SMOOTH_END * float(np.min(taut)):
                     break
                 mu /= SMOOTH_REDUCTION
-        if factor < 1.0 and iterations < max_iter:
+        if factor < 1.0:
             stage(scaled, f"EA x {factor:.1e}")
-    result = solve(potential, x, rtol=rtol, max_iter=max(max_iter - iterations, 1), label="static")
-    if not result.converged and iterations >= max_iter - 1:
-        result.reason = f"no convergence in {max_iter} iterations"
+    result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
     result.iterations += iterations
     result.history = history + result.history
     return result
@@ -320,6 +326,9 @@ def _strain_scale(net: Net, potential: Potential) -> float:
     return float(np.abs(potential.force).sum() / np.min(net.EA))
 
 
+CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
+
+
 def continuation(
     net: Net,
     loads: Loads,
@@ -334,36 +343,97 @@ def continuation(
 ) -> list[Result]:
     """Equilibria at increasing load factors, each starting from the previous one (a
     force-displacement curve). ``on_step(factor, result)`` sees each as it is found.
-    A failing step raises ConvergenceError whose ``state`` is the last equilibrium."""
+
+    A load step that fails is cut back: re-solved from the last equilibrium in sub-steps
+    of half its load increment, halved again while one fails (``CUTBACKS`` times at
+    most); the sub-steps' equilibria are not reported, their iterations count. A step
+    that still fails raises ConvergenceError whose ``state`` is the last equilibrium
+    found (a step's or a sub-step's; None before the first) and ``factor`` its load
+    factor (0: the start)."""
     if len(factors) == 0:
         raise ConfigError("continuation: factors is empty: give at least one load factor")
     ws = workspace or Workspace(net, linear=linear)
     results: list[Result] = []
     x = x0
+    good = Equilibrium(None, 0.0)  # the last equilibrium (None: the start)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
+        settings = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
         try:
             r = solve_static(
                 net,
                 loads,
                 x0=x,
                 factor=float(factor),
-                rtol=rtol,
-                max_iter=max_iter,
-                workspace=ws,
                 accepted=results[-1].x if results else x0,
+                **settings,
             )
-        except Exception as exc:
-            if results and hasattr(exc, "state"):
-                exc.state = results[-1].x
-            raise
+        except ConvergenceError as exc:
+            if isinstance(exc, Interrupted) or not _worth_cutting(exc):
+                exc.state, exc.factor = good.x, good.factor
+                raise
+            origin = good if good.x is not None else Equilibrium(x0, 0.0)
+            r = _cut_back(net, loads, origin, float(factor), exc, good, settings)
         r.steps = k + 1
         results.append(r)
+        good = Equilibrium(r.x, float(factor))
         x = r.x
         if on_step is not None:
             on_step(float(factor), r)
     return results
+
+
+@dataclass
+class Equilibrium:
+    """A converged state ``x`` (N, 3) of a static run and its load factor (x None: the
+    run's start, load factor 0)."""
+
+    x: np.ndarray | None
+    factor: float
+
+
+def _worth_cutting(exc: ConvergenceError) -> bool:
+    """Whether smaller load steps can help: not for a mechanism (singular at any load)
+    nor for loads below the forces' round-off."""
+    if isinstance(exc, SingularSystemError):
+        return False
+    return "round-off floor exceeds" not in str(exc)
+
+
+def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, settings) -> Result:
+    """The load step from ``origin`` to ``target`` in sub-steps (see ``continuation``);
+    ``good`` (updated) holds the last equilibrium. Raises the last failure, its message
+    saying what was tried, when sub-steps of 1/2**CUTBACKS still fail."""
+    x, f = origin.x, origin.factor
+    increment = 0.5 * (target - f)
+    spent = int(getattr(failure, "iterations", 0))
+    cuts = 1
+    while True:
+        level = target if f + increment >= target - 1e-12 * abs(target) else f + increment
+        log.info("load step cut back: load factor %.6g from %.6g", level, f)
+        try:
+            r = solve_static(net, loads, x0=x, factor=float(level), accepted=x, **settings)
+        except ConvergenceError as exc:
+            spent += int(getattr(exc, "iterations", 0))
+            if cuts >= CUTBACKS or not _worth_cutting(exc):
+                exc.args = (
+                    f"{exc}; tried: line search, a Levenberg-Marquardt shift and load-step "
+                    f"cut-back down to 1/{2**cuts} of the step (the last equilibrium: load "
+                    f"factor {good.factor:.6g})",
+                )
+                exc.iterations = spent
+                exc.state, exc.factor = good.x, good.factor
+                raise
+            increment *= 0.5
+            cuts += 1
+            continue
+        spent += r.iterations
+        x, f = r.x, float(level)
+        good.x, good.factor = x, f
+        if level == target:
+            r.iterations = spent
+            return r
 
 
 def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:

@@ -123,7 +123,8 @@ def test_every_zero_writes_no_trajectory(tmp_path):
         assert "v" not in h5["result"]  # a static case keeps no velocities
         np.testing.assert_array_equal(h5["result/x"][()], moved(scene, 1))
     found = check_xdmf(path.with_suffix(".xdmf"))
-    assert found["grids"] == 1 and found["slabs"] == 0 and found["refs"] == 4
+    # topology, x, tension, reaction and contact_force
+    assert found["grids"] == 1 and found["slabs"] == 0 and found["refs"] == 5
     text = path.with_suffix(".xdmf").read_text()
     assert "/result/x" in text and "/result/tension" in text
 

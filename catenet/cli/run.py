@@ -131,9 +131,13 @@ def command(
                 bar.close()
                 written = getattr(exc, "output", None)
                 if written is not None and not isinstance(exc, ConfigError):
+                    at = getattr(exc, "time", None)
+                    label = ""
+                    if at is not None:
+                        label = f"t = {at:.6g} s, " if dynamic else f"load factor {at:.6g}, "
                     exc.args = (
                         f"{exc}\n  the last good state is in {written} "
-                        "(/result, converged = false)",
+                        f"(/result, {label}converged = false)",
                     )
                 raise
             finally:
@@ -153,6 +157,14 @@ def command(
             code = EXIT_SIGINT if stop.signal == signal.SIGINT else EXIT_FAILED
         elif not result.converged:
             click.echo(f"catenet: did not converge: {result.message}", err=True)
+            code = EXIT_FAILED
+        elif result.stable is False:
+            if not quiet:
+                _summary(case, result, path)
+            click.echo(
+                f"catenet: error: the equilibrium found is unstable: {result.diagnosis}",
+                err=True,
+            )
             code = EXIT_FAILED
         elif not quiet:
             _summary(case, result, path)

@@ -123,3 +123,31 @@ def stretch_tension(x, edges, l0, ea, law, params, table, tension_only, out):
         eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
         _, force, _ = strain_energy(law, params, table, k, eps, tension_only[k], 0.0)
         out[k] = ea[k] * force
+
+
+@njit(cache=True, error_model="numpy")
+def stretch_roundoff(x, edges, l0, ea, law, params, table, tension_only, smooth, level):
+    """The round-off of the stretching at x (N, 3): adds to level (N,) the force error of
+    every edge at both of its nodes, |N| + EA |x| / l0 (its direction and, from
+    coordinates of size |x| carrying an error eps |x|, its strain: in units of eps), and
+    returns sum |N| |e| [J], the energy's (a strain error eps changes U by N l0 eps: what
+    differences of U cannot resolve, however small U itself is)."""
+    work = 0.0
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        eps = length / l0[k] - 1.0
+        _, force, _ = strain_energy(law, params, table, k, eps, tension_only[k], smooth)
+        size = 0.0
+        for a in range(3):
+            size = max(size, abs(x[i, a]), abs(x[j, a]))
+        n = abs(ea[k] * force)
+        f = n + ea[k] * size / l0[k]
+        level[i] += f
+        level[j] += f
+        work += n * length
+    return work

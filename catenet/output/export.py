@@ -116,6 +116,7 @@ def _frames(path: Path, spec: str) -> list[Frame]:
                 np.asarray(r["tension"], dtype=np.float64) if "tension" in r else None,
             )
             frame.reaction = np.asarray(r["reaction"]) if "reaction" in r else None
+            frame.contact_force = np.asarray(r["contact_force"]) if "contact_force" in r else None
             return [frame]
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
@@ -155,6 +156,8 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
             point_data["velocity"] = f.v
         if getattr(f, "reaction", None) is not None:
             point_data["reaction"] = f.reaction
+        if getattr(f, "contact_force", None) is not None:
+            point_data["contact_force"] = f.contact_force
         cell_data = {}
         for key, value in (
             ("tension", f.tension),

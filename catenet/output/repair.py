@@ -87,6 +87,7 @@ def write_sidecar_for(path: str | Path) -> Path | None:
         times = list(np.asarray(h5["trajectory/time"][:n], dtype=float)) if n else []
         has_v = "trajectory" in h5 and "v" in h5["trajectory"]
         has_result = "result" in h5 and "x" in h5["result"]
+        contact = has_result and "contact_force" in h5["result"]
         bodies = len(h5["mesh/bodies/node"]) if "mesh/bodies/node" in h5 else 0
         obstacles = obstacle_grids(h5)
     if not (times or has_result):
@@ -101,6 +102,7 @@ def write_sidecar_for(path: str | Path) -> Path | None:
         velocities=has_v,
         bodies=bodies,
         obstacles=obstacles,
+        contact=contact,
     )
     return side
 

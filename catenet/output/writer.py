@@ -502,6 +502,10 @@ class ResultWriter:
             g.create_dataset("cable_slack_fraction", data=slack)
         reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
         g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
+        contact = getattr(res, "contact_force", None)
+        if contact is None or not np.all(np.isfinite(contact)):
+            contact = np.zeros_like(res.x)
+        g.create_dataset("contact_force", data=np.asarray(contact, dtype=np.float64))
         v = getattr(res, "v", None)
         if self.velocities and v is not None and np.all(np.isfinite(v)):
             g.create_dataset("v", data=np.asarray(v, dtype=np.float64))

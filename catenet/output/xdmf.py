@@ -154,12 +154,14 @@ def write_xdmf(
     velocities: bool = False,
     bodies: int = 0,
     obstacles: Sequence = (),
+    contact: bool = True,
 ) -> None:
     """Writes the XDMF 3 sidecar of a result file (atomically: a temporary file renamed).
 
     With ``times`` (the trajectory's frames, whose views ``write_views`` wrote): a
     Temporal collection with one Polyline grid per frame. Without: one grid of /result/x,
-    /result/tension and /result/reaction. ``h5name`` is the HDF5 file as the sidecar names
+    /result/tension, /result/reaction and (``contact``: the file has it)
+    /result/contact_force. ``h5name`` is the HDF5 file as the sidecar names
     it (relative to the sidecar). ``bodies`` > 0 (the centres of moving spheres, the last
     nodes): a Temporal collection "bodies" before the net's, one Polyvertex grid of the
     centres (/mesh/bodies/node) per frame with their ``radius`` (a Sphere glyph scaled by
@@ -215,6 +217,9 @@ def write_xdmf(
         _hdf_item(att, h5name, "/result/tension", (n_edges,))
         att = _attribute(grid, "reaction", "Node", "Vector")
         _hdf_item(att, h5name, "/result/reaction", (n_nodes, 3))
+        if contact:
+            att = _attribute(grid, "contact_force", "Node", "Vector")
+            _hdf_item(att, h5name, "/result/contact_force", (n_nodes, 3))
     ET.indent(root, space=" ")
     text = '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     path = Path(path)

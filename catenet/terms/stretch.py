@@ -12,6 +12,7 @@ from catenet.kernels.stretch import (
     stretch_energy,
     stretch_gradient,
     stretch_hessian,
+    stretch_roundoff,
     stretch_tension,
 )
 from catenet.laws import Law
@@ -92,8 +93,22 @@ class Stretch(Term):
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
         """Coordinates of size |x| carry an error eps |x|, which each edge turns into a
-        force error EA eps |x| / l0 at both of its nodes (times eps: see Potential)."""
-        return self._k_norm * float(np.max(np.abs(x))), abs(energy)
+        force error EA eps |x| / l0 at both of its nodes; a strain error eps changes an
+        edge's energy by N |e| eps, however small the energy itself (a stiff strut at a
+        small strain): differences of U below sum |N| |e| eps are noise (both levels in
+        units of eps: see Potential)."""
+        work = stretch_roundoff(x, *self._args(), self.law.smooth, self._level(x))
+        return self._k_norm * float(np.max(np.abs(x))), abs(energy) + 0.0625 * work
+
+    def node_roundoff(self, x: np.ndarray) -> np.ndarray:
+        """Per node, the round-off of the forces that meet there (units of eps): every
+        edge's |N| + EA |x| / l0 (``kernels.stretch.stretch_roundoff``)."""
+        level = self._level(x)
+        stretch_roundoff(x, *self._args(), self.law.smooth, level)
+        return level
+
+    def _level(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros(x.shape[0])
 
     def stiffness(self) -> np.ndarray:
         """Per node, half the sum of EA/l0 of its edges [N/m]."""
