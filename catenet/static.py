@@ -223,6 +223,10 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
       slightly taut, with mu from the largest slack strain down tenfold per stage until
       it is negligible against the strains.
 
+    - Obstacles whose barrier is narrower than the scene calls for at the start (the
+      default: accurate to 1e-4 of an edge) are met first with wider barriers, tenfold
+      narrower per stage (``Obstacle.stages``), down to their own.
+
     Intermediate stages are solved loosely (SMOOTH_RTOL of the load scale). ``max_iter``
     bounds each Newton solve (every stage and the last), not their sum.
     """
@@ -265,11 +269,14 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
             factor *= STIFF_STEP
     mu = slack_strain(net, x) if stretch.law.any_tension_only else 0.0
 
-    def stage(term: Stretch, label: str) -> bool:
-        """One loose solve with the stretching ``term`` in place of the exact one."""
+    barriers = _Barriers(others)
+
+    def stage(term: Stretch, label: str, level: int = 0) -> bool:
+        """One loose solve with the stretching ``term`` in place of the exact one and the
+        obstacles' barriers of continuation ``level`` (0: the widest)."""
         nonlocal iterations, history
         result = solve(
-            potential.with_system(system.with_terms((term, *others))),
+            potential.with_system(system.with_terms((term, *barriers(level)))),
             x,
             rtol=SMOOTH_RTOL,
             atol=atol,
@@ -294,10 +301,36 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
                 mu /= SMOOTH_REDUCTION
         if factor < 1.0:
             stage(scaled, f"EA x {factor:.1e}")
+    for level in range(barriers.count):  # the obstacles' barriers, narrower each stage
+        stage(stretch, f"barrier stage {level + 1} of {barriers.count}", level)
     result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
     result.iterations += iterations
     result.history = history + result.history
     return result
+
+
+class _Barriers:
+    """The internal terms besides the stretching at each stage of the obstacles' barrier
+    continuation (``Obstacle.stages``): ``self(level)`` for level 0 (the widest) up to
+    ``count`` (the exact terms). Obstacles with fewer stages reach their own barrier
+    earlier, so all arrive together; friction rides on the exact barriers only."""
+
+    def __init__(self, others: tuple):
+        self.others = others
+        self.count = max((len(getattr(t, "stages", ())) for t in others), default=0)
+
+    def __call__(self, level: int) -> tuple:
+        if level >= self.count:
+            return self.others
+        out = []
+        for term in self.others:
+            stages = getattr(term, "stages", ())
+            if stages:
+                k = level - (self.count - len(stages))
+                out.append(stages[max(k, 0)])
+            elif not getattr(getattr(term, "obstacle", None), "stages", ()):
+                out.append(term)  # friction on a staged barrier waits for the exact one
+        return tuple(out)
 
 
 def _definite(potential: Potential, x: np.ndarray) -> bool:

@@ -175,7 +175,14 @@ def test_a_case_names_its_obstacles_and_the_scene_carries_their_terms():
     kinds = [type(t).__name__ for t in scene.terms]
     assert kinds == ["Sphere", "Plane"]
     ball, ground = scene.terms
-    assert ball.dhat == 0.01 and ground.dhat == pytest.approx(1e-3)  # 1e-3 of L = 1 m
+    # The ground's default barrier: 1e-4 of the median edge, reached in static solves
+    # through wider ones from 1e-3 of L = 1 m, ten times narrower each.
+    edge = float(np.median(scene.net.rest_length))
+    assert ball.dhat == 0.01 and ground.dhat == pytest.approx(1e-4 * edge)
+    assert [s.dhat for s in ground.stages][0] == pytest.approx(1e-3)
+    assert all(
+        a.dhat == pytest.approx(10 * b.dhat) for a, b in zip(ground.stages, ground.stages[1:])
+    )
     assert parse_case(tomllib.loads(case.to_toml())) == case  # the resolved case reads back
     r = solve(scene, Settings.of(case.solver))
     assert ball.gap(r.x).min() > 0.0 and ground.gap(r.x).min() > 0.0

@@ -2,7 +2,8 @@
 
 Each kind owns its keys and builds its energy term (``catenet.terms.contact``), registered
 by name in ``OBSTACLES``. Common keys: ``distance`` (the barrier's activation distance
-dhat, default 1e-3 of the scene's length scale) and ``stiffness`` (kappa [N/m], default:
+dhat; default ``accuracy``, 1e-4, of the net's median edge length: see
+``obstacle_terms``) and ``stiffness`` (kappa [N/m], default:
 the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f >= 0,
 default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a fixed
 sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
@@ -32,10 +33,17 @@ from catenet.case.keys import (
     vec3,
 )
 from catenet.case.sections import history_key
-from catenet.case.shapes import BoxObstacle, CapsuleObstacle, MeshObstacle
+from catenet.case.shapes import (
+    BoxObstacle,
+    CapsuleObstacle,
+    MeshObstacle,
+    _accuracy,
+    _distance,
+)
 from catenet.errors import ConfigError
 
-DISTANCE_SHARE = 1e-3  # default activation distance, of the scene's length scale
+DISTANCE_SHARE = 1e-3  # the static continuation's widest barrier, of the scene's length scale
+STAGE_SHRINK = 10.0  # each continuation stage's barrier is this much narrower
 
 
 @dataclass(frozen=True)
@@ -45,9 +53,8 @@ class PlaneObstacle(Declared):
     kind: str = choice("plane", ("plane",), doc="a half-space (ground, seabed)")
     point: tuple = vec3((0.0, 0.0, 0.0), unit="m", doc="plane: a point of the plane")
     normal: tuple = vec3((0.0, 0.0, 1.0), doc="plane: normal pointing to the free side")
-    distance: float | None = real(
-        None, gt=0, write="given", unit="m", doc="barrier activation distance (1e-3 L)"
-    )
+    distance: float | None = _distance()
+    accuracy: float = _accuracy()
     stiffness: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
     )
@@ -73,9 +80,8 @@ class SphereObstacle(Declared):
     kind: str = choice("sphere", ("sphere",), doc="a ball")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="sphere: centre")
     radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="sphere: radius")
-    distance: float | None = real(
-        None, gt=0, write="given", unit="m", doc="barrier activation distance (1e-3 L)"
-    )
+    distance: float | None = _distance()
+    accuracy: float = _accuracy()
     stiffness: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
     )
@@ -156,25 +162,48 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
 
 def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     """The energy terms of a case's obstacles on the net's free nodes. Raises ConfigError
-    (with the obstacle's key path) for an obstacle that a node of the net starts in."""
+    (with the obstacle's key path) for an obstacle that a node of the net starts in.
+
+    The activation distance dhat is ``distance``, else ``accuracy`` times the net's median
+    edge length: a node resting on the obstacle has a gap below dhat (the barrier acts
+    on no node farther away), so positions are exact to dhat and no node off the
+    obstacle by more than dhat feels it. A fixed obstacle whose dhat is below the wide
+    start (DISTANCE_SHARE of the scene's length scale) gets the wider barriers between
+    them, ten times narrower each, as ``stages``: static solves go through them first."""
     if not obstacles:
         return ()
     nodes = np.flatnonzero(~net.fixed[: net.n_net])  # a moving body's centre is no contact node
     force = loads.external_force(net)[nodes]
     per_node = float(np.mean(np.linalg.norm(force, axis=1))) if len(nodes) else 0.0
+    edge = float(np.median(net.rest_length[: net.n_edges])) if net.n_edges else size
     terms = []
     for k, obs in enumerate(obstacles):
         if getattr(obs, "moves", False):
             continue  # a node of its own: catenet.case.bodies
-        dhat = obs.distance if obs.distance is not None else DISTANCE_SHARE * size
-        if per_node <= 0.0:  # no loads: the force that strains an edge by dhat / l0
-            per_node = float(np.mean(net.EA / net.rest_length)) * dhat
-        kappa = obs.stiffness
-        if kappa is None:
+        dhat = obs.distance if obs.distance is not None else obs.accuracy * edge
+        load = per_node
+        if load <= 0.0:  # no loads: the force that strains an edge by dhat / l0
+            load = float(np.mean(net.EA / net.rest_length)) * dhat
+
+        def stiffness(distance: float, obs=obs, load=load) -> float:
+            if obs.stiffness is not None:
+                return obs.stiffness
             from catenet.terms.contact import default_stiffness
 
-            kappa = default_stiffness(per_node, dhat)
-        term = obs.term(nodes, kappa, dhat)
+            return default_stiffness(load, distance)
+
+        widths = []  # the continuation's wider barriers, widest first
+        wide = DISTANCE_SHARE * size
+        if obs.distance is None and not getattr(obs, "rigid_motion", False) and wide > 10.0 * dhat:
+            while wide > 10.0 * dhat:
+                widths.append(wide)
+                wide /= STAGE_SHRINK
+        kappa = stiffness(dhat)
+        if not math.isfinite(kappa):
+            raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
+        first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
+        term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
+        term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
         if hasattr(term, "carry"):  # on a prescribed motion: its name in messages
             term.label = f"obstacle[{k}] (kind {obs.kind!r})"
         gap = term.gap(net.nodes)
@@ -187,8 +216,6 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
                 f"{gap[inside[0]]:.3g} m), {inside.size} nodes in all: an obstacle must not "
                 "overlap the initial net; move it or the net"
             )
-        if not math.isfinite(kappa):
-            raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
         terms.append(term)
         if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
             from catenet.terms.friction import Friction

@@ -23,7 +23,23 @@ from catenet.errors import ConfigError
 
 
 def _distance():
-    return real(None, gt=0, write="given", unit="m", doc="barrier activation distance (1e-3 L)")
+    return real(
+        None,
+        gt=0,
+        write="given",
+        unit="m",
+        doc="barrier activation distance (default: accuracy x the median edge length)",
+    )
+
+
+def _accuracy():
+    return real(
+        1e-4,
+        gt=0,
+        lt=1,
+        write="given",
+        doc="largest gap of a node resting on it, per median edge length (without distance)",
+    )
 
 
 def _stiffness():
@@ -109,6 +125,7 @@ class BoxObstacle(_Motion, Declared):
     axis: tuple = vec3((0.0, 0.0, 1.0), doc="box: axis its orientation is turned about")
     angle: float = real(0.0, unit="rad", doc="box: turn about `axis` (0: edges along x, y, z)")
     distance: float | None = _distance()
+    accuracy: float = _accuracy()
     stiffness: float | None = _stiffness()
     friction: float = _friction()
     slip: float | None = _slip()
@@ -144,6 +161,7 @@ class CapsuleObstacle(_Motion, Declared):
     end: tuple = vec3(missing="[x, y, z] of the other end [m]", unit="m", doc="capsule: axis end")
     radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="capsule: radius")
     distance: float | None = _distance()
+    accuracy: float = _accuracy()
     stiffness: float | None = _stiffness()
     friction: float = _friction()
     slip: float | None = _slip()
@@ -181,6 +199,7 @@ class MeshObstacle(_Motion, Declared):
     scale: float = real(1.0, gt=0, doc="mesh: factor on its coordinates")
     offset: tuple = vec3((0.0, 0.0, 0.0), unit="m", doc="mesh: added to its (scaled) coordinates")
     distance: float | None = _distance()
+    accuracy: float = _accuracy()
     stiffness: float | None = _stiffness()
     friction: float = _friction()
     slip: float | None = _slip()

@@ -13,6 +13,7 @@ node's share of the load at half the activation distance (see ``default_stiffnes
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -38,9 +39,14 @@ def default_stiffness(force_per_node: float, dhat: float) -> float:
 
 class Obstacle(Term):
     """A rigid obstacle acting on ``nodes`` (the free nodes) with barrier stiffness
-    ``kappa`` [N/m] and activation distance ``dhat`` [m]."""
+    ``kappa`` [N/m] and activation distance ``dhat`` [m].
+
+    ``stages``: wider barriers of the same obstacle, widest first, that a static solve
+    goes through before this one (``narrowed`` copies; ``catenet.static.equilibrium``):
+    each stage's equilibrium, a gap below its dhat, starts the next."""
 
     role = "internal"
+    stages: tuple = ()
 
     def __init__(self, nodes, *, kappa: float, dhat: float):
         if not (math.isfinite(kappa) and kappa > 0 and math.isfinite(dhat) and dhat > 0):
@@ -51,6 +57,15 @@ class Obstacle(Term):
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return node_block_pattern(self.nodes)
+
+    def narrowed(self, kappa: float, dhat: float) -> Obstacle:
+        """The same obstacle with another barrier, no wider than this one's (a mesh's
+        grid, which lists the triangles within dhat, stays valid)."""
+        if not (math.isfinite(kappa) and kappa > 0 and 0 < dhat <= self.dhat):
+            raise ValueError(f"obstacle: kappa = {kappa!r}, dhat = {dhat!r}: not narrower")
+        out = copy.copy(self)
+        out.kappa, out.dhat, out.stages = float(kappa), float(dhat), ()
+        return out
 
     def energy(self, x: np.ndarray) -> float:
         return self.gradient(x, np.zeros_like(x))
