@@ -181,7 +181,8 @@ def test_a_case_names_its_obstacles_and_the_scene_carries_their_terms():
     assert ball.dhat == 0.01 and ground.dhat == pytest.approx(1e-4 * edge)
     assert [s.dhat for s in ground.stages][0] == pytest.approx(1e-3)
     assert all(
-        a.dhat == pytest.approx(10 * b.dhat) for a, b in zip(ground.stages, ground.stages[1:])
+        a.dhat == pytest.approx(10 * b.dhat)
+        for a, b in zip(ground.stages[:-1], ground.stages[1:], strict=True)
     )
     assert parse_case(tomllib.loads(case.to_toml())) == case  # the resolved case reads back
     r = solve(scene, Settings.of(case.solver))

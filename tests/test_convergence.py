@@ -1,0 +1,179 @@
+"""Models an engineer writes first, at default settings: they converge, or say exactly why.
+
+- A 5-node guyed mast (a 30 m bilateral strut, EA = 1.26e9 N, three guys of EA = 1.6e7 N
+  prestressed to T0, the strut precompressed to balance them, a horizontal load F at the
+  top) over a grid of F and T0, the unloaded balanced case among them. Its strut at a
+  strain of 2e-5 stores so little energy that differences of the total energy are below
+  their round-off (sum |N| |e| eps_mach) near the solution: the line search must not trust
+  them. The top's displacement is checked against the linear stiffness of the guys.
+- A mast of three pinned struts in a chain: a mechanism. The run exits 1, naming the
+  joints.
+- A failed static run: what it keeps as /result is an equilibrium (its residual is
+  checked at its load factor), never an unconverged iterate.
+- Contact forces close the global equilibrium: reactions + contact + loads = 0.
+"""
+
+from __future__ import annotations
+
+import math
+
+import h5py
+import numpy as np
+import pytest
+import tomli_w
+from click.testing import CliRunner
+from conftest import small_net
+
+from catenet.case import build, load_case, parse_case
+from catenet.cli import main
+from catenet.static import Workspace
+
+HEIGHT, RADIUS = 30.0, 20.0
+GUY = math.hypot(HEIGHT, RADIUS)
+EA_STRUT, EA_GUY = 1.26e9, 1.6e7
+
+
+def mast(force: float, prestress: float) -> dict:
+    """The 5-node guyed mast as written from the README: a graph with per-edge EA,
+    tension_only and prestress; guys at 0, 120 and 240 degrees."""
+    anchors = [
+        [RADIUS * math.cos(a), RADIUS * math.sin(a), 0.0] for a in np.radians([0.0, 120.0, 240.0])
+    ]
+    strut = -3.0 * prestress * HEIGHT / GUY  # balances the guys' vertical pull
+    return {
+        "title": "5-node guyed mast",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, HEIGHT], *anchors],
+            "edges": [[0, 1], [1, 2], [1, 3], [1, 4]],
+            "fixed": [0, 2, 3, 4],
+            "EA": [EA_STRUT, EA_GUY, EA_GUY, EA_GUY],
+            "tension_only": [False, True, True, True],
+            "prestress": [strut, prestress, prestress, prestress],
+        },
+        "material": {"EA": EA_GUY},
+        "load": {"point": [{"node": 1, "force": [force, 0.0, 0.0]}]},
+    }
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write(tmp_path, case: dict, name: str = "case") -> str:
+    path = tmp_path / f"{name}.toml"
+    path.write_bytes(tomli_w.dumps(case).encode())
+    return str(path)
+
+
+def imbalance(path) -> float:
+    """|sum of reactions + contact forces + applied loads| over the largest of them."""
+    from catenet.output import read_result
+
+    with h5py.File(path, "r") as h5:
+        reaction = h5["result/reaction"][()]
+        contact = h5["result/contact_force"][()]
+    res = read_result(path)
+    scene = build(parse_case(res.case))
+    load = scene.loads.external_force(scene.net, float(res.result_attrs.get("time", 1.0)))
+    total = np.sum(reaction + contact + load, axis=0)
+    scale = max(np.abs(reaction).max(), np.abs(contact).max(), np.abs(load).max())
+    return float(np.linalg.norm(total) / scale) if scale > 0 else float(np.linalg.norm(total))
+
+
+@pytest.mark.parametrize("prestress", [0.0, 1e3, 1e4, 5e4])
+@pytest.mark.parametrize("force", [0.0, 1e3, 3e3, 5e3, 6e3, 7e3, 2e4])
+def test_the_guyed_mast_converges_at_default_settings(tmp_path, force, prestress):
+    case = mast(force, prestress)
+    out = tmp_path / "mast.h5"
+    r = invoke("run", write(tmp_path, case), "-o", out, "-q")
+    assert r.exit_code == 0, r.output
+    with h5py.File(out, "r") as h5:
+        x = h5["result/x"][()]
+        tension = h5["result/tension"][()]
+        assert h5["result"].attrs["converged"]
+    assert imbalance(out) < 1e-7  # the residual is below rtol = 1e-8 of the force norm
+    u = x[1, 0]  # the top's sideways displacement
+    if force == 0.0:
+        assert abs(u) < 1e-9 and tension[1:] == pytest.approx(prestress, rel=1e-9)
+        return
+    # While every guy is taut, the top's horizontal stiffness is the guys' axial
+    # stiffness, sum EA/L cos^2 = 1.5 EA/L (RADIUS/GUY)^2 for three guys at 120 degrees,
+    # plus their and the strut's geometric stiffness T/L (1 + ...) : small against it.
+    taut = np.all(tension[1:] > 0)
+    k_axial = 1.5 * EA_GUY / GUY * (RADIUS / GUY) ** 2
+    k_geometric = 3.0 * prestress / GUY * (1 - 0.5 * (RADIUS / GUY) ** 2) - 3.0 * prestress / GUY
+    if taut:
+        assert u == pytest.approx(force / (k_axial + k_geometric), rel=2e-2)
+    assert u > 0.0
+
+
+def test_a_chain_of_struts_is_named_a_mechanism(tmp_path):
+    """Three pinned struts stacked into a mast, guyed only at the top: the two joints
+    between the struts have no lateral stiffness and the strut's compression pushes them
+    out. The run exits 1 and names them."""
+    case = {
+        "title": "mast of three struts in a chain",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [0, 0, 10], [0, 0, 20], [0, 0, 30]]
+            + [[20.0, 0, 0], [-10.0, 17.320508, 0], [-10.0, -17.320508, 0]],
+            "edges": [[0, 1], [1, 2], [2, 3], [3, 4], [3, 5], [3, 6]],
+            "fixed": [0, 4, 5, 6],
+            "EA": [EA_STRUT] * 3 + [EA_GUY] * 3,
+            "tension_only": [False] * 3 + [True] * 3,
+            "prestress": [-24961.5] * 3 + [1e4] * 3,
+        },
+        "material": {"EA": EA_GUY},
+        "load": {"point": [{"node": 3, "force": [3e3, 0.0, 0.0]}]},
+    }
+    r = invoke("run", write(tmp_path, case), "-o", tmp_path / "chain.h5")
+    assert r.exit_code == 1, r.output
+    assert "mechanism" in r.output and "nodes 1, 2" in r.output
+    assert "brace" in r.output  # the fix
+
+
+def test_an_unsupported_part_is_named(tmp_path):
+    case = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [5, 0, 0], [6, 0, 0]],
+            "edges": [[0, 1], [1, 2], [3, 4]],
+            "fixed": [0, 2],
+        },
+        "material": {"EA": 1e5, "prestress": 100.0},
+    }
+    r = invoke("run", write(tmp_path, case), "-o", tmp_path / "free.h5")
+    assert r.exit_code == 2, r.output
+    assert "nodes [3, 4]" in r.output and "no support" in r.output
+
+
+def test_a_failed_run_keeps_an_equilibrium(tmp_path, write_case):
+    """max_iter = 2 cannot take the paper's flat net to its equilibrium, even in cut-back
+    sub-steps: the run fails, and /result holds the last equilibrium found, labelled with
+    its load factor (the start at 0 when none was): its residual there is checked."""
+    small_case = write_case(small_net("static"))
+    out = tmp_path / "failed.h5"
+    r = invoke("run", small_case, "-o", out, "--set", "solver.max_iter=2")
+    assert r.exit_code == 1, r.output
+    assert "cut-back" in r.output and "load factor" in r.output
+    with h5py.File(out, "r") as h5:
+        x = h5["result/x"][()]
+        factor = float(h5["result"].attrs["time"])
+        assert not h5["result"].attrs["converged"]
+    case = load_case(small_case)
+    scene = build(case)
+    ws = Workspace(scene.net, terms=scene.terms)
+    _, g, scale, floor, _ = ws.potential(scene.loads, factor).evaluate(x)
+    assert np.linalg.norm(g) <= max(case.solver.rtol * scale, 10 * floor)
+
+
+def test_contact_forces_close_the_equilibrium_of_the_net_on_a_sphere(tmp_path):
+    out = tmp_path / "sphere.h5"
+    r = invoke("run", "configs/contact/net_on_sphere.toml", "-o", out, "-q")
+    assert r.exit_code == 0, r.output
+    with h5py.File(out, "r") as h5:
+        contact = h5["result/contact_force"][()]
+        assert np.abs(contact).max() > 0  # the sphere carries part of the load
+        assert np.all(contact[:, 2] >= 0)  # and pushes up
+    assert imbalance(out) < 1e-7  # the residual is below rtol = 1e-8 of the force norm
