@@ -1,0 +1,87 @@
+"""The untuned corpus (tests/corpus.py): every model converges and balances its loads.
+
+Each model is a well-posed structure (supported, stable, prestress in equilibrium with
+the given geometry, loads a designer would apply) written from the README alone, at
+catenet's default solver settings. So `catenet run` must exit 0, and the converged state
+must satisfy global equilibrium: reactions + applied loads + contact forces = 0 (SPEC
+sections 5 and 7).
+
+Tolerance of the balance, TOL = 1e-6 of the largest of the three sums: Newton stops at a
+residual of rtol = 1e-8 (the default) of the load scale per degree of freedom; summing the
+free nodes' residuals into one resultant leaves a factor of 100 for their accumulation
+(sqrt(N) for N up to 1e4 nodes) and round-off.
+
+The runs go through the command line (the README documents no Python entry point that
+runs a case file), two at a time, all of the module's selected models started by one
+fixture (so the module belongs on one worker, as `make test`'s --dist loadfile does):
+20 models of each family, about a minute on two cores; those above 3000 edges are marked
+slow.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+
+import corpus
+import h5py
+import pytest
+from conftest import catenet_command, subprocess_env
+
+PER_FAMILY = 20
+TOL = 1e-6
+TIMEOUT = 300.0  # s: a hang is a failure, not a stuck test session
+
+
+def _params():
+    for family in corpus.FAMILIES:
+        for seed in range(PER_FAMILY):
+            slow = corpus.generate(seed, family)["edges"] > 3000
+            marks = [pytest.mark.slow] if slow else []
+            yield pytest.param(family, seed, id=f"{family}-{seed}", marks=marks)
+
+
+def _run(family: str, seed: int, out) -> tuple:
+    """Write the model, run it; (case path, exit status, stderr, result path)."""
+    case = corpus.write(corpus.generate(seed, family), out / f"{family}-{seed}.toml")
+    result = case.with_suffix(".h5")
+    command = catenet_command("run", case, "-o", result, "-q")
+    try:
+        done = subprocess.run(
+            command, env=subprocess_env(), capture_output=True, text=True, timeout=TIMEOUT
+        )
+        return case, done.returncode, done.stderr, result
+    except subprocess.TimeoutExpired:
+        return case, "timeout", f"no answer within {TIMEOUT:g} s", result
+
+
+@pytest.fixture(scope="module")
+def runs(request, tmp_path_factory):
+    """Every selected model of this module, started at once, two at a time."""
+    out = tmp_path_factory.mktemp("corpus")
+    wanted = [
+        (item.callspec.params["family"], item.callspec.params["seed"])
+        for item in request.session.items
+        if item.module is request.module and hasattr(item, "callspec")
+    ]
+    pool = ThreadPoolExecutor(2)
+    yield {key: pool.submit(_run, *key, out) for key in wanted}
+    pool.shutdown(cancel_futures=True)
+
+
+@pytest.mark.parametrize(("family", "seed"), list(_params()))
+def test_model_converges_and_balances(runs, family, seed):
+    case, status, stderr, result = runs[family, seed].result()
+    command = f"catenet run {case} -o {result}"
+    assert status == 0, f"{command} exited {status}:\n{stderr}"
+    with h5py.File(result, "r") as f:
+        assert bool(f["result"].attrs["converged"]), f"{command}: converged = false"
+    imbalance = corpus.check_equilibrium(result)
+    assert imbalance <= TOL, f"{command}: global force imbalance {imbalance:.3g} > {TOL:g}"
+
+
+def test_generation_is_reproducible():
+    for seed in range(12):
+        first, again = corpus.generate(seed), corpus.generate(seed)
+        assert first == again
+        assert first["family"] in corpus.FAMILIES and first["scale"] in corpus.SCALES
