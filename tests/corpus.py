@@ -91,9 +91,10 @@ def check_equilibrium(path: str | Path) -> float:
 
     |sum of reactions + applied loads + contact forces| over the force scale that Newton's
     tolerance is relative to: the largest of the three sums and of the norms of the
-    reaction and contact fields (a prestressed net's reactions can dwarf its loads).  Applied loads are rebuilt from the resolved case stored in the file
-    (root attribute ``case``): pressure -p L^2 (square nets), point loads (times the size of
-    a node set), line loads per unstressed length, gravity on the lumped masses.
+    reaction and contact fields (a prestressed net's reactions can dwarf its loads).
+    Applied loads are rebuilt from the resolved case stored in the file (root attribute
+    ``case``): pressure -p L^2 (square nets), point loads (times the size of a node set),
+    line loads per unstressed length, gravity on the lumped masses.
     """
     with h5py.File(path, "r") as f:
         reaction = f["result/reaction"][()]

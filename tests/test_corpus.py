@@ -6,7 +6,8 @@ catenet's default solver settings. So `catenet run` must exit 0, and the converg
 must satisfy global equilibrium: reactions + applied loads + contact forces = 0 (SPEC
 sections 5 and 7).
 
-Tolerance of the balance, TOL = 1e-6 of the largest of the three sums: Newton stops at a
+Tolerance of the balance, TOL = 1e-6 of the force scale (``corpus.check_equilibrium``: the
+largest of the three sums and of the reaction and contact fields' norms): Newton stops at a
 residual of rtol = 1e-8 (the default) of the load scale per degree of freedom; summing the
 free nodes' residuals into one resultant leaves a factor of 100 for their accumulation
 (sqrt(N) for N up to 1e4 nodes) and round-off.
