@@ -64,6 +64,7 @@ WOLFE = 0.9  # curvature condition: |slope at the step| <= 0.9 |slope at 0|
 C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
 STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has converged
+FLOOR_SAFETY = 64.0  # a DOF's residual within this many eps of its forces is round-off
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
@@ -237,6 +238,22 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return phi, g, scale, floor, phi_scale
 
+    def at_floor(self, x: np.ndarray, g: np.ndarray) -> bool:
+        """Whether the residual g (free DOFs) at x is at its round-off floor in every
+        free DOF: within FLOOR_SAFETY eps of the forces that meet there (the edges'
+        |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other terms' and the loads'
+        forces). A state there is converged, whatever the global estimate says."""
+        stretch = self.system.stretch
+        free = self.system.free_dofs
+        level = np.repeat(stretch.node_roundoff(x), 3)[free]
+        _, grad = self.system.gradient(x)
+        level += 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
+        for term in self.steps:  # a time step's inertia
+            force = np.zeros_like(x)
+            term.gradient(x, force)
+            level += 2.0 * np.abs(force.reshape(-1)[free])
+        return bool(np.all(np.abs(g) <= FLOOR_SAFETY * EPS * level))
+
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""
         shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
@@ -279,20 +296,26 @@ def solve(
         if not math.isfinite(gnorm):
             reason = "non-finite residual"
             break
-        if gnorm <= tol:
-            reason = "converged"
+        if gnorm <= tol:  # which criterion held: the tolerance, or the floor above it
+            target = rtol * scale if atol is None else atol
+            reason = "converged" if gnorm <= target else "converged (round-off floor)"
             break
         if stall >= 3 and gnorm <= STALL_FLOOR * floor:
             reason = "converged (round-off floor)"
             break
         if it >= max_iter:
             reason = f"no convergence in {max_iter} iterations"
+            if potential.at_floor(x, g):
+                reason = "converged (round-off floor)"
             break
         if _stop is not None and _stop():
             raise Interrupted(
                 f"{label}: interrupted after {it} Newton iterations", iterations=it, history=history
             )
         if it - moved >= STAGNATION:
+            if potential.at_floor(x, g):
+                reason = "converged (round-off floor)"
+                break
             reason = (
                 f"stagnated: neither the residual nor the energy has decreased beyond round-off "
                 f"in {STAGNATION} iterations (best residual {best:.3e} N, round-off floor "
@@ -343,7 +366,7 @@ def solve(
         if not accepted:
             xf[free] = y0
             phi, g, scale, floor, phi_tol = potential.evaluate(x)
-            if gnorm <= STALL_FLOOR * floor:
+            if gnorm <= STALL_FLOOR * floor or potential.at_floor(x, g):
                 reason = "converged (round-off floor)"
                 break
             if kept:  # a fresh matrix before a larger c
@@ -353,6 +376,8 @@ def solve(
             log.debug("%s: step rejected; regularisation c -> %.3g", label, c)
             if c > C_MAX:
                 reason = "line search failed"
+                if potential.at_floor(x, g):
+                    reason = "converged (round-off floor)"
                 break
             stall += 1
             continue

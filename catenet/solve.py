@@ -194,6 +194,8 @@ def _static(scene, settings, ws, start, on_step) -> Result:
     r = total(done[-1])
     if not r.message or r.message == "converged":
         r.message = "equilibrium"
+    elif r.message == "converged (round-off floor)":  # above rtol x the force scale
+        r.message = "equilibrium at the round-off floor of its forces"
     return r
 
 

@@ -276,9 +276,10 @@ def test_progress_without_eta(capsys):
 
 
 def test_newton_stops_when_it_stagnates(monkeypatch):
-    """A residual held by noise a few times the round-off floor above the solution (as
-    the sums of a very large net are): Newton stops STAGNATION iterations after it gets
-    there, not at max_iter; the same problem without the noise converges."""
+    """A residual held by noise far above the round-off floor (as the sums of a very
+    large net can be): Newton stops STAGNATION iterations after it gets there, not at
+    max_iter; noise within every DOF's own floor is converged; the same problem without
+    the noise converges."""
     from catenet import newton
 
     pot, x = _potential()
@@ -287,13 +288,27 @@ def test_newton_stops_when_it_stagnates(monkeypatch):
     real = pot.evaluate
     rng = np.random.default_rng(0)
 
+    size = {"noise": 3.0}
+
     def noisy(x):
         phi, g, scale, floor, phi_tol = real(x)
         noise = rng.standard_normal(g.shape)
-        return phi, g + noise * (3.0 * floor / np.linalg.norm(noise)), scale, floor, phi_tol
+        return (
+            phi,
+            g + noise * (size["noise"] * floor / np.linalg.norm(noise)),
+            scale,
+            floor,
+            phi_tol,
+        )
 
     monkeypatch.setattr(pot, "evaluate", noisy)
     monkeypatch.setattr(newton, "STALL_FLOOR", 0.0)  # its stop at the floor switched off
+    # Noise within every DOF's own round-off floor (Potential.at_floor): converged there,
+    # never "stagnated".
+    r = newton.solve(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
+    assert r.converged and r.reason == "converged (round-off floor)", r.reason
+    # Noise above it (thirty times the global floor): stagnated, and soon.
+    size["noise"] = 30.0
     r = newton.solve(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
     assert not r.converged and r.reason.startswith("stagnated"), r.reason
     assert r.iterations <= ref.iterations + 2 * newton.STAGNATION < 200

@@ -114,3 +114,44 @@ class Stretch(Term):
         """Per node, half the sum of EA/l0 of its edges [N/m]."""
         net = self.net
         return net.axial_stiffness if self.scale == 1.0 else net.axial_stiffness * self.scale
+
+
+@register("springs")
+class Springs(Term):
+    """Linear springs of zero rest length along the edges, stiffness q per edge [N/m]:
+    U = 1/2 sum q |x_j - x_i|^2 (the force density method's energy). Its Hessian is the
+    graph Laplacian of q times the 3x3 identity, in the stretching's pattern: the static
+    solver's stretched start solves with it on the net's own factorisation."""
+
+    role = "internal"
+    convex = True
+
+    def __init__(self, net: Net, q: np.ndarray):
+        self.net = net
+        self.q = np.ascontiguousarray(q, dtype=np.float64)
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return Stretch(self.net).pattern()
+
+    def _e(self, x: np.ndarray) -> np.ndarray:
+        edges = self.net.edges
+        return x[edges[:, 1]] - x[edges[:, 0]]
+
+    def energy(self, x: np.ndarray) -> float:
+        e = self._e(x)
+        return 0.5 * float(np.sum(self.q * np.einsum("ij,ij->i", e, e)))
+
+    def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        e = self._e(x)
+        force = self.q[:, None] * e
+        edges = self.net.edges
+        np.add.at(grad, edges[:, 1], force)
+        np.subtract.at(grad, edges[:, 0], force)
+        return 0.5 * float(np.sum(force * e))
+
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
+        block = np.kron(np.array([[1.0, -1.0], [-1.0, 1.0]]), np.eye(3))  # (6, 6)
+        values.reshape(-1, 6, 6)[:] = self.q[:, None, None] * block
+
+    def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
+        return float(np.linalg.norm(self.q)) * float(np.max(np.abs(x))), abs(energy)
