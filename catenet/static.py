@@ -8,6 +8,7 @@ a damped gradient flow and ends as pure Newton with quadratic convergence.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -20,9 +21,9 @@ from catenet.errors import ConfigError, ConvergenceError, Interrupted, SingularS
 from catenet.linsolve import LinearSolver, make_solver
 from catenet.measures import loose_nodes, slack_strain, strain
 from catenet.net import Loads, Net
-from catenet.newton import Potential, raise_unconverged, solve
+from catenet.newton import Potential, _c_start, raise_unconverged, solve
 from catenet.result import Result, finish
-from catenet.terms import Stretch, Term
+from catenet.terms import Inertia, Stretch, Term
 from catenet.terms.stretch import Springs
 
 log = logging.getLogger(__name__)
@@ -90,6 +91,7 @@ def solve_static(
     workspace: Workspace | None = None,
     raise_on_failure: bool = True,
     accepted: np.ndarray | None = None,
+    transient: bool = False,
 ) -> Result:
     """Static equilibrium of ``net`` under ``loads`` scaled by ``factor``.
 
@@ -98,7 +100,9 @@ def solve_static(
     starts from, which the terms' ``begin_step`` sees (lagged friction measures slip
     from it; default: x0, else the reference positions). Raises ConvergenceError when
     Newton fails (with the residual history and, as ``state``, the start: never an
-    unconverged iterate), unless ``raise_on_failure`` is False.
+    unconverged iterate), unless ``raise_on_failure`` is False. ``transient``: reach the
+    equilibrium by a damped pseudo-transient solve (``_pseudo_transient``; the last rung
+    of the cut-back's ladder) instead of Newton directly.
     """
     _check_rtol(rtol)
     ws = workspace or Workspace(net, linear=linear)
@@ -109,7 +113,7 @@ def solve_static(
     if accepted is None:
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
     potential.begin_step(accepted)
-    result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter)
+    result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
     result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
     if result.converged and result.tolerance > potential.f_norm > 0:
         # Held only to a round-off floor above the loads: no digit of the answer is sure.
@@ -209,7 +213,9 @@ STIFF_STEP = 100.0  # EA grows a hundredfold per stage
 CONTACT_STRAIN = 3e-2  # nets that touch obstacles start the stiffness continuation here
 
 
-def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
+def equilibrium(
+    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int, transient: bool = False
+):
     """Newton to equilibrium from x (updated in place), through two continuations when
     the start calls for them; the last solve always uses the exact law and stiffness to
     the full tolerance.
@@ -306,6 +312,50 @@ def equilibrium(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: i
             stage(scaled, f"EA x {factor:.1e}")
     for level in range(barriers.count):  # the obstacles' barriers, narrower each stage
         stage(stretch, f"barrier stage {level + 1} of {barriers.count}", level)
+    if transient:
+        result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
+    else:
+        result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
+    result.iterations += iterations
+    result.history = history + result.history
+    return result
+
+
+PT_STEPS = 200  # pseudo-time steps of the damped pseudo-transient solve at most
+PT_GROW = 4.0  # its step grows (c shrinks) this much after each converged step
+PT_END = 1e-8  # ... until c is this share of its start: then Newton on the true potential
+
+
+def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
+    """The equilibrium by a damped pseudo-transient solve: implicit Euler steps of the
+    gradient flow D dy/dt = -grad Phi (D the axial stiffness diagonal; pseudo-time, no
+    inertia), each the minimum of Phi + (c/2) |y - y_k|_D^2 by Newton (an ``Inertia``
+    term of weight c D anchored at the step's start: a well-conditioned problem however
+    ill-conditioned Phi is), its step growing (c / PT_GROW) while they converge and
+    shrinking (c x PT_GROW^2) when one does not; from c below PT_END of its start (or a
+    state already within tolerance), Newton on the true potential ends it. Returns that
+    last solve's NewtonResult with the iterations of every step added."""
+    system = potential.system
+    free = system.free_dofs
+    inertia = Inertia(free)
+    _, g, scale, floor, _ = potential.evaluate(x)
+    c = c_first = _c_start(potential, g)
+    iterations, history = 0, []
+    for _ in range(PT_STEPS):
+        if c < PT_END * c_first or float(np.linalg.norm(g)) <= max(rtol * scale, floor):
+            break
+        y = x.reshape(-1)[free].copy()
+        inertia.set_step(c * potential.D, y)
+        step = Potential(system, potential.solver, potential.force, (inertia,))
+        r = solve(step, x, rtol=rtol, max_iter=max_iter, label=f"static (pseudo-time, c {c:.1e})")
+        iterations += r.iterations
+        history += r.history
+        if r.converged:
+            c /= PT_GROW
+        else:
+            x.reshape(-1)[free] = y
+            c *= PT_GROW**2
+        _, g, scale, floor, _ = potential.evaluate(x)
     result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
     result.iterations += iterations
     result.history = history + result.history
@@ -366,9 +416,11 @@ def _stretched_start(potential: Potential, x: np.ndarray) -> None:
         u.reshape(-1)[potential.system.free_dofs] = potential.solver.solve(springs.f_free)
     except SingularSystemError:
         return  # a part without support: the usual path says so
-    largest = float(np.max(np.linalg.norm(u, axis=1), initial=0.0))
+    if not np.all(np.isfinite(u)):
+        return
+    largest = float(np.max(np.abs(u), initial=0.0))  # no squares: no overflow
     extent = float(np.max(np.ptp(net.nodes, axis=0)))
-    if not (largest > 0.0 and extent > 0.0 and np.all(np.isfinite(u))):
+    if not (largest > 0.0 and math.isfinite(extent) and extent > 0.0):
         return
     u *= extent / largest  # s = 1 moves the farthest node by the net's extent
     u_free = u.reshape(-1)[potential.system.free_dofs]
@@ -499,6 +551,16 @@ def _worth_cutting(exc: ConvergenceError) -> bool:
     return "round-off floor exceeds" not in str(exc)
 
 
+def _advice(exc: ConvergenceError, max_iter: int) -> str:
+    """The one setting most likely to help a static run that failed after cut-back."""
+    if f"no convergence in {max_iter} iterations" in str(exc):
+        return f"most likely to help: a larger solver.max_iter (now {max_iter})"
+    return (
+        "most likely to help: solver.method = 'dynamic' (dynamic relaxation, the paper's "
+        "method, which follows the net's motion to rest), or more solver.steps"
+    )
+
+
 def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, settings) -> Result:
     """The load step from ``origin`` to ``target`` in sub-steps (see ``continuation``);
     ``good`` (updated) holds the last equilibrium. Raises the last failure, its message
@@ -507,18 +569,27 @@ def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, set
     increment = 0.5 * (target - f)
     spent = int(getattr(failure, "iterations", 0))
     cuts = 1
+    transient = False
     while True:
         level = target if f + increment >= target - 1e-12 * abs(target) else f + increment
         log.info("load step cut back: load factor %.6g from %.6g", level, f)
         try:
-            r = solve_static(net, loads, x0=x, factor=float(level), accepted=x, **settings)
+            r = solve_static(
+                net, loads, x0=x, factor=float(level), accepted=x, transient=transient, **settings
+            )
         except ConvergenceError as exc:
             spent += int(getattr(exc, "iterations", 0))
+            if cuts >= CUTBACKS and _worth_cutting(exc) and not transient:
+                transient = True  # the last rung: a damped pseudo-transient solve
+                continue
             if cuts >= CUTBACKS or not _worth_cutting(exc):
+                tried = f"load-step cut-back down to 1/{2**cuts} of the step"
+                if transient:
+                    tried += " and a damped pseudo-transient solve"
                 exc.args = (
-                    f"{exc}; tried: line search, a Levenberg-Marquardt shift and load-step "
-                    f"cut-back down to 1/{2**cuts} of the step (the last equilibrium: load "
-                    f"factor {good.factor:.6g})",
+                    f"{exc}; tried: line search, a Levenberg-Marquardt shift, {tried} (the "
+                    f"last equilibrium: load factor {good.factor:.6g}); "
+                    f"{_advice(exc, settings['max_iter'])}",
                 )
                 exc.iterations = spent
                 exc.state, exc.factor = good.x, good.factor

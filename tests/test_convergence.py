@@ -150,14 +150,17 @@ def test_an_unsupported_part_is_named(tmp_path):
 
 
 def test_a_failed_run_keeps_an_equilibrium(tmp_path, write_case):
-    """max_iter = 2 cannot take the paper's flat net to its equilibrium, even in cut-back
-    sub-steps: the run fails, and /result holds the last equilibrium found, labelled with
-    its load factor (the start at 0 when none was): its residual there is checked."""
+    """max_iter = 1 cannot take the paper's flat net to its equilibrium, even in cut-back
+    sub-steps or pseudo-time steps: the run fails, saying what it tried and the setting
+    most likely to help, and /result holds the last equilibrium found, labelled with its
+    load factor (the start at 0 when none was): its residual there is checked."""
     small_case = write_case(small_net("static"))
     out = tmp_path / "failed.h5"
-    r = invoke("run", small_case, "-o", out, "--set", "solver.max_iter=2")
+    r = invoke("run", small_case, "-o", out, "--set", "solver.max_iter=1")
     assert r.exit_code == 1, r.output
-    assert "cut-back" in r.output and "load factor" in r.output
+    assert "cut-back" in r.output and "pseudo-transient" in r.output
+    assert "most likely to help: a larger solver.max_iter" in r.output
+    assert "load factor" in r.output
     with h5py.File(out, "r") as h5:
         x = h5["result/x"][()]
         factor = float(h5["result"].attrs["time"])
@@ -204,3 +207,18 @@ def test_newton_from_the_flat_net_does_not_slow_down_with_refinement(edge):
     r = solve(build(case), Settings.of(case.solver))
     assert r.converged and r.iterations <= 12
     assert r.stats["factorize_count"] <= 14  # the springs' solve and one per iteration
+
+
+def test_the_pseudo_transient_rung_reaches_the_equilibrium_newton_cannot(tmp_path, write_case):
+    """With max_iter = 3 Newton cannot solve the flat net's load step, nor its cut-back
+    sub-steps; the damped pseudo-transient solve, whose pseudo-time steps are each an easy
+    problem, reaches the same equilibrium as the default run."""
+    case = write_case(small_net("static"))
+    runs = {}
+    for budget in (3, 200):
+        out = tmp_path / f"budget{budget}.h5"
+        r = invoke("run", case, "-o", out, "-q", "--set", f"solver.max_iter={budget}")
+        assert r.exit_code == 0, r.output
+        with h5py.File(out, "r") as h5:
+            runs[budget] = h5["result/x"][()]
+    assert np.max(np.abs(runs[3] - runs[200])) < 1e-8
