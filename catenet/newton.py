@@ -271,19 +271,22 @@ def solve(
     atol: float | None = None,
     label: str = "newton",
     reuse: Reuse | None = None,
+    shifted: bool = False,
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
     met by raising c, with c = 0 it raises SingularSystemError only if raising c fails.
     ``atol`` replaces rtol * scale by a fixed tolerance [N] (never below the floor).
-    ``reuse``: modified Newton with the factorisation it keeps (module docstring)."""
+    ``reuse``: modified Newton with the factorisation it keeps (module docstring).
+    ``shifted``: start with the regularisation a rejected first step would bring
+    (SHRINK x ``_c_start``), for a start known to be stiff in some directions only."""
     free = potential.system.free_dofs
     xf = x.reshape(-1)
     phi, g, scale, floor, phi_tol = potential.evaluate(x)
     gnorm = float(norm(g.reshape(-1)))
     tol = max(rtol * scale if atol is None else atol, floor)
     history = [gnorm]
-    c = 0.0  # regularisation: raised when the matrix is singular or a step fails
+    c = SHRINK * _c_start(potential, g) if shifted else 0.0  # raised when singular or a step fails
     factorizations = 0
     reused = 0
     stall = 0

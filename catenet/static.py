@@ -243,7 +243,8 @@ def equilibrium(
     others = tuple(t for t in system.terms if t is not stretch)
     history: list[float] = []
     iterations = 0
-    if not others and potential.f_norm > 0 and _unstressed(net, x):
+    stretched = not others and potential.f_norm > 0 and _unstressed(net, x)
+    if stretched:
         _stretched_start(potential, x)
     if _compressed_bilateral(stretch, x) and not _definite(potential, x):
         # Bilateral edges in compression: the straight compressed state is an unstable
@@ -315,7 +316,9 @@ def equilibrium(
     if transient:
         result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
     else:
-        result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
+        result = solve(
+            potential, x, rtol=rtol, max_iter=max_iter, label="static", shifted=stretched
+        )
     result.iterations += iterations
     result.history = history + result.history
     return result
@@ -404,8 +407,10 @@ def _stretched_start(potential: Potential, x: np.ndarray) -> None:
     tension-only net: bisection on its slope). Every edge the move lengthens is taut
     there, so Newton starts with a transverse stiffness it would otherwise grow step by
     step from the flat start, and takes a number of iterations that hardly grows with
-    refinement (the paper's n = 34 net: 8, 12 and 14 at 1 cm, 1 mm and 0.2 mm edges,
-    where the flat start took 11, 14 and more than 600)."""
+    refinement (the paper's n = 34 net: 7, 10 and 12 at 1 cm, 1 mm and 0.2 mm edges,
+    where the flat start took 11, 14 and more than 600). Edges the move hardly
+    lengthened (near the supports) are still soft across, so that Newton begins with a
+    small Levenberg-Marquardt shift (``newton.solve(shifted=True)``)."""
     net = potential.system.net
     u = np.zeros_like(x)
     springs = potential.with_system(
