@@ -185,7 +185,7 @@ def test_discrete_chain_is_what_catenet_computes():
 @pytest.mark.parametrize("dl", [0.05, 0.2, 0.5])
 def test_catenary_converges_with_order_two(dl):
     """Sag and H against the exact elastic catenary at N = 11 .. 161: error <= 2 (h/L)^2
-    and observed order in [1.8, 2.2] (tolerances justified in catenet.studies.validation). The
+    and observed order in [1.8, 2.2] (tolerances justified in catenet.validate.table). The
     remaining gap to the inextensible Eq. 15 is the elastic stretch the exact elastic
     catenary predicts, up to the discretisation error."""
     exact = elastic_catenary(L, EA, W_LEN, L - dl)

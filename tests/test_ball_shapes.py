@@ -24,7 +24,7 @@ from test_shapes import CUBE_T, CUBE_V, icosphere, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.contact import barrier
-from catenet.solve import Settings, solve
+from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.body import Ball
 from catenet.terms.moving import Moving

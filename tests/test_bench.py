@@ -56,7 +56,7 @@ def test_scale_study_runs_a_size_in_a_child_process(tmp_path):
 def test_baseline_reaches_catenets_equilibrium():
     """The plain NumPy/pypardiso baseline solves the same model to the same state."""
     pytest.importorskip("pypardiso")
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
     from catenet.studies.bench.baseline import baseline_static
     from catenet.studies.bench.common import paper_net
 
@@ -74,8 +74,8 @@ def test_baseline_reaches_catenets_equilibrium():
 def test_bench_solver_variants_give_the_same_answer():
     """The solver variants the studies time against catenet (re-analysing PARDISO,
     pypardiso.spsolve) solve to catenet's answer."""
-    from catenet.linsolve import pardiso_available
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.linear import pardiso_available
+    from catenet.solver.static import Workspace, solve_static
     from catenet.studies.bench.common import paper_net
     from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
@@ -156,7 +156,7 @@ def test_clock_moves_jit_time_to_startup():
     solve; without a solve block everything so far is start-up."""
     import numba
 
-    from catenet.clock import Clock, since_process_start
+    from catenet.run.clock import Clock, since_process_start
 
     clock = Clock()
     assert clock.solve == 0.0 and clock.startup > 0.0

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from catenet.case import build, parse_case
-from catenet.solve import Settings, solve
+from catenet.solver.path import Settings, solve
 from catenet.terms import Stretch, check_derivatives
 from catenet.terms.body import Ball, Guide, Path
 
@@ -80,7 +80,7 @@ def test_ball_contact_passes_finite_differences_in_the_net_and_the_centre():
 
 
 def test_guide_spring_passes_finite_differences_and_follows_its_path():
-    from catenet.history import History
+    from catenet.model.histories import History
 
     path = Path([0, 0, 1], [2.0, 0, 0], History([[0, 1], [1, 1], [2, 0]]))
     assert path(0.5) == pytest.approx([1.0, 0, 1])
@@ -334,7 +334,7 @@ def test_the_catch_example_runs_short_and_writes_the_ball_for_paraview_and_plot(
 
 def test_a_net_without_bodies_reads_back_none(tmp_path):
     from catenet.output import read_bodies
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     case = catch_case(t_end=0.02)
     case.pop("obstacle")

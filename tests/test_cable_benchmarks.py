@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.analytic import elastic_catenary, inclined_catenary
+from catenet.validate.analytic import elastic_catenary, inclined_catenary
 
 PAPER_EA = 10e6 * math.pi * 0.01**2  # 3141.6 N
 PAPER_RHOA = 1000.0 * math.pi * 0.01**2  # 0.314 kg/m: w = 3.08 N/m

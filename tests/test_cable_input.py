@@ -18,7 +18,7 @@ from test_cables import one, problems, straight, two_cables
 from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.cli import main
 from catenet.errors import ConfigError
-from catenet.runner import run_case
+from catenet.run.runner import run_case
 
 # --------------------------------------------------------------------------- results
 

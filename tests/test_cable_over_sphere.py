@@ -24,8 +24,8 @@ import math
 import numpy as np
 from scipy.optimize import fsolve
 
-from catenet.net import Loads, Net
-from catenet.solve import Problem, Settings, solve
+from catenet.model.net import Loads, Net
+from catenet.solver.path import Problem, Settings, solve
 from catenet.terms.contact import Sphere, default_stiffness
 
 X, Z_S, LENGTH, W = 2.0, 0.0, 5.0, 1.0

@@ -15,8 +15,8 @@ from scipy.optimize import fsolve
 
 from catenet.case import build, parse_case
 from catenet.errors import ConfigError
-from catenet.laws import LAWS
-from catenet.solve import Settings, solve
+from catenet.model.laws import LAWS
+from catenet.solver.path import Settings, solve
 
 TABLE = [[0.01, 100.0], [0.05, 300.0], [0.5, 900.0]]
 

@@ -17,7 +17,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from catenet import case as C
-from catenet import geometry as geo
 from catenet.case import (
     Case,
     GeometryConfig,
@@ -32,6 +31,7 @@ from catenet.case import (
 from catenet.case.keys import declared, integer, real
 from catenet.case.kinds.base import Built, Topology, resolve
 from catenet.errors import ConfigError
+from catenet.model import builders as geo
 
 # --------------------------------------------------------------------------- fixtures
 
@@ -561,7 +561,7 @@ def test_prestrain_and_rest_length_exclude_each_other():
 
 
 def test_pardiso_unavailable_is_reported(monkeypatch):
-    import catenet.linsolve as ls
+    import catenet.solver.linear as ls
 
     monkeypatch.setattr(ls, "pardiso_available", lambda: False)
     one_problem(

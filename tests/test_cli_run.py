@@ -26,7 +26,7 @@ from conftest import (
 from catenet.case import load_case
 from catenet.cli import main
 from catenet.output import open_result, read_frame, trajectory_length
-from catenet.runner import run_case
+from catenet.run.runner import run_case
 
 # A run that takes minutes unless stopped: small steps, little damping.
 SLOW = small_net(dt=5e-4, damping=0.1, t_end=100.0, every=5)
@@ -66,7 +66,7 @@ def test_quiet_prints_nothing_and_verbose_shows_newton(tmp_path, write_case):
     assert r.exit_code == 0 and r.stdout == "" and r.stderr == ""
     r = invoke("run", case, "-o", tmp_path / "v.h5", "-v")
     assert r.exit_code == 0
-    assert "catenet.newton" in r.stderr  # Newton's iterations at DEBUG
+    assert "catenet.solver.newton" in r.stderr  # Newton's iterations at DEBUG
 
 
 def test_set_overrides_reach_the_run_and_the_file(tmp_path, write_case):
@@ -408,9 +408,9 @@ def fake_dynamic(fail_at: int, nan: bool):
 
 @pytest.mark.parametrize("nan", [False, True], ids=["no-convergence", "non-finite"])
 def test_dynamic_failure_keeps_the_last_good_step(tmp_path, write_case, monkeypatch, nan):
-    import catenet.dynamic
+    import catenet.solver.dynamic
 
-    monkeypatch.setattr(catenet.dynamic, "solve_dynamic", fake_dynamic(4, nan))
+    monkeypatch.setattr(catenet.solver.dynamic, "solve_dynamic", fake_dynamic(4, nan))
     case = write_case(small_net(every=3))
     out = tmp_path / "fail.h5"
     r = invoke("run", case, "-o", out)

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from conftest import CONFIGS, check_xdmf
 
-from catenet import analytic
 from catenet.case import load_case
-from catenet.runner import run_case
+from catenet.run.runner import run_case
+from catenet.validate import analytic
 
 FILES = sorted(CONFIGS.glob("*.toml"))
 SLOW = ("n34", "damping")  # the largest nets and the time-stepping runs: seconds each

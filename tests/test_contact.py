@@ -28,7 +28,7 @@ from scipy.optimize import brentq
 
 import catenet as cn
 from catenet.kernels.contact import barrier
-from catenet.solve import Problem, Settings, solve
+from catenet.solver.path import Problem, Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import Plane, Sphere, default_stiffness
 
@@ -232,7 +232,7 @@ CONTACT_CONFIGS = sorted(
 @pytest.mark.parametrize("path", CONTACT_CONFIGS, ids=lambda p: p.stem)
 def test_contact_examples_run_and_keep_every_node_outside(path, tmp_path):
     from catenet.case import build, load_case
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     case = load_case(path)
     assert path.read_text().startswith("# "), "an example says in its first lines what it shows"

@@ -27,7 +27,7 @@ from conftest import small_net
 
 from catenet.case import build, load_case, parse_case
 from catenet.cli import main
-from catenet.static import Workspace
+from catenet.solver.static import Workspace
 
 HEIGHT, RADIUS = 30.0, 20.0
 GUY = math.hypot(HEIGHT, RADIUS)
@@ -201,7 +201,7 @@ def test_newton_from_the_flat_net_does_not_slow_down_with_refinement(edge):
     force density shape, scaled to the least potential along it) gives Newton a
     transverse stiffness at once; 7, 8 and 10 iterations at 1 cm, 2 mm and 1 mm edges
     (the flat start took 11, 15 and 14, and more than 600 at 0.2 mm: 12 now)."""
-    from catenet.solve import Settings, solve
+    from catenet.solver.path import Settings, solve
 
     case = load_case("configs/fig4g_n34_alpha_0.toml", [f"geometry.edge_length={edge}"])
     r = solve(build(case), Settings.of(case.solver))

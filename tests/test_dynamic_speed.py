@@ -12,12 +12,12 @@ from click.testing import CliRunner
 import catenet as cn
 from catenet.case import load_case
 from catenet.cli import main
-from catenet.dynamic import solve_dynamic
 from catenet.errors import SingularSystemError
-from catenet.linsolve import make_solver, pardiso_available
 from catenet.output import read_mesh
-from catenet.runner import run_case
-from catenet.static import Workspace
+from catenet.run.runner import run_case
+from catenet.solver.dynamic import solve_dynamic
+from catenet.solver.linear import make_solver, pardiso_available
+from catenet.solver.static import Workspace
 from catenet.terms.contact import Sphere
 from tests.conftest import small_net
 
@@ -158,7 +158,7 @@ def test_solver_reuse_must_be_a_boolean(write_case):
 
 
 def test_a_kept_factorisation_close_to_the_tolerance_is_kept():
-    from catenet.newton import REUSE_AHEAD, _converges_soon
+    from catenet.solver.newton import REUSE_AHEAD, _converges_soon
 
     assert REUSE_AHEAD == 2
     assert _converges_soon(1e-6, 1e-5, 1e-8)  # rate 0.1: 1e-8 after two more steps
@@ -167,7 +167,7 @@ def test_a_kept_factorisation_close_to_the_tolerance_is_kept():
 
 
 def test_keeping_a_slower_factorisation_near_the_tolerance_saves_factorisations(monkeypatch):
-    import catenet.newton as newton
+    import catenet.solver.newton as newton
 
     net, loads = paper_net(pressure=300.0, gravity=True)
     free = np.flatnonzero(~net.fixed)

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from conftest import CONFIGS
 
-from catenet import analytic
 from catenet.case import load_case
 from catenet.output import read_result
-from catenet.plotting import figure, paper_curve, plot_result
-from catenet.runner import run_case
+from catenet.plot.figure import figure, paper_curve, plot_result
+from catenet.run.runner import run_case
+from catenet.validate import analytic
 
 
 def run(tmp_path, name, *overrides):

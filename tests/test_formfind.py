@@ -23,8 +23,8 @@ from catenet.case import build, load_case, parse_case
 from catenet.cli import main
 from catenet.errors import ConfigError
 from catenet.formfind import formfind, to_case, write_formfind
-from catenet.net import Loads, Net
-from catenet.runner import run_case
+from catenet.model.net import Loads, Net
+from catenet.run.runner import run_case
 
 SADDLE = CONFIGS / "formfind" / "saddle.toml"
 CORNERS = np.array([[0.0, 0.0, 1.0], [2.0, 0.0, 0.0], [2.0, 2.0, 1.5], [0.0, 2.0, 0.5]])
@@ -295,7 +295,7 @@ def test_unreachable_targets_and_forces_beyond_the_law():
 
 
 def _law(m, name):
-    from catenet.laws import Law
+    from catenet.model.laws import Law
 
     return Law.uniform(m, name)
 

@@ -22,8 +22,8 @@ from scipy.optimize import brentq
 
 import catenet as cn
 from catenet.kernels.contact import barrier
-from catenet.net import Loads, Net
-from catenet.solve import Problem, Settings, Start, solve
+from catenet.model.net import Loads, Net
+from catenet.solver.path import Problem, Settings, Start, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import Plane, Sphere, default_stiffness
 from catenet.terms.friction import Friction
@@ -283,7 +283,7 @@ def pulled_run(tmp_path, *overrides):
     import h5py
 
     from catenet.case import build, load_case
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     case = load_case(MOORING, list(overrides))
     out = tmp_path / "mooring.h5"

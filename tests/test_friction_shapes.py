@@ -15,7 +15,7 @@ from test_moving_shapes import moving_shapes, near
 from test_shapes import CUBE_T, CUBE_V
 
 from catenet.case import build, parse_case
-from catenet.solve import Settings, solve
+from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.friction import Friction, contact_normals
 from catenet.terms.moving import Moving

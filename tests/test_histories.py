@@ -9,12 +9,12 @@ import subprocess
 import numpy as np
 import pytest
 
-from catenet import advice
 from catenet.case.parse import parse_case
 from catenet.case.scene import build
 from catenet.errors import ConfigError
-from catenet.history import History
-from catenet.solve import Settings, Start, solve, workspace
+from catenet.model.histories import History
+from catenet.run import advice
+from catenet.solver.path import Settings, Start, solve, workspace
 from tests.conftest import catenet_command, subprocess_env
 
 F = 10.0  # N, the point load at the cable's midpoint
@@ -234,7 +234,7 @@ def test_static_runs_warn_that_histories_and_velocities_are_ignored(caplog):
     assert len(messages) == 2
     assert messages[0].startswith("load.point[0].history: ignored with solver.method = 'static'")
     assert messages[1].startswith("mass[0].velocity = [0.0, 0.0, 1.0]: ignored")
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     with caplog.at_level(logging.WARNING, logger="catenet"):
         result = run_case(case, None)
@@ -315,7 +315,7 @@ def test_a_thrown_mass_moves_along_its_velocity_and_the_books_balance():
 
 def test_the_runner_starts_dynamic_runs_with_the_velocities(tmp_path):
     from catenet.output.reader import read_frame
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     data = net_case(method="dynamic", mass=0.5, velocity=[0.0, 0.0, 1.0])
     data["solver"]["t_end"] = 0.05

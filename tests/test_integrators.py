@@ -14,15 +14,15 @@ import pytest
 from conftest import CONFIGS
 
 import catenet as cn
-from catenet import advice
 from catenet.case.parse import parse_case
 from catenet.case.scene import build
-from catenet.dynamic import solve_dynamic
 from catenet.errors import ConfigError
-from catenet.integrators import RHO_INF, amplification, make, numerical_damping
-from catenet.runner import run_case
-from catenet.solve import Settings, Start, solve
-from catenet.static import Workspace
+from catenet.run import advice
+from catenet.run.runner import run_case
+from catenet.solver.dynamic import solve_dynamic
+from catenet.solver.integrators import RHO_INF, amplification, make, numerical_damping
+from catenet.solver.path import Settings, Start, solve
+from catenet.solver.static import Workspace
 
 # --------------------------------------------------------------------------- scenes
 
@@ -388,7 +388,7 @@ def test_implicit_euler_is_the_default_and_unchanged():
 
 
 def cn_problem(net, loads):
-    from catenet.solve import Problem
+    from catenet.solver.path import Problem
 
     return Problem(net, loads)
 
@@ -464,7 +464,7 @@ def test_newmark_relaxes_the_paper_net_at_large_steps(dt):
 def test_newmark_keeps_every_node_outside_a_sphere(dt):
     """A net falling under its weight and a pressure onto a fixed sphere, with newmark:
     no node inside it at any accepted step of any step size."""
-    from catenet.solve import Problem
+    from catenet.solver.path import Problem
     from catenet.terms.contact import Sphere
 
     sq = cn.square_net(10, 0.3, 1.0, 0.05, cn.Material.from_E(10e6, radius=0.01, density=1000.0))

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.assembly import System
 from catenet.kernels.stretch import stretch_energy, stretch_gradient, stretch_hessian
+from catenet.solver.system import System
 
 D = 1e-6
 

@@ -20,8 +20,8 @@ import catenet as cn
 from catenet.case import build, parse_case
 from catenet.errors import ConfigError
 from catenet.kernels.laws import density, strain_for_force
-from catenet.laws import LAWS, Law, table_rows
-from catenet.solve import Problem, Settings, solve
+from catenet.model.laws import LAWS, Law, table_rows
+from catenet.solver.path import Problem, Settings, solve
 from catenet.terms import Stretch, check_derivatives
 
 TABLE = [[0.02, 40.0], [0.1, 120.0], [0.3, 200.0], [0.6, 500.0]]  # strain, tension [N]

@@ -13,8 +13,8 @@ from test_shapes import CUBE_T, CUBE_V, flat_case
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.errors import ConvergenceError
-from catenet.history import History
-from catenet.solve import Settings, solve
+from catenet.model.histories import History
+from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.moving import Moving
 from catenet.terms.shapes import Box, Capsule, Mesh, rotation

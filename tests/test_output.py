@@ -28,7 +28,7 @@ from catenet.output import (
     recover,
     trajectory_length,
 )
-from catenet.result import Result
+from catenet.solver.result import Result
 
 
 def make_scene(**kw):
@@ -273,7 +273,7 @@ from conftest import small_net
 from catenet.case import build, parse_case
 from catenet.errors import OutputError
 from catenet.output import ResultWriter
-from catenet.result import Result
+from catenet.solver.result import Result
 scene = build(parse_case(tomllib.loads(small_net())))
 net = scene.net
 rng = np.random.default_rng(1)
@@ -330,7 +330,7 @@ def test_full_disk_keeps_the_result_in_a_temporary_file(tmp_path):
 
 def test_xdmf_of_a_static_run_with_steps(tmp_path):
     from catenet.case import load_case
-    from catenet.runner import run_case
+    from catenet.run.runner import run_case
 
     case_file = tmp_path / "c.toml"
     case_file.write_text(small_net(method="static", every=1))

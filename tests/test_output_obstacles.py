@@ -1,4 +1,4 @@
-"""Obstacles in result files (catenet/output/obstacles.py, catenet/obstacle_surfaces.py):
+"""Obstacles in result files (catenet/output/obstacles.py, catenet/output/surfaces.py):
 every kind's surface in /mesh/obstacles, a moving one's pose and surface at every frame
 (the solver's pose, and the closed form), the XDMF sidecar's grids (every path it names
 exists with its shape; VTK's reader, ParaView's, shows them at each time; meshio still
@@ -23,7 +23,7 @@ from test_shapes import icosphere, write_stl
 from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.output import read_obstacles, read_result, recover, repair, trajectory_length
 from catenet.output.obstacles import FRAME_VERTICES, simplify
-from catenet.runner import run_case
+from catenet.run.runner import run_case
 from catenet.terms.moving import Moving
 from catenet.terms.shapes import closed_surface
 
@@ -359,7 +359,7 @@ def test_the_capture_scene_file_shows_the_net_wrapping_the_tumbling_box(tmp_path
 
 
 def test_the_trajectory_estimate_counts_the_moving_obstacles_frames(run, ball):
-    from catenet import advice
+    from catenet.run import advice
 
     out, case = run
     fixed = parse_case(case_dict(ball, moving=()))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.assembly import System
+from catenet.solver.system import System
 from catenet.terms import Stretch, Term
 from catenet.terms.contact import Plane
 from catenet.terms.inertia import Inertia
@@ -16,9 +16,9 @@ from catenet.terms.inertia import Inertia
 @pytest.fixture(autouse=True)
 def kernels_for_every_size(monkeypatch):
     """These tests check the kernels' ways, which System takes above SMALL_PATTERN."""
-    import catenet.assembly
+    import catenet.solver.system
 
-    monkeypatch.setattr(catenet.assembly, "SMALL_PATTERN", -1)
+    monkeypatch.setattr(catenet.solver.system, "SMALL_PATTERN", -1)
 
 
 def reference(net, terms, upper):
@@ -117,15 +117,15 @@ def test_a_term_outside_the_pattern_is_refused_and_one_inside_is_placed():
 def test_small_systems_take_np_unique_and_get_the_same_arrays(monkeypatch, upper):
     """Below SMALL_PATTERN values the pattern comes from one np.unique (no kernel to
     compile on a first run); the arrays are the kernels' to the last entry."""
-    import catenet.assembly
+    import catenet.solver.system
 
     net = random_net(5)
     free = np.flatnonzero(~net.fixed)
     terms = [Stretch(net), Plane(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)]
     by_kernels = System(net, terms, upper=upper)
-    monkeypatch.setattr(catenet.assembly, "SMALL_PATTERN", 10**9)
+    monkeypatch.setattr(catenet.solver.system, "SMALL_PATTERN", 10**9)
     small = System(net, terms, upper=upper)
-    assert small._entry_count() <= catenet.assembly.SMALL_PATTERN
+    assert small._entry_count() <= catenet.solver.system.SMALL_PATTERN
     for name in ("indptr", "indices", "diag_pos"):
         a, b = getattr(small, name), getattr(by_kernels, name)
         assert a.dtype == b.dtype and np.array_equal(a, b)

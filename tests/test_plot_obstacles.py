@@ -1,4 +1,4 @@
-"""``catenet plot`` draws a case's obstacles (catenet/plot_obstacles.py): each kind in the
+"""``catenet plot`` draws a case's obstacles (catenet/plot/obstacles.py): each kind in the
 3D view and the side view (with its legend entry), a moving one at its pose at the
 plotted time, a plane clipped to the views, a large mesh by its edges, and a file
 without obstacles as before."""
@@ -18,8 +18,8 @@ from test_shapes import icosphere, write_stl
 from catenet.case import dumps_toml
 from catenet.cli import main
 from catenet.output.reader import read_result
-from catenet.plot_obstacles import MAX_EDGES, MAX_FACES, clipped, plane_patch, shapes
-from catenet.plotting import figure
+from catenet.plot.figure import figure
+from catenet.plot.obstacles import MAX_EDGES, MAX_FACES, clipped, plane_patch, shapes
 
 
 def base_case() -> dict:
@@ -180,7 +180,7 @@ def test_a_mesh_file_gone_since_the_run_is_skipped_with_a_warning(plain, tmp_pat
     ]
     res = with_case(plain, tmp_path / "gone.h5", obstacles)
     stl.unlink()
-    with caplog.at_level(logging.WARNING, logger="catenet.plot_obstacles"):
+    with caplog.at_level(logging.WARNING, logger="catenet.plot.obstacles"):
         ax3 = figure(res).axes[0]
     assert list(obstacle_artists(ax3)) == ["obstacle[1]: box"]
     assert "obstacle[0]: mesh not drawn: no such file" in caplog.text
@@ -199,7 +199,7 @@ def test_a_plane_patch_is_where_the_plane_cuts_the_box():
 
 
 def test_a_huge_obstacle_is_cut_to_the_views_which_it_widens_by_at_most_reach(plain, tmp_path):
-    from catenet.plot_obstacles import REACH
+    from catenet.plot.obstacles import REACH
 
     # a 200 m block whose top face is 0.3 m under the net
     seabed = {"kind": "box", "center": [0.0, 0.0, -50.3], "half_size": [100.0, 100.0, 50.0]}

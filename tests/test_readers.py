@@ -22,7 +22,7 @@ from conftest import catenet_command, check_xdmf, read_with_vtk, small_net, subp
 from catenet.case import load_case
 from catenet.cli import main
 from catenet.output import trajectory_length
-from catenet.runner import run_case
+from catenet.run.runner import run_case
 
 
 def invoke(*args):

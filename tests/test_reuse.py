@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import catenet as cn
-import catenet.dynamic as dynamic
-from catenet.dynamic import solve_dynamic
-from catenet.newton import NewtonResult, Reuse, solve
-from catenet.static import Workspace, solve_static
+import catenet.solver.dynamic as dynamic
+from catenet.solver.dynamic import solve_dynamic
+from catenet.solver.newton import NewtonResult, Reuse, solve
+from catenet.solver.static import Workspace, solve_static
 from catenet.terms.contact import Sphere
 
 SAME = 1e-8  # relative to the largest displacement

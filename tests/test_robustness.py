@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import catenet as cn
-from catenet import geometry
 from catenet.cli import main
+from catenet.model import builders as geometry
 
 MAT = cn.Material.from_E(10e6, radius=0.01, density=1000.0)
 
@@ -81,7 +81,7 @@ def test_square_net_accepts_or_explains(n, alpha, size, edge):
 def test_builders_refuse_a_net_this_machine_cannot_hold(monkeypatch):
     """The Python API checks memory too (the case loader does so with a margin before):
     a net whose solve cannot fit is a ConfigError naming the key, never an OOM kill."""
-    from catenet import memory
+    from catenet.model import memory
 
     monkeypatch.setattr(memory, "physical_memory", lambda: 2**30)  # 1 GiB
     with pytest.raises(cn.ConfigError, match=r"geometry.edge_length = 0.0001.*GiB; this mach"):
@@ -221,7 +221,7 @@ def test_same_case_same_bits(tmp_path):
 
 def test_singular_systems_name_their_nodes():
     """A matrix without stiffness at some DOFs is reported with the nodes concerned."""
-    from catenet.static import Workspace
+    from catenet.solver.static import Workspace
 
     sq = cn.square_net(2, 0.0, 1.0, 0.25, MAT)  # flat and unstressed: no transverse stiffness
     ws = Workspace(sq.net)

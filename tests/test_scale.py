@@ -16,7 +16,7 @@ def _rows(path):
 
 
 def test_scale_study_runs_pardisos_variants_and_reports_them(tmp_path):
-    from catenet.linsolve import pardiso_available
+    from catenet.solver.linear import pardiso_available
     from catenet.studies.bench import scale
     from catenet.studies.bench.report_scale import scale as section
 

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq, root
 
-import catenet.analytic as analytic
-from catenet.analytic import inclined_catenary, seabed_catenary
+import catenet.validate.analytic as analytic
 from catenet.errors import ConfigError
+from catenet.validate.analytic import inclined_catenary, seabed_catenary
 
 G = 9.81
 # The issue's line: a 300 m chain, submerged weight 1000 N/m, EA = 5e8 N, water depth
@@ -365,7 +365,7 @@ def solve_mooring_line(L, EA, w, X, h, n):
     The touchdown is the last node, along the line from the anchor, that the bed acts on
     (gap below the barrier's activation distance)."""
     from catenet.case import build, parse_case
-    from catenet.solve import Settings, solve
+    from catenet.solver.path import Settings, solve
 
     case = parse_case(mooring_line_case(L, EA, w, X, h, n))
     scene = build(case)
@@ -427,7 +427,7 @@ def test_the_mooring_line_by_dynamic_relaxation_matches_the_static_solve():
     with dt = 0.5 s): at the default t_end = 10 s the run ends earlier, and its summary
     says so (not yet at equilibrium: raise solver.t_end)."""
     from catenet.case import build, parse_case
-    from catenet.solve import Settings, solve
+    from catenet.solver.path import Settings, solve
 
     n = 100
     case = mooring_line_case(*ISSUE.values(), n)

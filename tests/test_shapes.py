@@ -25,7 +25,7 @@ import pytest
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.mesh import _cell
-from catenet.solve import Settings, solve
+from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.shapes import Box, Capsule, Mesh, closed_surface, rotation
 
@@ -508,8 +508,8 @@ def test_the_capture_example_runs_short_and_makes_a_figure_and_a_trajectory(tmp_
     res = CliRunner().invoke(main, ["plot", str(out), "-o", str(tmp_path / "capture.png")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "capture.png").stat().st_size > 10_000
-    # the figure draws the box where it is at the end of the run (catenet/plot_obstacles.py)
-    from catenet.plot_obstacles import plotted_time, shapes
+    # the figure draws the box where it is at the end of the run (catenet/plot/obstacles.py)
+    from catenet.plot.obstacles import plotted_time, shapes
 
     assert plotted_time(read_result(out)) == pytest.approx(0.6)
     (drawn,) = shapes(read_result(out))
@@ -551,7 +551,7 @@ def test_the_capture_scene_is_stable_from_1e5_to_1e1_s_steps(dt):
     settings = Settings.of(parsed.solver)
     (box,) = scene.terms
     net = scene.net
-    from catenet.solve import workspace
+    from catenet.solver.path import workspace
 
     system = workspace(scene, settings).system
     mass = net.mass[:, None]

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.linsolve import pardiso_available
-from catenet.static import Workspace
+from catenet.solver.linear import pardiso_available
+from catenet.solver.static import Workspace
 
 MAT = cn.Material.from_E(10e6, radius=0.01, density=1000.0)  # the paper's cable
 EA = MAT.EA
@@ -256,7 +256,7 @@ def test_unconverged_static_raises_with_history():
 
 
 def test_predictor_is_exact_for_linear_paths_and_cheapens_load_curves():
-    from catenet.static import predict
+    from catenet.solver.static import predict
 
     a, b = np.array([[0.0, 1.0, 2.0]]), np.array([[1.0, 3.0, 2.0]])
     assert np.allclose(predict([a, b], [1.0, 2.0], 4.0), a + 3 * (b - a))
@@ -274,7 +274,7 @@ def test_nodes_on_slack_edges_only_are_reported(caplog):
     net = cn.cable([-0.5, 0, 0], [0.5, 0, 0], 5, MAT)
     d = np.zeros((5, 3))
     d[0, 0], d[-1, 0] = 0.1, -0.1
-    with caplog.at_level("WARNING", logger="catenet.static"):
+    with caplog.at_level("WARNING", logger="catenet.solver.static"):
         r = cn.solve_static(net, cn.Loads(support_displacement=d))
     assert r.converged and not r.tension.any()
     assert "3 free nodes hang on slack edges only" in caplog.text
@@ -293,7 +293,7 @@ def test_an_unstable_equilibrium_is_flagged(linear, caplog):
     )
     d = np.zeros((11, 3))
     d[10, 0] = -0.1
-    with caplog.at_level("WARNING", logger="catenet.static"):
+    with caplog.at_level("WARNING", logger="catenet.solver.static"):
         r = cn.solve_static(net, cn.Loads(support_displacement=d), linear=linear)
     assert r.converged and r.stable is False
     assert "unstable" in caplog.text
@@ -330,7 +330,7 @@ def test_a_net_too_stiff_for_double_precision_is_explained():
 @pytest.fixture
 def fresh_mkl_lookup(monkeypatch):
     """A lookup that starts over (the runtime is found once per process and override)."""
-    import catenet.linsolve as ls
+    import catenet.solver.linear as ls
 
     ls._find_mkl.cache_clear()
     monkeypatch.setattr(ls, "_warned", set())
@@ -343,7 +343,7 @@ def test_missing_mkl_falls_back_to_scipy_with_one_warning(fresh_mkl_lookup, monk
     so once, 'pardiso' is refused with the variable and what to do."""
     ls = fresh_mkl_lookup
     monkeypatch.setenv("CATENET_MKL_RT", "/nowhere/libmkl_rt.so.2")
-    with caplog.at_level("WARNING", logger="catenet.linsolve"):
+    with caplog.at_level("WARNING", logger="catenet.solver.linear"):
         assert ls.resolve_backend("auto") == "scipy"
         assert ls.resolve_backend("auto") == "scipy"
         sq, loads = net_scene(6, edge=0.1)
@@ -381,7 +381,7 @@ def test_mkl_is_found_directly_and_without_pypardiso(fresh_mkl_lookup, monkeypat
     monkeypatch.delenv("PYPARDISO_MKL_RT", raising=False)
     path = ls.mkl_runtime().path
     monkeypatch.setenv("CATENET_MKL_RT", path)
-    with caplog.at_level("WARNING", logger="catenet.linsolve"):
+    with caplog.at_level("WARNING", logger="catenet.solver.linear"):
         assert ls.resolve_backend("auto") == "pardiso"
         sq, loads = net_scene(6, edge=0.1)
         assert cn.solve_static(sq.net, loads).stats["backend"] == "pardiso"
@@ -433,7 +433,7 @@ def test_linear_nets_use_kernels_without_the_other_laws():
     """Every edge linear: the kernels get law None and compile without the other laws;
     the numbers are those of the general kernels, bit for bit."""
     from catenet.kernels.stretch import stretch_gradient, stretch_hessian, stretch_tension
-    from catenet.laws import Law
+    from catenet.model.laws import Law
 
     sq, loads = net_scene(6, edge=0.1)
     net = sq.net
@@ -472,7 +472,7 @@ def test_compressed_bilateral_cable_hangs_like_the_tension_only_one(ratio, dL):
     moved inward, in one load step: the hanging chain, every edge in tension, the same
     state as the tension-only cable's (it used to stall near the unstable straight state:
     200 iterations, residual 50 N, for EA = 1e6 N, rho A = 1 kg/m, 10 %)."""
-    from catenet import analytic
+    from catenet.validate import analytic
 
     nodes, w = 41, 9.81
     results = []

@@ -41,7 +41,7 @@ def test_quick_subset_covers_every_group():
 
 def test_equilibrium_error_sees_a_wrong_state():
     """The check is not vacuous: a state moved off the equilibrium fails it."""
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
     from catenet.studies.bench.common import midpoint_cable
 
     net, loads, mid = midpoint_cable(10.0, nodes=11)

@@ -25,10 +25,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from catenet import advice
 from catenet.case import build, load_case
 from catenet.formfind.case import write_formfind
-from catenet.runner import run_case
+from catenet.run import advice
+from catenet.run.runner import run_case
 
 CONFIGS = Path(__file__).parents[1] / "configs"
 SADDLE = CONFIGS / "formfind" / "saddle_roof.toml"
@@ -170,7 +170,7 @@ def test_tether_net_strains_follow_the_law(law, tmp_path, caplog):
     else:
         stretch = brentq(lambda lam: lam - lam**-2 - 3 * force / ea, 1.0, 3.0, xtol=1e-15)
         expected = stretch - 1.0
-    from catenet import measures
+    from catenet.model import measures
 
     eps = measures.strain(net, r.x)
     np.testing.assert_allclose(r.tension[along], force, rtol=1e-8)

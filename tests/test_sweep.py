@@ -87,7 +87,7 @@ def reference_rows(case_path: Path) -> list[tuple[int, float, float, float, floa
     import tomllib
 
     from catenet.case import apply_overrides, build, parse_case
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
 
     base = tomllib.loads(case_path.read_text())
     base.pop("sweep")

@@ -19,7 +19,7 @@ import pytest
 from numba import njit
 
 import catenet as cn
-from catenet.solve import Problem, Settings, solve
+from catenet.solver.path import Problem, Settings, solve
 from catenet.terms import (
     TERMS,
     ExternalForce,

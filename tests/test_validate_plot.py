@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
-from catenet.studies.validation import Row, format_table, observed_order
+from catenet.validate.table import Row, format_table, observed_order
 
 
 def invoke(*args):

@@ -15,11 +15,11 @@ import pytest
 from click.testing import CliRunner
 from conftest import small_net
 
-from catenet import advice
 from catenet.case import load_case, parse_case
 from catenet.case.kinds import warn
 from catenet.cli import main
-from catenet.runner import run_case
+from catenet.run import advice
+from catenet.run.runner import run_case
 
 # The static case without the dynamic keys (set explicitly, they would be warned about).
 STATIC = "\n".join(
@@ -125,8 +125,8 @@ def test_small_strain_is_not_warned_about(tmp_path, write_case, caplog):
 
 
 def test_each_law_has_its_own_range():
-    from catenet.laws import Law, table_rows
-    from catenet.net import Net
+    from catenet.model.laws import Law, table_rows
+    from catenet.model.net import Net
 
     nodes = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
 
@@ -280,7 +280,7 @@ def test_newton_stops_when_it_stagnates(monkeypatch):
     large net can be): Newton stops STAGNATION iterations after it gets there, not at
     max_iter; noise within every DOF's own floor is converged; the same problem without
     the noise converges."""
-    from catenet import newton
+    from catenet.solver import newton
 
     pot, x = _potential()
     ref = newton.solve(pot, x.copy(), rtol=1e-8, max_iter=200)
@@ -317,9 +317,9 @@ def test_newton_stops_when_it_stagnates(monkeypatch):
 
 def _potential():
     """The n = 6 square net under a downward force at every free node, from flat."""
-    from catenet.geometry import Material, square_net
-    from catenet.net import Loads
-    from catenet.static import Workspace
+    from catenet.model.builders import Material, square_net
+    from catenet.model.net import Loads
+    from catenet.solver.static import Workspace
 
     sq = square_net(6, 0.0, 1.0, 0.1, Material(EA=3141.6))
     force = np.zeros((sq.net.n_nodes, 3))
@@ -371,7 +371,7 @@ def test_frame_times_are_whole_steps(tmp_path, write_case):
 
 
 def test_times_after_step_cuts_are_exact():
-    from catenet.dynamic import MAX_CUTS, _advance
+    from catenet.solver.dynamic import MAX_CUTS, _advance
 
     dt = 0.01
     q = dt / 2**MAX_CUTS

@@ -34,7 +34,7 @@ from catenet.case.sections import (
     SupportsConfig,
 )
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
-from catenet.geometry import MAX_NODES
+from catenet.model.builders import MAX_NODES
 
 __all__ = [
     "KINDS",

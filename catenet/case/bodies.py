@@ -20,8 +20,8 @@ import numpy as np
 
 from catenet.case.keys import show
 from catenet.errors import ConfigError
-from catenet.history import History
-from catenet.net import Loads, Net
+from catenet.model.histories import History
+from catenet.model.net import Loads, Net
 
 log = logging.getLogger(__name__)
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from catenet.case.keys import Checker, show
 from catenet.case.kinds import GeometryConfig
-from catenet.geometry import MAX_NODES
-from catenet.memory import (  # noqa: F401  (re-exported)
+from catenet.model.builders import MAX_NODES
+from catenet.model.memory import (  # noqa: F401  (re-exported)
     MEMORY_SHARE,
     PER_ITEM_BYTES,
     PROCESS_BYTES,

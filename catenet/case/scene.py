@@ -7,7 +7,6 @@ from typing import Any
 
 import numpy as np
 
-from catenet import geometry as geo
 from catenet.case.bodies import add_bodies
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
@@ -17,9 +16,10 @@ from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
-from catenet.history import History
-from catenet.laws import Law, table_rows
-from catenet.net import Loads, Net
+from catenet.model import builders as geo
+from catenet.model.histories import History
+from catenet.model.laws import Law, table_rows
+from catenet.model.net import Loads, Net
 
 
 @dataclass(frozen=True, eq=False)

@@ -33,9 +33,9 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS
 from catenet.errors import ConfigError
-from catenet.history import NEED, history_problem
-from catenet.integrators import INTEGRATORS, RHO_INF
-from catenet.laws import LAWS, table_rows
+from catenet.model.histories import NEED, history_problem
+from catenet.model.laws import LAWS, table_rows
+from catenet.solver.integrators import INTEGRATORS, RHO_INF
 
 METHODS = ("static", "dynamic")
 LINEAR = ("auto", "pardiso", "scipy")
@@ -196,7 +196,7 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
 
 
 def _check_history(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """A time history [[t, factor], ...] (catenet/history.py) as a tuple of pairs."""
+    """A time history [[t, factor], ...] (catenet/model/histories.py) as a tuple of pairs."""
     problem = history_problem(v)
     if problem:
         return ck.bad(path, v, problem)
@@ -434,7 +434,7 @@ def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:
     ck.keys(s, "solver", names(SolverConfig))
     v = parse_keys(ck, s, SolverConfig, "solver", ctx)
     if v["linear"] == "pardiso":
-        from catenet.linsolve import resolve_backend
+        from catenet.solver.linear import resolve_backend
 
         try:
             resolve_backend("pardiso")

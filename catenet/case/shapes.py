@@ -100,7 +100,7 @@ class _Motion:
         shape grown by it, ``catenet.terms.collide``), which guards no supports."""
         if not self.rigid_motion:
             return shape
-        from catenet.history import History
+        from catenet.model.histories import History
         from catenet.terms.moving import Moving
 
         hist = History(self.history, path="history") if self.history else None

@@ -27,8 +27,8 @@ def collect() -> list[tuple[str, str]]:
 
     import numba
 
-    from catenet import linsolve
     from catenet.output import environment
+    from catenet.solver import linear as linsolve
 
     env = environment()
     rows = [("catenet", env["catenet"]), ("python", f"{env['python']} ({sys.executable})")]
@@ -75,7 +75,7 @@ def _mkl_version_string(lib) -> str:
 
 def _pardiso_error() -> str:
     try:
-        from catenet import linsolve
+        from catenet.solver import linear as linsolve
 
         linsolve._load_pardiso()
     except Exception as exc:

@@ -61,7 +61,7 @@ def command(
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")
         else:
-            from catenet.plotting import plot_result
+            from catenet.plot.figure import plot_result
 
             files = [plot_result(path, output, scale=scale)]
         if not quiet:

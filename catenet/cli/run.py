@@ -105,7 +105,7 @@ def command(
     with errors_to_exit_codes(debug):
         from catenet.case import load_case
         from catenet.errors import CatenetError, ConfigError
-        from catenet.runner import output_path, run_case
+        from catenet.run.runner import output_path, run_case
 
         case = load_case(case_file, overrides)
         path = output_path(case, out)
@@ -202,7 +202,7 @@ def _times(result) -> str:
     s = result.stats
     if "solve_seconds" not in s:
         return f"{'wall time':<12} {result.wall_time:.3g} s ({s.get('backend', '?')})"
-    from catenet.clock import since_process_start
+    from catenet.run.clock import since_process_start
 
     return (
         f"{'wall time':<12} {since_process_start():.3g} s: solve {s['solve_seconds']:.3g} s "
@@ -214,7 +214,7 @@ def _times(result) -> str:
 def _summary(case, result, path: Path | None) -> None:
     import numpy as np
 
-    from catenet.advice import LARGE_BYTES, format_bytes
+    from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.stats
     state = "yes" if result.converged else "no"

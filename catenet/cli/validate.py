@@ -40,7 +40,7 @@ def command(output: Path | None, quiet: bool, verbose: int, debug: bool) -> None
         if output is not None and not output.resolve().parent.is_dir():
             raise ConfigError(f"--output = {str(output)!r}: its directory does not exist")
 
-        from catenet.studies import validation
+        from catenet.validate import table as validation
 
         rows = validation.run()
         if not quiet:

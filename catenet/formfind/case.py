@@ -168,8 +168,8 @@ def _header(case, found: FormFound, out: Path) -> str:
 
 def _result(found: FormFound, scene, wall_time: float):
     """The form-found state as a Result of the written scene (tensions from its law)."""
-    from catenet import measures
-    from catenet.result import Result
+    from catenet.model import measures
+    from catenet.solver.result import Result
 
     net = scene.net
     tension = measures.tension(net, found.x)

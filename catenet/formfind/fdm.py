@@ -39,7 +39,7 @@ import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.formfind.newton import Stalled, newton
-from catenet.net import Net
+from catenet.model.net import Net
 
 log = logging.getLogger(__name__)
 
@@ -207,7 +207,7 @@ class _Shape:
     """The shape for given force densities: factorisation, loads, solves."""
 
     def __init__(self, net, force, gravity, linear: str, q_name: str):
-        from catenet.linsolve import make_solver, resolve_backend
+        from catenet.solver.linear import make_solver, resolve_backend
 
         self.net, self.force, self.gravity, self.q_name = net, force, gravity, q_name
         self.pattern = p = Pattern(net)
@@ -298,7 +298,7 @@ def formfind(
     """The shape of a net by the force density method (see the module docstring).
 
     ``scene_or_net``: a case's Scene (its net and loads) or a Net (then ``loads``, a
-    ``catenet.net.Loads``, may give point forces and gravity). The net gives the topology,
+    ``catenet.model.net.Loads``, may give point forces and gravity). The net gives the topology,
     the fixed nodes and their positions, EA, the law and the line density; the positions
     of its free nodes are ignored. ``q`` [N/m]: one force density for every edge or one
     per edge (required for ``method = "linear"``; the start otherwise). ``method``:

@@ -91,7 +91,7 @@ class Kkt:
         self.backend = backend
         self.solver = None
         if backend == "pardiso":
-            from catenet.linsolve import make_solver
+            from catenet.solver.linear import make_solver
 
             self.solver = make_solver(
                 backend, self.indptr, self.indices, upper=True, dof_node=node, mtype=-2

@@ -22,7 +22,7 @@ continuation, which tends to max(eps, 0) as mu -> 0 and keeps every edge slightl
 
 Tables live in one array ``table`` (K, 3) of rows (eps, N/EA, w) shared by all edges; a
 table edge's ``params`` are (first row, number of rows). A new law is one function here and
-one branch in ``density`` (its id), plus its entry in ``catenet.laws.LAWS``.
+one branch in ``density`` (its id), plus its entry in ``catenet.model.laws.LAWS``.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.laws import HENCKY, LINEAR, NEO_HOOKEAN, TABLE
+from catenet.model.laws import HENCKY, LINEAR, NEO_HOOKEAN, TABLE
 
 
 @njit(cache=True, error_model="numpy")

@@ -9,7 +9,7 @@ import platform
 
 import numpy as np
 
-from catenet import measures
+from catenet.model import measures
 
 __all__ = ["environment", "result_attrs"]
 

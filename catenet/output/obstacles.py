@@ -3,7 +3,7 @@ ones are at every frame, for ParaView (the XDMF sidecar, ``catenet.output.xdmf``
 for readers (``read_obstacles``).
 
 Each ``[[obstacle]]`` but a moving sphere (a node of the net: ``catenet.output.bodies``)
-is a closed triangle surface with outward normals, as ``catenet.obstacle_surfaces``
+is a closed triangle surface with outward normals, as ``catenet.output.surfaces``
 tessellates it (``catenet plot`` draws the same): a box 12 triangles, a sphere and a
 capsule of 36 meridians, a mesh as its file reads, a plane the rectangle covering the
 initial net 1.5 times in it. Obstacle k (its index among the case's ``[[obstacle]]``):
@@ -62,7 +62,7 @@ def frame_cap(n_nodes: int) -> int:
 def frame_values(case, n_nodes: int) -> int:
     """The float64 values per trajectory frame that the moving obstacles of ``case`` add
     (pose and surface; at most ``frame_cap`` vertices each)."""
-    from catenet.obstacle_surfaces import surface
+    from catenet.output.surfaces import surface
 
     cap, total = frame_cap(n_nodes), 0
     for k, obs in enumerate(getattr(case, "obstacles", ()) or ()):
@@ -174,7 +174,7 @@ class Obstacles:
         self.moving = []
         if not obstacles:
             return
-        from catenet.obstacle_surfaces import surface
+        from catenet.output.surfaces import surface
 
         net = scene.net
         cover = net.nodes[: getattr(net, "n_net", net.n_nodes)]

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet import measures
 from catenet.errors import ConfigError
+from catenet.model import measures
 
 log = logging.getLogger(__name__)
 

@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet import measures
 from catenet.errors import ConfigError, OutputError
+from catenet.model import measures
 from catenet.output.bodies import write_bodies
 from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (

@@ -187,7 +187,7 @@ def make_sweep(
     case = case_api()
     base_dir = Path(base_dir)
     base_case = case.parse_case(base, source=source, base_dir=base_dir)
-    from catenet.runner import refuse_formfind
+    from catenet.run.runner import refuse_formfind
 
     refuse_formfind(base_case)
     sweep = Sweep(

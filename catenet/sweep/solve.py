@@ -61,7 +61,7 @@ def run_job(task: dict) -> dict:
             marker.write_text(f"{os.getpid()} {attempt}")
         _test_crash(out, index)
     try:
-        from catenet.linsolve import set_threads
+        from catenet.solver.linear import set_threads
 
         set_threads(int(task["threads"]))
         rows = _solve_levels(task)
@@ -147,7 +147,7 @@ def _solve_levels(task: dict) -> list[dict]:
             scene = scenes.build(parsed)
             net = scene.net
             if ws is None or not _same_net(ws_net, net):
-                from catenet import solve as sv
+                from catenet.solver import path as sv
 
                 ws = sv.workspace(scene, sv.Settings.of(parsed.solver))
                 ws_net, x_prev, path = net, None, []
@@ -157,7 +157,7 @@ def _solve_levels(task: dict) -> list[dict]:
             level_of = _load_level(force, reference)
             x0 = x_prev
             if parsed.solver.method == "static" and level_of is not None and len(path) >= 2:
-                from catenet.static import predict
+                from catenet.solver.static import predict
 
                 x0 = predict([x for _, x in path[-2:]], [s for s, _ in path[-2:]], level_of)
             result = _solve(parsed, scene, ws_net, ws, x0)
@@ -201,7 +201,7 @@ class _Scenes:
 
         import numpy as np
 
-        from catenet.geometry import pressure_force
+        from catenet.model.builders import pressure_force
 
         if not self.fast or self.first is None or case.geometry.kind != "square_net":
             scene = self.case_api.build(case)
@@ -272,8 +272,8 @@ def _solve(case, scene, net, ws, x_prev):
     it (which must reach t_end or equilibrium)."""
     import dataclasses
 
-    from catenet import solve as sv
     from catenet.errors import ConvergenceError
+    from catenet.solver import path as sv
 
     settings = sv.Settings.of(case.solver)
     if x_prev is not None and settings.method == "static":
@@ -288,7 +288,7 @@ def _solve(case, scene, net, ws, x_prev):
 
 
 def _measure(scene, net, result, np) -> dict:
-    from catenet import measures
+    from catenet.model import measures
 
     delta = measures.deflection(net.nodes, result.x, int(scene.probe))
     force = scene.loads.external_force(net)

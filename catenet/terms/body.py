@@ -7,7 +7,7 @@ act on it as on any node). ``Ball`` is the log-barrier of the fixed sphere
 force acts on both, the implicit step integrates net and ball together, and the line
 search is capped at the first contact of the relative motion (``max_step``), so no node
 is ever inside the ball, at any step size. The paper's mass-proportional damping mu
-acts on the net only (``catenet.dynamic``): a ball flies free and loses its energy to
+acts on the net only (``catenet.solver.dynamic``): a ball flies free and loses its energy to
 the damped net it lands on.
 
 A ball on a prescribed path (a sphere with ``velocity`` and no ``mass``) is the same

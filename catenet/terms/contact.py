@@ -42,7 +42,7 @@ class Obstacle(Term):
     ``kappa`` [N/m] and activation distance ``dhat`` [m].
 
     ``stages``: wider barriers of the same obstacle, widest first, that a static solve
-    goes through before this one (``narrowed`` copies; ``catenet.static.equilibrium``):
+    goes through before this one (``narrowed`` copies; ``catenet.solver.static.equilibrium``):
     each stage's equilibrium, a gap below its dhat, starts the next."""
 
     role = "internal"

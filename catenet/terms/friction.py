@@ -22,7 +22,7 @@ Guarantees, for each node in contact:
 In a dynamic step the lag is the usual one of incremental-potential contact: lambda is
 the normal force at the step's start, and a node that touches down during a step feels
 friction from the next step on. A static load step has no time: it is re-solved with
-lambda and n taken at its equilibrium (``relag``; ``catenet.static``) until they agree,
+lambda and n taken at its equilibrium (``relag``; ``catenet.solver.static``) until they agree,
 so a static result does not depend on the lag (nor, much, on the number of load steps).
 
 On an obstacle on a prescribed rigid motion (``catenet.terms.moving``: a conveyor, a

@@ -46,7 +46,7 @@ class Moving(Term):
     """The obstacle term ``shape`` (built at its pose at t = 0) moving rigidly: its
     reference point ``origin`` translates with ``velocity`` [m/s] and the body turns
     with ``angular_velocity`` [rad/s] about that point, both scaled by ``history``
-    (a ``catenet.history.History``; None: 1). ``reach``: the largest distance from the
+    (a ``catenet.model.histories.History``; None: 1). ``reach``: the largest distance from the
     origin to a point of the obstacle [m]."""
 
     role = "internal"

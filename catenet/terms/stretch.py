@@ -15,8 +15,8 @@ from catenet.kernels.stretch import (
     stretch_roundoff,
     stretch_tension,
 )
-from catenet.laws import Law
-from catenet.net import Net
+from catenet.model.laws import Law
+from catenet.model.net import Net
 from catenet.terms.base import Term, register
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, ClassVar, NamedTuple
 
 from catenet.case.keys import BAD, Checker, Context, Declared, parse_keys
-from catenet.net import Net
+from catenet.model.net import Net
 
 
 @dataclass(frozen=True)
@@ -144,7 +144,7 @@ class GeometryConfig(Declared):
         reference is sound."""
 
     def build(self, material: Any, fixed: Any) -> Built:
-        """The net of ``material`` (a catenet.geometry.Material) pinned at the node
+        """The net of ``material`` (a catenet.model.builders.Material) pinned at the node
         references ``fixed`` (None: the kind's default supports)."""
         raise NotImplementedError
 
@@ -153,7 +153,7 @@ class GeometryConfig(Declared):
         geometry (a graph's cables override it)."""
 
     def build_case(self, case: Any, material: Any) -> Built:
-        """The net of a whole case (``material``: the catenet.geometry.Material of its
+        """The net of a whole case (``material``: the catenet.model.builders.Material of its
         [material]); kinds that need more of the case than the supports override it."""
         return self.build(material, case.supports.fixed)
 

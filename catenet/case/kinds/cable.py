@@ -7,9 +7,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
-from catenet import geometry as geo
 from catenet.case.keys import BAD, Checker, Context, integer, parse_keys, real, vec3
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, refit
+from catenet.model import builders as geo
 
 Vec3 = tuple[float, float, float]
 

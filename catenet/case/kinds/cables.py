@@ -35,7 +35,7 @@ from catenet.case.keys import (
     text,
 )
 from catenet.errors import ConfigError
-from catenet.laws import LAWS, TABLE, Law
+from catenet.model.laws import LAWS, TABLE, Law
 
 #: How close (as a fraction of a segment) a load position must be to a node to use it.
 AT_TOL = 1e-9

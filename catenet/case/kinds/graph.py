@@ -10,7 +10,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from catenet import geometry as geo
 from catenet.case.keys import (
     BAD,
     Checker,
@@ -29,8 +28,9 @@ from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
 from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
 from catenet.errors import ConfigError
-from catenet.laws import Law, table_rows
-from catenet.net import Net
+from catenet.model import builders as geo
+from catenet.model.laws import Law, table_rows
+from catenet.model.net import Net
 
 Vec3 = tuple[float, float, float]
 

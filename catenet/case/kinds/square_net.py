@@ -9,10 +9,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from catenet import geometry as geo
 from catenet.case.keys import integer, real
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, refit
 from catenet.case.kinds.warn import angle_warning, warn_once
+from catenet.model import builders as geo
 
 
 @dataclass(frozen=True)

@@ -354,7 +354,7 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
     """Every method on the paper's net with ``n`` cables; one row each."""
     import numpy as np
 
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.static import Workspace, solve_static
 
     repeats = 3 if quick else 7
     few = 2 if quick else 3
@@ -438,7 +438,7 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
 def opensees_rows(net, loads, f, scale, row, study) -> None:
     """OpenSees on the same net, with the pretension it needs, against catenet on the
     same pretensioned net (rest lengths / (1 + prestrain))."""
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
 
     pre = 1e-4
     # The first configuration that converged on this net (Newton with 10 load steps, or

@@ -85,7 +85,7 @@ if "--jit" in sys.argv:  # and the first call of one cached kernel (Numba's own 
 _PLAIN = r"""
 import math, sys
 import h5py
-from catenet.geometry import Material, pressure_force, square_net
+from catenet.model.builders import Material, pressure_force, square_net
 from catenet.studies.bench.baseline import baseline_static
 sq = square_net(34, math.pi / 4, 1.0, 0.01, Material.from_E(10e6, radius=0.01, density=1000.0))
 net = sq.net
@@ -107,7 +107,7 @@ def _catenet_exe() -> list[str]:
 
 
 def _mkl_path() -> list[str]:
-    from catenet.linsolve import MklNotFound, mkl_runtime
+    from catenet.solver.linear import MklNotFound, mkl_runtime
 
     try:
         return [mkl_runtime().path]

@@ -55,7 +55,7 @@ def no_progress(done: float, total: float, note: str = "") -> None:
 
 
 def paper_material(tension_only: bool = True):
-    from catenet.geometry import Material
+    from catenet.model.builders import Material
 
     return Material.from_E(
         PAPER_E, radius=PAPER_RADIUS, density=PAPER_DENSITY, tension_only=tension_only
@@ -64,8 +64,8 @@ def paper_material(tension_only: bool = True):
 
 def paper_net(n: int, *, alpha: float = 0.0, edge: float = PAPER_EDGE, pressure=PAPER_PRESSURE):
     """The paper's square net (L = 1 m) and its pressure load: (SquareNet, Loads)."""
-    from catenet.geometry import pressure_force, square_net
-    from catenet.net import Loads
+    from catenet.model.builders import pressure_force, square_net
+    from catenet.model.net import Loads
 
     sq = square_net(n, alpha, 1.0, edge, paper_material())
     return sq, Loads(force=pressure_force(sq.net, pressure, 1.0))
@@ -84,8 +84,8 @@ def midpoint_cable(
     node (``nodes`` odd): (Net, Loads, midpoint index)."""
     import numpy as np
 
-    from catenet.geometry import Material, cable
-    from catenet.net import Loads
+    from catenet.model.builders import Material, cable
+    from catenet.model.net import Loads
 
     mat = paper_material(tension_only)
     if EA is not None or line_density is not None:
@@ -114,8 +114,8 @@ def compressed_catenary(
     paper's compressed catenary, Fig. 2a): (Net, Loads)."""
     import numpy as np
 
-    from catenet.geometry import Material, cable
-    from catenet.net import Loads
+    from catenet.model.builders import Material, cable
+    from catenet.model.net import Loads
 
     mat = paper_material(tension_only)
     if EA is not None:
@@ -137,8 +137,8 @@ def compressed_catenary(
 
 
 def set_threads(k: int) -> None:
-    """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.linsolve.set_threads."""
-    from catenet.linsolve import set_threads as set_catenet_threads
+    """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.solver.linear.set_threads."""
+    from catenet.solver.linear import set_threads as set_catenet_threads
 
     set_catenet_threads(k)
 
@@ -202,8 +202,8 @@ def interleaved(fns: dict, repeats: int = 5, warmup: int = 1) -> dict:
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel on a tiny net, so that no timed run
     pays for the JIT."""
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import solve_static
 
     net, loads, _ = midpoint_cable(1.0, nodes=5)
     solve_static(net, loads)

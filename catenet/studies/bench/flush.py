@@ -113,10 +113,10 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
     import h5py
     import numpy as np
 
-    from catenet import solve as sv
     from catenet.case import build, parse_case
-    from catenet.linsolve import resolve_backend
     from catenet.output import ResultWriter
+    from catenet.solver import path as sv
+    from catenet.solver.linear import resolve_backend
 
     set_threads(threads)
     warm_up()

@@ -53,7 +53,7 @@ SNOW = 1000.0  # N/m^2
 def roof(n: int):
     """A roof of 2 n (n - 1) edges: n x n grid on a 30 m square, boundary fixed on
     z = 3 (x^2 - y^2) / 225."""
-    from catenet.net import Net
+    from catenet.model.net import Net
 
     s = np.linspace(-15.0, 15.0, n)
     x, y = np.meshgrid(s, s)
@@ -91,7 +91,7 @@ def plain(net, q: np.ndarray) -> np.ndarray:
 
 def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
     from catenet.formfind import formfind
-    from catenet.linsolve import pardiso_available
+    from catenet.solver.linear import pardiso_available
 
     out_dir = Path(out_dir)
     sizes = QUICK_SIZES if quick else SIZES
@@ -188,8 +188,8 @@ def loaded(n: int, square: tuple, *, repeats: int) -> dict:
     """The form-found roof's static analysis under snow against the square net's static
     solve of the same size, interleaved: one row."""
     from catenet.formfind import formfind
-    from catenet.net import Loads, Net
-    from catenet.static import Workspace, solve_static
+    from catenet.model.net import Loads, Net
+    from catenet.solver.static import Workspace, solve_static
     from catenet.studies.bench.common import paper_net
 
     net = roof(n)

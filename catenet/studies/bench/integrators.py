@@ -4,7 +4,7 @@ the paper's damping study (App. A, Fig. A.9).
 Three parts, one CSV (``kind`` column):
 
 - ``analysis``: the damping ratio and relative period error each scheme adds to an
-  undamped mode at h omega (``catenet.integrators.numerical_damping``, from the
+  undamped mode at h omega (``catenet.solver.integrators.numerical_damping``, from the
   eigenvalues of the scheme's amplification matrix): implicit Euler, newmark with
   rho_inf = 1 (average acceleration), the default and 0.5;
 - ``measured``: the same ratio measured on the solver: a pretensioned string (10
@@ -59,9 +59,9 @@ def string_motion(name: str, rho_inf: float, h_omega: float) -> float:
     """The measured damping ratio of the string's lowest mode at step h omega."""
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.net import Loads, Net
-    from catenet.static import Workspace
+    from catenet.model.net import Loads, Net
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace
 
     n = 11
     s = np.linspace(0.0, 1.0, n)
@@ -110,7 +110,7 @@ def string_motion(name: str, rho_inf: float, h_omega: float) -> float:
 
 def settling(mu: str, name: str) -> dict:
     """The paper's n = 10 net (configs/damping_mu<mu>.toml) relaxed with ``name``."""
-    from catenet.dynamic import solve_dynamic
+    from catenet.solver.dynamic import solve_dynamic
 
     sq, loads = paper_net(10)
     start = time.perf_counter()
@@ -132,7 +132,7 @@ def settling(mu: str, name: str) -> dict:
 
 
 def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
-    from catenet.integrators import RHO_INF, numerical_damping
+    from catenet.solver.integrators import RHO_INF, numerical_damping
 
     set_threads(threads)
     warm_up()

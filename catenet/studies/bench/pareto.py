@@ -3,10 +3,10 @@
 Three scenes, each against a reference it converges to:
 
 - ``cable``: the paper's midpoint-loaded cable (L = 1 m, F = 0.01 EA, Fig. 2b); reference
-  Eq. 17 (``catenet.analytic.midpoint_load_deflection``). The discrete model is exact here
+  Eq. 17 (``catenet.validate.analytic.midpoint_load_deflection``). The discrete model is exact here
   (straight halves), so the error is the solver's alone.
 - ``catenary``: the paper's compressed catenary (dL/L = 0.2, self-weight, Fig. 2a/c);
-  reference the exact elastic catenary (``catenet.analytic.elastic_catenary``): the
+  reference the exact elastic catenary (``catenet.validate.analytic.elastic_catenary``): the
   error is discretisation (O(edge^2)) plus the solver's.
 - ``net``: the n = 34 square net (alpha = 0, p = 100 Pa); reference the Richardson
   extrapolation of static solutions with 5, 2.5 and 1.25 mm edges (rtol 1e-11) with the
@@ -142,7 +142,7 @@ def _scene(case: str, size, *, ramp: float = 0.0):
 
 
 def _solve(job: dict, budget: float, quick: bool):
-    from catenet import solve as sv
+    from catenet.solver import path as sv
 
     size = job.get("nodes", job["edge"])
     if job["method"] == "static":
@@ -181,7 +181,7 @@ def _solve(job: dict, budget: float, quick: bool):
 
 def reference(case: str) -> float:
     """The deflection each scene converges to."""
-    from catenet import analytic
+    from catenet.validate import analytic
 
     mat = paper_material()
     if case == "cable":
@@ -189,7 +189,7 @@ def reference(case: str) -> float:
     if case == "catenary":
         w = mat.line_density * 9.81
         return analytic.elastic_catenary(1.0, mat.EA, w, 1.0 - DL).sag
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
 
     deltas = []
     for edge in NET_REFERENCE_EDGES:

@@ -65,8 +65,8 @@ def relax_scene():
 
 def contact_scene(steps: int = STEPS):
     """(net, loads, sphere, keywords): the n = 34 net, weight and 300 Pa, onto a sphere."""
-    from catenet.geometry import pressure_force
-    from catenet.net import Loads
+    from catenet.model.builders import pressure_force
+    from catenet.model.net import Loads
     from catenet.terms.contact import Sphere, default_stiffness
 
     sq, _ = paper_net(34, alpha=0.3)
@@ -80,8 +80,8 @@ def contact_scene(steps: int = STEPS):
 
 
 def _runner(net, loads, kw, terms=(), solver=None, **extra):
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import Workspace
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace
 
     def run():
         ws = Workspace(net, terms=terms)
@@ -100,7 +100,7 @@ def _difference(a, b, x0) -> float:
 
 def _static(net):
     """The static equilibrium of the relax scene, to 1e-12 (a Result)."""
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
 
     _, loads, _ = relax_scene()
     return solve_static(net, loads, rtol=1e-12)
@@ -108,7 +108,7 @@ def _static(net):
 
 def _scenes(quick: bool):
     """[(scene, net, {variant: runner}, reference variant, cost?)]."""
-    from catenet.linsolve import pardiso_available
+    from catenet.solver.linear import pardiso_available
     from catenet.terms.contact import Sphere
 
     before = pardiso_available()  # the earlier variants are of the PARDISO wrapper

@@ -74,7 +74,7 @@ def rss():  # peak MiB of this process: VmHWM (ru_maxrss keeps the parent's acro
         pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # (Linux: KiB)
 from catenet.studies.bench.common import paper_net, warm_up
-from catenet.static import Workspace, solve_static
+from catenet.solver.static import Workspace, solve_static
 warm_up()
 out["rss_after_import_mib"] = rss()
 s = time.perf_counter()

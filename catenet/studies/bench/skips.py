@@ -9,7 +9,7 @@ against catenet's default way of doing the same thing, in one process after a wa
 - gravity: a scene without gravity (``Loads.gravity = None``) against zero gravity
   computed;
 - output: final state only (``output.every = 0``) against a trajectory frame every step
-  (needs ``catenet.runner``);
+  (needs ``catenet.run.runner``);
 - symbolic analysis: once per net (Workspace) against once per factorisation, and against
   ``pypardiso.spsolve``; for a static solve, 20 dynamic steps and a 10-step continuation;
 - matrix type: PARDISO mtype 2 (SPD: catenet's choice for tension-only nets), -2 (symmetric
@@ -53,7 +53,7 @@ def run(
 ) -> Study:
     import numpy as np
 
-    from catenet.static import solve_static
+    from catenet.solver.static import solve_static
 
     set_threads(threads)
     warm_up()
@@ -124,8 +124,8 @@ def run(
 
 
 def _method(net, loads, add, study, *, reps, quick, n):
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace, solve_static
 
     ws = Workspace(net)
     t, _, res = repeat(lambda: solve_static(net, loads, workspace=ws), reps)
@@ -149,9 +149,9 @@ def _method(net, loads, add, study, *, reps, quick, n):
 def _gravity(net, loads, add, study, *, reps, quick, n):
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.net import Loads
-    from catenet.static import Workspace, solve_static
+    from catenet.model.net import Loads
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace, solve_static
 
     ws = Workspace(net)
     with_g = Loads(force=loads.force, gravity=np.zeros(3))
@@ -195,9 +195,9 @@ def _output(net, loads, add, study, *, reps, quick, n):
 
     try:
         from catenet.case import load_case
-        from catenet.runner import run_case
+        from catenet.run.runner import run_case
     except ImportError as exc:
-        study.findings.append(f"output: not measured ({exc}): catenet.runner/case missing")
+        study.findings.append(f"output: not measured ({exc}): catenet.run.runner/case missing")
         return
     with tempfile.TemporaryDirectory(prefix="catenet-bench-") as tmp:
         base = [
@@ -240,8 +240,8 @@ def _output(net, loads, add, study, *, reps, quick, n):
 
 
 def _analysis(net, loads, add, study, *, reps, quick, n):
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import Workspace, continuation, solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace, continuation, solve_static
     from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
     variants = [
@@ -308,9 +308,9 @@ def _analysis(net, loads, add, study, *, reps, quick, n):
 
 
 def _mtype(net, loads, add, study, *, reps, quick, n):
-    from catenet.dynamic import solve_dynamic
     from catenet.errors import CatenetError
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace, solve_static
 
     names = {
         -2: "mtype -2 (symmetric indefinite)",
@@ -365,9 +365,9 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
 def _refinement(net, loads, add, study, *, reps, quick, n):
     """PARDISO's iterative refinement (iparm[7]) after every solve: catenet's setting
     against none (catenet checks the backward error of every solve anyway)."""
-    from catenet.dynamic import solve_dynamic
-    from catenet.linsolve import PardisoSolver
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.linear import PardisoSolver
+    from catenet.solver.static import Workspace, solve_static
 
     probe = Workspace(net)
     if not isinstance(probe.solver, PardisoSolver):
@@ -409,10 +409,10 @@ import json, sys, time, statistics
 from catenet.studies.bench.common import paper_net, warm_up, load_average
 mode = sys.argv[2]
 if mode == "catenet-threads-1":
-    from catenet.linsolve import set_threads
+    from catenet.solver.linear import set_threads
     set_threads(1)
-from catenet.static import Workspace, solve_static
-from catenet.dynamic import solve_dynamic
+from catenet.solver.static import Workspace, solve_static
+from catenet.solver.dynamic import solve_dynamic
 warm_up()
 sq, loads = paper_net(int(sys.argv[3]))
 ws = Workspace(sq.net)

@@ -6,7 +6,7 @@
 - ``CheckingEverySolve``, ``IndefiniteThroughout``: catenet's wrapper as it was before
   two speed-ups of dynamic runs (``catenet bench reuse`` measures both against today's).
 
-``install(workspace, cls)`` swaps the solver of a ``catenet.static.Workspace``.
+``install(workspace, cls)`` swaps the solver of a ``catenet.solver.static.Workspace``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from catenet.errors import SingularSystemError
-from catenet.linsolve import LinearSolver, PardisoSolver
+from catenet.solver.linear import LinearSolver, PardisoSolver
 
 
 class ReanalysingPardiso(PardisoSolver):

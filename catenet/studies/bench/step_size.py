@@ -39,8 +39,8 @@ T_END = 200.0  # s: far beyond equilibrium; the run stops there at the latest
 def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import Workspace, solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import Workspace, solve_static
 
     set_threads(threads)
     warm_up()

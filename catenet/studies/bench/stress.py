@@ -4,10 +4,10 @@ Every scene must end in one of two ways: a converged answer that passes its chec
 clear catenet error (``CatenetError``) where that is the right answer. Anything else (a
 non-catenet exception, a NaN in a result, a check that fails) is a finding. Checks:
 
-- ``eq17``: cable under a midpoint load against Eq. 17 (``catenet.analytic``), exact for
+- ``eq17``: cable under a midpoint load against Eq. 17 (``catenet.validate.analytic``), exact for
   the discrete model; relative error of delta.
 - ``chain``: cable under self-weight against the exact discrete chain
-  (``catenet.analytic.discrete_catenary``, the same model solved in closed form).
+  (``catenet.validate.analytic.discrete_catenary``, the same model solved in closed form).
 - ``equilibrium``: residual at the free nodes and the balance of reactions and applied
   loads, relative to the load scale, recomputed here from the returned state.
 - ``static = dynamic``: the dynamic run's final equilibrium against the static one.

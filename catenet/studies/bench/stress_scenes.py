@@ -25,7 +25,7 @@ def equilibrium_error(net, loads, res, factor: float = 1.0) -> float:
     returned positions and reactions."""
     import numpy as np
 
-    from catenet.assembly import System
+    from catenet.solver.system import System
 
     system = System(net)
     _, g = system.gradient(res.x)
@@ -34,7 +34,7 @@ def equilibrium_error(net, loads, res, factor: float = 1.0) -> float:
     residual = float(np.linalg.norm(g[free] - f[free]))
     balance = float(np.linalg.norm(res.reaction.sum(axis=0) + f.sum(axis=0)))
     # Round-off of the internal forces: an error eps |x| in the coordinates makes a force
-    # error EA eps |x| / l0 at each end of every edge (as in catenet.newton).
+    # error EA eps |x| / l0 at each end of every edge (as in catenet.solver.newton).
     k_norm = float(np.sqrt(2.0 * np.sum((net.EA / net.rest_length) ** 2)))
     roundoff = 1e2 * np.finfo(float).eps * k_norm * float(np.max(np.abs(res.x)))
     if max(residual, balance) <= roundoff:
@@ -73,7 +73,7 @@ def eq_row(check, value, tol, results, net, loads, note="", factor=1.0):
 
 def _solve(net, loads, method: str, *, dt: float, damping: float, t_end: float, budget: float):
     """A scene through catenet's solve path; dynamic runs stop after ``budget`` seconds."""
-    from catenet import solve as sv
+    from catenet.solver import path as sv
 
     start = time.perf_counter()
 
@@ -96,7 +96,7 @@ def midpoint_load(
     budget: float = 10.0,
 ):
     """Cable (L = 1) under a midpoint load, against Eq. 17."""
-    from catenet import analytic
+    from catenet.validate import analytic
 
     EA = paper_material().EA if EA is None else EA
     F = F_bar * EA if F is None else F
@@ -136,7 +136,7 @@ def self_weight(
 ):
     """Cable of length 1 under its own weight, supports moved inward by dL (0: a straight
     zero-slack cable), against the exact discrete chain."""
-    from catenet import analytic
+    from catenet.validate import analytic
 
     net, loads = compressed_catenary(
         dL, nodes=nodes, EA=EA, tension_only=tension_only, ramp=ramp if method == "dynamic" else 0.0
@@ -188,14 +188,14 @@ def bilateral_compression(
     (``Result.stable is False``, with a warning), which is a right answer."""
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import solve_static
 
     net, loads = compressed_catenary(
         dL, nodes=nodes, tension_only=False, ramp=0.5 if method == "dynamic" else 0.0
     )
     if not gravity:
-        from catenet.net import Loads
+        from catenet.model.net import Loads
 
         loads = Loads(support_displacement=loads.support_displacement, ramp_time=loads.ramp_time)
     x0 = None
@@ -210,7 +210,7 @@ def bilateral_compression(
     strain = res.tension / net.EA
     compressed = float(-np.min(strain))
     if gravity:
-        from catenet import analytic
+        from catenet.validate import analytic
 
         w = float(net.line_density[0]) * 9.81
         exact = analytic.discrete_catenary(1.0, float(net.EA[0]), w, 1.0 - dL, nodes - 1).sag
@@ -253,9 +253,9 @@ def bilateral_chain(ratio: float = 1e5, dL: float = 0.1, nodes: int = 41, rho_a:
     every edge ending in tension (else the check value is inf)."""
     import numpy as np
 
-    from catenet import analytic
-    from catenet.geometry import Material, cable
-    from catenet.net import Loads
+    from catenet.model.builders import Material, cable
+    from catenet.model.net import Loads
+    from catenet.validate import analytic
 
     w = rho_a * 9.81
     EA = ratio * w
@@ -288,10 +288,10 @@ def net_point_load(F: float = 5.0, n: int = 10, h: float = 0.05):
     unstressed (no stiffness across them)."""
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.geometry import square_net
-    from catenet.net import Loads
-    from catenet.static import solve_static
+    from catenet.model.builders import square_net
+    from catenet.model.net import Loads
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import solve_static
 
     sq = square_net(n, 0.0, 1.0, 0.01, paper_material())
     net = sq.net
@@ -320,8 +320,8 @@ def net_pressure(load_bar: float = 1e-3, n: int = 10, dynamic: bool = False):
     dynamic relaxation agrees with the static solve."""
     import numpy as np
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.static import solve_static
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import solve_static
 
     EA = paper_material().EA
     sq, loads = paper_net(n, pressure=load_bar * EA)
@@ -354,10 +354,10 @@ def random_graph(
     import numpy as np
     from scipy.spatial import Delaunay
 
-    from catenet.dynamic import solve_dynamic
-    from catenet.geometry import graph
-    from catenet.net import Loads
-    from catenet.static import solve_static
+    from catenet.model.builders import graph
+    from catenet.model.net import Loads
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.static import solve_static
 
     rng = np.random.default_rng(seed)
     pts = rng.random((n_nodes, 2))

@@ -1,7 +1,7 @@
 """Static equilibrium directly (beyond the paper, which reaches it by dynamic relaxation).
 
 Newton on the total potential E(x) - f.x with the regularisation and line search of
-``catenet.newton``: from a flat unstressed net or a straight zero-slack cable it starts as
+``catenet.solver.newton``: from a flat unstressed net or a straight zero-slack cable it starts as
 a damped gradient flow and ends as pure Newton with quadratic convergence.
 """
 
@@ -15,14 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.assembly import System
-from catenet.diagnose import describe_unstable
 from catenet.errors import ConfigError, ConvergenceError, Interrupted, SingularSystemError
-from catenet.linsolve import LinearSolver, make_solver
-from catenet.measures import loose_nodes, slack_strain, strain
-from catenet.net import Loads, Net
-from catenet.newton import Potential, _c_start, raise_unconverged, solve
-from catenet.result import Result, finish
+from catenet.model.measures import loose_nodes, slack_strain, strain
+from catenet.model.net import Loads, Net
+from catenet.solver.diagnose import describe_unstable
+from catenet.solver.linear import LinearSolver, make_solver
+from catenet.solver.newton import Potential, _c_start, raise_unconverged, solve
+from catenet.solver.result import Result, finish
+from catenet.solver.system import System
 from catenet.terms import Inertia, Stretch, Term
 from catenet.terms.stretch import Springs
 

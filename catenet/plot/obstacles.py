@@ -1,10 +1,10 @@
 """The fixed and prescribed-motion obstacles of a result file in ``catenet plot``'s figure
-(``catenet.plotting``), rebuilt from the resolved case the file stores (its root attribute
+(``catenet.plot.figure``), rebuilt from the resolved case the file stores (its root attribute
 ``case``, ``catenet.output.reader``): planes, fixed spheres, boxes, capsules and meshes,
 light grey and translucent under the net, in the 3D view and the side view, a moving one
 at its pose at the time of the plotted frame (``catenet.terms.moving``). A plane is the
 patch of it inside the views' box; everything is culled to that box. Moving spheres are
-``catenet.plot_bodies``'. A mesh of more than ``MAX_FACES`` triangles is drawn in 3D as
+``catenet.plot.bodies``'. A mesh of more than ``MAX_FACES`` triangles is drawn in 3D as
 (at most ``MAX_EDGES`` of) its edges. A file without obstacles draws nothing; an obstacle
 that cannot be rebuilt (a mesh file gone since the run) is skipped with a warning.
 """
@@ -63,8 +63,8 @@ def plotted_time(res) -> float:
 
 def shapes(res, t: float | None = None) -> list[Shape]:
     """The obstacles of ``res``'s case at time ``t`` (default: the plotted state's), as
-    ``catenet.obstacle_surfaces`` builds them."""
-    from catenet.obstacle_surfaces import surface
+    ``catenet.output.surfaces`` builds them."""
+    from catenet.output.surfaces import surface
 
     items = res.case.get("obstacle") if isinstance(res.case, dict) else None
     if not isinstance(items, list):
@@ -79,7 +79,7 @@ def shapes(res, t: float | None = None) -> list[Shape]:
         try:
             s = surface(d, k)
             if s is None:
-                continue  # a moving ball: catenet.plot_bodies
+                continue  # a moving ball: catenet.plot.bodies
             if s.kind == "plane":
                 out.append(Shape(s.kind, label, point=s.point, normal=s.normal))
             elif s.kind == "mesh":

@@ -20,7 +20,7 @@ LARGE_BYTES = 100 << 20
 #: The size ``output.every`` is suggested for.
 TARGET_BYTES = 256 << 20
 
-#: Newton iterations of one dynamic time step (``catenet.dynamic.solve_dynamic``).
+#: Newton iterations of one dynamic time step (``catenet.solver.dynamic.solve_dynamic``).
 DYNAMIC_MAX_ITER = 25
 
 _STATIC_ONLY = ("steps", "max_iter")
@@ -163,9 +163,9 @@ def format_bytes(n: float) -> str:
 
 def strain_beyond_law(net, x: np.ndarray) -> str | None:
     """A message when edges at positions ``x`` are strained beyond the range their law is
-    meant for (``catenet.laws.LAWS[name].max_strain``; a table's last point), else None."""
-    from catenet import measures
-    from catenet.laws import LAWS, TABLE
+    meant for (``catenet.model.laws.LAWS[name].max_strain``; a table's last point), else None."""
+    from catenet.model import measures
+    from catenet.model.laws import LAWS, TABLE
 
     eps = measures.strain(net, x)
     limit = net.law.max_strain()

@@ -26,11 +26,11 @@ import numpy as np
 
 from catenet.case.sections import METHODS, SolverConfig
 from catenet.errors import CatenetError, ConfigError, ConvergenceError
-from catenet.integrators import INTEGRATORS
-from catenet.net import Loads, Net
-from catenet.result import Result
-from catenet.static import Workspace, continuation
-from catenet.static import _start as start_state
+from catenet.model.net import Loads, Net
+from catenet.solver.integrators import INTEGRATORS
+from catenet.solver.result import Result
+from catenet.solver.static import Workspace, continuation
+from catenet.solver.static import _start as start_state
 
 _CASE = SolverConfig()  # the defaults, declared once with the case's [solver] keys
 
@@ -200,7 +200,7 @@ def _static(scene, settings, ws, start, on_step) -> Result:
 
 
 def _dynamic(scene, settings, ws, start, on_step) -> Result:
-    from catenet.dynamic import solve_dynamic
+    from catenet.solver.dynamic import solve_dynamic
 
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)

@@ -1,6 +1,6 @@
 """Closed-form solutions of single cables, each with its derivation, for validation.
 
-These are the reference answers of ``catenet validate`` (``catenet.studies.validation``) and
+These are the reference answers of ``catenet validate`` (``catenet.validate.table``) and
 of the tests (``tests/analytic.py`` re-exports this module): they live in the package because
 the command needs them at run time.
 

@@ -24,12 +24,12 @@ from collections.abc import Callable
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
-from catenet.integrators import RHO_INF, Newmark, make
 from catenet.kernels.sparse import norm
-from catenet.net import Loads, Net
-from catenet.newton import Reuse, solve
-from catenet.result import Result, finish
-from catenet.static import HarmonicExtension, Workspace, _check_rtol
+from catenet.model.net import Loads, Net
+from catenet.solver.integrators import RHO_INF, Newmark, make
+from catenet.solver.newton import Reuse, solve
+from catenet.solver.result import Result, finish
+from catenet.solver.static import HarmonicExtension, Workspace, _check_rtol
 from catenet.terms import Inertia
 from catenet.terms.moving import carry, moves
 
@@ -77,7 +77,7 @@ def solve_dynamic(
     repeat the uninterrupted run exactly). ``reuse=False``: a factorisation per iteration.
 
     ``integrator``: "implicit_euler" (the paper's) or "newmark" (second order, its
-    high-frequency dissipation ``rho_inf``; catenet/integrators.py). Its acceleration
+    high-frequency dissipation ``rho_inf``; catenet/solver/integrators.py). Its acceleration
     state (N, 3), 0 at the supports: ``a0`` the start's (a restart's stored one; None:
     the physical acceleration), ``a_out`` an array kept equal to it after the start and
     every accepted step, and the result's ``a``; implicit Euler has none (``a0`` ignored,

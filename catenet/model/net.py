@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.laws import Law
+from catenet.model.laws import Law
 
 
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -290,7 +290,7 @@ def _fixed_mask(fixed, n, problems) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class Loads:
     """What acts on a net: nodal forces, gravity and prescribed support motion, each
-    constant or following a time history (``catenet.history.History``) in dynamic runs.
+    constant or following a time history (``catenet.model.histories.History``) in dynamic runs.
 
     Attributes
     ----------

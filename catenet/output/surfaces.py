@@ -1,7 +1,7 @@
 """The fixed and prescribed-motion obstacles of a case (``[[obstacle]]`` tables, as the
 resolved case gives them: ``Declared.to_dict`` or the TOML a result file stores) as
 surfaces in world coordinates, at any time: what ``catenet plot`` draws
-(``catenet.plot_obstacles``) and what a result file stores for ParaView
+(``catenet.plot.obstacles``) and what a result file stores for ParaView
 (``catenet.output.obstacles``).
 
 A surface is its vertices at t = 0 and its faces, oriented outward (towards the free
@@ -18,7 +18,7 @@ A box, capsule or mesh on a prescribed rigid motion (``velocity``, ``angular_vel
 (``catenet.terms.moving.Moving.pose``, from the same reference point and keys), so that
 the surface drawn or stored at a frame is where the barrier had the obstacle. Moving
 spheres (a ``mass`` or a path's ``velocity``) are nodes of the net, not surfaces here
-(``catenet.output.bodies``, ``catenet.plot_bodies``).
+(``catenet.output.bodies``, ``catenet.plot.bodies``).
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ class Motion:
 
         history = None
         if d.get("history") is not None:
-            from catenet.history import History
+            from catenet.model.histories import History
 
             history = History(d["history"], path="history")
         # Moving's pose needs no shape: a stand-in with what its constructor reads

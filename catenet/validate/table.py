@@ -1,4 +1,5 @@
-"""catenet against the closed forms of ``catenet.analytic``: the table of ``catenet validate``.
+"""catenet against the closed forms of ``catenet.validate.analytic``: the table of
+``catenet validate``.
 
 Two problems of the paper's Sec. 3.1, on the paper's cable (L = 1 m, E = 10 MPa, r = 1 cm,
 density 1000 kg/m^3, so EA = 3141.6 N and w = rho A g = 3.082 N/m):
@@ -30,7 +31,7 @@ density 1000 kg/m^3, so EA = 3141.6 N and w = rho A g = 3.082 N/m):
     0.124 % and 0.040 %; the rest is the discretisation error).
 
 (iii) Material laws. A bar of the paper's cable (EA = 3141.6 N, rest length L) fixed at one
-    end and pulled along its axis at the other, for every law of ``catenet.laws.LAWS``
+    end and pulled along its axis at the other, for every law of ``catenet.model.laws.LAWS``
     (the table law with a three-segment table whose first slope is EA). The bar stays
     straight, so its strain solves EA w'(eps) = F exactly. At F = 1e-4 EA every law must
     give the paper's strain F/EA to 1e-3 relative (they differ at O(eps)), and at the force
@@ -56,8 +57,8 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet import analytic
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.validate import analytic
 
 log = logging.getLogger(__name__)
 
@@ -143,7 +144,7 @@ class Row:
 
 
 def _material():
-    from catenet.geometry import Material
+    from catenet.model.builders import Material
 
     return Material.from_E(YOUNG, radius=RADIUS, density=DENSITY)
 
@@ -170,8 +171,8 @@ def midpoint_load_rows(
     max_strain: float = MIDPOINT_MAX_STRAIN,
 ) -> list[Row]:
     """Case (i): midpoint deflection delta/L against Eq. 17 (see the module docstring)."""
-    from catenet.geometry import cable
-    from catenet.net import Loads
+    from catenet.model.builders import cable
+    from catenet.model.net import Loads
 
     material = _material()
     EA, L = material.EA, LENGTH
@@ -216,7 +217,7 @@ def midpoint_load_rows(
 
 def _solve(net, loads, x0=None):
     """The static equilibrium through catenet's one solve path."""
-    from catenet import solve as sv
+    from catenet.solver import path as sv
 
     problem = sv.Problem(net, loads)
     return sv.solve(problem, sv.Settings(rtol=RTOL), start=sv.Start(x=x0))
@@ -234,8 +235,8 @@ def catenary_rows(
 ) -> list[Row]:
     """Case (ii): the compressed catenary against the exact elastic catenary, the exact
     discrete chain and Eq. 15 (see the module docstring)."""
-    from catenet.geometry import cable
-    from catenet.net import Loads
+    from catenet.model.builders import cable
+    from catenet.model.net import Loads
 
     material = _material()
     EA, L = material.EA, LENGTH
@@ -343,8 +344,8 @@ def _law_force(name: str, eps: float) -> float:
 
 def law_rows() -> list[Row]:
     """Case (iii): every material law on a bar, at small strain and at 50 % strain."""
-    from catenet.laws import LAWS, Law, table_rows
-    from catenet.net import Loads, Net
+    from catenet.model.laws import LAWS, Law, table_rows
+    from catenet.model.net import Loads, Net
 
     material = _material()
     EA, L = material.EA, LENGTH

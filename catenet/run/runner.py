@@ -141,7 +141,7 @@ def run_case(
     frame (time, positions, velocities and, for newmark, the scheme's acceleration state)
     and writes a new file. ``progress(done, total)``
     is called after every step (time and t_end, or load factor and 1); dynamic runs add
-    ``rest``, how far the state is from rest (``catenet.solve.Step.rest``). ``stop()`` is
+    ``rest``, how far the state is from rest (``catenet.solver.path.Step.rest``). ``stop()`` is
     asked after every step; True ends the run there (``converged = False``, message
     "interrupted"). ``interrupt()`` (a signal handler's flag: it must be cheap) is asked
     before every Newton iteration as well, so that a long step stops too: the run ends as
@@ -152,12 +152,13 @@ def run_case(
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
     """
-    from catenet import advice, measures
-    from catenet import solve as sv
     from catenet.case import build
-    from catenet.clock import Clock
-    from catenet.linsolve import resolve_backend, set_threads
+    from catenet.model import measures
     from catenet.output import ResultWriter, check_output_path
+    from catenet.run import advice
+    from catenet.run.clock import Clock
+    from catenet.solver import path as sv
+    from catenet.solver.linear import resolve_backend, set_threads
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
@@ -237,7 +238,7 @@ def run_case(
     result.stats["delta_over_L"] = delta / float(scene.size)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables
-        from catenet.diagnose import describe_unstable
+        from catenet.solver.diagnose import describe_unstable
 
         result.diagnosis = describe_unstable(
             ws.system.stretch,
@@ -260,10 +261,10 @@ def run_case(
 def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None):
     """Solves through the one solve path, writing frames as the steps come; on failure
     or interruption the last good state becomes /result (converged = false)."""
-    from catenet import solve as sv
     from catenet.errors import Interrupted
-    from catenet.newton import interruptible
-    from catenet.result import finish
+    from catenet.solver import path as sv
+    from catenet.solver.newton import interruptible
+    from catenet.solver.result import finish
 
     dynamic = settings.method == "dynamic"
     total = settings.t_end if dynamic else 1.0
@@ -271,7 +272,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     written = {"step": -1}
 
     if clock is None:
-        from catenet.clock import Clock
+        from catenet.run.clock import Clock
 
         clock = Clock()
 
@@ -293,7 +294,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         v0 = start.v if start.v is not None else np.zeros_like(x0)
         a0 = start.a
         if a0 is None and settings.integrator == "newmark" and writer.wants(0):
-            from catenet.dynamic import start_acceleration
+            from catenet.solver.dynamic import start_acceleration
 
             a0 = start_acceleration(
                 scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
@@ -367,7 +368,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
 
 
 def _times(clock) -> dict:
-    """The run's start-up and solve seconds (``catenet.clock.Clock``)."""
+    """The run's start-up and solve seconds (``catenet.run.clock.Clock``)."""
     return {"startup_seconds": clock.startup, "solve_seconds": clock.solve}
 
 

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.memory import fits
-from catenet.net import Net
+from catenet.model.memory import fits
+from catenet.model.net import Net
 
 #: The largest net the builders make (the case loader also checks memory beforehand).
 MAX_NODES = 50_000_000

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from catenet.net import Net
+from catenet.model.net import Net
 
 
 def strain(net: Net, x: np.ndarray) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Memory a solve needs, estimated from the size of its net before any array is made,
 and the machine's physical memory: the case loader's guard (``catenet.case.guard``) and
-the builders (``catenet.geometry``) refuse nets that cannot fit."""
+the builders (``catenet.model.builders``) refuse nets that cannot fit."""
 
 from __future__ import annotations
 

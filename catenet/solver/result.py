@@ -7,10 +7,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from catenet.net import Loads
+from catenet.model.net import Loads
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
-    from catenet.assembly import System
+    from catenet.solver.system import System
 
 
 @dataclass
@@ -34,7 +34,7 @@ class Result:
         definite (False: an unstable equilibrium, e.g. a straight cable in compression);
         None where not checked (tension-only nets are never unstable)
     stats : counts and seconds per phase (assembly, analyse, factorize, solve)
-    diagnosis : what makes an unstable equilibrium unstable (``catenet.diagnose``), or ""
+    diagnosis : what makes an unstable equilibrium unstable (``catenet.solver.diagnose``), or ""
     """
 
     x: np.ndarray
@@ -67,9 +67,9 @@ def finish(
     load_time: float | None = None,
     **fields,
 ) -> Result:
-    """Tension and reactions at x (``catenet.measures``), and the Result around them;
+    """Tension and reactions at x (``catenet.model.measures``), and the Result around them;
     ``load_time``: the time of a dynamic state (loads with a history at their value then)."""
-    from catenet import measures
+    from catenet.model import measures
 
     net = system.net
     _, grad = system.gradient(x)

@@ -1,4 +1,4 @@
-"""The moving spheres of a result file in ``catenet plot``'s figure (``catenet.plotting``):
+"""The moving spheres of a result file in ``catenet plot``'s figure (``catenet.plot.figure``):
 each ball at its final place (a shaded sphere in the 3D view, a disc in the side view),
 the path of its centre, and, in the time panel of a dynamic run, the drop of its centre.
 A file without moving spheres draws nothing."""

@@ -48,10 +48,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from catenet.assembly import System
 from catenet.errors import ConvergenceError, Interrupted, SingularSystemError
 from catenet.kernels.sparse import dot, norm
-from catenet.linsolve import LinearSolver
+from catenet.solver.linear import LinearSolver
+from catenet.solver.system import System
 from catenet.terms import ExternalForce, Term
 
 log = logging.getLogger(__name__)

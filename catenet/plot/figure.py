@@ -30,8 +30,8 @@ FORMATS = (".png", ".svg", ".pdf")
 def edge_tension(x, edges, rest_length, EA, tension_only: bool = True) -> np.ndarray:
     """Axial forces [N] of the edges at positions x under the paper's law (0 when slack
     and tension-only): for result files that store no tensions."""
-    from catenet import measures
-    from catenet.laws import Law
+    from catenet.model import measures
+    from catenet.model.laws import Law
 
     law = Law.uniform(len(edges), tension_only=tension_only)
     return measures.edge_tension(x, edges, rest_length, EA, law)
@@ -67,7 +67,7 @@ def paper_curve(res) -> PaperCurve | None:
     scaled by s. Inextensible Eq. 15 does not depend on g, so the scaled gravity of the
     catenary steps does not matter there.
     """
-    from catenet import analytic
+    from catenet.validate import analytic
 
     case = res.case or {}
     g = case.get("geometry", {})
@@ -172,7 +172,7 @@ def figure(res, *, scale: float = 1.0):
     in N), over the undeformed one (dashed grey, drawn above the grid) in 3D and in a
     side view (x-z, or y-z when the net is longer along y), supports as red dots, the
     probe node marked; displacements drawn ``scale`` times (said in the title when not 1);
-    the case's obstacles in light grey (``catenet.plot_bodies``, ``catenet.plot_obstacles``).
+    the case's obstacles in light grey (``catenet.plot.bodies``, ``catenet.plot.obstacles``).
     The 3D box keeps true proportions except that no axis is shorter than 40 % of the
     longest (then the z label says it is stretched). With a trajectory of more than one
     frame also the probe's deflection (positive down) against time (dynamic runs) or
@@ -234,8 +234,8 @@ def figure(res, *, scale: float = 1.0):
     else:
         lines3.set_color("C0")
     ax3.add_collection3d(lines3)
-    from catenet.plot_bodies import Balls
-    from catenet.plot_obstacles import Obstacles
+    from catenet.plot.bodies import Balls
+    from catenet.plot.obstacles import Obstacles
 
     balls = Balls(res, scale)  # moving spheres (none: draws nothing)
     obstacles = Obstacles(res)  # the case's other obstacles (none: draws nothing)

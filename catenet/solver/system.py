@@ -24,7 +24,7 @@ from catenet.kernels.pattern import (
     pattern_locate,
 )
 from catenet.kernels.sparse import add_diagonal, scatter_add
-from catenet.net import Net
+from catenet.model.net import Net
 from catenet.terms import Stretch, Term
 
 if TYPE_CHECKING:  # SciPy is imported where a matrix is asked for: not on a run's path

@@ -1,0 +1,1 @@
+"""Validation: the closed forms (``analytic``) and the table of ``catenet validate``."""
