@@ -6,14 +6,12 @@ the parse functions add the rules between keys of one section.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from catenet.case.keys import (
     BAD,
-    MISSING,
     Checker,
     Context,
     Declared,
@@ -26,170 +24,21 @@ from catenet.case.keys import (
     parse_keys,
     parse_table,
     real,
-    show,
     tables,
     text,
     vec3,
 )
 from catenet.case.kinds import KINDS
+from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (a section)
 from catenet.errors import ConfigError
 from catenet.model.histories import NEED, history_problem
-from catenet.model.laws import LAWS, table_rows
-from catenet.solver.integrators import INTEGRATORS, RHO_INF
+from catenet.solver.integrators import INTEGRATORS
+from catenet.solver.settings import METHODS, Settings
 
-METHODS = ("static", "dynamic")
 LINEAR = ("auto", "pardiso", "scipy")
 
 Vec3 = tuple[float, float, float]
 NodeRef = int | str
-
-
-# --------------------------------------------------------------------------- material
-
-
-def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """A monotone tension-strain table, as a tuple of (strain, tension) pairs."""
-    if not isinstance(v, (list, tuple)) or not all(
-        isinstance(p, (list, tuple)) and len(p) == 2 for p in v
-    ):
-        return ck.bad(path, v, "must be [[strain, tension], ...]: pairs of numbers")
-    try:
-        table_rows(v, path=path)
-    except (ConfigError, TypeError, ValueError) as exc:
-        problems = getattr(exc, "problems", None) or [f"{path} = {show(v)}: {exc}"]
-        ck.problems.extend(problems)
-        return BAD
-    return tuple((float(a), float(b)) for a, b in v)
-
-
-@dataclass(frozen=True)
-class MaterialConfig(Declared):
-    """Either E with radius or area, or EA directly; density needs radius or area."""
-
-    E: float | None = real(
-        None, gt=0, write="given", unit="Pa", doc="Young's modulus (with radius or area), or EA"
-    )
-    radius: float | None = real(
-        None, gt=0, write="given", unit="m", doc="radius of the round cross-section, A = pi r^2"
-    )
-    area: float | None = real(
-        None, gt=0, write="given", unit="m^2", doc="cross-section A (instead of radius)"
-    )
-    EA: float | None = real(
-        None,
-        gt=0,
-        write="given",
-        unit="N",
-        doc="axial stiffness directly, instead of E (radius or area then only give mass)",
-    )
-    density: float = real(
-        0.0,
-        ge=0,
-        unit="kg/m^3",
-        doc="needs radius or area; must be > 0 for dynamic runs and for gravity",
-    )
-    tension_only: bool = boolean(True, doc="cables go slack in compression")
-    law: str = choice(
-        "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"
-    )
-    table: tuple | None = key(
-        _check_table,
-        "[[strain, tension], ...]: strains increasing from above 0, tensions not decreasing",
-        None,
-        write="given",
-        unit="-, N",
-        doc='law = "table": tension against strain; its first slope is EA',
-    )
-    prestress: float | None = real(
-        None,
-        write="given",
-        unit="N",
-        doc="tension of every edge in the given geometry (rest lengths derived from it)",
-    )
-
-    @property
-    def cross_section(self) -> float | None:
-        """Area A [m^2] from radius or area, None when only EA is given."""
-        if self.area is not None:
-            return self.area
-        if self.radius is not None:
-            return math.pi * self.radius**2
-        return None
-
-    @property
-    def axial_stiffness(self) -> float | None:
-        """EA [N]: E * A, or EA as given, or the table's first slope (None for a graph
-        with EA per edge only)."""
-        if self.table is not None:
-            return table_rows(self.table)[1]
-        if self.EA is not None:
-            return self.EA
-        if self.E is not None and self.cross_section is not None:
-            return self.E * self.cross_section
-        return None
-
-    @property
-    def line_density(self) -> float:
-        """rho * A [kg/m]."""
-        a = self.cross_section
-        return 0.0 if a is None else self.density * a
-
-
-def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> MaterialConfig | Any:
-    """The [material] table; ``geometry`` (None when broken) may give EA per edge."""
-    if m_v is MISSING:
-        ck.add(
-            "material: missing: the case needs a [material] table (E with radius or area, or EA)"
-        )
-        return BAD
-    m = ck.table(m_v, "material")
-    if m is None:
-        return BAD
-    ck.keys(m, "material", names(MaterialConfig))
-    v = parse_keys(ck, m, MaterialConfig, "material", ctx)
-    given = {k for k in ("E", "radius", "area", "EA") if k in m}
-    per_edge_ea = ctx.kind is not None and ctx.kind.gives_stiffness(geometry)
-    if {"radius", "area"} <= given:
-        ck.add(
-            f"material.area = {show(m['area'])}: give material.radius or material.area, not both"
-        )
-    if "E" in given and "EA" in given:
-        ck.add(
-            f"material.EA = {show(m['EA'])}: give material.E (with radius or area) or "
-            "material.EA, not both"
-        )
-    elif "E" in given and not given & {"radius", "area"}:
-        ck.add(
-            f"material.E = {show(m['E'])}: needs a cross-section: give material.radius or "
-            "material.area (or give material.EA instead of E)"
-        )
-    elif not given & {"E", "EA"} and not per_edge_ea and v["law"] != "table":
-        ck.add("material: missing stiffness: give E with radius or area, or EA")
-    if v["law"] == "table":
-        if "table" not in m:
-            ck.add("material.table: missing: law = 'table' needs [[strain, tension], ...]")
-        for k in sorted(given & {"E", "EA"}):
-            ck.add(
-                f"material.{k} = {show(m[k])}: the table gives the stiffness with law = "
-                "'table' (radius or area give the mass only)"
-            )
-    elif "table" in m and v["law"] is not BAD:
-        ck.add(f"material.table: only with material.law = 'table' (this is {v['law']!r})")
-    prestress = v["prestress"]
-    if prestress not in (None, BAD) and prestress < 0 and v["tension_only"] is True:
-        ck.add(
-            f"material.prestress = {prestress!r}: tension-only cables carry no compression: "
-            "must be >= 0 (or set material.tension_only = false for struts)"
-        )
-    density = v["density"]
-    if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:
-        ck.add(
-            f"material.density = {density!r}: mass needs a cross-section: give "
-            "material.radius or material.area (EA alone has no area)"
-        )
-    if BAD in v.values():
-        return BAD
-    return MaterialConfig(**v)
 
 
 # --------------------------------------------------------------------------- histories
@@ -393,12 +242,12 @@ class SolverConfig(Declared):
     """How to solve: see docs/DESIGN.md (solver section) for the meaning of each key."""
 
     method: str = choice(
-        "static", METHODS, doc="equilibrium directly, or the paper's damped implicit Euler"
+        Settings.method, METHODS, doc="equilibrium directly, or the paper's damped implicit Euler"
     )
-    dt: float = real(1e-2, gt=0, unit="s", doc="dynamic: time step")
-    damping: float = real(1.0, ge=0, unit="1/s", doc="dynamic: mass damping mu")
+    dt: float = real(Settings.dt, gt=0, unit="s", doc="dynamic: time step")
+    damping: float = real(Settings.damping, ge=0, unit="1/s", doc="dynamic: mass damping mu")
     integrator: str = choice(
-        "implicit_euler",
+        Settings.integrator,
         INTEGRATORS,
         write="changed",
         doc="dynamic: the paper's implicit Euler (first order, damps numerically) or "
@@ -407,24 +256,28 @@ class SolverConfig(Declared):
     rho_inf: float = key(
         _check_unit_interval,
         "a number in [0, 1]",
-        RHO_INF,
+        Settings.rho_inf,
         write="changed",
         doc="newmark: spectral radius at h omega -> inf (1: average acceleration, "
         "no numerical damping)",
     )
-    t_end: float = real(10.0, gt=0, unit="s", doc="dynamic: end time")
+    t_end: float = real(Settings.t_end, gt=0, unit="s", doc="dynamic: end time")
     reuse: bool = boolean(
-        False,
+        Settings.reuse,
         write="changed",
         doc="dynamic: keep the factorisation across Newton iterations and time steps while "
         "it converges (modified Newton: same answer to rtol, 1.5-2x faster; a --restart then "
         "repeats the uninterrupted run only to rtol)",
     )
-    rtol: float = real(1e-8, gt=0, lt=1, doc="Newton tolerance")
-    linear: str = choice("auto", LINEAR, doc="linear solver (auto: PARDISO where available)")
+    rtol: float = real(Settings.rtol, gt=0, lt=1, doc="Newton tolerance")
+    linear: str = choice(
+        Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
+    )
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
-    max_iter: int = integer(200, ge=1, doc="static: Newton iterations")
-    steps: int = integer(1, ge=1, doc="static: load steps (equilibria at k/steps of the load)")
+    max_iter: int = integer(Settings.max_iter, ge=1, doc="static: Newton iterations")
+    steps: int = integer(
+        Settings.steps, ge=1, doc="static: load steps (equilibria at k/steps of the load)"
+    )
 
 
 def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:

@@ -39,6 +39,7 @@ import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.formfind.newton import Stalled, newton
+from catenet.formfind.tocase import to_case
 from catenet.model.net import Net
 
 log = logging.getLogger(__name__)
@@ -170,9 +171,7 @@ class FormFound:
 
     def to_case(self, case=None, *, output_file: str | None = None) -> dict:
         """The graph case (a dict of TOML tables) that ``catenet run`` reproduces this
-        shape with (see ``catenet.formfind.case.to_case``)."""
-        from catenet.formfind.case import to_case
-
+        shape with (see ``catenet.formfind.tocase.to_case``)."""
         return to_case(self, case, output_file=output_file)
 
     def reaction(self) -> np.ndarray:

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.model.laws import HENCKY, LINEAR, NEO_HOOKEAN, TABLE
+from catenet.kernels.law_ids import HENCKY, LINEAR, NEO_HOOKEAN, TABLE
 
 
 @njit(cache=True, error_model="numpy")

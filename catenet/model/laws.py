@@ -19,12 +19,7 @@ from functools import cached_property
 import numpy as np
 
 from catenet.errors import ConfigError
-
-#: Law ids of the kernels (``catenet.kernels.laws.density`` branches on them).
-LINEAR = 0
-NEO_HOOKEAN = 1
-HENCKY = 2
-TABLE = 3
+from catenet.kernels.law_ids import HENCKY, LINEAR, NEO_HOOKEAN, TABLE
 
 
 @dataclass(frozen=True)

@@ -29,18 +29,18 @@ sidecar and the per-frame views /xdmf/<name>/<k> it names), ``export`` (frames t
 formats through meshio).
 """
 
+from catenet.output.bodies import read_bodies
 from catenet.output.files import check_output_path, remove_spares
 from catenet.output.metadata import environment, result_attrs
+from catenet.output.obstacles import read_obstacles
 from catenet.output.reader import (
     Frame,
     Mesh,
     ResultFile,
     open_result,
     probe_node,
-    read_bodies,
     read_frame,
     read_mesh,
-    read_obstacles,
     read_result,
     trajectory_length,
 )

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from catenet.output.reader import open_result, trajectory_length
+
 
 def write_bodies(mesh, scene) -> None:
     """Adds /mesh/bodies for the scene's moving spheres (nothing without any)."""
@@ -61,7 +63,6 @@ class Bodies:
 def body_nodes(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """The centres' node indices (B,) and radii (B,) of a result file's moving spheres
     (empty without any), without their trajectory."""
-    from catenet.output.reader import open_result
 
     with open_result(path) as h5:
         g = h5.get("mesh/bodies")
@@ -72,7 +73,6 @@ def body_nodes(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
 def read_bodies(path: str | Path) -> Bodies:
     """The moving spheres of a result file and their centres' trajectory (none: B = 0)."""
-    from catenet.output.reader import open_result, trajectory_length
 
     with open_result(path) as h5:
         g = h5.get("mesh/bodies")

@@ -44,6 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
+from catenet.output.reader import open_result, trajectory_length
+
 log = logging.getLogger(__name__)
 
 GROUP = "obstacles"  # in /mesh, /trajectory and /result
@@ -312,7 +314,6 @@ class StoredObstacle:
 def read_obstacles(path: str | Path) -> list[StoredObstacle]:
     """The obstacles of a result file (empty without any), each with its complete frames
     (those of the net: ``trajectory_length``)."""
-    from catenet.output.reader import open_result, trajectory_length
 
     out = []
     with open_result(path) as h5:

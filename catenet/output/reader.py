@@ -44,10 +44,8 @@ __all__ = [
     "ResultFile",
     "open_result",
     "probe_node",
-    "read_bodies",
     "read_frame",
     "read_mesh",
-    "read_obstacles",
     "read_result",
     "trajectory_length",
 ]
@@ -418,19 +416,3 @@ def _case(text, path: Path) -> dict:
     except tomllib.TOMLDecodeError as exc:
         log.warning("%s: the case attribute is not valid TOML (%s); plotting without it", path, exc)
         return {}
-
-
-def read_bodies(path: str | Path):
-    """The moving spheres of a result file (/mesh/bodies) with their centres' trajectory:
-    ``catenet.output.bodies.read_bodies``."""
-    from catenet.output.bodies import read_bodies as read
-
-    return read(path)
-
-
-def read_obstacles(path: str | Path):
-    """The fixed and moving obstacles of a result file (/mesh/obstacles) with the moving
-    ones' frames: ``catenet.output.obstacles.read_obstacles``."""
-    from catenet.output.obstacles import read_obstacles as read
-
-    return read(path)

@@ -16,61 +16,18 @@ describe the last good state, so that callers can keep it.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from catenet.case.sections import METHODS, SolverConfig
 from catenet.errors import CatenetError, ConfigError, ConvergenceError
 from catenet.model.net import Loads, Net
-from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.result import Result
+from catenet.solver.settings import METHODS, Settings  # noqa: F401 (the path's face)
 from catenet.solver.static import Workspace, continuation
 from catenet.solver.static import _start as start_state
-
-_CASE = SolverConfig()  # the defaults, declared once with the case's [solver] keys
-
-
-@dataclass(frozen=True)
-class Settings:
-    """How to solve: the case's [solver] keys (SPEC section 3) that a solve uses."""
-
-    method: str = _CASE.method
-    dt: float = _CASE.dt
-    damping: float = _CASE.damping
-    t_end: float = _CASE.t_end
-    rtol: float = _CASE.rtol
-    max_iter: int = _CASE.max_iter
-    steps: int = _CASE.steps
-    linear: str = _CASE.linear
-    integrator: str = _CASE.integrator
-    reuse: bool = _CASE.reuse
-    rho_inf: float = _CASE.rho_inf
-
-    @classmethod
-    def of(cls, config: Any, **changes) -> Settings:
-        """The settings in any object with these attributes (a case's SolverConfig)."""
-        names = [f.name for f in dataclasses.fields(cls)]
-        values = {n: getattr(config, n) for n in names if hasattr(config, n)}
-        return cls(**{**values, **changes})
-
-    def __post_init__(self):
-        if self.method not in METHODS:
-            raise ConfigError(
-                f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"
-            )
-        if self.integrator not in INTEGRATORS:
-            raise ConfigError(
-                f"solver.integrator = {self.integrator!r}: must be one of {', '.join(INTEGRATORS)}"
-            )
-        if not 0.0 <= self.rho_inf <= 1.0:
-            raise ConfigError(f"solver.rho_inf = {self.rho_inf!r}: must be in [0, 1]")
-        if self.steps < 1:
-            raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")
 
 
 @dataclass(frozen=True)

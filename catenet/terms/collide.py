@@ -41,7 +41,10 @@ from __future__ import annotations
 import numpy as np
 
 from catenet.terms.body import Ball
-from catenet.terms.moving import SWEEP_SAFETY
+
+#: Nodes closer than SWEEP_SAFETY times the obstacle's largest displacement in a step
+#: (plus the activation distance) ride with it into the step.
+SWEEP_SAFETY = 2.0
 
 
 def spread(terms, movers, start, base, trial, moved, t0: float, t1: float) -> int:

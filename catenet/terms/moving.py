@@ -29,10 +29,7 @@ import numpy as np
 from catenet.errors import ConvergenceError
 from catenet.terms.base import Term
 from catenet.terms.body import Path
-
-#: Nodes closer than SWEEP_SAFETY times the obstacle's largest displacement in a step
-#: (plus the activation distance) ride with it into the step.
-SWEEP_SAFETY = 2.0
+from catenet.terms.collide import SWEEP_SAFETY, spread
 
 
 def rotation_vector(w, angle: float) -> np.ndarray:
@@ -243,8 +240,6 @@ def carry(potential, base, trial, t0: float, t1: float, fixed) -> np.ndarray:
     movers = [t for t in potential.system.terms if isinstance(t, Moving)]
     if not movers:
         return base
-    from catenet.terms.collide import spread
-
     start, base = base, base.copy()
     moved = np.full(len(base), -1, dtype=np.int64)
     for k, term in enumerate(movers):

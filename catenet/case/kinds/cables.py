@@ -34,6 +34,7 @@ from catenet.case.keys import (
     real,
     text,
 )
+from catenet.case.material import MaterialConfig, parse_material
 from catenet.errors import ConfigError
 from catenet.model.laws import LAWS, TABLE, Law
 
@@ -71,15 +72,11 @@ class NodeSets(Declared):
 
 
 def _material_names() -> tuple[str, ...]:
-    from catenet.case.sections import MaterialConfig  # sections imports the kinds
-
     return names(MaterialConfig)
 
 
 def _check_material(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     """A table of [material] keys, each checked as [material] checks it."""
-    from catenet.case.sections import MaterialConfig
-
     t = ck.table(v, path)
     if t is None:
         return BAD
@@ -401,8 +398,6 @@ def merged_material(base: dict, over: Mapping[str, Any]) -> dict:
 def cable_materials(ck: Checker, base: Any, cables: Sequence[CableConfig]) -> list:
     """The MaterialConfig of every cable (``base`` where it overrides nothing), checked
     as [material] is; problems name the cable's keys. BAD entries where a cable's is bad."""
-    from catenet.case.sections import parse_material
-
     out = []
     raw = base.to_dict()
     for c, cable in enumerate(cables):

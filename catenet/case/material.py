@@ -1,0 +1,170 @@
+"""The [material] section of a case: its keys (``MaterialConfig``) and the rules between
+them (``parse_material``). Below the geometry kinds, whose cables take [material] keys."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from catenet.case.keys import (
+    BAD,
+    MISSING,
+    Checker,
+    Context,
+    Declared,
+    boolean,
+    choice,
+    key,
+    names,
+    parse_keys,
+    real,
+    show,
+)
+from catenet.errors import ConfigError
+from catenet.model.laws import LAWS, table_rows
+
+
+def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A monotone tension-strain table, as a tuple of (strain, tension) pairs."""
+    if not isinstance(v, (list, tuple)) or not all(
+        isinstance(p, (list, tuple)) and len(p) == 2 for p in v
+    ):
+        return ck.bad(path, v, "must be [[strain, tension], ...]: pairs of numbers")
+    try:
+        table_rows(v, path=path)
+    except (ConfigError, TypeError, ValueError) as exc:
+        problems = getattr(exc, "problems", None) or [f"{path} = {show(v)}: {exc}"]
+        ck.problems.extend(problems)
+        return BAD
+    return tuple((float(a), float(b)) for a, b in v)
+
+
+@dataclass(frozen=True)
+class MaterialConfig(Declared):
+    """Either E with radius or area, or EA directly; density needs radius or area."""
+
+    E: float | None = real(
+        None, gt=0, write="given", unit="Pa", doc="Young's modulus (with radius or area), or EA"
+    )
+    radius: float | None = real(
+        None, gt=0, write="given", unit="m", doc="radius of the round cross-section, A = pi r^2"
+    )
+    area: float | None = real(
+        None, gt=0, write="given", unit="m^2", doc="cross-section A (instead of radius)"
+    )
+    EA: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="N",
+        doc="axial stiffness directly, instead of E (radius or area then only give mass)",
+    )
+    density: float = real(
+        0.0,
+        ge=0,
+        unit="kg/m^3",
+        doc="needs radius or area; must be > 0 for dynamic runs and for gravity",
+    )
+    tension_only: bool = boolean(True, doc="cables go slack in compression")
+    law: str = choice(
+        "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"
+    )
+    table: tuple | None = key(
+        _check_table,
+        "[[strain, tension], ...]: strains increasing from above 0, tensions not decreasing",
+        None,
+        write="given",
+        unit="-, N",
+        doc='law = "table": tension against strain; its first slope is EA',
+    )
+    prestress: float | None = real(
+        None,
+        write="given",
+        unit="N",
+        doc="tension of every edge in the given geometry (rest lengths derived from it)",
+    )
+
+    @property
+    def cross_section(self) -> float | None:
+        """Area A [m^2] from radius or area, None when only EA is given."""
+        if self.area is not None:
+            return self.area
+        if self.radius is not None:
+            return math.pi * self.radius**2
+        return None
+
+    @property
+    def axial_stiffness(self) -> float | None:
+        """EA [N]: E * A, or EA as given, or the table's first slope (None for a graph
+        with EA per edge only)."""
+        if self.table is not None:
+            return table_rows(self.table)[1]
+        if self.EA is not None:
+            return self.EA
+        if self.E is not None and self.cross_section is not None:
+            return self.E * self.cross_section
+        return None
+
+    @property
+    def line_density(self) -> float:
+        """rho * A [kg/m]."""
+        a = self.cross_section
+        return 0.0 if a is None else self.density * a
+
+
+def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> MaterialConfig | Any:
+    """The [material] table; ``geometry`` (None when broken) may give EA per edge."""
+    if m_v is MISSING:
+        ck.add(
+            "material: missing: the case needs a [material] table (E with radius or area, or EA)"
+        )
+        return BAD
+    m = ck.table(m_v, "material")
+    if m is None:
+        return BAD
+    ck.keys(m, "material", names(MaterialConfig))
+    v = parse_keys(ck, m, MaterialConfig, "material", ctx)
+    given = {k for k in ("E", "radius", "area", "EA") if k in m}
+    per_edge_ea = ctx.kind is not None and ctx.kind.gives_stiffness(geometry)
+    if {"radius", "area"} <= given:
+        ck.add(
+            f"material.area = {show(m['area'])}: give material.radius or material.area, not both"
+        )
+    if "E" in given and "EA" in given:
+        ck.add(
+            f"material.EA = {show(m['EA'])}: give material.E (with radius or area) or "
+            "material.EA, not both"
+        )
+    elif "E" in given and not given & {"radius", "area"}:
+        ck.add(
+            f"material.E = {show(m['E'])}: needs a cross-section: give material.radius or "
+            "material.area (or give material.EA instead of E)"
+        )
+    elif not given & {"E", "EA"} and not per_edge_ea and v["law"] != "table":
+        ck.add("material: missing stiffness: give E with radius or area, or EA")
+    if v["law"] == "table":
+        if "table" not in m:
+            ck.add("material.table: missing: law = 'table' needs [[strain, tension], ...]")
+        for k in sorted(given & {"E", "EA"}):
+            ck.add(
+                f"material.{k} = {show(m[k])}: the table gives the stiffness with law = "
+                "'table' (radius or area give the mass only)"
+            )
+    elif "table" in m and v["law"] is not BAD:
+        ck.add(f"material.table: only with material.law = 'table' (this is {v['law']!r})")
+    prestress = v["prestress"]
+    if prestress not in (None, BAD) and prestress < 0 and v["tension_only"] is True:
+        ck.add(
+            f"material.prestress = {prestress!r}: tension-only cables carry no compression: "
+            "must be >= 0 (or set material.tension_only = false for struts)"
+        )
+    density = v["density"]
+    if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:
+        ck.add(
+            f"material.density = {density!r}: mass needs a cross-section: give "
+            "material.radius or material.area (EA alone has no area)"
+        )
+    if BAD in v.values():
+        return BAD
+    return MaterialConfig(**v)

@@ -1,0 +1,51 @@
+"""How to solve: the settings of the one solve path, declared here once; the case's
+``[solver]`` keys (``catenet.case.sections.SolverConfig``) take their defaults from them."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+from catenet.errors import ConfigError
+from catenet.solver.integrators import INTEGRATORS, RHO_INF
+
+METHODS = ("static", "dynamic")
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How to solve: the [solver] keys (SPEC section 3) that a solve uses."""
+
+    method: str = "static"
+    dt: float = 1e-2
+    damping: float = 1.0
+    t_end: float = 10.0
+    rtol: float = 1e-8
+    max_iter: int = 200
+    steps: int = 1
+    linear: str = "auto"
+    integrator: str = "implicit_euler"
+    reuse: bool = False
+    rho_inf: float = RHO_INF
+
+    @classmethod
+    def of(cls, config: Any, **changes) -> Settings:
+        """The settings in any object with these attributes (a case's SolverConfig)."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        values = {n: getattr(config, n) for n in names if hasattr(config, n)}
+        return cls(**{**values, **changes})
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ConfigError(
+                f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"
+            )
+        if self.integrator not in INTEGRATORS:
+            raise ConfigError(
+                f"solver.integrator = {self.integrator!r}: must be one of {', '.join(INTEGRATORS)}"
+            )
+        if not 0.0 <= self.rho_inf <= 1.0:
+            raise ConfigError(f"solver.rho_inf = {self.rho_inf!r}: must be in [0, 1]")
+        if self.steps < 1:
+            raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")
