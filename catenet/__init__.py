@@ -28,8 +28,8 @@ _NAMES = {
     "Loads": "catenet.model.net",
     "Net": "catenet.model.net",
     "Result": "catenet.solver.result",
-    "Workspace": "catenet.solver.static",
-    "continuation": "catenet.solver.static",
+    "Workspace": "catenet.solver.workspace",
+    "continuation": "catenet.solver.loadsteps",
     "solve_static": "catenet.solver.static",
     "solve_dynamic": "catenet.solver.dynamic",
 }

@@ -21,9 +21,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq, root
 
-import catenet.validate.analytic as analytic
+import catenet.validate.seabed as seabed
 from catenet.errors import ConfigError
-from catenet.validate.analytic import inclined_catenary, seabed_catenary
+from catenet.validate.analytic import inclined_catenary
+from catenet.validate.seabed import seabed_catenary
 
 G = 9.81
 # The line: a 300 m chain, submerged weight 1000 N/m, EA = 5e8 N, water depth
@@ -178,7 +179,7 @@ def test_a_taut_line_becomes_a_straight_elastic_bar():
 def test_newton_and_the_bracketed_fallback_agree(name, monkeypatch):
     L, EA, w, X, h = CASES[name]
     newton = seabed_catenary(L, EA, w, X, h)
-    monkeypatch.setattr(analytic, "_seabed_newton", lambda *args: None)
+    monkeypatch.setattr(seabed, "_seabed_newton", lambda *args: None)
     bracketed = seabed_catenary(L, EA, w, X, h)
     assert rel(bracketed.H, newton.H) < 1e-12 * newton.fairlead_tension / newton.H
     assert rel(bracketed.V, newton.V) < 1e-12 * newton.fairlead_tension / newton.V

@@ -45,9 +45,10 @@ from catenet.output.files import (
     remove_spares,
     spare_paths,
 )
-from catenet.output.metadata import environment, result_attrs
+from catenet.output.metadata import environment
 from catenet.output.obstacles import Obstacles
 from catenet.output.reader import LIBVER, TRAJECTORY
+from catenet.output.result_group import write_result_group
 from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 
 log = logging.getLogger(__name__)
@@ -486,37 +487,11 @@ class ResultWriter:
         raise err
 
     def _write_result(self, h5, res, attrs: dict) -> None:
-        scene = self.scene
-        if "result" in h5:
-            del h5["result"]
-        g = h5.create_group("result")
-        g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
         tension = self._stored_tension(res.x, res.tension)
-        g.create_dataset("tension", data=tension)
-        cables = getattr(scene, "cables", None)
-        if cables is not None:
-            top, slack = measures.cable_stats(
-                scene.net, res.x, tension, cables.edge, len(cables.names)
-            )
-            g.create_dataset("cable_max_tension", data=top)
-            g.create_dataset("cable_slack_fraction", data=slack)
-        reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
-        g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
-        contact = getattr(res, "contact_force", None)
-        if contact is None or not np.all(np.isfinite(contact)):
-            contact = np.zeros_like(res.x)
-        g.create_dataset("contact_force", data=np.asarray(contact, dtype=np.float64))
-        v = getattr(res, "v", None)
-        if self.velocities and v is not None and np.all(np.isfinite(v)):
-            g.create_dataset("v", data=np.asarray(v, dtype=np.float64))
-        a = getattr(res, "a", None)
-        if self.accelerations and a is not None and np.all(np.isfinite(a)):
-            g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
-        self.obstacles.write_result(g, float(getattr(res, "time", math.nan)))
-        for key, value in result_attrs(res, scene).items():
-            g.attrs[key] = value
-        for key, value in attrs.items():
-            g.attrs[key] = value
+        group = write_result_group(
+            h5, self.scene, res, tension, attrs, self.velocities, self.accelerations
+        )
+        self.obstacles.write_result(group, float(getattr(res, "time", math.nan)))
 
     def _save_elsewhere(self, res, attrs: dict) -> Path:
         import h5py

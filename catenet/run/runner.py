@@ -158,7 +158,8 @@ def run_case(
     from catenet.run import advice
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
-    from catenet.solver.linear import resolve_backend, set_threads
+    from catenet.solver.linear import resolve_backend
+    from catenet.solver.threads import set_threads
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)

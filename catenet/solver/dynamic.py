@@ -29,7 +29,8 @@ from catenet.model.net import Loads, Net
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
 from catenet.solver.result import Result, finish
-from catenet.solver.static import HarmonicExtension, Workspace, _check_rtol
+from catenet.solver.start import HarmonicExtension
+from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia
 from catenet.terms.moving import carry, moves
 
@@ -298,7 +299,7 @@ def _check(dt, damping, t_end, t0, rtol) -> None:
         problems.append(f"solver.t_end = {t_end!r}: must be finite and > {t0}")
     if problems:
         raise ConfigError(problems)
-    _check_rtol(rtol)
+    check_rtol(rtol)
 
 
 def potential_at(potential, loads, net, t):

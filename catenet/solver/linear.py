@@ -175,47 +175,6 @@ def resolve_backend(name: str) -> str:
     return "scipy"
 
 
-def set_threads(threads: int) -> None:
-    """Threads of MKL (PARDISO), Numba and every OpenBLAS loaded in this process (NumPy's
-    and SciPy's: left alone, its spinning threads slow short vector operations down)."""
-    if threads < 1:
-        raise ConfigError(f"solver.threads = {threads}: must be >= 1")
-    if pardiso_available():
-        mkl_runtime().libmkl.MKL_Set_Num_Threads(ctypes.c_int(threads))
-    import numba
-
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    os.environ["OPENBLAS_NUM_THREADS"] = str(threads)  # for an OpenBLAS loaded later
-    for path in _openblas_libraries():
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for name in (
-            "scipy_openblas_set_num_threads64_",
-            "scipy_openblas_set_num_threads",
-            "openblas_set_num_threads64_",
-            "openblas_set_num_threads",
-        ):
-            fn = getattr(lib, name, None)
-            if fn is not None:
-                fn(ctypes.c_int(threads))
-                break
-
-
-def _openblas_libraries() -> list[str]:
-    """Paths of the OpenBLAS libraries mapped into this process (Linux; else none).
-    SciPy's is not loaded for this (importing scipy.linalg costs 0.1-0.3 s of start-up):
-    one loaded later reads OPENBLAS_NUM_THREADS, which ``set_threads`` sets."""
-    import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
-
-    try:
-        with open("/proc/self/maps") as fh:
-            return sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
-    except OSError:
-        return []
-
-
 class LinearSolver:
     """Solves A x = b for a fixed pattern (CSR ``indptr``, ``indices``) and changing values.
 

@@ -24,10 +24,11 @@ import numpy as np
 
 from catenet.errors import CatenetError, ConfigError, ConvergenceError
 from catenet.model.net import Loads, Net
+from catenet.solver.loadsteps import continuation
 from catenet.solver.result import Result
 from catenet.solver.settings import METHODS, Settings  # noqa: F401 (the path's face)
-from catenet.solver.static import Workspace, continuation
-from catenet.solver.static import _start as start_state
+from catenet.solver.start import start_state
+from catenet.solver.workspace import Workspace
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ def run_job(task: dict) -> dict:
             marker.write_text(f"{os.getpid()} {attempt}")
         _test_crash(out, index)
     try:
-        from catenet.solver.linear import set_threads
+        from catenet.solver.threads import set_threads
 
         set_threads(int(task["threads"]))
         rows = _solve_levels(task)
@@ -157,7 +157,7 @@ def _solve_levels(task: dict) -> list[dict]:
             level_of = _load_level(force, reference)
             x0 = x_prev
             if parsed.solver.method == "static" and level_of is not None and len(path) >= 2:
-                from catenet.solver.static import predict
+                from catenet.solver.loadsteps import predict
 
                 x0 = predict([x for _, x in path[-2:]], [s for s, _ in path[-2:]], level_of)
             result = _solve(parsed, scene, ws_net, ws, x0)

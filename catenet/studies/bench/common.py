@@ -137,8 +137,8 @@ def compressed_catenary(
 
 
 def set_threads(k: int) -> None:
-    """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.solver.linear.set_threads."""
-    from catenet.solver.linear import set_threads as set_catenet_threads
+    """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.solver.threads.set_threads."""
+    from catenet.solver.threads import set_threads as set_catenet_threads
 
     set_catenet_threads(k)
 

@@ -241,7 +241,8 @@ def _output(net, loads, add, study, *, reps, quick, n):
 
 def _analysis(net, loads, add, study, *, reps, quick, n):
     from catenet.solver.dynamic import solve_dynamic
-    from catenet.solver.static import Workspace, continuation, solve_static
+    from catenet.solver.loadsteps import continuation
+    from catenet.solver.static import Workspace, solve_static
     from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
     variants = [
@@ -409,7 +410,7 @@ import json, sys, time, statistics
 from catenet.studies.bench.common import paper_net, warm_up, load_average
 mode = sys.argv[2]
 if mode == "catenet-threads-1":
-    from catenet.solver.linear import set_threads
+    from catenet.solver.threads import set_threads
     set_threads(1)
 from catenet.solver.static import Workspace, solve_static
 from catenet.solver.dynamic import solve_dynamic

@@ -1,0 +1,166 @@
+"""Static runs in load steps: equilibria at increasing load factors, each from the last
+(``continuation``), a failing step cut back and, as the ladder's last rung, solved by a
+damped pseudo-transient solve; ``predict`` extrapolates a step's start."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError, Interrupted, SingularSystemError
+from catenet.model.net import Loads, Net
+from catenet.solver.result import Result
+from catenet.solver.static import solve_static
+from catenet.solver.workspace import Workspace
+
+log = logging.getLogger(__name__)
+
+
+CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
+
+
+def continuation(
+    net: Net,
+    loads: Loads,
+    factors: Sequence[float],
+    *,
+    x0: np.ndarray | None = None,
+    rtol: float = 1e-8,
+    max_iter: int = 200,
+    linear: str = "auto",
+    on_step: Callable[[float, Result], None] | None = None,
+    workspace: Workspace | None = None,
+) -> list[Result]:
+    """Equilibria at increasing load factors, each starting from the previous one (a
+    force-displacement curve). ``on_step(factor, result)`` sees each as it is found.
+
+    A load step that fails is cut back: re-solved from the last equilibrium in sub-steps
+    of half its load increment, halved again while one fails (``CUTBACKS`` times at
+    most); the sub-steps' equilibria are not reported, their iterations count. A step
+    that still fails raises ConvergenceError whose ``state`` is the last equilibrium
+    found (a step's or a sub-step's; None before the first) and ``factor`` its load
+    factor (0: the start)."""
+    if len(factors) == 0:
+        raise ConfigError("continuation: factors is empty: give at least one load factor")
+    ws = workspace or Workspace(net, linear=linear)
+    results: list[Result] = []
+    x = x0
+    good = Equilibrium(None, 0.0)  # the last equilibrium (None: the start)
+    for k, factor in enumerate(factors):
+        if k >= 2:  # secant predictor through the last two equilibria
+            x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
+        settings = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
+        try:
+            r = solve_static(
+                net,
+                loads,
+                x0=x,
+                factor=float(factor),
+                accepted=results[-1].x if results else x0,
+                **settings,
+            )
+        except ConvergenceError as exc:
+            if isinstance(exc, Interrupted) or not _worth_cutting(exc):
+                exc.state, exc.factor = good.x, good.factor
+                raise
+            origin = good if good.x is not None else Equilibrium(x0, 0.0)
+            r = _cut_back(net, loads, origin, float(factor), exc, good, settings)
+        r.steps = k + 1
+        results.append(r)
+        good = Equilibrium(r.x, float(factor))
+        x = r.x
+        if on_step is not None:
+            on_step(float(factor), r)
+    return results
+
+
+@dataclass
+class Equilibrium:
+    """A converged state ``x`` (N, 3) of a static run and its load factor (x None: the
+    run's start, load factor 0)."""
+
+    x: np.ndarray | None
+    factor: float
+
+
+def _worth_cutting(exc: ConvergenceError) -> bool:
+    """Whether smaller load steps can help: not for a mechanism (singular at any load)
+    nor for loads below the forces' round-off."""
+    if isinstance(exc, SingularSystemError):
+        return False
+    return "round-off floor exceeds" not in str(exc)
+
+
+def _advice(exc: ConvergenceError, max_iter: int) -> str:
+    """The one setting most likely to help a static run that failed after cut-back."""
+    if f"no convergence in {max_iter} iterations" in str(exc):
+        return f"most likely to help: a larger solver.max_iter (now {max_iter})"
+    return (
+        "most likely to help: solver.method = 'dynamic' (dynamic relaxation, the paper's "
+        "method, which follows the net's motion to rest), or more solver.steps"
+    )
+
+
+def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, settings) -> Result:
+    """The load step from ``origin`` to ``target`` in sub-steps (see ``continuation``);
+    ``good`` (updated) holds the last equilibrium. Raises the last failure, its message
+    saying what was tried, when sub-steps of 1/2**CUTBACKS still fail."""
+    x, f = origin.x, origin.factor
+    increment = 0.5 * (target - f)
+    spent = int(getattr(failure, "iterations", 0))
+    cuts = 1
+    transient = False
+    while True:
+        level = target if f + increment >= target - 1e-12 * abs(target) else f + increment
+        log.info("load step cut back: load factor %.6g from %.6g", level, f)
+        try:
+            r = solve_static(
+                net, loads, x0=x, factor=float(level), accepted=x, transient=transient, **settings
+            )
+        except ConvergenceError as exc:
+            spent += int(getattr(exc, "iterations", 0))
+            if cuts >= CUTBACKS and _worth_cutting(exc) and not transient:
+                transient = True  # the last rung: a damped pseudo-transient solve
+                continue
+            if cuts >= CUTBACKS or not _worth_cutting(exc):
+                tried = f"load-step cut-back down to 1/{2**cuts} of the step"
+                if transient:
+                    tried += " and a damped pseudo-transient solve"
+                exc.args = (
+                    f"{exc}; tried: line search, a Levenberg-Marquardt shift, {tried} (the "
+                    f"last equilibrium: load factor {good.factor:.6g}); "
+                    f"{_advice(exc, settings['max_iter'])}",
+                )
+                exc.iterations = spent
+                exc.state, exc.factor = good.x, good.factor
+                raise
+            increment *= 0.5
+            cuts += 1
+            continue
+        spent += r.iterations
+        x, f = r.x, float(level)
+        good.x, good.factor = x, f
+        if level == target:
+            r.iterations = spent
+            return r
+
+
+def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:
+    """The equilibrium at load level ``level`` extrapolated by the Lagrange polynomial
+    through the given equilibria (two: a secant, three: a parabola) at their levels.
+    Levels must be distinct; with one state it is returned as it is."""
+    if len(states) != len(levels):
+        raise ValueError("predict: one level per state")
+    if len(set(levels)) != len(levels):
+        return np.array(states[-1], copy=True)
+    x = np.zeros_like(states[-1])
+    for i, (xi, si) in enumerate(zip(states, levels, strict=True)):
+        w = 1.0
+        for j, sj in enumerate(levels):
+            if j != i:
+                w *= (level - sj) / (si - sj)
+        x += w * xi
+    return x

@@ -1,0 +1,137 @@
+"""Where a static solve starts: the given or reference positions with the supports in
+place (the free nodes carried along by moved supports: ``HarmonicExtension``), and, for
+an unstressed net under loads, the stretched start (``stretched_start``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from catenet.errors import ConfigError, SingularSystemError
+from catenet.model.measures import strain
+from catenet.model.net import Loads, Net
+from catenet.solver.newton import Potential
+from catenet.terms.stretch import Springs
+
+
+def start_state(net: Net, loads: Loads, x0, factor: float) -> np.ndarray:
+    """The starting guess: x0 (or the reference positions) with the supports put in place.
+    Where supports move, the free nodes follow them by the harmonic extension of the
+    support displacement, so no edge starts out stretched many times its length."""
+    if x0 is None:
+        x = net.nodes.copy()
+    else:
+        x = np.array(x0, dtype=np.float64, copy=True)
+        if x.shape != net.nodes.shape or not np.all(np.isfinite(x)):
+            raise ConfigError(f"x0: shape {x.shape}: must be finite with shape {net.nodes.shape}")
+    target = loads.support_positions(net, factor=factor)
+    if loads.moves_supports:
+        x += harmonic_extension(net, target - x[net.fixed])
+    x[net.fixed] = target
+    return x
+
+
+class HarmonicExtension:
+    """Displacements of the free nodes that follow given support displacements: at every
+    free node the average of its neighbours' (weights 1/l0), the solution of a graph-
+    Laplacian system factorised once per net. Moved supports carry the net with them
+    instead of running over their neighbours."""
+
+    def __init__(self, net: Net):
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        n = net.n_nodes
+        i, j = net.edges[:, 0], net.edges[:, 1]
+        w = 1.0 / net.rest_length
+        lap = sp.coo_matrix(
+            (
+                np.concatenate([w, w, -w, -w]),
+                (np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i])),
+            ),
+            shape=(n, n),
+        ).tocsr()
+        self.net = net
+        self.free = ~net.fixed
+        self._coupling = lap[self.free][:, net.fixed].tocsr()
+        self._lu = splu(lap[self.free][:, self.free].tocsc())
+
+    def __call__(self, support_shift: np.ndarray) -> np.ndarray:
+        """Displacement (N, 3): ``support_shift`` (K, 3) at the fixed nodes."""
+        u = np.zeros((self.net.n_nodes, 3))
+        u[self.net.fixed] = support_shift
+        if np.any(support_shift):
+            u[self.free] = self._lu.solve(-(self._coupling @ support_shift))
+        return u
+
+
+def harmonic_extension(net: Net, support_shift: np.ndarray) -> np.ndarray:
+    """The displacement (N, 3) of HarmonicExtension for one support shift."""
+    return HarmonicExtension(net)(support_shift)
+
+
+UNSTRESSED = 1e-12  # a start whose strains are all below this carries no tension
+STRETCH_RTOL = 1e-3  # the stretched start's scale is found to this relative width
+
+
+def unstressed(net: Net, x: np.ndarray) -> bool:
+    """Whether no edge is strained at x (a flat net, a straight cable at its rest
+    length): the stiffness has no transverse part and Newton must find one."""
+    return bool(np.all(np.abs(strain(net, x)) <= UNSTRESSED))
+
+
+def stretched_start(potential: Potential, x: np.ndarray) -> None:
+    """Moves the free nodes of an unstressed net (x, in place) along the displacement u
+    of a net of linear springs q = 1/l0 under the loads (the force density method's; one
+    solve with the net's own factorisation, ``terms.stretch.Springs``), to the point
+    x + s u where the potential is least along that ray (a convex function of s for a
+    tension-only net: bisection on its slope). Every edge the move lengthens is taut
+    there, so Newton starts with a transverse stiffness it would otherwise grow step by
+    step from the flat start, and takes a number of iterations that hardly grows with
+    refinement (the paper's n = 34 net: 7, 10 and 12 at 1 cm, 1 mm and 0.2 mm edges,
+    where the flat start took 11, 14 and more than 600). Edges the move hardly
+    lengthened (near the supports) are still soft across, so that Newton begins with a
+    small Levenberg-Marquardt shift (``newton.solve(shifted=True)``)."""
+    net = potential.system.net
+    u = np.zeros_like(x)
+    springs = potential.with_system(
+        potential.system.with_terms([Springs(net, 1.0 / net.rest_length)])
+    )
+    try:
+        springs.factorize(x, 0.0)
+        u.reshape(-1)[potential.system.free_dofs] = potential.solver.solve(springs.f_free)
+    except SingularSystemError:
+        return  # a part without support: the usual path says so
+    if not np.all(np.isfinite(u)):
+        return
+    largest = float(np.max(np.abs(u), initial=0.0))  # no squares: no overflow
+    extent = float(np.max(np.ptp(net.nodes, axis=0)))
+    if not (largest > 0.0 and math.isfinite(extent) and extent > 0.0):
+        return
+    u *= extent / largest  # s = 1 moves the farthest node by the net's extent
+    u_free = u.reshape(-1)[potential.system.free_dofs]
+    x0 = x.copy()
+
+    def slope(s: float) -> float:
+        np.add(x0, s * u, out=x)
+        g = potential.evaluate(x)[1]
+        return float(np.dot(g, u_free))
+
+    lo, hi = 0.0, 1e-6
+    for _ in range(60):  # the slope is negative at 0 (the loads pull along u)
+        if not slope(hi) < 0.0:
+            break
+        lo, hi = hi, 4.0 * hi
+    else:
+        x[:] = x0
+        return
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if slope(mid) < 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= STRETCH_RTOL * hi:
+            break
+    np.add(x0, hi * u, out=x)

@@ -1,0 +1,71 @@
+"""A net's workspace: its energy terms' system (pattern once) and its linear solver
+(symbolic analysis once), shared by every solve on that net."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+from catenet.errors import ConfigError
+from catenet.model.net import Loads, Net
+from catenet.solver.linear import LinearSolver, make_solver
+from catenet.solver.newton import Potential
+from catenet.solver.system import System
+from catenet.terms import Stretch, Term
+
+
+class Workspace:
+    """A net's system (its energy terms and their pattern) and linear solver (symbolic
+    analysis), built once and reused by every solve on that net: load steps, time steps,
+    sweeps over loads. ``terms``: the scene's internal terms besides the stretching of
+    the edges (springs, contact, ...)."""
+
+    def __init__(
+        self,
+        net: Net,
+        *,
+        linear: str = "auto",
+        mtype: int | None = None,
+        terms: Sequence[Term] = (),
+    ):
+        all_terms = (Stretch(net), *terms)
+        if mtype is None:  # Cholesky where the matrices are positive (semi)definite
+            mtype = 2 if all(t.convex for t in all_terms) else -2
+        upper = mtype != 11
+        self.net = net
+        start = time.perf_counter()
+        self.system = System(net, all_terms, upper=upper)
+        dof_node = np.flatnonzero(~net.fixed).repeat(3)
+        self.solver: LinearSolver = make_solver(
+            linear,
+            self.system.indptr,
+            self.system.indices,
+            upper=upper,
+            dof_node=dof_node,
+            mtype=mtype,
+        )
+        self.setup_seconds = time.perf_counter() - start
+
+    def potential(self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()) -> Potential:
+        """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""
+        force = loads.external_force(self.net, factor)
+        return Potential(self.system, self.solver, force, steps)
+
+    def stats(self) -> dict:
+        s = self.solver
+        return {
+            "backend": s.name,
+            "dofs": self.system.n_free,
+            "nnz": self.system.nnz,
+            **{f"{k}_count": v for k, v in s.stats.items()},
+            **{f"{k}_seconds": v for k, v in s.seconds.items()},
+            "assembly_seconds": self.system.seconds,
+            "setup_seconds": self.setup_seconds,
+        }
+
+
+def check_rtol(rtol: float) -> None:
+    if not (np.isfinite(rtol) and 0 < rtol < 1):
+        raise ConfigError(f"solver.rtol = {rtol!r}: must be in (0, 1)")
