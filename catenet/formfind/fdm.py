@@ -157,17 +157,7 @@ class FormFound:
 
     def to_net(self) -> Net:
         """The net at the form-found shape, with the rest lengths that carry its forces."""
-        net = self.net
-        return Net.from_arrays(
-            self.x,
-            net.edges,
-            EA=net.EA,
-            fixed=net.fixed,
-            rest_length=self.rest_length(),
-            line_density=net.line_density,
-            tension_only=net.tension_only,
-            law=net.law,
-        )
+        return self.net.replace(nodes=self.x, rest_length=self.rest_length())
 
     def to_case(self, case=None, *, output_file: str | None = None) -> dict:
         """The graph case (a dict of TOML tables) that ``catenet run`` reproduces this

@@ -173,36 +173,57 @@ class Net:
         np.add.at(k, self.edges[:, 1], half)
         return k
 
-    def with_rest_length(self, rest_length, law: Law | None = None) -> Net:
-        """A copy with other rest lengths (pretension, or a cable of another length) and,
-        if given, another material law."""
-        return Net.from_arrays(
-            self.nodes,
-            self.edges,
-            EA=self.EA,
-            fixed=self.fixed,
-            rest_length=rest_length,
-            line_density=self.line_density,
-            tension_only=self.tension_only,
-            law=self.law if law is None else law,
-            point_mass=self.point_mass,
-            bodies=self.bodies,
-        )
-
-    def with_point_mass(self, point_mass) -> Net:
-        """A copy with these point masses (N,) [kg] at the nodes (replacing any)."""
-        return Net.from_arrays(
-            self.nodes,
-            self.edges,
+    def replace(self, **changes) -> Net:
+        """A copy with ``changes`` (any of ``from_arrays``' arguments: nodes, edges, EA,
+        fixed, rest_length, line_density, tension_only, law, point_mass, bodies),
+        validated as a new net; everything else, the material law, point masses and
+        bodies included, carried over. The one way to copy a net."""
+        fields = dict(
+            nodes=self.nodes,
+            edges=self.edges,
             EA=self.EA,
             fixed=self.fixed,
             rest_length=self.rest_length,
             line_density=self.line_density,
             tension_only=self.tension_only,
             law=self.law,
-            point_mass=point_mass,
+            point_mass=self.point_mass,
             bodies=self.bodies,
         )
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(f"Net.replace: unknown fields {sorted(unknown)}")
+        if "edges" in changes and "law" not in changes:
+            fields["law"] = None  # a law per edge does not fit other edges
+        fields.update(changes)
+        nodes, edges = fields.pop("nodes"), fields.pop("edges")
+        return Net.from_arrays(nodes, edges, **fields)
+
+    def same_as(self, other: Net | None) -> bool:
+        """Whether ``other`` is the same net: every array equal, the law's included."""
+        if other is self:
+            return True
+        if other is None or self.bodies != other.bodies:
+            return False
+        arrays = ("nodes", "edges", "rest_length", "EA", "fixed", "line_density")
+        if not all(_equal(getattr(self, a), getattr(other, a)) for a in arrays):
+            return False
+        a, b = self.law, other.law
+        if not all(_equal(getattr(a, k), getattr(b, k)) for k in ("kind", "params", "table")):
+            return False
+        if not _equal(a.tension_only, b.tension_only) or a.smooth != b.smooth:
+            return False
+        pa, pb = self.point_mass, other.point_mass
+        return (pa is None and pb is None) or (pa is not None and pb is not None and _equal(pa, pb))
+
+    def with_rest_length(self, rest_length, law: Law | None = None) -> Net:
+        """A copy with other rest lengths (pretension, or a cable of another length) and,
+        if given, another material law."""
+        return self.replace(rest_length=rest_length, law=self.law if law is None else law)
+
+    def with_point_mass(self, point_mass) -> Net:
+        """A copy with these point masses (N,) [kg] at the nodes (replacing any)."""
+        return self.replace(point_mass=point_mass)
 
     def components(self) -> np.ndarray:
         """Connected-component label (0, 1, ... in order of first node) of every node:
@@ -249,6 +270,10 @@ class Net:
             problems.append("supports: no node is fixed: fix at least one node")
         if problems:
             raise ConfigError(problems)
+
+
+def _equal(a, b) -> bool:
+    return np.shape(a) == np.shape(b) and bool(np.array_equal(a, b))
 
 
 def _broadcast(name, value, m, problems, allow_zero=False) -> np.ndarray:

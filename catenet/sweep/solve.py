@@ -234,22 +234,9 @@ class _Scenes:
 
 
 def _same_net(a, b) -> bool:
-    import numpy as np
-
-    if a is b:
-        return True
-    return (
-        a is not None
-        and a.nodes.shape == b.nodes.shape
-        and a.edges.shape == b.edges.shape
-        and a.tension_only == b.tension_only
-        and np.array_equal(a.nodes, b.nodes)
-        and np.array_equal(a.edges, b.edges)
-        and np.array_equal(a.rest_length, b.rest_length)
-        and np.array_equal(a.EA, b.EA)
-        and np.array_equal(a.fixed, b.fixed)
-        and np.array_equal(a.line_density, b.line_density)
-    )
+    """Whether the nets are the same (``Net.same_as``: the law, point masses and bodies
+    included); a is None before the first."""
+    return a is not None and a.same_as(b)
 
 
 def _load_level(force, reference) -> float | None:

@@ -68,15 +68,7 @@ def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
     if fixed is None and not prestrain:
         return net
     mask = net.fixed if fixed is None else sorted(resolve(r, names) for r in fixed)
-    return Net.from_arrays(
-        net.nodes,
-        net.edges,
-        EA=net.EA,
-        fixed=mask,
-        rest_length=net.rest_length / (1.0 + prestrain),
-        line_density=net.line_density,
-        tension_only=net.tension_only,
-    )
+    return net.replace(fixed=mask, rest_length=net.rest_length / (1.0 + prestrain))
 
 
 def with_prefix(message: str, fixed_key: str = "geometry.fixed") -> str:
