@@ -99,7 +99,7 @@ def solve_static(
             )
     loose = loose_nodes(net, out.tension)
     for term in ws.system.terms:  # nodes that another term (a spring, contact) holds
-        pattern = term.pattern() if not isinstance(term, Stretch) else None
+        pattern = term.pattern() if term.edge_net is None else None
         if pattern is not None and loose.size:
             loose = np.setdiff1d(loose, pattern[0] // 3)
     if loose.size:
@@ -123,7 +123,7 @@ def _relag(potential: Potential, x: np.ndarray, result, *, rtol: float, max_iter
     returning the relative change) and the step is solved again from there, until they
     change less than LAG_RTOL (fixed-point iteration; what is left after LAG_ROUNDS stays
     lagged, as in a dynamic step)."""
-    lagged = [t for t in potential.system.terms if hasattr(t, "relag")]
+    lagged = [t for t in potential.system.terms if t.lagged]
     for _ in range(LAG_ROUNDS if lagged else 0):
         if not result.converged or max(t.relag(x) for t in lagged) <= LAG_RTOL:
             return result
@@ -216,7 +216,7 @@ def equilibrium(
     factors = []
     # With contact the soft start matters more: a stiff chain pressed onto an obstacle
     # takes Newton steps its barrier cannot follow; it starts at strains of CONTACT_STRAIN.
-    contact = any(hasattr(t, "max_step") for t in system.terms)
+    contact = any(t.bounds_step for t in system.terms)
     start, below = (CONTACT_STRAIN, CONTACT_STRAIN) if contact else (1e-3, STIFF_STRAIN)
     if 0.0 < scale < below:
         factor = scale / start
@@ -319,18 +319,18 @@ class _Barriers:
 
     def __init__(self, others: tuple):
         self.others = others
-        self.count = max((len(getattr(t, "stages", ())) for t in others), default=0)
+        self.count = max((len(t.stages) for t in others), default=0)
 
     def __call__(self, level: int) -> tuple:
         if level >= self.count:
             return self.others
         out = []
         for term in self.others:
-            stages = getattr(term, "stages", ())
+            stages = term.stages
             if stages:
                 k = level - (self.count - len(stages))
                 out.append(stages[max(k, 0)])
-            elif not getattr(getattr(term, "obstacle", None), "stages", ()):
+            elif term.rides_on is None or not term.rides_on.stages:
                 out.append(term)  # friction on a staged barrier waits for the exact one
         return tuple(out)
 

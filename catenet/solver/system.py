@@ -85,7 +85,7 @@ class System:
         node adjacency as 3x3 blocks, when every free node has an edge and the other
         terms' entries fall into it (node-local terms do); else None."""
         net = self.net
-        stretch = [t for t in self.terms if isinstance(t, Stretch) and t.net is net]
+        stretch = [t for t in self.terms if t.edge_net is net]
         if not stretch or self.n_free == 0:
             return None
         edges = np.ascontiguousarray(net.edges, dtype=np.int64)
@@ -99,7 +99,7 @@ class System:
         )
         targets = []
         for term in self.terms:
-            if isinstance(term, Stretch) and term.net is net:
+            if term.edge_net is net:
                 targets.append(edge_target)
                 continue
             _, rows, cols, count = self._entries(term)
@@ -173,10 +173,11 @@ class System:
 
     @staticmethod
     def _entries(term: Term) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """A term's entries (elements, rows, cols, count of values): the stretching gives
-        its edges (row-major 6x6 blocks of their two nodes), every other term its pattern."""
-        if isinstance(term, Stretch):
-            edges = np.ascontiguousarray(term.net.edges, dtype=np.int64)
+        """A term's entries (elements, rows, cols, count of values): a term of a net's
+        edges (``edge_net``: the stretching) gives them (row-major 6x6 blocks of their two
+        nodes), every other term its pattern."""
+        if term.edge_net is not None:
+            edges = np.ascontiguousarray(term.edge_net.edges, dtype=np.int64)
             return edges, _NO_DOFS, _NO_DOFS, 36 * edges.shape[0]
         pattern = term.pattern()
         if pattern is None:
@@ -188,7 +189,7 @@ class System:
     @staticmethod
     def _pattern_key(term: Term) -> object:
         """Terms that share a pattern (variants of one stretch term) share its map."""
-        return term.net if isinstance(term, Stretch) else term
+        return term.edge_net if term.edge_net is not None else term
 
     def _remember(self, term: Term, target: np.ndarray) -> None:
         key = self._pattern_key(term)

@@ -15,6 +15,20 @@ function of the node positions x (N, 3):
 - ``stiffness()``: per node (N,), the scale of its Hessian diagonal (the regularisation of
   a singular start scales with it), or None.
 
+Optional capabilities, declared so that solvers ask no term what it has:
+
+- ``bounds_step`` (with ``max_step(x, dx)``: the largest multiple of the step dx that
+  keeps every node outside, inf when it never touches): obstacles and balls; line
+  searches, predictors and polishing steps are capped there.
+- ``lagged`` (with ``relag(x)``: updates lagged quantities at an equilibrium, returns
+  their relative change): friction; a static load step is re-solved until they settle.
+- ``moving`` (with ``set_pose(t)``): an obstacle on a prescribed motion.
+- ``stages``: wider copies of an obstacle a static solve goes through first;
+  ``rides_on``: the obstacle whose barrier a term rides on (friction's normal force).
+- ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
+  by edge (the stretching, the stretched start's springs): the system shares one map
+  into its pattern between all such terms of a net.
+
 ``role`` says how a solver uses the term: "internal" terms belong to the structure
 (stretching, springs, contact; support reactions balance them), "external" ones are the
 linear potential -f.x of applied loads (their force sets the load scale), "step" terms
@@ -60,6 +74,12 @@ class Term:
     name = "term"
     role = "internal"
     convex = True
+    bounds_step = False  # has max_step(x, dx)
+    lagged = False  # has relag(x)
+    moving = False  # has set_pose(t)
+    stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
+    rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
+    edge_net = None  # a Net: the Hessian is its edges' 6x6 blocks, edge by edge
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray] | None:
         return None

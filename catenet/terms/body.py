@@ -33,6 +33,8 @@ class Ball(Term):
     """Barrier contact of ``nodes`` with the ball of ``radius`` centred at node ``center``
     (kappa [N/m], activation distance dhat [m]); ``n_nodes`` of the net with the ball."""
 
+    bounds_step = True
+
     role = "internal"
     convex = False  # as the fixed sphere: indefinite near contact
 

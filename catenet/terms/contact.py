@@ -45,8 +45,9 @@ class Obstacle(Term):
     goes through before this one (``narrowed`` copies; ``catenet.solver.static.equilibrium``):
     each stage's equilibrium, a gap below its dhat, starts the next."""
 
+    bounds_step = True
+
     role = "internal"
-    stages: tuple = ()
 
     def __init__(self, nodes, *, kappa: float, dhat: float):
         if not (math.isfinite(kappa) and kappa > 0 and math.isfinite(dhat) and dhat > 0):

@@ -80,6 +80,8 @@ class Friction(Term):
     """Coulomb friction with coefficient ``mu`` (>= 0) and slip distance ``slip`` [m] on
     the nodes of ``obstacle`` (a barrier term with nodes, kappa, dhat and gap)."""
 
+    lagged = True
+
     role = "internal"
     convex = True
 
@@ -88,7 +90,7 @@ class Friction(Term):
             raise ValueError(f"friction: mu = {mu!r}: must be finite and >= 0")
         if not (math.isfinite(slip) and slip > 0):
             raise ValueError(f"friction: slip = {slip!r}: must be finite and > 0")
-        self.obstacle = obstacle
+        self.obstacle = self.rides_on = obstacle
         self.nodes = obstacle.nodes
         self.mu = float(mu)
         self.slip = float(slip)
@@ -107,7 +109,7 @@ class Friction(Term):
         """The lagged normal forces, normals and anchors at the accepted state x (time
         ``start``); on a moving obstacle, carried with it to its pose at ``time``."""
         obs = self.obstacle
-        moves = time is not None and start is not None and hasattr(obs, "set_pose")
+        moves = time is not None and start is not None and obs.moving
         if moves:
             obs.set_pose(start)  # the pose of the accepted state
         was = self.weight > 0.0

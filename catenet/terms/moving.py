@@ -46,6 +46,9 @@ class Moving(Term):
     (a ``catenet.model.histories.History``; None: 1). ``reach``: the largest distance from the
     origin to a point of the obstacle [m]."""
 
+    bounds_step = True
+    moving = True
+
     role = "internal"
     convex = False
     #: Whether ``carry`` stops the run at a support the obstacle reaches (False for a

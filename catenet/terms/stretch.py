@@ -40,6 +40,10 @@ class Stretch(Term):
             object.__setattr__(self, "law", self.net.law)
 
     @property
+    def edge_net(self) -> Net:
+        return self.net
+
+    @property
     def convex(self) -> bool:  # tension-only edges of a stiffening law
         return self.law.convex
 
@@ -127,7 +131,7 @@ class Springs(Term):
     convex = True
 
     def __init__(self, net: Net, q: np.ndarray):
-        self.net = net
+        self.net = self.edge_net = net
         self.q = np.ascontiguousarray(q, dtype=np.float64)
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
