@@ -2,9 +2,32 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass
+class LastGood:
+    """What a failed or interrupted run keeps: its last good state, never an unconverged
+    iterate. ``x`` (N, 3) the positions of the last equilibrium of a static run (a load
+    step's or a cut-back sub-step's; the start at load factor 0 before any) or of the
+    last accepted time step; ``time`` its load factor or time [s]; ``steps`` the load or
+    time steps done; ``iterations`` the Newton iterations spent in all; ``v`` (N, 3) and
+    ``a`` (N, 3) a dynamic run's velocities and newmark acceleration state (else None)."""
+
+    x: Any
+    time: float = 0.0
+    steps: int = 0
+    iterations: int = 0
+    v: Any = None
+    a: Any = None
+
 
 class CatenetError(Exception):
-    """Base class of every error catenet raises on purpose."""
+    """Base class of every error catenet raises on purpose. ``last_good``: the last good
+    state of the run it ended (``LastGood``), where the solve path knows one."""
+
+    last_good: LastGood | None = None
 
 
 class ConfigError(CatenetError, ValueError):
@@ -22,8 +45,9 @@ class ConfigError(CatenetError, ValueError):
 class ConvergenceError(CatenetError):
     """Newton (or the time stepping) did not converge.
 
-    ``history`` holds the residual norms of the failing iteration, ``state`` the last
-    converged positions (N, 3) when there is one.
+    ``history`` holds the residual norms of the failing iteration, ``state`` the start of
+    the failing solve (N, 3) when there is one (never an unconverged iterate); the solve
+    path adds the run's ``last_good``.
     """
 
     def __init__(self, message: str, *, iterations: int = 0, history=None, state=None):

@@ -131,7 +131,8 @@ def command(
                 bar.close()
                 written = getattr(exc, "output", None)
                 if written is not None and not isinstance(exc, ConfigError):
-                    at = getattr(exc, "time", None)
+                    good = exc.last_good
+                    at = None if good is None else good.time
                     label = ""
                     if at is not None:
                         label = f"t = {at:.6g} s, " if dynamic else f"load factor {at:.6g}, "

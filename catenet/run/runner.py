@@ -320,18 +320,18 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         with interruptible(interrupt), clock.solving():
             res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
     except CatenetError as exc:
-        if isinstance(exc, ConfigError) or not hasattr(exc, "steps"):
+        good = exc.last_good
+        if isinstance(exc, ConfigError) or good is None:
             raise
         stopped = isinstance(exc, Interrupted)
-        x = _usable(exc.state, None, scene)
-        t = float(exc.time)
+        x = _usable(good.x, None, scene)
+        t = float(good.time)
         if dynamic:  # the last good state is the file's last frame, then /result
             try:
-                keep(
-                    exc.steps, t, x, exc.velocity, force=True, a=getattr(exc, "acceleration", None)
-                )
+                keep(good.steps, t, x, good.v, force=True, a=good.a)
             except CatenetError:
                 pass
+        history = getattr(exc, "history", None)
         res = finish(
             ws.system,
             scene.loads,
@@ -340,12 +340,12 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             load_time=t if dynamic else None,
             converged=False,
             equilibrium=False,
-            iterations=int(getattr(exc, "iterations", 0)),
-            residual=float(exc.history[-1]) if getattr(exc, "history", None) else float("inf"),
-            steps=int(exc.steps),
+            iterations=int(good.iterations),
+            residual=float(history[-1]) if history else float("inf"),
+            steps=int(good.steps),
             time=t,
-            v=exc.velocity,
-            a=getattr(exc, "acceleration", None),
+            v=good.v,
+            a=good.a,
             message="interrupted" if stopped else str(exc),
             wall_time=time.perf_counter() - begin,
             stats={**ws.stats(), **_times(clock)},

@@ -10,7 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.errors import ConfigError, ConvergenceError, Interrupted, SingularSystemError
+from catenet.errors import (
+    ConfigError,
+    ConvergenceError,
+    Interrupted,
+    LastGood,
+    SingularSystemError,
+)
 from catenet.model.net import Loads, Net
 from catenet.solver.result import Result
 from catenet.solver.static import solve_static
@@ -41,8 +47,8 @@ def continuation(
     of half its load increment, halved again while one fails (``CUTBACKS`` times at
     most); the sub-steps' equilibria are not reported, their iterations count. A step
     that still fails raises ConvergenceError whose ``state`` is the last equilibrium
-    found (a step's or a sub-step's; None before the first) and ``factor`` its load
-    factor (0: the start)."""
+    found (``last_good``: a step's or a sub-step's, with its load factor; x None before the
+    first)."""
     if len(factors) == 0:
         raise ConfigError("continuation: factors is empty: give at least one load factor")
     ws = workspace or Workspace(net, linear=linear)
@@ -64,7 +70,7 @@ def continuation(
             )
         except ConvergenceError as exc:
             if isinstance(exc, Interrupted) or not _worth_cutting(exc):
-                exc.state, exc.factor = good.x, good.factor
+                exc.last_good = LastGood(good.x, good.factor)
                 raise
             origin = good if good.x is not None else Equilibrium(x0, 0.0)
             r = _cut_back(net, loads, origin, float(factor), exc, good, settings)
@@ -135,7 +141,7 @@ def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, set
                     f"{_advice(exc, settings['max_iter'])}",
                 )
                 exc.iterations = spent
-                exc.state, exc.factor = good.x, good.factor
+                exc.last_good = LastGood(good.x, good.factor)
                 raise
             increment *= 0.5
             cuts += 1

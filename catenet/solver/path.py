@@ -10,8 +10,8 @@ last (a force-displacement curve; one step: the equilibrium directly). Dynamic r
 the paper's implicit Euler from a start state to t_end or to equilibrium. ``on_step``
 sees every equilibrium or time step as a ``Step``; returning True stops the run there
 (the result is then not converged, its message "interrupted"). A run that fails raises
-ConvergenceError whose ``state``, ``velocity``, ``time``, ``steps`` and ``iterations``
-describe the last good state, so that callers can keep it.
+an error whose ``last_good`` (``catenet.errors.LastGood``: positions, velocities, time or
+load factor, steps, iterations) is the last good state, so that callers can keep it.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.errors import CatenetError, ConfigError, ConvergenceError
+from catenet.errors import CatenetError, ConfigError, ConvergenceError, LastGood
 from catenet.model.net import Loads, Net
 from catenet.solver.loadsteps import continuation
 from catenet.solver.result import Result
@@ -136,18 +136,12 @@ def _static(scene, settings, ws, start, on_step) -> Result:
             raise
         # The last good state: the last equilibrium (a load step's or a cut-back's
         # sub-step's), else the start at load factor 0; never an unconverged iterate.
-        state = getattr(exc, "state", None)
-        factor = float(getattr(exc, "factor", done[-1].time if done else 0.0))
-        if state is None:
-            state, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
-        _annotate(
-            exc,
-            state,
-            None,
-            factor,
-            len(done),
-            sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0)),
-        )
+        good = exc.last_good
+        x, factor = (None, 0.0) if good is None else (good.x, good.time)
+        if x is None:
+            x, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
+        spent = sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0))
+        exc.last_good = LastGood(x, factor, len(done), spent)
         raise
     r = total(done[-1])
     if not r.message or r.message == "converged":
@@ -208,15 +202,7 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
         iterations = int(getattr(exc, "iterations", 0))
         if last["steps"] == 0 and accel is not None:
             last["a"] = accel.copy()  # the start's state: solve_dynamic set it first
-        _annotate(exc, last["x"], last["v"], last["t"], last["steps"], iterations)
-        exc.acceleration = last["a"]
+        exc.last_good = LastGood(
+            last["x"], last["t"], last["steps"], iterations, last["v"], last["a"]
+        )
         raise
-
-
-def _annotate(exc, x, v, t, steps, iterations) -> None:
-    """What a failed run keeps: the last good state, its time, steps and iterations
-    (a dynamic run's also its acceleration state, ``acceleration``: None when none)."""
-    exc.state, exc.velocity, exc.time, exc.steps, exc.iterations = x, v, t, steps, iterations
-    exc.acceleration = None
-    if not hasattr(exc, "history"):
-        exc.history = []

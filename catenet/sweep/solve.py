@@ -168,7 +168,8 @@ def _solve_levels(task: dict) -> list[dict]:
                 row["run_file"] = _save_run(Path(task["out"]), task["index"], k, scene, result)
         except (CatenetError, ArithmeticError, ValueError, MemoryError, OSError) as exc:
             row["error"] = _error_text(exc)
-            state = getattr(exc, "state", None)
+            good = getattr(exc, "last_good", None)  # a catenet error's last good state
+            state = None if good is None else good.x
             if state is not None and ws_net is not None and np.shape(state) == ws_net.nodes.shape:
                 x_prev = np.asarray(state)
             path = []
