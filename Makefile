@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 
-.PHONY: run test lint clean
+.PHONY: run test test-fast lint clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -25,7 +25,11 @@ run: $(VENV)/.installed
 	$(VENV)/bin/catenet run
 
 test: $(VENV)/.installed-test
-	$(PY) -m pytest -n 2 --dist loadfile -q
+	$(PY) -m pytest -n 2 --dist loadfile -q --durations=15
+
+# The development loop: the suite without the tests marked slow (large nets, long runs).
+test-fast: $(VENV)/.installed-test
+	$(PY) -m pytest -n 2 --dist loadfile -q -m "not slow"
 
 lint: $(VENV)/.installed-test
 	$(PY) -m pip install --quiet ruff

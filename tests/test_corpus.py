@@ -29,6 +29,8 @@ import h5py
 import pytest
 from conftest import catenet_command, subprocess_env
 
+pytestmark = pytest.mark.slow  # 120 whole runs: make test, not make test-fast
+
 PER_FAMILY = 20
 TOL = 1e-6
 TIMEOUT = 300.0  # s: a hang is a failure, not a stuck test session

@@ -252,6 +252,7 @@ def test_a_restart_goes_on_with_the_obstacles_where_the_solver_has_them(run, tmp
     check_xdmf(again.with_suffix(".xdmf"))
 
 
+@pytest.mark.slow
 def test_a_killed_run_keeps_as_many_obstacle_frames_as_net_frames(tmp_path, ball):
     d = case_dict(ball, t_end=1.0)
     d["solver"]["dt"] = 5e-4  # 2000 steps: seconds of frames, then killed

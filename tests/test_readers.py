@@ -135,6 +135,7 @@ def wait_for_flushes(path: Path, frames: int, proc: subprocess.Popen, timeout=12
     raise AssertionError(f"{path}: fewer than {frames} frames after {timeout} s")
 
 
+@pytest.mark.slow
 def test_a_killed_run_opens_in_every_reader_with_the_uninterrupted_frames(tmp_path, write_case):
     case = write_case(KILLED)
     out = tmp_path / "killed.h5"

@@ -54,6 +54,7 @@ def test_readme_has_steps():
     assert kinds.count("shell") >= 10 and kinds.count("python") >= 3
 
 
+@pytest.mark.slow
 def test_readme_runs_as_written(tmp_path, monkeypatch):
     shutil.copytree(ROOT / "configs", tmp_path / "configs")
     monkeypatch.chdir(tmp_path)

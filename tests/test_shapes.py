@@ -479,6 +479,7 @@ def test_a_mesh_path_is_relative_to_the_case_file_and_reads_back(tmp_path, monke
 CAPTURE = Path(__file__).parents[1] / "configs" / "contact" / "tether_capture.toml"
 
 
+@pytest.mark.slow
 def test_the_capture_example_runs_short_and_makes_a_figure_and_a_trajectory(tmp_path):
     """The example as a user runs it, shortened by --set: a result with a trajectory,
     its XDMF sidecar, a figure, and no node inside the box in any written frame."""

@@ -441,6 +441,7 @@ def test_bundled_paper_case_runs_from_the_command_line(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.slow
 def test_the_paper_study_as_documented(tmp_path):
     """`catenet sweep configs/sweeps/paper.toml -o out/paper --plot` (the README):
     390 rows on 2 workers, the figures, and the numbers the README reports: the collapse

@@ -81,10 +81,10 @@ def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth,
 def stretch_hessian(x, edges, l0, ea, law, params, table, tension_only, smooth, values):
     """Writes the 6x6 Hessian of every edge into values (M*36,), row-major over the
     local DOFs (x_i, y_i, z_i, x_j, y_j, z_j)."""
+    e = np.empty(3)  # one buffer for every edge (no allocation in the loop)
     for k in range(edges.shape[0]):
         i = edges[k, 0]
         j = edges[k, 1]
-        e = np.empty(3)
         e[0] = x[j, 0] - x[i, 0]
         e[1] = x[j, 1] - x[i, 1]
         e[2] = x[j, 2] - x[i, 2]
