@@ -40,9 +40,8 @@ CHOICES = (*STUDIES, "all", "report")
     "--output",
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
-    default=Path("benchmarks") / "results",
-    show_default=True,
-    help="Directory for the CSV tables and figures.",
+    required=True,
+    help="Directory for the CSV tables and figures (nothing is written elsewhere).",
 )
 @click.option("--quick", is_flag=True, help="Smaller versions of the studies (~3 min in all).")
 @click.option(
@@ -56,9 +55,15 @@ CHOICES = (*STUDIES, "all", "report")
     "--docs",
     "docs_dir",
     type=click.Path(file_okay=False, path_type=Path),
-    default=Path("docs"),
-    show_default=True,
-    help="report: where readme-performance.md and figures/ go.",
+    default=None,
+    help="report: where readme-performance.md and figures/ go (default: OUTPUT).",
+)
+@click.option(
+    "--readme",
+    "readme",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="report: also put the section into this README between its performance markers.",
 )
 @click.option(
     "--strict",
@@ -72,7 +77,8 @@ def command(
     out_dir: Path,
     quick: bool,
     threads: int,
-    docs_dir: Path,
+    docs_dir: Path | None,
+    readme: Path | None,
     strict: bool,
     quiet: bool,
     verbose: int,
@@ -96,7 +102,8 @@ def command(
     integrators numerical damping of implicit Euler and newmark against h omega; time
                 to rest of the damping study (mu = 0.1, 1, 10) with each
     all         every study above, in this order
-    report      docs/readme-performance.md and docs/figures/ from OUTPUT's CSV files
+    report      readme-performance.md and figures/ (in --docs, default OUTPUT) from
+                OUTPUT's CSV files; with --readme, also that README's section
                 (give it after the studies to run them first: all report)
 
     Findings (a default that is not the faster choice, a stress scene without a right
@@ -117,7 +124,7 @@ def command(
         if "report" in studies:
             from catenet.studies.bench.report import write_report
 
-            path = write_report(out_dir, docs_dir)
+            path = write_report(out_dir, out_dir if docs_dir is None else docs_dir, readme)
             if not quiet:
                 click.echo(f"report written to {path}")
         for f in findings:

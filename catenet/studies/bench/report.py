@@ -1,6 +1,6 @@
 """The README performance section, generated from the studies' CSV files.
 
-``write_report(results_dir, docs_dir)`` reads ``<study>.csv`` and ``machine.json`` from
+``write_report(results_dir, docs_dir, readme=None)`` reads ``<study>.csv`` and ``machine.json`` from
 ``results_dir``, copies the figures ``bench-*.png`` to ``docs_dir/figures`` and writes
 ``docs_dir/readme-performance.md``: a header, the headline numbers (``_summary``), one
 section per study (``report_sections``) and how to reproduce them. Sections whose CSV is
@@ -24,7 +24,7 @@ log = logging.getLogger(__name__)
 NAME = "report"
 
 
-def write_report(results_dir: Path, docs_dir: Path) -> Path:
+def write_report(results_dir: Path, docs_dir: Path, readme: Path | None = None) -> Path:
     results, docs = Path(results_dir), Path(docs_dir)
     figures = docs / "figures"
     figures.mkdir(parents=True, exist_ok=True)
@@ -56,7 +56,8 @@ def write_report(results_dir: Path, docs_dir: Path) -> Path:
     path = docs / "readme-performance.md"
     text = "\n".join(lines).rstrip() + "\n"
     path.write_text(text)
-    splice_readme(docs.parent / "README.md", text, docs)
+    if readme is not None:  # only a README named on purpose is rewritten
+        splice_readme(Path(readme), text, docs)
     return path
 
 
@@ -217,7 +218,7 @@ def _reproduce() -> list[str]:
         "catenet bench all -o benchmarks/results            # every study (~25 min)",
         "catenet bench all --quick -o /tmp/bench             # a smaller version (~3 min)",
         "catenet bench scale -o benchmarks/results           # one study",
-        "catenet bench report -o benchmarks/results --docs docs   # this section",
+        "catenet bench report -o benchmarks/results --docs docs --readme README.md  # this",
         "python benchmarks/step_size.py -o benchmarks/results     # the same, as scripts",
         "```",
         "",
