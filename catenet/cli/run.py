@@ -144,7 +144,7 @@ def command(
             finally:
                 bar.close()
         if stop.signal is not None:
-            if result.message == "interrupted":
+            if result.outcome == "interrupted":  # catenet.solver.result.Outcome
                 where = f"; the state so far is in {path}" if path is not None else ""
                 click.echo(
                     f"catenet: interrupted at {_where(case, result)}{where} "

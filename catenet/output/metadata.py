@@ -51,6 +51,8 @@ def result_attrs(res, scene) -> dict:
         "wall_time": float(res.wall_time),
         "equilibrium": bool(res.equilibrium),
         "message": str(res.message or ""),
+        # how the solve ended: equilibrium, ... (catenet.solver.result.Outcome); "" unknown
+        "outcome": str(res.outcome) if getattr(res, "outcome", None) is not None else "",
         "time": float(res.time),
         "delta": delta,
         "delta_over_L": delta / float(scene.size),

@@ -265,7 +265,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     from catenet.errors import Interrupted
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
-    from catenet.solver.result import finish
+    from catenet.solver.result import Outcome, finish
 
     dynamic = settings.method == "dynamic"
     total = settings.t_end if dynamic else 1.0
@@ -347,6 +347,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             v=good.v,
             a=good.a,
             message="interrupted" if stopped else str(exc),
+            outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
             wall_time=time.perf_counter() - begin,
             stats={**ws.stats(), **_times(clock)},
         )
@@ -360,7 +361,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
     else:
         res.wall_time = time.perf_counter() - begin
-    if res.message == "interrupted":
+    if res.outcome is Outcome.INTERRUPTED:
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
     res.wall_time = time.perf_counter() - begin
     res.stats.update(_times(clock))

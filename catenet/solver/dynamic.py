@@ -28,7 +28,7 @@ from catenet.kernels.sparse import norm
 from catenet.model.net import Loads, Net
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
-from catenet.solver.result import Result, finish
+from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import HarmonicExtension
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia
@@ -210,10 +210,12 @@ def solve_dynamic(
                 on_rest(ratio)
         if on_step is not None and on_step(steps, t, x, v):
             interrupted = True
-            message = "interrupted"
             break
-    if not interrupted:
-        message = "equilibrium" if equilibrium else "reached t_end"
+    if interrupted:
+        outcome = Outcome.INTERRUPTED
+    else:
+        outcome = Outcome.EQUILIBRIUM if equilibrium else Outcome.REACHED_T_END
+    message = str(outcome)
     return finish(
         system,
         loads,
@@ -230,6 +232,7 @@ def solve_dynamic(
         message=message,
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
+        outcome=outcome,
     )
 
 

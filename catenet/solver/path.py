@@ -25,7 +25,7 @@ import numpy as np
 from catenet.errors import CatenetError, ConfigError, ConvergenceError, LastGood
 from catenet.model.net import Loads, Net
 from catenet.solver.loadsteps import continuation
-from catenet.solver.result import Result
+from catenet.solver.result import Outcome, Result
 from catenet.solver.settings import METHODS, Settings  # noqa: F401 (the path's face)
 from catenet.solver.start import start_state
 from catenet.solver.workspace import Workspace
@@ -130,7 +130,9 @@ def _static(scene, settings, ws, start, on_step) -> Result:
         )
     except _Stop:
         if len(done) < steps:
-            return total(done[-1], converged=False, message="interrupted")
+            return total(
+                done[-1], converged=False, message="interrupted", outcome=Outcome.INTERRUPTED
+            )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
             raise
@@ -144,10 +146,8 @@ def _static(scene, settings, ws, start, on_step) -> Result:
         exc.last_good = LastGood(x, factor, len(done), spent)
         raise
     r = total(done[-1])
-    if not r.message or r.message == "converged":
-        r.message = "equilibrium"
-    elif r.message == "converged (round-off floor)":  # above rtol x the force scale
-        r.message = "equilibrium at the round-off floor of its forces"
+    if r.outcome in (Outcome.EQUILIBRIUM, Outcome.AT_FLOOR):
+        r.message = str(r.outcome)  # which criterion held
     return r
 
 

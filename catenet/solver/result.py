@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -11,6 +12,16 @@ from catenet.model.net import Loads
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
     from catenet.solver.system import System
+
+
+class Outcome(StrEnum):
+    """How a solve ended (its value is the summary's word for it)."""
+
+    EQUILIBRIUM = "equilibrium"  # every free DOF within rtol of the force scale
+    AT_FLOOR = "equilibrium at the round-off floor of its forces"  # above rtol, at round-off
+    REACHED_T_END = "reached t_end"  # a dynamic run that ran its time, not yet at rest
+    INTERRUPTED = "interrupted"  # stopped on request (a signal, a callback)
+    FAILED = "failed"  # did not converge: the state is the last good one
 
 
 @dataclass
@@ -35,6 +46,7 @@ class Result:
         None where not checked (tension-only nets are never unstable)
     stats : counts and seconds per phase (assembly, analyse, factorize, solve)
     diagnosis : what makes an unstable equilibrium unstable (``catenet.solver.diagnose``), or ""
+    outcome : how the solve ended (``Outcome``); None where not known
     """
 
     x: np.ndarray
@@ -56,6 +68,7 @@ class Result:
     a: np.ndarray | None = None
     contact_force: np.ndarray | None = None
     diagnosis: str = ""
+    outcome: Outcome | None = None
 
 
 def finish(

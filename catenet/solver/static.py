@@ -17,7 +17,7 @@ from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import describe_unstable
 from catenet.solver.newton import Potential, _c_start, raise_unconverged, solve
-from catenet.solver.result import Result, finish
+from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import start_state, stretched_start, unstressed
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia, Stretch
@@ -87,6 +87,7 @@ def solve_static(
         message=result.reason,
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
+        outcome=_outcome(result),
     )
     if not net.law.all_tension_only and result.converged:
         out.stable = _stable(ws, potential, x)
@@ -111,6 +112,13 @@ def solve_static(
             " ..." if loose.size > 10 else "",
         )
     return out
+
+
+def _outcome(result) -> Outcome:
+    """The Outcome of a load step's Newton result: which criterion held, or failed."""
+    if not result.converged:
+        return Outcome.FAILED
+    return Outcome.AT_FLOOR if "round-off floor" in result.reason else Outcome.EQUILIBRIUM
 
 
 LAG_ROUNDS = 20  # a static load step re-solved at most this often for its lagged terms

@@ -172,7 +172,7 @@ def _solve(job: dict, budget: float, quick: bool):
             "iterations": res.iterations,
             "steps": res.steps,
             "equilibrium": res.equilibrium,
-            "capped": res.message == "interrupted",
+            "capped": res.outcome == "interrupted",
             "simulated_seconds": res.time,
             "dofs": 3 * int((~net.fixed).sum()),
         },

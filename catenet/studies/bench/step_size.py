@@ -80,7 +80,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
                     "simulated_seconds": res.time,
                     "time_ratio": wall / res.time if res.time > 0 else float("nan"),
                     "equilibrium": bool(res.equilibrium),
-                    "capped": res.message == "interrupted",
+                    "capped": res.outcome == "interrupted",
                     "error_vs_static": err,
                     "delta": -float(res.x[sq.center, 2]),
                     "delta_static": delta_ref,
