@@ -1,4 +1,4 @@
-"""Numerical-stability stress test (a fast subset runs in tests/test_stress.py).
+"""Numerical-stability stress test (a fast subset runs in tests/solver/test_stress.py).
 
 A thin script: the study is `catenet.studies.bench.stress` (so that `catenet bench stress` works
 from an installed package). Usage: `python benchmarks/stress.py [-o DIR] [--quick]`, the options of

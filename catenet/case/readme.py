@@ -1,7 +1,7 @@
 """The README table of case keys, generated from the declarations.
 
 ``python -m catenet.case.readme [README.md]`` rewrites the table between the markers
-``<!-- case-keys:begin -->`` and ``<!-- case-keys:end -->``; tests/test_case.py checks
+``<!-- case-keys:begin -->`` and ``<!-- case-keys:end -->``; tests/case/test_case.py checks
 that the README holds what ``keys_table()`` gives.
 """
 

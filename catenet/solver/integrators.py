@@ -38,7 +38,7 @@ to O((h omega)^3) per period. Why this form:
   internal forces at a mean of x_n and x_{n+1}, and the state x_{n+1} would be an
   extrapolation past the point the barrier guards.
 - The mass-proportional damping mu M v_{n+1} enters with the same Newmark velocity, so
-  the damped scheme is second order too (tests/test_integrators.py checks the order).
+  the damped scheme is second order too (tests/solver/test_integrators.py checks the order).
 - Plain average acceleration (rho_inf = 1) is energy conserving only for linear systems:
   on the paper's tension-only net (a kink in the stiffness at zero strain, axial modes
   far beyond 1/h) its undamped high modes ring for ever, since mass-proportional

@@ -13,7 +13,7 @@ non-catenet exception, a NaN in a result, a check that fails) is a finding. Chec
 - ``static = dynamic``: the dynamic run's final equilibrium against the static one.
 - ``bounded``: a dynamic run stopped long before equilibrium stays finite and bounded.
 
-``scenes(quick)`` lists them (the quick subset runs in ``tests/test_stress.py``);
+``scenes(quick)`` lists them (the quick subset runs in ``tests/solver/test_stress.py``);
 ``run_scene`` runs one and returns its row. The scenes and their checks are in
 ``catenet.studies.bench.stress_scenes``.
 """

@@ -19,8 +19,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from meshes import CUBE_T, CUBE_V, icosphere, write_stl
 from test_bodies import catch_case
-from test_shapes import CUBE_T, CUBE_V, icosphere, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.contact import barrier
@@ -246,7 +246,7 @@ def test_max_step_never_lets_a_ball_overlap(kind):
 
 
 def beside(obstacles, **solver):
-    """The coarse net of tests/test_bodies.py far from ``obstacles`` (at x = 2 m)."""
+    """The coarse net of tests/terms/test_bodies.py far from ``obstacles`` (at x = 2 m)."""
     case = catch_case(coarse=True, **solver)
     case["obstacle"] = obstacles
     return case
@@ -494,7 +494,7 @@ def test_the_ball_off_box_example_runs_short_and_never_overlaps(tmp_path):
     from catenet.output import read_bodies
     from catenet.output.reader import read_frame
 
-    config = Path(__file__).parents[1] / "configs" / "contact" / "ball_off_box.toml"
+    config = Path(__file__).parents[2] / "configs" / "contact" / "ball_off_box.toml"
     out = tmp_path / "ball.h5"
     res = CliRunner().invoke(
         main, ["run", str(config), "-o", str(out), "--set", "solver.t_end=0.8"]

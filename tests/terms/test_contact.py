@@ -224,8 +224,8 @@ def test_bad_obstacles_exit_2_with_their_key_path(tmp_path, obstacle, message):
 
 CONTACT_CONFIGS = sorted(
     p
-    for p in (Path(__file__).parents[1] / "configs" / "contact").glob("*.toml")
-    if p.stem != "tether_capture"  # a free flight, not an equilibrium: tests/test_shapes.py
+    for p in (Path(__file__).parents[2] / "configs" / "contact").glob("*.toml")
+    if p.stem != "tether_capture"  # a free flight, not an equilibrium: tests/terms/test_shapes.py
 )
 
 

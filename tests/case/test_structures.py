@@ -30,7 +30,7 @@ from catenet.formfind.case import write_formfind
 from catenet.run import advice
 from catenet.run.runner import run_case
 
-CONFIGS = Path(__file__).parents[1] / "configs"
+CONFIGS = Path(__file__).parents[2] / "configs"
 SADDLE = CONFIGS / "formfind" / "saddle_roof.toml"
 MAST = CONFIGS / "structures" / "guyed_mast.toml"
 TETHER = CONFIGS / "structures" / "tether_net.toml"

@@ -274,7 +274,7 @@ def test_a_mooring_line_on_the_seabed_keeps_its_grounded_part_under_a_sideways_p
 
 # --------------------------------------------------------------------------- cases
 
-MOORING = Path(__file__).parents[1] / "configs" / "friction" / "mooring_pulled.toml"
+MOORING = Path(__file__).parents[2] / "configs" / "friction" / "mooring_pulled.toml"
 
 
 def pulled_run(tmp_path, *overrides):

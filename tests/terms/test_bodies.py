@@ -286,7 +286,7 @@ def test_the_catch_example_runs_short_and_writes_the_ball_for_paraview_and_plot(
     from catenet.cli import main
     from catenet.output import read_bodies, read_result
 
-    config = Path(__file__).parents[1] / "configs" / "contact" / "sphere_catch.toml"
+    config = Path(__file__).parents[2] / "configs" / "contact" / "sphere_catch.toml"
     out = tmp_path / "catch.h5"
     args = ["run", str(config), "-o", str(out), "--set", "solver.t_end=0.5"]
     res = CliRunner().invoke(main, args)
@@ -381,7 +381,7 @@ def test_balls_stop_at_the_ground_at_fixed_spheres_and_at_each_other():
 
 
 def test_a_ball_no_longer_passes_through_a_box(caplog):
-    """Boxes, capsules and meshes stop a ball too (tests/test_ball_shapes.py): no more
+    """Boxes, capsules and meshes stop a ball too (tests/terms/test_ball_shapes.py): no more
     "does not collide" warning, a barrier on the ball's centre instead."""
     case = catch_case(coarse=True)
     case["obstacle"].append(

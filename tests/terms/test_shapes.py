@@ -22,52 +22,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from meshes import CUBE_T, CUBE_V, icosphere, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.mesh import _cell
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.shapes import Box, Capsule, Mesh, closed_surface, rotation
-
-CUBE_V = np.array(
-    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
-    dtype=float,
-)
-CUBE_T = np.array(
-    [
-        [0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
-        [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7],
-    ]
-)  # fmt: skip
-
-
-def icosphere(levels: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """A unit sphere of 20 * 4**levels triangles (a closed, convex, curved mesh)."""
-    p = (1 + 5**0.5) / 2
-    V = [[-1, p, 0], [1, p, 0], [-1, -p, 0], [1, -p, 0], [0, -1, p], [0, 1, p]]
-    V += [[0, -1, -p], [0, 1, -p], [p, 0, -1], [p, 0, 1], [-p, 0, -1], [-p, 0, 1]]
-    T = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4]]
-    T += [[11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8]]
-    T += [[3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
-    V = [np.array(v, float) / np.linalg.norm(v) for v in V]
-    for _ in range(levels):
-        mid: dict = {}
-
-        def m(i, j, mid=mid):
-            key = (min(i, j), max(i, j))
-            if key not in mid:
-                v = V[i] + V[j]
-                V.append(v / np.linalg.norm(v))
-                mid[key] = len(V) - 1
-            return mid[key]
-
-        T = [
-            t
-            for a, b, c in T
-            for t in ([a, m(a, b), m(c, a)], [b, m(b, c), m(a, b)], [c, m(c, a), m(b, c)],
-                      [m(a, b), m(b, c), m(c, a)])
-        ]  # fmt: skip
-    return np.array(V), np.array(T)
 
 
 def near_surface(term, rng, n, lo, hi, dhat):
@@ -372,13 +333,6 @@ def test_no_node_ever_enters_a_shape_a_net_falls_on(kind, dt, tmp_path):
 # --------------------------------------------------------------------------- input
 
 
-def write_stl(path, V, T):
-    import meshio
-
-    meshio.write_points_cells(path, V, [("triangle", T)])
-    return path
-
-
 @pytest.mark.parametrize(
     "obstacle, message",
     [
@@ -476,7 +430,7 @@ def test_a_mesh_path_is_relative_to_the_case_file_and_reads_back(tmp_path, monke
 
 # --------------------------------------------------------------------------- the capture scene
 
-CAPTURE = Path(__file__).parents[1] / "configs" / "contact" / "tether_capture.toml"
+CAPTURE = Path(__file__).parents[2] / "configs" / "contact" / "tether_capture.toml"
 
 
 @pytest.mark.slow
@@ -533,7 +487,7 @@ def capture_near(dt: float) -> dict:
     data["geometry"]["file"] = str(CAPTURE.parent / data["geometry"]["file"])
     box = data["obstacle"][0]
     box["angle"] = 0.0  # its top face level, 3 mm below the middle node
-    box.pop("angular_velocity", None)  # and staying so (tests/test_moving_shapes.py tumbles it)
+    box.pop("angular_velocity", None)  # and staying so (test_moving_shapes.py tumbles it)
     box["center"] = [0.0, 0.0, -box["half_size"][2] - 0.003]
     data["mass"].append({"node": "middle", "velocity": [0.0, 0.0, -5.0]})
     data["solver"].update(dt=dt, t_end=2 * max(dt, 2e-3))

@@ -13,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from test_shapes import icosphere, write_stl
+from meshes import icosphere, write_stl
 
 from catenet.case import dumps_toml
 from catenet.cli import main

@@ -367,7 +367,7 @@ def test_the_readme_example_runs():
     import tomllib
     from pathlib import Path
 
-    text = Path(__file__).resolve().parents[1].joinpath("README.md").read_text()
+    text = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
     part = text[text.index("**Time histories, point masses") :]
     example = part[part.index("```toml\n") + 8 : part.index("```\n", part.index("```toml"))]
     data = cable(t_end=0.8)

@@ -348,7 +348,7 @@ def test_the_readme_example_runs():
     """The README's cable example is a valid case; its loads and reactions balance."""
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
     blocks = [b.split("```", 1)[0] for b in text.split("```toml\n")[1:]]
     (example,) = [b for b in blocks if "[[geometry.cable]]" in b]
     scene = build(parse_case(tomllib.loads(example)))

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 import pyvista as pv
 from conftest import check_xdmf, read_with_vtk, spawn, wait_for_frames
+from meshes import icosphere, write_stl
 from scipy.spatial.transform import Rotation
-from test_shapes import icosphere, write_stl
 
 from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.output import read_obstacles, read_result, recover, repair, trajectory_length

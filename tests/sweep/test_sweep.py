@@ -26,7 +26,7 @@ from catenet import sweep as sw
 from catenet.cli.sweep import command as sweep_command
 from catenet.errors import ConfigError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "sweeps" / "paper.toml"
 
 BASE = """

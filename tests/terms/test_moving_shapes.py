@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 import pytest
-from test_shapes import CUBE_T, CUBE_V, flat_case
+from meshes import CUBE_T, CUBE_V
+from test_shapes import flat_case
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.errors import ConvergenceError
@@ -264,7 +265,7 @@ def test_a_moving_capsule_or_mesh_takes_the_same_keys(kind, tmp_path):
 
 @pytest.mark.parametrize("dt", [1e-5, 1e-3, 1e-1])
 def test_the_capture_scene_with_a_tumbling_box_keeps_every_node_outside(dt):
-    """The capture scene of tests/test_shapes.py (the box 3 mm below the net's middle),
+    """The capture scene of tests/terms/test_shapes.py (the box 3 mm below the net's middle),
     the box tumbling at 1.6 rad/s: at every step size every accepted state is finite,
     outside the box where it is at that time, and the net touches it."""
     from test_shapes import capture_near

@@ -223,7 +223,7 @@ with ResultWriter({path!r}, scene, every=1) as w:
 def test_sigkill_leaves_a_readable_file(tmp_path, delay):
     """A writer killed at an arbitrary moment leaves every flushed frame readable."""
     path = tmp_path / "killed.h5"
-    script = WRITER_SCRIPT.format(tests=str(Path(__file__).parent), path=str(path))
+    script = WRITER_SCRIPT.format(tests=str(Path(__file__).parents[1]), path=str(path))
     proc = subprocess.Popen(
         [sys.executable, "-c", script],
         env=subprocess_env(),
@@ -297,7 +297,7 @@ print(json.dumps(out))
 def test_full_disk_keeps_the_result_in_a_temporary_file(tmp_path):
     path = tmp_path / "full.h5"
     script = FULL_DISK_SCRIPT.format(
-        tests=str(Path(__file__).parent), path=str(path), limit=120_000
+        tests=str(Path(__file__).parents[1]), path=str(path), limit=120_000
     )
     proc = subprocess.run(
         [sys.executable, "-c", script],
