@@ -195,7 +195,7 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
         widths = []  # the continuation's wider barriers, widest first
         wide = DISTANCE_SHARE * size
         if obs.distance is None and not getattr(obs, "rigid_motion", False) and wide > 10.0 * dhat:
-            while wide > 10.0 * dhat:
+            while wide > dhat * (1.0 + 1e-9):  # tenfold narrower each, the last within 10x
                 widths.append(wide)
                 wide /= STAGE_SHRINK
         kappa = stiffness(dhat)
@@ -204,7 +204,7 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
         first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
         term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
         term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
-        if hasattr(term, "carry"):  # on a prescribed motion: its name in messages
+        if term.moving:  # on a prescribed motion: its name in messages
             term.label = f"obstacle[{k}] (kind {obs.kind!r})"
         gap = term.gap(net.nodes)
         inside = np.flatnonzero(~(gap > 0.0))

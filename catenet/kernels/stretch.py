@@ -54,7 +54,17 @@ def stretch_energy(x, edges, l0, ea, law, params, table, tension_only, smooth):
 def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth, grad):
     """Adds dU/dx into grad (N, 3) (the internal force, opposite to the force on the
     nodes) and returns the stretching energy."""
+    return stretch_gradient_work(x, edges, l0, ea, law, params, table, tension_only, smooth, grad)[
+        0
+    ]
+
+
+@njit(cache=True, error_model="numpy")
+def stretch_gradient_work(x, edges, l0, ea, law, params, table, tension_only, smooth, grad):
+    """``stretch_gradient``, returning (energy, sum |N| |e|): the energy's round-off level
+    in units of eps (see ``stretch_roundoff``), in the same pass."""
     total = 0.0
+    work = 0.0
     for k in range(edges.shape[0]):
         i = edges[k, 0]
         j = edges[k, 1]
@@ -67,6 +77,7 @@ def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth,
         if force == 0.0 and w == 0.0:
             continue
         total += ea[k] * l0[k] * w
+        work += abs(ea[k] * force) * length
         f = ea[k] * force / length
         grad[j, 0] += f * e0
         grad[j, 1] += f * e1
@@ -74,7 +85,7 @@ def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth,
         grad[i, 0] -= f * e0
         grad[i, 1] -= f * e1
         grad[i, 2] -= f * e2
-    return total
+    return total, work
 
 
 @njit(cache=True, error_model="numpy")

@@ -193,8 +193,11 @@ class Net:
         unknown = set(changes) - set(fields)
         if unknown:
             raise TypeError(f"Net.replace: unknown fields {sorted(unknown)}")
-        if "edges" in changes and "law" not in changes:
-            fields["law"] = None  # a law per edge does not fit other edges
+        if "law" not in changes:
+            if "edges" in changes:
+                fields["law"] = None  # a law per edge does not fit other edges
+            elif "tension_only" in changes:  # every edge's switch, the law kept
+                fields["law"] = self.law.with_tension_only(bool(changes["tension_only"]))
         fields.update(changes)
         nodes, edges = fields.pop("nodes"), fields.pop("edges")
         return Net.from_arrays(nodes, edges, **fields)

@@ -332,6 +332,9 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             except CatenetError:
                 pass
         history = getattr(exc, "history", None)
+        residual = float(history[-1]) if history else float("inf")
+        if not dynamic:  # the residual of the state kept, not of the failed solve's iterate
+            residual = _static_residual(ws, scene, x, t)
         res = finish(
             ws.system,
             scene.loads,
@@ -341,7 +344,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             converged=False,
             equilibrium=False,
             iterations=int(good.iterations),
-            residual=float(history[-1]) if history else float("inf"),
+            residual=residual,
             steps=int(good.steps),
             time=t,
             v=good.v,
@@ -367,6 +370,14 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     res.stats.update(_times(clock))
     _write_result(writer, res)
     return res
+
+
+def _static_residual(ws, scene, x, factor: float) -> float:
+    """|grad E - f| over the free DOFs at x under the loads at ``factor`` [N]."""
+    net = scene.net
+    _, grad = ws.system.gradient(x)
+    force = scene.loads.external_force(net, factor)
+    return float(np.linalg.norm((grad - force)[~net.fixed]))
 
 
 def _times(clock) -> dict:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,6 +18,7 @@ from catenet.errors import (
 )
 from catenet.model.net import Loads, Net
 from catenet.solver.result import Result
+from catenet.solver.start import start_state
 from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
 
@@ -40,21 +40,22 @@ def continuation(
     on_step: Callable[[float, Result], None] | None = None,
     workspace: Workspace | None = None,
 ) -> list[Result]:
-    """Equilibria at increasing load factors, each starting from the previous one (a
+    """Equilibria at the given load factors, each starting from the previous one (a
     force-displacement curve). ``on_step(factor, result)`` sees each as it is found.
 
     A load step that fails is cut back: re-solved from the last equilibrium in sub-steps
-    of half its load increment, halved again while one fails (``CUTBACKS`` times at
-    most); the sub-steps' equilibria are not reported, their iterations count. A step
-    that still fails raises ConvergenceError whose ``state`` is the last equilibrium
-    found (``last_good``: a step's or a sub-step's, with its load factor; x None before the
-    first)."""
+    of half its load increment, halved again while one fails (``CUTBACKS`` times at most,
+    doubled again after two that succeed), the last rung a damped pseudo-transient solve;
+    the sub-steps' equilibria are not reported, their iterations count. A step that
+    still fails (or is interrupted) raises its ConvergenceError with ``last_good`` the
+    last equilibrium found (a step's or a sub-step's, with its load factor; the start,
+    supports in place, at load factor 0 before the first)."""
     if len(factors) == 0:
         raise ConfigError("continuation: factors is empty: give at least one load factor")
     ws = workspace or Workspace(net, linear=linear)
     results: list[Result] = []
     x = x0
-    good = Equilibrium(None, 0.0)  # the last equilibrium (None: the start)
+    good = LastGood(start_state(net, loads, x0, 0.0), 0.0)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
@@ -70,26 +71,16 @@ def continuation(
             )
         except ConvergenceError as exc:
             if isinstance(exc, Interrupted) or not _worth_cutting(exc):
-                exc.last_good = LastGood(good.x, good.factor)
+                exc.last_good = LastGood(good.x, good.time)
                 raise
-            origin = good if good.x is not None else Equilibrium(x0, 0.0)
-            r = _cut_back(net, loads, origin, float(factor), exc, good, settings)
+            r = _cut_back(net, loads, float(factor), exc, good, settings)
         r.steps = k + 1
         results.append(r)
-        good = Equilibrium(r.x, float(factor))
+        good = LastGood(r.x, float(factor))
         x = r.x
         if on_step is not None:
             on_step(float(factor), r)
     return results
-
-
-@dataclass
-class Equilibrium:
-    """A converged state ``x`` (N, 3) of a static run and its load factor (x None: the
-    run's start, load factor 0)."""
-
-    x: np.ndarray | None
-    factor: float
 
 
 def _worth_cutting(exc: ConvergenceError) -> bool:
@@ -110,17 +101,19 @@ def _advice(exc: ConvergenceError, max_iter: int) -> str:
     )
 
 
-def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, settings) -> Result:
-    """The load step from ``origin`` to ``target`` in sub-steps (see ``continuation``);
-    ``good`` (updated) holds the last equilibrium. Raises the last failure, its message
-    saying what was tried, when sub-steps of 1/2**CUTBACKS still fail."""
-    x, f = origin.x, origin.factor
+def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> Result:
+    """The load step from the equilibrium ``good`` (updated: it holds the last one) to
+    load factor ``target`` in sub-steps (see ``continuation``), in either direction of
+    the load. Raises the last failure, its message saying what was tried, when sub-steps
+    of 1/2**CUTBACKS and the pseudo-transient solve still fail; an interrupt at once."""
+    x, f = good.x, good.time
     increment = 0.5 * (target - f)
     spent = int(getattr(failure, "iterations", 0))
-    cuts = 1
+    cuts, done = 1, 0
     transient = False
     while True:
-        level = target if f + increment >= target - 1e-12 * abs(target) else f + increment
+        rest = target - f
+        level = target if abs(increment) >= abs(rest) * (1.0 - 1e-12) else f + increment
         log.info("load step cut back: load factor %.6g from %.6g", level, f)
         try:
             r = solve_static(
@@ -128,6 +121,10 @@ def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, set
             )
         except ConvergenceError as exc:
             spent += int(getattr(exc, "iterations", 0))
+            if isinstance(exc, Interrupted):
+                exc.iterations = spent
+                exc.last_good = LastGood(good.x, good.time)
+                raise
             if cuts >= CUTBACKS and _worth_cutting(exc) and not transient:
                 transient = True  # the last rung: a damped pseudo-transient solve
                 continue
@@ -137,21 +134,25 @@ def _cut_back(net, loads, origin: Equilibrium, target: float, failure, good, set
                     tried += " and a damped pseudo-transient solve"
                 exc.args = (
                     f"{exc}; tried: line search, a Levenberg-Marquardt shift, {tried} (the "
-                    f"last equilibrium: load factor {good.factor:.6g}); "
+                    f"last equilibrium: load factor {good.time:.6g}); "
                     f"{_advice(exc, settings['max_iter'])}",
                 )
                 exc.iterations = spent
-                exc.last_good = LastGood(good.x, good.factor)
+                exc.last_good = LastGood(good.x, good.time)
                 raise
             increment *= 0.5
-            cuts += 1
+            cuts, done = cuts + 1, 0
             continue
         spent += r.iterations
         x, f = r.x, float(level)
-        good.x, good.factor = x, f
+        good.x, good.time = x, f
         if level == target:
             r.iterations = spent
             return r
+        done += 1
+        if done >= 2 and cuts > 1:  # two in a row: the step grows back
+            increment *= 2.0
+            cuts, done = cuts - 1, 0
 
 
 def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:

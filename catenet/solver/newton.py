@@ -61,7 +61,7 @@ EPS = np.finfo(float).eps
 C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
 STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has converged
-FLOOR_SAFETY = 64.0  # a DOF's residual within this many eps of its forces is round-off
+FLOOR_SAFETY = 16.0  # a DOF's residual within this many eps of its forces is round-off
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
@@ -235,11 +235,12 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return phi, g, scale, floor, phi_scale
 
-    def at_floor(self, x: np.ndarray, g: np.ndarray) -> bool:
-        """Whether the residual g (free DOFs) at x is at its round-off floor in every
-        free DOF: within FLOOR_SAFETY eps of the forces that meet there (the edges'
-        |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other terms' and the loads'
-        forces). A state there is converged, whatever the global estimate says."""
+    def at_floor(self, x: np.ndarray, g: np.ndarray) -> float | None:
+        """The norm of the residual's round-off floor, DOF by DOF, if the residual g (free
+        DOFs) at x is within it in every free DOF: FLOOR_SAFETY eps of the forces that
+        meet there (the edges' |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other
+        terms' and the loads' forces); else None. A state there is converged, and that
+        norm is the tolerance it was held to (the caller compares it with the loads)."""
         stretch = self.system.stretch
         free = self.system.free_dofs
         level = np.repeat(stretch.node_roundoff(x), 3)[free]
@@ -249,7 +250,8 @@ class Potential:
             force = np.zeros_like(x)
             term.gradient(x, force)
             level += 2.0 * np.abs(force.reshape(-1)[free])
-        return bool(np.all(np.abs(g) <= FLOOR_SAFETY * EPS * level))
+        level *= FLOOR_SAFETY * EPS
+        return float(np.linalg.norm(level)) if bool(np.all(np.abs(g) <= level)) else None
 
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""
@@ -301,20 +303,20 @@ def solve(
             reason = "converged" if gnorm <= target else "converged (round-off floor)"
             break
         if stall >= 3 and gnorm <= STALL_FLOOR * floor:
-            reason = "converged (round-off floor)"
+            reason, tol = "converged (round-off floor)", max(tol, STALL_FLOOR * floor)
             break
         if it >= max_iter:
             reason = f"no convergence in {max_iter} iterations"
-            if potential.at_floor(x, g):
-                reason = "converged (round-off floor)"
+            if (level := potential.at_floor(x, g)) is not None:
+                reason, tol = "converged (round-off floor)", max(tol, level)
             break
         if _stop is not None and _stop():
             raise Interrupted(
                 f"{label}: interrupted after {it} Newton iterations", iterations=it, history=history
             )
         if it - moved >= STAGNATION:
-            if potential.at_floor(x, g):
-                reason = "converged (round-off floor)"
+            if (level := potential.at_floor(x, g)) is not None:
+                reason, tol = "converged (round-off floor)", max(tol, level)
                 break
             reason = (
                 f"stagnated: neither the residual nor the energy has decreased beyond round-off "
@@ -366,8 +368,11 @@ def solve(
         if not accepted:
             xf[free] = y0
             phi, g, scale, floor, phi_tol = potential.evaluate(x)
-            if gnorm <= STALL_FLOOR * floor or potential.at_floor(x, g):
-                reason = "converged (round-off floor)"
+            if gnorm <= STALL_FLOOR * floor:
+                reason, tol = "converged (round-off floor)", max(tol, STALL_FLOOR * floor)
+                break
+            if (level := potential.at_floor(x, g)) is not None:
+                reason, tol = "converged (round-off floor)", max(tol, level)
                 break
             if kept:  # a fresh matrix before a larger c
                 reuse.drop()
@@ -376,8 +381,8 @@ def solve(
             log.debug("%s: step rejected; regularisation c -> %.3g", label, c)
             if c > C_MAX:
                 reason = "line search failed"
-                if potential.at_floor(x, g):
-                    reason = "converged (round-off floor)"
+                if (level := potential.at_floor(x, g)) is not None:
+                    reason, tol = "converged (round-off floor)", max(tol, level)
                 break
             stall += 1
             continue

@@ -152,7 +152,7 @@ def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
     try:
         potential.factorize(x, 0.0)
     except SingularSystemError:
-        return False  # singular at equilibrium: neutral at best
+        return None  # singular (neutral) at equilibrium: no negative stiffness to name
     negative = ws.solver.negative_eigenvalues()
     return None if negative is None else negative == 0
 
@@ -304,7 +304,8 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
         y = x.reshape(-1)[free].copy()
         inertia.set_step(c * potential.D, y)
         step = Potential(system, potential.solver, potential.force, (inertia,))
-        r = solve(step, x, rtol=rtol, max_iter=max_iter, label=f"static (pseudo-time, c {c:.1e})")
+        label = f"static (pseudo-time, c {c:.1e})"  # a way there: solved loosely, as stages
+        r = solve(step, x, rtol=max(rtol, SMOOTH_RTOL), max_iter=max_iter, label=label)
         iterations += r.iterations
         history += r.history
         if r.converged:

@@ -146,7 +146,9 @@ def _solve_levels(task: dict) -> list[dict]:
             parsed = case.parse_case(data, source=task["source"], base_dir=base_dir)
             scene = scenes.build(parsed)
             net = scene.net
-            if ws is None or not _same_net(ws_net, net):
+            # A workspace serves the next level only for the same net and no other terms
+            # (obstacles, bodies: their barrier may change with the swept keys or loads).
+            if ws is None or not _same_net(ws_net, net) or scene.terms:
                 from catenet.solver import path as sv
 
                 ws = sv.workspace(scene, sv.Settings.of(parsed.solver))

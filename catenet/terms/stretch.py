@@ -10,7 +10,7 @@ import numpy as np
 
 from catenet.kernels.stretch import (
     stretch_energy,
-    stretch_gradient,
+    stretch_gradient_work,
     stretch_hessian,
     stretch_roundoff,
     stretch_tension,
@@ -80,7 +80,8 @@ class Stretch(Term):
         return stretch_energy(x, *self._args(), self.law.smooth)
 
     def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
-        return stretch_gradient(x, *self._args(), self.law.smooth, grad)
+        energy, self._work[0] = stretch_gradient_work(x, *self._args(), self.law.smooth, grad)
+        return energy
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
         stretch_hessian(x, *self._args(), self.law.smooth, values)
@@ -101,7 +102,7 @@ class Stretch(Term):
         edge's energy by N |e| eps, however small the energy itself (a stiff strut at a
         small strain): differences of U below sum |N| |e| eps are noise (both levels in
         units of eps: see Potential)."""
-        work = stretch_roundoff(x, *self._args(), self.law.smooth, self._level(x))
+        work = float(self._work[0])  # from the gradient at this x (System.roundoff)
         return self._k_norm * float(np.max(np.abs(x))), abs(energy) + 0.0625 * work
 
     def node_roundoff(self, x: np.ndarray) -> np.ndarray:
@@ -113,6 +114,11 @@ class Stretch(Term):
 
     def _level(self, x: np.ndarray) -> np.ndarray:
         return np.zeros(x.shape[0])
+
+    @cached_property
+    def _work(self) -> np.ndarray:
+        """sum |N| |e| at the x of the last ``gradient`` call (``roundoff`` reads it)."""
+        return np.zeros(1)
 
     def stiffness(self) -> np.ndarray:
         """Per node, half the sum of EA/l0 of its edges [N/m]."""

@@ -86,3 +86,10 @@ def test_a_refitted_square_net_keeps_its_material_law():
     refitted = build(parse_case(case)).net
     assert set(plain.law.kind.tolist()) == set(refitted.law.kind.tolist()) == {2}
     assert np.allclose(refitted.rest_length * 1.01, plain.rest_length)
+
+
+def test_replace_tension_only_switches_every_edge_of_the_law():
+    net = net_with_everything()
+    assert net.replace(tension_only=True).law.tension_only.all()
+    assert not net.replace(tension_only=False).law.tension_only.any()
+    assert net.replace(tension_only=True).law.kind.tolist() == net.law.kind.tolist()

@@ -222,3 +222,44 @@ def test_the_pseudo_transient_rung_reaches_the_equilibrium_newton_cannot(tmp_pat
         with h5py.File(out, "r") as h5:
             runs[budget] = h5["result/x"][()]
     assert np.max(np.abs(runs[3] - runs[200])) < 1e-8
+
+
+def test_a_net_far_from_the_origin_is_never_converged_above_its_loads():
+    """A cable 1e5 m from the origin under loads far below the round-off of its forces
+    there (EA eps_mach |x| / l0): the run may end at that floor, but then it says so
+    (not converged: the floor exceeds the loads), never "converged" with a residual
+    above the loads."""
+    import catenet as cn
+
+    mat = cn.Material(EA=1e6, line_density=0.0)
+    cab = cn.cable([1e5, 0.0, 0.0], [1e5 + 10.0, 0.0, 0.0], 61, mat)
+    force = np.zeros((61, 3))
+    force[1:-1, 2] = -1e-6
+    r = cn.solve_static(cab, cn.Loads(force=force), raise_on_failure=False)
+    f_norm = float(np.linalg.norm(force))
+    assert not (r.converged and r.residual > f_norm), (r.message, r.residual, f_norm)
+
+
+def test_an_interrupted_load_step_is_not_cut_back():
+    import catenet as cn
+    from catenet.errors import Interrupted
+    from catenet.solver.newton import interruptible
+
+    sq = cn.square_net(6, 0.0, 1.0, 0.1, cn.Material(EA=1e4, line_density=0.1))
+    loads = cn.Loads(force=cn.pressure_force(sq.net, 1.0, 10.0))
+    with interruptible(lambda: True), pytest.raises(Interrupted) as info:
+        cn.continuation(sq.net, loads, [1.0])
+    assert "cut-back" not in str(info.value)
+    assert info.value.last_good is not None and info.value.last_good.time == 0.0
+
+
+def test_a_neutral_equilibrium_is_not_called_a_mechanism(tmp_path):
+    """A straight bilateral cable at its rest length, unloaded: in equilibrium, neutral
+    (no transverse stiffness) but with no negative stiffness: exit 0, not a mechanism."""
+    case = {
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [1, 0, 0], "nodes": 11},
+        "material": {"EA": 100.0, "tension_only": False},
+    }
+    r = invoke("run", write(tmp_path, case), "-o", tmp_path / "neutral.h5")
+    assert r.exit_code == 0, r.output
+    assert "mechanism" not in r.output
