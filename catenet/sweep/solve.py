@@ -190,7 +190,9 @@ class _Scenes:
     a square net, the net is built once and each level's loads are the first level's with
     the pressure part, -p L^2/N per node (SPEC section 2), computed for its p; the second
     level is also built in full once to check that this gives the same net and forces
-    (else every level is built). Saves a net build per level: 10-40 % of a job."""
+    (else every level is built); a scene with other terms (obstacles, bodies, whose
+    barrier stiffness follows the loads) is built for every level. Saves a net build per
+    level: 10-40 % of a job."""
 
     def __init__(self, case_module, *, pressure_only: bool):
         self.case_api = case_module
@@ -208,6 +210,8 @@ class _Scenes:
 
         if not self.fast or self.first is None or case.geometry.kind != "square_net":
             scene = self.case_api.build(case)
+            if scene.terms:  # obstacles, bodies: their terms depend on the loads; built anew
+                self.fast = False
             if self.fast and self.first is None and case.geometry.kind == "square_net":
                 self.first = scene
                 force = scene.loads.force
