@@ -116,10 +116,14 @@ class MaterialConfig(Declared):
 def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> MaterialConfig | Any:
     """The [material] table; ``geometry`` (None when broken) may give EA per edge."""
     if m_v is MISSING:
-        ck.add(
-            "material: missing: the case needs a [material] table (E with radius or area, or EA)"
-        )
-        return BAD
+        if ctx.kind is not None and ctx.kind.gives_stiffness(geometry):
+            m_v = {}  # EA per edge: the table's other keys keep their defaults
+        else:
+            ck.add(
+                "material: missing: the case needs a [material] table (E with radius or "
+                "area, or EA; or EA per edge in the geometry)"
+            )
+            return BAD
     m = ck.table(m_v, "material")
     if m is None:
         return BAD

@@ -263,3 +263,18 @@ def test_a_neutral_equilibrium_is_not_called_a_mechanism(tmp_path):
     r = invoke("run", write(tmp_path, case), "-o", tmp_path / "neutral.h5")
     assert r.exit_code == 0, r.output
     assert "mechanism" not in r.output
+
+
+def test_a_graph_with_ea_per_edge_needs_no_material_table(tmp_path):
+    """EA on every edge of the geometry is the whole stiffness: [material] may be left
+    out (its other keys keep their defaults), and the answer is the same."""
+    with_table = mast(3e3, 1e4)
+    without = {k: v for k, v in with_table.items() if k != "material"}
+    tops = []
+    for name, case in (("with", with_table), ("without", without)):
+        out = tmp_path / f"{name}.h5"
+        r = invoke("run", write(tmp_path, case, name), "-o", out, "-q")
+        assert r.exit_code == 0, r.output
+        with h5py.File(out, "r") as h5:
+            tops.append(h5["result/x"][1])
+    assert np.array_equal(tops[0], tops[1])

@@ -83,7 +83,7 @@ class GraphConfig(GeometryConfig):
         null=True,
         shown="from [material]",
         unit="N",
-        doc="axial stiffness of each edge",
+        doc="axial stiffness of each edge (then [material] may be left out)",
     )
     tension_only: tuple[bool, ...] | None = key(
         gk.per_edge_of("true or false", gk.boolean, "must be true or false"),
