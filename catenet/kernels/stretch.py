@@ -62,7 +62,8 @@ def stretch_gradient(x, edges, l0, ea, law, params, table, tension_only, smooth,
 @njit(cache=True, error_model="numpy")
 def stretch_gradient_work(x, edges, l0, ea, law, params, table, tension_only, smooth, grad):
     """``stretch_gradient``, returning (energy, sum |N| |e|): the energy's round-off level
-    in units of eps (see ``stretch_roundoff``), in the same pass."""
+    in units of eps (a strain error eps changes an edge's U by N |e| eps, however small U
+    itself is), in the same pass."""
     total = 0.0
     work = 0.0
     for k in range(edges.shape[0]):
@@ -137,28 +138,21 @@ def stretch_tension(x, edges, l0, ea, law, params, table, tension_only, out):
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_roundoff(x, edges, l0, ea, law, params, table, tension_only, smooth, level):
-    """The round-off of the stretching at x (N, 3): adds to level (N,) the force error of
-    every edge at both of its nodes, |N| + EA |x| / l0 (its direction and, from
-    coordinates of size |x| carrying an error eps |x|, its strain: in units of eps), and
-    returns sum |N| |e| [J], the energy's (a strain error eps changes U by N l0 eps: what
-    differences of U cannot resolve, however small U itself is)."""
-    work = 0.0
+def stretch_node_roundoff(x, edges, l0, ea, law, params, table, tension_only, smooth, level):
+    """Adds to level (N,) the round-off of every edge's force at both of its nodes, in
+    units of eps: |N| (its direction) + EA |x| / l0 (its strain, from coordinates of
+    size |x| that carry an error eps |x|)."""
     for k in range(edges.shape[0]):
         i = edges[k, 0]
         j = edges[k, 1]
         e0 = x[j, 0] - x[i, 0]
         e1 = x[j, 1] - x[i, 1]
         e2 = x[j, 2] - x[i, 2]
-        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-        eps = length / l0[k] - 1.0
+        eps = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2) / l0[k] - 1.0
         _, force, _ = strain_energy(law, params, table, k, eps, tension_only[k], smooth)
         size = 0.0
         for a in range(3):
             size = max(size, abs(x[i, a]), abs(x[j, a]))
-        n = abs(ea[k] * force)
-        f = n + ea[k] * size / l0[k]
+        f = abs(ea[k] * force) + ea[k] * size / l0[k]
         level[i] += f
         level[j] += f
-        work += n * length
-    return work

@@ -12,7 +12,7 @@ from catenet.kernels.stretch import (
     stretch_energy,
     stretch_gradient_work,
     stretch_hessian,
-    stretch_roundoff,
+    stretch_node_roundoff,
     stretch_tension,
 )
 from catenet.model.laws import Law
@@ -107,13 +107,10 @@ class Stretch(Term):
 
     def node_roundoff(self, x: np.ndarray) -> np.ndarray:
         """Per node, the round-off of the forces that meet there (units of eps): every
-        edge's |N| + EA |x| / l0 (``kernels.stretch.stretch_roundoff``)."""
-        level = self._level(x)
-        stretch_roundoff(x, *self._args(), self.law.smooth, level)
+        edge's |N| + EA |x| / l0 (``kernels.stretch.stretch_node_roundoff``)."""
+        level = np.zeros(x.shape[0])
+        stretch_node_roundoff(x, *self._args(), self.law.smooth, level)
         return level
-
-    def _level(self, x: np.ndarray) -> np.ndarray:
-        return np.zeros(x.shape[0])
 
     @cached_property
     def _work(self) -> np.ndarray:
