@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
+import multiprocessing
 import re
 import subprocess
 import sys
 import time
 from collections import Counter, defaultdict
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import h5py
@@ -212,16 +214,21 @@ def main(argv=None) -> int:
     seeds = range(args.seed, args.seed + args.count)
     rows = []
     if args.in_process:
-        pool = ProcessPoolExecutor(max(1, args.jobs), max_tasks_per_child=200)
-        runner = run_in_process
+        # multiprocessing's Pool replaces a worker after its 200 models (concurrent.futures'
+        # max_tasks_per_child can leave the pool without workers on Python 3.11)
+        pool = multiprocessing.get_context("spawn").Pool(max(1, args.jobs), maxtasksperchild=200)
+        run = functools.partial(
+            run_in_process, out=args.out, timeout=args.timeout, tol=args.tol, family=args.family
+        )
+        results = pool.imap(run, seeds)
     else:
-        pool, runner = ThreadPoolExecutor(max(1, args.jobs)), run_one
-    with pool:
+        pool = ThreadPoolExecutor(max(1, args.jobs))
         jobs = [
-            pool.submit(runner, s, args.out, args.timeout, args.tol, args.family) for s in seeds
+            pool.submit(run_one, s, args.out, args.timeout, args.tol, args.family) for s in seeds
         ]
-        for k, job in enumerate(jobs, 1):
-            row = job.result()
+        results = (job.result() for job in jobs)
+    with pool:
+        for k, row in enumerate(results, 1):
             rows.append(row)
             mark = "ok  " if not row["kind"] else "FAIL"
             print(
