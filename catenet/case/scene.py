@@ -17,6 +17,7 @@ from catenet.case.parse import Case
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
+from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
 from catenet.model.laws import Law, table_rows
 from catenet.model.net import Loads, Net
@@ -117,6 +118,28 @@ def _probe(case: Case, built: Any) -> int:
     return int(expand(ref, built.names, built.sets or {})[0])
 
 
+def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: int) -> np.ndarray:
+    """The nodal forces of load.area[k] (catenet/model/areas.py); the paper's pressure
+    on a square net as a whole (its own lumping of p L^2)."""
+    ar = case.load.areas[k]
+    if ar.nodes is None:
+        own = case.geometry.area_force(net, ar.pressure, size)
+        if own is not None:
+            return own
+        covered = np.ones(net.n_nodes, dtype=bool)
+        path = f"load.area[{k}]: the net"
+    else:
+        refs = (ar.nodes,) if isinstance(ar.nodes, str) else ar.nodes
+        covered = np.zeros(net.n_nodes, dtype=bool)
+        covered[[i for r in refs for i in expand(r, names, sets or {})]] = True
+        covered = with_chains(covered, case.geometry.given_nodes(net), net.edges)
+        path = f"load.area[{k}].nodes = {show(ar.nodes)}: these nodes"
+    try:
+        return area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction).force
+    except ConfigError as exc:
+        raise ConfigError([f"{path} {p}" for p in exc.problems]) from None
+
+
 def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:
     """The loads: pressure, point loads (on a node, each node of a node set, or the node
     at a position along a cable), line loads along cables (lumped as the self-weight),
@@ -148,6 +171,8 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
         if ln.cable is not None:
             on = built.cables.edge == built.cables.names.index(ln.cable)
         line_force(net, on, ln.force, target(ln.history))
+    for k, ar in enumerate(ld.areas):
+        target(ar.history)[:] += _area_force(case, net, names, sets, size, k)
     force = constant if constant.any() else None
     parts = tuple((f, History(h)) for h, f in timed.items() if f.any())
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)

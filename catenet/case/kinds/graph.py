@@ -26,6 +26,7 @@ from catenet.case.keys import (
 from catenet.case.kinds import cables as cb
 from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
+from catenet.case.kinds.regions import empty_boxes
 from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
@@ -171,7 +172,17 @@ class GraphConfig(GeometryConfig):
             ck.add(msg + (suffix if from_file else ""))
         if data is None or sub.problems or pre is BAD:
             return None
-        return cls(**data, prestrain=pre, file=file)
+        config = cls(**data, prestrain=pre, file=file)
+        if config.sets is not None and config.sets.regions:
+            try:
+                mesh = config._mesh()
+            except ConfigError:
+                return config  # reported where the net is built
+            before = len(ck.problems)
+            empty_boxes(ck, config.sets.items, mesh.nodes)
+            if len(ck.problems) > before:
+                return None
+        return config
 
     @classmethod
     def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
@@ -197,7 +208,7 @@ class GraphConfig(GeometryConfig):
             len(self.nodes),
             frozenset(self.fixed),
             {"center": _center(self.nodes, self.fixed)},
-            self._sets(),
+            self._sets(self._mesh() if self._needs_mesh() else None),
             tuple(c.name for c in self.cables),
         )
 
@@ -223,7 +234,7 @@ class GraphConfig(GeometryConfig):
         (the per-edge arrays where given; no per-cable material, law or prestress:
         ``build_case`` gives the case's whole net)."""
         mesh = self._mesh()
-        sets = self._sets()
+        sets = self._sets(mesh)
         names = self._names(mesh, fixed, sets)
         probe = names["center"]
         pinned = self._pinned(fixed, names, sets)
@@ -263,7 +274,7 @@ class GraphConfig(GeometryConfig):
             if pt.cable is not None:
                 at.setdefault(order[pt.cable], []).append((pt.at, k))
         mesh = self._mesh(at)
-        sets = self._sets()
+        sets = self._sets(mesh)
         names = self._names(mesh, case.supports.fixed, sets)
         probe = names["center"]
         pinned = self._pinned(case.supports.fixed, names, sets)
@@ -316,12 +327,25 @@ class GraphConfig(GeometryConfig):
         cables = self._index(mesh)
         return Built(net, probe, _size(net), names, True, sets, cables, mesh.at_nodes)
 
+    def given_nodes(self, net: Net) -> int:
+        return len(self.nodes)
+
     # --- helpers --------------------------------------------------------------------------
     def _xyz(self) -> np.ndarray:
         return np.asarray(self.nodes, dtype=np.float64)
 
-    def _sets(self) -> dict[str, tuple[int, ...]]:
-        return self.sets.as_dict() if self.sets is not None else {}
+    def _needs_mesh(self) -> bool:
+        return bool(self.cables) or (self.sets is not None and self.sets.regions)
+
+    def _sets(self, mesh: cb.CableMesh | None = None) -> dict[str, tuple[int, ...]]:
+        """The node sets: regions evaluated on the built nodes (the given ones without
+        ``mesh``), and "cable:NAME" for every node of each cable."""
+        xyz = self._xyz() if mesh is None else mesh.nodes
+        out = self.sets.as_dict(xyz) if self.sets is not None else {}
+        if mesh is not None:
+            for c, cable in enumerate(self.cables):
+                out[f"cable:{cable.name}"] = tuple(np.unique(mesh.edges[mesh.cable == c]).tolist())
+        return out
 
     def _hs(self) -> list:
         return [c.edge_length or self.edge_length for c in self.cables]
@@ -331,6 +355,7 @@ class GraphConfig(GeometryConfig):
             return []
         names = {"center": _center(self.nodes, self.fixed)}
         lines = cb.polylines(Checker(), self.cables, self._xyz(), (), self._sets(), names)
+        # (regions of a cable's nodes: evaluated on the given nodes)
         if lines is None:  # checked when parsed
             raise ConfigError("geometry.cable: invalid cables")
         return lines
@@ -459,8 +484,8 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
         "its length overflows: coordinates too large",
     )
     if v["cables"] and not ck.problems:
-        sets = v["sets"].as_dict() if v["sets"] is not None else {}
+        sets = v["sets"].as_dict(xyz) if v["sets"] is not None else {}
         cb.polylines(ck, v["cables"], xyz, edges, sets, {"center": _center(nodes, fixed)})
     elif v["sets"] is not None and not ck.problems:
-        cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(), {})
+        cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(xyz), {})
     return None if ck.problems else v
