@@ -124,7 +124,13 @@ def check_nodes(
 
 def _unknown_name(path: str, ref: str, topo: Topology) -> str:
     """The message for a string that names no node and no node set."""
-    known = [*topo.names, *topo.sets]
+    cables = [k for k in topo.sets if k.startswith("cable:")]
+    if ref.startswith("cable:"):
+        hint = difflib.get_close_matches(ref, cables, n=1)
+        mean = f"; did you mean {hint[0]!r}?" if hint else ""
+        have = ", ".join(map(repr, cables)) if cables else "none: the geometry has no cables"
+        return f"{path} = {ref!r}: no such cable (the nodes of a cable: {have}){mean}"
+    known = [*topo.names, *(k for k in topo.sets if k not in cables)]
     hint = difflib.get_close_matches(ref, known, n=1)
     mean = f"; did you mean {hint[0]!r}?" if hint else ""
     return (

@@ -127,17 +127,17 @@ def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: in
         if own is not None:
             return own
         covered = np.ones(net.n_nodes, dtype=bool)
-        path = f"load.area[{k}]: the net"
+        path = f"load.area[{k}] (on the whole net)"
     else:
         refs = (ar.nodes,) if isinstance(ar.nodes, str) else ar.nodes
         covered = np.zeros(net.n_nodes, dtype=bool)
         covered[[i for r in refs for i in expand(r, names, sets or {})]] = True
         covered = with_chains(covered, case.geometry.given_nodes(net), net.edges)
-        path = f"load.area[{k}].nodes = {show(ar.nodes)}: these nodes"
+        path = f"load.area[{k}].nodes = {show(ar.nodes)}"
     try:
         return area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction).force
     except ConfigError as exc:
-        raise ConfigError([f"{path} {p}" for p in exc.problems]) from None
+        raise ConfigError([f"{path}: {p}" for p in exc.problems]) from None
 
 
 def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:

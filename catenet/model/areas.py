@@ -84,26 +84,27 @@ def area_load(
     used = np.unique(sub)
     xyz = nodes[used]
     local = np.searchsorted(used, sub)
-    scale = float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0)))
-    normal, basis = _plane(xyz, direction, scale)
+    scale3 = float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0)))
+    normal, basis = _plane(xyz, direction, scale3)
     q = (xyz - xyz.mean(axis=0)) @ basis.T
     scale = float(np.linalg.norm(np.ptp(q, axis=0)))  # the extent in the plane
     if not scale > 0:
-        raise ConfigError("covers no area: its nodes lie at one point of the plane")
+        raise ConfigError(_no_area(direction == "plan"))
+    upright = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)[1] > TOL * scale3
     if np.linalg.svd(q - q.mean(axis=0), compute_uv=False)[-1] <= TOL * scale:
-        raise ConfigError(_no_area(direction))
+        raise ConfigError(_no_area(direction == "plan" and upright))
     _distinct(q, used, scale)
     faces = _closed_faces(q, local, scale)
     force, area = _lump(xyz, q, faces, normal, pressure, direction)
     if not area > (TOL * scale) ** 2:
-        raise ConfigError(_no_area(direction))
+        raise ConfigError(_no_area(False))
     out = np.zeros((len(nodes), 3))
     out[used] = force
     return AreaLoad(out, area, normal)
 
 
-def _no_area(direction: str) -> str:
-    where = " in plan (a vertical net has no plan area)" if direction == "plan" else ""
+def _no_area(upright: bool) -> str:
+    where = " in plan (a vertical net has no plan area)" if upright else ""
     return f"covers no area: its nodes lie on a line{where}"
 
 

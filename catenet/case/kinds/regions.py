@@ -7,7 +7,7 @@ through a node set (a cable's nodes are given ones).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,6 +26,7 @@ class Region:
 
     box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
     near: tuple[float, float, float] | None = None
+    given: Any = field(default=None, compare=False)  # as written, for messages
 
     def select(self, xyz: np.ndarray) -> tuple[int, ...]:
         """The nodes of ``xyz`` (N, 3) in the region."""
@@ -58,7 +59,7 @@ def check_region(ck: Checker, v: Any, path: str) -> Any:
     (name,) = given
     if name == "near":
         p = ck.vec3(t["near"], f"{path}.near")
-        return BAD if p is BAD else Region(near=p)
+        return BAD if p is BAD else Region(near=p, given=t["near"])
     box = t["box"]
     need = "must be [[x0, y0, z0], [x1, y1, z1]]: two opposite corners, finite"
     if not isinstance(box, (list, tuple)) or len(box) != 2:
@@ -67,7 +68,7 @@ def check_region(ck: Checker, v: Any, path: str) -> Any:
     corners = [sub.vec3(c, f"{path}.box[{k}]") for k, c in enumerate(box)]
     if sub.problems:
         return ck.bad(f"{path}.box", box, need)
-    return Region(box=(corners[0], corners[1]))
+    return Region(box=(corners[0], corners[1]), given=box)
 
 
 def resolve(items, xyz: np.ndarray) -> dict[str, tuple[int, ...]]:
@@ -85,7 +86,8 @@ def empty_boxes(ck: Checker, items, xyz: np.ndarray, where: str = "geometry.sets
             lo = np.min(xyz, axis=0).tolist() if len(xyz) else []
             hi = np.max(xyz, axis=0).tolist() if len(xyz) else []
             ck.add(
-                f"{where}.{name}.box = {show([list(c) for c in nodes.box])}: holds no node "
+                f"{where}.{name}.box = {show(nodes.given or [list(c) for c in nodes.box])}: "
+                "holds no node "
                 f"(the net's nodes span {show(lo)} to {show(hi)}): a box must hold at least "
                 "one node"
             )
