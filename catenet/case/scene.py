@@ -31,7 +31,9 @@ class Scene:
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
     at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are the net's last nodes (``Net.bodies``)."""
+    are the net's last nodes (``Net.bodies``). ``sets``: the node sets as node indices,
+    ``at_nodes``: the node of each load.point given along a cable (by its index),
+    ``names``: the named nodes ("center")."""
 
     case: Case
     net: Net
@@ -42,6 +44,9 @@ class Scene:
     cables: Any = None
     velocity: np.ndarray | None = None
     bodies: tuple = ()
+    sets: Any = None
+    at_nodes: Any = None
+    names: Any = None
 
 
 def build(case: Case) -> Scene:
@@ -82,6 +87,9 @@ def _build(case: Case) -> Scene:
         cables=built.cables,
         velocity=velocity,
         bodies=bodies,
+        sets=dict(built.sets or {}),
+        at_nodes=dict(built.at_nodes or {}),
+        names=dict(built.names),
     )
 
 

@@ -79,7 +79,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
     scene = build(case)
     found = formfind_scene(scene)
     run_file = str(out.with_name(out.stem + "_run" + out.suffix))
-    data = to_case(found, case, output_file=run_file)
+    data = to_case(found, case, output_file=run_file, scene=scene)
     text = _header(case, found, out) + dumps_toml(data)
     written = parse_case(data, source=str(toml_path), base_dir=toml_path.parent)
     result_scene = build(written)

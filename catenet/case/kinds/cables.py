@@ -116,6 +116,19 @@ def _check_polyline(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return BAD if bad else tuple(out)
 
 
+def _check_lengths(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """Numbers > 0 (one per edge of the cable: checked when it is split); not with
+    prestress."""
+    if not isinstance(v, (list, tuple)) or not v:
+        return ck.bad(path, v, "must be an array of numbers > 0, one per edge of the cable")
+    out = [ck.real(x, f"{path}[{k}]", gt=0.0) for k, x in enumerate(v)]
+    if BAD in out:
+        return BAD
+    if ctx.values.get("prestress") is not None:
+        return ck.bad(path, v, "gives the rest lengths: give it or prestress, not both")
+    return tuple(out)
+
+
 def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     """A table of name = [node indices] (each non-empty and listing each node once) or
     name = { box = ... } or { near = ... }."""
@@ -182,6 +195,15 @@ class CableConfig(Declared):
         shown="material's",
         unit="N",
         doc="its tension in the given geometry (rest lengths derived from it)",
+    )
+    rest_length: tuple[float, ...] | None = key(
+        _check_lengths,
+        "an array of numbers > 0, one per edge of the cable (after splitting)",
+        None,
+        write="given",
+        shown="from prestress, else the given lengths",
+        unit="m",
+        doc="unstressed length of each of its edges, in order (as catenet formfind writes)",
     )
     material: Overrides | None = key(
         _check_material,

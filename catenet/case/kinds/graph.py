@@ -300,6 +300,10 @@ class GraphConfig(GeometryConfig):
             rows = table_rows(mat.table)[0] if mat.law == "table" else None
             law = Law.uniform(n, mat.law, tension_only=only, table=rows)
             laws.append(law)
+            given = self.cables[c - 1].rest_length if c > 0 else None
+            if given is not None:
+                rest[sel] = _cable_rest(given, n, c - 1)
+                continue
             t0 = mat.prestress
             if c == 0 and self.prestress is not None:
                 t0 = np.asarray(self.prestress)
@@ -391,6 +395,16 @@ def _prestress_key(per_edge: bool):
     if per_edge:
         return lambda k: f"geometry.prestress[{k}]"
     return lambda k: f"material.prestress (edge {k})"
+
+
+def _cable_rest(given: tuple[float, ...], n: int, c: int) -> np.ndarray:
+    """The rest lengths a cable gives, one per edge of it after splitting."""
+    if len(given) != n:
+        raise ConfigError(
+            f"geometry.cable[{c}].rest_length: {len(given)} values: the cable has {n} edges "
+            "after splitting (one value per edge, in order)"
+        )
+    return np.asarray(given, dtype=np.float64)
 
 
 def _lengths(xyz: np.ndarray, edges: np.ndarray) -> np.ndarray:
