@@ -189,8 +189,10 @@ def _covered(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     if isinstance(v, (list, tuple)) and len(v) >= 3:
         return _node_list(ck, v, path, ctx)
     return ck.bad(
-        path, v, "must be a node set (its name in [geometry.sets], or \"cable:NAME\") or an "
-        "array of at least 3 nodes"
+        path,
+        v,
+        'must be a node set (its name in [geometry.sets], or "cable:NAME") or an '
+        "array of at least 3 nodes",
     )
 
 

@@ -226,7 +226,9 @@ def _delaunay(q: np.ndarray) -> _Faces:
     except (QhullError, ValueError):
         raise ConfigError("covers no area: its nodes lie on a line") from None
     a, b, c = q[tri[:, 0]], q[tri[:, 1]], q[tri[:, 2]]
-    signed = 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    signed = 0.5 * (
+        (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    )
     tri[signed < 0] = tri[signed < 0][:, ::-1]
     origin = tri.reshape(-1)
     dest = tri[:, [1, 2, 0]].reshape(-1)
@@ -315,10 +317,15 @@ def _lump(xyz, q, faces: _Faces, normal, pressure, direction):
     forces (n, 3) and the covered area."""
     cell = faces.area[faces.face] > 0
     count = np.bincount(faces.face, minlength=faces.area.size).astype(np.float64)
-    centre = np.column_stack(
-        [np.bincount(faces.face, weights=xyz[faces.origin, c], minlength=faces.area.size)
-         for c in range(3)]
-    ) / np.maximum(count, 1.0)[:, None]
+    centre = (
+        np.column_stack(
+            [
+                np.bincount(faces.face, weights=xyz[faces.origin, c], minlength=faces.area.size)
+                for c in range(3)
+            ]
+        )
+        / np.maximum(count, 1.0)[:, None]
+    )
     g = centre[faces.face[cell]]
     u = xyz[faces.origin[cell]] - g
     v = xyz[faces.dest[cell]] - g

@@ -77,7 +77,11 @@ def test_a_net_read_from_a_file_gives_the_same_loads(tmp_path):
     expect = force(with_area(data, pressure=800.0))
     for name in ("roof.obj", "roof.vtu"):
         read = {
-            "geometry": {"kind": "graph", "file": name, "fixed": np.flatnonzero(net.fixed).tolist()},
+            "geometry": {
+                "kind": "graph",
+                "file": name,
+                "fixed": np.flatnonzero(net.fixed).tolist(),
+            },
             "material": {"EA": 1e7},
             "load": {"area": [{"pressure": 800.0}]},
         }
@@ -122,7 +126,7 @@ def test_load_steps_and_histories_scale_it(tmp_path):
     assert reaction == pytest.approx(800.0 * 144.0, rel=1e-9)
     data["load"]["area"][0]["history"] = [[0.0, 0.0], [1.0, 1.0]]
     loads = build(parse_case(data)).loads
-    (part, history), = loads.parts
+    ((part, history),) = loads.parts
     assert loads.force is None and history(0.5) == 0.5
     assert part[:, 2].sum() == pytest.approx(-800.0 * 144.0, rel=1e-12)
 
@@ -147,7 +151,9 @@ def test_box_near_and_cable_sets_reach_the_nodes_that_split_cables():
     assert np.array_equal(on_x0, np.unique(x0)) and np.allclose(nodes[on_x0, 1], 0.0)
     assert (on_x0 >= given).sum() == len(x0) - 6  # its 6 segments split
     data["output"] = {"probe": "spot"}
-    assert build(parse_case(data)).probe == int(np.argmin(np.linalg.norm(nodes - [0.26, 0.1, 9], axis=1)))
+    assert build(parse_case(data)).probe == int(
+        np.argmin(np.linalg.norm(nodes - [0.26, 0.1, 9], axis=1))
+    )
     data["supports"] = {"fixed": ["strip"]}
     assert np.array_equal(np.flatnonzero(build(parse_case(data)).net.fixed), strip)
 

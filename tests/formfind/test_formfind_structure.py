@@ -111,8 +111,10 @@ def test_cable_rest_lengths_per_edge_are_checked(tmp_path):
     path.write_text(dumps_toml(data))
     r = CliRunner().invoke(main, ["run", str(path)])
     assert r.exit_code == 2
-    assert "geometry.cable[0].rest_length = [1.0, 2.0]: gives the rest lengths: give it or " \
+    assert (
+        "geometry.cable[0].rest_length = [1.0, 2.0]: gives the rest lengths: give it or "
         "prestress, not both" in r.output
+    )
 
 
 @pytest.mark.parametrize("law", ["linear", "neo_hookean", "hencky", "table"])

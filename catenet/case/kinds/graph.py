@@ -26,8 +26,8 @@ from catenet.case.keys import (
 from catenet.case.kinds import cables as cb
 from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
+from catenet.case.kinds.netfile import FILE_KEYS, MESH_KEYS, is_mesh, merge_file, read_net_file
 from catenet.case.kinds.regions import empty_boxes
-from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.laws import Law, table_rows
@@ -161,14 +161,16 @@ class GraphConfig(GeometryConfig):
             if src is None:
                 return None
             if is_mesh(file):
-                src = {**{k: g[k] for k in _DATA if k in g}, **src}
+                src = merge_file(ck, {k: g[k] for k in _DATA if k in g}, src, file)
+                if src is None:
+                    return None
             suffix = f" (in geometry.file = {file!r})"
         sub = Checker()
         if file is not None and not is_mesh(file):
             sub.keys(src, "geometry", _DATA, " in a graph file")
         data = _parse_data(sub, src, pre)
         for msg in sub.problems:
-            from_file = not is_mesh(file or "") or msg.startswith(MESH_KEYS, len("geometry."))
+            from_file = not is_mesh(file or "") or msg.startswith(FILE_KEYS, len("geometry."))
             ck.add(msg + (suffix if from_file else ""))
         if data is None or sub.problems or pre is BAD:
             return None

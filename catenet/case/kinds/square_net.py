@@ -89,7 +89,6 @@ class SquareNetConfig(GeometryConfig):
         names = {"center": sq.center}
         return Built(refit(sq.net, names, fixed, self.prestrain), sq.center, self.size, names)
 
-
     def area_force(self, net, pressure: float, size: float) -> Any:
         """The paper's pressure (SPEC section 2): p L^2 over the square, shared equally by
         the N nodes, so that [[load.area]] on the whole net is load.pressure (the net is
