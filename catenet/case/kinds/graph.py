@@ -1,6 +1,7 @@
-"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, CSV, OBJ, or a line
-mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets and
-per-edge arrays (rest length, EA, tension-only switch, prestress)."""
+"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, CSV, OBJ, VTK, or a
+line mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets
+(lists, regions: catenet/case/kinds/regions.py, and "cable:NAME") and per-edge arrays
+(rest length, EA, tension-only switch, prestress)."""
 
 from __future__ import annotations
 
@@ -134,7 +135,9 @@ class GraphConfig(GeometryConfig):
         doc="a JSON file of the keys above (relative to the case file); or nodes and edges "
         "from a CSV sheet (a table under the header x,y,z, a row per node, and one under i,j, "
         "a row per edge, node k the k-th row from 0; comma, semicolon or tab), an OBJ file of "
-        "polylines, or a line mesh meshio reads (.vtu, .vtk, .msh)",
+        "polylines, a VTK file (.vtu, .vtp, .vtk: lines and polylines; point data flags are "
+        "node sets) or a line mesh meshio reads (.msh, ...); a polyline of more than 2 "
+        "points, or a named one, is a cable (docs/guide/loads.md)",
     )
 
     @classmethod
