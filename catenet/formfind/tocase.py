@@ -75,6 +75,9 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         }
     out["geometry"] = geometry
     out["load"] = load
+    probe = out.get("output", {}).get("probe")
+    if structured and isinstance(probe, str) and probe in (scene.names or {}):
+        out["output"]["probe"] = int(scene.names[probe])  # ("center" moves with the shape)
     if output_file is not None:
         out.setdefault("output", {})["file"] = output_file
     order = ("title", "geometry", "material", "load", "solver", "output")

@@ -39,6 +39,7 @@ def roof_case() -> dict:
         ],
         "area": [{"pressure": 100.0}],
     }
+    data["output"] = {"probe": "center"}
     return data
 
 
@@ -66,6 +67,7 @@ def test_the_written_case_keeps_cables_materials_sets_and_load_nodes(written):
     points = back.load.points
     assert points[0].node == "mid" and points[1].node == scene.at_nodes[1]
     assert back.load.gravity == case.load.gravity
+    assert back.output.probe == scene.names["center"] == again.probe  # not moved
     total = build(back).loads.external_force(again.net)
     found = w.found.load
     assert np.allclose(total, found, rtol=0, atol=1e-12 * np.abs(found).max())
