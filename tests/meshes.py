@@ -53,3 +53,34 @@ def write_stl(path, V, T):
 
     meshio.write_points_cells(path, V, [("triangle", T)])
     return path
+
+
+def hypar_roof(half: float = 6.0, rise: float = 1.5, cells: int = 3, edge_length=None) -> dict:
+    """A graph case of a hypar roof z = rise (x^2 - y^2) / half^2 on the square plan
+    [-half, half]^2: cables along x ("x0", ...) and y ("y0", ...) through the crossings
+    of a (2 cells + 1)^2 grid, an "edge" cable round the pinned boundary (not split), a
+    node set "border" of its nodes. Its plan area is (2 half)^2."""
+    ks = range(-cells, cells + 1)
+    h = half / cells
+    idx, nodes = {}, []
+    for j in ks:
+        for i in ks:
+            x, y = i * h, j * h
+            idx[(i, j)] = len(nodes)
+            nodes.append([x, y, rise * (x * x - y * y) / half**2])
+    border = [idx[(i, j)] for (i, j) in idx if abs(i) == cells or abs(j) == cells]
+    inner = list(ks)[1:-1]
+    ring = (
+        [idx[(i, -cells)] for i in ks]
+        + [idx[(cells, j)] for j in list(ks)[1:]]
+        + [idx[(i, cells)] for i in list(ks)[::-1][1:]]
+        + [idx[(-cells, j)] for j in list(ks)[::-1][1:]]
+    )
+    cables = [{"name": f"x{j}", "nodes": [idx[(i, j)] for i in ks]} for j in inner]
+    cables += [{"name": f"y{i}", "nodes": [idx[(i, j)] for j in ks]} for i in inner]
+    cables.append({"name": "edge", "nodes": ring, "edge_length": 2 * half})
+    geometry = {"kind": "graph", "nodes": nodes, "fixed": sorted(border), "cable": cables}
+    geometry["sets"] = {"border": sorted(border)}
+    if edge_length is not None:
+        geometry["edge_length"] = edge_length
+    return {"geometry": geometry, "material": {"EA": 1e7, "prestress": 1e3}}

@@ -23,6 +23,8 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
     if isinstance(load, LoadConfig):
         refs += [p.node for p in load.points if p.node is not None]
+        for a in load.areas:
+            refs += [a.nodes] if isinstance(a.nodes, str) else list(a.nodes or ())
         if any(p.cable is not None for p in (*load.points, *load.lines)):
             return True
     return any(isinstance(r, int) for r in refs) or bool(
@@ -103,6 +105,12 @@ def check_nodes(
         for k, ln in enumerate(load.lines):
             if ln.cable is not None:
                 _known_cable(ck, f"load.line[{k}].cable", ln.cable, g, topo)
+        for k, ar in enumerate(load.areas):
+            if isinstance(ar.nodes, str):
+                in_range(ar.nodes, f"load.area[{k}].nodes")
+            elif ar.nodes is not None:
+                for j, r in enumerate(ar.nodes):
+                    in_range(r, f"load.area[{k}].nodes[{j}]")
     if probe is not None and in_range(probe, "output.probe"):
         many = expand(probe, topo.names, topo.sets)
         if len(many) != 1:
@@ -116,7 +124,13 @@ def check_nodes(
 
 def _unknown_name(path: str, ref: str, topo: Topology) -> str:
     """The message for a string that names no node and no node set."""
-    known = [*topo.names, *topo.sets]
+    cables = [k for k in topo.sets if k.startswith("cable:")]
+    if ref.startswith("cable:"):
+        hint = difflib.get_close_matches(ref, cables, n=1)
+        mean = f"; did you mean {hint[0]!r}?" if hint else ""
+        have = ", ".join(map(repr, cables)) if cables else "none: the geometry has no cables"
+        return f"{path} = {ref!r}: no such cable (the nodes of a cable: {have}){mean}"
+    known = [*topo.names, *(k for k in topo.sets if k not in cables)]
     hint = difflib.get_close_matches(ref, known, n=1)
     mean = f"; did you mean {hint[0]!r}?" if hint else ""
     return (

@@ -17,6 +17,7 @@ from catenet.case.parse import Case
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
+from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
 from catenet.model.laws import Law, table_rows
 from catenet.model.net import Loads, Net
@@ -30,7 +31,9 @@ class Scene:
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
     at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are the net's last nodes (``Net.bodies``)."""
+    are the net's last nodes (``Net.bodies``). ``sets``: the node sets as node indices,
+    ``at_nodes``: the node of each load.point given along a cable (by its index),
+    ``names``: the named nodes ("center")."""
 
     case: Case
     net: Net
@@ -41,6 +44,9 @@ class Scene:
     cables: Any = None
     velocity: np.ndarray | None = None
     bodies: tuple = ()
+    sets: Any = None
+    at_nodes: Any = None
+    names: Any = None
 
 
 def build(case: Case) -> Scene:
@@ -81,6 +87,9 @@ def _build(case: Case) -> Scene:
         cables=built.cables,
         velocity=velocity,
         bodies=bodies,
+        sets=dict(built.sets or {}),
+        at_nodes=dict(built.at_nodes or {}),
+        names=dict(built.names),
     )
 
 
@@ -117,6 +126,28 @@ def _probe(case: Case, built: Any) -> int:
     return int(expand(ref, built.names, built.sets or {})[0])
 
 
+def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: int) -> np.ndarray:
+    """The nodal forces of load.area[k] (catenet/model/areas.py); the paper's pressure
+    on a square net as a whole (its own lumping of p L^2)."""
+    ar = case.load.areas[k]
+    if ar.nodes is None:
+        own = case.geometry.area_force(net, ar.pressure, size)
+        if own is not None:
+            return own
+        covered = np.ones(net.n_nodes, dtype=bool)
+        path = f"load.area[{k}] (on the whole net)"
+    else:
+        refs = (ar.nodes,) if isinstance(ar.nodes, str) else ar.nodes
+        covered = np.zeros(net.n_nodes, dtype=bool)
+        covered[[i for r in refs for i in expand(r, names, sets or {})]] = True
+        covered = with_chains(covered, case.geometry.given_nodes(net), net.edges)
+        path = f"load.area[{k}].nodes = {show(ar.nodes)}"
+    try:
+        return area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction).force
+    except ConfigError as exc:
+        raise ConfigError([f"{path}: {p}" for p in exc.problems]) from None
+
+
 def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:
     """The loads: pressure, point loads (on a node, each node of a node set, or the node
     at a position along a cable), line loads along cables (lumped as the self-weight),
@@ -148,6 +179,8 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
         if ln.cable is not None:
             on = built.cables.edge == built.cables.names.index(ln.cable)
         line_force(net, on, ln.force, target(ln.history))
+    for k, ar in enumerate(ld.areas):
+        target(ar.history)[:] += _area_force(case, net, names, sets, size, k)
     force = constant if constant.any() else None
     parts = tuple((f, History(h)) for h, f in timed.items() if f.any())
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)

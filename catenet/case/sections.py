@@ -31,6 +31,7 @@ from catenet.case.keys import (
 from catenet.case.kinds import KINDS
 from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (a section)
 from catenet.errors import ConfigError
+from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
 from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.settings import METHODS, Settings
@@ -181,6 +182,50 @@ class LineLoadConfig(Declared):
     history: tuple | None = history_key("dynamic: force times factor(t) (none: load.history)")
 
 
+def _covered(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """The nodes an area load covers: a node set's name or an array of nodes."""
+    if isinstance(v, str):
+        return ck.node_ref(v, path, ctx.kind)
+    if isinstance(v, (list, tuple)) and len(v) >= 3:
+        return _node_list(ck, v, path, ctx)
+    return ck.bad(
+        path,
+        v,
+        'must be a node set (its name in [geometry.sets], or "cable:NAME") or an '
+        "array of at least 3 nodes",
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class AreaLoadConfig(Declared):
+    """A pressure [Pa] over the area the net covers (or the part ``nodes`` covers),
+    lumped to the nodes by tributary area (docs/guide/loads.md): on plan, vertical per
+    unit plan area (snow); normal, per unit surface area along the surface's normal
+    (wind)."""
+
+    pressure: float = real(
+        need="finite (> 0 pushes down on plan, against the upward normal)",
+        missing="the pressure [Pa]",
+        unit="Pa",
+        doc="> 0: down on plan; normal: against the net's upward normal (suction < 0)",
+    )
+    direction: str = choice(
+        "plan",
+        AREA_DIRECTIONS,
+        doc="plan: vertical, per plan area (snow); normal: per surface area, normal to "
+        "the net in the given geometry (wind)",
+    )
+    nodes: Any = key(
+        _covered,
+        "a node set (name) or an array of at least 3 nodes",
+        None,
+        write="given",
+        shown="the whole net",
+        doc="the part it covers: the area inside the outline through these nodes' outer ones",
+    )
+    history: tuple | None = history_key("dynamic: pressure times factor(t) (none: load.history)")
+
+
 def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     p = ck.real(v, path)
     kind = ctx.kind
@@ -195,8 +240,8 @@ def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 @dataclass(frozen=True)
 class LoadConfig(Declared):
-    """Pressure p [Pa] (square_net), gravity [m/s^2] (None: none), point loads and
-    distributed loads along cables."""
+    """Pressure p [Pa] (square_net), gravity [m/s^2] (None: none), point loads,
+    distributed loads along cables and area loads."""
 
     pressure: float = key(
         _pressure,
@@ -219,6 +264,11 @@ class LoadConfig(Declared):
     )
     lines: tuple[LineLoadConfig, ...] = tables(
         LineLoadConfig, name="line", doc="distributed loads per unit length of cable"
+    )
+    areas: tuple[AreaLoadConfig, ...] = tables(
+        AreaLoadConfig,
+        name="area",
+        doc="pressures over the area the net covers, on plan or normal to it",
     )
     history: tuple | None = history_key(
         "dynamic: pressure and gravity times factor(t), and each point or line load "

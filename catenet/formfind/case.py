@@ -11,6 +11,7 @@ load starts in equilibrium and reproduces the shape and forces.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from dataclasses import dataclass
@@ -64,7 +65,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
     """Form-finds ``case`` and writes the result file ``out`` (default: the case's
     output.file) and the case OUT.toml beside it. Nothing is written when the input is
     bad or the targets cannot be met."""
-    from catenet.case import build, dumps_toml, parse_case
+    from catenet.case import build, parse_case
     from catenet.output import ResultWriter, check_output_path
 
     start = time.perf_counter()
@@ -79,19 +80,24 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
     scene = build(case)
     found = formfind_scene(scene)
     run_file = str(out.with_name(out.stem + "_run" + out.suffix))
-    data = to_case(found, case, output_file=run_file)
-    text = _header(case, found, out) + dumps_toml(data)
+    data = to_case(found, case, output_file=run_file, scene=scene)
     written = parse_case(data, source=str(toml_path), base_dir=toml_path.parent)
+    resolved = written.to_toml()  # the case file's text and the result file's, once
     result_scene = build(written)
     res = _result(found, result_scene, time.perf_counter() - start)
     attrs = {
+        "case": resolved,
+        "title": written.title,
         "linear_backend": found.backend,
         "source": str(getattr(case, "source", "")),
         "formfind_method": found.method,
         "formfind_case": str(toml_path),
     }
+    if not written.title:
+        del attrs["title"]
+    plain = dataclasses.replace(result_scene, case=None)  # (its text is attrs["case"])
     with ResultWriter(
-        out, result_scene, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs
+        out, plain, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs
     ) as writer:
         if writer.wants(0):
             writer.frame(1.0, res.x, None, res.tension)
@@ -101,7 +107,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
             factorizations=int(found.factorizations),
         )
     toml_path.parent.mkdir(parents=True, exist_ok=True)
-    toml_path.write_text(text, encoding="utf-8")
+    toml_path.write_text(_header(case, found, out) + resolved, encoding="utf-8")
     return Written(found, written, out, toml_path)
 
 

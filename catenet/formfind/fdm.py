@@ -139,6 +139,7 @@ class FormFound:
     wall_time: float = 0.0
     backend: str = ""
     stats: dict = field(default_factory=dict)
+    _rest: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def length(self) -> np.ndarray:
@@ -151,9 +152,11 @@ class FormFound:
         return self.q * self.length
 
     def rest_length(self, name: str = "force_density") -> np.ndarray:
-        """Rest lengths l0 = L / (1 + eps) with N(eps) = q L under the net's law; a
-        tension the law cannot carry is a ConfigError naming ``name``."""
-        return rest_lengths(self.net, self.force, self.length, name)
+        """Rest lengths l0 = L / (1 + eps) with N(eps) = q L under the net's law (computed
+        once); a tension the law cannot carry is a ConfigError naming ``name``."""
+        if self._rest is None:
+            self._rest = rest_lengths(self.net, self.force, self.length, name)
+        return self._rest.copy()
 
     def to_net(self) -> Net:
         """The net at the form-found shape, with the rest lengths that carry its forces."""
@@ -334,7 +337,7 @@ def formfind(
         backend=shape.backend,
         stats={"solves": shape.solves, "n_free": shape.pattern.n_free},
     )
-    found.rest_length(q_name)  # the law must carry every force: say so now
+    found.rest_length(q_name)  # the law must carry every force: say so now (kept)
     found.wall_time = time.perf_counter() - start
     log.info(
         "form found (%s): %d factorisations, %d solves, %.3g s",

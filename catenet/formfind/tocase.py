@@ -1,7 +1,16 @@
 """The graph case that holds a form-found net (``to_case``): its positions, edges, EA per
 edge and the rest lengths l0 = L / (1 + eps) at which each edge carries its force N = q L
 under the case's law, its fixed nodes and loads, and the case's material, solver and
-output settings, so that ``catenet run`` on it starts in equilibrium."""
+output settings, so that ``catenet run`` on it starts in equilibrium.
+
+A graph case keeps its structure: every node of the built net becomes a given node (in
+the same order, so node indices, node sets and the loads' node references hold), the
+graph's own edges stay ``edges``, and each cable stays a named cable through all its nodes
+(none split again) with its material and the rest length of each of its edges; node sets
+are written as the nodes they held (a region as the nodes it selected); point loads keep
+their node references (one along a cable: the node there), and the loads that depend on
+the geometry (line, area) are written as the nodal forces they gave where the shape was
+found."""
 
 from __future__ import annotations
 
@@ -17,28 +26,39 @@ if TYPE_CHECKING:
 PREFIX = "formfind."
 
 
-def to_case(found: FormFound, case=None, *, output_file: str | None = None) -> dict:
+def to_case(found: FormFound, case=None, *, output_file: str | None = None, scene=None) -> dict:
     """The graph case (a dict of TOML tables) that holds the form-found net. ``case``: the
     case it was found from (its title, material, loads, solver and output settings); None
-    for a net made in Python (its law must then be the linear one)."""
+    for a net made in Python (its law must then be the linear one). ``scene``: the case
+    built (a graph's cables, node sets and load nodes are kept then)."""
     net = found.net
     rest = found.rest_length(PREFIX + "force_density")
-    geometry = {
-        "kind": "graph",
-        "nodes": found.x.tolist(),
-        "edges": net.edges.tolist(),
-        "rest_length": rest.tolist(),
-        "EA": net.EA.tolist(),
-        "fixed": np.flatnonzero(net.fixed).tolist(),
-    }
+    structured = scene is not None and getattr(case.geometry, "kind", "") == "graph"
+    if structured:
+        geometry = _graph(found, case, scene, rest)
+    else:
+        geometry = {
+            "kind": "graph",
+            "nodes": found.x.tolist(),
+            "edges": net.edges.tolist(),
+            "rest_length": rest.tolist(),
+            "EA": net.EA.tolist(),
+            "fixed": np.flatnonzero(net.fixed).tolist(),
+        }
     load: dict = {}
     const = found.load.copy()
     if case is not None and case.load.gravity is not None:
         load["gravity"] = list(case.load.gravity)
         const -= _weight(net, rest, case.load.gravity)
+    points = []
+    if structured:
+        points, const = _kept_points(case, scene, const)
+        if case.load.history is not None:
+            load["history"] = [list(p) for p in case.load.history]
     nodes = np.flatnonzero(np.any(const != 0.0, axis=1))
-    if nodes.size:
-        load["point"] = [{"node": int(i), "force": const[i].tolist()} for i in nodes]
+    points += [{"node": int(i), "force": const[i].tolist()} for i in nodes]
+    if points:
+        load["point"] = points
     if case is None:
         if np.any(net.law.kind != 0):
             raise ConfigError("to_case: a net under a nonlinear law needs the case it came from")
@@ -55,10 +75,66 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None) -> d
         }
     out["geometry"] = geometry
     out["load"] = load
+    probe = out.get("output", {}).get("probe")
+    if structured and isinstance(probe, str) and probe in (scene.names or {}):
+        out["output"]["probe"] = int(scene.names[probe])  # ("center" moves with the shape)
     if output_file is not None:
         out.setdefault("output", {})["file"] = output_file
     order = ("title", "geometry", "material", "load", "solver", "output")
     return {k: out[k] for k in order if k in out}
+
+
+def _graph(found: FormFound, case, scene, rest: np.ndarray) -> dict:
+    """A graph case's geometry with its structure: own edges, cables, node sets."""
+    net, g = found.net, case.geometry
+    own = np.ones(net.n_edges, dtype=bool) if scene.cables is None else scene.cables.edge < 0
+    geometry: dict = {"kind": "graph", "nodes": found.x.tolist()}
+    if own.any():
+        geometry["edges"] = net.edges[own].tolist()
+        geometry["rest_length"] = rest[own].tolist()
+        geometry["EA"] = net.EA[own].tolist()
+        if g.tension_only is not None:
+            geometry["tension_only"] = list(g.tension_only)
+    geometry["fixed"] = np.flatnonzero(net.fixed).tolist()
+    sets = {k: list(v) for k, v in (scene.sets or {}).items() if not k.startswith("cable:")}
+    if sets:
+        geometry["sets"] = sets
+    cables = []
+    for c, cable in enumerate(g.cables):
+        sel = np.flatnonzero(scene.cables.edge == c)
+        chain = [int(net.edges[sel[0], 0]), *net.edges[sel, 1].tolist()]
+        item: dict = {"name": cable.name, "nodes": chain, "rest_length": rest[sel].tolist()}
+        if cable.material is not None:
+            over = cable.material.to_dict()
+            over.pop("prestress", None)
+            if over:
+                item["material"] = over
+        cables.append(item)
+    if cables:
+        geometry["cable"] = cables  # (no edge_length: every cable is written as split)
+    return geometry
+
+
+def _kept_points(case, scene, const: np.ndarray) -> tuple[list, np.ndarray]:
+    """The point loads with their node references (one along a cable: the node there),
+    and the constant nodal forces left once the constant ones are taken out."""
+    points, rest = [], const.copy()
+    scale = float(np.abs(const).max(initial=0.0))
+    for k, pt in enumerate(case.load.points):
+        item = pt.to_dict()
+        if pt.cable is not None:
+            item.pop("cable")
+            item.pop("at")
+            item = {"node": int(scene.at_nodes[k]), **item}
+        points.append(item)
+        if pt.history is None and case.load.history is None:
+            ref = item["node"]
+            if isinstance(ref, str) and ref not in scene.sets:  # a named node: its index
+                ref = item["node"] = int(scene.names[ref])
+            for i in scene.sets[ref] if isinstance(ref, str) else (ref,):
+                rest[i] -= pt.force
+    rest[np.abs(rest) <= 64 * np.finfo(float).eps * scale] = 0.0  # the round-off left
+    return points, rest
 
 
 def _weight(net, rest: np.ndarray, gravity) -> np.ndarray:

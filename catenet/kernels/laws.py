@@ -169,3 +169,16 @@ def strain_for_force(law, params, table, target):
             return new
         eps = new
     return eps
+
+
+@njit(cache=True, error_model="numpy")
+def strains_for_forces(kind, params, table, tension_only, tension, EA):
+    """Per edge, ``strain_for_force`` of tension / EA (NaN for a compression in a
+    tension-only edge): one compiled loop over the edges."""
+    out = np.empty(len(kind))
+    for k in range(len(kind)):
+        if tension_only[k] and tension[k] < 0.0:
+            out[k] = np.nan
+        else:
+            out[k] = strain_for_force(kind[k], params[k], table, tension[k] / EA[k])
+    return out

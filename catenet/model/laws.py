@@ -121,16 +121,18 @@ class Law:
     def strain_for_tension(self, tension: np.ndarray, EA: np.ndarray) -> np.ndarray:
         """Per edge, the strain at which it carries ``tension`` [N] (NaN where it cannot:
         compression in a tension-only edge, or beyond what the law reaches)."""
-        from catenet.kernels.laws import strain_for_force
+        from catenet.kernels.laws import strains_for_forces
 
         tension = np.broadcast_to(np.asarray(tension, dtype=np.float64), self.kind.shape)
-        out = np.empty(len(self.kind))
-        for k in range(len(out)):
-            if self.tension_only[k] and tension[k] < 0.0:
-                out[k] = np.nan
-                continue
-            out[k] = strain_for_force(self.kind[k], self.params[k], self.table, tension[k] / EA[k])
-        return out
+        EA = np.broadcast_to(np.asarray(EA, dtype=np.float64), self.kind.shape)
+        return strains_for_forces(
+            self.kind,
+            self.params,
+            self.table,
+            self.tension_only,
+            np.ascontiguousarray(tension),
+            np.ascontiguousarray(EA),
+        )
 
 
 def table_rows(points, *, path: str = "material.table") -> tuple[np.ndarray, float]:

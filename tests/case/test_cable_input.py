@@ -88,7 +88,9 @@ def test_obj_polylines(tmp_path):
         "material": {"EA": 1.0},
     }
     case = parse_case(data, base_dir=tmp_path)
-    assert case.geometry.edges == ((0, 1), (1, 2), (3, 1))
+    # a polyline of more than two points is a cable (named by its place), a segment an edge
+    assert case.geometry.edges == ((3, 1),)
+    assert [(c.name, c.nodes) for c in case.geometry.cables] == [("line0", (0, 1, 2))]
     (tmp_path / "n.obj").write_text("v 0 0 0\nl 1 2\n")
     found = problems(data, base_dir=tmp_path)
     assert "line 2: 'l 1 2': a polyline needs at least 2 vertices defined before it" in found[0]
@@ -162,9 +164,9 @@ def test_bad_csv_nets_name_the_line(tmp_path, text, message):
 
 
 def test_meshio_missing_is_named(tmp_path, monkeypatch):
-    (tmp_path / "n.vtu").write_text("")
+    (tmp_path / "n.msh").write_text("")  # (.vtu, .vtp and .vtk: catenet reads them itself)
     monkeypatch.setitem(sys.modules, "meshio", None)
-    data = {"geometry": {"kind": "graph", "file": "n.vtu", "fixed": [0]}, "material": {"EA": 1.0}}
+    data = {"geometry": {"kind": "graph", "file": "n.msh", "fixed": [0]}, "material": {"EA": 1.0}}
     found = problems(data, base_dir=tmp_path)
     assert "needs the Python package meshio, which is not installed" in found[0]
 
@@ -274,7 +276,7 @@ BAD = [
         "geometry.cable.0.colour",
         "red",
         "geometry.cable[0].colour: unknown key (accepted: name, nodes, edge_length, "
-        "prestress, material)",
+        "prestress, rest_length, material)",
     ),
     (
         "geometry.prestrain",

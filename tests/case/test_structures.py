@@ -34,6 +34,7 @@ CONFIGS = Path(__file__).parents[2] / "configs"
 SADDLE = CONFIGS / "formfind" / "saddle_roof.toml"
 MAST = CONFIGS / "structures" / "guyed_mast.toml"
 TETHER = CONFIGS / "structures" / "tether_net.toml"
+HYPAR = CONFIGS / "structures" / "hypar_roof.toml"
 SNOW = 800.0  # N/m^2 on plan: 400 N per metre of cable of the 1 m grid (see the case)
 
 
@@ -53,7 +54,7 @@ def balanced(case, result) -> None:
 
 
 def test_every_structure_example_is_tested():
-    tested = {SADDLE, MAST, TETHER}
+    tested = {SADDLE, MAST, TETHER, HYPAR}
     assert set((CONFIGS / "structures").glob("*.toml")) <= tested
     for path in tested:
         says_what_it_shows(path)
@@ -107,6 +108,38 @@ def test_saddle_roof_under_snow(saddle):
     at = np.any(net.edges == centre, axis=1)
     split = change[at & hanging].mean() - change[at & ~hanging].mean()
     assert split == pytest.approx(SNOW * 1.0 * 12.0, rel=0.03)
+
+
+# --------------------------------------------------------------------------- hypar roof
+
+
+def test_hypar_roof_under_snow_on_plan(tmp_path):
+    """The roof with its self-weight alone, then with the snow: 800 Pa x 144 m^2 in all,
+    carried by the hanging cables gaining what the arching ones lose (membrane theory at
+    the middle node: dT_x - dT_y = p h c, h = 2 m, c = 12 m)."""
+    snow_case = load_case(HYPAR)
+    bare_case = load_case(HYPAR, ["load.area.0.pressure=0"])
+    scene = build(snow_case)
+    weight = build(bare_case).loads.external_force(scene.net)[:, 2].sum()
+    snow_load = scene.loads.external_force(scene.net)[:, 2].sum() - weight
+    assert snow_load == pytest.approx(-800.0 * 144.0, rel=1e-12)
+    snow = run_case(snow_case, tmp_path / "snow.h5")
+    bare = run_case(bare_case, tmp_path / "bare.h5")
+    assert snow.converged and bare.converged
+    balanced(snow_case, snow)
+    net = scene.net
+    along = net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]]
+    cable = scene.cables.edge >= 0
+    hanging = cable & (np.abs(along[:, 0]) > np.abs(along[:, 1]))
+    arching = cable & ~hanging
+    change = snow.tension - bare.tension
+    assert change[hanging].min() > 0.0 and change[arching].max() < 0.0
+    assert snow.tension[cable].min() > 0.3 * 30e3  # none slack
+    middle = scene.probe
+    assert np.allclose(net.nodes[middle], 0.0)
+    at = np.any(net.edges == middle, axis=1)
+    split = change[at & hanging].mean() - change[at & arching].mean()
+    assert split == pytest.approx(800.0 * 2.0 * 12.0, rel=0.05)
 
 
 # --------------------------------------------------------------------------- guyed mast

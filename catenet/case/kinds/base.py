@@ -149,5 +149,16 @@ class GeometryConfig(Declared):
         [material]); kinds that need more of the case than the supports override it."""
         return self.build(material, case.supports.fixed)
 
+    def area_force(self, net: Net, pressure: float, size: float) -> Any:
+        """The nodal forces (N, 3) of an area load over the whole net when the kind
+        lumps it its own way (the square net: the paper's pressure), else None
+        (tributary areas, catenet/model/areas.py)."""
+        return None
+
+    def given_nodes(self, net: Net) -> int:
+        """How many of the built net's first nodes the case gives (the rest split
+        cables)."""
+        return net.n_nodes
+
     def to_dict(self) -> dict:
         return {"kind": self.kind, **super().to_dict()}

@@ -34,6 +34,7 @@ from catenet.case.keys import (
     real,
     text,
 )
+from catenet.case.kinds.regions import Region, check_region, resolve
 from catenet.case.material import MaterialConfig, parse_material
 from catenet.errors import ConfigError
 from catenet.model.laws import LAWS, TABLE, Law
@@ -60,15 +61,23 @@ class Overrides(Declared):
 
 @dataclass(frozen=True)
 class NodeSets(Declared):
-    """Named groups of given nodes, ``((name, (i, j, ...)), ...)``."""
+    """Named groups of nodes, ``((name, (i, j, ...) or Region), ...)``: given nodes, or a
+    region (catenet/case/kinds/regions.py) evaluated on nodes."""
 
-    items: tuple[tuple[str, tuple[int, ...]], ...] = ()
+    items: tuple[tuple[str, Any], ...] = ()
 
-    def as_dict(self) -> dict[str, tuple[int, ...]]:
-        return dict(self.items)
+    def as_dict(self, xyz: np.ndarray | None = None) -> dict[str, tuple[int, ...]]:
+        """Name -> node indices: regions evaluated on ``xyz`` (None: left out)."""
+        if xyz is None:
+            return {k: v for k, v in self.items if not isinstance(v, Region)}
+        return resolve(self.items, xyz)
+
+    @property
+    def regions(self) -> bool:
+        return any(isinstance(v, Region) for _, v in self.items)
 
     def to_dict(self) -> dict:
-        return {k: list(v) for k, v in self.items}
+        return {k: (v.to_dict() if isinstance(v, Region) else list(v)) for k, v in self.items}
 
 
 def _material_names() -> tuple[str, ...]:
@@ -107,8 +116,22 @@ def _check_polyline(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return BAD if bad else tuple(out)
 
 
+def _check_lengths(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """Numbers > 0 (one per edge of the cable: checked when it is split); not with
+    prestress."""
+    if not isinstance(v, (list, tuple)) or not v:
+        return ck.bad(path, v, "must be an array of numbers > 0, one per edge of the cable")
+    out = [ck.real(x, f"{path}[{k}]", gt=0.0) for k, x in enumerate(v)]
+    if BAD in out:
+        return BAD
+    if ctx.values.get("prestress") is not None:
+        return ck.bad(path, v, "gives the rest lengths: give it or prestress, not both")
+    return tuple(out)
+
+
 def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """A table of name = [node indices], each non-empty and listing each node once."""
+    """A table of name = [node indices] (each non-empty and listing each node once) or
+    name = { box = ... } or { near = ... }."""
     t = ck.table(v, path)
     if t is None:
         return BAD
@@ -116,8 +139,11 @@ def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     items, before = [], len(ck.problems)
     for name, nodes in t.items():
         here = f"{path}.{name}"
-        if name in taken:
+        if name in taken or str(name).startswith("cable:"):
             ck.bad(here, nodes, f"{name!r} names a node already: choose another set name")
+        elif isinstance(nodes, dict):
+            region = check_region(ck, nodes, here)
+            items.append((str(name), region))
         elif not isinstance(nodes, (list, tuple)) or not nodes:
             ck.bad(here, nodes, "names no node: must be a non-empty array of node indices")
         else:
@@ -134,7 +160,8 @@ def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 def sets_key() -> Any:
     return key(
         _check_sets,
-        "a table of name = [node indices]",
+        "a table of name = [node indices], { box = [[x0, y0, z0], [x1, y1, z1]] } or "
+        "{ near = [x, y, z] }",
         None,
         write="given",
         shown="none",
@@ -168,6 +195,15 @@ class CableConfig(Declared):
         shown="material's",
         unit="N",
         doc="its tension in the given geometry (rest lengths derived from it)",
+    )
+    rest_length: tuple[float, ...] | None = key(
+        _check_lengths,
+        "an array of numbers > 0, one per edge of the cable (after splitting)",
+        None,
+        write="given",
+        shown="from prestress, else the given lengths",
+        unit="m",
+        doc="unstressed length of each of its edges, in order (as catenet formfind writes)",
     )
     material: Overrides | None = key(
         _check_material,

@@ -1,6 +1,7 @@
-"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, CSV, OBJ, or a line
-mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets and
-per-edge arrays (rest length, EA, tension-only switch, prestress)."""
+"""geometry.kind = "graph": an explicit net, inline or from a file (JSON, CSV, OBJ, VTK, or a
+line mesh meshio reads), with optional cables (catenet/case/kinds/cables.py), node sets
+(lists, regions: catenet/case/kinds/regions.py, and "cable:NAME") and per-edge arrays
+(rest length, EA, tension-only switch, prestress)."""
 
 from __future__ import annotations
 
@@ -26,7 +27,8 @@ from catenet.case.keys import (
 from catenet.case.kinds import cables as cb
 from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
-from catenet.case.kinds.netfile import MESH_KEYS, is_mesh, read_net_file
+from catenet.case.kinds.netfile import FILE_KEYS, MESH_KEYS, is_mesh, merge_file, read_net_file
+from catenet.case.kinds.regions import empty_boxes
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.laws import Law, table_rows
@@ -133,7 +135,9 @@ class GraphConfig(GeometryConfig):
         doc="a JSON file of the keys above (relative to the case file); or nodes and edges "
         "from a CSV sheet (a table under the header x,y,z, a row per node, and one under i,j, "
         "a row per edge, node k the k-th row from 0; comma, semicolon or tab), an OBJ file of "
-        "polylines, or a line mesh meshio reads (.vtu, .vtk, .msh)",
+        "polylines, a VTK file (.vtu, .vtp, .vtk: lines and polylines; point data flags are "
+        "node sets) or a line mesh meshio reads (.msh, ...); a polyline of more than 2 "
+        "points, or a named one, is a cable (docs/guide/loads.md)",
     )
 
     @classmethod
@@ -160,18 +164,30 @@ class GraphConfig(GeometryConfig):
             if src is None:
                 return None
             if is_mesh(file):
-                src = {**{k: g[k] for k in _DATA if k in g}, **src}
+                src = merge_file(ck, {k: g[k] for k in _DATA if k in g}, src, file)
+                if src is None:
+                    return None
             suffix = f" (in geometry.file = {file!r})"
         sub = Checker()
         if file is not None and not is_mesh(file):
             sub.keys(src, "geometry", _DATA, " in a graph file")
         data = _parse_data(sub, src, pre)
         for msg in sub.problems:
-            from_file = not is_mesh(file or "") or msg.startswith(MESH_KEYS, len("geometry."))
+            from_file = not is_mesh(file or "") or msg.startswith(FILE_KEYS, len("geometry."))
             ck.add(msg + (suffix if from_file else ""))
         if data is None or sub.problems or pre is BAD:
             return None
-        return cls(**data, prestrain=pre, file=file)
+        config = cls(**data, prestrain=pre, file=file)
+        if config.sets is not None and config.sets.regions:
+            try:
+                mesh = config._mesh()
+            except ConfigError:
+                return config  # reported where the net is built
+            before = len(ck.problems)
+            empty_boxes(ck, config.sets.items, mesh.nodes)
+            if len(ck.problems) > before:
+                return None
+        return config
 
     @classmethod
     def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
@@ -197,7 +213,7 @@ class GraphConfig(GeometryConfig):
             len(self.nodes),
             frozenset(self.fixed),
             {"center": _center(self.nodes, self.fixed)},
-            self._sets(),
+            self._sets(self._mesh() if self._needs_mesh() else None),
             tuple(c.name for c in self.cables),
         )
 
@@ -223,7 +239,7 @@ class GraphConfig(GeometryConfig):
         (the per-edge arrays where given; no per-cable material, law or prestress:
         ``build_case`` gives the case's whole net)."""
         mesh = self._mesh()
-        sets = self._sets()
+        sets = self._sets(mesh)
         names = self._names(mesh, fixed, sets)
         probe = names["center"]
         pinned = self._pinned(fixed, names, sets)
@@ -263,7 +279,7 @@ class GraphConfig(GeometryConfig):
             if pt.cable is not None:
                 at.setdefault(order[pt.cable], []).append((pt.at, k))
         mesh = self._mesh(at)
-        sets = self._sets()
+        sets = self._sets(mesh)
         names = self._names(mesh, case.supports.fixed, sets)
         probe = names["center"]
         pinned = self._pinned(case.supports.fixed, names, sets)
@@ -289,6 +305,10 @@ class GraphConfig(GeometryConfig):
             rows = table_rows(mat.table)[0] if mat.law == "table" else None
             law = Law.uniform(n, mat.law, tension_only=only, table=rows)
             laws.append(law)
+            given = self.cables[c - 1].rest_length if c > 0 else None
+            if given is not None:
+                rest[sel] = _cable_rest(given, n, c - 1)
+                continue
             t0 = mat.prestress
             if c == 0 and self.prestress is not None:
                 t0 = np.asarray(self.prestress)
@@ -316,12 +336,25 @@ class GraphConfig(GeometryConfig):
         cables = self._index(mesh)
         return Built(net, probe, _size(net), names, True, sets, cables, mesh.at_nodes)
 
+    def given_nodes(self, net: Net) -> int:
+        return len(self.nodes)
+
     # --- helpers --------------------------------------------------------------------------
     def _xyz(self) -> np.ndarray:
         return np.asarray(self.nodes, dtype=np.float64)
 
-    def _sets(self) -> dict[str, tuple[int, ...]]:
-        return self.sets.as_dict() if self.sets is not None else {}
+    def _needs_mesh(self) -> bool:
+        return bool(self.cables) or (self.sets is not None and self.sets.regions)
+
+    def _sets(self, mesh: cb.CableMesh | None = None) -> dict[str, tuple[int, ...]]:
+        """The node sets: regions evaluated on the built nodes (the given ones without
+        ``mesh``), and "cable:NAME" for every node of each cable."""
+        xyz = self._xyz() if mesh is None else mesh.nodes
+        out = self.sets.as_dict(xyz) if self.sets is not None else {}
+        if mesh is not None:
+            for c, cable in enumerate(self.cables):
+                out[f"cable:{cable.name}"] = tuple(np.unique(mesh.edges[mesh.cable == c]).tolist())
+        return out
 
     def _hs(self) -> list:
         return [c.edge_length or self.edge_length for c in self.cables]
@@ -331,6 +364,7 @@ class GraphConfig(GeometryConfig):
             return []
         names = {"center": _center(self.nodes, self.fixed)}
         lines = cb.polylines(Checker(), self.cables, self._xyz(), (), self._sets(), names)
+        # (regions of a cable's nodes: evaluated on the given nodes)
         if lines is None:  # checked when parsed
             raise ConfigError("geometry.cable: invalid cables")
         return lines
@@ -366,6 +400,16 @@ def _prestress_key(per_edge: bool):
     if per_edge:
         return lambda k: f"geometry.prestress[{k}]"
     return lambda k: f"material.prestress (edge {k})"
+
+
+def _cable_rest(given: tuple[float, ...], n: int, c: int) -> np.ndarray:
+    """The rest lengths a cable gives, one per edge of it after splitting."""
+    if len(given) != n:
+        raise ConfigError(
+            f"geometry.cable[{c}].rest_length: {len(given)} values: the cable has {n} edges "
+            "after splitting (one value per edge, in order)"
+        )
+    return np.asarray(given, dtype=np.float64)
 
 
 def _lengths(xyz: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -459,8 +503,8 @@ def _parse_data(ck: Checker, g: dict, pre: Any) -> dict | None:
         "its length overflows: coordinates too large",
     )
     if v["cables"] and not ck.problems:
-        sets = v["sets"].as_dict() if v["sets"] is not None else {}
+        sets = v["sets"].as_dict(xyz) if v["sets"] is not None else {}
         cb.polylines(ck, v["cables"], xyz, edges, sets, {"center": _center(nodes, fixed)})
     elif v["sets"] is not None and not ck.problems:
-        cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(), {})
+        cb.polylines(ck, (), xyz, edges, v["sets"].as_dict(xyz), {})
     return None if ck.problems else v

@@ -1,18 +1,26 @@
 """Reading a graph from ``geometry.file``: a JSON object of the graph's keys, a CSV file
 of two tables (nodes ``x,y,z`` and edges ``i,j``, as a spreadsheet saves them: see
-``_read_csv``), a Wavefront OBJ file of polylines (``v`` and ``l`` lines, read here), or
-any line mesh that meshio reads (``.vtu``, ``.vtk`` unstructured grids, ``.msh``, ...:
-its ``line`` cells are the edges; meshio is imported only then, and is optional).
+``_read_csv``), a Wavefront OBJ file of polylines (``v`` and ``l`` lines, read here), a
+VTK file (``.vtu``, ``.vtp``, legacy ``.vtk``: read here, catenet/case/kinds/vtkfile.py)
+or any other line mesh that meshio reads (``.msh``, ...: its ``line`` cells are the
+edges; meshio is imported only then, and is optional).
 
-A mesh file gives the nodes and edges; the other graph keys (supports, node sets, cables,
-per-edge arrays) stay in the case file. Problems are recorded in a Checker with the key
-``geometry.file`` and the file's path.
+A mesh file gives the nodes, the edges and the cables: a polyline of more than two points,
+or one with a name (an OBJ ``o`` or ``g`` name, a VTK cell data array ``name``), is a
+cable, named so or ``line<k>`` (k its place among the file's lines, from 0); a segment of
+two points is an edge. A VTK file's point data arrays of 0/1 flags (e.g. ``fixed``) are
+node sets. The other graph keys (supports, more node sets, per-edge arrays) stay in the
+case file. Problems are recorded in a Checker with the key ``geometry.file`` and the
+file's path.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import logging
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +31,9 @@ log = logging.getLogger(__name__)
 
 #: What a mesh file gives (the graph's other keys stay in the case file).
 MESH_KEYS = ("nodes", "edges")
+#: The keys whose problems are the file's.
+FILE_KEYS = ("nodes", "edges", "cable")
+VTK = (".vtu", ".vtp", ".vtk")
 
 
 def is_mesh(file: str) -> bool:
@@ -45,7 +56,94 @@ def read_net_file(ck: Checker, file: str, base_dir: Path, keys: tuple[str, ...])
         return _read_obj(ck, path, label)
     if path.suffix.lower() in (".csv", ".txt"):
         return _read_csv(ck, path, label)
+    if path.suffix.lower() in VTK:
+        return _read_vtk(ck, path, label)
     return _read_meshio(ck, path, label)
+
+
+def merge_file(ck: Checker, given: dict, read: dict, file: str) -> dict | None:
+    """The graph's keys: the case file's ``given`` ones and what the mesh file gave
+    (nodes, edges, cables, node sets; the case's node sets win over the file's flags)."""
+    own = dict(given)
+    if "cable" in read and "cable" in own:
+        ck.add(
+            f"geometry.cable: geometry.file = {file!r} gives the cables (its polylines): "
+            "give them in one place"
+        )
+        return None
+    flags = read.pop("sets", {})
+    if flags:
+        sets = own.get("sets")
+        own["sets"] = {**flags, **(sets if isinstance(sets, dict) else {})}
+    return {**own, **read}
+
+
+def _net(nodes, lines, names, label: str, ck: Checker) -> dict | None:
+    """Nodes, edges and cables from polylines (see the module's note)."""
+    edges, cables = [], []
+    for k, line in enumerate(lines):
+        idx = [int(i) for i in line]
+        name = names[k] if names is not None and names[k] else None
+        if len(idx) == 2 and name is None:
+            edges.append(idx)
+        else:
+            cables.append({"name": name or f"line{k}", "nodes": idx})
+    seen: dict[str, int] = {}
+    for c in cables:
+        n = seen[c["name"]] = seen.get(c["name"], 0) + 1
+        if n > 1:
+            c["name"] = f"{c['name']}#{n}"  # a repeated name: the second "a#2", ...
+    out: dict = {"nodes": nodes}
+    if edges:
+        out["edges"] = edges
+    if cables:
+        out["cable"] = cables
+    if not edges and not cables:
+        ck.add(f"{label}: holds no lines: nothing to make edges or cables of")
+        return None
+    return out
+
+
+def _read_vtk(ck: Checker, path: Path, label: str) -> dict | None:
+    from catenet.case.kinds.vtkfile import VtkError, read_vtk
+
+    try:
+        got = read_vtk(path)
+    except VtkError as exc:
+        ck.add(f"{label}: cannot read it as VTK: {exc}")
+        return None
+    except (OSError, ValueError, IndexError, KeyError, zlib.error) as exc:
+        kind = type(exc).__name__
+        ck.add(f"{label}: cannot read it as VTK (a damaged or unsupported file: {kind})")
+        return None
+    n = len(got.points)
+    if not got.lines:
+        found = ", ".join(got.skipped) or "no cells"
+        ck.add(
+            f"{label}: holds no line cells (it has {found}): catenet reads a mesh's lines "
+            "and polylines"
+        )
+        return None
+    for k, line in enumerate(got.lines):
+        if len(line) < 2 or line.min() < 0 or line.max() >= n:
+            ck.add(
+                f"{label}: line {k} ({line.tolist()}): needs at least 2 of the file's {n} points"
+            )
+            return None
+    if got.skipped:
+        log.warning("%s: ignoring its %s", path, ", ".join(got.skipped))
+    if not np.all(np.isfinite(got.points)):
+        ck.add(f"{label}: its points have non-finite coordinates")
+        return None
+    out = _net(got.points.tolist(), got.lines, got.names, label, ck)
+    sets = {}
+    for name, values in got.point_data.items():
+        v = np.asarray(values, dtype=np.float64)
+        if name and np.all((v == 0) | (v == 1)) and v.any():
+            sets[name] = np.flatnonzero(v).tolist()
+    if out is not None and sets:
+        out["sets"] = sets
+    return out
 
 
 def _read_text(ck: Checker, path: Path, label: str) -> str | None:
@@ -80,14 +178,20 @@ def _read_json(ck: Checker, path: Path, label: str, keys: tuple[str, ...]) -> di
 
 def _read_obj(ck: Checker, path: Path, label: str) -> dict | None:
     """Vertices (``v x y z``) and polylines (``l i j k ...``, 1-based, negative indices
-    count back from the last vertex so far); faces and the rest are ignored."""
+    count back from the last vertex so far), named by the ``o`` or ``g`` line before them;
+    faces and the rest are ignored."""
     text = _read_text(ck, path, label)
     if text is None:
         return None
     nodes: list[list[float]] = []
-    edges: list[list[int]] = []
+    lines: list[list[int]] = []
+    names: list[str | None] = []
+    group = None
     for lineno, raw in enumerate(text.splitlines(), 1):
         parts = raw.split("#", 1)[0].split()
+        if parts and parts[0] in ("o", "g"):
+            group = " ".join(parts[1:]) or None
+            continue
         if not parts or parts[0] not in ("v", "l"):
             continue
         try:
@@ -108,11 +212,12 @@ def _read_obj(ck: Checker, path: Path, label: str) -> dict | None:
                 f"vertices defined before it (1..{len(nodes)})"
             )
             return None
-        edges += [[a, b] for a, b in zip(idx[:-1], idx[1:], strict=True)]
-    if not edges:
+        lines.append(idx)
+        names.append(group)
+    if not lines:
         ck.add(f"{label}: holds no polylines (OBJ 'l' lines): nothing to make edges of")
         return None
-    return {"nodes": nodes, "edges": edges}
+    return _net(nodes, lines, names, label, ck)
 
 
 CSV_HEADERS = {("x", "y", "z"): "nodes", ("x", "y"): "nodes", ("i", "j"): "edges"}
@@ -199,11 +304,15 @@ def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
             "is not installed (pip install meshio), or give the graph as JSON or OBJ"
         )
         return None
-    try:
-        mesh = meshio.read(path)
-    except Exception as exc:  # meshio raises many kinds for a file it cannot read
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        ck.add(f"{label}: meshio cannot read it: {reason}")
+    try:  # meshio prints its own message and exits for a file none of its readers takes
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+            mesh = meshio.read(path)
+    except (Exception, SystemExit):  # meshio raises many kinds for a file it cannot read
+        ck.add(
+            f"{label}: cannot read it as a {path.suffix or 'suffix-less'} mesh (through meshio): "
+            "give a mesh of line cells in a format meshio reads, or the net as .vtu, .vtp, "
+            ".vtk, OBJ, CSV or JSON"
+        )
         return None
     lines = [c.data for c in mesh.cells if c.type == "line"]
     if not lines:

@@ -89,6 +89,12 @@ class SquareNetConfig(GeometryConfig):
         names = {"center": sq.center}
         return Built(refit(sq.net, names, fixed, self.prestrain), sq.center, self.size, names)
 
+    def area_force(self, net, pressure: float, size: float) -> Any:
+        """The paper's pressure (SPEC section 2): p L^2 over the square, shared equally by
+        the N nodes, so that [[load.area]] on the whole net is load.pressure (the net is
+        flat: on plan and normal to it alike)."""
+        return geo.pressure_force(net, pressure, size)
+
 
 def _clip_length(p: tuple[float, float], w: tuple[float, float], half: float) -> float:
     """Length of the line p + t w inside the square [-half, half]^2."""
