@@ -90,3 +90,24 @@ def test_animation_is_capped(monkeypatch):
     assert animated_count(10, 100) == 10
     assert animated_count(10, 10**7) == 1  # at least the lowest mode
     assert animated_count(10, 10**6) == 256 * 2**20 // (12 * 10**6 * 16)
+
+
+def test_export_writes_a_mode_like_frames(tmp_path):
+    """``catenet export --mode k``: the mode's frames over one period, positions and
+    shape as stored, the .pvd giving each its phase."""
+    import meshio
+
+    from catenet.output.export import export
+
+    done = modes_file(tmp_path)
+    written = export(done.path, "vtu", tmp_path / "m2", mode=2)
+    assert len(written.files) == 16 and written.times == [f / 16 for f in range(16)]
+    mesh = meshio.read(written.files[4])
+    stored = read_modes(done.path)
+    np.testing.assert_allclose(mesh.points, stored.frame(1, 4), atol=1e-5)
+    np.testing.assert_allclose(mesh.point_data["shape"], stored.shape[1])
+    assert written.collection.name == "cable_mode2.pvd"
+    from catenet.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="modes 1 to 4"):
+        export(done.path, "vtu", tmp_path / "m9", mode=9)
