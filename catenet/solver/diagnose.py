@@ -123,7 +123,8 @@ def describe_zero_modes(
     parts = []
     for group, why in groups:
         if group.size:
-            parts.append(f"nodes {_shown(group)}{_cables(net, group, cable_names, cable_of_edge)} {why}")
+            named = _cables(net, group, cable_names, cable_of_edge)
+            parts.append(f"nodes {_shown(group)}{named} {why}")
     where = "; ".join(parts) if parts else "the net"
     plural = "s" if count != 1 else ""
     return (

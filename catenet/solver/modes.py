@@ -53,6 +53,7 @@ SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
 ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
 DENSE = 240  # at most this many free DOFs: a dense eigensolver (and any count)
 RESIDUAL_TOL = 1e-6  # largest accepted |K phi - w^2 M phi| / (|K phi| + w^2 |M phi|)
+TOL = 1e-10  # ARPACK: relative accuracy of the Ritz values (refined by Rayleigh-Ritz after)
 AXES = "xyz"
 
 
@@ -288,7 +289,7 @@ def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
     v0 = np.random.default_rng(12345).standard_normal(n) * (op.m > 0)
     ncv = min(n, max(2 * k + 1, k + 20))
     lam, vec = eigsh(
-        k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv,
+        k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv, tol=TOL,
         mode="normal",
     )  # fmt: skip
     order = np.argsort(lam)
@@ -419,8 +420,6 @@ def modes(
                 f"modes: no equilibrium to take the modes about: {result.message or 'not at rest'}"
             )
         x = result.x
-    found = natural_modes(
-        ws, x, k, mass=mass, method=method, cables=getattr(scene, "cables", None)
-    )
+    found = natural_modes(ws, x, k, mass=mass, method=method, cables=getattr(scene, "cables", None))
     found.equilibrium = result
     return found

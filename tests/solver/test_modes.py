@@ -133,7 +133,8 @@ def test_ansys_vm53_string_under_tension():
     Targets: F = 500 lb, stress 162,974 psi, f1 = 74.708, f2 = 149.42, f3 = 224.12 Hz
     (lateral). E A eps0 is 499.98 lb, which VM53 rounds to 500 lb and its frequency
     targets use (f scales with sqrt(F): 2e-5 of the rounding); the targets have five
-    digits (half a unit of the last: up to 3.3e-5): matched to 5e-5. Units in-lb-s are consistent. VM53's density is per stretched volume (the
+    digits (half a unit of the last: up to 3.3e-5): matched to 5e-5. Units in-lb-s are
+    consistent. VM53's density is per stretched volume (the
     string at its strained length); catenet's is per unstressed volume, so it is given
     as rho (1 + eps0) (docs/guide/modes.md, "a mass per stretched length")."""
     E, A, rho, eps0, L = 30e6, 0.00306796, 0.00073, 0.00543228, 100.0
@@ -271,8 +272,9 @@ def test_prestressed_net_is_a_membrane(tmp_path):
     """An orthogonal net of cables at spacing d, each with tension T and mass rho A per
     length, over a square a = b = L = (m + 1) d pinned at its edge, is for lateral
     motion a membrane with tension N = T / d per unit width and mass m_a = 2 mu / d
-    per unit area (two families; mu = rho A / (1 + T / EA) per stretched length): N (w_xx + w_yy) = m_a w_tt, w = sin(p pi x / a)
-    sin(q pi y / b) cos(omega t), f_pq = (1/2) sqrt(N / m_a) sqrt((p/a)^2 + (q/b)^2).
+    per unit area (two families; mu = rho A / (1 + T / EA) per stretched length):
+    N (w_xx + w_yy) = m_a w_tt, w = sin(p pi x / a) sin(q pi y / b) cos(omega t),
+    f_pq = (1/2) sqrt(N / m_a) sqrt((p/a)^2 + (q/b)^2).
     The discrete net is the five-point Laplacian on the crossings (node mass 2 mu d,
     lateral springs T / d): omega^2 = (2 T / (rho A d^2)) (sin^2(p pi / (2 (m+1))) +
     sin^2(q pi / (2 (m+1)))) with mu for rho A, second order in d. The lowest lateral modes: (1,1),
@@ -340,7 +342,8 @@ def test_node_on_slack_edges_is_named_not_returned():
         assert "nodes 3 hang on slack edges only" in modes.zero_message
         T = 1e5 * (1 / 0.999 - 1)
         m1 = float(net.mass[1])
-        np.testing.assert_allclose(modes.frequency, math.sqrt(2 * T / m1) / (2 * math.pi), rtol=1e-9)
+        f = math.sqrt(2 * T / m1) / (2 * math.pi)
+        np.testing.assert_allclose(modes.frequency, f, rtol=1e-9)
 
 
 def test_part_joined_by_slack_edges_is_named():
