@@ -74,6 +74,7 @@ class Modes:
     sigma : the shift [1/s^2];  x : (N, 3) the equilibrium
     stats : method ("lanczos" or "dense"), backend, seconds, solves, factorisations,
         residual (the largest relative residual of a mode)
+    mass : (N,) the lumped masses of the free nodes [kg], 0 at the supports
     """
 
     frequency: np.ndarray
@@ -89,6 +90,7 @@ class Modes:
     zero_message: str = ""
     stats: dict = field(default_factory=dict)
     equilibrium: object = None  # the static Result the modes are taken about, if solved here
+    mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
 
     @property
     def period(self) -> np.ndarray:
@@ -102,10 +104,7 @@ class Modes:
 
     def direction_share(self) -> np.ndarray:
         """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2)."""
-        mass = getattr(self, "_mass", None)
-        if mass is None:
-            raise ValueError("Modes.direction_share needs the node masses (set by the solver)")
-        return np.einsum("n,knd->kd", mass, self.shape**2)
+        return np.einsum("n,knd->kd", self.mass, self.shape**2)
 
     def dominant(self) -> list[str]:
         """Each mode's dominant direction: the axis with the largest kinetic energy share."""
@@ -113,7 +112,7 @@ class Modes:
 
     def node_share(self) -> np.ndarray:
         """(K, N) each node's share of each mode's kinetic energy m_i |phi_i|^2 (sums to 1)."""
-        return self._mass[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+        return self.mass[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
 
 
 class Operator:
@@ -344,8 +343,8 @@ def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
         total_mass=np.full(3, float(m_free.sum())),
         x=np.array(x, dtype=np.float64),
         sigma=float(sigma),
+        mass=m_free,
     )
-    out._mass = m_free
     return out
 
 
