@@ -180,17 +180,21 @@ def natural_modes(
     op = Operator(system, np.asarray(x, dtype=np.float64), mass)
     if method not in ("auto", "dense", "lanczos"):
         raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
-    dense = method == "dense" or (method == "auto" and op.n <= DENSE)
+    # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
+    dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
     sigma = -SHIFT * op.scale
     stats = {"method": "dense" if dense else "lanczos", "backend": solver.name}
     if dense:
         lam, vec = _dense(op, sigma)
     else:
-        lam, vec = _lanczos_until(op, solver, sigma, count, stats)
+        lam, vec = _lanczos_until(
+            op, solver, sigma, count, stats, lambda why: _unstable(why, workspace, x)
+        )
     lam, vec = _rayleigh_ritz(op, vec)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
-    _refuse_unstable(op, lam, workspace, x)
+    if lam.size and lam[0] < -ZERO * op.scale:
+        _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
     zero = lam < ZERO * op.scale
     found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, sigma)
     _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
@@ -247,15 +251,18 @@ def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     return sigma + 1.0 / mu[order], vec[:, order]
 
 
-def _lanczos_until(op, solver, sigma, count, stats) -> tuple[np.ndarray, np.ndarray]:
+def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarray, np.ndarray]:
     """The lowest modes by shift-invert Lanczos, asking again for more while zero modes
     take the places of real ones (they are nearest the shift, so every one is found
-    before the first real mode)."""
+    before the first real mode). ``unstable(why)`` raises for a negative omega^2 that
+    the factorisation's inertia shows."""
     start = time.perf_counter()
     solver.factorize(op.shifted(sigma), definite=op.convex)
     stats["factorize_seconds"] = time.perf_counter() - start
     negative = solver.negative_eigenvalues()
     stats["negative"] = negative
+    if negative:  # Sylvester: that many omega^2 below sigma < 0
+        unstable(f"{negative} negative omega^2 (the inertia of K - sigma M)")
     limit = op.n - 1  # ARPACK: k < n
     k = min(count, limit)
     solves = 0
@@ -311,14 +318,12 @@ def _rayleigh_ritz(op: Operator, vec: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return lam, vec @ y
 
 
-def _refuse_unstable(op: Operator, lam: np.ndarray, workspace, x) -> None:
-    if lam.size and lam[0] < -ZERO * op.scale:
-        from catenet.solver.diagnose import describe_unstable
+def _unstable(how: str, workspace, x) -> None:
+    """Raises ConvergenceError: the equilibrium is unstable (``how``), its nodes named."""
+    from catenet.solver.diagnose import describe_unstable
 
-        why = describe_unstable(workspace.system.stretch, x, ~workspace.system.net.fixed)
-        raise ConvergenceError(
-            f"modes: the equilibrium is unstable (w^2 = {lam[0]:.3g} 1/s^2 < 0): {why}"
-        )
+    why = describe_unstable(workspace.system.stretch, x, ~workspace.system.net.fixed)
+    raise ConvergenceError(f"modes: the equilibrium is unstable ({how}): {why}")
 
 
 def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
@@ -398,8 +403,8 @@ def modes(
 ) -> Modes:
     """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a scene: a case's
     ``Scene`` or a ``catenet.solver.path.Problem``) under ``loads`` about its equilibrium,
-    found by the one solve path (``settings``: a ``catenet.solver.path.Settings``,
-    default static) unless ``x`` (N, 3) gives the equilibrium. ``terms``: further
+    found by the one solve path (``settings``: a ``catenet.solver.path.Settings``;
+    default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the equilibrium. ``terms``: further
     internal terms (with a ``Net``). Raises ConvergenceError where the equilibrium is not
     found (or a dynamic run ends before rest) and ConfigError for bad input (no mass,
     ``k`` out of range). The static Result is ``Modes.equilibrium``."""
@@ -409,7 +414,9 @@ def modes(
     scene = net
     if not hasattr(net, "net"):
         scene = path.Problem(net, Loads() if loads is None else loads, tuple(terms))
-    settings = path.Settings() if settings is None else settings
+    if settings is None:  # a case's scene: its [solver] keys; else the defaults
+        solver = getattr(getattr(scene, "case", None), "solver", None)
+        settings = path.Settings() if solver is None else path.Settings.of(solver)
     ws = workspace if workspace is not None else path.workspace(scene, settings)
     result = None
     if x is None:

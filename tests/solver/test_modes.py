@@ -374,3 +374,18 @@ def test_bad_input():
     massless = taut_cable(1.0, 10.0, 1e3, 0.0, 4)
     with pytest.raises(ConfigError, match="no mass"):
         catenet.modes(massless, None, 2)
+
+
+def test_unstable_equilibrium_is_refused():
+    """A straight chain of bilateral edges held 1 % short of its rest length is an
+    equilibrium in compression: its geometric stiffness N / |e| < 0 makes K indefinite
+    (omega^2 < 0 sideways: it buckles). Both solvers refuse it with the nodes named,
+    the Lanczos path from the inertia of K - sigma M before any iteration."""
+    from catenet.errors import ConvergenceError
+
+    net = cable([0, 0, 0], [1, 0, 0], 101, Material(EA=1e4, line_density=0.1), length=1.01)
+    net = net.replace(tension_only=False)
+    ws = workspace(catenet.solver.path.Problem(net, Loads()), Settings())
+    for method in ("dense", "lanczos"):
+        with pytest.raises(ConvergenceError, match="unstable.*compressed bilateral edges"):
+            natural_modes(ws, net.nodes, 3, method=method)
