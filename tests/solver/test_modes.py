@@ -389,3 +389,21 @@ def test_unstable_equilibrium_is_refused():
     for method in ("dense", "lanczos"):
         with pytest.raises(ConvergenceError, match="unstable.*compressed bilateral edges"):
             natural_modes(ws, net.nodes, 3, method=method)
+
+
+def test_sagging_cable_converges_at_second_order():
+    """The discrete sagging cable's first symmetric in-plane frequency converges to its
+    continuum limit at second order in the edge length: with the differences between
+    successive halvings of h (50, 100, 200, 400 edges), d_k = f(h_k) - f(h_k / 2), the
+    observed order is log2(d_k / d_{k+1}) ~ 2 (a Richardson self-convergence study: the
+    limit is the elastic catenary's, of which Irvine's flat-sag theory is the
+    approximation checked above)."""
+    f = []
+    for edges in (50, 100, 200, 400):
+        net, loads, _ = sagging_cable(10.0, edges=edges)
+        modes = catenet.modes(net, loads, 3)
+        dom = modes.dominant()
+        f.append(next(fk for fk, d in zip(modes.frequency, dom, strict=True) if d == "z"))
+    d = np.abs(np.diff(f))
+    orders = np.log2(d[:-1] / d[1:])
+    np.testing.assert_allclose(orders, 2.0, atol=0.1)
