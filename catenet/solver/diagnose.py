@@ -109,13 +109,15 @@ def describe_zero_modes(
     loose = np.zeros(net.n_nodes, bool)
     loose[loose_nodes(net, tension)] = True
     loose &= ~held
-    floating = floating_parts(net, tension, x, held) & ~loose
+    body = np.arange(net.n_nodes) >= net.n_net  # the centres of rigid balls
+    floating = floating_parts(net, tension, x, held) & ~loose & ~body
     nodes = np.asarray(nodes, dtype=np.int64)
     groups = [
+        (nodes[body[nodes]], "are the centres of rigid bodies that touch nothing"),
         (nodes[loose[nodes]], "hang on slack edges only"),
         (nodes[floating[nodes]], "form a part that only slack edges join to the supports"),
         (
-            nodes[~loose[nodes] & ~floating[nodes]],
+            nodes[~loose[nodes] & ~floating[nodes] & ~body[nodes]],
             "are a mechanism of the taut edges (untensioned straight edges or a chain "
             "that turns freely)",
         ),

@@ -404,10 +404,11 @@ def modes(
     """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a scene: a case's
     ``Scene`` or a ``catenet.solver.path.Problem``) under ``loads`` about its equilibrium,
     found by the one solve path (``settings``: a ``catenet.solver.path.Settings``;
-    default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the equilibrium. ``terms``: further
-    internal terms (with a ``Net``). Raises ConvergenceError where the equilibrium is not
-    found (or a dynamic run ends before rest) and ConfigError for bad input (no mass,
-    ``k`` out of range). The static Result is ``Modes.equilibrium``."""
+    default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the
+    equilibrium. ``terms``: further internal terms (with a ``Net``). Raises
+    ConvergenceError where the equilibrium is not found (or a dynamic run ends before
+    rest) and ConfigError for bad input (no mass, ``k`` out of range). The static
+    Result is ``Modes.equilibrium``."""
     from catenet.model.net import Loads
     from catenet.solver import path
 

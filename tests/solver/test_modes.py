@@ -407,3 +407,17 @@ def test_sagging_cable_converges_at_second_order():
     d = np.abs(np.diff(f))
     orders = np.log2(d[:-1] / d[1:])
     np.testing.assert_allclose(orders, 2.0, atol=0.1)
+
+
+def test_a_body_out_of_contact_is_named():
+    """A rigid ball's centre (the net's last node, its mass a point mass) that touches
+    nothing has no stiffness: three zero-frequency modes, named as the body's."""
+    nodes = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 0, 3.0]]
+    net = Net.from_arrays(
+        nodes, [[0, 1], [1, 2]], EA=1e5, fixed=[0, 2], rest_length=[0.999, 0.999],
+        line_density=1.0, point_mass=[0, 0, 0, 5.0], bodies=1,
+    )  # fmt: skip
+    modes = catenet.modes(net, None, 2)
+    assert modes.zero_modes == 3
+    assert "nodes 3 are the centres of rigid bodies that touch nothing" in modes.zero_message
+    assert modes.count == 2 and modes.frequency[0] > 0
