@@ -146,9 +146,14 @@ class Operator:
         self.dummy = 2.0 * self.bound
         ref = np.where(self.m > 0, self.m, float(np.median(self.m[self.m > 0])))
         self.k_data[system.diag_pos[self.dead]] = self.dummy * ref[self.dead]
+        self._k = None  # K as SciPy CSR, when asked for
 
     def matrix(self, shift: float = 0.0):
-        """K - shift M as SciPy CSR (both triangles)."""
+        """K - shift M as SciPy CSR (both triangles); K itself made once."""
+        if shift == 0.0:
+            if self._k is None:
+                self._k = self.system.matrix(self.k_data)
+            return self._k
         data = self.k_data.copy()
         data[self.system.diag_pos] -= shift * self.m
         return self.system.matrix(data)
