@@ -136,3 +136,14 @@ def test_failed_equilibrium_exits_1_with_the_static_message(tmp_path):
     assert done.returncode == 1
     assert "static equilibrium: no convergence" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_dynamic_case_must_come_to_rest(tmp_path):
+    """A dynamic case (solver.method = "dynamic") is relaxed by the paper's implicit Euler
+    as `catenet run` does; stopped at t_end before rest it has no equilibrium: exit 1."""
+    (tmp_path / "net.toml").write_text(NET)
+    done = run("modes", "net.toml", "--set", "solver.method=dynamic", "--set",
+               "solver.t_end=0.05", cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "before the net came to rest" in done.stderr
+    assert (tmp_path / "out" / "net.h5").exists()  # the run's own file, as catenet run's
