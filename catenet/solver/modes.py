@@ -52,6 +52,7 @@ log = logging.getLogger(__name__)
 SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
 ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
 DENSE = 240  # at most this many free DOFs: a dense eigensolver (and any count)
+DENSE_MAX = 4000  # ... and up to this many where too few DOFs carry mass for Lanczos
 RESIDUAL_TOL = 1e-6  # largest accepted |K phi - w^2 M phi| / (|K phi| + w^2 |M phi|)
 TOL = 1e-10  # ARPACK: relative accuracy of the Ritz values (refined by Rayleigh-Ritz after)
 AXES = "xyz"
@@ -187,6 +188,7 @@ def natural_modes(
         raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
     # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
     dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
+    dense = dense or _few_masses(op, count)
     sigma = -SHIFT * op.scale
     stats = {"method": "dense" if dense else "lanczos", "backend": solver.name}
     if dense:
@@ -224,6 +226,21 @@ def natural_modes(
     return found
 
 
+def _few_masses(op: Operator, count: int) -> bool:
+    """Whether so few DOFs carry mass (point masses on massless cables) that the Lanczos
+    vectors, which live in the range of M, cannot fill its basis: then the dense solver
+    (up to DENSE_MAX DOFs), else ConvergenceError."""
+    massive = int(np.count_nonzero((op.m > 0) & ~op.dead))
+    if massive > 2 * count + 20:
+        return False
+    if op.n <= DENSE_MAX:
+        return True
+    raise ConvergenceError(
+        f"modes: only {massive} of the {op.n} free DOFs carry mass: too few for the Lanczos "
+        f"method on a net this large; give the cables a density (material.density)"
+    )
+
+
 def _check_count(count, n_free: int) -> None:
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
@@ -250,7 +267,7 @@ def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
             ) from None
         lam, vec = sl.eigh(op.matrix().toarray(), m)
         return lam, vec
-    keep = mu > 0
+    keep = mu > 1e-12 * max(float(mu.max(initial=0.0)), 1e-300)  # else: no mass, w infinite
     mu, vec = mu[keep], vec[:, keep]
     order = np.argsort(-mu)
     return sigma + 1.0 / mu[order], vec[:, order]
@@ -285,7 +302,7 @@ def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarra
 
 def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
     """k eigenpairs nearest sigma by ARPACK with OPinv = the kept factorisation."""
-    from scipy.sparse.linalg import LinearOperator, eigsh
+    from scipy.sparse.linalg import ArpackError, LinearOperator, eigsh
 
     n = op.n
     used = [0]
@@ -299,28 +316,33 @@ def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
     m_op = LinearOperator((n, n), matvec=lambda v: op.m * np.ravel(v), dtype=np.float64)
     v0 = np.random.default_rng(12345).standard_normal(n) * (op.m > 0)
     ncv = min(n, max(2 * k + 1, k + 20))
-    lam, vec = eigsh(
-        k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv, tol=TOL,
-        mode="normal",
-    )  # fmt: skip
+    try:
+        lam, vec = eigsh(
+            k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv,
+            tol=TOL, mode="normal",
+        )  # fmt: skip
+    except ArpackError as exc:
+        raise ConvergenceError(f"modes: the Lanczos iteration (ARPACK) failed: {exc}") from None
     order = np.argsort(lam)
     return lam[order], vec[:, order], used[0]
 
 
 def _rayleigh_ritz(op: Operator, vec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The best eigenpairs in the span of ``vec``: V^T K V y = w^2 V^T M V y, so that the
-    shapes are M-orthonormal to round-off and the w^2 are Rayleigh quotients."""
+    """The best eigenpairs in the span of ``vec``: an M-orthonormal basis of it (the
+    directions of no mass, massless DOFs' infinite modes, left out), then the
+    eigenpairs of K in that basis, so that the shapes are M-orthonormal to round-off
+    and the w^2 are Rayleigh quotients."""
     import scipy.linalg as sl
 
     if vec.shape[1] == 0:
         return np.zeros(0), vec
-    kv = op.matrix() @ vec
-    mv = op.m[:, None] * vec
-    kr = vec.T @ kv
-    mr = vec.T @ mv
-    kr, mr = 0.5 * (kr + kr.T), 0.5 * (mr + mr.T)
-    lam, y = sl.eigh(kr, mr)
-    return lam, vec @ y
+    mr = vec.T @ (op.m[:, None] * vec)
+    w, u = sl.eigh(0.5 * (mr + mr.T))
+    keep = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
+    basis = vec @ (u[:, keep] / np.sqrt(w[keep]))
+    kr = basis.T @ (op.matrix() @ basis)
+    lam, y = sl.eigh(0.5 * (kr + kr.T))
+    return lam, basis @ y
 
 
 def _unstable(how: str, workspace, x) -> None:

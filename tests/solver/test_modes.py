@@ -421,3 +421,31 @@ def test_a_body_out_of_contact_is_named():
     assert modes.zero_modes == 3
     assert "nodes 3 are the centres of rigid bodies that touch nothing" in modes.zero_message
     assert modes.count == 2 and modes.frequency[0] > 0
+
+
+def test_massless_cables_with_point_masses():
+    """Massless edges carrying point masses: M is singular (its massless DOFs have
+    infinite frequencies, left out). A weightless string at tension T with one mass m at
+    midspan: omega^2 = (2 T / (L / 2)) / m laterally (twice), by both solvers; and a
+    string half of whose edges are massless: the Lanczos path (M singular, shift-invert
+    needs no M^-1) agrees with the dense one."""
+    L, T, EA, m = 2.0, 100.0, 1e5, 3.0
+    net = cable(
+        [0, 0, 0], [L, 0, 0], 41, Material(EA=EA, line_density=0.0), length=L / (1 + T / EA)
+    )
+    point = np.zeros(net.n_nodes)
+    point[20] = m
+    net = net.with_point_mass(point)
+    for method in ("dense", "lanczos"):
+        modes = catenet.modes(net, None, 2, method=method)
+        np.testing.assert_allclose(modes.frequency, math.sqrt(4 * T / (L * m)) / (2 * math.pi),
+                                   rtol=1e-10)  # fmt: skip
+    half = taut_cable(L, T, EA, 0.5, 200)
+    density = np.where(np.arange(half.n_edges) < 100, 0.0, 0.5)
+    half = half.replace(line_density=density)
+    ws = workspace(catenet.solver.path.Problem(half, Loads()), Settings())
+    x = catenet.modes(half, None, 1).x
+    dense = natural_modes(ws, x, 6, method="dense")
+    lanczos = natural_modes(ws, x, 6, method="lanczos")
+    assert lanczos.stats["method"] == "lanczos"
+    np.testing.assert_allclose(lanczos.frequency, dense.frequency, rtol=1e-9)
