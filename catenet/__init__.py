@@ -27,6 +27,8 @@ _NAMES = {
     "square_net": "catenet.model.builders",
     "Loads": "catenet.model.net",
     "Net": "catenet.model.net",
+    "Modes": "catenet.solver.modes",
+    "modes": "catenet.solver.modes",
     "Result": "catenet.solver.result",
     "Workspace": "catenet.solver.workspace",
     "continuation": "catenet.solver.loadsteps",

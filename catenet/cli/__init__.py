@@ -13,6 +13,7 @@ import click
 
 COMMANDS = {
     "run": ("catenet.cli.run", "Run a case file (or the bundled default) and write HDF5."),
+    "modes": ("catenet.cli.modes", "Natural frequencies and mode shapes about the equilibrium."),
     "sweep": ("catenet.cli.sweep", "Run a case over a grid of parameter values."),
     "formfind": ("catenet.cli.formfind", "Find a net's shape from force densities or targets."),
     "validate": ("catenet.cli.validate", "Check catenet against the analytic cable solutions."),

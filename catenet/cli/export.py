@@ -30,9 +30,23 @@ FORMATS = ("vtu", "vtk", "xdmf")  # catenet.output.export.FORMATS (not imported 
     show_default=True,
     help="Which frames: all, last, an index (negative: from the end) or start:stop[:step].",
 )
+@click.option(
+    "--mode",
+    type=click.IntRange(min=1),
+    default=None,
+    metavar="K",
+    help="A file of catenet modes: mode K's animation frames (1 = the lowest) instead.",
+)
 @verbosity_options
 def command(
-    path: Path, fmt: str, output: Path | None, frames: str, quiet: bool, verbose: int, debug: bool
+    path: Path,
+    fmt: str,
+    output: Path | None,
+    frames: str,
+    mode: int | None,
+    quiet: bool,
+    verbose: int,
+    debug: bool,
 ) -> None:
     """Write the frames of the result file PATH as one FORMAT file each, through meshio:
     STEM_0000.vtu, STEM_0001.vtu, ... (a file without a trajectory: its final state,
@@ -44,6 +58,9 @@ def command(
     displacement, fixed, velocity (dynamic runs) or reaction (final state); cell data
     tension [N], rest_length [m], EA [N].
 
+    --mode K (a file of catenet modes): mode K's frames over one period,
+    STEM_modeK_0000.vtu ..., times the phase, point data shape (mass-normalised).
+
     Needs meshio (pip install meshio). Prints the directory and the number of files.
     Exit status 2 for a missing or unreadable file or a bad --frames.
     """
@@ -51,7 +68,7 @@ def command(
     with errors_to_exit_codes(debug):
         from catenet.output.export import export
 
-        done = export(path, fmt, output, frames)
+        done = export(path, fmt, output, frames, mode=mode)
         if not quiet:
             where = done.files[0].parent
             extra = f" and {done.collection.name}" if done.collection else ""

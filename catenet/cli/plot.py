@@ -41,6 +41,8 @@ def command(
     obstacles are drawn in light grey (a moving one where it is at the end). The
     paper's single-cable cases get the paper's axes and closed forms (Figs.
     2e-2f, Eqs. 14-17).
+    A file of `catenet modes` also gets STEM-modes.png beside that figure: its
+    lowest modes (up to six), each with its frequency.
     Sweep directory: the sweep's figures (catenet.studies.square_net).
 
     Prints the path of every figure written. Exit status 2 for a missing or
@@ -62,8 +64,12 @@ def command(
             raise ConfigError(f"{path}: no such file or directory")
         else:
             from catenet.plot.figure import plot_result
+            from catenet.plot.modes import modes_output, plot_modes
 
             files = [plot_result(path, output, scale=scale)]
+            drawn = plot_modes(path, modes_output(files[0]))
+            if drawn is not None:
+                files.append(drawn)
         if not quiet:
             for f in files:
                 click.echo(str(f))

@@ -121,10 +121,46 @@ def _frames(path: Path, spec: str) -> list[Frame]:
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
-def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames="all") -> Export:
+def _mode_frames(path: Path, mode: int, spec: str) -> list[Frame]:
+    """The animation frames of mode ``mode`` (1 = the lowest) of a ``catenet modes``
+    file (``catenet.output.modes``): times are phases (0 to 1 period), tensions the
+    equilibrium's, and each frame carries the shape as ``shape``."""
+    from catenet.output.modes import read_modes
+
+    stored = read_modes(path)
+    if stored is None:
+        raise ConfigError(f"--mode {mode}: {path} holds no modes (write it with catenet modes)")
+    animated = int(stored.attrs.get("animated", 0))
+    if not 1 <= mode <= animated:
+        raise ConfigError(
+            f"--mode {mode}: {path} has animation frames for modes 1 to {animated} "
+            f"(of {stored.count})"
+        )
+    count = int(stored.attrs["frames"])
+    with open_result(path) as h5:
+        tension = np.asarray(h5["result/tension"]) if "result/tension" in h5 else None
+        g = h5[f"modes/frames/{mode - 1}"]
+        out = []
+        for f in select_frames(spec, count):
+            frame = Frame(f / count, np.asarray(g[str(f)], dtype=np.float64), None, "mode", f,
+                          tension)  # fmt: skip
+            frame.shape = stored.shape[mode - 1]
+            out.append(frame)
+    return out
+
+
+def export(
+    path: str | Path,
+    fmt: str,
+    out_dir: str | Path | None = None,
+    frames="all",
+    mode: int | None = None,
+) -> Export:
     """Writes the frames of a result file (``frames``: see ``select_frames``) in format
     ``fmt`` (one of ``FORMATS``) into ``out_dir`` (default: ``STEM-FMT`` beside the
-    file), as ``STEM_K.ext`` with K the frame's index; returns what was written."""
+    file), as ``STEM_K.ext`` with K the frame's index; returns what was written.
+    ``mode`` k: the animation frames of mode k of a ``catenet modes`` file instead
+    (``STEM_modek_F.ext``, times the phase in periods; point data ``shape``)."""
     path = Path(path)
     if fmt not in FORMATS:
         raise ConfigError(f"--to {fmt!r}: must be one of {', '.join(FORMATS)}")
@@ -132,8 +168,11 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
         raise ConfigError(f"{path}: no such result file")
     meshio = _meshio()
     mesh = read_mesh(path)
-    states = _frames(path, str(frames))
-    out = Path(out_dir) if out_dir is not None else path.with_name(f"{path.stem}-{fmt}")
+    if mode is None:
+        states, stem = _frames(path, str(frames)), path.stem
+    else:
+        states, stem = _mode_frames(path, int(mode), str(frames)), f"{path.stem}_mode{mode}"
+    out = Path(out_dir) if out_dir is not None else path.with_name(f"{stem}-{fmt}")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"-o {out}: exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
@@ -147,7 +186,7 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
         cells.append(("vertex", body[:, None]))
     files = []
     for f in states:
-        name = f"{path.stem}_{f.index:0{width}d}" if f.index >= 0 else f"{path.stem}_result"
+        name = f"{stem}_{f.index:0{width}d}" if f.index >= 0 else f"{stem}_result"
         point_data = {
             "displacement": f.x - mesh.nodes,
             "fixed": np.asarray(mesh.fixed, dtype=np.float64),  # VTK reads no int types
@@ -158,6 +197,8 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
             point_data["reaction"] = f.reaction
         if getattr(f, "contact_force", None) is not None:
             point_data["contact_force"] = f.contact_force
+        if getattr(f, "shape", None) is not None:
+            point_data["shape"] = f.shape
         cell_data = {}
         for key, value in (
             ("tension", f.tension),
@@ -180,7 +221,7 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
     times = [f.t for f in states]
     solids = _obstacles(meshio, path, states, out, ext, writer, width)
     parts = [files] + [w if len(w) == len(files) else w * len(files) for w in solids.values()]
-    collection = _write_pvd(out / f"{path.stem}.pvd", parts, times) if fmt in PVD else None
+    collection = _write_pvd(out / f"{stem}.pvd", parts, times) if fmt in PVD else None
     log.info("%s: %d frames written to %s", path, len(files), out)
     return Export(files, times, collection, solids)
 

@@ -133,6 +133,8 @@ def run_case(
     progress: Progress | None = None,
     stop: Stop | None = None,
     interrupt: Stop | None = None,
+    scene=None,
+    on_done: Callable | None = None,
 ):
     """Builds, solves and writes a case; returns the Result.
 
@@ -151,6 +153,10 @@ def run_case(
     ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
+
+    ``scene``: the case built already (``catenet.case.build``; default: built here).
+    ``on_done(scene, workspace, result)`` is called after a solve that ended (not one
+    that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
     from catenet.case import build
     from catenet.model import measures
@@ -168,7 +174,7 @@ def run_case(
     if path is not None:  # before anything is built: a bad path is found at once
         check_output_path(path)
         _probe_directory(path)
-    scene = build(case)
+    scene = build(case) if scene is None else scene
     solver = case.solver
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
@@ -256,6 +262,8 @@ def run_case(
             name: {"max_tension": float(t), "slack_fraction": float(s)}
             for name, t, s in zip(cables.names, top, slack, strict=True)
         }
+    if on_done is not None:
+        on_done(scene, ws, result)
     return result
 
 

@@ -1,4 +1,5 @@
-"""Naming what makes a stiffness matrix singular or indefinite: the nodes of a mechanism.
+"""Naming what makes a stiffness matrix singular or indefinite: the nodes of a mechanism
+(an unstable equilibrium; the zero-frequency modes of ``catenet.solver.modes``).
 
 A node's own 3x3 block of the edges' tangent stiffness, sum over its edges of
 (EA/l0) w'' t t^T + (N/|e|)(I - t t^T), is its stiffness when its neighbours stay put.
@@ -63,3 +64,85 @@ def describe_unstable(
         "pinned struts, a straight compressed strut): fix or brace those nodes (a support, "
         "an edge to a support, guys with prestress), or make the strut one edge"
     )
+
+
+def _held_by_terms(system) -> np.ndarray:
+    """(N,) nodes that a term besides the edges' stretching holds (a spring, contact)."""
+    held = np.zeros(system.net.n_nodes, bool)
+    for term in system.terms:
+        pattern = term.pattern() if term.edge_net is None else None
+        if pattern is not None:
+            held[np.asarray(pattern[0]) // 3] = True
+    return held
+
+
+def floating_parts(net, tension: np.ndarray, x: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """(N,) bool: free nodes in a part of the net that only slack edges join to its
+    supports (a rigid-body motion costs nothing). Taut: an edge in tension, at exactly
+    zero strain (its axial stiffness counts) or bilateral; ``held`` nodes (another term
+    holds them) count as supports."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    length = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
+    taut = (tension > 0) | (length >= net.rest_length) | ~net.law.tension_only
+    e = net.edges[taut]
+    n = net.n_nodes
+    graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    anchored = np.zeros(label.max() + 1, bool)
+    anchored[label[net.fixed | held]] = True
+    return ~anchored[label] & ~net.fixed
+
+
+def describe_zero_modes(
+    system, x: np.ndarray, nodes: np.ndarray, count: int, cable_names=None, cable_of_edge=None
+) -> str:
+    """One sentence on the zero-frequency modes of a net at x: how many, and the nodes
+    that move in them by what holds them (slack edges only, a part joined to the supports
+    by slack edges only, else a mechanism of the taut edges)."""
+    from catenet.model.measures import loose_nodes
+
+    net = system.net
+    tension = system.tension(x)
+    held = _held_by_terms(system)
+    loose = np.zeros(net.n_nodes, bool)
+    loose[loose_nodes(net, tension)] = True
+    loose &= ~held
+    body = np.arange(net.n_nodes) >= net.n_net  # the centres of rigid balls
+    floating = floating_parts(net, tension, x, held) & ~loose & ~body
+    nodes = np.asarray(nodes, dtype=np.int64)
+    groups = [
+        (nodes[body[nodes]], "are the centres of rigid bodies that touch nothing"),
+        (nodes[loose[nodes]], "hang on slack edges only"),
+        (nodes[floating[nodes]], "form a part that only slack edges join to the supports"),
+        (
+            nodes[~loose[nodes] & ~floating[nodes] & ~body[nodes]],
+            "are a mechanism of the taut edges (untensioned straight edges or a chain "
+            "that turns freely)",
+        ),
+    ]
+    parts = []
+    for group, why in groups:
+        if group.size:
+            named = _cables(net, group, cable_names, cable_of_edge)
+            parts.append(f"nodes {_shown(group)}{named} {why}")
+    where = "; ".join(parts) if parts else "the net"
+    plural = "s" if count != 1 else ""
+    return (
+        f"{count} zero-frequency mode{plural} (left out): {where}: give them tension "
+        "(prestress, a load) or a support"
+    )
+
+
+def _shown(nodes: np.ndarray) -> str:
+    head = ", ".join(map(str, nodes[:10]))
+    return head + (f" and {nodes.size - 10} more" if nodes.size > 10 else "")
+
+
+def _cables(net, nodes, cable_names, cable_of_edge) -> str:
+    if cable_names is None or cable_of_edge is None:
+        return ""
+    at = np.isin(net.edges, nodes).any(axis=1)
+    names = sorted({str(cable_names[c]) for c in cable_of_edge[at] if c >= 0})
+    return f" (cables {', '.join(names)})" if names else ""

@@ -98,6 +98,7 @@ class Sweep:
     params: tuple[Param, ...]
     base_toml: str = ""
     base_resolved: dict = field(default_factory=dict)
+    modes: int = 0  # the lowest natural frequencies per row, columns f1..fK [Hz]
 
     @property
     def keys(self) -> list[str]:
@@ -105,7 +106,7 @@ class Sweep:
 
     @property
     def columns(self) -> list[str]:
-        return self.keys + list(RESULT_COLUMNS)
+        return self.keys + list(RESULT_COLUMNS) + mode_columns(self.modes)
 
     @property
     def jobs(self) -> list[Job]:
@@ -131,6 +132,7 @@ class Sweep:
             {
                 "base": self.base_resolved or self.base,
                 "params": [[p.key, list(p.values)] for p in self.params],
+                **({"modes": self.modes} if self.modes else {}),
             },
             sort_keys=True,
             default=str,
@@ -144,11 +146,17 @@ class Sweep:
         return {k: values[k] for k in self.keys}
 
 
-def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
+def mode_columns(count: int) -> list[str]:
+    """The columns of the lowest natural frequencies: f1, f2, ... [Hz]."""
+    return [f"f{k}" for k in range(1, count + 1)]
+
+
+def load_sweep(path: str | Path, params: Sequence[str] = (), modes: int = 0) -> Sweep:
     """The sweep of a case file: its ``[sweep]`` table (``key.path = [values]``), if any,
     with the ``params`` (``"key.path=v1,v2"``) added; a key given in both takes the
     command line's values. Every combination is validated as a case (ConfigError listing
-    the problems) before anything runs."""
+    the problems) before anything runs. ``modes`` K > 0: every row also gets the K
+    lowest natural frequencies about its equilibrium (columns f1..fK [Hz])."""
     from catenet.case import parse_toml, read_case_bytes
 
     path = Path(path)
@@ -167,14 +175,24 @@ def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
             raise ConfigError(f"--param {text}: {p.key} is given twice")
         seen.add(p.key)
         merged[p.key] = p
-    return make_sweep(data, list(merged.values()), source=str(path), base_dir=path.parent)
+    return make_sweep(
+        data, list(merged.values()), source=str(path), base_dir=path.parent, modes=modes
+    )
 
 
 def make_sweep(
-    base: dict, params: Sequence[Param], *, source: str = "<dict>", base_dir: Path | str = "."
+    base: dict,
+    params: Sequence[Param],
+    *,
+    source: str = "<dict>",
+    base_dir: Path | str = ".",
+    modes: int = 0,
 ) -> Sweep:
     """A sweep from base case data (a dict as read from TOML) and parameters; validates
-    the base case and every combination with ``catenet.case.parse_case``."""
+    the base case and every combination with ``catenet.case.parse_case``; ``modes``: see
+    ``load_sweep``."""
+    if isinstance(modes, bool) or not isinstance(modes, int) or modes < 0:
+        raise ConfigError(f"--modes = {modes!r}: must be an integer >= 0")
     if not params:
         raise ConfigError(
             "no parameters to sweep: give --param key.path=v1,v2,... or a [sweep] table "
@@ -197,6 +215,7 @@ def make_sweep(
         params=tuple(params),
         base_toml=base_case.to_toml(),
         base_resolved=base_case.to_dict(),
+        modes=modes,
     )
     problems: list[str] = []
     for param in params:  # each value on its own first: one message per bad value

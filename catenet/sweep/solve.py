@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from catenet.errors import CatenetError, ConfigError
-from catenet.sweep.jobs import Job, Sweep, case_api, overrides
+from catenet.sweep.jobs import Job, Sweep, case_api, mode_columns, overrides
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +39,7 @@ def make_task(
         "save_runs": save_runs,
         "threads": threads,
         "crash_hook": crash_hook,
+        "modes": sweep.modes,
     }
 
 
@@ -140,6 +141,7 @@ def _solve_levels(task: dict) -> list[dict]:
     for k, level in enumerate(levels):
         start = time.perf_counter()
         row = nan_row()
+        row.update(dict.fromkeys(mode_columns(int(task.get("modes", 0))), float("nan")))
         values = dict(settings + level)
         try:
             data = case.apply_overrides(task["base"], overrides(settings + level))
@@ -166,6 +168,8 @@ def _solve_levels(task: dict) -> list[dict]:
             x_prev = result.x
             path = path + [(level_of, result.x)] if level_of is not None else []
             row.update(_measure(scene, ws_net, result, np))
+            if task.get("modes"):
+                row.update(_frequencies(scene, ws, result, int(task["modes"])))
             if task["save_runs"]:
                 row["run_file"] = _save_run(Path(task["out"]), task["index"], k, scene, result)
         except (CatenetError, ArithmeticError, ValueError, MemoryError, OSError) as exc:
@@ -296,6 +300,21 @@ def _measure(scene, net, result, np) -> dict:
         "iterations": int(result.iterations),
         "converged": bool(result.converged),
     }
+
+
+def _frequencies(scene, ws, result, count: int) -> dict:
+    """f1..fK [Hz] of the row's equilibrium (``catenet.solver.modes``; nan where the net
+    has fewer modes with a frequency). A net without mass or a count above its free DOFs
+    gives the row an error; the other measures stay."""
+    import numpy as np
+
+    from catenet.solver.modes import natural_modes
+
+    count = min(count, ws.system.n_free)
+    found = natural_modes(ws, result.x, count, cables=getattr(scene, "cables", None))
+    f = np.full(count, np.nan)
+    f[: found.count] = found.frequency
+    return {f"f{k + 1}": float(f[k]) for k in range(count)}
 
 
 def _save_run(out: Path, index: int, level: int, scene, result) -> str:

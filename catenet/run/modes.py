@@ -1,0 +1,143 @@
+"""``catenet modes``: a case's equilibrium by the run's own path (``run_case``: the same
+solve, result file and failures as ``catenet run``), then its lowest natural modes about
+it (``catenet.solver.modes``), written into the result file (``catenet.output.modes``).
+
+Bad input is found before anything is solved: a count that is not a positive integer or
+exceeds the free DOFs, a net without mass (ConfigError, exit 2). A failed equilibrium
+raises as ``catenet run``'s does (exit 1), as does a dynamic run that ends before rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError
+
+__all__ = ["ModeRow", "ModesRun", "check_modes_input", "mode_rows", "modes_case"]
+
+MOST = 3  # the summary names at most this many cables per mode
+MOST_SHARE = 0.1  # ... each with at least this share of the mode's kinetic energy
+
+
+def check_modes_input(scene, count) -> None:
+    """ConfigError for a count that is not a positive integer or above the free DOFs,
+    and for a net with no mass at its free nodes."""
+    n_free = 3 * int(np.count_nonzero(~scene.net.fixed))
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise ConfigError(f"--count = {count!r}: must be a positive integer")
+    if count > n_free:
+        raise ConfigError(
+            f"--count = {count}: more than the net's {n_free} free DOFs (3 per free node): "
+            f"ask for at most {n_free}"
+        )
+    if not float(np.sum(scene.net.mass[~scene.net.fixed])) > 0.0:
+        raise ConfigError(
+            "material.density = 0 and no [[mass]]: the net has no mass, so no natural "
+            "frequency: give material.density [kg/m^3] (per unstressed volume) or point "
+            "masses"
+        )
+
+
+@dataclass
+class ModesRun:
+    """What ``modes_case`` did: the equilibrium (a Result), the modes (None where the
+    equilibrium did not converge: the Result says why), the file written (or None) and
+    the scene."""
+
+    result: object
+    modes: object
+    path: object
+    scene: object
+
+
+def modes_case(
+    case, out=None, *, count: int = 10, progress=None, stop=None, interrupt=None
+) -> ModesRun:
+    """Solves ``case`` as ``catenet run`` does (writing its result file, ``out`` or the
+    case's output.file), then its ``count`` lowest modes, written into that file."""
+    from catenet.case import build
+    from catenet.output.modes import write_modes
+    from catenet.run.runner import output_path, refuse_formfind, run_case
+    from catenet.solver.modes import natural_modes
+
+    refuse_formfind(case)
+    scene = build(case)
+    check_modes_input(scene, count)
+    kept = {}
+
+    def done(scene, ws, result) -> None:
+        kept["ws"] = ws
+
+    result = run_case(
+        case, out, progress=progress, stop=stop, interrupt=interrupt, scene=scene, on_done=done
+    )
+    path = output_path(case, out)
+    if not result.converged:
+        return ModesRun(result, None, path, scene)
+    if not result.equilibrium:  # a dynamic run that reached t_end still moving
+        raise ConvergenceError(
+            f"modes: the dynamic run ended at t = {result.time:.6g} s before the net came to "
+            "rest: no equilibrium to take the modes about; raise solver.t_end or use "
+            "solver.method = 'static'"
+        )
+    if result.stable is False:
+        raise ConvergenceError(f"modes: the equilibrium found is unstable: {result.diagnosis}")
+    modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables)
+    if path is not None:
+        write_modes(path, scene, modes)
+    return ModesRun(result, modes, path, scene)
+
+
+@dataclass
+class ModeRow:
+    """One line of the summary's table."""
+
+    k: int
+    frequency: float
+    period: float
+    direction: str
+    mass_share: np.ndarray  # (3,) effective mass / free mass per axis
+    moves: str  # the cables (or the node) that move most
+
+
+def mode_rows(scene, modes) -> list[ModeRow]:
+    """The summary's table: per mode its frequency, period, dominant direction, the
+    share of the free mass it carries along x, y, z, and what moves most: the cables
+    with the largest shares of its kinetic energy (edge by edge, rho A l0 / 2 of each
+    end), else the node that moves most."""
+    net = scene.net
+    cables = getattr(scene, "cables", None)
+    dominant = modes.dominant()
+    total = np.where(modes.total_mass > 0, modes.total_mass, 1.0)
+    rows = []
+    for k in range(modes.count):
+        rows.append(
+            ModeRow(
+                k + 1,
+                float(modes.frequency[k]),
+                float(modes.period[k]),
+                dominant[k],
+                modes.effective_mass[k] / total,
+                _moves(net, modes.shape[k], cables),
+            )
+        )
+    return rows
+
+
+def _moves(net, shape: np.ndarray, cables) -> str:
+    amplitude = np.einsum("nd,nd->n", shape, shape)
+    if cables is not None and len(cables.names):
+        half = 0.5 * net.line_density * net.rest_length
+        energy = half * (amplitude[net.edges[:, 0]] + amplitude[net.edges[:, 1]])
+        on = cables.edge >= 0
+        per = np.bincount(cables.edge[on], energy[on], minlength=len(cables.names))
+        total = float(energy.sum())
+        if total > 0 and per.max() > 0:
+            order = np.argsort(-per)[:MOST]
+            names = [str(cables.names[c]) for c in order if per[c] >= MOST_SHARE * total]
+            if names:
+                return ", ".join(names)
+    node = int(np.argmax(amplitude))
+    return f"node {node}"

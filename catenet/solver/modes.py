@@ -1,0 +1,459 @@
+"""Natural frequencies and mode shapes of a net about an equilibrium.
+
+Small vibrations u about an equilibrium x obey M u'' + K u = 0 with K the tangent
+stiffness at x (the Hessian of the internal terms on the free DOFs: every edge's axial
+and geometric blocks, springs, contact) and M the lumped mass (``Net.mass``: rho A l0 / 2
+of each edge at each of its ends, conserved as the net stretches, plus point masses and
+the bodies' centres). The modes solve K phi = w^2 M phi; f = w / (2 pi).
+
+The tangent is the one the static solver uses at x: a tension-only edge shorter than its
+rest length (slack) contributes nothing; an edge at exactly zero strain counts as taut on
+its loading branch, with its axial stiffness EA/l0 along itself and no geometric term
+(its tension is zero): the one-sided stiffness of a cable that is just straight.
+
+The lowest modes come from the Lanczos method (ARPACK through ``scipy.sparse.linalg.eigsh``)
+in shift-invert mode: each Lanczos step applies (K - sigma M)^-1, solved with the net's
+own linear solver (``catenet.solver.linear``: PARDISO's factors, else SciPy's), factorised
+once and reused for every step. The shift sigma = -SHIFT x s, with s the largest ratio
+K_ii / m_i of the diagonals (the scale of the spectrum from above), lies just below zero:
+
+- K - sigma M = K + |sigma| M is positive definite whenever K is positive semidefinite
+  (every tension-only net): Cholesky, and no eigenvalue sits on the shift;
+- the transformation 1/(w^2 - sigma) spreads the lowest eigenvalues far apart (they
+  converge first), while |sigma| M still dominates the round-off of K (eps_mach s m) in
+  the directions of a mechanism, so that its zero modes are resolved, not lost in noise.
+
+Zero-frequency modes (w^2 below ZERO x s) are mechanisms, not frequencies: a node that
+hangs on slack edges only, a part held by slack edges only, untensioned straight edges.
+DOFs with no stiffness at all are taken out before the solve (a stiffness that puts
+their dummy modes above every real one), the others are found by the Lanczos method and
+asked for again until ``count`` real modes are found; all are named
+(``catenet.solver.diagnose.describe_zero_modes``), never returned as tiny frequencies. A
+negative eigenvalue (an unstable equilibrium of bilateral edges) raises ConvergenceError
+with the unstable nodes named.
+
+The Ritz vectors are refined by one Rayleigh-Ritz step in the M inner product, so the
+shapes are M-orthonormal to round-off; each mode's residual is checked.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError
+
+log = logging.getLogger(__name__)
+
+SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
+ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
+DENSE = 240  # at most this many free DOFs: a dense eigensolver (and any count)
+DENSE_MAX = 4000  # ... and up to this many where too few DOFs carry mass for Lanczos
+RESIDUAL_TOL = 1e-6  # largest accepted |K phi - w^2 M phi| / (|K phi| + w^2 |M phi|)
+TOL = 1e-10  # ARPACK: relative accuracy of the Ritz values (refined by Rayleigh-Ritz after)
+AXES = "xyz"
+
+
+@dataclass
+class Modes:
+    """The lowest natural modes of a net about an equilibrium x.
+
+    frequency : (K,) f [Hz], ascending;  omega2 : (K,) w^2 [1/s^2]
+    shape : (K, N, 3) mass-normalised shapes (phi^T M phi = 1) [1/sqrt(kg)], zero at
+        the supports; the sign of each shape is fixed so that its largest component is
+        positive
+    participation : (K, 3) Gamma_kd = phi_k^T M r_d (r_d: a unit translation of every
+        free node along axis d) [sqrt(kg)]
+    effective_mass : (K, 3) Gamma_kd^2 [kg]: summed over all modes, the free mass
+    total_mass : (3,) the mass of the free nodes that moves along each axis [kg]
+    zero_modes : how many zero-frequency modes (mechanisms) were found and left out;
+        ``zero_nodes`` the nodes that move in them, ``zero_message`` names them ("" if none)
+    sigma : the shift [1/s^2];  x : (N, 3) the equilibrium
+    stats : method ("lanczos" or "dense"), backend, seconds, solves, factorisations,
+        residual (the largest relative residual of a mode)
+    mass : (N,) the lumped masses of the free nodes [kg], 0 at the supports
+    """
+
+    frequency: np.ndarray
+    omega2: np.ndarray
+    shape: np.ndarray
+    participation: np.ndarray
+    effective_mass: np.ndarray
+    total_mass: np.ndarray
+    x: np.ndarray
+    sigma: float = 0.0
+    zero_modes: int = 0
+    zero_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    zero_message: str = ""
+    stats: dict = field(default_factory=dict)
+    equilibrium: object = None  # the static Result the modes are taken about, if solved here
+    mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
+
+    @property
+    def period(self) -> np.ndarray:
+        """(K,) periods 1/f [s]."""
+        with np.errstate(divide="ignore"):
+            return 1.0 / self.frequency
+
+    @property
+    def count(self) -> int:
+        return int(self.frequency.size)
+
+    def direction_share(self) -> np.ndarray:
+        """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2)."""
+        return np.einsum("n,knd->kd", self.mass, self.shape**2)
+
+    def dominant(self) -> list[str]:
+        """Each mode's dominant direction: the axis with the largest kinetic energy share."""
+        return [AXES[int(d)] for d in np.argmax(self.direction_share(), axis=1)]
+
+    def node_share(self) -> np.ndarray:
+        """(K, N) each node's share of each mode's kinetic energy m_i |phi_i|^2 (sums to 1)."""
+        return self.mass[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+
+
+class Operator:
+    """K and M of a net at x on its free DOFs, and the DOFs taken out (no stiffness)."""
+
+    def __init__(self, system, x: np.ndarray, mass: np.ndarray):
+        net = system.net
+        self.system = system
+        self.n = system.n_free
+        self.k_data = system.hessian(x).copy()
+        self.convex = system.convex
+        self.m = np.repeat(np.asarray(mass, dtype=np.float64)[~net.fixed], 3)
+        self.node = np.flatnonzero(~net.fixed).repeat(3)
+        rows = np.repeat(np.arange(self.n), np.diff(system.indptr))
+        a = np.abs(self.k_data)
+        off = rows != system.indices
+        rowsum = np.bincount(rows, a, minlength=self.n)
+        rowsum += np.bincount(system.indices[off], a[off], minlength=self.n)
+        diag = self.k_data[system.diag_pos]
+        self.rowsum = rowsum
+        self.dead = rowsum <= 1e-14 * max(float(rowsum.max(initial=0.0)), 1e-300)
+        live = ~self.dead & (self.m > 0)
+        if not live.any():
+            raise ConfigError(
+                "modes: no free node has both mass and stiffness: give the net a mass "
+                "(material.density, [[mass]]) and a tension"
+            )
+        self.scale = float(np.max(diag[live] / self.m[live]))  # max K_ii / m_i
+        self.bound = float(np.max(rowsum[live] / self.m[live]))  # Gershgorin: w^2 <= bound
+        # The DOFs without stiffness get a dummy w^2 of 2 x bound: above every real mode.
+        self.dummy = 2.0 * self.bound
+        ref = np.where(self.m > 0, self.m, float(np.median(self.m[self.m > 0])))
+        self.k_data[system.diag_pos[self.dead]] = self.dummy * ref[self.dead]
+        self._k = None  # K as SciPy CSR, when asked for
+
+    def matrix(self, shift: float = 0.0):
+        """K - shift M as SciPy CSR (both triangles); K itself made once."""
+        if shift == 0.0:
+            if self._k is None:
+                self._k = self.system.matrix(self.k_data)
+            return self._k
+        data = self.k_data.copy()
+        data[self.system.diag_pos] -= shift * self.m
+        return self.system.matrix(data)
+
+    def shifted(self, sigma: float) -> np.ndarray:
+        """CSR data (the system's pattern) of K - sigma M."""
+        data = self.k_data.copy()
+        data[self.system.diag_pos] -= sigma * self.m
+        return data
+
+
+def natural_modes(
+    workspace, x: np.ndarray, count: int, *, mass=None, method: str = "auto", cables=None
+) -> Modes:
+    """The ``count`` lowest natural modes of the workspace's net about the equilibrium x
+    (see the module docstring). ``mass`` (N,) [kg] defaults to ``Net.mass``; ``method``:
+    "auto" (dense up to DENSE free DOFs, else Lanczos), "dense" or "lanczos";
+    ``cables`` (``names``, ``edge``: a case's cable index) names cables in messages."""
+    begin = time.perf_counter()
+    system, solver = workspace.system, workspace.solver
+    net = system.net
+    mass = net.mass if mass is None else np.asarray(mass, dtype=np.float64)
+    _check_count(count, system.n_free)
+    if not float(np.sum(mass[~net.fixed])) > 0.0:
+        raise ConfigError(
+            "modes: the net has no mass (material.density = 0 and no [[mass]]): give "
+            "material.density [kg/m^3] or point masses to find its frequencies"
+        )
+    op = Operator(system, np.asarray(x, dtype=np.float64), mass)
+    if method not in ("auto", "dense", "lanczos"):
+        raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
+    # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
+    dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
+    dense = dense or _few_masses(op, count)
+    sigma = -SHIFT * op.scale
+    stats = {"method": "dense" if dense else "lanczos", "backend": solver.name}
+    if dense:
+        lam, vec = _dense(op, sigma)
+    else:
+        lam, vec = _lanczos_until(
+            op, solver, sigma, count, stats, lambda why: _unstable(why, workspace, x)
+        )
+    lam, vec = _rayleigh_ritz(op, vec)
+    real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
+    lam, vec = lam[real], vec[:, real]
+    if lam.size and lam[0] < -ZERO * op.scale:
+        _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
+    zero = lam < ZERO * op.scale
+    found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, sigma)
+    _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
+    found.stats = {
+        **stats,
+        "seconds": time.perf_counter() - begin,
+        "residual": _residual(op, found.omega2, vec[:, ~zero][:, :count]),
+        "dofs": op.n,
+    }
+    if found.stats["residual"] > RESIDUAL_TOL:
+        raise ConvergenceError(
+            f"modes: the eigensolver's modes are inaccurate (relative residual "
+            f"{found.stats['residual']:.1e} > {RESIDUAL_TOL:g})"
+        )
+    if found.count < count:
+        log.warning(
+            "modes: %d modes asked for, the net has %d with a frequency%s",
+            count,
+            found.count,
+            f" ({found.zero_modes} more of zero frequency)" if found.zero_modes else "",
+        )
+    return found
+
+
+def _few_masses(op: Operator, count: int) -> bool:
+    """Whether so few DOFs carry mass (point masses on massless cables) that the Lanczos
+    vectors, which live in the range of M, cannot fill its basis: then the dense solver
+    (up to DENSE_MAX DOFs), else ConvergenceError."""
+    massive = int(np.count_nonzero((op.m > 0) & ~op.dead))
+    if massive > 2 * count + 20:
+        return False
+    if op.n <= DENSE_MAX:
+        return True
+    raise ConvergenceError(
+        f"modes: only {massive} of the {op.n} free DOFs carry mass: too few for the Lanczos "
+        f"method on a net this large; give the cables a density (material.density)"
+    )
+
+
+def _check_count(count, n_free: int) -> None:
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise ConfigError(f"--count = {count!r}: must be a positive integer")
+    if count > n_free:
+        raise ConfigError(
+            f"--count = {count}: the net has {n_free} free DOFs (3 per free node): ask for "
+            f"at most {n_free} modes"
+        )
+
+
+def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every mode, by a dense symmetric eigensolver (small nets): M phi = mu (K - sigma M)
+    phi, mu = 1 / (w^2 - sigma), which allows massless DOFs (mu = 0: w infinite)."""
+    import scipy.linalg as sl
+
+    a = op.matrix(sigma).toarray()
+    m = np.diag(op.m)
+    try:
+        mu, vec = sl.eigh(m, a)
+    except np.linalg.LinAlgError:  # K - sigma M indefinite (compressed bilateral edges)
+        if not (op.m > 0).all():
+            raise ConvergenceError(
+                "modes: the stiffness is indefinite and some free nodes have no mass"
+            ) from None
+        lam, vec = sl.eigh(op.matrix().toarray(), m)
+        return lam, vec
+    keep = mu > 1e-12 * max(float(mu.max(initial=0.0)), 1e-300)  # else: no mass, w infinite
+    mu, vec = mu[keep], vec[:, keep]
+    order = np.argsort(-mu)
+    return sigma + 1.0 / mu[order], vec[:, order]
+
+
+def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest modes by shift-invert Lanczos, asking again for more while zero modes
+    take the places of real ones (they are nearest the shift, so every one is found
+    before the first real mode). ``unstable(why)`` raises for a negative omega^2 that
+    the factorisation's inertia shows."""
+    start = time.perf_counter()
+    solver.factorize(op.shifted(sigma), definite=op.convex)
+    stats["factorize_seconds"] = time.perf_counter() - start
+    negative = solver.negative_eigenvalues()
+    stats["negative"] = negative
+    if negative:  # Sylvester: that many omega^2 below sigma < 0
+        unstable(f"{negative} negative omega^2 (the inertia of K - sigma M)")
+    limit = op.n - 1  # ARPACK: k < n
+    k = min(count, limit)
+    solves = 0
+    while True:
+        lam, vec, used = _lanczos(op, solver, sigma, k)
+        solves += used
+        zero = int(np.count_nonzero(lam < ZERO * op.scale))
+        if len(lam) - zero >= count or k >= limit:
+            break
+        k = min(limit, count + zero if zero < k else 2 * k)
+    stats["solves"] = solves
+    stats["lanczos_seconds"] = time.perf_counter() - start
+    return lam, vec
+
+
+def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
+    """k eigenpairs nearest sigma by ARPACK with OPinv = the kept factorisation."""
+    from scipy.sparse.linalg import ArpackError, LinearOperator, eigsh
+
+    n = op.n
+    used = [0]
+
+    def inverse(b):
+        used[0] += 1
+        return solver.solve(np.asarray(b, dtype=np.float64).ravel())
+
+    k_matrix = op.matrix()
+    opinv = LinearOperator((n, n), matvec=inverse, dtype=np.float64)
+    m_op = LinearOperator((n, n), matvec=lambda v: op.m * np.ravel(v), dtype=np.float64)
+    v0 = np.random.default_rng(12345).standard_normal(n) * (op.m > 0)
+    ncv = min(n, max(2 * k + 1, k + 20))
+    try:
+        lam, vec = eigsh(
+            k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv,
+            tol=TOL, mode="normal",
+        )  # fmt: skip
+    except ArpackError as exc:
+        raise ConvergenceError(f"modes: the Lanczos iteration (ARPACK) failed: {exc}") from None
+    order = np.argsort(lam)
+    return lam[order], vec[:, order], used[0]
+
+
+def _rayleigh_ritz(op: Operator, vec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The best eigenpairs in the span of ``vec``: an M-orthonormal basis of it (the
+    directions of no mass, massless DOFs' infinite modes, left out), then the
+    eigenpairs of K in that basis, so that the shapes are M-orthonormal to round-off
+    and the w^2 are Rayleigh quotients."""
+    import scipy.linalg as sl
+
+    if vec.shape[1] == 0:
+        return np.zeros(0), vec
+    mr = vec.T @ (op.m[:, None] * vec)
+    w, u = sl.eigh(0.5 * (mr + mr.T))
+    keep = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
+    basis = vec @ (u[:, keep] / np.sqrt(w[keep]))
+    kr = basis.T @ (op.matrix() @ basis)
+    lam, y = sl.eigh(0.5 * (kr + kr.T))
+    return lam, basis @ y
+
+
+def _unstable(how: str, workspace, x) -> None:
+    """Raises ConvergenceError: the equilibrium is unstable (``how``), its nodes named."""
+    from catenet.solver.diagnose import describe_unstable
+
+    why = describe_unstable(workspace.system.stretch, x, ~workspace.system.net.fixed)
+    raise ConvergenceError(f"modes: the equilibrium is unstable ({how}): {why}")
+
+
+def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
+    """Modes of the net: shapes on every node, signs fixed, participation."""
+    k = lam.size
+    shape = np.zeros((k, net.n_nodes, 3))
+    free = np.flatnonzero(~net.fixed)
+    for j in range(k):
+        v = vec[:, j]
+        v = v / math.sqrt(float(v @ (op.m * v)))
+        if v[np.argmax(np.abs(v))] < 0:
+            v = -v
+        shape[j, free] = v.reshape(-1, 3)
+    m_free = np.where(net.fixed, 0.0, mass)
+    participation = np.einsum("n,knd->kd", m_free, shape)
+    out = Modes(
+        frequency=np.sqrt(np.maximum(lam, 0.0)) / (2 * math.pi),
+        omega2=lam.copy(),
+        shape=shape,
+        participation=participation,
+        effective_mass=participation**2,
+        total_mass=np.full(3, float(m_free.sum())),
+        x=np.array(x, dtype=np.float64),
+        sigma=float(sigma),
+        mass=m_free,
+    )
+    return out
+
+
+def _residual(op: Operator, lam: np.ndarray, vec: np.ndarray) -> float:
+    if vec.shape[1] == 0:
+        return 0.0
+    kv = op.matrix() @ vec
+    mv = op.m[:, None] * vec
+    r = np.linalg.norm(kv - mv * lam[None, :], axis=0)
+    scale = np.linalg.norm(kv, axis=0) + np.abs(lam) * np.linalg.norm(mv, axis=0)
+    return float(np.max(r / np.maximum(scale, 1e-300)))
+
+
+def _name_zero_modes(found: Modes, op: Operator, zero_vec, workspace, x, cables) -> None:
+    """Counts and names the zero-frequency modes: the DOFs without stiffness and the
+    mechanisms the Lanczos method found."""
+    from catenet.solver.diagnose import describe_zero_modes
+
+    net = workspace.system.net
+    dead_nodes = np.unique(op.node[op.dead & (op.m > 0)])
+    moving = np.zeros(0, dtype=np.int64)
+    if zero_vec.shape[1]:
+        energy = np.einsum("d,dk->d", op.m, zero_vec**2)
+        per_node = np.bincount(op.node, energy, minlength=net.n_nodes)
+        moving = np.flatnonzero(per_node > 1e-3 * per_node.max())
+    found.zero_modes = int(np.count_nonzero(op.dead & (op.m > 0))) + zero_vec.shape[1]
+    nodes = np.union1d(dead_nodes, moving).astype(np.int64)
+    found.zero_nodes = nodes
+    if found.zero_modes:
+        found.zero_message = describe_zero_modes(
+            workspace.system,
+            x,
+            nodes,
+            found.zero_modes,
+            None if cables is None else cables.names,
+            None if cables is None else cables.edge,
+        )
+
+
+def modes(
+    net,
+    loads=None,
+    k: int = 10,
+    *,
+    x: np.ndarray | None = None,
+    settings=None,
+    terms=(),
+    workspace=None,
+    mass=None,
+    method: str = "auto",
+) -> Modes:
+    """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a scene: a case's
+    ``Scene`` or a ``catenet.solver.path.Problem``) under ``loads`` about its equilibrium,
+    found by the one solve path (``settings``: a ``catenet.solver.path.Settings``;
+    default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the
+    equilibrium. ``terms``: further internal terms (with a ``Net``). Raises
+    ConvergenceError where the equilibrium is not found (or a dynamic run ends before
+    rest) and ConfigError for bad input (no mass, ``k`` out of range). The static
+    Result is ``Modes.equilibrium``."""
+    from catenet.model.net import Loads
+    from catenet.solver import path
+
+    scene = net
+    if not hasattr(net, "net"):
+        scene = path.Problem(net, Loads() if loads is None else loads, tuple(terms))
+    if settings is None:  # a case's scene: its [solver] keys; else the defaults
+        solver = getattr(getattr(scene, "case", None), "solver", None)
+        settings = path.Settings() if solver is None else path.Settings.of(solver)
+    ws = workspace if workspace is not None else path.workspace(scene, settings)
+    result = None
+    if x is None:
+        result = path.solve(scene, settings, workspace=ws)
+        if not (result.converged and result.equilibrium):
+            raise ConvergenceError(
+                f"modes: no equilibrium to take the modes about: {result.message or 'not at rest'}"
+            )
+        x = result.x
+    found = natural_modes(ws, x, k, mass=mass, method=method, cables=getattr(scene, "cables", None))
+    found.equilibrium = result
+    return found
