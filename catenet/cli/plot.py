@@ -41,7 +41,7 @@ def command(
     obstacles are drawn in light grey (a moving one where it is at the end). The
     paper's single-cable cases get the paper's axes and closed forms (Figs.
     2e-2f, Eqs. 14-17).
-    Sweep directory: the sweep's figures (catenet.studies.square_net).
+    Sweep directory: the sweep's figures (catenet.study).
 
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
@@ -52,11 +52,9 @@ def command(
 
         if path.is_dir():
             try:
-                from catenet.studies.square_net import plot_sweep
+                from catenet.study import plot_sweep
             except ImportError as exc:
-                raise CatenetError(
-                    f"{path}: sweep figures need catenet.studies.square_net: {exc}"
-                ) from exc
+                raise CatenetError(f"{path}: sweep figures need catenet.study: {exc}") from exc
             files = plot_sweep(path, output)
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")

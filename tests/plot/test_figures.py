@@ -122,7 +122,7 @@ def test_plot_command_takes_a_scale(tmp_path):
 
 
 def test_sweep_figure_curves_differ_in_colour_marker_and_line():
-    from catenet.studies.square_net.figures import COLOURS, style
+    from catenet.study.figures import COLOURS, style
 
     styles = [style(k) for k in range(6)]
     for a, b in zip(styles, styles[1:], strict=False):

@@ -187,9 +187,7 @@ def test_plot_directory_goes_to_the_sweep_figures(tmp_path, monkeypatch):
         calls.append((directory, out))
         return [tmp_path / "a.png", tmp_path / "b.png"]
 
-    monkeypatch.setitem(
-        sys.modules, "catenet.studies.square_net", types.SimpleNamespace(plot_sweep=plot_sweep)
-    )
+    monkeypatch.setitem(sys.modules, "catenet.study", types.SimpleNamespace(plot_sweep=plot_sweep))
     res = invoke("plot", str(tmp_path))
     assert res.exit_code == 0, res.output
     assert calls == [(tmp_path, None)]

@@ -1,15 +1,20 @@
-"""Smoke tests of the benchmark studies and ``catenet bench`` (no timing assertions:
-timings belong in the studies' output, not in tests)."""
+"""Smoke tests of the benchmark studies (``python -m benchmarks``) and of the renderer of
+docs/performance.md (no timing assertions: timings belong in the studies' output, not in
+tests)."""
 
 from __future__ import annotations
 
 import csv
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from catenet.cli import main
+from benchmarks.__main__ import main
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _rows(path):
@@ -20,8 +25,11 @@ def _rows(path):
 def test_bench_step_size_quick_writes_csv_figure_and_report(tmp_path):
     out = tmp_path / "results"
     docs = tmp_path / "docs"
+    docs.mkdir()
+    page = docs / "performance.md"
+    shutil.copy(ROOT / "docs" / "performance.md", page)
     r = CliRunner().invoke(
-        main, ["bench", "step-size", "report", "--quick", "-o", str(out), "--docs", str(docs)]
+        main, ["step-size", "render", "--quick", "-q", "-o", str(out), "--docs", str(page)]
     )
     assert r.exit_code == 0, r.output
     rows = _rows(out / "step-size.csv")
@@ -33,18 +41,48 @@ def test_bench_step_size_quick_writes_csv_figure_and_report(tmp_path):
             assert float(row["error_vs_static"]) < 1e-5
     assert (out / "bench-step-size.png").stat().st_size > 0
     assert (out / "machine.json").exists()
-    text = (docs / "readme-performance.md").read_text()
+    text = page.read_text()
     assert "Fig. B10" in text and "figures/bench-step-size.png" in text
     assert (docs / "figures" / "bench-step-size.png").exists()
+    # The step-size table is the quick run's (its sizes only); the others are kept.
+    table = text.split("<!-- results:step-size -->")[1].split("<!-- /results:step-size -->")[0]
+    assert "| 22 |" not in table and "| 34 |" in table and "| 10 |" in table
+    assert text.count("<!-- results:") == (ROOT / "docs" / "performance.md").read_text().count(
+        "<!-- results:"
+    )
+
+
+def test_the_performance_page_is_rendered_from_the_committed_results(tmp_path):
+    """docs/performance.md's tables are what the renderer makes of benchmarks/results."""
+    from benchmarks.render import FRAGMENTS, MARKER, render
+
+    committed = (ROOT / "docs" / "performance.md").read_text()
+    assert {m["name"] for m in MARKER.finditer(committed)} == set(FRAGMENTS)
+    page = tmp_path / "performance.md"
+    page.write_text(committed)
+    assert render(ROOT / "benchmarks" / "results", page) == []
+    assert page.read_text() == committed
+
+
+def test_render_refuses_an_unknown_fragment_and_keeps_missing_ones(tmp_path):
+    from benchmarks.render import render
+
+    page = tmp_path / "p.md"
+    page.write_text("a\n<!-- results:nonsense -->\nx\n<!-- /results:nonsense -->\n")
+    with pytest.raises(ValueError, match="nonsense"):
+        render(tmp_path, page)
+    page.write_text("a\n<!-- results:stress -->\nold\n<!-- /results:stress -->\n")
+    assert render(tmp_path, page) == ["stress"]  # no stress.csv in tmp_path
+    assert "old" in page.read_text()
 
 
 def test_bench_rejects_an_unknown_study(tmp_path):
-    r = CliRunner().invoke(main, ["bench", "nonsense", "-o", str(tmp_path)])
+    r = CliRunner().invoke(main, ["nonsense", "-o", str(tmp_path)])
     assert r.exit_code == 2
 
 
 def test_scale_study_runs_a_size_in_a_child_process(tmp_path):
-    from catenet.studies.bench import scale
+    from benchmarks import scale
 
     study = scale.run(tmp_path, sizes=[(10, 1 / 30)])
     (row,) = study.rows
@@ -56,9 +94,10 @@ def test_scale_study_runs_a_size_in_a_child_process(tmp_path):
 def test_baseline_reaches_catenets_equilibrium():
     """The plain NumPy/pypardiso baseline solves the same model to the same state."""
     pytest.importorskip("pypardiso")
+    from scenes import paper_net
+
+    from benchmarks.baseline import baseline_static
     from catenet.solver.static import solve_static
-    from catenet.studies.bench.baseline import baseline_static
-    from catenet.studies.bench.common import paper_net
 
     sq, loads = paper_net(10, edge=0.05)
     net = sq.net
@@ -74,10 +113,11 @@ def test_baseline_reaches_catenets_equilibrium():
 def test_bench_solver_variants_give_the_same_answer():
     """The solver variants the studies time against catenet (re-analysing PARDISO,
     pypardiso.spsolve) solve to catenet's answer."""
+    from scenes import paper_net
+
+    from benchmarks.solvers import PypardisoSpsolve, ReanalysingPardiso, install
     from catenet.solver.linear import pardiso_available
     from catenet.solver.static import Workspace, solve_static
-    from catenet.studies.bench.common import paper_net
-    from catenet.studies.bench.solvers import PypardisoSpsolve, ReanalysingPardiso, install
 
     sq, loads = paper_net(10, edge=0.05)
     ref = solve_static(sq.net, loads, linear="scipy")
@@ -93,7 +133,7 @@ def test_bench_solver_variants_give_the_same_answer():
 
 
 def test_pareto_front_marks_non_dominated_rows():
-    from catenet.studies.bench.pareto import _front
+    from benchmarks.pareto import _front
 
     rows = [
         {"case": "a", "seconds": 1.0, "error": 1e-3},
@@ -105,79 +145,12 @@ def test_pareto_front_marks_non_dominated_rows():
     assert [r["pareto"] for r in rows] == [True, True, False, True]
 
 
-# --- start-up (issue 13): what catenet run reports and imports; the study's arithmetic ----
-
-
-def test_catenet_run_reports_solve_and_startup_time_apart(write_case, tmp_path):
-    """catenet run prints the solve time and the start-up time (imports, case, JIT cache)
-    and stores them in /result; together they fit in the process's wall time, and the
-    run imports neither pypardiso, scipy.sparse nor the studies."""
-    import subprocess
-    import sys
-    import time
-
-    import h5py
-    from conftest import small_net, subprocess_env
-
-    case = write_case(small_net(method="static"))
-    out = tmp_path / "small.h5"
-    code = (
-        "import sys, runpy\n"
-        "sys.argv = ['catenet', 'run', sys.argv[1], '-o', sys.argv[2]]\n"
-        "try:\n"
-        "    runpy.run_module('catenet', run_name='__main__')\n"
-        "except SystemExit as exc:\n"
-        "    heavy = sorted({m.split('.')[0] + ('.sparse' if m.startswith('scipy.sparse')"
-        " else '') for m in sys.modules if m.startswith(('pypardiso', 'scipy.sparse',"
-        " 'catenet.studies'))})\n"
-        "    print('heavy:', heavy)\n"
-        "    raise\n"
-    )
-    start = time.perf_counter()
-    proc = subprocess.run(
-        [sys.executable, "-c", code, str(case), str(out)],
-        capture_output=True,
-        text=True,
-        env=subprocess_env(),
-    )
-    wall = time.perf_counter() - start
-    assert proc.returncode == 0, proc.stderr
-    assert "heavy: []" in proc.stdout
-    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("wall time"))
-    assert "solve" in line and "start-up" in line and "JIT cache" in line
-    with h5py.File(out, "r") as fh:
-        a = fh["result"].attrs
-        solve, startup = float(a["solve_time"]), float(a["startup_time"])
-    assert 0 < solve and 0 < startup and solve + startup < wall
-
-
-def test_clock_moves_jit_time_to_startup():
-    """A kernel compiled inside the solve counts as start-up; writing is left out of the
-    solve; without a solve block everything so far is start-up."""
-    import numba
-
-    from catenet.run.clock import Clock, since_process_start
-
-    clock = Clock()
-    assert clock.solve == 0.0 and clock.startup > 0.0
-
-    @numba.njit
-    def fresh(a):  # a new function: compiled on its first call
-        return a + 1.0
-
-    with clock.solving():
-        assert fresh(1.0) == 2.0
-        with clock.aside():
-            sum(range(10_000))
-    assert clock.jit > 0.0
-    assert clock.startup >= clock.jit
-    assert clock.solve < clock.jit  # the compile is not solving
-    assert clock.startup <= since_process_start()
+# --- the cold-start study's arithmetic -------------------------------------------------
 
 
 def test_cold_start_ratios_and_findings():
     """The study's ratios and its findings against the targets, from rows."""
-    from catenet.studies.bench import cold_start as cs
+    from benchmarks import cold_start as cs
 
     def row(command, cache, seconds, cpu):
         return {
@@ -214,7 +187,7 @@ def test_cold_start_ratios_and_findings():
 
 
 def test_import_costs_sums_own_times_by_package(tmp_path):
-    from catenet.studies.bench.cold_start import import_costs
+    from benchmarks.cold_start import import_costs
 
     costs = dict(import_costs(["-c", "import json, email.message"], {}, str(tmp_path), top=50))
     assert costs["json"] > 0 and costs["email"] > 0

@@ -1,4 +1,4 @@
-"""Numerical-stability stress test: hard scenes, each checked against what is right.
+"""The stress test's scene matrix: hard scenes, each checked against what is right.
 
 Every scene must end in one of two ways: a converged answer that passes its check, or a
 clear catenet error (``CatenetError``) where that is the right answer. Anything else (a
@@ -13,9 +13,9 @@ non-catenet exception, a NaN in a result, a check that fails) is a finding. Chec
 - ``static = dynamic``: the dynamic run's final equilibrium against the static one.
 - ``bounded``: a dynamic run stopped long before equilibrium stays finite and bounded.
 
-``scenes(quick)`` lists them (the quick subset runs in ``tests/solver/test_stress.py``);
-``run_scene`` runs one and returns its row. The scenes and their checks are in
-``catenet.studies.bench.stress_scenes``.
+``scenes(quick)`` lists them (the quick subset runs in ``tests/solver/test_stress.py``, the
+whole matrix in ``benchmarks/stress.py``); ``run_scene`` runs one and returns its row. The
+scenes and their checks are in ``tests/scenes.py``.
 """
 
 from __future__ import annotations
@@ -25,33 +25,20 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
-from catenet.studies.bench.common import (
-    Study,
-    no_progress,
-    paper_material,
-    pyplot,
-    save_figure,
-    set_threads,
-    warm_up,
-    write_csv,
-)
-from catenet.studies.bench.stress_scenes import (
+from scenes import (
     bilateral_chain,
     bilateral_compression,
     finite,
     midpoint_load,
     net_point_load,
     net_pressure,
+    paper_material,
     random_graph,
     self_weight,
 )
 
 log = logging.getLogger(__name__)
-
-NAME = "stress"
-TITLE = "Numerical-stability stress test"
 
 SLOW_SECONDS = 10.0  # a scene slower than this is reported
 EQ_TOL = 1e-6  # relative residual / reaction balance of a converged state
@@ -272,51 +259,3 @@ def _history(history) -> str:
     if len(h) > 8:
         h = h[:3] + ["..."] + h[-4:]
     return " ".join(x if isinstance(x, str) else f"{x:.2e}" for x in h)
-
-
-def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
-    set_threads(threads)
-    warm_up()
-    todo = scenes(quick)
-    rows: list[dict] = []
-    study = Study(NAME, rows, Path(out_dir) / f"{NAME}.csv")
-    for k, scene in enumerate(todo):
-        progress(k, len(todo), scene.id)
-        rows.append(run_scene(scene))
-    progress(len(todo), len(todo), "")
-    write_csv(rows, study.csv)
-    study.figure = figure(rows, out_dir)
-    for r in rows:
-        flag = "ok  " if r["passed"] else "FAIL"
-        study.summary.append(
-            f"{flag} {r['id']:<40s} {r['status']:<28s} {r.get('check', ''):<16s} "
-            f"{_num(r.get('value'))} it {r.get('iterations')}  {r['seconds']:.2f} s"
-        )
-        if not r["passed"]:
-            study.findings.append(
-                f"stress {r['id']} ({r['params']}): {r['status']}; check {r.get('check')} = "
-                f"{_num(r.get('value'))} (tol {_num(r.get('tol'))}), equilibrium error "
-                f"{_num(r.get('equilibrium_error'))}; {r.get('message', '')}; "
-                f"Newton history: {r.get('history', '')}"
-            )
-        elif r["slow"]:
-            study.findings.append(f"stress {r['id']}: slow ({r['seconds']:.1f} s)")
-    return study
-
-
-def _num(v) -> str:
-    return f"{v:.2e}" if isinstance(v, float) else str(v)
-
-
-def figure(rows, out_dir):
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(8, 0.28 * len(rows) + 1.2))
-    y = list(range(len(rows)))
-    colors = ["tab:green" if r["passed"] else "tab:red" for r in rows]
-    ax.barh(y, [max(r["seconds"], 1e-3) for r in rows], color=colors)
-    ax.set_yticks(y, [f"{r['id']} [{r['status']}]" for r in rows], fontsize=6)
-    ax.invert_yaxis()
-    ax.set_xscale("log")
-    ax.set_xlabel("wall time [s] (green: right answer, red: finding)")
-    fig.tight_layout()
-    return save_figure(fig, out_dir, NAME)

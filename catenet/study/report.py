@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.studies.square_net.data import SweepData, load_data, near, unique
-from catenet.studies.square_net.figures import fig5, fig6, fig7, fig7_subset, fig8
-from catenet.studies.square_net.fit import (
+from catenet.study.data import SweepData, load_data, near, unique
+from catenet.study.figures import fig5, fig6, fig7, fig7_subset, fig8
+from catenet.study.fit import (
     PAPER_D,
     ScalingFit,
     fit_cosine,

@@ -1,12 +1,12 @@
-"""The README performance section's part on dynamic runs: modified Newton and an obstacle
-never touched, from ``reuse.csv`` (``catenet bench reuse``)."""
+"""docs/performance.md's table on dynamic runs: modified Newton and an obstacle never
+touched, from ``reuse.csv`` (``python -m benchmarks reuse``)."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
 
-from catenet.studies.bench.report_sections import as_float, as_text, md_table, read_study
+from benchmarks.sections import as_float, as_text, md_table, read_study
 
 
 def reuse(results: Path) -> list[str]:
@@ -14,23 +14,7 @@ def reuse(results: Path) -> list[str]:
     if not rows:
         return []
     repeats = sorted({r["repeats"] for r in rows})
-    out = [
-        "### Dynamic runs: factorisation reuse and idle obstacles",
-        "",
-        "Variants of each scene interleaved in one process, medians of "
-        f"{' or '.join(repeats)} repeats (`catenet bench reuse`): the paper's relaxation of "
-        "the n = 34 net (h = 0.01 s) with `solver.reuse = true` (modified Newton) against a "
-        "factorisation per Newton iteration (the default), and the same with every solve's "
-        "backward error checked (before: the check is now left to each factorisation's first "
-        "solve); the n = 34 net falling onto a sphere (h = 1 ms); the relaxation with a "
-        "sphere it never touches against none, and the same with PARDISO symmetric "
-        "indefinite throughout (before: it now keeps Cholesky while the sphere is out of "
-        "reach). Difference: the largest difference of the final states from the "
-        "reference's, relative to the largest displacement; from static: from the static "
-        "equilibrium solved to 1e-12 (runs that stop at rest within rtol are about rtol "
-        "from it and from each other).",
-        "",
-    ]
+    out = [f"Times are medians of {' or '.join(repeats)} repeats.", ""]
     table = []
     for r in rows:
         same = r["variant"] == r["reference"]
@@ -69,7 +53,7 @@ def reuse(results: Path) -> list[str]:
         ],
         table,
     )
-    return out + [""]
+    return out
 
 
 def _sci(v) -> str:

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet.studies.square_net.data import SweepData, alpha_label, near, unique
-from catenet.studies.square_net.fit import PAPER_D, ScalingFit, f_alpha, fit_cosine
+from catenet.study.data import SweepData, alpha_label, near, unique
+from catenet.study.fit import PAPER_D, ScalingFit, f_alpha, fit_cosine
 
 P_FIG7 = 10.0  # Pa, the paper's Fig. 7
 

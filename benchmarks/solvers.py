@@ -4,7 +4,7 @@
   before every factorisation, i.e. what a solver without pattern reuse pays.
 - ``PypardisoSpsolve``: ``pypardiso.spsolve`` on the full matrix every Newton step.
 - ``CheckingEverySolve``, ``IndefiniteThroughout``: catenet's wrapper as it was before
-  two speed-ups of dynamic runs (``catenet bench reuse`` measures both against today's).
+  two speed-ups of dynamic runs (``python -m benchmarks reuse`` measures both against today's).
 
 ``install(workspace, cls)`` swaps the solver of a ``catenet.solver.static.Workspace``.
 """

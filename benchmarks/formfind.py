@@ -22,12 +22,17 @@ paper's kind of scene on the roof's topology.
 
 from __future__ import annotations
 
-import logging
+import sys
 from pathlib import Path
+
+if __package__ in (None, ""):  # python benchmarks/formfind.py: the repository root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import logging
 
 import numpy as np
 
-from catenet.studies.bench.common import (
+from benchmarks.common import (
     Study,
     interleaved,
     no_progress,
@@ -187,10 +192,10 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
 def loaded(n: int, square: tuple, *, repeats: int) -> dict:
     """The form-found roof's static analysis under snow against the square net's static
     solve of the same size, interleaved: one row."""
+    from benchmarks.common import paper_net
     from catenet.formfind import formfind
     from catenet.model.net import Loads, Net
     from catenet.solver.static import Workspace, solve_static
-    from catenet.studies.bench.common import paper_net
 
     net = roof(n)
     found = formfind(net, 2.0e4)  # (warm: timed below, interleaved)
@@ -263,3 +268,9 @@ def _figure(rows, out_dir: Path) -> Path:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     return save_figure(fig, out_dir, NAME)
+
+
+if __name__ == "__main__":
+    from benchmarks.__main__ import script
+
+    script(NAME)

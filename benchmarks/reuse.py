@@ -26,13 +26,18 @@ variant as close to the static equilibrium as its reference is equally right.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
+if __package__ in (None, ""):  # python benchmarks/reuse.py: the repository root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
 import logging
 import math
-from pathlib import Path
 
 import numpy as np
 
-from catenet.studies.bench.common import (
+from benchmarks.common import (
     Study,
     interleaved,
     no_progress,
@@ -43,7 +48,7 @@ from catenet.studies.bench.common import (
     warm_up,
     write_csv,
 )
-from catenet.studies.bench.solvers import CheckingEverySolve, IndefiniteThroughout, install
+from benchmarks.solvers import CheckingEverySolve, IndefiniteThroughout, install
 
 log = logging.getLogger(__name__)
 
@@ -234,3 +239,9 @@ def _figure(rows, out_dir: Path) -> Path:
     ax.set_xlim(0, 1.3 * top)
     fig.tight_layout()
     return save_figure(fig, out_dir, NAME)
+
+
+if __name__ == "__main__":
+    from benchmarks.__main__ import script
+
+    script(NAME)

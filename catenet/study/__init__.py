@@ -29,8 +29,8 @@ Modules: ``fit`` (the scaling law), ``data`` (the sweep table as arrays), ``figu
 
 from __future__ import annotations
 
-from catenet.studies.square_net.data import SweepData, load_data
-from catenet.studies.square_net.fit import (
+from catenet.study.data import SweepData, load_data
+from catenet.study.fit import (
     PAPER_D,
     ScalingFit,
     f_alpha,
@@ -38,7 +38,7 @@ from catenet.studies.square_net.fit import (
     fit_exponents,
     fit_scaling,
 )
-from catenet.studies.square_net.report import plot_sweep, write_report
+from catenet.study.report import plot_sweep, write_report
 
 __all__ = [
     "PAPER_D",

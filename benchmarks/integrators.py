@@ -21,12 +21,17 @@ Three parts, one CSV (``kind`` column):
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
+if __package__ in (None, ""):  # python benchmarks/integrators.py: the repository root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
 import logging
 import math
 import time
-from pathlib import Path
 
-from catenet.studies.bench.common import (
+from benchmarks.common import (
     Study,
     no_progress,
     paper_net,
@@ -235,21 +240,13 @@ def figure(rows, out_dir):
 
 
 def section(results: Path) -> list[str]:
-    """The README performance section's part on this study (``catenet bench report``)."""
-    from catenet.studies.bench.report_sections import as_text, md_table, read_study
+    """docs/performance.md's tables of this study (``python -m benchmarks render``)."""
+    from benchmarks.sections import as_text, md_table, read_study
 
     rows = read_study(results, NAME)
     if not rows:
         return []
-    out = [
-        "### Numerical damping of the time integrators",
-        "",
-        "Damping ratio each integrator adds to an undamped mode at step h omega, measured on "
-        "a string's lowest mode (`catenet bench integrators`; analysis in brackets), and the "
-        "simulated time to rest of `configs/damping_mu*.toml` (h = 0.01 s) with each: "
-        "implicit Euler's own damping hides mu, newmark's settling time follows 1/mu.",
-        "",
-    ]
+    out: list[str] = []
     measured = [r for r in rows if r["kind"] == "measured"]
     schemes = list(dict.fromkeys(r["scheme"] for r in measured))
     h_omegas = list(dict.fromkeys(r["h_omega"] for r in measured))
@@ -269,5 +266,10 @@ def section(results: Path) -> list[str]:
               + ("" if str(r["at_rest"]) == "True" else " (not at rest)"),
               r["steps"], as_text(r["wall_seconds"])] for r in settle],
         )]  # fmt: skip
-    out += ["", "![integrators](figures/bench-integrators.png)", ""]
     return out
+
+
+if __name__ == "__main__":
+    from benchmarks.__main__ import script
+
+    script(NAME)

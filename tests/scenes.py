@@ -1,4 +1,5 @@
-"""The hard scenes of the stress test (``catenet.studies.bench.stress``) and their checks.
+"""The suite's hard scenes: the paper's nets and cables, and the scenes of the stress test
+(``tests/stress_matrix.py``, also run in full by ``benchmarks/stress.py``) with their checks.
 
 Each scene function solves one scene and returns ``results`` (the solver's Result
 objects), ``check``, ``value``, ``tol``, ``equilibrium_error`` and ``note``; it raises a
@@ -10,12 +11,94 @@ from __future__ import annotations
 import math
 import time
 
-from catenet.studies.bench.common import (
-    compressed_catenary,
-    midpoint_cable,
-    paper_material,
-    paper_net,
-)
+# The paper's material and load (Sec. 3): E = 10 MPa, r = 1 cm, density 1000 kg/m^3.
+PAPER_E = 10e6
+PAPER_RADIUS = 0.01
+PAPER_DENSITY = 1000.0
+PAPER_PRESSURE = 100.0
+PAPER_EDGE = 0.01
+
+# --- scenes -------------------------------------------------------------------------------
+
+
+def paper_material(tension_only: bool = True):
+    from catenet.model.builders import Material
+
+    return Material.from_E(
+        PAPER_E, radius=PAPER_RADIUS, density=PAPER_DENSITY, tension_only=tension_only
+    )
+
+
+def paper_net(n: int, *, alpha: float = 0.0, edge: float = PAPER_EDGE, pressure=PAPER_PRESSURE):
+    """The paper's square net (L = 1 m) and its pressure load: (SquareNet, Loads)."""
+    from catenet.model.builders import pressure_force, square_net
+    from catenet.model.net import Loads
+
+    sq = square_net(n, alpha, 1.0, edge, paper_material())
+    return sq, Loads(force=pressure_force(sq.net, pressure, 1.0))
+
+
+def midpoint_cable(
+    F: float,
+    *,
+    nodes: int = 21,
+    EA: float | None = None,
+    L: float = 1.0,
+    line_density: float | None = None,
+    tension_only: bool = True,
+):
+    """A straight cable of length L pinned at both ends, force F down on its midpoint
+    node (``nodes`` odd): (Net, Loads, midpoint index)."""
+    import numpy as np
+
+    from catenet.model.builders import Material, cable
+    from catenet.model.net import Loads
+
+    mat = paper_material(tension_only)
+    if EA is not None or line_density is not None:
+        mat = Material(
+            EA=mat.EA if EA is None else EA,
+            line_density=mat.line_density if line_density is None else line_density,
+            tension_only=tension_only,
+        )
+    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
+    mid = (nodes - 1) // 2
+    f = np.zeros((nodes, 3))
+    f[mid, 2] = -F
+    return net, Loads(force=f), mid
+
+
+def compressed_catenary(
+    dL: float,
+    *,
+    nodes: int = 101,
+    L: float = 1.0,
+    ramp: float = 0.0,
+    EA: float | None = None,
+    tension_only: bool = True,
+):
+    """A cable of length L under its own weight whose ends move inward by dL/2 each (the
+    paper's compressed catenary, Fig. 2a): (Net, Loads)."""
+    import numpy as np
+
+    from catenet.model.builders import Material, cable
+    from catenet.model.net import Loads
+
+    mat = paper_material(tension_only)
+    if EA is not None:
+        mat = Material(EA=EA, line_density=mat.line_density, tension_only=tension_only)
+    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
+    d = np.zeros((nodes, 3))
+    d[0, 0] = dL / 2
+    d[-1, 0] = -dL / 2
+    ramp_time = None
+    if ramp > 0:
+        ramp_time = np.zeros(nodes)
+        ramp_time[[0, -1]] = ramp
+    return net, Loads(
+        gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d, ramp_time=ramp_time
+    )
+
 
 # --- checks ---------------------------------------------------------------------------------
 

@@ -1,4 +1,5 @@
-"""What every study shares: the paper's scenes, thread control, timing, CSV and figures.
+"""What every study shares: thread control, timing, CSV and figures (the paper's scenes
+are the test suite's, tests/scenes.py).
 
 Timings on a shared machine are noisy: every study times after a JIT warm-up, repeats
 short runs and keeps the median, and compares settings as ratios measured in one run.
@@ -21,16 +22,38 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[1]
+TESTS = ROOT / "tests"
+if str(TESTS) not in sys.path:  # the suite's scenes (tests/scenes.py) are the studies' too
+    sys.path.insert(0, str(TESTS))
+
+from scenes import (  # noqa: E402
+    PAPER_DENSITY,
+    PAPER_E,
+    PAPER_EDGE,
+    PAPER_PRESSURE,
+    PAPER_RADIUS,
+    compressed_catenary,
+    midpoint_cable,
+    paper_material,
+    paper_net,
+)
+
 log = logging.getLogger(__name__)
 
-DEFAULT_OUT = Path("benchmarks") / "results"
+DEFAULT_OUT = ROOT / "benchmarks" / "results"
 
-# The paper's material and load (Sec. 3): E = 10 MPa, r = 1 cm, density 1000 kg/m^3.
-PAPER_E = 10e6
-PAPER_RADIUS = 0.01
-PAPER_DENSITY = 1000.0
-PAPER_PRESSURE = 100.0
-PAPER_EDGE = 0.01
+__all__ = [
+    "PAPER_DENSITY",
+    "PAPER_E",
+    "PAPER_EDGE",
+    "PAPER_PRESSURE",
+    "PAPER_RADIUS",
+    "compressed_catenary",
+    "midpoint_cable",
+    "paper_material",
+    "paper_net",
+]
 
 Progress = Callable[[float, float, str], None]
 
@@ -51,88 +74,6 @@ def no_progress(done: float, total: float, note: str = "") -> None:
     """The default progress callback: nothing."""
 
 
-# --- scenes -------------------------------------------------------------------------------
-
-
-def paper_material(tension_only: bool = True):
-    from catenet.model.builders import Material
-
-    return Material.from_E(
-        PAPER_E, radius=PAPER_RADIUS, density=PAPER_DENSITY, tension_only=tension_only
-    )
-
-
-def paper_net(n: int, *, alpha: float = 0.0, edge: float = PAPER_EDGE, pressure=PAPER_PRESSURE):
-    """The paper's square net (L = 1 m) and its pressure load: (SquareNet, Loads)."""
-    from catenet.model.builders import pressure_force, square_net
-    from catenet.model.net import Loads
-
-    sq = square_net(n, alpha, 1.0, edge, paper_material())
-    return sq, Loads(force=pressure_force(sq.net, pressure, 1.0))
-
-
-def midpoint_cable(
-    F: float,
-    *,
-    nodes: int = 21,
-    EA: float | None = None,
-    L: float = 1.0,
-    line_density: float | None = None,
-    tension_only: bool = True,
-):
-    """A straight cable of length L pinned at both ends, force F down on its midpoint
-    node (``nodes`` odd): (Net, Loads, midpoint index)."""
-    import numpy as np
-
-    from catenet.model.builders import Material, cable
-    from catenet.model.net import Loads
-
-    mat = paper_material(tension_only)
-    if EA is not None or line_density is not None:
-        mat = Material(
-            EA=mat.EA if EA is None else EA,
-            line_density=mat.line_density if line_density is None else line_density,
-            tension_only=tension_only,
-        )
-    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
-    mid = (nodes - 1) // 2
-    f = np.zeros((nodes, 3))
-    f[mid, 2] = -F
-    return net, Loads(force=f), mid
-
-
-def compressed_catenary(
-    dL: float,
-    *,
-    nodes: int = 101,
-    L: float = 1.0,
-    ramp: float = 0.0,
-    EA: float | None = None,
-    tension_only: bool = True,
-):
-    """A cable of length L under its own weight whose ends move inward by dL/2 each (the
-    paper's compressed catenary, Fig. 2a): (Net, Loads)."""
-    import numpy as np
-
-    from catenet.model.builders import Material, cable
-    from catenet.model.net import Loads
-
-    mat = paper_material(tension_only)
-    if EA is not None:
-        mat = Material(EA=EA, line_density=mat.line_density, tension_only=tension_only)
-    net = cable([-L / 2, 0, 0], [L / 2, 0, 0], nodes, mat)
-    d = np.zeros((nodes, 3))
-    d[0, 0] = dL / 2
-    d[-1, 0] = -dL / 2
-    ramp_time = None
-    if ramp > 0:
-        ramp_time = np.zeros(nodes)
-        ramp_time[[0, -1]] = ramp
-    return net, Loads(
-        gravity=np.array([0.0, 0.0, -9.81]), support_displacement=d, ramp_time=ramp_time
-    )
-
-
 # --- threads --------------------------------------------------------------------------------
 
 
@@ -145,7 +86,7 @@ def set_threads(k: int) -> None:
 
 def thread_env(threads: int | None) -> dict:
     """Environment of a child process with ``threads`` BLAS/MKL/Numba threads (None: as is)."""
-    env = dict(os.environ)
+    env = child_env()
     if threads is not None:
         for var in (
             "OMP_NUM_THREADS",
@@ -217,6 +158,15 @@ def load_average() -> float:
         return float("nan")
 
 
+def child_env(env: dict | None = None) -> dict:
+    """``env`` (default: this process's) with the repository root and tests/ first on
+    PYTHONPATH, so that a child process imports ``benchmarks`` and the scenes."""
+    env = dict(os.environ if env is None else env)
+    paths = [str(ROOT), str(TESTS), *filter(None, env.get("PYTHONPATH", "").split(os.pathsep))]
+    env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
+    return env
+
+
 def run_child(code: str, *, timeout: float, env: dict | None = None) -> dict:
     """Runs ``code`` in a fresh interpreter; the code writes a JSON object to the path in
     ``sys.argv[1]``. Returns that object with ``returncode`` and ``wall_seconds``, or
@@ -230,7 +180,7 @@ def run_child(code: str, *, timeout: float, env: dict | None = None) -> dict:
                 capture_output=True,
                 text=True,
                 timeout=timeout,
-                env=env,
+                env=child_env(env),
             )
         except subprocess.TimeoutExpired:
             return {

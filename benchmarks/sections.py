@@ -1,12 +1,14 @@
-"""The sections of the README performance section, one per study, each from its study's
-CSV file in the results directory (an empty list when the file is missing)."""
+"""The fragments of docs/performance.md that come from the studies' tables: one function
+per study, each the lines (Markdown tables and the sentences whose numbers they hold) from
+its CSV file in the results directory, an empty list when the study has not run. The
+page's prose and headings are written by hand in the page."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
 
-from catenet.studies.bench.common import read_csv
+from benchmarks.common import read_csv
 
 
 def as_float(v) -> float:
@@ -42,7 +44,7 @@ def static(results: Path) -> list[str]:
     rows = read_study(results, "baseline")
     if not rows:
         return []
-    out = ["### Static solve of the paper's nets, against a plain implementation", ""]
+    out: list[str] = []
     n34 = [r for r in rows if r["n"] == "34"]
     cat = next((r for r in n34 if r["method"] == "catenet (pardiso)"), None)
     base = next((r for r in n34 if r["method"].startswith("baseline numpy+pypardiso")), None)
@@ -59,7 +61,7 @@ def static(results: Path) -> list[str]:
             + (
                 f", **{as_text(base['ratio_to_catenet'], '{:.1f}')} times faster** than the plain "
                 "NumPy + `scipy.sparse` + `pypardiso.spsolve` implementation of the same "
-                "model and Newton method (`catenet/studies/bench/baseline.py`), which "
+                "model and Newton method (`benchmarks/baseline.py`), which "
                 "reaches the same equilibrium "
                 f"(to {as_text(base['max_error_rel'], '{:.0e}')} of delta)."
                 if base
@@ -92,20 +94,6 @@ def static(results: Path) -> list[str]:
             for r in rows
         ],
     )
-    out += [
-        "",
-        "OpenSees rows (where present) solve the same net as `corotTruss` elements with a "
-        "tension-only elastic material; a flat unstressed net has no transverse stiffness, "
-        "so OpenSees needs a pretension (1e-4 strain, `InitStrainMaterial`) and load steps "
-        "(20, `NewtonLineSearch`, UmfPack; plain Newton with 10 steps and SparseSYM fail); "
-        "they are compared with catenet on the same pretensioned net (rest lengths / "
-        "(1 + 1e-4)); the remaining difference (~3e-5 of delta) is the cross term of the two "
-        "ways to pretension. openseespy 3.7 installs from PyPI but its Linux wheel does not "
-        "find its bundled `libblas.so.3`; the study loads that library first.",
-        "",
-        "![catenet against the baseline](figures/bench-baseline.png)",
-        "",
-    ]
     return out
 
 
@@ -113,17 +101,7 @@ def step_size(results: Path) -> list[str]:
     rows = read_study(results, "step-size")
     if not rows:
         return []
-    out = [
-        "### Time against step size (paper Fig. B10)",
-        "",
-        "Dynamic relaxation (implicit Euler, mu = 1) of the paper's nets (alpha = 0, "
-        "p = 100 Pa, 1 cm edges) from rest until the static residual and the inertial "
-        "force fall below rtol = 1e-8 of the load; runs that had not arrived within their "
-        "wall-time budget are marked capped (the ratio is still measured over the "
-        "simulated time reached). Error: max |x - x_static| / delta_static.",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         [
             "n",
             "DOF",
@@ -156,9 +134,6 @@ def step_size(results: Path) -> list[str]:
         "The static solve of the same nets (one run, rtol 1e-10) takes "
         + ", ".join(f"{as_text(v)} s (n = {k})" for k, v in statics.items())
         + ".",
-        "",
-        "![time against step size](figures/bench-step-size.png)",
-        "",
     ]
     return out
 
@@ -167,19 +142,7 @@ def pareto(results: Path) -> list[str]:
     best = read_study(results, "pareto-best")
     if not best:
         return []
-    out = [
-        "### Run time against error: which settings for which accuracy",
-        "",
-        "Three scenes against references they converge to: the midpoint-loaded cable "
-        "(F = 0.01 EA, Eq. 17: the discrete model is exact, so only the solver errs), the "
-        "compressed catenary (dL/L = 0.2, the exact elastic catenary: discretisation "
-        "error O(edge^2) plus the solver's) and the n = 34 net (Richardson extrapolation "
-        "of 5, 2.5 and 1.25 mm edges with the observed order, about 1). Error: relative "
-        "error of the mid-span / centre deflection. Fastest setting found for each "
-        "target:",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         [
             "scene",
             "error <=",
@@ -222,34 +185,11 @@ def pareto(results: Path) -> list[str]:
     if errs:
         out += [
             "",
-            "The net's centre deflection converges only at about first order in the "
-            "edge length (the paper's load puts p L^2 / N on every node, whatever its "
-            "share of cable), so the paper's 1 cm edges carry a discretisation error of "
-            "about half a per cent: error of delta at rtol 1e-8 for edge " + ", ".join(errs) + ".",
+            "Error of the net's centre deflection at rtol 1e-8 for edge " + ", ".join(errs) + ".",
         ]
-    out += [
-        "",
-        "Recommendations:",
-        "",
-        '- For an equilibrium, use `solver.method = "static"`: it is the fastest way to '
-        "every accuracy in every scene" + _static_vs_dynamic(results) + ".",
-        "- `rtol` costs little: Newton converges quadratically, so going from 1e-4 to 1e-8 "
-        "adds one or two iterations. Keep the default 1e-8; the error is then set by the "
-        "discretisation alone.",
-        "- The discretisation sets the accuracy of a sagging cable or net: the catenary's "
-        "error falls as edge^2 (halving the edge length gains a factor of 4 for about twice "
-        "the run time), the net's only as edge^1 (a factor of 2 for about twice the DOF). "
-        "A cable under point loads only (straight pieces) is exact with any number of "
-        "edges. For 1e-2 on a net the paper's 1 cm edges suffice; 1e-3 needs edges of "
-        "about 2 mm (extrapolated from the first-order error above).",
-        '- Dynamic relaxation (`method = "dynamic"`) is for the motion itself; if it is '
-        "used to reach an equilibrium, take the largest step (h = 1 s arrives in a handful "
-        "of steps; the final state does not depend on h or mu) rather than a small h, whose "
-        "cost grows as 1/h.",
-        "",
-        "![run time against error](figures/bench-pareto.png)",
-        "",
-    ]
+    ratio = _static_vs_dynamic(results)
+    if ratio:
+        out += ["", f"Dynamic relaxation of the n = 34 net to the same tolerance takes {ratio}."]
     return out
 
 
@@ -264,29 +204,14 @@ def _static_vs_dynamic(results: Path) -> str:
         for h in (1.0, 0.01)
         if h in sel
     ]
-    return (
-        (
-            "; dynamic relaxation of the n = 34 net to the same tolerance takes "
-            + " and ".join(parts)
-            + " as long"
-        )
-        if parts
-        else ""
-    )
+    return " and ".join(parts) + " as long as the static solve" if parts else ""
 
 
 def skips(results: Path) -> list[str]:
     rows = read_study(results, "skips")
     if not rows:
         return []
-    out = [
-        "### What each skip saves",
-        "",
-        "Each variant against catenet's default (marked *) on the n = 34 net, one process, "
-        "medians of repeats.",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         ["what", "variant", "time [s]", "x default", "Newton it.", "note"],
         [
             [
@@ -300,7 +225,6 @@ def skips(results: Path) -> list[str]:
             for r in rows
         ],
     )
-    out += ["", "![skips](figures/bench-skips.png)", ""]
     return out
 
 
@@ -308,14 +232,7 @@ def cold_start(results: Path) -> list[str]:
     rows = read_study(results, "cold-start")
     if not rows:
         return []
-    out = [
-        "### Cold start",
-        "",
-        "Fresh processes, as a user runs them; `empty` Numba cache: `NUMBA_CACHE_DIR` "
-        "points at a new directory, so every kernel is compiled.",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         ["command", "Numba cache", "threads", "time [s]", "runs"],
         [
             [r["command"], r["numba_cache"], r["threads"], as_text(r["seconds"]), r["runs"]]
@@ -327,7 +244,6 @@ def cold_start(results: Path) -> list[str]:
     )
     if heavy:
         out += ["", f"Heavy modules imported by `catenet --help`: {heavy}."]
-    out += ["", "![cold start](figures/bench-cold-start.png)", ""]
     return out
 
 
@@ -337,15 +253,7 @@ def stress(results: Path) -> list[str]:
         return []
     passed = sum(r["passed"] == "True" for r in rows)
     out = [
-        "### Numerical-stability stress test",
-        "",
-        f"{passed} of {len(rows)} hard scenes give a right answer (a converged state that "
-        "passes its check, or a clear catenet error where that is right). Loads from 1e-9 "
-        "to 0.5 EA, EA from 1e-2 to 1e9 N, h from 1e-6 to 1e3 s, damping 0 to 1e3, "
-        "zero-slack cables under self-weight, supports moved in by half the span and more, "
-        "bilateral cables in compression, point loads on a net, a 1e5-edge cable and "
-        "random graphs. Checks: Eq. 17, the exact discrete chain, equilibrium (residual and "
-        "reaction balance recomputed from the answer), static = dynamic.",
+        f"{passed} of {len(rows)} hard scenes give a right answer.",
         "",
     ]
     out += md_table(
@@ -367,7 +275,6 @@ def stress(results: Path) -> list[str]:
     if bad:
         out += ["", "Scenes without a right answer (reported to be fixed in the solver):", ""]
         out += [f"- {r['id']}: {r['status']}; {r.get('message', '')}" for r in bad]
-    out += ["", "![stress test](figures/bench-stress.png)", ""]
     return out
 
 
@@ -375,18 +282,7 @@ def formfind(results: Path) -> list[str]:
     rows = read_study(results, "formfind")
     if not rows:
         return []
-    out = [
-        "### Form finding",
-        "",
-        "The force density method on square roofs (`catenet bench formfind`), set-up "
-        "included: the linear method is one sparse factorisation for the three coordinates; "
-        "`plain spsolve` assembles the same system with scipy.sparse products and calls "
-        "`spsolve` per coordinate; `forces` and `lengths` meet a target force or length "
-        "in every edge to 1e-9 (damped Newton on log q, one sparse saddle-point solve per "
-        "step).",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         [
             "edges",
             "linear [s]",
@@ -431,7 +327,6 @@ def formfind(results: Path) -> list[str]:
                     else ""
                 ),
             ]
-    out += ["", "![form finding](figures/bench-formfind.png)", ""]
     return out
 
 
@@ -439,15 +334,7 @@ def flush(results: Path) -> list[str]:
     rows = read_study(results, "flush")
     if not rows:
         return []
-    out = [
-        "### Writing trajectories",
-        "",
-        "1000 dynamic steps keeping every frame (`catenet bench flush`): frames flushed in "
-        "batches into a spare file that replaces the result file whole, against the earlier "
-        "per-frame flush in place; the frames of both files are bitwise equal.",
-        "",
-    ]
-    out += md_table(
+    out = md_table(
         ["scheme", "DOF", "steps", "time [s]", "ratio to per-frame flush"],
         [
             [
@@ -460,4 +347,4 @@ def flush(results: Path) -> list[str]:
             for r in rows
         ],
     )
-    return out + [""]
+    return out

@@ -1,10 +1,10 @@
-"""The README's scale section (``catenet bench report``), from benchmarks/results/scale.csv."""
+"""docs/performance.md's scale tables (``python -m benchmarks render``), from scale.csv."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from catenet.studies.bench.report_sections import as_float, as_text, md_table, read_study
+from benchmarks.sections import as_float, as_text, md_table, read_study
 
 
 def scale(results: Path) -> list[str]:
@@ -13,7 +13,7 @@ def scale(results: Path) -> list[str]:
         return []
     for r in rows:  # the guard's estimate by today's formula (it may have been recalibrated)
         if r.get("dofs") and r.get("n") and r.get("edge"):
-            from catenet.studies.bench.scale import guard_estimate_mib
+            from benchmarks.scale import guard_estimate_mib
 
             r["guard_estimate_mib"] = guard_estimate_mib(int(r["n"]), as_float(r["edge"]))
             r["guard_ratio"] = r["guard_estimate_mib"] / as_float(r["peak_rss_mib"])
@@ -22,16 +22,7 @@ def scale(results: Path) -> list[str]:
     if not ok:
         return []
     top = ok[-1]
-    out = [
-        f"### Scale: 1e3 to {as_float(top['dofs']):.0e} DOF".replace("e+0", "e"),
-        "",
-        "Static equilibrium of the square net refined both ways (n = 34 k cables, 1 cm / k "
-        "edges), each size in a fresh process on one thread; peak memory is the process's "
-        "resident high-water mark (VmHWM; it sees MKL's allocations), the guard's estimate "
-        "is what `catenet run` checks against the machine's memory before building anything "
-        "(`catenet.case.guard.estimate_memory`).",
-        "",
-    ]
+    out = [f"Sizes from 1e3 to {as_float(top['dofs']):.0e} DOF:".replace("e+0", "e"), ""]
     out += md_table(
         [
             "DOF",
@@ -69,7 +60,7 @@ def scale(results: Path) -> list[str]:
     )
     fit = [r for r in ok if as_float(r["dofs"]) >= 5e3]
     if len(fit) >= 3:
-        from catenet.studies.bench.common import geometric_fit
+        from benchmarks.common import geometric_fit
 
         dofs = [as_float(r["dofs"]) for r in fit]
         b = geometric_fit(dofs, [as_float(r["total_seconds"]) for r in fit])[0]
@@ -109,13 +100,7 @@ def scale(results: Path) -> list[str]:
         out += ["", text + "."]
     variants = [r for r in rows if r.get("variant", "default") != "default"]
     if variants:
-        out += [
-            "",
-            "PARDISO's other choices at the same size, each in a fresh process (times "
-            "from separate processes on a shared machine: only large ratios mean "
-            "something; factor nonzeros and peak memory do not depend on the load):",
-            "",
-        ]
+        out += ["", "PARDISO's other choices at the same size:", ""]
         base = {r["dofs"]: r for r in ok}
         table = []
         for r in variants:
@@ -156,5 +141,4 @@ def scale(results: Path) -> list[str]:
                 "",
                 f"n = {r['n']}, edge {r['edge']}, {r.get('variant', 'default')}: {r['error']}",
             ]
-    out += ["", "![scale](figures/bench-scale.png)", ""]
     return out
