@@ -1,5 +1,5 @@
 """Graph cases with cables, node sets, per-edge arrays and the loads users give (issue 10,
-items 1 and 5; SPEC section 6): subdivision, per-cable material and prestress, loads by
+items 1 and 5; contract §6): subdivision, per-cable material and prestress, loads by
 node set, per unit length of cable and at a position along a cable, the per-cable results
 (Result stats, the HDF5 file, the run summary), line meshes from files, and bad input."""
 
@@ -77,7 +77,7 @@ def exact(scene, **kw):
 
 def test_cables_are_split_into_edges_no_longer_than_edge_length():
     """Each segment gets ceil(length / edge_length - 1e-9) equal edges: a segment of
-    exactly k edge lengths gets k (SPEC section 2's rule); new nodes follow the given
+    exactly k edge lengths gets k (contract §2's rule); new nodes follow the given
     ones, on the segment; the cable of every edge is recorded."""
     data = straight()
     seg = math.sqrt(1.5**2 + 0.5**2 + 1)
@@ -345,10 +345,12 @@ def test_load_steps_reach_the_same_equilibrium():
 
 
 def test_the_readme_example_runs():
-    """The README's cable example is a valid case; its loads and reactions balance."""
+    """The cable example of the case keys' page is a valid case; its loads and reactions
+    balance."""
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    page = Path(__file__).resolve().parents[2] / "docs" / "reference" / "case-keys.md"
+    text = page.read_text(encoding="utf-8")
     blocks = [b.split("```", 1)[0] for b in text.split("```toml\n")[1:]]
     (example,) = [b for b in blocks if "[[geometry.cable]]" in b]
     scene = build(parse_case(tomllib.loads(example)))

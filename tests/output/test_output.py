@@ -1,4 +1,4 @@
-"""The result file (SPEC section 5), its XDMF sidecar, and what survives crashes and full
+"""The result file (contract §5), its XDMF sidecar, and what survives crashes and full
 disks."""
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def test_table_helpers():
 
 
 def write_result(path, *, frames=1, method="static", with_result=True):
-    """A small result file in the SPEC §5 layout: a 21-node cable sagging into a
+    """A small result file in the contract §5 layout: a 21-node cable sagging into a
     parabola, every frame a little lower."""
     n = 21
     s = np.linspace(-0.5, 0.5, n)
