@@ -85,3 +85,17 @@ def test_setup_files_do_what_the_quick_start_says(name):
         assert "-m venv" in text
     else:
         assert "make test" in text
+
+
+@pytest.mark.parametrize(
+    "path", sorted((ROOT / "docs" / "examples").glob("[!i]*.md")), ids=lambda p: p.stem
+)
+def test_an_example_page_shows_its_case_file_as_it_is(path):
+    """Each example page names its case in configs/, shows that file unchanged and the
+    figure of it."""
+    text = path.read_text(encoding="utf-8")
+    (name,) = re.findall(r"^`(configs/[^`]+\.toml)`: ", text, re.M)
+    (_, block), *_ = toml_blocks(path)
+    assert block.rstrip() == (ROOT / name).read_text().rstrip()
+    (figure,) = re.findall(r"!\[[^\]]*\]\(([^)]+\.png)\)", text)
+    assert (path.parent / figure).exists()
