@@ -33,7 +33,7 @@ test-fast: $(VENV)/.installed-test
 
 lint: $(VENV)/.installed-test
 	$(PY) -m pip install --quiet ruff
-	$(VENV)/bin/ruff check catenet tests benchmarks
+	$(VENV)/bin/ruff check catenet tests benchmarks docs/hooks
 
 # The documentation site, from docs/ and mkdocs.yml, into site/ (open site/index.html).
 $(VENV)/.installed-docs: pyproject.toml | $(PY)

@@ -11,8 +11,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import click
-
 from catenet.cli import COMMANDS, main
 
 WIDTH = 92
@@ -28,16 +26,14 @@ failed or did not converge) or 2 (bad input: usage, case file, values); see
 
 
 def help_text(name: str | None) -> str:
-    """What ``catenet [NAME] --help`` prints."""
-    group_ctx = click.Context(
-        main, info_name="catenet", terminal_width=WIDTH, max_content_width=WIDTH
-    )
+    """What ``catenet [NAME] --help`` prints (contexts made as the command line makes
+    them, so that the commands' context settings, such as ``-h``, apply)."""
+    width = {"terminal_width": WIDTH, "max_content_width": WIDTH}
+    group_ctx = main.make_context("catenet", [], resilient_parsing=True, **width)
     if name is None:
         return main.get_help(group_ctx)
     command = main.get_command(group_ctx, name)
-    ctx = click.Context(
-        command, info_name=name, parent=group_ctx, terminal_width=WIDTH, max_content_width=WIDTH
-    )
+    ctx = command.make_context(name, [], parent=group_ctx, resilient_parsing=True, **width)
     return command.get_help(ctx)
 
 
