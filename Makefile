@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 
-.PHONY: run test test-fast lint clean
+.PHONY: run test test-fast lint docs clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -33,7 +33,15 @@ test-fast: $(VENV)/.installed-test
 
 lint: $(VENV)/.installed-test
 	$(PY) -m pip install --quiet ruff
-	$(VENV)/bin/ruff check catenet tests benchmarks
+	$(VENV)/bin/ruff check catenet tests benchmarks docs/hooks
+
+# The documentation site, from docs/ and mkdocs.yml, into site/ (open site/index.html).
+$(VENV)/.installed-docs: pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet -e ".[docs]"
+	touch $@ $(VENV)/.installed
+
+docs: $(VENV)/.installed-docs
+	$(PY) -m mkdocs build --strict -d site
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out site .pytest_cache

@@ -200,3 +200,36 @@ def pytest_configure(config):
     config.addinivalue_line(
         "markers", "slow: takes seconds (large nets, time stepping); still part of every run"
     )
+
+
+# --- the examples in configs/, each run once per test session ------------------------------
+
+
+@pytest.fixture(scope="session")
+def example(tmp_path_factory):
+    """``example(name)``: the result file of ``configs/<name>.toml`` as ``catenet run``
+    writes it. Each example runs once per test session, also when the tests that need it
+    are spread over xdist's worker processes: the first to ask runs it into a directory
+    the workers share, under a lock; the others read its file."""
+    import fcntl
+    import hashlib
+
+    from catenet.case import load_case
+    from catenet.run.runner import run_case
+
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    root = shared / "examples"
+    root.mkdir(exist_ok=True)
+
+    def run(name: str) -> Path:
+        source = CONFIGS / f"{name}.toml"
+        digest = hashlib.sha256(source.read_bytes()).hexdigest()[:12]
+        out = root / f"{name.replace('/', '-')}-{digest}.h5"
+        with open(out.with_suffix(".lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not out.exists():
+                run_case(load_case(source), out)
+        return out
+
+    return run

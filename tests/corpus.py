@@ -5,7 +5,7 @@ section alone: real dimensions, steel strand and rope stiffnesses, prestress tha
 balances the given geometry by statics, supports that make the structure stable, and
 loads from zero to past the first slack member where the structure stays stable after it.
 No solver key is set: every model ought to converge at catenet's defaults and close its
-global equilibrium (reactions + applied loads + contact forces = 0, SPEC sections 5, 7).
+global equilibrium (reactions + applied loads + contact forces = 0, contract §5 and §7).
 
 Families (``FAMILIES``), each drawn from its own ``numpy.random.Generator(seed)``:
 

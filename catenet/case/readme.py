@@ -1,8 +1,8 @@
-"""The README table of case keys, generated from the declarations.
+"""The table of case keys (docs/reference/case-keys.md), generated from the declarations.
 
-``python -m catenet.case.readme [README.md]`` rewrites the table between the markers
-``<!-- case-keys:begin -->`` and ``<!-- case-keys:end -->``; tests/case/test_case.py checks
-that the README holds what ``keys_table()`` gives.
+``python -m catenet.case.readme [PAGE]`` (default docs/reference/case-keys.md) rewrites the
+table between the markers ``<!-- case-keys:begin -->`` and ``<!-- case-keys:end -->``;
+tests/case/test_case.py checks that the page holds what ``keys_table()`` gives.
 """
 
 from __future__ import annotations
@@ -107,6 +107,6 @@ def update_readme(path: Path) -> bool:
 
 
 if __name__ == "__main__":  # pragma: no cover - a maintainer's command
-    readme = Path(sys.argv[1] if len(sys.argv) > 1 else "README.md")
+    readme = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/reference/case-keys.md")
     if not update_readme(readme):
         sys.exit(f"{readme}: no {BEGIN} ... {END} markers")

@@ -17,7 +17,7 @@ COMMANDS = {
     "sweep": ("catenet.cli.sweep", "Run a case over a grid of parameter values."),
     "formfind": ("catenet.cli.formfind", "Find a net's shape from force densities or targets."),
     "validate": ("catenet.cli.validate", "Check catenet against the analytic cable solutions."),
-    "bench": ("catenet.cli.bench", "Timing and accuracy studies."),
+    "bench": ("catenet.cli.bench", "Time the n = 34 solve, backend, threads and cold start here."),
     "plot": ("catenet.cli.plot", "Draw figures from a result file or a sweep directory."),
     "export": ("catenet.cli.export", "Write a result file's frames as VTU, VTK or XDMF files."),
     "repair": ("catenet.cli.repair", "Make a result file open in every reader (killed runs)."),

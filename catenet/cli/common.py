@@ -66,7 +66,7 @@ def fail(message: str, code: int) -> None:
 
 @contextlib.contextmanager
 def errors_to_exit_codes(debug: bool = False):
-    """Maps catenet's exceptions to one line on stderr and the SPEC's exit codes:
+    """Maps catenet's exceptions to one line on stderr and the exit codes of the contract:
     ConfigError -> 2; ConvergenceError, OutputError, other CatenetError -> 1. With
     ``debug`` the traceback is shown as well. Unexpected exceptions are reported as
     internal errors (exit 1), never as a bare traceback."""

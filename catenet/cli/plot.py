@@ -43,7 +43,7 @@ def command(
     2e-2f, Eqs. 14-17).
     A file of `catenet modes` also gets STEM-modes.png beside that figure: its
     lowest modes (up to six), each with its frequency.
-    Sweep directory: the sweep's figures (catenet.studies.square_net).
+    Sweep directory: the sweep's figures (catenet.study).
 
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
@@ -54,11 +54,9 @@ def command(
 
         if path.is_dir():
             try:
-                from catenet.studies.square_net import plot_sweep
+                from catenet.study import plot_sweep
             except ImportError as exc:
-                raise CatenetError(
-                    f"{path}: sweep figures need catenet.studies.square_net: {exc}"
-                ) from exc
+                raise CatenetError(f"{path}: sweep figures need catenet.study: {exc}") from exc
             files = plot_sweep(path, output)
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")

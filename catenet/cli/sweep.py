@@ -154,7 +154,7 @@ def command(
                 err=True,
             )
         if plot:
-            from catenet.studies.square_net import plot_sweep
+            from catenet.study import plot_sweep
 
             for path in plot_sweep(out, None):
                 if not quiet:

@@ -1,5 +1,5 @@
 """Form finding of a case: the shape its [formfind] table asks for, the graph case that
-``catenet run`` reproduces it with, and the result file (SPEC section 5) beside it.
+``catenet run`` reproduces it with, and the result file (contract §5) beside it.
 
 The case written (``to_case``) is a graph: the form-found positions, the edges, EA per
 edge and the rest lengths l0 = L / (1 + eps) at which each edge carries its force N = q L

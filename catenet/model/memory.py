@@ -21,7 +21,7 @@ def physical_memory() -> int | None:
 #: Resident memory of a process that has loaded NumPy, Numba and MKL (Linux x86-64).
 PROCESS_BYTES = 180.0 * 2**20
 #: Bytes per node and per edge of the size estimate, fitted to the peak resident memory
-#: of static solves of square nets from 1e3 to 1e7 DOF (``catenet bench scale``: the
+#: of static solves of square nets from 1e3 to 1e7 DOF (``python -m benchmarks scale``: the
 #: estimate is 0.99 to 1.06 times the measured peak there).
 PER_ITEM_BYTES = 1300.0
 

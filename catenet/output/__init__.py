@@ -1,4 +1,4 @@
-"""Result files: the HDF5 layout of SPEC section 5 and an XDMF sidecar for ParaView.
+"""Result files: the HDF5 layout of contract §5 and an XDMF sidecar for ParaView.
 
 ::
 

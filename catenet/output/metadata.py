@@ -1,6 +1,6 @@
 """What a result file records about its run besides the states: the versions of the
 software that wrote it (root attributes ``<name>_version``) and the /result attributes
-(SPEC section 5)."""
+(contract §5)."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def environment() -> dict[str, str]:
 
 
 def result_attrs(res, scene) -> dict:
-    """The /result attributes of a Result: SPEC section 5 plus what a user reads first."""
+    """The /result attributes of a Result: contract §5 plus what a user reads first."""
     net = scene.net
     probe = int(scene.probe)
     delta = measures.deflection(net.nodes, res.x, probe)

@@ -1,4 +1,4 @@
-"""Reading result files (SPEC section 5), also those of killed runs: the one module that
+"""Reading result files (contract §5), also those of killed runs: the one module that
 knows where a result file keeps what.
 
 - ``read_result(path)`` -> ``ResultFile``: mesh, attributes, final state (``/result``, or
@@ -292,7 +292,7 @@ def _dataset(h5, name: str, path: Path, shape_tail: tuple, dtype, problems: list
 
 
 def read_result(path: str | Path) -> ResultFile:
-    """Reads a result file, checking the SPEC §5 layout; raises ConfigError listing every
+    """Reads a result file, checking the contract §5 layout; raises ConfigError listing every
     problem found.
 
     /result/x may be missing (a run that stopped before writing it): the last complete
@@ -346,7 +346,7 @@ def read_result(path: str | Path) -> ResultFile:
                 problems.insert(
                     0,
                     f"{path}: missing {', '.join(missing)}: not a catenet result file "
-                    "(layout of SPEC §5: /mesh/nodes, /mesh/edges, /result/x, ...)",
+                    "(the result file layout: /mesh/nodes, /mesh/edges, /result/x, ...)",
                 )
             if problems:
                 raise ConfigError(problems)

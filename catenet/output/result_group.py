@@ -1,4 +1,4 @@
-"""The /result group of a result file (SPEC sections 5 and 7): the final state, its
+"""The /result group of a result file (contract §5 and §7): the final state, its
 tensions (per cable too), reactions and contact forces, velocities and the newmark
 scheme's acceleration where the run keeps them, and the attributes a user reads first."""
 

@@ -6,7 +6,7 @@ The sidecar holds no data: every DataItem names a whole HDF5 dataset. A trajecto
 Temporal collection with one Polyline grid per frame; frame k's geometry, tensions and
 velocities are the datasets ``/xdmf/x/k``, ``/xdmf/tension/k`` and ``/xdmf/v/k``: virtual
 datasets (HDF5 1.10) that map frame k of ``/trajectory/x`` and the others, so they cost
-metadata only and the trajectory stays where SPEC section 5 puts it. (meshio reads whole
+metadata only and the trajectory stays where contract §5 puts it. (meshio reads whole
 datasets only, not XDMF HyperSlabs, hence these views.) Each frame also carries its
 positions as the point attribute ``position``: meshio's time-series reader takes the
 geometry of the first grid only. A file without a trajectory gets one grid of /result.

@@ -1,4 +1,4 @@
-"""Figures of a result file (SPEC §5): the deformed net over the undeformed one, coloured
+"""Figures of a result file (contract §5): the deformed net over the undeformed one, coloured
 by tension, in 3D and in a side view (paper Figs. 2c-d and 4), and, for runs with a
 trajectory, the deflection of the probe node against time or load factor (paper Fig. A9).
 

@@ -15,7 +15,7 @@ METHODS = ("static", "dynamic")
 
 @dataclass(frozen=True)
 class Settings:
-    """How to solve: the [solver] keys (SPEC section 3) that a solve uses."""
+    """How to solve: the [solver] keys (contract §3) that a solve uses."""
 
     method: str = "static"
     dt: float = 1e-2

@@ -192,7 +192,7 @@ def _solve_levels(task: dict) -> list[dict]:
 class _Scenes:
     """The scenes of a job's load levels. When the only load key is ``load.pressure`` of
     a square net, the net is built once and each level's loads are the first level's with
-    the pressure part, -p L^2/N per node (SPEC section 2), computed for its p; the second
+    the pressure part, -p L^2/N per node (contract §2), computed for its p; the second
     level is also built in full once to check that this gives the same net and forces
     (else every level is built); a scene with other terms (obstacles, bodies, whose
     barrier stiffness follows the loads) is built for every level. Saves a net build per
@@ -318,7 +318,7 @@ def _frequencies(scene, ws, result, count: int) -> dict:
 
 
 def _save_run(out: Path, index: int, level: int, scene, result) -> str:
-    """The level's HDF5 result file (SPEC section 5, as ``catenet run`` writes it: a
+    """The level's HDF5 result file (contract §5, as ``catenet run`` writes it: a
     static equilibrium is the frame at load factor 1) under DIR/runs/; its path relative
     to DIR."""
     from catenet.output import ResultWriter

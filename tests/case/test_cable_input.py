@@ -11,9 +11,9 @@ import tomllib
 import h5py
 import numpy as np
 import pytest
+from cable_cases import one, problems, straight, two_cables
 from click.testing import CliRunner
 from conftest import CONFIGS
-from test_cables import one, problems, straight, two_cables
 
 from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.cli import main

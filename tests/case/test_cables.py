@@ -1,5 +1,5 @@
 """Graph cases with cables, node sets, per-edge arrays and the loads users give (issue 10,
-items 1 and 5; SPEC section 6): subdivision, per-cable material and prestress, loads by
+items 1 and 5; contract §6): subdivision, per-cable material and prestress, loads by
 node set, per unit length of cable and at a position along a cable, the per-cable results
 (Result stats, the HDF5 file, the run summary), line meshes from files, and bad input."""
 
@@ -11,59 +11,14 @@ import tomllib
 
 import numpy as np
 import pytest
+from cable_cases import one, straight, two_cables
 from scipy.optimize import fsolve
 
 from catenet.case import build, parse_case
-from catenet.errors import ConfigError
 from catenet.model.laws import LAWS
 from catenet.solver.path import Settings, solve
 
 TABLE = [[0.01, 100.0], [0.05, 300.0], [0.5, 900.0]]
-
-
-def two_cables() -> dict:
-    """A horizontal cable "a" (0 -> 1, 4 m) and a cable "b" across it (2 -> 3), all four
-    ends pinned through the node set "anchors"."""
-    return {
-        "geometry": {
-            "kind": "graph",
-            "nodes": [[0, 0, 0], [4, 0, 0], [2, -2, 0.5], [2, 2, 0.5]],
-            "edge_length": 0.5,
-            "sets": {"anchors": [0, 1, 2, 3], "west": [0]},
-            "cable": [
-                {"name": "a", "nodes": ["west", 1], "prestress": 100.0},
-                {"name": "b", "nodes": [2, 3], "material": {"EA": 5e4}},
-            ],
-        },
-        "supports": {"fixed": ["anchors"]},
-        "material": {"EA": 1e5},
-    }
-
-
-def straight(**cable) -> dict:
-    """One straight cable through three given nodes, pinned at its ends."""
-    return {
-        "geometry": {
-            "kind": "graph",
-            "nodes": [[0, 0, 0], [1.5, 0.5, 1], [3, 1, 2]],
-            "fixed": [0, 2],
-            "edge_length": 0.3,
-            "cable": [{"name": "c", "nodes": [0, 1, 2], **cable}],
-        },
-        "material": {"EA": 1000.0},
-    }
-
-
-def problems(data: dict, **kw) -> list[str]:
-    with pytest.raises(ConfigError) as info:
-        parse_case(data, **kw)
-    return info.value.problems
-
-
-def one(data: dict, needle: str) -> str:
-    found = problems(data)
-    assert len(found) == 1 and needle in found[0], found
-    return found[0]
 
 
 def exact(scene, **kw):
@@ -77,7 +32,7 @@ def exact(scene, **kw):
 
 def test_cables_are_split_into_edges_no_longer_than_edge_length():
     """Each segment gets ceil(length / edge_length - 1e-9) equal edges: a segment of
-    exactly k edge lengths gets k (SPEC section 2's rule); new nodes follow the given
+    exactly k edge lengths gets k (contract §2's rule); new nodes follow the given
     ones, on the segment; the cable of every edge is recorded."""
     data = straight()
     seg = math.sqrt(1.5**2 + 0.5**2 + 1)
@@ -345,10 +300,12 @@ def test_load_steps_reach_the_same_equilibrium():
 
 
 def test_the_readme_example_runs():
-    """The README's cable example is a valid case; its loads and reactions balance."""
+    """The cable example of the case keys' page is a valid case; its loads and reactions
+    balance."""
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    page = Path(__file__).resolve().parents[2] / "docs" / "reference" / "case-keys.md"
+    text = page.read_text(encoding="utf-8")
     blocks = [b.split("```", 1)[0] for b in text.split("```toml\n")[1:]]
     (example,) = [b for b in blocks if "[[geometry.cable]]" in b]
     scene = build(parse_case(tomllib.loads(example)))

@@ -930,9 +930,10 @@ def test_a_sweep_table_is_left_to_catenet_sweep(tmp_path):
 
 
 def test_readme_table_of_keys_is_generated_from_the_declarations():
-    """The README's table of case keys is what the declarations give (regenerate it with
-    `python -m catenet.case.readme README.md`)."""
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    """The table of case keys in docs/reference/case-keys.md is what the declarations give
+    (regenerate it with `python -m catenet.case.readme`)."""
+    page = Path(__file__).resolve().parents[2] / "docs" / "reference" / "case-keys.md"
+    text = page.read_text(encoding="utf-8")
     assert readme.readme_table(text) == readme.section_text()
 
 

@@ -11,7 +11,6 @@ import pytest
 from conftest import CONFIGS, check_xdmf
 
 from catenet.case import load_case
-from catenet.run.runner import run_case
 from catenet.validate import analytic
 
 FILES = sorted(CONFIGS.glob("*.toml"))
@@ -34,31 +33,30 @@ def test_configs_exist():
 
 
 @pytest.mark.parametrize("path", list(params()))
-def test_config_runs(path, tmp_path):
-    RESULTS[path.stem] = run_config(path, tmp_path)
+def test_config_runs(path, example):
+    RESULTS[path.stem] = run_config(path, example)
 
 
-def run_config(path, tmp_path) -> dict:
-    """Runs one example case as `catenet run` does, checks its file, returns what the
-    physics tests need."""
+def run_config(path, example) -> dict:
+    """Runs one example case as `catenet run` does (once per test session: the
+    ``example`` fixture), checks its file, returns what the physics tests need."""
     case = load_case(path)
-    out = tmp_path / f"{path.stem}.h5"
-    res = run_case(case, out)
-    assert res.converged and res.equilibrium, res.message
+    out = example(path.stem)
     with h5py.File(out, "r") as h5:
         a = dict(h5["result"].attrs)
         times = h5["trajectory/time"][()] if "trajectory" in h5 else np.zeros(0)
         series = h5["trajectory/x"][:, int(a["probe"]), 2] if "trajectory" in h5 else None
+    assert a["converged"] and a["equilibrium"], a["message"]
     assert a["converged"] and a["delta"] > 0
     check_xdmf(out.with_suffix(".xdmf"))
     return {
-        "delta": res.stats["delta"],
-        "L": res.stats["size"],
-        "time": res.time,
+        "delta": float(a["delta"]),
+        "L": float(a["size"]),
+        "time": float(a["time"]),
         "t_end": case.solver.t_end,
         "times": times,
         "series": series,
-        "max_strain": res.max_strain,
+        "max_strain": float(a["max_strain"]),
         "EA": float(np.median(load_scene_EA(case))),
     }
 
@@ -69,35 +67,34 @@ def load_scene_EA(case):
     return build(case).net.EA
 
 
-def need(tmp_path, *names):
-    """The runs of the named cases: from test_config_runs when it ran in this process,
-    else run here (tests may be spread over processes)."""
+def need(example, *names):
+    """The runs of the named cases (each run once per session by ``example``)."""
     for name in names:
         if name not in RESULTS:
-            RESULTS[name] = run_config(CONFIGS / f"{name}.toml", tmp_path)
+            RESULTS[name] = run_config(CONFIGS / f"{name}.toml", example)
     return [RESULTS[n] for n in names]
 
 
-def test_catenary_follows_eqs_14_15(tmp_path):
+def test_catenary_follows_eqs_14_15(example):
     """Each load step k moves the ends by 0.01 k: the sag follows the inextensible catenary
     at Delta L / L = 0.02 k, to the discretisation error (101 nodes) and the small stretch
     under self-weight (rho g A L / EA ~ 1e-3)."""
-    (r,) = need(tmp_path, "catenary")
+    (r,) = need(example, "catenary")
     sags = -np.asarray(r["series"])
     expected = [analytic.catenary_sag(1.0, 0.02 * k) for k in range(1, 11)]
     np.testing.assert_allclose(r["times"], np.arange(1, 11) / 10)
     np.testing.assert_allclose(sags, expected, rtol=5e-3)
 
 
-def test_midpoint_load_follows_eq_17(tmp_path):
-    (r,) = need(tmp_path, "midpoint_load")
+def test_midpoint_load_follows_eq_17(example):
+    (r,) = need(example, "midpoint_load")
     F = 94.25 * np.arange(1, 11) / 10
     expected = [analytic.midpoint_load_deflection(f, 1.0, r["EA"]) for f in F]
     np.testing.assert_allclose(-np.asarray(r["series"]), expected, rtol=1e-6)
     assert r["max_strain"] < 0.05  # the paper's limit of linear elasticity
 
 
-def test_nets_stiffen_with_n_and_soften_with_alpha(tmp_path):
+def test_nets_stiffen_with_n_and_soften_with_alpha(example):
     """Fig. 4 and 7: more cables deflect less; turning them from 0 to pi/4 deflects more."""
     names = {
         (n, a): f"fig4{letter}_n{n}_alpha_{a}"
@@ -107,7 +104,7 @@ def test_nets_stiffen_with_n_and_soften_with_alpha(tmp_path):
             strict=True,
         )
     }
-    runs = need(tmp_path, *names.values())
+    runs = need(example, *names.values())
     deltas = {key: r["delta"] for key, r in zip(names, runs, strict=True)}
     for a in ("0", "pi6", "pi4"):
         assert deltas[10, a] > deltas[22, a] > deltas[34, a]
@@ -116,10 +113,10 @@ def test_nets_stiffen_with_n_and_soften_with_alpha(tmp_path):
     assert all(0.02 < d < 0.1 for d in deltas.values())
 
 
-def test_damping_changes_the_way_not_the_equilibrium(tmp_path):
+def test_damping_changes_the_way_not_the_equilibrium(example):
     """App. A: the same equilibrium for mu = 0.1, 1, 10, equal to the static one of
     Fig. 4a, reached long before t_end (dynamic relaxation stops at rest)."""
-    runs = need(tmp_path, "damping_mu0.1", "damping_mu1", "damping_mu10", "fig4a_n10_alpha_0")
+    runs = need(example, "damping_mu0.1", "damping_mu1", "damping_mu10", "fig4a_n10_alpha_0")
     static = runs[-1]["delta"]
     for r in runs[:-1]:
         assert r["delta"] == pytest.approx(static, rel=1e-6)

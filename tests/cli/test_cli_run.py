@@ -336,7 +336,7 @@ try:
     main(sys.argv[1:])
 except SystemExit as exc:
     code = exc.code or 0
-heavy = ("numpy", "numba", "scipy", "h5py", "catenet.studies", "catenet.sweep")
+heavy = ("numpy", "numba", "scipy", "h5py", "catenet.study", "benchmarks", "catenet.sweep")
 print("IMPORTED", *sorted(m for m in heavy if m in sys.modules))
 sys.exit(code)
 """
@@ -361,7 +361,7 @@ def test_help_imports_no_numpy_and_run_no_studies(tmp_path, write_case):
     assert imported_by("run", "--help") == []
     case = write_case(small_net(method="static"))
     modules = imported_by("run", case, "-o", tmp_path / "r.h5", "-q")
-    assert "numpy" in modules and "catenet.studies" not in modules
+    assert "numpy" in modules and "catenet.study" not in modules and "benchmarks" not in modules
     assert "catenet.sweep" not in modules
 
 

@@ -1,78 +1,125 @@
-"""Running a Markdown page of the documentation as a user would, top to bottom: a fenced
-block whose first line is ``# NAME.EXT`` (a case file, a net) is written to NAME.EXT;
-shell lines starting with ``$ `` run as subprocesses (a command whose next line shows
-``catenet: error: ...`` must fail with exit status 2 and that message, every other must
-succeed); ```python blocks are executed. All in one scratch directory holding a copy of
-configs/."""
+"""Running a Markdown page as written: the steps of its code blocks, in order.
+
+- a shell line starting with ``$ `` in a plain (or ``console``, ``bash``, ``sh``) code
+  block runs as a subprocess (shlex-split, no shell); when the next line shows
+  ``catenet: error: ...`` the command must fail with exit status 2 and that message,
+  otherwise it must succeed;
+- a ```python block is executed;
+- a block right after the line ``<!-- file: NAME -->`` is written to NAME (a case file the
+  page then runs);
+- ```toml blocks must parse (``toml_blocks``); ```text blocks are shown, never run.
+
+``run_page(path, directory)`` runs one page in ``directory`` (which holds a copy of
+configs/), as a user following the page would.
+"""
 
 from __future__ import annotations
 
 import os
 import re
 import shlex
-import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 BIN = Path(sys.executable).parent
-FILE = re.compile(r"^# ([\w.-]+\.\w+)\s*$")
+SHELLS = ("", "console", "bash", "sh")
+FILE = re.compile(r"^<!-- file: (\S+) -->$")
 
 
-def page_steps(page: Path) -> list[tuple[str, str, str | None]]:
-    """(kind, text, expected error or file name) for each step of ``page``, in order:
-    kind "file" (text: its content, third: its name), "shell" or "python"."""
-    steps = []
-    lines = page.read_text().splitlines()
-    fence = None
-    block: list[str] = []
+@dataclass(frozen=True)
+class Step:
+    kind: str  # "shell", "python" or "file"
+    text: str
+    error: str | None = None  # shell: the expected "catenet: error: ..." line
+    name: str | None = None  # file: where the block goes
+    line: int = 0
+
+
+def pages() -> list[Path]:
+    """The README and every page under docs/."""
+    return [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+
+
+def page_id(path: Path) -> str:
+    return str(path.relative_to(ROOT))
+
+
+def steps(path: Path) -> list[Step]:
+    """The page's steps, in order."""
+    out: list[Step] = []
+    lines = path.read_text(encoding="utf-8").splitlines()
+    fence, block, target, start = None, [], None, 0
     for i, line in enumerate(lines):
         if line.startswith("```"):
             if fence is None:
-                fence, block = line[3:].strip(), []
+                fence, block, start = line[3:].strip(), [], i + 1
+                previous = lines[i - 1] if i else ""
+                match = FILE.match(previous.strip())
+                target = match.group(1) if match else None
                 continue
-            named = FILE.match(block[0]) if block else None
-            if named:
-                steps.append(("file", "\n".join(block) + "\n", named.group(1)))
+            text = "\n".join(block) + "\n"
+            if target is not None:
+                out.append(Step("file", text, name=target, line=start))
             elif fence == "python":
-                steps.append(("python", "\n".join(block), None))
+                out.append(Step("python", text, line=start))
             fence = None
             continue
         if fence is None:
             continue
         block.append(line)
-        if fence in ("", "console", "bash", "sh") and line.startswith("$ "):
+        if target is None and fence in SHELLS and line.startswith("$ "):
             command = re.sub(r"\s+#.*$", "", line[2:]).strip()
             following = lines[i + 1] if i + 1 < len(lines) else ""
             error = following if following.startswith("catenet: error:") else None
-            steps.append(("shell", command, error))
-    return steps
+            out.append(Step("shell", command, error, line=i + 1))
+    return out
 
 
-def run_page(page: Path, tmp_path: Path, monkeypatch) -> list[tuple[str, str, str | None]]:
-    """Runs every step of ``page`` in ``tmp_path``; the steps, for the caller's checks."""
-    shutil.copytree(ROOT / "configs", tmp_path / "configs")
-    monkeypatch.chdir(tmp_path)
+def toml_blocks(path: Path) -> list[tuple[int, str]]:
+    """(line, text) of every ```toml block."""
+    out, fence, block, start = [], None, [], 0
+    for i, line in enumerate(path.read_text(encoding="utf-8").splitlines()):
+        if line.startswith("```"):
+            if fence is None:
+                fence, block, start = line[3:].strip(), [], i + 1
+                continue
+            if fence == "toml":
+                out.append((start, "\n".join(block) + "\n"))
+            fence = None
+            continue
+        if fence is not None:
+            block.append(line)
+    return out
+
+
+def run_page(path: Path, directory: Path) -> None:
+    """Runs every step of ``path`` in ``directory`` (the current directory meanwhile)."""
     env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
-    steps = page_steps(page)
-    for kind, text, extra in steps:
-        if kind == "file":
-            (tmp_path / extra).write_text(text)
-        elif kind == "python":
-            exec(compile(text, str(page), "exec"), {"__name__": page.stem})
+    where = page_id(path)
+    for step in steps(path):
+        if step.kind == "file":
+            target = directory / step.name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(step.text)
+            continue
+        if step.kind == "python":
+            code = compile(step.text, f"{where}:{step.line}", "exec")
+            exec(code, {"__name__": "docs"})
+            continue
+        done = subprocess.run(
+            shlex.split(step.text),
+            cwd=directory,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
+        context = f"{where}:{step.line}: $ {step.text}\n{done.stdout}\n{done.stderr}"
+        if step.error is None:
+            assert done.returncode == 0, context
         else:
-            done = subprocess.run(
-                shlex.split(text),
-                cwd=tmp_path,
-                env=env,
-                capture_output=True,
-                text=True,
-                timeout=600,
-            )
-            if extra is None:
-                assert done.returncode == 0, f"$ {text}\n{done.stdout}\n{done.stderr}"
-            else:
-                assert done.returncode == 2, f"$ {text}\n{done.stdout}\n{done.stderr}"
-                assert extra in done.stderr, f"$ {text}\n{done.stderr}"
-    return steps
+            assert done.returncode == 2, context
+            assert step.error in done.stderr, context

@@ -5,21 +5,25 @@ from __future__ import annotations
 
 import h5py
 import numpy as np
-from pages import ROOT, page_steps, run_page
+import shutil
+
+from pages import ROOT, run_page, steps
 
 PAGE = ROOT / "docs" / "guide" / "loads.md"
 
 
 def test_the_page_has_its_examples():
-    steps = page_steps(PAGE)
-    files = {extra for kind, _, extra in steps if kind == "file"}
+    found = steps(PAGE)
+    files = {s.name for s in found if s.kind == "file"}
     assert {"strip.toml", "regions.toml", "missed.toml", "net.obj", "from_obj.toml"} <= files
-    errors = [extra for kind, _, extra in steps if kind == "shell" and extra]
+    errors = [s.error for s in found if s.kind == "shell" and s.error]
     assert len(errors) == 3
 
 
 def test_the_page_runs_as_written(tmp_path, monkeypatch):
-    run_page(PAGE, tmp_path, monkeypatch)
+    shutil.copytree(ROOT / "configs", tmp_path / "configs")
+    monkeypatch.chdir(tmp_path)
+    run_page(PAGE, tmp_path)
     with h5py.File(tmp_path / "out" / "hypar_roof.h5") as h5:
         reaction = h5["result/reaction"][:]
         assert h5["result"].attrs["converged"]

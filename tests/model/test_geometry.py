@@ -1,4 +1,4 @@
-"""The builders: the paper's square net (SPEC section 2), single cables, graphs."""
+"""The builders: the paper's square net (contract §2), single cables, graphs."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ MAT = cn.Material.from_E(10e6, radius=0.01, density=1000.0)
 
 
 def cable_lines(n, alpha, L):
-    """The 2m lines of SPEC section 2 as (point, direction) pairs."""
+    """The 2m lines of contract §2 as (point, direction) pairs."""
     m = n // 2
     d = L / (m + 1)
     u = np.array([math.cos(alpha), math.sin(alpha)])

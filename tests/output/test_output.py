@@ -1,4 +1,4 @@
-"""The result file (SPEC section 5), its XDMF sidecar, and what survives crashes and full
+"""The result file (contract §5), its XDMF sidecar, and what survives crashes and full
 disks."""
 
 from __future__ import annotations
@@ -442,20 +442,3 @@ def test_spares_of_a_killed_run_are_removed_by_the_next(tmp_path):
         assert not (tmp_path / ".again.h5.prev").exists()
         w.frame(0.0, moved(scene, 0))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.h5", "again.xdmf"]
-
-
-def test_the_flush_studys_per_frame_writer_stores_what_the_writer_stores(tmp_path):
-    """``catenet bench flush`` compares the writer with catenet's earlier per-frame SWMR
-    writer: both store the same frames, bit for bit."""
-    from catenet.studies.bench.flush import swmr_writer_class
-
-    scene = make_scene()
-    rng = np.random.default_rng(3)
-    frames = [(0.1 * k, moved(scene, k) + rng.random((scene.net.n_nodes, 3))) for k in range(5)]
-    for name, cls in (("old.h5", swmr_writer_class()), ("new.h5", ResultWriter)):
-        with cls(tmp_path / name, scene, every=1) as w:
-            for t, x in frames:
-                w.frame(t, x, 2 * x)
-    with h5py.File(tmp_path / "new.h5", "r") as new, open_result(tmp_path / "old.h5") as old:
-        for name in ("time", "x", "v", "tension"):
-            np.testing.assert_array_equal(new["trajectory"][name], old["trajectory"][name])

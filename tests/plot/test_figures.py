@@ -23,6 +23,12 @@ def run(tmp_path, name, *overrides):
     return read_result(out)
 
 
+@pytest.fixture
+def example_result(example):
+    """``example_result(name)``: the example's result file read (run once per session)."""
+    return lambda name: read_result(example(name))
+
+
 def panel(fig, title_start):
     return next(ax for ax in fig.axes if ax.get_title().startswith(title_start))
 
@@ -34,8 +40,8 @@ def panel(fig, title_start):
         ("midpoint_load", "load F/EA [-]", "Eq. 17"),
     ],
 )
-def test_paper_cases_draw_the_papers_axes_and_closed_form(tmp_path, name, xlabel, closed):
-    res = run(tmp_path, name)
+def test_paper_cases_draw_the_papers_axes_and_closed_form(example_result, name, xlabel, closed):
+    res = example_result(name)
     curve = paper_curve(res)
     assert curve is not None
     fig = figure(res)
@@ -72,7 +78,7 @@ def colorbar(fig):
     return next(ax for ax in fig.axes if ax.get_label() == "<colorbar>")
 
 
-def test_the_colour_range_follows_the_data(tmp_path):
+def test_the_colour_range_follows_the_data(tmp_path, example_result):
     """A prestressed net under a small load: tensions of about 25 kN vary by little; the
     colour bar spans their range, not 0 to the maximum."""
     res = run(
@@ -86,7 +92,7 @@ def test_the_colour_range_follows_the_data(tmp_path):
     lo, hi = colorbar(figure(res)).get_ylim()
     assert lo == pytest.approx(res.tension.min()) and hi == pytest.approx(res.tension.max())
     assert lo > 20_000
-    uniform = run(tmp_path, "midpoint_load")  # every edge carries the same tension
+    uniform = example_result("midpoint_load")  # every edge carries the same tension
     lo, hi = colorbar(figure(uniform)).get_ylim()
     assert lo < uniform.tension.min() <= uniform.tension.max() < hi
 
@@ -109,12 +115,12 @@ def test_the_undeformed_net_is_drawn_above_the_grid_and_scaled_deformation(tmp_p
         figure(res, scale=0.0)
 
 
-def test_plot_command_takes_a_scale(tmp_path):
+def test_plot_command_takes_a_scale(tmp_path, example_result):
     from click.testing import CliRunner
 
     from catenet.cli import main
 
-    res = run(tmp_path, "midpoint_load")
+    res = example_result("midpoint_load")
     out = tmp_path / "m.png"
     r = CliRunner().invoke(main, ["plot", str(res.path), "-o", str(out), "--scale", "2"])
     assert r.exit_code == 0, r.output and out.exists()
@@ -122,7 +128,7 @@ def test_plot_command_takes_a_scale(tmp_path):
 
 
 def test_sweep_figure_curves_differ_in_colour_marker_and_line():
-    from catenet.studies.square_net.figures import COLOURS, style
+    from catenet.study.figures import COLOURS, style
 
     styles = [style(k) for k in range(6)]
     for a, b in zip(styles, styles[1:], strict=False):

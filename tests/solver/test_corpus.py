@@ -3,7 +3,7 @@
 Each model is a well-posed structure (supported, stable, prestress in equilibrium with
 the given geometry, loads a designer would apply) written from the README alone, at
 catenet's default solver settings. So `catenet run` must exit 0, and the converged state
-must satisfy global equilibrium: reactions + applied loads + contact forces = 0 (SPEC
+must satisfy global equilibrium: reactions + applied loads + contact forces = 0 (contract
 sections 5 and 7).
 
 Tolerance of the balance, TOL = 1e-6 of the force scale (``corpus.check_equilibrium``: the

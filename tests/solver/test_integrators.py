@@ -437,7 +437,7 @@ def test_settling_time_follows_one_over_mu_with_newmark_only():
     """The damping study: with newmark the settling times of mu = 1 and 10 are about ten
     times apart (physics damps), with implicit Euler they are not (it damps
     numerically). (mu = 0.1 settles after about 250 s, 10^4 steps: see the benchmark
-    study ``catenet bench integrators``.)"""
+    study ``python -m benchmarks integrators``.)"""
     newmark = [settling_time(mu, "newmark") for mu in ("1", "10")]
     assert 7.0 < newmark[0] / newmark[1] < 13.0, newmark
     euler = [settling_time(mu, "implicit_euler") for mu in ("0.1", "1", "10")]

@@ -1,17 +1,16 @@
-"""Fast subset of the numerical-stability stress test (``catenet.studies.bench.stress``).
+"""Fast subset of the numerical-stability stress test (``tests/stress_matrix.py``).
 
 Every scene must end in a right answer: a converged state that passes its check (Eq. 17,
 the exact discrete chain, equilibrium recomputed from the answer, static = dynamic) or a
 clear catenet error where that is right; never another exception, never a NaN. No timing
-assertions. The full matrix runs with ``catenet bench stress``.
+assertions. The full matrix runs with ``python -m benchmarks stress``.
 """
 
 from __future__ import annotations
 
 import pytest
-
-from catenet.studies.bench import stress
-from catenet.studies.bench.stress_scenes import equilibrium_error
+import stress_matrix as stress
+from scenes import equilibrium_error, midpoint_cable
 
 
 def _params():
@@ -21,7 +20,7 @@ def _params():
 
 @pytest.fixture(scope="module", autouse=True)
 def _one_thread():
-    from catenet.studies.bench.common import set_threads
+    from catenet.solver.threads import set_threads
 
     set_threads(1)
 
@@ -42,7 +41,6 @@ def test_quick_subset_covers_every_group():
 def test_equilibrium_error_sees_a_wrong_state():
     """The check is not vacuous: a state moved off the equilibrium fails it."""
     from catenet.solver.static import solve_static
-    from catenet.studies.bench.common import midpoint_cable
 
     net, loads, mid = midpoint_cable(10.0, nodes=11)
     res = solve_static(net, loads)

@@ -311,7 +311,7 @@ def test_save_runs_keeps_each_result_file(small_case, reference, tmp_path):
 
 
 def test_the_fit_recovers_a_known_D():
-    from catenet.studies.square_net import f_alpha, fit_scaling
+    from catenet.study import f_alpha, fit_scaling
 
     rng = np.random.default_rng(1)
     n, alpha, F = np.meshgrid(
@@ -333,7 +333,7 @@ def test_the_fit_recovers_a_known_D():
 
 
 def test_figures_and_report_of_a_small_sweep(small_case, tmp_path):
-    from catenet.studies.square_net import plot_sweep
+    from catenet.study import plot_sweep
 
     spec = sw.load_sweep(small_case)
     sw.run_sweep(spec, tmp_path / "s", workers=1)
@@ -447,7 +447,7 @@ def test_the_paper_study_as_documented(tmp_path):
     390 rows on 2 workers, the figures, and the numbers the README reports: the collapse
     onto delta_bar = C f(alpha) (F_bar/n)^beta holds to 1 % RMS with beta = 1/3 and
     D = 1.21 (the paper: 1.31)."""
-    from catenet.studies.square_net import fit_scaling, load_data
+    from catenet.study import fit_scaling, load_data
 
     out = tmp_path / "paper"
     result = CliRunner().invoke(sweep_command, [str(PAPER), "-o", str(out), "-j", "2", "--plot"])

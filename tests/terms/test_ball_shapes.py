@@ -19,8 +19,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from contact_cases import catch_case
 from meshes import CUBE_T, CUBE_V, icosphere, write_stl
-from test_bodies import catch_case
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.contact import barrier

@@ -12,45 +12,12 @@ import math
 
 import numpy as np
 import pytest
+from contact_cases import G, catch_case
 
 from catenet.case import build, parse_case
 from catenet.solver.path import Settings, solve
 from catenet.terms import Stretch, check_derivatives
 from catenet.terms.body import Ball, Guide, Path
-
-G = [0.0, 0.0, -9.81]
-
-
-def catch_case(coarse: bool = False, **solver) -> dict:
-    """The paper's square net (Sec. 3.2, n = 22, alpha = pi/4) and a 10 kg ball of radius
-    0.15 m thrown down onto it at 1 m/s from 0.15 m above (configs/contact/sphere_catch.toml
-    closer: a ball resting where it cannot roll off, see there). ``coarse``: n = 10 and
-    5 cm edges, for runs that need not come to rest."""
-    geometry = {"n": 10, "edge_length": 0.05} if coarse else {}
-    return {
-        "title": "square net catching a ball",
-        "geometry": {
-            "kind": "square_net",
-            "n": 22,
-            "alpha": math.pi / 4,
-            "size": 1.0,
-            "edge_length": 0.02,
-            **geometry,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": G},
-        "obstacle": [
-            {
-                "kind": "sphere",
-                "center": [0.0, 0.0, 0.3],
-                "radius": 0.15,
-                "mass": 10.0,
-                "velocity": [0.0, 0.0, -1.0],
-                "distance": 0.005,
-            }
-        ],
-        "solver": {"method": "dynamic", "dt": 0.005, "damping": 0.0, "t_end": 0.4, **solver},
-    }
 
 
 def ball_of(scene) -> Ball:

@@ -18,10 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
+from contact_cases import block
 
 import catenet as cn
-from catenet.kernels.contact import barrier
 from catenet.model.net import Loads, Net
 from catenet.solver.path import Problem, Settings, Start, solve
 from catenet.terms import check_derivatives
@@ -115,33 +114,6 @@ def test_bad_friction_arguments_raise():
 
 
 # --------------------------------------------------------------------------- a block
-
-KAPPA, DHAT = 1e4, 1e-2
-
-
-def resting_gap(force: float) -> float:
-    """The gap at which the plane barrier carries ``force``."""
-    return brentq(lambda d: -KAPPA * barrier(d, DHAT)[1] - force, 1e-12, DHAT * (1 - 1e-12))
-
-
-def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0, obstacle=None):
-    """Node 1 resting on the plane z = 0 (or on ``obstacle``, a term on node 1 whose
-    surface passes there) under ``force`` (3,), tied to support 0 one metre away by a
-    bilateral spring of stiffness ``spring`` (None: a slack tie) that moves ``pull``
-    away from it."""
-    gap = resting_gap(-force[2])
-    tie = dict(EA=spring, tension_only=False) if spring else dict(EA=1.0, rest_length=20.0)
-    net = Net.from_arrays(
-        [[-1.0, 0, gap], [0.0, 0, gap]], [[0, 1]], fixed=[0], point_mass=[0, mass], **tie
-    )
-    f = np.zeros((2, 3))
-    f[1] = force
-    move = np.zeros((2, 3))
-    move[0, 0] = -pull
-    loads = Loads(force=f, support_displacement=move if pull else None)
-    if obstacle is None:
-        obstacle = Plane(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
-    return Problem(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
 
 
 @pytest.mark.parametrize("steps", [1, 4])

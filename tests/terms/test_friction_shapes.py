@@ -10,9 +10,8 @@ import math
 
 import numpy as np
 import pytest
+from contact_cases import DHAT, KAPPA, block, moving_shapes, near
 from meshes import CUBE_T, CUBE_V
-from test_friction import DHAT, KAPPA, block
-from test_moving_shapes import moving_shapes, near
 
 from catenet.case import build, parse_case
 from catenet.solver.path import Settings, solve

@@ -9,8 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from contact_cases import flat_case, moving_shapes, near
 from meshes import CUBE_T, CUBE_V
-from test_shapes import flat_case
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.errors import ConvergenceError
@@ -18,39 +18,7 @@ from catenet.model.histories import History
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.moving import Moving
-from catenet.terms.shapes import Box, Capsule, Mesh, rotation
-
-V = [0.3, -0.2, 0.5]
-W = [0.4, 1.1, -0.7]
-
-
-def moving_shapes(dhat=0.05, n=30, history=None):
-    nodes = np.arange(n)
-    R = rotation([1.0, 2.0, 3.0], 0.7)
-    box = Box(nodes, [0.1, 0.0, 0.0], [0.5, 0.3, 0.2], R, kappa=30.0, dhat=dhat)
-    capsule = Capsule(nodes, [0, 0, 0], [1.0, 0.5, 0.0], 0.3, kappa=30.0, dhat=dhat)
-    cube = Mesh(nodes, CUBE_V - 0.5, CUBE_T, kappa=30.0, dhat=dhat)
-    return {
-        "box": Moving(box, [0.1, 0, 0], V, W, history, reach=0.7),
-        "capsule": Moving(capsule, [0.5, 0.25, 0], V, W, history, reach=0.9),
-        "mesh": Moving(cube, [0, 0, 0], V, W, history, reach=0.9),
-    }
-
-
-def near(term, rng, n, dhat):
-    """n points at gaps between 0.05 and 1.4 dhat from the moving term where it is now."""
-    out = []
-    probe = Moving.__new__(Moving)
-    probe.__dict__.update(term.__dict__)
-    shape = type(term.shape).__new__(type(term.shape))
-    shape.__dict__.update(term.shape.__dict__)
-    shape.nodes = np.zeros(1, dtype=np.int64)
-    probe.shape, probe.nodes = shape, shape.nodes
-    while len(out) < n:
-        p = term.world(rng.uniform(-1.2, 1.7, (1, 3)))
-        if 0.05 * dhat < probe.gap(p)[0] < 1.4 * dhat:
-            out.append(p[0])
-    return np.array(out)
+from catenet.terms.shapes import Box, rotation
 
 
 @pytest.mark.parametrize("kind", ["box", "capsule", "mesh"])
@@ -268,7 +236,7 @@ def test_the_capture_scene_with_a_tumbling_box_keeps_every_node_outside(dt):
     """The capture scene of tests/terms/test_shapes.py (the box 3 mm below the net's middle),
     the box tumbling at 1.6 rad/s: at every step size every accepted state is finite,
     outside the box where it is at that time, and the net touches it."""
-    from test_shapes import capture_near
+    from contact_cases import capture_near
 
     data = capture_near(dt)
     data["obstacle"][0]["angular_velocity"] = [0.8, -0.6, 1.2]

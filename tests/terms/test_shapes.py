@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from contact_cases import CAPTURE, capture_near, flat_case
 from meshes import CUBE_T, CUBE_V, icosphere, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
@@ -258,24 +259,6 @@ def test_a_taut_cable_over_a_capsule_wraps_on_a_circle():
     )
 
 
-def flat_case(dhat=0.01, **solver):
-    return {
-        "title": "a net pressed onto a box",
-        "geometry": {"kind": "square_net", "n": 10, "alpha": 0.3, "size": 1.0, "edge_length": 0.05},
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"pressure": 300.0},
-        "obstacle": [
-            {
-                "kind": "box",
-                "center": [0.0, 0.0, -0.35],
-                "half_size": [0.25, 0.2, 0.3],
-                "distance": dhat,
-            }
-        ],
-        "solver": solver or {"method": "static", "steps": 4},
-    }
-
-
 def test_a_net_pressed_onto_a_box_face_lies_flat_on_it():
     r, scene, (box,), gaps = run(flat_case())
     assert r.converged and min(gaps) > 0
@@ -430,8 +413,6 @@ def test_a_mesh_path_is_relative_to_the_case_file_and_reads_back(tmp_path, monke
 
 # --------------------------------------------------------------------------- the capture scene
 
-CAPTURE = Path(__file__).parents[2] / "configs" / "contact" / "tether_capture.toml"
-
 
 @pytest.mark.slow
 def test_the_capture_example_runs_short_and_makes_a_figure_and_a_trajectory(tmp_path):
@@ -473,27 +454,6 @@ def test_the_capture_example_runs_short_and_makes_a_figure_and_a_trajectory(tmp_
     corners = box.world(box.shape.center + (signs * box.shape.half) @ box.shape.axes.T)
     got = np.concatenate(drawn.polys)
     assert all(np.min(np.linalg.norm(got - c, axis=1)) < 1e-9 for c in corners)
-
-
-def capture_near(dt: float) -> dict:
-    """The capture scene with the box (level) 3 mm below the net's middle, which is thrown
-    at it too: contact within the first 0.6 ms, so that short runs at every step size
-    hit."""
-    import tomllib
-
-    from catenet.case import load_case
-
-    data = tomllib.loads(CAPTURE.read_text())
-    data["geometry"]["file"] = str(CAPTURE.parent / data["geometry"]["file"])
-    box = data["obstacle"][0]
-    box["angle"] = 0.0  # its top face level, 3 mm below the middle node
-    box.pop("angular_velocity", None)  # and staying so (test_moving_shapes.py tumbles it)
-    box["center"] = [0.0, 0.0, -box["half_size"][2] - 0.003]
-    data["mass"].append({"node": "middle", "velocity": [0.0, 0.0, -5.0]})
-    data["solver"].update(dt=dt, t_end=2 * max(dt, 2e-3))
-    data.pop("output")
-    assert load_case(CAPTURE).obstacles  # the file itself reads
-    return data
 
 
 @pytest.mark.parametrize("dt", [1e-5, 1e-4, 1e-3, 1e-2, 1e-1])

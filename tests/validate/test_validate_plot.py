@@ -89,7 +89,7 @@ def test_table_helpers():
 
 
 def write_result(path, *, frames=1, method="static", with_result=True):
-    """A small result file in the SPEC §5 layout: a 21-node cable sagging into a
+    """A small result file in the contract §5 layout: a 21-node cable sagging into a
     parabola, every frame a little lower."""
     n = 21
     s = np.linspace(-0.5, 0.5, n)
@@ -187,9 +187,7 @@ def test_plot_directory_goes_to_the_sweep_figures(tmp_path, monkeypatch):
         calls.append((directory, out))
         return [tmp_path / "a.png", tmp_path / "b.png"]
 
-    monkeypatch.setitem(
-        sys.modules, "catenet.studies.square_net", types.SimpleNamespace(plot_sweep=plot_sweep)
-    )
+    monkeypatch.setitem(sys.modules, "catenet.study", types.SimpleNamespace(plot_sweep=plot_sweep))
     res = invoke("plot", str(tmp_path))
     assert res.exit_code == 0, res.output
     assert calls == [(tmp_path, None)]

@@ -320,7 +320,7 @@ class CableMesh:
 
 
 def split_count(length: np.ndarray, h: float | None) -> np.ndarray:
-    """Edges per piece: as the square net's pieces (SPEC section 2); one without h."""
+    """Edges per piece: as the square net's pieces (contract §2); one without h."""
     if h is None:
         return np.ones(len(length), dtype=np.int64)
     return np.maximum(np.ceil(length / h - 1e-9), 1).astype(np.int64)

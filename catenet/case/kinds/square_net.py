@@ -1,4 +1,4 @@
-"""geometry.kind = "square_net": the paper's square net (SPEC section 2)."""
+"""geometry.kind = "square_net": the paper's square net (contract §2)."""
 
 from __future__ import annotations
 
@@ -17,13 +17,11 @@ from catenet.model import builders as geo
 
 @dataclass(frozen=True)
 class SquareNetConfig(GeometryConfig):
-    """The paper's square net (SPEC section 2); ``prestrain`` shortens every rest length
+    """The paper's square net (contract §2); ``prestrain`` shortens every rest length
     to initial / (1 + prestrain)."""
 
     kind: ClassVar[str] = "square_net"
-    summary: ClassVar[str] = (
-        "the paper's square net (SPEC section 2), both ends of every cable pinned"
-    )
+    summary: ClassVar[str] = "the paper's square net (Sec. 3.2), both ends of every cable pinned"
     node_names: ClassVar[tuple[str, ...]] = ("center",)
     default_supports: ClassVar[str] = "both ends of every cable; supports.fixed sets others"
     pressure: ClassVar[bool] = True

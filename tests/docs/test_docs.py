@@ -1,0 +1,107 @@
+"""Every command and every Python snippet of the README and of every page under docs/
+runs as written, each page in a scratch directory of its own that holds a copy of configs/
+(later snippets of a page see the files earlier ones wrote, as a user following the page
+would). See tests/docs/pages.py for what counts as a step. Pages whose runs take
+long (sweeps, dynamic runs, the examples) are marked slow.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import tomllib
+
+import pytest
+from pages import ROOT, page_id, pages, run_page, steps, toml_blocks
+
+# Pages cheap enough for every test run (a few catenet commands each).
+FAST = {
+    "README.md",
+    "docs/getting-started.md",
+    "docs/howto/guyed-mast.md",
+    "docs/howto/mooring-line.md",
+    "docs/reference/errors.md",
+    "docs/performance.md",
+}
+# What a page's run must leave behind, beyond its commands succeeding.
+LEAVES = {
+    "README.md": ["out/catenary.png", "out/saddle.toml"],
+    "docs/validation.md": ["out/paper/report.md"],
+    "docs/howto/cable-roof.md": ["out/snow.png"],
+}
+
+
+# Pages with a test of their own, which runs them and checks what they leave.
+OWN = {"docs/guide/loads.md", "docs/guide/modes.md"}
+
+
+def params():
+    for path in pages():
+        name = page_id(path)
+        if name in OWN:
+            continue
+        marks = [] if name in FAST else [pytest.mark.slow]
+        yield pytest.param(path, id=name, marks=marks)
+
+
+def test_the_pages_have_steps():
+    kinds = [s.kind for path in pages() for s in steps(path)]
+    assert kinds.count("shell") >= 10 and kinds.count("python") >= 3
+    readme = [s.kind for s in steps(ROOT / "README.md")]
+    assert readme.count("shell") >= 4 and readme.count("python") >= 1
+    assert set(FAST) | set(LEAVES) <= {page_id(p) for p in pages()}
+
+
+@pytest.mark.parametrize("path", [p for p in pages() if toml_blocks(p)], ids=page_id)
+def test_every_toml_block_parses(path):
+    for line, text in toml_blocks(path):
+        try:
+            tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            pytest.fail(f"{page_id(path)}:{line}: {exc}")
+
+
+@pytest.mark.parametrize("path", pages(), ids=page_id)
+def test_every_link_to_a_file_of_the_repository_resolves(path):
+    """Relative links and images point at files that exist (the site build checks the
+    pages under docs/ too; this also covers the README)."""
+    text = path.read_text(encoding="utf-8")
+    for target in re.findall(r"\]\(([^)\s]+)\)", text):
+        if re.match(r"[a-z]+:", target) or target.startswith("#"):
+            continue
+        where = (path.parent / target.split("#")[0]).resolve()
+        assert where.exists(), f"{page_id(path)}: link to {target}: no such file"
+
+
+@pytest.mark.parametrize("path", list(params()))
+def test_page_runs_as_written(path, tmp_path, monkeypatch):
+    shutil.copytree(ROOT / "configs", tmp_path / "configs")
+    monkeypatch.chdir(tmp_path)
+    run_page(path, tmp_path)
+    for left in LEAVES.get(page_id(path), []):
+        assert (tmp_path / left).exists(), left
+
+
+@pytest.mark.parametrize("name", ["Makefile", ".ci/run"])
+def test_setup_files_do_what_the_quick_start_says(name):
+    text = (ROOT / name).read_text()
+    if name == "Makefile":
+        assert re.search(r"^run:.*\n\t.*catenet run$", text, re.M)
+        assert re.search(r"^test:.*\n\t.*pytest", text, re.M)
+        assert "-m venv" in text
+    else:
+        assert "make test" in text
+
+
+@pytest.mark.parametrize(
+    "path", sorted((ROOT / "docs" / "examples").glob("[!i]*.md")), ids=lambda p: p.stem
+)
+def test_an_example_page_shows_its_case_file_as_it_is(path):
+    """Each example page names its case in configs/, shows that file unchanged and the
+    figure of it."""
+    text = path.read_text(encoding="utf-8")
+    (name,) = re.findall(r"^`(configs/[^`]+\.toml)`: ", text, re.M)
+    (_, block), *_ = toml_blocks(path)
+    assert block.rstrip() == (ROOT / name).read_text().rstrip()
+    (figure,) = re.findall(r"!\[[^\]]*\]\(([^)]+\.png)\)", text)
+    assert (path.parent / figure).exists()
