@@ -11,7 +11,7 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.model.net import Loads, Net
 from catenet.solver.linear import LinearSolver, make_solver
-from catenet.solver.newton import Potential
+from catenet.solver.potential import Potential
 from catenet.solver.system import System
 from catenet.terms import Stretch, Term
 

@@ -168,8 +168,8 @@ def test_a_failed_run_keeps_an_equilibrium(tmp_path, write_case):
     case = load_case(small_case)
     scene = build(case)
     ws = Workspace(scene.net, terms=scene.terms)
-    _, g, scale, floor, _ = ws.potential(scene.loads, factor).evaluate(x)
-    assert np.linalg.norm(g) <= max(case.solver.rtol * scale, 10 * floor)
+    ev = ws.potential(scene.loads, factor).evaluate(x)
+    assert np.linalg.norm(ev.g) <= max(case.solver.rtol * ev.scale, 10 * ev.floor)
 
 
 def test_contact_forces_close_the_equilibrium_of_the_net_on_a_sphere(tmp_path):
