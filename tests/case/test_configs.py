@@ -52,8 +52,8 @@ def run_config(path, tmp_path) -> dict:
     assert a["converged"] and a["delta"] > 0
     check_xdmf(out.with_suffix(".xdmf"))
     return {
-        "delta": res.stats["delta"],
-        "L": res.stats["size"],
+        "delta": res.report.delta,
+        "L": res.report.size,
         "time": res.time,
         "t_end": case.solver.t_end,
         "times": times,

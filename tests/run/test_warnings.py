@@ -111,7 +111,7 @@ def test_strain_beyond_the_linear_law_is_warned_about(tmp_path, write_case, capl
     assert result.converged and result.max_strain > 1e3
     (msg,) = [m for m in messages(caplog) if "material law's range" in m]
     assert "linear law (meant for strains <= 0.05)" in msg and "neo_hookean" in msg
-    assert result.stats["strain_warning"] == msg
+    assert result.report.strain_warning == msg
     r = invoke("run", write_case(STATIC), "-o", tmp_path / "c.h5", "--set", "load.pressure=1e9")
     assert r.exit_code == 0
     assert "beyond the material law's range" in r.stdout and "WARNING" in r.stderr
@@ -122,7 +122,7 @@ def test_small_strain_is_not_warned_about(tmp_path, write_case, caplog):
     with caplog.at_level(logging.WARNING):
         result = run_case(case, tmp_path / "small.h5")
     assert 0 < result.max_strain < 0.05
-    assert not messages(caplog) and result.stats["strain_warning"] == ""
+    assert not messages(caplog) and result.report.strain_warning == ""
 
 
 def test_each_law_has_its_own_range():
@@ -195,7 +195,7 @@ def test_trajectory_estimate_bounds_the_file(tmp_path, write_case):
         stored = sum(g[k][:frames].nbytes for k in ("x", "v", "tension", "time"))
     assert est.frames == 1 + math.ceil(50 / 2) == frames  # t_end / dt / every, + frame 0
     assert est.bytes == stored
-    assert result.stats["trajectory_bytes"] == est.bytes
+    assert result.report.trajectory_bytes == est.bytes
     static = case_of(write_case, STATIC, "solver.steps=7", "output.every=3")
     assert advice.trajectory(static, build(static).net).frames == 3  # 3, 6 and 7
     # newmark files keep the scheme's accelerations too
