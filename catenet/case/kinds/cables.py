@@ -35,8 +35,6 @@ from catenet.case.keys import (
     text,
 )
 from catenet.case.material import MaterialConfig, parse_material
-from catenet.errors import ConfigError
-from catenet.model.laws import LAWS, TABLE, Law
 
 #: How close (as a fraction of a segment) a load position must be to a node to use it.
 AT_TOL = 1e-9
@@ -429,45 +427,6 @@ def cable_materials(ck: Checker, base: Any, cables: Sequence[CableConfig]) -> li
     return out
 
 
-def rest_from_prestress(law, tension, EA, length, what: str) -> np.ndarray:
-    """Rest lengths l0 = |e| / (1 + eps) at which each edge carries ``tension`` (as
-    ``catenet.case.scene._with_law``); ConfigError naming ``what(k)`` for an edge that
-    cannot (NaN strain, or l0 not positive)."""
-    eps = law.strain_for_tension(tension, EA)
-    bad = np.flatnonzero(~(np.isfinite(eps) & (eps > -1.0)))
-    if bad.size:
-        k = int(bad[0])
-        ids = {info.id: name for name, info in LAWS.items()}
-        t = float(np.broadcast_to(tension, eps.shape)[k])
-        only = ", tension-only" if law.tension_only[k] else ""
-        raise ConfigError(
-            f"{what(k)} = {t!r}: cannot be carried under law {ids[int(law.kind[k])]!r} "
-            f"(EA = {EA[k]:.6g} N{only}): its rest length would not be positive, or the law "
-            "never reaches that tension (a compression needs tension_only = false)"
-        )
-    return length / (1.0 + eps)
-
-
-def concat_laws(laws: list[Law]) -> Law:
-    """One law of the edges of several, their tables stacked (a table edge's first-row
-    parameter shifted to where its rows went)."""
-    tables, offset = [], 0
-    params = []
-    for lw in laws:
-        p = lw.params.copy()
-        if np.any(lw.kind == TABLE):
-            p[lw.kind == TABLE, 0] += offset
-            tables.append(lw.table)
-            offset += len(lw.table)
-        params.append(p)
-    return Law(
-        kind=np.ascontiguousarray(np.concatenate([lw.kind for lw in laws])),
-        params=np.ascontiguousarray(np.concatenate(params)),
-        tension_only=np.ascontiguousarray(np.concatenate([lw.tension_only for lw in laws])),
-        table=np.ascontiguousarray(np.concatenate(tables)) if tables else np.zeros((2, 3)),
-    )
-
-
 def line_force(net, on: np.ndarray, force, out: np.ndarray | None = None) -> np.ndarray:
     """Nodal forces (N, 3) of a force per unit unstressed length [N/m] along the edges
     ``on`` (a mask), lumped as the self-weight is: half of each edge's f l0 to each end;
@@ -487,11 +446,9 @@ __all__ = [
     "Overrides",
     "cable_materials",
     "cable_mesh",
-    "concat_laws",
     "estimate",
     "line_force",
     "merged_material",
     "polylines",
-    "rest_from_prestress",
     "sets_key",
 ]
