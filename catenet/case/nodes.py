@@ -23,7 +23,9 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
     if isinstance(load, LoadConfig):
         refs += [p.node for p in load.points if p.node is not None]
-        if any(p.cable is not None for p in (*load.points, *load.lines)):
+        if any(p.cable is not None for p in load.points) or any(
+            ln.cable is not None for ln in load.lines
+        ):
             return True
     return any(isinstance(r, int) for r in refs) or bool(
         isinstance(supports, SupportsConfig) and supports.moves
@@ -125,7 +127,9 @@ def _unknown_name(path: str, ref: str, topo: Topology) -> str:
     )
 
 
-def _known_cable(ck: Checker, path: str, name: str, g: GeometryConfig, topo: Topology) -> None:
+def _known_cable(
+    ck: Checker, path: str, name: str | None, g: GeometryConfig, topo: Topology
+) -> None:
     """A problem unless ``name`` is one of the geometry's cables."""
     if name in topo.cables:
         return
@@ -135,7 +139,7 @@ def _known_cable(ck: Checker, path: str, name: str, g: GeometryConfig, topo: Top
             "cables are a graph's [[geometry.cable]])"
         )
         return
-    hint = difflib.get_close_matches(name, topo.cables, n=1)
+    hint = difflib.get_close_matches(str(name), topo.cables, n=1)
     mean = f"; did you mean {hint[0]!r}?" if hint else ""
     ck.add(
         f"{path} = {name!r}: no such cable (accepted: {', '.join(map(repr, topo.cables))}){mean}"

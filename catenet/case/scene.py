@@ -103,7 +103,10 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
     if case.geometry.pressure and ld.pressure != 0.0:
         target(None)[:] += geo.pressure_force(net, ld.pressure, size)
     for k, pt in enumerate(ld.points):
-        nodes = (built.at_nodes[k],) if pt.cable is not None else expand(pt.node, names, sets)
+        if pt.cable is not None or pt.node is None:  # a position along a cable
+            nodes: tuple[int, ...] = (built.at_nodes[k],)
+        else:
+            nodes = expand(pt.node, names, sets)
         for i in nodes:
             if not 0 <= i < net.n_nodes:
                 raise ConfigError(

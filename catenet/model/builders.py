@@ -25,7 +25,7 @@ def _check_size(nodes: float, edges: float, where: str) -> None:
             f"{MAX_NODES:.0e}"
         )
     ok, need, total = fits(nodes, edges)
-    if not ok:
+    if not ok and total is not None:  # (not ok: the machine's memory is known)
         raise ConfigError(
             f"{where}: the net could have about {nodes:.2g} nodes and its solve need about "
             f"{need / 2**30:.2g} GiB; this machine has {total / 2**30:.0f} GiB"
@@ -198,15 +198,15 @@ def square_net(
     for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans, strict=True)):
         family_a = line_id < m
         k = line_id if family_a else line_id - m
-        # Break points: (t, node id or None for an end still to be made).
-        breaks: list[tuple[float, int | None]] = []
+        # Break points: (t, node id).
+        breaks: list[tuple[float, int]] = []
         for other in range(m):
             t = -c[other] if family_a else c[other]
             if t0 - tol <= t <= t1 + tol:
                 node = crossing_node(k, other) if family_a else crossing_node(other, k)
                 breaks.append((min(max(t, t0), t1), node))
         breaks.sort()
-        ends = []
+        ends: list[int] = []
         for t_end in (t0, t1):
             near = [b for b in breaks if abs(b[0] - t_end) <= tol]
             if near:

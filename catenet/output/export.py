@@ -154,9 +154,9 @@ def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames
         }
         if f.v is not None:
             point_data["velocity"] = f.v
-        if getattr(f, "reaction", None) is not None:
+        if f.reaction is not None:
             point_data["reaction"] = f.reaction
-        if getattr(f, "contact_force", None) is not None:
+        if f.contact_force is not None:
             point_data["contact_force"] = f.contact_force
         cell_data = {}
         for key, value in (

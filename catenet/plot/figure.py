@@ -14,11 +14,18 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output import read_result
+
+if TYPE_CHECKING:
+    from matplotlib.colors import Colormap, Normalize
+
+    from catenet.plot.bodies import Balls
+    from catenet.plot.obstacles import Obstacles
 
 log = logging.getLogger(__name__)
 
@@ -187,6 +194,7 @@ def figure(res, *, scale: float = 1.0):
     matplotlib.rcParams["svg.hashsalt"] = "catenet"  # reproducible SVG ids
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
 
     from catenet.plot.bodies import Balls
     from catenet.plot.obstacles import Obstacles
@@ -196,7 +204,9 @@ def figure(res, *, scale: float = 1.0):
     series = res.series_delta is not None
     fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
     FigureCanvasAgg(fig)
-    fig.get_layout_engine().set(wspace=0.12)  # room for the 3D view's z label
+    engine = fig.get_layout_engine()
+    assert isinstance(engine, ConstrainedLayoutEngine)
+    engine.set(wspace=0.12)  # room for the 3D view's z label
     ncols = 3 if series else 2
     ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
     ax2 = fig.add_subplot(1, ncols, 2)
@@ -219,7 +229,7 @@ def figure(res, *, scale: float = 1.0):
     return fig
 
 
-UNDEFORMED = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
+UNDEFORMED: dict[str, Any] = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
 
 
 @dataclass
@@ -227,8 +237,8 @@ class _Colours:
     """The edges' tensions and how they map to colours (the data's range)."""
 
     tension: np.ndarray
-    norm: object
-    cmap: object
+    norm: Normalize
+    cmap: Colormap
     t_min: float
     t_max: float
 
@@ -248,6 +258,7 @@ class _Colours:
         if tension is None or not len(tension) or not np.all(np.isfinite(tension)):
             return None
         t_min, t_max = float(tension.min()), float(tension.max())
+        norm: Normalize
         if t_min < 0.0 < t_max:  # compression (bilateral edges): diverging colours
             norm, cmap = TwoSlopeNorm(0.0, t_min, t_max), colormaps["coolwarm"]
         else:  # the range of the data, not from 0: a prestressed net is not one colour
@@ -274,13 +285,13 @@ class _Drawn:
     seg_ref: np.ndarray
     seg_def: np.ndarray
     colours: _Colours | None
-    balls: object
-    obstacles: object
+    balls: Balls
+    obstacles: Obstacles
     lo: np.ndarray
     hi: np.ndarray
 
     @classmethod
-    def of(cls, res, scale: float, balls, obstacles) -> _Drawn:
+    def of(cls, res, scale: float, balls: Balls, obstacles: Obstacles) -> _Drawn:
         mesh = res.mesh
         nodes, edges = mesh.nodes, mesh.edges
         x = nodes + scale * (res.x - nodes)
@@ -340,10 +351,10 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     h = 0 if np.ptp(nodes[:, 0]) >= np.ptp(nodes[:, 1]) else 1
     ax2.set_axisbelow(True)  # the grid under the nets: z = 0 hides no undeformed line
     ax2.grid(True, lw=0.3, zorder=0)
-    ax2.add_collection(
-        LineCollection(d.seg_ref[:, :, [h, 2]], label="undeformed", zorder=2, **UNDEFORMED)
-    )
-    lines2 = LineCollection(d.seg_def[:, :, [h, 2]], linewidths=1.4, label="deformed", zorder=3)
+    ref: Any = d.seg_ref[:, :, [h, 2]]  # (M, 2, 2): LineCollection takes the array
+    ax2.add_collection(LineCollection(ref, label="undeformed", zorder=2, **UNDEFORMED))
+    deformed: Any = d.seg_def[:, :, [h, 2]]
+    lines2 = LineCollection(deformed, linewidths=1.4, label="deformed", zorder=3)
     d.deformed(lines2)
     ax2.add_collection(lines2)
     if curve is not None and scale == 1.0:
@@ -376,7 +387,7 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     return lines2
 
 
-def _deflection(ax_t, res, curve: PaperCurve | None, balls) -> None:
+def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls) -> None:
     """The probe's deflection along the trajectory (against time or load factor), or the
     paper's plot with its closed form."""
     ax_t.grid(True, lw=0.3)

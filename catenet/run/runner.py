@@ -463,8 +463,8 @@ class _NoFile:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc) -> bool:
-        return False
+    def __exit__(self, *exc) -> None:
+        return None
 
     def wants(self, step: int) -> bool:
         return False

@@ -197,6 +197,7 @@ def solve_dynamic(
         x[:] = x_trial
         t = _advance(t, h_step, t0, t_end, quantum)
         steps += 1
+        assert newton is not None  # ok: it converged
         residual = newton.residual
         good += 1
         if h < dt and good >= GROW_AFTER:
@@ -242,7 +243,7 @@ def _mass_and_damping(net: Net, damping: float):
     m_free = np.repeat(net.mass[~net.fixed], 3)
     if net.bodies:
         body = np.repeat(np.flatnonzero(~net.fixed) >= net.n_net, 3)
-        damping = np.where(body, 0.0, damping)
+        return m_free, np.where(body, 0.0, damping)
     return m_free, damping
 
 
@@ -265,7 +266,9 @@ def start_acceleration(
     scheme = Newmark()
     potential = potential_at(workspace.potential(loads), loads, net, t)
     scheme.begin(potential, x, np.asarray(v, dtype=np.float64), m_free, mu)
-    return _store(scheme, np.zeros_like(x), workspace.system.free_dofs)
+    out = np.zeros_like(x)
+    _store(scheme, out, workspace.system.free_dofs)
+    return out
 
 
 def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> float:

@@ -178,7 +178,17 @@ class _Newton:
     """The state of one Newton solve between iterations: the evaluation at x, the
     tolerance, the regularisation c and the counts that judge progress."""
 
-    def __init__(self, potential, x, *, rtol, atol, max_iter, label, reuse):
+    def __init__(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        *,
+        rtol: float,
+        atol: float | None,
+        max_iter: int,
+        label: str,
+        reuse: Reuse | None,
+    ):
         self.potential = potential
         self.x = x
         self.rtol, self.atol, self.max_iter = rtol, atol, max_iter
@@ -284,7 +294,7 @@ class _Newton:
             return "converged (round-off floor)"
         if (reason := self.at_floor(None)) is not None:
             return reason
-        if kept:  # a fresh matrix before a larger c
+        if kept and self.reuse is not None:  # a fresh matrix before a larger c
             self.reuse.drop()
             return None
         self.c = max(4.0 * self.c, SHRINK * _c_start(self.potential, self.ev.g))
@@ -297,7 +307,9 @@ class _Newton:
     def accept(self, search: Outcome, kept: bool) -> None:
         """Moves on to the state the line search reached; adapts c (or the kept matrix)."""
         prev = self.gnorm
-        self.ev = ev = search.trial
+        ev = search.trial
+        assert ev is not None  # the step was accepted
+        self.ev = ev
         self.gnorm = gnorm = ev.gnorm
         self.tol = max(self.target(), ev.floor)
         self.history.append(gnorm)
@@ -316,7 +328,7 @@ class _Newton:
             search.rho,
             self.c,
         )
-        if kept:  # c stays; a slow step refreshes the matrix
+        if kept and self.reuse is not None:  # c stays; a slow step refreshes the matrix
             if gnorm > REUSE_RATE * prev and not _converges_soon(gnorm, prev, self.tol):
                 self.reuse.drop()
             return

@@ -63,7 +63,7 @@ class Potential:
         self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
         # Terms that bound a step (obstacles: the first contact along it).
         self._limits = [t for t in system.terms if t.bounds_step]
-        self._dx = np.zeros_like(self.force) if self._limits else None
+        self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
 

@@ -260,8 +260,8 @@ def equilibrium(
                 if not stage(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
                     break
                 strains = strain(net, x)
-                taut = strains[strains > 0]
-                if taut.size and mu < SMOOTH_END * float(np.min(taut)):
+                positive = strains[strains > 0]
+                if positive.size and mu < SMOOTH_END * float(np.min(positive)):
                     break
                 mu /= SMOOTH_REDUCTION
         if factor < 1.0:

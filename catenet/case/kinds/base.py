@@ -46,7 +46,7 @@ class Built(NamedTuple):
     at_nodes: Mapping[int, int] = {}
 
 
-def resolve(ref: int | str, names: dict[str, int]) -> int:
+def resolve(ref: int | str, names: Mapping[str, int]) -> int:
     """A node index from an index or a node name."""
     return names[ref] if isinstance(ref, str) else ref
 

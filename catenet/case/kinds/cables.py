@@ -92,7 +92,8 @@ def _check_polyline(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     """At least two nodes: indices (>= 0) or names (node sets of one node)."""
     if not isinstance(v, (list, tuple)) or len(v) < 2:
         return ck.bad(path, v, "must be an array of at least 2 nodes (indices or node sets)")
-    out, bad = [], []
+    out: list[int | str] = []
+    bad = []
     for k, x in enumerate(v):
         i = as_int(x)
         if isinstance(x, str) and x.strip():
@@ -125,7 +126,7 @@ def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
             dup = [] if bad else duplicates(idx)
             if dup:
                 ck.bad(here, nodes, f"node {dup[0]} appears more than once: list each once")
-            items.append((str(name), tuple(idx)))
+            items.append((str(name), tuple(i for i in idx if i is not None)))
     return BAD if len(ck.problems) > before else NodeSets(tuple(items))
 
 
@@ -208,10 +209,12 @@ def polylines(
                 f"[{seen_names[cable.name]}]: cable names must be unique"
             )
         seen_names.setdefault(cable.name, c)
-        line = []
-        for k, ref in enumerate(cable.nodes):
-            line.append(_node(ck, ref, f"{path}.nodes[{k}]", n, sets, named))
-        out.append(tuple(line))
+        out.append(
+            tuple(
+                _node(ck, ref, f"{path}.nodes[{k}]", n, sets, named)
+                for k, ref in enumerate(cable.nodes)
+            )
+        )
     if len(ck.problems) > before:
         return None
     segments: dict[tuple[int, int], str] = {
@@ -314,8 +317,8 @@ def cable_mesh(
     pieces = [np.asarray(edges, dtype=np.int64).reshape(-1, 2)]
     owner = [np.full(len(pieces[0]), -1, dtype=np.int64)]
     at_nodes: dict[int, int] = {}
-    for c, (line, h) in enumerate(zip(lines, hs, strict=True)):
-        line = np.asarray(line, dtype=np.int64)
+    for c, (polyline, h) in enumerate(zip(lines, hs, strict=True)):
+        line = np.asarray(polyline, dtype=np.int64)
         seg = np.linalg.norm(np.diff(xyz[line], axis=0), axis=1)
         cum = np.concatenate([[0.0], np.cumsum(seg)])
         breaks: dict[int, list[tuple[float, int]]] = {}

@@ -176,7 +176,8 @@ class GraphConfig(GeometryConfig):
 
     @classmethod
     def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
-        return geometry is None or geometry.EA is not None  # None: unknown, do not insist
+        # None: unknown, do not insist
+        return geometry is None or getattr(geometry, "EA", None) is not None
 
     def estimate_size(self) -> tuple[float, float, float, str]:
         n, m = len(self.nodes), len(self.edges)

@@ -145,7 +145,7 @@ def _row(command: str, cache: str, threads: str, walls, cpus, errors) -> dict:
 def _interleaved(plan: dict[str, tuple[list[str], dict]], reps: int, cwd: str) -> dict:
     """Every command of ``plan`` once per round, ``reps`` rounds: {label: (walls, cpus,
     errors)}."""
-    out = {label: ([], [], []) for label in plan}
+    out: dict[str, tuple[list, list, list]] = {label: ([], [], []) for label in plan}
     for _ in range(reps):
         for label, (cmd, env) in plan.items():
             wall, cpu, err = _once(cmd, env, cwd)
@@ -178,7 +178,7 @@ def import_costs(cmd: list[str], env: dict, cwd: str, top: int = 8) -> list[tupl
         cwd=cwd,
         timeout=600,
     )
-    cost: collections.Counter = collections.Counter()
+    cost: dict[str, float] = collections.defaultdict(float)
     for line in proc.stderr.splitlines():
         if not line.startswith("import time:") or "self [us]" in line:
             continue
@@ -187,7 +187,7 @@ def import_costs(cmd: list[str], env: dict, cwd: str, top: int = 8) -> list[tupl
             cost[name.strip().split(".")[0]] += int(own) / 1e6
         except ValueError:
             continue
-    return cost.most_common(top)
+    return sorted(cost.items(), key=lambda kv: -kv[1])[:top]  # (as Counter.most_common)
 
 
 def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
@@ -213,7 +213,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             env = thread_env(env_threads)
             cache = Path(tmp) / f"numba-cache-{k}"
             progress(1 + 2 * k, 5, f"{RUN}, empty Numba cache, threads {tlabel}")
-            cold = ([], [], [])
+            cold: tuple[list, list, list] = ([], [], [])
             for rep in range(1 if quick or env_threads is not None else 3):
                 empty = Path(tmp) / f"numba-empty-{k}-{rep}"
                 empty.mkdir()

@@ -24,6 +24,7 @@ import logging
 import math
 import time
 from pathlib import Path
+from typing import Any
 
 from catenet.studies.bench.common import (
     PAPER_EDGE,
@@ -106,7 +107,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
 
 def _plan(quick: bool) -> list[dict]:
     rtols = (1e-4, 1e-8) if quick else (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
-    plan = []
+    plan: list[dict[str, Any]] = []
     cable_nodes = (21, 101) if quick else (11, 21, 51, 101, 201)
     cat_nodes = (21, 101) if quick else (11, 21, 51, 101, 201, 401)
     net_edges = (0.02, 0.01) if quick else (0.04, 0.02, 0.01, 0.005)

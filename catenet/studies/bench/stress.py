@@ -26,6 +26,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from catenet.studies.bench.common import (
     Study,
@@ -215,7 +216,7 @@ def run_scene(scene: Scene) -> dict:
     """Runs one scene; never raises. ``passed``: a right answer (see the module doc)."""
     from catenet.errors import CatenetError
 
-    row = {
+    row: dict[str, Any] = {
         "id": scene.id,
         "group": scene.group,
         "params": ", ".join(f"{k}={v}" for k, v in scene.params.items()),
