@@ -31,9 +31,12 @@ test: $(VENV)/.installed-test
 test-fast: $(VENV)/.installed-test
 	$(PY) -m pytest -n 2 --dist loadfile -q -m "not slow"
 
+# ruff, and mypy on the package's type hints ([tool.mypy] in pyproject.toml: the kernels
+# aside, whose types Numba checks).
 lint: $(VENV)/.installed-test
-	$(PY) -m pip install --quiet ruff
+	$(PY) -m pip install --quiet ruff mypy
 	$(VENV)/bin/ruff check catenet tests benchmarks docs/hooks
+	$(VENV)/bin/mypy
 
 # The documentation site, from docs/ and mkdocs.yml, into site/ (open site/index.html).
 $(VENV)/.installed-docs: pyproject.toml | $(PY)

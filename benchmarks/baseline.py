@@ -386,7 +386,7 @@ def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:
         )
 
     def split(res):
-        s = res.stats
+        s = res.stats.as_dict()
         return {
             k: s[k]
             for k in (

@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ROOT / "tests"
@@ -104,15 +105,13 @@ def thread_env(threads: int | None) -> dict:
 # --- timing ---------------------------------------------------------------------------------
 
 
-def timed(fn: Callable[[], object]) -> tuple[float, object]:
+def timed(fn: Callable[[], Any]) -> tuple[float, Any]:
     start = time.perf_counter()
     out = fn()
     return time.perf_counter() - start, out
 
 
-def repeat(
-    fn: Callable[[], object], repeats: int = 5, warmup: int = 1
-) -> tuple[float, list, object]:
+def repeat(fn: Callable[[], Any], repeats: int = 5, warmup: int = 1) -> tuple[float, list, Any]:
     """Median wall time of ``fn`` over ``repeats`` runs after ``warmup`` runs:
     (median seconds, all times, the last return value)."""
     out = None
@@ -128,7 +127,7 @@ def repeat(
 def interleaved(fns: dict, repeats: int = 5, warmup: int = 1) -> dict:
     """Times several variants in turn (A B C A B C ...), so that a change in the machine's
     load hits all of them alike: {key: (median seconds, times, last return value)}."""
-    out = {k: None for k in fns}
+    out: dict[str, Any] = {k: None for k in fns}
     times: dict = {k: [] for k in fns}
     for _ in range(warmup):
         for k, fn in fns.items():
@@ -253,7 +252,7 @@ def save_figure(fig, out_dir: Path, name: str) -> Path:
 
 def machine() -> dict:
     """The machine and software the numbers come from."""
-    info = {
+    info: dict[str, Any] = {
         "cpu": _cpu_model(),
         "cores": os.cpu_count(),
         "system": f"{platform.system()} {platform.release()}",

@@ -87,7 +87,7 @@ def swmr_writer_class():
             self._h5.swmr_mode = True
             self._open = True
 
-        def frame(self, t, x, v=None, tension=None) -> None:
+        def frame(self, t, x, v=None, tension=None, a=None) -> None:
             data = {"x": np.asarray(x), "tension": self._stored_tension(x, tension)}
             if self.velocities:
                 data["v"] = np.zeros_like(x) if v is None else np.asarray(v)

@@ -22,6 +22,7 @@ paper's kind of scene on the roof's topology.
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
@@ -128,7 +129,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             rng = np.random.default_rng(0)
             target = formfind(net, rng.uniform(1.0e4, 3.0e4, net.n_edges)).force
             sec, ff = timed(
-                lambda net=net, q=q, t=target: formfind(net, q, method="forces", force=t, tol=1e-9)
+                functools.partial(formfind, net, q, method="forces", force=target, tol=1e-9)
             )
             row.update(
                 forces_s=sec,
@@ -138,7 +139,7 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             )
             goal = formfind(net, rng.uniform(1.0e4, 3.0e4, net.n_edges)).length
             sec, fl = timed(
-                lambda net=net, q=q, g=goal: formfind(net, q, method="lengths", length=g, tol=1e-9)
+                functools.partial(formfind, net, q, method="lengths", length=goal, tol=1e-9)
             )
             row.update(
                 lengths_s=sec, lengths_iterations=fl.iterations, lengths_residual=fl.residual

@@ -96,7 +96,7 @@ for k in range(args["repeats"]):
         ws.solver.iparm[int(key)] = value
     res = solve_static(net, loads, workspace=ws)
     total = time.perf_counter() - s
-    st = dict(res.stats)
+    st = res.stats.as_dict()
     st["total_seconds"] = total
     st["total_cpu_seconds"] = time.process_time() - cpu  # immune to a loaded machine
     st["factor_nnz"] = getattr(ws.solver, "factor_nnz", None)

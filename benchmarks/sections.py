@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 from benchmarks.common import read_csv
 
@@ -165,7 +166,7 @@ def pareto(results: Path) -> list[str]:
             for a, d in zip(best[0::2], best[1::2], strict=True)
         ],
     )
-    rows = read_study(results, "pareto") or []
+    rows: list[dict[str, Any]] = read_study(results, "pareto") or []
     net = sorted(
         {as_float(r["edge"]) for r in rows if r["case"] == "net" and r["method"] == "static"}
     )
@@ -180,8 +181,8 @@ def pareto(results: Path) -> list[str]:
             and as_float(r["rtol"]) <= 1e-8
         ]
         if sel:
-            best = min(as_float(r["error"]) for r in sel)
-            errs.append(f"{e * 1e3:g} mm: {as_text(best, '{:.1e}')}")
+            lowest = min(as_float(r["error"]) for r in sel)
+            errs.append(f"{e * 1e3:g} mm: {as_text(lowest, '{:.1e}')}")
     if errs:
         out += [
             "",

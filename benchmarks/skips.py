@@ -267,7 +267,7 @@ def _analysis(net, loads, add, study, *, reps, quick, n):
             t,
             res.x,
             res.iterations,
-            analyse_count=res.stats.get("analyse_count"),
+            analyse_count=res.stats.analyse_count,
         )
         t, _, res = repeat(
             lambda ws=ws: solve_dynamic(net, loads, dt=1e-2, damping=1.0, t_end=0.2, workspace=ws),
@@ -281,7 +281,7 @@ def _analysis(net, loads, add, study, *, reps, quick, n):
             None,
             res.iterations,
             note=f"{res.steps} steps",
-            analyse_count=res.stats.get("analyse_count"),
+            analyse_count=res.stats.analyse_count,
         )
     factors = [0.1 * k for k in range(1, 11)]
     t, _, res = repeat(lambda: continuation(net, loads, factors), 1 if quick else 3)
@@ -361,8 +361,8 @@ def _mtype(net, loads, add, study, *, reps, quick, n):
                 t,
                 res.x if label.endswith("(static)") else None,
                 res.iterations,
-                factorize_seconds=res.stats.get("factorize_seconds"),
-                solve_seconds=res.stats.get("solve_seconds"),
+                factorize_seconds=res.stats.factorize_seconds,
+                solve_seconds=res.stats.solve_seconds,
                 upper=ws.system.upper,
                 factor_nnz=getattr(ws.solver, "factor_nnz", None),
             )
@@ -405,8 +405,8 @@ def _refinement(net, loads, add, study, *, reps, quick, n):
                 t,
                 res.x if label.endswith("(static)") else None,
                 res.iterations,
-                factorize_seconds=res.stats.get("factorize_seconds"),
-                solve_seconds=res.stats.get("solve_seconds"),
+                factorize_seconds=res.stats.factorize_seconds,
+                solve_seconds=res.stats.solve_seconds,
             )
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 
@@ -25,9 +26,11 @@ class LastGood:
 
 class CatenetError(Exception):
     """Base class of every error catenet raises on purpose. ``last_good``: the last good
-    state of the run it ended (``LastGood``), where the solve path knows one."""
+    state of the run it ended (``LastGood``), where the solve path knows one; ``output``:
+    the result file that holds it (``catenet.run.runner.run_case``; None: none does)."""
 
     last_good: LastGood | None = None
+    output: Path | None = None
 
 
 class ConfigError(CatenetError, ValueError):
@@ -78,4 +81,9 @@ class SingularSystemError(ConvergenceError):
 
 
 class OutputError(CatenetError):
-    """A result file could not be written."""
+    """A result file could not be written. ``result``: the Result that was to be written
+    (kept in memory), ``saved_to``: the temporary file it was saved to instead (None:
+    nowhere)."""
+
+    result: Any = None
+    saved_to: Path | None = None

@@ -182,7 +182,10 @@ def midpoint_load(
     from catenet.validate import analytic
 
     EA = paper_material().EA if EA is None else EA
-    F = F_bar * EA if F is None else F
+    if F is None:
+        if F_bar is None:
+            raise ValueError("midpoint_load: give F or F_bar")
+        F = F_bar * EA
     net, loads, mid = midpoint_cable(F, nodes=nodes, EA=EA)
     exact = analytic.midpoint_load_deflection(F, 1.0, EA)
     t_end = steps * h if steps else 1e6 * h

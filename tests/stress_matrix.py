@@ -25,6 +25,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from scenes import (
     bilateral_chain,
@@ -202,7 +203,7 @@ def run_scene(scene: Scene) -> dict:
     """Runs one scene; never raises. ``passed``: a right answer (see the module doc)."""
     from catenet.errors import CatenetError
 
-    row = {
+    row: dict[str, Any] = {
         "id": scene.id,
         "group": scene.group,
         "params": ", ".join(f"{k}={v}" for k, v in scene.params.items()),

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from catenet.case.keys import show
 from catenet.errors import ConfigError
 from catenet.model.histories import History
 from catenet.model.net import Loads, Net
+from catenet.terms import Term
 
 log = logging.getLogger(__name__)
 
@@ -111,7 +113,8 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
     v = np.zeros((n0, 3)) if velocity is None else velocity
     velocity = np.vstack([v, v_new])
     loads = pad_loads(loads, nb)
-    terms, bodies = [], []
+    terms: list[Term] = []
+    bodies = []
     for j, (k, obs, prescribed, hist) in enumerate(specs):
         node = n0 + j
         dhat = obs.distance if obs.distance is not None else DISTANCE_SHARE * size
@@ -142,6 +145,7 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
 
     me = obstacles[k]
     out = []
+    term: Any  # an obstacle's term (Ball, Plane, Sphere, a shape): each has gap(x)
     for i, other in enumerate(obstacles):
         if i == k or (getattr(other, "moves", False) and i < k):
             continue  # itself, or a pair built with the other ball

@@ -12,10 +12,10 @@ return the clean value, or ``BAD`` when the value failed (its problem already re
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import datetime
 import difflib
-import functools
 import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
@@ -61,10 +61,11 @@ def as_float(v: Any) -> float | None:
     """A real number (not a boolean) as float (huge integers become inf), else None."""
     if not isinstance(v, numbers.Real) or isinstance(v, (bool, np.bool_)):
         return None
+    big: Any = v  # a huge integer (or fraction)
     try:
-        return float(v)
+        return float(big)
     except OverflowError:
-        return math.inf if v > 0 else -math.inf
+        return math.inf if big > 0 else -math.inf
     except (TypeError, ValueError):
         return None
 
@@ -81,10 +82,10 @@ def as_int(v: Any) -> int | None:
     return None
 
 
-def duplicates(values: list[int]) -> list[int]:
+def duplicates(values: Sequence[Any]) -> list[Any]:
     """The values that occur more than once, sorted."""
-    seen: set[int] = set()
-    return sorted({i for i in values if i in seen or seen.add(i)})
+    counts = collections.Counter(values)
+    return sorted(i for i, n in counts.items() if n > 1)
 
 
 def _bounds(gt=None, ge=None, lt=None) -> str:
@@ -336,16 +337,21 @@ def tables(section: type, **kw) -> Any:
     return key(check, "an array of tables", (), section=section, **kw)
 
 
-@functools.cache
+_DECLARED: dict[type, tuple[Key, ...]] = {}
+
+
 def declared(section: type) -> tuple[Key, ...]:
     """The keys of a section class, in the order of its fields (the order messages list
-    accepted keys in)."""
-    out = []
-    for f in dataclasses.fields(section):
-        k = f.metadata.get("key")
-        if k is not None:
-            out.append(dataclasses.replace(k, name=k.name or f.name, attr=f.name))
-    return tuple(out)
+    accepted keys in); found once per class."""
+    keys = _DECLARED.get(section)
+    if keys is None:
+        out = []
+        for f in dataclasses.fields(section):
+            k = f.metadata.get("key")
+            if k is not None:
+                out.append(dataclasses.replace(k, name=k.name or f.name, attr=f.name))
+        keys = _DECLARED[section] = tuple(out)
+    return keys
 
 
 def names(section: type) -> tuple[str, ...]:

@@ -22,6 +22,7 @@ from catenet.case.keys import (
     show,
 )
 from catenet.errors import ConfigError
+from catenet.model.builders import Material
 from catenet.model.laws import LAWS, table_rows
 
 
@@ -111,6 +112,21 @@ class MaterialConfig(Declared):
         """rho * A [kg/m]."""
         a = self.cross_section
         return 0.0 if a is None else self.density * a
+
+
+def model_material(config: MaterialConfig, *, prestress: bool = True) -> Material:
+    """The ``catenet.model.builders.Material`` of a [material] table (or a cable's): its
+    law and, unless ``prestress`` is False, its prestress; EA 1 where the geometry gives
+    EA per edge (the builders then take those)."""
+    ea = config.axial_stiffness
+    return Material(
+        EA=1.0 if ea is None else ea,
+        line_density=config.line_density,
+        tension_only=config.tension_only,
+        law=config.law,
+        table=config.table,
+        prestress=config.prestress if prestress else None,
+    )
 
 
 def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> MaterialConfig | Any:

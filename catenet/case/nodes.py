@@ -139,7 +139,9 @@ def _unknown_name(path: str, ref: str, topo: Topology) -> str:
     )
 
 
-def _known_cable(ck: Checker, path: str, name: str, g: GeometryConfig, topo: Topology) -> None:
+def _known_cable(
+    ck: Checker, path: str, name: str | None, g: GeometryConfig, topo: Topology
+) -> None:
     """A problem unless ``name`` is one of the geometry's cables."""
     if name in topo.cables:
         return
@@ -149,7 +151,7 @@ def _known_cable(ck: Checker, path: str, name: str, g: GeometryConfig, topo: Top
             "cables are a graph's [[geometry.cable]])"
         )
         return
-    hint = difflib.get_close_matches(name, topo.cables, n=1)
+    hint = difflib.get_close_matches(str(name), topo.cables, n=1)
     mean = f"; did you mean {hint[0]!r}?" if hint else ""
     ck.add(
         f"{path} = {name!r}: no such cable (accepted: {', '.join(map(repr, topo.cables))}){mean}"

@@ -203,7 +203,10 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
             raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
         first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
         term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
-        term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
+        if first is not None:  # (widths: the wider stages, none without)
+            term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
+        else:
+            term.stages = ()
         if term.moving:  # on a prescribed motion: its name in messages
             term.label = f"obstacle[{k}] (kind {obs.kind!r})"
         gap = term.gap(net.nodes)

@@ -153,7 +153,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
 
     # Rules between sections.
     if isinstance(material, MaterialConfig) and material.prestress is not None:
-        g = data.get("geometry") if isinstance(data.get("geometry"), Mapping) else {}
+        raw = data.get("geometry")
+        g = raw if isinstance(raw, Mapping) else {}
         for other in ("length", "rest_length", "prestrain"):
             if other in g:
                 ck.add(
@@ -184,6 +185,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
 
     if ck.problems:
         raise ConfigError(ck.problems)
+    assert geometry is not None  # (else a problem says why)
     return Case(
         title=title,
         geometry=geometry,

@@ -76,9 +76,13 @@ def keys_table() -> str:
         rows += _rows(name, declared(section))
     rows += _rows("formfind", declared(FormfindConfig))  # catenet formfind only
     for name, obstacle in OBSTACLES.items():
-        rows.append(f'| **`[[obstacle]]` kind = "{name}"** | | | {obstacle.__doc__.strip()} |')
+        rows.append(
+            f'| **`[[obstacle]]` kind = "{name}"** | | | {(obstacle.__doc__ or "").strip()} |'
+        )
         rows += [r for r in _rows("obstacle[k]", declared(obstacle)) if ".kind`" not in r]
-    rows.append(f"| `[[mass]]` | an array of tables | none | {MassConfig.__doc__.strip()} |")
+    rows.append(
+        f"| `[[mass]]` | an array of tables | none | {(MassConfig.__doc__ or '').strip()} |"
+    )
     rows += _rows("mass[k]", declared(MassConfig))
     return "\n".join(rows)
 

@@ -12,6 +12,7 @@ from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
+from catenet.case.material import model_material
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.case.shapes import check_motion
@@ -19,7 +20,6 @@ from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
-from catenet.model.laws import Law, table_rows
 from catenet.model.net import Loads, Net
 
 
@@ -59,15 +59,8 @@ def build(case: Case) -> Scene:
 
 
 def _build(case: Case) -> Scene:
-    mat = case.material
-    ea = mat.axial_stiffness
-    material = geo.Material(
-        EA=1.0 if ea is None else ea,  # None only for a graph with EA per edge
-        line_density=mat.line_density,
-        tension_only=mat.tension_only,
-    )
-    built = case.geometry.build_case(case, material)
-    net = built.net if built.final else _with_law(case, built.net)
+    built = case.geometry.build_case(case, model_material(case.material))
+    net = built.net
     point_mass, velocity = point_masses(getattr(case, "masses", ()), net, built.names, built.sets)
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
@@ -91,31 +84,6 @@ def _build(case: Case) -> Scene:
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
     )
-
-
-def _with_law(case: Case, net: Net) -> Net:
-    """The net under the case's material law, with the rest lengths that give every edge
-    ``material.prestress`` in the given geometry (U = EA l0 w(eps): the tension
-    EA w'(eps) equals the prestress at eps = |e|/l0 - 1, so l0 = |e| / (1 + eps))."""
-    mat = case.material
-    if mat.law == "linear" and mat.prestress is None:
-        return net  # the builders' default: the paper's law
-    rows = table_rows(mat.table)[0] if mat.law == "table" else None
-    law = Law.uniform(net.n_edges, mat.law, tension_only=net.law.tension_only, table=rows)
-    rest = net.rest_length
-    if mat.prestress is not None:
-        length = np.linalg.norm(net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]], axis=1)
-        eps = law.strain_for_tension(mat.prestress, net.EA)
-        bad = np.flatnonzero(~(np.isfinite(eps) & (eps > -1.0)))
-        if bad.size:
-            k = int(bad[0])
-            raise ConfigError(
-                f"material.prestress = {mat.prestress!r}: edge {k} cannot carry it under "
-                f"law {mat.law!r} (EA = {net.EA[k]:.6g} N): its rest length would not be "
-                "positive, or the law never reaches that tension"
-            )
-        rest = length / (1.0 + eps)
-    return net.with_rest_length(rest, law)
 
 
 def _probe(case: Case, built: Any) -> int:
@@ -166,7 +134,10 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
     if case.geometry.pressure and ld.pressure != 0.0:
         target(None)[:] += geo.pressure_force(net, ld.pressure, size)
     for k, pt in enumerate(ld.points):
-        nodes = (built.at_nodes[k],) if pt.cable is not None else expand(pt.node, names, sets)
+        if pt.cable is not None or pt.node is None:  # a position along a cable
+            nodes: tuple[int, ...] = (built.at_nodes[k],)
+        else:
+            nodes = expand(pt.node, names, sets)
         for i in nodes:
             if not 0 <= i < net.n_nodes:
                 raise ConfigError(

@@ -14,6 +14,7 @@ import dataclasses
 import functools
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -83,6 +84,10 @@ def _history():
 class _Motion:
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
     box, capsule or mesh (``catenet.terms.moving``): dynamic runs only."""
+
+    velocity: Any  # the keys of the obstacle kinds that mix it in
+    angular_velocity: Any
+    history: Any
 
     @property
     def rigid_motion(self) -> bool:

@@ -48,7 +48,7 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
         msg = str(exc)
         m = re.match(r"(?s)(.*) \(at line (\d+), column (\d+)\)$", msg)
         if m:
-            reason, line, col = m.group(1), m.group(2), m.group(3)
+            reason, line, col = m.group(1), int(m.group(2)), int(m.group(3))
         else:
             line, col = _line_col(text)
             reason = re.sub(r" \(at end of document\)$", "", msg)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import signal
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -29,7 +30,7 @@ class StopFlag:
 
     def __init__(self):
         self.signal: int | None = None
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, Any] = {}
 
     def __call__(self) -> bool:
         return self.signal is not None
@@ -56,10 +57,9 @@ class StopFlag:
                 pass
         return self
 
-    def __exit__(self, *exc) -> bool:
+    def __exit__(self, *exc) -> None:
         for sig, handler in self._previous.items():
             signal.signal(sig, handler)
-        return False
 
 
 @click.command(name="run")
@@ -200,15 +200,14 @@ def _where(case, result) -> str:
 
 def _times(result) -> str:
     """The wall time of the process so far, split into the solve and the start-up."""
-    s = result.stats
-    if "solve_seconds" not in s:
-        return f"{'wall time':<12} {result.wall_time:.3g} s ({s.get('backend', '?')})"
+    backend, timing = result.report.backend, result.timing
+    if timing is None:
+        return f"{'wall time':<12} {result.wall_time:.3g} s ({backend})"
     from catenet.run.clock import since_process_start
 
     return (
-        f"{'wall time':<12} {since_process_start():.3g} s: solve {s['solve_seconds']:.3g} s "
-        f"({s.get('backend', '?')}), start-up {s['startup_seconds']:.3g} s (imports, case, "
-        "JIT cache)"
+        f"{'wall time':<12} {since_process_start():.3g} s: solve {timing.solve:.3g} s "
+        f"({backend}), start-up {timing.startup:.3g} s (imports, case, JIT cache)"
     )
 
 
@@ -217,7 +216,7 @@ def _summary(case, result, path: Path | None) -> None:
 
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
-    s = result.stats
+    s = result.report
     state = "yes" if result.converged else "no"
     detail = result.message or ""
     if case.solver.method == "dynamic" and not result.equilibrium:
@@ -228,25 +227,23 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        f"{'delta':<12} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
-        f"(node {s['probe']}, L = {s['size']:.6g} m)",
+        f"{'delta':<12} {s.delta:.6g} m   delta/L = {s.delta_over_L:.6g}   "
+        f"(node {s.probe}, L = {s.size:.6g} m)",
         f"{'max tension':<12} {float(np.max(result.tension, initial=0.0)):.6g} N   "
         f"max strain {result.max_strain:.4g}"
-        + (
-            " (beyond the material law's range: see the warning)" if s.get("strain_warning") else ""
-        ),
+        + (" (beyond the material law's range: see the warning)" if s.strain_warning else ""),
         _times(result),
     ]
-    for name, c in s.get("cables", {}).items():  # a graph's cables, one line each
+    for name, c in (s.cables or {}).items():  # a graph's cables, one line each
         lines.insert(
             -1,
-            f"{'cable':<12} {name}: max tension {c['max_tension']:.6g} N, "
-            f"slack {100 * c['slack_fraction']:.3g} % of its length",
+            f"{'cable':<12} {name}: max tension {c.max_tension:.6g} N, "
+            f"slack {100 * c.slack_fraction:.3g} % of its length",
         )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""
-        estimate = int(s.get("trajectory_bytes", 0))
+        estimate = int(s.trajectory_bytes)
         if estimate >= LARGE_BYTES:
             size = Path(path).stat().st_size if Path(path).is_file() else 0
             extra += (

@@ -216,7 +216,10 @@ class _Shape:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         self.solves += b.shape[1]
-        return np.column_stack([self.solver.solve(np.ascontiguousarray(c)) for c in b.T])
+        solver = self.solver
+        if solver is None:  # (a net without free nodes has nothing to solve)
+            raise RuntimeError("no free nodes: nothing to solve")
+        return np.column_stack([solver.solve(np.ascontiguousarray(c)) for c in b.T])
 
     def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions (N, 3) and the loads (N, 3) at them, for force densities q."""

@@ -36,10 +36,14 @@ be met (``Stalled``, with the best state reached).
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+
+if TYPE_CHECKING:
+    from catenet.solver.linear import LinearSolver
 
 log = logging.getLogger(__name__)
 
@@ -80,8 +84,9 @@ class Kkt:
         diag = np.arange(self.n)  # every diagonal (G, and zeros PARDISO wants present)
         rows.append(diag)
         cols.append(diag)
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
-        keys, self._slot = np.unique(rows * self.n + cols, return_inverse=True)
+        keys, self._slot = np.unique(
+            np.concatenate(rows) * self.n + np.concatenate(cols), return_inverse=True
+        )
         r_u, c_u = keys // self.n, keys % self.n
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(r_u, minlength=self.n))])
         self.indices = c_u
@@ -89,15 +94,16 @@ class Kkt:
         self._ea, self._eb, self._eo = ea, eb, eo
         node = np.concatenate([np.repeat(p.free_nodes, 3), p.net.edges[:, 0]])
         self.backend = backend
-        self.solver = None
+        self.solver: LinearSolver | None = None
         if backend == "pardiso":
             from catenet.solver.linear import make_solver
 
-            self.solver = make_solver(
+            solver: Any = make_solver(
                 backend, self.indptr, self.indices, upper=True, dof_node=node, mtype=-2
             )
-            self.solver.iparm[10] = 1  # scaling and weighted matching: saddle points
-            self.solver.iparm[12] = 1
+            solver.iparm[10] = 1  # scaling and weighted matching: saddle points
+            solver.iparm[12] = 1
+            self.solver = solver
         self.factorizations = 0
 
     def values(self, q, u, g) -> np.ndarray:

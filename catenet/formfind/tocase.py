@@ -14,7 +14,7 @@ found."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -63,7 +63,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         if np.any(net.law.kind != 0):
             raise ConfigError("to_case: a net under a nonlinear law needs the case it came from")
         material = {"tension_only": bool(net.law.tension_only.all())}
-        out = {"title": "form found", "material": material}
+        out: dict[str, Any] = {"title": "form found", "material": material}
     else:
         material = case.material.to_dict()
         material.pop("prestress", None)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.laws import Law, prestressed_lengths, table_rows
 from catenet.model.memory import fits
 from catenet.model.net import Net
 
@@ -24,7 +25,7 @@ def _check_size(nodes: float, edges: float, where: str) -> None:
             f"{MAX_NODES:.0e}"
         )
     ok, need, total = fits(nodes, edges)
-    if not ok:
+    if not ok and total is not None:  # (not ok: the machine's memory is known)
         raise ConfigError(
             f"{where}: the net could have about {nodes:.2g} nodes and its solve need about "
             f"{need / 2**30:.2g} GiB; this machine has {total / 2**30:.0f} GiB"
@@ -33,19 +34,69 @@ def _check_size(nodes: float, edges: float, where: str) -> None:
 
 @dataclass(frozen=True)
 class Material:
-    """Axial stiffness EA [N], mass per length rho*A [kg/m], tension-only switch."""
+    """What the edges of a net are made of: axial stiffness EA [N] (every law's
+    small-strain stiffness), mass per length rho*A [kg/m], the tension-only switch, the
+    material law (a name in ``catenet.model.laws.LAWS``; ``table``: the (strain, tension)
+    points of the "table" law) and ``prestress``, the tension [N] every edge carries in the
+    given geometry (None: the rest lengths are the builder's). Every builder makes its
+    net under it, once (``net``)."""
 
     EA: float
     line_density: float = 0.0
     tension_only: bool = True
+    law: str = "linear"
+    table: tuple | None = None
+    prestress: float | None = None
 
     @classmethod
-    def from_E(cls, E: float, *, radius=None, area=None, density=0.0, tension_only=True):
-        """From Young's modulus and a circular radius (A = pi r^2) or an area."""
+    def from_E(cls, E: float, *, radius=None, area=None, density=0.0, **law) -> Material:
+        """From Young's modulus and a circular radius (A = pi r^2) or an area; ``law``:
+        tension_only, law, table, prestress."""
         if (radius is None) == (area is None):
             raise ConfigError("material: give exactly one of radius and area")
         A = math.pi * radius**2 if area is None else area
-        return cls(EA=E * A, line_density=density * A, tension_only=tension_only)
+        return cls(EA=E * A, line_density=density * A, **law)
+
+    def law_of(self, n_edges: int, tension_only=None) -> Law:
+        """The law of ``n_edges`` edges of this material (``tension_only``: one switch per
+        edge instead of the material's)."""
+        rows = table_rows(self.table)[0] if self.law == "table" else None
+        only = self.tension_only if tension_only is None else tension_only
+        return Law.uniform(n_edges, self.law, tension_only=only, table=rows)
+
+    def net(self, nodes, edges, *, fixed, EA=None, rest_length=None) -> Net:
+        """The net of these nodes and edges under this material: its law on every edge
+        and, with a prestress, the rest lengths at which every edge carries it in the
+        given geometry (else ``rest_length``, default the edges' lengths); ``EA`` per edge
+        overrides the material's."""
+        return self.prestressed(
+            self.unstressed(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length)
+        )
+
+    def unstressed(self, nodes, edges, *, fixed, EA=None, rest_length=None) -> Net:
+        """``net`` without the prestress: the rest lengths as given."""
+        return Net.from_arrays(
+            nodes,
+            edges,
+            EA=self.EA if EA is None else EA,
+            fixed=fixed,
+            rest_length=rest_length,
+            line_density=self.line_density,
+            law=self.law_of(len(edges)),
+        )
+
+    def prestressed(self, net: Net) -> Net:
+        """``net`` (under this material) with the rest lengths at which every edge carries
+        the prestress in its given geometry; ``net`` itself without a prestress."""
+        if self.prestress is None:
+            return net
+        length = np.linalg.norm(net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]], axis=1)
+        rest = prestressed_lengths(net.law, self.prestress, net.EA, length, _prestress_key)
+        return net.with_rest_length(rest)
+
+
+def _prestress_key(k: int) -> str:
+    return "material.prestress"
 
 
 def cable(
@@ -76,15 +127,8 @@ def cable(
     s = np.linspace(0.0, 1.0, nodes)
     xyz = start[None, :] + s[:, None] * (end - start)[None, :]
     edges = np.column_stack([np.arange(nodes - 1), np.arange(1, nodes)])
-    return Net.from_arrays(
-        xyz,
-        edges,
-        EA=material.EA,
-        fixed=[0, nodes - 1],
-        rest_length=np.full(nodes - 1, length / (nodes - 1)),
-        line_density=material.line_density,
-        tension_only=material.tension_only,
-    )
+    rest = np.full(nodes - 1, length / (nodes - 1))
+    return material.net(xyz, edges, fixed=[0, nodes - 1], rest_length=rest)
 
 
 @dataclass(frozen=True)
@@ -154,15 +198,15 @@ def square_net(
     for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans, strict=True)):
         family_a = line_id < m
         k = line_id if family_a else line_id - m
-        # Break points: (t, node id or None for an end still to be made).
-        breaks: list[tuple[float, int | None]] = []
+        # Break points: (t, node id).
+        breaks: list[tuple[float, int]] = []
         for other in range(m):
             t = -c[other] if family_a else c[other]
             if t0 - tol <= t <= t1 + tol:
                 node = crossing_node(k, other) if family_a else crossing_node(other, k)
                 breaks.append((min(max(t, t0), t1), node))
         breaks.sort()
-        ends = []
+        ends: list[int] = []
         for t_end in (t0, t1):
             near = [b for b in breaks if abs(b[0] - t_end) <= tol]
             if near:
@@ -184,14 +228,7 @@ def square_net(
     nodes = np.column_stack([xy, np.zeros(len(xy))])
     edges_arr = np.concatenate(edges)
     try:
-        net = Net.from_arrays(
-            nodes,
-            edges_arr,
-            EA=material.EA,
-            fixed=sorted(set(fixed)),
-            line_density=material.line_density,
-            tension_only=material.tension_only,
-        )
+        net = material.unstressed(nodes, edges_arr, fixed=sorted(set(fixed)))
     except ConfigError as exc:  # e.g. edges that round to zero length in a tiny square
         raise ConfigError(
             [
@@ -199,6 +236,7 @@ def square_net(
                 for p in exc.problems
             ]
         ) from None
+    net = material.prestressed(net)
     center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
     return SquareNet(net=net, center=center, size=L, n=int(n), alpha=float(alpha))
 
@@ -235,13 +273,6 @@ def graph(
     rest_length=None,
     EA=None,
 ) -> Net:
-    """A net from explicit arrays; ``EA`` per edge overrides the material's."""
-    return Net.from_arrays(
-        nodes,
-        edges,
-        EA=material.EA if EA is None else EA,
-        fixed=fixed,
-        rest_length=rest_length,
-        line_density=material.line_density,
-        tension_only=material.tension_only,
-    )
+    """A net from explicit arrays under ``material``; ``EA`` per edge overrides the
+    material's."""
+    return material.net(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length)

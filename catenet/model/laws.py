@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -78,6 +79,30 @@ class Law:
             table=np.ascontiguousarray(rows),
         )
 
+    @classmethod
+    def concat(cls, laws: Sequence[Law]) -> Law:
+        """One law of the edges of several, in order, their tables stacked (a table edge's
+        first-row parameter shifted to where its rows went)."""
+        tables, offset = [], 0
+        params = []
+        for lw in laws:
+            p = lw.params.copy()
+            if np.any(lw.kind == TABLE):
+                p[lw.kind == TABLE, 0] += offset
+                tables.append(lw.table)
+                offset += len(lw.table)
+            params.append(p)
+        return cls(
+            kind=np.ascontiguousarray(np.concatenate([lw.kind for lw in laws])),
+            params=np.ascontiguousarray(np.concatenate(params)),
+            tension_only=np.ascontiguousarray(np.concatenate([lw.tension_only for lw in laws])),
+            table=np.ascontiguousarray(np.concatenate(tables)) if tables else np.zeros((2, 3)),
+        )
+
+    def name(self, k: int) -> str:
+        """The name (in ``LAWS``) of edge k's law."""
+        return next(name for name, info in LAWS.items() if info.id == int(self.kind[k]))
+
     def smoothed(self, smooth: float) -> Law:
         """The same law with the tension-only switch smoothed by ``smooth`` (0: exact)."""
         return dataclasses.replace(self, smooth=float(smooth))
@@ -133,6 +158,36 @@ class Law:
             np.ascontiguousarray(tension),
             np.ascontiguousarray(EA),
         )
+
+
+def prestressed_lengths(
+    law: Law,
+    tension,
+    EA: np.ndarray,
+    length: np.ndarray,
+    what: Callable[[int], str],
+    edges: np.ndarray | None = None,
+) -> np.ndarray:
+    """Rest lengths l0 = |e| / (1 + eps) at which each edge of the given lengths |e| carries
+    ``tension`` [N] under ``law`` (U = EA l0 w(eps): the tension EA w'(eps) equals it at
+    eps = |e|/l0 - 1). ConfigError naming the key ``what(k)`` and the net's edge
+    ``edges[k]`` (default k) for an edge that cannot (the law never reaches that tension,
+    a compression of a tension-only edge, or l0 not positive)."""
+    eps = law.strain_for_tension(tension, EA)
+    bad = np.flatnonzero(~(np.isfinite(eps) & (eps > -1.0)))
+    if bad.size:
+        k = int(bad[0])
+        t = float(np.broadcast_to(tension, eps.shape)[k])
+        only = law.tension_only[k]
+        edge = k if edges is None else int(edges[k])
+        raise ConfigError(
+            f"{what(k)} = {t!r}: cannot be met: edge {edge} cannot carry it under law "
+            f"{law.name(k)!r} "
+            f"(EA = {EA[k]:.6g} N{', tension-only' if only else ''}): its rest length would "
+            "not be positive, or the law never reaches that tension"
+            + (" (a compression needs tension_only = false)" if only and t < 0 else "")
+        )
+    return length / (1.0 + eps)
 
 
 def table_rows(points, *, path: str = "material.table") -> tuple[np.ndarray, float]:

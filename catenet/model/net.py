@@ -40,9 +40,9 @@ class Net:
     EA : (M,) float64, axial stiffness [N]
     line_density : (M,) float64, mass per unstressed length rho*A [kg/m]
     fixed : (N,) bool, pinned nodes (all three DOFs)
-    tension_only : edges carry no compression (slack when eps < 0)
-    law : the material law of every edge (default: the paper's linear law, with
-        ``tension_only`` for every edge)
+    law : the material law of every edge, its tension-only switches included
+        (``from_arrays``' default: the paper's linear law); ``tension_only`` says whether
+        every edge is tension-only
     point_mass : (N,) float64, lumped masses added at the nodes [kg] (corner masses of
         a tether net), or None; part of ``mass``, so gravity and inertia act on them
     bodies : how many of the last nodes are the centres of rigid bodies (no edges, their
@@ -55,15 +55,14 @@ class Net:
     EA: np.ndarray
     line_density: np.ndarray
     fixed: np.ndarray
-    tension_only: bool = True
-    law: Law | None = None
+    law: Law
     point_mass: np.ndarray | None = None
     bodies: int = 0
 
-    def __post_init__(self):
-        if self.law is None:
-            law = Law.uniform(len(self.edges), tension_only=self.tension_only)
-            object.__setattr__(self, "law", law)
+    @property
+    def tension_only(self) -> bool:
+        """Whether every edge carries no compression (slack when eps < 0): the law's."""
+        return self.law.all_tension_only
 
     @classmethod
     def from_arrays(
@@ -83,8 +82,8 @@ class Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
         ``law`` (one entry per edge) defaults to the paper's linear law with
-        ``tension_only`` for every edge; ``point_mass`` (N,) [kg] adds to the lumped
-        masses."""
+        ``tension_only`` for every edge (ignored where a law is given); ``point_mass``
+        (N,) [kg] adds to the lumped masses."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
         edges = _as_array("edges", edges, np.int64, (2,))
         n, m = len(nodes), len(edges)
@@ -135,7 +134,9 @@ class Net:
             point_mass = _broadcast("point_mass", point_mass, n, problems, allow_zero=True)
         if problems:
             raise ConfigError(problems)
-        net = cls(nodes, edges, l0, EA, rho_a, mask, bool(tension_only), law, point_mass, bodies)
+        if law is None:
+            law = Law.uniform(m, tension_only=bool(tension_only))
+        net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies)
         net._check_supported()
         return net
 
@@ -177,8 +178,10 @@ class Net:
         """A copy with ``changes`` (any of ``from_arrays``' arguments: nodes, edges, EA,
         fixed, rest_length, line_density, tension_only, law, point_mass, bodies),
         validated as a new net; everything else, the material law, point masses and
-        bodies included, carried over. The one way to copy a net."""
-        fields = dict(
+        bodies included, carried over. The one way to copy a net. ``tension_only`` sets
+        every edge's switch of the law kept; other ``edges`` without a ``law`` get the
+        linear law (with the net's switch, if every edge had it)."""
+        fields: dict[str, Any] = dict(
             nodes=self.nodes,
             edges=self.edges,
             EA=self.EA,

@@ -193,9 +193,9 @@ def export(
         }
         if f.v is not None:
             point_data["velocity"] = f.v
-        if getattr(f, "reaction", None) is not None:
+        if f.reaction is not None:
             point_data["reaction"] = f.reaction
-        if getattr(f, "contact_force", None) is not None:
+        if f.contact_force is not None:
             point_data["contact_force"] = f.contact_force
         if getattr(f, "shape", None) is not None:
             point_data["shape"] = f.shape

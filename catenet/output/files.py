@@ -63,7 +63,7 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     return p
 
 
-def describe(exc: BaseException) -> str:
+def describe(exc: BaseException | None) -> str:
     """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
     text = str(exc)
     m = re.search(r"errno = (\d+), error message = '([^']*)'", text)

@@ -43,6 +43,7 @@ def result_attrs(res, scene) -> dict:
     tension = np.asarray(res.tension) if res.tension is not None else np.zeros(0)
     residual = float(res.residual)
     strain = float(res.max_strain)
+    timing = res.timing
     return {
         "converged": bool(res.converged),
         "iterations": int(res.iterations),
@@ -64,8 +65,6 @@ def result_attrs(res, scene) -> dict:
         "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
         # catenet run: seconds of the solve (the engine) and of the start-up before it
         # (imports, the case, the JIT cache); -1 where not measured
-        **{
-            f"{k}_time": float(res.stats.get(f"{k}_seconds", -1.0) if res.stats else -1.0)
-            for k in ("solve", "startup")
-        },
+        "solve_time": -1.0 if timing is None else float(timing.solve),
+        "startup_time": -1.0 if timing is None else float(timing.startup),
     }

@@ -68,8 +68,9 @@ def frame_values(case, n_nodes: int) -> int:
 
     cap, total = frame_cap(n_nodes), 0
     for k, obs in enumerate(getattr(case, "obstacles", ()) or ()):
-        if getattr(obs, "rigid_motion", False):
-            total += 3 * min(len(surface(obs.to_dict(), k).vertices), cap) + 12
+        shape = surface(obs.to_dict(), k) if getattr(obs, "rigid_motion", False) else None
+        if shape is not None:  # (a moving sphere is a node of the net: no surface)
+            total += 3 * min(len(shape.vertices), cap) + 12
     return total
 
 

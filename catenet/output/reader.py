@@ -103,7 +103,8 @@ class Frame:
     """One stored state: time (or load factor), positions, velocities (None: not
     stored), where it came from ("trajectory" frame ``index`` or "result"), the
     tensions stored with it and the integrator's acceleration state (newmark runs; None:
-    not stored)."""
+    not stored); /result's reactions and contact forces (``catenet export``; None: not
+    read)."""
 
     t: float
     x: np.ndarray
@@ -112,6 +113,8 @@ class Frame:
     index: int
     tension: np.ndarray | None = None
     a: np.ndarray | None = None
+    reaction: np.ndarray | None = None
+    contact_force: np.ndarray | None = None
 
 
 def _array(g, name: str) -> np.ndarray | None:

@@ -48,6 +48,14 @@ def _vec(d: dict, key: str, default=None) -> np.ndarray | None:
     return None if v is None else np.asarray(v, dtype=np.float64).reshape(3)
 
 
+def _req(d: dict, key: str, default=None) -> np.ndarray:
+    """``_vec`` of a key the surface needs (KeyError where it is missing)."""
+    v = _vec(d, key, default)
+    if v is None:
+        raise KeyError(key)
+    return v
+
+
 def is_body(d: dict) -> bool:
     """A moving sphere: a node of the net (a rigid ball or a ball on a path)."""
     return d.get("kind") == "sphere" and (
@@ -148,8 +156,7 @@ def _lathe(axis_points, radii, axis, n: int = SEGMENTS) -> tuple[np.ndarray, np.
         c = c % n
         return np.where(i == 0, 0, np.where(i == m, 1 + (m - 1) * n, 1 + (i - 1) * n + c))
 
-    i, c = np.meshgrid(np.arange(m), np.arange(n), indexing="ij")
-    i, c = i.ravel(), c.ravel()
+    i, c = (g.ravel() for g in np.meshgrid(np.arange(m), np.arange(n), indexing="ij"))
     # from pole to pole along e, counter-clockwise about e seen from outside
     faces = np.stack([index(i, c), index(i, c + 1), index(i + 1, c + 1), index(i + 1, c)], axis=1)
     return V, faces
@@ -210,8 +217,8 @@ def surface(d: dict, index: int, cover=None) -> Surface | None:
     motion = None
     moving = d.get("velocity") is not None or d.get("angular_velocity") is not None
     if kind == "plane":
-        point = _vec(d, "point", (0.0, 0.0, 0.0))
-        normal = _vec(d, "normal", (0.0, 0.0, 1.0))
+        point = _req(d, "point", (0.0, 0.0, 0.0))
+        normal = _req(d, "normal", (0.0, 0.0, 1.0))
         normal = normal / np.linalg.norm(normal)
         if cover is None:
             V, F = np.zeros((0, 3)), np.zeros((0, 4), dtype=np.int64)
@@ -221,21 +228,21 @@ def surface(d: dict, index: int, cover=None) -> Surface | None:
     if kind == "sphere":
         if is_body(d):
             return None
-        V, F = sphere(_vec(d, "center"), float(d["radius"]))
+        V, F = sphere(_req(d, "center"), float(d["radius"]))
         return Surface(index, kind, V, F)
     if kind == "box":
-        center = _vec(d, "center")
-        axes = rotation(_vec(d, "axis", (0.0, 0.0, 1.0)), float(d.get("angle", 0.0)))
-        V, F = box(center, _vec(d, "half_size"), axes)
+        center = _req(d, "center")
+        axes = rotation(_req(d, "axis", (0.0, 0.0, 1.0)), float(d.get("angle", 0.0)))
+        V, F = box(center, _req(d, "half_size"), axes)
         origin = center
     elif kind == "capsule":
-        a, b = _vec(d, "start"), _vec(d, "end")
+        a, b = _req(d, "start"), _req(d, "end")
         V, F = capsule(a, b, float(d["radius"]))
         origin = 0.5 * (a + b)
     elif kind == "mesh":
         from catenet.case.shapes import read_surface
 
-        origin = _vec(d, "offset", (0.0, 0.0, 0.0))
+        origin = _req(d, "offset", (0.0, 0.0, 0.0))
         V, F = read_surface(str(d["file"]))
         V = V * float(d.get("scale", 1.0)) + origin
     else:

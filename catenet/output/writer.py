@@ -147,9 +147,8 @@ class ResultWriter:
         self.open()
         return self
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type, exc, tb) -> None:
         self.close()
-        return False
 
     @property
     def has_result(self) -> bool:

@@ -5,7 +5,12 @@ A file without moving spheres draws nothing."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.output.bodies import Bodies
 
 
 class Balls:
@@ -14,6 +19,7 @@ class Balls:
     def __init__(self, res, scale: float = 1.0):
         from catenet.output.bodies import read_bodies
 
+        self.b: Bodies | None
         try:
             self.b = read_bodies(res.path)
         except (OSError, KeyError, ValueError):

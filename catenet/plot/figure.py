@@ -14,11 +14,18 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output import read_result
+
+if TYPE_CHECKING:
+    from matplotlib.colors import Colormap, Normalize
+
+    from catenet.plot.bodies import Balls
+    from catenet.plot.obstacles import Obstacles
 
 log = logging.getLogger(__name__)
 
@@ -185,64 +192,135 @@ def figure(res, *, scale: float = 1.0):
     import matplotlib
 
     matplotlib.rcParams["svg.hashsalt"] = "catenet"  # reproducible SVG ids
-    from matplotlib import colormaps
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import LineCollection
-    from matplotlib.colors import Normalize, TwoSlopeNorm
     from matplotlib.figure import Figure
-    from matplotlib.ticker import MaxNLocator
-    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
 
-    mesh = res.mesh
-    nodes, edges, fixed = mesh.nodes, mesh.edges, mesh.fixed
-    x = nodes + scale * (res.x - nodes)
-    seg_ref = nodes[edges]  # (M, 2, 3)
-    seg_def = x[edges]
-    tension = res.tension
-    # a file that stores no tensions (not written by catenet): computed from the mesh
-    if tension is None and mesh.rest_length is not None and mesh.EA is not None:
-        only = bool(res.case.get("material", {}).get("tension_only", True)) if res.case else True
-        tension = edge_tension(res.x, edges, mesh.rest_length, mesh.EA, only)
-    if tension is not None and len(tension) and np.all(np.isfinite(tension)):
+    from catenet.plot.bodies import Balls
+    from catenet.plot.obstacles import Obstacles
+
+    drawn = _Drawn.of(res, scale, Balls(res, scale), Obstacles(res))
+    curve = paper_curve(res)
+    series = res.series_delta is not None
+    fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
+    FigureCanvasAgg(fig)
+    engine = fig.get_layout_engine()
+    assert isinstance(engine, ConstrainedLayoutEngine)
+    engine.set(wspace=0.12)  # room for the 3D view's z label
+    ncols = 3 if series else 2
+    ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
+    ax2 = fig.add_subplot(1, ncols, 2)
+    _view_3d(ax3, drawn)
+    lines2 = _side_view(ax2, drawn, res, curve, scale)
+    colours = drawn.colours
+    if colours is not None:
+        cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
+        cb.set_label(f"tension [N], {colours.t_min:.6g} to {colours.t_max:.6g}")
+    if series:
+        _deflection(fig.add_subplot(1, ncols, 3), res, curve, drawn.balls)
+    status = ""
+    if res.converged is False:
+        status = " (NOT converged)"
+    if res.from_trajectory:
+        status += " (last trajectory frame)"
+    if scale != 1.0:
+        status += f" (displacements × {scale:g})"
+    fig.suptitle(f"{res.title}{status}")
+    return fig
+
+
+UNDEFORMED: dict[str, Any] = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
+
+
+@dataclass
+class _Colours:
+    """The edges' tensions and how they map to colours (the data's range)."""
+
+    tension: np.ndarray
+    norm: Normalize
+    cmap: Colormap
+    t_min: float
+    t_max: float
+
+    @classmethod
+    def of(cls, res) -> _Colours | None:
+        """None where the file has no finite tensions (nothing to colour by)."""
+        from matplotlib import colormaps
+        from matplotlib.colors import Normalize, TwoSlopeNorm
+
+        mesh = res.mesh
+        tension = res.tension
+        # a file that stores no tensions (not written by catenet): computed from the mesh
+        if tension is None and mesh.rest_length is not None and mesh.EA is not None:
+            material = res.case.get("material", {}) if res.case else {}
+            only = bool(material.get("tension_only", True))
+            tension = edge_tension(res.x, mesh.edges, mesh.rest_length, mesh.EA, only)
+        if tension is None or not len(tension) or not np.all(np.isfinite(tension)):
+            return None
         t_min, t_max = float(tension.min()), float(tension.max())
+        norm: Normalize
         if t_min < 0.0 < t_max:  # compression (bilateral edges): diverging colours
             norm, cmap = TwoSlopeNorm(0.0, t_min, t_max), colormaps["coolwarm"]
         else:  # the range of the data, not from 0: a prestressed net is not one colour
             uniform = t_max - t_min <= 1e-9 * max(abs(t_max), abs(t_min))  # round-off only
             pad = (0.05 * abs(t_max) or 1.0) if uniform else 0.0
             norm, cmap = Normalize(t_min - pad, t_max + pad), colormaps["viridis"]
-    else:
-        tension, norm, cmap = None, None, None
+        return cls(tension, norm, cmap, t_min, t_max)
 
-    curve = paper_curve(res)
-    series = res.series_delta is not None
-    fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
-    FigureCanvasAgg(fig)
-    fig.get_layout_engine().set(wspace=0.12)  # room for the 3D view's z label
-    ncols = 3 if series else 2
-    ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
-    ax2 = fig.add_subplot(1, ncols, 2)
-    undeformed = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
+    def paint(self, lines) -> None:
+        lines.set_array(self.tension)
+        lines.set_cmap(self.cmap)
+        lines.set_norm(self.norm)
 
-    # 3D view
-    ax3.add_collection3d(Line3DCollection(seg_ref, **undeformed))
-    lines3 = Line3DCollection(seg_def, linewidths=1.4)
-    if tension is not None:
-        lines3.set_array(tension)
-        lines3.set_cmap(cmap)
-        lines3.set_norm(norm)
-    else:
-        lines3.set_color("C0")
+
+@dataclass
+class _Drawn:
+    """What the two views of the net draw: the undeformed and deformed edges (M, 2, 3),
+    the drawn positions x (displacements scaled), the colours, the balls and obstacles,
+    and the box [lo, hi] around all of them."""
+
+    nodes: np.ndarray
+    x: np.ndarray
+    fixed: np.ndarray | None
+    seg_ref: np.ndarray
+    seg_def: np.ndarray
+    colours: _Colours | None
+    balls: Balls
+    obstacles: Obstacles
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @classmethod
+    def of(cls, res, scale: float, balls: Balls, obstacles: Obstacles) -> _Drawn:
+        mesh = res.mesh
+        nodes, edges = mesh.nodes, mesh.edges
+        x = nodes + scale * (res.x - nodes)
+        seg_ref = nodes[edges]  # (M, 2, 3)
+        seg_def = x[edges]
+        colours = _Colours.of(res)
+        lo, hi = _limits(seg_ref, seg_def, *balls.extent())
+        lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
+        return cls(nodes, x, mesh.fixed, seg_ref, seg_def, colours, balls, obstacles, lo, hi)
+
+    def deformed(self, lines) -> None:
+        """Colours the deformed edges by tension (one colour without tensions)."""
+        if self.colours is not None:
+            self.colours.paint(lines)
+        else:
+            lines.set_color("C0")
+
+
+def _view_3d(ax3, d: _Drawn) -> None:
+    """The 3D view: true proportions, but no axis shorter than 40 % of the longest (a
+    flat net: its deflection would be squashed into a sliver)."""
+    from matplotlib.ticker import MaxNLocator
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    ax3.add_collection3d(Line3DCollection(d.seg_ref, **UNDEFORMED))
+    lines3 = Line3DCollection(d.seg_def, linewidths=1.4)
+    d.deformed(lines3)
     ax3.add_collection3d(lines3)
-    from catenet.plot.bodies import Balls
-    from catenet.plot.obstacles import Obstacles
-
-    balls = Balls(res, scale)  # moving spheres (none: draws nothing)
-    obstacles = Obstacles(res)  # the case's other obstacles (none: draws nothing)
-    lo, hi = _limits(seg_ref, seg_def, *balls.extent())
-    lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
-    # true proportions, but no axis shorter than 40 % of the longest (a flat net: its
-    # deflection would be squashed into a sliver)
+    lo, hi = d.lo, d.hi
     longest = float(np.max(hi - lo))
     mid, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.2 * longest)
     stretched = bool(half[2] > 0.5 * (hi - lo)[2] * (1 + 1e-9))
@@ -253,38 +331,39 @@ def figure(res, *, scale: float = 1.0):
     ax3.set_box_aspect(tuple(2.0 * half))
     for axis in (ax3.xaxis, ax3.yaxis, ax3.zaxis):
         axis.set_major_locator(MaxNLocator(4))
-    if fixed is not None and fixed.any():
-        f = x[fixed]
+    if d.fixed is not None and d.fixed.any():
+        f = d.x[d.fixed]
         ax3.scatter(f[:, 0], f[:, 1], f[:, 2], color="red", s=8, depthshade=False)
-    balls.draw3d(ax3)
-    obstacles.draw3d(ax3, mid - half, mid + half)
+    d.balls.draw3d(ax3)
+    d.obstacles.draw3d(ax3, mid - half, mid + half)
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("y [m]")
     ax3.set_zlabel("z [m] (stretched)" if stretched else "z [m]", labelpad=1)
     ax3.set_title("3D view")
 
-    # side view: the horizontal axis along which the net is longer
+
+def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
+    """The side view along the horizontal axis in which the net is longer (with the
+    closed-form shape of the paper's cable cases); returns the deformed edges' lines."""
+    from matplotlib.collections import LineCollection
+
+    nodes, x, lo, hi = d.nodes, d.x, d.lo, d.hi
     h = 0 if np.ptp(nodes[:, 0]) >= np.ptp(nodes[:, 1]) else 1
     ax2.set_axisbelow(True)  # the grid under the nets: z = 0 hides no undeformed line
     ax2.grid(True, lw=0.3, zorder=0)
-    ax2.add_collection(
-        LineCollection(seg_ref[:, :, [h, 2]], label="undeformed", zorder=2, **undeformed)
-    )
-    lines2 = LineCollection(seg_def[:, :, [h, 2]], linewidths=1.4, label="deformed", zorder=3)
-    if tension is not None:
-        lines2.set_array(tension)
-        lines2.set_cmap(cmap)
-        lines2.set_norm(norm)
-    else:
-        lines2.set_color("C0")
+    ref: Any = d.seg_ref[:, :, [h, 2]]  # (M, 2, 2): LineCollection takes the array
+    ax2.add_collection(LineCollection(ref, label="undeformed", zorder=2, **UNDEFORMED))
+    deformed: Any = d.seg_def[:, :, [h, 2]]
+    lines2 = LineCollection(deformed, linewidths=1.4, label="deformed", zorder=3)
+    d.deformed(lines2)
     ax2.add_collection(lines2)
     if curve is not None and scale == 1.0:
         centre = 0.5 * (nodes[0] + nodes[-1])
         span = np.linspace(float(np.min(x[:, h])), float(np.max(x[:, h])), 301)
         z = curve.shape(span - centre[h]) + centre[2]
         ax2.plot(span, z, ":", color="k", lw=1.2, label=curve.shape_label, zorder=4)
-    if fixed is not None and fixed.any():
-        f = x[fixed]
+    if d.fixed is not None and d.fixed.any():
+        f = x[d.fixed]
         ax2.plot(f[:, h], f[:, 2], "o", color="red", ms=3, label="supports", zorder=5)
     p = res.probe
     ax2.plot(
@@ -296,8 +375,8 @@ def figure(res, *, scale: float = 1.0):
         zorder=5,
         label=f"probe node {p}: δ = {res.delta:.4g} m",
     )
-    balls.draw2d(ax2, h)
-    obstacles.draw2d(ax2, h, lo, hi)
+    d.balls.draw2d(ax2, h)
+    d.obstacles.draw2d(ax2, h, lo, hi)
     ax2.update_datalim(np.column_stack([[lo[h], hi[h]], [lo[2], hi[2]]]))
     ax2.autoscale_view()
     ax2.set_aspect("equal", adjustable="datalim")
@@ -305,44 +384,31 @@ def figure(res, *, scale: float = 1.0):
     ax2.set_ylabel("z [m]")
     ax2.set_title("side view")
     ax2.legend(loc="best", fontsize="small")
+    return lines2
 
-    if tension is not None:
-        cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
-        cb.set_label(f"tension [N], {t_min:.6g} to {t_max:.6g}")
 
-    if series:
-        ax_t = fig.add_subplot(1, ncols, 3)
-        ax_t.grid(True, lw=0.3)
-        t, d = res.series_t, res.series_delta
-        if curve is not None:
-            ax_t.plot(
-                curve.x_closed, curve.y_closed, "-", color="k", lw=1.0, label=curve.closed_label
-            )
-            ax_t.plot(curve.x, curve.y, "o", color="C0", ms=4, label="catenet (load steps)")
-            ax_t.set_xlabel(curve.xlabel)
-            ax_t.set_ylabel(curve.ylabel)
-            ax_t.set_title(curve.title)
-            ax_t.legend(loc="best", fontsize="small")
-        else:
-            ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
-            if res.method == "dynamic":
-                ax_t.set_xlabel("time t [s]")
-                ax_t.set_title("probe deflection against time")
-            elif res.method == "static":
-                ax_t.set_xlabel("load factor [-]")
-                ax_t.set_title("probe deflection against load")
-            else:
-                ax_t.set_xlabel("/trajectory/time")
-                ax_t.set_title("probe deflection along the trajectory")
-            ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
-            balls.draw_series(ax_t)
-
-    status = ""
-    if res.converged is False:
-        status = " (NOT converged)"
-    if res.from_trajectory:
-        status += " (last trajectory frame)"
-    if scale != 1.0:
-        status += f" (displacements × {scale:g})"
-    fig.suptitle(f"{res.title}{status}")
-    return fig
+def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls) -> None:
+    """The probe's deflection along the trajectory (against time or load factor), or the
+    paper's plot with its closed form."""
+    ax_t.grid(True, lw=0.3)
+    t, d = res.series_t, res.series_delta
+    if curve is not None:
+        ax_t.plot(curve.x_closed, curve.y_closed, "-", color="k", lw=1.0, label=curve.closed_label)
+        ax_t.plot(curve.x, curve.y, "o", color="C0", ms=4, label="catenet (load steps)")
+        ax_t.set_xlabel(curve.xlabel)
+        ax_t.set_ylabel(curve.ylabel)
+        ax_t.set_title(curve.title)
+        ax_t.legend(loc="best", fontsize="small")
+        return
+    ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
+    if res.method == "dynamic":
+        ax_t.set_xlabel("time t [s]")
+        ax_t.set_title("probe deflection against time")
+    elif res.method == "static":
+        ax_t.set_xlabel("load factor [-]")
+        ax_t.set_title("probe deflection against load")
+    else:
+        ax_t.set_xlabel("/trajectory/time")
+        ax_t.set_title("probe deflection along the trajectory")
+    ax_t.set_ylabel(f"deflection δ of node {res.probe} [m] (down)")
+    balls.draw_series(ax_t)

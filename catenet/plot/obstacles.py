@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +23,7 @@ log = logging.getLogger(__name__)
 MAX_FACES = 3000  # above: a mesh is drawn in 3D by its edges
 MAX_EDGES = 6000  # at most this many of them
 FACE = {"facecolors": "0.6", "edgecolors": "0.6", "alpha": 0.25, "linewidth": 0.0, "zorder": 0.5}
-SIDE = {"facecolor": "0.8", "edgecolor": "0.6", "linewidth": 0.6, "alpha": 0.6}
+SIDE: dict[str, Any] = {"facecolor": "0.8", "edgecolor": "0.6", "linewidth": 0.6, "alpha": 0.6}
 #: finite obstacles widen the views by at most this share of the net's span on each side
 REACH = 0.5
 

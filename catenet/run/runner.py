@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
+from catenet.run.report import CableSummary, RunReport, RunResult
+from catenet.solver.result import Timing
 
 log = logging.getLogger(__name__)
 
@@ -149,8 +151,9 @@ def run_case(
     before every Newton iteration as well, so that a long step stops too: the run ends as
     interrupted with the last equilibrium (static) or time step (dynamic).
 
-    ``result.stats`` gains ``delta`` (probe z-deflection, positive down), ``delta_over_L``,
-    ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
+    The result (a ``RunResult``) carries a ``RunReport``: the probe's z-deflection
+    ``delta`` (positive down), ``delta_over_L``, ``size``, ``probe``, ``output`` (the file
+    written, or None), warnings and per-cable statistics. ConvergenceError and
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
 
@@ -233,16 +236,6 @@ def run_case(
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
-    result.stats.update(
-        delta=delta,
-        size=float(scene.size),
-        probe=int(scene.probe),
-        output=None if path is None else str(path),
-        backend=backend,
-        strain_warning=beyond or "",
-        trajectory_bytes=0 if trajectory is None else trajectory.bytes,
-    )
-    result.stats["delta_over_L"] = delta / float(scene.size)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables
         from catenet.solver.diagnose import describe_unstable
@@ -258,13 +251,24 @@ def run_case(
         top, slack = measures.cable_stats(
             scene.net, result.x, result.tension, cables.edge, len(cables.names)
         )
-        result.stats["cables"] = {
-            name: {"max_tension": float(t), "slack_fraction": float(s)}
+        per_cable = {
+            name: CableSummary(float(t), float(s))
             for name, t, s in zip(cables.names, top, slack, strict=True)
         }
+    report = RunReport(
+        delta=delta,
+        size=float(scene.size),
+        probe=int(scene.probe),
+        output=None if path is None else str(path),
+        backend=backend,
+        strain_warning=beyond or "",
+        trajectory_bytes=0 if trajectory is None else trajectory.bytes,
+        cables=per_cable if cables is not None else None,
+    )
+    run = RunResult.of(result, report)
     if on_done is not None:
-        on_done(scene, ws, result)
-    return result
+        on_done(scene, ws, run)
+    return run
 
 
 def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None):
@@ -360,7 +364,8 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             message="interrupted" if stopped else str(exc),
             outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
             wall_time=time.perf_counter() - begin,
-            stats={**ws.stats(), **_times(clock)},
+            stats=ws.stats(),
+            timing=_timing(clock),
         )
         if stopped:  # within a step: like a stop between steps, not a failure
             log.info("interrupted during %s", "a time step" if dynamic else "a load step")
@@ -375,7 +380,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     if res.outcome is Outcome.INTERRUPTED:
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
     res.wall_time = time.perf_counter() - begin
-    res.stats.update(_times(clock))
+    res.timing = _timing(clock)
     _write_result(writer, res)
     return res
 
@@ -388,9 +393,9 @@ def _static_residual(ws, scene, x, factor: float) -> float:
     return float(np.linalg.norm((grad - force)[~net.fixed]))
 
 
-def _times(clock) -> dict:
-    """The run's start-up and solve seconds (``catenet.run.clock.Clock``)."""
-    return {"startup_seconds": clock.startup, "solve_seconds": clock.solve}
+def _timing(clock) -> Timing:
+    """The run's solve and start-up seconds (``catenet.run.clock.Clock``)."""
+    return Timing(solve=clock.solve, startup=clock.startup)
 
 
 # --------------------------------------------------------------------------------------------
@@ -467,8 +472,8 @@ class _NoFile:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc) -> bool:
-        return False
+    def __exit__(self, *exc) -> None:
+        return None
 
     def wants(self, step: int) -> bool:
         return False

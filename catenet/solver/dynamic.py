@@ -113,9 +113,7 @@ def solve_dynamic(
     follow = HarmonicExtension(net) if loads.moves_supports and settle > t0 else None
 
     t = t0
-    quantum = dt / 2**MAX_CUTS  # every step is a multiple of it, until t_end cuts one short
-    h = dt
-    good = 0
+    control = StepControl(dt, t0, t_end)
     steps = 0
     iterations = 0
     residual = 0.0
@@ -131,7 +129,7 @@ def solve_dynamic(
     kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
     fresh = False  # this step's retry with fresh factorisations (its kept one failed)
     while t < t_end * (1 - 1e-12) and not equilibrium:
-        h_step = min(h, t_end - t)
+        h_step = control.step(t)
         x_trial[:] = x
         scheme.predict(x_trial, v, free, h_step)  # Eq. 11 for implicit Euler
         supports = loads.support_positions(net, time=t + h_step)
@@ -181,10 +179,11 @@ def solve_dynamic(
             continue
         fresh = False
         if not ok:
-            h = 0.5 * h_step
-            good = 0
-            log.info("t = %.6g: step %.3g failed (%s); retrying with %.3g", t, h_step, why, h)
-            if h < dt / 2**MAX_CUTS:
+            again = control.failed(h_step)
+            log.info(
+                "t = %.6g: step %.3g failed (%s); retrying with %.3g", t, h_step, why, control.h
+            )
+            if not again:
                 raise ConvergenceError(
                     f"dynamic step at t = {t:.6g} s failed even with h = {h_step:.3g} s: {why}",
                     iterations=iterations,
@@ -195,15 +194,13 @@ def solve_dynamic(
         v = scheme.accept(x_trial, x, v, free, h_step)  # Eq. 10c for implicit Euler
         _store(scheme, a_out, free)
         x[:] = x_trial
-        t = _advance(t, h_step, t0, t_end, quantum)
+        t = control.advance(t, h_step)
         steps += 1
+        assert newton is not None  # ok: it converged
         residual = newton.residual
-        good += 1
-        if h < dt and good >= GROW_AFTER:
-            h = min(dt, 2.0 * h)
-            good = 0
+        control.accepted()
         if stop_at_equilibrium and t >= settle and not moving:  # it runs to t_end
-            equilibrium, residual_static, ratio = _at_rest(
+            equilibrium, residual_static, ratio = at_rest(
                 system, potential, x, v, m_free, h_step, rtol
             )
             if on_rest is not None:
@@ -242,7 +239,7 @@ def _mass_and_damping(net: Net, damping: float):
     m_free = np.repeat(net.mass[~net.fixed], 3)
     if net.bodies:
         body = np.repeat(np.flatnonzero(~net.fixed) >= net.n_net, 3)
-        damping = np.where(body, 0.0, damping)
+        return m_free, np.where(body, 0.0, damping)
     return m_free, damping
 
 
@@ -265,7 +262,46 @@ def start_acceleration(
     scheme = Newmark()
     potential = potential_at(workspace.potential(loads), loads, net, t)
     scheme.begin(potential, x, np.asarray(v, dtype=np.float64), m_free, mu)
-    return _store(scheme, np.zeros_like(x), workspace.system.free_dofs)
+    out = np.zeros_like(x)
+    _store(scheme, out, workspace.system.free_dofs)
+    return out
+
+
+class StepControl:
+    """The time step of a run from t0 to t_end: ``dt`` while steps converge; a failed step
+    is retried with half its length (``failed`` says whether that is still at least the
+    smallest step, dt / 2**MAX_CUTS); after GROW_AFTER accepted steps in a row a shortened
+    step doubles, back up to dt. ``advance`` gives the time after a step: exact multiples
+    of the smallest step after t0 (t0 + k dt with one rounding while the step is dt), not
+    sums of the steps' round-off."""
+
+    def __init__(self, dt: float, t0: float, t_end: float):
+        self.dt, self.t0, self.t_end = dt, t0, t_end
+        self.quantum = dt / 2**MAX_CUTS  # every step is a multiple of it (but one at t_end)
+        self.h = dt  # the next step's length
+        self.good = 0  # steps accepted since the last change of h
+
+    def step(self, t: float) -> float:
+        """The next step from t: h, cut short at t_end."""
+        return min(self.h, self.t_end - t)
+
+    def failed(self, h_step: float) -> bool:
+        """A step of ``h_step`` failed: the next try has half its length. False when that
+        is below the smallest step (the run fails)."""
+        self.h = 0.5 * h_step
+        self.good = 0
+        return not self.h < self.dt / 2**MAX_CUTS
+
+    def accepted(self) -> None:
+        """A step was accepted: after GROW_AFTER of them a shortened step doubles."""
+        self.good += 1
+        if self.h < self.dt and self.good >= GROW_AFTER:
+            self.h = min(self.dt, 2.0 * self.h)
+            self.good = 0
+
+    def advance(self, t: float, h_step: float) -> float:
+        """The time after the step of ``h_step`` from t."""
+        return _advance(t, h_step, self.t0, self.t_end, self.quantum)
 
 
 def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> float:
@@ -279,9 +315,11 @@ def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> flo
     return t + h
 
 
-def _at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, float]:
-    """Static residual and inertial force both below rtol times the load scale; the
-    residual and the larger of the two over that tolerance."""
+def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, float]:
+    """The rest test of dynamic relaxation after a step of length h to (x, v): whether the
+    static residual |grad E - f| and the inertial force |M v| / h are both below rtol
+    times the load scale (the larger of |f| and |grad E|); the residual and the larger of
+    the two over that tolerance (at most 1 at rest)."""
     _, grad = system.gradient(x)
     r = grad.reshape(-1)[system.free_dofs] - potential.f_free
     scale = max(potential.f_norm, float(norm(grad.reshape(-1))))

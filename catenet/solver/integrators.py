@@ -136,14 +136,20 @@ class Newmark:
         force = potential.f_free - grad.reshape(-1)[system.free_dofs]
         self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
 
+    @property
+    def _a(self) -> np.ndarray:
+        if self.a is None:
+            raise RuntimeError("Newmark: begin() sets the acceleration state first")
+        return self.a
+
     def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None:
         """Newton's start: x_n + h v_n + h^2/2 a_n (constant acceleration over the step)."""
-        x_trial.reshape(-1)[free] += h * v.reshape(-1)[free] + (0.5 * h * h) * self.a
+        x_trial.reshape(-1)[free] += h * v.reshape(-1)[free] + (0.5 * h * h) * self._a
 
     def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
         """w and a of the step's inertia term: the equation of motion above with
         a_{n+1} = (x - p)/(beta h^2), p = x_n + h v_n + h^2 (1/2 - beta) a_n."""
-        a_n, beta, gamma, am = self.a, self.beta, self.gamma, self.alpha_m
+        a_n, beta, gamma, am = self._a, self.beta, self.gamma, self.alpha_m
         p = y_k + h * v_k + (h * h * (0.5 - beta)) * a_n
         self._p = p
         w = m_free * ((1.0 - am) / (beta * h * h) + damping * gamma / (beta * h))
@@ -154,10 +160,11 @@ class Newmark:
         """The new velocities (and acceleration) of the accepted step; supports'
         velocities are their mean over the step."""
         y_new = x_new.reshape(-1)[free]
+        assert self._p is not None  # weights() came first
         a_new = (y_new - self._p) / (self.beta * h * h)
         out = (x_new - x) / h
         v_k = v.reshape(-1)[free]
-        out.reshape(-1)[free] = v_k + h * ((1.0 - self.gamma) * self.a + self.gamma * a_new)
+        out.reshape(-1)[free] = v_k + h * ((1.0 - self.gamma) * self._a + self.gamma * a_new)
         self.a = a_new
         return out
 

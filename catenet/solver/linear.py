@@ -190,7 +190,7 @@ class LinearSolver:
         self.n = len(self.indptr) - 1
         self.upper = upper
         self.dof_node = dof_node
-        self._data = None
+        self._data: np.ndarray | None = None  # the values last factorised (a copy)
         self._anorm = 0.0
         self._r = np.empty(self.n)
         self._analysed = False
@@ -279,6 +279,8 @@ class LinearSolver:
     def weak_nodes(self) -> list[int]:
         """Nodes whose DOFs have (almost) no stiffness on the diagonal."""
         diag = np.zeros(self.n)
+        if self._data is None:  # nothing factorised yet
+            return []
         rows = np.repeat(np.arange(self.n), np.diff(self.indptr))
         on = rows == self.indices
         diag[rows[on]] = self._data[on]

@@ -5,10 +5,15 @@ search inside a bracket; capped at the first contact with an obstacle)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from catenet.kernels.sparse import dot, norm
+from catenet.kernels.sparse import dot
+
+if TYPE_CHECKING:
+    from catenet.solver.potential import Evaluation, Potential
 
 ARMIJO = 1e-4
 MAX_HALVINGS = 30
@@ -16,8 +21,38 @@ MAX_EXPANSIONS = 12
 WOLFE = 0.9  # curvature condition: |slope at the step| <= 0.9 |slope at 0|
 
 
-def line_search(potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial):
-    """Step length along dy.
+@dataclass(frozen=True)
+class Trial:
+    """Phi along the step at one length: its evaluation (None where the step touches an
+    obstacle), the slope of Phi along dy there and whether it decreased enough."""
+
+    alpha: float
+    evaluation: Evaluation | None
+    slope: float
+    ok: bool
+
+    @property
+    def phi(self) -> float:
+        return math.inf if self.evaluation is None else self.evaluation.phi
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a line search found: the step length alpha, whether a step was taken (x then
+    holds y0 + alpha dy), rho (actual over predicted decrease of Phi at the full step) and
+    the evaluation at alpha (its gradient a copy, the caller's to keep)."""
+
+    alpha: float
+    accepted: bool
+    rho: float
+    trial: Evaluation | None
+
+
+class LineSearch:
+    """The line search of one Newton step along dy (free DOFs) from x, whose evaluation is
+    ``start`` (Phi, its round-off level, the residual norm) and whose slope along dy is
+    ``slope`` < 0; ``tol`` the residual's tolerance, ``predicted`` the decrease of Phi the
+    quadratic model predicts for the full step; ``y_trial`` a buffer of the free DOFs.
 
     alpha = 1 when Phi decreases enough (Armijo) and its slope along dy has flattened
     (|slope| <= WOLFE |slope at 0|), as for every Newton step near the solution. While the
@@ -26,85 +61,122 @@ def line_search(potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted
     search on the slope inside the bracket [lo, hi] finds a point that satisfies both
     conditions. The potential of a tension-only net is convex, so the slope along dy is
     monotone and the bracket sound; elsewhere the search falls back to bisection.
-
-    Returns (alpha, accepted, rho, evaluation at alpha); x holds y0 + alpha dy if accepted.
     """
-    free = potential.system.free_dofs
-    xf = x.reshape(-1)
-    cap = potential.max_step(x, dy)  # steps of this length or longer touch an obstacle
-    refused = (math.inf, None, 0.0, 0.0, 0.0, math.inf), math.inf, False
 
-    def at(alpha):
-        if alpha >= cap:
-            return refused
-        np.add(y0, alpha * dy, out=y_trial)
-        xf[free] = y_trial
-        phi_t, g_t, scale_t, floor_t, phi_tol_t = potential.evaluate(x)
-        gnorm_t = float(norm(g_t.reshape(-1)))
-        finite = math.isfinite(phi_t) and math.isfinite(gnorm_t)
-        d_t = float(dot(g_t, dy)) if finite else math.inf
-        if abs(phi_t - phi) > phi_tol:
-            ok = finite and phi_t <= phi + ARMIJO * alpha * slope
+    def __init__(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        dy: np.ndarray,
+        *,
+        start: Evaluation,
+        slope: float,
+        tol: float,
+        predicted: float,
+        y_trial: np.ndarray,
+    ):
+        self.potential = potential
+        self.x = x
+        self.dy = dy
+        self.start = start
+        self.slope = slope
+        self.tol = tol
+        self.predicted = predicted
+        self.y_trial = y_trial
+        self.free = potential.system.free_dofs
+        self.y0 = x.reshape(-1)[self.free].copy()
+        self.cap = potential.max_step(x, dy)  # steps this long or longer touch an obstacle
+
+    def at(self, alpha: float) -> Trial:
+        """Phi at y0 + alpha dy (x is left there)."""
+        if alpha >= self.cap:
+            return Trial(alpha, None, math.inf, False)
+        np.add(self.y0, alpha * self.dy, out=self.y_trial)
+        self.x.reshape(-1)[self.free] = self.y_trial
+        ev = self.potential.evaluate(self.x)
+        start = self.start
+        finite = math.isfinite(ev.phi) and math.isfinite(ev.gnorm)
+        d = float(dot(ev.g, self.dy)) if finite else math.inf
+        if abs(ev.phi - start.phi) > start.phi_tol:
+            ok = finite and ev.phi <= start.phi + ARMIJO * alpha * self.slope
         else:  # Phi cannot tell: the gradient norm decides
-            ok = finite and (gnorm_t <= (1.0 - ARMIJO * alpha) * gnorm or gnorm_t <= tol)
-        return (phi_t, g_t.copy(), scale_t, floor_t, phi_tol_t, gnorm_t), d_t, ok
+            ok = finite and (
+                ev.gnorm <= (1.0 - ARMIJO * alpha) * start.gnorm or ev.gnorm <= self.tol
+            )
+        return Trial(alpha, ev.kept(), d, ok)
 
-    def flat(d):
-        return abs(d) <= WOLFE * abs(slope)
+    def flat(self, d: float) -> bool:
+        return abs(d) <= WOLFE * abs(self.slope)
 
-    ev, d, ok = at(1.0)
-    rho = 0.0
-    if math.isfinite(ev[0]):
-        if abs(ev[0] - phi) > phi_tol and predicted > 0:
-            rho = (phi - ev[0]) / predicted
+    def rho(self, full: Trial) -> float:
+        """Actual over predicted decrease of Phi at the full step (where Phi cannot tell:
+        1 if the residual fell, else 0)."""
+        ev, start = full.evaluation, self.start
+        if ev is None or not math.isfinite(ev.phi):
+            return 0.0
+        if abs(ev.phi - start.phi) > start.phi_tol and self.predicted > 0:
+            return (start.phi - ev.phi) / self.predicted
+        return 1.0 if ev.gnorm < start.gnorm else 0.0
+
+    def run(self) -> Outcome:
+        full = self.at(1.0)
+        rho = self.rho(full)
+        if full.ok and full.slope >= WOLFE * self.slope:
+            return Outcome(1.0, True, rho, full.evaluation)
+        if full.ok:  # still steep at the full step: lengthen it
+            best, lo, hi = self._lengthen(full)
         else:
-            rho = 1.0 if ev[5] < gnorm else 0.0
-    if ok and (d >= WOLFE * slope):
-        return 1.0, True, rho, ev
-    best = None  # (alpha, evaluation)
-    if ok:  # still steep at the full step: lengthen it
-        best = (1.0, ev)
-        lo, d_lo, hi, d_hi = 1.0, d, None, None
+            best, lo, hi = None, Trial(0.0, self.start, self.slope, True), full
+        if hi is not None:
+            best = self._bracket(best, lo, hi)
+        if best is None:
+            self.x.reshape(-1)[self.free] = self.y0
+            return Outcome(0.0, False, rho, None)
+        np.add(self.y0, best.alpha * self.dy, out=self.y_trial)
+        self.x.reshape(-1)[self.free] = self.y_trial
+        return Outcome(best.alpha, True, rho, best.evaluation)
+
+    def _lengthen(self, full: Trial) -> tuple[Trial, Trial, Trial | None]:
+        """Steps 4, 16, ... times as long while Phi falls and the slope stays steep:
+        the best step, and the bracket's ends (hi None: the last step is flat)."""
+        best = lo = full
+        hi = None
         for _ in range(MAX_EXPANSIONS):
-            alpha = 4.0 * lo
-            ev, d, ok = at(alpha)
-            if ok and d < 0.0:
-                best, lo, d_lo = (alpha, ev), alpha, d
-                if flat(d):
+            trial = self.at(4.0 * lo.alpha)
+            if trial.ok and trial.slope < 0.0:
+                best = lo = trial
+                if self.flat(trial.slope):
                     hi = None
                     break
                 continue
-            hi, d_hi = alpha, d
-            if ok and ev[0] < best[1][0]:
-                best = (alpha, ev)
+            hi = trial
+            if trial.ok and trial.phi < best.phi:
+                best = trial
             break
-    else:
-        lo, d_lo, hi, d_hi = 0.0, slope, 1.0, d
-    if hi is not None:
+        return best, lo, hi
+
+    def _bracket(self, best: Trial | None, lo: Trial, hi: Trial) -> Trial | None:
+        """A secant search on the slope inside [lo, hi] (bisection where the slopes do
+        not bracket a zero): the best acceptable step found."""
+        a_lo, d_lo, a_hi, d_hi = lo.alpha, lo.slope, hi.alpha, hi.slope
         for _ in range(MAX_HALVINGS):
             if math.isfinite(d_hi) and d_hi > 0.0 > d_lo:  # secant, kept off the ends
-                alpha = lo - d_lo * (hi - lo) / (d_hi - d_lo)
-                alpha = min(max(alpha, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo))
+                alpha = a_lo - d_lo * (a_hi - a_lo) / (d_hi - d_lo)
+                alpha = min(max(alpha, a_lo + 0.1 * (a_hi - a_lo)), a_hi - 0.1 * (a_hi - a_lo))
             else:
-                alpha = 0.5 * (lo + hi)
-            ev, d, ok = at(alpha)
-            if ok:
-                if best is None or ev[0] < best[1][0]:
-                    best = (alpha, ev)
-                if flat(d):
+                alpha = 0.5 * (a_lo + a_hi)
+            trial = self.at(alpha)
+            if trial.ok:
+                if best is None or trial.phi < best.phi:
+                    best = trial
+                if self.flat(trial.slope):
                     break
-                if d < 0.0:
-                    lo, d_lo = alpha, d
+                if trial.slope < 0.0:
+                    a_lo, d_lo = alpha, trial.slope
                 else:
-                    hi, d_hi = alpha, d
+                    a_hi, d_hi = alpha, trial.slope
             else:
-                hi, d_hi = alpha, d
-            if best is not None and hi - lo < 1e-3 * hi:
+                a_hi, d_hi = alpha, trial.slope
+            if best is not None and a_hi - a_lo < 1e-3 * a_hi:
                 break
-    if best is None:
-        xf[free] = y0
-        return 0.0, False, rho, None
-    alpha, ev = best
-    np.add(y0, alpha * dy, out=y_trial)
-    xf[free] = y_trial
-    return alpha, True, rho, ev
+        return best

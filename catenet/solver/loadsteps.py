@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -59,7 +60,7 @@ def continuation(
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
-        settings = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
+        settings: dict[str, Any] = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
         try:
             r = solve_static(
                 net,

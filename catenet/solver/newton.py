@@ -43,25 +43,21 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from catenet.errors import ConvergenceError, Interrupted, SingularSystemError
-from catenet.kernels.sparse import dot, norm
-from catenet.solver.linear import LinearSolver
-from catenet.solver.linesearch import line_search
-from catenet.solver.system import System
-from catenet.terms import ExternalForce, Term
+from catenet.kernels.sparse import dot
+from catenet.solver.linesearch import LineSearch, Outcome
+from catenet.solver.potential import Potential
 
 log = logging.getLogger(__name__)
 
-EPS = np.finfo(float).eps
 C_MIN = 1e-12  # below this relative regularisation, c is set to 0 (pure Newton)
 C_MAX = 1e12
 STALL_FLOOR = 10.0  # a residual stuck within this multiple of the floor has converged
-FLOOR_SAFETY = 16.0  # a DOF's residual within this many eps of its forces is round-off
 SHRINK = 1e-3  # c restarts at this fraction of _c_start after pure Newton stumbles
 STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond round-off: stop
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
@@ -129,138 +125,6 @@ class Reuse:
         self._owner = None
 
 
-class Potential:
-    """Phi on the free DOFs of a net: the sum of energy terms (``catenet.terms``), with
-    the supports held in place. Evaluates value and gradient, fills the Jacobian.
-
-    ``system`` sums the internal terms (stretching and whatever else the scene names),
-    ``force`` (N, 3) is the external force (the linear term -f.x), ``steps`` are the
-    terms of a time step (inertia and damping), whose values change from step to step.
-    """
-
-    def __init__(
-        self,
-        system: System,
-        solver: LinearSolver,
-        force: np.ndarray,
-        steps: Sequence[Term] = (),
-    ):
-        self.system = system
-        self.solver = solver
-        external = ExternalForce(force)
-        self.force = external.force  # (N, 3) external force
-        self.f_free = external.flat[system.free_dofs].copy()
-        self.f_norm = external.norm
-        self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
-        self.steps = tuple(steps)
-        self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
-        # Terms that bound a step (obstacles: the first contact along it).
-        self._limits = [t for t in system.terms if t.bounds_step]
-        self._dx = np.zeros_like(self.force) if self._limits else None
-        self._g = np.empty(system.n_free)
-        self._shift = np.empty(system.n_free)
-
-    def set_force(self, force: np.ndarray) -> None:
-        """Replaces the external force (N, 3) in place: a time-varying load's value at a
-        time step, without rebuilding the potential (the pattern and solver stay)."""
-        external = ExternalForce(force)
-        self.force = external.force
-        self.f_free = external.flat[self.system.free_dofs].copy()
-        self.f_norm = external.norm
-        self.external = external if self.f_norm > 0 else None
-
-    def begin_step(
-        self, x: np.ndarray, time: float | None = None, start: float | None = None
-    ) -> None:
-        """Tells every term a new load step (``time`` None) or time step (from ``start``,
-        the time of x, to ``time``) starts from the accepted state x (``Term.begin_step``)."""
-        for term in (*self.system.terms, *self.steps):
-            term.begin_step(x, time, start)
-
-    def with_system(self, system: System) -> Potential:
-        """The same loads and step terms on other internal terms of the same pattern."""
-        return Potential(system, self.solver, self.force, self.steps)
-
-    def free(self, x: np.ndarray) -> np.ndarray:
-        return x.reshape(-1)[self.system.free_dofs]
-
-    def max_step(self, x: np.ndarray, dy: np.ndarray) -> float:
-        """The largest multiple of the step dy (free DOFs) from x that keeps every node
-        outside every obstacle (inf when there are none)."""
-        if not self._limits:
-            return math.inf
-        self._dx.reshape(-1)[self.system.free_dofs] = dy
-        return min(t.max_step(x, self._dx) for t in self._limits)
-
-    def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
-        """``target`` if the straight path of the free nodes from x to it keeps every node
-        outside every obstacle, else their point ``share`` of the way to the first contact
-        (supports stay where ``target`` puts them)."""
-        if not self._limits:
-            return target
-        dx = target - x
-        t = min(o.max_step(x, dx) for o in self._limits)
-        if t > 1.0:
-            return target
-        out = target.copy()
-        free = self.system.free.reshape(-1, 3)
-        out[free] = x[free] + share * t * dx[free]
-        return out
-
-    def evaluate(self, x: np.ndarray) -> tuple[float, np.ndarray, float, float, float]:
-        """Phi, grad Phi (free DOFs), the load scale, the gradient's round-off floor and
-        the round-off level of Phi.
-
-        The load scale is the larger of |f| and |internal force| (supports included).
-        The floor adds the round-off of every term: forces of size |f| and |internal|,
-        and the strains' (coordinates of size |x| carry an error eps |x|, which each edge
-        turns into a force error EA eps |x| / l0 at both of its nodes)."""
-        energy, grad = self.system.gradient(x)
-        internal = float(norm(grad.reshape(-1)))
-        strains, phi_scale = self.system.roundoff(x)
-        work = 0.0 if self.external is None else -self.external.energy(x)
-        phi = energy - work
-        floor = self.f_norm + 2.0 * internal + strains
-        phi_scale += abs(work)
-        for term in self.steps:
-            e = term.gradient(x, grad)
-            phi += e
-            g_level, e_level = term.roundoff(x, e)
-            floor += g_level
-            phi_scale += e_level
-        g = self._g
-        np.subtract(grad.reshape(-1)[self.system.free_dofs], self.f_free, out=g)
-        scale = max(self.f_norm, internal)
-        floor *= 4.0 * EPS
-        phi_scale *= 64.0 * EPS
-        return phi, g, scale, floor, phi_scale
-
-    def at_floor(self, x: np.ndarray, g: np.ndarray) -> float | None:
-        """The norm of the residual's round-off floor, DOF by DOF, if the residual g (free
-        DOFs) at x is within it in every free DOF: FLOOR_SAFETY eps of the forces that
-        meet there (the edges' |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other
-        terms' and the loads' forces); else None. A state there is converged, and that
-        norm is the tolerance it was held to (the caller compares it with the loads)."""
-        stretch = self.system.stretch
-        free = self.system.free_dofs
-        level = np.repeat(stretch.node_roundoff(x), 3)[free]
-        _, grad = self.system.gradient(x)
-        level += 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
-        for term in self.steps:  # a time step's inertia
-            force = np.zeros_like(x)
-            term.gradient(x, force)
-            level += 2.0 * np.abs(force.reshape(-1)[free])
-        level *= FLOOR_SAFETY * EPS
-        return float(np.linalg.norm(level)) if bool(np.all(np.abs(g) <= level)) else None
-
-    def factorize(self, x: np.ndarray, c: float) -> None:
-        """Fills J + c D at x and factorises it."""
-        shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
-        data = self.system.hessian(x, shift, self.steps)
-        # Cholesky while no non-convex term (an obstacle out of reach) contributes.
-        self.solver.factorize(data, definite=self.system.convex)
-
-
 def solve(
     potential: Potential,
     x: np.ndarray,
@@ -279,153 +143,231 @@ def solve(
     ``reuse``: modified Newton with the factorisation it keeps (module docstring).
     ``shifted``: start with the regularisation a rejected first step would bring
     (SHRINK x ``_c_start``), for a start known to be stiff in some directions only."""
-    free = potential.system.free_dofs
-    xf = x.reshape(-1)
-    phi, g, scale, floor, phi_tol = potential.evaluate(x)
-    gnorm = float(norm(g.reshape(-1)))
-    tol = max(rtol * scale if atol is None else atol, floor)
-    history = [gnorm]
-    c = SHRINK * _c_start(potential, g) if shifted else 0.0  # raised when singular or a step fails
-    factorizations = 0
-    reused = 0
-    stall = 0
-    good = 0  # consecutive well-predicted full steps
-    best, best_phi, moved = gnorm, phi, 0  # the iteration of the last progress: stagnation
-    it = 0
-    reason = ""
-    y_trial = np.empty_like(g)
-    while True:
+    run = _Newton(potential, x, rtol=rtol, atol=atol, max_iter=max_iter, label=label, reuse=reuse)
+    if shifted:
+        run.c = SHRINK * _c_start(potential, run.ev.g)
+    while (reason := run.verdict()) is None:
+        run.it += 1
+        step = run.direction()
+        if step is None:  # no regularisation made the matrix regular and the step descend
+            return run.result()
+        dy, slope, kept = step
+        # Decrease of Phi that the quadratic model predicts for the full step (the model's
+        # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
+        predicted = -0.5 * slope + 0.5 * run.c * float(dot(potential.D * dy, dy))
+        search = LineSearch(
+            potential,
+            x,
+            dy,
+            start=run.ev,
+            slope=slope,
+            tol=run.tol,
+            predicted=predicted,
+            y_trial=run.y_trial,
+        ).run()
+        if search.accepted:
+            run.accept(search, kept)
+        elif (reason := run.reject(kept)) is not None:
+            break
+    run.reason = reason
+    run.polish()
+    return run.result()
+
+
+class _Newton:
+    """The state of one Newton solve between iterations: the evaluation at x, the
+    tolerance, the regularisation c and the counts that judge progress."""
+
+    def __init__(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        *,
+        rtol: float,
+        atol: float | None,
+        max_iter: int,
+        label: str,
+        reuse: Reuse | None,
+    ):
+        self.potential = potential
+        self.x = x
+        self.rtol, self.atol, self.max_iter = rtol, atol, max_iter
+        self.label = label
+        self.reuse: Reuse | None = reuse
+        self.ev = potential.evaluate(x)
+        self.gnorm = self.ev.gnorm
+        self.tol = max(self.target(), self.ev.floor)
+        self.history = [self.gnorm]
+        self.c = 0.0  # raised when singular or a step fails
+        self.factorizations = 0
+        self.reused = 0
+        self.stall = 0
+        self.good = 0  # consecutive well-predicted full steps
+        # the iteration of the last progress (stagnation)
+        self.best, self.best_phi, self.moved = self.gnorm, self.ev.phi, 0
+        self.it = 0
+        self.reason = ""
+        self.y_trial = np.empty_like(self.ev.g)
+
+    def target(self) -> float:
+        """The tolerance the loads ask for [N] (the floor aside)."""
+        return self.rtol * self.ev.scale if self.atol is None else self.atol
+
+    def at_floor(self, reason: str | None) -> str | None:
+        """Convergence at round-off if the residual is within every DOF's floor (the
+        tolerance then that floor), else ``reason``."""
+        if (level := self.potential.at_floor(self.x, self.ev.g)) is not None:
+            self.tol = max(self.tol, level)
+            return "converged (round-off floor)"
+        return reason
+
+    def verdict(self) -> str | None:
+        """Why the iteration ends before the next step (None: it goes on)."""
+        gnorm, floor = self.gnorm, self.ev.floor
         if not math.isfinite(gnorm):
-            reason = "non-finite residual"
-            break
-        if gnorm <= tol:  # which criterion held: the tolerance, or the floor above it
-            target = rtol * scale if atol is None else atol
-            reason = "converged" if gnorm <= target else "converged (round-off floor)"
-            break
-        if stall >= 3 and gnorm <= STALL_FLOOR * floor:
-            reason, tol = "converged (round-off floor)", max(tol, STALL_FLOOR * floor)
-            break
-        if it >= max_iter:
-            reason = f"no convergence in {max_iter} iterations"
-            if (level := potential.at_floor(x, g)) is not None:
-                reason, tol = "converged (round-off floor)", max(tol, level)
-            break
+            return "non-finite residual"
+        if gnorm <= self.tol:  # which criterion held: the tolerance, or the floor above it
+            return "converged" if gnorm <= self.target() else "converged (round-off floor)"
+        if self.stall >= 3 and gnorm <= STALL_FLOOR * floor:
+            self.tol = max(self.tol, STALL_FLOOR * floor)
+            return "converged (round-off floor)"
+        if self.it >= self.max_iter:
+            return self.at_floor(f"no convergence in {self.max_iter} iterations")
         if _stop is not None and _stop():
             raise Interrupted(
-                f"{label}: interrupted after {it} Newton iterations", iterations=it, history=history
+                f"{self.label}: interrupted after {self.it} Newton iterations",
+                iterations=self.it,
+                history=self.history,
             )
-        if it - moved >= STAGNATION:
-            if (level := potential.at_floor(x, g)) is not None:
-                reason, tol = "converged (round-off floor)", max(tol, level)
-                break
-            reason = (
+        if self.it - self.moved >= STAGNATION:
+            return self.at_floor(
                 f"stagnated: neither the residual nor the energy has decreased beyond round-off "
-                f"in {STAGNATION} iterations (best residual {best:.3e} N, round-off floor "
+                f"in {STAGNATION} iterations (best residual {self.best:.3e} N, round-off floor "
                 f"{floor:.1e} N)"
             )
-            break
-        it += 1
-        kept = reuse is not None and reuse.valid(potential, c)
-        if kept:  # modified Newton: the kept matrix, if it gives a descent direction
+        return None
+
+    def direction(self) -> tuple[np.ndarray, float, bool] | None:
+        """The step dy, the slope g.dy < 0 and whether it came from a kept factorisation;
+        None (with the reason) if no regularisation c <= C_MAX gives a descent direction."""
+        potential, g, reuse = self.potential, self.ev.g, self.reuse
+        if reuse is not None and reuse.valid(potential, self.c):
+            # modified Newton: the kept matrix, if it gives a descent direction
             try:
                 dy = potential.solver.solve(-g)
                 slope = float(dot(g, dy))
             except SingularSystemError:
                 slope = math.nan
-            if not slope < 0.0:
-                kept = False
-                reuse.drop()
-            else:
-                reused += 1
+            if slope < 0.0:
+                self.reused += 1
+                return dy, slope, True
+            reuse.drop()
         # Newton direction, raising c until the matrix is regular and dy a descent direction.
-        while not kept:
+        while True:
             try:
-                potential.factorize(x, c)
-                factorizations += 1
+                potential.factorize(self.x, self.c)
+                self.factorizations += 1
                 dy = potential.solver.solve(-g)
                 slope = float(dot(g, dy))
                 if slope < 0.0:
                     if reuse is not None:
-                        reuse.mark(potential, c)
-                    break
+                        reuse.mark(potential, self.c)
+                    return dy, slope, False
                 why = "not a descent direction"
             except SingularSystemError as exc:
-                if c >= C_MAX:
+                if self.c >= C_MAX:
                     raise
                 why = str(exc)
-            c = max(10.0 * c, _c_start(potential, g))
-            log.debug("%s: %s; regularisation c -> %.3g", label, why, c)
-            if c > C_MAX:
-                reason = "regularisation failed (" + why + ")"
-                return NewtonResult(False, it, gnorm, tol, history, reason, factorizations, reused)
-        # Decrease of Phi that the quadratic model predicts for the full step (the model's
-        # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
-        predicted = -0.5 * slope + 0.5 * c * float(dot(potential.D * dy, dy))
-        y0 = xf[free].copy()
-        alpha, accepted, rho, trial = line_search(
-            potential, x, y0, dy, phi, slope, gnorm, phi_tol, tol, predicted, y_trial
-        )
-        if not accepted:
-            xf[free] = y0
-            phi, g, scale, floor, phi_tol = potential.evaluate(x)
-            if gnorm <= STALL_FLOOR * floor:
-                reason, tol = "converged (round-off floor)", max(tol, STALL_FLOOR * floor)
-                break
-            if (level := potential.at_floor(x, g)) is not None:
-                reason, tol = "converged (round-off floor)", max(tol, level)
-                break
-            if kept:  # a fresh matrix before a larger c
-                reuse.drop()
-                continue
-            c = max(4.0 * c, SHRINK * _c_start(potential, g))
-            log.debug("%s: step rejected; regularisation c -> %.3g", label, c)
-            if c > C_MAX:
-                reason = "line search failed"
-                if (level := potential.at_floor(x, g)) is not None:
-                    reason, tol = "converged (round-off floor)", max(tol, level)
-                break
-            stall += 1
-            continue
-        prev = gnorm
-        phi, g, scale, floor, phi_tol, gnorm = trial
-        tol = max(rtol * scale if atol is None else atol, floor)
-        history.append(gnorm)
-        stall = stall + 1 if gnorm > 0.5 * prev else 0
-        if gnorm < best * (1.0 - PROGRESS) and best - gnorm > floor:
-            best, moved = gnorm, it
-        if phi < best_phi - phi_tol:
-            best_phi, moved = phi, it
+            self.c = max(10.0 * self.c, _c_start(potential, g))
+            log.debug("%s: %s; regularisation c -> %.3g", self.label, why, self.c)
+            if self.c > C_MAX:
+                self.reason = "regularisation failed (" + why + ")"
+                return None
+
+    def reject(self, kept: bool) -> str | None:
+        """After a step the line search refused (x back at its start): why the iteration
+        ends, or None to try again (a fresh matrix, or a larger c)."""
+        self.ev = self.potential.evaluate(self.x)
+        floor = self.ev.floor
+        if self.gnorm <= STALL_FLOOR * floor:
+            self.tol = max(self.tol, STALL_FLOOR * floor)
+            return "converged (round-off floor)"
+        if (reason := self.at_floor(None)) is not None:
+            return reason
+        if kept and self.reuse is not None:  # a fresh matrix before a larger c
+            self.reuse.drop()
+            return None
+        self.c = max(4.0 * self.c, SHRINK * _c_start(self.potential, self.ev.g))
+        log.debug("%s: step rejected; regularisation c -> %.3g", self.label, self.c)
+        if self.c > C_MAX:
+            return self.at_floor("line search failed")
+        self.stall += 1
+        return None
+
+    def accept(self, search: Outcome, kept: bool) -> None:
+        """Moves on to the state the line search reached; adapts c (or the kept matrix)."""
+        prev = self.gnorm
+        ev = search.trial
+        assert ev is not None  # the step was accepted
+        self.ev = ev
+        self.gnorm = gnorm = ev.gnorm
+        self.tol = max(self.target(), ev.floor)
+        self.history.append(gnorm)
+        self.stall = self.stall + 1 if gnorm > 0.5 * prev else 0
+        if gnorm < self.best * (1.0 - PROGRESS) and self.best - gnorm > ev.floor:
+            self.best, self.moved = gnorm, self.it
+        if ev.phi < self.best_phi - ev.phi_tol:
+            self.best_phi, self.moved = ev.phi, self.it
         log.debug(
             "%s %3d: |r| = %.3e (tol %.1e)  step %.3g  rho %.2f  c = %.2g",
-            label,
-            it,
+            self.label,
+            self.it,
             gnorm,
-            tol,
-            alpha,
-            rho,
-            c,
+            self.tol,
+            search.alpha,
+            search.rho,
+            self.c,
         )
-        if kept:  # c stays; a slow step refreshes the matrix
-            if gnorm > REUSE_RATE * prev and not _converges_soon(gnorm, prev, tol):
-                reuse.drop()
-            continue
-        good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
-        c = _update_regularisation(c, alpha, rho, good, potential, g)
-    converged = reason.startswith("converged")
-    target = rtol * scale if atol is None else atol
-    if converged and gnorm > target and math.isfinite(gnorm):
-        # The round-off floor, not the tolerance, ended the run: one more Newton step
-        # often lands far below the floor (the iteration was still quadratic).
+        if kept and self.reuse is not None:  # c stays; a slow step refreshes the matrix
+            if gnorm > REUSE_RATE * prev and not _converges_soon(gnorm, prev, self.tol):
+                self.reuse.drop()
+            return
+        self.good = self.good + 1 if (search.alpha >= 1.0 and search.rho > 0.75) else 0
+        self.c = _update_regularisation(
+            self.c, search.alpha, search.rho, self.good, self.potential, ev.g
+        )
+
+    def polish(self) -> None:
+        """When the round-off floor, not the tolerance, ended a converged run: one more
+        Newton step often lands far below the floor (the iteration was still quadratic)."""
+        if not (
+            self.reason.startswith("converged")
+            and self.gnorm > self.target()
+            and math.isfinite(self.gnorm)
+        ):
+            return
+        potential, reuse = self.potential, self.reuse
         count = potential.solver.stats["factorize"]
-        better = _polish(potential, x, g, gnorm)
+        better = _polish(potential, self.x, self.ev.g, self.gnorm)
         if reuse is not None and potential.solver.stats["factorize"] > count:
             reuse.mark(potential, 0.0)  # J at a point next to the solution: worth keeping
         if better is not None:
-            gnorm = better
-            history.append(gnorm)
-            it += 1
-            factorizations += 1
-    return NewtonResult(converged, it, gnorm, tol, history, reason, factorizations, reused)
+            self.gnorm = better
+            self.history.append(better)
+            self.it += 1
+            self.factorizations += 1
+
+    def result(self) -> NewtonResult:
+        return NewtonResult(
+            self.reason.startswith("converged"),
+            self.it,
+            self.gnorm,
+            self.tol,
+            self.history,
+            self.reason,
+            self.factorizations,
+            self.reused,
+        )
 
 
 def _converges_soon(gnorm: float, prev: float, tol: float) -> bool:
@@ -448,8 +390,7 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
     if potential.max_step(x, dy) <= 1.0:
         return None  # the full step would touch an obstacle
     xf[free] = y0 + dy
-    g_new = potential.evaluate(x)[1]
-    new = float(norm(g_new.reshape(-1)))
+    new = potential.evaluate(x).gnorm
     if math.isfinite(new) and new < gnorm:
         return new
     xf[free] = y0

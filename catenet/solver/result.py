@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
@@ -25,6 +25,39 @@ class Outcome(StrEnum):
 
 
 @dataclass
+class SolverStats:
+    """What a solve cost: the linear solver's backend, the size of the system, and the
+    count and seconds of each phase (the linear solver's symbolic analysis, numerical
+    factorisation, solves and refinements; the assembly of values; the workspace's set-up)."""
+
+    backend: str = ""
+    dofs: int = 0
+    nnz: int = 0  # stored entries of the system matrix (one triangle)
+    analyse_count: int = 0
+    factorize_count: int = 0
+    solve_count: int = 0
+    refine_count: int = 0  # solves whose backward error needed iterative refinement
+    analyse_seconds: float = 0.0
+    factorize_seconds: float = 0.0
+    solve_seconds: float = 0.0
+    assembly_seconds: float = 0.0
+    setup_seconds: float = 0.0
+
+    def as_dict(self) -> dict[str, str | int | float]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Where a whole run's time went (``catenet run``: ``catenet.run.clock.Clock``): the
+    solve (the engine) and the start-up before it (the interpreter, imports, the case,
+    the JIT cache) [s]; /result ``solve_time`` and ``startup_time``."""
+
+    solve: float
+    startup: float
+
+
+@dataclass
 class Result:
     """A solved state of a net.
 
@@ -44,7 +77,8 @@ class Result:
     stable : for bilateral nets, whether the stiffness at the equilibrium is positive
         definite (False: an unstable equilibrium, e.g. a straight cable in compression);
         None where not checked (tension-only nets are never unstable)
-    stats : counts and seconds per phase (assembly, analyse, factorize, solve)
+    stats : counts and seconds per phase (``SolverStats``)
+    timing : a whole run's solve and start-up seconds (``Timing``; None outside a run)
     diagnosis : what makes an unstable equilibrium unstable (``catenet.solver.diagnose``), or ""
     outcome : how the solve ended (``Outcome``); None where not known
     """
@@ -64,11 +98,12 @@ class Result:
     max_strain: float = float("nan")
     stable: bool | None = None
     history: list[float] = field(default_factory=list)
-    stats: dict = field(default_factory=dict)
+    stats: SolverStats = field(default_factory=SolverStats)
     a: np.ndarray | None = None
     contact_force: np.ndarray | None = None
     diagnosis: str = ""
     outcome: Outcome | None = None
+    timing: Timing | None = None
 
 
 def finish(

@@ -11,7 +11,7 @@ import numpy as np
 from catenet.errors import ConfigError, SingularSystemError
 from catenet.model.measures import strain
 from catenet.model.net import Loads, Net
-from catenet.solver.newton import Potential
+from catenet.solver.potential import Potential
 from catenet.terms.stretch import Springs
 
 
@@ -115,7 +115,7 @@ def stretched_start(potential: Potential, x: np.ndarray) -> None:
 
     def slope(s: float) -> float:
         np.add(x0, s * u, out=x)
-        g = potential.evaluate(x)[1]
+        g = potential.evaluate(x).g
         return float(np.dot(g, u_free))
 
     lo, hi = 0.0, 1e-6

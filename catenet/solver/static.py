@@ -16,7 +16,8 @@ from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import describe_unstable
-from catenet.solver.newton import Potential, _c_start, raise_unconverged, solve
+from catenet.solver.newton import _c_start, raise_unconverged, solve
+from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import start_state, stretched_start, unstressed
 from catenet.solver.workspace import Workspace, check_rtol
@@ -259,8 +260,8 @@ def equilibrium(
                 if not stage(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
                     break
                 strains = strain(net, x)
-                taut = strains[strains > 0]
-                if taut.size and mu < SMOOTH_END * float(np.min(taut)):
+                positive = strains[strains > 0]
+                if positive.size and mu < SMOOTH_END * float(np.min(positive)):
                     break
                 mu /= SMOOTH_REDUCTION
         if factor < 1.0:
@@ -295,11 +296,11 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
     system = potential.system
     free = system.free_dofs
     inertia = Inertia(free)
-    _, g, scale, floor, _ = potential.evaluate(x)
-    c = c_first = _c_start(potential, g)
+    ev = potential.evaluate(x)
+    c = c_first = _c_start(potential, ev.g)
     iterations, history = 0, []
     for _ in range(PT_STEPS):
-        if c < PT_END * c_first or float(np.linalg.norm(g)) <= max(rtol * scale, floor):
+        if c < PT_END * c_first or float(np.linalg.norm(ev.g)) <= max(rtol * ev.scale, ev.floor):
             break
         y = x.reshape(-1)[free].copy()
         inertia.set_step(c * potential.D, y)
@@ -313,7 +314,7 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
         else:
             x.reshape(-1)[free] = y
             c *= PT_GROW**2
-        _, g, scale, floor, _ = potential.evaluate(x)
+        ev = potential.evaluate(x)
     result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
     result.iterations += iterations
     result.history = history + result.history

@@ -11,7 +11,8 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.model.net import Loads, Net
 from catenet.solver.linear import LinearSolver, make_solver
-from catenet.solver.newton import Potential
+from catenet.solver.potential import Potential
+from catenet.solver.result import SolverStats
 from catenet.solver.system import System
 from catenet.terms import Stretch, Term
 
@@ -53,17 +54,23 @@ class Workspace:
         force = loads.external_force(self.net, factor)
         return Potential(self.system, self.solver, force, steps)
 
-    def stats(self) -> dict:
+    def stats(self) -> SolverStats:
+        """What the solves on this workspace have cost so far."""
         s = self.solver
-        return {
-            "backend": s.name,
-            "dofs": self.system.n_free,
-            "nnz": self.system.nnz,
-            **{f"{k}_count": v for k, v in s.stats.items()},
-            **{f"{k}_seconds": v for k, v in s.seconds.items()},
-            "assembly_seconds": self.system.seconds,
-            "setup_seconds": self.setup_seconds,
-        }
+        return SolverStats(
+            backend=s.name,
+            dofs=self.system.n_free,
+            nnz=self.system.nnz,
+            analyse_count=s.stats["analyse"],
+            factorize_count=s.stats["factorize"],
+            solve_count=s.stats["solve"],
+            refine_count=s.stats.get("refine", 0),
+            analyse_seconds=s.seconds["analyse"],
+            factorize_seconds=s.seconds["factorize"],
+            solve_seconds=s.seconds["solve"],
+            assembly_seconds=self.system.seconds,
+            setup_seconds=self.setup_seconds,
+        )
 
 
 def check_rtol(rtol: float) -> None:

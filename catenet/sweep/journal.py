@@ -242,7 +242,7 @@ def read_table(directory: Path) -> tuple[list[str], list[str], dict[str, list]]:
     with path.open(newline="", encoding="utf-8") as fh:
         reader = csv.reader(fh)
         columns = next(reader)
-        data = {c: [] for c in columns}
+        data: dict[str, list] = {c: [] for c in columns}
         for line in reader:
             for c, v in zip(columns, line, strict=False):
                 data[c].append(_parse_cell(v))

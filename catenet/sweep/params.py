@@ -142,8 +142,8 @@ def expand_range(text: str) -> list:
         raise ValueError(f"{text!r}: {count} values: at most {MAX_VALUES}")
     if all(type(v) is int for v in (start, step, stop)):
         return [start + k * step for k in range(count)]
-    decimals = [_decimal(p) for p in parts]
-    if all(d is not None and d.is_finite() for d in decimals):
+    decimals = [d for d in map(_decimal, parts) if d is not None and d.is_finite()]
+    if len(decimals) == len(parts):
         d0, ds, _ = decimals
         return [float(d0 + k * ds) for k in range(count)]
     values = [float(start + k * step) for k in range(count)]

@@ -42,9 +42,14 @@ difference check that every term passes in the tests.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.model.net import Net
 
 #: Terms by name: a new term is one module that defines it plus one ``register`` call.
 TERMS: dict[str, type[Term]] = {}
@@ -73,13 +78,18 @@ class Term:
 
     name = "term"
     role = "internal"
-    convex = True
     bounds_step = False  # has max_step(x, dx)
     lagged = False  # has relag(x)
     moving = False  # has set_pose(t)
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
-    edge_net = None  # a Net: the Hessian is its edges' 6x6 blocks, edge by edge
+    edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
+
+    @property
+    def convex(self) -> bool:
+        """Whether its Hessian is positive semidefinite everywhere (a subclass says it
+        with a class attribute, or a property where it depends on the term's data)."""
+        return True
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray] | None:
         return None
@@ -90,14 +100,26 @@ class Term:
     def energy(self, x: np.ndarray) -> float:
         return self.gradient(x, np.zeros_like(x))
 
-    def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
-        """Writes the Hessian values (only terms with a pattern have any)."""
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> bool | None:
+        """Writes the Hessian values (only terms with a pattern have any); False says
+        they are all zero (an obstacle out of reach: nothing to add)."""
+        return None
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
         return 0.0, abs(energy)
 
     def stiffness(self) -> np.ndarray | None:
         return None
+
+    def max_step(self, x: np.ndarray, dx: np.ndarray) -> float:
+        """(``bounds_step`` terms) The largest multiple of the step dx from x that keeps
+        every node outside; inf when it never touches."""
+        return math.inf
+
+    def relag(self, x: np.ndarray) -> float:
+        """(``lagged`` terms) Updates the lagged quantities at the equilibrium x; returns
+        their relative change."""
+        raise NotImplementedError(f"{type(self).__name__} lags nothing")
 
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time
@@ -148,13 +170,13 @@ def check_derivatives(term: Term, x: np.ndarray, *, step: float = 1e-6) -> tuple
     fd_h = np.zeros((n, n))
     for d in range(n):
         keep = flat[d]
-        up, down = np.zeros_like(x), np.zeros_like(x)
+        g_up, g_down = np.zeros_like(x), np.zeros_like(x)
         flat[d] = keep + h
-        term.gradient(x, up)
+        term.gradient(x, g_up)
         flat[d] = keep - h
-        term.gradient(x, down)
+        term.gradient(x, g_down)
         flat[d] = keep
-        fd_h[:, d] = (up - down).reshape(-1) / (2 * h)
+        fd_h[:, d] = (g_up - g_down).reshape(-1) / (2 * h)
     scale = max(float(np.max(np.abs(dense))), float(np.max(np.abs(fd_h))), 1e-300)
     hess_err = float(np.max(np.abs(dense - fd_h))) / scale
     return grad_err, hess_err

@@ -154,7 +154,9 @@ class Moving(Term):
     def sweep(self, t0: float, t1: float) -> float:
         """The largest displacement of any point of the obstacle from t0 to t1 [m]."""
         f = abs(self.path.distance(t1) - self.path.distance(t0))
-        return f * (float(np.linalg.norm(self.velocity)) + np.linalg.norm(self.omega) * self.reach)
+        return f * (
+            float(np.linalg.norm(self.velocity)) + float(np.linalg.norm(self.omega)) * self.reach
+        )
 
     def carry(self, base, trial, t0: float, t1: float, fixed, moved=None, index=0) -> int:
         """Moves the free nodes the obstacle may reach from t0 to t1 (gap at pose(t0)

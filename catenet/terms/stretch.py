@@ -31,17 +31,14 @@ class Stretch(Term):
     """
 
     net: Net
-    law: Law | None = None
+    law: Law = None  # type: ignore[assignment]  # None: the net's (set below)
     scale: float = 1.0
     role = "internal"
 
     def __post_init__(self):
         if self.law is None:
             object.__setattr__(self, "law", self.net.law)
-
-    @property
-    def edge_net(self) -> Net:
-        return self.net
+        object.__setattr__(self, "edge_net", self.net)
 
     @property
     def convex(self) -> bool:  # tension-only edges of a stiffening law

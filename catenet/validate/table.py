@@ -158,11 +158,11 @@ def _rel(value: float, exact: float) -> float:
 def observed_order(h: Sequence[float], err: Sequence[float]) -> float:
     """Slope of log(err) against log(h) by least squares (``numpy.polyfit``); nan when an
     error is zero or not finite."""
-    h = np.asarray(h, dtype=float)
-    err = np.asarray(err, dtype=float)
-    if len(h) < 2 or not np.all(np.isfinite(err)) or not np.all(err > 0):
+    hs = np.asarray(h, dtype=float)
+    errs = np.asarray(err, dtype=float)
+    if len(hs) < 2 or not np.all(np.isfinite(errs)) or not np.all(errs > 0):
         return math.nan
-    return float(np.polyfit(np.log(h), np.log(err), 1)[0])
+    return float(np.polyfit(np.log(hs), np.log(errs), 1)[0])
 
 
 def midpoint_load_rows(
@@ -412,7 +412,7 @@ HEADER = ("case", "quantity", "N", "catenet", "analytic", "rel. error", "order",
 
 def table_cells(rows: Sequence[Row]) -> list[tuple[str, ...]]:
     """The rows as the strings of the printed table (header first)."""
-    cells = [HEADER]
+    cells: list[tuple[str, ...]] = [HEADER]
     for r in rows:
         ok = "info" if r.passed is None else ("yes" if r.passed else "NO")
         err = "inf" if math.isinf(r.error) else _fmt(r.error, ".2e")

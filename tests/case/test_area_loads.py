@@ -50,7 +50,7 @@ def test_on_the_square_net_it_is_the_papers_pressure(tmp_path):
         assert np.array_equal(force(area), force(paper))
     a = run_case(parse_case(with_area(SQUARE, pressure=150.0)), tmp_path / "a.h5")
     b = run_case(parse_case(paper), tmp_path / "b.h5")
-    assert np.array_equal(a.x, b.x) and a.stats["delta"] == b.stats["delta"]
+    assert np.array_equal(a.x, b.x) and a.report.delta == b.report.delta
 
 
 @pytest.mark.parametrize("half, p", [(6.0, 800.0), (0.3, 2.5), (40.0, 1200.0)])

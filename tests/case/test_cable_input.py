@@ -18,6 +18,7 @@ from conftest import CONFIGS
 from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.cli import main
 from catenet.errors import ConfigError
+from catenet.run.report import CableSummary
 from catenet.run.runner import run_case
 
 # --------------------------------------------------------------------------- results
@@ -34,14 +35,14 @@ def test_results_per_cable_in_stats_file_and_summary(tmp_path):
     case_file = tmp_path / "c.toml"
     case_file.write_text(dumps_toml(data))
     result = run_case(load_case(case_file))
-    a, b = result.stats["cables"]["a"], result.stats["cables"]["b"]
-    assert a["max_tension"] == pytest.approx(float(result.tension.max())) and a["max_tension"] > 100
-    assert a["slack_fraction"] == 0.0
-    assert b == {"max_tension": 0.0, "slack_fraction": 1.0}
+    a, b = result.report.cables["a"], result.report.cables["b"]
+    assert a.max_tension == pytest.approx(float(result.tension.max())) and a.max_tension > 100
+    assert a.slack_fraction == 0.0
+    assert b == CableSummary(max_tension=0.0, slack_fraction=1.0)
     with h5py.File(tmp_path / "r.h5") as h5:
         assert h5["mesh"].attrs["cable_names"].astype(str).tolist() == ["a", "b"]
         assert np.array_equal(h5["mesh/cable"][:], build(load_case(case_file)).cables.edge)
-        assert h5["result/cable_max_tension"][:].tolist() == [a["max_tension"], 0.0]
+        assert h5["result/cable_max_tension"][:].tolist() == [a.max_tension, 0.0]
         assert h5["result/cable_slack_fraction"][:].tolist() == [0.0, 1.0]
         assert "tension" in h5["result"] and "reaction" in h5["result"]
     r = CliRunner().invoke(main, ["run", str(case_file), "-o", str(tmp_path / "s.h5")])
@@ -56,7 +57,7 @@ def test_graphs_without_cables_write_no_cable_data(tmp_path):
     data["geometry"]["edges"] = [[0, 1], [1, 2]]
     del data["geometry"]["cable"]
     result = run_case(parse_case(data), tmp_path / "g.h5")
-    assert "cables" not in result.stats
+    assert result.report.cables is None
     with h5py.File(tmp_path / "g.h5") as h5:
         assert "cable" not in h5["mesh"] and "cable_max_tension" not in h5["result"]
 
@@ -414,7 +415,7 @@ def test_center_of_a_cable_only_net_is_a_free_node_that_moves(tmp_path):
     dist = np.linalg.norm(scene.net.nodes - mid, axis=1)
     assert dist[c] == pytest.approx(dist[free].min())
     result = run_case(parse_case(data), tmp_path / "c.h5")
-    assert result.stats["probe"] == c and result.stats["delta"] > 1e-4
+    assert result.report.probe == c and result.report.delta > 1e-4
     # A net whose middle node is free keeps it; one whose middle node is a support
     # moves 'center' to the nearest free node.
     data = straight()
@@ -441,9 +442,9 @@ def test_output_probe_picks_the_reported_node(tmp_path):
     x0 = build(parse_case(data)).net.nodes
     with h5py.File(tmp_path / "p.h5") as f:
         z = f["result/x"][3, 2]
-    assert result.stats["probe"] == 3
-    assert abs(result.stats["delta"]) > 1e-3
-    assert result.stats["delta"] == pytest.approx(x0[3, 2] - z, rel=1e-12)
+    assert result.report.probe == 3
+    assert abs(result.report.delta) > 1e-3
+    assert result.report.delta == pytest.approx(x0[3, 2] - z, rel=1e-12)
     assert parse_case(data).output.probe == 3
     assert "probe = 3" in dumps_toml(parse_case(data).to_dict())
     with open(CONFIGS / "fig4a_n10_alpha_0.toml", "rb") as f:

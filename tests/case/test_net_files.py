@@ -176,7 +176,7 @@ def test_every_vtk_file_and_the_obj_give_the_same_net_and_run(tmp_path):
         ("cross", (4, 2, 5)),
     ]
     want = run_case(obj, tmp_path / "obj.h5")
-    assert want.converged and set(want.stats["cables"]) == set(NAMES)
+    assert want.converged and set(want.report.cables) == set(NAMES)
     for name in names:
         if name == "net.obj":
             continue
@@ -185,7 +185,7 @@ def test_every_vtk_file_and_the_obj_give_the_same_net_and_run(tmp_path):
         assert got.geometry.sets.as_dict()["fixed"] == (0, 3, 4, 5), name
         assert np.array_equal(np.asarray(got.geometry.nodes), POINTS), name
         res = run_case(got, tmp_path / f"{name}.h5")
-        assert np.array_equal(res.x, want.x) and res.stats["cables"] == want.stats["cables"]
+        assert np.array_equal(res.x, want.x) and res.report.cables == want.report.cables
 
 
 def test_files_written_by_vtk_itself(tmp_path):

@@ -81,9 +81,9 @@ def test_running_it_reports_per_cable_what_form_finding_found(written, tmp_path)
     with h5py.File(w.result_file) as h5:
         found = h5["result/cable_max_tension"][:]
         names = h5["mesh"].attrs["cable_names"].astype(str).tolist()
-    per_cable = res.stats["cables"]
+    per_cable = res.report.cables
     assert list(per_cable) == names
-    got = np.array([per_cable[n]["max_tension"] for n in names])
+    got = np.array([per_cable[n].max_tension for n in names])
     np.testing.assert_allclose(got, found, rtol=1e-9)
     r = CliRunner().invoke(main, ["run", str(w.case_file), "-o", str(tmp_path / "cli.h5")])
     assert r.exit_code == 0, r.output
@@ -96,7 +96,7 @@ def test_snow_on_the_written_case_is_reported_per_cable(written, tmp_path):
     data = tomllib.loads(w.case_file.read_text())
     data["load"]["area"] = [{"pressure": 800.0}]
     res = run_case(parse_case(data), tmp_path / "snow.h5")
-    assert res.converged and set(res.stats["cables"]) == {c.name for c in w.case.geometry.cables}
+    assert res.converged and set(res.report.cables) == {c.name for c in w.case.geometry.cables}
 
 
 def test_cable_rest_lengths_per_edge_are_checked(tmp_path):

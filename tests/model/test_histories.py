@@ -147,7 +147,7 @@ def test_set_force_replaces_the_external_force_of_a_potential():
     p.set_force(f2)
     fresh = ws.potential(scene.loads, factor=2.0)
     assert np.array_equal(p.f_free, fresh.f_free) and p.f_norm == fresh.f_norm
-    assert p.evaluate(x)[0] == fresh.evaluate(x)[0]
+    assert p.evaluate(x).phi == fresh.evaluate(x).phi
     p.set_force(np.zeros_like(f2))
     assert p.external is None and p.f_norm == 0.0
 

@@ -213,3 +213,85 @@ def test_prestress_then_load_gives_the_loaded_pretensioned_cable():
     N = EA * (length / l0 - 1)
     assert r.tension == pytest.approx([N, N], rel=1e-10)
     assert 2 * N * d / length == pytest.approx(F, rel=1e-10)
+
+
+# ------------------------------------------------------------------ Material carries its law
+
+
+def _builders(material):
+    """The net of every builder under ``material``: a cable, the paper's square net and
+    a graph (a triangle with a tail)."""
+    nodes = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.5, 0.0], [1.0, 0.5, -1.0]]
+    edges = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]]
+    return {
+        "cable": cn.cable([0, 0, 0], [3, 1, 2], 7, material),
+        "square_net": cn.square_net(4, 0.3, 1.0, 0.2, material).net,
+        "graph": cn.graph(nodes, edges, [0, 1, 2], material),
+    }
+
+
+@pytest.mark.parametrize("name", ["linear", "neo_hookean", "hencky", "table"])
+def test_every_builder_makes_its_net_under_the_materials_law(name):
+    """A Material carries its law: each builder gives every edge that law (the table's
+    rows, the tension-only switch), and ``Net.tension_only`` is the law's."""
+    ea = TABLE_EA if name == "table" else 1000.0
+    table = TABLE if name == "table" else None
+    for only in (True, False):
+        material = cn.Material(EA=ea, tension_only=only, law=name, table=table)
+        for kind, net in _builders(material).items():
+            law = net.law
+            assert np.all(law.kind == LAWS[name].id), kind
+            assert np.all(law.tension_only == only) and net.tension_only is only, kind
+            if name == "table":
+                np.testing.assert_array_equal(law.table, ROWS)
+                assert np.all(law.params[:, 1] == len(ROWS))
+            else:
+                assert law.kernel_kind is None if name == "linear" else law.kernel_kind is not None
+
+
+@pytest.mark.parametrize("name", ["linear", "neo_hookean", "hencky", "table"])
+def test_a_prestressed_material_gives_every_builder_its_tension_in_the_given_geometry(name):
+    """With ``prestress`` T0 every edge's tension in the net as built is T0 (the rest
+    lengths come from the law's inverse), whatever the builder; the same builders without
+    it give the unstressed rest lengths."""
+    t0 = 150.0
+    ea = TABLE_EA if name == "table" else 1000.0
+    table = TABLE if name == "table" else None
+    plain = _builders(cn.Material(EA=ea, law=name, table=table))
+    stressed = _builders(cn.Material(EA=ea, law=name, table=table, prestress=t0))
+    for kind, net in stressed.items():
+        tension = Stretch(net).tension(net.nodes)
+        np.testing.assert_allclose(tension, t0, rtol=1e-12, err_msg=kind)
+        assert np.all(net.rest_length < plain[kind].rest_length), kind
+        np.testing.assert_allclose(Stretch(plain[kind]).tension(net.nodes), 0.0, atol=1e-12 * ea)
+
+
+def test_a_prestress_the_law_cannot_carry_names_its_key_and_edge():
+    material = cn.Material(EA=1000.0, law="hencky", prestress=500.0)  # Hencky peaks at EA/e
+    with pytest.raises(ConfigError, match="material.prestress = 500.0: cannot be met: edge 0 "):
+        cn.cable([0, 0, 0], [1, 0, 0], 3, material)
+
+
+def test_uniform_and_per_cable_materials_build_the_same_net():
+    """One path for uniform and per-cable laws: a cable case, and a graph of the same
+    polyline whose only cable takes [material] (law and prestress) give the same law,
+    rest lengths and stiffness on every edge."""
+    material = {"EA": 1000.0, "law": "neo_hookean", "prestress": 40.0, "tension_only": False}
+    cable = build(parse_case(cable_case(**material))).net
+    graph = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [3, 1, 2]],
+            "cable": [{"name": "c", "nodes": [0, 1], "edge_length": 3.8 / 12}],
+        },
+        "material": material,
+        "supports": {"fixed": [0, 1]},
+    }
+    net = build(parse_case(graph)).net
+    assert net.n_edges == cable.n_edges == 12
+    order = np.argsort(net.nodes[:, 0], kind="stable")  # the graph numbers its ends first
+    np.testing.assert_allclose(net.nodes[order], cable.nodes, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(net.law.kind, cable.law.kind)
+    np.testing.assert_array_equal(net.law.tension_only, cable.law.tension_only)
+    np.testing.assert_allclose(np.sort(net.rest_length), np.sort(cable.rest_length), rtol=1e-12)
+    np.testing.assert_array_equal(net.EA, cable.EA)

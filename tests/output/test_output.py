@@ -28,7 +28,7 @@ from catenet.output import (
     recover,
     trajectory_length,
 )
-from catenet.solver.result import Result
+from catenet.solver.result import Result, SolverStats, Timing
 
 
 def make_scene(**kw):
@@ -201,6 +201,24 @@ def test_result_can_be_read_back_as_a_frame(tmp_path):
     np.testing.assert_array_equal(frame.v, v)
     with pytest.raises(ConfigError, match="no such result file"):
         read_frame(tmp_path / "missing.h5")
+
+
+def test_solve_and_startup_time_come_from_a_runs_timing_only(tmp_path):
+    """/result solve_time and startup_time are a whole run's (``Result.timing``, set by
+    ``catenet run``); a result without one (a sweep's saved run, a Python solve) stores
+    -1, not its linear solver's seconds (``Result.stats``)."""
+    scene = make_scene(every=0)
+    res = fake_result(scene, moved(scene, 1))
+    res.stats = SolverStats(backend="scipy", solve_seconds=0.25, factorize_seconds=0.5)
+    with ResultWriter(tmp_path / "a.h5", scene, every=0) as w:
+        w.result(res)
+    res.timing = Timing(solve=1.5, startup=0.75)
+    with ResultWriter(tmp_path / "b.h5", scene, every=0) as w:
+        w.result(res)
+    with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "b.h5") as b:
+        assert a["result"].attrs["solve_time"] == -1.0 == a["result"].attrs["startup_time"]
+        assert b["result"].attrs["solve_time"] == 1.5
+        assert b["result"].attrs["startup_time"] == 0.75
 
 
 WRITER_SCRIPT = """

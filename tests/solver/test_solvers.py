@@ -175,7 +175,7 @@ def test_backends_agree():
     sq, loads = net_scene(10, 0.3, 0.05)
     a = cn.solve_static(sq.net, loads, rtol=1e-12, linear="pardiso")
     b = cn.solve_static(sq.net, loads, rtol=1e-12, linear="scipy")
-    assert a.stats["backend"] == "pardiso" and b.stats["backend"] == "scipy"
+    assert a.stats.backend == "pardiso" and b.stats.backend == "scipy"
     assert np.abs(a.x - b.x).max() <= 1e-10
 
 
@@ -348,7 +348,7 @@ def test_missing_mkl_falls_back_to_scipy_with_one_warning(fresh_mkl_lookup, monk
         assert ls.resolve_backend("auto") == "scipy"
         sq, loads = net_scene(6, edge=0.1)
         r = cn.solve_static(sq.net, loads)
-    assert r.converged and r.stats["backend"] == "scipy"
+    assert r.converged and r.stats.backend == "scipy"
     warnings = [m for m in caplog.messages if "CATENET_MKL_RT" in m]
     assert len(warnings) == 1, caplog.messages
     assert "/nowhere/libmkl_rt.so.2" in warnings[0] and "SciPy" in warnings[0]
@@ -384,13 +384,13 @@ def test_mkl_is_found_directly_and_without_pypardiso(fresh_mkl_lookup, monkeypat
     with caplog.at_level("WARNING", logger="catenet.solver.linear"):
         assert ls.resolve_backend("auto") == "pardiso"
         sq, loads = net_scene(6, edge=0.1)
-        assert cn.solve_static(sq.net, loads).stats["backend"] == "pardiso"
+        assert cn.solve_static(sq.net, loads).stats.backend == "pardiso"
     assert ls.mkl_runtime().path == path and not caplog.messages
     code = (
         "import sys, catenet as cn, numpy as np\n"
         "sq = cn.square_net(6, 0.0, 1.0, 0.1, cn.Material(EA=1e4, line_density=0.1))\n"
         "r = cn.solve_static(sq.net, cn.Loads(force=cn.pressure_force(sq.net, 1.0, 1.0)))\n"
-        "assert r.stats['backend'] == 'pardiso'\n"
+        "assert r.stats.backend == 'pardiso'\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'pypardiso'"
         " or m.startswith('scipy.sparse')))\n"
     )

@@ -31,11 +31,9 @@ class Topology:
 
 
 class Built(NamedTuple):
-    """A geometry built: the net (with its supports and rest lengths), the probe node
-    whose z-deflection is reported, the length scale L of delta/L and the named nodes.
-
-    A kind that applies the case's material law and prestress itself says so with
-    ``final`` (else the scene does, uniformly); ``sets`` are its node sets, ``cables``
+    """A geometry built: the net (with its supports and rest lengths, under the case's
+    material: its law and prestress), the probe node whose z-deflection is reported, the
+    length scale L of delta/L and the named nodes; ``sets`` are its node sets, ``cables``
     its cables (a ``catenet.case.kinds.cables.CableIndex``, None: none) and ``at_nodes``
     the node of each load.point given by a position along a cable (by its index)."""
 
@@ -43,13 +41,12 @@ class Built(NamedTuple):
     probe: int
     size: float
     names: dict[str, int]
-    final: bool = False
     sets: Mapping[str, tuple[int, ...]] = {}
     cables: Any = None
     at_nodes: Mapping[int, int] = {}
 
 
-def resolve(ref: int | str, names: dict[str, int]) -> int:
+def resolve(ref: int | str, names: Mapping[str, int]) -> int:
     """A node index from an index or a node name."""
     return names[ref] if isinstance(ref, str) else ref
 
@@ -136,8 +133,9 @@ class GeometryConfig(Declared):
         reference is sound."""
 
     def build(self, material: Any, fixed: Any) -> Built:
-        """The net of ``material`` (a catenet.model.builders.Material) pinned at the node
-        references ``fixed`` (None: the kind's default supports)."""
+        """The net under ``material`` (a catenet.model.builders.Material: its law and
+        prestress; the builders apply both) pinned at the node references ``fixed``
+        (None: the kind's default supports)."""
         raise NotImplementedError
 
     def check_material(self, ck: Checker, material: Any) -> None:
@@ -146,7 +144,8 @@ class GeometryConfig(Declared):
 
     def build_case(self, case: Any, material: Any) -> Built:
         """The net of a whole case (``material``: the catenet.model.builders.Material of its
-        [material]); kinds that need more of the case than the supports override it."""
+        [material], ``catenet.case.material.model_material``); kinds that need more of the
+        case than the supports override it."""
         return self.build(material, case.supports.fixed)
 
     def area_force(self, net: Net, pressure: float, size: float) -> Any:

@@ -36,8 +36,6 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds.regions import Region, check_region, resolve
 from catenet.case.material import MaterialConfig, parse_material
-from catenet.errors import ConfigError
-from catenet.model.laws import LAWS, TABLE, Law
 
 #: How close (as a fraction of a segment) a load position must be to a node to use it.
 AT_TOL = 1e-9
@@ -103,7 +101,8 @@ def _check_polyline(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     """At least two nodes: indices (>= 0) or names (node sets of one node)."""
     if not isinstance(v, (list, tuple)) or len(v) < 2:
         return ck.bad(path, v, "must be an array of at least 2 nodes (indices or node sets)")
-    out, bad = [], []
+    out: list[int | str] = []
+    bad = []
     for k, x in enumerate(v):
         i = as_int(x)
         if isinstance(x, str) and x.strip():
@@ -153,7 +152,7 @@ def _check_sets(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
             dup = [] if bad else duplicates(idx)
             if dup:
                 ck.bad(here, nodes, f"node {dup[0]} appears more than once: list each once")
-            items.append((str(name), tuple(idx)))
+            items.append((str(name), tuple(i for i in idx if i is not None)))
     return BAD if len(ck.problems) > before else NodeSets(tuple(items))
 
 
@@ -246,10 +245,12 @@ def polylines(
                 f"[{seen_names[cable.name]}]: cable names must be unique"
             )
         seen_names.setdefault(cable.name, c)
-        line = []
-        for k, ref in enumerate(cable.nodes):
-            line.append(_node(ck, ref, f"{path}.nodes[{k}]", n, sets, named))
-        out.append(tuple(line))
+        out.append(
+            tuple(
+                _node(ck, ref, f"{path}.nodes[{k}]", n, sets, named)
+                for k, ref in enumerate(cable.nodes)
+            )
+        )
     if len(ck.problems) > before:
         return None
     segments: dict[tuple[int, int], str] = {
@@ -352,8 +353,8 @@ def cable_mesh(
     pieces = [np.asarray(edges, dtype=np.int64).reshape(-1, 2)]
     owner = [np.full(len(pieces[0]), -1, dtype=np.int64)]
     at_nodes: dict[int, int] = {}
-    for c, (line, h) in enumerate(zip(lines, hs, strict=True)):
-        line = np.asarray(line, dtype=np.int64)
+    for c, (polyline, h) in enumerate(zip(lines, hs, strict=True)):
+        line = np.asarray(polyline, dtype=np.int64)
         seg = np.linalg.norm(np.diff(xyz[line], axis=0), axis=1)
         cum = np.concatenate([[0.0], np.cumsum(seg)])
         breaks: dict[int, list[tuple[float, int]]] = {}
@@ -465,45 +466,6 @@ def cable_materials(ck: Checker, base: Any, cables: Sequence[CableConfig]) -> li
     return out
 
 
-def rest_from_prestress(law, tension, EA, length, what: str) -> np.ndarray:
-    """Rest lengths l0 = |e| / (1 + eps) at which each edge carries ``tension`` (as
-    ``catenet.case.scene._with_law``); ConfigError naming ``what(k)`` for an edge that
-    cannot (NaN strain, or l0 not positive)."""
-    eps = law.strain_for_tension(tension, EA)
-    bad = np.flatnonzero(~(np.isfinite(eps) & (eps > -1.0)))
-    if bad.size:
-        k = int(bad[0])
-        ids = {info.id: name for name, info in LAWS.items()}
-        t = float(np.broadcast_to(tension, eps.shape)[k])
-        only = ", tension-only" if law.tension_only[k] else ""
-        raise ConfigError(
-            f"{what(k)} = {t!r}: cannot be carried under law {ids[int(law.kind[k])]!r} "
-            f"(EA = {EA[k]:.6g} N{only}): its rest length would not be positive, or the law "
-            "never reaches that tension (a compression needs tension_only = false)"
-        )
-    return length / (1.0 + eps)
-
-
-def concat_laws(laws: list[Law]) -> Law:
-    """One law of the edges of several, their tables stacked (a table edge's first-row
-    parameter shifted to where its rows went)."""
-    tables, offset = [], 0
-    params = []
-    for lw in laws:
-        p = lw.params.copy()
-        if np.any(lw.kind == TABLE):
-            p[lw.kind == TABLE, 0] += offset
-            tables.append(lw.table)
-            offset += len(lw.table)
-        params.append(p)
-    return Law(
-        kind=np.ascontiguousarray(np.concatenate([lw.kind for lw in laws])),
-        params=np.ascontiguousarray(np.concatenate(params)),
-        tension_only=np.ascontiguousarray(np.concatenate([lw.tension_only for lw in laws])),
-        table=np.ascontiguousarray(np.concatenate(tables)) if tables else np.zeros((2, 3)),
-    )
-
-
 def line_force(net, on: np.ndarray, force, out: np.ndarray | None = None) -> np.ndarray:
     """Nodal forces (N, 3) of a force per unit unstressed length [N/m] along the edges
     ``on`` (a mask), lumped as the self-weight is: half of each edge's f l0 to each end;
@@ -523,11 +485,9 @@ __all__ = [
     "Overrides",
     "cable_materials",
     "cable_mesh",
-    "concat_laws",
     "estimate",
     "line_force",
     "merged_material",
     "polylines",
-    "rest_from_prestress",
     "sets_key",
 ]

@@ -29,9 +29,10 @@ from catenet.case.kinds import graph_keys as gk
 from catenet.case.kinds.base import Built, GeometryConfig, Topology, expand, with_prefix
 from catenet.case.kinds.netfile import FILE_KEYS, MESH_KEYS, is_mesh, merge_file, read_net_file
 from catenet.case.kinds.regions import empty_boxes
+from catenet.case.material import model_material
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
-from catenet.model.laws import Law, table_rows
+from catenet.model.laws import Law, prestressed_lengths
 from catenet.model.net import Net
 
 Vec3 = tuple[float, float, float]
@@ -191,7 +192,8 @@ class GraphConfig(GeometryConfig):
 
     @classmethod
     def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
-        return geometry is None or geometry.EA is not None  # None: unknown, do not insist
+        # None: unknown, do not insist
+        return geometry is None or getattr(geometry, "EA", None) is not None
 
     def estimate_size(self) -> tuple[float, float, float, str]:
         n, m = len(self.nodes), len(self.edges)
@@ -234,45 +236,13 @@ class GraphConfig(GeometryConfig):
     def check_material(self, ck: Checker, material: Any) -> None:
         cb.cable_materials(ck, material, self.cables)
 
-    def build(self, material: geo.Material, fixed: Any) -> Built:
-        """The net with ``material`` on every edge of the graph's own and of its cables
-        (the per-edge arrays where given; no per-cable material, law or prestress:
-        ``build_case`` gives the case's whole net)."""
-        mesh = self._mesh()
-        sets = self._sets(mesh)
-        names = self._names(mesh, fixed, sets)
-        probe = names["center"]
-        pinned = self._pinned(fixed, names, sets)
-        m0 = len(self.edges)
-        own = mesh.cable < 0
-        rest = None
-        if self.rest_length is not None or self.prestrain:
-            rest = _lengths(mesh.nodes, mesh.edges) / (1.0 + self.prestrain)
-            if self.rest_length is not None:
-                rest[:m0] = self.rest_length
-        EA = np.full(len(mesh.edges), material.EA)
-        if self.EA is not None:
-            EA[own] = self.EA
-        only = np.full(len(mesh.edges), material.tension_only)
-        if self.tension_only is not None:
-            only[own] = self.tension_only
-        net = Net.from_arrays(
-            mesh.nodes,
-            mesh.edges,
-            EA=EA,
-            fixed=pinned,
-            rest_length=rest,
-            line_density=material.line_density,
-            tension_only=bool(only.all()),
-            law=Law.uniform(len(mesh.edges), tension_only=only),
-        )
-        return Built(net, probe, _size(net), names, sets=sets, cables=self._index(mesh))
-
     def build_case(self, case: Any, material: geo.Material) -> Built:
         """The case's net: each edge of the graph's own under [material] and its per-edge
-        arrays, each cable's under its material; rest lengths from the prestress (per
-        edge, per cable, or material.prestress) in the given geometry, else from
-        rest_length or prestrain; the node of each point load along a cable."""
+        arrays, each cable's under its material (each a ``Material`` carrying its law:
+        one law of every edge, ``Law.concat``); rest lengths from the prestress (per edge,
+        per cable, or material.prestress) in the given geometry, else from rest_length or
+        prestrain; the node of each point load along a cable. (A graph has no build
+        without the case: its cables and loads along them need it.)"""
         at: dict[int, list[tuple[float, int]]] = {}
         order = {c.name: k for k, c in enumerate(self.cables)}
         for k, pt in enumerate(case.load.points):
@@ -299,11 +269,10 @@ class GraphConfig(GeometryConfig):
             ea = mat.axial_stiffness
             EA[sel] = self.EA if c == 0 and self.EA is not None else ea
             rho[sel] = mat.line_density
-            only = mat.tension_only
+            only = None
             if c == 0 and self.tension_only is not None:
                 only = np.asarray(self.tension_only, dtype=bool)
-            rows = table_rows(mat.table)[0] if mat.law == "table" else None
-            law = Law.uniform(n, mat.law, tension_only=only, table=rows)
+            law = model_material(mat).law_of(n, tension_only=only)
             laws.append(law)
             given = self.cables[c - 1].rest_length if c > 0 else None
             if given is not None:
@@ -322,7 +291,9 @@ class GraphConfig(GeometryConfig):
                 what = lambda k, c=c: f"geometry.cable[{c - 1}].material.prestress"  # noqa: E731
             else:
                 what = _prestress_key(False)
-            rest[sel] = cb.rest_from_prestress(law, t0, EA[sel], length[sel], what)
+            rest[sel] = prestressed_lengths(
+                law, t0, EA[sel], length[sel], what, np.flatnonzero(sel)
+            )
         net = Net.from_arrays(
             mesh.nodes,
             mesh.edges,
@@ -330,11 +301,10 @@ class GraphConfig(GeometryConfig):
             fixed=pinned,
             rest_length=rest,
             line_density=rho,
-            tension_only=all(lw.all_tension_only for lw in laws),
-            law=cb.concat_laws(laws),
+            law=Law.concat(laws),
         )
         cables = self._index(mesh)
-        return Built(net, probe, _size(net), names, True, sets, cables, mesh.at_nodes)
+        return Built(net, probe, _size(net), names, sets, cables, mesh.at_nodes)
 
     def given_nodes(self, net: Net) -> int:
         return len(self.nodes)
@@ -399,7 +369,7 @@ _DATA = tuple(n for n in names(GraphConfig) if n not in ("prestrain", "file"))
 def _prestress_key(per_edge: bool):
     if per_edge:
         return lambda k: f"geometry.prestress[{k}]"
-    return lambda k: f"material.prestress (edge {k})"
+    return lambda k: "material.prestress"
 
 
 def _cable_rest(given: tuple[float, ...], n: int, c: int) -> np.ndarray:

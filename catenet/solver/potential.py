@@ -1,0 +1,168 @@
+"""The potential Newton minimises: Phi on the free DOFs of a net, the sum of its energy
+terms with the supports held in place (``Potential``), and its value, gradient and
+round-off levels at a state (``Evaluation``). ``catenet.solver.newton`` has the method."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from catenet.kernels.sparse import norm
+from catenet.solver.linear import LinearSolver
+from catenet.solver.system import System
+from catenet.terms import ExternalForce, Term
+
+EPS = np.finfo(float).eps
+FLOOR_SAFETY = 16.0  # a DOF's residual within this many eps of its forces is round-off
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Phi and its gradient at a state, with the scales Newton's tests compare them with.
+    ``g`` is the potential's own buffer, overwritten by its next evaluation: ``kept()``
+    is the same evaluation with a copy of it."""
+
+    phi: float  # Phi [J]
+    g: np.ndarray  # grad Phi on the free DOFs [N]
+    scale: float  # the load scale: the larger of |f| and |internal force| [N]
+    floor: float  # the gradient's round-off floor [N]
+    phi_tol: float  # the round-off level of Phi [J]
+    gnorm: float  # |g| [N]
+
+    def kept(self) -> Evaluation:
+        return replace(self, g=self.g.copy())
+
+
+class Potential:
+    """Phi on the free DOFs of a net: the sum of energy terms (``catenet.terms``), with
+    the supports held in place. Evaluates value and gradient, fills the Jacobian.
+
+    ``system`` sums the internal terms (stretching and whatever else the scene names),
+    ``force`` (N, 3) is the external force (the linear term -f.x), ``steps`` are the
+    terms of a time step (inertia and damping), whose values change from step to step.
+    """
+
+    def __init__(
+        self,
+        system: System,
+        solver: LinearSolver,
+        force: np.ndarray,
+        steps: Sequence[Term] = (),
+    ):
+        self.system = system
+        self.solver = solver
+        external = ExternalForce(force)
+        self.force = external.force  # (N, 3) external force
+        self.f_free = external.flat[system.free_dofs].copy()
+        self.f_norm = external.norm
+        self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
+        self.steps = tuple(steps)
+        self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
+        # Terms that bound a step (obstacles: the first contact along it).
+        self._limits = [t for t in system.terms if t.bounds_step]
+        self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
+        self._g = np.empty(system.n_free)
+        self._shift = np.empty(system.n_free)
+
+    def set_force(self, force: np.ndarray) -> None:
+        """Replaces the external force (N, 3) in place: a time-varying load's value at a
+        time step, without rebuilding the potential (the pattern and solver stay)."""
+        external = ExternalForce(force)
+        self.force = external.force
+        self.f_free = external.flat[self.system.free_dofs].copy()
+        self.f_norm = external.norm
+        self.external = external if self.f_norm > 0 else None
+
+    def begin_step(
+        self, x: np.ndarray, time: float | None = None, start: float | None = None
+    ) -> None:
+        """Tells every term a new load step (``time`` None) or time step (from ``start``,
+        the time of x, to ``time``) starts from the accepted state x (``Term.begin_step``)."""
+        for term in (*self.system.terms, *self.steps):
+            term.begin_step(x, time, start)
+
+    def with_system(self, system: System) -> Potential:
+        """The same loads and step terms on other internal terms of the same pattern."""
+        return Potential(system, self.solver, self.force, self.steps)
+
+    def free(self, x: np.ndarray) -> np.ndarray:
+        return x.reshape(-1)[self.system.free_dofs]
+
+    def max_step(self, x: np.ndarray, dy: np.ndarray) -> float:
+        """The largest multiple of the step dy (free DOFs) from x that keeps every node
+        outside every obstacle (inf when there are none)."""
+        if not self._limits:
+            return math.inf
+        self._dx.reshape(-1)[self.system.free_dofs] = dy
+        return min(t.max_step(x, self._dx) for t in self._limits)
+
+    def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
+        """``target`` if the straight path of the free nodes from x to it keeps every node
+        outside every obstacle, else their point ``share`` of the way to the first contact
+        (supports stay where ``target`` puts them)."""
+        if not self._limits:
+            return target
+        dx = target - x
+        t = min(o.max_step(x, dx) for o in self._limits)
+        if t > 1.0:
+            return target
+        out = target.copy()
+        free = self.system.free.reshape(-1, 3)
+        out[free] = x[free] + share * t * dx[free]
+        return out
+
+    def evaluate(self, x: np.ndarray) -> Evaluation:
+        """Phi, grad Phi (free DOFs), the load scale, the gradient's round-off floor and
+        the round-off level of Phi at x (``Evaluation``).
+
+        The load scale is the larger of |f| and |internal force| (supports included).
+        The floor adds the round-off of every term: forces of size |f| and |internal|,
+        and the strains' (coordinates of size |x| carry an error eps |x|, which each edge
+        turns into a force error EA eps |x| / l0 at both of its nodes)."""
+        energy, grad = self.system.gradient(x)
+        internal = float(norm(grad.reshape(-1)))
+        strains, phi_scale = self.system.roundoff(x)
+        work = 0.0 if self.external is None else -self.external.energy(x)
+        phi = energy - work
+        floor = self.f_norm + 2.0 * internal + strains
+        phi_scale += abs(work)
+        for term in self.steps:
+            e = term.gradient(x, grad)
+            phi += e
+            g_level, e_level = term.roundoff(x, e)
+            floor += g_level
+            phi_scale += e_level
+        g = self._g
+        np.subtract(grad.reshape(-1)[self.system.free_dofs], self.f_free, out=g)
+        scale = max(self.f_norm, internal)
+        floor *= 4.0 * EPS
+        phi_scale *= 64.0 * EPS
+        return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
+
+    def at_floor(self, x: np.ndarray, g: np.ndarray) -> float | None:
+        """The norm of the residual's round-off floor, DOF by DOF, if the residual g (free
+        DOFs) at x is within it in every free DOF: FLOOR_SAFETY eps of the forces that
+        meet there (the edges' |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other
+        terms' and the loads' forces); else None. A state there is converged, and that
+        norm is the tolerance it was held to (the caller compares it with the loads)."""
+        stretch = self.system.stretch
+        free = self.system.free_dofs
+        level = np.repeat(stretch.node_roundoff(x), 3)[free]
+        _, grad = self.system.gradient(x)
+        level += 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
+        for term in self.steps:  # a time step's inertia
+            force = np.zeros_like(x)
+            term.gradient(x, force)
+            level += 2.0 * np.abs(force.reshape(-1)[free])
+        level *= FLOOR_SAFETY * EPS
+        return float(np.linalg.norm(level)) if bool(np.all(np.abs(g) <= level)) else None
+
+    def factorize(self, x: np.ndarray, c: float) -> None:
+        """Fills J + c D at x and factorises it."""
+        shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
+        data = self.system.hessian(x, shift, self.steps)
+        # Cholesky while no non-convex term (an obstacle out of reach) contributes.
+        self.solver.factorize(data, definite=self.system.convex)
