@@ -14,6 +14,7 @@ from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
+from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
@@ -30,7 +31,8 @@ class Scene:
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
     at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are the net's last nodes (``Net.bodies``)."""
+    are among the net's last nodes (``Net.bodies``); ``rigid``: the free bodies
+    (``catenet.case.rigid.FreeBody``), four nodes each after them."""
 
     case: Case
     net: Net
@@ -41,6 +43,7 @@ class Scene:
     cables: Any = None
     velocity: np.ndarray | None = None
     bodies: tuple = ()
+    rigid: tuple = ()
 
 
 def build(case: Case) -> Scene:
@@ -70,7 +73,11 @@ def _build(case: Case) -> Scene:
     net, loads, velocity, body_terms, bodies = add_bodies(
         case, net, loads, velocity, float(built.size)
     )
+    net, loads, velocity, rigid_terms, rigid = add_free_bodies(
+        case, net, loads, velocity, float(built.size)
+    )
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
+    terms += rigid_terms
     return Scene(
         case=case,
         net=net,
@@ -81,6 +88,7 @@ def _build(case: Case) -> Scene:
         cables=built.cables,
         velocity=velocity,
         bodies=bodies,
+        rigid=rigid,
     )
 
 

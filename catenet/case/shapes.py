@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.rigid import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 
@@ -62,7 +63,7 @@ def _velocity():
         write="given",
         shown="none",
         unit="m/s",
-        doc="box/capsule/mesh: moves at this velocity",
+        doc="box/capsule/mesh: moves at this velocity (a free body: its initial one)",
     )
 
 
@@ -72,7 +73,8 @@ def _spin(about: str):
         write="given",
         shown="none",
         unit="rad/s",
-        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about}",
+        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about} "
+        "(a free body: its initial one, about its centre of mass)",
     )
 
 
@@ -80,16 +82,19 @@ def _history():
     return history_key("moving box/capsule/mesh: velocities times factor(t) (dynamic runs)")
 
 
-class _Motion:
+class _Motion(FreeKeys):
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
-    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only."""
+    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
+    ``density`` a free body instead (``catenet.case.rigid``)."""
 
     @property
     def rigid_motion(self) -> bool:
-        return self.velocity is not None or self.angular_velocity is not None
+        moves = self.velocity is not None or self.angular_velocity is not None
+        return moves and not self.free
 
     def _check_motion(self, ck: Checker, path: str) -> None:
-        if self.history is not None and not self.rigid_motion:
+        self._check_free(ck, path)
+        if self.history is not None and not self.rigid_motion and not self.free:
             ck.add(
                 f"{path}.history: scales a prescribed motion: give velocity or "
                 "angular_velocity with it"
@@ -132,6 +137,9 @@ class BoxObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("its centre")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if not all(h > 0 for h in self.half_size):
@@ -168,6 +176,9 @@ class CapsuleObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the midpoint of start-end")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if self.start == self.end:
@@ -206,6 +217,9 @@ class MeshObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the point `offset`")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         self._check_motion(ck, path)

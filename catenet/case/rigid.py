@@ -1,0 +1,292 @@
+"""Free rigid bodies of a case: an ``[[obstacle]]`` box, capsule, mesh or sphere with
+``mass`` or ``density`` (a sphere: with ``density``, ``inertia`` or
+``angular_velocity``; a sphere with ``mass`` alone is a ball, ``catenet.case.bodies``,
+the exact torque-free case: a frictionless ball never spins up).
+
+Each body is four nodes appended to the net (``catenet.terms.rigid``: an affine body
+whose lumped masses m/4 carry its mass and second moment exactly), with its initial
+``velocity`` and ``angular_velocity`` (world frame, about its centre of mass), the
+orthogonality energy that keeps it rigid (``Rigidity``) and the barrier between its
+shape and every free net node (``BodyContact``). Mass properties come from the shape at
+uniform density (``mass_properties``) unless ``inertia`` (3 x 3 about the centre of
+mass in the body axes: a box's own axes, a capsule's (x', y', axis), a sphere's and a
+mesh's the world axes at t = 0; or 3 principal moments) is given.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.case.keys import Checker, Context, key, real, show
+from catenet.errors import ConfigError
+
+#: The orthogonality energy's k over the body's load scale (force x size): the body
+#: strains by about 1/RIGIDITY under a force of the scale.
+RIGIDITY = 1e6
+
+
+def _check_inertia(ck: Checker, v, path: str, ctx: Context):
+    from catenet.terms.rigid import inertia_problem
+
+    need = "must be [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] or 3 principal moments [kg m^2]"
+    rows = v
+    if isinstance(v, (list, tuple)) and len(v) == 3 and not isinstance(v[0], (list, tuple)):
+        try:
+            rows = np.diag([float(c) for c in v]).tolist()
+        except (TypeError, ValueError):
+            return ck.bad(path, v, need)
+    try:
+        I = np.array(rows, dtype=np.float64)
+    except (TypeError, ValueError):
+        return ck.bad(path, v, need)
+    if I.shape != (3, 3):
+        return ck.bad(path, v, need)
+    why = inertia_problem(I)
+    if why is not None:
+        return ck.bad(path, v, f"an inertia tensor {why}")
+    return tuple(tuple(r) for r in I.tolist())
+
+
+def mass_key():
+    return real(None, gt=0, write="given", unit="kg", doc="a free rigid body of this mass")
+
+
+def density_key():
+    return real(
+        None, gt=0, write="given", unit="kg/m^3", doc="a free rigid body of this density"
+    )
+
+
+def inertia_key():
+    return key(
+        _check_inertia,
+        "3 x 3 symmetric positive definite [kg m^2] (or 3 principal moments)",
+        None,
+        write="given",
+        shown="from the shape",
+        unit="kg m^2",
+        doc="free body: inertia about its centre of mass, body axes",
+    )
+
+
+class FreeKeys:
+    """What the free-body keys (``mass``, ``density``, ``inertia``) mean on a table."""
+
+    @property
+    def free(self) -> bool:
+        """A free rigid body (six degrees of freedom)."""
+        return self.mass is not None or self.density is not None
+
+    def _check_free(self, ck: Checker, path: str) -> None:
+        if self.mass is not None and self.density is not None:
+            ck.add(f"{path}.density = {self.density!r}: give mass or density, not both")
+        if self.inertia is not None and not self.free:
+            ck.add(f"{path}.inertia: belongs to a free body: give mass or density with it")
+        if self.free and getattr(self, "history", None) is not None:
+            ck.add(
+                f"{path}.history: a free body moves as the forces on it say; history "
+                "scales a prescribed motion (drop mass and density for one)"
+            )
+        if self.free and getattr(self, "friction", 0.0) > 0:
+            ck.add(
+                f"{path}.friction = {self.friction!r}: a free body's contact with the net "
+                "is frictionless: friction = 0"
+            )
+
+
+@dataclass(frozen=True)
+class FreeBody:
+    """A free body as the result file records it: its ``[[obstacle]]`` table, its four
+    nodes (``frame``), mass [kg], inertia (3, 3) [kg m^2] in its body axes ``axes``
+    (their world directions at t = 0, as columns) and its centre of mass at t = 0."""
+
+    obstacle: int
+    frame: object
+    mass: float
+    inertia: np.ndarray
+    axes: np.ndarray
+    center: np.ndarray
+
+
+def mass_properties(obs) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """(mass, centre of mass, inertia in the body axes, axes (columns)) of a free body
+    table, uniform density unless ``mass``/``inertia`` say otherwise."""
+    volume, com, inertia_unit, axes = _shape(obs)  # inertia per unit mass
+    mass = obs.mass if obs.mass is not None else obs.density * volume
+    inertia = mass * inertia_unit if obs.inertia is None else np.array(obs.inertia, float)
+    return float(mass), com, inertia, axes
+
+
+def _shape(obs):
+    """(volume, centre, inertia per unit mass in body axes, axes) of a shape."""
+    from catenet.terms.shapes import rotation
+
+    if obs.kind == "box":
+        h = np.asarray(obs.half_size, dtype=np.float64)
+        I = np.diag([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2]) / 3
+        return 8 * h.prod(), np.asarray(obs.center, float), I, rotation(obs.axis, obs.angle)
+    if obs.kind == "sphere":
+        r = obs.radius
+        return 4 / 3 * math.pi * r**3, np.asarray(obs.center, float), 0.4 * r * r * np.eye(3), np.eye(3)
+    if obs.kind == "capsule":
+        return _capsule(obs)
+    return _mesh(obs)
+
+
+def _capsule(obs):
+    a, b, r = np.asarray(obs.start, float), np.asarray(obs.end, float), obs.radius
+    length = float(np.linalg.norm(b - a))
+    v_cyl, v_sph = math.pi * r * r * length, 4 / 3 * math.pi * r**3
+    volume = v_cyl + v_sph
+    mc, ms = v_cyl / volume, v_sph / volume  # per unit mass
+    axial = mc * r * r / 2 + ms * 0.4 * r * r
+    arm = length / 2 + 3 * r / 8  # each half ball's centre from the middle
+    side = mc * (r * r / 4 + length**2 / 12) + ms * (83 / 320 * r * r + arm**2)
+    z = (b - a) / length
+    helper = np.eye(3)[int(np.argmin(np.abs(z)))]
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    axes = np.column_stack([x, np.cross(z, x), z])
+    return volume, 0.5 * (a + b), np.diag([side, side, axial]), axes
+
+
+def _mesh(obs):
+    V, T = obs.surface()
+    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+    vol = np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0  # signed tetrahedra from 0
+    volume = float(vol.sum())
+    com = (vol[:, None] * (a + b + c) / 4.0).sum(axis=0) / volume
+    s = a + b + c
+    outer = np.einsum("ki,kj->kij", a, a) + np.einsum("ki,kj->kij", b, b)
+    outer += np.einsum("ki,kj->kij", c, c) + np.einsum("ki,kj->kij", s, s)
+    J = (vol[:, None, None] * outer).sum(axis=0) / 20.0 / volume - np.outer(com, com)
+    return volume, com, np.trace(J) * np.eye(3) - J, np.eye(3)
+
+
+def add_free_bodies(case, net, loads, velocity, size: float):
+    """(net, loads, velocity, terms, bodies) with the case's free bodies appended (four
+    nodes each). Raises ConfigError with the key path for a body that starts overlapping
+    the net, that shares the scene with other obstacles, or has a bad inertia."""
+    from catenet.case.bodies import pad_loads
+    from catenet.model.net import Net
+
+    which = [k for k, o in enumerate(case.obstacles) if getattr(o, "free", False)]
+    if not which:
+        return net, loads, velocity, (), ()
+    _check_alone(case, which)
+    n0 = net.n_nodes
+    places, speeds, built = [], [], []
+    for j, k in enumerate(which):
+        obs = case.obstacles[k]
+        body, P, V = _frame(obs, k, n0 + 4 * j, case)
+        places.append(P)
+        speeds.append(V)
+        built.append(body)
+    nb = 4 * len(which)
+    point = np.zeros(n0) if net.point_mass is None else net.point_mass
+    masses = np.repeat([b.mass / 4 for b in built], 4)
+    net = Net.from_arrays(
+        np.vstack([net.nodes, *places]),
+        net.edges,
+        EA=net.EA,
+        fixed=np.concatenate([net.fixed, np.zeros(nb, bool)]),
+        rest_length=net.rest_length,
+        line_density=net.line_density,
+        tension_only=net.tension_only,
+        law=net.law,
+        point_mass=np.concatenate([point, masses]),
+        bodies=net.bodies + nb,
+    )
+    v = np.zeros((n0, 3)) if velocity is None else velocity
+    velocity = np.vstack([v, *speeds])
+    loads = pad_loads(loads, nb)
+    terms = []
+    for body in built:
+        terms += _terms(case, body, net, loads, size)
+    return net, loads, velocity, tuple(terms), tuple(built)
+
+
+def _check_alone(case, which) -> None:
+    k = which[0]
+    kind = case.obstacles[k].kind
+    if len(which) > 1:
+        raise ConfigError(
+            f"obstacle[{which[1]}]: a second free body: free bodies meet the net, not "
+            f"each other (obstacle[{k}] is one): keep one free body"
+        )
+    others = [i for i in range(len(case.obstacles)) if i != k]
+    if others:
+        i = others[0]
+        raise ConfigError(
+            f"obstacle[{i}] (kind {case.obstacles[i].kind!r}): a free body "
+            f"(obstacle[{k}], kind {kind!r}) meets the net only and would pass through "
+            "another obstacle: drop mass and density of the free body, or the other obstacle"
+        )
+
+
+def _frame(obs, k: int, first: int, case):
+    from catenet.terms.rigid import Frame, inertia_problem
+
+    path = f"obstacle[{k}]"
+    mass, com, inertia, axes = mass_properties(obs)
+    world = axes @ inertia @ axes.T
+    why = inertia_problem(world)
+    if why is not None:  # a given inertia is checked when parsed; a thin shape's may fail
+        raise ConfigError(f"{path}.inertia: the body's inertia {why}: give inertia")
+    frame = Frame(first, mass, world, com)
+    v = None if obs.velocity is None else np.asarray(obs.velocity, float)
+    w = getattr(obs, "angular_velocity", None)
+    P, V = frame.place(v, None if w is None else np.asarray(w, float))
+    moving = [n for n in ("velocity", "angular_velocity") if any(getattr(obs, n, None) or ())]
+    if case.solver.method != "dynamic" and moving:
+        key = moving[0]
+        raise ConfigError(
+            f"{path}.{key} = {list(getattr(obs, key))}: a free body's initial motion acts "
+            "in dynamic runs only: set solver.method = 'dynamic', or drop it"
+        )
+    return FreeBody(k, frame, mass, inertia, axes, com), P, V
+
+
+def _terms(case, body: FreeBody, net, loads, size: float) -> list:
+    """The body's rigidity and its barrier with every free net node."""
+    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.terms.contact import default_stiffness
+    from catenet.terms.rigid import Rigidity
+    from catenet.terms.rigid_contact import BodyContact
+
+    k = body.obstacle
+    obs = case.obstacles[k]
+    path = f"obstacle[{k}]"
+    frame = body.frame
+    nodes = np.flatnonzero(~net.fixed[: net.n_net])
+    g = 0.0 if loads.gravity is None else float(np.linalg.norm(loads.gravity))
+    stiff = float(np.mean(net.EA / net.rest_length)) if net.n_edges else 1.0
+    force = loads.external_force(net)[nodes]
+    per_node = float(np.mean(np.linalg.norm(force, axis=1))) if len(nodes) else 0.0
+    dhat = obs.distance if obs.distance is not None else DISTANCE_SHARE * size
+    load = max(per_node, body.mass * g / 8.0)
+    if load <= 0.0:
+        load = stiff * dhat
+    kappa = obs.stiffness if obs.stiffness is not None else default_stiffness(load, dhat)
+    shape = obs.term(nodes, kappa, dhat)
+    contact = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{path} (kind {obs.kind!r})")
+    gap = shape.gap(net.nodes)
+    inside = np.flatnonzero(~(gap > 0.0))
+    if inside.size:
+        i = int(nodes[inside[0]])
+        raise ConfigError(
+            f"{path} (kind {obs.kind!r}, a free body): node {i} at "
+            f"{show(net.nodes[i].tolist())} starts inside or on it (gap "
+            f"{gap[inside[0]]:.3g} m), {inside.size} nodes in all: a body must not "
+            "overlap the initial net; move it or the net"
+        )
+    spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
+    reach = frame.reach  # about the body's size
+    ea = float(np.max(net.EA)) if net.n_edges else stiff * size
+    w0 = np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0))
+    v0 = np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0))
+    scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
+    return [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
