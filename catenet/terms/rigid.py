@@ -33,8 +33,8 @@ X = c0 + A^T (x - c) (the body frame; A^T = A^-1 for a rotation). Its energy
 kappa b(d(X)) is a smooth function of the node and the four body nodes; the gradient and
 Hessian are the shape's g_b, H_b through the Jacobian of X (module ``kernels`` of the
 shape give those), the force on the net and on the body equal and opposite. The step cap
-``max_step`` is conservative advancement along the quadratic body-frame path of every
-node (the distance to the shape is 1-Lipschitz), stopping at CA_SHARE of a node's gap:
+``max_step`` follows the quadratic body-frame path of every node by chords within
+CA_SHARE of the smallest gap, each tested exactly against the shape grown by that much:
 no iterate has a node inside the body.
 """
 
@@ -49,8 +49,8 @@ from catenet.terms.base import Term, register
 #: Unit vertices of a regular tetrahedron (sum 0, sum v v^T = 4/3 1).
 TETRA = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]])
 TETRA /= math.sqrt(3.0)
-CA_SHARE = 0.1  # conservative advancement stops at this share of a node's gap
-CA_ITER = 60  # advances per node (then the step is capped where it got)
+CA_SHARE = 0.1  # the step cap's chords are within this share of the smallest gap
+CA_ITER = 60  # pieces of the step cap (then the step is capped where they got)
 EPS = np.finfo(np.float64).eps
 
 

@@ -15,11 +15,14 @@ node the values are its (x, x) block (9), (x, p) (36) and (p, x) (36), then the
 body's (p, p) block (144) summed over the nodes.
 
 ``max_step``: along the step, a node's body-frame point follows the quadratic path
-X(t) = X0 + t V + t^2 W (V = A^T du + dA^T u, W = dA^T du, du = dx - dc). The distance to
-the shape is 1-Lipschitz, so moving by at most the remaining gap keeps the node
-outside: each node advances t by the root of |V + 2 t W| s + |W| s^2 = d(t) - CA_SHARE d0
-until its gap is within twice that share of its start (the first contact, from below)
-or it gets beyond every step the line search tries (inf).
+X(t) = X0 + t V + t^2 W (V = A^T du + dA^T u, W = dA^T du, du = dx - dc). On a piece
+[t, t + h] the path stays within |W| h^2 / 4 of its chord, so when that is at most
+delta, a path that enters the shape has its chord enter the shape grown by delta no
+later: the chords' exact first contact with the grown shape (the kernels' own ray tests,
+the offset grown) is a safe cap, exact for W = 0 (a body that does not turn in the
+step). delta is CA_SHARE of the smallest gap (at most dhat / 2, within a mesh's grid),
+so no iterate reaches the shape; the pieces go on to beyond every step a line search
+tries (inf).
 """
 
 from __future__ import annotations
@@ -28,6 +31,9 @@ import math
 
 import numpy as np
 
+from catenet.kernels.contact import sphere_max_step
+from catenet.kernels.mesh import mesh_max_step
+from catenet.kernels.shapes import box_max_step, capsule_max_step
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, Frame
 
@@ -151,43 +157,52 @@ class BodyContact(Term):
         dU = np.asarray(dx)[self.nodes] - dc
         V = dU @ A + U @ dA
         W = dU @ dA
-        speed = np.linalg.norm(V, axis=1) + np.linalg.norm(W, axis=1)
-        d0 = self.shape.gap(self._buf)
-        moving = np.flatnonzero(speed > 0.0)
-        if moving.size == 0:
+        if not (np.any(V) or np.any(W)):
             return math.inf
-        return self._advance(moving, X0, V, W, d0)
+        return self._advance(X0, V, W)
 
-    def _advance(self, idx, X0, V, W, d0) -> float:
-        """Conservative advancement of the nodes ``idx`` (see the module docstring)."""
-        t = np.zeros(idx.size)
-        target = CA_SHARE * d0[idx]
-        d = d0[idx].copy()
-        live = np.ones(idx.size, dtype=bool)
-        found = np.full(idx.size, math.inf)
-        keep = self.shape.nodes
+    def _advance(self, X0, V, W) -> float:
+        """The first contact along the quadratic paths X0 + t V + t^2 W (module
+        docstring): over pieces [t, t + h] whose chords stay within delta of the paths
+        (|W| h^2 / 4 <= delta), each chord's exact first contact with the shape grown by
+        delta, a contact no later than the true one (exact where W = 0)."""
+        w = float(np.linalg.norm(W, axis=1).max())
+        t = 0.0
+        for _ in range(CA_ITER):
+            P = X0 + t * V + t * t * W
+            self._buf[self.nodes] = P
+            gap = self.shape.gap(self._buf)
+            delta = min(CA_SHARE * float(gap.min()), 0.5 * self.dhat)
+            h = T_FAR - t if w == 0.0 else min(2.0 * math.sqrt(delta / w), T_FAR - t)
+            chord = (h * V + (2.0 * t * h + h * h) * W)  # X(t + h) - X(t)
+            s = self._ray(P, chord, 0.0 if w == 0.0 else delta)
+            if s <= 1.0:
+                return t + s * h
+            t += h
+            if t >= T_FAR:
+                return math.inf
+        return t  # still short of a contact: capped where the pieces got
+
+    def _ray(self, P, D, grow: float) -> float:
+        """The first contact of the nodes' segments P + s D (s in [0, 1]) with the shape
+        grown by ``grow`` (inf: none)."""
+        from catenet.terms.contact import Sphere
+        from catenet.terms.shapes import Box, Capsule, Mesh
+
+        x, dx = self._buf, self._g
+        x[self.nodes] = P
+        dx[self.nodes] = D
+        sh, nodes = self.shape, self.nodes
         try:
-            for _ in range(CA_ITER):
-                k = np.flatnonzero(live)
-                if k.size == 0:
-                    break
-                a = np.linalg.norm(V[idx[k]] + 2.0 * t[k, None] * W[idx[k]], axis=1)
-                b = np.linalg.norm(W[idx[k]], axis=1)
-                room = np.maximum(d[k] - target[k], 0.0)
-                step = 2.0 * room / (a + np.sqrt(a * a + 4.0 * b * room) + 1e-300)
-                t[k] += step
-                far = t[k] > T_FAR
-                live[k[far]] = False
-                k = k[~far]
-                tk = t[k, None]
-                pts = X0[idx[k]] + tk * V[idx[k]] + tk * tk * W[idx[k]]
-                self.shape.nodes = self.nodes[idx[k]]
-                self._buf[self.shape.nodes] = pts
-                d[k] = self.shape.gap(self._buf)
-                hit = d[k] <= 2.0 * target[k]
-                found[k[hit]] = t[k[hit]]
-                live[k[hit]] = False
-            found[live] = t[live]  # still approaching: capped where it got
+            if isinstance(sh, Box):
+                return box_max_step(x, dx, nodes, sh.center, sh.axes, sh.half, sh.offset + grow)
+            if isinstance(sh, Capsule):
+                return capsule_max_step(x, dx, nodes, sh.a, sh.b, sh.radius + grow)
+            if isinstance(sh, Sphere):
+                return sphere_max_step(x, dx, nodes, sh.center, sh.radius + grow)
+            if isinstance(sh, Mesh):
+                args = (sh.vertices, sh.triangles, sh.fn, sh.offset + grow, *sh._grid())
+                return mesh_max_step(x, dx, nodes, *args)
+            raise TypeError(f"no ray test for {type(sh).__name__}")
         finally:
-            self.shape.nodes = keep
-        return float(found.min())
+            dx[nodes] = 0.0
