@@ -163,9 +163,10 @@ class BodyContact(Term):
 
     def _advance(self, X0, V, W) -> float:
         """The first contact along the quadratic paths X0 + t V + t^2 W (module
-        docstring): over pieces [t, t + h] whose chords stay within delta of the paths
-        (|W| h^2 / 4 <= delta), each chord's exact first contact with the shape grown by
-        delta, a contact no later than the true one (exact where W = 0)."""
+        docstring): over pieces [t, t + h] (the step [0, 1], then doubling t) whose
+        chords stay within |W| h^2 / 4 <= delta of the paths, each chord's exact first
+        contact with the shape grown by that deviation, a contact no later than the true
+        one (exact where W = 0)."""
         w = float(np.linalg.norm(W, axis=1).max())
         t = 0.0
         for _ in range(CA_ITER):
@@ -173,9 +174,11 @@ class BodyContact(Term):
             self._buf[self.nodes] = P
             gap = self.shape.gap(self._buf)
             delta = min(CA_SHARE * float(gap.min()), 0.5 * self.dhat)
-            h = T_FAR - t if w == 0.0 else min(2.0 * math.sqrt(delta / w), T_FAR - t)
-            chord = (h * V + (2.0 * t * h + h * h) * W)  # X(t + h) - X(t)
-            s = self._ray(P, chord, 0.0 if w == 0.0 else delta)
+            h = min(max(1.0, t), T_FAR - t)  # pieces of the step, then doubling
+            if w > 0.0:
+                h = min(h, 2.0 * math.sqrt(delta / w))
+            chord = h * V + (2.0 * t * h + h * h) * W  # X(t + h) - X(t)
+            s = self._ray(P, chord, 0.25 * w * h * h)
             if s <= 1.0:
                 return t + s * h
             t += h
