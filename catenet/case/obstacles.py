@@ -32,7 +32,7 @@ from catenet.case.keys import (
     show,
     vec3,
 )
-from catenet.case.rigid import FreeKeys, density_key, inertia_key
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
     BoxObstacle,

@@ -20,81 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.case.keys import Checker, Context, key, real, show
+from catenet.case.keys import show
 from catenet.errors import ConfigError
 
 #: The orthogonality energy's k over the body's load scale (force x size): the body
 #: strains by about 1/RIGIDITY under a force of the scale.
 RIGIDITY = 1e6
-
-
-def _check_inertia(ck: Checker, v, path: str, ctx: Context):
-    from catenet.terms.rigid import inertia_problem
-
-    need = "must be [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] or 3 principal moments [kg m^2]"
-    rows = v
-    if isinstance(v, (list, tuple)) and len(v) == 3 and not isinstance(v[0], (list, tuple)):
-        try:
-            rows = np.diag([float(c) for c in v]).tolist()
-        except (TypeError, ValueError):
-            return ck.bad(path, v, need)
-    try:
-        I = np.array(rows, dtype=np.float64)
-    except (TypeError, ValueError):
-        return ck.bad(path, v, need)
-    if I.shape != (3, 3):
-        return ck.bad(path, v, need)
-    why = inertia_problem(I)
-    if why is not None:
-        return ck.bad(path, v, f"an inertia tensor {why}")
-    return tuple(tuple(r) for r in I.tolist())
-
-
-def mass_key():
-    return real(None, gt=0, write="given", unit="kg", doc="a free rigid body of this mass")
-
-
-def density_key():
-    return real(
-        None, gt=0, write="given", unit="kg/m^3", doc="a free rigid body of this density"
-    )
-
-
-def inertia_key():
-    return key(
-        _check_inertia,
-        "3 x 3 symmetric positive definite [kg m^2] (or 3 principal moments)",
-        None,
-        write="given",
-        shown="from the shape",
-        unit="kg m^2",
-        doc="free body: inertia about its centre of mass, body axes",
-    )
-
-
-class FreeKeys:
-    """What the free-body keys (``mass``, ``density``, ``inertia``) mean on a table."""
-
-    @property
-    def free(self) -> bool:
-        """A free rigid body (six degrees of freedom)."""
-        return self.mass is not None or self.density is not None
-
-    def _check_free(self, ck: Checker, path: str) -> None:
-        if self.mass is not None and self.density is not None:
-            ck.add(f"{path}.density = {self.density!r}: give mass or density, not both")
-        if self.inertia is not None and not self.free:
-            ck.add(f"{path}.inertia: belongs to a free body: give mass or density with it")
-        if self.free and getattr(self, "history", None) is not None:
-            ck.add(
-                f"{path}.history: a free body moves as the forces on it say; history "
-                "scales a prescribed motion (drop mass and density for one)"
-            )
-        if self.free and getattr(self, "friction", 0.0) > 0:
-            ck.add(
-                f"{path}.friction = {self.friction!r}: a free body's contact with the net "
-                "is frictionless: friction = 0"
-            )
 
 
 @dataclass(frozen=True)
@@ -126,11 +57,13 @@ def _shape(obs):
 
     if obs.kind == "box":
         h = np.asarray(obs.half_size, dtype=np.float64)
-        I = np.diag([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2]) / 3
-        return 8 * h.prod(), np.asarray(obs.center, float), I, rotation(obs.axis, obs.angle)
+        moments = np.array([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2])
+        axes = rotation(obs.axis, obs.angle)
+        return 8 * h.prod(), np.asarray(obs.center, float), np.diag(moments) / 3, axes
     if obs.kind == "sphere":
         r = obs.radius
-        return 4 / 3 * math.pi * r**3, np.asarray(obs.center, float), 0.4 * r * r * np.eye(3), np.eye(3)
+        ball = 0.4 * r * r * np.eye(3)
+        return 4 / 3 * math.pi * r**3, np.asarray(obs.center, float), ball, np.eye(3)
     if obs.kind == "capsule":
         return _capsule(obs)
     return _mesh(obs)
@@ -235,7 +168,9 @@ def _frame(obs, k: int, first: int, case):
     world = axes @ inertia @ axes.T
     why = inertia_problem(world)
     if why is not None:  # a given inertia is checked when parsed; a thin shape's may fail
-        raise ConfigError(f"{path}.inertia: the body's inertia {why}: give inertia")
+        raise ConfigError(
+            f"{path}: the inertia of its shape is no inertia tensor ({why}): give inertia"
+        )
     frame = Frame(first, mass, world, com)
     v = None if obs.velocity is None else np.asarray(obs.velocity, float)
     w = getattr(obs, "angular_velocity", None)

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.case.keys import Checker, Declared, choice, real, text, vec3
-from catenet.case.rigid import FreeKeys, density_key, inertia_key, mass_key
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 

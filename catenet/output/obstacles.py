@@ -172,7 +172,8 @@ class _Item:
     def grid(self) -> ObstacleGrid:
         s = self.surface
         shown = self.shown_triangles
-        return ObstacleGrid(s.index, s.kind, self.moving, len(self.shown), len(shown), self.simplified)
+        count = len(self.shown)
+        return ObstacleGrid(s.index, s.kind, self.moving, count, len(shown), self.simplified)
 
     @property
     def origin(self) -> np.ndarray:

@@ -64,7 +64,8 @@ def is_free(d: dict) -> bool:
         return True
     if d.get("mass") is None:
         return False
-    return d.get("kind") != "sphere" or any(d.get(k) is not None for k in ("inertia", "angular_velocity"))
+    spins = any(d.get(k) is not None for k in ("inertia", "angular_velocity"))
+    return d.get("kind") != "sphere" or spins
 
 
 class Motion:

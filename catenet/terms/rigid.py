@@ -62,20 +62,20 @@ def second_moment(inertia) -> np.ndarray:
 
 def inertia_problem(inertia) -> str | None:
     """Why ``inertia`` (3, 3) [kg m^2] is no rigid body's inertia tensor, else None."""
-    I = np.asarray(inertia, dtype=np.float64)
-    if I.shape != (3, 3) or not np.all(np.isfinite(I)):
-        return "must be a finite 3 x 3 matrix"
-    scale = float(np.abs(I).max())
-    if not scale > 0 or not np.allclose(I, I.T, rtol=0, atol=1e-12 * scale):
-        return "must be symmetric and not zero"
-    w = np.linalg.eigvalsh(I)
+    tensor = np.asarray(inertia, dtype=np.float64)
+    if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
+        return "it is not a finite 3 x 3 matrix"
+    scale = float(np.abs(tensor).max())
+    if not scale > 0:
+        return "it is zero"
+    if not np.allclose(tensor, tensor.T, rtol=0, atol=1e-12 * scale):
+        return "it is not symmetric"
+    w = np.linalg.eigvalsh(tensor)
     if not w[0] > 1e-12 * scale:
-        return f"must be positive definite (its principal moments are {_show(w)})"
+        return f"it is not positive definite (principal moments {_show(w)})"
     if not w[0] + w[1] > w[2] * (1 + 1e-12):
-        return (
-            f"its principal moments {_show(w)} break I1 + I2 > I3: no mass distribution "
-            "has them"
-        )
+        moments = _show(w)
+        return f"its principal moments {moments} break I1 + I2 > I3 (no body has them)"
     return None
 
 
@@ -163,10 +163,10 @@ class Rigidity(Term):
             raise ValueError(f"rigidity: k = {k!r}: must be > 0")
         self.frame, self.k, self.n_nodes = frame, float(k), int(n_nodes)
         D = np.zeros((9, 12))  # d vec(A) (row-major) / d P (node-major)
-        for l in range(3):
+        for row in range(3):
             for m in range(3):
                 for k4 in range(4):
-                    D[3 * l + m, 3 * k4 + l] = frame.B[k4, m]
+                    D[3 * row + m, 3 * k4 + row] = frame.B[k4, m]
         self._D = D
 
     def pattern(self):

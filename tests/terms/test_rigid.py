@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from meshes import CUBE_T, CUBE_V, icosphere, write_stl
+from meshes import icosphere
 
 from catenet.case import build, parse_case
 from catenet.solver.path import Settings, solve
@@ -298,7 +298,8 @@ def test_a_sphere_body_repeats_the_ball():
             assert len(scene.rigid) == 1 and scene.net.bodies == 4
             centre = lambda x, f=scene.rigid[0].frame: f.pose(x)[0]  # noqa: E731
         path = []
-        solve(scene, Settings.of(scene.case.solver), on_step=lambda s, p=path, c=centre: p.append(c(s.x)))
+        settings = Settings.of(scene.case.solver)
+        solve(scene, settings, on_step=lambda s, p=path, c=centre: p.append(c(s.x)))
         paths.append(np.array(path))
     assert len(paths[0]) == len(paths[1])
     assert np.abs(paths[0] - paths[1]).max() < 1e-6
