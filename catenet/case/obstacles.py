@@ -76,8 +76,7 @@ class PlaneObstacle(Declared):
 
 @dataclass(frozen=True, kw_only=True)
 class SphereObstacle(FreeKeys, Declared):
-    """A rigid ball: fixed, a rigid body (`mass`) or on a path (`velocity` and no `mass`);
-    with `density`, `inertia` or `angular_velocity` a free body that also turns."""
+    """A ball: fixed, moving (`mass`; a path: `velocity`), or turning (`angular_velocity`)."""
 
     kind: str = choice("sphere", ("sphere",), doc="a ball")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="sphere: centre")

@@ -132,6 +132,7 @@ def add_free_bodies(case, net, loads, velocity, size: float):
         law=net.law,
         point_mass=np.concatenate([point, masses]),
         bodies=net.bodies + nb,
+        flies=net.flies,
     )
     v = np.zeros((n0, 3)) if velocity is None else velocity
     velocity = np.vstack([v, *speeds])
