@@ -65,3 +65,13 @@ def test_a_free_body_is_stored_with_its_pose_and_motion(tmp_path):
         r = f["result/obstacles/0"]
         for name in ("center", "rotation", "velocity", "angular_velocity"):
             assert np.asarray(r[name]) == pytest.approx(np.asarray(t[name][-1]))
+        frames = np.asarray(t["vertices"])
+        times = np.asarray(f["trajectory/time"])
+    # catenet plot draws it where the file has it.
+    from catenet.output.reader import read_result
+    from catenet.plot.obstacles import shapes
+
+    res = read_result(out)
+    (shape,) = shapes(res, float(times[n // 2]))
+    drawn = np.unique(np.concatenate(shape.polys).round(9), axis=0)
+    assert drawn == pytest.approx(np.unique(frames[n // 2].round(9), axis=0))
