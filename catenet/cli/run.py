@@ -243,6 +243,15 @@ def _summary(case, result, path: Path | None) -> None:
             f"{'cable':<12} {name}: max tension {c['max_tension']:.6g} N, "
             f"slack {100 * c['slack_fraction']:.3g} % of its length",
         )
+    for k, b in s.get("bodies", {}).items():  # free rigid bodies, one line each
+        first = b["first_contact"]
+        touch = "no contact" if first is None else f"first contact at t = {first:.6g} s"
+        axis = ", ".join(f"{c:.3g}" for c in b["axis"])
+        lines.insert(
+            -1,
+            f"{'body':<12} obstacle[{k}] ({b['kind']}): spin {b['spin']:.4g} deg/s about "
+            f"[{axis}], speed {b['speed']:.4g} m/s at the end; {touch}",
+        )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -263,6 +263,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     """Solves through the one solve path, writing frames as the steps come; on failure
     or interruption the last good state becomes /result (converged = false)."""
     from catenet.errors import Interrupted
+    from catenet.run.bodies import BodyWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
@@ -271,6 +272,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     total = settings.t_end if dynamic else 1.0
     start = None
     written = {"step": -1}
+    watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
 
     if clock is None:
         from catenet.run.clock import Clock
@@ -303,6 +305,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         keep(0, start.t, x0, v0, a=a0)
 
     def on_step(step: sv.Step) -> bool:
+        watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
         keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
@@ -368,6 +371,8 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
     res.wall_time = time.perf_counter() - begin
     res.stats.update(_times(clock))
+    if watch:
+        res.stats["bodies"] = watch.stats(res.x, res.v)
     _write_result(writer, res)
     return res
 
