@@ -8,8 +8,9 @@ the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f
 default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a fixed
 sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
 surface; ``catenet.terms.friction``), with ``slip`` (the distance below which a node
-sticks, default the activation distance); a moving sphere (a ball) is frictionless. A new
-kind is one class here and one line in ``OBSTACLES``.
+sticks, default the activation distance); a moving sphere (a ball) is frictionless, a
+free body (``catenet.case.rigid``) is not. A new kind is one class here and one line in
+``OBSTACLES``.
 """
 
 from __future__ import annotations
@@ -136,7 +137,8 @@ class SphereObstacle(FreeKeys, Declared):
             ck.add(
                 f"{path}.friction = {self.friction!r}: a moving sphere (mass or velocity) "
                 "is frictionless (it has no spin): friction = 0; friction acts on planes, "
-                "fixed spheres, boxes, capsules and meshes"
+                "fixed spheres, boxes, capsules and meshes, and on free bodies (a sphere "
+                "with mass and angular_velocity, e.g. [0, 0, 0], turns)"
             )
         if self.history is not None and (self.velocity is None or self.mass is not None):
             ck.add(

@@ -225,4 +225,11 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     w0 = np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0))
     v0 = np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0))
     scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
-    return [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
+    terms = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
+    if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
+        from catenet.terms.friction import Friction
+        from catenet.terms.rigid_contact import BodyFriction
+
+        slip = obs.slip if obs.slip is not None else dhat
+        terms.append(BodyFriction(Friction(shape, mu=obs.friction, slip=slip), contact))
+    return terms

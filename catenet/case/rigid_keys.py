@@ -70,8 +70,3 @@ class FreeKeys:
                 f"{path}.history: a free body moves as the forces on it say; history "
                 "scales a prescribed motion (drop mass and density for one)"
             )
-        if self.free and getattr(self, "friction", 0.0) > 0:
-            ck.add(
-                f"{path}.friction = {self.friction!r}: a free body's contact with the net "
-                "is frictionless: friction = 0"
-            )

@@ -52,7 +52,7 @@ class BodyContact(Term):
     def __init__(self, shape, frame: Frame, *, n_nodes: int, label: str = "a free body"):
         self.shape, self.frame = shape, frame
         self.nodes = shape.nodes
-        self.kappa, self.dhat = shape.kappa, shape.dhat
+        self.kappa, self.dhat = getattr(shape, "kappa", 0.0), getattr(shape, "dhat", 0.0)
         self.n_nodes = int(n_nodes)
         self.label = label
         self.c0 = frame.center.copy()
@@ -209,3 +209,33 @@ class BodyContact(Term):
             raise TypeError(f"no ray test for {type(sh).__name__}")
         finally:
             dx[nodes] = 0.0
+
+
+@register("body_friction")
+class BodyFriction(BodyContact):
+    """Coulomb friction between the net and a free body: the lagged friction term
+    (``catenet.terms.friction.Friction``) of the body's shape, evaluated in the body
+    frame like the barrier it rides on (``contact``), so its normals and anchors ride
+    with the body and the friction force acts on both the node and the body (equal and
+    opposite, no net torque). A static load step re-lags it (``relag``)."""
+
+    bounds_step = False
+    lagged = True
+
+    def __init__(self, friction, contact: BodyContact):
+        super().__init__(friction, contact.frame, n_nodes=contact.n_nodes, label=contact.label)
+        self.rides_on = contact
+
+    def begin_step(self, x, time, start=None) -> None:
+        self._local(x)
+        self.shape.begin_step(self._buf, None)
+
+    def relag(self, x) -> float:
+        self._local(x)
+        return self.shape.relag(self._buf)
+
+    def gap(self, x):
+        return self.rides_on.gap(x)
+
+    def stiffness(self):
+        return None
