@@ -115,6 +115,7 @@ def test_a_given_inertia_and_principal_moments():
         ({"second": True}, "obstacle[1]: a second free body"),
         ({"ground": True}, "obstacle[1] (kind 'plane'): a free body (obstacle[0]"),
         ({"mesh": "open"}, "obstacle[0].file = "),
+        ({"rho": 1.0}, "solver.rho_inf = 1.0: must be <= 0.95 with a free body"),
     ],
 )
 def test_bad_free_bodies_exit_2_with_their_key_path(tmp_path, change, message):
@@ -126,6 +127,8 @@ def test_bad_free_bodies_exit_2_with_their_key_path(tmp_path, change, message):
     obs = case["obstacle"][0]
     if change.pop("solver", None):
         case["solver"] = {"method": "static"}
+    if (rho := change.pop("rho", None)) is not None:
+        case["solver"].update(integrator="newmark", rho_inf=rho)
     if change.pop("second", None):
         case["obstacle"].append({**obs, "center": [0.0, 0.0, 0.6]})
     if change.pop("ground", None):
