@@ -151,3 +151,24 @@ def test_bad_free_bodies_exit_2_with_their_key_path(tmp_path, change, message):
     assert message in res.output
     assert "Traceback" not in res.output
     assert not (tmp_path / "out.h5").exists()
+
+
+def test_the_summary_says_where_a_free_body_is(tmp_path):
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    case = drop(center=[0.0, 0.0, 0.052], half_size=[0.15, 0.15, 0.05], distance=0.005)
+    case["solver"] = {"method": "static"}
+    path = tmp_path / "rest.toml"
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "rest.h5")])
+    assert res.exit_code == 0, res.output
+    assert "body         obstacle[0] (box): resting on the net" in res.output
+    case["obstacle"][0]["center"] = [0.0, 0.0, 0.5]  # out of reach, and nothing pulls it
+    case["load"] = {}
+    case["load"]["point"] = [{"node": "center", "force": [0.0, 0.0, -10.0]}]
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "away.h5")])
+    assert res.exit_code == 0, res.output
+    assert "body         obstacle[0] (box): not touching the net" in res.output

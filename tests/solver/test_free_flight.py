@@ -6,6 +6,8 @@ supports is refused (it would move as a rigid body), exit 2."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,22 @@ def test_a_free_net_alone_flies_straight(method):
     assert r.converged
     assert r.x - scene.net.nodes == pytest.approx(np.full_like(r.x, 0.2) * [1.0, -0.5, 0.25])
     assert r.v == pytest.approx(np.tile([1.0, -0.5, 0.25], (len(r.x), 1)))
+
+
+@pytest.mark.parametrize("dt", [0.1, 0.01, 0.001])
+def test_no_node_enters_the_box_at_any_step_size(dt):
+    """The thrown net at steps from 1e-3 to 1e-1 s: every accepted state has every node
+    outside the box, and so has every point of the straight motion between two of them
+    (sampled densely)."""
+    case = thrown_net(dt=dt)
+    case["solver"]["t_end"] = 0.2
+    scene = build(parse_case(case))
+    contact = next(t for t in scene.terms if isinstance(t, BodyContact))
+    states = [scene.net.nodes.copy()]
+    r = solve(scene, Settings.of(scene.case.solver), on_step=lambda s: states.append(s.x.copy()))
+    assert r.converged
+    worst = math.inf
+    for a, b in zip(states[:-1], states[1:], strict=True):
+        for s in np.linspace(0.0, 1.0, 11):
+            worst = min(worst, float(contact.gap(a + s * (b - a)).min()))
+    assert 0.0 < worst < contact.dhat  # touching, never inside
