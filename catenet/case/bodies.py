@@ -109,6 +109,7 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
         law=net.law,
         point_mass=np.concatenate([point, masses]),
         bodies=net.bodies + nb,
+        flies=net.flies,
     )
     v = np.zeros((n0, 3)) if velocity is None else velocity
     velocity = np.vstack([v, v_new])

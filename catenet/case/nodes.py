@@ -33,10 +33,16 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
 
 
 def check_nodes(
-    ck: Checker, g: GeometryConfig, supports: Any, load: Any, output: Any = None
+    ck: Checker,
+    g: GeometryConfig,
+    supports: Any,
+    load: Any,
+    output: Any = None,
+    flies: bool = False,
 ) -> None:
     """Every node reference of the supports, loads and output probe (each BAD when its
-    section failed) against the geometry ``g``."""
+    section failed) against the geometry ``g``; ``flies``: a dynamic run, where the net
+    may have no support."""
     probe = getattr(output, "probe", None)
     if not _needs_topology(g, supports, load, probe):
         return
@@ -119,7 +125,7 @@ def check_nodes(
                 "the probe must be one node (an index, a node name or a set of one node)"
             )
     if len(ck.problems) == before:
-        g.check_supports(ck, fixed, fixed_key)
+        g.check_supports(ck, fixed, fixed_key, flies)
 
 
 def _unknown_name(path: str, ref: str, topo: Topology) -> str:

@@ -8,8 +8,9 @@ the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f
 default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a fixed
 sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
 surface; ``catenet.terms.friction``), with ``slip`` (the distance below which a node
-sticks, default the activation distance); a moving sphere (a ball) is frictionless. A new
-kind is one class here and one line in ``OBSTACLES``.
+sticks, default the activation distance); a moving sphere (a ball) is frictionless, a
+free body (``catenet.case.rigid``) is not. A new kind is one class here and one line in
+``OBSTACLES``.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from catenet.case.keys import (
     show,
     vec3,
 )
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
     BoxObstacle,
@@ -74,8 +76,8 @@ class PlaneObstacle(Declared):
 
 
 @dataclass(frozen=True, kw_only=True)
-class SphereObstacle(Declared):
-    """A rigid ball: fixed, a rigid body (`mass`) or on a path (`velocity` and no `mass`)."""
+class SphereObstacle(FreeKeys, Declared):
+    """A ball: fixed, moving (`mass`; a path: `velocity`), or turning (`angular_velocity`)."""
 
     kind: str = choice("sphere", ("sphere",), doc="a ball")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="sphere: centre")
@@ -102,18 +104,41 @@ class SphereObstacle(Declared):
     history: tuple | None = history_key(
         "sphere on a path: its velocity is factor(t) times velocity (dynamic runs)"
     )
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
+    angular_velocity: tuple | None = vec3(
+        None,
+        write="given",
+        shown="none",
+        unit="rad/s",
+        doc="free body: initial angular velocity (world frame, about its centre of mass)",
+    )
+
+    @property
+    def free(self) -> bool:
+        """A free body with six degrees of freedom (``catenet.case.rigid``)."""
+        spins = self.inertia is not None or self.angular_velocity is not None
+        return self.density is not None or (self.mass is not None and spins)
 
     @property
     def moves(self) -> bool:
-        """A rigid body or a ball on a prescribed path (a node of its own)."""
-        return self.mass is not None or self.velocity is not None
+        """A rigid ball or a ball on a prescribed path (a node of its own)."""
+        return (self.mass is not None or self.velocity is not None) and not self.free
 
     def check(self, ck: Checker, path: str) -> None:
+        if self.angular_velocity is not None and self.mass is None and self.density is None:
+            ck.add(
+                f"{path}.angular_velocity = {list(self.angular_velocity)}: a sphere turns "
+                "as a free body: give mass or density with it"
+            )
+            return
+        self._check_free(ck, path)
         if self.friction > 0 and self.moves:
             ck.add(
                 f"{path}.friction = {self.friction!r}: a moving sphere (mass or velocity) "
                 "is frictionless (it has no spin): friction = 0; friction acts on planes, "
-                "fixed spheres, boxes, capsules and meshes"
+                "fixed spheres, boxes, capsules and meshes, and on free bodies (a sphere "
+                "with mass and angular_velocity, e.g. [0, 0, 0], turns)"
             )
         if self.history is not None and (self.velocity is None or self.mass is not None):
             ck.add(
@@ -178,8 +203,8 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     edge = float(np.median(net.rest_length[: net.n_edges])) if net.n_edges else size
     terms = []
     for k, obs in enumerate(obstacles):
-        if getattr(obs, "moves", False):
-            continue  # a node of its own: catenet.case.bodies
+        if getattr(obs, "moves", False) or getattr(obs, "free", False):
+            continue  # nodes of its own: catenet.case.bodies, catenet.case.rigid
         dhat = obs.distance if obs.distance is not None else obs.accuracy * edge
         load = per_node
         if load <= 0.0:  # no loads: the force that strains an edge by dhat / l0

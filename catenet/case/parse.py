@@ -181,7 +181,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     # Node references need the node count (and, for square nets, the built topology):
     # only once the geometry itself is sound.
     if geometry is not None:
-        check_nodes(ck, geometry, supports, load, output)
+        flies = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+        check_nodes(ck, geometry, supports, load, output, flies)
 
     if ck.problems:
         raise ConfigError(ck.problems)

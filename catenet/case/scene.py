@@ -15,6 +15,7 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
+from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
@@ -31,9 +32,10 @@ class Scene:
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
     at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are the net's last nodes (``Net.bodies``). ``sets``: the node sets as node indices,
-    ``at_nodes``: the node of each load.point given along a cable (by its index),
-    ``names``: the named nodes ("center")."""
+    are among the net's last nodes (``Net.bodies``); ``rigid``: the free bodies
+    (``catenet.case.rigid.FreeBody``), four nodes each after them. ``sets``: the node
+    sets as node indices, ``at_nodes``: the node of each load.point given along a cable
+    (by its index), ``names``: the named nodes ("center")."""
 
     case: Case
     net: Net
@@ -47,6 +49,7 @@ class Scene:
     sets: Any = None
     at_nodes: Any = None
     names: Any = None
+    rigid: tuple = ()
 
 
 def build(case: Case) -> Scene:
@@ -69,7 +72,11 @@ def _build(case: Case) -> Scene:
     net, loads, velocity, body_terms, bodies = add_bodies(
         case, net, loads, velocity, float(built.size)
     )
+    net, loads, velocity, rigid_terms, rigid = add_free_bodies(
+        case, net, loads, velocity, float(built.size)
+    )
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
+    terms += rigid_terms
     return Scene(
         case=case,
         net=net,
@@ -83,6 +90,7 @@ def _build(case: Case) -> Scene:
         sets=dict(built.sets or {}),
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
+        rigid=rigid,
     )
 
 

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 
@@ -63,7 +64,7 @@ def _velocity():
         write="given",
         shown="none",
         unit="m/s",
-        doc="box/capsule/mesh: moves at this velocity",
+        doc="box/capsule/mesh: moves at this velocity (a free body: its initial one)",
     )
 
 
@@ -73,7 +74,8 @@ def _spin(about: str):
         write="given",
         shown="none",
         unit="rad/s",
-        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about}",
+        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about} "
+        "(a free body: its initial one, about its centre of mass)",
     )
 
 
@@ -81,9 +83,10 @@ def _history():
     return history_key("moving box/capsule/mesh: velocities times factor(t) (dynamic runs)")
 
 
-class _Motion:
+class _Motion(FreeKeys):
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
-    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only."""
+    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
+    ``density`` a free body instead (``catenet.case.rigid``)."""
 
     velocity: Any  # the keys of the obstacle kinds that mix it in
     angular_velocity: Any
@@ -91,10 +94,12 @@ class _Motion:
 
     @property
     def rigid_motion(self) -> bool:
-        return self.velocity is not None or self.angular_velocity is not None
+        moves = self.velocity is not None or self.angular_velocity is not None
+        return moves and not self.free
 
     def _check_motion(self, ck: Checker, path: str) -> None:
-        if self.history is not None and not self.rigid_motion:
+        self._check_free(ck, path)
+        if self.history is not None and not self.rigid_motion and not self.free:
             ck.add(
                 f"{path}.history: scales a prescribed motion: give velocity or "
                 "angular_velocity with it"
@@ -137,6 +142,9 @@ class BoxObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("its centre")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if not all(h > 0 for h in self.half_size):
@@ -173,6 +181,9 @@ class CapsuleObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the midpoint of start-end")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if self.start == self.end:
@@ -211,6 +222,9 @@ class MeshObstacle(_Motion, Declared):
     velocity: tuple | None = _velocity()
     angular_velocity: tuple | None = _spin("the point `offset`")
     history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
         self._check_motion(ck, path)

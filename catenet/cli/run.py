@@ -240,6 +240,20 @@ def _summary(case, result, path: Path | None) -> None:
             f"{'cable':<12} {name}: max tension {c.max_tension:.6g} N, "
             f"slack {100 * c.slack_fraction:.3g} % of its length",
         )
+    for k, b in s.bodies.items():  # free rigid bodies, one line each
+        first = b["first_contact"]
+        head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "
+        if case.solver.method != "dynamic":  # at rest: where it is is the answer
+            touch = "not touching the net" if first is None else "resting on the net"
+            lines.insert(-1, head + touch)
+            continue
+        touch = "no contact" if first is None else f"first contact at t = {first:.6g} s"
+        axis = ", ".join(f"{c:.3g}" for c in b["axis"])
+        lines.insert(
+            -1,
+            head + f"spin {b['spin']:.4g} deg/s about [{axis}], speed {b['speed']:.4g} m/s "
+            f"at the end; {touch}",
+        )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -47,6 +47,8 @@ class Net:
         a tether net), or None; part of ``mass``, so gravity and inertia act on them
     bodies : how many of the last nodes are the centres of rigid bodies (no edges, their
         mass in ``point_mass``; ``catenet.terms.body``), 0 for a net alone
+    flies : parts of the net may have no support (a net flying free, dynamic runs only:
+        its rigid-body motion is inertia's to hold); False: every part needs one
     """
 
     nodes: np.ndarray
@@ -58,6 +60,7 @@ class Net:
     law: Law
     point_mass: np.ndarray | None = None
     bodies: int = 0
+    flies: bool = False
 
     @property
     def tension_only(self) -> bool:
@@ -78,12 +81,14 @@ class Net:
         law: Law | None = None,
         point_mass=None,
         bodies: int = 0,
+        flies: bool = False,
     ) -> Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
         ``law`` (one entry per edge) defaults to the paper's linear law with
         ``tension_only`` for every edge (ignored where a law is given); ``point_mass``
-        (N,) [kg] adds to the lumped masses."""
+        (N,) [kg] adds to the lumped masses; ``flies``: parts without a support are
+        allowed (dynamic runs)."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
         edges = _as_array("edges", edges, np.int64, (2,))
         n, m = len(nodes), len(edges)
@@ -136,7 +141,7 @@ class Net:
             raise ConfigError(problems)
         if law is None:
             law = Law.uniform(m, tension_only=bool(tension_only))
-        net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies)
+        net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies, bool(flies))
         net._check_supported()
         return net
 
@@ -192,6 +197,7 @@ class Net:
             law=self.law,
             point_mass=self.point_mass,
             bodies=self.bodies,
+            flies=self.flies,
         )
         unknown = set(changes) - set(fields)
         if unknown:
@@ -263,6 +269,10 @@ class Net:
             problems.append(
                 f"nodes {lonely[:10].tolist()}: belong to no edge: every free node needs an edge"
             )
+        if self.flies:  # a free flight: parts without support are the point
+            if problems:
+                raise ConfigError(problems)
+            return
         labels = self.components()
         supported = np.zeros(labels.max() + 1, bool)
         supported[labels[self.fixed]] = True
@@ -270,10 +280,15 @@ class Net:
         if loose.size:
             problems.append(
                 f"nodes {loose[:10].tolist()}{' ...' if loose.size > 10 else ''}: "
-                "a part of the net has no support (a mechanism): fix at least one of its nodes"
+                "a part of the net has no support (a mechanism): fix at least one of its nodes "
+                "(a dynamic run, solver.method = 'dynamic', lets it fly free)"
             )
         if not self.fixed.any():
-            problems.append("supports: no node is fixed: fix at least one node")
+            problems.append(
+                "supports: no node is fixed: a net without supports moves as a rigid body and "
+                "has no static equilibrium: fix at least one node, or let it fly in a dynamic "
+                "run (solver.method = 'dynamic')"
+            )
         if problems:
             raise ConfigError(problems)
 

@@ -27,7 +27,21 @@ pose and its surface there, and the same at /result's time:
 /result/obstacles/<k>/{center, rotation, vertices}   the same at the final time
 ```
 
-The pose is the solver's (``catenet.terms.moving``). A surface of more than
+A free rigid body (``catenet.case.rigid``) is stored as a moving one, its pose read from
+the state (its four nodes, ``catenet.terms.rigid.Frame``; the origin is its centre of
+mass at t = 0), with more:
+
+```
+/mesh/obstacles/<k>                  attrs: mass [kg], free (True)
+/mesh/obstacles/<k>/inertia          (3, 3) [kg m^2] about the centre of mass, body axes
+/mesh/obstacles/<k>/axes             (3, 3) the body axes at t = 0 (columns, world frame)
+/trajectory/obstacles/<k>/velocity   (F, 3) of the centre of mass [m/s]
+/trajectory/obstacles/<k>/angular_velocity  (F, 3) [rad/s], world frame
+/result/obstacles/<k>/{velocity, angular_velocity}   the same at the final time
+```
+
+(zeros where the file keeps no velocities: static runs). The pose is the solver's
+(``catenet.terms.moving``, ``catenet.terms.rigid``). A surface of more than
 ``frame_cap(n)`` = max(FRAME_VERTICES, the net's node count) vertices is stored per frame
 simplified (vertex clustering, at most that many vertices; a warning says so) with its
 own triangles ``/mesh/obstacles/<k>/frame_triangles``, so that the frames never take much
@@ -52,6 +66,7 @@ GROUP = "obstacles"  # in /mesh, /trajectory and /result
 FRAME_VERTICES = 4096  # a moving surface is stored per frame with at most
 # max(FRAME_VERTICES, net nodes) vertices
 POSE_CHUNK = 256  # frames per chunk of center and rotation
+FREE_SETS = ("velocity", "angular_velocity")  # a free body's more per frame
 
 __all__ = ["FRAME_VERTICES", "ObstacleGrid", "Obstacles", "StoredObstacle", "read_obstacles"]
 
@@ -68,7 +83,8 @@ def frame_values(case, n_nodes: int) -> int:
 
     cap, total = frame_cap(n_nodes), 0
     for k, obs in enumerate(getattr(case, "obstacles", ()) or ()):
-        shape = surface(obs.to_dict(), k) if getattr(obs, "rigid_motion", False) else None
+        moves = getattr(obs, "rigid_motion", False) or getattr(obs, "free", False)
+        shape = surface(obs.to_dict(), k) if moves else None
         if shape is not None:  # (a moving sphere is a node of the net: no surface)
             total += 3 * min(len(shape.vertices), cap) + 12
     return total
@@ -137,12 +153,14 @@ class ObstacleGrid:
 class _Item:
     """One obstacle as the writer stores it."""
 
-    def __init__(self, surface, cap: int):
+    def __init__(self, surface, cap: int, body=None):
         self.surface = surface
+        self.body = body  # a free body (catenet.case.rigid.FreeBody), else None
         self.vertices = np.ascontiguousarray(surface.vertices, dtype=np.float64)
         self.triangles = surface.triangles
         self.shown, self.shown_triangles = self.vertices, self.triangles
-        self.simplified = surface.moving and len(self.vertices) > cap
+        self.moving = surface.moving or body is not None
+        self.simplified = self.moving and len(self.vertices) > cap
         if self.simplified:
             self.shown, self.shown_triangles = simplify(self.vertices, self.triangles, cap)
             log.warning(
@@ -156,10 +174,25 @@ class _Item:
     def grid(self) -> ObstacleGrid:
         s = self.surface
         shown = self.shown_triangles
-        return ObstacleGrid(s.index, s.kind, s.moving, len(self.shown), len(shown), self.simplified)
+        count = len(self.shown)
+        return ObstacleGrid(s.index, s.kind, self.moving, count, len(shown), self.simplified)
 
-    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(center, rotation, shown vertices) at time t."""
+    @property
+    def origin(self) -> np.ndarray:
+        return self.body.center if self.body is not None else self.surface.motion.origin
+
+    def state(self, frame: dict) -> tuple[np.ndarray, np.ndarray]:
+        """A free body's (velocity, angular velocity) in a frame (x, v)."""
+        v = frame.get("v")
+        if v is None:
+            return np.zeros(3), np.zeros(3)
+        return self.body.frame.motion(frame["x"], v)
+
+    def pose(self, t: float, frame: dict | None = None):
+        """(center, rotation, shown vertices) at time t (a free body: in ``frame``)."""
+        if self.body is not None:
+            c, R = self.body.frame.pose(frame["x"])
+            return c, R, c + (self.shown - self.body.center) @ R.T
         motion = self.surface.motion
         c, R = motion.pose(t)
         return c, R, motion.place(self.shown, t, (c, R))
@@ -182,11 +215,12 @@ class Obstacles:
         net = scene.net
         cover = net.nodes[: getattr(net, "n_net", net.n_nodes)]
         cap = frame_cap(net.n_nodes)
+        free = {b.obstacle: b for b in getattr(scene, "rigid", ())}
         for k, obs in enumerate(obstacles):
             s = surface(obs.to_dict(), k, cover)
             if s is not None:
-                self.items.append(_Item(s, cap))
-        self.moving = [item for item in self.items if item.surface.moving]
+                self.items.append(_Item(s, cap, free.get(k)))
+        self.moving = [item for item in self.items if item.moving]
 
     def __len__(self) -> int:
         return len(self.items)
@@ -205,11 +239,16 @@ class Obstacles:
             g = group.create_group(str(s.index))
             g.attrs["kind"] = s.kind
             g.attrs["obstacle"] = s.index
-            g.attrs["moving"] = s.moving
+            g.attrs["moving"] = item.moving
             g.create_dataset("vertices", data=item.vertices)
             g.create_dataset("triangles", data=item.triangles)
-            if s.moving:
-                g.attrs["origin"] = s.motion.origin
+            if item.moving:
+                g.attrs["origin"] = item.origin
+            if item.body is not None:
+                g.attrs["free"] = True
+                g.attrs["mass"] = item.body.mass
+                g.create_dataset("inertia", data=np.asarray(item.body.inertia, dtype=np.float64))
+                g.create_dataset("axes", data=np.asarray(item.body.axes, dtype=np.float64))
             if item.simplified:
                 g.create_dataset("frame_triangles", data=item.shown_triangles)
 
@@ -218,11 +257,14 @@ class Obstacles:
         for item in self.moving:
             g = traj.create_group(f"{GROUP}/{item.surface.index}")
             nv = len(item.shown)
-            for name, tail, chunks, gzip in (
+            sets = [
                 ("center", (3,), (POSE_CHUNK, 3), False),
                 ("rotation", (3, 3), (POSE_CHUNK, 3, 3), False),
                 ("vertices", (nv, 3), (1, nv, 3), True),
-            ):
+            ]
+            if item.body is not None:
+                sets += [(n, (3,), (POSE_CHUNK, 3), False) for n in FREE_SETS]
+            for name, tail, chunks, gzip in sets:
                 extra = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
                 g.create_dataset(
                     name,
@@ -234,32 +276,48 @@ class Obstacles:
                     **(extra if gzip else {}),
                 )
 
-    def append(self, traj, times, n0: int, held: list) -> None:
-        """Writes the moving obstacles' frames n0, n0 + 1, ... (at ``times``); ``held``
-        keeps the datasets open as long as the file (``catenet.output.writer``)."""
+    def append(self, traj, times, n0: int, held: list, frames=None) -> None:
+        """Writes the moving obstacles' frames n0, n0 + 1, ... (at ``times``; ``frames``:
+        each one's data, x and v, for the free bodies); ``held`` keeps the datasets open
+        as long as the file (``catenet.output.writer``)."""
         n1 = n0 + len(times)
+        frames = frames if frames is not None else [{}] * len(times)
         for item in self.moving:
             g = traj[f"{GROUP}/{item.surface.index}"]
-            center, rotation, vertices = g["center"], g["rotation"], g["vertices"]
-            held.extend((center, rotation, vertices))
-            for ds in (center, rotation, vertices):
+            names = ("center", "rotation", "vertices")
+            names += FREE_SETS if item.body is not None else ()
+            sets = [g[name] for name in names]
+            held.extend(sets)
+            for ds in sets:
                 ds.resize(n1, axis=0)
-            poses = [item.pose(t) for t in times]
-            center[n0:n1] = np.array([c for c, _, _ in poses])
-            rotation[n0:n1] = np.array([R for _, R, _ in poses])
+            poses = [item.pose(t, f) for t, f in zip(times, frames, strict=True)]
+            sets[0][n0:n1] = np.array([c for c, _, _ in poses])
+            sets[1][n0:n1] = np.array([R for _, R, _ in poses])
             for j, (_, _, V) in enumerate(poses):
-                vertices[n0 + j] = V
+                sets[2][n0 + j] = V
+            if item.body is not None:
+                motion = [item.state(f) for f in frames]
+                sets[3][n0:n1] = np.array([v for v, _ in motion])
+                sets[4][n0:n1] = np.array([w for _, w in motion])
 
-    def write_result(self, result, t: float) -> None:
-        """/result/obstacles: the moving obstacles at the final time t."""
+    def write_result(self, result, t: float, res=None) -> None:
+        """/result/obstacles: the moving obstacles at the final time t (the free bodies
+        in the result ``res``'s state)."""
         if not self.moving or not math.isfinite(t):
             return
+        frame = {} if res is None else {"x": res.x, "v": getattr(res, "v", None)}
         for item in self.moving:
+            if item.body is not None and res is None:
+                continue
             g = result.create_group(f"{GROUP}/{item.surface.index}")
-            c, R, V = item.pose(t)
+            c, R, V = item.pose(t, frame)
             g.create_dataset("center", data=c)
             g.create_dataset("rotation", data=R)
             g.create_dataset("vertices", data=V)
+            if item.body is not None:
+                v, w = item.state(frame)
+                g.create_dataset("velocity", data=v)
+                g.create_dataset("angular_velocity", data=w)
 
 
 # --------------------------------------------------------------------------------------------

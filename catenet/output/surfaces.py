@@ -40,7 +40,7 @@ BOX_FACES = np.array(
 )
 _SIGNS = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
 
-__all__ = ["Motion", "Surface", "is_body", "surface"]
+__all__ = ["Motion", "Surface", "is_body", "is_free", "surface"]
 
 
 def _vec(d: dict, key: str, default=None) -> np.ndarray | None:
@@ -58,9 +58,22 @@ def _req(d: dict, key: str, default=None) -> np.ndarray:
 
 def is_body(d: dict) -> bool:
     """A moving sphere: a node of the net (a rigid ball or a ball on a path)."""
-    return d.get("kind") == "sphere" and (
-        d.get("mass") is not None or d.get("velocity") is not None
+    return (
+        d.get("kind") == "sphere"
+        and (d.get("mass") is not None or d.get("velocity") is not None)
+        and not is_free(d)
     )
+
+
+def is_free(d: dict) -> bool:
+    """A free rigid body (``catenet.case.rigid``): it moves as the solver finds, its
+    pose is read from the state (``catenet.output.obstacles``), never a ``Motion``."""
+    if d.get("density") is not None:
+        return True
+    if d.get("mass") is None:
+        return False
+    spins = any(d.get(k) is not None for k in ("inertia", "angular_velocity"))
+    return d.get("kind") != "sphere" or spins
 
 
 class Motion:
@@ -216,6 +229,7 @@ def surface(d: dict, index: int, cover=None) -> Surface | None:
     kind = d.get("kind")
     motion = None
     moving = d.get("velocity") is not None or d.get("angular_velocity") is not None
+    moving = moving and not is_free(d)
     if kind == "plane":
         point = _req(d, "point", (0.0, 0.0, 0.0))
         normal = _req(d, "normal", (0.0, 0.0, 1.0))

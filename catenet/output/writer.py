@@ -413,7 +413,7 @@ class ResultWriter:
                     ds.id.write_direct_chunk((k, *zeros), chunk)
             else:  # frames split into several chunks: HDF5 compresses them
                 ds[n0:n1] = np.stack([data[name] for _, data in batch])
-        self.obstacles.append(g, [t for t, _ in batch], n0, held)
+        self.obstacles.append(g, [t for t, _ in batch], n0, held, [d for _, d in batch])
         held.append(ds := g["time"])
         ds.resize((n1,))
         ds[n0:n1] = [t for t, _ in batch]  # last: a frame counts once its time is there
@@ -490,7 +490,7 @@ class ResultWriter:
         group = write_result_group(
             h5, self.scene, res, tension, attrs, self.velocities, self.accelerations
         )
-        self.obstacles.write_result(group, float(getattr(res, "time", math.nan)))
+        self.obstacles.write_result(group, float(getattr(res, "time", math.nan)), res)
 
     def _save_elsewhere(self, res, attrs: dict) -> Path:
         import h5py

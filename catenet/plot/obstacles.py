@@ -65,7 +65,7 @@ def plotted_time(res) -> float:
 def shapes(res, t: float | None = None) -> list[Shape]:
     """The obstacles of ``res``'s case at time ``t`` (default: the plotted state's), as
     ``catenet.output.surfaces`` builds them."""
-    from catenet.output.surfaces import surface
+    from catenet.output.surfaces import is_free, surface
 
     items = res.case.get("obstacle") if isinstance(res.case, dict) else None
     if not isinstance(items, list):
@@ -81,6 +81,8 @@ def shapes(res, t: float | None = None) -> list[Shape]:
             s = surface(d, k)
             if s is None:
                 continue  # a moving ball: catenet.plot.bodies
+            if is_free(d):  # a free body: where the result file has it at t
+                s = _posed(res, s, k, t)
             if s.kind == "plane":
                 out.append(Shape(s.kind, label, point=s.point, normal=s.normal))
             elif s.kind == "mesh":
@@ -90,6 +92,25 @@ def shapes(res, t: float | None = None) -> list[Shape]:
         except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
             log.warning("%s: %s not drawn: %s", res.path, label, exc)
     return out
+
+
+def _posed(res, s, k: int, t: float):
+    """The surface ``s`` of free body ``k`` at its stored pose nearest to time t (the
+    frame's, or /result's at the end); as at t = 0 when the file has none."""
+    import dataclasses
+
+    from catenet.output.reader import open_result
+
+    with open_result(res.path) as h5:
+        g = h5.get(f"trajectory/obstacles/{k}")
+        origin = h5.get(f"mesh/obstacles/{k}")
+        if g is None or origin is None or "center" not in g or not len(g["center"]):
+            return s
+        times = np.asarray(h5["trajectory/time"][: len(g["center"])])
+        j = int(np.argmin(np.abs(times - t)))
+        c, R = np.asarray(g["center"][j]), np.asarray(g["rotation"][j])
+        o = np.asarray(origin.attrs["origin"], dtype=np.float64)
+    return dataclasses.replace(s, vertices=c + (s.vertices - o) @ R.T)
 
 
 def plane_patch(point, normal, lo, hi) -> np.ndarray:

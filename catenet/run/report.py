@@ -25,7 +25,9 @@ class RunReport:
     backend: the linear solver; strain_warning: the warning of a strain beyond the
     material law's range ("" when none); trajectory_bytes: the trajectory's size as
     estimated before the run (0 without a file); cables: per cable of a graph case
-    (None for other nets)."""
+    (None for other nets); bodies: per free rigid body (its obstacle index): kind,
+    first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
+    (``catenet.run.bodies.BodyWatch.stats``)."""
 
     delta: float
     size: float
@@ -35,6 +37,7 @@ class RunReport:
     strain_warning: str = ""
     trajectory_bytes: int = 0
     cables: dict[str, CableSummary] | None = None
+    bodies: dict[int, dict] = field(default_factory=dict)
 
     @property
     def delta_over_L(self) -> float:

@@ -222,10 +222,11 @@ def run_case(
         if path is not None
         else _NoFile()
     )
+    bodies: dict = {}  # the free rigid bodies' summary, filled by _run
     with writer:
         try:
             result = _run(
-                scene, settings, ws, writer, state, progress, stop, interrupt, start, clock
+                scene, settings, ws, writer, state, progress, stop, interrupt, start, clock, bodies
             )
         except CatenetError as exc:
             exc.output = path if writer.has_result else None
@@ -264,6 +265,7 @@ def run_case(
         strain_warning=beyond or "",
         trajectory_bytes=0 if trajectory is None else trajectory.bytes,
         cables=per_cable if cables is not None else None,
+        bodies=bodies,
     )
     run = RunResult.of(result, report)
     if on_done is not None:
@@ -271,10 +273,15 @@ def run_case(
     return run
 
 
-def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None):
+def _run(
+    scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None, bodies=None
+):
     """Solves through the one solve path, writing frames as the steps come; on failure
-    or interruption the last good state becomes /result (converged = false)."""
+    or interruption the last good state becomes /result (converged = false). ``bodies``
+    (a dict) receives the free rigid bodies' summary (``BodyWatch.stats``)."""
+    bodies = {} if bodies is None else bodies
     from catenet.errors import Interrupted
+    from catenet.run.bodies import BodyWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
@@ -283,6 +290,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     total = settings.t_end if dynamic else 1.0
     start = None
     written = {"step": -1}
+    watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
 
     if clock is None:
         from catenet.run.clock import Clock
@@ -315,6 +323,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         keep(0, start.t, x0, v0, a=a0)
 
     def on_step(step: sv.Step) -> bool:
+        watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
         keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
@@ -381,6 +390,8 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
     res.wall_time = time.perf_counter() - begin
     res.timing = _timing(clock)
+    if watch:
+        bodies.update(watch.stats(res.x, res.v))
     _write_result(writer, res)
     return res
 

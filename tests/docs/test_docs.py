@@ -32,7 +32,7 @@ LEAVES = {
 
 
 # Pages with a test of their own, which runs them and checks what they leave.
-OWN = {"docs/guide/loads.md", "docs/guide/modes.md"}
+OWN = {"docs/guide/loads.md", "docs/guide/modes.md", "docs/guide/bodies.md"}
 
 
 def params():

@@ -128,9 +128,11 @@ class GeometryConfig(Declared):
     def topology(self) -> Topology:
         raise NotImplementedError
 
-    def check_supports(self, ck: Checker, fixed: set[int], fixed_key: str) -> None:
+    def check_supports(
+        self, ck: Checker, fixed: set[int], fixed_key: str, flies: bool = False
+    ) -> None:
         """Problems of the supports ``fixed`` (named by ``fixed_key``) once every node
-        reference is sound."""
+        reference is sound; ``flies``: a dynamic run, where a net may have none."""
 
     def build(self, material: Any, fixed: Any) -> Built:
         """The net under ``material`` (a catenet.model.builders.Material: its law and

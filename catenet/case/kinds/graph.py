@@ -219,17 +219,25 @@ class GraphConfig(GeometryConfig):
             tuple(c.name for c in self.cables),
         )
 
-    def check_supports(self, ck: Checker, fixed: set[int], fixed_key: str) -> None:
+    def check_supports(
+        self, ck: Checker, fixed: set[int], fixed_key: str, flies: bool = False
+    ) -> None:
+        if flies and not fixed:
+            return  # a net flying free (a dynamic run)
         if not fixed:
             ck.add(
                 "geometry.fixed: missing or empty: a graph needs supports "
-                "(geometry.fixed or supports.fixed)"
+                "(geometry.fixed or supports.fixed) in a static run: without them the net "
+                "moves as a rigid body and has no equilibrium; a dynamic run "
+                "(solver.method = 'dynamic') lets it fly free"
             )
             return
         mesh = self._mesh()
         rest = self.rest_length if not self.cables else None
         try:
-            Net.from_arrays(mesh.nodes, mesh.edges, EA=1.0, fixed=sorted(fixed), rest_length=rest)
+            Net.from_arrays(
+                mesh.nodes, mesh.edges, EA=1.0, fixed=sorted(fixed), rest_length=rest, flies=flies
+            )
         except ConfigError as exc:
             ck.problems.extend(with_prefix(p, fixed_key) for p in exc.problems)
 
@@ -302,6 +310,7 @@ class GraphConfig(GeometryConfig):
             rest_length=rest,
             line_density=rho,
             law=Law.concat(laws),
+            flies=case.solver.method == "dynamic",  # a dynamic run needs no support
         )
         cables = self._index(mesh)
         return Built(net, probe, _size(net), names, sets, cables, mesh.at_nodes)

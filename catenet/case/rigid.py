@@ -1,0 +1,247 @@
+"""Free rigid bodies of a case: an ``[[obstacle]]`` box, capsule, mesh or sphere with
+``mass`` or ``density`` (a sphere: with ``density``, ``inertia`` or
+``angular_velocity``; a sphere with ``mass`` alone is a ball, ``catenet.case.bodies``,
+the exact torque-free case: a frictionless ball never spins up).
+
+Each body is four nodes appended to the net (``catenet.terms.rigid``: an affine body
+whose lumped masses m/4 carry its mass and second moment exactly), with its initial
+``velocity`` and ``angular_velocity`` (world frame, about its centre of mass), the
+orthogonality energy that keeps it rigid (``Rigidity``) and the barrier between its
+shape and every free net node (``BodyContact``). Mass properties come from the shape at
+uniform density (``mass_properties``) unless ``inertia`` (3 x 3 about the centre of
+mass in the body axes: a box's own axes, a capsule's (x', y', axis), a sphere's and a
+mesh's the world axes at t = 0; or 3 principal moments) is given.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.case.keys import show
+from catenet.errors import ConfigError
+
+#: The orthogonality energy's k over the body's load scale (force x size): the body
+#: strains by about 1/RIGIDITY under a force of the scale.
+RIGIDITY = 1e6
+#: The largest solver.rho_inf with a free body: its rigidity is a stiff mode that the
+#: newmark scheme must damp (at 0.99 a spinning box's momentum drifts by half, at 1 the
+#: run blows up; 0.95 and below keep the second-order drift).
+RHO_INF_MAX = 0.95
+
+
+@dataclass(frozen=True)
+class FreeBody:
+    """A free body as the result file records it: its ``[[obstacle]]`` table, its four
+    nodes (``frame``), mass [kg], inertia (3, 3) [kg m^2] in its body axes ``axes``
+    (their world directions at t = 0, as columns) and its centre of mass at t = 0."""
+
+    obstacle: int
+    frame: object
+    mass: float
+    inertia: np.ndarray
+    axes: np.ndarray
+    center: np.ndarray
+
+
+def mass_properties(obs) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """(mass, centre of mass, inertia in the body axes, axes (columns)) of a free body
+    table, uniform density unless ``mass``/``inertia`` say otherwise."""
+    volume, com, inertia_unit, axes = _shape(obs)  # inertia per unit mass
+    mass = obs.mass if obs.mass is not None else obs.density * volume
+    inertia = mass * inertia_unit if obs.inertia is None else np.array(obs.inertia, float)
+    return float(mass), com, inertia, axes
+
+
+def _shape(obs):
+    """(volume, centre, inertia per unit mass in body axes, axes) of a shape."""
+    from catenet.terms.shapes import rotation
+
+    if obs.kind == "box":
+        h = np.asarray(obs.half_size, dtype=np.float64)
+        moments = np.array([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2])
+        axes = rotation(obs.axis, obs.angle)
+        return 8 * h.prod(), np.asarray(obs.center, float), np.diag(moments) / 3, axes
+    if obs.kind == "sphere":
+        r = obs.radius
+        ball = 0.4 * r * r * np.eye(3)
+        return 4 / 3 * math.pi * r**3, np.asarray(obs.center, float), ball, np.eye(3)
+    if obs.kind == "capsule":
+        return _capsule(obs)
+    return _mesh(obs)
+
+
+def _capsule(obs):
+    a, b, r = np.asarray(obs.start, float), np.asarray(obs.end, float), obs.radius
+    length = float(np.linalg.norm(b - a))
+    v_cyl, v_sph = math.pi * r * r * length, 4 / 3 * math.pi * r**3
+    volume = v_cyl + v_sph
+    mc, ms = v_cyl / volume, v_sph / volume  # per unit mass
+    axial = mc * r * r / 2 + ms * 0.4 * r * r
+    arm = length / 2 + 3 * r / 8  # each half ball's centre from the middle
+    side = mc * (r * r / 4 + length**2 / 12) + ms * (83 / 320 * r * r + arm**2)
+    z = (b - a) / length
+    helper = np.eye(3)[int(np.argmin(np.abs(z)))]
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    axes = np.column_stack([x, np.cross(z, x), z])
+    return volume, 0.5 * (a + b), np.diag([side, side, axial]), axes
+
+
+def _mesh(obs):
+    V, T = obs.surface()
+    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+    vol = np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0  # signed tetrahedra from 0
+    volume = float(vol.sum())
+    com = (vol[:, None] * (a + b + c) / 4.0).sum(axis=0) / volume
+    s = a + b + c
+    outer = np.einsum("ki,kj->kij", a, a) + np.einsum("ki,kj->kij", b, b)
+    outer += np.einsum("ki,kj->kij", c, c) + np.einsum("ki,kj->kij", s, s)
+    J = (vol[:, None, None] * outer).sum(axis=0) / 20.0 / volume - np.outer(com, com)
+    return volume, com, np.trace(J) * np.eye(3) - J, np.eye(3)
+
+
+def add_free_bodies(case, net, loads, velocity, size: float):
+    """(net, loads, velocity, terms, bodies) with the case's free bodies appended (four
+    nodes each). Raises ConfigError with the key path for a body that starts overlapping
+    the net, that shares the scene with other obstacles, or has a bad inertia."""
+    from catenet.case.bodies import pad_loads
+    from catenet.model.net import Net
+
+    which = [k for k, o in enumerate(case.obstacles) if getattr(o, "free", False)]
+    if not which:
+        return net, loads, velocity, (), ()
+    _check_alone(case, which)
+    solver = case.solver
+    if solver.method == "dynamic" and solver.integrator == "newmark":
+        if solver.rho_inf > RHO_INF_MAX:
+            raise ConfigError(
+                f"solver.rho_inf = {solver.rho_inf!r}: must be <= {RHO_INF_MAX} with a free "
+                f"body (obstacle[{which[0]}]): its rigidity is a stiff mode the newmark "
+                "scheme must damp; the default 0.8 does"
+            )
+    n0 = net.n_nodes
+    places, speeds, built = [], [], []
+    for j, k in enumerate(which):
+        obs = case.obstacles[k]
+        body, P, V = _frame(obs, k, n0 + 4 * j, case)
+        places.append(P)
+        speeds.append(V)
+        built.append(body)
+    nb = 4 * len(which)
+    point = np.zeros(n0) if net.point_mass is None else net.point_mass
+    masses = np.repeat([b.mass / 4 for b in built], 4)
+    net = Net.from_arrays(
+        np.vstack([net.nodes, *places]),
+        net.edges,
+        EA=net.EA,
+        fixed=np.concatenate([net.fixed, np.zeros(nb, bool)]),
+        rest_length=net.rest_length,
+        line_density=net.line_density,
+        tension_only=net.tension_only,
+        law=net.law,
+        point_mass=np.concatenate([point, masses]),
+        bodies=net.bodies + nb,
+        flies=net.flies,
+    )
+    v = np.zeros((n0, 3)) if velocity is None else velocity
+    velocity = np.vstack([v, *speeds])
+    loads = pad_loads(loads, nb)
+    terms = []
+    for body in built:
+        terms += _terms(case, body, net, loads, size)
+    return net, loads, velocity, tuple(terms), tuple(built)
+
+
+def _check_alone(case, which) -> None:
+    k = which[0]
+    kind = case.obstacles[k].kind
+    if len(which) > 1:
+        raise ConfigError(
+            f"obstacle[{which[1]}]: a second free body: free bodies meet the net, not "
+            f"each other (obstacle[{k}] is one): keep one free body"
+        )
+    others = [i for i in range(len(case.obstacles)) if i != k]
+    if others:
+        i = others[0]
+        raise ConfigError(
+            f"obstacle[{i}] (kind {case.obstacles[i].kind!r}): a free body "
+            f"(obstacle[{k}], kind {kind!r}) meets the net only and would pass through "
+            "another obstacle: drop mass and density of the free body, or the other obstacle"
+        )
+
+
+def _frame(obs, k: int, first: int, case):
+    from catenet.terms.rigid import Frame, inertia_problem
+
+    path = f"obstacle[{k}]"
+    mass, com, inertia, axes = mass_properties(obs)
+    world = axes @ inertia @ axes.T
+    why = inertia_problem(world)
+    if why is not None:  # a given inertia is checked when parsed; a thin shape's may fail
+        raise ConfigError(
+            f"{path}: the inertia of its shape is no inertia tensor ({why}): give inertia"
+        )
+    frame = Frame(first, mass, world, com)
+    v = None if obs.velocity is None else np.asarray(obs.velocity, float)
+    w = getattr(obs, "angular_velocity", None)
+    P, V = frame.place(v, None if w is None else np.asarray(w, float))
+    moving = [n for n in ("velocity", "angular_velocity") if any(getattr(obs, n, None) or ())]
+    if case.solver.method != "dynamic" and moving:
+        key = moving[0]
+        raise ConfigError(
+            f"{path}.{key} = {list(getattr(obs, key))}: a free body's initial motion acts "
+            "in dynamic runs only: set solver.method = 'dynamic', or drop it"
+        )
+    return FreeBody(k, frame, mass, inertia, axes, com), P, V
+
+
+def _terms(case, body: FreeBody, net, loads, size: float) -> list:
+    """The body's rigidity and its barrier with every free net node."""
+    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.terms.contact import default_stiffness
+    from catenet.terms.rigid import Rigidity
+    from catenet.terms.rigid_contact import BodyContact
+
+    k = body.obstacle
+    obs = case.obstacles[k]
+    path = f"obstacle[{k}]"
+    frame = body.frame
+    nodes = np.flatnonzero(~net.fixed[: net.n_net])
+    g = 0.0 if loads.gravity is None else float(np.linalg.norm(loads.gravity))
+    stiff = float(np.mean(net.EA / net.rest_length)) if net.n_edges else 1.0
+    force = loads.external_force(net)[nodes]
+    per_node = float(np.mean(np.linalg.norm(force, axis=1))) if len(nodes) else 0.0
+    dhat = obs.distance if obs.distance is not None else DISTANCE_SHARE * size
+    load = max(per_node, body.mass * g / 8.0)
+    if load <= 0.0:
+        load = stiff * dhat
+    kappa = obs.stiffness if obs.stiffness is not None else default_stiffness(load, dhat)
+    shape = obs.term(nodes, kappa, dhat)
+    contact = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{path} (kind {obs.kind!r})")
+    gap = shape.gap(net.nodes)
+    inside = np.flatnonzero(~(gap > 0.0))
+    if inside.size:
+        i = int(nodes[inside[0]])
+        raise ConfigError(
+            f"{path} (kind {obs.kind!r}, a free body): node {i} at "
+            f"{show(net.nodes[i].tolist())} starts inside or on it (gap "
+            f"{gap[inside[0]]:.3g} m), {inside.size} nodes in all: a body must not "
+            "overlap the initial net; move it or the net"
+        )
+    spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
+    reach = frame.reach  # about the body's size
+    ea = float(np.max(net.EA)) if net.n_edges else stiff * size
+    w0 = np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0))
+    v0 = np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0))
+    scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
+    terms = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
+    if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
+        from catenet.terms.friction import Friction
+        from catenet.terms.rigid_contact import BodyFriction
+
+        slip = obs.slip if obs.slip is not None else dhat
+        terms.append(BodyFriction(Friction(shape, mu=obs.friction, slip=slip), contact))
+    return terms

@@ -1,0 +1,51 @@
+"""What a run's summary says of its free rigid bodies (``catenet.case.rigid``): the time
+each first came within its barrier's reach of the net (the first contact), and its final
+speed and spin, from the states the runner sees."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class BodyWatch:
+    """Follows the free bodies of a scene through a run's steps (``see``), then says
+    what the summary reports (``stats``)."""
+
+    def __init__(self, scene):
+        from catenet.terms.rigid_contact import BodyContact
+
+        contacts = {
+            id(t.frame): t for t in scene.terms if isinstance(t, BodyContact) and t.bounds_step
+        }  # the barriers (not the friction riding on them)
+        self.bodies = [(b, contacts.get(id(b.frame))) for b in getattr(scene, "rigid", ())]
+        self.kinds = {b.obstacle: scene.case.obstacles[b.obstacle].kind for b, _ in self.bodies}
+        self.first = {b.obstacle: None for b, _ in self.bodies}
+
+    def __bool__(self) -> bool:
+        return bool(self.bodies)
+
+    def see(self, t: float, x) -> None:
+        """A state x (N, 3) at time t."""
+        for body, contact in self.bodies:
+            if contact is None or self.first[body.obstacle] is not None:
+                continue
+            if float(contact.gap(x).min()) < contact.dhat:
+                self.first[body.obstacle] = float(t)
+
+    def stats(self, x, v) -> dict:
+        """Per body (its obstacle index): kind, first contact time (None: none), final
+        speed [m/s], spin [deg/s] and its axis (world frame)."""
+        out = {}
+        for body, _ in self.bodies:
+            vel, spin = (np.zeros(3), np.zeros(3)) if v is None else body.frame.motion(x, v)
+            w = float(np.linalg.norm(spin))
+            out[body.obstacle] = {
+                "kind": self.kinds[body.obstacle],
+                "first_contact": self.first[body.obstacle],
+                "speed": float(np.linalg.norm(vel)),
+                "spin": math.degrees(w),
+                "axis": (spin / w).tolist() if w > 0 else [0.0, 0.0, 0.0],
+            }
+        return out

@@ -1,0 +1,241 @@
+"""Barrier contact between the net's nodes and a free rigid body (``catenet.terms.rigid``).
+
+The body's shape is a fixed obstacle term (box, capsule, sphere, mesh) built at the
+body's pose at t = 0; a node x is seen there at X = c0 + A^T (x - c), with (c, A) the
+body's pose, linear in its four nodes p (``Frame.state``). With g, H the shape's
+gradient and Hessian at X and u = x - c:
+
+    dE/dx = A g,   dE/dc = -A g,   dE/dA = u g^T,
+
+and the Hessian in q = (x, c, a1, a2, a3) (a_m the columns of A) is L^T H L + S, with
+L = [A^T, -A^T, e_1 u^T, e_2 u^T, e_3 u^T] the Jacobian of X and S the second
+derivative of X weighted by g: g_m 1 between a_m and x, -g_m 1 between a_m and c. The
+chain to the body's nodes is the constant kron(T, 1) of ``Frame.chain``. Per contact
+node the values are its (x, x) block (9), (x, p) (36) and (p, x) (36), then the
+body's (p, p) block (144) summed over the nodes.
+
+``max_step``: along the step, a node's body-frame point follows the quadratic path
+X(t) = X0 + t V + t^2 W (V = A^T du + dA^T u, W = dA^T du, du = dx - dc). On a piece
+[t, t + h] the path stays within |W| h^2 / 4 of its chord, so when that is at most
+delta, a path that enters the shape has its chord enter the shape grown by delta no
+later: the chords' exact first contact with the grown shape (the kernels' own ray tests,
+the offset grown) is a safe cap, exact for W = 0 (a body that does not turn in the
+step). delta is CA_SHARE of the smallest gap (at most dhat / 2, within a mesh's grid),
+so no iterate reaches the shape; the pieces go on to beyond every step a line search
+tries (inf).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from catenet.kernels.contact import sphere_max_step
+from catenet.kernels.mesh import mesh_max_step
+from catenet.kernels.shapes import box_max_step, capsule_max_step
+from catenet.terms.base import Term, register
+from catenet.terms.rigid import CA_ITER, CA_SHARE, Frame
+
+T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS = 12)
+
+
+@register("body_contact")
+class BodyContact(Term):
+    """The barrier of ``shape`` (a fixed obstacle term on the net's contact nodes, built
+    at the body's pose at t = 0) riding on the body ``frame``."""
+
+    bounds_step = True
+    role = "internal"
+    convex = False
+
+    def __init__(self, shape, frame: Frame, *, n_nodes: int, label: str = "a free body"):
+        self.shape, self.frame = shape, frame
+        self.nodes = shape.nodes
+        self.kappa, self.dhat = getattr(shape, "kappa", 0.0), getattr(shape, "dhat", 0.0)
+        self.n_nodes = int(n_nodes)
+        self.label = label
+        self.c0 = frame.center.copy()
+        self._buf = np.zeros((n_nodes, 3))
+        self._g = np.zeros((n_nodes, 3))
+        chain = frame.chain()
+        T = np.zeros((15, 15))
+        T[:3, :3] = np.eye(3)
+        T[3:, 3:] = chain
+        self._T = T
+
+    # ---- evaluation -------------------------------------------------------------------
+    def _local(self, x):
+        c, A = self.frame.state(x)
+        U = np.asarray(x)[self.nodes] - c
+        self._buf[self.nodes] = self.c0 + U @ A
+        return c, A, U
+
+    def gap(self, x):
+        self._local(x)
+        return self.shape.gap(self._buf)
+
+    def _shape_gradient(self):
+        g = self._g
+        energy = self.shape.gradient(self._buf, g)
+        out = g[self.nodes].copy()
+        g[self.nodes] = 0.0
+        return energy, out
+
+    def energy(self, x):
+        self._local(x)
+        return self.shape.energy(self._buf)
+
+    def gradient(self, x, grad):
+        _, A, U = self._local(x)
+        energy, g = self._shape_gradient()
+        fx = g @ A.T
+        grad[self.nodes] += fx
+        gA = U.T @ g
+        grad[self.frame.nodes] += -0.25 * fx.sum(axis=0) + self.frame.B @ gA.T
+        return energy
+
+    def pattern(self):
+        dn = 3 * self.nodes[:, None] + np.arange(3)  # (K, 3)
+        db = self.frame.dofs()  # (12,)
+        K = len(self.nodes)
+        ii_r = np.repeat(dn, 3, axis=1)
+        ii_c = np.tile(dn, (1, 3))
+        ip_r = np.repeat(dn, 12, axis=1)
+        ip_c = np.tile(db, (K, 3))
+        pi_r = np.tile(np.repeat(db, 3), (K, 1))
+        pi_c = np.tile(dn, (1, 12))
+        rows = np.concatenate([ii_r, ip_r, pi_r], axis=1).ravel()
+        cols = np.concatenate([ii_c, ip_c, pi_c], axis=1).ravel()
+        return np.concatenate([rows, np.repeat(db, 12)]), np.concatenate([cols, np.tile(db, 12)])
+
+    def hessian(self, x, values):
+        _, A, U = self._local(x)
+        K = len(self.nodes)
+        hv = np.zeros(9 * K)
+        self.shape.hessian(self._buf, hv)
+        H = hv.reshape(K, 3, 3)
+        _, g = self._shape_gradient()
+        values[:] = 0.0
+        act = np.flatnonzero(np.any(H.reshape(K, 9) != 0.0, axis=1) | np.any(g != 0.0, axis=1))
+        if act.size == 0:
+            return False
+        Ka = act.size
+        u, Ha, ga = U[act], H[act], g[act]
+        L = np.zeros((Ka, 3, 15))
+        L[:, :, 0:3] = A.T
+        L[:, :, 3:6] = -A.T
+        for m in range(3):
+            L[:, m, 6 + 3 * m : 9 + 3 * m] = u
+        Kq = np.einsum("kai,kab,kbj->kij", L, Ha, L)
+        eye = np.eye(3)
+        for m in range(3):
+            s = ga[:, m, None, None] * eye  # (Ka, 3, 3)
+            a = slice(6 + 3 * m, 9 + 3 * m)
+            Kq[:, a, 0:3] += s
+            Kq[:, 0:3, a] += s
+            Kq[:, a, 3:6] -= s
+            Kq[:, 3:6, a] -= s
+        Kp = np.einsum("ia,kij,jb->kab", self._T, Kq, self._T)
+        blocks = values[: 81 * K].reshape(K, 81)
+        blocks[act, 0:9] = Kp[:, :3, :3].reshape(Ka, 9)
+        blocks[act, 9:45] = Kp[:, :3, 3:].reshape(Ka, 36)
+        blocks[act, 45:81] = Kp[:, 3:, :3].reshape(Ka, 36)
+        values[81 * K :] = Kp[:, 3:, 3:].sum(axis=0).ravel()
+        return True
+
+    def stiffness(self):
+        s = np.zeros(self.n_nodes)
+        s[self.frame.nodes] = self.kappa
+        return s
+
+    # ---- the step cap -----------------------------------------------------------------
+    def max_step(self, x, dx):
+        c, A, U = self._local(x)
+        X0 = self._buf[self.nodes].copy()
+        dc, dA = self.frame.state(dx)
+        dU = np.asarray(dx)[self.nodes] - dc
+        V = dU @ A + U @ dA
+        W = dU @ dA
+        if not (np.any(V) or np.any(W)):
+            return math.inf
+        return self._advance(X0, V, W)
+
+    def _advance(self, X0, V, W) -> float:
+        """The first contact along the quadratic paths X0 + t V + t^2 W (module
+        docstring): over pieces [t, t + h] (the step [0, 1], then doubling t) whose
+        chords stay within |W| h^2 / 4 <= delta of the paths, each chord's exact first
+        contact with the shape grown by that deviation, a contact no later than the true
+        one (exact where W = 0)."""
+        w = float(np.linalg.norm(W, axis=1).max())
+        t = 0.0
+        for _ in range(CA_ITER):
+            P = X0 + t * V + t * t * W
+            self._buf[self.nodes] = P
+            gap = self.shape.gap(self._buf)
+            delta = min(CA_SHARE * float(gap.min()), 0.5 * self.dhat)
+            h = min(max(1.0, t), T_FAR - t)  # pieces of the step, then doubling
+            if w > 0.0:
+                h = min(h, 2.0 * math.sqrt(delta / w))
+            chord = h * V + (2.0 * t * h + h * h) * W  # X(t + h) - X(t)
+            s = self._ray(P, chord, 0.25 * w * h * h)
+            if s <= 1.0:
+                return t + s * h
+            t += h
+            if t >= T_FAR:
+                return math.inf
+        return t  # still short of a contact: capped where the pieces got
+
+    def _ray(self, P, D, grow: float) -> float:
+        """The first contact of the nodes' segments P + s D (s in [0, 1]) with the shape
+        grown by ``grow`` (inf: none)."""
+        from catenet.terms.contact import Sphere
+        from catenet.terms.shapes import Box, Capsule, Mesh
+
+        x, dx = self._buf, self._g
+        x[self.nodes] = P
+        dx[self.nodes] = D
+        sh, nodes = self.shape, self.nodes
+        try:
+            if isinstance(sh, Box):
+                return box_max_step(x, dx, nodes, sh.center, sh.axes, sh.half, sh.offset + grow)
+            if isinstance(sh, Capsule):
+                return capsule_max_step(x, dx, nodes, sh.a, sh.b, sh.radius + grow)
+            if isinstance(sh, Sphere):
+                return sphere_max_step(x, dx, nodes, sh.center, sh.radius + grow)
+            if isinstance(sh, Mesh):
+                args = (sh.vertices, sh.triangles, sh.fn, sh.offset + grow, *sh._grid())
+                return mesh_max_step(x, dx, nodes, *args)
+            raise TypeError(f"no ray test for {type(sh).__name__}")
+        finally:
+            dx[nodes] = 0.0
+
+
+@register("body_friction")
+class BodyFriction(BodyContact):
+    """Coulomb friction between the net and a free body: the lagged friction term
+    (``catenet.terms.friction.Friction``) of the body's shape, evaluated in the body
+    frame like the barrier it rides on (``contact``), so its normals and anchors ride
+    with the body and the friction force acts on both the node and the body (equal and
+    opposite, no net torque). A static load step re-lags it (``relag``)."""
+
+    bounds_step = False
+    lagged = True
+
+    def __init__(self, friction, contact: BodyContact):
+        super().__init__(friction, contact.frame, n_nodes=contact.n_nodes, label=contact.label)
+        self.rides_on = contact
+
+    def begin_step(self, x, time, start=None) -> None:
+        self._local(x)
+        self.shape.begin_step(self._buf, None)
+
+    def relag(self, x) -> float:
+        self._local(x)
+        return self.shape.relag(self._buf)
+
+    def gap(self, x):
+        return self.rides_on.gap(x)
+
+    def stiffness(self):
+        return None

@@ -1,0 +1,174 @@
+"""Free rigid bodies in case files (catenet/case/rigid.py): which tables are free bodies,
+their mass properties from the shape (box, sphere, capsule, mesh) or as given, and bad
+input (zero or negative mass, an inertia that is not symmetric positive definite, a body
+overlapping the net, a mesh that is not closed, ...) exiting 2 with the key path."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from meshes import CUBE_T, CUBE_V, write_stl
+
+from catenet.case import build, dumps_toml, parse_case
+from catenet.case.rigid import mass_properties
+
+
+def drop(**body) -> dict:
+    """A 12 kg box 0.1 m above the paper's square net (n = 10), dynamic."""
+    obstacle = {
+        "kind": "box", "center": [0.0, 0.0, 0.2], "half_size": [0.15, 0.1, 0.05],
+        "mass": 12.0, **body,
+    }  # fmt: skip
+    return {
+        "geometry": {
+            "kind": "square_net", "n": 10, "alpha": math.pi / 4, "size": 1.0,
+            "edge_length": 0.05,
+        },
+        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [{k: v for k, v in obstacle.items() if v is not None}],
+        "solver": {"method": "dynamic", "dt": 0.01, "damping": 0.0, "t_end": 0.05},
+    }  # fmt: skip
+
+
+def test_a_box_with_mass_is_four_nodes_with_its_weight_and_initial_motion():
+    scene = build(parse_case(drop(velocity=[0.0, 0.0, -1.0], angular_velocity=[0.0, 0.0, 3.0])))
+    net = scene.net
+    (body,) = scene.rigid
+    assert net.bodies == 4
+    assert body.frame.nodes.tolist() == list(range(net.n_nodes - 4, net.n_nodes))
+    assert net.mass[-4:] == pytest.approx([3.0] * 4) and not net.fixed[-4:].any()
+    f = scene.loads.external_force(net)[-4:].sum(axis=0)
+    assert f == pytest.approx([0.0, 0.0, -12.0 * 9.81])
+    v, w = body.frame.motion(net.nodes, scene.velocity)
+    assert v == pytest.approx([0, 0, -1.0]) and w == pytest.approx([0, 0, 3.0])
+    assert body.inertia == pytest.approx(12.0 / 3 * np.diag([0.0125, 0.025, 0.0325]))
+
+
+def test_mass_properties_of_each_shape(tmp_path):
+    case = drop(density=500.0, mass=None, angle=0.4, axis=[0, 1, 0])
+    box = parse_case(case).obstacles[0]
+    m, c, inertia, axes = mass_properties(box)
+    assert m == pytest.approx(500.0 * 0.3 * 0.2 * 0.1) and c == pytest.approx([0, 0, 0.2])
+    assert axes[:, 1] == pytest.approx([0, 1, 0])  # turned about y
+    # A mesh of the same box (the unit cube scaled and moved) has the same properties.
+    write_stl(str(tmp_path / "cube.stl"), CUBE_V, CUBE_T)
+    mesh = copy.deepcopy(case)
+    mesh["obstacle"][0] = {
+        "kind": "mesh", "file": str(tmp_path / "cube.stl"), "scale": 0.4,
+        "offset": [-0.2, -0.2, 0.0], "density": 500.0,
+    }  # fmt: skip
+    m2, c2, inertia2, axes2 = mass_properties(parse_case(mesh).obstacles[0])
+    assert m2 == pytest.approx(500.0 * 0.4**3) and c2 == pytest.approx([0, 0, 0.2])
+    assert inertia2 == pytest.approx(m2 * 0.4**2 / 6 * np.eye(3))
+    assert axes2 == pytest.approx(np.eye(3))
+    # A capsule against a fine voxel sum of the same solid.
+    cap = copy.deepcopy(case)
+    cap["obstacle"][0] = {
+        "kind": "capsule", "start": [0, 0, 0], "end": [0.6, 0, 0], "radius": 0.2,
+        "density": 1.0,
+    }  # fmt: skip
+    m3, c3, inertia3, axes3 = mass_properties(parse_case(cap).obstacles[0])
+    g = np.linspace(-0.5, 0.5, 201)
+    X, Y, Z = np.meshgrid(g + 0.3, g * 0.5, g * 0.5, indexing="ij")
+    p = np.stack([X, Y, Z], axis=-1).reshape(-1, 3)
+    t = np.clip(p[:, 0], 0.0, 0.6)
+    inside = p[np.linalg.norm(p - np.column_stack([t, 0 * t, 0 * t]), axis=1) <= 0.2]
+    dv = (g[1] - g[0]) ** 3 * 0.25
+    r = inside - [0.3, 0, 0]
+    J = dv * r.T @ r
+    assert m3 == pytest.approx(len(inside) * dv, rel=5e-3) and c3 == pytest.approx([0.3, 0, 0])
+    world = axes3 @ inertia3 @ axes3.T
+    assert world == pytest.approx(np.trace(J) * np.eye(3) - J, rel=1e-2, abs=1e-6)
+    sphere = copy.deepcopy(case)
+    sphere["obstacle"][0] = {"kind": "sphere", "center": [0, 0, 1], "radius": 0.5, "density": 2.0}
+    m4, _, inertia4, _ = mass_properties(parse_case(sphere).obstacles[0])
+    assert m4 == pytest.approx(2.0 * 4 / 3 * math.pi / 8)
+    assert inertia4 == pytest.approx(0.4 * m4 * 0.25 * np.eye(3))
+
+
+def test_a_given_inertia_and_principal_moments():
+    full = [[0.2, 0.01, 0.0], [0.01, 0.3, 0.0], [0.0, 0.0, 0.4]]
+    box = parse_case(drop(inertia=full)).obstacles[0]
+    assert mass_properties(box)[2] == pytest.approx(np.array(full))
+    box = parse_case(drop(inertia=[0.2, 0.3, 0.4])).obstacles[0]
+    assert mass_properties(box)[2] == pytest.approx(np.diag([0.2, 0.3, 0.4]))
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"mass": 0.0}, "obstacle[0].mass = 0.0: must be finite and > 0"),
+        ({"mass": -3.0}, "obstacle[0].mass = -3.0: must be finite and > 0"),
+        ({"density": 0.0, "mass": None}, "obstacle[0].density = 0.0: must be finite and > 0"),
+        ({"density": 100.0}, "obstacle[0].density = 100.0: give mass or density, not both"),
+        ({"inertia": [[1, 0, 0], [0, -1, 0], [0, 0, 1]]}, "obstacle[0].inertia = "),
+        ({"inertia": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]}, "it is not symmetric"),
+        ({"inertia": [1.0, 1.0, 3.0]}, "I1 + I2 > I3"),
+        ({"inertia": [1.0, 2.0]}, "obstacle[0].inertia = [1.0, 2.0]: must be"),
+        ({"center": [0.0, 0.0, 0.01]}, "obstacle[0] (kind 'box', a free body): node"),
+        ({"history": [[0, 1]], "velocity": [0, 0, 1]}, "obstacle[0].history: a free body"),
+        ({"solver": "static", "velocity": [0, 0, -1]}, "obstacle[0].velocity = [0.0, 0.0, -1.0]"),
+        ({"second": True}, "obstacle[1]: a second free body"),
+        ({"ground": True}, "obstacle[1] (kind 'plane'): a free body (obstacle[0]"),
+        ({"mesh": "open"}, "obstacle[0].file = "),
+        ({"rho": 1.0}, "solver.rho_inf = 1.0: must be <= 0.95 with a free body"),
+    ],
+)
+def test_bad_free_bodies_exit_2_with_their_key_path(tmp_path, change, message):
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    case = drop()
+    obs = case["obstacle"][0]
+    if change.pop("solver", None):
+        case["solver"] = {"method": "static"}
+    if (rho := change.pop("rho", None)) is not None:
+        case["solver"].update(integrator="newmark", rho_inf=rho)
+    if change.pop("second", None):
+        case["obstacle"].append({**obs, "center": [0.0, 0.0, 0.6]})
+    if change.pop("ground", None):
+        case["obstacle"].append({"kind": "plane", "point": [0, 0, -2.0]})
+    if change.pop("mesh", None):
+        V, T = CUBE_V, CUBE_T[:-1]  # one triangle short: not closed
+        write_stl(str(tmp_path / "open.stl"), V, T)
+        case["obstacle"][0] = {
+            "kind": "mesh", "file": "open.stl", "mass": 3.0, "offset": [0, 0, 0.3],
+        }  # fmt: skip
+    for k, v in change.items():
+        if v is None:
+            obs.pop(k, None)
+        else:
+            obs[k] = v
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
+    assert res.exit_code == 2, res.output
+    assert message in res.output
+    assert "Traceback" not in res.output
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_the_summary_says_where_a_free_body_is(tmp_path):
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    case = drop(center=[0.0, 0.0, 0.052], half_size=[0.15, 0.15, 0.05], distance=0.005)
+    case["solver"] = {"method": "static"}
+    path = tmp_path / "rest.toml"
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "rest.h5")])
+    assert res.exit_code == 0, res.output
+    assert "body         obstacle[0] (box): resting on the net" in res.output
+    case["obstacle"][0]["center"] = [0.0, 0.0, 0.5]  # out of reach, and nothing pulls it
+    case["load"] = {}
+    case["load"]["point"] = [{"node": "center", "force": [0.0, 0.0, -10.0]}]
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "away.h5")])
+    assert res.exit_code == 0, res.output
+    assert "body         obstacle[0] (box): not touching the net" in res.output
