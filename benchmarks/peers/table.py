@@ -1,0 +1,178 @@
+"""Markdown tables of the peer comparisons, from benchmarks/results/peers-*.csv.
+
+    python benchmarks/peers/table.py [--results benchmarks/results]
+
+Prints one table per CSV that exists: OpenSees (engine and whole process), its check,
+compas_fd (form finding) and pypardiso (phases and start-up).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent.parent / "results"
+
+
+def g(value, digits: int = 3) -> str:
+    """A number in a short form; text as it is."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    if v == 0.0:
+        return "0"
+    if abs(v) < 1e-3 or abs(v) >= 1e5:
+        return f"{v:.1e}"
+    return f"{v:.{digits}g}"
+
+
+def markdown(header: list[str], rows: list[list]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += [
+        "| " + " | ".join(g(c) if not isinstance(c, str) else c for c in r) + " |" for r in rows
+    ]
+    return "\n".join(lines)
+
+
+def read(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def opensees(rows: list[dict]) -> str:
+    header = [
+        "DOF",
+        "catenet solve [s]",
+        "OpenSees analyze [s]",
+        "OpenSees / catenet",
+        "`catenet run` [s]",
+        "OpenSees process [s]",
+        "OpenSees / catenet",
+        "Newton it. catenet / OpenSees",
+        "peak MiB catenet / OpenSees",
+        "largest difference / delta",
+    ]
+    body = [
+        [
+            r["dofs"],
+            g(r["catenet_engine_s"]),
+            g(r["opensees_engine_s"]) + ("" if r["opensees_engine_warm"] == "True" else " (cold)"),
+            g(r["engine_ratio"], 2),
+            g(r["catenet_process_s"]),
+            g(r["opensees_process_s"]),
+            g(r["process_ratio"], 2),
+            f"{r['catenet_iterations']} / {r['opensees_iterations']}",
+            f"{float(r['catenet_peak_mib']):.0f} / {float(r['opensees_peak_mib']):.0f}",
+            g(r["max_diff_over_delta"], 2),
+        ]
+        for r in rows
+    ]
+    return markdown(header, body)
+
+
+def check(rows: list[dict]) -> str:
+    header = [
+        "OpenSees system",
+        "converged",
+        "Newton it.",
+        "analyze [s]",
+        "largest difference / delta, same law",
+        "without the pretension",
+    ]
+    body = [
+        [
+            r["system"],
+            "yes" if r["ok"] == "0" else f"no ({r['ok']})",
+            r["iterations"],
+            g(r["analyze_s"]),
+            g(r["diff_same_law"], 2),
+            g(r["diff_no_pretension"], 2),
+        ]
+        for r in rows
+    ]
+    return markdown(header, body)
+
+
+def formfind(rows: list[dict]) -> str:
+    header = [
+        "edges",
+        "catenet `formfind` [s]",
+        "with `Net.from_arrays` [s]",
+        "compas_fd `fd_numpy` [s]",
+        "catenet / compas_fd",
+        "`catenet formfind` process [s]",
+        "compas_fd process [s]",
+        "catenet / compas_fd",
+        "peak MiB catenet / compas_fd",
+        "largest difference / span",
+    ]
+    body = [
+        [
+            r["edges"],
+            g(r["catenet_engine_s"]),
+            g(r["catenet_engine_with_net_s"]),
+            g(r["compas_engine_s"]),
+            g(r["engine_ratio"], 2),
+            g(r["catenet_process_s"]),
+            g(r["compas_process_s"]),
+            g(r["process_ratio"], 2),
+            f"{float(r['catenet_peak_mib']):.0f} / {float(r['compas_peak_mib']):.0f}",
+            g(r["max_dx_over_span"], 2),
+        ]
+        for r in rows
+    ]
+    return markdown(header, body)
+
+
+def pardiso(rows: list[dict]) -> str:
+    header = [
+        "DOF",
+        "binding",
+        "phase",
+        "time [s]",
+        "x catenet's",
+        "largest difference / largest x",
+    ]
+    body = [
+        [
+            r["dofs"],
+            r["tool"],
+            r["phase"],
+            g(r["seconds"]),
+            g(r["over_catenet"], 2) if r["over_catenet"] else "",
+            g(r["max_dx_over_x"], 2) if r["max_dx_over_x"] else "",
+        ]
+        for r in rows
+    ]
+    return markdown(header, body)
+
+
+def startup(rows: list[dict]) -> str:
+    header = ["fresh process", "time [s]", "over the floor [s]"]
+    body = [[r["process"], g(r["seconds"]), g(r["over_floor_s"])] for r in rows]
+    return markdown(header, body)
+
+
+TABLES = (
+    ("peers-opensees-check.csv", "OpenSees: the check (n = 34, 10047 DOF)", check),
+    ("peers-opensees.csv", "OpenSees: engine and whole process", opensees),
+    ("peers-formfind.csv", "compas_fd: form finding", formfind),
+    ("peers-pardiso.csv", "pypardiso: PARDISO's phases", pardiso),
+    ("peers-pardiso-startup.csv", "pypardiso: start-up", startup),
+)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--results", type=Path, default=RESULTS)
+    a = p.parse_args()
+    for name, title, render in TABLES:
+        path = a.results / name
+        if path.exists():
+            print(f"#### {title}\n\n<!-- {name} -->\n{render(read(path))}\n")
+
+
+if __name__ == "__main__":
+    main()
