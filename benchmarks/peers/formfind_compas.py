@@ -113,15 +113,18 @@ def measure(n: int, folder: Path) -> dict:
     }
     for f in fns.values():  # warm-up
         f()
-    times: dict[str, list] = {k: [] for k in (*fns, "catenet_process", "compas_process")}
+    keys = (*fns, "catenet_process", "compas_process")
+    times: dict[str, list] = {k: [] for k in keys}
+    cpu: dict[str, list] = {k: [] for k in keys}
     peaks: dict[str, list] = {"catenet_process": [], "compas_process": []}
     exe = Path(sys.executable).with_name("catenet")
     out_json = folder / "out.json"
     for _ in range(ROUNDS.get(n, 3)):
         for key, f in fns.items():
-            start = time.perf_counter()
+            start, c0 = time.perf_counter(), time.process_time()
             value = f()
             times[key].append(time.perf_counter() - start)
+            cpu[key].append(time.process_time() - c0)
             if key == "catenet":
                 found = value
             elif key == "compas":
@@ -140,6 +143,7 @@ def measure(n: int, folder: Path) -> dict:
             if p["code"] != 0:
                 raise RuntimeError(f"{key} failed ({p['code']}): {p['stderr']}")
             times[key].append(p["seconds"])
+            cpu[key].append(p["cpu_s"])
             peaks[key].append(p["peak_mib"])
         print(
             f"{len(d['edges'])} edges: "
@@ -147,6 +151,7 @@ def measure(n: int, folder: Path) -> dict:
             flush=True,
         )
     med = {k: statistics.median(v) for k, v in times.items()}
+    mc = {k: statistics.median(v) for k, v in cpu.items()}
     other = json.loads(out_json.read_text())
     force = np.asarray(found.force).ravel()
     return {
@@ -162,6 +167,14 @@ def measure(n: int, folder: Path) -> dict:
         "catenet_process_s": med["catenet_process"],
         "compas_process_s": med["compas_process"],
         "process_ratio": med["catenet_process"] / med["compas_process"],
+        "catenet_engine_cpu_s": mc["catenet"],
+        "catenet_engine_with_net_cpu_s": mc["catenet_with_net"],
+        "compas_engine_cpu_s": mc["compas"],
+        "engine_cpu_ratio": mc["catenet"] / mc["compas"],
+        "engine_with_net_cpu_ratio": mc["catenet_with_net"] / mc["compas"],
+        "catenet_process_cpu_s": mc["catenet_process"],
+        "compas_process_cpu_s": mc["compas_process"],
+        "process_cpu_ratio": mc["catenet_process"] / mc["compas_process"],
         "compas_solve_in_process_s": float(other["solve_s"]),
         "catenet_peak_mib": max(peaks["catenet_process"]),
         "compas_peak_mib": max(peaks["compas_process"]),

@@ -40,8 +40,10 @@ for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMB
 
 import argparse  # noqa: E402
 import csv  # noqa: E402
+import math  # noqa: E402
 import platform  # noqa: E402
 import re  # noqa: E402
+import signal  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
@@ -113,28 +115,39 @@ def write_inputs(folder: Path, n: int, edge: float, sq, force, tol: float):
     return npz, case
 
 
-def run_process(cmd: list, timeout: float = TIMEOUT) -> dict:
-    """Wall time, peak resident memory [MiB], exit code and stdout of one child process.
+def run_process(cmd: list, timeout: float | None = None) -> dict:
+    """Wall time, CPU time (user + system), peak resident memory [MiB], exit code and
+    stdout of one child process.
 
     The child runs under GNU time, which reports its peak: Linux carries a process's
     resident high-water mark across fork and exec, so ``ru_maxrss`` of a child forked from
     this (large) process would include this process's own memory."""
+    timeout = TIMEOUT if timeout is None else timeout
     with tempfile.TemporaryDirectory() as tmp:
         peak = Path(tmp) / "peak"
         start = time.perf_counter()
-        p = subprocess.run(
-            ["/usr/bin/time", "-f", "%M", "-o", str(peak), *map(str, cmd)],
-            capture_output=True,
-            timeout=timeout,
+        p = subprocess.Popen(
+            ["/usr/bin/time", "-f", "%M %U %S", "-o", str(peak), *map(str, cmd)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            start_new_session=True,  # its own process group: a timeout ends the child too
         )
+        try:
+            out, err = p.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.communicate()
+            raise
         wall = time.perf_counter() - start
-        lines = peak.read_text().split() if peak.exists() else []
+        words = peak.read_text().split() if peak.exists() else []
+        ok = len(words) >= 3
         return {
             "seconds": wall,
-            "peak_mib": float(lines[-1]) / 1024.0 if lines else float("nan"),
+            "peak_mib": float(words[-3]) / 1024.0 if ok else math.nan,
+            "cpu_s": float(words[-2]) + float(words[-1]) if ok else math.nan,
             "code": p.returncode,
-            "stdout": p.stdout.decode(errors="replace"),
-            "stderr": p.stderr.decode(errors="replace")[-2000:],
+            "stdout": out.decode(errors="replace"),
+            "stderr": err.decode(errors="replace")[-2000:],
         }
 
 
@@ -235,22 +248,43 @@ def measure(label: str, folder: Path) -> dict:
     npz, case = write_inputs(folder, n, edge, sq, force, RTOL * f_norm)
     big = label == "1e6"
     catenet_engine(net, loads)  # warm-up
-    times: dict[str, list] = {k: [] for k in ("ce", "oe", "cr", "or")}
+    keys = ("ce", "oe", "cr", "or", "ce_cpu", "oe_cpu", "cr_cpu", "or_cpu")
+    times: dict[str, list] = {k: [] for k in keys}
     peaks: dict[str, list] = {"cr": [], "or": []}
     for _ in range(ROUNDS[label]):
+        cpu = time.process_time()
         t, res = catenet_engine(net, loads)
+        times["ce_cpu"].append(time.process_time() - cpu)
         times["ce"].append(t)
         if not big:
             o = opensees(npz, folder / "oe.npz", repeat=2)
             times["oe"].append(float(o["analyze_s"][-1]))
+            times["oe_cpu"].append(float(o["analyze_cpu_s"][-1]))
         c = catenet_run(case)
         times["cr"].append(c["seconds"])
+        times["cr_cpu"].append(c["cpu_s"])
         peaks["cr"].append(c["peak_mib"])
-        w = opensees(npz, folder / "or.npz", repeat=1)
+        try:
+            w = opensees(npz, folder / "or.npz", repeat=1)
+        except subprocess.TimeoutExpired:  # skipped, and said so in the row
+            w = {
+                "seconds": math.nan,
+                "peak_mib": math.nan,
+                "analyze_s": [math.nan],
+                "analyze_cpu_s": [math.nan],
+                "cpu_s": math.nan,
+                "build_s": [math.nan],
+                "iterations": -1,
+                "ok": -99,
+                "version": "",
+                "x": np.full_like(res.x, math.nan),
+            }
         times["or"].append(w["seconds"])
+        times["or_cpu"].append(w["cpu_s"])
         peaks["or"].append(w["peak_mib"])
         if big:
             times["oe"].append(float(w["analyze_s"][0]))
+            times["oe_cpu"].append(float(w["analyze_cpu_s"][0]))
         print(
             f"{label}: catenet {t:.3g} s / {c['seconds']:.3g} s, OpenSees "
             f"{times['oe'][-1]:.3g} s / {w['seconds']:.3g} s",
@@ -276,7 +310,13 @@ def measure(label: str, folder: Path) -> dict:
         "catenet_iterations": res.iterations,
         "catenet_run_iterations": c["iterations"],
         "opensees_iterations": int(w["iterations"]),
-        "opensees_ok": int(w["ok"]),
+        "opensees_ok": int(w["ok"]),  # -99: stopped after TIMEOUT s
+        "catenet_engine_cpu_s": med["ce_cpu"],
+        "opensees_engine_cpu_s": med["oe_cpu"],
+        "engine_cpu_ratio": med["oe_cpu"] / med["ce_cpu"],
+        "catenet_process_cpu_s": med["cr_cpu"],
+        "opensees_process_cpu_s": med["or_cpu"],
+        "process_cpu_ratio": med["or_cpu"] / med["cr_cpu"],
         "catenet_peak_mib": max(peaks["cr"]),
         "opensees_peak_mib": max(peaks["or"]),
         "delta_m": delta,
@@ -289,6 +329,11 @@ def measure(label: str, folder: Path) -> dict:
     }
 
 
+def read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
 def write_csv(rows: list[dict], path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as fh:
@@ -299,6 +344,7 @@ def write_csv(rows: list[dict], path: Path) -> None:
 
 
 def main() -> None:
+    global TIMEOUT
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", default=",".join(SIZES), help="of " + ", ".join(SIZES))
     p.add_argument("--out", type=Path, default=RESULTS)
@@ -306,7 +352,9 @@ def main() -> None:
     p.add_argument("--no-check", action="store_true", help="skip the check")
     p.add_argument("--systems", default=",".join(SYSTEMS), help="OpenSees systems to check")
     p.add_argument("--rtol-check", type=float, default=RTOL_CHECK)
+    p.add_argument("--timeout", type=float, default=TIMEOUT, help="per process [s]")
     a = p.parse_args()
+    TIMEOUT = a.timeout
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         if not a.no_check:
@@ -316,8 +364,12 @@ def main() -> None:
             return
         sq, _, force = paper_net(*SIZES["1e3"])  # the JIT cache of `catenet run`: warm
         catenet_run(write_inputs(folder, 10, SIZES["1e3"][1], sq, force, 1.0)[1])
-        rows = [measure(s, folder) for s in a.sizes.split(",")]
-        write_csv(rows, a.out / "peers-opensees.csv")
+        path = a.out / "peers-opensees.csv"
+        for label in a.sizes.split(","):  # each size replaces its row; the file after each
+            row = measure(label, folder)
+            old = read_csv(path) if path.exists() else []
+            rows = [r for r in old if r["size"] != label] + [row]
+            write_csv(sorted(rows, key=lambda r: int(r["dofs"])), path)
 
 
 if __name__ == "__main__":

@@ -9,7 +9,8 @@ run's factorisations); pypardiso 0.4 offers ``PyPardisoSolver`` (phases set by
 to the matrix it factorised, else 13). Measured on the tangent stiffness of the paper's
 square net at its equilibrium (the n = 34 net, 10047 DOF, and the 1e5-DOF net of
 ``opensees.py``), upper triangle, symmetric positive definite (mtype 2), one thread;
-medians of interleaved repeats, all in this one process:
+medians of interleaved repeats, all in this one process (CPU time, which a shared machine
+inflates less, and wall time):
 
 - ``catenet``: analysis (11), numeric factorisation (22), solve (33) of the binding, and its
   checked ``solve`` (backward error of the first solve after each factorisation);
@@ -94,14 +95,17 @@ def tangent(x, net):
 
 
 def interleaved(fns: dict, repeats: int) -> dict:
+    """key: (median wall time, median CPU time, the last value)."""
     times = {k: [] for k in fns}
+    cpu = {k: [] for k in fns}
     out = {}
     for _ in range(repeats):
         for key, f in fns.items():
-            start = time.perf_counter()
+            start, c0 = time.perf_counter(), time.process_time()
             out[key] = f()
             times[key].append(time.perf_counter() - start)
-    return {k: (statistics.median(v), out[k]) for k, v in times.items()}
+            cpu[key].append(time.process_time() - c0)
+    return {k: (statistics.median(v), statistics.median(cpu[k]), out[k]) for k, v in times.items()}
 
 
 def phases(label: str) -> list[dict]:
@@ -166,9 +170,9 @@ def phases(label: str) -> list[dict]:
         pypardiso.spsolve(fulls.reverse() or fulls[0], b)
     )
     t = interleaved(fns, REPEATS[label])
-    ref = t[("catenet", "solve")][1]
+    ref = t[("catenet", "solve")][2]
     rows = []
-    for (tool, phase), (sec, value) in t.items():
+    for (tool, phase), (sec, cpu, value) in t.items():
         solved = isinstance(value, np.ndarray) and "solve" in phase + tool
         x = value.reshape(ref.shape) if solved else None
         rows.append(
@@ -179,7 +183,8 @@ def phases(label: str) -> list[dict]:
                 "tool": tool,
                 "phase": phase,
                 "seconds": sec,
-                "over_catenet": sec / t[("catenet", _base(phase))][0] if _base(phase) else "",
+                "cpu_s": cpu,
+                "over_catenet": cpu / t[("catenet", _base(phase))][1] if _base(phase) else "",
                 "max_dx_over_x": float(np.abs(x - ref).max() / np.abs(ref).max())
                 if x is not None
                 else "",
@@ -199,18 +204,23 @@ def _base(phase: str) -> str:
 
 def startup() -> list[dict]:
     times = {k: [] for k in STARTUP}
+    cpu = {k: [] for k in STARTUP}
     for _ in range(STARTUP_REPEATS):
         for key, code in STARTUP.items():
             p = run_process([sys.executable, "-c", code])
             if p["code"] != 0:
                 raise RuntimeError(f"{key}: {p['stderr']}")
             times[key].append(p["seconds"])
-    floor = statistics.median(times["python + numpy + scipy.sparse"])
+            cpu[key].append(p["cpu_s"])
+    first = next(iter(STARTUP))
+    floor, floor_cpu = statistics.median(times[first]), statistics.median(cpu[first])
     rows = [
         {
             "process": k,
             "seconds": statistics.median(v),
+            "cpu_s": statistics.median(cpu[k]),
             "over_floor_s": statistics.median(v) - floor,
+            "cpu_over_floor_s": statistics.median(cpu[k]) - floor_cpu,
             "repeats": STARTUP_REPEATS,
         }
         for k, v in times.items()
