@@ -206,7 +206,7 @@ def pardiso(rows: list[dict]) -> str:
 
 
 def startup(rows: list[dict]) -> str:
-    header = ["fresh process", "CPU [s]", "CPU over the first [s]", "wall [s]"]
+    header = ["fresh process", "CPU [s]", "CPU over the second [s]", "wall [s]"]
     body = [[r["process"], g(r["cpu_s"]), g(r["cpu_over_floor_s"]), g(r["seconds"])] for r in rows]
     return markdown(header, body)
 
