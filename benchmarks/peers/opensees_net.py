@@ -10,9 +10,9 @@ of a tension-only elastic material (``Elastic`` with Eneg = 0) under a tiny pret
 first tangent. The load is applied in ONE step (LoadControl 1.0), plain Newton, the
 NormUnbalance test. OUT.npz gets the final positions ``x`` and the timings: ``build_s``
 (the model's commands), ``analyze_s`` and ``analyze_cpu_s`` (wall and CPU time, one per
-repeat; each repeat rebuilds the model),
-``iterations``, ``residual`` (the last NormUnbalance [N]) and ``ok`` (analyze's return
-code, 0 = converged).
+repeat; each repeat rebuilds the model), ``iterations``, ``residual`` (the last
+NormUnbalance [N]), ``norms`` (all of them) and ``ok`` (analyze's return code, 0 =
+converged).
 
 Imports only NumPy and openseespy. openseespy 3.7's Linux wheel does not find its own
 ``libblas.so.3``: it is loaded first.
@@ -101,6 +101,7 @@ def main() -> None:
         analyze_cpu_s=np.array(cpu),
         iterations=iterations,
         residual=norms[iterations - 1] if 0 < iterations <= len(norms) else float("nan"),
+        norms=np.array(norms, dtype=float),  # the test's norm at every iteration
         ok=ok,
         version=str(ops.version()) if hasattr(ops, "version") else "",
     )

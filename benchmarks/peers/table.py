@@ -1,15 +1,18 @@
 """Markdown tables of the peer comparisons, from benchmarks/results/peers-*.csv.
 
-    python benchmarks/peers/table.py [--results benchmarks/results]
+    python benchmarks/peers/table.py [--results benchmarks/results] [--readme README.md]
 
 Prints one table per CSV that exists: OpenSees (engine and whole process), its check,
-compas_fd (form finding) and pypardiso (phases and start-up).
+compas_fd (form finding) and pypardiso (phases and start-up). With ``--readme`` it fills
+them into that Markdown file instead, between each ``<!-- peers-NAME.csv -->`` line and
+the next ``<!-- end -->``.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import re
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
@@ -59,14 +62,16 @@ def opensees(rows: list[dict]) -> str:
         [
             r["dofs"],
             g(r["catenet_engine_cpu_s"]),
-            g(r["opensees_engine_cpu_s"]) + ("" if r["opensees_engine_warm"] == "True" else "*"),
-            g(r["engine_cpu_ratio"], 2),
+            g(r["opensees_engine_cpu_s"])
+            + ("" if r["opensees_engine_warm"] == "True" else "*")
+            + ("" if r["opensees_ok"] == "0" else " (no equilibrium)"),
+            g(r["engine_cpu_ratio"], 2) if r["opensees_ok"] == "0" else "-",
             g(r["catenet_process_cpu_s"]),
             g(r["opensees_process_cpu_s"]),
-            g(r["process_cpu_ratio"], 2),
+            g(r["process_cpu_ratio"], 2) if r["opensees_ok"] == "0" else "-",
             f"{r['catenet_iterations']} / {r['opensees_iterations']}",
             f"{float(r['catenet_peak_mib']):.0f} / {float(r['opensees_peak_mib']):.0f}",
-            g(r["max_diff_over_delta"], 2),
+            g(r["max_diff_over_delta"], 2) if r["opensees_ok"] == "0" else "-",
         ]
         for r in rows
     ]
@@ -90,7 +95,7 @@ def opensees(rows: list[dict]) -> str:
         for r in rows
     ]
     return (
-        "CPU time [s] (medians):\n\n"
+        "CPU time [s] (medians; * the analysis within the whole process, not warm):\n\n"
         + markdown(cpu, body)
         + "\n\nWall time [s] on the shared machine (medians of the same runs):\n\n"
         + markdown(wall, body2)
@@ -223,7 +228,22 @@ TABLES = (
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--results", type=Path, default=RESULTS)
+    p.add_argument("--readme", type=Path, help="fill the tables into this file")
     a = p.parse_args()
+    if a.readme:
+        text = a.readme.read_text()
+        for name, _, render in TABLES:
+            path = a.results / name
+            if path.exists():
+                table = render(read(path))
+                text = re.sub(
+                    rf"(<!-- {re.escape(name)} -->\n).*?(\n<!-- end -->)",
+                    lambda m, t=table: m.group(1) + t + m.group(2),
+                    text,
+                    flags=re.S,
+                )
+        a.readme.write_text(text)
+        return
     for name, title, render in TABLES:
         path = a.results / name
         if path.exists():
