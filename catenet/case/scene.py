@@ -30,7 +30,9 @@ class Scene:
     cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
     None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
     at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are the net's last nodes (``Net.bodies``)."""
+    are the net's last nodes (``Net.bodies``). ``probe_auto``: no probe was named and
+    the geometry has no natural one (a graph): the summary reports the free node that
+    moves most (``catenet.model.summary.probe_of``)."""
 
     case: Case
     net: Net
@@ -41,6 +43,7 @@ class Scene:
     cables: Any = None
     velocity: np.ndarray | None = None
     bodies: tuple = ()
+    probe_auto: bool = False
 
 
 def build(case: Case) -> Scene:
@@ -81,6 +84,7 @@ def _build(case: Case) -> Scene:
         cables=built.cables,
         velocity=velocity,
         bodies=bodies,
+        probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
     )
 
 

@@ -213,11 +213,11 @@ def _times(result) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    import numpy as np
-
+    from catenet.cli.summary import state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.stats
+    warn = bool(s.get("strain_warning"))
     state = "yes" if result.converged else "no"
     detail = result.message or ""
     if case.solver.method == "dynamic" and not result.equilibrium:
@@ -228,21 +228,9 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        f"{'delta':<12} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
-        f"(node {s['probe']}, L = {s['size']:.6g} m)",
-        f"{'max tension':<12} {float(np.max(result.tension, initial=0.0)):.6g} N   "
-        f"max strain {result.max_strain:.4g}"
-        + (
-            " (beyond the material law's range: see the warning)" if s.get("strain_warning") else ""
-        ),
+        *state_lines(s, case.solver.method == "dynamic", len(result.tension), warn),
         _times(result),
     ]
-    for name, c in s.get("cables", {}).items():  # a graph's cables, one line each
-        lines.insert(
-            -1,
-            f"{'cable':<12} {name}: max tension {c['max_tension']:.6g} N, "
-            f"slack {100 * c['slack_fraction']:.3g} % of its length",
-        )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -1,13 +1,23 @@
 """The /result group of a result file (SPEC sections 5 and 7): the final state, its
-tensions (per cable too), reactions and contact forces, velocities and the newmark
-scheme's acceleration where the run keeps them, and the attributes a user reads first."""
+tensions (per cable too), reactions and contact forces, the run's peaks over every step
+(``peak_tension``, ``peak_tension_time``, ``least_tension``, ``peak_displacement``,
+``peak_displacement_time``), velocities and the newmark scheme's acceleration where the
+run keeps them, and the attributes a user reads first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from catenet.model import measures
+from catenet.model import summary
 from catenet.output.metadata import result_attrs
+
+PEAKS = (
+    "peak_tension",
+    "peak_tension_time",
+    "least_tension",
+    "peak_displacement",
+    "peak_displacement_time",
+)
 
 
 def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, accelerations: bool):
@@ -20,9 +30,18 @@ def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, a
     g.create_dataset("tension", data=tension)
     cables = getattr(scene, "cables", None)
     if cables is not None:
-        top, slack = measures.cable_stats(scene.net, res.x, tension, cables.edge, len(cables.names))
-        g.create_dataset("cable_max_tension", data=top)
-        g.create_dataset("cable_slack_fraction", data=slack)
+        per = summary.cable_summary(scene.net, res.x, tension, cables.edge, cables.names)
+        for key, dtype in (
+            ("max_tension", np.float64),
+            ("slack_fraction", np.float64),
+            ("max_compression", np.float64),
+            ("slack_edges", np.int64),
+        ):
+            g.create_dataset(f"cable_{key}", data=np.array([c[key] for c in per.values()], dtype))
+    peaks = getattr(res, "peaks", None)
+    if peaks is not None:
+        for key, value in peaks.arrays().items():
+            g.create_dataset(key, data=value)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
     contact = getattr(res, "contact_force", None)
@@ -35,6 +54,6 @@ def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, a
     a = getattr(res, "a", None)
     if accelerations and a is not None and np.all(np.isfinite(a)):
         g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
-    for key, value in {**result_attrs(res, scene), **attrs}.items():
+    for key, value in {**result_attrs(res, scene, tension), **attrs}.items():
         g.attrs[key] = value
     return g

@@ -147,13 +147,15 @@ def run_case(
     before every Newton iteration as well, so that a long step stops too: the run ends as
     interrupted with the last equilibrium (static) or time step (dynamic).
 
-    ``result.stats`` gains ``delta`` (probe z-deflection, positive down), ``delta_over_L``,
-    ``size``, ``probe`` and ``output`` (the file written, or None). ConvergenceError and
+    ``result.stats`` gains the summary (``catenet.model.summary.summarize_result``: ``delta``
+    (probe z-deflection, positive down), ``probe``, ``max_displacement``, reactions,
+    slack edges, peaks, ``cables``, ...), ``delta_over_L``, ``size`` and ``output`` (the
+    file written, or None); ``result.peaks`` the peaks over every step. ConvergenceError and
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
     """
     from catenet.case import build
-    from catenet.model import measures
+    from catenet.model import summary
     from catenet.output import ResultWriter, check_output_path
     from catenet.run import advice
     from catenet.run.clock import Clock
@@ -223,20 +225,19 @@ def run_case(
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
-    delta = measures.deflection(scene.net.nodes, result.x, scene.probe)
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
+    numbers = summary.summarize_result(scene, result)
+    result.stats.update(numbers)
     result.stats.update(
-        delta=delta,
         size=float(scene.size),
-        probe=int(scene.probe),
         output=None if path is None else str(path),
         backend=backend,
         strain_warning=beyond or "",
         trajectory_bytes=0 if trajectory is None else trajectory.bytes,
     )
-    result.stats["delta_over_L"] = delta / float(scene.size)
+    result.stats["delta_over_L"] = numbers["delta"] / float(scene.size)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables
         from catenet.solver.diagnose import describe_unstable
@@ -248,14 +249,6 @@ def run_case(
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
         )
-    if cables is not None:  # per cable: the largest tension and the slack share
-        top, slack = measures.cable_stats(
-            scene.net, result.x, result.tension, cables.edge, len(cables.names)
-        )
-        result.stats["cables"] = {
-            name: {"max_tension": float(t), "slack_fraction": float(s)}
-            for name, t, s in zip(cables.names, top, slack, strict=True)
-        }
     return result
 
 
@@ -263,6 +256,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     """Solves through the one solve path, writing frames as the steps come; on failure
     or interruption the last good state becomes /result (converged = false)."""
     from catenet.errors import Interrupted
+    from catenet.model.peaks import Peaks
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
@@ -316,9 +310,12 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             return True
         return False
 
+    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
     try:
         with interruptible(interrupt), clock.solving():
-            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
+            res = sv.solve(
+                scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks
+            )
     except CatenetError as exc:
         good = exc.last_good
         if isinstance(exc, ConfigError) or good is None:
@@ -353,6 +350,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
             outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
             wall_time=time.perf_counter() - begin,
             stats={**ws.stats(), **_times(clock)},
+            peaks=peaks,
         )
         if stopped:  # within a step: like a stop between steps, not a failure
             log.info("interrupted during %s", "a time step" if dynamic else "a load step")

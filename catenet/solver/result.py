@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.model.net import Loads
+from catenet.model.peaks import Peaks
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
     from catenet.solver.system import System
@@ -47,6 +48,8 @@ class Result:
     stats : counts and seconds per phase (assembly, analyse, factorize, solve)
     diagnosis : what makes an unstable equilibrium unstable (``catenet.solver.diagnose``), or ""
     outcome : how the solve ended (``Outcome``); None where not known
+    peaks : each edge's largest tension and each node's largest displacement over every
+        time step or load step (``catenet.model.peaks.Peaks``); None where not followed
     """
 
     x: np.ndarray
@@ -69,6 +72,7 @@ class Result:
     contact_force: np.ndarray | None = None
     diagnosis: str = ""
     outcome: Outcome | None = None
+    peaks: Peaks | None = None
 
 
 def finish(
