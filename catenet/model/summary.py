@@ -29,7 +29,7 @@ import numpy as np
 from catenet.model import measures
 from catenet.model.net import Net
 
-# the summary's scalar columns a sweep table carries (vectors are split into _x, _y, _z)
+# the summary's scalars a sweep table carries (``flat`` names: a vector's components)
 COLUMNS = (
     "max_displacement",
     "max_displacement_node",
@@ -37,15 +37,33 @@ COLUMNS = (
     "max_tension_edge",
     "max_compression",
     "max_strain_edge",
-    "slack_edges",
     "max_reaction",
     "max_reaction_node",
-    "reaction_resultant",
-    "contact_resultant",
+    "reaction_resultant_x",
+    "reaction_resultant_y",
+    "reaction_resultant_z",
+    "contact_resultant_x",
+    "contact_resultant_y",
+    "contact_resultant_z",
     "peak_tension",
     "peak_tension_time",
     "peak_displacement",
+    "probe",
 )
+
+
+def flat(numbers: dict) -> dict:
+    """The summary's scalars, each 3-vector ``name`` split into ``name_x``, ``name_y``,
+    ``name_z`` (HDF5 attributes and table columns hold scalars); ``cables`` left out."""
+    out = {}
+    for key, value in numbers.items():
+        if key == "cables":
+            continue
+        if isinstance(value, list):
+            out.update({f"{key}_{a}": float(c) for a, c in zip("xyz", value, strict=True)})
+        else:
+            out[key] = value
+    return out
 
 
 def free_net_nodes(net: Net) -> np.ndarray:

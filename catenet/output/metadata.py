@@ -48,14 +48,13 @@ def environment() -> dict[str, str]:
 
 def result_attrs(res, scene, tension=None) -> dict:
     """The /result attributes of a Result: SPEC section 5 plus what a user reads first:
-    the summary's numbers (``catenet.model.summary.summarize``; vectors as 3 floats, -1
+    the summary's numbers (``catenet.model.summary.summarize``; a vector v as v_x, v_y, v_z; -1
     for no node or edge, the per-cable table in datasets); ``tension``: the stored one
     (default: the Result's)."""
     if tension is None:
         tension = res.tension if res.tension is not None else measures.tension(scene.net, res.x)
     tension = np.asarray(tension, dtype=np.float64)
-    numbers = summary.summarize_result(scene, _with_tension(res, tension))
-    numbers.pop("cables", None)
+    numbers = summary.flat(summary.summarize_result(scene, _with_tension(res, tension)))
     delta = numbers["delta"]
     residual = float(res.residual)
     strain = float(res.max_strain)

@@ -313,9 +313,7 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
     try:
         with interruptible(interrupt), clock.solving():
-            res = sv.solve(
-                scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks
-            )
+            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
     except CatenetError as exc:
         good = exc.last_good
         if isinstance(exc, ConfigError) or good is None:

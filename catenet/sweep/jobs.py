@@ -20,12 +20,34 @@ from catenet.sweep.params import Param, params_from_table, parse_param
 
 log = logging.getLogger(__name__)
 
+# catenet.model.summary.COLUMNS (not imported here: it loads NumPy; a test checks them)
+SUMMARY_COLUMNS = (
+    "max_displacement",
+    "max_displacement_node",
+    "max_tension",
+    "max_tension_edge",
+    "max_compression",
+    "max_strain_edge",
+    "max_reaction",
+    "max_reaction_node",
+    "reaction_resultant_x",
+    "reaction_resultant_y",
+    "reaction_resultant_z",
+    "contact_resultant_x",
+    "contact_resultant_y",
+    "contact_resultant_z",
+    "peak_tension",
+    "peak_tension_time",
+    "peak_displacement",
+    "probe",
+)
 RESULT_COLUMNS = (
     "delta",
     "delta_over_L",
     "F_bar",
     "max_strain",
     "slack_edges",
+    *SUMMARY_COLUMNS,
     "iterations",
     "wall_time",
     "converged",

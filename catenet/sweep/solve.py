@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from catenet.errors import CatenetError, ConfigError
-from catenet.sweep.jobs import Job, Sweep, case_api, overrides
+from catenet.sweep.jobs import SUMMARY_COLUMNS, Job, Sweep, case_api, overrides
 
 log = logging.getLogger(__name__)
 
@@ -95,6 +95,10 @@ def nan_row() -> dict:
         "F_bar": nan,
         "max_strain": nan,
         "slack_edges": -1,
+        **{
+            key: (-1 if key.endswith(("_node", "_edge")) or key == "probe" else nan)
+            for key in SUMMARY_COLUMNS
+        },
         "iterations": 0,
         "wall_time": 0.0,
         "converged": False,
@@ -282,9 +286,15 @@ def _solve(case, scene, net, ws, x_prev):
 
 
 def _measure(scene, net, result, np) -> dict:
-    from catenet.model import measures
+    """The row of a level: the run's summary (``catenet.model.summary``, the numbers
+    ``catenet run`` prints and writes as /result attributes) and the paper's measures."""
+    import dataclasses
 
-    delta = measures.deflection(net.nodes, result.x, int(scene.probe))
+    from catenet.model import summary
+
+    scene = dataclasses.replace(scene, net=net) if scene.net is not net else scene
+    numbers = summary.flat(summary.summarize_result(scene, result))
+    delta = numbers["delta"]
     force = scene.loads.external_force(net)
     EA = float(np.median(net.EA))
     return {
@@ -292,7 +302,8 @@ def _measure(scene, net, result, np) -> dict:
         "delta_over_L": delta / float(scene.size),
         "F_bar": float(np.linalg.norm(force.sum(axis=0))) / EA,
         "max_strain": float(result.max_strain),
-        "slack_edges": measures.slack_edges(net, result.x),
+        "slack_edges": numbers["slack_edges"],
+        **{key: numbers[key] for key in SUMMARY_COLUMNS},
         "iterations": int(result.iterations),
         "converged": bool(result.converged),
     }
