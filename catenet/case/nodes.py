@@ -31,10 +31,17 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
 
 
 def check_nodes(
-    ck: Checker, g: GeometryConfig, supports: Any, load: Any, output: Any = None
+    ck: Checker,
+    g: GeometryConfig,
+    supports: Any,
+    load: Any,
+    output: Any = None,
+    *,
+    prefix: str = "load",
 ) -> None:
     """Every node reference of the supports, loads and output probe (each BAD when its
-    section failed) against the geometry ``g``."""
+    section failed) against the geometry ``g``; ``prefix``: the loads' key path (a load
+    case's ``load_case[k]``: then its loads alone are checked, not the supports)."""
     probe = getattr(output, "probe", None)
     if not _needs_topology(g, supports, load, probe):
         return
@@ -97,12 +104,12 @@ def check_nodes(
     if isinstance(load, LoadConfig):
         for k, pt in enumerate(load.points):
             if pt.node is not None:
-                in_range(pt.node, f"load.point[{k}].node")
+                in_range(pt.node, f"{prefix}.point[{k}].node")
             else:
-                _known_cable(ck, f"load.point[{k}].cable", pt.cable, g, topo)
+                _known_cable(ck, f"{prefix}.point[{k}].cable", pt.cable, g, topo)
         for k, ln in enumerate(load.lines):
             if ln.cable is not None:
-                _known_cable(ck, f"load.line[{k}].cable", ln.cable, g, topo)
+                _known_cable(ck, f"{prefix}.line[{k}].cable", ln.cable, g, topo)
     if probe is not None and in_range(probe, "output.probe"):
         many = expand(probe, topo.names, topo.sets)
         if len(many) != 1:
@@ -110,7 +117,7 @@ def check_nodes(
                 f"output.probe = {probe!r}: the node set has {len(many)} nodes: "
                 "the probe must be one node (an index, a node name or a set of one node)"
             )
-    if len(ck.problems) == before:
+    if len(ck.problems) == before and prefix == "load":
         g.check_supports(ck, fixed, fixed_key)
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 from catenet.case.formfind import FormfindConfig
 from catenet.case.keys import REQUIRED, Key, declared
 from catenet.case.kinds import KINDS
+from catenet.case.loadcases import CombinationConfig, LoadCaseConfig
 from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
@@ -80,7 +81,16 @@ def keys_table() -> str:
         rows += [r for r in _rows("obstacle[k]", declared(obstacle)) if ".kind`" not in r]
     rows.append(f"| `[[mass]]` | an array of tables | none | {MassConfig.__doc__.strip()} |")
     rows += _rows("mass[k]", declared(MassConfig))
+    rows.append(f"| `[[load_case]]` | an array of tables | none | {_doc(LoadCaseConfig)} |")
+    rows += _rows("load_case[k]", declared(LoadCaseConfig))
+    rows.append(f"| `[[combination]]` | an array of tables | none | {_doc(CombinationConfig)} |")
+    rows += _rows("combination[k]", declared(CombinationConfig))
     return "\n".join(rows)
+
+
+def _doc(section: type) -> str:
+    """A section's docstring on one line."""
+    return " ".join(section.__doc__.split())
 
 
 def section_text() -> str:

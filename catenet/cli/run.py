@@ -81,12 +81,20 @@ class StopFlag:
     help="Continue a dynamic run from the last frame stored in OLD.h5 (time, positions, "
     "velocities), writing a new file.",
 )
+@click.option(
+    "--case",
+    "only_case",
+    metavar="NAME",
+    default=None,
+    help="Solve only this [[load_case]] or [[combination]] (after the base state).",
+)
 @verbosity_options
 def command(
     case_file: Path | None,
     out: Path | None,
     overrides: tuple[str, ...],
     restart: Path | None,
+    only_case: str | None,
     quiet: bool,
     verbose: int,
     debug: bool,
@@ -125,7 +133,13 @@ def command(
         with StopFlag() as stop:
             try:
                 result = run_case(
-                    case, path, restart=restart, progress=progress, stop=stop, interrupt=stop
+                    case,
+                    path,
+                    restart=restart,
+                    progress=progress,
+                    stop=stop,
+                    interrupt=stop,
+                    load_case=only_case,
                 )
             except CatenetError as exc:
                 bar.close()
@@ -167,8 +181,17 @@ def command(
                 err=True,
             )
             code = EXIT_FAILED
-        elif not quiet:
-            _summary(case, result, path)
+        else:
+            if not quiet:
+                _summary(case, result, path)
+            failed = [r.name for r in result.cases if not r.converged]
+            if failed:
+                click.echo(
+                    f"catenet: did not converge: load case {', '.join(failed)} (its last "
+                    "good state is in /cases/<name>, converged = false)",
+                    err=True,
+                )
+                code = EXIT_FAILED
     sys.exit(code)
 
 
@@ -213,7 +236,7 @@ def _times(result) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    from catenet.cli.summary import state_lines
+    from catenet.cli.summary import cases_table, state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.stats
@@ -231,6 +254,8 @@ def _summary(case, result, path: Path | None) -> None:
         *state_lines(s, case.solver.method == "dynamic", len(result.tension), warn),
         _times(result),
     ]
+    if s.get("cases"):
+        lines[-1:-1] = cases_table(s["cases"], len(result.tension))
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

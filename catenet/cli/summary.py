@@ -104,3 +104,26 @@ def cable_line(name: str, c: dict) -> str:
     if c.get("max_compression", 0) > 0:
         line += f", compression {c['max_compression']:.6g} N in its struts"
     return line
+
+
+def cases_table(cases: dict, n_edges: int) -> list[str]:
+    """One row per load case and combination (``result.stats["cases"]``): the largest
+    displacement and its node, the largest tension and its edge, the largest strut
+    compression, the slack edges and the largest reaction, SI units."""
+    head = (
+        f"{'load case':<16} {'max displ. [m]':>14} {'node':>6} {'max tension [N]':>15} "
+        f"{'edge':>6} {'compr. [N]':>11} {'slack':>6} {'max reaction [N]':>16}  converged"
+    )
+    rows = [head]
+    for name, s in cases.items():
+        rows.append(
+            f"{name:<16} {s['max_displacement']:>14.6g} {s['max_displacement_node']:>6} "
+            f"{s['max_tension']:>15.6g} {s['max_tension_edge']:>6} "
+            f"{s['max_compression']:>11.6g} {s['slack_edges']:>6} {s['max_reaction']:>16.6g}  "
+            + ("yes" if s["converged"] else f"no: {s['error']}")
+        )
+    rows.append(
+        f"{'':<16} (slack: of {n_edges} edges; every case and combination is solved from the "
+        "base state above; /cases/<name>, envelopes in /envelope)"
+    )
+    return rows

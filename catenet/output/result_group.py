@@ -20,12 +20,22 @@ PEAKS = (
 )
 
 
-def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, accelerations: bool):
-    """Writes /result (replacing one there) for the Result ``res`` of ``scene`` with the
+def write_result_group(
+    h5,
+    scene,
+    res,
+    tension,
+    attrs: dict,
+    velocities: bool,
+    accelerations: bool,
+    name: str = "result",
+):
+    """Writes /result (or the group ``name`` in its layout, e.g. a load case's
+    cases/<name>; replacing one there) for the Result ``res`` of ``scene`` with the
     stored ``tension``; ``attrs`` add to its attributes. Returns the group."""
-    if "result" in h5:
-        del h5["result"]
-    g = h5.create_group("result")
+    if name in h5:
+        del h5[name]
+    g = h5.create_group(name)
     g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
     g.create_dataset("tension", data=tension)
     cables = getattr(scene, "cables", None)

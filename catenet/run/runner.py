@@ -133,8 +133,14 @@ def run_case(
     progress: Progress | None = None,
     stop: Stop | None = None,
     interrupt: Stop | None = None,
+    load_case: str | None = None,
 ):
     """Builds, solves and writes a case; returns the Result.
+
+    A case with ``[[load_case]]`` or ``[[combination]]`` tables: the Result is the base
+    state's (/result), and ``result.cases`` holds each load case and combination solved
+    from it (``catenet.run.cases``: /cases/<name>/, /envelope/), ``result.stats["cases"]``
+    their numbers; ``load_case`` names the only one to solve.
 
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
@@ -158,6 +164,7 @@ def run_case(
     from catenet.model import summary
     from catenet.output import ResultWriter, check_output_path
     from catenet.run import advice
+    from catenet.run.cases import pick
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -171,6 +178,7 @@ def run_case(
         check_output_path(path)
         _probe_directory(path)
     scene = build(case)
+    cases = pick(scene, load_case)
     solver = case.solver
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
@@ -225,6 +233,8 @@ def run_case(
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
+    if cases:
+        _solve_cases(scene, settings, ws, result, cases, path, interrupt)
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
@@ -250,6 +260,21 @@ def run_case(
             None if cables is None else cables.edge,
         )
     return result
+
+
+def _solve_cases(scene, settings, ws, result, cases, path, interrupt) -> None:
+    """The load cases from the base state ``result``, written to /cases and /envelope."""
+    from catenet.run.cases import solve_cases, write_cases
+
+    if not result.converged:
+        log.error("the base state did not converge: no load case is solved")
+        return
+    result.cases = solve_cases(scene, settings, ws, result, cases, interrupt)
+    result.stats["cases"] = {
+        r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
+    }
+    if path is not None:
+        write_cases(path, scene, scene.case, result.cases)
 
 
 def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None):

@@ -50,6 +50,8 @@ class Result:
     outcome : how the solve ended (``Outcome``); None where not known
     peaks : each edge's largest tension and each node's largest displacement over every
         time step or load step (``catenet.model.peaks.Peaks``); None where not followed
+    cases : the load cases and combinations solved from this (base) state, each a
+        ``catenet.run.cases.CaseRun`` (name, Result, summary numbers, error)
     """
 
     x: np.ndarray
@@ -73,6 +75,7 @@ class Result:
     diagnosis: str = ""
     outcome: Outcome | None = None
     peaks: Peaks | None = None
+    cases: list = field(default_factory=list)
 
 
 def finish(
