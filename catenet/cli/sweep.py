@@ -51,6 +51,14 @@ from catenet.cli.common import (
     default=None,
     help="Run the jobs on a Dask distributed cluster (e.g. tcp://host:8786).",
 )
+@click.option(
+    "--case",
+    "load_case",
+    metavar="NAME",
+    default=None,
+    help="Report this [[load_case]] or [[combination]] of the case in every row (solved "
+    "from the row's base state).",
+)
 @click.option("--save-runs", is_flag=True, help="Also keep each run's HDF5 file in DIR/runs/.")
 @click.option("--plot", "plot", is_flag=True, help="Draw the sweep figures and report.md after.")
 @verbosity_options
@@ -60,6 +68,7 @@ def command(
     output: Path | None,
     workers: int | None,
     scheduler: str | None,
+    load_case: str | None,
     save_runs: bool,
     plot: bool,
     quiet: bool,
@@ -91,7 +100,7 @@ def command(
     with _sigterm_as_interrupt(), errors_to_exit_codes(debug):
         from catenet import sweep as sw
 
-        spec = sw.load_sweep(case, params)
+        spec = sw.load_sweep(case, params, load_case=load_case)
         out = output if output is not None else Path("out") / case.stem
         jobs = spec.jobs
         n_load = len(jobs[0].levels) if jobs and jobs[0].levels else 1

@@ -120,6 +120,7 @@ class Sweep:
     params: tuple[Param, ...]
     base_toml: str = ""
     base_resolved: dict = field(default_factory=dict)
+    load_case: str | None = None  # the [[load_case]] or [[combination]] each row reports
 
     @property
     def keys(self) -> list[str]:
@@ -153,6 +154,7 @@ class Sweep:
             {
                 "base": self.base_resolved or self.base,
                 "params": [[p.key, list(p.values)] for p in self.params],
+                **({"load_case": self.load_case} if self.load_case else {}),
             },
             sort_keys=True,
             default=str,
@@ -166,11 +168,12 @@ class Sweep:
         return {k: values[k] for k in self.keys}
 
 
-def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
+def load_sweep(path: str | Path, params: Sequence[str] = (), load_case: str | None = None) -> Sweep:
     """The sweep of a case file: its ``[sweep]`` table (``key.path = [values]``), if any,
     with the ``params`` (``"key.path=v1,v2"``) added; a key given in both takes the
     command line's values. Every combination is validated as a case (ConfigError listing
-    the problems) before anything runs."""
+    the problems) before anything runs. ``load_case``: each row reports that load case
+    or combination of the case, solved from the row's base state."""
     from catenet.case import parse_toml, read_case_bytes
 
     path = Path(path)
@@ -189,11 +192,18 @@ def load_sweep(path: str | Path, params: Sequence[str] = ()) -> Sweep:
             raise ConfigError(f"--param {text}: {p.key} is given twice")
         seen.add(p.key)
         merged[p.key] = p
-    return make_sweep(data, list(merged.values()), source=str(path), base_dir=path.parent)
+    return make_sweep(
+        data, list(merged.values()), source=str(path), base_dir=path.parent, load_case=load_case
+    )
 
 
 def make_sweep(
-    base: dict, params: Sequence[Param], *, source: str = "<dict>", base_dir: Path | str = "."
+    base: dict,
+    params: Sequence[Param],
+    *,
+    source: str = "<dict>",
+    base_dir: Path | str = ".",
+    load_case: str | None = None,
 ) -> Sweep:
     """A sweep from base case data (a dict as read from TOML) and parameters; validates
     the base case and every combination with ``catenet.case.parse_case``."""
@@ -212,6 +222,14 @@ def make_sweep(
     from catenet.run.runner import refuse_formfind
 
     refuse_formfind(base_case)
+    if load_case is not None:
+        names = [c.name for c in (*base_case.load_cases, *base_case.combinations)]
+        if load_case not in names:
+            listed = ", ".join(map(repr, names)) or "none"
+            raise ConfigError(
+                f"--case {load_case!r}: no [[load_case]] or [[combination]] is named so "
+                f"(the case has: {listed})"
+            )
     sweep = Sweep(
         source=source,
         base_dir=str(base_dir.resolve()),
@@ -219,6 +237,7 @@ def make_sweep(
         params=tuple(params),
         base_toml=base_case.to_toml(),
         base_resolved=base_case.to_dict(),
+        load_case=load_case,
     )
     problems: list[str] = []
     for param in params:  # each value on its own first: one message per bad value

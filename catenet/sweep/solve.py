@@ -39,6 +39,7 @@ def make_task(
         "save_runs": save_runs,
         "threads": threads,
         "crash_hook": crash_hook,
+        "load_case": sweep.load_case,
     }
 
 
@@ -169,6 +170,8 @@ def _solve_levels(task: dict) -> list[dict]:
             result = _solve(parsed, scene, ws_net, ws, x0)
             x_prev = result.x
             path = path + [(level_of, result.x)] if level_of is not None else []
+            if task.get("load_case"):
+                result = _solve_case(parsed, scene, ws, result, task["load_case"])
             row.update(_measure(scene, ws_net, result, np))
             if task["save_runs"]:
                 row["run_file"] = _save_run(Path(task["out"]), task["index"], k, scene, result)
@@ -283,6 +286,18 @@ def _solve(case, scene, net, ws, x_prev):
             f"dynamic run did not converge: {r.message}", iterations=r.iterations, state=r.x
         )
     return r
+
+
+def _solve_case(case, scene, ws, base, name: str):
+    """The load case or combination ``name`` solved from the level's base state."""
+    from catenet.errors import ConvergenceError
+    from catenet.run.cases import pick, solve_cases
+    from catenet.solver import path as sv
+
+    (run,) = solve_cases(scene, sv.Settings.of(case.solver), ws, base, pick(scene, name))
+    if not run.converged:
+        raise ConvergenceError(f"load case {name}: {run.error}", state=base.x)
+    return run.result
 
 
 def _measure(scene, net, result, np) -> dict:
