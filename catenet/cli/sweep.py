@@ -154,9 +154,9 @@ def command(
                 err=True,
             )
         if plot:
-            from catenet.studies.square_net import plot_sweep
+            from catenet.cli.plot import sweep_figures
 
-            for path in plot_sweep(out, None):
+            for path in sweep_figures(out, None):
                 if not quiet:
                     click.echo(str(path))
         header, done = sw.read_journal(out)

@@ -232,6 +232,7 @@ class ResultFile:
     series_t: np.ndarray | None = None
     series_delta: np.ndarray | None = None
     from_trajectory: bool = False  # x is the last trajectory frame (no /result/x)
+    reaction: np.ndarray | None = None  # (N, 3) /result/reaction [N] (None: not stored)
 
     @property
     def title(self) -> str:
@@ -322,6 +323,12 @@ def read_result(path: str | Path) -> ResultFile:
             fixed = _dataset(h5, "/mesh/fixed", path, (), bool, problems)
             x = _dataset(h5, "/result/x", path, (3,), np.float64, problems)
             tension = _dataset(h5, "/result/tension", path, (), np.float64, problems)
+            reaction = h5.get("/result/reaction")
+            reaction = (
+                np.asarray(reaction, dtype=np.float64)
+                if nodes is not None and getattr(reaction, "shape", None) == (len(nodes), 3)
+                else None
+            )
             rest = _dataset(h5, "/mesh/rest_length", path, (), np.float64, problems)
             EA = _dataset(h5, "/mesh/EA", path, (), np.float64, problems)
             time = _dataset(h5, "/trajectory/time", path, (), np.float64, problems)
@@ -403,6 +410,7 @@ def read_result(path: str | Path) -> ResultFile:
         series_t=series_t,
         series_delta=series_delta,
         from_trajectory=from_trajectory,
+        reaction=reaction,
     )
 
 

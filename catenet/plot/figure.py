@@ -19,6 +19,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output import read_result
+from catenet.plot.plan import draw_plan, draw_slack, slack_edges, wants_plan
 
 log = logging.getLogger(__name__)
 
@@ -178,7 +179,9 @@ def figure(res, *, scale: float = 1.0):
     frame also the probe's deflection (positive down) against time (dynamic runs) or
     load factor (static runs in steps); for the paper's single-cable cases (``paper_curve``)
     that panel has the paper's axes and closed form, and the side view the closed-form
-    shape.
+    shape. A static run's curve starts at zero load. Slack edges (no tension, shorter
+    than their rest length) are dotted in their own colour; a graph gets a plan view
+    coloured by displacement with the reactions as arrows (``catenet.plot.plan``).
     """
     if not (math.isfinite(scale) and scale > 0):
         raise ConfigError(f"--scale = {scale!r}: must be a number > 0")
@@ -216,10 +219,12 @@ def figure(res, *, scale: float = 1.0):
 
     curve = paper_curve(res)
     series = res.series_delta is not None
-    fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
+    plan = wants_plan(res)
+    slack = slack_edges(res)
+    ncols = 2 + int(series) + int(plan)
+    fig = Figure(figsize=(4.6 + 5.3 * (ncols - 1), 4.8), layout="constrained")
     FigureCanvasAgg(fig)
     fig.get_layout_engine().set(wspace=0.12)  # room for the 3D view's z label
-    ncols = 3 if series else 2
     ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
     ax2 = fig.add_subplot(1, ncols, 2)
     undeformed = {"colors": "0.35", "linewidths": 0.7, "linestyles": "--"}
@@ -234,6 +239,7 @@ def figure(res, *, scale: float = 1.0):
     else:
         lines3.set_color("C0")
     ax3.add_collection3d(lines3)
+    draw_slack(ax3, seg_def, slack, three_d=True)
     from catenet.plot.bodies import Balls
     from catenet.plot.obstacles import Obstacles
 
@@ -278,6 +284,7 @@ def figure(res, *, scale: float = 1.0):
     else:
         lines2.set_color("C0")
     ax2.add_collection(lines2)
+    draw_slack(ax2, seg_def[:, :, [h, 2]], slack, three_d=False)
     if curve is not None and scale == 1.0:
         centre = 0.5 * (nodes[0] + nodes[-1])
         span = np.linspace(float(np.min(x[:, h])), float(np.max(x[:, h])), 301)
@@ -324,6 +331,8 @@ def figure(res, *, scale: float = 1.0):
             ax_t.set_title(curve.title)
             ax_t.legend(loc="best", fontsize="small")
         else:
+            if res.method == "static" and len(t) and t[0] > 0:  # the curve from zero load
+                t, d = np.concatenate([[0.0], t]), np.concatenate([[0.0], d])
             ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
             if res.method == "dynamic":
                 ax_t.set_xlabel("time t [s]")
@@ -336,6 +345,9 @@ def figure(res, *, scale: float = 1.0):
                 ax_t.set_title("probe deflection along the trajectory")
             ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
             balls.draw_series(ax_t)
+
+    if plan:
+        draw_plan(fig, fig.add_subplot(1, ncols, ncols), res, scale)
 
     status = ""
     if res.converged is False:
