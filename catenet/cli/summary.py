@@ -123,7 +123,7 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
             + ("yes" if s["converged"] else f"no: {s['error']}")
         )
     rows.append(
-        f"{'':<16} (slack: of {n_edges} edges; every case and combination is solved from the "
-        "base state above; /cases/<name>, envelopes in /envelope)"
+        f"{'':<16} (slack: edges of {n_edges}; each solved from the base state above; "
+        "results in /cases/<name>/, envelopes in /envelope/)"
     )
     return rows
