@@ -102,7 +102,20 @@ def _kind(c) -> str:
 
 
 def write_cases(path, scene, case, runs: list[CaseRun]) -> None:
-    """Adds /cases/<name>/ and /envelope/ to the closed result file at ``path``."""
+    """Adds /cases/<name>/ and /envelope/ to the closed result file at ``path``
+    (OutputError when it cannot be written)."""
+    from catenet.errors import OutputError
+    from catenet.output.files import describe
+
+    try:
+        _write_cases(path, scene, case, runs)
+    except OSError as exc:
+        raise OutputError(
+            f"{path}: writing the load cases (/cases, /envelope) failed: {describe(exc)}"
+        ) from None
+
+
+def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
     import h5py
 
     from catenet.output.result_group import write_result_group
