@@ -33,6 +33,26 @@ class Peaks:
         self.seen = 0
         self._u = np.empty(n)
 
+    def seed(self, arrays: dict[str, np.ndarray]) -> bool:
+        """Goes on from the peaks of an earlier part of the run (``arrays()`` of it, as a
+        result file stores them); False (and nothing taken) when their shapes differ."""
+        shapes = {
+            "peak_tension": self.tension.shape,
+            "peak_tension_time": self.tension.shape,
+            "least_tension": self.tension.shape,
+            "peak_displacement": self.displacement.shape,
+            "peak_displacement_time": self.displacement.shape,
+        }
+        if any(np.shape(arrays.get(k)) != shape for k, shape in shapes.items()):
+            return False
+        self.tension[:] = arrays["peak_tension"]
+        self.tension_time[:] = arrays["peak_tension_time"]
+        self.tension_low[:] = arrays["least_tension"]
+        self.displacement[:] = arrays["peak_displacement"]
+        self.displacement_time[:] = arrays["peak_displacement_time"]
+        self.seen += 1
+        return True
+
     def observe(self, t: float, x: np.ndarray, tension: np.ndarray) -> None:
         """Takes the state x (N, 3) with its edge tensions (M,) at time (load factor) t."""
         tension = np.asarray(tension)

@@ -158,6 +158,29 @@ def read_frame(path: str | Path, index: int = -1) -> Frame:
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
+def read_peaks(path: str | Path, t: float) -> dict[str, np.ndarray] | None:
+    """The run's peaks in /result (``peak_tension``, ``peak_tension_time``,
+    ``least_tension``, ``peak_displacement``, ``peak_displacement_time``) when /result is
+    the state at time ``t`` (a restart from its last frame goes on with them); else None."""
+    names = (
+        "peak_tension",
+        "peak_tension_time",
+        "least_tension",
+        "peak_displacement",
+        "peak_displacement_time",
+    )
+    try:
+        with open_result(Path(path)) as h5:
+            r = h5.get("result")
+            if r is None or float(r.attrs.get("time", np.nan)) != t:
+                return None
+            if not all(name in r for name in names):
+                return None
+            return {name: np.asarray(r[name], dtype=np.float64) for name in names}
+    except (OSError, KeyError, TypeError, ValueError):
+        return None
+
+
 # --------------------------------------------------------------------------------------------
 # The net a file was written for
 # --------------------------------------------------------------------------------------------

@@ -40,6 +40,7 @@ class RestartState:
     v: np.ndarray
     source: str
     a: np.ndarray | None = None
+    peaks: dict | None = None  # the earlier run's peaks up to t (None: not in the file)
 
 
 def output_path(case, out: str | Path | None = None) -> Path | None:
@@ -93,7 +94,10 @@ def read_restart(path: str | Path, scene) -> RestartState:
             "acceleration (not exactly as the uninterrupted run would)",
             label,
         )
-    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a)
+    from catenet.output.reader import read_peaks
+
+    peaks = read_peaks(path, frame.t)
+    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a, peaks)
 
 
 def _mesh_mismatch(mesh, net) -> list[str]:
@@ -336,6 +340,8 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         return False
 
     peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
+    if state is not None and state.peaks is not None and peaks.seed(state.peaks):
+        log.info("--restart: the peaks go on from those of %s", state.path)
     try:
         with interruptible(interrupt), clock.solving():
             res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)

@@ -91,3 +91,20 @@ def test_static_peaks_are_over_the_load_steps(tmp_path):
     assert np.array_equal(r["peak_tension"], r["tension"])
     assert np.all(r["peak_tension_time"] == 1.0)
     assert a["peak_tension"] == a["max_tension"] == result.stats["peak_tension"]
+
+
+def test_a_restart_goes_on_from_the_earlier_peaks(tmp_path):
+    """A run to 0.5 s (past the cable's snap at 0.45 s) restarted to 0.6 s ends with the
+    peaks of the uninterrupted run to 0.6 s: the snap is before the restart."""
+    run_case(parse_case(dropped_cable(1)), tmp_path / "whole.h5")
+    run_case(parse_case(dropped_cable(1, t_end=0.5)), tmp_path / "first.h5")
+    second = run_case(
+        parse_case(dropped_cable(1)), tmp_path / "second.h5", restart=tmp_path / "first.h5"
+    )
+    a, _, _, _, _, _ = read(tmp_path / "whole.h5")
+    b, _, tension_b, time_b, _, _ = read(tmp_path / "second.h5")
+    assert time_b[0] == pytest.approx(0.5) and np.all(a["peak_tension_time"] < 0.5)
+    assert tension_b.max() < 0.8 * a["peak_tension"].max()  # after 0.5 s: no such peak
+    assert np.allclose(b["peak_tension"], a["peak_tension"], rtol=1e-9, atol=0)
+    assert np.allclose(b["peak_tension_time"], a["peak_tension_time"], rtol=0, atol=1e-12)
+    assert second.stats["peak_tension"] == pytest.approx(a["peak_tension"].max(), rel=1e-9)
