@@ -236,7 +236,7 @@ def _times(result) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    from catenet.cli.summary import cases_table, state_lines
+    from catenet.cli.summary import cases_table, envelope_lines, state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.stats
@@ -255,7 +255,8 @@ def _summary(case, result, path: Path | None) -> None:
         _times(result),
     ]
     if s.get("cases"):
-        lines[-1:-1] = cases_table(s["cases"], len(result.tension))
+        table = cases_table(s["cases"], len(result.tension))
+        lines[-1:-1] = table + envelope_lines(s.get("envelope", {}))
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

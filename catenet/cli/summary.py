@@ -106,6 +106,25 @@ def cable_line(name: str, c: dict) -> str:
     return line
 
 
+def envelope_lines(env: dict) -> list[str]:
+    """The envelope over the load cases: its extremes and the cases that give them."""
+    lines = []
+    for key, what, where, unit in (
+        ("tension_max", "largest tension", "edge", "N"),
+        ("tension_min", "least tension", "edge", "N"),
+        ("displacement_max", "largest displacement", "node", "m"),
+    ):
+        if key in env:
+            e = env[key]
+            value = e["value"]
+            if key == "tension_min" and value < 0:  # a strut: its compression
+                what, value = "largest compression", -value
+            lines.append(
+                f"{'envelope':<{W}} {what} {value:.6g} {unit} ({where} {e['at']}, {e['case']})"
+            )
+    return lines
+
+
 def cases_table(cases: dict, n_edges: int) -> list[str]:
     """One row per load case and combination (``result.stats["cases"]``): the largest
     displacement and its node, the largest tension and its edge, the largest strut

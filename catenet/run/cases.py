@@ -22,7 +22,7 @@ from catenet.errors import CatenetError, ConfigError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["CaseRun", "pick", "solve_cases", "write_cases"]
+__all__ = ["CaseRun", "governing", "pick", "solve_cases", "write_cases"]
 
 
 @dataclass
@@ -161,6 +161,35 @@ def envelope(net, runs: list[CaseRun]) -> dict[str, np.ndarray]:
         "displacement_max": u.max(axis=0),
         "displacement_max_case": u.argmax(axis=0),
     }
+
+
+def governing(net, runs: list[CaseRun]) -> dict:
+    """The envelope's extremes and the cases that give them: ``tension_max`` [N] (edge,
+    case), ``tension_min`` [N] (edge, case: the least tension, negative for a strut in
+    compression), ``displacement_max`` [m] (node, case); {} without a case solved."""
+    done = [r for r in runs if r.result is not None]
+    if not done:
+        return {}
+    env = envelope(net, done)
+    free = ~np.asarray(net.fixed, dtype=bool)
+    free[net.n_net :] = False
+    out = {}
+    for key, pick_, where in (
+        ("tension_max", np.argmax, None),
+        ("tension_min", np.argmin, None),
+        ("displacement_max", np.argmax, free),
+    ):
+        values = env[key]
+        idx = np.flatnonzero(where) if where is not None else np.arange(len(values))
+        if idx.size == 0:
+            continue
+        k = int(idx[pick_(values[idx])])
+        out[key] = {
+            "value": float(values[k]),
+            "at": k,
+            "case": done[int(env[f"{key}_case"][k])].name,
+        }
+    return out
 
 
 def write_envelope(group, net, runs: list[CaseRun]) -> None:

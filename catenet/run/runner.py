@@ -268,7 +268,7 @@ def run_case(
 
 def _solve_cases(scene, settings, ws, result, cases, path, interrupt) -> None:
     """The load cases from the base state ``result``, written to /cases and /envelope."""
-    from catenet.run.cases import solve_cases, write_cases
+    from catenet.run.cases import governing, solve_cases, write_cases
 
     if not result.converged:
         log.error("the base state did not converge: no load case is solved")
@@ -277,6 +277,7 @@ def _solve_cases(scene, settings, ws, result, cases, path, interrupt) -> None:
     result.stats["cases"] = {
         r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
     }
+    result.stats["envelope"] = governing(scene.net, result.cases)
     if path is not None:
         write_cases(path, scene, scene.case, result.cases)
 

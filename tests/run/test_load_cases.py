@@ -239,3 +239,22 @@ def test_the_mast_load_cases_example(tmp_path):
         assert env["tension_max"][top] == result.stats["cases"][governing]["max_tension"]
         assert governing == "ULS_wind_x"
         assert np.all(env["tension_min"][:] <= env["tension_max"][:])
+        least = env["tension_min"][:]
+    e = result.stats["envelope"]
+    assert e["tension_max"]["case"] == "ULS_wind_x" and e["tension_max"]["at"] == top
+    assert e["tension_min"]["value"] == least.min() < 0  # the strut
+    assert e["displacement_max"]["case"] == "ULS_diagonal"
+    r = CliRunner().invoke(
+        main,
+        [
+            "run",
+            str(CONFIGS / "structures" / "mast_load_cases.toml"),
+            "-o",
+            str(tmp_path / "cli.h5"),
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    assert (
+        f"envelope     largest compression {-least.min():.6g} N (edge 0, ULS_diagonal)" in r.output
+    )
+    assert f"largest tension {e['tension_max']['value']:.6g} N (edge {top}, ULS_wind_x)" in r.output
