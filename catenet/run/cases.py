@@ -94,6 +94,9 @@ def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRu
             error = str(exc)
             log.error("%s %s: %s", _kind(c), c.name, exc)
         runs.append(CaseRun(c.name, c.combination, r, summary.summarize_result(scene, r), error))
+        if interrupt is not None and interrupt():  # a signal: the cases after it wait
+            log.warning("interrupted: the load cases after %s are not solved", c.name)
+            break
     return runs
 
 

@@ -258,3 +258,21 @@ def test_the_mast_load_cases_example(tmp_path):
         f"envelope     largest compression {-least.min():.6g} N (edge 0, ULS_diagonal)" in r.output
     )
     assert f"largest tension {e['tension_max']['value']:.6g} N (edge {top}, ULS_wind_x)" in r.output
+
+
+def test_a_signal_stops_the_load_cases(tmp_path):
+    """An interrupt (Ctrl-C's flag) during the load cases stops them: the one under way
+    keeps its last good state, the ones after it are not solved."""
+    from catenet.case import build
+    from catenet.run.cases import solve_cases
+    from catenet.solver import path as sv
+
+    case = parse_case(mast())
+    scene = build(case)
+    settings = sv.Settings.of(case.solver)
+    ws = sv.workspace(scene, settings)
+    base = sv.solve(scene, settings, workspace=ws)
+    runs = solve_cases(scene, settings, ws, base, scene.cases, interrupt=lambda: True)
+    assert [r.name for r in runs] == ["wind_x"]
+    assert not runs[0].converged and "interrupt" in runs[0].error
+    assert np.array_equal(runs[0].result.x, base.x)  # its last good state: the base
