@@ -276,3 +276,28 @@ def test_a_signal_stops_the_load_cases(tmp_path):
     assert [r.name for r in runs] == ["wind_x"]
     assert not runs[0].converged and "interrupt" in runs[0].error
     assert np.array_equal(runs[0].result.x, base.x)  # its last good state: the base
+
+
+def test_a_load_case_along_a_cable_puts_its_node_in_the_shared_net(tmp_path):
+    """A load case's point load at a position along a cable (``cable``, ``at``) splits the
+    cable there in the one net every case shares; the case equals a separate run with
+    that load in [load] (same net, same start: the prestressed cable is in equilibrium)."""
+    cable = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [10, 0, 0]],
+            "edge_length": 1.0,
+            "cable": [{"name": "c", "nodes": [0, 1], "prestress": 1000.0}],
+            "fixed": [0, 1],
+        },
+        "material": {"EA": 1e6},
+    }
+    point = {"cable": "c", "at": 0.33, "force": [0, 0, -500.0]}
+    with_case = {**cable, "load_case": [{"name": "hook", "point": [point]}]}
+    result = run_case(parse_case(with_case), tmp_path / "c.h5")
+    alone = run_case(parse_case({**cable, "load": {"point": [point]}}), tmp_path / "a.h5")
+    (hook,) = result.cases
+    assert len(result.x) == len(alone.x) == 12  # 11 nodes of 1 m edges and one at 3.3 m
+    assert np.any(np.isclose(result.x[:, 0], 3.3))
+    assert np.array_equal(hook.result.x, alone.x)
+    assert np.array_equal(hook.result.tension, alone.tension)
