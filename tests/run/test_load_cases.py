@@ -160,6 +160,14 @@ def test_bad_load_cases_exit_2_with_the_key_path(tmp_path):
             "load_case[0].point[0].node = 99: must be a node index in 0..",
         ),
         ("load_case", 0, "pressure"): (100.0, "load_case[0].pressure = 100.0: only for"),
+        ("load_case", 1, "point"): (
+            [{"cable": "guy_x", "at": 0.5, "force": WIND_X}],
+            "load_case[1].point[0].cable = 'guy_x'",
+        ),
+        ("load_case", 1, "line"): (
+            [{"cable": "guy", "force": WIND_X}],
+            "load_case[1].line[0].cable = 'guy'",
+        ),
         ("load_case", 0, "snow"): (1.0, "load_case[0].snow: unknown key"),
         ("load_case", 0, "history"): ([[0, 0], [1, 1]], "load_case[0].history: a load case is"),
         ("load_case", 1, "gravity"): ([0, 0, -9.81], "load_case[1].gravity = [0.0, 0.0, -9.81]"),
