@@ -256,6 +256,7 @@ class ResultFile:
     series_delta: np.ndarray | None = None
     from_trajectory: bool = False  # x is the last trajectory frame (no /result/x)
     reaction: np.ndarray | None = None  # (N, 3) /result/reaction [N] (None: not stored)
+    series_u: np.ndarray | None = None  # |x - X| of the probe along series_t [m]
 
     @property
     def title(self) -> str:
@@ -409,10 +410,11 @@ def read_result(path: str | Path) -> ResultFile:
             times = np.zeros(0)
             if n_frames and time is not None:
                 times = time[:n_frames]
-            series_t = series_delta = None
+            series_t = series_delta = series_u = None
             if n_frames > 1 and traj.shape[1:] == (n, 3):
                 xp = np.asarray(traj[:n_frames, probe : probe + 1], dtype=np.float64)
                 series_delta = measures.deflection(nodes[probe : probe + 1], xp, 0)
+                series_u = np.linalg.norm(xp[:, 0, :] - nodes[probe], axis=1)
                 if time is not None and len(time) >= n_frames:
                     series_t = time[:n_frames]
                 else:
@@ -434,6 +436,7 @@ def read_result(path: str | Path) -> ResultFile:
         series_delta=series_delta,
         from_trajectory=from_trajectory,
         reaction=reaction,
+        series_u=series_u,
     )
 
 

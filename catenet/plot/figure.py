@@ -179,7 +179,8 @@ def figure(res, *, scale: float = 1.0):
     frame also the probe's deflection (positive down) against time (dynamic runs) or
     load factor (static runs in steps); for the paper's single-cable cases (``paper_curve``)
     that panel has the paper's axes and closed form, and the side view the closed-form
-    shape. A static run's curve starts at zero load. Slack edges (no tension, shorter
+    shape. A static run's curve starts at zero load; a graph's shows how far its probe
+    moves (|x - X|: a mast's top moves sideways). Slack edges (no tension, shorter
     than their rest length) are dotted in their own colour; a graph gets a plan view
     coloured by displacement with the reactions as arrows (``catenet.plot.plan``).
     """
@@ -331,6 +332,9 @@ def figure(res, *, scale: float = 1.0):
             ax_t.set_title(curve.title)
             ax_t.legend(loc="best", fontsize="small")
         else:
+            whole = plan and res.series_u is not None  # a graph: how far the probe moves
+            if whole:
+                d = res.series_u
             if res.method == "static" and len(t) and t[0] > 0:  # the curve from zero load
                 t, d = np.concatenate([[0.0], t]), np.concatenate([[0.0], d])
             ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
@@ -343,7 +347,11 @@ def figure(res, *, scale: float = 1.0):
             else:
                 ax_t.set_xlabel("/trajectory/time")
                 ax_t.set_title("probe deflection along the trajectory")
-            ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
+            if whole:
+                ax_t.set_title(ax_t.get_title().replace("deflection", "displacement"))
+                ax_t.set_ylabel(f"displacement |x - X| of node {p} [m]")
+            else:
+                ax_t.set_ylabel(f"deflection δ of node {p} [m] (down)")
             balls.draw_series(ax_t)
 
     if plan:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import tomllib
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 from conftest import CONFIGS
 
@@ -42,9 +43,13 @@ def test_graph_plan_view_reactions_and_load_curve_from_zero(tmp_path):
         quiver[0].U / quiver[0].U[np.argmax(np.abs(quiver[0].U))],
         r[:, 0] / r[np.argmax(np.abs(r[:, 0])), 0],
     )
-    curve = panel(fig, "probe deflection against load").lines[0]
+    # a graph's load curve: how far its probe (the top) moves, from zero load
+    ax = panel(fig, "probe displacement against load")
+    curve = ax.lines[0]
+    assert ax.get_ylabel() == "displacement |x - X| of node 1 [m]"
     assert curve.get_xdata()[0] == 0.0 and curve.get_ydata()[0] == 0.0
     assert list(curve.get_xdata()[1:]) == [0.5, 1.0]
+    assert curve.get_ydata()[-1] == pytest.approx(u[1], rel=1e-12)
 
 
 def test_slack_edges_have_their_own_colour(tmp_path):
