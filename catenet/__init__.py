@@ -4,6 +4,11 @@ Cables are discretised into nodes and edges with the stretching energy of the di
 catenary; equilibria come from Newton's method on the total potential (``solve_static``)
 or from the paper's implicit Euler with damping (``solve_dynamic``).
 
+From a case file: ``catenet.load_case(path)`` (a validated case; ``--set`` overrides as
+``overrides=[...]``), ``catenet.run_case(case, out)`` (the run ``catenet run`` makes:
+its Result, ``result.report.summary`` the summary's numbers, ``result.cases`` the load cases),
+``catenet.read_result(path)`` (a result file). docs/guide/results.md shows them.
+
 Names are loaded on first use, so that ``catenet --help`` does not import NumPy or Numba.
 """
 
@@ -34,6 +39,11 @@ _NAMES = {
     "continuation": "catenet.solver.loadsteps",
     "solve_static": "catenet.solver.static",
     "solve_dynamic": "catenet.solver.dynamic",
+    "load_case": "catenet.case",
+    "parse_case": "catenet.case",
+    "build": "catenet.case",
+    "run_case": "catenet.run.runner",
+    "read_result": "catenet.output",
 }
 
 __all__ = sorted(_NAMES) + ["__version__"]

@@ -39,10 +39,13 @@ def check_nodes(
     load: Any,
     output: Any = None,
     flies: bool = False,
+    *,
+    prefix: str = "load",
 ) -> None:
     """Every node reference of the supports, loads and output probe (each BAD when its
     section failed) against the geometry ``g``; ``flies``: a dynamic run, where the net
-    may have no support."""
+    may have no support; ``prefix``: the loads' key path (a load case's
+    ``load_case[k]``: then its loads alone are checked, not the supports)."""
     probe = getattr(output, "probe", None)
     if not _needs_topology(g, supports, load, probe):
         return
@@ -105,18 +108,18 @@ def check_nodes(
     if isinstance(load, LoadConfig):
         for k, pt in enumerate(load.points):
             if pt.node is not None:
-                in_range(pt.node, f"load.point[{k}].node")
+                in_range(pt.node, f"{prefix}.point[{k}].node")
             else:
-                _known_cable(ck, f"load.point[{k}].cable", pt.cable, g, topo)
+                _known_cable(ck, f"{prefix}.point[{k}].cable", pt.cable, g, topo)
         for k, ln in enumerate(load.lines):
             if ln.cable is not None:
-                _known_cable(ck, f"load.line[{k}].cable", ln.cable, g, topo)
+                _known_cable(ck, f"{prefix}.line[{k}].cable", ln.cable, g, topo)
         for k, ar in enumerate(load.areas):
             if isinstance(ar.nodes, str):
-                in_range(ar.nodes, f"load.area[{k}].nodes")
+                in_range(ar.nodes, f"{prefix}.area[{k}].nodes")
             elif ar.nodes is not None:
                 for j, r in enumerate(ar.nodes):
-                    in_range(r, f"load.area[{k}].nodes[{j}]")
+                    in_range(r, f"{prefix}.area[{k}].nodes[{j}]")
     if probe is not None and in_range(probe, "output.probe"):
         many = expand(probe, topo.names, topo.sets)
         if len(many) != 1:
@@ -124,7 +127,7 @@ def check_nodes(
                 f"output.probe = {probe!r}: the node set has {len(many)} nodes: "
                 "the probe must be one node (an index, a node name or a set of one node)"
             )
-    if len(ck.problems) == before:
+    if len(ck.problems) == before and prefix == "load":
         g.check_supports(ck, fixed, fixed_key, flies)
 
 

@@ -23,6 +23,7 @@ from catenet.case.keys import (
     value,
 )
 from catenet.case.kinds import KINDS, GeometryConfig
+from catenet.case.loadcases import check_method, parse_combinations, parse_load_cases
 from catenet.case.masses import parse_masses
 from catenet.case.nodes import check_nodes
 from catenet.case.obstacles import parse_obstacles
@@ -54,6 +55,8 @@ class Case:
     formfind: FormfindConfig | None = None  # read by `catenet formfind` only
     obstacles: tuple = ()  # [[obstacle]]: rigid bodies the net cannot enter
     masses: tuple = ()  # [[mass]]: point masses and initial velocities at nodes
+    load_cases: tuple = ()  # [[load_case]]: loads solved from the base state
+    combinations: tuple = ()  # [[combination]]: factored sums of load cases
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -76,6 +79,10 @@ class Case:
             out["obstacle"] = [o.to_dict() for o in self.obstacles]
         if self.masses:
             out["mass"] = [m.to_dict() for m in self.masses]
+        if self.load_cases:
+            out["load_case"] = [c.to_dict() for c in self.load_cases]
+        if self.combinations:
+            out["combination"] = [c.to_dict() for c in self.combinations]
         return out
 
     def to_toml(self) -> str:
@@ -95,6 +102,8 @@ TOP_KEYS = (
     "formfind",
     "obstacle",
     "mass",
+    "load_case",
+    "combination",
 )
 
 
@@ -146,6 +155,10 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     output = parse_output(ck, data.get("output", {}), ctx, source)
     obstacles = parse_obstacles(ck, data.get("obstacle"), ctx, base_dir)
     masses = parse_masses(ck, data.get("mass"), ctx)
+    load_cases = parse_load_cases(ck, data.get("load_case"), ctx)
+    combinations = parse_combinations(ck, data.get("combination"), ctx, load_cases)
+    density = material.density if isinstance(material, MaterialConfig) else None
+    check_method(ck, load_cases, combinations, solver, density)
     formfind = None
     if "formfind" in data:
         formfind = parse_formfind(ck, data["formfind"], ctx)
@@ -183,6 +196,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     if geometry is not None:
         flies = isinstance(solver, SolverConfig) and solver.method == "dynamic"
         check_nodes(ck, geometry, supports, load, output, flies)
+        for k, lc in enumerate(load_cases if isinstance(load_cases, tuple) else ()):
+            check_nodes(ck, geometry, None, lc, prefix=f"load_case[{k}]")
 
     if ck.problems:
         raise ConfigError(ck.problems)
@@ -198,6 +213,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         formfind=formfind,
         obstacles=obstacles,
         masses=masses,
+        load_cases=load_cases,
+        combinations=combinations,
         source=source,
     )
 

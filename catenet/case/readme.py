@@ -13,6 +13,7 @@ from pathlib import Path
 from catenet.case.formfind import FormfindConfig
 from catenet.case.keys import REQUIRED, Key, declared
 from catenet.case.kinds import KINDS
+from catenet.case.loadcases import CombinationConfig, LoadCaseConfig
 from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
@@ -84,7 +85,16 @@ def keys_table() -> str:
         f"| `[[mass]]` | an array of tables | none | {(MassConfig.__doc__ or '').strip()} |"
     )
     rows += _rows("mass[k]", declared(MassConfig))
+    rows.append(f"| `[[load_case]]` | an array of tables | none | {_doc(LoadCaseConfig)} |")
+    rows += _rows("load_case[k]", declared(LoadCaseConfig))
+    rows.append(f"| `[[combination]]` | an array of tables | none | {_doc(CombinationConfig)} |")
+    rows += _rows("combination[k]", declared(CombinationConfig))
     return "\n".join(rows)
+
+
+def _doc(section: type) -> str:
+    """A section's docstring on one line."""
+    return " ".join(section.__doc__.split())
 
 
 def section_text() -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +36,11 @@ class Scene:
     are among the net's last nodes (``Net.bodies``); ``rigid``: the free bodies
     (``catenet.case.rigid.FreeBody``), four nodes each after them. ``sets``: the node
     sets as node indices, ``at_nodes``: the node of each load.point given along a cable
-    (by its index), ``names``: the named nodes ("center")."""
+    (by its index), ``names``: the named nodes ("center"). ``probe_auto``: no probe was
+    named and the geometry has no natural one (a graph): the summary reports the free
+    node that moves most (``catenet.model.summary.probe_of``). ``cases``: per
+    ``[[load_case]]``, then per ``[[combination]]``, a ``LoadCase`` (its name and the
+    force it adds to the base loads, (N, 3) [N])."""
 
     case: Case
     net: Net
@@ -50,6 +55,8 @@ class Scene:
     at_nodes: Any = None
     names: Any = None
     rigid: tuple = ()
+    probe_auto: bool = False
+    cases: tuple = ()
 
 
 def build(case: Case) -> Scene:
@@ -62,7 +69,7 @@ def build(case: Case) -> Scene:
 
 
 def _build(case: Case) -> Scene:
-    built = case.geometry.build_case(case, model_material(case.material))
+    built = case.geometry.build_case(_with_case_points(case), model_material(case.material))
     net = built.net
     point_mass, velocity = point_masses(getattr(case, "masses", ()), net, built.names, built.sets)
     if point_mass is not None:
@@ -91,7 +98,60 @@ def _build(case: Case) -> Scene:
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
         rigid=rigid,
+        probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
+        cases=_load_cases(case, net, built),
     )
+
+
+@dataclass(frozen=True, eq=False)
+class LoadCase:
+    """A load case or combination built: its name, whether it is a combination and the
+    force it adds to the base loads (N, 3) [N] (static: histories do not apply)."""
+
+    name: str
+    force: np.ndarray
+    combination: bool = False
+
+
+def _with_case_points(case: Case) -> Case:
+    """The case whose point loads include the load cases' loads along cables (after its
+    own, in order), so that the geometry puts a node under each: every case shares the
+    base's net."""
+    extra = tuple(pt for lc in case.load_cases for pt in lc.points)
+    if not any(pt.cable is not None for pt in extra):
+        return case
+    load = dataclasses.replace(case.load, points=case.load.points + extra)
+    return dataclasses.replace(case, load=load)
+
+
+def _load_cases(case: Case, net: Net, built: Any) -> tuple:
+    """The load cases' and combinations' added forces (``LoadCase``)."""
+    from catenet.model.cases import combined
+
+    out = []
+    offset = len(case.load.points)
+    forces = {}
+    for k, lc in enumerate(case.load_cases):
+        at = {
+            j: built.at_nodes[offset + j]
+            for j in range(len(lc.points))
+            if offset + j in built.at_nodes
+        }
+        offset += len(lc.points)
+        sub = dataclasses.replace(
+            case, load=lc, supports=dataclasses.replace(case.supports, moves=())
+        )
+        try:
+            loads = _loads(sub, net, built.names, float(built.size), built._replace(at_nodes=at))
+        except ConfigError as exc:
+            raise ConfigError(
+                [p.replace("load.", f"load_case[{k}].", 1) for p in exc.problems]
+            ) from None
+        forces[lc.name] = loads.external_force(net)
+        out.append(LoadCase(lc.name, forces[lc.name]))
+    for combo in case.combinations:
+        out.append(LoadCase(combo.name, combined(forces, combo.factors), True))
+    return tuple(out)
 
 
 def _probe(case: Case, built: Any) -> int:

@@ -16,7 +16,12 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 def verbosity_options(f):
     """-q / -v / --debug on a command; the values reach it as ``quiet``, ``verbose``, ``debug``."""
     f = click.option("--debug", is_flag=True, help="Show tracebacks and debug logging.")(f)
-    f = click.option("-v", "--verbose", count=True, help="More output (-v: Newton iterations).")(f)
+    f = click.option(
+        "-v",
+        "--verbose",
+        count=True,
+        help="More output (-v: catenet's log, Newton iterations; -vv: the libraries' too).",
+    )(f)
     f = click.option("-q", "--quiet", is_flag=True, help="Only errors.")(f)
     return f
 
@@ -45,14 +50,32 @@ def case_options(output_help: str, example: str):
     return add
 
 
+class _OwnLog(logging.Filter):
+    """Passes catenet's own records, and other libraries' (h5py, numba, ...) only from
+    ``others`` up: -v shows catenet's log lines, not h5py's DEBUG flood."""
+
+    def __init__(self, others: int):
+        super().__init__()
+        self.others = others
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        return own or record.levelno >= self.others
+
+
 def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) -> None:
+    """Log to stderr: warnings; -v catenet's debug lines too; -vv or --debug every
+    library's; -q errors only."""
     level = logging.WARNING
     if debug or verbose >= 1:
         level = logging.DEBUG
     if quiet:
         level = logging.ERROR
+    others = logging.DEBUG if (debug or verbose >= 2) and not quiet else max(level, logging.WARNING)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.addFilter(_OwnLog(others))
     logging.basicConfig(
-        level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True
+        level=level, format="%(levelname)s %(name)s: %(message)s", handlers=[handler], force=True
     )
     logging.getLogger("numba").setLevel(logging.WARNING)
     logging.getLogger("matplotlib").setLevel(logging.WARNING)

@@ -43,21 +43,20 @@ def command(
     2e-2f, Eqs. 14-17).
     A file of `catenet modes` also gets STEM-modes.png beside that figure: its
     lowest modes (up to six), each with its frequency.
-    Sweep directory: the sweep's figures (catenet.study).
+    Sweep directory: each output column (deflection, largest displacement,
+    tension, compression, reaction, strain, slack edges, peaks) against each
+    swept parameter, sweep_<key>.png; for sweeps of the paper's square net also
+    its figures 5-8 and report.md (catenet.study).
 
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):
-        from catenet.errors import CatenetError, ConfigError
+        from catenet.errors import ConfigError
 
         if path.is_dir():
-            try:
-                from catenet.study import plot_sweep
-            except ImportError as exc:
-                raise CatenetError(f"{path}: sweep figures need catenet.study: {exc}") from exc
-            files = plot_sweep(path, output)
+            files = sweep_figures(path, output)
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")
         else:
@@ -71,3 +70,19 @@ def command(
         if not quiet:
             for f in files:
                 click.echo(str(f))
+
+
+def sweep_figures(directory: Path, out: Path | None) -> list[Path]:
+    """Every sweep's column figures, and the paper's figures and report for a sweep of
+    the square net."""
+    from catenet.errors import ConfigError
+    from catenet.plot.sweep import is_square_net_sweep, plot_columns
+
+    files = plot_columns(directory, out)
+    if is_square_net_sweep(directory):
+        from catenet.study import plot_sweep
+
+        files += plot_sweep(directory, out)
+    if not files:
+        raise ConfigError(f"{directory}: the sweep has no row with numbers to plot yet")
+    return files

@@ -81,12 +81,20 @@ class StopFlag:
     help="Continue a dynamic run from the last frame stored in OLD.h5 (time, positions, "
     "velocities), writing a new file.",
 )
+@click.option(
+    "--case",
+    "only_case",
+    metavar="NAME",
+    default=None,
+    help="Solve only this [[load_case]] or [[combination]] (after the base state).",
+)
 @verbosity_options
 def command(
     case_file: Path | None,
     out: Path | None,
     overrides: tuple[str, ...],
     restart: Path | None,
+    only_case: str | None,
     quiet: bool,
     verbose: int,
     debug: bool,
@@ -125,7 +133,13 @@ def command(
         with StopFlag() as stop:
             try:
                 result = run_case(
-                    case, path, restart=restart, progress=progress, stop=stop, interrupt=stop
+                    case,
+                    path,
+                    restart=restart,
+                    progress=progress,
+                    stop=stop,
+                    interrupt=stop,
+                    load_case=only_case,
                 )
             except CatenetError as exc:
                 bar.close()
@@ -167,8 +181,17 @@ def command(
                 err=True,
             )
             code = EXIT_FAILED
-        elif not quiet:
-            _summary(case, result, path)
+        else:
+            if not quiet:
+                _summary(case, result, path)
+            failed = [r.name for r in result.cases if not r.converged]
+            if failed:
+                click.echo(
+                    f"catenet: did not converge: load case {', '.join(failed)} (its last "
+                    "good state is in /cases/<name>, converged = false)",
+                    err=True,
+                )
+                code = EXIT_FAILED
     sys.exit(code)
 
 
@@ -212,11 +235,12 @@ def _times(result) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    import numpy as np
-
+    from catenet.cli.summary import cases_table, envelope_lines, state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.report
+    numbers = {**s.summary, "delta_over_L": s.delta_over_L, "size": s.size}
+    warn = bool(s.strain_warning)
     state = "yes" if result.converged else "no"
     detail = result.message or ""
     if case.solver.method == "dynamic" and not result.equilibrium:
@@ -227,19 +251,9 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        f"{'delta':<12} {s.delta:.6g} m   delta/L = {s.delta_over_L:.6g}   "
-        f"(node {s.probe}, L = {s.size:.6g} m)",
-        f"{'max tension':<12} {float(np.max(result.tension, initial=0.0)):.6g} N   "
-        f"max strain {result.max_strain:.4g}"
-        + (" (beyond the material law's range: see the warning)" if s.strain_warning else ""),
+        *state_lines(numbers, case.solver.method == "dynamic", len(result.tension), warn),
         _times(result),
     ]
-    for name, c in (s.cables or {}).items():  # a graph's cables, one line each
-        lines.insert(
-            -1,
-            f"{'cable':<12} {name}: max tension {c.max_tension:.6g} N, "
-            f"slack {100 * c.slack_fraction:.3g} % of its length",
-        )
     for k, b in s.bodies.items():  # free rigid bodies, one line each
         first = b["first_contact"]
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "
@@ -254,6 +268,9 @@ def _summary(case, result, path: Path | None) -> None:
             head + f"spin {b['spin']:.4g} deg/s about [{axis}], speed {b['speed']:.4g} m/s "
             f"at the end; {touch}",
         )
+    if s.cases:
+        table = cases_table(s.cases, len(result.tension))
+        lines[-1:-1] = table + envelope_lines(s.envelope)
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -59,6 +59,14 @@ from catenet.cli.common import (
     help="Also the K lowest natural frequencies of every row's equilibrium: columns "
     "f1..fK [Hz] (as catenet modes finds them).",
 )
+@click.option(
+    "--case",
+    "load_case",
+    metavar="NAME",
+    default=None,
+    help="Report this [[load_case]] or [[combination]] of the case in every row (solved "
+    "from the row's base state).",
+)
 @click.option("--save-runs", is_flag=True, help="Also keep each run's HDF5 file in DIR/runs/.")
 @click.option("--plot", "plot", is_flag=True, help="Draw the sweep figures and report.md after.")
 @verbosity_options
@@ -69,6 +77,7 @@ def command(
     workers: int | None,
     scheduler: str | None,
     modes: int,
+    load_case: str | None,
     save_runs: bool,
     plot: bool,
     quiet: bool,
@@ -100,7 +109,7 @@ def command(
     with _sigterm_as_interrupt(), errors_to_exit_codes(debug):
         from catenet import sweep as sw
 
-        spec = sw.load_sweep(case, params, modes=modes)
+        spec = sw.load_sweep(case, params, modes=modes, load_case=load_case)
         out = output if output is not None else Path("out") / case.stem
         jobs = spec.jobs
         n_load = len(jobs[0].levels) if jobs and jobs[0].levels else 1
@@ -154,9 +163,9 @@ def command(
                 err=True,
             )
         if plot:
-            from catenet.study import plot_sweep
+            from catenet.cli.plot import sweep_figures
 
-            for path in plot_sweep(out, None):
+            for path in sweep_figures(out, None):
                 if not quiet:
                     click.echo(str(path))
         header, done = sw.read_journal(out)

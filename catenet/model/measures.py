@@ -54,8 +54,9 @@ def slack_strain(net: Net, x: np.ndarray) -> float:
 
 
 def slack_edges(net: Net, x: np.ndarray) -> int:
-    """How many edges are shorter than their rest length."""
-    return int(np.count_nonzero(strain(net, x) < 0.0))
+    """How many tension-only edges are shorter than their rest length (slack; a strut,
+    an edge that is not tension-only, in compression is not slack)."""
+    return int(np.count_nonzero((strain(net, x) < 0.0) & net.law.tension_only))
 
 
 def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.ndarray:

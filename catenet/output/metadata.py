@@ -9,9 +9,20 @@ import platform
 
 import numpy as np
 
-from catenet.model import measures
+from catenet.model import measures, summary
 
 __all__ = ["environment", "result_attrs"]
+
+
+def _with_tension(res, tension):
+    """The Result with the tension the file stores (a copy only when they differ)."""
+    if res.tension is tension:
+        return res
+    import copy
+
+    other = copy.copy(res)
+    other.tension = tension
+    return other
 
 
 def environment() -> dict[str, str]:
@@ -35,12 +46,16 @@ def environment() -> dict[str, str]:
     return out
 
 
-def result_attrs(res, scene) -> dict:
-    """The /result attributes of a Result: contract §5 plus what a user reads first."""
-    net = scene.net
-    probe = int(scene.probe)
-    delta = measures.deflection(net.nodes, res.x, probe)
-    tension = np.asarray(res.tension) if res.tension is not None else np.zeros(0)
+def result_attrs(res, scene, tension=None) -> dict:
+    """The /result attributes of a Result: contract §5 plus what a user reads first:
+    the summary's numbers (``catenet.model.summary.summarize``; a vector v as v_x, v_y, v_z; -1
+    for no node or edge, the per-cable table in datasets); ``tension``: the stored one
+    (default: the Result's)."""
+    if tension is None:
+        tension = res.tension if res.tension is not None else measures.tension(scene.net, res.x)
+    tension = np.asarray(tension, dtype=np.float64)
+    numbers = summary.flat(summary.summarize_result(scene, _with_tension(res, tension)))
+    delta = numbers["delta"]
     residual = float(res.residual)
     strain = float(res.max_strain)
     timing = res.timing
@@ -55,12 +70,10 @@ def result_attrs(res, scene) -> dict:
         # how the solve ended: equilibrium, ... (catenet.solver.result.Outcome); "" unknown
         "outcome": str(res.outcome) if getattr(res, "outcome", None) is not None else "",
         "time": float(res.time),
-        "delta": delta,
+        **numbers,
         "delta_over_L": delta / float(scene.size),
-        "probe": probe,
         "size": float(scene.size),
         "max_strain": strain if math.isfinite(strain) else 0.0,
-        "max_tension": float(np.max(tension, initial=0.0)),
         # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
         "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
         # catenet run: seconds of the solve (the engine) and of the start-up before it

@@ -161,6 +161,29 @@ def read_frame(path: str | Path, index: int = -1) -> Frame:
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
+def read_peaks(path: str | Path, t: float) -> dict[str, np.ndarray] | None:
+    """The run's peaks in /result (``peak_tension``, ``peak_tension_time``,
+    ``least_tension``, ``peak_displacement``, ``peak_displacement_time``) when /result is
+    the state at time ``t`` (a restart from its last frame goes on with them); else None."""
+    names = (
+        "peak_tension",
+        "peak_tension_time",
+        "least_tension",
+        "peak_displacement",
+        "peak_displacement_time",
+    )
+    try:
+        with open_result(Path(path)) as h5:
+            r = h5.get("result")
+            if r is None or float(r.attrs.get("time", np.nan)) != t:
+                return None
+            if not all(name in r for name in names):
+                return None
+            return {name: np.asarray(r[name], dtype=np.float64) for name in names}
+    except (OSError, KeyError, TypeError, ValueError):
+        return None
+
+
 # --------------------------------------------------------------------------------------------
 # The net a file was written for
 # --------------------------------------------------------------------------------------------
@@ -235,6 +258,8 @@ class ResultFile:
     series_t: np.ndarray | None = None
     series_delta: np.ndarray | None = None
     from_trajectory: bool = False  # x is the last trajectory frame (no /result/x)
+    reaction: np.ndarray | None = None  # (N, 3) /result/reaction [N] (None: not stored)
+    series_u: np.ndarray | None = None  # |x - X| of the probe along series_t [m]
 
     @property
     def title(self) -> str:
@@ -325,6 +350,12 @@ def read_result(path: str | Path) -> ResultFile:
             fixed = _dataset(h5, "/mesh/fixed", path, (), bool, problems)
             x = _dataset(h5, "/result/x", path, (3,), np.float64, problems)
             tension = _dataset(h5, "/result/tension", path, (), np.float64, problems)
+            reaction = h5.get("/result/reaction")
+            reaction = (
+                np.asarray(reaction, dtype=np.float64)
+                if nodes is not None and getattr(reaction, "shape", None) == (len(nodes), 3)
+                else None
+            )
             rest = _dataset(h5, "/mesh/rest_length", path, (), np.float64, problems)
             EA = _dataset(h5, "/mesh/EA", path, (), np.float64, problems)
             time = _dataset(h5, "/trajectory/time", path, (), np.float64, problems)
@@ -382,10 +413,11 @@ def read_result(path: str | Path) -> ResultFile:
             times = np.zeros(0)
             if n_frames and time is not None:
                 times = time[:n_frames]
-            series_t = series_delta = None
+            series_t = series_delta = series_u = None
             if n_frames > 1 and traj.shape[1:] == (n, 3):
                 xp = np.asarray(traj[:n_frames, probe : probe + 1], dtype=np.float64)
                 series_delta = measures.deflection(nodes[probe : probe + 1], xp, 0)
+                series_u = np.linalg.norm(xp[:, 0, :] - nodes[probe], axis=1)
                 if time is not None and len(time) >= n_frames:
                     series_t = time[:n_frames]
                 else:
@@ -406,6 +438,8 @@ def read_result(path: str | Path) -> ResultFile:
         series_t=series_t,
         series_delta=series_delta,
         from_trajectory=from_trajectory,
+        reaction=reaction,
+        series_u=series_u,
     )
 
 

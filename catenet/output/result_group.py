@@ -1,28 +1,57 @@
 """The /result group of a result file (contract §5 and §7): the final state, its
-tensions (per cable too), reactions and contact forces, velocities and the newmark
-scheme's acceleration where the run keeps them, and the attributes a user reads first."""
+tensions (per cable too), reactions and contact forces, the run's peaks over every step
+(``peak_tension``, ``peak_tension_time``, ``least_tension``, ``peak_displacement``,
+``peak_displacement_time``), velocities and the newmark scheme's acceleration where the
+run keeps them, and the attributes a user reads first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from catenet.model import measures
+from catenet.model import summary
 from catenet.output.metadata import result_attrs
 
+PEAKS = (
+    "peak_tension",
+    "peak_tension_time",
+    "least_tension",
+    "peak_displacement",
+    "peak_displacement_time",
+)
 
-def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, accelerations: bool):
-    """Writes /result (replacing one there) for the Result ``res`` of ``scene`` with the
+
+def write_result_group(
+    h5,
+    scene,
+    res,
+    tension,
+    attrs: dict,
+    velocities: bool,
+    accelerations: bool,
+    name: str = "result",
+):
+    """Writes /result (or the group ``name`` in its layout, e.g. a load case's
+    cases/<name>; replacing one there) for the Result ``res`` of ``scene`` with the
     stored ``tension``; ``attrs`` add to its attributes. Returns the group."""
-    if "result" in h5:
-        del h5["result"]
-    g = h5.create_group("result")
+    if name in h5:
+        del h5[name]
+    g = h5.create_group(name)
     g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
     g.create_dataset("tension", data=tension)
     cables = getattr(scene, "cables", None)
     if cables is not None:
-        top, slack = measures.cable_stats(scene.net, res.x, tension, cables.edge, len(cables.names))
-        g.create_dataset("cable_max_tension", data=top)
-        g.create_dataset("cable_slack_fraction", data=slack)
+        per = summary.cable_summary(scene.net, res.x, tension, cables.edge, cables.names)
+        for key, dtype in (
+            ("max_tension", np.float64),
+            ("slack_fraction", np.float64),
+            ("max_compression", np.float64),
+            ("slack_edges", np.int64),
+        ):
+            g.create_dataset(f"cable_{key}", data=np.array([c[key] for c in per.values()], dtype))
+    peaks = getattr(res, "peaks", None)
+    if peaks is not None:
+        for key, value in peaks.arrays().items():
+            g.create_dataset(key, data=value)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
     contact = getattr(res, "contact_force", None)
@@ -35,6 +64,6 @@ def write_result_group(h5, scene, res, tension, attrs: dict, velocities: bool, a
     a = getattr(res, "a", None)
     if accelerations and a is not None and np.all(np.isfinite(a)):
         g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
-    for key, value in {**result_attrs(res, scene), **attrs}.items():
+    for key, value in {**result_attrs(res, scene, tension), **attrs}.items():
         g.attrs[key] = value
     return g

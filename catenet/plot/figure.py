@@ -20,6 +20,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output import read_result
+from catenet.plot.plan import draw_plan, draw_slack, slack_edges, wants_plan
 
 if TYPE_CHECKING:
     from matplotlib.colors import Colormap, Normalize
@@ -185,7 +186,10 @@ def figure(res, *, scale: float = 1.0):
     frame also the probe's deflection (positive down) against time (dynamic runs) or
     load factor (static runs in steps); for the paper's single-cable cases (``paper_curve``)
     that panel has the paper's axes and closed form, and the side view the closed-form
-    shape.
+    shape. A static run's curve starts at zero load; a graph's shows how far its probe
+    moves (|x - X|: a mast's top moves sideways). Slack edges (no tension, shorter
+    than their rest length) are dotted in their own colour; a graph gets a plan view
+    coloured by displacement with the reactions as arrows (``catenet.plot.plan``).
     """
     if not (math.isfinite(scale) and scale > 0):
         raise ConfigError(f"--scale = {scale!r}: must be a number > 0")
@@ -202,12 +206,13 @@ def figure(res, *, scale: float = 1.0):
     drawn = _Drawn.of(res, scale, Balls(res, scale), Obstacles(res))
     curve = paper_curve(res)
     series = res.series_delta is not None
-    fig = Figure(figsize=(15.5 if series else 11.0, 4.8), layout="constrained")
+    plan = wants_plan(res)
+    ncols = 2 + int(series) + int(plan)
+    fig = Figure(figsize=(4.6 + 5.3 * (ncols - 1), 4.8), layout="constrained")
     FigureCanvasAgg(fig)
     engine = fig.get_layout_engine()
     assert isinstance(engine, ConstrainedLayoutEngine)
     engine.set(wspace=0.12)  # room for the 3D view's z label
-    ncols = 3 if series else 2
     ax3 = fig.add_subplot(1, ncols, 1, projection="3d")
     ax2 = fig.add_subplot(1, ncols, 2)
     _view_3d(ax3, drawn)
@@ -217,7 +222,9 @@ def figure(res, *, scale: float = 1.0):
         cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
         cb.set_label(f"tension [N], {colours.t_min:.6g} to {colours.t_max:.6g}")
     if series:
-        _deflection(fig.add_subplot(1, ncols, 3), res, curve, drawn.balls)
+        _deflection(fig.add_subplot(1, ncols, 3), res, curve, drawn.balls, whole=plan)
+    if plan:
+        draw_plan(fig, fig.add_subplot(1, ncols, ncols), res, scale)
     status = ""
     if res.converged is False:
         status = " (NOT converged)"
@@ -285,6 +292,7 @@ class _Drawn:
     seg_ref: np.ndarray
     seg_def: np.ndarray
     colours: _Colours | None
+    slack: np.ndarray
     balls: Balls
     obstacles: Obstacles
     lo: np.ndarray
@@ -300,7 +308,10 @@ class _Drawn:
         colours = _Colours.of(res)
         lo, hi = _limits(seg_ref, seg_def, *balls.extent())
         lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
-        return cls(nodes, x, mesh.fixed, seg_ref, seg_def, colours, balls, obstacles, lo, hi)
+        slack = slack_edges(res)
+        return cls(
+            nodes, x, mesh.fixed, seg_ref, seg_def, colours, slack, balls, obstacles, lo, hi
+        )
 
     def deformed(self, lines) -> None:
         """Colours the deformed edges by tension (one colour without tensions)."""
@@ -320,6 +331,7 @@ def _view_3d(ax3, d: _Drawn) -> None:
     lines3 = Line3DCollection(d.seg_def, linewidths=1.4)
     d.deformed(lines3)
     ax3.add_collection3d(lines3)
+    draw_slack(ax3, d.seg_def, d.slack, three_d=True)
     lo, hi = d.lo, d.hi
     longest = float(np.max(hi - lo))
     mid, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.2 * longest)
@@ -357,6 +369,7 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     lines2 = LineCollection(deformed, linewidths=1.4, label="deformed", zorder=3)
     d.deformed(lines2)
     ax2.add_collection(lines2)
+    draw_slack(ax2, d.seg_def[:, :, [h, 2]], d.slack, three_d=False)
     if curve is not None and scale == 1.0:
         centre = 0.5 * (nodes[0] + nodes[-1])
         span = np.linspace(float(np.min(x[:, h])), float(np.max(x[:, h])), 301)
@@ -387,9 +400,10 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     return lines2
 
 
-def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls) -> None:
-    """The probe's deflection along the trajectory (against time or load factor), or the
-    paper's plot with its closed form."""
+def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls, *, whole: bool) -> None:
+    """The probe's deflection along the trajectory (against time or load factor; a static
+    run's from zero load), or the paper's plot with its closed form. ``whole``: a graph,
+    whose probe's whole displacement |x - X| is drawn (a mast's top moves sideways)."""
     ax_t.grid(True, lw=0.3)
     t, d = res.series_t, res.series_delta
     if curve is not None:
@@ -400,6 +414,11 @@ def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls) -> None:
         ax_t.set_title(curve.title)
         ax_t.legend(loc="best", fontsize="small")
         return
+    whole = whole and res.series_u is not None
+    if whole:
+        d = res.series_u
+    if res.method == "static" and len(t) and t[0] > 0:  # the curve from zero load
+        t, d = np.concatenate([[0.0], t]), np.concatenate([[0.0], d])
     ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
     if res.method == "dynamic":
         ax_t.set_xlabel("time t [s]")
@@ -410,5 +429,9 @@ def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls) -> None:
     else:
         ax_t.set_xlabel("/trajectory/time")
         ax_t.set_title("probe deflection along the trajectory")
-    ax_t.set_ylabel(f"deflection δ of node {res.probe} [m] (down)")
+    if whole:
+        ax_t.set_title(ax_t.get_title().replace("deflection", "displacement"))
+        ax_t.set_ylabel(f"displacement |x - X| of node {res.probe} [m]")
+    else:
+        ax_t.set_ylabel(f"deflection δ of node {res.probe} [m] (down)")
     balls.draw_series(ax_t)

@@ -27,7 +27,12 @@ class RunReport:
     estimated before the run (0 without a file); cables: per cable of a graph case
     (None for other nets); bodies: per free rigid body (its obstacle index): kind,
     first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
-    (``catenet.run.bodies.BodyWatch.stats``)."""
+    (``catenet.run.bodies.BodyWatch.stats``); summary: the summary's numbers
+    (``catenet.model.summary.summarize_result``: largest displacement, reactions, slack
+    edges, peaks, per cable, ...: the /result attributes and the sweep columns); cases:
+    per load case and combination its numbers (with ``converged`` and ``error``);
+    envelope: the extremes over the cases and the cases that give them
+    (``catenet.run.cases.governing``)."""
 
     delta: float
     size: float
@@ -38,6 +43,9 @@ class RunReport:
     trajectory_bytes: int = 0
     cables: dict[str, CableSummary] | None = None
     bodies: dict[int, dict] = field(default_factory=dict)
+    summary: dict = field(default_factory=dict)
+    cases: dict = field(default_factory=dict)
+    envelope: dict = field(default_factory=dict)
 
     @property
     def delta_over_L(self) -> float:

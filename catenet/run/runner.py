@@ -42,6 +42,7 @@ class RestartState:
     v: np.ndarray
     source: str
     a: np.ndarray | None = None
+    peaks: dict | None = None  # the earlier run's peaks up to t (None: not in the file)
 
 
 def output_path(case, out: str | Path | None = None) -> Path | None:
@@ -95,7 +96,10 @@ def read_restart(path: str | Path, scene) -> RestartState:
             "acceleration (not exactly as the uninterrupted run would)",
             label,
         )
-    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a)
+    from catenet.output.reader import read_peaks
+
+    peaks = read_peaks(path, frame.t)
+    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a, peaks)
 
 
 def _mesh_mismatch(mesh, net) -> list[str]:
@@ -137,8 +141,14 @@ def run_case(
     interrupt: Stop | None = None,
     scene=None,
     on_done: Callable | None = None,
+    load_case: str | None = None,
 ):
     """Builds, solves and writes a case; returns the Result.
+
+    A case with ``[[load_case]]`` or ``[[combination]]`` tables: the Result is the base
+    state's (/result), and ``result.cases`` holds each load case and combination solved
+    from it (``catenet.run.cases``: /cases/<name>/, /envelope/), ``result.report.cases``
+    their numbers; ``load_case`` names the only one to solve.
 
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
@@ -153,7 +163,9 @@ def run_case(
 
     The result (a ``RunResult``) carries a ``RunReport``: the probe's z-deflection
     ``delta`` (positive down), ``delta_over_L``, ``size``, ``probe``, ``output`` (the file
-    written, or None), warnings and per-cable statistics. ConvergenceError and
+    written, or None), warnings, per-cable statistics and the summary's numbers
+    (``catenet.model.summary.summarize_result``: ``max_displacement``, reactions, slack
+    edges, peaks, ...); ``result.peaks`` the peaks over every step. ConvergenceError and
     other run-time errors are re-raised after /result was written, with ``.output`` set
     to the file that holds it (None when none does).
 
@@ -162,9 +174,10 @@ def run_case(
     that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
     from catenet.case import build
-    from catenet.model import measures
+    from catenet.model import measures, summary
     from catenet.output import ResultWriter, check_output_path
     from catenet.run import advice
+    from catenet.run.cases import pick
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -178,6 +191,7 @@ def run_case(
         check_output_path(path)
         _probe_directory(path)
     scene = build(case) if scene is None else scene
+    cases = pick(scene, load_case)
     solver = case.solver
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
@@ -233,10 +247,13 @@ def run_case(
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
-    delta = measures.deflection(scene.net.nodes, result.x, scene.probe)
+    case_numbers, envelope = {}, {}
+    if cases:
+        case_numbers, envelope = _solve_cases(scene, settings, ws, result, cases, path, interrupt)
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
+    numbers = summary.summarize_result(scene, result)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables
         from catenet.solver.diagnose import describe_unstable
@@ -257,20 +274,41 @@ def run_case(
             for name, t, s in zip(cables.names, top, slack, strict=True)
         }
     report = RunReport(
-        delta=delta,
+        delta=float(numbers["delta"]),
         size=float(scene.size),
-        probe=int(scene.probe),
+        probe=int(numbers["probe"]),
         output=None if path is None else str(path),
         backend=backend,
         strain_warning=beyond or "",
         trajectory_bytes=0 if trajectory is None else trajectory.bytes,
         cables=per_cable if cables is not None else None,
         bodies=bodies,
+        summary=numbers,
+        cases=case_numbers,
+        envelope=envelope,
     )
     run = RunResult.of(result, report)
     if on_done is not None:
         on_done(scene, ws, run)
     return run
+
+
+def _solve_cases(scene, settings, ws, result, cases, path, interrupt) -> tuple[dict, dict]:
+    """The load cases from the base state ``result``, written to /cases and /envelope;
+    their summary numbers by name and the envelope (``governing``)."""
+    from catenet.run.cases import governing, solve_cases, write_cases
+
+    if not result.converged:
+        log.error("the base state did not converge: no load case is solved")
+        return {}, {}
+    result.cases = solve_cases(scene, settings, ws, result, cases, interrupt)
+    numbers = {
+        r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
+    }
+    envelope = governing(scene.net, result.cases)
+    if path is not None:
+        write_cases(path, scene, scene.case, result.cases)
+    return numbers, envelope
 
 
 def _run(
@@ -281,6 +319,7 @@ def _run(
     (a dict) receives the free rigid bodies' summary (``BodyWatch.stats``)."""
     bodies = {} if bodies is None else bodies
     from catenet.errors import Interrupted
+    from catenet.model.peaks import Peaks
     from catenet.run.bodies import BodyWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
@@ -337,9 +376,12 @@ def _run(
             return True
         return False
 
+    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
+    if state is not None and state.peaks is not None and peaks.seed(state.peaks):
+        log.info("--restart: the peaks go on from those of %s", state.path)
     try:
         with interruptible(interrupt), clock.solving():
-            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step)
+            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
     except CatenetError as exc:
         good = exc.last_good
         if isinstance(exc, ConfigError) or good is None:
@@ -375,6 +417,7 @@ def _run(
             wall_time=time.perf_counter() - begin,
             stats=ws.stats(),
             timing=_timing(clock),
+            peaks=peaks,
         )
         if stopped:  # within a step: like a stop between steps, not a failure
             log.info("interrupted during %s", "a time step" if dynamic else "a load step")

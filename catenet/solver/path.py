@@ -9,7 +9,10 @@ Static runs find the equilibria at load factors k/steps, k = 1..steps, each from
 last (a force-displacement curve; one step: the equilibrium directly). Dynamic runs are
 the paper's implicit Euler from a start state to t_end or to equilibrium. ``on_step``
 sees every equilibrium or time step as a ``Step``; returning True stops the run there
-(the result is then not converged, its message "interrupted"). A run that fails raises
+(the result is then not converged, its message "interrupted"). Every one of those states
+(and a dynamic run's start) goes to ``peaks`` (``catenet.model.peaks.Peaks``, a new one
+unless given), the result's ``peaks``: each edge's largest tension and each node's largest
+displacement over the whole run, not only over the frames a file keeps. A run that fails raises
 an error whose ``last_good`` (``catenet.errors.LastGood``: positions, velocities, time or
 load factor, steps, iterations) is the last good state, so that callers can keep it.
 """
@@ -24,6 +27,7 @@ import numpy as np
 
 from catenet.errors import CatenetError, ConfigError, ConvergenceError, LastGood
 from catenet.model.net import Loads, Net
+from catenet.model.peaks import Peaks
 from catenet.solver.loadsteps import continuation
 from catenet.solver.result import Outcome, Result
 from catenet.solver.settings import METHODS, Settings  # noqa: F401 (the path's face)
@@ -84,20 +88,27 @@ def solve(
     workspace: Workspace | None = None,
     start: Start | None = None,
     on_step: OnStep | None = None,
+    peaks: Peaks | None = None,
 ) -> Result:
-    """Solves ``scene`` as ``settings`` say (see the module docstring)."""
+    """Solves ``scene`` as ``settings`` say (see the module docstring). ``peaks``: where
+    the run's peaks accumulate (pass one to keep them when the run fails)."""
     ws = workspace if workspace is not None else globals()["workspace"](scene, settings)
     start = start or Start()
+    if peaks is None:
+        peaks = Peaks(scene.net.nodes, scene.net.n_edges)
     if settings.method == "dynamic":
-        return _dynamic(scene, settings, ws, start, on_step)
-    return _static(scene, settings, ws, start, on_step)
+        result = _dynamic(scene, settings, ws, start, on_step, peaks)
+    else:
+        result = _static(scene, settings, ws, start, on_step, peaks)
+    result.peaks = peaks
+    return result
 
 
 class _Stop(Exception):
     """Raised from the continuation's callback when on_step asks to stop."""
 
 
-def _static(scene, settings, ws, start, on_step) -> Result:
+def _static(scene, settings, ws, start, on_step, peaks) -> Result:
     begin = time.perf_counter()
     steps = settings.steps
     factors = [k / steps for k in range(1, steps + 1)]
@@ -106,6 +117,7 @@ def _static(scene, settings, ws, start, on_step) -> Result:
     def seen(factor: float, r: Result) -> None:
         done.append(r)
         r.time = factor
+        peaks.observe(factor, r.x, r.tension)
         if on_step is not None and on_step(Step(len(done), factor, r.x, None, r)):
             raise _Stop
 
@@ -151,7 +163,7 @@ def _static(scene, settings, ws, start, on_step) -> Result:
     return r
 
 
-def _dynamic(scene, settings, ws, start, on_step) -> Result:
+def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     from catenet.solver.dynamic import solve_dynamic
 
     net, loads = scene.net, scene.loads
@@ -163,6 +175,8 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
     last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy(), "rest": float("nan")}
     accel = np.zeros_like(x0) if settings.integrator == "newmark" else None
     last["a"] = None if start.a is None else np.array(start.a, dtype=np.float64)
+    tension = ws.system.tension
+    peaks.observe(start.t, x0, tension(x0))
 
     def rest(ratio: float) -> None:
         last["rest"] = ratio
@@ -170,6 +184,7 @@ def _dynamic(scene, settings, ws, start, on_step) -> Result:
     def seen(step: int, t: float, x, v) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
             raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
+        peaks.observe(t, x, tension(x))
         a = None if accel is None else accel.copy()
         last.update(steps=step, t=t, x=x.copy(), v=v.copy(), a=a)
         if on_step is None:

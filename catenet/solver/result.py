@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.model.net import Loads
+from catenet.model.peaks import Peaks
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
     from catenet.solver.system import System
@@ -81,6 +82,10 @@ class Result:
     timing : a whole run's solve and start-up seconds (``Timing``; None outside a run)
     diagnosis : what makes an unstable equilibrium unstable (``catenet.solver.diagnose``), or ""
     outcome : how the solve ended (``Outcome``); None where not known
+    peaks : each edge's largest tension and each node's largest displacement over every
+        time step or load step (``catenet.model.peaks.Peaks``); None where not followed
+    cases : the load cases and combinations solved from this (base) state, each a
+        ``catenet.run.cases.CaseRun`` (name, Result, summary numbers, error)
     """
 
     x: np.ndarray
@@ -104,6 +109,8 @@ class Result:
     diagnosis: str = ""
     outcome: Outcome | None = None
     timing: Timing | None = None
+    peaks: Peaks | None = None
+    cases: list = field(default_factory=list)
 
 
 def finish(

@@ -20,7 +20,12 @@ or other parameters is refused.
 Columns of the table: the swept keys (by key path, in the order given), then ``delta``
 (z-deflection of the scene's probe node, positive down) [m], ``delta_over_L``, ``F_bar``
 (|sum of the external nodal forces| / EA, = p L^2 / EA for the square net), ``max_strain``,
-``slack_edges`` (edges shorter than their rest length), ``iterations`` (Newton iterations
+``slack_edges`` (tension-only edges shorter than their rest length), the run summary's
+numbers (``catenet.model.summary.COLUMNS``, as ``catenet run`` prints them and writes them
+as /result attributes: ``max_displacement`` [m] and its node, ``max_tension`` [N] and its
+edge, ``max_compression`` [N], ``max_reaction`` [N] and its node, the resultants of the
+reactions and contact forces by component [N], ``peak_tension`` [N] and its time,
+``peak_displacement`` [m], ``probe``), ``iterations`` (Newton iterations
 of that load level), ``wall_time`` [s] (building the net and the workspace counts towards
 the first level of a job), ``converged``, ``error`` (empty on success), ``attempts`` (2
 when the job was retried after its worker process died) and ``run_file`` (the level's

@@ -20,12 +20,34 @@ from catenet.sweep.params import Param, params_from_table, parse_param
 
 log = logging.getLogger(__name__)
 
+# catenet.model.summary.COLUMNS (not imported here: it loads NumPy; a test checks them)
+SUMMARY_COLUMNS = (
+    "max_displacement",
+    "max_displacement_node",
+    "max_tension",
+    "max_tension_edge",
+    "max_compression",
+    "max_strain_edge",
+    "max_reaction",
+    "max_reaction_node",
+    "reaction_resultant_x",
+    "reaction_resultant_y",
+    "reaction_resultant_z",
+    "contact_resultant_x",
+    "contact_resultant_y",
+    "contact_resultant_z",
+    "peak_tension",
+    "peak_tension_time",
+    "peak_displacement",
+    "probe",
+)
 RESULT_COLUMNS = (
     "delta",
     "delta_over_L",
     "F_bar",
     "max_strain",
     "slack_edges",
+    *SUMMARY_COLUMNS,
     "iterations",
     "wall_time",
     "converged",
@@ -99,6 +121,7 @@ class Sweep:
     base_toml: str = ""
     base_resolved: dict = field(default_factory=dict)
     modes: int = 0  # the lowest natural frequencies per row, columns f1..fK [Hz]
+    load_case: str | None = None  # the [[load_case]] or [[combination]] each row reports
 
     @property
     def keys(self) -> list[str]:
@@ -133,6 +156,7 @@ class Sweep:
                 "base": self.base_resolved or self.base,
                 "params": [[p.key, list(p.values)] for p in self.params],
                 **({"modes": self.modes} if self.modes else {}),
+                **({"load_case": self.load_case} if self.load_case else {}),
             },
             sort_keys=True,
             default=str,
@@ -151,12 +175,19 @@ def mode_columns(count: int) -> list[str]:
     return [f"f{k}" for k in range(1, count + 1)]
 
 
-def load_sweep(path: str | Path, params: Sequence[str] = (), modes: int = 0) -> Sweep:
+def load_sweep(
+    path: str | Path,
+    params: Sequence[str] = (),
+    modes: int = 0,
+    load_case: str | None = None,
+) -> Sweep:
     """The sweep of a case file: its ``[sweep]`` table (``key.path = [values]``), if any,
     with the ``params`` (``"key.path=v1,v2"``) added; a key given in both takes the
     command line's values. Every combination is validated as a case (ConfigError listing
     the problems) before anything runs. ``modes`` K > 0: every row also gets the K
-    lowest natural frequencies about its equilibrium (columns f1..fK [Hz])."""
+    lowest natural frequencies about its equilibrium (columns f1..fK [Hz]).
+    ``load_case``: each row reports that load case or combination of the case, solved
+    from the row's base state."""
     from catenet.case import parse_toml, read_case_bytes
 
     path = Path(path)
@@ -176,7 +207,12 @@ def load_sweep(path: str | Path, params: Sequence[str] = (), modes: int = 0) -> 
         seen.add(p.key)
         merged[p.key] = p
     return make_sweep(
-        data, list(merged.values()), source=str(path), base_dir=path.parent, modes=modes
+        data,
+        list(merged.values()),
+        source=str(path),
+        base_dir=path.parent,
+        modes=modes,
+        load_case=load_case,
     )
 
 
@@ -187,6 +223,7 @@ def make_sweep(
     source: str = "<dict>",
     base_dir: Path | str = ".",
     modes: int = 0,
+    load_case: str | None = None,
 ) -> Sweep:
     """A sweep from base case data (a dict as read from TOML) and parameters; validates
     the base case and every combination with ``catenet.case.parse_case``; ``modes``: see
@@ -208,6 +245,14 @@ def make_sweep(
     from catenet.run.runner import refuse_formfind
 
     refuse_formfind(base_case)
+    if load_case is not None:
+        names = [c.name for c in (*base_case.load_cases, *base_case.combinations)]
+        if load_case not in names:
+            listed = ", ".join(map(repr, names)) or "none"
+            raise ConfigError(
+                f"--case {load_case!r}: no [[load_case]] or [[combination]] is named so "
+                f"(the case has: {listed})"
+            )
     sweep = Sweep(
         source=source,
         base_dir=str(base_dir.resolve()),
@@ -216,6 +261,7 @@ def make_sweep(
         base_toml=base_case.to_toml(),
         base_resolved=base_case.to_dict(),
         modes=modes,
+        load_case=load_case,
     )
     problems: list[str] = []
     for param in params:  # each value on its own first: one message per bad value

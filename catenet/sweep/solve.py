@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from catenet.errors import CatenetError, ConfigError
-from catenet.sweep.jobs import Job, Sweep, case_api, mode_columns, overrides
+from catenet.sweep.jobs import SUMMARY_COLUMNS, Job, Sweep, case_api, mode_columns, overrides
 
 log = logging.getLogger(__name__)
 
@@ -40,6 +40,7 @@ def make_task(
         "threads": threads,
         "crash_hook": crash_hook,
         "modes": sweep.modes,
+        "load_case": sweep.load_case,
     }
 
 
@@ -96,6 +97,10 @@ def nan_row() -> dict:
         "F_bar": nan,
         "max_strain": nan,
         "slack_edges": -1,
+        **{
+            key: (-1 if key.endswith(("_node", "_edge")) or key == "probe" else nan)
+            for key in SUMMARY_COLUMNS
+        },
         "iterations": 0,
         "wall_time": 0.0,
         "converged": False,
@@ -167,6 +172,8 @@ def _solve_levels(task: dict) -> list[dict]:
             result = _solve(parsed, scene, ws_net, ws, x0)
             x_prev = result.x
             path = path + [(level_of, result.x)] if level_of is not None else []
+            if task.get("load_case"):
+                result = _solve_case(parsed, scene, ws, result, task["load_case"])
             row.update(_measure(scene, ws_net, result, np))
             if task.get("modes"):
                 row.update(_frequencies(scene, ws, result, int(task["modes"])))
@@ -285,10 +292,28 @@ def _solve(case, scene, net, ws, x_prev):
     return r
 
 
-def _measure(scene, net, result, np) -> dict:
-    from catenet.model import measures
+def _solve_case(case, scene, ws, base, name: str):
+    """The load case or combination ``name`` solved from the level's base state."""
+    from catenet.errors import ConvergenceError
+    from catenet.run.cases import pick, solve_cases
+    from catenet.solver import path as sv
 
-    delta = measures.deflection(net.nodes, result.x, int(scene.probe))
+    (run,) = solve_cases(scene, sv.Settings.of(case.solver), ws, base, pick(scene, name))
+    if not run.converged:
+        raise ConvergenceError(f"load case {name}: {run.error}", state=base.x)
+    return run.result
+
+
+def _measure(scene, net, result, np) -> dict:
+    """The row of a level: the run's summary (``catenet.model.summary``, the numbers
+    ``catenet run`` prints and writes as /result attributes) and the paper's measures."""
+    import dataclasses
+
+    from catenet.model import summary
+
+    scene = dataclasses.replace(scene, net=net) if scene.net is not net else scene
+    numbers = summary.flat(summary.summarize_result(scene, result))
+    delta = numbers["delta"]
     force = scene.loads.external_force(net)
     EA = float(np.median(net.EA))
     return {
@@ -296,7 +321,8 @@ def _measure(scene, net, result, np) -> dict:
         "delta_over_L": delta / float(scene.size),
         "F_bar": float(np.linalg.norm(force.sum(axis=0))) / EA,
         "max_strain": float(result.max_strain),
-        "slack_edges": measures.slack_edges(net, result.x),
+        "slack_edges": numbers["slack_edges"],
+        **{key: numbers[key] for key in SUMMARY_COLUMNS},
         "iterations": int(result.iterations),
         "converged": bool(result.converged),
     }

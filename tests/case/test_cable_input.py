@@ -39,6 +39,8 @@ def test_results_per_cable_in_stats_file_and_summary(tmp_path):
     assert a.max_tension == pytest.approx(float(result.tension.max())) and a.max_tension > 100
     assert a.slack_fraction == 0.0
     assert b == CableSummary(max_tension=0.0, slack_fraction=1.0)
+    b_full = result.report.summary["cables"]["b"]
+    assert b_full["slack_edges"] > 0 and not b_full["strut"]  # every edge of b is slack
     with h5py.File(tmp_path / "r.h5") as h5:
         assert h5["mesh"].attrs["cable_names"].astype(str).tolist() == ["a", "b"]
         assert np.array_equal(h5["mesh/cable"][:], build(load_case(case_file)).cables.edge)

@@ -95,10 +95,12 @@ def toml_blocks(path: Path) -> list[tuple[int, str]]:
     return out
 
 
-def run_page(path: Path, directory: Path) -> None:
-    """Runs every step of ``path`` in ``directory`` (the current directory meanwhile)."""
+def run_page(path: Path, directory: Path) -> list[subprocess.CompletedProcess]:
+    """Runs every step of ``path`` in ``directory`` (the current directory meanwhile);
+    the commands' completed processes, in order (what they printed)."""
     env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
     where = page_id(path)
+    done_all = []
     for step in steps(path):
         if step.kind == "file":
             target = directory / step.name
@@ -117,9 +119,11 @@ def run_page(path: Path, directory: Path) -> None:
             text=True,
             timeout=900,
         )
+        done_all.append(done)
         context = f"{where}:{step.line}: $ {step.text}\n{done.stdout}\n{done.stderr}"
         if step.error is None:
             assert done.returncode == 0, context
         else:
             assert done.returncode == 2, context
             assert step.error in done.stderr, context
+    return done_all

@@ -3,10 +3,10 @@ succeed or fail with the message it shows."""
 
 from __future__ import annotations
 
-import h5py
-import numpy as np
 import shutil
 
+import h5py
+import numpy as np
 from pages import ROOT, run_page, steps
 
 PAGE = ROOT / "docs" / "guide" / "loads.md"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import math
 import sys
 import types
@@ -188,6 +189,10 @@ def test_plot_directory_goes_to_the_sweep_figures(tmp_path, monkeypatch):
         return [tmp_path / "a.png", tmp_path / "b.png"]
 
     monkeypatch.setitem(sys.modules, "catenet.study", types.SimpleNamespace(plot_sweep=plot_sweep))
+    # a sweep of the paper's square net (its figures and report), with no rows yet
+    header = {"catenet_sweep": 1, "params": [["geometry.n", [10]]], "columns": ["geometry.n"]}
+    header["base"] = {"geometry": {"kind": "square_net"}}
+    (tmp_path / "results.jsonl").write_text(json.dumps(header) + "\n")
     res = invoke("plot", str(tmp_path))
     assert res.exit_code == 0, res.output
     assert calls == [(tmp_path, None)]

@@ -67,7 +67,8 @@ class CableConfig(GeometryConfig):
         return None if BAD in v.values() else cls(**v)
 
     def estimate_size(self) -> tuple[float, float, float, str]:
-        return float(self.nodes), float(self.nodes - 1), 0.0, "geometry.nodes"
+        n = float(self.nodes) if self.nodes < 2**1000 else math.inf  # float() overflows
+        return n, n - 1.0, 0.0, "geometry.nodes"
 
     def _names(self) -> dict[str, int]:
         return {"start": 0, "end": self.nodes - 1, "midpoint": self.midpoint}

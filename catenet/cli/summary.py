@@ -1,0 +1,148 @@
+"""The lines ``catenet run`` prints after a run: the numbers of
+``catenet.model.summary`` (the same as the /result attributes and the sweep columns), in
+SI units, one quantity a line."""
+
+from __future__ import annotations
+
+import math
+
+W = 12  # the label column
+
+
+def vector(v) -> str:
+    """A 3-vector as [x, y, z] with 4 significant digits (components below 1e-12 of the
+    largest, round-off, as 0)."""
+    v = [float(c) for c in v]
+    big = max((abs(c) for c in v), default=0.0)
+    return "[" + ", ".join(f"{c if abs(c) > 1e-12 * big else 0.0:.4g}" for c in v) + "]"
+
+
+def _when(t: float, dynamic: bool) -> str:
+    if not math.isfinite(t):
+        return ""
+    return f"t = {t:.4g} s" if dynamic else f"load factor {t:.4g}"
+
+
+def _more(peak: float, final: float) -> bool:
+    """Whether a peak over the run is above the final value (beyond round-off)."""
+    return peak > final + 1e-12 * max(abs(peak), abs(final))
+
+
+def state_lines(s: dict, dynamic: bool, n_edges: int, warn_strain: bool = False) -> list[str]:
+    """The summary's lines for the numbers ``s`` (``summarize_result`` plus
+    ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors)."""
+    probe = s["probe"]
+    how = "the free node that moves most; " if s.get("probe_auto") else ""
+    lines = [
+        f"{'delta':<{W}} {s['delta']:.6g} m   delta/L = {s['delta_over_L']:.6g}   "
+        f"(node {probe}, {how}L = {s['size']:.6g} m; z-displacement, positive down)",
+        f"{'probe':<{W}} node {probe} moves {vector(s['probe_displacement'])} m",
+    ]
+    line = (
+        f"{'max displ.':<{W}} {s['max_displacement']:.6g} m at node "
+        f"{s['max_displacement_node']}: {vector(s['max_displacement_vector'])} m"
+    )
+    peak = s.get("peak_displacement")
+    if peak is not None and _more(peak, s["max_displacement"]):
+        line += (
+            f"; peak over the run {peak:.6g} m at node {s['peak_displacement_node']} "
+            f"({_when(s['peak_displacement_time'], dynamic)})"
+        )
+    lines.append(line)
+    edge = f" (edge {s['max_tension_edge']})" if s["max_tension_edge"] >= 0 else ""
+    strain = f" (edge {s['max_strain_edge']})" if s["max_strain_edge"] >= 0 else ""
+    lines.append(
+        f"{'max tension':<{W}} {s['max_tension']:.6g} N{edge}   max strain "
+        f"{s['max_strain']:.4g}{strain}"
+        + (" (beyond the material law's range: see the warning)" if warn_strain else "")
+    )
+    peak = s.get("peak_tension")
+    if peak is not None and _more(peak, s["max_tension"]):
+        lines.append(
+            f"{'peak tension':<{W}} {peak:.6g} N at {_when(s['peak_tension_time'], dynamic)} "
+            f"(edge {s['peak_tension_edge']}); the final state's max tension is "
+            f"{s['max_tension']:.6g} N"
+        )
+    if s.get("compressed_edges", 0):
+        n = s["compressed_edges"]
+        lines.append(
+            f"{'compression':<{W}} {s['max_compression']:.6g} N (edge "
+            f"{s['max_compression_edge']}; {n} strut{'' if n == 1 else 's'} in compression)"
+        )
+    lines.append(
+        f"{'slack':<{W}} {s['slack_edges']} of {n_edges} edges (tension-only, shorter than "
+        "their rest length)"
+    )
+    if s["max_reaction_node"] >= 0:
+        lines.append(
+            f"{'reactions':<{W}} resultant {vector(s['reaction_resultant'])} N; largest "
+            f"{s['max_reaction']:.6g} N at node {s['max_reaction_node']}"
+        )
+    if s.get("contact_nodes", 0):
+        lines.append(
+            f"{'contact':<{W}} resultant {vector(s['contact_resultant'])} N on "
+            f"{s['contact_nodes']} nodes; largest {s['max_contact']:.6g} N at node "
+            f"{s['max_contact_node']}"
+        )
+    for name, c in s.get("cables", {}).items():
+        lines.append(cable_line(name, c))
+    return lines
+
+
+def cable_line(name: str, c: dict) -> str:
+    """One cable's line: a tie's largest tension and slack share, a strut's compression."""
+    if c.get("strut"):
+        if c["max_compression"] > 0:
+            return f"{'cable':<{W}} {name}: a strut, compression {c['max_compression']:.6g} N"
+        return f"{'cable':<{W}} {name}: a strut, max tension {c['max_tension']:.6g} N"
+    line = (
+        f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N, "
+        f"slack {100 * c['slack_fraction']:.3g} % of its length"
+    )
+    if c.get("slack_edges"):
+        line += f" ({c['slack_edges']} slack edges)"
+    if c.get("max_compression", 0) > 0:
+        line += f", compression {c['max_compression']:.6g} N in its struts"
+    return line
+
+
+def envelope_lines(env: dict) -> list[str]:
+    """The envelope over the load cases: its extremes and the cases that give them."""
+    lines = []
+    for key, what, where, unit in (
+        ("tension_max", "largest tension", "edge", "N"),
+        ("tension_min", "least tension", "edge", "N"),
+        ("displacement_max", "largest displacement", "node", "m"),
+    ):
+        if key in env:
+            e = env[key]
+            value = e["value"]
+            if key == "tension_min" and value < 0:  # a strut: its compression
+                what, value = "largest compression", -value
+            lines.append(
+                f"{'envelope':<{W}} {what} {value:.6g} {unit} ({where} {e['at']}, {e['case']})"
+            )
+    return lines
+
+
+def cases_table(cases: dict, n_edges: int) -> list[str]:
+    """One row per load case and combination (``result.report.cases``): the largest
+    displacement and its node, the largest tension and its edge, the largest strut
+    compression, the slack edges and the largest reaction, SI units."""
+    head = (
+        f"{'load case':<16} {'max displ. [m]':>14} {'node':>6} {'max tension [N]':>15} "
+        f"{'edge':>6} {'compr. [N]':>11} {'slack':>6} {'max reaction [N]':>16}  converged"
+    )
+    rows = [head]
+    for name, s in cases.items():
+        rows.append(
+            f"{name:<16} {s['max_displacement']:>14.6g} {s['max_displacement_node']:>6} "
+            f"{s['max_tension']:>15.6g} {s['max_tension_edge']:>6} "
+            f"{s['max_compression']:>11.6g} {s['slack_edges']:>6} {s['max_reaction']:>16.6g}  "
+            + ("yes" if s["converged"] else f"no: {s['error']}")
+        )
+    rows.append(
+        f"{'':<16} (slack: edges of {n_edges}; each solved from the base state above; "
+        "results in /cases/<name>/, envelopes in /envelope/)"
+    )
+    return rows

@@ -1,0 +1,237 @@
+"""The numbers an engineer designs with, from one state (and the run's peaks): the one
+source of the run's printed summary, the /result attributes and the sweep table's columns.
+
+``summarize`` returns a flat dict of plain floats, ints and 3-vectors (lists), SI units:
+
+- ``max_displacement`` [m], ``max_displacement_node``, ``max_displacement_vector`` (3,):
+  the largest |x - X| of a free node of the net (not a support, not a body's centre);
+- ``probe``, ``probe_displacement`` (3,) [m], ``delta`` (its z-displacement, positive
+  down, the paper's) and ``probe_auto`` (True: no probe was named, and for a graph the
+  probe is the free node that moves most);
+- ``max_tension`` [N] (0 when no edge pulls) and ``max_tension_edge`` (-1: none);
+  ``max_compression`` [N] (> 0: the largest compression of a strut, an edge that is not
+  tension-only) and ``max_compression_edge``; ``compressed_edges`` (struts in compression);
+- ``max_strain`` (|e|/l0 - 1, 0 when none is stretched) and ``max_strain_edge``;
+- ``slack_edges``: tension-only edges shorter than their rest length (slack);
+- ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``;
+- ``contact_resultant`` (3,) [N], ``max_contact`` [N], ``contact_nodes`` (nodes touched);
+- with peaks: ``peak_tension`` [N], ``peak_tension_edge``, ``peak_tension_time`` (s, or
+  the load factor of a static run), ``peak_displacement`` [m], ``peak_displacement_node``,
+  ``peak_displacement_time``.
+
+``cable_summary`` gives the same per cable of a graph with cables.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from catenet.model import measures
+from catenet.model.net import Net
+
+# the summary's scalars a sweep table carries (``flat`` names: a vector's components)
+COLUMNS = (
+    "max_displacement",
+    "max_displacement_node",
+    "max_tension",
+    "max_tension_edge",
+    "max_compression",
+    "max_strain_edge",
+    "max_reaction",
+    "max_reaction_node",
+    "reaction_resultant_x",
+    "reaction_resultant_y",
+    "reaction_resultant_z",
+    "contact_resultant_x",
+    "contact_resultant_y",
+    "contact_resultant_z",
+    "peak_tension",
+    "peak_tension_time",
+    "peak_displacement",
+    "probe",
+)
+
+
+def flat(numbers: dict) -> dict:
+    """The summary's scalars, each 3-vector ``name`` split into ``name_x``, ``name_y``,
+    ``name_z`` (HDF5 attributes and table columns hold scalars); ``cables`` left out."""
+    out = {}
+    for key, value in numbers.items():
+        if key == "cables":
+            continue
+        if isinstance(value, list):
+            out.update({f"{key}_{a}": float(c) for a, c in zip("xyz", value, strict=True)})
+        else:
+            out[key] = value
+    return out
+
+
+def free_net_nodes(net: Net) -> np.ndarray:
+    """The free nodes of the net itself (a body's centre is no node of the net)."""
+    free = ~np.asarray(net.fixed, dtype=bool)
+    free[net.n_net :] = False
+    return np.flatnonzero(free)
+
+
+def displacement(net: Net, x: np.ndarray) -> np.ndarray:
+    """|x - X| of every node [m] from the reference positions X."""
+    d = np.asarray(x) - net.nodes
+    return np.sqrt(np.einsum("ij,ij->i", d, d))
+
+
+def most_moved(net: Net, x: np.ndarray) -> int:
+    """The free node of the net that moves most (-1 when none is free)."""
+    free = free_net_nodes(net)
+    if free.size == 0:
+        return -1
+    return int(free[np.argmax(displacement(net, x)[free])])
+
+
+def _argmax(values: np.ndarray, where: np.ndarray | None = None) -> int:
+    """Index of the largest value (among ``where``), -1 when there is none."""
+    idx = np.arange(len(values)) if where is None else np.flatnonzero(where)
+    if idx.size == 0:
+        return -1
+    return int(idx[np.argmax(np.asarray(values)[idx])])
+
+
+def _vector(v) -> list[float]:
+    return [float(c) for c in np.asarray(v, dtype=np.float64).reshape(3)]
+
+
+def summarize(
+    net: Net,
+    x: np.ndarray,
+    tension: np.ndarray,
+    reaction: np.ndarray | None,
+    contact: np.ndarray | None,
+    probe: int,
+    *,
+    probe_auto: bool = False,
+    peaks=None,
+) -> dict:
+    """The summary of state x (see the module docstring); ``peaks`` a
+    ``catenet.model.peaks.Peaks`` (or its ``arrays()``) of the run, or None."""
+    x = np.asarray(x, dtype=np.float64)
+    tension = np.asarray(tension, dtype=np.float64)
+    out: dict = {}
+    u = displacement(net, x)
+    free = np.zeros(net.n_nodes, bool)
+    free[free_net_nodes(net)] = True
+    k = _argmax(u, free)
+    out["max_displacement"] = float(u[k]) if k >= 0 else 0.0
+    out["max_displacement_node"] = k
+    out["max_displacement_vector"] = _vector(x[k] - net.nodes[k] if k >= 0 else np.zeros(3))
+    out["probe"] = int(probe)
+    out["probe_auto"] = bool(probe_auto)
+    out["probe_displacement"] = _vector(x[probe] - net.nodes[probe])
+    out["delta"] = measures.deflection(net.nodes, x, int(probe))
+    only = np.asarray(net.law.tension_only, dtype=bool)
+    e = _argmax(tension, tension > 0)
+    out["max_tension"] = float(tension[e]) if e >= 0 else 0.0
+    out["max_tension_edge"] = e
+    strut = (~only) & (tension < 0)
+    e = _argmax(-tension, strut)
+    out["max_compression"] = float(-tension[e]) if e >= 0 else 0.0
+    out["max_compression_edge"] = e
+    out["compressed_edges"] = int(np.count_nonzero(strut))
+    eps = measures.strain(net, x)
+    e = _argmax(eps, eps > 0)
+    out["max_strain"] = float(eps[e]) if e >= 0 else 0.0
+    out["max_strain_edge"] = e
+    out["slack_edges"] = int(np.count_nonzero(only & (eps < 0)))
+    out.update(_forces("reaction", reaction, x, net.fixed))
+    out.update(_forces("contact", contact, x, None))
+    if peaks is not None:
+        out.update(_peaks(peaks if isinstance(peaks, dict) else peaks.arrays(), free))
+    return out
+
+
+def _forces(name: str, force, x, where) -> dict:
+    """Resultant, largest and its node of a nodal force field (N, 3) (None: zero)."""
+    f = np.zeros_like(x) if force is None else np.asarray(force, dtype=np.float64)
+    size = np.linalg.norm(f, axis=1)
+    k = _argmax(size, (size > 0) if where is None else (np.asarray(where) & (size > 0)))
+    out = {
+        f"{name}_resultant": _vector(f.sum(axis=0)),
+        f"max_{name}": float(size[k]) if k >= 0 else 0.0,
+        f"max_{name}_node": k,
+    }
+    if name == "contact":
+        out["contact_nodes"] = int(np.count_nonzero(size > 0))
+    return out
+
+
+def _peaks(p: dict, free: np.ndarray) -> dict:
+    """The run's largest tension and displacement over time, where and when."""
+    top, when = p["peak_tension"], p["peak_tension_time"]
+    e = _argmax(top, np.isfinite(top))
+    u, u_when = p["peak_displacement"], p["peak_displacement_time"]
+    k = _argmax(u, free & np.isfinite(u))
+    return {
+        "peak_tension": float(max(top[e], 0.0)) if e >= 0 else 0.0,
+        "peak_tension_edge": e if e >= 0 and top[e] > 0 else -1,
+        "peak_tension_time": float(when[e]) if e >= 0 and top[e] > 0 else float("nan"),
+        "peak_displacement": float(u[k]) if k >= 0 else 0.0,
+        "peak_displacement_node": k,
+        "peak_displacement_time": float(u_when[k]) if k >= 0 else float("nan"),
+    }
+
+
+def cable_summary(net: Net, x, tension, edge_cable: np.ndarray, names) -> dict[str, dict]:
+    """Per cable (``edge_cable`` (M,): each edge's cable index, -1: none): ``max_tension``
+    (the largest axial force, negative for a strut in compression: SPEC's cable_max_tension),
+    ``max_compression`` (>= 0), ``slack_fraction`` (share of its unstressed length slack),
+    ``slack_edges`` (tension-only edges slack), ``strut`` (no edge of it is tension-only)."""
+    tension = np.asarray(tension, dtype=np.float64)
+    n = len(names)
+    top, slack = measures.cable_stats(net, x, tension, edge_cable, n)
+    on = edge_cable >= 0
+    c = edge_cable[on]
+    only = np.asarray(net.law.tension_only, dtype=bool)
+    loose = (measures.strain(net, x) < 0.0) & only
+    count = np.bincount(c, weights=loose[on].astype(float), minlength=n)
+    squeeze = np.zeros(n)
+    np.maximum.at(squeeze, c, np.where(only[on], 0.0, -tension[on]))
+    ties = np.bincount(c, weights=only[on].astype(float), minlength=n)
+    return {
+        str(name): {
+            "max_tension": float(top[k]),
+            "slack_fraction": float(slack[k]),
+            "max_compression": float(squeeze[k]),
+            "slack_edges": int(count[k]),
+            "strut": bool(ties[k] == 0),
+        }
+        for k, name in enumerate(names)
+    }
+
+
+def probe_of(scene, x: np.ndarray) -> tuple[int, bool]:
+    """The probe node of a scene's state x and whether it was chosen for it: the scene's
+    (``output.probe``, else its geometry's), or with ``scene.probe_auto`` (a graph without
+    ``output.probe``) the free node that moves most."""
+    if getattr(scene, "probe_auto", False):
+        k = most_moved(scene.net, x)
+        if k >= 0:
+            return k, True
+    return int(scene.probe), False
+
+
+def summarize_result(scene, res) -> dict:
+    """``summarize`` of a solver Result of a scene (net, probe, cables), with its peaks;
+    per cable under ``cables`` when the scene has cables."""
+    probe, auto = probe_of(scene, res.x)
+    out = summarize(
+        scene.net,
+        res.x,
+        res.tension,
+        res.reaction,
+        getattr(res, "contact_force", None),
+        probe,
+        probe_auto=auto,
+        peaks=getattr(res, "peaks", None),
+    )
+    cables = getattr(scene, "cables", None)
+    if cables is not None:
+        out["cables"] = cable_summary(scene.net, res.x, res.tension, cables.edge, cables.names)
+    return out

@@ -1,0 +1,117 @@
+"""The numbers an engineer reads after a run (``catenet.model.summary``): the same in
+``result.stats``, the /result attributes, the printed summary and the sweep table."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from catenet.case import build, load_case, parse_case
+from catenet.cli import main
+from catenet.run.runner import run_case
+from tests.conftest import CONFIGS
+
+MAST = CONFIGS / "structures" / "guyed_mast.toml"
+
+
+def test_guyed_mast_summary_reads_as_an_engineer_expects(tmp_path):
+    """The mast (configs/structures/guyed_mast.toml): the top moves most (the default
+    probe of a graph, said so), its strut is reported in compression, the reactions
+    balance the 10 kN load, and the file's attributes hold the same numbers."""
+    case = load_case(MAST)
+    scene = build(case)
+    result = run_case(case, tmp_path / "m.h5")
+    s = result.report.summary
+    net, x = scene.net, result.x
+    u = np.linalg.norm(x - net.nodes, axis=1)
+    top = 1
+    assert s["max_displacement_node"] == top and s["max_displacement"] == u[top]
+    assert s["max_displacement_vector"] == list(x[top] - net.nodes[top])
+    assert s["probe"] == top and s["probe_auto"] is True
+    assert s["probe_displacement"] == s["max_displacement_vector"]
+    assert s["max_displacement_vector"][0] > 1e-2  # it moves downwind
+    assert s["delta"] == pytest.approx(-(x[top, 2] - net.nodes[top, 2]), rel=1e-12)
+    # The strut: compression, not a negative "max tension" nor a slack cable.
+    strut = int(np.flatnonzero(~net.law.tension_only)[0])
+    assert s["max_compression_edge"] == strut and s["max_compression"] == -result.tension[strut]
+    assert s["max_compression"] == pytest.approx(64e3, rel=1e-2)
+    assert s["compressed_edges"] == 1 and s["slack_edges"] == 0
+    assert s["max_tension"] == result.tension.max() > 0
+    assert s["max_tension_edge"] == int(np.argmax(result.tension))
+    mast = s["cables"]["mast"]
+    assert mast["strut"] and mast["max_compression"] == s["max_compression"]
+    assert not s["cables"]["guy_windward"]["strut"]
+    # Reactions + loads = 0: the resultant is minus the 10 kN top load.
+    assert np.allclose(s["reaction_resultant"], [-10e3, 0.0, 0.0], atol=1e-6 * 10e3)
+    size = np.linalg.norm(result.reaction, axis=1)
+    assert s["max_reaction"] == size.max() and s["max_reaction_node"] == int(np.argmax(size))
+    assert s["contact_nodes"] == 0 and s["contact_resultant"] == [0.0, 0.0, 0.0]
+    eps = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1) / net.rest_length - 1
+    assert s["max_strain_edge"] == int(np.argmax(eps)) and s["max_strain"] == eps.max()
+    with h5py.File(tmp_path / "m.h5") as h5:
+        a = dict(h5["result"].attrs)
+        assert h5["result/cable_max_compression"][0] == mast["max_compression"]
+        assert h5["result/cable_slack_edges"][:].tolist() == [0, 0, 0, 0, 0]
+    for key in ("max_displacement", "max_displacement_node", "max_compression", "probe"):
+        assert a[key] == s[key], key
+    assert [a[f"reaction_resultant_{c}"] for c in "xyz"] == s["reaction_resultant"]
+    assert [a[f"max_displacement_vector_{c}"] for c in "xyz"] == s["max_displacement_vector"]
+
+
+def test_printed_summary_names_struts_slack_and_the_probe(tmp_path):
+    r = CliRunner().invoke(main, ["run", str(MAST), "-o", str(tmp_path / "m.h5")])
+    assert r.exit_code == 0, r.output
+    out = r.output
+    assert "(node 1, the free node that moves most;" in out
+    assert "mast: a strut, compression 6" in out and "mast: max tension" not in out
+    assert "compression " in out and "1 strut in compression" in out
+    assert "slack        0 of 21 edges" in out
+    assert "reactions    resultant [-1e+04, 0, " in out
+    assert "max displ.   0.0173" in out and "m at node 1: [0.01736, 0, " in out
+    assert "peak tension" not in out  # a static load that only grows peaks at the end
+
+
+def test_slack_edges_are_counted_per_cable(tmp_path):
+    """Two cables of one span: one pulled by a point load, the other's support moved 0.8 m
+    towards its anchor, so that every one of its 4 edges hangs slack; the summary counts
+    them, per cable too, and prints them."""
+    data = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [4, 0, 0], [0, 1, 0], [4, 1, 0]],
+            "edge_length": 1.0,
+            "sets": {"moved": [3]},
+            "cable": [
+                {"name": "taut", "nodes": [0, 1], "prestress": 100.0},
+                {"name": "loose", "nodes": [2, 3]},
+            ],
+            "fixed": [0, 1, 2, 3],
+        },
+        "supports": {"move": [{"node": "moved", "displacement": [-0.8, 0, 0]}]},
+        "material": {"EA": 1e5},
+        "load": {"point": [{"cable": "taut", "at": 0.5, "force": [0, 0, -10.0]}]},
+    }
+    result = run_case(parse_case(data), tmp_path / "s.h5")
+    s = result.report.summary
+    assert s["slack_edges"] == 4
+    assert s["cables"]["loose"]["slack_edges"] == 4 and s["cables"]["taut"]["slack_edges"] == 0
+    assert s["cables"]["loose"]["slack_fraction"] == 1.0
+    assert s["compressed_edges"] == 0 and s["max_compression"] == 0.0
+
+
+def test_contact_totals_close_the_equilibrium(tmp_path):
+    """A net pressed onto a sphere: reactions + contact forces + loads = 0, and the
+    summary's resultants say so."""
+    case = load_case(CONFIGS / "contact" / "net_on_sphere.toml")
+    scene = build(case)
+    result = run_case(case, tmp_path / "s.h5")
+    s = result.report.summary
+    load = scene.loads.external_force(scene.net).sum(axis=0)
+    total = np.add(s["reaction_resultant"], s["contact_resultant"]) + load
+    assert np.allclose(total, 0.0, atol=1e-6 * np.abs(load).max())
+    assert s["contact_nodes"] > 0 and s["contact_resultant"][2] > 0.1 * abs(load[2])
+    size = np.linalg.norm(result.contact_force, axis=1)
+    assert s["max_contact"] == size.max() and s["max_contact_node"] == int(np.argmax(size))
+    assert s["probe_auto"] is False  # a square net keeps the paper's centre node
