@@ -110,11 +110,14 @@ class Pattern:
 
     def spread(self, w: np.ndarray) -> np.ndarray:
         """C_f^T w: per free node, the sum of w over its edges (+ at the second end)."""
-        out = np.zeros((self.n_free, *w.shape[1:]))
         on_a, on_b = self.a >= 0, self.b >= 0
-        np.add.at(out, self.b[on_b], w[on_b])
-        np.subtract.at(out, self.a[on_a], w[on_a])
-        return out
+        n, flat = self.n_free, w.reshape(len(w), -1)
+        out = np.empty((n, flat.shape[1]))
+        for c in range(flat.shape[1]):  # bincount: a sum per node, far faster than add.at
+            out[:, c] = np.bincount(self.b[on_b], flat[on_b, c], n) - np.bincount(
+                self.a[on_a], flat[on_a, c], n
+            )
+        return out.reshape((n, *w.shape[1:]))
 
     def gather(self, z: np.ndarray) -> np.ndarray:
         """C_f z: per edge, z at its second free end minus z at its first (0 if fixed)."""

@@ -130,9 +130,12 @@ def strain_energy(law, params, table, k, eps, tension_only, smooth):
 @njit(cache=True, error_model="numpy")
 def strain_for_force(law, params, table, target):
     """The strain at which the law carries N/EA = ``target`` (NaN where none does): Newton
-    on w'(eps) = target, safeguarded by bisection on a bracket grown from 0."""
+    on w'(eps) = target, safeguarded by bisection on a bracket grown from 0. The linear
+    law's w'(eps) = eps gives the strain at once."""
     if target == 0.0:
         return 0.0
+    if law == LINEAR:
+        return target
     lo, hi = 0.0, 0.0
     step = abs(target) if abs(target) < 0.5 else 0.5
     if target > 0.0:
