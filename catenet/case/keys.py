@@ -42,6 +42,13 @@ MISSING: Any = _Marker("missing")
 
 # --------------------------------------------------------------------------- values
 
+#: The largest magnitude of a number in a case: EA, loads, coordinates and their products
+#: must stay far below the 1.8e308 of double precision (squares of forces, energies).
+MAGNITUDE = 1e100
+#: The largest count (steps, iterations, threads, nodes asked for by number) a key takes:
+#: beyond it a run would not finish.
+MAX_COUNT = 10**9
+
 
 def show(value: Any, limit: int = 72) -> str:
     """A value as it reads in a message: repr, TOML-like for dates, shortened."""
@@ -79,6 +86,16 @@ def as_int(v: Any) -> int | None:
     if f is not None and math.isfinite(f) and f == int(f):
         return int(f)
     return None
+
+
+def carried(f: float) -> bool:
+    """A float the arithmetic carries: finite and within +-MAGNITUDE."""
+    return math.isfinite(f) and abs(f) <= MAGNITUDE
+
+
+def too_large() -> str:
+    """What a number must stay within, as messages say it."""
+    return f"+-{MAGNITUDE:.0e} (beyond, the arithmetic of forces and energies overflows)"
 
 
 def duplicates(values: list[int]) -> list[int]:
@@ -143,14 +160,20 @@ class Checker:
         ok = ok and (gt is None or f > gt) and (ge is None or f >= ge) and (lt is None or f < lt)
         if not ok:
             return self.bad(path, v, f"must be {need}")
+        if abs(f) > MAGNITUDE:
+            return self.bad(path, v, f"must be {need} and within {too_large()}")
         return f
 
-    def integer(self, v: Any, path: str, *, ge: int, even: bool = False) -> Any:
+    def integer(
+        self, v: Any, path: str, *, ge: int, even: bool = False, le: int = MAX_COUNT
+    ) -> Any:
         if v is BAD:
             return BAD
         i = as_int(v)
         if i is None or i < ge or (even and i % 2):
             return self.bad(path, v, f"must be an {'even ' if even else ''}integer >= {ge}")
+        if i > le:
+            return self.bad(path, v, f"must be at most {le:.0e}: more would never finish")
         return i
 
     def boolean(self, v: Any, path: str) -> Any:
@@ -188,6 +211,8 @@ class Checker:
         out = [as_float(c) for c in v]
         if any(c is None or not math.isfinite(c) for c in out):
             return self.bad(path, v, need)
+        if any(abs(c) > MAGNITUDE for c in out):
+            return self.bad(path, v, f"{need}, each within {too_large()}")
         return tuple(out)
 
     def node_ref(self, v: Any, path: str, kind: Any) -> Any:
@@ -284,9 +309,11 @@ def real(default: Any = REQUIRED, *, gt=None, ge=None, lt=None, need: str = "", 
     return key(check, f"a number, {need}", default, **kw)
 
 
-def integer(default: Any = REQUIRED, *, ge: int, even: bool = False, **kw) -> Any:
+def integer(
+    default: Any = REQUIRED, *, ge: int, even: bool = False, le: int = MAX_COUNT, **kw
+) -> Any:
     def check(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-        return ck.integer(v, path, ge=ge, even=even)
+        return ck.integer(v, path, ge=ge, even=even, le=le)
 
     return key(check, f"an {'even ' if even else ''}integer >= {ge}", default, **kw)
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.keys import MAGNITUDE, Checker, Declared, choice, real, text, vec3
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 
@@ -270,8 +270,8 @@ def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndar
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
         raise ValueError(f"holds no triangles (it has {found}): a mesh obstacle is a surface")
     points = np.asarray(mesh.points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
-        raise ValueError(f"its points (shape {points.shape}) must be finite 3D points")
+    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.abs(points) <= MAGNITUDE):
+        raise ValueError(f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}")
     V, T = closed_surface(points, np.concatenate(tris))
     V.setflags(write=False)
     T.setflags(write=False)

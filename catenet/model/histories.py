@@ -59,8 +59,8 @@ def history_problem(points) -> str:
                 f = float(v)
             except OverflowError:
                 f = math.inf
-            if not math.isfinite(f):
-                return f"point {k} = {_show(p)}: must be finite numbers"
+            if not (math.isfinite(f) and abs(f) <= 1e100):  # catenet.case.keys.MAGNITUDE
+                return f"point {k} = {_show(p)}: must be finite numbers within +-1e+100"
             pair.append(f)
         rows.append(pair)
     for k in range(1, len(rows)):

@@ -58,14 +58,18 @@ __all__ = [
 
 def open_result(path: str | Path):
     """Opens a result file for reading with h5py: normally, or, for the file of a run that
-    was killed or whose disk filled up while writing (HDF5 refuses it: "file is already
-    open for write", "truncated file"), in SWMR read mode, which reads it as it was at its
-    last flush."""
+    was killed while writing in place (HDF5 refuses it: "file is already open for write"),
+    in SWMR read mode, which reads it as it was at its last flush. A truncated or damaged
+    file raises OSError at once."""
     import h5py
 
     try:
         return h5py.File(path, "r")
     except OSError as exc:
+        # Only a file that HDF5 calls open for write is read in SWMR mode: a truncated or
+        # damaged one would make SWMR's reader retry its metadata for ever.
+        if "already open for write" not in str(exc):
+            raise
         try:
             return h5py.File(path, "r", libver=LIBVER, swmr=True)
         except OSError:

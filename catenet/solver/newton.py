@@ -298,6 +298,9 @@ def solve(
         if not math.isfinite(gnorm):
             reason = "non-finite residual"
             break
+        if not (math.isfinite(tol) and math.isfinite(scale)):  # never "converged" against inf
+            reason = f"non-finite tolerance (load scale {scale:.3g} N): the arithmetic overflows"
+            break
         if gnorm <= tol:  # which criterion held: the tolerance, or the floor above it
             target = rtol * scale if atol is None else atol
             reason = "converged" if gnorm <= target else "converged (round-off floor)"
@@ -411,7 +414,7 @@ def solve(
             continue
         good = good + 1 if (alpha >= 1.0 and rho > 0.75) else 0
         c = _update_regularisation(c, alpha, rho, good, potential, g)
-    converged = reason.startswith("converged")
+    converged = reason.startswith("converged") and math.isfinite(gnorm) and math.isfinite(tol)
     target = rtol * scale if atol is None else atol
     if converged and gnorm > target and math.isfinite(gnorm):
         # The round-off floor, not the tolerance, ended the run: one more Newton step

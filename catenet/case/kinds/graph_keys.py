@@ -8,12 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from catenet.case.keys import BAD, Checker, Context, as_float, as_int, duplicates
+from catenet.case.keys import BAD, Checker, Context, as_float, as_int, carried, duplicates
 
 
 def finite(c: Any) -> float | None:
     f = as_float(c)
-    return f if f is not None and math.isfinite(f) else None
+    return f if f is not None and carried(f) else None
 
 
 def index(c: Any) -> int | None:

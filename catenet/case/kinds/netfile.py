@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet.case.keys import Checker
+from catenet.case.keys import Checker, carried, too_large
 
 log = logging.getLogger(__name__)
 
@@ -163,13 +163,13 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
         try:
             if table == "nodes":
                 xyz = [float(c) for c in cells]
-                if not all(map(np.isfinite, xyz)):
+                if not all(map(carried, xyz)):
                     raise ValueError
                 tables["nodes"].append(xyz + [0.0] * (3 - width))
             else:
                 tables["edges"].append([int(c) for c in cells])
         except ValueError:
-            need = "finite numbers" if table == "nodes" else "node indices (0, 1, ...)"
+            need = f"finite numbers within {too_large()}" if table == "nodes" else "node indices (0, 1, ...)"
             ck.add(f"{label}: line {lineno}: {shown!r}: the {table} table holds {need}")
             return None
         if table == "edges":
