@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from catenet.model.limits import MAGNITUDE, MAX_COUNT, carried, too_large  # noqa: F401
+
 
 class _Marker:
     def __init__(self, name: str) -> None:
@@ -41,13 +43,6 @@ MISSING: Any = _Marker("missing")
 
 
 # --------------------------------------------------------------------------- values
-
-#: The largest magnitude of a number in a case: EA, loads, coordinates and their products
-#: must stay far below the 1.8e308 of double precision (squares of forces, energies).
-MAGNITUDE = 1e100
-#: The largest count (steps, iterations, threads, nodes asked for by number) a key takes:
-#: beyond it a run would not finish.
-MAX_COUNT = 10**9
 
 
 def show(value: Any, limit: int = 72) -> str:
@@ -86,16 +81,6 @@ def as_int(v: Any) -> int | None:
     if f is not None and math.isfinite(f) and f == int(f):
         return int(f)
     return None
-
-
-def carried(f: float) -> bool:
-    """A float the arithmetic carries: finite and within +-MAGNITUDE."""
-    return math.isfinite(f) and abs(f) <= MAGNITUDE
-
-
-def too_large() -> str:
-    """What a number must stay within, as messages say it."""
-    return f"+-{MAGNITUDE:.0e} (beyond, the arithmetic of forces and energies overflows)"
 
 
 def duplicates(values: list[int]) -> list[int]:
