@@ -18,6 +18,7 @@ from pathlib import Path
 from catenet.errors import ConfigError
 
 __all__ = [
+    "check_output_dir",
     "check_output_path",
     "copy_atomically",
     "describe",
@@ -37,6 +38,14 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     text = str(path)
     if not text.strip():
         raise ConfigError(f"{what} = {text!r}: must be a file path")
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:  # bytes that are not UTF-8 (os.fsdecode's surrogates)
+        raise ConfigError(
+            f"{what} {text!r}: holds bytes that are not UTF-8 text: HDF5 and XDMF files name "
+            "their paths in UTF-8; rename it"
+        ) from None
+    _check_name_lengths(p, what)
     if p.is_dir():
         raise ConfigError(f"{what} {text!r}: is a directory: give a file path such as out/run.h5")
     if p.suffix.lower() == ".xdmf":
@@ -44,6 +53,10 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
             f"{what} {text!r}: .xdmf is the name of the ParaView sidecar: give the HDF5 file, "
             "such as out/run.h5"
         )
+    for beside, name in ((p.with_suffix(".xdmf"), "its XDMF sidecar"), (spare_paths(p)[0], "")):
+        if beside.is_dir() and beside != p:
+            name = name or f"its hidden spare {beside.name}"
+            raise ConfigError(f"{what} {text!r}: {name} {str(beside)!r} is a directory")
     if p.exists() or p.is_symlink():
         if not p.is_file():
             raise ConfigError(f"{what} {text!r}: exists and is not a regular file")
@@ -61,6 +74,46 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ConfigError(f"{what} {text!r}: cannot write in {parent} (permission denied)")
     return p
+
+
+def check_output_dir(path: str | Path, *, what: str = "output directory") -> Path:
+    """Checks, without creating anything, that the directory ``path`` can be made or
+    written in: no name in it too long, no regular file on the way, permission to write.
+    Raises ConfigError naming the path; returns the path."""
+    p = Path(path)
+    text = str(path)
+    if not text.strip():
+        raise ConfigError(f"{what} = {text!r}: must be a directory path")
+    _check_name_lengths(p / "results.h5", what)
+    here = p.absolute()
+    while not (here.exists() or here.is_symlink()):
+        here = here.parent
+    if not here.is_dir():
+        raise ConfigError(f"{what} {text!r}: {str(here)!r} is not a directory")
+    if not os.access(here, os.W_OK | os.X_OK):
+        raise ConfigError(f"{what} {text!r}: cannot write in {str(here)!r} (permission denied)")
+    return p
+
+
+def _check_name_lengths(p: Path, what: str) -> None:
+    """ConfigError when the file's name, or the hidden spare's beside it, or a directory
+    on the way, is longer than the file system takes."""
+    parent = p.absolute().parent
+    limit = 255
+    while parent != parent.parent:
+        try:
+            limit = os.pathconf(parent, "PC_NAME_MAX")
+            break
+        except (OSError, ValueError):  # missing yet, or a name too long itself
+            parent = parent.parent
+    longest = max(len(os.fsencode(part)) for part in p.parts) if p.parts else 0
+    spare = len(os.fsencode(spare_paths(p)[0].name))
+    if max(longest, spare) > limit:
+        raise ConfigError(
+            f"{what} {str(p)!r}: a name in it is too long for the file system (at most "
+            f"{limit - len('..spare')} bytes for the file, whose hidden spare .NAME.spare "
+            f"must fit in {limit})"
+        )
 
 
 def describe(exc: BaseException) -> str:

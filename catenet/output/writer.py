@@ -222,7 +222,7 @@ class ResultWriter:
             if name != "catenet" and ver:
                 h5.attrs[f"{name}_version"] = ver
         for key, value in self.attrs.items():
-            h5.attrs[key] = value
+            h5.attrs[key] = _utf8(value)
         mesh = h5.create_group("mesh")
         mesh.create_dataset("nodes", data=np.asarray(net.nodes, dtype=np.float64))
         mesh.create_dataset("edges", data=np.asarray(net.edges, dtype=np.int64))
@@ -526,3 +526,11 @@ class ResultWriter:
                 remove_spares(self.path)
             except OSError as exc:
                 log.warning("%s: cannot remove the spare copy: %s", self._spare, describe(exc))
+
+
+def _utf8(value):
+    """A string attribute as UTF-8 text: the bytes of a path that are not UTF-8 (the
+    surrogates of os.fsdecode) written as \\xNN escapes; other values as they are."""
+    if isinstance(value, str):
+        return os.fsencode(value).decode("utf-8", "backslashreplace")
+    return value

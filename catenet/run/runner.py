@@ -68,7 +68,19 @@ def read_restart(path: str | Path, scene) -> RestartState:
         raise ConfigError([f"--restart: {p}" for p in exc.problems]) from None
     except OSError as exc:
         raise ConfigError(f"{label}: cannot be read: {exc}") from None
-    problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
+    try:
+        problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
+    except (TypeError, ValueError) as exc:  # /mesh datasets that are not numbers
+        if isinstance(exc, ConfigError):
+            raise
+        problems = [f"its /mesh is damaged or not a catenet result file's ({exc})"]
+    shape = scene.net.nodes.shape
+    for name, arr in (("positions", frame.x), ("velocities", frame.v)):
+        if arr is not None and arr.shape != shape:
+            problems.append(
+                f"its stored {name} ({frame.source}) have shape {arr.shape}: the case's net "
+                f"needs {shape}: restart with the case that wrote it"
+            )
     if problems:
         raise ConfigError([f"{label}: {p}" for p in problems])
     if frame.v is None:
@@ -111,6 +123,9 @@ def _mesh_mismatch(mesh, net) -> list[str]:
         problems.append("its rest lengths differ from the case's")
     if not np.array_equal(fixed.astype(bool), net.fixed):
         problems.append("its supports differ from the case's")
+    EA = mesh.EA
+    if EA is not None and (EA.shape != net.EA.shape or not np.allclose(EA, net.EA, rtol=1e-12)):
+        problems.append("its axial stiffnesses EA differ from the case's")
     return problems
 
 

@@ -108,6 +108,9 @@ def run_sweep(
             raise ConfigError(f"--save-runs: needs catenet.output.ResultWriter: {exc}") from None
     jobs = sweep.jobs
     summary = SweepSummary(out, len(jobs), sweep.n_rows)
+    from catenet.output.files import check_output_dir
+
+    check_output_dir(out, what="sweep directory")
     client = connect_dask(scheduler) if scheduler else None  # before DIR exists
     try:
         out.mkdir(parents=True, exist_ok=True)
