@@ -10,6 +10,7 @@ holds the next version; both are removed when the run ends, and by ``catenet rep
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shutil
@@ -26,6 +27,7 @@ __all__ = [
     "publish",
     "remove_spares",
     "spare_paths",
+    "WriteLock",
 ]
 
 
@@ -114,6 +116,66 @@ def _check_name_lengths(p: Path, what: str) -> None:
             f"{limit - len('..spare')} bytes for the file, whose hidden spare .NAME.spare "
             f"must fit in {limit})"
         )
+
+
+class WriteLock:
+    """The lock a writer of ``path`` holds while the file is being written: an exclusive
+    ``flock`` on ``.NAME.lock`` beside it, which the kernel releases when the process
+    ends however it ends, so a killed run never blocks the next. A second run (or
+    ``catenet repair``) on the same file is refused with a ConfigError instead of both
+    writing the one spare. Where the file system has no locks, nothing is locked."""
+
+    def __init__(self, path: str | Path):
+        p = Path(path)
+        self.target = p
+        self.path = p.with_name(f".{p.name}.lock")
+        self.fd: int | None = None
+
+    def acquire(self) -> WriteLock:
+        try:
+            import fcntl
+        except ImportError:  # not POSIX: no locks
+            return self
+        for _ in range(20):  # a lock file removed by its holder meanwhile: try the new one
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError:
+                return self  # cannot even create it: the writer will say why
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise ConfigError(
+                        f"output file {str(self.target)!r}: another catenet process is writing "
+                        "it now: wait for it to end or give another file (-o)"
+                    ) from None
+                return self  # no locks on this file system
+            try:
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except OSError:
+                same = False
+            if same:
+                self.fd = fd
+                return self
+            os.close(fd)
+        return self
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        try:
+            self.path.unlink(missing_ok=True)  # while still held: the next one makes its own
+        except OSError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self) -> WriteLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
 
 
 def describe(exc: BaseException) -> str:

@@ -17,9 +17,16 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.output.files import remove_spares
+from catenet.output.files import WriteLock, remove_spares
 from catenet.output.obstacles import grids as obstacle_grids
-from catenet.output.reader import LIBVER, TRAJECTORY, open_result, trajectory_length
+from catenet.output.reader import (
+    DAMAGED,
+    LIBVER,
+    TRAJECTORY,
+    damaged,
+    open_result,
+    trajectory_length,
+)
 from catenet.output.xdmf import VIEWS, sidecar_path, view_sources, write_views, write_xdmf
 
 __all__ = ["Repair", "recover", "repair"]
@@ -173,10 +180,14 @@ def repair(path: str | Path) -> Repair:
                 )
     except OSError as exc:
         raise ConfigError(f"{path}: cannot be read, even as a killed run's file: {exc}") from None
-    problems = _problems(p)
-    if problems:
-        recover(p)
-    side = write_sidecar_for(p)
-    with open_result(p) as h5:
-        frames = trajectory_length(h5)
-    return Repair(p, frames, bool(problems), problems, side, remove_spares(p))
+    with WriteLock(p):  # not while a run writes it
+        try:
+            problems = _problems(p)
+            if problems:
+                recover(p)
+            side = write_sidecar_for(p)
+            with open_result(p) as h5:
+                frames = trajectory_length(h5)
+        except DAMAGED as exc:
+            raise damaged(path, exc) from None
+        return Repair(p, frames, bool(problems), problems, side, remove_spares(p))

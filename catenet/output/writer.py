@@ -37,6 +37,7 @@ from catenet.model import measures
 from catenet.output.bodies import write_bodies
 from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (
+    WriteLock,
     check_output_path,
     copy_atomically,
     describe,
@@ -134,6 +135,7 @@ class ResultWriter:
         self.error: BaseException | None = None  # a failed write: frames stop there
         self.saved_to: Path | None = None  # where the result went instead
         self._spare, self._prev = spare_paths(self.path)
+        self._lock = WriteLock(self.path)
         self._pending: list[tuple[float, dict]] = []
         self._pending_bytes = 0
         self._open = False
@@ -182,10 +184,12 @@ class ResultWriter:
                 f"output file {str(self.path)!r}: cannot create its directory: "
                 f"{exc.strerror or exc}"
             ) from None
+        self._lock.acquire()  # a second writer of the same file is refused here
         remove_spares(self.path)  # left by a killed run
         try:
             h5 = h5py.File(self._spare, "w", libver=LIBVER)
         except OSError as exc:
+            self._lock.release()
             raise ConfigError(
                 f"output file {str(self.path)!r}: cannot be created: {describe(exc)}"
             ) from None
@@ -197,6 +201,7 @@ class ResultWriter:
             copy_atomically(self._spare, self.path)
         except OSError as exc:
             self._abandon()
+            self._lock.release()
             raise OutputError(f"{self.path}: cannot be written: {describe(exc)}") from None
         self._open = True
         # A sidecar left from an earlier run of this file would now lie: remove it.
@@ -526,6 +531,7 @@ class ResultWriter:
                 remove_spares(self.path)
             except OSError as exc:
                 log.warning("%s: cannot remove the spare copy: %s", self._spare, describe(exc))
+            self._lock.release()
 
 
 def _utf8(value):
