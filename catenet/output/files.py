@@ -178,6 +178,50 @@ class WriteLock:
         self.release()
 
 
+def write_image(path: Path, build, libver) -> None:
+    """Builds an HDF5 file in memory (``build(h5)`` fills it) and writes its bytes to
+    ``path`` with plain file I/O: a full disk is then an OSError and the partial file is
+    removed, where HDF5 writing to the disk itself would fail in its destructors and crash
+    the process."""
+    import io
+
+    import h5py
+
+    buf = io.BytesIO()
+    with h5py.File(buf, "w", libver=libver) as h5:
+        build(h5)
+    try:
+        with open(path, "wb") as f:
+            f.write(buf.getbuffer())
+    except OSError:
+        Path(path).unlink(missing_ok=True)
+        raise
+
+
+def header_bytes(net) -> int:
+    """About the bytes of a result file before its first frame: the mesh's arrays (nodes,
+    edges, rest lengths, EA, supports) and HDF5's own structures."""
+    return 16 * 1024 + 40 * (int(net.n_nodes) + int(net.n_edges))
+
+
+def check_free_space(path: str | Path, need: int) -> None:
+    """OSError (ENOSPC) when the file system of ``path`` has fewer than ``need`` bytes free:
+    HDF5 itself fails badly when the disk fills while a file is created."""
+    here = Path(path).absolute().parent
+    while not here.exists() and here != here.parent:
+        here = here.parent
+    try:
+        free = shutil.disk_usage(here).free
+    except OSError:
+        return
+    if free < need:
+        raise OSError(
+            errno.ENOSPC,
+            f"No space left on device ({free} bytes free, at least {need} needed)",
+            str(path),
+        )
+
+
 def describe(exc: BaseException) -> str:
     """A one-line account of an I/O error (HDF5's messages span lines and name buffers)."""
     text = str(exc)

@@ -38,11 +38,14 @@ from catenet.output.bodies import write_bodies
 from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (
     WriteLock,
+    check_free_space,
     check_output_path,
     copy_atomically,
     describe,
     detach,
+    header_bytes,
     publish,
+    write_image,
     remove_spares,
     spare_paths,
 )
@@ -174,8 +177,6 @@ class ResultWriter:
     # --- opening ---------------------------------------------------------------------------
     def open(self) -> None:
         """Creates the file (and missing parent directories) with the mesh."""
-        import h5py
-
         check_output_path(self.path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -186,20 +187,17 @@ class ResultWriter:
             ) from None
         self._lock.acquire()  # a second writer of the same file is refused here
         remove_spares(self.path)  # left by a killed run
+
+        def header(h5) -> None:
+            self._write_header(h5)
+            if self.every > 0:
+                self._create_trajectory(h5)
+
         try:
-            h5 = h5py.File(self._spare, "w", libver=LIBVER)
-        except OSError as exc:
-            self._lock.release()
-            raise ConfigError(
-                f"output file {str(self.path)!r}: cannot be created: {describe(exc)}"
-            ) from None
-        try:
-            with h5:
-                self._write_header(h5)
-                if self.every > 0:
-                    self._create_trajectory(h5)
+            check_free_space(self.path, 2 * header_bytes(self.scene.net))
+            write_image(self._spare, header, LIBVER)  # a full disk: OSError, not a crash
             copy_atomically(self._spare, self.path)
-        except OSError as exc:
+        except (OSError, RuntimeError) as exc:
             self._abandon()
             self._lock.release()
             raise OutputError(f"{self.path}: cannot be written: {describe(exc)}") from None
@@ -499,19 +497,20 @@ class ResultWriter:
         self.obstacles.write_result(group, float(getattr(res, "time", math.nan)))
 
     def _save_elsewhere(self, res, attrs: dict) -> Path:
-        import h5py
-
         fd, name = tempfile.mkstemp(prefix=f"{self.path.stem}-", suffix=".h5")
         os.close(fd)
         tmp = Path(name)
+
+        def build(h5) -> None:
+            self._write_header(h5)
+            h5.attrs["note"] = (
+                f"saved here because writing {self.path} failed ({describe(self.error)}); "
+                f"the trajectory ({self.frames} frames) is in that file"
+            )
+            self._write_result(h5, res, attrs)
+
         try:
-            with h5py.File(tmp, "w", libver=LIBVER) as h5:
-                self._write_header(h5)
-                h5.attrs["note"] = (
-                    f"saved here because writing {self.path} failed ({describe(self.error)}); "
-                    f"the trajectory ({self.frames} frames) is in that file"
-                )
-                self._write_result(h5, res, attrs)
+            write_image(tmp, build, LIBVER)
         except Exception:
             tmp.unlink(missing_ok=True)
             raise

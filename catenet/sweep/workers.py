@@ -81,12 +81,35 @@ def _worker_environment(threads: int):
                 os.environ[k] = v
 
 
-def _init_worker(threads: int) -> None:
+def _init_worker(threads: int, parent: int | None = None) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     for k in THREAD_VARIABLES:
         os.environ[k] = str(threads)
+    if parent is not None:
+        die_with_parent(parent)
+
+
+def die_with_parent(parent: int) -> None:
+    """Asks Linux to kill this process when its parent ends (PR_SET_PDEATHSIG), so that a
+    sweep whose parent is killed (SIGKILL: no chance to stop its pool) leaves no worker
+    behind; the resource tracker then ends too (its last pipe closes). Ends at once if
+    the parent is already gone. Elsewhere, nothing."""
+    import signal
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it ended before the request was made
+        os._exit(1)
 
 
 def run_pool(todo: list, task, recorder, workers: int, running: Path) -> None:
@@ -118,7 +141,7 @@ def run_pool(todo: list, task, recorder, workers: int, running: Path) -> None:
         env.__enter__()
         try:
             pool = ProcessPoolExecutor(
-                width, mp_context=ctx, initializer=_init_worker, initargs=(threads,)
+                width, mp_context=ctx, initializer=_init_worker, initargs=(threads, os.getpid())
             )
         except BaseException:
             env.__exit__(None, None, None)
