@@ -10,7 +10,6 @@ analyse the unfound starting geometry): form-find it first, then run the case it
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 

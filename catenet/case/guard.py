@@ -75,9 +75,7 @@ def guard_scales(case: Any, net: Any, loads: Any) -> None:
     material = _given(case.material, ("E", "radius", "area", "EA", "table"), "material")
     ea = np.abs(net.EA)
     if ea.size and not float(ea.max()) <= MAGNITUDE:
-        problems.append(
-            f"{material}: EA = {float(ea.max()):.3g} N: must be within {too_large()}"
-        )
+        problems.append(f"{material}: EA = {float(ea.max()):.3g} N: must be within {too_large()}")
     nodes = net.nodes
     extent = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0))) if len(nodes) else 0.0
     extent = max(extent, float(np.max(net.rest_length, initial=0.0)))

@@ -271,7 +271,9 @@ def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndar
         raise ValueError(f"holds no triangles (it has {found}): a mesh obstacle is a surface")
     points = np.asarray(mesh.points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.abs(points) <= MAGNITUDE):
-        raise ValueError(f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}")
+        raise ValueError(
+            f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}"
+        )
     V, T = closed_surface(points, np.concatenate(tris))
     V.setflags(write=False)
     T.setflags(write=False)

@@ -45,9 +45,9 @@ from catenet.output.files import (
     detach,
     header_bytes,
     publish,
-    write_image,
     remove_spares,
     spare_paths,
+    write_image,
 )
 from catenet.output.metadata import environment
 from catenet.output.obstacles import Obstacles

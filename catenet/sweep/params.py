@@ -20,6 +20,7 @@ from catenet.errors import ConfigError
 LOAD_PREFIX = "load."
 MAX_VALUES = 100_000
 
+
 def _power(a, b):
     """a ** b, in floating point unless both are integers with a result of at most
     MAX_BITS bits (so that ``9**9**9`` is an overflow, not hours of big-integer work)."""
@@ -292,9 +293,7 @@ def _param_from_table(key: str, raw) -> Param:
     values: list = []
     for item in raw:
         if _has_datetime(item):
-            raise ConfigError(
-                f"{where}: {_show(item)}: dates and times are not parameter values"
-            )
+            raise ConfigError(f"{where}: {_show(item)}: dates and times are not parameter values")
         if isinstance(item, str):
             try:
                 values.extend(_string_item(item))

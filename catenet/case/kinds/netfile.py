@@ -169,7 +169,11 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
             else:
                 tables["edges"].append([int(c) for c in cells])
         except ValueError:
-            need = f"finite numbers within {too_large()}" if table == "nodes" else "node indices (0, 1, ...)"
+            need = (
+                f"finite numbers within {too_large()}"
+                if table == "nodes"
+                else "node indices (0, 1, ...)"
+            )
             ck.add(f"{label}: line {lineno}: {shown!r}: the {table} table holds {need}")
             return None
         if table == "edges":
