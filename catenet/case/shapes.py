@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.case.keys import MAGNITUDE, Checker, Declared, choice, real, text, vec3
+from catenet.case.meshfiles import read_mesh_file
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 
@@ -254,17 +255,13 @@ def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndar
     from catenet.terms.shapes import closed_surface
 
     try:
-        import meshio
+        mesh = read_mesh_file(file)
     except ImportError:
         raise ValueError(
             "reading a mesh obstacle needs the Python package meshio (pip install meshio)"
         ) from None
-    try:
-        with np.errstate(over="ignore"):  # meshio's binary-STL size test on ASCII files
-            mesh = meshio.read(file)
-    except Exception as exc:  # meshio raises many kinds for a file it cannot read
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ValueError(f"meshio cannot read it: {reason}") from None
+    except ValueError as exc:
+        raise ValueError(f"meshio cannot read it: {exc}") from None
     tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
     if not tris:
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"

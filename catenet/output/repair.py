@@ -157,6 +157,17 @@ def _problems(path: Path) -> list[str]:
         return problems
 
 
+def _readable(p: Path, path) -> None:
+    try:
+        with open_result(p) as h5:
+            if "mesh" not in h5 or "nodes" not in h5["mesh"] or "edges" not in h5["mesh"]:
+                raise ConfigError(
+                    f"{path}: has no /mesh/nodes and /mesh/edges: not a catenet result file"
+                )
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read, even as a killed run's file: {exc}") from None
+
+
 def repair(path: str | Path) -> Repair:
     """Makes a result file open in every reader: rewrites it (``recover``) when ordinary
     HDF5 readers refuse it, it has incomplete frames or lacks the sidecar's views;
@@ -172,16 +183,9 @@ def repair(path: str | Path) -> Repair:
             raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
     except OSError as exc:
         raise ConfigError(f"{path}: cannot be read: {exc}") from None
-    try:
-        with open_result(p) as h5:
-            if "mesh" not in h5 or "nodes" not in h5["mesh"] or "edges" not in h5["mesh"]:
-                raise ConfigError(
-                    f"{path}: has no /mesh/nodes and /mesh/edges: not a catenet result file"
-                )
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read, even as a killed run's file: {exc}") from None
     with WriteLock(p):  # not while a run writes it
         try:
+            _readable(p, path)
             problems = _problems(p)
             if problems:
                 recover(p)

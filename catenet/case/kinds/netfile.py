@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.case.keys import Checker, carried, too_large
+from catenet.case.meshfiles import read_mesh_file
 
 log = logging.getLogger(__name__)
 
@@ -196,18 +197,15 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
 
 def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
     try:
-        import meshio
+        mesh = read_mesh_file(path)
     except ImportError:
         ck.add(
             f"{label}: reading {path.suffix} files needs the Python package meshio, which "
             "is not installed (pip install meshio), or give the graph as JSON or OBJ"
         )
         return None
-    try:
-        mesh = meshio.read(path)
-    except Exception as exc:  # meshio raises many kinds for a file it cannot read
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        ck.add(f"{label}: meshio cannot read it: {reason}")
+    except ValueError as exc:
+        ck.add(f"{label}: meshio cannot read it: {exc}")
         return None
     lines = [c.data for c in mesh.cells if c.type == "line"]
     if not lines:
