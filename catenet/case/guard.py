@@ -64,6 +64,26 @@ def _given(section: Any, names: tuple[str, ...], prefix: str) -> str:
     return ", ".join(parts) or prefix
 
 
+def guard_material(case: Any) -> None:
+    """ConfigError when the material's EA (E times the cross-section) or mass per length
+    (density times it) is beyond MAGNITUDE, naming the keys given; before any net is built."""
+    mat = case.material
+    problems = []
+    ea = mat.axial_stiffness
+    if ea is not None and not abs(ea) <= MAGNITUDE:
+        keys = _given(mat, ("E", "radius", "area", "EA", "table"), "material")
+        problems.append(f"{keys}: EA = {ea:.3g} N: must be within {too_large()}")
+    if not abs(mat.line_density) <= MAGNITUDE:
+        keys = _given(mat, ("density", "radius", "area"), "material")
+        problems.append(
+            f"{keys}: mass per length {mat.line_density:.3g} kg/m: must be within {too_large()}"
+        )
+    if problems:
+        from catenet.errors import ConfigError
+
+        raise ConfigError(problems)
+
+
 def guard_scales(case: Any, net: Any, loads: Any) -> None:
     """ConfigError when the scene's numbers, each within MAGNITUDE, combine into forces
     or energies the arithmetic cannot carry: EA (from E and the cross-section), the

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.bodies import add_bodies
-from catenet.case.guard import guard_scales
+from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
@@ -54,6 +54,7 @@ def build(case: Case) -> Scene:
 
 
 def _build(case: Case) -> Scene:
+    guard_material(case)
     mat = case.material
     ea = mat.axial_stiffness
     material = geo.Material(

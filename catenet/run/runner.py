@@ -235,8 +235,8 @@ def run_case(
             )
         except CatenetError as exc:
             exc.output = path if writer.has_result else None
-            if isinstance(exc, ConfigError) and writer.frames == 0:
-                _remove(writer)  # bad input found late: leave nothing behind
+            if isinstance(exc, ConfigError):
+                _remove(writer)  # bad input found late (exit 2): leave nothing behind
             raise
     delta = measures.deflection(scene.net.nodes, result.x, scene.probe)
     beyond = advice.strain_beyond_law(scene.net, result.x)
