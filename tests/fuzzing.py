@@ -368,7 +368,7 @@ def judge(result, work: Path, before: set[Path] = frozenset()) -> Outcome:
     if code == 2:
         if NUMPY_REPR.search(out):
             return Outcome("numpy repr", out[-300:])
-        if "error" not in out:
+        if "error" not in out.lower():
             return Outcome("unclear message", out[-300:])
         made = [p for p in new if p.is_file()]
         if made:

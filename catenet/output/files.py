@@ -109,13 +109,17 @@ def _check_name_lengths(p: Path, what: str) -> None:
         except (OSError, ValueError):  # missing yet, or a name too long itself
             parent = parent.parent
     longest = max(len(os.fsencode(part)) for part in p.parts) if p.parts else 0
-    spare = len(os.fsencode(spare_paths(p)[0].name))
-    if max(longest, spare) > limit:
+    extra = len(HIDDEN_LONGEST.format(name=""))
+    if max(longest, len(os.fsencode(p.name)) + extra) > limit:
         raise ConfigError(
             f"{what} {str(p)!r}: a name in it is too long for the file system (at most "
-            f"{limit - len('..spare')} bytes for the file, whose hidden spare .NAME.spare "
-            f"must fit in {limit})"
+            f"{limit - extra} bytes for the file, whose hidden copies beside it, such as "
+            f"{HIDDEN_LONGEST.format(name='NAME')}, must fit in {limit})"
         )
+
+
+#: The longest name of the hidden files beside a result file (the spare's copy).
+HIDDEN_LONGEST = "..{name}.spare.copy"
 
 
 class WriteLock:
