@@ -1,0 +1,18 @@
+"""The guide pages' examples (docs/guide/*.md) run as written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from pages import page_steps, run_page
+
+GUIDE = Path(__file__).resolve().parents[2] / "docs" / "guide"
+
+
+@pytest.mark.parametrize("page", ["reliability.md"])
+def test_guide_page_runs_as_written(tmp_path, page):
+    steps = page_steps(GUIDE / page)
+    assert any(kind == "file" for kind, _, _ in steps)
+    assert sum(1 for _, _, error in steps if error) >= 3  # the refusals it shows
+    assert run_page(GUIDE / page, tmp_path) >= 6
