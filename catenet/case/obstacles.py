@@ -199,8 +199,15 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
                 widths.append(wide)
                 wide /= STAGE_SHRINK
         kappa = stiffness(dhat)
-        if not math.isfinite(kappa):
-            raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
+        if not (math.isfinite(kappa) and kappa > 0):
+            key = next(
+                (n for n in ("stiffness", "distance") if getattr(obs, n, None) is not None),
+                "accuracy",
+            )
+            raise ConfigError(
+                f"obstacle[{k}].{key} = {show(getattr(obs, key, None))}: the barrier's stiffness "
+                f"would be {kappa:.3g} N/m: give a larger distance (or a finite stiffness)"
+            )
         first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
         term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
         term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)

@@ -286,3 +286,18 @@ def test_bad_input_found_once_the_file_is_open_leaves_nothing(tmp_path):
     )  # fmt: skip
     assert result.exit_code == 2 and "material.density" in text, text
     assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
+
+
+@pytest.mark.parametrize("name", ["sphere_catch.toml", "net_on_sphere.toml"])
+def test_a_denormal_barrier_distance_is_named(tmp_path, name):
+    """obstacle.distance = 5e-324 made the barrier's stiffness infinite: a ValueError
+    from the ball's term (the long fuzz run found it)."""
+    from fuzzing import CONFIGS
+
+    case = (CONFIGS / "contact" / name).read_text()
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "obstacle.0.distance=5e-324",
+        "--set", "solver.t_end=0.1", case=case,
+    )  # fmt: skip
+    assert result.exit_code == 2, text
+    assert "obstacle[0].distance = 5e-324: the barrier's stiffness would be inf" in text
