@@ -346,10 +346,9 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
                 keep(good.steps, t, x, good.v, force=True, a=good.a)
             except CatenetError:
                 pass
-        history = getattr(exc, "history", None)
-        residual = float(history[-1]) if history else float("inf")
-        if not dynamic:  # the residual of the state kept, not of the failed solve's iterate
-            residual = _static_residual(ws, scene, x, t)
+        # The residual of the state kept (a dynamic run's: its static part under the loads
+        # at its time), not of the failed solve's iterate, which may not even be finite.
+        residual = _static_residual(ws, scene, x, t, dynamic)
         res = finish(
             ws.system,
             scene.loads,
@@ -387,11 +386,15 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
     return res
 
 
-def _static_residual(ws, scene, x, factor: float) -> float:
-    """|grad E - f| over the free DOFs at x under the loads at ``factor`` [N]."""
+def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
+    """|grad E - f| over the free DOFs at x under the loads at load factor ``at`` (a
+    dynamic run's: at time ``at``) [N]."""
     net = scene.net
     _, grad = ws.system.gradient(x)
-    force = scene.loads.external_force(net, factor)
+    if dynamic:
+        force = scene.loads.external_force(net, time=at)
+    else:
+        force = scene.loads.external_force(net, at)
     return float(np.linalg.norm((grad - force)[~net.fixed]))
 
 

@@ -301,3 +301,26 @@ def test_a_denormal_barrier_distance_is_named(tmp_path, name):
     )  # fmt: skip
     assert result.exit_code == 2, text
     assert "obstacle[0].distance = 5e-324: the barrier's stiffness would be inf" in text
+
+
+def test_a_far_node_of_a_cable_graph(tmp_path):
+    """A mooring line's fairlead moved to x = 1e99 (the quick tier found it): the cable
+    split into 2e99 edges was cast to int64 garbage and built; now the size guard refuses
+    it. A dynamic run that fails keeps a finite /result residual (it stored inf)."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["geometry"]["nodes"][1][0] = 1e99
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2 and "the net would have about 4e+99 nodes" in text, text
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "solver.max_iter=1",
+        "--set", "solver.rtol=1e-300", case=SMALL,
+    )  # fmt: skip
+    if result.exit_code == 1:
+        with h5py.File(tmp_path / "o.h5") as h5:
+            assert math.isfinite(h5["result"].attrs["residual"])
+    assert judge(result, tmp_path).good
