@@ -285,8 +285,9 @@ def mutate_result(src: Path, dst: Path, rng: random.Random) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-class Hang(Exception):
-    """A command that did not end within its time."""
+class Hang(BaseException):
+    """A command that did not end within its time (a BaseException: catenet's handlers of
+    unexpected exceptions must not take it for one of the command's own)."""
 
 
 @dataclass

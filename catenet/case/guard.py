@@ -4,6 +4,7 @@ forces, extent), which the arithmetic must carry."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from catenet.case.keys import MAGNITUDE, Checker, show, too_large
@@ -52,6 +53,8 @@ def guard_size(ck: Checker, geometry: GeometryConfig) -> None:
 #: energy) a scene may reach: their squares and sums stay finite in double precision.
 FORCE_SCALE = 1e150
 ENERGY_SCALE = 1e250
+#: The largest ratio of the node forces to the smallest EA (a strain scale).
+RATIO = 1e150
 
 
 def _given(section: Any, names: tuple[str, ...], prefix: str) -> str:
@@ -108,6 +111,12 @@ def guard_scales(case: Any, net: Any, loads: Any) -> None:
             f"{material}: the edges' stiffness EA / rest length (up to {stiff:.3g} N/m) over "
             f"the net's extent ({extent:.3g} m) makes forces of {stiff * extent:.3g} N: "
             f"beyond {FORCE_SCALE:.0e} the arithmetic overflows; check the units"
+        )
+    ea_min = float(np.min(ea, initial=math.inf))
+    if not problems and f_max > 0 and not f_max <= RATIO * ea_min:
+        problems.append(
+            f"{material}: EA = {ea_min:.3g} N against node forces of up to {f_max:.3g} N: "
+            f"their ratio is beyond {RATIO:.0e} (strains no arithmetic carries); check the units"
         )
     if not (f_max <= FORCE_SCALE and f_max * extent <= ENERGY_SCALE):
         load = _given(case.load, ("pressure", "gravity", "points", "lines"), "load")

@@ -82,6 +82,7 @@ def test_truncated_result_files_fail_fast(dynamic_file, tmp_path, fraction):
         (["solver.steps=1e300", "solver.method=static"], "solver.steps = 1e+300"),
         (["solver.dt=1e-300"], "solver.dt = 1e-300"),
         (["load.gravity=[0, 0, -1e300]"], "load.gravity = [0, 0, -1e+300]"),
+        (["material.E=1e-320"], "material.E = 1e-320, material.radius = 0.01: EA = 4.94e-324"),
     ],
 )
 def test_numbers_beyond_the_arithmetic_name_their_key(tmp_path, sets, key):
