@@ -1,5 +1,5 @@
-"""Running a Markdown page of the documentation as a user would: its ```toml blocks whose
-first line is ``# NAME`` are written to NAME, its shell lines (``$ ...`` in plain code
+"""Running a Markdown page of the documentation as a user would: a block right after the
+line ``<!-- file: NAME -->`` is written to NAME, its shell lines (``$ ...`` in plain code
 blocks) run in order in one scratch directory. A command whose next line shows
 ``catenet: error: ...`` must fail with exit status 2 and that message (the start of it);
 every other command must succeed."""
@@ -22,20 +22,26 @@ def page_steps(path: Path) -> list[tuple[str, str, str | None]]:
     steps: list[tuple[str, str, str | None]] = []
     lines = path.read_text().splitlines()
     fence = None
+    name = None  # the file the next block goes to
     block: list[str] = []
     for i, line in enumerate(lines):
+        marker = re.match(r"^<!-- file: (\S+) -->$", line)
+        if marker and fence is None:
+            name = marker.group(1)
+            continue
         if line.startswith("```"):
             if fence is None:
                 fence, block = line[3:].strip(), []
                 continue
-            if fence == "toml" and block and block[0].startswith("# "):
-                steps.append(("file", block[0][2:].strip(), "\n".join(block[1:]) + "\n"))
+            if name is not None:
+                steps.append(("file", name, "\n".join(block) + "\n"))
+                name = None
             fence = None
             continue
         if fence is None:
             continue
         block.append(line)
-        if fence in ("", "console", "bash", "sh") and line.startswith("$ "):
+        if name is None and fence in ("", "console", "bash", "sh") and line.startswith("$ "):
             command = re.sub(r"\s+#.*$", "", line[2:]).strip()
             following = lines[i + 1] if i + 1 < len(lines) else ""
             error = following if following.startswith("catenet: error:") else None
