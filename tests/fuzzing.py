@@ -84,6 +84,8 @@ HOSTILE = [
 COUNTS = ["steps", "max_iter", "nodes", "n", "every", "threads"]
 HUGE_COUNTS = [10**9, 10**12, 1e300, 2**62, 10**6 + 1]
 NUMPY_REPR = re.compile(r"np\.(float|int|bool|str)\w*\(|array\(\[|dtype=")
+#: What catenet says when a run (or a sweep's rows) failed: exit 1.
+FAILED = re.compile(r"catenet: (error|did not converge)|error:|rows failed or did not converge")
 HIDDEN = re.compile(r"^\..*\.(spare|prev|copy|lock)$")
 
 
@@ -375,7 +377,7 @@ def judge(result, work: Path, before: set[Path] = frozenset()) -> Outcome:
         if made:
             return Outcome("leftover", f"exit 2 and {made[0].name} written")
         return Outcome("bad input", out.strip().splitlines()[-1][:200] if out.strip() else "")
-    if code == 1 and not re.search(r"catenet: (error|did not converge)|error:", out):
+    if code == 1 and not re.search(FAILED, out):
         return Outcome("unclear message", out[-300:])
     for path in new:
         bad = nonfinite(path)
