@@ -141,9 +141,19 @@ def _check_shapes(path: Path, mesh, states: list[Frame]) -> None:
                     f"{path}: {name} of {f.source} frame {f.index} has shape "
                     f"{np.shape(value)}: the mesh needs {shape} (a damaged file)"
                 )
-    for name, value in (("rest_length", mesh.rest_length), ("EA", mesh.EA)):
-        if value is not None and np.shape(value) != (m,):
-            raise ConfigError(f"{path}: /mesh/{name} has shape {np.shape(value)}: must be ({m},)")
+    for name, value, size in (
+        ("rest_length", mesh.rest_length, m),
+        ("EA", mesh.EA, m),
+        ("fixed", mesh.fixed, n),
+    ):
+        if value is None:
+            continue
+        value = np.asarray(value)
+        if value.shape != (size,) or value.dtype.kind not in "biuf":
+            raise ConfigError(
+                f"{path}: /mesh/{name} holds {value.dtype} of shape {value.shape}: must be "
+                f"({size},) numbers (a damaged file)"
+            )
 
 
 def export(path: str | Path, fmt: str, out_dir: str | Path | None = None, frames="all") -> Export:

@@ -325,3 +325,28 @@ def test_a_far_node_of_a_cable_graph(tmp_path):
         with h5py.File(tmp_path / "o.h5") as h5:
             assert math.isfinite(h5["result"].attrs["residual"])
     assert judge(result, tmp_path).good
+
+
+@pytest.mark.parametrize(
+    "name, value",
+    [
+        ("mesh/fixed", np.array([b"not", b"numbers"])),
+        ("mesh/EA", np.float64(np.nan)),
+        ("mesh/rest_length", np.array([b"not", b"numbers"])),
+        ("mesh/nodes", np.zeros((104, 2, 2))),
+        ("trajectory/tension", None),
+    ],
+)
+def test_export_of_datasets_of_the_wrong_type_or_shape(dynamic_file, tmp_path, name, value):
+    """Damaged result files the long fuzz run gave `catenet export`: exit 2 naming the
+    file (they were internal errors: TypeError, ValueError, KeyError)."""
+    _, src = dynamic_file
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(src.read_bytes())
+    with h5py.File(bad, "a") as h5:
+        del h5[name]
+        if value is not None:
+            h5[name] = value
+    result = invoke(["export", bad, "--to", "vtu", "-o", tmp_path / "ex"], cwd=tmp_path)
+    assert result.exit_code == 2 and "bad.h5" in result.output, result.output
+    assert judge(result, tmp_path, {bad}).good
