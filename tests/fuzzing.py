@@ -346,8 +346,21 @@ def invoke(args: list[str], seconds: float = 60.0, cwd: Path | None = None):
             os.chdir(cwd)
         with small_machine(), time_limit(seconds):
             return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=True)
+    except Hang as exc:  # CliRunner lets a BaseException through
+        return Stopped(exc)
     finally:
         os.chdir(here)
+
+
+@dataclass
+class Stopped:
+    """What ``invoke`` returns for a command stopped by its time limit."""
+
+    exception: BaseException
+    output: str = ""
+    stderr_bytes: bytes | None = None
+    stderr: str = ""
+    exit_code: int | None = None
 
 
 def judge(result, work: Path, before: set[Path] = frozenset()) -> Outcome:
