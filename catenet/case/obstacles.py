@@ -160,6 +160,10 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
     return BAD if BAD in out else tuple(out)
 
 
+#: The smallest friction slip distance, relative to the barrier's activation distance.
+MIN_SLIP = 1e-12
+
+
 def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     """The energy terms of a case's obstacles on the net's free nodes. Raises ConfigError
     (with the obstacle's key path) for an obstacle that a node of the net starts in.
@@ -228,5 +232,10 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
             from catenet.terms.friction import Friction
 
             slip = obs.slip if obs.slip is not None else dhat
+            if not slip >= MIN_SLIP * dhat:  # its stiffness mu lambda / slip would overflow
+                raise ConfigError(
+                    f"obstacle[{k}].slip = {show(obs.slip)}: must be at least "
+                    f"{MIN_SLIP:.0e} times the barrier's activation distance ({dhat:.3g})"
+                )
             terms.append(Friction(term, mu=obs.friction, slip=slip))
     return tuple(terms)

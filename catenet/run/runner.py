@@ -11,6 +11,7 @@ with its last good state in /result and ``converged = false``.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections.abc import Callable
@@ -349,6 +350,9 @@ def _run(scene, settings, ws, writer, state, progress, stop, interrupt, begin, c
         # The residual of the state kept (a dynamic run's: its static part under the loads
         # at its time), not of the failed solve's iterate, which may not even be finite.
         residual = _static_residual(ws, scene, x, t, dynamic)
+        if not math.isfinite(residual):  # a term's gradient beyond floating point there:
+            start = [r for r in getattr(exc, "history", None) or () if math.isfinite(r)]
+            residual = start[0] if start else residual  # the failed solve's first residual
         res = finish(
             ws.system,
             scene.loads,

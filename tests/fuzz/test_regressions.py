@@ -350,3 +350,18 @@ def test_export_of_datasets_of_the_wrong_type_or_shape(dynamic_file, tmp_path, n
     result = invoke(["export", bad, "--to", "vtu", "-o", tmp_path / "ex"], cwd=tmp_path)
     assert result.exit_code == 2 and "bad.h5" in result.output, result.output
     assert judge(result, tmp_path, {bad}).good
+
+
+def test_a_vanishing_friction_slip_is_named(tmp_path):
+    """obstacle.slip = 1e-300 (the quick tier found it): the friction's gradient overflowed
+    at the start and the failed run stored an infinite residual."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["obstacle"][0]["slip"] = 1e-300
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2 and "obstacle[0].slip = 1e-300: must be at least" in text, text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
