@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -123,6 +124,12 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
         if load <= 0.0:
             load = stiff * dhat
         kappa = obs.stiffness if obs.stiffness is not None else default_stiffness(load, dhat)
+        if not (math.isfinite(kappa) and kappa > 0 and dhat > 0):
+            key = "stiffness" if obs.stiffness is not None else "distance"
+            raise ConfigError(
+                f"obstacle[{k}].{key} = {show(getattr(obs, key))}: the barrier's stiffness "
+                f"would be {kappa:.3g} N/m: give a larger distance (or a finite stiffness)"
+            )
         terms.append(Ball(free, node, obs.radius, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes))
         if prescribed:
             route = Path(obs.center, obs.velocity, hist)

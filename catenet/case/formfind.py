@@ -10,7 +10,6 @@ analyse the unfound starting geometry): form-find it first, then run the case it
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +19,7 @@ from catenet.case.keys import (
     Context,
     Declared,
     as_float,
+    carried,
     choice,
     integer,
     key,
@@ -45,12 +45,12 @@ def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
         bad = [
             (f"{path}[{k}]", v[k])
             for k, x in enumerate(vals)
-            if x is None or not (math.isfinite(x) and x > 0)
+            if x is None or not (carried(x) and x > 0)
         ]
         ck.first(bad, "must be finite and > 0")
         return BAD if bad else tuple(vals)
     f = as_float(v)
-    if f is None or not (math.isfinite(f) and f > 0):
+    if f is None or not (carried(f) and f > 0):
         return ck.bad(path, v, "must be a number, finite and > 0, or an array of them per edge")
     return f
 

@@ -1,9 +1,13 @@
-"""The memory guard: the size of the net and the memory a solve needs, estimated from
-the case alone, before any array is made."""
+"""The guards of a case: the size of the net and the memory a solve needs, estimated from
+the case alone before any array is made; and the scales of the built scene (stiffness,
+forces, extent), which the arithmetic must carry."""
 
 from __future__ import annotations
 
-from catenet.case.keys import Checker, show
+import math
+from typing import Any
+
+from catenet.case.keys import MAGNITUDE, Checker, show, too_large
 from catenet.case.kinds import GeometryConfig
 from catenet.model.builders import MAX_NODES
 from catenet.model.memory import (  # noqa: F401  (re-exported)
@@ -43,3 +47,86 @@ def guard_size(ck: Checker, geometry: GeometryConfig) -> None:
             f"{need / gib:.2g} GiB; this machine has {total / gib:.0f} GiB (at most "
             f"{MEMORY_SHARE:.0%} of it may be used)"
         )
+
+
+#: The largest stiffness times length scale (a force) and force times length (an
+#: energy) a scene may reach: their squares and sums stay finite in double precision.
+FORCE_SCALE = 1e150
+ENERGY_SCALE = 1e250
+#: The largest ratio of the node forces to the smallest EA (a strain scale).
+RATIO = 1e150
+
+
+def _given(section: Any, names: tuple[str, ...], prefix: str) -> str:
+    """``prefix.key = value`` for each of ``names`` given (not None, not zero)."""
+    parts = [
+        f"{prefix}.{name} = {show(getattr(section, name))}"
+        for name in names
+        if getattr(section, name, None) not in (None, 0.0, ())
+    ]
+    return ", ".join(parts) or prefix
+
+
+def guard_material(case: Any) -> None:
+    """ConfigError when the material's EA (E times the cross-section) or mass per length
+    (density times it) is beyond MAGNITUDE, naming the keys given; before any net is built."""
+    mat = case.material
+    problems = []
+    ea = mat.axial_stiffness
+    if ea is not None and not abs(ea) <= MAGNITUDE:
+        keys = _given(mat, ("E", "radius", "area", "EA", "table"), "material")
+        problems.append(f"{keys}: EA = {ea:.3g} N: must be within {too_large()}")
+    if not abs(mat.line_density) <= MAGNITUDE:
+        keys = _given(mat, ("density", "radius", "area"), "material")
+        problems.append(
+            f"{keys}: mass per length {mat.line_density:.3g} kg/m: must be within {too_large()}"
+        )
+    if problems:
+        from catenet.errors import ConfigError
+
+        raise ConfigError(problems)
+
+
+def guard_scales(case: Any, net: Any, loads: Any) -> None:
+    """ConfigError when the scene's numbers, each within MAGNITUDE, combine into forces
+    or energies the arithmetic cannot carry: EA (from E and the cross-section), the
+    stiffness EA / l0 over the net's extent, the node forces (pressure over the area,
+    gravity on the mass, point and line loads) and the work they do over it."""
+    import numpy as np
+
+    problems: list[str] = []
+    material = _given(case.material, ("E", "radius", "area", "EA", "table"), "material")
+    ea = np.abs(net.EA)
+    if ea.size and not float(ea.max()) <= MAGNITUDE:
+        problems.append(f"{material}: EA = {float(ea.max()):.3g} N: must be within {too_large()}")
+    nodes = net.nodes
+    extent = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0))) if len(nodes) else 0.0
+    extent = max(extent, float(np.max(net.rest_length, initial=0.0)))
+    with np.errstate(all="ignore"):
+        stiff = float(np.max(ea / net.rest_length, initial=0.0))
+        force = loads.external_force(net)
+        f_max = float(np.max(np.abs(force), initial=0.0))
+    if not problems and not stiff * extent <= FORCE_SCALE:
+        problems.append(
+            f"{material}: the edges' stiffness EA / rest length (up to {stiff:.3g} N/m) over "
+            f"the net's extent ({extent:.3g} m) makes forces of {stiff * extent:.3g} N: "
+            f"beyond {FORCE_SCALE:.0e} the arithmetic overflows; check the units"
+        )
+    ea_min = float(np.min(ea, initial=math.inf))
+    if not problems and f_max > 0 and not f_max <= RATIO * ea_min:
+        problems.append(
+            f"{material}: EA = {ea_min:.3g} N against node forces of up to {f_max:.3g} N: "
+            f"their ratio is beyond {RATIO:.0e} (strains no arithmetic carries); check the units"
+        )
+    if not (f_max <= FORCE_SCALE and f_max * extent <= ENERGY_SCALE):
+        load = _given(case.load, ("pressure", "gravity", "points", "lines"), "load")
+        masses = ", material.density" if case.material.density else ""
+        problems.append(
+            f"{load}{masses}: node forces of up to {f_max:.3g} N over the net's extent "
+            f"({extent:.3g} m): beyond {FORCE_SCALE:.0e} N (or {ENERGY_SCALE:.0e} J of work) "
+            "the arithmetic overflows; check the units"
+        )
+    if problems:
+        from catenet.errors import ConfigError
+
+        raise ConfigError(problems)

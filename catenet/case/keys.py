@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from catenet.model.limits import MAGNITUDE, MAX_COUNT, carried, too_large  # noqa: F401
+
 
 class _Marker:
     def __init__(self, name: str) -> None:
@@ -144,14 +146,20 @@ class Checker:
         ok = ok and (gt is None or f > gt) and (ge is None or f >= ge) and (lt is None or f < lt)
         if not ok:
             return self.bad(path, v, f"must be {need}")
+        if abs(f) > MAGNITUDE:
+            return self.bad(path, v, f"must be {need} and within {too_large()}")
         return f
 
-    def integer(self, v: Any, path: str, *, ge: int, even: bool = False) -> Any:
+    def integer(
+        self, v: Any, path: str, *, ge: int, even: bool = False, le: int = MAX_COUNT
+    ) -> Any:
         if v is BAD:
             return BAD
         i = as_int(v)
         if i is None or i < ge or (even and i % 2):
             return self.bad(path, v, f"must be an {'even ' if even else ''}integer >= {ge}")
+        if i > le:
+            return self.bad(path, v, f"must be at most {le:.0e}: more would never finish")
         return i
 
     def boolean(self, v: Any, path: str) -> Any:
@@ -189,6 +197,8 @@ class Checker:
         out = [as_float(c) for c in v]
         if any(c is None or not math.isfinite(c) for c in out):
             return self.bad(path, v, need)
+        if any(abs(c) > MAGNITUDE for c in out):
+            return self.bad(path, v, f"{need}, each within {too_large()}")
         return tuple(out)
 
     def node_ref(self, v: Any, path: str, kind: Any) -> Any:
@@ -285,9 +295,11 @@ def real(default: Any = REQUIRED, *, gt=None, ge=None, lt=None, need: str = "", 
     return key(check, f"a number, {need}", default, **kw)
 
 
-def integer(default: Any = REQUIRED, *, ge: int, even: bool = False, **kw) -> Any:
+def integer(
+    default: Any = REQUIRED, *, ge: int, even: bool = False, le: int = MAX_COUNT, **kw
+) -> Any:
     def check(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-        return ck.integer(v, path, ge=ge, even=even)
+        return ck.integer(v, path, ge=ge, even=even, le=le)
 
     return key(check, f"an {'even ' if even else ''}integer >= {ge}", default, **kw)
 

@@ -185,6 +185,10 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
     return BAD if BAD in out else tuple(out)
 
 
+#: The smallest friction slip distance, relative to the barrier's activation distance.
+MIN_SLIP = 1e-12
+
+
 def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     """The energy terms of a case's obstacles on the net's free nodes. Raises ConfigError
     (with the obstacle's key path) for an obstacle that a node of the net starts in.
@@ -224,8 +228,15 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
                 widths.append(wide)
                 wide /= STAGE_SHRINK
         kappa = stiffness(dhat)
-        if not math.isfinite(kappa):
-            raise ConfigError(f"obstacle[{k}].stiffness: must be finite")
+        if not (math.isfinite(kappa) and kappa > 0):
+            key = next(
+                (n for n in ("stiffness", "distance") if getattr(obs, n, None) is not None),
+                "accuracy",
+            )
+            raise ConfigError(
+                f"obstacle[{k}].{key} = {show(getattr(obs, key, None))}: the barrier's stiffness "
+                f"would be {kappa:.3g} N/m: give a larger distance (or a finite stiffness)"
+            )
         first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
         term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
         if first is not None:  # (widths: the wider stages, none without)
@@ -249,5 +260,10 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
             from catenet.terms.friction import Friction
 
             slip = obs.slip if obs.slip is not None else dhat
+            if not slip >= MIN_SLIP * dhat:  # its stiffness mu lambda / slip would overflow
+                raise ConfigError(
+                    f"obstacle[{k}].slip = {show(obs.slip)}: must be at least "
+                    f"{MIN_SLIP:.0e} times the barrier's activation distance ({dhat:.3g})"
+                )
             terms.append(Friction(term, mu=obs.friction, slip=slip))
     return tuple(terms)

@@ -40,6 +40,9 @@ from catenet.case.sections import (
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.errors import ConfigError
 
+#: The most time steps a dynamic run may be asked for (t_end / dt).
+MAX_TIME_STEPS = 1e8
+
 
 @dataclass(frozen=True, kw_only=True)
 class Case:
@@ -190,6 +193,14 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             )
     if isinstance(solver, SolverConfig) and solver.method == "dynamic" and solver.dt > solver.t_end:
         ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {solver.t_end!r}")
+    elif isinstance(solver, SolverConfig) and solver.method == "dynamic":
+        steps = solver.t_end / solver.dt
+        if not steps <= MAX_TIME_STEPS:
+            ck.add(
+                f"solver.t_end = {solver.t_end!r}, solver.dt = {solver.dt!r}: {steps:.3g} time "
+                f"steps: at most {MAX_TIME_STEPS:.0e} (more would never finish): a larger dt "
+                "or a smaller t_end"
+            )
 
     # Node references need the node count (and, for square nets, the built topology):
     # only once the geometry itself is sound.

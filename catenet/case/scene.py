@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.bodies import add_bodies
+from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
@@ -69,12 +70,14 @@ def build(case: Case) -> Scene:
 
 
 def _build(case: Case) -> Scene:
+    guard_material(case)
     built = case.geometry.build_case(_with_case_points(case), model_material(case.material))
     net = built.net
     point_mass, velocity = point_masses(getattr(case, "masses", ()), net, built.names, built.sets)
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
     loads = _loads(case, net, built.names, built.size, built)
+    guard_scales(case, net, loads)
     check_motion(case)  # a moving box, capsule or mesh: dynamic runs only
     net, loads, velocity, body_terms, bodies = add_bodies(
         case, net, loads, velocity, float(built.size)

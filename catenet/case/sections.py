@@ -324,9 +324,9 @@ class SolverConfig(Declared):
         Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
     )
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
-    max_iter: int = integer(Settings.max_iter, ge=1, doc="static: Newton iterations")
+    max_iter: int = integer(Settings.max_iter, ge=1, le=10**6, doc="static: Newton iterations")
     steps: int = integer(
-        Settings.steps, ge=1, doc="static: load steps (equilibria at k/steps of the load)"
+        Settings.steps, ge=1, le=10**6, doc="static: load steps (equilibria at k/steps of the load)"
     )
 
 

@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.keys import MAGNITUDE, Checker, Declared, choice, real, text, vec3
+from catenet.case.meshfiles import read_mesh_file
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
@@ -273,24 +274,22 @@ def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndar
     from catenet.terms.shapes import closed_surface
 
     try:
-        import meshio
+        mesh = read_mesh_file(file)
     except ImportError:
         raise ValueError(
             "reading a mesh obstacle needs the Python package meshio (pip install meshio)"
         ) from None
-    try:
-        with np.errstate(over="ignore"):  # meshio's binary-STL size test on ASCII files
-            mesh = meshio.read(file)
-    except Exception as exc:  # meshio raises many kinds for a file it cannot read
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ValueError(f"meshio cannot read it: {reason}") from None
+    except ValueError as exc:
+        raise ValueError(f"meshio cannot read it: {exc}") from None
     tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
     if not tris:
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
         raise ValueError(f"holds no triangles (it has {found}): a mesh obstacle is a surface")
     points = np.asarray(mesh.points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
-        raise ValueError(f"its points (shape {points.shape}) must be finite 3D points")
+    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.abs(points) <= MAGNITUDE):
+        raise ValueError(
+            f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}"
+        )
     V, T = closed_surface(points, np.concatenate(tris))
     V.setflags(write=False)
     T.setflags(write=False)

@@ -41,7 +41,7 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
     else:
         text = raw
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except RecursionError:
         raise ConfigError(f"{source}: nested too deeply to be a case file") from None
     except ValueError as exc:  # tomllib.TOMLDecodeError is a ValueError
@@ -54,6 +54,32 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
             reason = re.sub(r" \(at end of document\)$", "", msg)
         reason = reason[:1].lower() + reason[1:]
         raise ConfigError(f"{source}: line {line}, column {col}: {reason}") from None
+    deep = too_deep(data)
+    if deep is not None:
+        raise ConfigError(
+            f"{source}: {deep}: nested more than {MAX_DEPTH} levels deep: not a case file"
+        )
+    return data
+
+
+#: The deepest nesting of tables and arrays a case file or a --set key path may have.
+MAX_DEPTH = 32
+
+
+def too_deep(data: Any) -> str | None:
+    """The key path (shortened) at which ``data`` nests deeper than MAX_DEPTH, else None;
+    walked without recursion."""
+    stack = [(data, ())]
+    while stack:
+        value, path = stack.pop()
+        if len(path) > MAX_DEPTH:
+            shown = ".".join(map(str, path[:4]))
+            return f"{shown}... ({len(path)}+ levels)"
+        if isinstance(value, dict):
+            stack.extend((v, (*path, k)) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, (*path, i)) for i, v in enumerate(value))
+    return None
 
 
 def _line_col(text: str) -> tuple[int, int]:
@@ -75,6 +101,12 @@ def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
             continue
         key, _, text = ov.partition("=")
         parts = [p.strip() for p in key.strip().split(".")]
+        if len(parts) > MAX_DEPTH:
+            problems.append(
+                f"override {show(ov, 60)}: key path of {len(parts)} parts: a case nests at "
+                f"most {MAX_DEPTH} levels deep"
+            )
+            continue
         if not all(parts):
             problems.append(
                 f"override {ov!r}: key path {key.strip()!r}: empty part: must be like a.b.c"
@@ -94,7 +126,7 @@ def _override_value(text: str) -> Any:
         parsed = tomllib.loads(f"v = {text}")
     except (ValueError, RecursionError):
         return text
-    if set(parsed) != {"v"}:
+    if set(parsed) != {"v"} or too_deep(parsed) is not None:
         return text
     return parsed["v"]
 

@@ -123,6 +123,19 @@ def errors_to_exit_codes(debug: bool = False):
         if debug:
             raise
         fail(f"{exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), EXIT_FAILED)
+    except Exception as exc:  # a bug: one line, and how to see more
+        if debug:
+            raise
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        fail(
+            f"{INTERNAL}: {type(exc).__name__}: {reason} (run again with --debug for the "
+            "traceback, and please report it)",
+            EXIT_FAILED,
+        )
+
+
+#: How an unexpected exception (a bug in catenet) is reported: exit 1, never a traceback.
+INTERNAL = "internal error"
 
 
 class Progress:

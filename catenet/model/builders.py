@@ -9,11 +9,13 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.model.laws import Law, prestressed_lengths, table_rows
+from catenet.model.limits import carried, too_large
 from catenet.model.memory import fits
 from catenet.model.net import Net
 
 #: The largest net the builders make (the case loader also checks memory beforehand).
 MAX_NODES = 50_000_000
+WITHIN = f"within {too_large()}"
 
 
 def _check_size(nodes: float, edges: float, where: str) -> None:
@@ -122,8 +124,8 @@ def cable(
         raise ConfigError(f"geometry.end = {end.tolist()}: must differ from geometry.start")
     if length is None:
         length = chord
-    if not (math.isfinite(length) and length > 0):
-        raise ConfigError(f"geometry.length = {length!r}: must be finite and > 0")
+    if not (carried(length) and length > 0):
+        raise ConfigError(f"geometry.length = {length!r}: must be finite and > 0, {WITHIN}")
     s = np.linspace(0.0, 1.0, nodes)
     xyz = start[None, :] + s[:, None] * (end - start)[None, :]
     edges = np.column_stack([np.arange(nodes - 1), np.arange(1, nodes)])
@@ -155,10 +157,12 @@ def square_net(
     """
     if not (isinstance(n, (int, np.integer)) and n >= 2 and n % 2 == 0):
         raise ConfigError(f"geometry.n = {n!r}: must be an even integer >= 2")
-    if not (math.isfinite(size) and size > 0):
-        raise ConfigError(f"geometry.size = {size!r}: must be finite and > 0")
-    if not (math.isfinite(edge_length) and edge_length > 0):
-        raise ConfigError(f"geometry.edge_length = {edge_length!r}: must be finite and > 0")
+    if not (carried(size) and size > 0):
+        raise ConfigError(f"geometry.size = {size!r}: must be finite and > 0, {WITHIN}")
+    if not (carried(edge_length) and edge_length > 0):
+        raise ConfigError(
+            f"geometry.edge_length = {edge_length!r}: must be finite and > 0, {WITHIN}"
+        )
     if not math.isfinite(alpha):
         raise ConfigError(f"geometry.alpha = {alpha!r}: must be finite (radians)")
     m = n // 2

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.limits import carried
 
 
 class History:
@@ -59,8 +60,8 @@ def history_problem(points) -> str:
                 f = float(v)
             except OverflowError:
                 f = math.inf
-            if not math.isfinite(f):
-                return f"point {k} = {_show(p)}: must be finite numbers"
+            if not carried(f):
+                return f"point {k} = {_show(p)}: must be finite numbers within +-1e+100"
             pair.append(f)
         rows.append(pair)
     for k in range(1, len(rows)):

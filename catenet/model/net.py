@@ -13,6 +13,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.model.laws import Law
+from catenet.model.limits import MAGNITUDE, too_large
 
 
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -99,9 +100,13 @@ class Net:
             problems.append("edges: empty: a net needs at least one edge")
         if problems:
             raise ConfigError(problems)
-        if not np.all(np.isfinite(nodes)):
-            bad = np.flatnonzero(~np.isfinite(nodes).all(axis=1))[:5].tolist()
-            problems.append(f"nodes: non-finite coordinates at nodes {bad}: must be finite")
+        if not np.all(np.abs(nodes) <= MAGNITUDE):
+            bad = np.flatnonzero(~(np.abs(nodes) <= MAGNITUDE).all(axis=1))[:5].tolist()
+            problems.append(
+                f"nodes: non-finite or huge coordinates at nodes {bad}: must be finite, "
+                f"within {too_large()}"
+            )
+            raise ConfigError(problems)
         bad = np.flatnonzero((edges < 0).any(axis=1) | (edges >= n).any(axis=1))
         if bad.size:
             e = int(bad[0])
@@ -304,11 +309,13 @@ def _broadcast(name, value, m, problems, allow_zero=False) -> np.ndarray:
     if arr.shape != (m,):
         problems.append(f"{name}: shape {arr.shape}: must be a scalar or one value per edge ({m})")
         return np.zeros(m)
-    ok = np.isfinite(arr) & ((arr >= 0) if allow_zero else (arr > 0))
+    ok = (np.abs(arr) <= MAGNITUDE) & ((arr >= 0) if allow_zero else (arr > 0))
     if not ok.all():
         e = int(np.flatnonzero(~ok)[0])
         need = ">= 0" if allow_zero else "> 0"
-        problems.append(f"{name}[{e}] = {arr[e]!r}: must be finite and {need}")
+        problems.append(
+            f"{name}[{e}] = {float(arr[e])!r}: must be finite and {need}, within {too_large()}"
+        )
     return np.ascontiguousarray(arr)
 
 

@@ -68,14 +68,15 @@ class Peaks:
         self.seen += 1
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The peaks as arrays (0 and nan for a run that saw no state)."""
+        """The peaks as arrays (0 at time 0 for a run that saw no state, and the time of a
+        value never taken, a non-finite state's, as 0: a result file holds finite numbers)."""
         empty = self.seen == 0
         return {
             "peak_tension": np.zeros_like(self.tension) if empty else self.tension.copy(),
-            "peak_tension_time": self.tension_time.copy(),
+            "peak_tension_time": np.nan_to_num(self.tension_time, nan=0.0),
             "least_tension": np.zeros_like(self.tension) if empty else self.tension_low.copy(),
             "peak_displacement": (
                 np.zeros_like(self.displacement) if empty else self.displacement.copy()
             ),
-            "peak_displacement_time": self.displacement_time.copy(),
+            "peak_displacement_time": np.nan_to_num(self.displacement_time, nan=0.0),
         }

@@ -32,7 +32,15 @@ import numpy as np
 from catenet.errors import CatenetError, ConfigError
 from catenet.output.bodies import body_nodes
 from catenet.output.obstacles import read_obstacles
-from catenet.output.reader import Frame, open_result, read_mesh, trajectory_length
+from catenet.output.reader import (
+    DAMAGED,
+    Frame,
+    damaged,
+    open_result,
+    read_mesh,
+    read_result,
+    trajectory_length,
+)
 
 log = logging.getLogger(__name__)
 
@@ -121,6 +129,33 @@ def _frames(path: Path, spec: str) -> list[Frame]:
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
+def _check_shapes(path: Path, mesh, states: list[Frame]) -> None:
+    """ConfigError when a stored state does not fit the mesh (a damaged file)."""
+    n, m = len(mesh.nodes), len(mesh.edges)
+    want = {"x": (n, 3), "v": (n, 3), "tension": (m,)}
+    for f in states:
+        for name, shape in want.items():
+            value = getattr(f, name)
+            if value is not None and np.shape(value) != shape:
+                raise ConfigError(
+                    f"{path}: {name} of {f.source} frame {f.index} has shape "
+                    f"{np.shape(value)}: the mesh needs {shape} (a damaged file)"
+                )
+    for name, value, size in (
+        ("rest_length", mesh.rest_length, m),
+        ("EA", mesh.EA, m),
+        ("fixed", mesh.fixed, n),
+    ):
+        if value is None:
+            continue
+        value = np.asarray(value)
+        if value.shape != (size,) or value.dtype.kind not in "biuf":
+            raise ConfigError(
+                f"{path}: /mesh/{name} holds {value.dtype} of shape {value.shape}: must be "
+                f"({size},) numbers (a damaged file)"
+            )
+
+
 def _mode_frames(path: Path, mode: int, spec: str) -> list[Frame]:
     """The animation frames of mode ``mode`` (1 = the lowest) of a ``catenet modes``
     file (``catenet.output.modes``): times are phases (0 to 1 period), tensions the
@@ -167,11 +202,18 @@ def export(
     if not path.is_file():
         raise ConfigError(f"{path}: no such result file")
     meshio = _meshio()
-    mesh = read_mesh(path)
-    if mode is None:
-        states, stem = _frames(path, str(frames)), path.stem
-    else:
-        states, stem = _mode_frames(path, int(mode), str(frames)), f"{path.stem}_mode{mode}"
+    read_result(path)  # the layout checked first: every problem at once
+    try:
+        mesh = read_mesh(path)
+        if mode is None:
+            states, stem = _frames(path, str(frames)), path.stem
+        else:
+            states, stem = _mode_frames(path, int(mode), str(frames)), f"{path.stem}_mode{mode}"
+        _check_shapes(path, mesh, states)
+        body, radius = body_nodes(path)  # moving spheres: a vertex cell each, with its radius
+        obstacles = read_obstacles(path)
+    except DAMAGED as exc:
+        raise damaged(path, exc) from None
     out = Path(out_dir) if out_dir is not None else path.with_name(f"{stem}-{fmt}")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"-o {out}: exists and is not a directory")
@@ -179,7 +221,6 @@ def export(
     ext, writer = FORMATS[fmt]
     width = max(4, len(str(max(f.index for f in states))))
     cells = [("line", np.asarray(mesh.edges, dtype=np.int64))]
-    body, radius = body_nodes(path)  # moving spheres: a vertex cell each, with its radius
     if fmt == "xdmf":  # meshio reads no vertex cells back from its mixed XDMF topology
         body = body[:0]
     if body.size:
@@ -219,19 +260,19 @@ def export(
         )
         files.append(target)
     times = [f.t for f in states]
-    solids = _obstacles(meshio, path, states, out, ext, writer, width)
+    solids = _obstacles(meshio, path, obstacles, states, out, ext, writer, width)
     parts = [files] + [w if len(w) == len(files) else w * len(files) for w in solids.values()]
     collection = _write_pvd(out / f"{stem}.pvd", parts, times) if fmt in PVD else None
     log.info("%s: %d frames written to %s", path, len(files), out)
     return Export(files, times, collection, solids)
 
 
-def _obstacles(meshio, path: Path, states, out: Path, ext: str, writer: str, width: int):
+def _obstacles(meshio, path: Path, obstacles, states, out: Path, ext: str, writer: str, width):
     """Writes every obstacle's surface: once for a fixed one, at every state for a
     moving one (its frame's surface, or /result's for the final state); returns the
     files per obstacle index."""
     written: dict[int, list[Path]] = {}
-    for o in read_obstacles(path):
+    for o in obstacles:
         stem = f"{path.stem}_obstacle{o.index}"
         if not o.moving:
             target = out / f"{stem}.{ext}"

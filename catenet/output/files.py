@@ -10,6 +10,7 @@ holds the next version; both are removed when the run ends, and by ``catenet rep
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shutil
@@ -18,6 +19,7 @@ from pathlib import Path
 from catenet.errors import ConfigError
 
 __all__ = [
+    "check_output_dir",
     "check_output_path",
     "copy_atomically",
     "describe",
@@ -25,6 +27,7 @@ __all__ = [
     "publish",
     "remove_spares",
     "spare_paths",
+    "WriteLock",
 ]
 
 
@@ -37,6 +40,14 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     text = str(path)
     if not text.strip():
         raise ConfigError(f"{what} = {text!r}: must be a file path")
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:  # bytes that are not UTF-8 (os.fsdecode's surrogates)
+        raise ConfigError(
+            f"{what} {text!r}: holds bytes that are not UTF-8 text: HDF5 and XDMF files name "
+            "their paths in UTF-8; rename it"
+        ) from None
+    _check_name_lengths(p, what)
     if p.is_dir():
         raise ConfigError(f"{what} {text!r}: is a directory: give a file path such as out/run.h5")
     if p.suffix.lower() == ".xdmf":
@@ -44,6 +55,10 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
             f"{what} {text!r}: .xdmf is the name of the ParaView sidecar: give the HDF5 file, "
             "such as out/run.h5"
         )
+    for beside, name in ((p.with_suffix(".xdmf"), "its XDMF sidecar"), (spare_paths(p)[0], "")):
+        if beside.is_dir() and beside != p:
+            name = name or f"its hidden spare {beside.name}"
+            raise ConfigError(f"{what} {text!r}: {name} {str(beside)!r} is a directory")
     if p.exists() or p.is_symlink():
         if not p.is_file():
             raise ConfigError(f"{what} {text!r}: exists and is not a regular file")
@@ -61,6 +76,154 @@ def check_output_path(path: str | Path, *, what: str = "output file") -> Path:
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ConfigError(f"{what} {text!r}: cannot write in {parent} (permission denied)")
     return p
+
+
+def check_output_dir(path: str | Path, *, what: str = "output directory") -> Path:
+    """Checks, without creating anything, that the directory ``path`` can be made or
+    written in: no name in it too long, no regular file on the way, permission to write.
+    Raises ConfigError naming the path; returns the path."""
+    p = Path(path)
+    text = str(path)
+    if not text.strip():
+        raise ConfigError(f"{what} = {text!r}: must be a directory path")
+    _check_name_lengths(p / "results.h5", what)
+    here = p.absolute()
+    while not (here.exists() or here.is_symlink()):
+        here = here.parent
+    if not here.is_dir():
+        raise ConfigError(f"{what} {text!r}: {str(here)!r} is not a directory")
+    if not os.access(here, os.W_OK | os.X_OK):
+        raise ConfigError(f"{what} {text!r}: cannot write in {str(here)!r} (permission denied)")
+    return p
+
+
+def _check_name_lengths(p: Path, what: str) -> None:
+    """ConfigError when the file's name, or the hidden spare's beside it, or a directory
+    on the way, is longer than the file system takes."""
+    parent = p.absolute().parent
+    limit = 255
+    while parent != parent.parent:
+        try:
+            limit = os.pathconf(parent, "PC_NAME_MAX")
+            break
+        except (OSError, ValueError):  # missing yet, or a name too long itself
+            parent = parent.parent
+    longest = max(len(os.fsencode(part)) for part in p.parts) if p.parts else 0
+    extra = len(HIDDEN_LONGEST.format(name=""))
+    if max(longest, len(os.fsencode(p.name)) + extra) > limit:
+        raise ConfigError(
+            f"{what} {str(p)!r}: a name in it is too long for the file system (at most "
+            f"{limit - extra} bytes for the file, whose hidden copies beside it, such as "
+            f"{HIDDEN_LONGEST.format(name='NAME')}, must fit in {limit})"
+        )
+
+
+#: The longest name of the hidden files beside a result file (the spare's copy).
+HIDDEN_LONGEST = "..{name}.spare.copy"
+
+
+class WriteLock:
+    """The lock a writer of ``path`` holds while the file is being written: an exclusive
+    ``flock`` on ``.NAME.lock`` beside it, which the kernel releases when the process
+    ends however it ends, so a killed run never blocks the next. A second run (or
+    ``catenet repair``) on the same file is refused with a ConfigError instead of both
+    writing the one spare. Where the file system has no locks, nothing is locked."""
+
+    def __init__(self, path: str | Path):
+        p = Path(path)
+        self.target = p
+        self.path = p.with_name(f".{p.name}.lock")
+        self.fd: int | None = None
+
+    def acquire(self) -> WriteLock:
+        try:
+            import fcntl
+        except ImportError:  # not POSIX: no locks
+            return self
+        for _ in range(20):  # a lock file removed by its holder meanwhile: try the new one
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError:
+                return self  # cannot even create it: the writer will say why
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise ConfigError(
+                        f"output file {str(self.target)!r}: another catenet process is writing "
+                        "it now: wait for it to end or give another file (-o)"
+                    ) from None
+                return self  # no locks on this file system
+            try:
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except OSError:
+                same = False
+            if same:
+                self.fd = fd
+                return self
+            os.close(fd)
+        return self
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        try:
+            self.path.unlink(missing_ok=True)  # while still held: the next one makes its own
+        except OSError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self) -> WriteLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def write_image(path: Path, build, libver) -> None:
+    """Builds an HDF5 file in memory (``build(h5)`` fills it) and writes its bytes to
+    ``path`` with plain file I/O: a full disk is then an OSError and the partial file is
+    removed, where HDF5 writing to the disk itself would fail in its destructors and crash
+    the process."""
+    import io
+
+    import h5py
+
+    buf = io.BytesIO()
+    with h5py.File(buf, "w", libver=libver) as h5:
+        build(h5)
+    try:
+        with open(path, "wb") as f:
+            f.write(buf.getbuffer())
+    except OSError:
+        Path(path).unlink(missing_ok=True)
+        raise
+
+
+def header_bytes(net) -> int:
+    """About the bytes of a result file before its first frame: the mesh's arrays (nodes,
+    edges, rest lengths, EA, supports) and HDF5's own structures."""
+    return 16 * 1024 + 40 * (int(net.n_nodes) + int(net.n_edges))
+
+
+def check_free_space(path: str | Path, need: int) -> None:
+    """OSError (ENOSPC) when the file system of ``path`` has fewer than ``need`` bytes free:
+    HDF5 itself fails badly when the disk fills while a file is created."""
+    here = Path(path).absolute().parent
+    while not here.exists() and here != here.parent:
+        here = here.parent
+    try:
+        free = shutil.disk_usage(here).free
+    except OSError:
+        return
+    if free < need:
+        raise OSError(
+            errno.ENOSPC,
+            f"No space left on device ({free} bytes free, at least {need} needed)",
+            str(path),
+        )
 
 
 def describe(exc: BaseException | None) -> str:

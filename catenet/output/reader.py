@@ -58,14 +58,18 @@ __all__ = [
 
 def open_result(path: str | Path):
     """Opens a result file for reading with h5py: normally, or, for the file of a run that
-    was killed or whose disk filled up while writing (HDF5 refuses it: "file is already
-    open for write", "truncated file"), in SWMR read mode, which reads it as it was at its
-    last flush."""
+    was killed while writing in place (HDF5 refuses it: "file is already open for write"),
+    in SWMR read mode, which reads it as it was at its last flush. A truncated or damaged
+    file raises OSError at once."""
     import h5py
 
     try:
         return h5py.File(path, "r")
     except OSError as exc:
+        # Only a file that HDF5 calls open for write is read in SWMR mode: a truncated or
+        # damaged one would make SWMR's reader retry its metadata for ever.
+        if "already open for write" not in str(exc):
+            raise
         try:
             return h5py.File(path, "r", libver=LIBVER, swmr=True)
         except OSError:
@@ -89,8 +93,21 @@ def trajectory_length(h5) -> int:
 def _complete(g, names, k: int) -> bool:
     try:
         return all(np.all(np.isfinite(g[name][k])) for name in names)
-    except (OSError, RuntimeError):  # data beyond the end of a truncated file
+    except DAMAGED:  # data beyond the end of a truncated file, or not numbers
         return False
+
+
+#: What h5py and NumPy raise for a damaged file or datasets of the wrong kind: a group
+#: where a dataset belongs, strings where numbers belong, chunks that fail to decode.
+DAMAGED = (OSError, RuntimeError, TypeError, ValueError, KeyError, AttributeError, IndexError)
+
+
+def damaged(path, exc: BaseException) -> ConfigError:
+    """The ConfigError for a result file that is damaged or not laid out as catenet's."""
+    if isinstance(exc, ConfigError):
+        return exc
+    reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    return ConfigError(f"{path}: damaged or not a catenet result file ({reason})")
 
 
 # --------------------------------------------------------------------------------------------
@@ -148,16 +165,19 @@ def read_frame(path: str | Path, index: int = -1) -> Frame:
         h5 = open_result(p)
     except OSError as exc:
         raise ConfigError(f"{path}: cannot be read as an HDF5 result file: {exc}") from None
-    with h5:
-        n = trajectory_length(h5)
-        if n > 0:
-            return _trajectory_frame(h5, _frame_index(path, n, index))
-        if "result" in h5 and "x" in h5["result"]:
-            r = h5["result"]
-            t = float(r.attrs.get("time", 0.0))
-            x = np.asarray(r["x"], dtype=np.float64)
-            v, tension, a = _array(r, "v"), _array(r, "tension"), _array(r, "a")
-            return Frame(t, x, v, "result", -1, tension, a)
+    try:
+        with h5:
+            n = trajectory_length(h5)
+            if n > 0:
+                return _trajectory_frame(h5, _frame_index(path, n, index))
+            if "result" in h5 and "x" in h5["result"]:
+                r = h5["result"]
+                t = float(r.attrs.get("time", 0.0))
+                x = np.asarray(r["x"], dtype=np.float64)
+                v, tension, a = _array(r, "v"), _array(r, "tension"), _array(r, "a")
+                return Frame(t, x, v, "result", -1, tension, a)
+    except DAMAGED as exc:
+        raise damaged(path, exc) from None
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
@@ -222,6 +242,8 @@ def read_mesh(path: str | Path, *, what: str | None = None) -> Mesh:
             EA = np.asarray(mesh["EA"]) if "EA" in mesh else None
     except OSError as exc:
         raise ConfigError(f"{what}: cannot be read: {exc}") from None
+    except DAMAGED as exc:
+        raise damaged(what, exc) from None
     return Mesh(nodes, edges, rest, EA, fixed)
 
 
@@ -285,8 +307,11 @@ class ResultFile:
     def frame(self, index: int) -> Frame:
         """Trajectory frame ``index`` (negative: from the end)."""
         k = _frame_index(self.path, self.n_frames, index)
-        with open_result(self.path) as h5:
-            return _trajectory_frame(h5, k)
+        try:
+            with open_result(self.path) as h5:
+                return _trajectory_frame(h5, k)
+        except DAMAGED as exc:
+            raise damaged(self.path, exc) from None
 
 
 def probe_node(nodes: np.ndarray, fixed: np.ndarray | None = None) -> int:
@@ -422,8 +447,12 @@ def read_result(path: str | Path) -> ResultFile:
                     series_t = time[:n_frames]
                 else:
                     series_t = np.arange(n_frames, dtype=np.float64)
+    except ConfigError:
+        raise
     except OSError as exc:
         raise ConfigError(f"{path}: cannot be read as HDF5: {exc}") from exc
+    except DAMAGED as exc:
+        raise damaged(path, exc) from None
     return ResultFile(
         path=path,
         mesh=Mesh(nodes, edges, rest, EA, fixed),

@@ -17,9 +17,16 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.output.files import remove_spares
+from catenet.output.files import WriteLock, remove_spares
 from catenet.output.obstacles import grids as obstacle_grids
-from catenet.output.reader import LIBVER, TRAJECTORY, open_result, trajectory_length
+from catenet.output.reader import (
+    DAMAGED,
+    LIBVER,
+    TRAJECTORY,
+    damaged,
+    open_result,
+    trajectory_length,
+)
 from catenet.output.xdmf import VIEWS, sidecar_path, view_sources, write_views, write_xdmf
 
 __all__ = ["Repair", "recover", "repair"]
@@ -150,6 +157,17 @@ def _problems(path: Path) -> list[str]:
         return problems
 
 
+def _readable(p: Path, path) -> None:
+    try:
+        with open_result(p) as h5:
+            if "mesh" not in h5 or "nodes" not in h5["mesh"] or "edges" not in h5["mesh"]:
+                raise ConfigError(
+                    f"{path}: has no /mesh/nodes and /mesh/edges: not a catenet result file"
+                )
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read, even as a killed run's file: {exc}") from None
+
+
 def repair(path: str | Path) -> Repair:
     """Makes a result file open in every reader: rewrites it (``recover``) when ordinary
     HDF5 readers refuse it, it has incomplete frames or lacks the sidecar's views;
@@ -165,18 +183,15 @@ def repair(path: str | Path) -> Repair:
             raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
     except OSError as exc:
         raise ConfigError(f"{path}: cannot be read: {exc}") from None
-    try:
-        with open_result(p) as h5:
-            if "mesh" not in h5 or "nodes" not in h5["mesh"] or "edges" not in h5["mesh"]:
-                raise ConfigError(
-                    f"{path}: has no /mesh/nodes and /mesh/edges: not a catenet result file"
-                )
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read, even as a killed run's file: {exc}") from None
-    problems = _problems(p)
-    if problems:
-        recover(p)
-    side = write_sidecar_for(p)
-    with open_result(p) as h5:
-        frames = trajectory_length(h5)
-    return Repair(p, frames, bool(problems), problems, side, remove_spares(p))
+    with WriteLock(p):  # not while a run writes it
+        try:
+            _readable(p, path)
+            problems = _problems(p)
+            if problems:
+                recover(p)
+            side = write_sidecar_for(p)
+            with open_result(p) as h5:
+                frames = trajectory_length(h5)
+        except DAMAGED as exc:
+            raise damaged(path, exc) from None
+        return Repair(p, frames, bool(problems), problems, side, remove_spares(p))

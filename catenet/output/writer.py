@@ -37,13 +37,17 @@ from catenet.model import measures
 from catenet.output.bodies import write_bodies
 from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (
+    WriteLock,
+    check_free_space,
     check_output_path,
     copy_atomically,
     describe,
     detach,
+    header_bytes,
     publish,
     remove_spares,
     spare_paths,
+    write_image,
 )
 from catenet.output.metadata import environment
 from catenet.output.obstacles import Obstacles
@@ -134,6 +138,7 @@ class ResultWriter:
         self.error: BaseException | None = None  # a failed write: frames stop there
         self.saved_to: Path | None = None  # where the result went instead
         self._spare, self._prev = spare_paths(self.path)
+        self._lock = WriteLock(self.path)
         self._pending: list[tuple[float, dict]] = []
         self._pending_bytes = 0
         self._open = False
@@ -171,8 +176,6 @@ class ResultWriter:
     # --- opening ---------------------------------------------------------------------------
     def open(self) -> None:
         """Creates the file (and missing parent directories) with the mesh."""
-        import h5py
-
         check_output_path(self.path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -181,21 +184,21 @@ class ResultWriter:
                 f"output file {str(self.path)!r}: cannot create its directory: "
                 f"{exc.strerror or exc}"
             ) from None
+        self._lock.acquire()  # a second writer of the same file is refused here
         remove_spares(self.path)  # left by a killed run
+
+        def header(h5) -> None:
+            self._write_header(h5)
+            if self.every > 0:
+                self._create_trajectory(h5)
+
         try:
-            h5 = h5py.File(self._spare, "w", libver=LIBVER)
-        except OSError as exc:
-            raise ConfigError(
-                f"output file {str(self.path)!r}: cannot be created: {describe(exc)}"
-            ) from None
-        try:
-            with h5:
-                self._write_header(h5)
-                if self.every > 0:
-                    self._create_trajectory(h5)
+            check_free_space(self.path, 2 * header_bytes(self.scene.net))
+            write_image(self._spare, header, LIBVER)  # a full disk: OSError, not a crash
             copy_atomically(self._spare, self.path)
-        except OSError as exc:
+        except (OSError, RuntimeError) as exc:
             self._abandon()
+            self._lock.release()
             raise OutputError(f"{self.path}: cannot be written: {describe(exc)}") from None
         self._open = True
         # A sidecar left from an earlier run of this file would now lie: remove it.
@@ -221,7 +224,7 @@ class ResultWriter:
             if name != "catenet" and ver:
                 h5.attrs[f"{name}_version"] = ver
         for key, value in self.attrs.items():
-            h5.attrs[key] = value
+            h5.attrs[key] = _utf8(value)
         mesh = h5.create_group("mesh")
         mesh.create_dataset("nodes", data=np.asarray(net.nodes, dtype=np.float64))
         mesh.create_dataset("edges", data=np.asarray(net.edges, dtype=np.int64))
@@ -493,19 +496,20 @@ class ResultWriter:
         self.obstacles.write_result(group, float(getattr(res, "time", math.nan)), res)
 
     def _save_elsewhere(self, res, attrs: dict) -> Path:
-        import h5py
-
         fd, name = tempfile.mkstemp(prefix=f"{self.path.stem}-", suffix=".h5")
         os.close(fd)
         tmp = Path(name)
+
+        def build(h5) -> None:
+            self._write_header(h5)
+            h5.attrs["note"] = (
+                f"saved here because writing {self.path} failed ({describe(self.error)}); "
+                f"the trajectory ({self.frames} frames) is in that file"
+            )
+            self._write_result(h5, res, attrs)
+
         try:
-            with h5py.File(tmp, "w", libver=LIBVER) as h5:
-                self._write_header(h5)
-                h5.attrs["note"] = (
-                    f"saved here because writing {self.path} failed ({describe(self.error)}); "
-                    f"the trajectory ({self.frames} frames) is in that file"
-                )
-                self._write_result(h5, res, attrs)
+            write_image(tmp, build, LIBVER)
         except Exception:
             tmp.unlink(missing_ok=True)
             raise
@@ -525,3 +529,12 @@ class ResultWriter:
                 remove_spares(self.path)
             except OSError as exc:
                 log.warning("%s: cannot remove the spare copy: %s", self._spare, describe(exc))
+            self._lock.release()
+
+
+def _utf8(value):
+    """A string attribute as UTF-8 text: the bytes of a path that are not UTF-8 (the
+    surrogates of os.fsdecode) written as \\xNN escapes; other values as they are."""
+    if isinstance(value, str):
+        return os.fsencode(value).decode("utf-8", "backslashreplace")
+    return value

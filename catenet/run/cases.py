@@ -202,3 +202,19 @@ def write_envelope(group, net, runs: list[CaseRun]) -> None:
 
     group.attrs["cases"] = np.array([r.name for r in runs], dtype=h5py.string_dtype())
     group.attrs["converged"] = all(r.converged for r in runs)
+
+
+def solve_from_base(scene, settings, ws, result, cases, path, interrupt) -> tuple[dict, dict]:
+    """The load cases from the base state ``result``, written to /cases and /envelope;
+    their summary numbers by name and the envelope (``governing``)."""
+    if not result.converged:
+        log.error("the base state did not converge: no load case is solved")
+        return {}, {}
+    result.cases = solve_cases(scene, settings, ws, result, cases, interrupt)
+    numbers = {
+        r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
+    }
+    envelope = governing(scene.net, result.cases)
+    if path is not None:
+        write_cases(path, scene, scene.case, result.cases)
+    return numbers, envelope

@@ -11,6 +11,7 @@ with its last good state in /result and ``converged = false``.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections.abc import Callable
@@ -71,7 +72,19 @@ def read_restart(path: str | Path, scene) -> RestartState:
         raise ConfigError([f"--restart: {p}" for p in exc.problems]) from None
     except OSError as exc:
         raise ConfigError(f"{label}: cannot be read: {exc}") from None
-    problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
+    try:
+        problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
+    except (TypeError, ValueError) as exc:  # /mesh datasets that are not numbers
+        if isinstance(exc, ConfigError):
+            raise
+        problems = [f"its /mesh is damaged or not a catenet result file's ({exc})"]
+    shape = scene.net.nodes.shape
+    for name, arr in (("positions", frame.x), ("velocities", frame.v)):
+        if arr is not None and arr.shape != shape:
+            problems.append(
+                f"its stored {name} ({frame.source}) have shape {arr.shape}: the case's net "
+                f"needs {shape}: restart with the case that wrote it"
+            )
     if problems:
         raise ConfigError([f"{label}: {p}" for p in problems])
     if frame.v is None:
@@ -117,6 +130,9 @@ def _mesh_mismatch(mesh, net) -> list[str]:
         problems.append("its rest lengths differ from the case's")
     if not np.array_equal(fixed.astype(bool), net.fixed):
         problems.append("its supports differ from the case's")
+    EA = mesh.EA
+    if EA is not None and (EA.shape != net.EA.shape or not np.allclose(EA, net.EA, rtol=1e-12)):
+        problems.append("its axial stiffnesses EA differ from the case's")
     return problems
 
 
@@ -177,7 +193,7 @@ def run_case(
     from catenet.model import measures, summary
     from catenet.output import ResultWriter, check_output_path
     from catenet.run import advice
-    from catenet.run.cases import pick
+    from catenet.run.cases import pick, solve_from_base
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -244,12 +260,12 @@ def run_case(
             )
         except CatenetError as exc:
             exc.output = path if writer.has_result else None
-            if isinstance(exc, ConfigError) and writer.frames == 0:
-                _remove(writer)  # bad input found late: leave nothing behind
+            if isinstance(exc, ConfigError):
+                _remove(writer)  # bad input found late (exit 2): leave nothing behind
             raise
     case_numbers, envelope = {}, {}
     if cases:
-        case_numbers, envelope = _solve_cases(scene, settings, ws, result, cases, path, interrupt)
+        case_numbers, envelope = solve_from_base(scene, settings, ws, result, cases, path, interrupt)
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
@@ -291,24 +307,6 @@ def run_case(
     if on_done is not None:
         on_done(scene, ws, run)
     return run
-
-
-def _solve_cases(scene, settings, ws, result, cases, path, interrupt) -> tuple[dict, dict]:
-    """The load cases from the base state ``result``, written to /cases and /envelope;
-    their summary numbers by name and the envelope (``governing``)."""
-    from catenet.run.cases import governing, solve_cases, write_cases
-
-    if not result.converged:
-        log.error("the base state did not converge: no load case is solved")
-        return {}, {}
-    result.cases = solve_cases(scene, settings, ws, result, cases, interrupt)
-    numbers = {
-        r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
-    }
-    envelope = governing(scene.net, result.cases)
-    if path is not None:
-        write_cases(path, scene, scene.case, result.cases)
-    return numbers, envelope
 
 
 def _run(
@@ -394,10 +392,12 @@ def _run(
                 keep(good.steps, t, x, good.v, force=True, a=good.a)
             except CatenetError:
                 pass
-        history = getattr(exc, "history", None)
-        residual = float(history[-1]) if history else float("inf")
-        if not dynamic:  # the residual of the state kept, not of the failed solve's iterate
-            residual = _static_residual(ws, scene, x, t)
+        # The residual of the state kept (a dynamic run's: its static part under the loads
+        # at its time), not of the failed solve's iterate, which may not even be finite.
+        residual = _static_residual(ws, scene, x, t, dynamic)
+        if not math.isfinite(residual):  # a term's gradient beyond floating point there:
+            start = [r for r in getattr(exc, "history", None) or () if math.isfinite(r)]
+            residual = start[0] if start else residual  # the failed solve's first residual
         res = finish(
             ws.system,
             scene.loads,
@@ -439,11 +439,15 @@ def _run(
     return res
 
 
-def _static_residual(ws, scene, x, factor: float) -> float:
-    """|grad E - f| over the free DOFs at x under the loads at ``factor`` [N]."""
+def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
+    """|grad E - f| over the free DOFs at x under the loads at load factor ``at`` (a
+    dynamic run's: at time ``at``) [N]."""
     net = scene.net
     _, grad = ws.system.gradient(x)
-    force = scene.loads.external_force(net, factor)
+    if dynamic:
+        force = scene.loads.external_force(net, time=at)
+    else:
+        force = scene.loads.external_force(net, at)
     return float(np.linalg.norm((grad - force)[~net.fixed]))
 
 

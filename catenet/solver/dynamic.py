@@ -326,7 +326,9 @@ def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, floa
     tol = rtol * scale
     residual = float(norm(r.reshape(-1)))
     inertia = float(norm(m_free * v.reshape(-1)[system.free_dofs])) / h
-    ratio = max(residual, inertia) / tol if tol > 0 else math.inf
+    if not (math.isfinite(tol) and tol > 0 and math.isfinite(residual + inertia)):
+        return False, residual, math.inf  # never at rest against a non-finite tolerance
+    ratio = max(residual, inertia) / tol
     return (residual <= tol and inertia <= tol), residual, ratio
 
 

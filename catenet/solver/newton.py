@@ -226,6 +226,9 @@ class _Newton:
         gnorm, floor = self.gnorm, self.ev.floor
         if not math.isfinite(gnorm):
             return "non-finite residual"
+        scale = self.ev.scale
+        if not (math.isfinite(self.tol) and math.isfinite(scale)):  # never "converged" vs inf
+            return f"non-finite tolerance (load scale {scale:.3g} N): the arithmetic overflows"
         if gnorm <= self.tol:  # which criterion held: the tolerance, or the floor above it
             return "converged" if gnorm <= self.target() else "converged (round-off floor)"
         if self.stall >= 3 and gnorm <= STALL_FLOOR * floor:
@@ -358,8 +361,13 @@ class _Newton:
             self.factorizations += 1
 
     def result(self) -> NewtonResult:
+        converged = (
+            self.reason.startswith("converged")
+            and math.isfinite(self.gnorm)
+            and math.isfinite(self.tol)
+        )
         return NewtonResult(
-            self.reason.startswith("converged"),
+            converged,
             self.it,
             self.gnorm,
             self.tol,

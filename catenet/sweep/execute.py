@@ -108,6 +108,9 @@ def run_sweep(
             raise ConfigError(f"--save-runs: needs catenet.output.ResultWriter: {exc}") from None
     jobs = sweep.jobs
     summary = SweepSummary(out, len(jobs), sweep.n_rows)
+    from catenet.output.files import check_output_dir
+
+    check_output_dir(out, what="sweep directory")
     client = connect_dask(scheduler) if scheduler else None  # before DIR exists
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -153,9 +156,12 @@ def _run(sweep, out, jobs, summary, client, workers, save_runs, progress) -> Non
                 tag = sweep.fingerprint[:8]
                 run_dask(_largest_first(sweep, todo), task, recorder, client, tag)
             elif workers == 1:
-                for job in todo:
-                    result = run_job(task(job, threads_per_worker(1), False))
-                    recorder.done(job, result["rows"], 1)
+                with deferred_interrupt() as interrupted:
+                    for job in todo:
+                        result = run_job(task(job, threads_per_worker(1), False))
+                        if interrupted():  # its rows may hold the interrupt: redone on resume
+                            raise KeyboardInterrupt
+                        recorder.done(job, result["rows"], 1)
             else:
                 run_pool(_largest_first(sweep, todo), task, recorder, workers, running)
         except KeyboardInterrupt:
@@ -187,3 +193,33 @@ def _largest_first(sweep: Sweep, jobs: list[Job]) -> list[Job]:
 
     costs = {job.index: cost(job) for job in jobs}
     return sorted(jobs, key=lambda job: (-costs[job.index], job.index))
+
+
+@contextlib.contextmanager
+def deferred_interrupt():
+    """Ctrl-C while jobs run in this process: the first SIGINT only sets a flag, which the
+    Newton solves ask before every iteration (they stop at once) and the caller asks after
+    each job (it then raises KeyboardInterrupt, and the interrupted job is not recorded,
+    so a resume runs it again). A KeyboardInterrupt raised anywhere inside NumPy could
+    come out as another exception and be recorded as the job's error. A second SIGINT
+    raises KeyboardInterrupt at once."""
+    import signal
+
+    from catenet.solver.newton import interruptible
+
+    got: list[int] = []
+
+    def handler(signum, frame):
+        got.append(signum)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    try:
+        previous = signal.signal(signal.SIGINT, handler)
+    except ValueError:  # not the main thread: Ctrl-C is not ours to handle
+        yield lambda: False
+        return
+    try:
+        with interruptible(lambda: bool(got)):
+            yield lambda: bool(got)
+    finally:
+        signal.signal(signal.SIGINT, previous)

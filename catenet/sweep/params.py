@@ -20,12 +20,24 @@ from catenet.errors import ConfigError
 LOAD_PREFIX = "load."
 MAX_VALUES = 100_000
 
+
+def _power(a, b):
+    """a ** b, in floating point unless both are integers with a result of at most
+    MAX_BITS bits (so that ``9**9**9`` is an overflow, not hours of big-integer work)."""
+    if type(a) is int and type(b) is int and b >= 0:
+        if a in (0, 1, -1) or b * math.log2(abs(a)) <= MAX_BITS:
+            return a**b
+    return math.pow(a, b)
+
+
+MAX_BITS = 1024  # the largest integer an expression makes (about 1e308)
+
 _OPS = {
     ast.Add: operator.add,
     ast.Sub: operator.sub,
     ast.Mult: operator.mul,
     ast.Div: operator.truediv,
-    ast.Pow: operator.pow,
+    ast.Pow: _power,
     ast.USub: operator.neg,
     ast.UAdd: operator.pos,
 }
@@ -72,9 +84,11 @@ def evaluate(text: str) -> float | int:
 
     try:
         value = ev(tree)
-    except (ZeroDivisionError, OverflowError) as exc:
-        raise ValueError(f"{text!r}: {exc}") from exc
-    if isinstance(value, complex) or not math.isfinite(value):
+        finite = not isinstance(value, complex) and math.isfinite(value)
+    except (ZeroDivisionError, OverflowError, ValueError, RecursionError, MemoryError) as exc:
+        reason = str(exc) or type(exc).__name__
+        raise ValueError(f"{text!r}: {reason}") from None
+    if not finite:
         raise ValueError(f"{text!r}: not a finite real number")
     return value
 
@@ -88,6 +102,17 @@ def _toml_scalar(text: str):
     if _has_datetime(value):
         raise ValueError(f"{text!r}: dates and times are not parameter values")
     return value
+
+
+def _show(value) -> str:
+    """A value as the user wrote it in TOML (dates in ISO form)."""
+    import datetime as dt
+
+    if isinstance(value, (dt.date, dt.time, dt.datetime)):
+        return value.isoformat()
+    if isinstance(value, list):
+        return "[" + ", ".join(_show(v) for v in value) + "]"
+    return repr(value)
 
 
 def _has_datetime(value) -> bool:
@@ -132,14 +157,23 @@ def expand_range(text: str) -> list:
         start, step, stop = (_number(p) for p in parts)
     except ValueError as exc:
         raise ValueError(f"{text!r}: a range is start:step:stop of numbers ({exc})") from None
+    try:
+        finite = all(math.isfinite(v) for v in (start, step, stop))
+    except OverflowError:  # an integer beyond floating point
+        finite = False
+    if not finite:
+        raise ValueError(f"{text!r}: start, step and stop must be finite numbers")
     if step == 0:
         raise ValueError(f"{text!r}: the step must not be 0")
     span = (stop - start) / step
+    if not math.isfinite(span):
+        raise ValueError(f"{text!r}: more than {MAX_VALUES} values")
     if span < -1e-9:
         raise ValueError(f"{text!r}: the step goes away from stop (check its sign)")
     count = math.floor(span + 1e-9) + 1
     if count > MAX_VALUES:
-        raise ValueError(f"{text!r}: {count} values: at most {MAX_VALUES}")
+        shown = f"{count}" if count < 10**9 else f"about {float(count):.3g}"
+        raise ValueError(f"{text!r}: {shown} values: at most {MAX_VALUES}")
     if all(type(v) is int for v in (start, step, stop)):
         return [start + k * step for k in range(count)]
     decimals = [d for d in map(_decimal, parts) if d is not None and d.is_finite()]
@@ -258,6 +292,8 @@ def _param_from_table(key: str, raw) -> Param:
         raise ConfigError(f"{where} = {raw!r}: must be a non-empty list of values")
     values: list = []
     for item in raw:
+        if _has_datetime(item):
+            raise ConfigError(f"{where}: {_show(item)}: dates and times are not parameter values")
         if isinstance(item, str):
             try:
                 values.extend(_string_item(item))

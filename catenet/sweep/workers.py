@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
+import socket
 from pathlib import Path
 
 from catenet.errors import CatenetError, ConfigError
@@ -79,12 +81,35 @@ def _worker_environment(threads: int):
                 os.environ[k] = v
 
 
-def _init_worker(threads: int) -> None:
+def _init_worker(threads: int, parent: int | None = None) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     for k in THREAD_VARIABLES:
         os.environ[k] = str(threads)
+    if parent is not None:
+        die_with_parent(parent)
+
+
+def die_with_parent(parent: int) -> None:
+    """Asks Linux to kill this process when its parent ends (PR_SET_PDEATHSIG), so that a
+    sweep whose parent is killed (SIGKILL: no chance to stop its pool) leaves no worker
+    behind; the resource tracker then ends too (its last pipe closes). Ends at once if
+    the parent is already gone. Elsewhere, nothing."""
+    import signal
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it ended before the request was made
+        os._exit(1)
 
 
 def run_pool(todo: list, task, recorder, workers: int, running: Path) -> None:
@@ -116,7 +141,7 @@ def run_pool(todo: list, task, recorder, workers: int, running: Path) -> None:
         env.__enter__()
         try:
             pool = ProcessPoolExecutor(
-                width, mp_context=ctx, initializer=_init_worker, initargs=(threads,)
+                width, mp_context=ctx, initializer=_init_worker, initargs=(threads, os.getpid())
             )
         except BaseException:
             env.__exit__(None, None, None)
@@ -170,10 +195,36 @@ def connect_dask(scheduler: str):
         from distributed import Client
     except ImportError:
         raise ConfigError("--scheduler needs Dask distributed: pip install catenet[dask]") from None
+    _reachable(scheduler)
     try:
         return Client(scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
         raise CatenetError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
+
+
+_ADDRESS = re.compile(r"^(?:(tcp|tls)://)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})$")
+
+
+def _reachable(scheduler: str) -> None:
+    """ConfigError for what is not a scheduler address (``tcp://host:port``, ``host:port``),
+    CatenetError when nothing listens there (a TCP connection, a few seconds at most):
+    Dask itself would try for CONNECT_TIMEOUT and print its own traceback."""
+    m = _ADDRESS.match(scheduler.strip())
+    port = int(m.group(3)) if m else 0
+    if not m or not 0 < port < 65536:
+        raise ConfigError(
+            f"--scheduler {scheduler!r}: must be a Dask scheduler address such as "
+            "tcp://host:8786 (a host name or IP address and a port 1..65535)"
+        )
+    host = m.group(2).strip("[]")
+    try:
+        socket.create_connection((host, port), timeout=PROBE_SECONDS).close()
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise CatenetError(f"--scheduler {scheduler}: cannot connect: {reason}") from None
+
+
+PROBE_SECONDS = 5.0
 
 
 def run_dask(todo: list, task, recorder, client, tag: str) -> None:

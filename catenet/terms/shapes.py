@@ -30,6 +30,7 @@ MAX_CELLS = 2_000_000  # the mesh's grid never has more cells
 def rotation(axis, angle: float) -> np.ndarray:
     """The rotation matrix (3, 3) by ``angle`` [rad] about ``axis`` (Rodrigues)."""
     k = np.asarray(axis, dtype=np.float64)
+    k = k / np.max(np.abs(k))  # first to O(1): the norm of a tiny axis would underflow to 0
     k = k / np.linalg.norm(k)
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * (K @ K)

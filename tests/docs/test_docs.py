@@ -37,6 +37,7 @@ OWN = {
     "docs/guide/modes.md",
     "docs/guide/bodies.md",
     "docs/guide/results.md",
+    "docs/guide/reliability.md",
 }
 
 

@@ -324,17 +324,23 @@ def split_count(length: np.ndarray, h: float | None) -> np.ndarray:
     """Edges per piece: as the square net's pieces (contract §2); one without h."""
     if h is None:
         return np.ones(len(length), dtype=np.int64)
-    return np.maximum(np.ceil(length / h - 1e-9), 1).astype(np.int64)
+    return np.minimum(_counts(length, h), 2.0**62).astype(np.int64)  # beyond: refused anyway
 
 
-def estimate(xyz: np.ndarray, lines: Sequence[Sequence[int]], hs: Sequence) -> tuple[int, int]:
-    """(new nodes, edges) the cables add, from their segment lengths."""
-    nodes = edges = 0
+def _counts(length: np.ndarray, h: float) -> np.ndarray:
+    return np.maximum(np.ceil(length / h - 1e-9), 1.0)
+
+
+def estimate(xyz: np.ndarray, lines: Sequence[Sequence[int]], hs: Sequence) -> tuple[float, float]:
+    """(new nodes, edges) the cables add, from their segment lengths, in floating point (a
+    cable 1e99 m long in edges of 0.5 m is 2e99 edges: the size guard refuses it)."""
+    nodes = edges = 0.0
     for line, h in zip(lines, hs, strict=True):
         p = xyz[np.asarray(line, dtype=np.int64)]
-        k = split_count(np.linalg.norm(np.diff(p, axis=0), axis=1), h)
-        nodes += int(np.sum(k - 1))
-        edges += int(np.sum(k))
+        length = np.linalg.norm(np.diff(p, axis=0), axis=1)
+        k = _counts(length, h) if h is not None else np.ones(len(length))
+        nodes += float(np.sum(k - 1))
+        edges += float(np.sum(k))
     return nodes, edges
 
 

@@ -3,17 +3,25 @@ coordinates, edges as index pairs, one value per edge, node index lists."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
-from catenet.case.keys import BAD, Checker, Context, as_float, as_int, duplicates
+from catenet.case.keys import (
+    BAD,
+    MAGNITUDE,
+    Checker,
+    Context,
+    as_float,
+    as_int,
+    carried,
+    duplicates,
+)
 
 
 def finite(c: Any) -> float | None:
     f = as_float(c)
-    return f if f is not None and math.isfinite(f) else None
+    return f if f is not None and carried(f) else None
 
 
 def index(c: Any) -> int | None:
@@ -43,7 +51,8 @@ def _array(ck: Checker, v: Any, path: str, shape: tuple[int, int], convert, need
 
 
 def points(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    return _array(ck, v, path, (2, 3), finite, "[x, y, z]: 3 finite numbers")
+    need = f"[x, y, z]: 3 finite numbers, each within +-{MAGNITUDE:.0e}"
+    return _array(ck, v, path, (2, 3), finite, need)
 
 
 def pairs(ck: Checker, v: Any, path: str, ctx: Context) -> Any:

@@ -16,8 +16,6 @@ file's path.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import logging
 import zlib
@@ -25,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from catenet.case.keys import Checker
+from catenet.case.keys import Checker, carried, too_large
+from catenet.case.meshfiles import read_mesh_file
 
 log = logging.getLogger(__name__)
 
@@ -268,13 +267,17 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
         try:
             if table == "nodes":
                 xyz = [float(c) for c in cells]
-                if not all(map(np.isfinite, xyz)):
+                if not all(map(carried, xyz)):
                     raise ValueError
                 tables["nodes"].append(xyz + [0.0] * (3 - width))
             else:
                 tables["edges"].append([int(c) for c in cells])
         except ValueError:
-            need = "finite numbers" if table == "nodes" else "node indices (0, 1, ...)"
+            need = (
+                f"finite numbers within {too_large()}"
+                if table == "nodes"
+                else "node indices (0, 1, ...)"
+            )
             ck.add(f"{label}: line {lineno}: {shown!r}: the {table} table holds {need}")
             return None
         if table == "edges":
@@ -296,18 +299,15 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
 
 
 def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
-    try:
-        import meshio
+    try:  # (meshio prints its own message and exits for a file none of its readers takes)
+        mesh = read_mesh_file(path)
     except ImportError:
         ck.add(
             f"{label}: reading {path.suffix} files needs the Python package meshio, which "
             "is not installed (pip install meshio), or give the graph as JSON or OBJ"
         )
         return None
-    try:  # meshio prints its own message and exits for a file none of its readers takes
-        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
-            mesh = meshio.read(path)
-    except (Exception, SystemExit):  # meshio raises many kinds for a file it cannot read
+    except ValueError:  # (meshio's own words name its internals, not the user's file)
         ck.add(
             f"{label}: cannot read it as a {path.suffix or 'suffix-less'} mesh (through meshio): "
             "give a mesh of line cells in a format meshio reads, or the net as .vtu, .vtp, "

@@ -1,0 +1,369 @@
+"""Regression tests built from the cases a hostile fuzz of catenet found (each failure as
+it showed): hangs on truncated files, a false "converged", non-finite results, tracebacks,
+messages that blamed the wrong key, exit 1 for bad input, leftovers, runaway work."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import warnings
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from conftest import catenet_command, small_net, subprocess_env
+from fuzzing import HIDDEN, NUMPY_REPR, invoke, judge
+
+pytestmark = pytest.mark.filterwarnings("ignore")
+
+SMALL = small_net(t_end=0.3).replace("edge_length = 0.05", "edge_length = 0.1")
+
+
+def run(tmp_path, *args, case=SMALL, name="case.toml"):
+    path = tmp_path / name
+    path.write_text(case)
+    result = invoke(["run", path, *args], seconds=120, cwd=tmp_path)
+    return result, result.output + (result.stderr or "")
+
+
+def hidden(root: Path) -> list[str]:
+    return [p.name for p in root.rglob("*") if HIDDEN.match(p.name)]
+
+
+@pytest.fixture(scope="module")
+def dynamic_file(tmp_path_factory):
+    work = tmp_path_factory.mktemp("dyn")
+    (work / "case.toml").write_text(small_net(t_end=1.0))
+    out = work / "d.h5"
+    result = invoke(["run", work / "case.toml", "-o", out, "-q"], seconds=120)
+    assert result.exit_code == 0, result.output
+    return work / "case.toml", out
+
+
+# --- hangs on truncated result files ----------------------------------------------------------
+
+
+@pytest.mark.parametrize("fraction", [96, 512, 77703, 0.6])
+def test_truncated_result_files_fail_fast(dynamic_file, tmp_path, fraction):
+    """A dynamic run's file cut at 96, 512, 77 703 bytes (and at 60 %): --restart, plot,
+    export and repair each end at once with exit 2 (SWMR reading retried for ever)."""
+    case, src = dynamic_file
+    raw = src.read_bytes()
+    cut = tmp_path / "cut.h5"
+    cut.write_bytes(raw[: int(fraction * len(raw)) if fraction < 1 else fraction])
+    commands = [
+        ["run", case, "--restart", cut, "-o", tmp_path / "again.h5", "--set", "solver.t_end=2"],
+        ["plot", cut, "-o", tmp_path / "fig.png"],
+        ["export", cut, "--to", "vtu", "-o", tmp_path / "ex"],
+        ["repair", cut],
+    ]
+    for args in commands:  # a fresh interpreter: a hang inside HDF5 holds the GIL
+        proc = subprocess.run(
+            catenet_command(*args), capture_output=True, text=True, env=subprocess_env(), timeout=60
+        )
+        assert proc.returncode == 2, (args, proc.stderr)
+        assert "Traceback" not in proc.stderr and "catenet: error:" in proc.stderr
+    assert not (tmp_path / "again.h5").exists() and not hidden(tmp_path)
+
+
+# --- a false "converged" and non-finite results -------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "sets, key",
+    [
+        (["material.E=1e300"], "material.E = 1e+300"),
+        (["load.pressure=1e300"], "load.pressure = 1e+300"),
+        (["solver.damping=1e300"], "solver.damping = 1e+300"),
+        (["material.radius=1e200"], "material.radius = 1e+200"),
+        (["material.E=1e90", "material.radius=1e90"], "material.E = 1e+90, material.radius"),
+        (["solver.steps=1e300", "solver.method=static"], "solver.steps = 1e+300"),
+        (["solver.dt=1e-300"], "solver.dt = 1e-300"),
+        (["load.gravity=[0, 0, -1e300]"], "load.gravity = [0, 0, -1e+300]"),
+        (["material.E=1e-320"], "material.E = 1e-320, material.radius = 0.01: EA = 4.94e-324"),
+    ],
+)
+def test_numbers_beyond_the_arithmetic_name_their_key(tmp_path, sets, key):
+    args = ["-o", tmp_path / "o.h5", "-q"]
+    for s in sets:
+        args += ["--set", s]
+    result, text = run(tmp_path, *args)
+    assert result.exit_code == 2, text
+    assert key in text and not NUMPY_REPR.search(text)
+    assert not (tmp_path / "o.h5").exists()
+
+
+def test_never_converged_against_a_non_finite_tolerance(tmp_path, monkeypatch):
+    """E = 1e300 with the range checks out of the way: the run may fail (exit 1) but never
+    says "converged" (it did, with 0 Newton iterations and a residual of 3 N)."""
+    from catenet.case import guard, keys
+
+    monkeypatch.setattr(keys, "MAGNITUDE", math.inf)
+    monkeypatch.setattr("catenet.model.net.MAGNITUDE", math.inf)
+    for name in ("guard_scales", "guard_material"):
+        monkeypatch.setattr(guard, name, lambda *a: None)
+        monkeypatch.setattr(f"catenet.case.scene.{name}", lambda *a: None)
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", "--set", "material.E=1e300")
+    assert result.exit_code == 1, text
+    assert "converged after" not in text and "non-finite" in text
+    with h5py.File(tmp_path / "o.h5") as h5:
+        assert not h5["result"].attrs["converged"]
+        assert np.all(np.isfinite(h5["result/x"][()]))
+
+
+def test_newton_refuses_a_non_finite_scale():
+    from catenet.solver import newton
+    from catenet.solver.potential import Evaluation
+
+    class Potential:  # the load scale overflowed
+        def evaluate(self, x):
+            g = np.full(3, 1.0)
+            return Evaluation(0.0, g, math.inf, 0.0, 0.0, float(np.linalg.norm(g)))
+
+        system = type("S", (), {"free_dofs": np.arange(3)})()
+
+    result = newton.solve(Potential(), np.zeros((1, 3)), rtol=1e-8, max_iter=5)
+    assert not result.converged and "non-finite tolerance" in result.reason
+
+
+# --- tracebacks -----------------------------------------------------------------------------
+
+
+def test_sweep_values_beyond_the_arithmetic(tmp_path):
+    case = tmp_path / "case.toml"
+    case.write_text(small_net(method="static"))
+    for value in ("10**400", "0:1:inf", "9**9**9", "0:1e-300:1", "1e308*10"):
+        result = invoke(["sweep", case, "-o", tmp_path / "sw", "-p", f"load.pressure={value}"])
+        text = result.output
+        assert result.exit_code == 2 and "--param" in text, (value, text)
+        assert "Traceback" not in text
+    assert not (tmp_path / "sw").exists()
+
+
+def test_a_date_in_a_sweep_is_named_as_written(tmp_path):
+    case = tmp_path / "case.toml"
+    case.write_text(small_net(method="static") + "\n[sweep]\nload.pressure = [2020-01-01]\n")
+    result = invoke(["sweep", case, "-o", tmp_path / "sw"])
+    assert result.exit_code == 2
+    assert "sweep.load.pressure: 2020-01-01: dates" in result.output
+    assert "datetime" not in result.output
+
+
+def test_deep_nesting_in_a_case_and_in_set(tmp_path):
+    deep = SMALL + "\n[extra]\n" + "a." * 3000 + "b = 1\n"
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", "--set", "title=x", case=deep)
+    assert result.exit_code == 2 and "nested more than" in text, text
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", "--set", "title." + "a." * 1200 + "b=1")
+    assert result.exit_code == 2 and "key path of 1202 parts" in text, text
+
+
+def test_undecodable_paths(tmp_path):
+    """An output path with bytes that are not UTF-8: exit 2, nothing written (a traceback
+    in the XDMF writer); a case file with such a name runs."""
+    bad = os.fsdecode(b"bad\xff.h5")
+    result, text = run(tmp_path, "-o", tmp_path / bad, "-q")
+    assert result.exit_code == 2 and "not UTF-8" in text, text
+    assert list(tmp_path.iterdir()) == [tmp_path / "case.toml"]
+    result, text = run(tmp_path, "-o", tmp_path / "ok.h5", "-q", name=os.fsdecode(b"c\xff.toml"))
+    assert result.exit_code == 0, text
+    with h5py.File(tmp_path / "ok.h5") as h5:
+        assert h5.attrs["source"].endswith("c\\xff.toml")  # the byte, escaped
+
+
+def test_restart_files_of_the_wrong_shape_or_another_case(dynamic_file, tmp_path):
+    case, src = dynamic_file
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(src.read_bytes())
+    with h5py.File(bad, "a") as h5:
+        del h5["trajectory/x"]
+        h5["trajectory/x"] = np.zeros((3, 5, 3))
+    base = ["run", case, "-o", tmp_path / "again.h5", "--set", "solver.t_end=2", "--restart"]
+    result = invoke([*base, bad])
+    assert result.exit_code == 2 and "shape (5, 3)" in result.output, result.output
+    result = invoke([*base, src, "--set", "material.E=2e7"])
+    assert result.exit_code == 2 and "EA differ" in result.output, result.output
+    result = invoke([*base, src, "--set", "geometry.edge_length=0.1"])
+    assert result.exit_code == 2 and "its net has" in result.output, result.output
+    assert not (tmp_path / "again.h5").exists()
+
+
+# --- messages that blamed the wrong key -------------------------------------------------------
+
+
+GRAPH = """
+title = "graph"
+[geometry]
+kind = "graph"
+nodes = [[0, 0, 0], [1, 0, -0.1], [2, 0, 0]]
+edges = [[0, 1], [1, 2]]
+fixed = [0, 2]
+[material]
+EA = 1000.0
+[load]
+point = [{node = 1, force = [0, 0, -10]}]
+[solver]
+method = "static"
+"""
+
+
+def test_a_huge_coordinate_is_blamed_on_the_node(tmp_path):
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "geometry.nodes=[[0,0,0],[1e300,0,0],[2,0,0]]",
+        case=GRAPH,
+    )  # fmt: skip
+    assert result.exit_code == 2 and "geometry.nodes[1] = [1e+300, 0, 0]" in text, text
+    assert "rest_length" not in text and not NUMPY_REPR.search(text)
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", "--set", "geometry.size=1e300")
+    assert result.exit_code == 2 and "geometry.size = 1e+300" in text, text
+
+
+def test_the_square_net_builder_raises_no_warning():
+    """Hostile sizes in the Python API: a ConfigError, not an overflow warning first."""
+    import catenet as cn
+
+    mat = cn.Material.from_E(10e6, radius=0.01, density=1000.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for size, edge in ((1e300, 1e300), (1e300, 1.8e308), (1e101, 1.0)):
+            with pytest.raises(cn.ConfigError, match="geometry"):
+                cn.square_net(2, 0.3, size, edge, mat)
+        with pytest.raises(cn.ConfigError, match="huge coordinates"):
+            cn.Net.from_arrays([[0, 0, 0], [1e300, 0, 0]], [[0, 1]], EA=1.0, fixed=[0])
+
+
+# --- exit 1 for bad input, leftovers, runaway work -----------------------------------------------
+
+
+def test_names_too_long_and_directories_below_files_are_bad_input(tmp_path):
+    for length in (300, 240):  # 240: the file fits, its hidden spare's copy does not
+        result, text = run(tmp_path, "-o", tmp_path / ("x" * length + ".h5"))
+        assert result.exit_code == 2 and "too long for the file system" in text, text
+    (tmp_path / "afile").write_text("")
+    case = tmp_path / "case.toml"
+    result = invoke(["sweep", case, "-o", tmp_path / "afile" / "sub", "-p", "load.pressure=1"])
+    assert result.exit_code == 2 and "is not a directory" in result.output, result.output
+    result = invoke(["sweep", case, "-o", tmp_path / ("y" * 300), "-p", "load.pressure=1"])
+    assert result.exit_code == 2 and "too long" in result.output, result.output
+
+
+def test_a_sidecar_path_that_is_a_directory_leaves_nothing(tmp_path):
+    (tmp_path / "r.xdmf").mkdir()
+    result, text = run(tmp_path, "-o", tmp_path / "r.h5", "-q")
+    assert result.exit_code == 2 and "sidecar" in text, text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml", "r.xdmf"]
+
+
+def test_a_garbage_scheduler_address_is_refused_at_once(tmp_path):
+    case = tmp_path / "case.toml"
+    case.write_text(small_net(method="static"))
+    for address, code in (("garbage!!", 2), ("tcp://127.0.0.1:1", 1), ("host:99999", 2)):
+        result = invoke(
+            ["sweep", case, "-o", tmp_path / "sw", "-p", "load.pressure=1", "--scheduler", address],
+            seconds=30,
+        )
+        assert result.exit_code == code and "--scheduler" in result.output, result.output
+        assert "Traceback" not in result.output
+    assert not (tmp_path / "sw").exists()
+
+
+def test_a_mesh_file_meshio_exits_on_is_bad_input(tmp_path):
+    """meshio prints a line and calls sys.exit for some broken STL files."""
+    (tmp_path / "cube.stl").write_text("solid\nfacet normal 0 0 -1\n outer loop\n  vertex -1 -1\n")
+    case = SMALL + '\n[[obstacle]]\nkind = "mesh"\nfile = "cube.stl"\n'
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=case)
+    assert result.exit_code == 2 and "obstacle[0].file = 'cube.stl': meshio cannot read" in text
+    assert judge(result, tmp_path).good
+
+
+def test_bad_input_found_once_the_file_is_open_leaves_nothing(tmp_path):
+    """A density so small that the masses underflow to 0 is found by the dynamic solver,
+    after the file got its first frame: exit 2 and no file (one was left)."""
+    from fuzzing import CONFIGS
+
+    case = (CONFIGS / "contact" / "ball_off_box.toml").read_text()
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "material.density=5e-324",
+        "--set", "solver.t_end=0.2", case=case,
+    )  # fmt: skip
+    assert result.exit_code == 2 and "material.density" in text, text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
+
+
+@pytest.mark.parametrize("name", ["sphere_catch.toml", "net_on_sphere.toml"])
+def test_a_denormal_barrier_distance_is_named(tmp_path, name):
+    """obstacle.distance = 5e-324 made the barrier's stiffness infinite: a ValueError
+    from the ball's term (the long fuzz run found it)."""
+    from fuzzing import CONFIGS
+
+    case = (CONFIGS / "contact" / name).read_text()
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "obstacle.0.distance=5e-324",
+        "--set", "solver.t_end=0.1", case=case,
+    )  # fmt: skip
+    assert result.exit_code == 2, text
+    assert "obstacle[0].distance = 5e-324: the barrier's stiffness would be inf" in text
+
+
+def test_a_far_node_of_a_cable_graph(tmp_path):
+    """A mooring line's fairlead moved to x = 1e99 (the quick tier found it): the cable
+    split into 2e99 edges was cast to int64 garbage and built; now the size guard refuses
+    it. A dynamic run that fails keeps a finite /result residual (it stored inf)."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["geometry"]["nodes"][1][0] = 1e99
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2 and "the net would have about 4e+99 nodes" in text, text
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "solver.max_iter=1",
+        "--set", "solver.rtol=1e-300", case=SMALL,
+    )  # fmt: skip
+    if result.exit_code == 1:
+        with h5py.File(tmp_path / "o.h5") as h5:
+            assert math.isfinite(h5["result"].attrs["residual"])
+    assert judge(result, tmp_path).good
+
+
+@pytest.mark.parametrize(
+    "name, value",
+    [
+        ("mesh/fixed", np.array([b"not", b"numbers"])),
+        ("mesh/EA", np.float64(np.nan)),
+        ("mesh/rest_length", np.array([b"not", b"numbers"])),
+        ("mesh/nodes", np.zeros((104, 2, 2))),
+        ("trajectory/tension", None),
+    ],
+)
+def test_export_of_datasets_of_the_wrong_type_or_shape(dynamic_file, tmp_path, name, value):
+    """Damaged result files the long fuzz run gave `catenet export`: exit 2 naming the
+    file (they were internal errors: TypeError, ValueError, KeyError)."""
+    _, src = dynamic_file
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(src.read_bytes())
+    with h5py.File(bad, "a") as h5:
+        del h5[name]
+        if value is not None:
+            h5[name] = value
+    result = invoke(["export", bad, "--to", "vtu", "-o", tmp_path / "ex"], cwd=tmp_path)
+    assert result.exit_code == 2 and "bad.h5" in result.output, result.output
+    assert judge(result, tmp_path, {bad}).good
+
+
+def test_a_vanishing_friction_slip_is_named(tmp_path):
+    """obstacle.slip = 1e-300 (the quick tier found it): the friction's gradient overflowed
+    at the start and the failed run stored an infinite residual."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["obstacle"][0]["slip"] = 1e-300
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2 and "obstacle[0].slip = 1e-300: must be at least" in text, text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
