@@ -89,55 +89,124 @@ def solve_dynamic(
     """
     _check(dt, damping, t_end, t0, rtol)
     scheme = make(integrator, rho_inf)
-    mass = net.mass
-    if not np.all(mass[~net.fixed] > 0):
-        raise ConfigError(
-            "material.density: the free nodes have no mass: the dynamic solver needs "
-            "density > 0 (or use solver.method = 'static')"
-        )
+    _check_mass(net)
     ws = workspace or Workspace(net, linear=linear)
-    system = ws.system
-    free = system.free_dofs
-    m_free, damping = _mass_and_damping(net, damping)
-    inertia = Inertia(free)  # the step's inertia and damping, refilled every step
-    potential = ws.potential(loads, steps=(inertia,))
+    stepper = TimeStepper(
+        net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
+    )
     start = time.perf_counter()
+    stepper.begin(x0, v0, t0, a0, a_out)
+    run = stepper.run(
+        StepControl(dt, t0, t_end),
+        rest=stop_at_equilibrium,
+        on_step=on_step,
+        on_rest=on_rest,
+    )
+    x, v, t = stepper.x, stepper.v, stepper.t
+    return finish(
+        ws.system,
+        loads,
+        x,
+        converged=run is not Outcome.INTERRUPTED,
+        equilibrium=stepper.equilibrium,
+        iterations=stepper.iterations,
+        residual=stepper.residual,
+        load_time=t,
+        steps=stepper.steps,
+        time=t,
+        v=v,
+        a=None if scheme.a is None else _store(scheme, np.zeros_like(x), stepper.free),
+        message=str(run),
+        wall_time=time.perf_counter() - start,
+        stats=ws.stats(),
+        outcome=run,
+    )
 
-    x = net.nodes.copy() if x0 is None else np.array(x0, dtype=np.float64, copy=True)
-    v = np.zeros_like(x) if v0 is None else np.array(v0, dtype=np.float64, copy=True)
-    if x.shape != net.nodes.shape or v.shape != net.nodes.shape:
-        raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
-    x[net.fixed] = loads.support_positions(net, time=t0)
-    settle = loads.settle_time()
-    moving = moves(potential, t0)  # an obstacle on a prescribed motion, at its t0 pose
-    follow = HarmonicExtension(net) if loads.moves_supports and settle > t0 else None
 
-    t = t0
-    control = StepControl(dt, t0, t_end)
-    steps = 0
-    iterations = 0
-    residual = 0.0
-    equilibrium = False
-    message = ""
-    interrupted = False
-    x_trial = np.empty_like(x)
-    if a0 is not None and np.shape(a0) != net.nodes.shape:
-        raise ConfigError(f"a0: must have shape {net.nodes.shape}")
-    a_free = None if a0 is None else np.asarray(a0, dtype=np.float64).reshape(-1)[free]
-    scheme.begin(potential_at(potential, loads, net, t0), x, v, m_free, damping, a_free)
-    _store(scheme, a_out, free)
-    kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
-    fresh = False  # this step's retry with fresh factorisations (its kept one failed)
-    while t < t_end * (1 - 1e-12) and not equilibrium:
-        h_step = control.step(t)
+class TimeStepper:
+    """The state (t, x, v) of a dynamic run and the steps that advance it: each step's
+    predictor (the scheme's, carried along by moving supports and obstacles), its Newton
+    solve with the scheme's inertia and damping, the retry with fresh factorisations of a
+    step that failed with a kept one (modified Newton, ``reuse``), and the rest test of
+    dynamic relaxation. ``iterations`` counts every Newton iteration, failed steps' too."""
+
+    def __init__(self, net, loads, ws, scheme, damping, *, rtol, max_iter, reuse):
+        self.net, self.loads, self.scheme = net, loads, scheme
+        self.system = ws.system
+        self.free = self.system.free_dofs
+        self.m_free, self.damping = _mass_and_damping(net, damping)
+        self.inertia = Inertia(self.free)  # the step's inertia and damping, refilled every step
+        self.potential = ws.potential(loads, steps=(self.inertia,))
+        self.rtol, self.max_iter = rtol, max_iter
+        self.kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
+        self.fresh = False  # this step's retry with fresh factorisations (its kept one failed)
+        self.iterations = 0
+        self.steps = 0
+        self.residual = 0.0  # the last step's Newton residual; at rest the static one
+        self.equilibrium = False
+
+    def begin(self, x0, v0, t0, a0, a_out) -> None:
+        """The start state at t0: ``x0``, ``v0`` (default: reference positions at rest)
+        with the supports where they are at t0; the scheme's acceleration state from
+        ``a0`` (None: the physical one), copied into ``a_out`` after every step."""
+        net, loads = self.net, self.loads
+        x = net.nodes.copy() if x0 is None else np.array(x0, dtype=np.float64, copy=True)
+        v = np.zeros_like(x) if v0 is None else np.array(v0, dtype=np.float64, copy=True)
+        if x.shape != net.nodes.shape or v.shape != net.nodes.shape:
+            raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
+        x[net.fixed] = loads.support_positions(net, time=t0)
+        self.settle = loads.settle_time()
+        # an obstacle on a prescribed motion, at its t0 pose
+        self.moving = moves(self.potential, t0)
+        moving_supports = loads.moves_supports and self.settle > t0
+        self.follow = HarmonicExtension(net) if moving_supports else None
+        self.t, self.x, self.v = t0, x, v
+        self.x_trial = np.empty_like(x)
+        if a0 is not None and np.shape(a0) != net.nodes.shape:
+            raise ConfigError(f"a0: must have shape {net.nodes.shape}")
+        a_free = None if a0 is None else np.asarray(a0, dtype=np.float64).reshape(-1)[self.free]
+        potential = potential_at(self.potential, loads, net, t0)
+        self.scheme.begin(potential, x, v, self.m_free, self.damping, a_free)
+        self.a_out = a_out
+        _store(self.scheme, a_out, self.free)
+
+    def run(self, control: StepControl, *, rest: bool, on_step, on_rest) -> Outcome:
+        """Steps to ``control.t_end``, to rest (``rest``: dynamic relaxation, once the
+        supports have settled and no obstacle moves) or until ``on_step`` says stop."""
+        while self.t < control.t_end * (1 - 1e-12) and not self.equilibrium:
+            h_step = control.step(self.t)
+            newton, why = self.solve_step(h_step)
+            if newton is None or not newton.converged:
+                if not self.refresh(h_step, why):
+                    self.cut(control, h_step, why, newton)
+                continue
+            self.accept(control, h_step, newton)
+            if rest and self.t >= self.settle and not self.moving:  # else it runs to t_end
+                self.equilibrium, residual_static, ratio = at_rest(
+                    self.system, self.potential, self.x, self.v, self.m_free, h_step, self.rtol
+                )
+                if self.equilibrium:
+                    self.residual = residual_static
+                if on_rest is not None:
+                    on_rest(ratio)
+            if on_step is not None and on_step(self.steps, self.t, self.x, self.v):
+                return Outcome.INTERRUPTED
+        return Outcome.EQUILIBRIUM if self.equilibrium else Outcome.REACHED_T_END
+
+    def predict(self, h_step: float) -> np.ndarray:
+        """The step's start for Newton: the scheme's predictor (Eq. 11 for implicit Euler)
+        with the supports at t + h, the free nodes following their motion, carried by a
+        moving obstacle and cut at the obstacles."""
+        net, loads, potential = self.net, self.loads, self.potential
+        x, v, t, x_trial = self.x, self.v, self.t, self.x_trial
         x_trial[:] = x
-        scheme.predict(x_trial, v, free, h_step)  # Eq. 11 for implicit Euler
+        self.scheme.predict(x_trial, v, self.free, h_step)
         supports = loads.support_positions(net, time=t + h_step)
-        if follow is not None and t < settle:
+        if self.follow is not None and t < self.settle:
             # The free nodes follow what Eq. 11 does not foresee of the supports' motion
             # (a start, a stop, a change of speed): the net is carried along instead of
             # being run over by a support.
-            x_trial += follow(supports - x[net.fixed] - h_step * v[net.fixed])
+            x_trial += self.follow(supports - x[net.fixed] - h_step * v[net.fixed])
         x_trial[net.fixed] = supports
         if loads.varies:  # loads with a time history act with their value at t + h
             potential.set_force(loads.external_force(net, time=t + h_step))
@@ -145,92 +214,74 @@ def solve_dynamic(
         try:  # nodes a moving obstacle may reach ride with it (catenet/terms/moving.py)
             base = carry(potential, x, x_trial, t, t + h_step, net.fixed)
         except ConvergenceError as exc:
-            raise ConvergenceError(str(exc), iterations=iterations, state=x.copy()) from None
+            raise ConvergenceError(str(exc), iterations=self.iterations, state=x.copy()) from None
         x_trial[:] = potential.toward(base, x_trial)  # a predictor inside an obstacle is cut
-        y_k = x.reshape(-1)[free]
-        v_k = v.reshape(-1)[free]
-        inertia.set_step(*scheme.weights(m_free, y_k, v_k, h_step, damping))
-        if kept is not None:
-            kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
+        return x_trial
+
+    def solve_step(self, h_step: float):
+        """Newton for the step of ``h_step`` from the predictor: its result (None when the
+        system was singular) and why it failed."""
+        x_trial = self.predict(h_step)
+        y_k = self.x.reshape(-1)[self.free]
+        v_k = self.v.reshape(-1)[self.free]
+        self.inertia.set_step(*self.scheme.weights(self.m_free, y_k, v_k, h_step, self.damping))
+        if self.kept is not None:
+            self.kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
         try:
             newton = solve(
-                potential,
+                self.potential,
                 x_trial,
-                rtol=rtol * scheme.step_rtol,
-                max_iter=max_iter,
+                rtol=self.rtol * self.scheme.step_rtol,
+                max_iter=self.max_iter,
                 label="step",
-                reuse=None if fresh else kept,
+                reuse=None if self.fresh else self.kept,
             )
-            ok = newton.converged
-            why = newton.reason
         except SingularSystemError as exc:
-            ok, why, newton = False, str(exc), None
-        if newton is not None:
-            iterations += newton.iterations
-        if not ok and kept is not None and not fresh:
-            fresh = True  # with a kept factorisation: once more with fresh ones, same h
-            kept.drop()
-            log.info(
-                "t = %.6g: step %.3g failed (%s); retrying with fresh factorisations",
-                t,
-                h_step,
-                why,
+            return None, str(exc)
+        self.iterations += newton.iterations
+        return newton, newton.reason
+
+    def refresh(self, h_step: float, why: str) -> bool:
+        """After a failed step: whether to retry it at the same h with fresh
+        factorisations (it failed with a kept one)."""
+        if self.kept is None or self.fresh:
+            self.fresh = False
+            return False
+        self.fresh = True
+        self.kept.drop()
+        log.info(
+            "t = %.6g: step %.3g failed (%s); retrying with fresh factorisations",
+            self.t,
+            h_step,
+            why,
+        )
+        return True
+
+    def cut(self, control: StepControl, h_step: float, why: str, newton) -> None:
+        """After a failed step: the next try has half its length; raises ConvergenceError
+        (the last accepted state) below the smallest step."""
+        again = control.failed(h_step)
+        log.info(
+            "t = %.6g: step %.3g failed (%s); retrying with %.3g", self.t, h_step, why, control.h
+        )
+        if not again:
+            raise ConvergenceError(
+                f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s: {why}",
+                iterations=self.iterations,
+                history=newton.history if newton else [],
+                state=self.x.copy(),
             )
-            continue
-        fresh = False
-        if not ok:
-            again = control.failed(h_step)
-            log.info(
-                "t = %.6g: step %.3g failed (%s); retrying with %.3g", t, h_step, why, control.h
-            )
-            if not again:
-                raise ConvergenceError(
-                    f"dynamic step at t = {t:.6g} s failed even with h = {h_step:.3g} s: {why}",
-                    iterations=iterations,
-                    history=newton.history if newton else [],
-                    state=x.copy(),
-                )
-            continue
-        v = scheme.accept(x_trial, x, v, free, h_step)  # Eq. 10c for implicit Euler
-        _store(scheme, a_out, free)
-        x[:] = x_trial
-        t = control.advance(t, h_step)
-        steps += 1
-        assert newton is not None  # ok: it converged
-        residual = newton.residual
+
+    def accept(self, control: StepControl, h_step: float, newton) -> None:
+        """The converged step becomes the state (Eq. 10c for implicit Euler)."""
+        self.fresh = False
+        self.v = self.scheme.accept(self.x_trial, self.x, self.v, self.free, h_step)
+        _store(self.scheme, self.a_out, self.free)
+        self.x[:] = self.x_trial
+        self.t = control.advance(self.t, h_step)
+        self.steps += 1
+        self.residual = newton.residual
         control.accepted()
-        if stop_at_equilibrium and t >= settle and not moving:  # it runs to t_end
-            equilibrium, residual_static, ratio = at_rest(
-                system, potential, x, v, m_free, h_step, rtol
-            )
-            if on_rest is not None:
-                on_rest(ratio)
-        if on_step is not None and on_step(steps, t, x, v):
-            interrupted = True
-            break
-    if interrupted:
-        outcome = Outcome.INTERRUPTED
-    else:
-        outcome = Outcome.EQUILIBRIUM if equilibrium else Outcome.REACHED_T_END
-    message = str(outcome)
-    return finish(
-        system,
-        loads,
-        x,
-        converged=not interrupted,
-        equilibrium=equilibrium,
-        iterations=iterations,
-        residual=residual_static if equilibrium else residual,
-        load_time=t,
-        steps=steps,
-        time=t,
-        v=v,
-        a=None if scheme.a is None else _store(scheme, np.zeros_like(x), free),
-        message=message,
-        wall_time=time.perf_counter() - start,
-        stats=ws.stats(),
-        outcome=outcome,
-    )
 
 
 def _mass_and_damping(net: Net, damping: float):
@@ -343,6 +394,14 @@ def _check(dt, damping, t_end, t0, rtol) -> None:
     if problems:
         raise ConfigError(problems)
     check_rtol(rtol)
+
+
+def _check_mass(net: Net) -> None:
+    if not np.all(net.mass[~net.fixed] > 0):
+        raise ConfigError(
+            "material.density: the free nodes have no mass: the dynamic solver needs "
+            "density > 0 (or use solver.method = 'static')"
+        )
 
 
 def potential_at(potential, loads, net, t):

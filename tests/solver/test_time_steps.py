@@ -1,6 +1,7 @@
 """The pieces of the dynamic solver's time stepping, one by one: the step control
 (halving after a failure down to the smallest step, growing back after good steps, times
-on the grid of the smallest step) and the rest test of dynamic relaxation."""
+on the grid of the smallest step), the rest test of dynamic relaxation and the time
+stepper (a step's predictor, its Newton solve, the retry with fresh factorisations)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,15 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.solver.dynamic import GROW_AFTER, MAX_CUTS, StepControl, at_rest
+from catenet.solver.dynamic import (
+    GROW_AFTER,
+    MAX_CUTS,
+    StepControl,
+    TimeStepper,
+    at_rest,
+    solve_dynamic,
+)
+from catenet.solver.integrators import make
 from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
 
@@ -78,3 +87,85 @@ def test_the_rest_test_asks_for_equilibrium_and_no_inertial_force():
     off[~net.fixed, 2] += 1e-4
     rest, residual, ratio = at_rest(system, potential, off, still, m_free, 0.01, rtol)
     assert not rest and ratio > 1.0 and residual > rtol * potential.f_norm
+
+
+def _sagging_cable(move=None):
+    """A cable under gravity; ``move``: its far end's displacement over 1 s."""
+    net = cn.cable([0, 0, 0], [1, 0, 0], 11, cn.Material(EA=1e3, line_density=0.5), length=1.05)
+    if move is None:
+        return net, cn.Loads(gravity=[0.0, 0.0, -9.81])
+    d = np.zeros_like(net.nodes)
+    d[-1] = move
+    ramp = np.where(net.fixed, 1.0, 0.0)
+    return net, cn.Loads(gravity=[0.0, 0.0, -9.81], support_displacement=d, ramp_time=ramp)
+
+
+def _stepper(net, loads, *, integrator="implicit_euler", reuse=False):
+    ws = Workspace(net)
+    return TimeStepper(
+        net, loads, ws, make(integrator, 0.8), 1.0, rtol=1e-8, max_iter=25, reuse=reuse
+    )
+
+
+@pytest.mark.parametrize("integrator", ["implicit_euler", "newmark"])
+def test_stepping_by_hand_repeats_solve_dynamic_exactly(integrator):
+    """begin, then solve_step and accept step by step: the states solve_dynamic reports,
+    bit for bit, with the moving support carrying the net along."""
+    net, loads = _sagging_cable(move=[0.0, 0.0, 0.2])
+    seen = []
+    solve_dynamic(
+        net,
+        loads,
+        dt=0.01,
+        damping=1.0,
+        t_end=0.05,
+        integrator=integrator,
+        rho_inf=0.8,
+        on_step=lambda k, t, x, v: seen.append((t, x.copy(), v.copy())),
+    )
+    stepper = _stepper(net, loads, integrator=integrator)
+    stepper.begin(None, None, 0.0, None, None)
+    control = StepControl(0.01, 0.0, 0.05)
+    for t, x, v in seen:
+        h = control.step(stepper.t)
+        newton, why = stepper.solve_step(h)
+        assert newton is not None and newton.converged, why
+        stepper.accept(control, h, newton)
+        assert stepper.t == t
+        assert np.array_equal(stepper.x, x) and np.array_equal(stepper.v, v)
+    assert stepper.steps == 5 and stepper.iterations > 0
+
+
+def test_the_predictor_puts_the_supports_at_t_plus_h_and_carries_the_net():
+    """With a support moving, the predictor has it at its place at t + h and moves the
+    free nodes next to it with it (more than the far ones)."""
+    net, loads = _sagging_cable(move=[0.0, 0.0, 0.5])
+    stepper = _stepper(net, loads)
+    stepper.begin(None, None, 0.0, None, None)
+    x_trial = stepper.predict(0.1)
+    assert np.array_equal(x_trial[net.fixed], loads.support_positions(net, time=0.1))
+    lift = x_trial[:, 2] - net.nodes[:, 2]
+    assert lift[-2] > lift[1] > 0.0  # the free nodes follow, the nearest most
+
+
+def test_a_failed_step_is_retried_fresh_only_with_a_kept_factorisation_and_once():
+    net, loads = _sagging_cable()
+    plain = _stepper(net, loads)
+    plain.begin(None, None, 0.0, None, None)
+    assert not plain.refresh(0.01, "forced")  # nothing kept: the step is cut instead
+    kept = _stepper(net, loads, reuse=True)
+    kept.begin(None, None, 0.0, None, None)
+    assert kept.refresh(0.01, "forced") and kept.fresh  # once more with fresh ones
+    assert not kept.refresh(0.01, "forced") and not kept.fresh  # then cut
+
+
+def test_a_step_cut_below_the_smallest_step_fails_with_the_last_state():
+    net, loads = _sagging_cable()
+    stepper = _stepper(net, loads)
+    stepper.begin(None, None, 0.0, None, None)
+    control = StepControl(0.01, 0.0, 1.0)
+    stepper.cut(control, 0.01, "forced", None)  # halved: still a step
+    assert control.h == 0.005
+    with pytest.raises(cn.ConvergenceError, match="failed even with h") as info:
+        stepper.cut(control, 0.01 / 2**MAX_CUTS, "forced", None)
+    assert np.array_equal(info.value.state, stepper.x)
