@@ -104,7 +104,8 @@ class Frame:
     stored), where it came from ("trajectory" frame ``index`` or "result"), the
     tensions stored with it and the integrator's acceleration state (newmark runs; None:
     not stored); /result's reactions and contact forces (``catenet export``; None: not
-    read)."""
+    read); the mode shape (N, 3) of a mode's animation frame (``catenet export --mode``;
+    None otherwise)."""
 
     t: float
     x: np.ndarray
@@ -115,6 +116,7 @@ class Frame:
     a: np.ndarray | None = None
     reaction: np.ndarray | None = None
     contact_force: np.ndarray | None = None
+    shape: np.ndarray | None = None
 
 
 def _array(g, name: str) -> np.ndarray | None:
