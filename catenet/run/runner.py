@@ -247,7 +247,8 @@ def run_case(
             if isinstance(exc, ConfigError) and writer.frames == 0:
                 _remove(writer)  # bad input found late: leave nothing behind
             raise
-    case_numbers, envelope = {}, {}
+    case_numbers: dict = {}  # each load case's summary numbers, by name
+    envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if cases:
         case_numbers, envelope = _solve_cases(scene, settings, ws, result, cases, path, interrupt)
     beyond = advice.strain_beyond_law(scene.net, result.x)
