@@ -25,7 +25,9 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
         refs += [p.node for p in load.points if p.node is not None]
         for a in load.areas:
             refs += [a.nodes] if isinstance(a.nodes, str) else list(a.nodes or ())
-        if any(p.cable is not None for p in (*load.points, *load.lines)):
+        if any(p.cable is not None for p in load.points):
+            return True
+        if any(ln.cable is not None for ln in load.lines):
             return True
     return any(isinstance(r, int) for r in refs) or bool(
         isinstance(supports, SupportsConfig) and supports.moves

@@ -94,7 +94,7 @@ def keys_table() -> str:
 
 def _doc(section: type) -> str:
     """A section's docstring on one line."""
-    return " ".join(section.__doc__.split())
+    return " ".join((section.__doc__ or "").split())
 
 
 def section_text() -> str:

@@ -17,11 +17,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.case.keys import show
 from catenet.errors import ConfigError
+
+if TYPE_CHECKING:  # the terms load where a body is built
+    from catenet.terms.rigid import Frame
 
 #: The orthogonality energy's k over the body's load scale (force x size): the body
 #: strains by about 1/RIGIDITY under a force of the scale.
@@ -39,7 +43,7 @@ class FreeBody:
     (their world directions at t = 0, as columns) and its centre of mass at t = 0."""
 
     obstacle: int
-    frame: object
+    frame: Frame
     mass: float
     inertia: np.ndarray
     axes: np.ndarray
@@ -234,8 +238,8 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
     reach = frame.reach  # about the body's size
     ea = float(np.max(net.EA)) if net.n_edges else stiff * size
-    w0 = np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0))
-    v0 = np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0))
+    w0 = float(np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0)))
+    v0 = float(np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0)))
     scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
     terms = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
     if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier

@@ -55,6 +55,10 @@ def inertia_key():
 class FreeKeys:
     """What the free-body keys (``mass``, ``density``, ``inertia``) mean on a table."""
 
+    mass: float | None  # the keys of the obstacle kinds that mix it in
+    density: float | None
+    inertia: tuple | None
+
     @property
     def free(self) -> bool:
         """A free rigid body (six degrees of freedom)."""

@@ -41,9 +41,10 @@ class Scene:
     named and the geometry has no natural one (a graph): the summary reports the free
     node that moves most (``catenet.model.summary.probe_of``). ``cases``: per
     ``[[load_case]]``, then per ``[[combination]]``, a ``LoadCase`` (its name and the
-    force it adds to the base loads, (N, 3) [N])."""
+    force it adds to the base loads, (N, 3) [N]). ``case``: the case built (None: a
+    scene written without it, as ``catenet formfind`` writes its result file)."""
 
-    case: Case
+    case: Case | None
     net: Net
     loads: Loads
     probe: int

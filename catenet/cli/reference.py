@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 from catenet.cli import COMMANDS, main
 
@@ -28,7 +29,7 @@ failed or did not converge) or 2 (bad input: usage, case file, values); see
 def help_text(name: str | None) -> str:
     """What ``catenet [NAME] --help`` prints (contexts made as the command line makes
     them, so that the commands' context settings, such as ``-h``, apply)."""
-    width = {"terminal_width": WIDTH, "max_content_width": WIDTH}
+    width: dict[str, Any] = {"terminal_width": WIDTH, "max_content_width": WIDTH}
     group_ctx = main.make_context("catenet", [], resilient_parsing=True, **width)
     if name is None:
         return main.get_help(group_ctx)

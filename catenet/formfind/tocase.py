@@ -50,7 +50,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
     if case is not None and case.load.gravity is not None:
         load["gravity"] = list(case.load.gravity)
         const -= _weight(net, rest, case.load.gravity)
-    points = []
+    points: list[dict[str, Any]] = []
     if structured:
         points, const = _kept_points(case, scene, const)
         if case.load.history is not None:

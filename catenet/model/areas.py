@@ -199,7 +199,7 @@ def _closed_faces(q: np.ndarray, edges: np.ndarray, scale: float) -> _Faces:
     extra = []
     have = {tuple(sorted(e)) for e in edges.tolist()}
     for f in np.flatnonzero(faces.area <= tol):
-        for a, b in _outline(q, faces, f, scale):
+        for a, b in _outline(q, faces, int(f), scale):
             if (min(a, b), max(a, b)) not in have:
                 have.add((min(a, b), max(a, b)))
                 extra.append((a, b))

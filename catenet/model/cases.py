@@ -33,8 +33,9 @@ class Increment(Loads):
 
 def combined(forces: dict[str, np.ndarray], factors: dict[str, float]) -> np.ndarray:
     """The force of a combination: sum of factor x each named case's force (N, 3)."""
-    out = None
+    out: np.ndarray | None = None
     for name, f in factors.items():
         part = f * forces[name]
         out = part if out is None else out + part
+    assert out is not None, "a combination names at least one load case (its check says so)"
     return out

@@ -43,7 +43,7 @@ class Peaks:
             "peak_displacement": self.displacement.shape,
             "peak_displacement_time": self.displacement.shape,
         }
-        if any(np.shape(arrays.get(k)) != shape for k, shape in shapes.items()):
+        if any(k not in arrays or np.shape(arrays[k]) != shape for k, shape in shapes.items()):
             return False
         self.tension[:] = arrays["peak_tension"]
         self.tension_time[:] = arrays["peak_tension_time"]

@@ -178,8 +178,7 @@ def _mode_frames(path: Path, mode: int, spec: str) -> list[Frame]:
         out = []
         for f in select_frames(spec, count):
             frame = Frame(f / count, np.asarray(g[str(f)], dtype=np.float64), None, "mode", f,
-                          tension)  # fmt: skip
-            frame.shape = stored.shape[mode - 1]
+                          tension, shape=stored.shape[mode - 1])  # fmt: skip
             out.append(frame)
     return out
 
@@ -238,7 +237,7 @@ def export(
             point_data["reaction"] = f.reaction
         if f.contact_force is not None:
             point_data["contact_force"] = f.contact_force
-        if getattr(f, "shape", None) is not None:
+        if f.shape is not None:
             point_data["shape"] = f.shape
         cell_data = {}
         for key, value in (

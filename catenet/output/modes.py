@@ -158,11 +158,13 @@ def read_modes(path: str | Path) -> StoredModes | None:
         if "modes" not in h5:
             return None
         g = h5["modes"]
+
+        def array(name: str) -> np.ndarray:
+            return np.asarray(g[name][()])
+
         return StoredModes(
-            *(np.asarray(g[name][()]) for name in (
-                "frequency", "period", "shape", "effective_mass", "participation",
-                "direction_share", "x",
-            )),
+            array("frequency"), array("period"), array("shape"), array("effective_mass"),
+            array("participation"), array("direction_share"), array("x"),
             attrs={k: (v.item() if np.ndim(v) == 0 and hasattr(v, "item") else v)
                    for k, v in g.attrs.items()},
         )  # fmt: skip
@@ -174,6 +176,7 @@ def add_to_sidecar(side: Path, h5name: str, n_nodes: int, n_edges: int, count: i
     trajectory stays the one it reads). Times are phases (0 to 1 period)."""
     tree = ET.parse(side)
     domain = tree.getroot().find("Domain")
+    assert domain is not None, f"{side}: the sidecar catenet wrote has a Domain"
     net = [g for g in domain if g.get("Name") in ("trajectory", "result")]
     at = list(domain).index(net[0]) if net else len(domain)
     for old in [g for g in domain if (g.get("Name") or "").startswith("mode ")]:

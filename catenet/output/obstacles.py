@@ -191,6 +191,7 @@ class _Item:
     def pose(self, t: float, frame: dict | None = None):
         """(center, rotation, shown vertices) at time t (a free body: in ``frame``)."""
         if self.body is not None:
+            assert frame is not None, "a free body's pose is in its frame (x, v)"
             c, R = self.body.frame.pose(frame["x"])
             return c, R, c + (self.shown - self.body.center) @ R.T
         motion = self.surface.motion
@@ -284,7 +285,7 @@ class Obstacles:
         frames = frames if frames is not None else [{}] * len(times)
         for item in self.moving:
             g = traj[f"{GROUP}/{item.surface.index}"]
-            names = ("center", "rotation", "vertices")
+            names: tuple[str, ...] = ("center", "rotation", "vertices")
             names += FREE_SETS if item.body is not None else ()
             sets = [g[name] for name in names]
             held.extend(sets)

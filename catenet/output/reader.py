@@ -121,7 +121,8 @@ class Frame:
     stored), where it came from ("trajectory" frame ``index`` or "result"), the
     tensions stored with it and the integrator's acceleration state (newmark runs; None:
     not stored); /result's reactions and contact forces (``catenet export``; None: not
-    read)."""
+    read); the mode shape (N, 3) of a mode's animation frame (``catenet export --mode``;
+    None otherwise)."""
 
     t: float
     x: np.ndarray
@@ -132,6 +133,7 @@ class Frame:
     a: np.ndarray | None = None
     reaction: np.ndarray | None = None
     contact_force: np.ndarray | None = None
+    shape: np.ndarray | None = None
 
 
 def _array(g, name: str) -> np.ndarray | None:

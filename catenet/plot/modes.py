@@ -38,7 +38,7 @@ def plot_modes(path: str | Path, out: str | Path, *, dpi: int = 150) -> Path | N
     return Path(out)
 
 
-def figure(stored, edges: np.ndarray, fixed: np.ndarray):
+def figure(stored, edges: np.ndarray, fixed: np.ndarray | None):
     """The modes figure (a matplotlib Figure) of a ``catenet.output.modes.StoredModes``."""
     from matplotlib import colormaps
     from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -89,9 +89,9 @@ def plot_columns(directory: Path, out: Path | None = None, *, dpi: int = 120) ->
             ax = fig.add_subplot(rows, cols, j + 1)
             ax.grid(True, lw=0.3)
             for g, idx in groups.items():
-                idx = np.array(sorted(idx, key=lambda i: x[i]))
+                order = np.array(sorted(idx, key=lambda i: x[i]))
                 name = ", ".join(f"{k}={v}" for k, v in zip(others, g, strict=True))
-                ax.plot(x[idx], y[idx], "o-", ms=3, lw=1.0, label=name or None)
+                ax.plot(x[order], y[order], "o-", ms=3, lw=1.0, label=name or None)
             ax.set_xlabel(key)
             ax.set_ylabel(label)
             if j == 0 and others and len(groups) <= 10:

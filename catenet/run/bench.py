@@ -90,7 +90,7 @@ def backend(report: BenchReport, threads: int | None) -> None:
         set_threads(threads)
     name = linear.resolve_backend("auto")
     report.add("backend", name, note='what solver.linear = "auto" picks on this machine')
-    mkl = "-"
+    mkl: int | str = "-"  # PARDISO's thread count; "-": another backend
     if name == "pardiso":
         try:
             mkl = int(linear.mkl_runtime().libmkl.MKL_Get_Max_Threads())

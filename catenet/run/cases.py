@@ -15,10 +15,14 @@ from __future__ import annotations
 import json
 import logging
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
+
+if TYPE_CHECKING:  # the solvers load when a case is run
+    from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
@@ -32,7 +36,7 @@ class CaseRun:
 
     name: str
     combination: bool
-    result: object | None
+    result: Result | None
     numbers: dict = field(default_factory=dict)
     error: str = ""
 
@@ -153,9 +157,12 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
 
 def envelope(net, runs: list[CaseRun]) -> dict[str, np.ndarray]:
     """Over the cases: each edge's largest and least tension [N], each node's largest
-    displacement [m], and the index (into ``runs``) of the case that governs each."""
-    t = np.array([np.asarray(r.result.tension) for r in runs])
-    u = np.array([np.linalg.norm(np.asarray(r.result.x) - net.nodes, axis=1) for r in runs])
+    displacement [m], and the index (into ``runs``: each with its Result) of the case
+    that governs each."""
+    results = [r.result for r in runs if r.result is not None]
+    assert len(results) == len(runs), "the envelope is over the cases solved"
+    t = np.array([np.asarray(r.tension) for r in results])
+    u = np.array([np.linalg.norm(np.asarray(r.x) - net.nodes, axis=1) for r in results])
     return {
         "tension_max": t.max(axis=0),
         "tension_max_case": t.argmax(axis=0),

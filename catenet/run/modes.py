@@ -10,10 +10,17 @@ raises as ``catenet run``'s does (exit 1), as does a dynamic run that ends befor
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+
+if TYPE_CHECKING:  # the solvers load when a case is run
+    from catenet.case.scene import Scene
+    from catenet.solver.modes import Modes
+    from catenet.solver.result import Result
 
 __all__ = ["ModeRow", "ModesRun", "check_modes_input", "mode_rows", "modes_case"]
 
@@ -46,10 +53,10 @@ class ModesRun:
     equilibrium did not converge: the Result says why), the file written (or None) and
     the scene."""
 
-    result: object
-    modes: object
-    path: object
-    scene: object
+    result: Result
+    modes: Modes | None
+    path: Path | None
+    scene: Scene
 
 
 def modes_case(

@@ -263,7 +263,8 @@ def run_case(
             if isinstance(exc, ConfigError):
                 _remove(writer)  # bad input found late (exit 2): leave nothing behind
             raise
-    case_numbers, envelope = {}, {}
+    case_numbers: dict = {}  # each load case's summary numbers, by name
+    envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if cases:
         case_numbers, envelope = solve_from_base(scene, settings, ws, result, cases, path, interrupt)
     beyond = advice.strain_beyond_law(scene.net, result.x)

@@ -42,10 +42,14 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+
+if TYPE_CHECKING:
+    from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
@@ -90,7 +94,7 @@ class Modes:
     zero_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     zero_message: str = ""
     stats: dict = field(default_factory=dict)
-    equilibrium: object = None  # the static Result the modes are taken about, if solved here
+    equilibrium: Result | None = None  # the static Result the modes are about, if solved here
     mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
 
     @property
@@ -105,7 +109,7 @@ class Modes:
 
     def direction_share(self) -> np.ndarray:
         """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2)."""
-        return np.einsum("n,knd->kd", self.mass, self.shape**2)
+        return np.einsum("n,knd->kd", self._mass(), self.shape**2)
 
     def dominant(self) -> list[str]:
         """Each mode's dominant direction: the axis with the largest kinetic energy share."""
@@ -113,7 +117,11 @@ class Modes:
 
     def node_share(self) -> np.ndarray:
         """(K, N) each node's share of each mode's kinetic energy m_i |phi_i|^2 (sums to 1)."""
-        return self.mass[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+        return self._mass()[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+
+    def _mass(self) -> np.ndarray:
+        assert self.mass is not None, "natural_modes gives the modes their masses"
+        return self.mass
 
 
 class Operator:

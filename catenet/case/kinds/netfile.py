@@ -20,6 +20,7 @@ import json
 import logging
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -79,7 +80,8 @@ def merge_file(ck: Checker, given: dict, read: dict, file: str) -> dict | None:
 
 def _net(nodes, lines, names, label: str, ck: Checker) -> dict | None:
     """Nodes, edges and cables from polylines (see the module's note)."""
-    edges, cables = [], []
+    edges: list[list[int]] = []
+    cables: list[dict[str, Any]] = []
     for k, line in enumerate(lines):
         idx = [int(i) for i in line]
         name = names[k] if names is not None and names[k] else None

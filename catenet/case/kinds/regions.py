@@ -33,16 +33,22 @@ class Region:
         if self.near is not None:
             d = np.linalg.norm(xyz - np.asarray(self.near), axis=1)
             return (int(np.argmin(d)),)
-        lo, hi = np.minimum(*self.box), np.maximum(*self.box)
+        box = self._box()
+        lo, hi = np.minimum(*box), np.maximum(*box)
         extent = float(np.linalg.norm(np.ptp(xyz, axis=0))) if len(xyz) else 0.0
-        tol = BOX_TOL * max(extent, float(np.max(np.abs(self.box))), 1e-300)
+        tol = BOX_TOL * max(extent, float(np.max(np.abs(box))), 1e-300)
         inside = np.all((xyz >= np.asarray(lo) - tol) & (xyz <= np.asarray(hi) + tol), axis=1)
         return tuple(np.flatnonzero(inside).tolist())
 
     def to_dict(self) -> dict:
         if self.near is not None:
             return {"near": list(self.near)}
-        return {"box": [list(c) for c in self.box]}
+        return {"box": [list(c) for c in self._box()]}
+
+    def _box(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """The box of a region that is not ``near`` (``check_region`` gives one of them)."""
+        assert self.box is not None, "a Region has a box or a near point"
+        return self.box
 
 
 def check_region(ck: Checker, v: Any, path: str) -> Any:

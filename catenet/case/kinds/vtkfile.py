@@ -217,7 +217,7 @@ def _read_xml(raw: bytes) -> Lines:
         keep = np.flatnonzero((types == LINE) | (types == POLY_LINE))
         skipped = _cell_names(types[(types != LINE) & (types != POLY_LINE)])
     else:
-        cells, keep = [], []
+        cells, line_cells = [], []
         for section in ("Verts", "Lines", "Strips", "Polys"):
             arrays = {a.get("Name"): a for a in piece.findall(f"./{section}/DataArray")}
             if not arrays:
@@ -226,11 +226,11 @@ def _read_xml(raw: bytes) -> Lines:
             offsets = xml.array(arrays["offsets"]).astype(np.int64)
             these = np.split(conn, offsets[:-1]) if len(offsets) else []
             if section == "Lines":
-                keep = list(range(len(cells), len(cells) + len(these)))
+                line_cells = list(range(len(cells), len(cells) + len(these)))
             elif these:
                 skipped.append(_SECTIONS[section])
             cells += these
-        keep = np.asarray(keep, dtype=np.int64)
+        keep = np.asarray(line_cells, dtype=np.int64)
     lines = [cells[k] for k in keep]
     names = None
     for a in [*piece.findall("./CellData/DataArray"), *piece.findall("./CellData/Array")]:
