@@ -85,19 +85,33 @@ def state_lines(s: dict, dynamic: bool, n_edges: int, warn_strain: bool = False)
             f"{s['max_contact_node']}"
         )
     for name, c in s.get("cables", {}).items():
-        lines.append(cable_line(name, c))
+        lines.append(cable_line(name, c, dynamic))
     return lines
 
 
-def cable_line(name: str, c: dict) -> str:
-    """One cable's line: a tie's largest tension and slack share, a strut's compression."""
+def _cable_peak(c: dict, dynamic: bool) -> str:
+    """The cable line's ", peak P N at t = T s" when the cable's peak over the run is
+    above its final max tension, else nothing."""
+    peak = c.get("peak_tension")
+    if peak is None or not math.isfinite(peak) or not _more(peak, c["max_tension"]):
+        return ""
+    when = _when(c.get("peak_tension_time", math.nan), dynamic)
+    return f", peak {peak:.6g} N" + (f" at {when}" if when else "")
+
+
+def cable_line(name: str, c: dict, dynamic: bool = True) -> str:
+    """One cable's line: a tie's largest tension (and its peak over the run when that is
+    higher) and slack share, a strut's compression."""
     if c.get("strut"):
         if c["max_compression"] > 0:
             return f"{'cable':<{W}} {name}: a strut, compression {c['max_compression']:.6g} N"
-        return f"{'cable':<{W}} {name}: a strut, max tension {c['max_tension']:.6g} N"
+        return (
+            f"{'cable':<{W}} {name}: a strut, max tension {c['max_tension']:.6g} N"
+            + _cable_peak(c, dynamic)
+        )
     line = (
-        f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N, "
-        f"slack {100 * c['slack_fraction']:.3g} % of its length"
+        f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N"
+        f"{_cable_peak(c, dynamic)}, slack {100 * c['slack_fraction']:.3g} % of its length"
     )
     if c.get("slack_edges"):
         line += f" ({c['slack_edges']} slack edges)"

@@ -19,7 +19,8 @@ source of the run's printed summary, the /result attributes and the sweep table'
   the load factor of a static run), ``peak_displacement`` [m], ``peak_displacement_node``,
   ``peak_displacement_time``.
 
-``cable_summary`` gives the same per cable of a graph with cables.
+``cable_summary`` gives the same per cable of a graph with cables (with peaks: each
+cable's ``peak_tension``, its time and edge).
 """
 
 from __future__ import annotations
@@ -178,11 +179,16 @@ def _peaks(p: dict, free: np.ndarray) -> dict:
     }
 
 
-def cable_summary(net: Net, x, tension, edge_cable: np.ndarray, names) -> dict[str, dict]:
+def cable_summary(
+    net: Net, x, tension, edge_cable: np.ndarray, names, peaks=None
+) -> dict[str, dict]:
     """Per cable (``edge_cable`` (M,): each edge's cable index, -1: none): ``max_tension``
     (the largest axial force, negative for a strut in compression: SPEC's cable_max_tension),
     ``max_compression`` (>= 0), ``slack_fraction`` (share of its unstressed length slack),
-    ``slack_edges`` (tension-only edges slack), ``strut`` (no edge of it is tension-only)."""
+    ``slack_edges`` (tension-only edges slack), ``strut`` (no edge of it is tension-only).
+    With the run's ``peaks`` (a ``Peaks`` or its ``arrays()``) also ``peak_tension``: the
+    largest of its edges' peak tensions over the run (``/result/cable_peak_tension``),
+    ``peak_tension_time`` and ``peak_tension_edge``."""
     tension = np.asarray(tension, dtype=np.float64)
     n = len(names)
     top, slack = measures.cable_stats(net, x, tension, edge_cable, n)
@@ -194,7 +200,7 @@ def cable_summary(net: Net, x, tension, edge_cable: np.ndarray, names) -> dict[s
     squeeze = np.zeros(n)
     np.maximum.at(squeeze, c, np.where(only[on], 0.0, -tension[on]))
     ties = np.bincount(c, weights=only[on].astype(float), minlength=n)
-    return {
+    out = {
         str(name): {
             "max_tension": float(top[k]),
             "slack_fraction": float(slack[k]),
@@ -204,6 +210,32 @@ def cable_summary(net: Net, x, tension, edge_cable: np.ndarray, names) -> dict[s
         }
         for k, name in enumerate(names)
     }
+    if peaks is not None:
+        p = peaks if isinstance(peaks, dict) else peaks.arrays()
+        for c, peak in zip(out.values(), _cable_peaks(p, edge_cable, n), strict=True):
+            c.update(peak)
+    return out
+
+
+def _cable_peaks(p: dict, edge_cable: np.ndarray, n: int) -> list[dict]:
+    """Per cable the largest peak tension of its edges over the run, its edge and time
+    (nan and edge -1 for a cable without edges)."""
+    top, when = p["peak_tension"], p["peak_tension_time"]
+    out = [
+        {"peak_tension": float("nan"), "peak_tension_time": float("nan"), "peak_tension_edge": -1}
+        for _ in range(n)
+    ]
+    idx = np.flatnonzero((edge_cable >= 0) & np.isfinite(top))
+    # each cable's edges, the highest peak first: the first of each cable is its peak
+    order = idx[np.lexsort((-top[idx], edge_cable[idx]))]
+    cables, first = np.unique(edge_cable[order], return_index=True)
+    for k, e in zip(cables, order[first], strict=True):
+        out[k] = {
+            "peak_tension": float(top[e]),
+            "peak_tension_time": float(when[e]),
+            "peak_tension_edge": int(e),
+        }
+    return out
 
 
 def probe_of(scene, x: np.ndarray) -> tuple[int, bool]:
@@ -233,5 +265,12 @@ def summarize_result(scene, res) -> dict:
     )
     cables = getattr(scene, "cables", None)
     if cables is not None:
-        out["cables"] = cable_summary(scene.net, res.x, res.tension, cables.edge, cables.names)
+        out["cables"] = cable_summary(
+            scene.net,
+            res.x,
+            res.tension,
+            cables.edge,
+            cables.names,
+            peaks=getattr(res, "peaks", None),
+        )
     return out

@@ -4,7 +4,8 @@
 
     /                   attrs: catenet_version, case (resolved TOML), created, software
                         versions (<name>_version), linear_backend, threads
-    /mesh/nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,)
+    /mesh/nodes (N, 3), edges (M, 2), rest_length (M,), EA (M,), fixed (N,), mass (N,)
+                        (each node's lumped mass [kg])
     /trajectory/time (T,), x (T, N, 3), v (T, N, 3) (dynamic runs), a (T, N, 3)
                         (newmark runs: the scheme's acceleration state), tension (T, M)
     /result/x (N, 3), tension (M,), reaction (N, 3), v (N, 3) (dynamic runs),

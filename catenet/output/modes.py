@@ -12,7 +12,9 @@ frames and their place in the XDMF sidecar.
                           frames (per period), animated (modes with frames)
     /modes/frames/<k>/<f> (N, 3) float32: mode k at phase f / frames of its period,
                           x + amplitude sin(2 pi f / frames) phi_k / max|phi_k|
-    /mesh/mass (N,)       each node's lumped mass [kg]
+
+The lumped masses M the modes are taken with are the file's /mesh/mass (N,) [kg], which
+every result file has (``catenet.output.writer``).
 
 The frames make each mode a time series that ParaView animates (the sidecar's Temporal
 collection "mode k", times are the phase in periods, 0 to 1) and that ``catenet export
@@ -74,7 +76,7 @@ def animated_count(count: int, n_nodes: int, frames: int = FRAMES) -> int:
 
 
 def write_modes(path: str | Path, scene, modes, *, frames: int = FRAMES) -> None:
-    """Adds /modes (and /mesh/mass) to the result file ``path`` of ``scene`` and the
+    """Adds /modes to the result file ``path`` of ``scene`` and the
     modes' animations to its XDMF sidecar where it has one."""
     import h5py
 
@@ -96,11 +98,8 @@ def write_modes(path: str | Path, scene, modes, *, frames: int = FRAMES) -> None
 
 
 def _write_group(h5, scene, modes, frames: int, animated: int, amplitude: float) -> None:
-    net = scene.net
     if "modes" in h5:
         del h5["modes"]
-    if "mass" not in h5["mesh"]:
-        h5["mesh"].create_dataset("mass", data=np.asarray(net.mass, dtype=np.float64))
     g = h5.create_group("modes")
     g.create_dataset("frequency", data=modes.frequency)
     g.create_dataset("period", data=modes.period)

@@ -1,8 +1,10 @@
 """The /result group of a result file (contract §5 and §7): the final state, its
-tensions (per cable too), reactions and contact forces, the run's peaks over every step
-(``peak_tension``, ``peak_tension_time``, ``least_tension``, ``peak_displacement``,
-``peak_displacement_time``), velocities and the newmark scheme's acceleration where the
-run keeps them, and the attributes a user reads first (``catenet.model.summary``)."""
+tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
+``cable_peak_tension`` and ``cable_peak_tension_time``), reactions and contact forces,
+the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
+``least_tension``, ``peak_displacement``, ``peak_displacement_time``), velocities and
+the newmark scheme's acceleration where the run keeps them, and the attributes a user
+reads first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 
@@ -39,16 +41,21 @@ def write_result_group(
     g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
     g.create_dataset("tension", data=tension)
     cables = getattr(scene, "cables", None)
+    peaks = getattr(res, "peaks", None)
     if cables is not None:
-        per = summary.cable_summary(scene.net, res.x, tension, cables.edge, cables.names)
-        for key, dtype in (
+        per = summary.cable_summary(
+            scene.net, res.x, tension, cables.edge, cables.names, peaks=peaks
+        )
+        keys = [
             ("max_tension", np.float64),
             ("slack_fraction", np.float64),
             ("max_compression", np.float64),
             ("slack_edges", np.int64),
-        ):
+        ]
+        if peaks is not None:
+            keys += [("peak_tension", np.float64), ("peak_tension_time", np.float64)]
+        for key, dtype in keys:
             g.create_dataset(f"cable_{key}", data=np.array([c[key] for c in per.values()], dtype))
-    peaks = getattr(res, "peaks", None)
     if peaks is not None:
         for key, value in peaks.arrays().items():
             g.create_dataset(key, data=value)

@@ -231,6 +231,8 @@ class ResultWriter:
         mesh.create_dataset("rest_length", data=np.asarray(net.rest_length, dtype=np.float64))
         mesh.create_dataset("EA", data=np.asarray(net.EA, dtype=np.float64))
         mesh.create_dataset("fixed", data=np.asarray(net.fixed, dtype=bool))
+        # each node's lumped mass [kg]: rho A l0 / 2 of its edges, point masses, a body's
+        mesh.create_dataset("mass", data=np.asarray(net.mass, dtype=np.float64))
         mesh.attrs["probe"] = int(scene.probe)
         mesh.attrs["size"] = float(scene.size)
         write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)

@@ -1,7 +1,8 @@
 """configs/contact/envisat_capture.toml, short: a tether net thrown at a free tumbling
 8 t box in orbit. The box is a free body (four nodes, its mass and inertia), the run's
-summary names its spin and the time of first contact, no node is ever inside the box,
-and the box takes the net's momentum (net + box keep it where the tether is slack)."""
+summary names its spin, the time of first contact and the tether's peak load, no node is
+ever inside the box, and the box takes the net's momentum (net + box keep it where the
+tether is slack)."""
 
 from __future__ import annotations
 
@@ -28,6 +29,16 @@ def test_the_capture_scene_runs_short_and_reports_the_contact(tmp_path):
     assert res.exit_code == 0, res.output
     line = next(s for s in res.output.splitlines() if s.startswith("body"))
     assert "obstacle[0] (box): spin 3.49" in line and "first contact at t = 1.3" in line
+    # the tether's peak load over every step, which the final state (slack) hides
+    tether = next(s for s in res.output.splitlines() if s.startswith("cable        tether:"))
+    with h5py.File(out) as f:
+        edges = np.flatnonzero(f["mesh/cable"][()] == 0)
+        peak = f["result/cable_peak_tension"][0]
+        when = f["result/cable_peak_tension_time"][0]
+        assert f["mesh"].attrs["cable_names"][0] == "tether" and len(edges) == 8
+        assert peak == f["result/peak_tension"][edges].max() > 1.0
+        assert np.all(peak >= f["trajectory/tension"][:, edges])
+    assert f"max tension 0 N, peak {peak:.6g} N at t = {when:.4g} s" in tether
     scene = build(load_case(CAPTURE, ["solver.t_end=1.45"]))
     (body,) = scene.rigid
     assert body.mass == 8000.0
