@@ -195,11 +195,12 @@ class Checker:
         if not isinstance(v, (list, tuple)) or len(v) != 3:
             return self.bad(path, v, need)
         out = [as_float(c) for c in v]
-        if any(c is None or not math.isfinite(c) for c in out):
+        values = [c for c in out if c is not None and math.isfinite(c)]
+        if len(values) != 3:
             return self.bad(path, v, need)
-        if any(abs(c) > MAGNITUDE for c in out):
+        if any(abs(c) > MAGNITUDE for c in values):
             return self.bad(path, v, f"{need}, each within {too_large()}")
-        return tuple(out)
+        return tuple(values)
 
     def node_ref(self, v: Any, path: str, kind: Any) -> Any:
         """A node index (checked against the node count later) or a node name of the

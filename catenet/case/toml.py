@@ -69,7 +69,7 @@ MAX_DEPTH = 32
 def too_deep(data: Any) -> str | None:
     """The key path (shortened) at which ``data`` nests deeper than MAX_DEPTH, else None;
     walked without recursion."""
-    stack = [(data, ())]
+    stack: list[tuple[Any, tuple]] = [(data, ())]
     while stack:
         value, path = stack.pop()
         if len(path) > MAX_DEPTH:

@@ -211,9 +211,9 @@ def cable_summary(
         for k, name in enumerate(names)
     }
     if peaks is not None:
-        p = peaks if isinstance(peaks, dict) else peaks.arrays()
-        for c, peak in zip(out.values(), _cable_peaks(p, edge_cable, n), strict=True):
-            c.update(peak)
+        arrays = peaks if isinstance(peaks, dict) else peaks.arrays()
+        for row, peak in zip(out.values(), _cable_peaks(arrays, edge_cable, n), strict=True):
+            row.update(peak)
     return out
 
 

@@ -266,7 +266,9 @@ def run_case(
     case_numbers: dict = {}  # each load case's summary numbers, by name
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if cases:
-        case_numbers, envelope = solve_from_base(scene, settings, ws, result, cases, path, interrupt)
+        case_numbers, envelope = solve_from_base(
+            scene, settings, ws, result, cases, path, interrupt
+        )
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
