@@ -7,10 +7,10 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
 
 
-@click.command(name="bench")
+@click.command(name="bench", context_settings=HELP)
 @click.option(
     "-o",
     "--output",

@@ -11,6 +11,8 @@ from pathlib import Path
 import click
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+# Every command takes -h as --help, also when called on its own (not through the group).
+HELP = {"help_option_names": ["-h", "--help"]}
 
 
 def verbosity_options(f):

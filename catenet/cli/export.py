@@ -6,12 +6,12 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
 
 FORMATS = ("vtu", "vtk", "xdmf")  # catenet.output.export.FORMATS (not imported for --help)
 
 
-@click.command(name="export")
+@click.command(name="export", context_settings=HELP)
 @click.argument("path", type=click.Path(path_type=Path))
 @click.option(
     "--to", "fmt", type=click.Choice(FORMATS), required=True, help="The format of the files."

@@ -9,6 +9,7 @@ import click
 
 from catenet.cli.common import (
     EXIT_OK,
+    HELP,
     case_options,
     errors_to_exit_codes,
     setup_logging,
@@ -16,7 +17,7 @@ from catenet.cli.common import (
 )
 
 
-@click.command(name="formfind")
+@click.command(name="formfind", context_settings=HELP)
 @click.argument(
     "case_file", metavar="CASE.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path)
 )

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import click
 
-from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
 
 
-@click.command(name="info")
+@click.command(name="info", context_settings=HELP)
 @verbosity_options
 def command(quiet: bool, verbose: int, debug: bool) -> None:
     """Print the versions of catenet and its libraries, the linear-solver backend that

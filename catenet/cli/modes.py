@@ -10,6 +10,7 @@ import click
 from catenet.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
+    HELP,
     Progress,
     case_options,
     errors_to_exit_codes,
@@ -32,7 +33,7 @@ def _count(ctx, param, value):
     return count
 
 
-@click.command(name="modes")
+@click.command(name="modes", context_settings=HELP)
 @click.argument(
     "case_file", metavar="CASE.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path)
 )

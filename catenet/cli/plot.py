@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
 
 
-@click.command(name="plot")
+@click.command(name="plot", context_settings=HELP)
 @click.argument("path", type=click.Path(path_type=Path))
 @click.option(
     "-o",

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
 
 
-@click.command(name="repair")
+@click.command(name="repair", context_settings=HELP)
 @click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=Path))
 @verbosity_options
 def command(paths: tuple[Path, ...], quiet: bool, verbose: int, debug: bool) -> None:

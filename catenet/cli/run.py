@@ -13,6 +13,7 @@ from catenet.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_OK,
+    HELP,
     Progress,
     case_options,
     errors_to_exit_codes,
@@ -62,7 +63,7 @@ class StopFlag:
             signal.signal(sig, handler)
 
 
-@click.command(name="run")
+@click.command(name="run", context_settings=HELP)
 @click.argument(
     "case_file",
     metavar="[CASE.toml]",

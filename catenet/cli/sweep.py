@@ -10,6 +10,7 @@ import click
 
 from catenet.cli.common import (
     EXIT_FAILED,
+    HELP,
     Progress,
     errors_to_exit_codes,
     fail,
@@ -18,7 +19,7 @@ from catenet.cli.common import (
 )
 
 
-@click.command(name="sweep")
+@click.command(name="sweep", context_settings=HELP)
 @click.argument("case", type=click.Path(path_type=Path))
 @click.option(
     "-p",

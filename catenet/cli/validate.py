@@ -7,10 +7,16 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import EXIT_FAILED, errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import (
+    EXIT_FAILED,
+    HELP,
+    errors_to_exit_codes,
+    setup_logging,
+    verbosity_options,
+)
 
 
-@click.command(name="validate")
+@click.command(name="validate", context_settings=HELP)
 @click.option(
     "-o",
     "--output",
