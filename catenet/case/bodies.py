@@ -98,20 +98,7 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
         v_new.append(v0)
         specs.append((k, obs, prescribed, hist))
     nb = len(which)
-    point = np.zeros(n0) if net.point_mass is None else net.point_mass
-    net = Net.from_arrays(
-        np.vstack([net.nodes, centres]),
-        net.edges,
-        EA=net.EA,
-        fixed=np.concatenate([net.fixed, np.zeros(nb, bool)]),
-        rest_length=net.rest_length,
-        line_density=net.line_density,
-        tension_only=net.tension_only,
-        law=net.law,
-        point_mass=np.concatenate([point, masses]),
-        bodies=net.bodies + nb,
-        flies=net.flies,
-    )
+    net = net.with_body_nodes(np.vstack(centres), masses)
     v = np.zeros((n0, 3)) if velocity is None else velocity
     velocity = np.vstack([v, v_new])
     loads = pad_loads(loads, nb)

@@ -112,7 +112,6 @@ def add_free_bodies(case, net, loads, velocity, size: float):
     nodes each). Raises ConfigError with the key path for a body that starts overlapping
     the net, that shares the scene with other obstacles, or has a bad inertia."""
     from catenet.case.bodies import pad_loads
-    from catenet.model.net import Net
 
     which = [k for k, o in enumerate(case.obstacles) if getattr(o, "free", False)]
     if not which:
@@ -135,21 +134,8 @@ def add_free_bodies(case, net, loads, velocity, size: float):
         speeds.append(V)
         built.append(body)
     nb = 4 * len(which)
-    point = np.zeros(n0) if net.point_mass is None else net.point_mass
     masses = np.repeat([b.mass / 4 for b in built], 4)
-    net = Net.from_arrays(
-        np.vstack([net.nodes, *places]),
-        net.edges,
-        EA=net.EA,
-        fixed=np.concatenate([net.fixed, np.zeros(nb, bool)]),
-        rest_length=net.rest_length,
-        line_density=net.line_density,
-        tension_only=net.tension_only,
-        law=net.law,
-        point_mass=np.concatenate([point, masses]),
-        bodies=net.bodies + nb,
-        flies=net.flies,
-    )
+    net = net.with_body_nodes(np.vstack(places), masses)
     v = np.zeros((n0, 3)) if velocity is None else velocity
     velocity = np.vstack([v, *speeds])
     loads = pad_loads(loads, nb)

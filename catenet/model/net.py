@@ -242,6 +242,27 @@ class Net:
         """A copy with these point masses (N,) [kg] at the nodes (replacing any)."""
         return self.replace(point_mass=point_mass)
 
+    def with_body_nodes(self, positions, masses) -> Net:
+        """The net with free nodes added after its own, at ``positions`` (B, 3), each with
+        its point mass ``masses`` (B,) [kg] and no edge: the nodes of moving balls and free
+        rigid bodies, counted in ``bodies``."""
+        positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+        nb = len(positions)
+        point = np.zeros(self.n_nodes) if self.point_mass is None else self.point_mass
+        return Net.from_arrays(
+            np.vstack([self.nodes, positions]),
+            self.edges,
+            EA=self.EA,
+            fixed=np.concatenate([self.fixed, np.zeros(nb, bool)]),
+            rest_length=self.rest_length,
+            line_density=self.line_density,
+            tension_only=self.tension_only,
+            law=self.law,
+            point_mass=np.concatenate([point, np.asarray(masses, dtype=np.float64)]),
+            bodies=self.bodies + nb,
+            flies=self.flies,
+        )
+
     def components(self) -> np.ndarray:
         """Connected-component label (0, 1, ... in order of first node) of every node:
         union-find in NumPy, every edge hooking the larger of its two roots under the
