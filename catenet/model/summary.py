@@ -88,12 +88,37 @@ def most_moved(net: Net, x: np.ndarray) -> int:
     return int(free[np.argmax(displacement(net, x)[free])])
 
 
+TIE = 1e-12  # values this close (relative) to the extreme tie: the first of them is named
+
+
+def first_extreme(values: np.ndarray, idx: np.ndarray, largest: bool = True) -> int:
+    """The first index of ``idx`` whose value is the largest (smallest) of them, values
+    within TIE of it counted as equal: symmetric members that differ at round-off (two
+    guys of a mast) name the same one on every machine and in every run."""
+    v = np.asarray(values, dtype=np.float64)[idx]
+    best = float(np.max(v) if largest else np.min(v))
+    slack = TIE * abs(best)
+    near = v >= best - slack if largest else v <= best + slack
+    return int(idx[np.flatnonzero(near)[0]])
+
+
+def _largest(values: np.ndarray, where: np.ndarray | None = None) -> tuple[int, float]:
+    """The index ``_argmax`` names and the largest value itself (0.0 when there is none):
+    the value is the true extreme, the index the first member at it to round-off."""
+    k = _argmax(values, where)
+    if k < 0:
+        return k, 0.0
+    idx = np.arange(len(values)) if where is None else np.flatnonzero(where)
+    return k, float(np.max(np.asarray(values, dtype=np.float64)[idx]))
+
+
 def _argmax(values: np.ndarray, where: np.ndarray | None = None) -> int:
-    """Index of the largest value (among ``where``), -1 when there is none."""
+    """Index of the largest value (among ``where``; ties at round-off: the first), -1
+    when there is none."""
     idx = np.arange(len(values)) if where is None else np.flatnonzero(where)
     if idx.size == 0:
         return -1
-    return int(idx[np.argmax(np.asarray(values)[idx])])
+    return first_extreme(values, idx)
 
 
 def _vector(v) -> list[float]:
@@ -119,8 +144,7 @@ def summarize(
     u = displacement(net, x)
     free = np.zeros(net.n_nodes, bool)
     free[free_net_nodes(net)] = True
-    k = _argmax(u, free)
-    out["max_displacement"] = float(u[k]) if k >= 0 else 0.0
+    k, out["max_displacement"] = _largest(u, free)
     out["max_displacement_node"] = k
     out["max_displacement_vector"] = _vector(x[k] - net.nodes[k] if k >= 0 else np.zeros(3))
     out["probe"] = int(probe)
@@ -128,17 +152,14 @@ def summarize(
     out["probe_displacement"] = _vector(x[probe] - net.nodes[probe])
     out["delta"] = measures.deflection(net.nodes, x, int(probe))
     only = np.asarray(net.law.tension_only, dtype=bool)
-    e = _argmax(tension, tension > 0)
-    out["max_tension"] = float(tension[e]) if e >= 0 else 0.0
+    e, out["max_tension"] = _largest(tension, tension > 0)
     out["max_tension_edge"] = e
     strut = (~only) & (tension < 0)
-    e = _argmax(-tension, strut)
-    out["max_compression"] = float(-tension[e]) if e >= 0 else 0.0
+    e, out["max_compression"] = _largest(-tension, strut)
     out["max_compression_edge"] = e
     out["compressed_edges"] = int(np.count_nonzero(strut))
     eps = measures.strain(net, x)
-    e = _argmax(eps, eps > 0)
-    out["max_strain"] = float(eps[e]) if e >= 0 else 0.0
+    e, out["max_strain"] = _largest(eps, eps > 0)
     out["max_strain_edge"] = e
     out["slack_edges"] = int(np.count_nonzero(only & (eps < 0)))
     out.update(_forces("reaction", reaction, x, net.fixed))
@@ -152,10 +173,10 @@ def _forces(name: str, force, x, where) -> dict:
     """Resultant, largest and its node of a nodal force field (N, 3) (None: zero)."""
     f = np.zeros_like(x) if force is None else np.asarray(force, dtype=np.float64)
     size = np.linalg.norm(f, axis=1)
-    k = _argmax(size, (size > 0) if where is None else (np.asarray(where) & (size > 0)))
+    k, largest = _largest(size, (size > 0) if where is None else (np.asarray(where) & (size > 0)))
     out = {
         f"{name}_resultant": _vector(f.sum(axis=0)),
-        f"max_{name}": float(size[k]) if k >= 0 else 0.0,
+        f"max_{name}": largest,
         f"max_{name}_node": k,
     }
     if name == "contact":
@@ -166,14 +187,14 @@ def _forces(name: str, force, x, where) -> dict:
 def _peaks(p: dict, free: np.ndarray) -> dict:
     """The run's largest tension and displacement over time, where and when."""
     top, when = p["peak_tension"], p["peak_tension_time"]
-    e = _argmax(top, np.isfinite(top))
+    e, top_value = _largest(top, np.isfinite(top))
     u, u_when = p["peak_displacement"], p["peak_displacement_time"]
-    k = _argmax(u, free & np.isfinite(u))
+    k, u_value = _largest(u, free & np.isfinite(u))
     return {
-        "peak_tension": float(max(top[e], 0.0)) if e >= 0 else 0.0,
+        "peak_tension": max(top_value, 0.0),
         "peak_tension_edge": e if e >= 0 and top[e] > 0 else -1,
         "peak_tension_time": float(when[e]) if e >= 0 and top[e] > 0 else float("nan"),
-        "peak_displacement": float(u[k]) if k >= 0 else 0.0,
+        "peak_displacement": u_value,
         "peak_displacement_node": k,
         "peak_displacement_time": float(u_when[k]) if k >= 0 else float("nan"),
     }

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
+from catenet.model.summary import first_extreme
 
 if TYPE_CHECKING:  # the solvers load when a case is run
     from catenet.solver.result import Result
@@ -184,16 +185,16 @@ def governing(net, runs: list[CaseRun]) -> dict:
     free = ~np.asarray(net.fixed, dtype=bool)
     free[net.n_net :] = False
     out = {}
-    for key, pick_, where in (
-        ("tension_max", np.argmax, None),
-        ("tension_min", np.argmin, None),
-        ("displacement_max", np.argmax, free),
+    for key, largest, where in (
+        ("tension_max", True, None),
+        ("tension_min", False, None),
+        ("displacement_max", True, free),
     ):
         values = env[key]
         idx = np.flatnonzero(where) if where is not None else np.arange(len(values))
         if idx.size == 0:
             continue
-        k = int(idx[pick_(values[idx])])
+        k = first_extreme(values, idx, largest)  # ties at round-off: the first
         out[key] = {
             "value": float(values[k]),
             "at": k,
