@@ -41,7 +41,7 @@ def problems(data: dict, **kw) -> list[str]:
 
 
 def test_on_the_square_net_it_is_the_papers_pressure(tmp_path):
-    """load.pressure shares p L^2 equally among the nodes (SPEC section 2); an area load
+    """load.pressure shares p L^2 equally among the nodes (contract §2); an area load
     over the whole square net does the same, on plan and normal to the flat net."""
     paper = copy.deepcopy(SQUARE)
     paper["load"] = {"pressure": 150.0}

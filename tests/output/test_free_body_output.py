@@ -1,4 +1,4 @@
-"""A free body in the result file (SPEC section 7): /mesh/obstacles/<k> attrs mass and
+"""A free body in the result file (contract §7): /mesh/obstacles/<k> attrs mass and
 dataset inertia; /trajectory/obstacles/<k>/ center, rotation, velocity,
 angular_velocity per frame, read from the body's four nodes in /trajectory/x and v; the
 same under /result/obstacles/<k>/ at the end."""

@@ -1,4 +1,4 @@
-"""Load cases and combinations (SPEC section 7): the base state solved once, each case
+"""Load cases and combinations (contract §7): the base state solved once, each case
 and combination solved from it on one workspace, results in /cases/<name>/ with the
 layout of /result, envelopes in /envelope/."""
 

@@ -1,4 +1,4 @@
-"""Peaks over a run (SPEC section 7: /result/peak_tension, /result/peak_tension_time):
+"""Peaks over a run (contract §7: /result/peak_tension, /result/peak_tension_time):
 each edge's largest tension over every time step or load step, not only the frames a
 file keeps, and each node's largest displacement."""
 

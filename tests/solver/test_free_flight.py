@@ -1,4 +1,4 @@
-"""A net without supports in a dynamic run (it flies free, SPEC section 7): thrown at a free
+"""A net without supports in a dynamic run (it flies free, contract §7): thrown at a free
 box in zero gravity without damping, net and box together keep their linear momentum to
 the solver's tolerance at every step, and their angular momentum drifts less as the
 step shrinks under newmark; the net never enters the box; a static run of a net without

@@ -12,7 +12,7 @@ from catenet.solver.path import Settings, Start, solve
 
 
 def test_plucked_paper_net_rings_at_the_lowest_frequency(tmp_path):
-    """The paper's n = 10 net (SPEC section 2: L = 1 m, edge 0.05 m, E = 10 MPa, r = 1 cm,
+    """The paper's n = 10 net (contract §2: L = 1 m, edge 0.05 m, E = 10 MPa, r = 1 cm,
     rho = 1000 kg/m^3, p = 100 Pa) at its equilibrium under the pressure, displaced along
     its first mode (amplitude 1e-5 L: linear) and let go without damping. Small
     vibrations about the equilibrium obey M u'' + K u = 0, so the displaced mode rings

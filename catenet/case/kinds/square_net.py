@@ -88,7 +88,7 @@ class SquareNetConfig(GeometryConfig):
         return Built(refit(sq.net, names, fixed, self.prestrain), sq.center, self.size, names)
 
     def area_force(self, net, pressure: float, size: float) -> Any:
-        """The paper's pressure (SPEC section 2): p L^2 over the square, shared equally by
+        """The paper's pressure (contract §2): p L^2 over the square, shared equally by
         the N nodes, so that [[load.area]] on the whole net is load.pressure (the net is
         flat: on plan and normal to it alike)."""
         return geo.pressure_force(net, pressure, size)
