@@ -204,7 +204,7 @@ def cable_summary(
     net: Net, x, tension, edge_cable: np.ndarray, names, peaks=None
 ) -> dict[str, dict]:
     """Per cable (``edge_cable`` (M,): each edge's cable index, -1: none): ``max_tension``
-    (the largest axial force, negative for a strut in compression: the contract's cable_max_tension),
+    (the largest axial force, negative for a strut in compression: cable_max_tension),
     ``max_compression`` (>= 0), ``slack_fraction`` (share of its unstressed length slack),
     ``slack_edges`` (tension-only edges slack), ``strut`` (no edge of it is tension-only).
     With the run's ``peaks`` (a ``Peaks`` or its ``arrays()``) also ``peak_tension``: the
