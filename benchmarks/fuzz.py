@@ -32,41 +32,6 @@ sys.path.insert(0, str(REPO / "tests"))
 
 import fuzzing as fz  # noqa: E402
 
-NET_CASE = """
-title = "net from a file"
-[geometry]
-kind = "graph"
-file = "{name}"
-fixed = [0, 3]
-[material]
-EA = 1000.0
-[load]
-point = [{{node = 1, force = [0.0, 0.0, -10.0]}}]
-[solver]
-method = "static"
-"""
-NET_FILES = {
-    "net.json": b'{"nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], '
-    b'"edges": [[0, 1], [1, 2], [2, 3]]}',
-    "net.csv": b"x,y,z\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n\ni,j\n0,1\n1,2\n2,3\n",
-    "net.obj": b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nl 1 2 3 4\n",
-}
-SWEEP_CASE = """
-title = "sweep"
-[geometry]
-kind = "square_net"
-n = 4
-alpha = 0.0
-size = 1.0
-edge_length = 0.25
-[material]
-E = 10e6
-radius = 0.01
-[load]
-pressure = 10.0
-[solver]
-method = "static"
-"""
 SMALL_NET = """
 title = "small"
 [geometry]
@@ -102,15 +67,15 @@ def case_input(rng, work: Path, cases, bases):
 
 
 def net_input(rng, work: Path):
-    name = rng.choice(sorted(NET_FILES))
-    (work / name).write_bytes(fz.mutate_text(NET_FILES[name], rng))
-    (work / "case.toml").write_text(NET_CASE.format(name=name))
+    name = rng.choice(sorted(fz.NET_FILES))
+    (work / name).write_bytes(fz.mutate_text(fz.NET_FILES[name], rng))
+    (work / "case.toml").write_text(fz.NET_CASE.format(name=name))
     what = f"{name}: {(work / name).read_bytes()[:200]!r}"
     return ["run", work / "case.toml", "-o", work / "out.h5", "-q"], what
 
 
 def sweep_input(rng, work: Path):
-    (work / "case.toml").write_text(SWEEP_CASE)
+    (work / "case.toml").write_text(fz.SWEEP_CASE)
     params = fz.mutate_params(rng)
     args = ["sweep", work / "case.toml", "-o", work / "sw", "-j", "1", "-q"]
     for p in params:

@@ -460,3 +460,43 @@ def copy_beside(case: Path, work: Path) -> None:
     for sibling in case.parent.iterdir():
         if sibling.suffix.lower() in (".json", ".csv", ".obj", ".stl", ".vtu", ".msh"):
             shutil.copy(sibling, work / sibling.name)
+
+
+# Seeds shared by the quick tier (tests/fuzz) and the long run (benchmarks/fuzz.py).
+NET_CASE = """
+title = "net from a file"
+[geometry]
+kind = "graph"
+file = "{name}"
+fixed = [0, 3]
+[material]
+EA = 1000.0
+[load]
+point = [{{node = 1, force = [0.0, 0.0, -10.0]}}]
+[solver]
+method = "static"
+"""
+
+NET_FILES = {
+    "net.json": b'{"nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], '
+    b'"edges": [[0, 1], [1, 2], [2, 3]]}',
+    "net.csv": b"x,y,z\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n\ni,j\n0,1\n1,2\n2,3\n",
+    "net.obj": b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nl 1 2 3 4\n",
+}
+
+SWEEP_CASE = """
+title = "sweep"
+[geometry]
+kind = "square_net"
+n = 4
+alpha = 0.0
+size = 1.0
+edge_length = 0.25
+[material]
+E = 10e6
+radius = 0.01
+[load]
+pressure = 10.0
+[solver]
+method = "static"
+"""

@@ -17,6 +17,9 @@ from pathlib import Path
 
 import pytest
 from fuzzing import (
+    NET_CASE,
+    NET_FILES,
+    SWEEP_CASE,
     copy_beside,
     example_cases,
     invoke,
@@ -111,27 +114,6 @@ def _drop_none(v):
     return v
 
 
-NET_CASE = """
-title = "net from a file"
-[geometry]
-kind = "graph"
-file = "{name}"
-fixed = [0, 3]
-[material]
-EA = 1000.0
-[load]
-point = [{{node = 1, force = [0.0, 0.0, -10.0]}}]
-[solver]
-method = "static"
-"""
-NET_FILES = {
-    "net.json": b'{"nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], '
-    b'"edges": [[0, 1], [1, 2], [2, 3]]}',
-    "net.csv": b"x,y,z\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n\ni,j\n0,1\n1,2\n2,3\n",
-    "net.obj": b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nl 1 2 3 4\n",
-}
-
-
 @settings(max_examples=60, **SETTINGS)
 @given(name=st.sampled_from(sorted(NET_FILES)), rng=st.randoms(use_true_random=False))
 def test_mutated_net_files(tmp_path_factory, name, rng):
@@ -178,24 +160,6 @@ def test_mutated_mesh_files(tmp_path_factory, rng):
     case.write_text(MESH_CASE)
     result = invoke(["run", case, "-o", work / "out.h5", "-q"], seconds=60, cwd=work)
     _check(judge(result, work), mesh.read_bytes()[:300])
-
-
-SWEEP_CASE = """
-title = "sweep"
-[geometry]
-kind = "square_net"
-n = 4
-alpha = 0.0
-size = 1.0
-edge_length = 0.25
-[material]
-E = 10e6
-radius = 0.01
-[load]
-pressure = 10.0
-[solver]
-method = "static"
-"""
 
 
 @settings(max_examples=60, **SETTINGS)
