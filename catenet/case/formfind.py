@@ -36,8 +36,19 @@ TARGETS = {"forces": "force", "lengths": "length"}
 
 
 def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """One number > 0 (every edge) or an array of them (one per edge, counted when the
-    net is built)."""
+    """One number > 0 (every edge), an array of them (one per edge, counted when the
+    net is built) or a table of them by cable (names or patterns, ``edges`` for the
+    graph's own edges: matched when the net is built)."""
+    if isinstance(v, dict):
+        if not v:
+            return ck.bad(path, v, f"must name at least one cable: {BY_CABLE}")
+        out = {}
+        for name, x in v.items():
+            f = as_float(x)
+            if f is None or not (carried(f) and f > 0):
+                return ck.bad(f"{path}.{name}", x, "must be a number, finite and > 0")
+            out[str(name)] = f
+        return out
     if isinstance(v, (list, tuple)):
         if not v:
             return ck.bad(path, v, "must be a number > 0 or a non-empty array, one per edge")
@@ -55,10 +66,17 @@ def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return f
 
 
+#: The table form of a per-edge value, as messages show it.
+BY_CABLE = (
+    '{ "hang*" = 1e4, arch = 2e4, edges = 5e3 } (cable names or patterns; edges: the '
+    "graph's own)"
+)
+
+
 def _per_edge(default: Any = None, **kw) -> Any:
     return key(
         _number_or_per_edge,
-        "a number > 0, or an array of them (one per edge)",
+        "a number > 0, an array of them (one per edge), or a table by cable",
         default,
         write="given",
         **kw,

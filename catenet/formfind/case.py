@@ -12,6 +12,7 @@ load starts in equilibrium and reproduces the shape and forces.
 from __future__ import annotations
 
 import dataclasses
+import fnmatch
 import logging
 import time
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from catenet.case.keys import show
 from catenet.errors import ConfigError
 from catenet.formfind.fdm import FormFound, formfind
 from catenet.formfind.tocase import PREFIX, to_case
@@ -35,15 +37,63 @@ def formfind_scene(scene) -> FormFound:
         )
     return formfind(
         scene,
-        cfg.force_density,
+        by_cable(scene, cfg.force_density, "force_density"),
         method=cfg.method,
-        force=cfg.force,
-        length=cfg.length,
+        force=by_cable(scene, cfg.force, "force"),
+        length=by_cable(scene, cfg.length, "length"),
         tol=cfg.tol,
         max_iter=cfg.max_iter,
         linear=scene.case.solver.linear,
         prefix=PREFIX,
     )
+
+
+OWN_EDGES = "edges"  # the key of a table by cable for the graph's own edges
+
+
+def by_cable(scene, value, key: str):
+    """A per-edge value of [formfind] as the form finding takes it: a table by cable
+    (``{ name or pattern = value, edges = value }``) as one value per edge of the built
+    net; a number or an array as given. ConfigError naming ``formfind.<key>`` when a
+    key matches nothing, a cable twice, or an edge is left without a value."""
+    if not isinstance(value, dict):
+        return value
+    path = f"{PREFIX}{key}"
+    cables = scene.cables
+    if cables is None or not cables.names:
+        raise ConfigError(
+            f"{path} = {show(value)}: a table by cable needs a graph with [[geometry.cable]]: "
+            "give one number, or one per edge"
+        )
+    names = list(cables.names)
+    edge_cable = np.asarray(cables.edge)
+    out = np.full(len(edge_cable), np.nan)
+    given: dict[int, str] = {}  # cable index (-1: own edges) -> the key that gave it
+    for pattern, v in value.items():
+        hits = [c for c, n in enumerate(names) if fnmatch.fnmatchcase(n, pattern)]
+        if pattern == OWN_EDGES and np.any(edge_cable < 0):
+            hits.append(-1)
+        if not hits:
+            own = ", edges (the graph's own edges)" if np.any(edge_cable < 0) else ""
+            raise ConfigError(
+                f"{path}.{pattern} = {show(v)}: matches no cable (the cables: "
+                f"{', '.join(names)}{own})"
+            )
+        for c in hits:
+            if c in given:
+                what = "the graph's own edges" if c < 0 else f"cable {names[c]!r}"
+                raise ConfigError(
+                    f"{path}.{pattern} = {show(v)}: {what} has a value already (from "
+                    f"{path}.{given[c]}): give each cable one"
+                )
+            given[c] = pattern
+            out[edge_cable == c] = v
+    left = np.flatnonzero(np.isnan(out))
+    if left.size:
+        c = int(edge_cable[left[0]])
+        what = "the graph's own edges (key edges)" if c < 0 else f"cable {names[c]!r}"
+        raise ConfigError(f"{path} = {show(value)}: gives no value for {what}: give every edge one")
+    return out
 
 
 @dataclass

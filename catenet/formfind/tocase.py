@@ -75,13 +75,77 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         }
     out["geometry"] = geometry
     out["load"] = load
+    if case is not None:
+        out.update(_kept_tables(case, scene))
     probe = out.get("output", {}).get("probe")
-    if structured and isinstance(probe, str) and probe in (scene.names or {}):
-        out["output"]["probe"] = int(scene.names[probe])  # ("center" moves with the shape)
+    if scene is not None and isinstance(probe, str):
+        out["output"]["probe"] = _ref(probe, scene)  # ("center" moves with the shape)
     if output_file is not None:
         out.setdefault("output", {})["file"] = output_file
-    order = ("title", "geometry", "material", "load", "solver", "output")
+    order = ("title", "geometry", "material", "load", "solver", "output", *TABLES)
     return {k: out[k] for k in order if k in out}
+
+
+#: The case's arrays of tables the written case keeps (loads of the found net's analysis).
+TABLES = ("mass", "obstacle", "load_case", "combination")
+
+
+def _ref(ref, scene):
+    """A node reference of the case as the written case holds it: a named node (e.g.
+    "center", found from the geometry, which moves) as its index; a node set or an index
+    as given."""
+    if isinstance(ref, str) and ref not in (scene.sets or {}) and ref in (scene.names or {}):
+        return int(scene.names[ref])
+    return ref
+
+
+def _refs(value, scene):
+    if isinstance(value, (list, tuple)):
+        return [_ref(r, scene) for r in value]
+    return _ref(value, scene)
+
+
+def _kept_tables(case, scene) -> dict:
+    """The point masses, obstacles, load cases and combinations of ``case``, their node
+    references kept (named nodes as indices; a point load along a cable: the node there,
+    split so when the shape was found)."""
+    out: dict = {}
+    if scene is None:
+        return {k: [t.to_dict() for t in getattr(case, a)] for k, a in _ATTRS if getattr(case, a)}
+    if case.masses:
+        out["mass"] = [{**m.to_dict(), "node": _refs(m.node, scene)} for m in case.masses]
+    if case.obstacles:
+        out["obstacle"] = [o.to_dict() for o in case.obstacles]
+    offset = len(case.load.points)  # the load cases' points along cables follow the base's
+    cases = []
+    for lc in case.load_cases:
+        item = lc.to_dict()
+        points = []
+        for j, pt in enumerate(lc.points):
+            one = pt.to_dict()
+            if pt.cable is not None:
+                one.pop("cable")
+                one.pop("at")
+                one = {"node": int(scene.at_nodes[offset + j]), **one}
+            else:
+                one["node"] = _refs(pt.node, scene)
+            points.append(one)
+        offset += len(lc.points)
+        if points:
+            item["point"] = points
+        for a, area in zip(item.get("area", ()), lc.areas, strict=True):
+            if area.nodes is not None:
+                a["nodes"] = _refs(area.nodes, scene)
+        cases.append(item)
+    if cases:
+        out["load_case"] = cases
+    if case.combinations:
+        out["combination"] = [c.to_dict() for c in case.combinations]
+    return out
+
+
+_ATTRS = (("mass", "masses"), ("obstacle", "obstacles"), ("load_case", "load_cases"))
+_ATTRS += (("combination", "combinations"),)
 
 
 def _graph(found: FormFound, case, scene, rest: np.ndarray) -> dict:

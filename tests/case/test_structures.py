@@ -54,9 +54,12 @@ def balanced(case, result) -> None:
 
 
 def test_every_structure_example_is_tested():
-    tested = {SADDLE, MAST, TETHER, HYPAR, CONFIGS / "structures" / "mast_load_cases.toml"}
+    elsewhere = ("mast_load_cases.toml", "hypar_principal.toml")
+    tested = {SADDLE, MAST, TETHER, HYPAR, *(CONFIGS / "structures" / f for f in elsewhere)}
     assert set((CONFIGS / "structures").glob("*.toml")) <= tested
-    for path in tested:  # mast_load_cases.toml: tests/run/test_load_cases.py
+    # mast_load_cases.toml: tests/run/test_load_cases.py; hypar_principal.toml:
+    # tests/formfind/test_hypar_principal.py
+    for path in tested:
         says_what_it_shows(path)
 
 

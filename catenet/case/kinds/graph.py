@@ -133,7 +133,8 @@ class GraphConfig(GeometryConfig):
         nonempty=True,
         write="never",
         compare=False,
-        doc="a JSON file of the keys above (relative to the case file); or nodes and edges "
+        doc="a JSON file of some of the keys above (relative to the case file; the others "
+        "may stay here); or nodes and edges "
         "from a CSV sheet (a table under the header x,y,z, a row per node, and one under i,j, "
         "a row per edge, node k the k-th row from 0; comma, semicolon or tab), an OBJ file of "
         "polylines, a VTK file (.vtu, .vtp, .vtk: lines and polylines; point data flags are "
@@ -149,23 +150,31 @@ class GraphConfig(GeometryConfig):
         file = None
         src: Any = g
         suffix = ""
+        read: tuple[str, ...] = ()
         if "file" in g:
             file = value(ck, g, by_name["file"], "geometry", ctx)
             if file is BAD:
                 return None
-            held = MESH_KEYS if is_mesh(file) else _DATA
-            inline = [k for k in held if k in g]
+            mesh = is_mesh(file)
+            inline = [k for k in MESH_KEYS if k in g]  # (a JSON file's others: below)
             if inline:
+                held = ", ".join(MESH_KEYS) if mesh else "the graph's keys"
                 ck.add(
                     f"geometry.{inline[0]}: give the graph in geometry.file or inline, not both "
-                    f"(geometry.file = {file!r} holds {', '.join(held)})"
+                    f"(geometry.file = {file!r} holds {held})"
                 )
                 return None
             src = read_net_file(ck, file, base_dir, _DATA)
             if src is None:
                 return None
-            if is_mesh(file):
-                src = merge_file(ck, {k: g[k] for k in _DATA if k in g}, src, file)
+            own = {k: g[k] for k in _DATA if k in g}
+            read = FILE_KEYS if mesh else tuple(src)
+            if mesh:
+                src = merge_file(ck, own, src, file)
+                if src is None:
+                    return None
+            else:
+                src = _merge_json(ck, own, src, file)
                 if src is None:
                     return None
             suffix = f" (in geometry.file = {file!r})"
@@ -174,7 +183,7 @@ class GraphConfig(GeometryConfig):
             sub.keys(src, "geometry", _DATA, " in a graph file")
         data = _parse_data(sub, src, pre)
         for msg in sub.problems:
-            from_file = not is_mesh(file or "") or msg.startswith(FILE_KEYS, len("geometry."))
+            from_file = msg.startswith(tuple(f"geometry.{k}" for k in read))
             ck.add(msg + (suffix if from_file else ""))
         if data is None or sub.problems or pre is BAD:
             return None
@@ -373,6 +382,19 @@ class GraphConfig(GeometryConfig):
 
 #: The keys that give the net (inline, or in the JSON file of geometry.file).
 _DATA = tuple(n for n in names(GraphConfig) if n not in ("prestrain", "file"))
+
+
+def _merge_json(ck: Checker, given: dict, read: dict, file: str) -> dict | None:
+    """The graph's keys: the JSON file's and the case file's others (a key in both is
+    refused: one place for each)."""
+    both = [k for k in read if k in given]
+    if both:
+        ck.add(
+            f"geometry.{both[0]}: given in geometry.file = {file!r} too: give it in one place "
+            f"(the file holds {', '.join(k for k in _DATA if k in read)})"
+        )
+        return None
+    return {**given, **read}
 
 
 def _prestress_key(per_edge: bool):
