@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import json
 import logging
+import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,10 +61,11 @@ def by_cable(scene, value, key: str):
     if not isinstance(value, dict):
         return value
     path = f"{PREFIX}{key}"
+    shown = _inline(value)
     cables = scene.cables
     if cables is None or not cables.names:
         raise ConfigError(
-            f"{path} = {show(value)}: a table by cable needs a graph with [[geometry.cable]]: "
+            f"{path} = {shown}: a table by cable needs a graph with [[geometry.cable]]: "
             "give one number, or one per edge"
         )
     names = list(cables.names)
@@ -92,8 +95,15 @@ def by_cable(scene, value, key: str):
     if left.size:
         c = int(edge_cable[left[0]])
         what = "the graph's own edges (key edges)" if c < 0 else f"cable {names[c]!r}"
-        raise ConfigError(f"{path} = {show(value)}: gives no value for {what}: give every edge one")
+        raise ConfigError(f"{path} = {shown}: gives no value for {what}: give every edge one")
     return out
+
+
+def _inline(table: dict) -> str:
+    """A table as TOML writes it inline: ``{ "hang*" = 45000.0, edges = 1000.0 }``."""
+    bare = re.compile(r"^[A-Za-z0-9_-]+$")
+    items = (f"{k if bare.match(k) else json.dumps(k)} = {show(v)}" for k, v in table.items())
+    return "{ " + ", ".join(items) + " }"
 
 
 @dataclass

@@ -53,8 +53,8 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
     points: list[dict[str, Any]] = []
     if structured:
         points, const = _kept_points(case, scene, const)
-        if case.load.history is not None:
-            load["history"] = [list(p) for p in case.load.history]
+    if case is not None and scene is not None:
+        points += _timed(case, scene, structured, load)
     nodes = np.flatnonzero(np.any(const != 0.0, axis=1))
     points += [{"node": int(i), "force": const[i].tolist()} for i in nodes]
     if points:
@@ -199,6 +199,31 @@ def _kept_points(case, scene, const: np.ndarray) -> tuple[list, np.ndarray]:
                 rest[i] -= pt.force
     rest[np.abs(rest) <= 64 * np.finfo(float).eps * scale] = 0.0  # the round-off left
     return points, rest
+
+
+def _timed(case, scene, structured: bool, load: dict) -> list[dict]:
+    """The loads that follow a time history (dynamic runs; form finding leaves them out):
+    ``load.history`` and, of a graph, its line and area loads with a history as given
+    (into ``load``; its point loads are kept with the others); of another kind, each
+    timed nodal force as a point load with its history (returned)."""
+    timed = case.load.history is not None
+    if timed:
+        load["history"] = [list(p) for p in case.load.history]
+    if structured:
+        for key, items in (("line", case.load.lines), ("area", case.load.areas)):
+            kept = [t.to_dict() for t in items if timed or t.history is not None]
+            for t in kept if key == "area" else ():
+                if "nodes" in t:
+                    t["nodes"] = _refs(t["nodes"], scene)
+            if kept:
+                load[key] = kept
+        return []
+    points = []
+    for force, history in scene.loads.parts:
+        table = np.column_stack([history.times, history.factors]).tolist()
+        for i in np.flatnonzero(np.any(force != 0.0, axis=1)):
+            points.append({"node": int(i), "force": force[i].tolist(), "history": table})
+    return points
 
 
 def _weight(net, rest: np.ndarray, gravity) -> np.ndarray:

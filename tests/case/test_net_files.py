@@ -308,3 +308,39 @@ def run_bad(tmp_path, file: str, content: bytes) -> str:
 def test_files_that_cannot_be_read_exit_2_with_the_key(tmp_path, file, content, message):
     out = run_bad(tmp_path, file, content)
     assert f"geometry.file = {file!r}: " in out and message in out
+
+
+def test_a_json_net_file_leaves_the_other_graph_keys_to_the_case(tmp_path):
+    """A JSON file of the net (nodes, edges, cables, supports) with the discretisation and
+    node sets in the case file: one place for each key; a key in both is refused."""
+    import json
+
+    net = {
+        "nodes": POINTS.tolist(),
+        "cable": [{"name": n, "nodes": list(c)} for n, c in zip(NAMES, LINES, strict=True)],
+    }
+    net["fixed"] = [i for i, f in enumerate(FIXED) if f]
+    (tmp_path / "net.json").write_text(json.dumps(net))
+    data = {
+        "geometry": {
+            "kind": "graph",
+            "file": "net.json",
+            "edge_length": 0.25,
+            "sets": {"mid": {"near": [1.5, 0, 0]}},
+        },
+        "material": {"EA": 1e4, "prestress": 10.0},
+        "load": {"point": [{"node": "mid", "force": [0, 0, -1.0]}]},
+    }
+    scene = build(parse_case(data, base_dir=tmp_path))
+    assert scene.net.n_nodes > len(POINTS) and tuple(scene.cables.names) == NAMES
+    data["geometry"]["file"] = "net.json"
+    net["edge_length"] = 0.5
+    (tmp_path / "net.json").write_text(json.dumps(net))
+    path = tmp_path / "c.toml"
+    path.write_text(dumps_toml(data))
+    r = CliRunner().invoke(main, ["run", str(path)])
+    assert r.exit_code == 2
+    assert (
+        "geometry.edge_length: given in geometry.file = 'net.json' too: give it in one place "
+        "(the file holds nodes, fixed, edge_length, cable)" in r.output
+    )
