@@ -1,8 +1,9 @@
 """The [formfind] table: how ``catenet formfind`` finds the shape of a case's net.
 
 The force density method (``method = "linear"``) takes a force density q [N/m] per edge
-(``force_density``: one number for every edge, or one per edge) and gives the shape in one
-sparse solve. ``method = "forces"`` and ``"lengths"`` adjust the force densities until every
+(``force_density``: one number for every edge, one per edge, or a table by cable,
+``{ "hang*" = q1, edges = q2 }``) and gives the shape in one sparse solve.
+``method = "forces"`` and ``"lengths"`` adjust the force densities until every
 edge carries its target tension ``force`` [N] or has its target length ``length`` [m], to
 the relative tolerance ``tol``. ``catenet run`` refuses a case with this table (it would
 analyse the unfound starting geometry): form-find it first, then run the case it writes.
