@@ -9,6 +9,7 @@ from typing import Any
 
 from catenet.case.keys import Checker, duplicates, show
 from catenet.case.kinds.base import GeometryConfig, Topology, expand, with_prefix
+from catenet.case.kinds.netfile import flag_note
 from catenet.case.sections import LoadConfig, SupportsConfig
 from catenet.errors import ConfigError
 
@@ -63,7 +64,7 @@ def check_nodes(
             ck.bad(path, ref, f"must be a node index in 0..{n - 1} (or a named node)")
             return False
         if isinstance(ref, str) and ref not in topo.names and ref not in topo.sets:
-            ck.add(_unknown_name(path, ref, topo))
+            ck.add(_unknown_name(path, ref, topo) + flag_note(getattr(g, "file", None)))
             return False
         return True
 

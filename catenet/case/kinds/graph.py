@@ -136,10 +136,11 @@ class GraphConfig(GeometryConfig):
         doc="a JSON file of some of the keys above (relative to the case file; the others "
         "may stay here); or nodes and edges "
         "from a CSV sheet (a table under the header x,y,z, a row per node, and one under i,j, "
-        "a row per edge, node k the k-th row from 0; comma, semicolon or tab), an OBJ file of "
-        "polylines, a VTK file (.vtu, .vtp, .vtk: lines and polylines; point data flags are "
-        "node sets) or a line mesh meshio reads (.msh, ...); a polyline of more than 2 "
-        "points, or a named one, is a cable (docs/guide/loads.md)",
+        "a row per edge, node k the k-th row from 0; comma, semicolon or tab; flag columns "
+        "after x,y,z), an OBJ file of polylines, a VTK file (.vtu, .vtp, .vtk: lines and "
+        "polylines) or a line mesh meshio reads (.msh, .ply, .xdmf, ...); point data flags "
+        "and gmsh physical groups are node sets; a polyline of more than 2 points, or a "
+        "named one, is a cable (docs/guide/loads.md)",
     )
 
     @classmethod

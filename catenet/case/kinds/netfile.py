@@ -2,16 +2,18 @@
 of two tables (nodes ``x,y,z`` and edges ``i,j``, as a spreadsheet saves them: see
 ``_read_csv``), a Wavefront OBJ file of polylines (``v`` and ``l`` lines, read here), a
 VTK file (``.vtu``, ``.vtp``, legacy ``.vtk``: read here, catenet/case/kinds/vtkfile.py)
-or any other line mesh that meshio reads (``.msh``, ...: its ``line`` cells are the
-edges; meshio is imported only then, and is optional).
+or any other line mesh that meshio reads (``.msh``, ``.ply``, ``.xdmf``, ...: its ``line``
+cells are the edges, its point data flags and named groups of cells, such as gmsh's
+physical groups, node sets; meshio is imported only then, and is optional).
 
 A mesh file gives the nodes, the edges and the cables: a polyline of more than two points,
 or one with a name (an OBJ ``o`` or ``g`` name, a VTK cell data array ``name``), is a
 cable, named so or ``line<k>`` (k its place among the file's lines, from 0); a segment of
-two points is an edge. A VTK file's point data arrays of 0/1 flags (e.g. ``fixed``) are
-node sets. The other graph keys (supports, more node sets, per-edge arrays) stay in the
-case file. Problems are recorded in a Checker with the key ``geometry.file`` and the
-file's path.
+two points is an edge. Point data arrays of 0/1 flags (e.g. ``fixed``: of a VTK file or
+any mesh meshio reads, or flag columns of a CSV nodes table) are node sets; an OBJ file
+carries none (a set named that is not there says so). The other graph keys (supports,
+more node sets, per-edge arrays) stay in the case file. Problems are recorded in a
+Checker with the key ``geometry.file`` and the file's path.
 """
 
 from __future__ import annotations
@@ -137,14 +139,46 @@ def _read_vtk(ck: Checker, path: Path, label: str) -> dict | None:
         ck.add(f"{label}: its points have non-finite coordinates")
         return None
     out = _net(got.points.tolist(), got.lines, got.names, label, ck)
-    sets = {}
-    for name, values in got.point_data.items():
-        v = np.asarray(values, dtype=np.float64)
-        if name and np.all((v == 0) | (v == 1)) and v.any():
-            sets[name] = np.flatnonzero(v).tolist()
+    sets = flag_sets(got.point_data)
     if out is not None and sets:
         out["sets"] = sets
     return out
+
+
+def flag_sets(point_data) -> dict[str, list[int]]:
+    """The node sets of point data arrays of 0/1 flags, one value per point (each set:
+    the points where it is 1); other arrays are not node sets."""
+    sets = {}
+    for name, values in point_data.items():
+        v = np.asarray(values)
+        if v.ndim == 2 and v.shape[1] == 1:
+            v = v[:, 0]
+        if v.ndim != 1 or v.dtype.kind not in "biuf":
+            continue
+        if name and np.all((v == 0) | (v == 1)) and v.any():
+            sets[str(name)] = np.flatnonzero(v).tolist()
+    return sets
+
+
+#: The net files that carry no point data (so no flags), by suffix, as messages name them.
+NO_FLAGS = {".obj": "an OBJ file", ".json": "a JSON file", "": "a JSON file"}
+
+
+def flag_note(file: str | None) -> str:
+    """Why a net file gives no node set of a name, for a message: its format carries no
+    point data (OBJ; JSON holds its node sets as ``sets``); "" for the others."""
+    if not file:
+        return ""
+    what = NO_FLAGS.get(Path(file).suffix.lower())
+    if what is None:
+        return ""
+    if what.startswith("a JSON"):
+        return f"; geometry.file = {file!r} is {what}: its node sets are its 'sets'"
+    return (
+        f"; geometry.file = {file!r} is {what}, which carries no point data flags: name "
+        "the nodes in [geometry.sets] (by region: { box = ... }), or give the net as "
+        ".vtu, .vtp, .vtk, .msh or CSV with flag columns"
+    )
 
 
 def _read_text(ck: Checker, path: Path, label: str) -> str | None:
@@ -227,8 +261,10 @@ CSV_HEADERS = {("x", "y", "z"): "nodes", ("x", "y"): "nodes", ("i", "j"): "edges
 def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
     """Two tables in one sheet, each under its header row: ``x,y,z`` (or ``x,y``, z = 0)
     then one row per node, and ``i,j`` then one row per edge (node k is the k-th row of
-    the nodes table, counting from 0). Separators: comma, semicolon or tab (the first
-    header's); blank lines, empty trailing cells and lines starting with # are skipped."""
+    the nodes table, counting from 0). Columns after x, y, z of the nodes table are flags
+    (0 or 1) that name node sets: ``x,y,z,fixed``. Separators: comma, semicolon or tab
+    (the first header's); blank lines, empty trailing cells and lines starting with #
+    are skipped."""
     import csv
 
     text = _read_text(ck, path, label)
@@ -240,6 +276,8 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
     tables: dict[str, list] = {"nodes": [], "edges": []}
     seen: set[str] = set()
     table = None
+    xyz = 3  # the nodes table's coordinate columns, then its flag columns:
+    flags: dict[str, list[bool]] = {}
     accepted = " or ".join(repr(",".join(h)) for h in CSV_HEADERS)
     for lineno, row in enumerate(csv.reader(lines, delimiter=sep), 1):
         cells = [c.strip() for c in row]
@@ -249,13 +287,20 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
             continue
         shown = sep.join(row).strip()
         header = tuple(c.lower() for c in cells)
-        if header in CSV_HEADERS:
-            table = CSV_HEADERS[header]
+        lead = _coordinates(header)
+        if header in CSV_HEADERS or lead:
+            table = CSV_HEADERS.get(header, "nodes")
             if table in seen:
                 ck.add(f"{label}: line {lineno}: {shown!r}: a second {table} table")
                 return None
             seen.add(table)
             width = len(header)
+            if table == "nodes":
+                xyz = lead or width
+                flags = {name: [] for name in cells[xyz:]}
+                if len(flags) < width - xyz:
+                    ck.add(f"{label}: line {lineno}: {shown!r}: a flag column named twice")
+                    return None
             continue
         if table is None:
             ck.add(f"{label}: line {lineno}: {shown!r}: must start with a header row {accepted}")
@@ -268,10 +313,18 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
             return None
         try:
             if table == "nodes":
-                xyz = [float(c) for c in cells]
-                if not all(map(carried, xyz)):
+                coords = [float(c) for c in cells[:xyz]]
+                if not all(map(carried, coords)):
                     raise ValueError
-                tables["nodes"].append(xyz + [0.0] * (3 - width))
+                tables["nodes"].append(coords + [0.0] * (3 - xyz))
+                for name, c in zip(flags, cells[xyz:], strict=True):
+                    if c not in ("0", "1"):
+                        ck.add(
+                            f"{label}: line {lineno}: {shown!r}: the flag column {name!r} "
+                            f"holds 0 or 1 (a node set: its nodes are the rows with 1), not {c!r}"
+                        )
+                        return None
+                    flags[name].append(c == "1")
             else:
                 tables["edges"].append([int(c) for c in cells])
         except ValueError:
@@ -297,7 +350,18 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
         head = "'x,y,z'" if missing[0] == "nodes" else "'i,j'"
         ck.add(f"{label}: has no {missing[0]}: give a header row {head} and a row per one")
         return None
-    return tables
+    sets = flag_sets({k: np.array(v, dtype=bool) for k, v in flags.items()})
+    return {**tables, "sets": sets} if sets else tables
+
+
+def _coordinates(header: tuple[str, ...]) -> int:
+    """How many coordinate columns (x, y[, z]) a nodes table's header starts with when
+    flag columns follow them; 0 otherwise."""
+    if len(header) > 3 and header[:3] == ("x", "y", "z"):
+        return 3
+    if len(header) > 2 and header[:2] == ("x", "y") and header[2] != "z":
+        return 2
+    return 0
 
 
 def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
@@ -321,7 +385,7 @@ def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
         found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
         ck.add(f"{label}: holds no line cells (it has {found}): catenet reads a mesh's lines")
         return None
-    other = sorted({c.type for c in mesh.cells if c.type != "line"})
+    other = sorted({c.type for c in mesh.cells if c.type not in ("line", "vertex")})
     if other:
         log.warning("%s: ignoring its cells of type %s", path, ", ".join(other))
     points = np.asarray(mesh.points, dtype=np.float64)
@@ -331,4 +395,42 @@ def _read_meshio(ck: Checker, path: Path, label: str) -> dict | None:
     if points.shape[1] == 2:
         points = np.column_stack([points, np.zeros(len(points))])
     edges = np.concatenate([np.asarray(d, dtype=np.int64) for d in lines])
-    return {"nodes": points.tolist(), "edges": edges.tolist()}
+    out: dict = {"nodes": points.tolist(), "edges": edges.tolist()}
+    sets = {**_group_sets(mesh), **flag_sets(mesh.point_data)}
+    if sets:
+        out["sets"] = sets
+    return out
+
+
+def _group_sets(mesh) -> dict[str, list[int]]:
+    """The node sets of a mesh's named groups of cells, each the points of its cells:
+    gmsh's physical groups (a Physical Point, Curve, ...: ``field_data`` name -> [tag,
+    dimension], the cells' ``gmsh:physical`` tags) and meshio's ``cell_sets``."""
+    groups: dict[str, list] = {}
+    physical = (getattr(mesh, "cell_data", None) or {}).get("gmsh:physical")
+    for name, value in (getattr(mesh, "field_data", None) or {}).items():
+        tag_dim = np.asarray(value).ravel()
+        if physical is None or len(tag_dim) != 2:
+            continue
+        tag, dim = int(tag_dim[0]), int(tag_dim[1])
+        for cells, tags in zip(mesh.cells, physical, strict=False):
+            if CELL_DIMENSION.get(cells.type) == dim:
+                groups.setdefault(str(name), []).append(np.asarray(cells.data)[tags == tag])
+    for name, blocks in (getattr(mesh, "cell_sets", None) or {}).items():
+        if str(name).startswith("gmsh:"):
+            continue
+        for cells, idx in zip(mesh.cells, blocks, strict=False):
+            if idx is not None and len(idx):
+                chosen = np.asarray(cells.data)[np.asarray(idx, dtype=np.int64)]
+                groups.setdefault(str(name), []).append(chosen)
+    sets = {}
+    for name, parts in groups.items():
+        nodes = np.unique(np.concatenate([part.ravel() for part in parts]))
+        if name and nodes.size:
+            sets[name] = nodes.astype(int).tolist()
+    return sets
+
+
+#: The dimension of meshio's cell types that gmsh's physical groups hold.
+CELL_DIMENSION = {"vertex": 0, "line": 1, "line3": 1, "triangle": 2, "quad": 2}
+CELL_DIMENSION |= {"triangle6": 2, "quad8": 2, "quad9": 2, "tetra": 3, "hexahedron": 3}
