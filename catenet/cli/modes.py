@@ -50,12 +50,21 @@ def _count(ctx, param, value):
     metavar="K",
     help="How many of the lowest modes.",
 )
+@click.option(
+    "--case",
+    "only_case",
+    metavar="NAME",
+    default=None,
+    help="The modes about the state under this [[load_case]] or [[combination]] (solved "
+    "from the base state); default: about the base state.",
+)
 @verbosity_options
 def command(
     case_file: Path,
     out: Path | None,
     overrides: tuple[str, ...],
     count: int,
+    only_case: str | None,
     quiet: bool,
     verbose: int,
     debug: bool,
@@ -67,6 +76,9 @@ def command(
     animation in the XDMF sidecar; prints a table of the modes.
 
     \b
+    Load cases: the modes are about the base state (/result), or with --case NAME
+    about the state under that [[load_case]] or [[combination]] (/modes attribute
+    load_case).
     Mass: material.density per unstressed volume (rho A l0 / 2 at each end of an
     edge) plus [[mass]] point masses. Zero-frequency modes (a node on slack edges
     only, a mechanism) are named, not listed.
@@ -86,7 +98,7 @@ def command(
             bar.update(done, total, note=f"{done:.4g}")
 
         try:
-            done = modes_case(case, out, count=count, progress=progress)
+            done = modes_case(case, out, count=count, progress=progress, load_case=only_case)
         finally:
             bar.close()
         if done.modes is None:
@@ -102,10 +114,17 @@ def _summary(case, done) -> None:
 
     result, modes, path = done.result, done.modes, done.path
     s = modes.stats
+    if done.load_case is not None:
+        state = f"under {done.load_case}, from the base state: "
+    elif case.load_cases:
+        state = "the base state (--case NAME: under a load case): "
+    else:
+        state = ""
     lines = [
         f"{'case':<12} {case.title or case.source}",
-        f"{'equilibrium':<12} {result.message or 'converged'} ({result.iterations} Newton "
-        f"iterations), max tension {float(max(result.tension.max(initial=0.0), 0.0)):.6g} N",
+        f"{'equilibrium':<12} {state}{result.message or 'converged'} ({result.iterations} "
+        f"Newton iterations), max tension "
+        f"{float(max(result.tension.max(initial=0.0), 0.0)):.6g} N",
         f"{'modes':<12} {modes.count} lowest of {s['dofs']} free DOFs ({s['method']}, "
         f"{s['backend']}, {s['seconds']:.3g} s, residual {s['residual']:.1e})",
     ]

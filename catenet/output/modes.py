@@ -75,9 +75,13 @@ def animated_count(count: int, n_nodes: int, frames: int = FRAMES) -> int:
     return int(min(count, max(1, ANIMATION_BYTES // max(per_mode, 1))))
 
 
-def write_modes(path: str | Path, scene, modes, *, frames: int = FRAMES) -> None:
+def write_modes(
+    path: str | Path, scene, modes, *, frames: int = FRAMES, about: str | None = None
+) -> None:
     """Adds /modes to the result file ``path`` of ``scene`` and the
-    modes' animations to its XDMF sidecar where it has one."""
+    modes' animations to its XDMF sidecar where it has one. ``about``: the load case or
+    combination whose state the modes are about (attribute ``load_case``; None: the
+    base state, /result)."""
     import h5py
 
     path = Path(path)
@@ -88,6 +92,8 @@ def write_modes(path: str | Path, scene, modes, *, frames: int = FRAMES) -> None
     try:
         with h5py.File(tmp, "r+", libver=LIBVER) as h5:
             _write_group(h5, scene, modes, frames, animated, amplitude)
+            if about is not None:
+                h5["modes"].attrs["load_case"] = about
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -57,13 +57,24 @@ class ModesRun:
     modes: Modes | None
     path: Path | None
     scene: Scene
+    load_case: str | None = None  # the load case or combination the modes are about
 
 
 def modes_case(
-    case, out=None, *, count: int = 10, progress=None, stop=None, interrupt=None
+    case,
+    out=None,
+    *,
+    count: int = 10,
+    progress=None,
+    stop=None,
+    interrupt=None,
+    load_case: str | None = None,
 ) -> ModesRun:
     """Solves ``case`` as ``catenet run`` does (writing its result file, ``out`` or the
-    case's output.file), then its ``count`` lowest modes, written into that file."""
+    case's output.file), then its ``count`` lowest modes, written into that file.
+    ``load_case``: the modes about the state under that load case or combination
+    (solved from the base state, as ``catenet run --case`` does); else about the base
+    state (its load cases are solved too, as ``catenet run`` solves them)."""
     from catenet.case import build
     from catenet.output.modes import write_modes
     from catenet.run.runner import output_path, refuse_formfind, run_case
@@ -78,11 +89,27 @@ def modes_case(
         kept["ws"] = ws
 
     result = run_case(
-        case, out, progress=progress, stop=stop, interrupt=interrupt, scene=scene, on_done=done
+        case,
+        out,
+        progress=progress,
+        stop=stop,
+        interrupt=interrupt,
+        scene=scene,
+        on_done=done,
+        load_case=load_case,
     )
     path = output_path(case, out)
+    if load_case is not None and result.converged:  # (else the base state failed)
+        (one,) = result.cases
+        if one.result is None or not one.converged:
+            message = one.error or (one.result.message if one.result else "not solved")
+            failed = result if one.result is None else one.result
+            failed.message = f"{one.name}: {message}"
+            failed.converged = False
+            return ModesRun(failed, None, path, scene, load_case)
+        result = one.result
     if not result.converged:
-        return ModesRun(result, None, path, scene)
+        return ModesRun(result, None, path, scene, load_case)
     if not result.equilibrium:  # a dynamic run that reached t_end still moving
         raise ConvergenceError(
             f"modes: the dynamic run ended at t = {result.time:.6g} s before the net came to "
@@ -93,8 +120,8 @@ def modes_case(
         raise ConvergenceError(f"modes: the equilibrium found is unstable: {result.diagnosis}")
     modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables)
     if path is not None:
-        write_modes(path, scene, modes)
-    return ModesRun(result, modes, path, scene)
+        write_modes(path, scene, modes, about=load_case)
+    return ModesRun(result, modes, path, scene, load_case)
 
 
 @dataclass
