@@ -142,12 +142,27 @@ def check_formfind_case(ck: Checker, data: Any) -> None:
     geometry = data.get("geometry") if isinstance(data.get("geometry"), dict) else {}
     material = data.get("material") if isinstance(data.get("material"), dict) else {}
     supports = data.get("supports") if isinstance(data.get("supports"), dict) else {}
-    for k in ("rest_length", "length", "prestrain"):
+    for k in ("rest_length", "length", "prestrain", "prestress"):
         if k in geometry:
             ck.add(
                 f"geometry.{k} = {show(geometry[k])}: form finding derives the rest lengths "
                 "from the forces it finds: remove it (or remove [formfind])"
             )
+    cables = geometry.get("cable") if isinstance(geometry.get("cable"), list) else []
+    given = [
+        (j, k, c[k])
+        for j, c in enumerate(cables)
+        for k in ("prestress", "rest_length")
+        if isinstance(c, dict) and k in c
+    ]
+    if given:
+        j, k, v = given[0]
+        more = f" ({len(given) - 1} more cables give theirs)" if len(given) > 1 else ""
+        ck.add(
+            f"geometry.cable[{j}].{k} = {show(v)}: form finding gives every edge its "
+            f"tension: remove it{more} (target tensions by cable: formfind.method = "
+            "'forces' with formfind.force = { NAME = N, ... })"
+        )
     if "prestress" in material:
         ck.add(
             f"material.prestress = {show(material['prestress'])}: form finding gives every "

@@ -69,8 +69,8 @@ def _summary(written) -> None:
     lines = [
         f"{'case':<12} {written.case.title or written.case.source}",
         f"{'method':<12} {f.method} ({detail})",
-        f"{'net':<12} {f.net.n_nodes} nodes, {f.net.n_edges} edges, "
-        f"{int(np.count_nonzero(f.net.fixed))} fixed",
+        f"{'net':<12} {f.net.n_net} nodes, {f.net.n_edges} edges, "
+        f"{int(np.count_nonzero(f.net.fixed[: f.net.n_net]))} fixed",
         f"{'tension':<12} {float(force.min()):.6g} .. {float(force.max()):.6g} N",
         f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
         f"{'output':<12} {written.result_file}",

@@ -37,6 +37,10 @@ def formfind_scene(scene) -> FormFound:
         raise ConfigError(
             "formfind: missing: the case needs a [formfind] table (force_density = q [N/m])"
         )
+    net = scene.net
+    if net.bodies:  # free bodies' nodes (no edges) stay where they are: the run moves them
+        held = net.fixed | (np.arange(net.n_nodes) >= net.n_net)
+        scene = dataclasses.replace(scene, net=net.replace(fixed=held))
     return formfind(
         scene,
         by_cable(scene, cfg.force_density, "force_density"),

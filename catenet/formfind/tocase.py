@@ -39,11 +39,11 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
     else:
         geometry = {
             "kind": "graph",
-            "nodes": found.x.tolist(),
+            "nodes": found.x[: net.n_net].tolist(),
             "edges": net.edges.tolist(),
             "rest_length": rest.tolist(),
             "EA": net.EA.tolist(),
-            "fixed": np.flatnonzero(net.fixed).tolist(),
+            "fixed": np.flatnonzero(net.fixed[: net.n_net]).tolist(),
         }
     load: dict = {}
     const = found.load.copy()
@@ -55,7 +55,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         points, const = _kept_points(case, scene, const)
     if case is not None and scene is not None:
         points += _timed(case, scene, structured, load)
-    nodes = np.flatnonzero(np.any(const != 0.0, axis=1))
+    nodes = np.flatnonzero(np.any(const[: net.n_net] != 0.0, axis=1))  # (not the bodies')
     points += [{"node": int(i), "force": const[i].tolist()} for i in nodes]
     if points:
         load["point"] = points
@@ -152,14 +152,14 @@ def _graph(found: FormFound, case, scene, rest: np.ndarray) -> dict:
     """A graph case's geometry with its structure: own edges, cables, node sets."""
     net, g = found.net, case.geometry
     own = np.ones(net.n_edges, dtype=bool) if scene.cables is None else scene.cables.edge < 0
-    geometry: dict = {"kind": "graph", "nodes": found.x.tolist()}
+    geometry: dict = {"kind": "graph", "nodes": found.x[: net.n_net].tolist()}
     if own.any():
         geometry["edges"] = net.edges[own].tolist()
         geometry["rest_length"] = rest[own].tolist()
         geometry["EA"] = net.EA[own].tolist()
         if g.tension_only is not None:
             geometry["tension_only"] = list(g.tension_only)
-    geometry["fixed"] = np.flatnonzero(net.fixed).tolist()
+    geometry["fixed"] = np.flatnonzero(net.fixed[: net.n_net]).tolist()  # (bodies' own: not)
     sets = {k: list(v) for k, v in (scene.sets or {}).items() if not k.startswith("cable:")}
     if sets:
         geometry["sets"] = sets

@@ -226,3 +226,42 @@ def test_a_table_by_cable_needs_cables():
         "formfind.force = { a = 1.0 }: a table by cable needs a graph with [[geometry.cable]]: "
         "give one number, or one per edge"
     ]
+
+
+def test_a_free_body_is_kept_out_of_the_form_finding(tmp_path):
+    """A free rigid body (an obstacle with mass) adds a node of its own to the net, with
+    no edge: form finding leaves it where it is, and the written case, which holds the
+    obstacle, adds it again."""
+    data = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0], [2, 2, 1.0]],
+            "edges": [[0, 4], [1, 4], [2, 4], [3, 4]],
+            "fixed": [0, 1, 2, 3],
+        },
+        "material": {"EA": 1e5, "density": 1000.0, "radius": 0.01},
+        "formfind": {"method": "linear", "force_density": 100.0},
+        "obstacle": [{"kind": "sphere", "center": [2, 2, 3], "radius": 0.5, "mass": 10.0}],
+        "solver": {"method": "dynamic", "t_end": 0.05, "dt": 0.01},
+    }
+    written = write_formfind(parse_case(data), tmp_path / "fb.h5")
+    back = tomllib.loads(written.case_file.read_text())
+    assert len(back["geometry"]["nodes"]) == 5 and back["geometry"]["fixed"] == [0, 1, 2, 3]
+    assert back["geometry"]["nodes"][4] == [2.0, 2.0, 0.0]  # the corners' mean
+    assert back["obstacle"][0]["mass"] == 10.0
+    assert build(written.case).net.bodies == build(parse_case(data)).net.bodies == 1
+
+
+def test_tensions_given_to_cables_are_refused_with_one_message(tmp_path):
+    data = hypar_roof(cells=3)
+    data["material"] = {"EA": 1e7}
+    for cable in data["geometry"]["cable"][:3]:
+        cable["prestress"] = 3e3
+    data["formfind"] = {"method": "linear", "force_density": 1e3}
+    with pytest.raises(ConfigError) as info:
+        parse_case(data)
+    assert info.value.problems == [
+        "geometry.cable[0].prestress = 3000.0: form finding gives every edge its tension: "
+        "remove it (2 more cables give theirs) (target tensions by cable: formfind.method = "
+        "'forces' with formfind.force = { NAME = N, ... })"
+    ]

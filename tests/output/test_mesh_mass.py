@@ -140,10 +140,16 @@ def test_sweep_runs_and_formfind_write_it(tmp_path):
     assert len(files) == 2
     for path in files:
         check_mass(path)
-    # form finding takes the net without its point masses (OUT.toml has no [[mass]])
-    bare = CASE.split("[[mass]]")[0] + "[load]" + CASE.split("[load]")[1]
-    (tmp_path / "ff.toml").write_text(
-        bare + '\n[formfind]\nmethod = "linear"\nforce_density = 1000.0\n'
-    )
+    # form finding gives the cables their tensions (no prestress of their own): the net
+    # without its point masses, and with them (OUT.toml keeps its [[mass]] tables)
+    found = CASE.replace("prestress = 800.0\n", "").replace("prestress = 1500.0\n", "")
+    bare = found.split("[[mass]]")[0] + "[load]" + found.split("[load]")[1]
+    ff = '\n[formfind]\nmethod = "linear"\nforce_density = 1000.0\n'
+    (tmp_path / "ff.toml").write_text(bare + ff)
     run("formfind", "ff.toml", "-o", "out/ff.h5", cwd=tmp_path)
     check_mass(tmp_path / "out" / "ff.h5", points=False)
+    (tmp_path / "ffm.toml").write_text(found + ff)
+    run("formfind", "ffm.toml", "-o", "out/ffm.h5", cwd=tmp_path)
+    check_mass(tmp_path / "out" / "ffm.h5")
+    run("run", "out/ffm.toml", "-o", "out/ffm_run.h5", cwd=tmp_path)
+    check_mass(tmp_path / "out" / "ffm_run.h5")
