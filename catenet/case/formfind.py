@@ -68,10 +68,7 @@ def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 
 #: The table form of a per-edge value, as messages show it.
-BY_CABLE = (
-    '{ "hang*" = 1e4, arch = 2e4, edges = 5e3 } (cable names or patterns; edges: the '
-    "graph's own)"
-)
+BY_CABLE = '{ NAME or "PATTERN*" = value, edges = value (the graph\'s own edges) }'
 
 
 def _per_edge(default: Any = None, **kw) -> Any:

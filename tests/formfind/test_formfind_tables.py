@@ -196,10 +196,11 @@ def test_targets_by_cable(tmp_path):
         ),
         (
             {"x*": 2e3, "edge": 1e3},
-            'formfind.force = { "x*" = 2000.0, edge = 1000.0 }: gives no value for cable \'y-2\': '
+            "formfind.force = { \"x*\" = 2000.0, edge = 1000.0 }: gives no value for cable 'y-2': "
             "give every edge one",
         ),
         ({"x*": -1.0}, "formfind.force.x* = -1.0: must be a number, finite and > 0"),
+        ({}, 'formfind.force = {}: must name at least one cable: { NAME or "PATTERN*" = value'),
     ],
 )
 def test_bad_tables_by_cable_exit_2_naming_the_key(tmp_path, force, message):
