@@ -144,8 +144,12 @@ def _kept_tables(case, scene) -> dict:
     return out
 
 
-_ATTRS = (("mass", "masses"), ("obstacle", "obstacles"), ("load_case", "load_cases"))
-_ATTRS += (("combination", "combinations"),)
+_ATTRS = (
+    ("mass", "masses"),
+    ("obstacle", "obstacles"),
+    ("load_case", "load_cases"),
+    ("combination", "combinations"),
+)
 
 
 def _graph(found: FormFound, case, scene, rest: np.ndarray) -> dict:

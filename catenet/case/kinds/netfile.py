@@ -432,5 +432,8 @@ def _group_sets(mesh) -> dict[str, list[int]]:
 
 
 #: The dimension of meshio's cell types that gmsh's physical groups hold.
-CELL_DIMENSION = {"vertex": 0, "line": 1, "line3": 1, "triangle": 2, "quad": 2}
-CELL_DIMENSION |= {"triangle6": 2, "quad8": 2, "quad9": 2, "tetra": 3, "hexahedron": 3}
+CELL_DIMENSION = {
+    **{"vertex": 0, "line": 1, "line3": 1},
+    **{"triangle": 2, "triangle6": 2, "quad": 2, "quad8": 2, "quad9": 2},
+    **{"tetra": 3, "hexahedron": 3},
+}
