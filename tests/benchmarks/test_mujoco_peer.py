@@ -254,3 +254,21 @@ def test_mujocos_side_keeps_momentum_and_meets_the_box(throw, tmp_path):
     Iz = ms.box_inertia(5.0, [0.2, 0.15, 0.1])[2]
     assert out["angular_momentum"][0] == pytest.approx([0.0, 0.0, Iz], rel=1e-6, abs=1e-9)
     assert np.abs(p[-1]).max() > 1e-3
+
+
+def test_the_scenes_may_be_written_one_at_a_time(tmp_path):
+    import csv
+
+    mc.write([{"scene": "capture", "tool": "catenet", "stable_dt": 0.25}], tmp_path)
+    mc.write(
+        [{"scene": "drop", "tool": "catenet", "steps": 10, "tried_stable": [[1, 2]]}], tmp_path
+    )
+    mc.write([{"scene": "drop", "tool": "MuJoCo discrete", "steps": 4000}], tmp_path)
+    with open(tmp_path / "peers-mujoco.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [(r["scene"], r["tool"]) for r in rows] == [
+        ("drop", "MuJoCo discrete"),
+        ("capture", "catenet"),
+    ]
+    assert rows[0]["steps"] == "4000" and rows[1]["stable_dt"] == "0.25"
+    assert "tried_stable" not in rows[0]
