@@ -21,7 +21,7 @@ def mujoco(results: Path) -> list[str]:
         "off catenet's",
         "deepest penetration [m]",
         "largest stable step [s]",
-        "largest step within 2 % [s]",
+        "largest accurate step [s]",
         "penetration there [m]",
         "steps",
         "engine CPU [s]",
@@ -49,7 +49,7 @@ def mujoco(results: Path) -> list[str]:
     if check:
         out += ["", "catenet's two integrators on the same scenes, the box at the end:", ""]
         out += md_table(
-            ["scene", "integrator", "dt [s]", "box momentum [kg m/s]", "largest |p| [kg m/s]"],
+            ["scene", "integrator", "dt [s]", "box momentum [kg m/s]", "largest momentum [kg m/s]"],
             [
                 [r["scene"], r["integrator"], as_text(r["dt"], "{:g}"), r["momentum"],
                  as_text(r["peak_momentum"])]

@@ -1,13 +1,13 @@
 """catenet side by side with MuJoCo: a net and a free box, two scenes.
 
     python benchmarks/peers/mujoco_capture.py --python /path/to/venv/bin/python
-        [--scenes drop,capture] [--out benchmarks/results] [--quick]
+        [--scenes drop,capture] [--integrators discrete,implicitfast] [--out benchmarks/results]
 
 ``--python``: an interpreter with ``mujoco`` and NumPy (MuJoCo is not one of catenet's
 dependencies); catenet runs in this process. The scenes are catenet cases:
 
 - ``drop``: ``mujoco_drop.toml``, the 12 kg box of docs/guide/bodies.md dropped
-  (turned, spinning) on a pinned square net under gravity, frictionless, to t = 0.4 s;
+  (turned 0.3 rad about z) on a pinned square net under gravity, frictionless, to 0.4 s;
 - ``capture``: ``configs/contact/envisat_capture.toml`` shortened to t = CAPTURE_T_END
   (first contact at t = 1.39 s): the tether net with four corner masses thrown at the
   tumbling 8 t box in orbit, friction 0.3, the tether to the fixed chaser.
@@ -16,18 +16,22 @@ MuJoCo gets the same arrays (``mujoco_scene``: nodes, lumped masses, edges with
 catenet's tension-only law as tendons of stiffness EA / r with the dead band [0, r], the
 box's mass, inertia and initial motion); ``mujoco_net.py`` builds and steps the model.
 
-For each tool and scene: a fine-step reference (catenet with newmark at REF_DT, MuJoCo
-at REF_DT / 10 with each integrator), the two references compared (the box's momentum,
-linear and angular, at the end); then the largest stable step (finite, no blow-up, the
-box's final momentum within STABLE_TOL of the tool's own reference; ``largest_stable_step``)
-and the largest step within ACCURATE_TOL, timed there: the stepping alone (engine) and
-the whole process (``catenet run`` writing its HDF5 result, against the MuJoCo script
-building its model from the JSON scene and stepping); and the deepest penetration of a
-net node into the box over the run at that step (catenet: the nodes' distance to the box
-surface; MuJoCo: its contact distance, node spheres of the cords' radius).
+For each tool and scene (catenet with its default implicit Euler; MuJoCo with each
+integrator): a fine-step reference (runs at h and h / 2, extrapolated to first order),
+compared between the tools (the box's momentum, linear and angular, at the end); the
+largest stable step (finite, no blow-up, the box's final momentum within STABLE_TOL of
+the tool's own reference, over its largest momentum; ``largest_stable_step``) and the
+largest step within the scene's accuracy (ACCURATE_TOL unless it says otherwise),
+timed there: the stepping alone (engine) and the whole process (``catenet run`` writing
+its HDF5 result, against the MuJoCo script building its model from the JSON scene and
+stepping); and the deepest penetration of a net node into the box over the run
+(catenet: the nodes' distance to the box surface; MuJoCo: its contact distance, node
+spheres of the cords' radius). A row more: MuJoCo with its default contacts.
+``--integrator-check``: catenet's implicit Euler and newmark at three steps.
 
 Writes ``peers-mujoco.csv`` (one row per scene, tool and setting) and
-``peers-mujoco.json`` (the same with every step tried).
+``peers-mujoco.json`` (the same with every step tried), keeping the rows of scenes not
+run this time.
 """
 
 from __future__ import annotations
