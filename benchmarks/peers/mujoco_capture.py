@@ -78,8 +78,8 @@ ACCURATE_TOL = 0.02
 #: MuJoCo's contact time constant [s] (solref; damping ratio 1). Its default, 0.02 s, lets
 #: the node spheres sink through the box's face in the drop scene and the box fall
 #: through the net (the "default contacts" row). With 1e-3 s MuJoCo's ``refsafe`` makes
-#: the contacts as stiff as the step allows (implicitfast: max(solref, 2 dt); discrete:
-#: the stiffest zero-restitution row for the step) from dt = 5e-4 s up.
+#: the contacts as stiff as the step allows (implicitfast: max(solref, 2 dt), from
+#: dt = 5e-4 s up; discrete: the stiffest zero-restitution row for the step, from 1e-3 s).
 TIMECONST = 1e-3
 
 
@@ -108,7 +108,7 @@ SCENES = {
         2.5e-3,
         2.5e-4,
         0.25,
-        0.05,  # catenet's runs at 2.5e-3 and 1.25e-3 s differ by 2.5 %: 2 % would need
+        0.05,  # catenet's runs at 2.5e-3 and 1.25e-3 s differ by 2 %: 2 % would need
         1.3,  # steps below 1e-3 s, an hour of runs on the busy machine
     ),
 }
