@@ -1,0 +1,107 @@
+"""The pseudo-time steps of dynamic relaxation to rest (``solver.t_end = "rest"``).
+
+A run to rest follows the damped motion only as a path to the static equilibrium: its
+time is pseudo-time, and the step may grow once the motion has settled into a decay.
+After every accepted step the step is set by switched evolution relaxation (Mulder &
+van Leer 1985; pseudo-transient continuation, Kelley & Keyes 1998) on the static
+residual r_k = |grad E - f| of the free DOFs:
+
+    h_{k+1} = h_k * min(2, r_{k-1} / r_k),
+
+kept between the smaller of h_k and ``dt`` and the cap ``dt * GROWTH_CAP``, and held
+(not grown) when the step's Newton solve needed more than ``EASY`` iterations. A failed
+step is retried with half its length, as in a run to a given end time. As h grows the
+implicit Euler step tends to a Newton step on the static equilibrium (its inertia and
+damping terms, M (1/h^2 + mu/h), vanish), so the run ends in a few dozen steps where
+steps of ``dt`` would need thousands. ``max_steps`` bounds the accepted steps: a run
+whose motion does not die out (no damping, a limit cycle) fails with a message instead
+of running for ever.
+
+Obstacles whose barrier is narrower than the scene calls for (``Obstacle.stages``, as
+in the static solve) are met first with their widest barrier: the run goes to rest,
+loosely (STAGE_RTOL), at each stage, from the widest to the exact barrier. A line that
+falls onto a bed then lands on a soft cushion instead of a barrier a fraction of a
+millimetre thick, and each narrower stage moves it only by the change of the barrier.
+Stages are used where nothing moves by prescription (no time history, no moving
+support, obstacle or body); their steps go on growing from where they were.
+"""
+
+from __future__ import annotations
+
+import math
+
+REST = "rest"  # solver.t_end's value for a run to rest
+MAX_STEPS = 20_000  # solver.max_steps's default: accepted steps of a run to rest
+GROWTH_CAP = 2.0**20  # the largest step is dt * GROWTH_CAP
+EASY = 8  # a step that took at most this many Newton iterations doubles the next one
+HARD = 16  # one that took more halves it (down to dt)
+
+
+STAGE_RTOL = 1e-3  # the rest test of the barrier stages before the last, times the load scale
+
+
+class RestControl:
+    """The step of a run to rest from t0 (the interface of ``dynamic.StepControl``, with
+    ``t_end`` infinite): ``dt`` at first, then grown by ``settled`` (module docstring);
+    ``failed`` halves it, down to the smallest step dt / 2**max_cuts."""
+
+    t_end = math.inf
+
+    def __init__(self, dt: float, t0: float, max_cuts: int, max_steps: int, stages=()):
+        self.dt, self.t0 = dt, t0
+        self.stages = list(stages)  # potentials of the barrier stages still to come
+        self.h = dt
+        self.h_min = dt / 2**max_cuts
+        self.h_max = dt * GROWTH_CAP
+        self.max_steps = max_steps
+        self.previous = math.nan  # the static residual after the last accepted step
+
+    def step(self, t: float) -> float:
+        """The next step from t."""
+        return self.h
+
+    def failed(self, h_step: float) -> bool:
+        """A step of ``h_step`` failed: the next try has half its length. False when that
+        is below the smallest step (the run fails)."""
+        self.h = 0.5 * h_step
+        self.previous = math.nan  # the decay starts again from the next accepted step
+        return not self.h < self.h_min
+
+    def accepted(self) -> None:
+        """A step was accepted (``settled`` sets the next one)."""
+
+    def settled(self, residual: float, iterations: int) -> None:
+        """After an accepted step (once nothing moves by prescription): its static
+        residual and the Newton iterations it took set the next step."""
+        before, self.previous = self.previous, residual
+        if iterations > HARD:
+            self.h = max(min(self.h, self.dt), 0.5 * self.h)
+            return
+        factor = 2.0 if iterations <= EASY else 1.0
+        if math.isfinite(before) and residual > 0.0:
+            factor = max(factor, min(2.0, before / residual))
+        self.h = min(self.h_max, max(min(self.h, self.dt), self.h * factor))
+
+    def advance(self, t: float, h_step: float) -> float:
+        """The time after the step (pseudo-time: plain sums)."""
+        return t + h_step
+
+    def rtol(self, rtol: float) -> float:
+        """The rest test's tolerance: loose at a barrier stage before the last."""
+        return max(rtol, STAGE_RTOL) if self.stages else rtol
+
+    def next_stage(self):
+        """The potential of the next barrier stage (None after the last)."""
+        self.previous = math.nan
+        return self.stages.pop(0) if self.stages else None
+
+
+def barrier_stages(potential, barriers) -> list:
+    """The potentials of a run to rest, one per barrier stage from the widest to the
+    exact one (``static._Barriers``); [potential] when the obstacles have no stages."""
+    if barriers.count == 0:
+        return [potential]
+    system = potential.system
+    stretch = system.stretch
+    levels = [system.with_terms((stretch, *barriers(k))) for k in range(barriers.count)]
+    return [*(potential.with_system(s) for s in levels), potential]
