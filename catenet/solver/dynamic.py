@@ -30,7 +30,7 @@ from catenet.kernels.sparse import norm
 from catenet.model.net import Loads, Net
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
-from catenet.solver.relax import MAX_STEPS, REST, RestControl, barrier_stages
+from catenet.solver.relax import MAX_STEPS, REST, RestControl, rest_stages
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import HarmonicExtension
 from catenet.solver.workspace import Workspace, check_rtol
@@ -305,16 +305,17 @@ class TimeStepper:
             )
 
     def rest_stages(self) -> list:
-        """The barrier stages of a run to rest after the first (whose potential this
+        """The continuation stages of a run to rest after the first (whose potential this
         stepper takes): catenet/solver/relax.py; none where something moves."""
-        from catenet.solver.static import _Barriers
+        from catenet.solver.static import _Barriers, stiffness_factors
 
         fixed = not (self.loads.varies or self.moving or self.follow or self.net.bodies)
         if not fixed:
             return []
         system = self.system
         barriers = _Barriers(tuple(t for t in system.terms if t is not system.stretch))
-        first, *rest = barrier_stages(self.potential, barriers)
+        factors = stiffness_factors(self.potential)
+        first, *rest = rest_stages(self.potential, barriers, factors)
         self.potential = first
         return rest
 

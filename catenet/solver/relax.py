@@ -17,11 +17,13 @@ steps of ``dt`` would need thousands. ``max_steps`` bounds the accepted steps: a
 whose motion does not die out (no damping, a limit cycle) fails with a message instead
 of running for ever.
 
-Obstacles whose barrier is narrower than the scene calls for (``Obstacle.stages``, as
-in the static solve) are met first with their widest barrier: the run goes to rest,
-loosely (STAGE_RTOL), at each stage, from the widest to the exact barrier. A line that
-falls onto a bed then lands on a soft cushion instead of a barrier a fraction of a
-millimetre thick, and each narrower stage moves it only by the change of the barrier.
+The run goes through the static solve's continuations, each stage to rest loosely
+(STAGE_RTOL): a nearly inextensible net first with its axial stiffness scaled down
+(Newton's quadratic model of a stiff chain holds only for rotations below the square
+root of its strain), then obstacles whose barrier is narrower than the scene calls for
+(``Obstacle.stages``) with their wider barriers first. A chain that falls onto a bed
+then lands as a softer chain on a cushion instead of a barrier a fraction of a
+millimetre thick, and each later stage moves it only a little.
 Stages are used where nothing moves by prescription (no time history, no moving
 support, obstacle or body); their steps go on growing from where they were.
 """
@@ -96,12 +98,13 @@ class RestControl:
         return self.stages.pop(0) if self.stages else None
 
 
-def barrier_stages(potential, barriers) -> list:
-    """The potentials of a run to rest, one per barrier stage from the widest to the
-    exact one (``static._Barriers``); [potential] when the obstacles have no stages."""
-    if barriers.count == 0:
-        return [potential]
+def rest_stages(potential, barriers, factors) -> list:
+    """The potentials of a run to rest, as the static solve's continuations
+    (``static.equilibrium``): the stretching scaled by each of ``factors`` (a nearly
+    inextensible net) with the widest barriers, then the exact stretching with each
+    barrier stage (``static._Barriers``), then ``potential`` itself."""
     system = potential.system
     stretch = system.stretch
-    levels = [system.with_terms((stretch, *barriers(k))) for k in range(barriers.count)]
+    levels = [system.with_terms((stretch.scaled(f), *barriers(0))) for f in factors]
+    levels += [system.with_terms((stretch, *barriers(k))) for k in range(barriers.count)]
     return [*(potential.with_system(s) for s in levels), potential]
