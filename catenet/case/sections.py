@@ -324,7 +324,7 @@ class SolverConfig(Declared):
         f"a number > 0, or {REST!r}",
         None,  # not given: catenet/case/timing.py decides for a dynamic case (parse_case)
         write="given",
-        shown=f'`"{REST}"` if nothing depends on time (see below), else `10.0`',
+        shown=f'`"{REST}"` if nothing depends on time, else `10.0`',
         unit="s",
         doc="dynamic: end time, or \"rest\": dynamic relaxation until the net is at rest "
         "(its steps grow as the motion decays: pseudo-time). Default \"rest\" unless a load "

@@ -2,15 +2,18 @@
 
 A run to rest follows the damped motion only as a path to the static equilibrium: its
 time is pseudo-time, and the step may grow once the motion has settled into a decay.
-After every accepted step the step is set by switched evolution relaxation (Mulder &
-van Leer 1985; pseudo-transient continuation, Kelley & Keyes 1998) on the static
-residual r_k = |grad E - f| of the free DOFs:
+After every accepted step the next step is set from the static residual
+r_k = |grad E - f| of the free DOFs, as in switched evolution relaxation (Mulder & van
+Leer 1985; pseudo-transient continuation, Kelley & Keyes 1998), and from the Newton
+iterations the step took:
 
-    h_{k+1} = h_k * min(2, r_{k-1} / r_k),
+    h_{k+1} = h_k * max(g, min(2, r_{k-1} / r_k)),  g = 2 after at most EASY iterations, else 1,
 
-kept between the smaller of h_k and ``dt`` and the cap ``dt * GROWTH_CAP``, and held
-(not grown) when the step's Newton solve needed more than ``EASY`` iterations. A failed
-step is retried with half its length, as in a run to a given end time. As h grows the
+so the step doubles while Newton converges easily, grows with the decay of the residual
+otherwise and is held while the residual rises (a net still falling onto its supports:
+pure SER would keep it at dt). After more than HARD iterations it is halved, never below
+``dt`` by this rule, and it never exceeds ``dt * GROWTH_CAP``. A failed step is retried
+with half its length, as in a run to a given end time. As h grows the
 implicit Euler step tends to a Newton step on the static equilibrium (its inertia and
 damping terms, M (1/h^2 + mu/h), vanish), so the run ends in a few dozen steps where
 steps of ``dt`` would need thousands. ``max_steps`` bounds the accepted steps: a run
