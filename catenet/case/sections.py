@@ -326,8 +326,8 @@ class SolverConfig(Declared):
         write="given",
         shown=f'`"{REST}"` if nothing depends on time, else `10.0`',
         unit="s",
-        doc="dynamic: end time, or \"rest\": dynamic relaxation until the net is at rest "
-        "(its steps grow as the motion decays: pseudo-time). Default \"rest\" unless a load "
+        doc='dynamic: end time, or "rest": dynamic relaxation until the net is at rest '
+        '(its steps grow as the motion decays: pseudo-time). Default "rest" unless a load '
         "or support motion has a history or duration, an obstacle moves or is a free body, "
         "a node starts with a velocity, or damping = 0; then 10 s",
     )
@@ -336,7 +336,7 @@ class SolverConfig(Declared):
         ge=1,
         le=10**8,
         write="changed",
-        doc="dynamic, t_end = \"rest\": the most time steps before the run fails as not "
+        doc='dynamic, t_end = "rest": the most time steps before the run fails as not '
         "coming to rest",
     )
     reuse: bool = boolean(

@@ -136,7 +136,8 @@ def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
     dynamic), the newmark scheme's accelerations (N x 3), moving obstacles' poses and
     surfaces (``catenet.output.obstacles``) and the time, 8 bytes each.
     Frames: dynamic, the initial state, every ``every``-th of the (t_end - t0) / dt steps
-    (t_end = "rest": of TYPICAL_REST_STEPS) and the last; static, every ``every``-th of the load steps and the last."""
+    (t_end = "rest": of TYPICAL_REST_STEPS) and the last; static, every ``every``-th of
+    the load steps and the last."""
     every = int(case.output.every)
     if every <= 0:
         return None

@@ -169,9 +169,8 @@ def run_case(
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
     frame (time, positions, velocities and, for newmark, the scheme's acceleration state)
-    and writes a new file. ``progress(done, total)``
-    is called after every step (time and t_end, inf for a run to rest, or load factor
-    and 1); dynamic runs add
+    and writes a new file. ``progress(done, total)`` is called after every step (time and
+    t_end, inf for a run to rest, or load factor and 1); dynamic runs add
     ``rest``, how far the state is from rest (``catenet.solver.path.Step.rest``). ``stop()`` is
     asked after every step; True ends the run there (``converged = False``, message
     "interrupted"). ``interrupt()`` (a signal handler's flag: it must be cheap) is asked

@@ -46,7 +46,10 @@ def test_the_default_is_rest_where_nothing_depends_on_time():
         ("supports.move", [{"node": 0, "displacement": [0.1, 0, 0], "history": [[0, 0], [1, 1]]}]),
         ("mass", [{"node": 10, "velocity": [0, 0, 1.0]}]),
         ("obstacle", [{"kind": "sphere", "center": [5, 0, -2], "radius": 0.5, "mass": 10.0}]),
-        ("obstacle", [{"kind": "sphere", "center": [5, 0, -2], "radius": 0.5, "velocity": [0, 0, 1]}]),
+        (
+            "obstacle",
+            [{"kind": "sphere", "center": [5, 0, -2], "radius": 0.5, "velocity": [0, 0, 1]}],
+        ),
         ("solver.damping", 0.0),
     ],
 )

@@ -22,16 +22,27 @@ def without_t_end(text: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(
-    tmp_path, write_case
-):
+def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(tmp_path, write_case):
     # Newmark with rho_inf = 1 damps nothing: the net swings for ever
     case = write_case(without_t_end(small_net(dt=0.05, damping=0.0)))
     out = tmp_path / "undamped.h5"
-    r = invoke("run", case, "-o", out, "--set", "solver.integrator=newmark",
-               "--set", "solver.rho_inf=1", "--set", "output.every=0")
+    r = invoke(
+        "run",
+        case,
+        "-o",
+        out,
+        "--set",
+        "solver.integrator=newmark",
+        "--set",
+        "solver.rho_inf=1",
+        "--set",
+        "output.every=0",
+    )
     assert r.exit_code == 0, r.output
-    assert "not yet at equilibrium: an undamped run never rests: give solver.t_end or damping" in r.stdout
+    assert (
+        "not yet at equilibrium: an undamped run never rests: give solver.t_end or damping"
+        in r.stdout
+    )
     with h5py.File(out, "r") as h5:
         assert h5["result"].attrs["time"] == 10.0 and not h5["result"].attrs["equilibrium"]
 

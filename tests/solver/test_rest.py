@@ -40,7 +40,9 @@ def test_the_paper_net_relaxed_at_default_settings_is_the_static_equilibrium():
     assert relaxed.converged and relaxed.equilibrium
     # both to rtol = 1e-8 of the load scale: the same state to far below the 1 cm edges
     assert np.max(np.abs(relaxed.x - static.x)) < 1e-8
-    assert np.allclose(relaxed.reaction, static.reaction, rtol=0, atol=1e-6 * np.abs(static.reaction).max())
+    assert np.allclose(
+        relaxed.reaction, static.reaction, rtol=0, atol=1e-6 * np.abs(static.reaction).max()
+    )
     # pseudo-time: the steps grew from dt, so the times are uneven and increasing
     steps = np.diff(np.concatenate([[0.0], times]))
     assert np.all(steps > 0) and steps[0] == pytest.approx(0.01) and steps.max() > 10 * 0.01
@@ -56,7 +58,9 @@ def test_an_explicit_end_time_keeps_steps_of_dt():
 
 def test_an_undamped_run_to_rest_fails_at_once_with_the_reason():
     scene, settings = scene_and_settings("solver.t_end='rest'", "solver.damping=0")
-    with pytest.raises(ConvergenceError, match="an undamped run never rests: give solver.t_end or damping"):
+    with pytest.raises(
+        ConvergenceError, match="an undamped run never rests: give solver.t_end or damping"
+    ):
         solve(scene, settings)
 
 
