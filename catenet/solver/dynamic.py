@@ -27,6 +27,7 @@ import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import norm
+from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
@@ -315,7 +316,9 @@ class TimeStepper:
         system = self.system
         barriers = _Barriers(tuple(t for t in system.terms if t is not system.stretch))
         factors = stiffness_factors(self.potential)
-        first, *rest = rest_stages(self.potential, barriers, factors)
+        law = system.stretch.law
+        smooth = slack_strain(self.net, self.x) if law.any_tension_only else 0.0
+        first, *rest = rest_stages(self.potential, barriers, factors, smooth)
         self.potential = first
         return rest
 

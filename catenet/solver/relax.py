@@ -21,7 +21,10 @@ whose motion does not die out (no damping, a limit cycle) fails with a message i
 of running for ever.
 
 The run goes through the static solve's continuations, each stage to rest loosely
-(STAGE_RTOL): a nearly inextensible net first with its axial stiffness scaled down
+(STAGE_RTOL): a net that starts slack first with its tension-only law smoothed (by mu,
+the largest slack strain at the start, then mu/10 and mu/100: every edge keeps some
+stiffness, so Newton does not bounce between slack and taut edges), a nearly
+inextensible net with its axial stiffness scaled down
 (Newton's quadratic model of a stiff chain holds only for rotations below the square
 root of its strain), then obstacles whose barrier is narrower than the scene calls for
 (``Obstacle.stages``) with their wider barriers first. A chain that falls onto a bed
@@ -42,6 +45,7 @@ EASY = 8  # a step that took at most this many Newton iterations doubles the nex
 HARD = 16  # one that took more halves it (down to dt)
 
 
+SMOOTH_STAGES = 3  # a slack start: the tension-only law smoothed by mu, mu/10, mu/100 first
 STAGE_RTOL = 1e-3  # the rest test of the barrier stages before the last, times the load scale
 
 
@@ -101,13 +105,19 @@ class RestControl:
         return self.stages.pop(0) if self.stages else None
 
 
-def rest_stages(potential, barriers, factors) -> list:
+def rest_stages(potential, barriers, factors, smooth: float = 0.0) -> list:
     """The potentials of a run to rest, as the static solve's continuations
-    (``static.equilibrium``): the stretching scaled by each of ``factors`` (a nearly
-    inextensible net) with the widest barriers, then the exact stretching with each
-    barrier stage (``static._Barriers``), then ``potential`` itself."""
+    (``static.equilibrium``): with the widest barriers, the law smoothed by ``smooth``
+    and its SMOOTH_STAGES tenfold reductions (none when 0) at the first stiffness, then
+    the stretching scaled by each of ``factors`` (a nearly inextensible net); then the
+    exact stretching with each barrier stage (``static._Barriers``); then ``potential``."""
     system = potential.system
     stretch = system.stretch
-    levels = [system.with_terms((stretch.scaled(f), *barriers(0))) for f in factors]
+    first = stretch.scaled(factors[0]) if factors else stretch
+    mus = [smooth / 10.0**k for k in range(SMOOTH_STAGES)] if smooth > 0 else []
+    levels = [
+        system.with_terms((first.with_law(stretch.law.smoothed(m)), *barriers(0))) for m in mus
+    ]
+    levels += [system.with_terms((stretch.scaled(f), *barriers(0))) for f in factors]
     levels += [system.with_terms((stretch, *barriers(k))) for k in range(barriers.count)]
     return [*(potential.with_system(s) for s in levels), potential]
