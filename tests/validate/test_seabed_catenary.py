@@ -392,6 +392,8 @@ def solve_mooring_line(L, EA, w, X, h, n, method="static"):
     return float(np.linalg.norm(fair)), float(math.hypot(fair[0], fair[1])), x_TD, uplift
 
 
+# Dynamic relaxation of the 10000-edge line is slow (its stiffness stage cuts the steps
+# far below dt: catenet/solver/relax.py): in the slow tier.
 METHODS = [
     pytest.param(n, method, marks=[pytest.mark.slow] if (n, method) == (10000, "dynamic") else [])
     for method in ("static", "dynamic")
