@@ -3,6 +3,7 @@ between sections and the node references, all checked before anything is compute
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -37,6 +38,7 @@ from catenet.case.sections import (
     parse_output,
     parse_solver,
 )
+from catenet.case.timing import default_t_end
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.errors import ConfigError
 
@@ -191,9 +193,14 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
                 f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
                 "set material.density > 0 (with material.radius or material.area)"
             )
-    if isinstance(solver, SolverConfig) and solver.method == "dynamic" and solver.dt > solver.t_end:
+    dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+    if dynamic and solver.t_end is None:  # not given (a static case's stays None)
+        t_end = default_t_end(load, supports, solver, obstacles, masses)
+        solver = dataclasses.replace(solver, t_end=t_end)
+    timed = isinstance(solver, SolverConfig) and not isinstance(solver.t_end, str)
+    if timed and solver.method == "dynamic" and solver.dt > solver.t_end:
         ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {solver.t_end!r}")
-    elif isinstance(solver, SolverConfig) and solver.method == "dynamic":
+    elif timed and solver.method == "dynamic":
         steps = solver.t_end / solver.dt
         if not steps <= MAX_TIME_STEPS:
             ck.add(

@@ -34,6 +34,7 @@ from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
 from catenet.solver.integrators import INTEGRATORS
+from catenet.solver.relax import REST
 from catenet.solver.settings import METHODS, Settings
 
 LINEAR = ("auto", "pardiso", "scipy")
@@ -287,6 +288,13 @@ def _check_unit_interval(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return f
 
 
+def _check_t_end(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """An end time > 0, or "rest"."""
+    if isinstance(v, str):
+        return v if v == REST else ck.bad(path, v, f"must be a number > 0 or {REST!r}")
+    return ck.real(v, path, gt=0.0, need=f"finite and > 0, or {REST!r}")
+
+
 @dataclass(frozen=True)
 class SolverConfig(Declared):
     """How to solve: see docs/DESIGN.md (solver section) for the meaning of each key."""
@@ -311,7 +319,26 @@ class SolverConfig(Declared):
         doc="newmark: spectral radius at h omega -> inf (1: average acceleration, "
         "no numerical damping)",
     )
-    t_end: float = real(Settings.t_end, gt=0, unit="s", doc="dynamic: end time")
+    t_end: float | str = key(
+        _check_t_end,
+        f"a number > 0, or {REST!r}",
+        None,  # not given: catenet/case/timing.py decides for a dynamic case (parse_case)
+        write="given",
+        shown=f'`"{REST}"` if nothing depends on time, else `10.0`',
+        unit="s",
+        doc='dynamic: end time, or "rest": dynamic relaxation until the net is at rest '
+        '(its steps grow as the motion decays: pseudo-time). Default "rest" unless a load '
+        "or support motion has a history or duration, an obstacle moves or is a free body, "
+        "a node starts with a velocity, or damping = 0; then 10 s",
+    )
+    max_steps: int = integer(
+        Settings.max_steps,
+        ge=1,
+        le=10**8,
+        write="changed",
+        doc='dynamic, t_end = "rest": the most time steps before the run fails as not '
+        "coming to rest",
+    )
     reuse: bool = boolean(
         Settings.reuse,
         write="changed",

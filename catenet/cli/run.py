@@ -245,7 +245,10 @@ def _summary(case, result, path: Path | None) -> None:
     state = "yes" if result.converged else "no"
     detail = result.message or ""
     if case.solver.method == "dynamic" and not result.equilibrium:
-        detail = f"{detail}; not yet at equilibrium: raise solver.t_end".lstrip("; ")
+        advice = "raise solver.t_end"
+        if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
+            advice = "an undamped run never rests: give solver.t_end or damping"
+        detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
     lines = [
         f"{'case':<12} {case.title or case.source}",
         f"{'converged':<12} {state} ({detail}; {result.iterations} Newton iterations, "

@@ -20,11 +20,14 @@ LARGE_BYTES = 100 << 20
 #: The size ``output.every`` is suggested for.
 TARGET_BYTES = 256 << 20
 
+#: The trajectory estimate of a run to rest (solver.t_end = "rest"): its steps as a rule.
+TYPICAL_REST_STEPS = 300
+
 #: Newton iterations of one dynamic time step (``catenet.solver.dynamic.solve_dynamic``).
 DYNAMIC_MAX_ITER = 25
 
 _STATIC_ONLY = ("steps", "max_iter")
-_DYNAMIC_ONLY = ("dt", "damping", "t_end", "integrator", "rho_inf")
+_DYNAMIC_ONLY = ("dt", "damping", "t_end", "integrator", "rho_inf", "max_steps")
 
 
 def ignored_solver_keys(solver) -> list[str]:
@@ -133,14 +136,18 @@ def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
     dynamic), the newmark scheme's accelerations (N x 3), moving obstacles' poses and
     surfaces (``catenet.output.obstacles``) and the time, 8 bytes each.
     Frames: dynamic, the initial state, every ``every``-th of the (t_end - t0) / dt steps
-    and the last; static, every ``every``-th of the load steps and the last."""
+    (t_end = "rest": of TYPICAL_REST_STEPS) and the last; static, every ``every``-th of
+    the load steps and the last."""
     every = int(case.output.every)
     if every <= 0:
         return None
     solver = case.solver
     n, m = int(net.n_nodes), int(net.n_edges)
     if solver.method == "dynamic":
-        steps = max(1, math.ceil((solver.t_end - t0) / solver.dt * (1 - 1e-12)))
+        if isinstance(solver.t_end, str):  # "rest": a few hundred steps as a rule
+            steps = min(solver.max_steps, TYPICAL_REST_STEPS)
+        else:
+            steps = max(1, math.ceil((solver.t_end - t0) / solver.dt * (1 - 1e-12)))
         frames = 1 + math.ceil(steps / every)
         values = (9 if solver.integrator == "newmark" else 6) * n + m
         from catenet.output.obstacles import frame_values

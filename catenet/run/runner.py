@@ -94,8 +94,8 @@ def read_restart(path: str | Path, scene) -> RestartState:
         )
     if not (np.all(np.isfinite(frame.x)) and np.all(np.isfinite(frame.v))):
         raise ConfigError(f"{label}: its last stored state is not finite")
-    t_end = scene.case.solver.t_end
-    if not frame.t < t_end * (1 - 1e-12):
+    t_end = scene.case.solver.t_end  # "rest": goes on to rest from any time
+    if not isinstance(t_end, str) and not frame.t < t_end * (1 - 1e-12):
         raise ConfigError(
             f"{label}: its last state is at t = {frame.t:.6g} s, not before solver.t_end = "
             f"{t_end!r}: raise solver.t_end to go on"
@@ -169,8 +169,8 @@ def run_case(
     ``out``: the HDF5 file (default: the case's output.file). ``restart``: the result
     file of an earlier dynamic run of the same case; the run goes on from its last stored
     frame (time, positions, velocities and, for newmark, the scheme's acceleration state)
-    and writes a new file. ``progress(done, total)``
-    is called after every step (time and t_end, or load factor and 1); dynamic runs add
+    and writes a new file. ``progress(done, total)`` is called after every step (time and
+    t_end, inf for a run to rest, or load factor and 1); dynamic runs add
     ``rest``, how far the state is from rest (``catenet.solver.path.Step.rest``). ``stop()`` is
     asked after every step; True ends the run there (``converged = False``, message
     "interrupted"). ``interrupt()`` (a signal handler's flag: it must be cheap) is asked
@@ -327,7 +327,7 @@ def _run(
     from catenet.solver.result import Outcome, finish
 
     dynamic = settings.method == "dynamic"
-    total = settings.t_end if dynamic else 1.0
+    total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
     start = None
     written = {"step": -1}
     watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)

@@ -7,7 +7,9 @@ Each step from t_k to t_k + h solves Eq. 10a,
 by Newton from the predictor q_k + h v_k (Eq. 11) with the Jacobian
 M/h^2 + mu M/h + K (Eq. 13); then v_{k+1} = (q - q_k)/h. A step whose Newton iteration
 fails is retried with half the step (never accepted silently); after four good steps the
-step grows back towards ``dt``. With ``reuse``, Newton keeps its factorisation across iterations
+step grows back towards ``dt``. With ``t_end = "rest"`` the run goes to rest in
+pseudo-time, its step grown as the motion decays (catenet/solver/relax.py), at most
+``max_steps`` steps. With ``reuse``, Newton keeps its factorisation across iterations
 and steps (modified Newton) while h stays; a step that fails with a kept matrix is
 retried once with fresh ones before its h is halved. Dynamic relaxation: the run stops
 before ``t_end`` once the supports have settled and both the static residual
@@ -25,9 +27,11 @@ import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import norm
+from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
+from catenet.solver.relax import MAX_STEPS, REST, RestControl, rest_stages
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import HarmonicExtension
 from catenet.solver.workspace import Workspace, check_rtol
@@ -46,7 +50,7 @@ def solve_dynamic(
     *,
     dt: float,
     damping: float,
-    t_end: float,
+    t_end: float | str,
     rtol: float = 1e-8,
     x0: np.ndarray | None = None,
     v0: np.ndarray | None = None,
@@ -62,6 +66,7 @@ def solve_dynamic(
     rho_inf: float = RHO_INF,
     a0: np.ndarray | None = None,
     a_out: np.ndarray | None = None,
+    max_steps: int = MAX_STEPS,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -86,8 +91,21 @@ def solve_dynamic(
 
     Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
     with one rounding while the step is dt), not sums of the steps' round-off.
+
+    ``t_end = "rest"``: dynamic relaxation to rest (``stop_at_equilibrium`` must hold),
+    its steps growing as the motion decays (catenet/solver/relax.py), their time
+    pseudo-time; ConvergenceError when ``damping`` is 0 (an undamped run never rests)
+    or when ``max_steps`` accepted steps do not reach rest.
     """
-    _check(dt, damping, t_end, t0, rtol)
+    _check(dt, damping, t_end, t0, rtol, max_steps)
+    to_rest = t_end == REST
+    if to_rest and not stop_at_equilibrium:
+        raise ConfigError("t_end = 'rest' needs stop_at_equilibrium")
+    if to_rest and damping == 0:
+        raise ConvergenceError(
+            "solver.t_end = 'rest' with solver.damping = 0: an undamped run never rests: "
+            "give solver.t_end or damping"
+        )
     scheme = make(integrator, rho_inf)
     _check_mass(net)
     ws = workspace or Workspace(net, linear=linear)
@@ -96,8 +114,12 @@ def solve_dynamic(
     )
     start = time.perf_counter()
     stepper.begin(x0, v0, t0, a0, a_out)
+    if to_rest:
+        control = RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
+    else:
+        control = StepControl(dt, t0, t_end)
     run = stepper.run(
-        StepControl(dt, t0, t_end),
+        control,
         rest=stop_at_equilibrium,
         on_step=on_step,
         on_rest=on_rest,
@@ -170,9 +192,12 @@ class TimeStepper:
         self.a_out = a_out
         _store(self.scheme, a_out, self.free)
 
-    def run(self, control: StepControl, *, rest: bool, on_step, on_rest) -> Outcome:
+    def run(self, control, *, rest: bool, on_step, on_rest) -> Outcome:
         """Steps to ``control.t_end``, to rest (``rest``: dynamic relaxation, once the
-        supports have settled and no obstacle moves) or until ``on_step`` says stop."""
+        supports have settled and no obstacle moves) or until ``on_step`` says stop.
+        ``control``: a StepControl, or a RestControl (a run to rest: its steps grow as the
+        static residual decays; ConvergenceError after its ``max_steps`` steps)."""
+        to_rest = isinstance(control, RestControl)
         while self.t < control.t_end * (1 - 1e-12) and not self.equilibrium:
             h_step = control.step(self.t)
             newton, why = self.solve_step(h_step)
@@ -182,15 +207,23 @@ class TimeStepper:
                 continue
             self.accept(control, h_step, newton)
             if rest and self.t >= self.settle and not self.moving:  # else it runs to t_end
+                tol = control.rtol(self.rtol) if to_rest else self.rtol
                 self.equilibrium, residual_static, ratio = at_rest(
-                    self.system, self.potential, self.x, self.v, self.m_free, h_step, self.rtol
+                    self.potential.system, self.potential, self.x, self.v, self.m_free, h_step, tol
                 )
-                if self.equilibrium:
+                if self.equilibrium and to_rest and control.stages:
+                    self.potential = control.next_stage()  # at rest on a wider barrier
+                    self.equilibrium = False
+                elif self.equilibrium:
                     self.residual = residual_static
+                elif to_rest:
+                    control.settled(residual_static, newton.iterations)
                 if on_rest is not None:
                     on_rest(ratio)
             if on_step is not None and on_step(self.steps, self.t, self.x, self.v):
                 return Outcome.INTERRUPTED
+            if to_rest and not self.equilibrium and self.steps >= control.max_steps:
+                self.no_rest(control)
         return Outcome.EQUILIBRIUM if self.equilibrium else Outcome.REACHED_T_END
 
     def predict(self, h_step: float) -> np.ndarray:
@@ -271,6 +304,33 @@ class TimeStepper:
                 history=newton.history if newton else [],
                 state=self.x.copy(),
             )
+
+    def rest_stages(self) -> list:
+        """The continuation stages of a run to rest after the first (whose potential this
+        stepper takes): catenet/solver/relax.py; none where something moves."""
+        from catenet.solver.static import _Barriers, stiffness_factors
+
+        fixed = not (self.loads.varies or self.moving or self.follow or self.net.bodies)
+        if not fixed:
+            return []
+        system = self.system
+        barriers = _Barriers(tuple(t for t in system.terms if t is not system.stretch))
+        factors = stiffness_factors(self.potential)
+        law = system.stretch.law
+        smooth = slack_strain(self.net, self.x) if law.any_tension_only else 0.0
+        first, *rest = rest_stages(self.potential, barriers, factors, smooth)
+        self.potential = first
+        return rest
+
+    def no_rest(self, control: RestControl) -> None:
+        """A run to rest that spent its steps: ConvergenceError (the last step's state)."""
+        raise ConvergenceError(
+            f"not at rest after solver.max_steps = {control.max_steps} time steps "
+            f"(pseudo-time t = {self.t:.6g} s): the motion does not die out: give "
+            "solver.t_end, more solver.damping or a larger solver.max_steps",
+            iterations=self.iterations,
+            state=self.x.copy(),
+        )
 
     def accept(self, control: StepControl, h_step: float, newton) -> None:
         """The converged step becomes the state (Eq. 10c for implicit Euler)."""
@@ -383,14 +443,19 @@ def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, floa
     return (residual <= tol and inertia <= tol), residual, ratio
 
 
-def _check(dt, damping, t_end, t0, rtol) -> None:
+def _check(dt, damping, t_end, t0, rtol, max_steps) -> None:
     problems = []
+    if not (isinstance(max_steps, int) and max_steps >= 1):
+        problems.append(f"solver.max_steps = {max_steps!r}: must be an integer >= 1")
     if not (math.isfinite(dt) and dt > 0):
         problems.append(f"solver.dt = {dt!r}: must be finite and > 0")
     if not (math.isfinite(damping) and damping >= 0):
         problems.append(f"solver.damping = {damping!r}: must be finite and >= 0")
-    if not (math.isfinite(t_end) and t_end > t0):
-        problems.append(f"solver.t_end = {t_end!r}: must be finite and > {t0}")
+    if isinstance(t_end, str):
+        if t_end != REST:
+            problems.append(f"solver.t_end = {t_end!r}: must be a number or {REST!r}")
+    elif not (math.isfinite(t_end) and t_end > t0):
+        problems.append(f"solver.t_end = {t_end!r}: must be finite and > {t0}, or {REST!r}")
     if problems:
         raise ConfigError(problems)
     check_rtol(rtol)

@@ -210,6 +210,7 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
             reuse=settings.reuse,
             a0=start.a,
             a_out=accel,
+            max_steps=settings.max_steps,
         )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):

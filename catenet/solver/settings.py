@@ -9,6 +9,7 @@ from typing import Any
 
 from catenet.errors import ConfigError
 from catenet.solver.integrators import INTEGRATORS, RHO_INF
+from catenet.solver.relax import MAX_STEPS, REST
 
 METHODS = ("static", "dynamic")
 
@@ -20,7 +21,8 @@ class Settings:
     method: str = "static"
     dt: float = 1e-2
     damping: float = 1.0
-    t_end: float = 10.0
+    t_end: float | str = 10.0  # or "rest" (a case's default when nothing depends on time)
+    max_steps: int = MAX_STEPS  # t_end = "rest": the most time steps
     rtol: float = 1e-8
     max_iter: int = 200
     steps: int = 1
@@ -33,7 +35,8 @@ class Settings:
     def of(cls, config: Any, **changes) -> Settings:
         """The settings in any object with these attributes (a case's SolverConfig)."""
         names = [f.name for f in dataclasses.fields(cls)]
-        values = {n: getattr(config, n) for n in names if hasattr(config, n)}
+        # (None: not given, e.g. a static case's t_end: the default here)
+        values = {n: getattr(config, n) for n in names if getattr(config, n, None) is not None}
         return cls(**{**values, **changes})
 
     def __post_init__(self):
@@ -47,5 +50,7 @@ class Settings:
             )
         if not 0.0 <= self.rho_inf <= 1.0:
             raise ConfigError(f"solver.rho_inf = {self.rho_inf!r}: must be in [0, 1]")
+        if isinstance(self.t_end, str) and self.t_end != REST:
+            raise ConfigError(f"solver.t_end = {self.t_end!r}: must be a number or {REST!r}")
         if self.steps < 1:
             raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")

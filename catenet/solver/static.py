@@ -221,17 +221,7 @@ def equilibrium(
         history += first.history
     # Stages are held to the load scale: smoothing and scaling change the internal forces.
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
-    scale = _strain_scale(net, potential)
-    factors = []
-    # With contact the soft start matters more: a stiff chain pressed onto an obstacle
-    # takes Newton steps its barrier cannot follow; it starts at strains of CONTACT_STRAIN.
-    contact = any(t.bounds_step for t in system.terms)
-    start, below = (CONTACT_STRAIN, CONTACT_STRAIN) if contact else (1e-3, STIFF_STRAIN)
-    if 0.0 < scale < below:
-        factor = scale / start
-        while factor < 1.0:
-            factors.append(factor)
-            factor *= STIFF_STEP
+    factors = stiffness_factors(potential)
     mu = slack_strain(net, x) if stretch.law.any_tension_only else 0.0
 
     barriers = _Barriers(others)
@@ -277,6 +267,24 @@ def equilibrium(
     result.iterations += iterations
     result.history = history + result.history
     return result
+
+
+def stiffness_factors(potential: Potential) -> list[float]:
+    """The factors (each below 1, rising STIFF_STEP-fold) of the stiffness continuation
+    of ``equilibrium`` for a nearly inextensible net; [] for the others."""
+    system = potential.system
+    scale = _strain_scale(system.net, potential)
+    factors = []
+    # With contact the soft start matters more: a stiff chain pressed onto an obstacle
+    # takes Newton steps its barrier cannot follow; it starts at strains of CONTACT_STRAIN.
+    contact = any(t.bounds_step for t in system.terms)
+    start, below = (CONTACT_STRAIN, CONTACT_STRAIN) if contact else (1e-3, STIFF_STRAIN)
+    if 0.0 < scale < below:
+        factor = scale / start
+        while factor < 1.0:
+            factors.append(factor)
+            factor *= STIFF_STEP
+    return factors
 
 
 PT_STEPS = 200  # pseudo-time steps of the damped pseudo-transient solve at most

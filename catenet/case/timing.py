@@ -1,0 +1,59 @@
+"""Whether anything in a case depends on time: the default of ``solver.t_end``.
+
+A dynamic run of a case where nothing depends on time is dynamic relaxation: its motion
+is only the path to the static equilibrium, so by default it runs to rest
+(``t_end = "rest"``: catenet/solver/relax.py). Anything that makes the motion itself the
+answer keeps the fixed default end time (10 s): a time history of a load or support
+motion, a support that moves over a duration, an obstacle that moves (a ball with mass,
+a path, a turning shape) or is a free body, an initial velocity, or no damping
+(an undamped motion does not die out).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from catenet.solver.relax import REST
+
+#: solver.t_end's default where something depends on time [s].
+T_END = 10.0
+
+
+def time_dependence(load: Any, supports: Any, solver: Any, obstacles: Any, masses: Any) -> str:
+    """The first key of the case (its path as the user writes it) that makes the motion
+    depend on time, or "" when none does. Sections that failed their checks are skipped."""
+    for path, history in _histories(load):
+        if history is not None:
+            return f"{path}.history"
+    for k, move in enumerate(getattr(supports, "moves", ()) or ()):
+        if move.history is not None:
+            return f"supports.move[{k}].history"
+        if move.duration > 0:
+            return f"supports.move[{k}].duration"
+    for k, obs in enumerate(obstacles if isinstance(obstacles, tuple) else ()):
+        if getattr(obs, "free", False):
+            return f"obstacle[{k}] (a free body)"
+        if getattr(obs, "moves", False) or getattr(obs, "rigid_motion", False):
+            return f"obstacle[{k}] (it moves)"
+    for k, m in enumerate(masses if isinstance(masses, tuple) else ()):
+        if m.velocity is not None:
+            return f"mass[{k}].velocity"
+    if getattr(solver, "damping", 1.0) == 0:
+        return "solver.damping = 0"
+    return ""
+
+
+def default_t_end(load: Any, supports: Any, solver: Any, obstacles: Any, masses: Any):
+    """solver.t_end when the case does not give it: "rest" where nothing depends on time
+    (``time_dependence``), else T_END."""
+    return T_END if time_dependence(load, supports, solver, obstacles, masses) else REST
+
+
+def _histories(load: Any):
+    """(key path, history) of the load and each of its point, line and area loads."""
+    if not hasattr(load, "history"):
+        return
+    yield "load", load.history
+    for name, items in (("point", load.points), ("line", load.lines), ("area", load.areas)):
+        for k, item in enumerate(items):
+            yield f"load.{name}[{k}]", item.history

@@ -1,0 +1,78 @@
+"""`catenet run` of dynamic relaxation to rest (solver.t_end = "rest"): the summary of an
+undamped run without t_end, the exit 1 of a run that cannot rest, and a run that spent
+its steps, restarted to rest and plotted from frames at uneven times."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+from click.testing import CliRunner
+from conftest import check_xdmf, small_net
+
+from catenet.cli import main
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def without_t_end(text: str) -> str:
+    lines = [ln for ln in text.splitlines() if not ln.startswith("t_end")]
+    assert len(lines) == len(text.splitlines()) - 1
+    return "\n".join(lines) + "\n"
+
+
+def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(tmp_path, write_case):
+    # Newmark with rho_inf = 1 damps nothing: the net swings for ever
+    case = write_case(without_t_end(small_net(dt=0.05, damping=0.0)))
+    out = tmp_path / "undamped.h5"
+    r = invoke(
+        "run",
+        case,
+        "-o",
+        out,
+        "--set",
+        "solver.integrator=newmark",
+        "--set",
+        "solver.rho_inf=1",
+        "--set",
+        "output.every=0",
+    )
+    assert r.exit_code == 0, r.output
+    assert (
+        "not yet at equilibrium: an undamped run never rests: give solver.t_end or damping"
+        in r.stdout
+    )
+    with h5py.File(out, "r") as h5:
+        assert h5["result"].attrs["time"] == 10.0 and not h5["result"].attrs["equilibrium"]
+
+
+def test_rest_without_damping_exits_1_with_the_reason(tmp_path, write_case):
+    case = write_case(small_net(damping=0.0).replace("t_end = 5.0", 't_end = "rest"'))
+    r = invoke("run", case, "-o", tmp_path / "no.h5")
+    assert r.exit_code == 1, r.output
+    assert "an undamped run never rests: give solver.t_end or damping" in r.stderr
+    assert "Traceback" not in r.output
+
+
+def test_a_run_out_of_steps_exits_1_and_its_restart_goes_on_to_rest(tmp_path, write_case):
+    case = write_case(without_t_end(small_net()))
+    first, second = tmp_path / "first.h5", tmp_path / "second.h5"
+    r = invoke("run", case, "-o", first, "--set", "solver.max_steps=4")
+    assert r.exit_code == 1, r.output
+    assert "not at rest after solver.max_steps = 4 time steps" in r.stderr
+    with h5py.File(first, "r") as h5:
+        assert not h5["result"].attrs["converged"]
+        assert len(h5["trajectory/time"]) == 5  # the start and 4 steps
+    r = invoke("run", case, "--restart", first, "-o", second)
+    assert r.exit_code == 0, r.output
+    assert "equilibrium" in r.stdout
+    with h5py.File(second, "r") as h5:
+        t = h5["trajectory/time"][()]
+        assert bool(h5["result"].attrs["equilibrium"])
+    steps = np.diff(t)
+    assert np.all(steps > 0) and steps.max() > 2 * steps.min()  # pseudo-time: uneven
+    check_xdmf(second.with_suffix(".xdmf"))
+    r = invoke("plot", second, "-o", tmp_path / "second.png")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "second.png").stat().st_size > 0
