@@ -11,7 +11,9 @@ import pytest
 import catenet as cn
 from catenet.solver.dynamic import (
     GROW_AFTER,
+    ALLOWANCE,
     MAX_CUTS,
+    SLOWDOWN,
     StepControl,
     TimeStepper,
     at_rest,
@@ -32,6 +34,27 @@ def test_a_failed_step_is_halved_down_to_the_smallest_step():
         assert h == 0.1 / 2**cut
     assert not control.failed(h)  # dt / 2**(MAX_CUTS + 1): the run fails
     assert control.h == 0.1 / 2 ** (MAX_CUTS + 1)
+
+
+def test_the_tries_of_a_run_are_bounded():
+    """A run may try SLOWDOWN times the steps dt plans plus ALLOWANCE (accepted and failed
+    alike); beyond, ``spent`` ends it, and the message says how far it came and why."""
+    control = StepControl(0.01, 0.3, 0.5)  # 20 steps planned
+    assert control.planned == 20
+    assert control.budget == SLOWDOWN * 20 + ALLOWANCE
+    h = control.step(0.3)
+    while True:  # a step that fails and one that passes, over and over
+        control.failed(h)
+        if control.spent():
+            break
+        h = control.step(0.3)
+        control.accepted()
+    assert control.tries == control.budget + 1 and control.fails == (control.budget + 2) // 2
+    message = control.spent_message(0.31)
+    assert "t = 0.31 s of solver.t_end = 0.5 s" in message
+    assert f"{control.tries} steps tried ({control.fails} failed)" in message
+    assert "solver.dt = 0.01 s plans 20" in message
+    assert StepControl(0.01, 0.0, 0.0301).planned == 4  # a last short step counts
 
 
 def test_a_shortened_step_grows_back_to_dt_after_good_steps():
