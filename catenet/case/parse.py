@@ -122,14 +122,14 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
         source = str(p)
         raw = read_case_bytes(p)
         base_dir = p.parent
-    data = parse_toml(raw, source)
+    data = parse_toml(raw, source, written=True)
     sweep = data.pop("sweep", None)  # the grid of `catenet sweep`; a single run ignores it
     if sweep is not None and not isinstance(sweep, dict):
         raise ConfigError(
             f"sweep = {sweep!r}: must be a table of key.path = [values] (read by catenet sweep)"
         )
     if overrides:
-        data = apply_overrides(data, overrides)
+        data = apply_overrides(data, overrides, written=True)
     return parse_case(data, source=source, base_dir=base_dir)
 
 
