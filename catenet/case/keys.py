@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from catenet.case.written import WrittenFloat, WrittenInt, as_written_float
 from catenet.model.limits import MAGNITUDE, MAX_COUNT, carried, too_large  # noqa: F401
 
 
@@ -65,6 +66,10 @@ def as_float(v: Any) -> float | None:
         return None
     big: Any = v  # a huge integer (or fraction)
     try:
+        if isinstance(v, (WrittenFloat, WrittenInt)):
+            return as_written_float(v)  # quoted as written after the checks too
+        if isinstance(v, (int, np.integer)):  # an integer for a float: quoted without ".0"
+            return WrittenFloat(str(int(v)), float(big))
         return float(big)
     except OverflowError:
         return math.inf if big > 0 else -math.inf

@@ -38,6 +38,7 @@ from catenet.case.sections import (
     parse_solver,
 )
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
+from catenet.case.written import plain
 from catenet.errors import ConfigError
 
 #: The most time steps a dynamic run may be asked for (t_end / dt).
@@ -86,7 +87,7 @@ class Case:
             out["load_case"] = [c.to_dict() for c in self.load_cases]
         if self.combinations:
             out["combination"] = [c.to_dict() for c in self.combinations]
-        return out
+        return plain(out)
 
     def to_toml(self) -> str:
         """The resolved case as TOML text; ``parse_case(tomllib.loads(text))`` gives it back."""

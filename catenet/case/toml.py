@@ -13,7 +13,7 @@ from typing import Any
 import tomli_w
 
 from catenet.case.keys import show
-from catenet.case.written import WrittenFloat, mark_integers, written_value
+from catenet.case.written import WrittenFloat, mark_integers, plain, written_value
 from catenet.errors import ConfigError
 
 
@@ -178,7 +178,7 @@ def dumps_toml(data: Mapping) -> str:
     inf as such), so they read back bit for bit. tomli-w puts every array item on its own
     line; flat arrays that fit in a line of 100 characters are joined onto one, so a node
     reads ``[0.0, 1.5, 2.0]`` and a net of 10^4 nodes takes 10^4 lines, not 5 10^4."""
-    text = tomli_w.dumps(data)
+    text = tomli_w.dumps(plain(data))
 
     def join(match: re.Match) -> str:
         items = [line.strip().rstrip(",") for line in match.group(1).splitlines()]

@@ -2,8 +2,9 @@
 and integers (``0x10``, ``1_000``) and ``--set`` values keep their source text, so that a
 message quoting one shows it as written, not as Python prints the number
 (``1000000000000.0``). They are a ``float`` and an ``int`` in every other respect; the
-checks turn them into plain ones (``float(v)``, ``int(v)``), so nothing past the case
-file carries them.
+checks keep a float's text in the case's settings (``catenet.case.guard`` quotes them
+after parsing) and give plain integers; the resolved case (``Case.to_dict``, the TOML in a
+result file) holds plain numbers only (``plain``).
 
 tomllib gives a float's text to ``parse_float``; an integer's text is found again by
 scanning the ``key = integer`` lines of the source (an integer inside an array or an
@@ -20,8 +21,8 @@ class WrittenFloat(float):
 
     text: str
 
-    def __new__(cls, text: str) -> WrittenFloat:
-        self = super().__new__(cls, float(text))
+    def __new__(cls, text: str, value: float | None = None) -> WrittenFloat:
+        self = super().__new__(cls, float(text) if value is None else value)
         self.text = text
         return self
 
@@ -31,7 +32,7 @@ class WrittenFloat(float):
     __str__ = __repr__
 
     def __reduce__(self):
-        return (WrittenFloat, (self.text,))
+        return (WrittenFloat, (self.text, float(self)))
 
 
 class WrittenInt(int):
@@ -51,6 +52,24 @@ class WrittenInt(int):
 
     def __reduce__(self):
         return (WrittenInt, (int(self), self.text))
+
+
+def as_written_float(v: WrittenFloat | WrittenInt) -> WrittenFloat:
+    """A written number as a float that keeps its text."""
+    return v if isinstance(v, WrittenFloat) else WrittenFloat(v.text, float(v))
+
+
+def plain(data: Any) -> Any:
+    """``data`` (nested dicts, lists, tuples) with every written number a plain one."""
+    if isinstance(data, WrittenFloat):
+        return float(data)
+    if isinstance(data, WrittenInt):
+        return int(data)
+    if isinstance(data, dict):
+        return {k: plain(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return type(data)(plain(v) for v in data)
+    return data
 
 
 def written_value(text: str, value: Any) -> Any:

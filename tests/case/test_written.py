@@ -108,13 +108,15 @@ def test_written_numbers_are_numbers():
 
 
 def test_a_valid_case_reads_the_same(tmp_path):
-    """The spelling changes messages only: the case's values and its resolved TOML are
-    those of Python's spelling."""
+    """The spelling changes messages only: the case's values, its resolved table and TOML
+    are those of Python's spelling (plain numbers), and its counts are plain integers."""
     path = tmp_path / "a.toml"
     path.write_text(CASE.replace("E = 10e6", "E = 1_0e6").replace("n = 10", "n = 0xA"))
     plain = tmp_path / "b.toml"
     plain.write_text(CASE.replace("E = 10e6", "E = 10000000.0"))
     a, b = load_case(path, ["solver.dt=1e-2"]), load_case(plain, ["solver.dt=0.01"])
-    assert a.material.E == b.material.E == 1e7 and type(a.material.E) is float
+    assert a == b and a.material.E == 1e7 and a.solver.dt == 0.01
+    assert repr(a.material.E) == "1_0e6" and repr(a.solver.dt) == "1e-2"  # for messages
     assert a.geometry.n == 10 and type(a.geometry.n) is int
-    assert a.solver.dt == 0.01 and type(a.solver.dt) is float
+    assert a.to_toml() == b.to_toml() and a.to_dict() == b.to_dict()
+    assert type(a.to_dict()["material"]["E"]) is float
