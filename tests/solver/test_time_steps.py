@@ -10,8 +10,8 @@ import pytest
 
 import catenet as cn
 from catenet.solver.dynamic import (
-    GROW_AFTER,
     ALLOWANCE,
+    GROW_AFTER,
     MAX_CUTS,
     SLOWDOWN,
     StepControl,
