@@ -120,3 +120,18 @@ def test_a_valid_case_reads_the_same(tmp_path):
     assert a.geometry.n == 10 and type(a.geometry.n) is int
     assert a.to_toml() == b.to_toml() and a.to_dict() == b.to_dict()
     assert type(a.to_dict()["material"]["E"]) is float
+
+
+def test_show_never_prints_numpy_reprs():
+    """A value a message quotes that is not the user's text (a built array, a NumPy
+    scalar inside a list) reads as Python's numbers, shortened; the user's text as is."""
+    import numpy as np
+
+    from catenet.case.keys import show
+
+    assert show([np.float64(1.5), np.int64(2), WrittenFloat("1e12")]) == "[1.5, 2, 1e12]"
+    assert show(np.array([1.0, np.inf])) == "[1.0, inf]" and show(np.float64("nan")) == "nan"
+    assert show((WrittenInt(16, "0x10"),)) == "(0x10,)" and show((1, 2)) == "(1, 2)"
+    long = show(np.arange(10_000.0))
+    assert len(long) <= 72 and long.endswith(" ...") and "np." not in long
+    assert show([[1, 2], [3]]) == "[[1, 2], [3]]" and show("ab") == "'ab'"
