@@ -43,6 +43,9 @@ GROW_AFTER = 4
 #: stay short beyond that fails rather than run on for hours.
 SLOWDOWN = 4  # the examples take at most 2.2x (tether_capture: 532 tries for 240 steps)
 ALLOWANCE = 100
+#: Of these, at most half the steps dt plans plus FAIL_ALLOWANCE may fail (a failed try
+#: costs max_iter Newton iterations; a start cut down to the smallest step still fits).
+FAIL_ALLOWANCE = MAX_CUTS + 4
 
 
 def solve_dynamic(
@@ -338,7 +341,8 @@ class StepControl:
     step doubles, back up to dt. ``advance`` gives the time after a step: exact multiples
     of the smallest step after t0 (t0 + k dt with one rounding while the step is dt), not
     sums of the steps' round-off. The tries (accepted and failed steps) are bounded:
-    ``spent`` says when they exceed SLOWDOWN times the steps dt plans plus ALLOWANCE."""
+    ``spent`` says when they exceed SLOWDOWN times the steps dt plans plus ALLOWANCE, or
+    the failed ones half the steps dt plans plus FAIL_ALLOWANCE."""
 
     def __init__(self, dt: float, t0: float, t_end: float):
         self.dt, self.t0, self.t_end = dt, t0, t_end
@@ -347,6 +351,7 @@ class StepControl:
         self.good = 0  # steps accepted since the last change of h
         self.planned = max(1, math.ceil((t_end - t0) / dt - 1e-9))
         self.budget = SLOWDOWN * self.planned + ALLOWANCE
+        self.fail_budget = self.planned // 2 + FAIL_ALLOWANCE
         self.tries = 0  # steps tried, accepted or failed
         self.fails = 0
 
@@ -364,8 +369,9 @@ class StepControl:
         return not self.h < self.dt / 2**MAX_CUTS
 
     def spent(self) -> bool:
-        """Whether the tries so far exceed the run's budget (the run fails)."""
-        return self.tries > self.budget
+        """Whether the tries so far, or the failed ones, exceed the run's budget (the run
+        fails)."""
+        return self.tries > self.budget or self.fails > self.fail_budget
 
     def spent_message(self, t: float) -> str:
         """Why a run whose budget is spent stops at time t."""
@@ -374,9 +380,9 @@ class StepControl:
             f"dynamic run stopped at t = {t:.6g} s of solver.t_end = {self.t_end:g} s: "
             f"{self.tries} steps tried ({self.fails} failed) where solver.dt = {self.dt:g} s "
             f"plans {self.planned}; its steps stay about {self.dt / max(mean, self.quantum):.0f}x"
-            f" shorter than dt and would not finish in reasonable time (a stiff or fast model"
-            f" for this dt: try a smaller solver.dt, a larger solver.max_iter, or check"
-            f" material.E and the masses); the last failed step"
+            f" shorter than dt and would not finish in reasonable time (a model too stiff or"
+            f" too fast for this dt: try a smaller solver.dt, a larger solver.max_iter, or"
+            f" check the stiffness, masses and velocities); the last failed step"
         )
 
     def accepted(self) -> None:
