@@ -82,9 +82,9 @@ def written_value(text: str, value: Any) -> Any:
 
 _PART = r"""(?:[A-Za-z0-9_-]+|"[^"\\]*"|'[^']*')"""
 _KEY = rf"{_PART}(?:\s*\.\s*{_PART})*"
-_HEADER = re.compile(rf"^\s*(\[\[?)\s*({_KEY})\s*\]\]?\s*(?:#.*)?$")
+_HEADER = rf"^\s*(\[\[?)\s*({_KEY})\s*\]\]?\s*(?:#.*)?$"
 _INT = r"[+-]?(?:0x[0-9A-Fa-f_]+|0o[0-7_]+|0b[01_]+|[0-9_]+)"
-_INT_LINE = re.compile(rf"^\s*({_KEY})\s*=\s*({_INT})\s*(?:#.*)?$")
+_INT_LINE = rf"^\s*({_KEY})\s*=\s*({_INT})\s*(?:#.*)?$"
 
 
 def _parts(key: str) -> tuple[str, ...]:
@@ -94,10 +94,12 @@ def _parts(key: str) -> tuple[str, ...]:
 def mark_integers(data: dict, text: str) -> None:
     """Give the integers of ``key = integer`` lines of the TOML source ``text`` (parsed
     into ``data``) their source text where it differs from Python's."""
+    if re.search(r"=\s*(?:\+|[+-]?0[xob]|[+-]?\d+_)", text) is None:
+        return  # no integer spelt otherwise (the common case: no scan)
     table: tuple[str, ...] = ()
     index: dict[tuple, int] = {}  # the current item of each array of tables
     for line in text.splitlines():
-        header = _HEADER.match(line)
+        header = re.match(_HEADER, line)  # (re caches the compiled patterns)
         if header:
             table = _parts(header.group(2))
             if header.group(1) == "[[":
@@ -105,7 +107,7 @@ def mark_integers(data: dict, text: str) -> None:
                 for k in [k for k in index if k[: len(table)] == table and k != table]:
                     del index[k]  # a new item: its own arrays of tables start again
             continue
-        m = _INT_LINE.match(line)
+        m = re.match(_INT_LINE, line)
         if m is None:
             continue
         literal = m.group(2)
