@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from catenet.case.written import WrittenFloat, WrittenInt, as_written_float
 from catenet.model.limits import MAGNITUDE, MAX_COUNT, carried, too_large  # noqa: F401
 
 
@@ -46,17 +47,34 @@ MISSING: Any = _Marker("missing")
 
 
 def show(value: Any, limit: int = 72) -> str:
-    """A value as it reads in a message: repr, TOML-like for dates, shortened."""
-    if isinstance(value, (datetime.date, datetime.time)):
-        text = value.isoformat()
-    elif isinstance(value, np.generic):
-        text = repr(value.item())
-    else:
-        try:
-            text = repr(value)
-        except Exception:  # a repr that fails must not hide the real problem
-            text = f"<{type(value).__name__}>"
+    """A value as it reads in a message: as written in the case file or --set (see
+    catenet/case/written.py), else repr (TOML-like for dates, NumPy's values as Python's),
+    shortened."""
+    text = _text(value, limit)
     return text if len(text) <= limit else text[: limit - 4] + " ..."
+
+
+def _text(value: Any, limit: int) -> str:
+    if isinstance(value, (datetime.date, datetime.time)):
+        return value.isoformat()
+    if isinstance(value, np.generic):
+        return repr(value.item())
+    if isinstance(value, np.ndarray):
+        value = value.tolist() if value.size <= limit else value.ravel()[:limit].tolist()
+    if isinstance(value, (list, tuple)) and not hasattr(value, "_fields"):
+        inner = []
+        for item in value[:limit]:  # (enough to fill the line)
+            inner.append(_text(item, limit))
+            if sum(map(len, inner)) > limit:
+                break
+        text = ", ".join(inner) + ("" if len(inner) == len(value) else ", ...")
+        if isinstance(value, list):
+            return f"[{text}]"
+        return f"({text},)" if len(value) == 1 else f"({text})"
+    try:
+        return repr(value)
+    except Exception:  # a repr that fails must not hide the real problem
+        return f"<{type(value).__name__}>"
 
 
 def as_float(v: Any) -> float | None:
@@ -65,6 +83,10 @@ def as_float(v: Any) -> float | None:
         return None
     big: Any = v  # a huge integer (or fraction)
     try:
+        if isinstance(v, (WrittenFloat, WrittenInt)):
+            return as_written_float(v)  # quoted as written after the checks too
+        if isinstance(v, (int, np.integer)):  # an integer for a float: quoted without ".0"
+            return WrittenFloat(str(int(v)), float(big))
         return float(big)
     except OverflowError:
         return math.inf if big > 0 else -math.inf

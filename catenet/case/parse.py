@@ -40,6 +40,7 @@ from catenet.case.sections import (
 )
 from catenet.case.timing import default_t_end
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
+from catenet.case.written import plain
 from catenet.errors import ConfigError
 
 #: The most time steps a dynamic run may be asked for (t_end / dt).
@@ -88,7 +89,7 @@ class Case:
             out["load_case"] = [c.to_dict() for c in self.load_cases]
         if self.combinations:
             out["combination"] = [c.to_dict() for c in self.combinations]
-        return out
+        return plain(out)
 
     def to_toml(self) -> str:
         """The resolved case as TOML text; ``parse_case(tomllib.loads(text))`` gives it back."""
@@ -124,14 +125,14 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
         source = str(p)
         raw = read_case_bytes(p)
         base_dir = p.parent
-    data = parse_toml(raw, source)
+    data = parse_toml(raw, source, written=True)
     sweep = data.pop("sweep", None)  # the grid of `catenet sweep`; a single run ignores it
     if sweep is not None and not isinstance(sweep, dict):
         raise ConfigError(
             f"sweep = {sweep!r}: must be a table of key.path = [values] (read by catenet sweep)"
         )
     if overrides:
-        data = apply_overrides(data, overrides)
+        data = apply_overrides(data, overrides, written=True)
     return parse_case(data, source=source, base_dir=base_dir)
 
 

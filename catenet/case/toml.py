@@ -13,6 +13,7 @@ from typing import Any
 import tomli_w
 
 from catenet.case.keys import show
+from catenet.case.written import WrittenFloat, mark_integers, plain, written_value
 from catenet.errors import ConfigError
 
 
@@ -28,8 +29,10 @@ def read_case_bytes(path: Path) -> bytes:
         raise ConfigError(f"{path}: cannot read the case file: {exc.strerror or exc}") from None
 
 
-def parse_toml(raw: bytes | str, source: str) -> dict:
-    """TOML text (bytes are decoded as UTF-8) to a dict; errors name source, line and column."""
+def parse_toml(raw: bytes | str, source: str, *, written: bool = False) -> dict:
+    """TOML text (bytes are decoded as UTF-8) to a dict; errors name source, line and column.
+    ``written``: its numbers print as written in the text (catenet/case/written.py), for
+    the messages of the checks."""
     if isinstance(raw, bytes):
         try:
             text = raw.decode("utf-8")
@@ -41,7 +44,7 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
     else:
         text = raw
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=WrittenFloat if written else float)
     except RecursionError:
         raise ConfigError(f"{source}: nested too deeply to be a case file") from None
     except ValueError as exc:  # tomllib.TOMLDecodeError is a ValueError
@@ -59,6 +62,8 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
         raise ConfigError(
             f"{source}: {deep}: nested more than {MAX_DEPTH} levels deep: not a case file"
         )
+    if written:
+        mark_integers(data, text)
     return data
 
 
@@ -88,11 +93,11 @@ def _line_col(text: str) -> tuple[int, int]:
     return len(lines), len(lines[-1]) + 1
 
 
-def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
+def apply_overrides(data: dict, overrides: Sequence[str], *, written: bool = False) -> dict:
     """A copy of ``data`` with every ``key.path=value`` set. The value is read as a TOML
     value (``3``, ``0.5``, ``[1, 2, 3]``, ``true``, ``"text"``), else taken as a plain
     string. A number as a path part indexes an array of tables (the next free index
-    appends a table)."""
+    appends a table). ``written``: numbers print as the text gave them (``1e12``)."""
     out = copy.deepcopy(dict(data))
     problems: list[str] = []
     for ov in overrides:
@@ -112,7 +117,7 @@ def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
                 f"override {ov!r}: key path {key.strip()!r}: empty part: must be like a.b.c"
             )
             continue
-        value = _override_value(text.strip())
+        value = _override_value(text.strip(), written)
         problem = _set_path(out, parts, value)
         if problem:
             problems.append(f"override {ov!r}: {problem}")
@@ -121,14 +126,14 @@ def apply_overrides(data: dict, overrides: Sequence[str]) -> dict:
     return out
 
 
-def _override_value(text: str) -> Any:
+def _override_value(text: str, written: bool = False) -> Any:
     try:
-        parsed = tomllib.loads(f"v = {text}")
+        parsed = tomllib.loads(f"v = {text}", parse_float=WrittenFloat if written else float)
     except (ValueError, RecursionError):
         return text
     if set(parsed) != {"v"} or too_deep(parsed) is not None:
         return text
-    return parsed["v"]
+    return written_value(text, parsed["v"]) if written else parsed["v"]
 
 
 def _set_path(root: dict, parts: list[str], value: Any) -> str | None:
@@ -173,7 +178,7 @@ def dumps_toml(data: Mapping) -> str:
     inf as such), so they read back bit for bit. tomli-w puts every array item on its own
     line; flat arrays that fit in a line of 100 characters are joined onto one, so a node
     reads ``[0.0, 1.5, 2.0]`` and a net of 10^4 nodes takes 10^4 lines, not 5 10^4."""
-    text = tomli_w.dumps(data)
+    text = tomli_w.dumps(plain(data))
 
     def join(match: re.Match) -> str:
         items = [line.strip().rstrip(",") for line in match.group(1).splitlines()]

@@ -14,12 +14,15 @@ class BodyWatch:
     what the summary reports (``stats``)."""
 
     def __init__(self, scene):
-        from catenet.terms.rigid_contact import BodyContact
+        rigid = getattr(scene, "rigid", ())
+        contacts = {}
+        if rigid:  # (the contact kernels load only for a scene with free bodies)
+            from catenet.terms.rigid_contact import BodyContact
 
-        contacts = {
-            id(t.frame): t for t in scene.terms if isinstance(t, BodyContact) and t.bounds_step
-        }  # the barriers (not the friction riding on them)
-        self.bodies = [(b, contacts.get(id(b.frame))) for b in getattr(scene, "rigid", ())]
+            contacts = {
+                id(t.frame): t for t in scene.terms if isinstance(t, BodyContact) and t.bounds_step
+            }  # the barriers (not the friction riding on them)
+        self.bodies = [(b, contacts.get(id(b.frame))) for b in rigid]
         self.kinds = {b.obstacle: scene.case.obstacles[b.obstacle].kind for b, _ in self.bodies}
         self.first = {b.obstacle: None for b, _ in self.bodies}
 

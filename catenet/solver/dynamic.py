@@ -42,6 +42,14 @@ log = logging.getLogger(__name__)
 
 MAX_CUTS = 20  # the smallest step is dt / 2**MAX_CUTS
 GROW_AFTER = 4
+#: The work a run may take: SLOWDOWN times the steps dt plans from t0 to t_end, plus
+#: ALLOWANCE tries (the cut-backs of a hard start or of a few impacts). A run whose steps
+#: stay short beyond that fails rather than run on for hours.
+SLOWDOWN = 4  # the examples take at most 2.2x (tether_capture: 532 tries for 240 steps)
+ALLOWANCE = 100
+#: Of these, at most half the steps dt plans plus FAIL_ALLOWANCE may fail (a failed try
+#: costs max_iter Newton iterations; a start cut down to the smallest step still fits).
+FAIL_ALLOWANCE = MAX_CUTS + 4
 
 
 def solve_dynamic(
@@ -224,6 +232,9 @@ class TimeStepper:
                 return Outcome.INTERRUPTED
             if to_rest and not self.equilibrium and self.steps >= control.max_steps:
                 self.no_rest(control)
+        log.info(
+            "%d steps tried (%d failed); dt plans %d", control.tries, control.fails, control.planned
+        )
         return Outcome.EQUILIBRIUM if self.equilibrium else Outcome.REACHED_T_END
 
     def predict(self, h_step: float) -> np.ndarray:
@@ -298,12 +309,17 @@ class TimeStepper:
             "t = %.6g: step %.3g failed (%s); retrying with %.3g", self.t, h_step, why, control.h
         )
         if not again:
-            raise ConvergenceError(
-                f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s: {why}",
-                iterations=self.iterations,
-                history=newton.history if newton else [],
-                state=self.x.copy(),
-            )
+            message = f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s"
+        elif control.spent():
+            message = control.spent_message(self.t)
+        else:
+            return
+        raise ConvergenceError(
+            f"{message}: {why}",
+            iterations=self.iterations,
+            history=newton.history if newton else [],
+            state=self.x.copy(),
+        )
 
     def rest_stages(self) -> list:
         """The continuation stages of a run to rest after the first (whose potential this
@@ -384,13 +400,20 @@ class StepControl:
     smallest step, dt / 2**MAX_CUTS); after GROW_AFTER accepted steps in a row a shortened
     step doubles, back up to dt. ``advance`` gives the time after a step: exact multiples
     of the smallest step after t0 (t0 + k dt with one rounding while the step is dt), not
-    sums of the steps' round-off."""
+    sums of the steps' round-off. The tries (accepted and failed steps) are bounded:
+    ``spent`` says when they exceed SLOWDOWN times the steps dt plans plus ALLOWANCE, or
+    the failed ones half the steps dt plans plus FAIL_ALLOWANCE."""
 
     def __init__(self, dt: float, t0: float, t_end: float):
         self.dt, self.t0, self.t_end = dt, t0, t_end
         self.quantum = dt / 2**MAX_CUTS  # every step is a multiple of it (but one at t_end)
         self.h = dt  # the next step's length
         self.good = 0  # steps accepted since the last change of h
+        self.planned = max(1, math.ceil((t_end - t0) / dt - 1e-9))
+        self.budget = SLOWDOWN * self.planned + ALLOWANCE
+        self.fail_budget = self.planned // 2 + FAIL_ALLOWANCE
+        self.tries = 0  # steps tried, accepted or failed
+        self.fails = 0
 
     def step(self, t: float) -> float:
         """The next step from t: h, cut short at t_end."""
@@ -401,10 +424,30 @@ class StepControl:
         is below the smallest step (the run fails)."""
         self.h = 0.5 * h_step
         self.good = 0
+        self.tries += 1
+        self.fails += 1
         return not self.h < self.dt / 2**MAX_CUTS
+
+    def spent(self) -> bool:
+        """Whether the tries so far, or the failed ones, exceed the run's budget (the run
+        fails)."""
+        return self.tries > self.budget or self.fails > self.fail_budget
+
+    def spent_message(self, t: float) -> str:
+        """Why a run whose budget is spent stops at time t."""
+        mean = (t - self.t0) / max(1, self.tries - self.fails)
+        return (
+            f"dynamic run stopped at t = {t:.6g} s of solver.t_end = {self.t_end:g} s: "
+            f"{self.tries} steps tried ({self.fails} failed) where solver.dt = {self.dt:g} s "
+            f"plans {self.planned}; its steps stay about {self.dt / max(mean, self.quantum):.0f}x"
+            f" shorter than dt and would not finish in reasonable time (a model too stiff or"
+            f" too fast for this dt: try a smaller solver.dt, a larger solver.max_iter, or"
+            f" check the stiffness, masses and velocities); the last failed step"
+        )
 
     def accepted(self) -> None:
         """A step was accepted: after GROW_AFTER of them a shortened step doubles."""
+        self.tries += 1
         self.good += 1
         if self.h < self.dt and self.good >= GROW_AFTER:
             self.h = min(self.dt, 2.0 * self.h)

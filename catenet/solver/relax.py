@@ -64,6 +64,9 @@ class RestControl:
         self.h_max = dt * GROWTH_CAP
         self.max_steps = max_steps
         self.previous = math.nan  # the static residual after the last accepted step
+        self.planned = max_steps  # the tries are bounded by max_steps accepted steps,
+        self.tries = 0  # each after at most max_cuts failed ones
+        self.fails = 0
 
     def step(self, t: float) -> float:
         """The next step from t."""
@@ -74,10 +77,17 @@ class RestControl:
         is below the smallest step (the run fails)."""
         self.h = 0.5 * h_step
         self.previous = math.nan  # the decay starts again from the next accepted step
+        self.tries += 1
+        self.fails += 1
         return not self.h < self.h_min
+
+    def spent(self) -> bool:
+        """Never: ``max_steps`` bounds a run to rest (the stepper checks it)."""
+        return False
 
     def accepted(self) -> None:
         """A step was accepted (``settled`` sets the next one)."""
+        self.tries += 1
 
     def settled(self, residual: float, iterations: int) -> None:
         """After an accepted step (once nothing moves by prescription): its static

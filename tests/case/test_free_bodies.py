@@ -111,7 +111,7 @@ def test_a_given_inertia_and_principal_moments():
         ({"inertia": [1.0, 2.0]}, "obstacle[0].inertia = [1.0, 2.0]: must be"),
         ({"center": [0.0, 0.0, 0.01]}, "obstacle[0] (kind 'box', a free body): node"),
         ({"history": [[0, 1]], "velocity": [0, 0, 1]}, "obstacle[0].history: a free body"),
-        ({"solver": "static", "velocity": [0, 0, -1]}, "obstacle[0].velocity = [0.0, 0.0, -1.0]"),
+        ({"solver": "static", "velocity": [0, 0, -1]}, "obstacle[0].velocity = [0, 0, -1]"),
         ({"second": True}, "obstacle[1]: a second free body"),
         ({"ground": True}, "obstacle[1] (kind 'plane'): a free body (obstacle[0]"),
         ({"mesh": "open"}, "obstacle[0].file = "),

@@ -233,7 +233,7 @@ def test_static_runs_warn_that_histories_and_velocities_are_ignored(caplog):
     messages = advice.ignored_histories(case)
     assert len(messages) == 2
     assert messages[0].startswith("load.point[0].history: ignored with solver.method = 'static'")
-    assert messages[1].startswith("mass[0].velocity = [0.0, 0.0, 1.0]: ignored")
+    assert messages[1].startswith("mass[0].velocity = [0, 0, 1]: ignored")
     from catenet.run.runner import run_case
 
     with caplog.at_level(logging.WARNING, logger="catenet"):
@@ -332,7 +332,7 @@ def test_the_runner_starts_dynamic_runs_with_the_velocities(tmp_path):
     [
         ({"node": "center"}, "mass[0]: gives neither mass > 0 nor velocity"),
         ({"node": "center", "mass": -1.0}, "mass[0].mass = -1.0: must be finite and >= 0"),
-        ({"node": "fixed", "velocity": [0, 0, 1]}, "mass[0].velocity = [0.0, 0.0, 1.0]: node"),
+        ({"node": "fixed", "velocity": [0, 0, 1]}, "mass[0].velocity = [0, 0, 1]: node"),
         ({"node": 999, "mass": 1.0}, "mass[0].node = 999: must be a node index in"),
         ({"node": "nowhere", "mass": 1.0}, "mass[0].node = 'nowhere'"),
         ({"mass": 1.0}, "mass[0].node: missing"),

@@ -170,7 +170,7 @@ def test_bad_load_cases_exit_2_with_the_key_path(tmp_path):
         ),
         ("load_case", 0, "snow"): (1.0, "load_case[0].snow: unknown key"),
         ("load_case", 0, "history"): ([[0, 0], [1, 1]], "load_case[0].history: a load case is"),
-        ("load_case", 1, "gravity"): ([0, 0, -9.81], "load_case[1].gravity = [0.0, 0.0, -9.81]"),
+        ("load_case", 1, "gravity"): ([0, 0, -9.81], "load_case[1].gravity = [0, 0, -9.81]"),
     }
     for (table, k, key), (value, message) in bad.items():
         data = mast()

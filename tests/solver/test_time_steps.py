@@ -10,8 +10,11 @@ import pytest
 
 import catenet as cn
 from catenet.solver.dynamic import (
+    ALLOWANCE,
+    FAIL_ALLOWANCE,
     GROW_AFTER,
     MAX_CUTS,
+    SLOWDOWN,
     StepControl,
     TimeStepper,
     at_rest,
@@ -32,6 +35,37 @@ def test_a_failed_step_is_halved_down_to_the_smallest_step():
         assert h == 0.1 / 2**cut
     assert not control.failed(h)  # dt / 2**(MAX_CUTS + 1): the run fails
     assert control.h == 0.1 / 2 ** (MAX_CUTS + 1)
+
+
+def test_the_tries_of_a_run_are_bounded():
+    """A run may try SLOWDOWN times the steps dt plans plus ALLOWANCE (accepted and failed
+    alike), of which half the planned steps plus FAIL_ALLOWANCE may fail; beyond either,
+    ``spent`` ends it, and the message says how far it came and why."""
+    control = StepControl(0.01, 0.3, 0.5)  # 20 steps planned
+    assert control.planned == 20
+    assert control.budget == SLOWDOWN * 20 + ALLOWANCE
+    assert control.fail_budget == 10 + FAIL_ALLOWANCE >= MAX_CUTS + 1  # a start to the floor
+    h = control.step(0.3)
+    while True:  # a step that fails and four that pass, over and over
+        control.failed(h)
+        if control.spent():
+            break
+        h = control.step(0.3)
+        for _ in range(4):
+            control.accepted()
+    assert control.fails == control.fail_budget + 1 and control.tries < control.budget
+    message = control.spent_message(0.31)
+    assert "t = 0.31 s of solver.t_end = 0.5 s" in message
+    assert f"{control.tries} steps tried ({control.fails} failed)" in message
+    assert "solver.dt = 0.01 s plans 20" in message
+
+    control = StepControl(0.01, 0.3, 0.5)
+    for _ in range(control.budget):  # every step passes, yet short ones: no end of tries
+        control.accepted()
+    assert not control.spent()
+    control.accepted()
+    assert control.spent() and control.fails == 0
+    assert StepControl(0.01, 0.0, 0.0301).planned == 4  # a last short step counts
 
 
 def test_a_shortened_step_grows_back_to_dt_after_good_steps():

@@ -265,6 +265,47 @@ def pulled_run(tmp_path, *overrides):
     return r, build(case), times, xs
 
 
+def grounded_far(bed, settled, final):
+    """The nodes on the bed when settled and at the end, more than 3 m before the
+    settled touchdown point."""
+    on_bed = bed.nodes[(bed.gap(settled) < bed.dhat) & (bed.gap(final) < bed.dhat)]
+    touchdown = settled[on_bed, 0].max()
+    return on_bed[settled[on_bed, 0] < touchdown - 3.0]
+
+
+def test_the_mooring_example_short_keeps_its_grounded_part_while_pulled(tmp_path):
+    """configs/friction/mooring_pulled.toml to t = 9 s: the line settles on the rough bed
+    (t < 5 s) and the fairlead is 1.2 m into its 3 m sideways move: no node is ever below
+    the bed, every node lying on it more than 3 m before the touchdown point stays within
+    the slip distance, and `catenet plot` draws it. Frictionless
+    (--set obstacle.0.friction=0) the same part has swung by more than ten slip distances.
+    The full run (to rest, 3 m of pull): the slow test below."""
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    assert MOORING.read_text().startswith("# "), "an example says in its first lines what it shows"
+    r, scene, times, xs = pulled_run(tmp_path, "solver.t_end=9")
+    assert r.converged and times[-1] == pytest.approx(9.0)
+    bed, friction = scene.terms
+    assert friction.mu == 1.0 and friction.slip == 0.01
+    assert min(bed.gap(x).min() for x in xs) > 0.0
+    settled = xs[np.searchsorted(times, 5.0)]
+    far = grounded_far(bed, settled, r.x)
+    assert far.size >= 15  # 7.5 m of line and more
+    slid = np.linalg.norm((r.x - settled)[far, :2], axis=1)
+    assert slid.max() < friction.slip
+    assert abs(r.x[9, 1] - 3.0 * (9.0 - 5.0) / 10.0) < 1e-12  # the fairlead is moving
+    res = CliRunner().invoke(main, ["plot", str(tmp_path / "mooring.h5")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "mooring.png").stat().st_size > 10_000
+
+    r0, _, times0, xs0 = pulled_run(tmp_path, "obstacle.0.friction=0", "solver.t_end=9")
+    settled0 = xs0[np.searchsorted(times0, 5.0)]
+    assert np.linalg.norm((r0.x - settled0)[far, :2], axis=1).max() > 10 * friction.slip
+
+
+@pytest.mark.slow
 def test_the_mooring_example_keeps_its_grounded_part_while_pulled_sideways(tmp_path):
     """configs/friction/mooring_pulled.toml: the line laid on the rough seabed
     settles (t < 5 s), the fairlead moves 3 m sideways (5 s to 15 s): every node lying

@@ -189,7 +189,7 @@ class GraphConfig(GeometryConfig):
         if data is None or sub.problems or pre is BAD:
             return None
         config = cls(**data, prestrain=pre, file=file)
-        if config.sets is not None and config.sets.regions:
+        if config.sets is not None and config.sets.regions and config._meshable():
             try:
                 mesh = config._mesh()
             except ConfigError:
@@ -357,6 +357,12 @@ class GraphConfig(GeometryConfig):
         if lines is None:  # checked when parsed
             raise ConfigError("geometry.cable: invalid cables")
         return lines
+
+    def _meshable(self) -> bool:
+        """Whether the split net is small enough to build (else the size guard, after
+        parsing, names the key that makes it too large)."""
+        nodes, edges, _, _ = self.estimate_size()
+        return nodes + edges <= geo.MAX_NODES
 
     def _mesh(self, at=None) -> cb.CableMesh:
         return cb.cable_mesh(self._xyz(), np.asarray(self.edges), self._polylines(), self._hs(), at)
