@@ -17,6 +17,7 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
+from catenet.case.clearance import Clearance
 from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
@@ -59,6 +60,7 @@ class Scene:
     rigid: tuple = ()
     probe_auto: bool = False
     cases: tuple = ()
+    watch: Any = None  # stops a run where a free body meets another body or an obstacle
 
 
 def build(case: Case) -> Scene:
@@ -88,6 +90,11 @@ def _build(case: Case) -> Scene:
     )
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     terms += rigid_terms
+    watch = Clearance(case, rigid, bodies) if rigid else None
+    if watch:
+        watch.start(net.nodes)
+    else:
+        watch = None
     return Scene(
         case=case,
         net=net,
@@ -102,6 +109,7 @@ def _build(case: Case) -> Scene:
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
         rigid=rigid,
+        watch=watch,
         probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
         cases=_load_cases(case, net, built),
     )
