@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.bodies import add_bodies
+from catenet.case.clearance import Clearance
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
@@ -17,7 +18,6 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
-from catenet.case.clearance import Clearance
 from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError

@@ -31,6 +31,10 @@ along itself it carries nothing. Each edge adds Ca rho_w A l0 (I - t t^T) / 2 at
 its ends (t its unit direction at the equilibrium, l0 its rest length: the displaced
 volume A l0 is the unstressed one, as the structural mass is): a 3 x 3 block per node,
 symmetric positive semidefinite, which on the structural m 1 keeps M positive definite.
+
+``Operator`` holds K and M of the modal problem (on the rigid motions where there are
+free bodies) and factorises K - sigma M; ``stable_with_bodies`` counts its negative
+eigenvalues for a static solve with free bodies.
 """
 
 from __future__ import annotations
@@ -271,3 +275,19 @@ def _block_low(mm, m: np.ndarray) -> np.ndarray:
     blocks = np.zeros((n // 3, 3, 3))
     np.add.at(blocks, (coo.row[own] // 3, coo.row[own] % 3, coo.col[own] % 3), coo.data[own])
     return np.repeat(np.linalg.eigvalsh(blocks)[:, 0], 3)
+
+
+def stable_with_bodies(workspace, x: np.ndarray) -> bool | None:
+    """Whether the equilibrium x of a net with free bodies is stable: no omega^2 below
+    the shift of ``natural_modes`` (just below zero) on the bodies' rigid motions (a
+    frictionless body's free sliding or turning has no stiffness: it is neutral, not
+    unstable); None where it cannot tell (no mass, a backend without the inertia)."""
+    from catenet.errors import SingularSystemError
+
+    try:
+        op = Operator(workspace.system, np.asarray(x, dtype=np.float64), workspace.system.net.mass)
+        solver = op.factorized(workspace.solver, op.sigma)
+    except (SingularSystemError, ConfigError):
+        return None
+    negative = solver.negative_eigenvalues()
+    return None if negative is None else negative == 0

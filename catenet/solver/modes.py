@@ -218,22 +218,6 @@ def natural_modes(
     return found
 
 
-def stable_with_bodies(workspace, x: np.ndarray) -> bool | None:
-    """Whether the equilibrium x of a net with free bodies is stable: no omega^2 below
-    the shift of ``natural_modes`` on the bodies' rigid motions (their frictionless
-    free motions, zero to the noise of their rigidity, do not count); None where the
-    backend cannot tell."""
-    from catenet.errors import SingularSystemError
-
-    op = Operator(workspace.system, np.asarray(x, dtype=np.float64), workspace.system.net.mass)
-    try:
-        solver = op.factorized(workspace.solver, op.sigma)
-    except SingularSystemError:
-        return None
-    negative = solver.negative_eigenvalues()
-    return None if negative is None else negative == 0
-
-
 def _few_masses(op: Operator, count: int) -> bool:
     """Whether so few DOFs carry mass (point masses on massless cables) that the Lanczos
     vectors, which live in the range of M, cannot fill its basis: then the dense solver

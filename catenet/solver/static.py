@@ -16,8 +16,7 @@ from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
-from catenet.solver.modal import body_frames
-from catenet.solver.modes import stable_with_bodies
+from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import _c_start, raise_unconverged, solve
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
