@@ -238,8 +238,8 @@ def test_frictionless_box_on_a_net_is_refused_as_unstable(tmp_path):
     """A frictionless box balanced on a pinned net's flat patch: the nodes under a flat
     face hold it up but not sideways, and a tilt turns their push (its weight W) into a
     sideways force: K has [[0, W], [W, k]] in (slide, tilt), indefinite. The static run
-    warns, ``catenet modes`` refuses it naming the body; with friction it has modes,
-    the lowest ones the body's."""
+    warns, ``catenet modes`` refuses it naming the body; with friction it has modes
+    (Lanczos as the dense solver), rigid on the body, the lowest one the box's."""
     case = {
         "geometry": {
             "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
@@ -260,3 +260,11 @@ def test_frictionless_box_on_a_net_is_refused_as_unstable(tmp_path):
     scene, ws, x = equilibrium(case)
     modes = natural_modes(ws, x, 4)
     assert modes.count == 4 and modes.omega2[0] > 0
+    assert modes.stats["method"] == "lanczos"
+    dense = natural_modes(ws, x, 4, method="dense")  # the same modes, every one computed
+    assert np.allclose(modes.omega2, dense.omega2, rtol=1e-8)
+    frame = scene.rigid[0].frame
+    for k in range(4):
+        assert_rigid(frame, modes.shape[k], x)
+    share = modes.node_share()[:, frame.nodes].sum(axis=1)
+    assert share[0] > 0.5  # the lowest mode is the box's (its bounce on the net)
