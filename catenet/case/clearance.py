@@ -1,7 +1,7 @@
 """The watch that stops a run before a free rigid body meets another body or an obstacle.
 
-Free bodies (``catenet.case.rigid``) meet the net only: a body would pass through
-another free body, a ball or a fixed obstacle. Several bodies, and bodies beside
+Free bodies (``catenet.case.rigid``) meet the net and planes only: a body would pass
+through another free body, a ball or a fixed sphere, box, capsule or mesh. Several bodies, and bodies beside
 obstacles and balls, are allowed, so that a run that never brings them together is
 exact; ``Clearance`` (the scene's ``watch``) is asked after every accepted step of a
 dynamic run and every equilibrium of a static one, and raises ``BodiesMeet`` (a
@@ -11,7 +11,8 @@ where two of them meet or crossed since the last one:
 - against a plane, exactly: the body's vertices (a box's corners, a mesh's vertices
   grown by nothing, a capsule's or a sphere's centre grown by its radius) at the new
   pose, and its centre's path since the last state (a body that went through between
-  two steps);
+  two steps); a plane holds a free body by its barrier (``catenet.terms.body_plane``),
+  so this is a check that never fires, but for a body that starts through it;
 - between two spheres (sphere bodies, balls, fixed spheres), exactly: their centres'
   distance against the sum of their radii, over the straight path of the centres
   between the two states (the closest approach, not only its ends);

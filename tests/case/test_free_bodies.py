@@ -113,7 +113,7 @@ def test_a_given_inertia_and_principal_moments():
         ({"history": [[0, 1]], "velocity": [0, 0, 1]}, "obstacle[0].history: a free body"),
         ({"solver": "static", "velocity": [0, 0, -1]}, "obstacle[0].velocity = [0.0, 0.0, -1.0]"),
         ({"second": True}, "obstacle[0] (a free box): it meets obstacle[1] (a free box) at"),
-        ({"ground": True}, "obstacle[0] (a free box): it meets obstacle[1] (plane) at the start"),
+        ({"ground": True}, "obstacle[0] (a free box): its point [0.15, 0.1, 0.25] starts in"),
         ({"path": True}, "obstacle[1] (kind 'box'): an obstacle on a prescribed motion"),
         ({"mesh": "open"}, "obstacle[0].file = "),
         ({"rho": 1.0}, "solver.rho_inf = 1.0: must be <= 0.95 with a free body"),
