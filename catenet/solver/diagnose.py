@@ -161,10 +161,10 @@ def describe_zero_modes(
     if named:  # a frictionless free body slides or turns on the net's nodes at no cost
         which = ", ".join(named)
         bodies = (
-            f"the free bod{'y' if len(named) == 1 else 'ies'} {which} slide or turn on the "
-            "net at no cost (frictionless contact: the net's nodes slip on a face, or "
-            "their pushes pass through the body's axis): a rigid motion, not a vibration; "
-            "friction holds it"
+            f"the free bod{'y' if len(named) == 1 else 'ies'} {which} slide or turn where "
+            "they rest at no cost (frictionless contact: the net's nodes or the ground "
+            "slip along a face, or every push passes through the body's axis): a rigid "
+            "motion, not a vibration; friction holds it"
         )
         if not parts:
             return head + bodies

@@ -268,3 +268,47 @@ def test_frictionless_box_on_a_net_is_refused_as_unstable(tmp_path):
         assert_rigid(frame, modes.shape[k], x)
     share = modes.node_share()[:, frame.nodes].sum(axis=1)
     assert share[0] > 0.5  # the lowest mode is the box's (its bounce on the net)
+
+
+def test_box_on_the_ground_bounce_and_rocking_closed_forms():
+    """A 40 kg box (0.3 x 0.2 x 0.1 m) at rest on the ground (a plane's barrier on its
+    corners, catenet.terms.body_plane), beside a short pinned cable. Each lower corner
+    is a spring kappa b''(d) along the plane's normal, which does not turn with the box;
+    turning about x by theta moves corner (y_i, -h) up by y_i theta and, at second
+    order, by h theta^2 / 2, so its barrier force F = W / 4 adds -F h (the weight's
+    overturning moment, W h in all):
+
+        bounce      omega^2 = 4 k / m,
+        rocking x   omega^2 = (4 k b^2 - W h) / I_xx,   I_xx = m (b^2 + h^2) / 3,
+        rocking y   omega^2 = (4 k a^2 - W h) / I_yy,   I_yy = m (a^2 + h^2) / 3,
+
+    (a, b, h the half sizes): the body's mass, inertia and the barrier's true stiffness,
+    to 1e-8. Sliding and turning about z cost nothing: three zero-frequency modes."""
+    a, b, h, m, g = 0.15, 0.1, 0.05, 40.0, 9.81
+    case = {
+        "geometry": {"kind": "cable", "start": [2, 0, 0], "end": [3, 0, 0], "nodes": 3},
+        "material": {"EA": 1e5, "area": 1e-5, "density": 1000.0, "prestress": 100.0},
+        "load": {"gravity": [0.0, 0.0, -g]},
+        "obstacle": [
+            {"kind": "plane", "point": [0.0, 0.0, -1.0], "distance": 0.002},
+            {"kind": "box", "center": [0.0, 0.0, -1.0 + h + 0.0015], "half_size": [a, b, h],
+             "mass": m, "distance": 0.005},
+        ],
+        "solver": {"method": "static"},
+    }  # fmt: skip
+    scene, ws, x = equilibrium(case)
+    plane = next(t for t in scene.terms if type(t).__name__ == "BodyPlane")
+    d = np.sort(plane.gap(x))[:4]
+    assert np.allclose(d, d[0], rtol=1e-9)
+    r = float(d[0]) - plane.dhat
+    k = plane.kappa * (-2 * math.log(d[0] / plane.dhat) - 4 * r / d[0] + r * r / d[0] ** 2)
+    weight = m * g
+    expected = [
+        4 * k / m,
+        (4 * k * b**2 - weight * h) / (m * (b**2 + h**2) / 3),
+        (4 * k * a**2 - weight * h) / (m * (a**2 + h**2) / 3),
+    ]
+    modes = natural_modes(ws, x, ws.system.n_free - 6 - 3, method="dense")
+    assert modes.zero_modes == 3
+    for target in expected:
+        assert np.min(np.abs(modes.omega2 / target - 1)) < 1e-8, target
