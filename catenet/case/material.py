@@ -67,6 +67,21 @@ class MaterialConfig(Declared):
         unit="kg/m^3",
         doc="needs radius or area; must be > 0 for dynamic runs and for gravity",
     )
+    added_mass: float = real(
+        0.0,
+        ge=0,
+        unit="-",
+        write="changed",
+        doc="modes: added-mass coefficient Ca of water moving with the cable sideways "
+        "(1: a round cable); adds Ca water_density A per unstressed length, normal to it",
+    )
+    water_density: float = real(
+        1025.0,
+        gt=0,
+        unit="kg/m^3",
+        write="changed",
+        doc="modes: the water's density (with added_mass)",
+    )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
     law: str = choice(
         "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"
@@ -112,6 +127,21 @@ class MaterialConfig(Declared):
         """rho * A [kg/m]."""
         a = self.cross_section
         return 0.0 if a is None else self.density * a
+
+
+def added_line_mass(config: MaterialConfig, path: str = "material") -> float:
+    """Ca rho_w A [kg/m] (per unstressed length) of a [material] table: the water that a
+    cable carries along as it moves sideways; 0 without added_mass. ConfigError where
+    added_mass is given but no cross-section (EA alone)."""
+    if not config.added_mass:
+        return 0.0
+    area = config.cross_section
+    if area is None:
+        raise ConfigError(
+            f"{path}.added_mass = {config.added_mass!r}: the displaced water needs a "
+            f"cross-section: give {path}.radius or {path}.area"
+        )
+    return config.added_mass * config.water_density * area
 
 
 def model_material(config: MaterialConfig, *, prestress: bool = True) -> Material:

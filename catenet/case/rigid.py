@@ -110,7 +110,8 @@ def _mesh(obs):
 def add_free_bodies(case, net, loads, velocity, size: float):
     """(net, loads, velocity, terms, bodies) with the case's free bodies appended (four
     nodes each). Raises ConfigError with the key path for a body that starts overlapping
-    the net, that shares the scene with other obstacles, or has a bad inertia."""
+    the net, that shares the scene with an obstacle on a prescribed motion, or has a bad
+    inertia."""
     from catenet.case.bodies import pad_loads
 
     which = [k for k, o in enumerate(case.obstacles) if getattr(o, "free", False)]
@@ -146,21 +147,19 @@ def add_free_bodies(case, net, loads, velocity, size: float):
 
 
 def _check_alone(case, which) -> None:
+    """ConfigError for a free body beside an obstacle on a prescribed motion (a box,
+    capsule or mesh that moves: the watch of ``catenet.case.clearance`` does not follow
+    it). Several free bodies, fixed obstacles and balls are allowed: the watch stops a
+    run where one would meet another."""
     k = which[0]
-    kind = case.obstacles[k].kind
-    if len(which) > 1:
-        raise ConfigError(
-            f"obstacle[{which[1]}]: a second free body: free bodies meet the net, not "
-            f"each other (obstacle[{k}] is one): keep one free body"
-        )
-    others = [i for i in range(len(case.obstacles)) if i != k]
-    if others:
-        i = others[0]
-        raise ConfigError(
-            f"obstacle[{i}] (kind {case.obstacles[i].kind!r}): a free body "
-            f"(obstacle[{k}], kind {kind!r}) meets the net only and would pass through "
-            "another obstacle: drop mass and density of the free body, or the other obstacle"
-        )
+    for i, obs in enumerate(case.obstacles):
+        if getattr(obs, "rigid_motion", False):
+            raise ConfigError(
+                f"obstacle[{i}] (kind {obs.kind!r}): an obstacle on a prescribed motion "
+                f"beside a free body (obstacle[{k}]): a free body meets the net only and "
+                "nothing would see it pass through the moving obstacle; drop one of them, "
+                "or give the other a fixed place"
+            )
 
 
 def _frame(obs, k: int, first: int, case):
@@ -228,6 +227,7 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     v0 = float(np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0)))
     scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
     terms = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
+    terms += _planes(case, body, net, dhat, load)
     if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
         from catenet.terms.rigid_contact import BodyFriction
@@ -235,3 +235,54 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
         slip = obs.slip if obs.slip is not None else dhat
         terms.append(BodyFriction(Friction(shape, mu=obs.friction, slip=slip), contact))
     return terms
+
+
+def _planes(case, body: FreeBody, net, dhat: float, load: float) -> list:
+    """The barrier of every plane obstacle on the body's vertices (``BodyPlane``: a
+    box's corners, a mesh's vertices, a sphere's or a capsule's centre or axis ends grown
+    by its radius), its distance and stiffness the plane's keys, else the body's own
+    distance and a stiffness that holds the body's weight on four vertices."""
+    from catenet.terms.body_plane import BodyPlane
+    from catenet.terms.contact import default_stiffness
+
+    obs = case.obstacles[body.obstacle]
+    vertices, radius = _vertices(obs)
+    out = []
+    for k, plane in enumerate(case.obstacles):
+        if plane.kind != "plane":
+            continue
+        distance = plane.distance if plane.distance is not None else dhat
+        kappa = plane.stiffness
+        if kappa is None:
+            kappa = default_stiffness(max(load, body.mass * 9.81 / 4.0), distance)
+        label = f"obstacle[{body.obstacle}] (a free {obs.kind}) on obstacle[{k}] (plane)"
+        term = BodyPlane(
+            body.frame, vertices, plane.point, plane.normal, radius=radius, kappa=kappa,
+            dhat=distance, n_nodes=net.n_nodes, label=label,
+        )  # fmt: skip
+        gap = term.gap(net.nodes)
+        if not np.all(gap > 0.0):
+            v = int(np.argmin(gap))
+            raise ConfigError(
+                f"obstacle[{body.obstacle}] (a free {obs.kind}): its point "
+                f"{show(np.round(vertices[v], 12).tolist())} starts in or on obstacle[{k}] "
+                f"(plane) (gap {gap[v]:.3g} m): move the body or the plane"
+            )
+        out.append(term)
+    return out
+
+
+def _vertices(obs) -> tuple[np.ndarray, float]:
+    """(V, 3) the points of a free body's shape at t = 0 nearest a plane, and the radius
+    they are grown by."""
+    if obs.kind == "sphere":
+        return np.asarray(obs.center, float)[None], float(obs.radius)
+    if obs.kind == "capsule":
+        return np.array([obs.start, obs.end], dtype=np.float64), float(obs.radius)
+    if obs.kind == "box":
+        from catenet.terms.shapes import rotation
+
+        signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)])
+        R = rotation(obs.axis, obs.angle)
+        return np.asarray(obs.center, float) + (signs * obs.half_size) @ R.T, 0.0
+    return np.asarray(obs.surface()[0], dtype=np.float64), 0.0

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.bodies import add_bodies
+from catenet.case.clearance import Clearance
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
@@ -59,6 +60,7 @@ class Scene:
     rigid: tuple = ()
     probe_auto: bool = False
     cases: tuple = ()
+    watch: Any = None  # stops a run where a free body meets another body or an obstacle
 
 
 def build(case: Case) -> Scene:
@@ -88,6 +90,11 @@ def _build(case: Case) -> Scene:
     )
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     terms += rigid_terms
+    watch = Clearance(case, rigid, bodies) if rigid else None
+    if watch:
+        watch.start(net.nodes)
+    else:
+        watch = None
     return Scene(
         case=case,
         net=net,
@@ -102,6 +109,7 @@ def _build(case: Case) -> Scene:
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
         rigid=rigid,
+        watch=watch,
         probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
         cases=_load_cases(case, net, built),
     )

@@ -128,6 +128,12 @@ def _summary(case, done) -> None:
         f"{'modes':<12} {modes.count} lowest of {s['dofs']} free DOFs ({s['method']}, "
         f"{s['backend']}, {s['seconds']:.3g} s, residual {s['residual']:.1e})",
     ]
+    if s.get("bodies"):
+        n = s["bodies"]
+        lines.append(
+            f"{'bodies':<12} {n} free bod{'y' if n == 1 else 'ies'}: 6 rigid motions each "
+            "(the affine body's 6 strains, stiff and not physical, are left out)"
+        )
     if modes.zero_modes:
         lines.append(f"{'zero modes':<12} {modes.zero_message}")
     lines.append(

@@ -31,12 +31,13 @@ MOST_SHARE = 0.1  # ... each with at least this share of the mode's kinetic ener
 def check_modes_input(scene, count) -> None:
     """ConfigError for a count that is not a positive integer or above the free DOFs,
     and for a net with no mass at its free nodes."""
-    n_free = 3 * int(np.count_nonzero(~scene.net.fixed))
+    n_free = 3 * int(np.count_nonzero(~scene.net.fixed)) - 6 * len(getattr(scene, "rigid", ()))
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
         raise ConfigError(
-            f"--count = {count}: more than the net's {n_free} free DOFs (3 per free node): "
+            f"--count = {count}: more than the net's {n_free} free DOFs (3 per free node, "
+            "6 per free body): "
             f"ask for at most {n_free}"
         )
     if not float(np.sum(scene.net.mass[~scene.net.fixed])) > 0.0:
@@ -45,6 +46,30 @@ def check_modes_input(scene, count) -> None:
             "frequency: give material.density [kg/m^3] (per unstressed volume) or point "
             "masses"
         )
+
+
+def added_line(case, scene) -> np.ndarray | None:
+    """(E,) the added mass of water of each edge, Ca rho_w A l0 [kg] (its cable's
+    [material] in a graph with cables, else [material]); None where no material asks
+    for it (``material.added_mass``)."""
+    from catenet.case.keys import Checker
+    from catenet.case.material import added_line_mass
+
+    net = scene.net
+    base = added_line_mass(case.material)
+    per_edge = np.full(net.n_edges, base)
+    cables = getattr(scene, "cables", None)
+    listed = getattr(case.geometry, "cables", ())
+    if cables is not None and listed:
+        from catenet.case.kinds.cables import cable_materials
+
+        mats = cable_materials(Checker(), case.material, listed)
+        line = [added_line_mass(m, f"geometry.cable[{c}].material") for c, m in enumerate(mats)]
+        on = cables.edge >= 0
+        per_edge[on] = np.asarray(line)[cables.edge[on]]
+    if not per_edge.any():
+        return None
+    return per_edge * net.rest_length
 
 
 @dataclass
@@ -83,6 +108,7 @@ def modes_case(
     refuse_formfind(case)
     scene = build(case)
     check_modes_input(scene, count)
+    added = added_line(case, scene)
     kept = {}
 
     def done(scene, ws, result) -> None:
@@ -118,7 +144,7 @@ def modes_case(
         )
     if result.stable is False:
         raise ConvergenceError(f"modes: the equilibrium found is unstable: {result.diagnosis}")
-    modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables)
+    modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables, added=added)
     if path is not None:
         write_modes(path, scene, modes, about=load_case)
     return ModesRun(result, modes, path, scene, load_case)
@@ -154,10 +180,41 @@ def mode_rows(scene, modes) -> list[ModeRow]:
                 float(modes.period[k]),
                 dominant[k],
                 modes.effective_mass[k] / total,
-                _moves(net, modes.shape[k], cables),
+                _body_moves(scene, modes.shape[k], modes.x) or _moves(net, modes.shape[k], cables),
             )
         )
     return rows
+
+
+def _body_moves(scene, shape: np.ndarray, x: np.ndarray) -> str:
+    """The free body that carries most of a mode's kinetic energy, if one carries at
+    least half of it: "obstacle[k] (kind)", and "turning about [a, b, c]" where its
+    rotation carries most of its own (else ""). The body's four nodes have masses m/4."""
+    rigid = getattr(scene, "rigid", ())
+    if not rigid:
+        return ""
+    mass = scene.net.mass
+    total = float(np.einsum("n,nd,nd->", mass, shape, shape))
+    best, share = None, 0.0
+    for body in rigid:
+        nodes = body.frame.nodes
+        energy = float(np.einsum("n,nd,nd->", mass[nodes], shape[nodes], shape[nodes]))
+        if total > 0 and energy / total > share:
+            best, share = body, energy / total
+    if best is None or share < 0.5:
+        return ""
+    nodes = best.frame.nodes
+    label = f"obstacle[{best.obstacle}] ({scene.case.obstacles[best.obstacle].kind})"
+    move = shape[nodes] - shape[nodes].mean(axis=0)  # w x r_k, r_k from the centre
+    r = x[nodes] - x[nodes].mean(axis=0)
+    if float(np.sum(move**2)) <= float(np.sum(shape[nodes].mean(axis=0) ** 2)) * 4:
+        return label  # its translation carries most of its energy
+    cross = np.zeros((4, 3, 3))  # -[r_k]x w = move_k
+    cross[:, 0, 1], cross[:, 0, 2], cross[:, 1, 2] = r[:, 2], -r[:, 1], r[:, 0]
+    cross -= cross.transpose(0, 2, 1)
+    w = np.linalg.lstsq(cross.reshape(12, 3), move.ravel(), rcond=None)[0]
+    w /= np.linalg.norm(w)
+    return f"{label} turning about [{', '.join(f'{v:.2g}' for v in np.round(w, 6) + 0.0)}]"
 
 
 def _moves(net, shape: np.ndarray, cables) -> str:

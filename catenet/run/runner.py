@@ -275,9 +275,9 @@ def run_case(
     numbers = summary.summarize_result(scene, result)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables
-        from catenet.solver.diagnose import describe_unstable
+        from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 
-        result.diagnosis = describe_unstable(
+        result.diagnosis = describe_unstable_bodies(ws.system, result.x) or describe_unstable(
             ws.system.stretch,
             result.x,
             ~scene.net.fixed,

@@ -66,6 +66,27 @@ def describe_unstable(
     )
 
 
+def describe_unstable_bodies(system, x: np.ndarray) -> str:
+    """One sentence naming the free rigid bodies of an unstable equilibrium that no
+    compressed bilateral edge explains (else ""): a body at rest on the net whose rigid
+    motion has negative stiffness, and the fix."""
+    stretch = system.stretch
+    if np.any(stretch.tension(x) < 0.0):
+        return ""  # compressed bilateral edges: ``describe_unstable`` names them
+    labels = [t.label for t in system.terms if type(t).__name__ == "BodyContact"]
+    if not labels:
+        return ""
+    names = ", ".join(labels)
+    return (
+        f"the free {'body' if len(labels) == 1 else 'bodies'} {names} would slide, roll or "
+        "tip from where the solve balanced it: the net's nodes under a flat face hold a "
+        "frictionless body up but not sideways, so a small tilt turns their push into a "
+        "sideways force nothing resists; give the body friction (its friction key), or "
+        "let it come to rest in a dynamic run with damping (solver.method = 'dynamic'), "
+        "whose rest state catenet modes takes"
+    )
+
+
 def _held_by_terms(system) -> np.ndarray:
     """(N,) nodes that a term besides the edges' stretching holds (a spring, contact)."""
     held = np.zeros(system.net.n_nodes, bool)
@@ -112,6 +133,14 @@ def describe_zero_modes(
     body = np.arange(net.n_nodes) >= net.n_net  # the centres of rigid balls
     floating = floating_parts(net, tension, x, held) & ~loose & ~body
     nodes = np.asarray(nodes, dtype=np.int64)
+    free_bodies = _free_bodies(system)  # (label, nodes) of each free rigid body
+    rigid = np.zeros(net.n_nodes, bool)
+    named = []
+    for label, own in free_bodies:
+        rigid[own] = True
+        if np.isin(own, nodes).any():
+            named.append(label)
+    nodes = nodes[~rigid[nodes]]
     groups = [
         (nodes[body[nodes]], "are the centres of rigid bodies that touch nothing"),
         (nodes[loose[nodes]], "hang on slack edges only"),
@@ -127,12 +156,26 @@ def describe_zero_modes(
         if group.size:
             named = _cables(net, group, cable_names, cable_of_edge)
             parts.append(f"nodes {_shown(group)}{named} {why}")
-    where = "; ".join(parts) if parts else "the net"
     plural = "s" if count != 1 else ""
-    return (
-        f"{count} zero-frequency mode{plural} (left out): {where}: give them tension "
-        "(prestress, a load) or a support"
-    )
+    head = f"{count} zero-frequency mode{plural} (left out): "
+    if named:  # a frictionless free body slides or turns on the net's nodes at no cost
+        which = ", ".join(named)
+        bodies = (
+            f"the free bod{'y' if len(named) == 1 else 'ies'} {which} slide or turn where "
+            "they rest at no cost (frictionless contact: the net's nodes or the ground "
+            "slip along a face, or every push passes through the body's axis): a rigid "
+            "motion, not a vibration; friction holds it"
+        )
+        if not parts:
+            return head + bodies
+        head += bodies + "; "
+    where = "; ".join(parts) if parts else "the net"
+    return f"{head}{where}: give them tension (prestress, a load) or a support"
+
+
+def _free_bodies(system) -> list:
+    """(label, nodes) of each free rigid body: its contact term's label and frame."""
+    return [(t.label, t.frame.nodes) for t in system.terms if type(t).__name__ == "BodyContact"]
 
 
 def _shown(nodes: np.ndarray) -> str:

@@ -47,14 +47,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.solver.modal import Operator
 
 if TYPE_CHECKING:
     from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
-SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
-ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
 DENSE = 240  # at most this many free DOFs: a dense eigensolver (and any count)
 DENSE_MAX = 4000  # ... and up to this many where too few DOFs carry mass for Lanczos
 RESIDUAL_TOL = 1e-6  # largest accepted |K phi - w^2 M phi| / (|K phi| + w^2 |M phi|)
@@ -96,6 +95,7 @@ class Modes:
     stats: dict = field(default_factory=dict)
     equilibrium: Result | None = None  # the static Result the modes are about, if solved here
     mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
+    added: np.ndarray | None = None  # (N, 3, 3) added mass of water of the free nodes [kg]
 
     @property
     def period(self) -> np.ndarray:
@@ -108,96 +108,78 @@ class Modes:
         return int(self.frequency.size)
 
     def direction_share(self) -> np.ndarray:
-        """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2)."""
-        return np.einsum("n,knd->kd", self._mass(), self.shape**2)
+        """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2, and
+        phi_id (A_i phi_i)_d with an added mass A_i)."""
+        share = np.einsum("n,knd->kd", self._mass(), self.shape**2)
+        if self.added is not None:
+            share += np.einsum("knd,nde,kne->kd", self.shape, self.added, self.shape)
+        return share
 
     def dominant(self) -> list[str]:
         """Each mode's dominant direction: the axis with the largest kinetic energy share."""
         return [AXES[int(d)] for d in np.argmax(self.direction_share(), axis=1)]
 
     def node_share(self) -> np.ndarray:
-        """(K, N) each node's share of each mode's kinetic energy m_i |phi_i|^2 (sums to 1)."""
-        return self._mass()[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+        """(K, N) each node's share of each mode's kinetic energy phi_i^T M_i phi_i (sums
+        to 1; M_i = m_i 1 plus any added mass)."""
+        share = self._mass()[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+        if self.added is not None:
+            share += np.einsum("knd,nde,kne->kn", self.shape, self.added, self.shape)
+        return share
 
     def _mass(self) -> np.ndarray:
         assert self.mass is not None, "natural_modes gives the modes their masses"
         return self.mass
 
 
-class Operator:
-    """K and M of a net at x on its free DOFs, and the DOFs taken out (no stiffness)."""
-
-    def __init__(self, system, x: np.ndarray, mass: np.ndarray):
-        net = system.net
-        self.system = system
-        self.n = system.n_free
-        self.k_data = system.hessian(x).copy()
-        self.convex = system.convex
-        self.m = np.repeat(np.asarray(mass, dtype=np.float64)[~net.fixed], 3)
-        self.node = np.flatnonzero(~net.fixed).repeat(3)
-        rows = np.repeat(np.arange(self.n), np.diff(system.indptr))
-        a = np.abs(self.k_data)
-        off = rows != system.indices
-        rowsum = np.bincount(rows, a, minlength=self.n)
-        rowsum += np.bincount(system.indices[off], a[off], minlength=self.n)
-        diag = self.k_data[system.diag_pos]
-        self.rowsum = rowsum
-        self.dead = rowsum <= 1e-14 * max(float(rowsum.max(initial=0.0)), 1e-300)
-        live = ~self.dead & (self.m > 0)
-        if not live.any():
-            raise ConfigError(
-                "modes: no free node has both mass and stiffness: give the net a mass "
-                "(material.density, [[mass]]) and a tension"
-            )
-        self.scale = float(np.max(diag[live] / self.m[live]))  # max K_ii / m_i
-        self.bound = float(np.max(rowsum[live] / self.m[live]))  # Gershgorin: w^2 <= bound
-        # The DOFs without stiffness get a dummy w^2 of 2 x bound: above every real mode.
-        self.dummy = 2.0 * self.bound
-        ref = np.where(self.m > 0, self.m, float(np.median(self.m[self.m > 0])))
-        self.k_data[system.diag_pos[self.dead]] = self.dummy * ref[self.dead]
-        self._k = None  # K as SciPy CSR, when asked for
-
-    def matrix(self, shift: float = 0.0):
-        """K - shift M as SciPy CSR (both triangles); K itself made once."""
-        if shift == 0.0:
-            if self._k is None:
-                self._k = self.system.matrix(self.k_data)
-            return self._k
-        data = self.k_data.copy()
-        data[self.system.diag_pos] -= shift * self.m
-        return self.system.matrix(data)
-
-    def shifted(self, sigma: float) -> np.ndarray:
-        """CSR data (the system's pattern) of K - sigma M."""
-        data = self.k_data.copy()
-        data[self.system.diag_pos] -= sigma * self.m
-        return data
-
-
 def natural_modes(
-    workspace, x: np.ndarray, count: int, *, mass=None, method: str = "auto", cables=None
+    workspace,
+    x: np.ndarray,
+    count: int,
+    *,
+    mass=None,
+    method: str = "auto",
+    cables=None,
+    added=None,
 ) -> Modes:
     """The ``count`` lowest natural modes of the workspace's net about the equilibrium x
     (see the module docstring). ``mass`` (N,) [kg] defaults to ``Net.mass``; ``method``:
     "auto" (dense up to DENSE free DOFs, else Lanczos), "dense" or "lanczos";
-    ``cables`` (``names``, ``edge``: a case's cable index) names cables in messages."""
+    ``cables`` (``names``, ``edge``: a case's cable index) names cables in messages;
+    ``added`` (E,) [kg]: each edge's added mass of water Ca rho_w A l0, moving with its
+    ends sideways only (``catenet.solver.modal.added_mass_blocks``), or None."""
     begin = time.perf_counter()
     system, solver = workspace.system, workspace.solver
     net = system.net
     mass = net.mass if mass is None else np.asarray(mass, dtype=np.float64)
-    _check_count(count, system.n_free)
+    from catenet.solver.modal import body_frames
+
+    bodies = len(body_frames(system))
+    _check_count(count, system.n_free - 6 * bodies)
     if not float(np.sum(mass[~net.fixed])) > 0.0:
         raise ConfigError(
             "modes: the net has no mass (material.density = 0 and no [[mass]]): give "
             "material.density [kg/m^3] or point masses to find its frequencies"
         )
-    op = Operator(system, np.asarray(x, dtype=np.float64), mass)
+    x = np.asarray(x, dtype=np.float64)
+    blocks = None
+    if added is not None:
+        from catenet.solver.modal import added_mass_blocks
+
+        added = np.asarray(added, dtype=np.float64)
+        if added.shape != (net.n_edges,) or not np.all(np.isfinite(added) & (added >= 0)):
+            raise ConfigError(
+                f"modes: added mass of shape {added.shape}: must be {net.n_edges} finite "
+                "masses >= 0 [kg], one per edge"
+            )
+        blocks = added_mass_blocks(net, x, added)
+    op = Operator(system, x, mass, blocks)
     if method not in ("auto", "dense", "lanczos"):
         raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
     # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
     dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
     dense = dense or _few_masses(op, count)
-    sigma = -SHIFT * op.scale
+    sigma = op.sigma
     stats = {"method": "dense" if dense else "lanczos", "backend": solver.name}
     if dense:
         lam, vec = _dense(op, sigma)
@@ -208,16 +190,18 @@ def natural_modes(
     lam, vec = _rayleigh_ritz(op, vec)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
-    if lam.size and lam[0] < -ZERO * op.scale:
+    if lam.size and lam[0] < -op.zero:
         _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
-    zero = lam < ZERO * op.scale
+    zero = lam < op.zero
     found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, sigma)
+    found.added = None if blocks is None else np.where(net.fixed[:, None, None], 0.0, blocks)
     _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
     found.stats = {
         **stats,
         "seconds": time.perf_counter() - begin,
         "residual": _residual(op, found.omega2, vec[:, ~zero][:, :count]),
         "dofs": op.n,
+        "bodies": bodies,
     }
     if found.stats["residual"] > RESIDUAL_TOL:
         raise ConvergenceError(
@@ -254,8 +238,8 @@ def _check_count(count, n_free: int) -> None:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
         raise ConfigError(
-            f"--count = {count}: the net has {n_free} free DOFs (3 per free node): ask for "
-            f"at most {n_free} modes"
+            f"--count = {count}: the net has {n_free} free DOFs (3 per free node, 6 per "
+            f"free body): ask for at most {n_free} modes"
         )
 
 
@@ -264,8 +248,8 @@ def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     phi, mu = 1 / (w^2 - sigma), which allows massless DOFs (mu = 0: w infinite)."""
     import scipy.linalg as sl
 
-    a = op.matrix(sigma).toarray()
-    m = np.diag(op.m)
+    a = (op.k - sigma * op.mm).toarray()
+    m = op.mm.toarray()
     try:
         mu, vec = sl.eigh(m, a)
     except np.linalg.LinAlgError:  # K - sigma M indefinite (compressed bilateral edges)
@@ -273,10 +257,10 @@ def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
             raise ConvergenceError(
                 "modes: the stiffness is indefinite and some free nodes have no mass"
             ) from None
-        lam, vec = sl.eigh(op.matrix().toarray(), m)
+        lam, vec = sl.eigh(op.k.toarray(), m)
         return lam, vec
     keep = mu > 1e-12 * max(float(mu.max(initial=0.0)), 1e-300)  # else: no mass, w infinite
-    mu, vec = mu[keep], vec[:, keep]
+    mu, vec = mu[keep], vec[:, keep] / np.sqrt(mu[keep])  # phi^T M phi = 1
     order = np.argsort(-mu)
     return sigma + 1.0 / mu[order], vec[:, order]
 
@@ -287,7 +271,7 @@ def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarra
     before the first real mode). ``unstable(why)`` raises for a negative omega^2 that
     the factorisation's inertia shows."""
     start = time.perf_counter()
-    solver.factorize(op.shifted(sigma), definite=op.convex)
+    solver = op.factorized(solver, sigma)
     stats["factorize_seconds"] = time.perf_counter() - start
     negative = solver.negative_eigenvalues()
     stats["negative"] = negative
@@ -299,7 +283,7 @@ def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarra
     while True:
         lam, vec, used = _lanczos(op, solver, sigma, k)
         solves += used
-        zero = int(np.count_nonzero(lam < ZERO * op.scale))
+        zero = int(np.count_nonzero(lam < op.zero))
         if len(lam) - zero >= count or k >= limit:
             break
         k = min(limit, count + zero if zero < k else 2 * k)
@@ -319,9 +303,9 @@ def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
         used[0] += 1
         return solver.solve(np.asarray(b, dtype=np.float64).ravel())
 
-    k_matrix = op.matrix()
+    k_matrix = op.k
     opinv = LinearOperator((n, n), matvec=inverse, dtype=np.float64)
-    m_op = LinearOperator((n, n), matvec=lambda v: op.m * np.ravel(v), dtype=np.float64)
+    m_op = LinearOperator((n, n), matvec=lambda v: op.mm @ np.ravel(v), dtype=np.float64)
     v0 = np.random.default_rng(12345).standard_normal(n) * (op.m > 0)
     ncv = min(n, max(2 * k + 1, k + 20))
     try:
@@ -344,43 +328,53 @@ def _rayleigh_ritz(op: Operator, vec: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     if vec.shape[1] == 0:
         return np.zeros(0), vec
-    mr = vec.T @ (op.m[:, None] * vec)
+    mr = vec.T @ (op.mm @ vec)
     w, u = sl.eigh(0.5 * (mr + mr.T))
     keep = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
     basis = vec @ (u[:, keep] / np.sqrt(w[keep]))
-    kr = basis.T @ (op.matrix() @ basis)
+    kr = basis.T @ (op.k @ basis)
     lam, y = sl.eigh(0.5 * (kr + kr.T))
     return lam, basis @ y
 
 
 def _unstable(how: str, workspace, x) -> None:
     """Raises ConvergenceError: the equilibrium is unstable (``how``), its nodes named."""
-    from catenet.solver.diagnose import describe_unstable
+    from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 
-    why = describe_unstable(workspace.system.stretch, x, ~workspace.system.net.fixed)
+    system = workspace.system
+    why = describe_unstable_bodies(system, x)
+    if not why:
+        why = describe_unstable(system.stretch, x, ~system.net.fixed)
     raise ConvergenceError(f"modes: the equilibrium is unstable ({how}): {why}")
 
 
 def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
-    """Modes of the net: shapes on every node, signs fixed, participation."""
+    """Modes of the net: shapes on every node (a free body's four nodes moving rigidly),
+    signs fixed, participation phi^T M r_d with the whole M (added mass too)."""
     k = lam.size
     shape = np.zeros((k, net.n_nodes, 3))
     free = np.flatnonzero(~net.fixed)
+    if k:
+        vec = vec / np.sqrt(np.einsum("ik,ik->k", vec, op.mm @ vec))[None, :]
+    u = op.full(vec)
     for j in range(k):
-        v = vec[:, j]
-        v = v / math.sqrt(float(v @ (op.m * v)))
+        v = u[:, j]
         if v[np.argmax(np.abs(v))] < 0:
             v = -v
         shape[j, free] = v.reshape(-1, 3)
     m_free = np.where(net.fixed, 0.0, mass)
-    participation = np.einsum("n,knd->kd", m_free, shape)
+    rigid = np.zeros((op.m_free.shape[0], 3))
+    for d in range(3):
+        rigid[d::3, d] = 1.0  # a unit translation of every free node along axis d
+    moved = op.m_free @ rigid  # (n_free, 3): M r_d
+    participation = np.einsum("kn,nd->kd", shape[:, free].reshape(k, -1), moved)
     out = Modes(
         frequency=np.sqrt(np.maximum(lam, 0.0)) / (2 * math.pi),
         omega2=lam.copy(),
         shape=shape,
         participation=participation,
         effective_mass=participation**2,
-        total_mass=np.full(3, float(m_free.sum())),
+        total_mass=np.einsum("nd,nd->d", rigid, moved),
         x=np.array(x, dtype=np.float64),
         sigma=float(sigma),
         mass=m_free,
@@ -391,8 +385,8 @@ def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
 def _residual(op: Operator, lam: np.ndarray, vec: np.ndarray) -> float:
     if vec.shape[1] == 0:
         return 0.0
-    kv = op.matrix() @ vec
-    mv = op.m[:, None] * vec
+    kv = op.k @ vec
+    mv = op.mm @ vec
     r = np.linalg.norm(kv - mv * lam[None, :], axis=0)
     scale = np.linalg.norm(kv, axis=0) + np.abs(lam) * np.linalg.norm(mv, axis=0)
     return float(np.max(r / np.maximum(scale, 1e-300)))
@@ -435,12 +429,14 @@ def modes(
     workspace=None,
     mass=None,
     method: str = "auto",
+    added=None,
 ) -> Modes:
     """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a scene: a case's
     ``Scene`` or a ``catenet.solver.path.Problem``) under ``loads`` about its equilibrium,
     found by the one solve path (``settings``: a ``catenet.solver.path.Settings``;
     default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the
-    equilibrium. ``terms``: further internal terms (with a ``Net``). Raises
+    equilibrium. ``terms``: further internal terms (with a ``Net``); ``added`` (E,)
+    [kg]: each edge's added mass of water (``natural_modes``). Raises
     ConvergenceError where the equilibrium is not found (or a dynamic run ends before
     rest) and ConfigError for bad input (no mass, ``k`` out of range). The static
     Result is ``Modes.equilibrium``."""
@@ -462,6 +458,7 @@ def modes(
                 f"modes: no equilibrium to take the modes about: {result.message or 'not at rest'}"
             )
         x = result.x
-    found = natural_modes(ws, x, k, mass=mass, method=method, cables=getattr(scene, "cables", None))
+    cables = getattr(scene, "cables", None)
+    found = natural_modes(ws, x, k, mass=mass, method=method, cables=cables, added=added)
     found.equilibrium = result
     return found

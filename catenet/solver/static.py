@@ -15,7 +15,8 @@ import numpy as np
 from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
-from catenet.solver.diagnose import describe_unstable
+from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
+from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import _c_start, raise_unconverged, solve
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
@@ -90,13 +91,16 @@ def solve_static(
         stats=ws.stats(),
         outcome=_outcome(result),
     )
-    if not net.law.all_tension_only and result.converged:
-        out.stable = _stable(ws, potential, x)
+    bodies = body_frames(ws.system)  # a free body may rest unstably on any net
+    if (bodies or not net.law.all_tension_only) and result.converged:
+        out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, potential, x)
         if out.stable is False:
-            out.diagnosis = describe_unstable(ws.system.stretch, x, ~net.fixed)
+            out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
+                ws.system.stretch, x, ~net.fixed
+            )
             log.warning(
                 "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
-                "(compressed bilateral edges: any disturbance makes the net buckle away): %s",
+                "(any disturbance makes the net or a body move away): %s",
                 out.diagnosis,
             )
     loose = loose_nodes(net, out.tension)

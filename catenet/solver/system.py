@@ -276,10 +276,15 @@ class System:
 
     # --- matrix ------------------------------------------------------------------------
     def hessian(
-        self, x: np.ndarray, shift: np.ndarray | None = None, extra: Sequence[Term] = ()
+        self,
+        x: np.ndarray,
+        shift: np.ndarray | None = None,
+        extra: Sequence[Term] = (),
+        skip: Sequence[Term] = (),
     ) -> np.ndarray:
         """Fills and returns the CSR data of the Hessian of the terms (and of ``extra``
-        terms, such as a time step's inertia) plus diag(shift) on the free DOFs.
+        terms, such as a time step's inertia) plus diag(shift) on the free DOFs, without
+        the ``skip`` terms.
         Afterwards ``convex`` says whether only convex terms contributed (a non-convex
         obstacle out of reach writes nothing): then the matrix is positive semidefinite
         and the linear solver may use Cholesky for it."""
@@ -288,6 +293,8 @@ class System:
         data.fill(0.0)
         definite = True  # every term that wrote values is convex (see ``convex``)
         for term in (*self.terms, *extra):
+            if skip and any(term is t for t in skip):
+                continue
             target = self.target(term)
             if not target.size:
                 continue

@@ -334,10 +334,13 @@ def _frequencies(scene, ws, result, count: int) -> dict:
     gives the row an error; the other measures stay."""
     import numpy as np
 
+    from catenet.run.modes import added_line
     from catenet.solver.modes import natural_modes
 
-    count = min(count, ws.system.n_free)
-    found = natural_modes(ws, result.x, count, cables=getattr(scene, "cables", None))
+    count = min(count, ws.system.n_free - 6 * len(getattr(scene, "rigid", ())))
+    added = added_line(scene.case, scene)  # material.added_mass, if any
+    cables = getattr(scene, "cables", None)
+    found = natural_modes(ws, result.x, count, cables=cables, added=added)
     f = np.full(count, np.nan)
     f[: found.count] = found.frequency
     return {f"f{k + 1}": float(f[k]) for k in range(count)}

@@ -1,0 +1,270 @@
+"""Several free rigid bodies in one case, and free bodies beside fixed obstacles and
+balls (catenet.case.rigid, catenet.case.clearance): two bodies dropped into one net
+come to rest at the static equilibrium with both; two bodies and a free net in zero
+gravity keep their momentum; a box lands on the ground (a plane's barrier on its
+corners: finite-difference checks, reaction = weight); a run stops (exit 1, the steps
+before kept) at the step where a body meets another body or a fixed ball, exactly for
+two spheres (over the path between two steps, not only at its ends), conservatively
+otherwise; bodies that start overlapping are refused (exit 2)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from catenet.case import build, dumps_toml, parse_case
+from catenet.case.clearance import BodiesMeet
+from catenet.cli import main
+from catenet.errors import ConfigError
+from catenet.solver.path import Settings, solve
+from catenet.terms import check_derivatives
+from catenet.terms.body_plane import BodyPlane
+from catenet.terms.rigid_contact import BodyContact
+
+
+def two_bowls(**solver) -> dict:
+    """A 1 x 0.5 m grid net (0.1 m cells) pinned on its edge and along its middle line:
+    two bowls of 5 x 5 cells; a 3 kg sphere body (density: it has six DOFs) over the
+    middle of each, the centre of a cell: it rests cradled by that cell's four nodes
+    (over a node it would balance on it, unstable)."""
+    nx, ny, h = 11, 6, 0.1
+    nodes = [[i * h - 0.5, j * h - 0.25, 0.0] for j in range(ny) for i in range(nx)]
+    edges = [[j * nx + i, j * nx + i + 1] for j in range(ny) for i in range(nx - 1)]
+    edges += [[j * nx + i, (j + 1) * nx + i] for j in range(ny - 1) for i in range(nx)]
+    fixed = [j * nx + i for j in range(ny) for i in range(nx) if i in (0, 5, 10) or j in (0, 5)]
+    r = 0.08
+    density = 3.0 / (4 / 3 * math.pi * r**3)
+    spheres = [
+        {"kind": "sphere", "center": [x, 0.0, r + 0.004], "radius": r, "density": density,
+         "distance": 0.005}
+        for x in (-0.25, 0.25)
+    ]  # fmt: skip
+    return {
+        "geometry": {"kind": "graph", "nodes": nodes, "edges": edges, "fixed": fixed},
+        "material": {"E": 2e8, "radius": 0.002, "density": 1000.0, "prestress": 50.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": spheres,
+        "solver": solver,
+    }
+
+
+def test_two_bodies_in_one_net_rest_at_the_static_equilibrium_with_both():
+    static = build(parse_case(two_bowls(method="static")))
+    rs = solve(static, Settings.of(static.case.solver))
+    assert rs.converged and len(static.rigid) == 2
+    for body in static.rigid:  # each sank into its bowl, under it
+        c, _ = body.frame.pose(rs.x)
+        assert c[2] < body.center[2] - 0.004
+    load = static.loads.external_force(static.net).sum(axis=0)
+    assert np.abs(rs.reaction.sum(axis=0) + load).max() < 1e-8 * np.abs(load).max()
+    dynamic = build(parse_case(two_bowls(method="dynamic", dt=0.02, damping=10.0, t_end=12.0)))
+    rd = solve(dynamic, Settings.of(dynamic.case.solver))
+    assert rd.converged and rd.equilibrium
+    for a, b in zip(static.rigid, dynamic.rigid, strict=True):
+        assert np.abs(a.frame.pose(rs.x)[0] - b.frame.pose(rd.x)[0]).max() < 1e-6
+    net = static.net.n_net
+    assert np.abs(rd.x[:net] - rs.x[:net]).max() < 1e-6
+
+
+def test_two_bodies_and_a_free_net_keep_their_momentum():
+    """No supports, no gravity, no damping: a 4 x 4 net thrown down between two boxes
+    that fly at it from below, one turning: the total linear momentum of net and bodies
+    stays what it was to the solver's tolerance at every step, though both bodies touch
+    the net (each exchanges momentum with it through the barrier only)."""
+    n = 4
+    g = np.linspace(-0.3, 0.3, n)
+    nodes = [[float(x), float(y), 0.2] for y in g for x in g]
+    edges = [[j * n + i, j * n + i + 1] for j in range(n) for i in range(n - 1)]
+    edges += [[j * n + i, (j + 1) * n + i] for j in range(n - 1) for i in range(n)]
+    boxes = [
+        {"kind": "box", "center": [x, 0.0, 0.0], "half_size": [0.08, 0.15, 0.08], "mass": 2.0,
+         "velocity": [0.0, 0.0, 1.5], "angular_velocity": [0.0, w, 0.0], "distance": 0.005}
+        for x, w in ((-0.3, 0.5), (0.3, 0.0))
+    ]  # fmt: skip
+    case = {
+        "geometry": {"kind": "graph", "nodes": nodes, "edges": edges},
+        "material": {"E": 2e9, "radius": 0.001, "density": 1000.0, "tension_only": False},
+        "mass": [{"node": i, "mass": 0.05, "velocity": [0.0, 0.0, -1.0]} for i in range(n * n)],
+        "obstacle": boxes,
+        "solver": {"method": "dynamic", "dt": 0.005, "damping": 0.0, "t_end": 0.12},
+    }
+    scene = build(parse_case(case))
+    m = scene.net.mass[:, None]
+    p0 = (m * scene.velocity).sum(axis=0)
+    gaps, drift = [], []
+    contacts = [t for t in scene.terms if isinstance(t, BodyContact)]
+
+    def on_step(s):
+        drift.append(float(np.abs((m * s.v).sum(axis=0) - p0).max()))
+        gaps.append([float(t.gap(s.x).min()) for t in contacts])
+
+    r = solve(scene, Settings.of(scene.case.solver), on_step=on_step)
+    assert r.converged
+    assert np.all(np.min(gaps, axis=0) < 0.005)  # both boxes reach the net
+    scale = float(np.abs(m * scene.velocity).sum())
+    assert max(drift) < 1e-6 * scale
+
+
+def run_cli(tmp_path, case: dict, name: str):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(dumps_toml(case))
+    out = tmp_path / f"{name}.h5"
+    return CliRunner().invoke(main, ["run", str(path), "-o", str(out)]), out
+
+
+def ground_case(x: float, **solver) -> dict:
+    """A pinned net (1 m) above the ground at z = -0.15, a 40 kg box thrown down at
+    3 m/s from its bottom at z = 0.25, at x (beside the net when x > 0.75)."""
+    return {
+        "geometry": {
+            "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
+            "edge_length": 0.05,
+        },
+        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [
+            {"kind": "plane", "point": [0.0, 0.0, -0.15], "normal": [0.0, 0.0, 1.0],
+             "distance": 0.002},
+            {"kind": "box", "center": [x, 0.0, 0.3], "half_size": [0.15, 0.15, 0.05],
+             "mass": 40.0, "velocity": [0.0, 0.0, -3.0], "distance": 0.005},
+        ],
+        "solver": {"method": "dynamic", "dt": 0.01, "damping": 0.0, "t_end": 0.3, **solver},
+    }  # fmt: skip
+
+
+def test_a_box_beside_the_net_lands_on_the_ground_and_rests_there():
+    """Beside the net the box falls freely onto the ground (a plane: the barrier acts on
+    its corners, ``catenet.terms.body_plane``): no corner ever below the ground; with
+    damping it comes to rest level on it (its speed below 1e-9 m/s), its four lower
+    corners within the barrier's reach, and the ground's reaction (their barrier
+    forces) is the box's weight."""
+    case = ground_case(1.2, damping=20.0, t_end=3.0, dt=0.02)
+    scene = build(parse_case(case))
+    plane = next(t for t in scene.terms if isinstance(t, BodyPlane))
+    low = []
+
+    def seen(step):
+        low.append(plane.gap(step.x).min())
+
+    r = solve(scene, Settings.of(scene.case.solver), on_step=seen)
+    assert r.converged and np.abs(r.v).max() < 1e-9  # at rest
+    assert min(low) > 0.0
+    gaps = np.sort(plane.gap(r.x))
+    assert np.all(gaps[:4] < 0.002) and np.all(gaps[4:] > 0.09)  # level, on four corners
+    grad = np.zeros_like(r.x)
+    plane.gradient(r.x, grad)
+    reaction = -grad[scene.rigid[0].frame.nodes].sum(axis=0)
+    assert np.allclose(reaction, [0.0, 0.0, 40.0 * 9.81], rtol=1e-6, atol=1e-6)
+    _, R = scene.rigid[0].frame.pose(r.x)
+    assert np.abs(R - np.eye(3)).max() < 1e-6
+    over = build(parse_case(ground_case(0.0)))  # over the net: caught by it
+    assert solve(over, Settings.of(over.case.solver)).converged
+
+
+def test_body_plane_derivatives_and_step_cap():
+    """Gradient and Hessian of the body-plane barrier against finite differences, at a
+    turned, slightly strained box with three corners within reach; the step cap is the
+    first time a corner would reach the plane along a step."""
+    case = ground_case(1.2)
+    case["obstacle"][1].update(center=[1.2, 0.0, -0.085], axis=[1.0, 1.0, 0.0], angle=0.05)
+    case["obstacle"][0]["distance"] = 0.05
+    scene = build(parse_case(case))
+    plane = next(t for t in scene.terms if isinstance(t, BodyPlane))
+    x = scene.net.nodes.copy()
+    nodes = scene.rigid[0].frame.nodes
+    x[nodes] += 1e-4 * np.random.default_rng(3).standard_normal((4, 3))
+    assert np.count_nonzero(plane.gap(x) < 0.05) >= 3
+    grad_err, hess_err = check_derivatives(plane, x, step=1e-7)
+    assert grad_err < 1e-6 and hess_err < 1e-6
+    dx = np.zeros_like(x)
+    dx[nodes] = [0.0, 0.0, -1.0]  # the body sinks: its lowest corner first
+    t = plane.max_step(x, dx)
+    assert t == pytest.approx(plane.gap(x).min(), rel=1e-12)
+    assert plane.max_step(x, -dx) == math.inf
+
+
+def spheres_case(offset: float, dt: float) -> dict:
+    """Two sphere bodies (r = 0.05) flying at each other at 1 m/s each, 0.4 m apart
+    centre to centre, their lines ``offset`` apart across; a pinned cable far away."""
+    spheres = [
+        {"kind": "sphere", "center": [s * 0.2, s * offset / 2, 1.0], "radius": 0.05,
+         "density": 2000.0, "velocity": [-s * 1.0, 0.0, 0.0]}
+        for s in (-1.0, 1.0)
+    ]  # fmt: skip
+    return {
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [1, 0, 0], "nodes": 5},
+        "material": {"E": 1e9, "radius": 0.001, "density": 1000.0, "prestress": 10.0},
+        "obstacle": spheres,
+        "solver": {"method": "dynamic", "dt": dt, "damping": 0.0, "t_end": 0.5},
+    }
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.3])
+def test_two_spheres_that_meet_stop_the_run_at_that_step(tmp_path, dt):
+    """They touch when their centres are 0.1 apart: at t = 0.15. With dt = 0.01 the run
+    stops at the step where they overlap; with dt = 0.3 they would be through each other
+    after one step (0.2 past), and the check over the centres' path between the steps
+    still stops it there. 0.12 apart across, they pass: the run goes to its end."""
+    res, out = run_cli(tmp_path, spheres_case(0.0, dt), "meet")
+    assert res.exit_code == 1, res.output
+    assert "obstacle[0] (a free sphere) meets obstacle[1] (a free sphere)" in res.output
+    when = float(res.output.split("at t = ")[1].split(" s")[0])
+    assert 0.15 <= when < 0.15 + dt + 1e-9
+    scene = build(parse_case(spheres_case(0.12, dt)))
+    assert solve(scene, Settings.of(scene.case.solver)).converged
+
+
+def test_a_static_run_stops_where_a_body_meets_a_fixed_sphere():
+    """A static run: a 10 kg box on a net that 800 N at its centre push up towards a
+    fixed ball above it: the equilibrium of net and box has the box's bounding sphere
+    through the ball (the net's nodes stay below): BodiesMeet, conservative, the start
+    kept as the last good state."""
+    case = {
+        "geometry": {
+            "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
+            "edge_length": 0.05,
+        },
+        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
+        "load": {
+            "gravity": [0.0, 0.0, -9.81],
+            "point": [{"node": "center", "force": [0.0, 0.0, 800.0]}],
+        },
+        "obstacle": [
+            {"kind": "sphere", "center": [0.0, 0.0, 0.4], "radius": 0.1},
+            {"kind": "box", "center": [0.0, 0.0, 0.052], "half_size": [0.15, 0.15, 0.05],
+             "mass": 10.0, "distance": 0.005},
+        ],
+        "solver": {"method": "static"},
+    }  # fmt: skip
+    scene = build(parse_case(case))
+    match = r"at load factor 1: obstacle\[1\] \(a free box\) meets obstacle\[0\] \(sphere\)"
+    with pytest.raises(BodiesMeet, match=match + r" \(their bounding spheres") as e:
+        solve(scene, Settings.of(scene.case.solver))
+    assert e.value.last_good.time == 0.0
+
+
+def test_bodies_that_start_overlapping_are_refused():
+    case = spheres_case(0.0, 0.01)
+    case["obstacle"][1]["center"] = [-0.15, 0.0, 1.0]
+    with pytest.raises(
+        ConfigError,
+        match=r"obstacle\[0\] \(a free sphere\): it meets obstacle\[1\] .* at the start",
+    ):
+        build(parse_case(case))
+    case = ground_case(1.2)
+    case["obstacle"][1]["center"] = [1.2, 0.0, -0.12]
+    with pytest.raises(ConfigError, match=r"obstacle\[1\] \(a free box\): its point .* starts in"):
+        build(parse_case(case))
+
+
+def test_a_free_body_beside_a_moving_box_is_refused():
+    case = ground_case(1.2)
+    case["obstacle"][0] = {
+        "kind": "box", "center": [0.0, 0.0, -0.5], "half_size": [0.1, 0.1, 0.1],
+        "velocity": [0.0, 0.0, 0.1],
+    }  # fmt: skip
+    with pytest.raises(ConfigError, match=r"obstacle\[0\] \(kind 'box'\): an obstacle on a"):
+        build(parse_case(case))
