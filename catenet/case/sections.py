@@ -359,10 +359,9 @@ def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:
         except ConfigError as exc:
             ck.problems.extend(exc.problems)
     if v["self_contact"] is True and v["method"] == "static":
-        ck.bad(
-            "solver.self_contact",
-            True,
-            'is for dynamic runs: set solver.method = "dynamic" (or self_contact = false)',
+        ck.add(
+            "solver.self_contact = true: is for dynamic runs: set solver.method = "
+            '"dynamic" (or self_contact = false)'
         )
         return BAD
     if BAD in v.values():

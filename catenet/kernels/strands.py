@@ -213,6 +213,8 @@ def pair_energy(P, eps, dhat2, kappa, g, H, want):
     D = sqdist(P, 0, gd, Hd, want)
     if D >= dhat2:
         return 0.0
+    if D <= 0.0:
+        return np.inf  # touching (m b would be 0 inf for parallel edges)
     ge = np.empty(12)
     He = np.empty((12, 12))
     m, dm, ddm = mollifier(parallelism(P, ge, He, want), eps)

@@ -69,7 +69,11 @@ class System:
 
     # --- pattern -----------------------------------------------------------------------
     def _build(self) -> None:
-        """The pattern: every term's entries on free DOFs, and the diagonal."""
+        """The pattern: every term's entries on free DOFs, and the diagonal (a grown
+        term's entries too: it has not grown since)."""
+        for term in self.terms:
+            if term.grows:
+                term.grew = False
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
         if self._entry_count() <= SMALL_PATTERN:
             found = self._unique_pattern()
@@ -86,11 +90,8 @@ class System:
         """Rebuilds the pattern in place if a term's grew since it was built (``grows``
         terms: self-contact's new candidate pairs); whether it did. Nothing happens (and
         nothing is computed) otherwise."""
-        grown = [t for t in self.terms if t.grows and t.grew]
-        if not grown:
+        if not any(t.grows and t.grew for t in self.terms):
             return False
-        for term in grown:
-            term.grew = False
         start = time.perf_counter()
         self._build()
         self.seconds += time.perf_counter() - start
