@@ -210,9 +210,11 @@ def pair_energy(P, eps, dhat2, kappa, g, H, want):
         H[:, :] = 0.0
     gd = np.empty(12)
     Hd = np.empty((12, 12))
-    D = sqdist(P, 0, gd, Hd, want)
+    D = sqdist(P, 0, gd, Hd, False)
     if D >= dhat2:
-        return 0.0
+        return 0.0  # out of reach: no Hessian to compute
+    if want:
+        sqdist(P, 0, gd, Hd, True)
     if D <= 0.0:
         return np.inf  # touching (m b would be 0 inf for parallel edges)
     ge = np.empty(12)
@@ -479,9 +481,10 @@ def accd(P, dP, t_max):
 
 @njit(cache=True, error_model="numpy")
 def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max):
-    """The largest multiple t (at most t_max: longer steps are never checked) of the step dx
-    from x that keeps (1) every node's motion from ``base`` relative to the mean motion
-    of ``nodes`` within its ``radius`` and (2) every candidate pair apart (``accd``)."""
+    """(t, t1): the largest multiple t (at most t_max: longer steps are never checked)
+    of the step dx from x that keeps (1) every node's motion from ``base`` relative to
+    the mean motion of ``nodes`` within its ``radius`` and (2) every candidate pair apart
+    (``accd``); t1 the limit of (1) alone."""
     k = nodes.shape[0]
     m0, m1 = np.zeros(3), np.zeros(3)
     for j in range(k):
@@ -501,12 +504,13 @@ def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max):
             zz += z * z
         c = ww - radius[n] * radius[n]
         if c >= 0.0:
-            return 0.0
+            return 0.0, 0.0
         if zz > 0.0:
             t = min(t, (-wz + np.sqrt(wz * wz - zz * c)) / zz)
+    moved = t
     P, dP = np.empty(12), np.empty(12)
     for p in range(pairs.shape[0]):
         _gather(x, edges, pairs[p, 0], pairs[p, 1], P)
         _gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
         t = min(t, accd(P, dP, t))
-    return t
+    return t, moved

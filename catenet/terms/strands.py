@@ -20,8 +20,8 @@ distance, and every Newton line search (and the predictor of a time step) is cap
 
 The radii follow the motion: a node's radius is ``reach`` (a tenth of the shortest
 edge, at least dhat) plus twice its relative motion in the last step; a step that is
-tried again (it failed) doubles them. The cost grows with the close pairs, not with the
-square of the edges.
+tried again (it failed) after they held a Newton step back doubles them. The cost grows
+with the close pairs, not with the square of the edges.
 
 The Hessian's sparsity pattern holds the 12x12 blocks of every pair that was ever a
 candidate: when a step's candidates include new pairs, the pattern grows (``grows``,
@@ -87,6 +87,7 @@ class SelfContact(Term):
         self.slots = np.zeros(0, dtype=np.int64)
         self.base: np.ndarray | None = None  # the positions the candidates were found at
         self.grew = False
+        self.held = False  # a step of this time step was cut short by the radii
         self._gather(net.nodes if x is None else np.asarray(x, dtype=np.float64))
         self.base = None
 
@@ -96,11 +97,13 @@ class SelfContact(Term):
         when the same step is tried again)."""
         if self.base is not None:
             if np.array_equal(x, self.base):
-                self.radius[self.nodes] *= 2.0  # the step failed: wider
+                if self.held:  # the step failed where the radii held it back: wider
+                    self.radius[self.nodes] *= 2.0
             else:
                 moved = x[self.nodes] - self.base[self.nodes]
                 moved -= moved.mean(axis=0)
                 self.radius[self.nodes] = self.reach + 2.0 * np.linalg.norm(moved, axis=1)
+        self.held = False
         self._gather(x)
 
     def _gather(self, x: np.ndarray) -> None:
@@ -144,7 +147,9 @@ class SelfContact(Term):
     def max_step(self, x, dx) -> float:
         base = x if self.base is None else self.base
         args = (x, dx, base, self.nodes, self.radius, self.edges, self.pairs, STEP_CHECKED)
-        return strand_max_step(*args)
+        t, moved = strand_max_step(*args)
+        self.held = self.held or moved < 1.0
+        return t
 
     def distances(self, x: np.ndarray) -> np.ndarray:
         """The distance of every candidate pair at x [m] (the gap the barrier keeps)."""
