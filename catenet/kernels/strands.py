@@ -353,7 +353,8 @@ def _cells(lo, hi, origin, cell, dims):
 
 @njit(cache=True)
 def _entries(span, dims):
-    """(cell key, edge) of every cell every box covers, sorted by key."""
+    """(cell key, edge) of every cell every box covers, sorted by key (by counting where
+    the grid is dense, as a net's is)."""
     m = span.shape[0]
     count = 0
     for e in range(m):
@@ -372,8 +373,21 @@ def _entries(span, dims):
                     keys[k] = (cx * dims[1] + cy) * dims[2] + cz
                     ids[k] = e
                     k += 1
-    order = np.argsort(keys, kind="mergesort")
-    return keys[order], ids[order]
+    cells = dims[0] * dims[1] * dims[2]
+    if cells > 4 * count + 1024:  # a sparse grid: sort the keys
+        order = np.argsort(keys, kind="mergesort")
+        return keys[order], ids[order]
+    start = np.zeros(cells + 1, dtype=np.int64)  # else by counting, in linear time
+    for k in range(count):
+        start[keys[k] + 1] += 1
+    for c in range(cells):
+        start[c + 1] += start[c]
+    out_keys, out_ids = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+    for k in range(count):
+        p = start[keys[k]]
+        out_keys[p], out_ids[p] = keys[k], ids[k]
+        start[keys[k]] = p + 1
+    return out_keys, out_ids
 
 
 @njit(cache=True, error_model="numpy")

@@ -25,9 +25,9 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``moving`` (with ``set_pose(t)``): an obstacle on a prescribed motion.
 - ``stages``: wider copies of an obstacle a static solve goes through first;
   ``rides_on``: the obstacle whose barrier a term rides on (friction's normal force).
-- ``grows`` (with ``grew``): a term whose pattern may gain entries at ``begin_step``
-  (the candidate pairs of self-contact); it sets ``grew`` then, and the time stepping
-  rebuilds the system with the grown pattern (``Workspace.refresh``), which clears it.
+- ``grows`` (with ``grew``): a term whose pattern may change at ``begin_step`` (the
+  candidate pairs of self-contact); it sets ``grew`` then, and the time stepping
+  rebuilds the system with the new pattern (``Workspace.refresh``), which clears it.
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.

@@ -23,10 +23,12 @@ edge, at least dhat) plus twice its relative motion in the last step; a step tha
 tried again (it failed) after they held a Newton step back doubles them. The cost grows
 with the close pairs, not with the square of the edges.
 
-The Hessian's sparsity pattern holds the 12x12 blocks of every pair that was ever a
-candidate: when a step's candidates include new pairs, the pattern grows (``grows``,
+The Hessian's sparsity pattern holds the 12x12 blocks of the pairs that were
+candidates: when a step's candidates include new pairs, the pattern grows (``grows``,
 ``grew``) and the time stepping rebuilds the system and the linear solver's analysis
-(``catenet.solver.workspace.Workspace.refresh``); otherwise nothing is rebuilt. So the
+(``catenet.solver.workspace.Workspace.refresh``); otherwise nothing is rebuilt. Past
+pairs stay in it (no rebuild when they come back) until they outnumber PATTERN_SLACK
+times the candidates: then the pattern starts anew from the candidates. So the
 term is for dynamic runs: a static solve refuses it (``catenet.case.sections``).
 """
 
@@ -50,6 +52,8 @@ from catenet.terms.base import Term, register
 STEP_CHECKED = 4.0
 #: A node's smallest radius, relative to the shortest edge (at least dhat).
 REACH_SHARE = 0.1
+#: The pattern keeps past pairs until they outnumber this many times the candidates.
+PATTERN_SLACK = 4
 
 
 def default_strand_stiffness(force: float, dhat: float) -> float:
@@ -109,6 +113,10 @@ class SelfContact(Term):
     def _gather(self, x: np.ndarray) -> None:
         edge_radius = np.maximum(self.radius[self.edges[:, 0]], self.radius[self.edges[:, 1]])
         pairs = candidates(x, self.edges, edge_radius, self.dhat)
+        if len(self.known) > PATTERN_SLACK * max(len(pairs), 32):  # mostly stale: start anew
+            self.known = np.zeros((0, 2), dtype=np.int64)
+            self._slot = {}
+            self.grew = True  # changed: the system is rebuilt all the same
         slots = np.empty(len(pairs), dtype=np.int64)
         new = []
         for k, (a, b) in enumerate(pairs.tolist()):
@@ -151,11 +159,15 @@ class SelfContact(Term):
         self.held = self.held or moved < 1.0
         return t
 
-    def distances(self, x: np.ndarray) -> np.ndarray:
-        """The distance of every candidate pair at x [m] (the gap the barrier keeps)."""
-        out = np.empty(len(self.pairs))
-        g, h, p = np.empty(12), np.empty((12, 12)), np.empty(12)
-        for k, (a, b) in enumerate(self.pairs.tolist()):
-            p[:] = x[[*self.edges[a], *self.edges[b]]].ravel()
+    def distances(self, x: np.ndarray, reach: float | None = None) -> np.ndarray:
+        """The distances [m] of the strands closer than ``reach`` (default: dhat) at x
+        (N, 3), pairs of edges that share no node, ascending (found by the grid)."""
+        reach = self.dhat if reach is None else float(reach)
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        pairs = candidates(x, self.edges, np.zeros(len(self.edges)), reach)
+        out = np.empty(len(pairs))
+        g, h = np.empty(12), np.empty((12, 12))
+        for k, (a, b) in enumerate(pairs.tolist()):
+            p = x[[*self.edges[a], *self.edges[b]]].ravel()
             out[k] = math.sqrt(sqdist(p, 0, g, h, False))
-        return out
+        return np.sort(out)
