@@ -34,21 +34,22 @@ CONTACT = Path(__file__).parents[1] / "configs" / "contact"
 
 
 def solve_time(case: Path, changes: list[str], repeat: int) -> tuple[float, int, object]:
-    """Median solve seconds (a fresh scene and workspace per run, after a warm-up), the
-    Newton iterations and the last result."""
+    """Median solve seconds of this process's CPU (a fresh scene and workspace per run,
+    after a warm-up; CPU time, not wall time: the machine may be shared), the Newton
+    iterations and the last result."""
     times, res = [], None
     for k in range(repeat + 1):
         scene = build(load_case(case, changes))
         settings = sv.Settings.of(scene.case.solver)
-        start = time.perf_counter()
+        start = time.process_time()
         res = sv.solve(scene, settings)
         if k:
-            times.append(time.perf_counter() - start)
+            times.append(time.process_time() - start)
     return statistics.median(times), res.iterations, res
 
 
 def wrapped(repeat: int, quick: bool) -> None:
-    print("1. wrapped nets: self_contact on against off (solve seconds, median)")
+    print("1. wrapped nets: self_contact on against off (solve CPU seconds, median)")
     print(f"{'case':34s} {'off s':>8s} {'on s':>8s} {'ratio':>6s} {'iter off':>9s} {'iter on':>8s}")
     runs = [("folded_net.toml", [])]
     if not quick:

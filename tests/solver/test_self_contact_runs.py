@@ -75,6 +75,19 @@ def test_the_folded_net_never_passes_through_itself_at_small_steps():
     assert strand_crossings(frames, net.edges) == []
 
 
+def test_the_folded_net_example_lands_on_itself_and_through_itself_without(tmp_path):
+    case = CONFIGS / "folded_net.toml"
+    crossings = {}
+    for on in ("true", "false"):
+        out = tmp_path / f"{on}.h5"
+        args = ["run", str(case), "-o", str(out), "--set", "solver.t_end=0.3"]
+        res = CliRunner().invoke(main, [*args, "--set", f"solver.self_contact={on}"])
+        assert res.exit_code == 0, res.output
+        with h5py.File(out) as f:
+            crossings[on] = strand_crossings(f["trajectory/x"][()], f["mesh/edges"][()])
+    assert crossings["true"] == [] and len(crossings["false"]) > 20
+
+
 def test_the_capture_scene_with_self_contact_stays_penetration_free(tmp_path):
     case = CONFIGS / "envisat_capture.toml"
     out = tmp_path / "capture.h5"
