@@ -25,6 +25,7 @@ from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
 from catenet.model.net import Loads, Net
+from catenet.terms.strands import SelfContact, default_strand_stiffness
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,8 +91,10 @@ def _build(case: Case) -> Scene:
     )
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     terms += rigid_terms
+    if getattr(case.solver, "self_contact", False):
+        terms += (self_contact(case.solver, net, loads),)
     watch = Clearance(case, rigid, bodies) if rigid else None
-    if watch:
+    if watch:  # something to watch
         watch.start(net.nodes)
     else:
         watch = None
@@ -113,6 +116,25 @@ def _build(case: Case) -> Scene:
         probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
         cases=_load_cases(case, net, built),
     )
+
+
+#: The default activation distance of self-contact, per shortest edge.
+STRAND_DISTANCE_SHARE = 1e-2
+
+
+def self_contact(solver, net: Net, loads: Loads) -> SelfContact:
+    """The barrier between the net's strands (``solver.self_contact``): activation
+    distance ``solver.self_contact_distance``, else STRAND_DISTANCE_SHARE of the shortest
+    edge; stiffness such that two strands dhat/2 apart push each other with a node's
+    mean share of the loads (without loads: the force that strains an average edge by
+    dhat / l0)."""
+    edges = net.rest_length
+    dhat = solver.self_contact_distance or STRAND_DISTANCE_SHARE * float(edges.min())
+    force = loads.external_force(net)[np.unique(net.edges)]
+    load = float(np.mean(np.linalg.norm(force, axis=1)))
+    if not load > 0.0:
+        load = float(np.mean(net.EA / edges)) * dhat
+    return SelfContact(net, kappa=default_strand_stiffness(load, dhat), dhat=dhat)
 
 
 @dataclass(frozen=True, eq=False)

@@ -347,6 +347,21 @@ class SolverConfig(Declared):
         "repeats the uninterrupted run only to rtol)",
     )
     rtol: float = real(Settings.rtol, gt=0, lt=1, doc="Newton tolerance")
+    self_contact: bool = boolean(
+        False,
+        write="changed",
+        doc="dynamic: the net never passes through itself (a barrier between strands that "
+        "share no node; docs/guide/self-contact.md)",
+    )
+    self_contact_distance: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="m",
+        shown="1e-2 x the shortest edge",
+        doc="self_contact: the barrier's activation distance: strands touching rest closer "
+        "than this, and no farther pair feels the other",
+    )
     linear: str = choice(
         Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
     )
@@ -370,6 +385,12 @@ def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:
             resolve_backend("pardiso")
         except ConfigError as exc:
             ck.problems.extend(exc.problems)
+    if v["self_contact"] is True and v["method"] == "static":
+        ck.add(
+            "solver.self_contact = true: is for dynamic runs: set solver.method = "
+            '"dynamic" (or self_contact = false)'
+        )
+        return BAD
     if BAD in v.values():
         return BAD
     return SolverConfig(**v)

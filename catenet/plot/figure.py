@@ -309,9 +309,7 @@ class _Drawn:
         lo, hi = _limits(seg_ref, seg_def, *balls.extent())
         lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
         slack = slack_edges(res)
-        return cls(
-            nodes, x, mesh.fixed, seg_ref, seg_def, colours, slack, balls, obstacles, lo, hi
-        )
+        return cls(nodes, x, mesh.fixed, seg_ref, seg_def, colours, slack, balls, obstacles, lo, hi)
 
     def deformed(self, lines) -> None:
         """Colours the deformed edges by tension (one colour without tensions)."""

@@ -162,6 +162,7 @@ class TimeStepper:
 
     def __init__(self, net, loads, ws, scheme, damping, *, rtol, max_iter, reuse):
         self.net, self.loads, self.scheme = net, loads, scheme
+        self.ws = ws
         self.system = ws.system
         self.free = self.system.free_dofs
         self.m_free, self.damping = _mass_and_damping(net, damping)
@@ -255,6 +256,8 @@ class TimeStepper:
         if loads.varies:  # loads with a time history act with their value at t + h
             potential.set_force(loads.external_force(net, time=t + h_step))
         potential.begin_step(x, t + h_step, t)
+        if self.ws.refresh(potential) and self.kept is not None:
+            self.kept.drop()  # the pattern grew (self-contact): a new matrix
         try:  # nodes a moving obstacle may reach ride with it (catenet/terms/moving.py)
             base = carry(potential, x, x_trial, t, t + h_step, net.fixed)
         except ConvergenceError as exc:

@@ -96,6 +96,11 @@ def solve(
     start = start or Start()
     if peaks is None:
         peaks = Peaks(scene.net.nodes, scene.net.n_edges)
+    if settings.method != "dynamic" and any(t.grows for t in ws.system.terms):
+        raise ConfigError(
+            "solver.self_contact = true: is for dynamic runs: set solver.method = "
+            '"dynamic" (or self_contact = false)'
+        )
     if settings.method == "dynamic":
         result = _dynamic(scene, settings, ws, start, on_step, peaks)
     else:

@@ -61,7 +61,19 @@ class System:
         self._reduced = np.full(3 * n, -1, dtype=np.int64)
         self._reduced[self.free_dofs] = np.arange(self.n_free)
 
-        # The pattern: every term's entries on free DOFs, and the diagonal.
+        self._build()
+        self._grad = np.zeros((n, 3))
+        self._energies = [0.0] * len(self.terms)
+        self.seconds = 0.0  # spent filling gradients and Hessians
+        self.convex = all(t.convex for t in self.terms)  # of the last ``hessian`` (see there)
+
+    # --- pattern -----------------------------------------------------------------------
+    def _build(self) -> None:
+        """The pattern: every term's entries on free DOFs, and the diagonal (a grown
+        term's entries too: it has not grown since)."""
+        for term in self.terms:
+            if term.grows:
+                term.grew = False
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
         if self._entry_count() <= SMALL_PATTERN:
             found = self._unique_pattern()
@@ -71,15 +83,20 @@ class System:
         self.nnz = int(self.indices.size)
         for term, target in zip(self.terms, targets, strict=True):
             self._remember(term, target)
-
         self._values: dict[int, np.ndarray] = {}
-        self._grad = np.zeros((n, 3))
-        self._energies = [0.0] * len(self.terms)
         self.data = np.zeros(self.nnz)
-        self.seconds = 0.0  # spent filling gradients and Hessians
-        self.convex = all(t.convex for t in self.terms)  # of the last ``hessian`` (see there)
 
-    # --- pattern -----------------------------------------------------------------------
+    def refresh(self) -> bool:
+        """Rebuilds the pattern in place if a term's grew since it was built (``grows``
+        terms: self-contact's new candidate pairs); whether it did. Nothing happens (and
+        nothing is computed) otherwise."""
+        if not any(t.grows and t.grew for t in self.terms):
+            return False
+        start = time.perf_counter()
+        self._build()
+        self.seconds += time.perf_counter() - start
+        return True
+
     def _block_pattern(self) -> tuple | None:
         """The pattern at node level (catenet.kernels.pattern.block_pattern): the edges'
         node adjacency as 3x3 blocks, when every free node has an edge and the other

@@ -38,16 +38,36 @@ class Workspace:
         self.net = net
         start = time.perf_counter()
         self.system = System(net, all_terms, upper=upper)
-        dof_node = np.flatnonzero(~net.fixed).repeat(3)
-        self.solver: LinearSolver = make_solver(
-            linear,
-            self.system.indptr,
-            self.system.indices,
-            upper=upper,
-            dof_node=dof_node,
-            mtype=mtype,
-        )
+        self._linear = (linear, upper, np.flatnonzero(~net.fixed).repeat(3), mtype)
+        self.solver: LinearSolver = self._make_solver()
         self.setup_seconds = time.perf_counter() - start
+
+    def _make_solver(self) -> LinearSolver:
+        linear, upper, dof_node, mtype = self._linear
+        system = self.system
+        return make_solver(
+            linear, system.indptr, system.indices, upper=upper, dof_node=dof_node, mtype=mtype
+        )
+
+    def refresh(self, *potentials: Potential) -> bool:
+        """After a time step's ``begin_step``: when a term's pattern grew (``Term.grows``:
+        self-contact's new candidate pairs), rebuilds the system's pattern and the linear
+        solver (a new symbolic analysis), and points the ``potentials`` at the new
+        solver; whether it did. The solver's counts and times go on from the old one's."""
+        if not self.system.refresh():
+            return False
+        old = self.solver
+        start = time.perf_counter()
+        self.solver = self._make_solver()
+        self.setup_seconds += time.perf_counter() - start
+        for name, count in old.stats.items():
+            self.solver.stats[name] = self.solver.stats.get(name, 0) + count
+        for name, seconds in old.seconds.items():
+            self.solver.seconds[name] = self.solver.seconds.get(name, 0.0) + seconds
+        old.release()
+        for potential in potentials:
+            potential.solver = self.solver
+        return True
 
     def potential(self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()) -> Potential:
         """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""

@@ -25,6 +25,9 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``moving`` (with ``set_pose(t)``): an obstacle on a prescribed motion.
 - ``stages``: wider copies of an obstacle a static solve goes through first;
   ``rides_on``: the obstacle whose barrier a term rides on (friction's normal force).
+- ``grows`` (with ``grew``): a term whose pattern may change at ``begin_step`` (the
+  candidate pairs of self-contact); it sets ``grew`` then, and the time stepping
+  rebuilds the system with the new pattern (``Workspace.refresh``), which clears it.
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
@@ -81,6 +84,8 @@ class Term:
     bounds_step = False  # has max_step(x, dx)
     lagged = False  # has relag(x)
     moving = False  # has set_pose(t)
+    grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
+    grew = False
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
@@ -126,7 +131,7 @@ class Term:
         step (``time``: the step's end, ``start``: its start, the time of x) with the
         last accepted state x (N, 3). A term whose energy depends on the step (lagged
         friction, an obstacle on a prescribed path) updates itself here; the pattern
-        must not change. Default: nothing."""
+        must not change, but for ``grows`` terms (which set ``grew``). Default: nothing."""
 
 
 def node_block_pattern(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
