@@ -235,6 +235,14 @@ def _times(result) -> str:
     )
 
 
+def _timing(case) -> bool | str:
+    """How the summary dates peaks: "rest" for a run to rest (dynamic relaxation's
+    pseudo-time), True for another dynamic run (times), False for load factors."""
+    if case.solver.method != "dynamic":
+        return False
+    return "rest" if case.solver.t_end == "rest" else True
+
+
 def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import cases_table, envelope_lines, state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes
@@ -255,7 +263,7 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        *state_lines(numbers, case.solver.method == "dynamic", len(result.tension), warn),
+        *state_lines(numbers, _timing(case), len(result.tension), warn),
         _times(result),
     ]
     for k, b in s.bodies.items():  # free rigid bodies, one line each

@@ -17,9 +17,13 @@ def vector(v) -> str:
     return "[" + ", ".join(f"{c if abs(c) > 1e-12 * big else 0.0:.4g}" for c in v) + "]"
 
 
-def _when(t: float, dynamic: bool) -> str:
+def _when(t: float, dynamic: bool | str) -> str:
+    """When a peak happened: ``dynamic`` True (a time), False (a load factor) or "rest"
+    (the pseudo-time of dynamic relaxation: the path to rest is not a physical motion)."""
     if not math.isfinite(t):
         return ""
+    if dynamic == "rest":
+        return f"pseudo-time t = {t:.4g} s of the relaxation, not a physical transient"
     return f"t = {t:.4g} s" if dynamic else f"load factor {t:.4g}"
 
 
@@ -28,9 +32,12 @@ def _more(peak: float, final: float) -> bool:
     return peak > final + 1e-12 * max(abs(peak), abs(final))
 
 
-def state_lines(s: dict, dynamic: bool, n_edges: int, warn_strain: bool = False) -> list[str]:
+def state_lines(
+    s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False
+) -> list[str]:
     """The summary's lines for the numbers ``s`` (``summarize_result`` plus
-    ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors)."""
+    ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors;
+    "rest": a run to rest, whose peaks are on the relaxation's pseudo-time path)."""
     probe = s["probe"]
     how = "the free node that moves most; " if s.get("probe_auto") else ""
     lines = [
@@ -89,7 +96,7 @@ def state_lines(s: dict, dynamic: bool, n_edges: int, warn_strain: bool = False)
     return lines
 
 
-def _cable_peak(c: dict, dynamic: bool) -> str:
+def _cable_peak(c: dict, dynamic: bool | str) -> str:
     """The cable line's ", peak P N at t = T s" when the cable's peak over the run is
     above its final max tension, else nothing."""
     peak = c.get("peak_tension")
@@ -99,7 +106,7 @@ def _cable_peak(c: dict, dynamic: bool) -> str:
     return f", peak {peak:.6g} N" + (f" at {when}" if when else "")
 
 
-def cable_line(name: str, c: dict, dynamic: bool = True) -> str:
+def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
     """One cable's line: a tie's largest tension (and its peak over the run when that is
     higher) and slack share, a strut's compression."""
     if c.get("strut"):
