@@ -245,7 +245,7 @@ def _timing(case) -> bool | str:
 
 def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import cases_table, envelope_lines, state_lines
-    from catenet.run.advice import LARGE_BYTES, format_bytes
+    from catenet.run.advice import LARGE_BYTES, format_bytes, newmark_contact
 
     s = result.report
     numbers = {**s.summary, "delta_over_L": s.delta_over_L, "size": s.size}
@@ -266,6 +266,8 @@ def _summary(case, result, path: Path | None) -> None:
         *state_lines(numbers, _timing(case), len(result.tension), warn),
         _times(result),
     ]
+    for note in newmark_contact(case):  # the scheme's known failure in impacts
+        lines.insert(-1, f"{'warning':<12} {note}")
     for k, b in s.bodies.items():  # free rigid bodies, one line each
         first = b["first_contact"]
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "

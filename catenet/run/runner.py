@@ -218,7 +218,8 @@ def run_case(
             raise ConfigError(
                 f"--restart {restart}: is also the output file: give another one with -o"
             )
-    for message in advice.ignored_solver_keys(solver) + advice.ignored_histories(case):
+    notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
+    for message in notes + advice.newmark_contact(case):
         log.warning("%s", message)
     trajectory = None
     if path is not None:

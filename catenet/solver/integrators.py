@@ -52,6 +52,13 @@ to O((h omega)^3) per period. Why this form:
   damps by 0.11 % of critical against implicit Euler's 20 %. Where the lowest modes are
   well resolved, rho_inf = 0.9 to 1 damps them less still (configs/dynamics/).
 
+In contact keep rho_inf <= 0.5 (``catenet.run.advice.newmark_contact`` warns): at 0.8 a
+box or ball dropped onto a net leaves it faster than it came and the rebound does not
+converge with h; at 0.5 it does (docs/howto/dynamic-runs.md). Likely mechanism: the
+barrier is a mode far beyond 1/h that a_n carries from step to step, losing only a factor
+rho_inf per step, and the one-sided barrier pushes back on each swing toward the obstacle
+and lets the swings away go.
+
 The scheme's acceleration a_n is part of its state. A run starts at t = 0 with the
 physical acceleration M^-1 (f - grad E - mu M v). With rho_inf < 1 the a_n of later
 steps is a filtered acceleration, not the physical one, so the result file of a newmark
