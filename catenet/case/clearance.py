@@ -1,12 +1,12 @@
 """The watch that stops a run before a free rigid body meets another body or an obstacle.
 
 Free bodies (``catenet.case.rigid``) meet the net and planes only: a body would pass
-through another free body, a ball or a fixed sphere, box, capsule or mesh. Several bodies, and bodies beside
-obstacles and balls, are allowed, so that a run that never brings them together is
-exact; ``Clearance`` (the scene's ``watch``) is asked after every accepted step of a
-dynamic run and every equilibrium of a static one, and raises ``BodiesMeet`` (a
-ConvergenceError: exit 1, the result file keeping every step before) at the first state
-where two of them meet or crossed since the last one:
+through another free body, a ball or a fixed sphere, box, capsule or mesh. Several
+bodies, and bodies beside obstacles and balls, are allowed, so that a run that never
+brings them together is exact; ``Clearance`` (the scene's ``watch``) is asked after
+every accepted step of a dynamic run and every equilibrium of a static one, and raises
+``BodiesMeet`` (a ConvergenceError: exit 1, the result file keeping every step before) at
+the first state where two of them meet or crossed since the last one:
 
 - against a plane, exactly: the body's vertices (a box's corners, a mesh's vertices
   grown by nothing, a capsule's or a sphere's centre grown by its radius) at the new

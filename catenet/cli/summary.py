@@ -32,9 +32,7 @@ def _more(peak: float, final: float) -> bool:
     return peak > final + 1e-12 * max(abs(peak), abs(final))
 
 
-def state_lines(
-    s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False
-) -> list[str]:
+def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False) -> list[str]:
     """The summary's lines for the numbers ``s`` (``summarize_result`` plus
     ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors;
     "rest": a run to rest, whose peaks are on the relaxation's pseudo-time path)."""

@@ -84,9 +84,9 @@ def test_the_peaks_of_a_run_to_rest_are_dated_in_its_pseudo_time(tmp_path):
     not a physical transient: the summary says so, and the final state is the static one."""
     case = tmp_path / "wire.toml"
     case.write_text(
-        "[geometry]\nkind = \"cable\"\nstart = [0, 0, 0]\nend = [80, 0, 10]\nlength = 84\n"
+        '[geometry]\nkind = "cable"\nstart = [0, 0, 0]\nend = [80, 0, 10]\nlength = 84\n'
         "nodes = 41\n[material]\nE = 160e9\nradius = 0.012\ndensity = 7850\n"
-        "[load]\ngravity = [0, 0, -9.81]\n[solver]\nmethod = \"dynamic\"\n"
+        '[load]\ngravity = [0, 0, -9.81]\n[solver]\nmethod = "dynamic"\n'
     )
     rest = invoke("run", case, "-o", tmp_path / "rest.h5")
     assert rest.exit_code == 0, rest.output

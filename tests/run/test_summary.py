@@ -16,12 +16,12 @@ from tests.conftest import CONFIGS
 MAST = CONFIGS / "structures" / "guyed_mast.toml"
 
 
-
 def first_at_max(values) -> int:
     """The first index whose value is the largest to round-off (1e-12 relative)."""
     values = np.asarray(values)
     top = values.max()
     return int(np.flatnonzero(values >= top - 1e-12 * abs(top))[0])
+
 
 def test_guyed_mast_summary_reads_as_an_engineer_expects(tmp_path):
     """The mast (configs/structures/guyed_mast.toml): the top moves most (the default
