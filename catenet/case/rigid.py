@@ -23,6 +23,7 @@ import numpy as np
 
 from catenet.case.keys import show
 from catenet.errors import ConfigError
+from catenet.model.limits import carried, too_large
 
 if TYPE_CHECKING:  # the terms load where a body is built
     from catenet.terms.rigid import Frame
@@ -226,6 +227,7 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     w0 = float(np.linalg.norm(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0)))
     v0 = float(np.linalg.norm(obs.velocity or (0.0, 0.0, 0.0)))
     scale = max(ea * reach, body.mass * g * reach, spin * w0**2, body.mass * v0**2)
+    _check_carried(path, obs, RIGIDITY * scale, spin * w0**2, body.mass * v0**2)
     terms = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), contact]
     terms += _planes(case, body, net, dhat, load)
     if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
@@ -235,6 +237,23 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
         slip = obs.slip if obs.slip is not None else dhat
         terms.append(BodyFriction(Friction(shape, mu=obs.friction, slip=slip), contact))
     return terms
+
+
+def _check_carried(path: str, obs, stiffness: float, turning: float, moving: float) -> None:
+    """ConfigError where the body's rigidity stiffness (set by its largest energy: the
+    net's stiffness, its weight, its spin, its speed) is beyond what the arithmetic
+    carries: its energies and the squares of its forces would overflow in the first step."""
+    if carried(stiffness):
+        return
+    if turning >= moving:
+        key, value, what = "angular_velocity", obs.angular_velocity, "spin"
+    else:
+        key, value, what = "velocity", obs.velocity, "speed"
+    raise ConfigError(
+        f"{path}.{key} = {show(list(value))}: the body's kinetic energy of {what} "
+        f"({max(turning, moving):.3g} J) makes its energies overflow; a free body's "
+        f"energies must stay within {too_large()}"
+    )
 
 
 def _planes(case, body: FreeBody, net, dhat: float, load: float) -> list:

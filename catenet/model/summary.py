@@ -99,6 +99,7 @@ def first_extreme(values: np.ndarray, idx: np.ndarray, largest: bool = True) -> 
     best = float(np.max(v) if largest else np.min(v))
     slack = TIE * abs(best)
     near = v >= best - slack if largest else v <= best + slack
+    near |= v == best  # an infinite extreme (inf - inf is NaN): its first member
     return int(idx[np.flatnonzero(near)[0]])
 
 

@@ -174,6 +174,8 @@ class BodyContact(Term):
             self._buf[self.nodes] = P
             gap = self.shape.gap(self._buf)
             delta = min(CA_SHARE * float(gap.min()), 0.5 * self.dhat)
+            if not delta > 0.0:  # a node on the shape already (round-off of a body turning
+                return t  # at an extreme rate, or NaN): no further advance is safe
             h = min(max(1.0, t), T_FAR - t)  # pieces of the step, then doubling
             if w > 0.0:
                 h = min(h, 2.0 * math.sqrt(delta / w))

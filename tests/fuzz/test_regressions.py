@@ -431,3 +431,31 @@ def test_a_body_thrown_too_fast_ends_the_run(tmp_path):
     with h5py.File(tmp_path / "o.h5") as h5:
         assert not h5["result"].attrs["converged"]
     assert judge(result, tmp_path, {tmp_path / "o.h5"}).good
+
+
+def test_a_body_spun_beyond_the_arithmetic_is_bad_input_and_a_fast_one_fails_cleanly(tmp_path):
+    """The quick tier found the Envisat capture with ``angular_velocity = [1e99, ...]``
+    ending in an internal IndexError (an infinite contact force in the summary). A spin
+    whose kinetic energy the arithmetic cannot carry is bad input naming the key; a spin
+    of 1e10 rad/s (within the limits, far beyond what a step resolves) ends with exit 1
+    and catenet's message, not with a math domain error in the body's step cap."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "contact" / "envisat_capture.toml").read_text()))
+    (tmp_path / "envisat_capture.json").write_bytes(
+        (CONFIGS / "contact" / "envisat_capture.json").read_bytes()
+    )
+    data["solver"]["t_end"] = 0.05
+    data["obstacle"][0]["angular_velocity"][0] = 1e99
+    result, text = run(tmp_path, "-o", tmp_path / "huge.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2, text
+    assert "obstacle[0].angular_velocity = [1e+99" in text or "[1e99" in text, text
+    assert "kinetic energy of spin" in text and "Traceback" not in text, text
+    assert judge(result, tmp_path).good
+    data["obstacle"][0]["angular_velocity"][0] = 1e10
+    result, text = run(tmp_path, "-o", tmp_path / "fast.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 1 and "internal error" not in text, text
+    assert "dynamic run stopped at t = " in text or "failed even with h" in text, text
