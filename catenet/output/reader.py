@@ -202,8 +202,8 @@ def read_peaks(path: str | Path, t: float) -> dict[str, np.ndarray] | None:
             if not all(name in r for name in names):
                 return None
             return {name: np.asarray(r[name], dtype=np.float64) for name in names}
-    except (OSError, KeyError, TypeError, ValueError):
-        return None
+    except DAMAGED as exc:  # a file damaged there: bad input, not peaks silently lost
+        raise damaged(path, exc) from None
 
 
 # --------------------------------------------------------------------------------------------

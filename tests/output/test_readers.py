@@ -331,3 +331,39 @@ def test_export_bad_input(dynamic_result, tmp_path, monkeypatch):
     r = invoke("export", dynamic_result, "--to", "vtu", "-o", tmp_path / "c")
     assert r.exit_code == 1 and "needs meshio" in r.stderr and "pip install meshio" in r.stderr
     assert "Traceback" not in r.output
+
+
+def test_peaks_of_a_damaged_file_are_bad_input_not_silently_dropped(tmp_path, monkeypatch):
+    """The long fuzz run (seed 3) found a restart from a dynamic file with flipped bytes
+    ending in an internal RuntimeError ("incorrect metadata checksum") where the peaks
+    were read. A damaged /result there is bad input naming the file; a file written
+    before peaks existed still restarts without them (None)."""
+    import contextlib
+
+    import catenet.output.reader as reader
+    from catenet.errors import ConfigError
+
+    class Broken:
+        def get(self, name):
+            raise RuntimeError(
+                "Unable to synchronously check link existence (incorrect metadata checksum)"
+            )
+
+    @contextlib.contextmanager
+    def broken(path):
+        yield Broken()
+
+    monkeypatch.setattr(reader, "open_result", broken)
+    with pytest.raises(ConfigError, match="damaged or not a catenet result file"):
+        reader.read_peaks(tmp_path / "d.h5", 1.0)
+
+    class Old:
+        def get(self, name):
+            return None  # no /result group: nothing to go on with
+
+    @contextlib.contextmanager
+    def old(path):
+        yield Old()
+
+    monkeypatch.setattr(reader, "open_result", old)
+    assert reader.read_peaks(tmp_path / "d.h5", 1.0) is None
