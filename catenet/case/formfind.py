@@ -145,7 +145,8 @@ def check_formfind_case(ck: Checker, data: Any) -> None:
                 f"geometry.{k} = {show(geometry[k])}: form finding derives the rest lengths "
                 "from the forces it finds: remove it (or remove [formfind])"
             )
-    cables = geometry.get("cable") if isinstance(geometry.get("cable"), list) else []
+    listed = geometry.get("cable")
+    cables: list = listed if isinstance(listed, list) else []
     given = [
         (j, k, c[k])
         for j, c in enumerate(cables)

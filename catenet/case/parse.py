@@ -198,11 +198,11 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     if dynamic and solver.t_end is None:  # not given (a static case's stays None)
         t_end = default_t_end(load, supports, solver, obstacles, masses)
         solver = dataclasses.replace(solver, t_end=t_end)
-    timed = isinstance(solver, SolverConfig) and not isinstance(solver.t_end, str)
-    if timed and solver.method == "dynamic" and solver.dt > solver.t_end:
-        ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {solver.t_end!r}")
-    elif timed and solver.method == "dynamic":
-        steps = solver.t_end / solver.dt
+    t_end = solver.t_end if dynamic else None  # a number, or "rest"
+    if isinstance(t_end, (int, float)) and solver.dt > t_end:
+        ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {t_end!r}")
+    elif isinstance(t_end, (int, float)):
+        steps = t_end / solver.dt
         if not steps <= MAX_TIME_STEPS:
             ck.add(
                 f"solver.t_end = {solver.t_end!r}, solver.dt = {solver.dt!r}: {steps:.3g} time "

@@ -214,7 +214,8 @@ def _body_moves(scene, shape: np.ndarray, x: np.ndarray) -> str:
     cross -= cross.transpose(0, 2, 1)
     w = np.linalg.lstsq(cross.reshape(12, 3), move.ravel(), rcond=None)[0]
     w /= np.linalg.norm(w)
-    return f"{label} turning about [{', '.join(f'{v:.2g}' for v in np.round(w, 6) + 0.0)}]"
+    axis = [round(float(v), 6) + 0.0 for v in w]  # + 0.0: no -0
+    return f"{label} turning about [{', '.join(f'{v:.2g}' for v in axis)}]"
 
 
 def _moves(net, shape: np.ndarray, cables) -> str:

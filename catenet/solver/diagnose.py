@@ -154,8 +154,8 @@ def describe_zero_modes(
     parts = []
     for group, why in groups:
         if group.size:
-            named = _cables(net, group, cable_names, cable_of_edge)
-            parts.append(f"nodes {_shown(group)}{named} {why}")
+            on = _cables(net, group, cable_names, cable_of_edge)
+            parts.append(f"nodes {_shown(group)}{on} {why}")
     plural = "s" if count != 1 else ""
     head = f"{count} zero-frequency mode{plural} (left out): "
     if named:  # a frictionless free body slides or turns on the net's nodes at no cost

@@ -122,10 +122,11 @@ def solve_dynamic(
     )
     start = time.perf_counter()
     stepper.begin(x0, v0, t0, a0, a_out)
+    control: RestControl | StepControl
     if to_rest:
         control = RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
     else:
-        control = StepControl(dt, t0, t_end)
+        control = StepControl(dt, t0, float(t_end))
     run = stepper.run(
         control,
         rest=stop_at_equilibrium,

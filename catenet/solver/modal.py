@@ -91,10 +91,13 @@ class Reduction:
             for k in range(4):
                 dof = reduced[3 * frame.nodes[k] + np.arange(3)]
                 for d in range(3):  # translation along d
-                    rows.append([dof[d]]), cols.append([q + d]), vals.append([1.0])
+                    rows.append(dof[d : d + 1])
+                    cols.append(np.array([q + d]))
+                    vals.append(np.ones(1))
                 for d in range(3):  # rotation about axis d: e_d x r_k
-                    turn = np.cross(np.eye(3)[d], r[k])
-                    rows.append(dof), cols.append(np.full(3, q + 3 + d)), vals.append(turn)
+                    rows.append(dof)
+                    cols.append(np.full(3, q + 3 + d))
+                    vals.append(np.cross(np.eye(3)[d], r[k]))
             node.append(np.full(6, frame.nodes[0]))
             q += 6
         self.n = q
@@ -121,7 +124,9 @@ class Reduction:
             for i in range(3):
                 for j in range(3):
                     v = term.k * float(np.sum(C * (dA[i].T @ dA[j] + dA[j].T @ dA[i])))
-                    rows.append(q + i), cols.append(q + j), vals.append(v)
+                    rows.append(q + i)
+                    cols.append(q + j)
+                    vals.append(v)
         return sp.csr_matrix((vals, (rows, cols)), shape=(self.n, self.n))
 
     def reduce(self, a: sp.spmatrix) -> sp.csr_matrix:

@@ -118,7 +118,7 @@ class SelfContact(Term):
             self._slot = {}
             self.grew = True  # changed: the system is rebuilt all the same
         slots = np.empty(len(pairs), dtype=np.int64)
-        new = []
+        new: list = []
         for k, (a, b) in enumerate(pairs.tolist()):
             slot = self._slot.get((a, b))
             if slot is None:

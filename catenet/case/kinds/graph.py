@@ -191,11 +191,11 @@ class GraphConfig(GeometryConfig):
         config = cls(**data, prestrain=pre, file=file)
         if config.sets is not None and config.sets.regions and config._meshable():
             try:
-                mesh = config._mesh()
+                built = config._mesh()
             except ConfigError:
                 return config  # reported where the net is built
             before = len(ck.problems)
-            empty_boxes(ck, config.sets.items, mesh.nodes)
+            empty_boxes(ck, config.sets.items, built.nodes)
             if len(ck.problems) > before:
                 return None
         return config
