@@ -28,6 +28,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.model import measures
+from catenet.model.limits import MAGNITUDE
 
 log = logging.getLogger(__name__)
 
@@ -327,6 +328,10 @@ def probe_node(nodes: np.ndarray, fixed: np.ndarray | None = None) -> int:
     return int(np.argmin(dist))
 
 
+#: The datasets of node positions, whose every value a run keeps within MAGNITUDE.
+POSITIONS = ("/mesh/nodes", "/result/x")
+
+
 def _dataset(h5, name: str, path: Path, shape_tail: tuple, dtype, problems: list[str]):
     obj = h5.get(name)
     if obj is None:
@@ -340,10 +345,16 @@ def _dataset(h5, name: str, path: Path, shape_tail: tuple, dtype, problems: list
         problems.append(f"{path}: {name} has shape {arr.shape}: must be {want}")
         return None
     try:
-        return arr.astype(dtype)
+        arr = arr.astype(dtype)
     except (TypeError, ValueError):
         problems.append(f"{path}: {name} is not numeric")
         return None
+    if name in POSITIONS and arr.size and not np.all(np.abs(arr) <= MAGNITUDE):
+        problems.append(  # no run writes such positions: flipped bytes (a NaN, 7e307)
+            f"{path}: {name} holds positions beyond +-{MAGNITUDE:.0e} m or not finite: damaged"
+        )
+        return None
+    return arr
 
 
 def read_result(path: str | Path) -> ResultFile:

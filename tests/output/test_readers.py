@@ -367,3 +367,19 @@ def test_peaks_of_a_damaged_file_are_bad_input_not_silently_dropped(tmp_path, mo
 
     monkeypatch.setattr(reader, "open_result", old)
     assert reader.read_peaks(tmp_path / "d.h5", 1.0) is None
+
+
+def test_a_file_whose_positions_no_run_writes_is_damaged_for_plot(tmp_path, write_case):
+    """The long fuzz run (seed 6) found `catenet plot` of a static file with flipped bytes
+    ending in matplotlib's "Singular matrix": a node at 7.5e307 m. Positions beyond what
+    a run keeps (+-1e100) or not finite are a damaged file: exit 2 naming the dataset."""
+    case = write_case(small_net(method="static"))
+    out = tmp_path / "s.h5"
+    runner = CliRunner()
+    assert runner.invoke(main, ["run", str(case), "-o", str(out), "-q"]).exit_code == 0
+    for value in (7.490388061926316e307, float("nan")):
+        with h5py.File(out, "r+") as h5:
+            h5["mesh/nodes"][0, 0] = value
+        r = runner.invoke(main, ["plot", str(out), "-o", str(tmp_path / "f.png")])
+        assert r.exit_code == 2, r.output
+        assert "/mesh/nodes holds positions beyond +-1e+100 m or not finite" in r.output
