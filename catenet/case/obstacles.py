@@ -245,16 +245,7 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
             term.stages = ()
         if term.moving:  # on a prescribed motion: its name in messages
             term.label = f"obstacle[{k}] (kind {obs.kind!r})"
-        gap = term.gap(net.nodes)
-        inside = np.flatnonzero(~(gap > 0.0))
-        if inside.size:
-            i = int(nodes[inside[0]])
-            raise ConfigError(
-                f"obstacle[{k}] (kind {obs.kind!r}): node {i} at "
-                f"{show(net.nodes[i].tolist())} starts inside or on it (gap "
-                f"{gap[inside[0]]:.3g} m), {inside.size} nodes in all: an obstacle must not "
-                "overlap the initial net; move it or the net"
-            )
+        check_clear(f"obstacle[{k}] (kind {obs.kind!r})", "an obstacle", term, nodes, net)
         terms.append(term)
         if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
             from catenet.terms.friction import Friction
@@ -267,3 +258,18 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
                 )
             terms.append(Friction(term, mu=obs.friction, slip=slip))
     return tuple(terms)
+
+
+def check_clear(label: str, what: str, shape, nodes: np.ndarray, net) -> None:
+    """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
+    inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",
+    "a body")."""
+    gap = shape.gap(net.nodes)
+    inside = np.flatnonzero(~(gap > 0.0))
+    if inside.size:
+        i = int(nodes[inside[0]])
+        raise ConfigError(
+            f"{label}: node {i} at {show(net.nodes[i].tolist())} starts inside or on it "
+            f"(gap {gap[inside[0]]:.3g} m), {inside.size} nodes in all: {what} must not "
+            "overlap the initial net; move it or the net"
+        )

@@ -190,7 +190,7 @@ def _frame(obs, k: int, first: int, case):
 
 def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     """The body's rigidity and its barrier with every free net node."""
-    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.case.obstacles import DISTANCE_SHARE, check_clear
     from catenet.terms.contact import default_stiffness
     from catenet.terms.rigid import Rigidity
     from catenet.terms.rigid_contact import BodyContact
@@ -211,16 +211,7 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     kappa = obs.stiffness if obs.stiffness is not None else default_stiffness(load, dhat)
     shape = obs.term(nodes, kappa, dhat)
     contact = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{path} (kind {obs.kind!r})")
-    gap = shape.gap(net.nodes)
-    inside = np.flatnonzero(~(gap > 0.0))
-    if inside.size:
-        i = int(nodes[inside[0]])
-        raise ConfigError(
-            f"{path} (kind {obs.kind!r}, a free body): node {i} at "
-            f"{show(net.nodes[i].tolist())} starts inside or on it (gap "
-            f"{gap[inside[0]]:.3g} m), {inside.size} nodes in all: a body must not "
-            "overlap the initial net; move it or the net"
-        )
+    check_clear(f"{path} (kind {obs.kind!r}, a free body)", "a body", shape, nodes, net)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
     reach = frame.reach  # about the body's size
     ea = float(np.max(net.EA)) if net.n_edges else stiff * size

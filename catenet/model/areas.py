@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.net import components
 
 DIRECTIONS = ("plan", "normal")
 
@@ -44,27 +45,6 @@ class AreaLoad:
     force: np.ndarray
     area: float
     normal: np.ndarray
-
-
-def labels(n: int, edges: np.ndarray) -> np.ndarray:
-    """Connected-component label of every node (0, 1, ...; union-find by pointer
-    jumping, every edge hooking the larger root under the smaller)."""
-    parent = np.arange(n)
-    i, j = edges[:, 0], edges[:, 1]
-    while True:
-        ri, rj = parent[i], parent[j]
-        differ = ri != rj
-        if not differ.any():
-            break
-        lo, hi = np.minimum(ri, rj)[differ], np.maximum(ri, rj)[differ]
-        parent[hi] = lo
-        while True:
-            up = parent[parent]
-            if np.array_equal(up, parent):
-                break
-            parent = up
-    root = parent == np.arange(n)
-    return (np.cumsum(root) - 1)[parent]
 
 
 def area_load(
@@ -192,7 +172,7 @@ def _closed_faces(q: np.ndarray, edges: np.ndarray, scale: float) -> _Faces:
     drawing (Euler's formula; one outside per part). Edges in several parts (parallel
     cables without cross ties) or without a cell: the Delaunay triangles of the nodes."""
     tol = (TOL * scale) ** 2
-    parts = int(labels(len(q), edges).max()) + 1
+    parts = int(components(len(q), edges).max()) + 1
     faces = _faces(q, edges)
     if parts > 1 or not (faces.area > tol).any():
         return _delaunay(q)
@@ -353,7 +333,7 @@ def with_chains(covered: np.ndarray, given: int, edges: np.ndarray) -> np.ndarra
     if not made.any():
         return covered
     inner = edges[made[edges[:, 0]] & made[edges[:, 1]]]
-    lab = labels(n, inner)
+    lab = components(n, inner)
     ends = edges[made[edges[:, 0]] != made[edges[:, 1]]]
     chain = np.where(made[ends[:, 0]], ends[:, 0], ends[:, 1])
     end = np.where(made[ends[:, 0]], ends[:, 1], ends[:, 0])

@@ -264,26 +264,9 @@ class Net:
         )
 
     def components(self) -> np.ndarray:
-        """Connected-component label (0, 1, ... in order of first node) of every node:
-        union-find in NumPy, every edge hooking the larger of its two roots under the
-        smaller, then pointer jumping until every node points at its root (a few passes;
-        no SciPy on a run's path)."""
-        parent = np.arange(self.n_nodes)
-        i, j = self.edges[:, 0], self.edges[:, 1]
-        while True:
-            ri, rj = parent[i], parent[j]
-            differ = ri != rj
-            if not differ.any():
-                break
-            lo, hi = np.minimum(ri, rj)[differ], np.maximum(ri, rj)[differ]
-            parent[hi] = lo  # roots only, always to a smaller index: no cycles
-            while True:
-                up = parent[parent]
-                if np.array_equal(up, parent):
-                    break
-                parent = up
-        root = parent == np.arange(self.n_nodes)
-        return (np.cumsum(root) - 1)[parent]
+        """Connected-component label (0, 1, ... in order of first node) of every node
+        (``components``)."""
+        return components(self.n_nodes, self.edges)
 
     def _check_supported(self) -> None:
         """Every connected part with a free node needs a support, or it is a mechanism."""
@@ -456,3 +439,26 @@ class Loads:
     @property
     def moves_supports(self) -> bool:
         return self.support_displacement is not None and bool(np.any(self.support_displacement))
+
+
+def components(n: int, edges: np.ndarray) -> np.ndarray:
+    """Connected-component label (0, 1, ... in order of first node) of each of n nodes
+    joined by ``edges`` (M, 2): union-find in NumPy, every edge hooking the larger of its
+    two roots under the smaller, then pointer jumping until every node points at its root
+    (a few passes; no SciPy on a run's path)."""
+    parent = np.arange(n)
+    i, j = edges[:, 0], edges[:, 1]
+    while True:
+        ri, rj = parent[i], parent[j]
+        differ = ri != rj
+        if not differ.any():
+            break
+        lo, hi = np.minimum(ri, rj)[differ], np.maximum(ri, rj)[differ]
+        parent[hi] = lo  # roots only, always to a smaller index: no cycles
+        while True:
+            up = parent[parent]
+            if np.array_equal(up, parent):
+                break
+            parent = up
+    root = parent == np.arange(n)
+    return (np.cumsum(root) - 1)[parent]
