@@ -298,6 +298,13 @@ class ResultFile:
         return method if isinstance(method, str) else None
 
     @property
+    def to_rest(self) -> bool:
+        """Whether the run was dynamic relaxation to rest (solver.t_end = "rest"): its
+        time is pseudo-time."""
+        solver = self.case.get("solver", {}) if self.case else {}
+        return self.method == "dynamic" and solver.get("t_end") == "rest"
+
+    @property
     def delta(self) -> float:
         """Final deflection of the probe node [m], positive downward."""
         return measures.deflection(self.mesh.nodes, self.x, self.probe)

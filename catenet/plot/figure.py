@@ -418,7 +418,10 @@ def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls, *, whole: boo
     if res.method == "static" and len(t) and t[0] > 0:  # the curve from zero load
         t, d = np.concatenate([[0.0], t]), np.concatenate([[0.0], d])
     ax_t.plot(t, d, "-", color="C0", lw=1.2, marker="." if len(t) < 60 else None)
-    if res.method == "dynamic":
+    if res.to_rest:  # dynamic relaxation: its path to rest is not a physical motion
+        ax_t.set_xlabel("pseudo-time t [s] (relaxation to rest)")
+        ax_t.set_title("probe deflection on the way to rest")
+    elif res.method == "dynamic":
         ax_t.set_xlabel("time t [s]")
         ax_t.set_title("probe deflection against time")
     elif res.method == "static":

@@ -97,3 +97,7 @@ def test_the_peaks_of_a_run_to_rest_are_dated_in_its_pseudo_time(tmp_path):
         ta, tb = a["result/tension"][()], b["result/tension"][()]
         assert np.max(np.abs(ta - tb)) < 1e-6 * np.max(tb)
         assert a["result/peak_tension"][()].max() > 1.5 * ta.max()  # the way down overshot
+    from catenet.output.reader import read_result
+
+    assert read_result(tmp_path / "rest.h5").to_rest  # the figure's time axis: pseudo-time
+    assert not read_result(tmp_path / "static.h5").to_rest
