@@ -55,13 +55,13 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
     """(net, loads, velocity, terms, bodies) with the case's moving spheres appended.
     Raises ConfigError with the key path for a ball that starts overlapping the net, or
     a path in a static run."""
+    which = moving(case.obstacles)
+    if not which:
+        return net, loads, velocity, (), ()
     from catenet.case.obstacles import DISTANCE_SHARE
     from catenet.terms.body import Ball, Guide, Path
     from catenet.terms.contact import default_stiffness
 
-    which = moving(case.obstacles)
-    if not which:
-        return net, loads, velocity, (), ()
     n0 = net.n_nodes
     free = np.flatnonzero(~net.fixed)
     force = loads.external_force(net)[free]

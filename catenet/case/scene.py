@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,7 +25,9 @@ from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
 from catenet.model.net import Loads, Net
-from catenet.terms.strands import SelfContact, default_strand_stiffness
+
+if TYPE_CHECKING:  # the strands' kernels load only for a case with self-contact
+    from catenet.terms.strands import SelfContact
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,6 +130,8 @@ def self_contact(solver, net: Net, loads: Loads) -> SelfContact:
     edge; stiffness such that two strands dhat/2 apart push each other with a node's
     mean share of the loads (without loads: the force that strains an average edge by
     dhat / l0)."""
+    from catenet.terms.strands import SelfContact, default_strand_stiffness
+
     edges = net.rest_length
     dhat = solver.self_contact_distance or STRAND_DISTANCE_SHARE * float(edges.min())
     force = loads.external_force(net)[np.unique(net.edges)]

@@ -84,10 +84,11 @@ def backend(report: BenchReport, threads: int | None) -> None:
     import numba
 
     from catenet.solver import linear
-    from catenet.solver.threads import set_threads
+    from catenet.solver.threads import set_numba_threads, set_threads
 
     if threads is not None:
         set_threads(threads)
+        set_numba_threads(threads)  # the report shows Numba's count: its pool starts here
     name = linear.resolve_backend("auto")
     report.add("backend", name, note='what solver.linear = "auto" picks on this machine')
     mkl: int | str = "-"  # PARDISO's thread count; "-": another backend

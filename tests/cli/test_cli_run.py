@@ -365,6 +365,55 @@ def test_help_imports_no_numpy_and_run_no_studies(tmp_path, write_case):
     assert "catenet.sweep" not in modules
 
 
+LEAN = """
+import sys
+from catenet.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit as exc:
+    assert not exc.code, exc.code
+from numba.np.ufunc import parallel
+optional = ("catenet.terms.strands", "catenet.kernels.strands", "catenet.terms.rigid",
+            "catenet.terms.body", "catenet.kernels.body", "catenet.terms.contact")
+print("LOADED", *sorted(m for m in optional if m in sys.modules))
+print("POOL", parallel._is_initialized)
+"""
+
+
+def test_a_plain_static_run_loads_only_what_it_uses(tmp_path, write_case):
+    """No self-contact, bodies or obstacles: their terms and kernels stay unloaded, and
+    Numba's thread pool (catenet's kernels are serial) is not started."""
+    case = write_case(small_net(method="static"))
+    proc = subprocess.run(
+        [sys.executable, "-c", LEAN, "run", str(case), "-o", str(tmp_path / "r.h5"), "-q"],
+        capture_output=True,
+        text=True,
+        env=subprocess_env(),
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    lines = dict(ln.split(" ", 1) if " " in ln else (ln, "") for ln in proc.stdout.splitlines())
+    assert lines["LOADED"] == ""
+    assert lines["POOL"] == "False"
+
+
+def test_set_numba_threads_starts_the_pool_set_threads_only_where_it_runs():
+    code = (
+        "import numba\n"
+        "from numba.np.ufunc import parallel\n"
+        "from catenet.solver.threads import set_numba_threads, set_threads\n"
+        "set_threads(1)\n"
+        "print(parallel._is_initialized)\n"
+        "set_numba_threads(1)\n"
+        "print(parallel._is_initialized, numba.get_num_threads())\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=subprocess_env()
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["False", "True", "1"]
+
+
 def test_info():
     r = invoke("info")
     assert r.exit_code == 0, r.output
