@@ -141,7 +141,14 @@ def main() -> None:
         )
         for name in trees:
             rev = subprocess.run(
-                ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD" if name == "this" else name],
+                [
+                    "git",
+                    "-C",
+                    str(ROOT),
+                    "rev-parse",
+                    "--short",
+                    "HEAD" if name == "this" else name,
+                ],
                 capture_output=True,
                 text=True,
             ).stdout.strip()

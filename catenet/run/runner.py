@@ -11,18 +11,15 @@ with its last good state in /result and ``converged = false``.
 from __future__ import annotations
 
 import logging
-import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.run.report import CableSummary, RunReport, RunResult
-from catenet.solver.result import Timing
+from catenet.run.restart import RestartState, read_restart
+from catenet.run.steps import NoFile, run_steps
 
 log = logging.getLogger(__name__)
 
@@ -32,108 +29,12 @@ Progress = Callable[..., None]
 Stop = Callable[[], bool]
 
 
-@dataclass
-class RestartState:
-    """Where a dynamic run goes on from: time, positions, velocities and the newmark
-    scheme's acceleration state (None: not in the file, or not a newmark case)."""
-
-    path: Path
-    t: float
-    x: np.ndarray
-    v: np.ndarray
-    source: str
-    a: np.ndarray | None = None
-    peaks: dict | None = None  # the earlier run's peaks up to t (None: not in the file)
-
-
 def output_path(case, out: str | Path | None = None) -> Path | None:
     """The file a run writes: ``out``, else the case's output.file (None: no file)."""
     if out is not None:
         return Path(out)
     file = case.output.file
     return Path(file) if file else None
-
-
-def read_restart(path: str | Path, scene) -> RestartState:
-    """The last stored state of an earlier dynamic run of the same net, checked against
-    the scene. Raises ConfigError for a file that does not fit."""
-    from catenet.output import read_frame, read_mesh
-
-    path = Path(path)
-    label = f"--restart {path}"
-    if scene.case.solver.method != "dynamic":
-        raise ConfigError(
-            f"{label}: only dynamic runs can be restarted (solver.method = "
-            f"{scene.case.solver.method!r}); set solver.method = 'dynamic'"
-        )
-    try:
-        frame = read_frame(path)
-    except ConfigError as exc:
-        raise ConfigError([f"--restart: {p}" for p in exc.problems]) from None
-    except OSError as exc:
-        raise ConfigError(f"{label}: cannot be read: {exc}") from None
-    try:
-        problems = _mesh_mismatch(read_mesh(path, what=label), scene.net)
-    except (TypeError, ValueError) as exc:  # /mesh datasets that are not numbers
-        if isinstance(exc, ConfigError):
-            raise
-        problems = [f"its /mesh is damaged or not a catenet result file's ({exc})"]
-    shape = scene.net.nodes.shape
-    for name, arr in (("positions", frame.x), ("velocities", frame.v)):
-        if arr is not None and arr.shape != shape:
-            problems.append(
-                f"its stored {name} ({frame.source}) have shape {arr.shape}: the case's net "
-                f"needs {shape}: restart with the case that wrote it"
-            )
-    if problems:
-        raise ConfigError([f"{label}: {p}" for p in problems])
-    if frame.v is None:
-        raise ConfigError(
-            f"{label}: holds no velocities (/trajectory/v or /result/v): it is not the file "
-            "of a dynamic run with output.every > 0"
-        )
-    if not (np.all(np.isfinite(frame.x)) and np.all(np.isfinite(frame.v))):
-        raise ConfigError(f"{label}: its last stored state is not finite")
-    t_end = scene.case.solver.t_end  # "rest": goes on to rest from any time
-    if not isinstance(t_end, str) and not frame.t < t_end * (1 - 1e-12):
-        raise ConfigError(
-            f"{label}: its last state is at t = {frame.t:.6g} s, not before solver.t_end = "
-            f"{t_end!r}: raise solver.t_end to go on"
-        )
-    a = frame.a if scene.case.solver.integrator == "newmark" else None
-    if a is not None and not (a.shape == frame.x.shape and np.all(np.isfinite(a))):
-        raise ConfigError(f"{label}: its stored accelerations (/trajectory/a) are not usable")
-    if a is None and scene.case.solver.integrator == "newmark":
-        log.info(
-            "%s: holds no newmark acceleration state: the run goes on from the physical "
-            "acceleration (not exactly as the uninterrupted run would)",
-            label,
-        )
-    from catenet.output.reader import read_peaks
-
-    peaks = read_peaks(path, frame.t)
-    return RestartState(path, frame.t, frame.x, frame.v, frame.source, a, peaks)
-
-
-def _mesh_mismatch(mesh, net) -> list[str]:
-    """How the net of a result file (an ``output.Mesh``) differs from the case's."""
-    nodes, edges, rest, fixed = mesh.nodes, mesh.edges, mesh.rest_length, mesh.fixed
-    if nodes.shape != net.nodes.shape or edges.shape != net.edges.shape:
-        return [
-            f"its net has {len(nodes)} nodes and {len(edges)} edges, the case's "
-            f"{net.n_nodes} and {net.n_edges}: restart with the case that wrote it"
-        ]
-    problems = []
-    if not np.array_equal(edges, net.edges):
-        problems.append("its edges differ from the case's: restart with the case that wrote it")
-    if not np.allclose(rest, net.rest_length, rtol=1e-12, atol=0.0):
-        problems.append("its rest lengths differ from the case's")
-    if not np.array_equal(fixed.astype(bool), net.fixed):
-        problems.append("its supports differ from the case's")
-    EA = mesh.EA
-    if EA is not None and (EA.shape != net.EA.shape or not np.allclose(EA, net.EA, rtol=1e-12)):
-        problems.append("its axial stiffnesses EA differ from the case's")
-    return problems
 
 
 def refuse_formfind(case) -> None:
@@ -251,12 +152,12 @@ def run_case(
             attrs=attrs,
         )
         if path is not None
-        else _NoFile()
+        else NoFile()
     )
-    bodies: dict = {}  # the free rigid bodies' summary, filled by _run
+    bodies: dict = {}  # the free rigid bodies' summary, filled by run_steps
     with writer:
         try:
-            result = _run(
+            result = run_steps(
                 scene, settings, ws, writer, state, progress, stop, interrupt, start, clock, bodies
             )
         except CatenetError as exc:
@@ -313,180 +214,6 @@ def run_case(
     return run
 
 
-def _run(
-    scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None, bodies=None
-):
-    """Solves through the one solve path, writing frames as the steps come; on failure
-    or interruption the last good state becomes /result (converged = false). ``bodies``
-    (a dict) receives the free rigid bodies' summary (``BodyWatch.stats``)."""
-    bodies = {} if bodies is None else bodies
-    from catenet.errors import Interrupted
-    from catenet.model.peaks import Peaks
-    from catenet.run.bodies import BodyWatch
-    from catenet.solver import path as sv
-    from catenet.solver.newton import interruptible
-    from catenet.solver.result import Outcome, finish
-
-    dynamic = settings.method == "dynamic"
-    total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
-    start = None
-    written = {"step": -1}
-    watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
-
-    if clock is None:
-        from catenet.run.clock import Clock
-
-        clock = Clock()
-
-    def keep(step, t, x, v, tension=None, force=False, a=None) -> None:
-        if (force or writer.wants(step)) and written["step"] != step:
-            with clock.aside():  # writing is neither start-up nor solving
-                tension = ws.system.tension(x) if tension is None else tension
-                writer.frame(t, x, v, tension, a=a)
-            written["step"] = step
-
-    if dynamic:
-        v_start = getattr(scene, "velocity", None)  # [[mass]] velocity: initial velocities
-        if state is None:
-            start = sv.Start(v=v_start, t=0.0)
-        else:
-            start = sv.Start(state.x, state.v, state.t, state.a)
-        x0 = scene.net.nodes.copy() if state is None else state.x.copy()
-        x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
-        v0 = start.v if start.v is not None else np.zeros_like(x0)
-        a0 = start.a
-        if a0 is None and settings.integrator == "newmark" and writer.wants(0):
-            from catenet.solver.dynamic import start_acceleration
-
-            a0 = start_acceleration(
-                scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
-            )
-        keep(0, start.t, x0, v0, a=a0)
-
-    def on_step(step: sv.Step) -> bool:
-        watch.see(step.time, step.x)  # free bodies: their first contact
-        last = step.index == settings.steps and not dynamic
-        tension = step.result.tension if step.result is not None else None
-        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
-        if progress is not None:
-            if dynamic:
-                progress(step.time, total, rest=step.rest)
-            else:
-                progress(step.time, total)
-        if stop is not None and stop():
-            keep(step.index, step.time, step.x, step.v, tension, force=dynamic, a=step.a)
-            return True
-        return False
-
-    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
-    if state is not None and state.peaks is not None and peaks.seed(state.peaks):
-        log.info("--restart: the peaks go on from those of %s", state.path)
-    try:
-        with interruptible(interrupt), clock.solving():
-            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
-    except CatenetError as exc:
-        good = exc.last_good
-        if isinstance(exc, ConfigError) or good is None:
-            raise
-        stopped = isinstance(exc, Interrupted)
-        x = _usable(good.x, None, scene)
-        t = float(good.time)
-        if dynamic:  # the last good state is the file's last frame, then /result
-            try:
-                keep(good.steps, t, x, good.v, force=True, a=good.a)
-            except CatenetError:
-                pass
-        # The residual of the state kept (a dynamic run's: its static part under the loads
-        # at its time), not of the failed solve's iterate, which may not even be finite.
-        residual = _static_residual(ws, scene, x, t, dynamic)
-        if not math.isfinite(residual):  # a term's gradient beyond floating point there:
-            start = [r for r in getattr(exc, "history", None) or () if math.isfinite(r)]
-            residual = start[0] if start else residual  # the failed solve's first residual
-        res = finish(
-            ws.system,
-            scene.loads,
-            x,
-            1.0 if dynamic else t,
-            load_time=t if dynamic else None,
-            converged=False,
-            equilibrium=False,
-            iterations=int(good.iterations),
-            residual=residual,
-            steps=int(good.steps),
-            time=t,
-            v=good.v,
-            a=good.a,
-            message="interrupted" if stopped else str(exc),
-            outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
-            wall_time=time.perf_counter() - begin,
-            stats=ws.stats(),
-            timing=_timing(clock),
-            peaks=peaks,
-        )
-        if stopped:  # within a step: like a stop between steps, not a failure
-            log.info("interrupted during %s", "a time step" if dynamic else "a load step")
-            _write_result(writer, res)
-            return res
-        _write_result(writer, res, failed=exc)
-        raise
-    if dynamic:
-        keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
-    else:
-        res.wall_time = time.perf_counter() - begin
-    if res.outcome is Outcome.INTERRUPTED:
-        log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
-    res.wall_time = time.perf_counter() - begin
-    res.timing = _timing(clock)
-    if watch:
-        bodies.update(watch.stats(res.x, res.v))
-    _write_result(writer, res)
-    return res
-
-
-def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
-    """|grad E - f| over the free DOFs at x under the loads at load factor ``at`` (a
-    dynamic run's: at time ``at``) [N]."""
-    net = scene.net
-    _, grad = ws.system.gradient(x)
-    if dynamic:
-        force = scene.loads.external_force(net, time=at)
-    else:
-        force = scene.loads.external_force(net, at)
-    return float(np.linalg.norm((grad - force)[~net.fixed]))
-
-
-def _timing(clock) -> Timing:
-    """The run's solve and start-up seconds (``catenet.run.clock.Clock``)."""
-    return Timing(solve=clock.solve, startup=clock.startup)
-
-
-# --------------------------------------------------------------------------------------------
-# Helpers
-# --------------------------------------------------------------------------------------------
-
-
-def _write_result(writer, res, failed: BaseException | None = None) -> None:
-    """Writes /result; when the run itself failed, a failure to write is only logged (the
-    run's own error is the one to report)."""
-    if failed is None:
-        writer.result(res)
-        return
-    try:
-        writer.result(res)
-    except CatenetError as exc:
-        log.error("%s", exc)
-
-
-def _usable(state, fallback, scene) -> np.ndarray:
-    """A finite state to report: the error's, else the last equilibrium, else the start."""
-    for x in (state, fallback):
-        if x is not None and np.shape(x) == scene.net.nodes.shape and np.all(np.isfinite(x)):
-            return np.array(x, dtype=np.float64)
-    x = scene.net.nodes.copy()
-    x[scene.net.fixed] = scene.loads.support_positions(scene.net, factor=1.0)
-    return x
-
-
 def _probe_directory(path: Path) -> None:
     """Creates and removes a file in the nearest existing directory of ``path``: what
     permissions alone do not tell (a read-only or special file system, root's access
@@ -522,29 +249,3 @@ def _remove(writer) -> None:
                 Path(p).unlink(missing_ok=True)
             except OSError:
                 pass
-
-
-class _NoFile:
-    """Stands in for ResultWriter when a run writes no file."""
-
-    every = 0
-    frames = 0
-    has_result = False
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        return None
-
-    def wants(self, step: int) -> bool:
-        return False
-
-    def frame(self, *args, **kwargs) -> None:
-        pass
-
-    def result(self, res, **attrs) -> None:
-        pass
-
-    def close(self) -> None:
-        pass

@@ -1,0 +1,214 @@
+"""A case's solve with its result file: the steps of the one solve path
+(``catenet.solver.path``) written as they come, and on failure or interruption the last
+good state kept as /result (``run_steps``, which ``catenet.run.runner.run_case`` calls
+once everything a user can get wrong has been checked)."""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from catenet.errors import CatenetError, ConfigError
+from catenet.solver.result import Timing
+
+log = logging.getLogger(__name__)
+
+__all__ = ["NoFile", "run_steps"]
+
+
+def run_steps(
+    scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None, bodies=None
+):
+    """Solves through the one solve path, writing frames as the steps come; on failure
+    or interruption the last good state becomes /result (converged = false). ``bodies``
+    (a dict) receives the free rigid bodies' summary (``BodyWatch.stats``)."""
+    bodies = {} if bodies is None else bodies
+    from catenet.errors import Interrupted
+    from catenet.model.peaks import Peaks
+    from catenet.run.bodies import BodyWatch
+    from catenet.solver import path as sv
+    from catenet.solver.newton import interruptible
+    from catenet.solver.result import Outcome, finish
+
+    dynamic = settings.method == "dynamic"
+    total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
+    start = None
+    written = {"step": -1}
+    watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
+
+    if clock is None:
+        from catenet.run.clock import Clock
+
+        clock = Clock()
+
+    def keep(step, t, x, v, tension=None, force=False, a=None) -> None:
+        if (force or writer.wants(step)) and written["step"] != step:
+            with clock.aside():  # writing is neither start-up nor solving
+                tension = ws.system.tension(x) if tension is None else tension
+                writer.frame(t, x, v, tension, a=a)
+            written["step"] = step
+
+    if dynamic:
+        v_start = getattr(scene, "velocity", None)  # [[mass]] velocity: initial velocities
+        if state is None:
+            start = sv.Start(v=v_start, t=0.0)
+        else:
+            start = sv.Start(state.x, state.v, state.t, state.a)
+        x0 = scene.net.nodes.copy() if state is None else state.x.copy()
+        x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
+        v0 = start.v if start.v is not None else np.zeros_like(x0)
+        a0 = start.a
+        if a0 is None and settings.integrator == "newmark" and writer.wants(0):
+            from catenet.solver.dynamic import start_acceleration
+
+            a0 = start_acceleration(
+                scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
+            )
+        keep(0, start.t, x0, v0, a=a0)
+
+    def on_step(step: sv.Step) -> bool:
+        watch.see(step.time, step.x)  # free bodies: their first contact
+        last = step.index == settings.steps and not dynamic
+        tension = step.result.tension if step.result is not None else None
+        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
+        if progress is not None:
+            if dynamic:
+                progress(step.time, total, rest=step.rest)
+            else:
+                progress(step.time, total)
+        if stop is not None and stop():
+            keep(step.index, step.time, step.x, step.v, tension, force=dynamic, a=step.a)
+            return True
+        return False
+
+    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
+    if state is not None and state.peaks is not None and peaks.seed(state.peaks):
+        log.info("--restart: the peaks go on from those of %s", state.path)
+    try:
+        with interruptible(interrupt), clock.solving():
+            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
+    except CatenetError as exc:
+        good = exc.last_good
+        if isinstance(exc, ConfigError) or good is None:
+            raise
+        stopped = isinstance(exc, Interrupted)
+        x = _usable(good.x, None, scene)
+        t = float(good.time)
+        if dynamic:  # the last good state is the file's last frame, then /result
+            try:
+                keep(good.steps, t, x, good.v, force=True, a=good.a)
+            except CatenetError:
+                pass
+        # The residual of the state kept (a dynamic run's: its static part under the loads
+        # at its time), not of the failed solve's iterate, which may not even be finite.
+        residual = _static_residual(ws, scene, x, t, dynamic)
+        if not math.isfinite(residual):  # a term's gradient beyond floating point there:
+            start = [r for r in getattr(exc, "history", None) or () if math.isfinite(r)]
+            residual = start[0] if start else residual  # the failed solve's first residual
+        res = finish(
+            ws.system,
+            scene.loads,
+            x,
+            1.0 if dynamic else t,
+            load_time=t if dynamic else None,
+            converged=False,
+            equilibrium=False,
+            iterations=int(good.iterations),
+            residual=residual,
+            steps=int(good.steps),
+            time=t,
+            v=good.v,
+            a=good.a,
+            message="interrupted" if stopped else str(exc),
+            outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
+            wall_time=time.perf_counter() - begin,
+            stats=ws.stats(),
+            timing=_timing(clock),
+            peaks=peaks,
+        )
+        if stopped:  # within a step: like a stop between steps, not a failure
+            log.info("interrupted during %s", "a time step" if dynamic else "a load step")
+            _write_result(writer, res)
+            return res
+        _write_result(writer, res, failed=exc)
+        raise
+    if dynamic:
+        keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
+    else:
+        res.wall_time = time.perf_counter() - begin
+    if res.outcome is Outcome.INTERRUPTED:
+        log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
+    res.wall_time = time.perf_counter() - begin
+    res.timing = _timing(clock)
+    if watch:
+        bodies.update(watch.stats(res.x, res.v))
+    _write_result(writer, res)
+    return res
+
+
+def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
+    """|grad E - f| over the free DOFs at x under the loads at load factor ``at`` (a
+    dynamic run's: at time ``at``) [N]."""
+    net = scene.net
+    _, grad = ws.system.gradient(x)
+    if dynamic:
+        force = scene.loads.external_force(net, time=at)
+    else:
+        force = scene.loads.external_force(net, at)
+    return float(np.linalg.norm((grad - force)[~net.fixed]))
+
+
+def _timing(clock) -> Timing:
+    """The run's solve and start-up seconds (``catenet.run.clock.Clock``)."""
+    return Timing(solve=clock.solve, startup=clock.startup)
+
+
+def _write_result(writer, res, failed: BaseException | None = None) -> None:
+    """Writes /result; when the run itself failed, a failure to write is only logged (the
+    run's own error is the one to report)."""
+    if failed is None:
+        writer.result(res)
+        return
+    try:
+        writer.result(res)
+    except CatenetError as exc:
+        log.error("%s", exc)
+
+
+def _usable(state, fallback, scene) -> np.ndarray:
+    """A finite state to report: the error's, else the last equilibrium, else the start."""
+    for x in (state, fallback):
+        if x is not None and np.shape(x) == scene.net.nodes.shape and np.all(np.isfinite(x)):
+            return np.array(x, dtype=np.float64)
+    x = scene.net.nodes.copy()
+    x[scene.net.fixed] = scene.loads.support_positions(scene.net, factor=1.0)
+    return x
+
+
+class NoFile:
+    """Stands in for ResultWriter when a run writes no file."""
+
+    every = 0
+    frames = 0
+    has_result = False
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    def wants(self, step: int) -> bool:
+        return False
+
+    def frame(self, *args, **kwargs) -> None:
+        pass
+
+    def result(self, res, **attrs) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
