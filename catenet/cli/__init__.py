@@ -50,7 +50,21 @@ def _version() -> str:
         return "unknown"
 
 
+def _show_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``--version``: looked up only when asked (the package metadata costs start-up)."""
+    if value and not ctx.resilient_parsing:
+        click.echo(f"catenet, version {_version()}")
+        ctx.exit()
+
+
 @click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(_version(), prog_name="catenet")
+@click.option(
+    "--version",
+    is_flag=True,
+    expose_value=False,
+    is_eager=True,
+    callback=_show_version,
+    help="Show the version and exit.",
+)
 def main():
     """catenet: static and dynamic analysis of elastic cable structures."""

@@ -356,6 +356,14 @@ def imported_by(*args) -> list[str]:
     return line.split()[1:]
 
 
+def test_version_is_looked_up_when_asked():
+    from importlib.metadata import version
+
+    r = invoke("--version")
+    assert r.exit_code == 0, r.output
+    assert r.output == f"catenet, version {version('catenet')}\n"
+
+
 def test_help_imports_no_numpy_and_run_no_studies(tmp_path, write_case):
     assert imported_by("--help") == []
     assert imported_by("run", "--help") == []
