@@ -36,9 +36,9 @@ from benchmarks.common import (
     run_child,
     save_figure,
     set_threads,
+    tabulate,
     thread_env,
     warm_up,
-    write_csv,
 )
 
 log = logging.getLogger(__name__)
@@ -337,14 +337,8 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
                 r["ratio_per_iteration"] = (r["seconds"] / max(r["iterations"], 1)) / (
                     base["seconds"] / max(base["iterations"], 1)
                 )
-    write_csv(rows, study.csv)
-    study.figure = figure(rows, out_dir)
+    tabulate(study, out_dir, figure, _line)
     for r in rows:
-        study.summary.append(
-            f"n = {r['n']:2d}  {r['method']:<50s} {r['seconds']:8.3f} s  "
-            f"x{r['ratio_to_catenet']:6.1f}  {r['iterations']:3d} it  "
-            f"error {r['max_error_rel']:.1e}"
-        )
         # Prestrained rows compare other nets (their error is against catenet on the same
         # pretensioned net, or against the unprestrained one): not a finding.
         if r["max_error_rel"] > 1e-5 and "prestrain" not in r["method"]:
@@ -353,6 +347,14 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
                 f"{r['max_error_rel']:.1e} of delta"
             )
     return study
+
+
+def _line(r: dict) -> str:
+    return (
+        f"n = {r['n']:2d}  {r['method']:<50s} {r['seconds']:8.3f} s  "
+        f"x{r['ratio_to_catenet']:6.1f}  {r['iterations']:3d} it  "
+        f"error {r['max_error_rel']:.1e}"
+    )
 
 
 def compare(n: int, rows: list, study: Study, *, quick: bool) -> None:

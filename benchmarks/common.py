@@ -201,6 +201,16 @@ def run_child(code: str, *, timeout: float, env: dict | None = None) -> dict:
 # --- output ---------------------------------------------------------------------------------
 
 
+def tabulate(study: Study, out_dir: Path, figure, line) -> Study:
+    """A study's table: ``study.rows`` into ``study.csv``, its figure (``figure(rows,
+    out_dir)``, the path it saves) and one summary line per row (``line(row)``; None: no
+    line for that row)."""
+    write_csv(study.rows, study.csv)
+    study.figure = figure(study.rows, out_dir)
+    study.summary += [text for text in map(line, study.rows) if text is not None]
+    return study
+
+
 def write_csv(rows: Sequence[dict], path: Path) -> Path:
     """Rows (dicts) as CSV, columns in order of first appearance; floats with 6 digits."""
     path = Path(path)

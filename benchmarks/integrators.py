@@ -38,8 +38,8 @@ from benchmarks.common import (
     pyplot,
     save_figure,
     set_threads,
+    tabulate,
     warm_up,
-    write_csv,
 )
 
 log = logging.getLogger(__name__)
@@ -181,22 +181,23 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             rows.append(row)
             done += 1
     progress(total, total, "")
-    csv = write_csv(rows, Path(out_dir) / f"{NAME}.csv")
-    study = Study(NAME, rows, csv, figure(rows, out_dir))
-    for r in rows:
-        if r["kind"] == "measured":
-            study.summary.append(
-                f"{r['scheme']:<22} h omega = {r['h_omega']:<5g} xi = {r['xi']:.2e} "
-                f"(analysis {r['xi_analysis']:.2e})"
-            )
-        elif r["kind"] == "settling":
-            study.summary.append(
-                f"{r['scheme']:<22} mu = {r['mu']:<4g} "
-                + ("at rest after" if r["at_rest"] else "NOT at rest by")
-                + f" {r['settle_seconds']:.4g} s "
-                f"({r['steps']} steps, {r['wall_seconds']:.3g} s wall)"
-            )
-    return study
+    return tabulate(Study(NAME, rows, Path(out_dir) / f"{NAME}.csv"), out_dir, figure, _line)
+
+
+def _line(r: dict) -> str | None:
+    if r["kind"] == "measured":
+        return (
+            f"{r['scheme']:<22} h omega = {r['h_omega']:<5g} xi = {r['xi']:.2e} "
+            f"(analysis {r['xi_analysis']:.2e})"
+        )
+    if r["kind"] == "settling":
+        return (
+            f"{r['scheme']:<22} mu = {r['mu']:<4g} "
+            + ("at rest after" if r["at_rest"] else "NOT at rest by")
+            + f" {r['settle_seconds']:.4g} s "
+            f"({r['steps']} steps, {r['wall_seconds']:.3g} s wall)"
+        )
+    return None  # the analysis' rows: in the table and the figure only
 
 
 def figure(rows, out_dir):

@@ -42,9 +42,9 @@ from benchmarks.common import (
     run_child,
     save_figure,
     set_threads,
+    tabulate,
     thread_env,
     warm_up,
-    write_csv,
 )
 
 log = logging.getLogger(__name__)
@@ -115,14 +115,14 @@ def run(
                     f"slower than {r['variant']} ({r['seconds']:.3g} s, "
                     f"x{r['ratio_to_default']:.2f})"
                 )
-    write_csv(rows, study.csv)
-    study.figure = figure(rows, out_dir)
-    for r in rows:
-        study.summary.append(
-            f"{r['skip']:<18s} {r['variant']:<46s} {'*' if r['default'] else ' '} "
-            f"{r['seconds']:8.4f} s  x{r['ratio_to_default']:6.2f}  {r['note']}"
-        )
-    return study
+    return tabulate(study, out_dir, figure, _line)
+
+
+def _line(r: dict) -> str:
+    return (
+        f"{r['skip']:<18s} {r['variant']:<46s} {'*' if r['default'] else ' '} "
+        f"{r['seconds']:8.4f} s  x{r['ratio_to_default']:6.2f}  {r['note']}"
+    )
 
 
 # --- parts ----------------------------------------------------------------------------------

@@ -27,8 +27,8 @@ from benchmarks.common import (
     pyplot,
     save_figure,
     set_threads,
+    tabulate,
     warm_up,
-    write_csv,
 )
 
 log = logging.getLogger(__name__)
@@ -94,21 +94,17 @@ def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: in
             )
             done += 1
     progress(total, total, "")
-    csv = write_csv(rows, Path(out_dir) / f"{NAME}.csv")
-    fig = figure(rows, out_dir)
-    study = Study(NAME, rows, csv, fig)
-    for r in rows:
-        state = (
-            "equilibrium"
-            if r["equilibrium"]
-            else f"capped at {r['simulated_seconds']:.1f} s simulated"
-        )
-        study.summary.append(
-            f"n = {r['n']:2d}  h = {r['h']:<6g} {r['wall_seconds']:7.2f} s  "
-            f"{r['steps']:6d} steps  {r['iterations_per_step']:.2f} it/step  "
-            f"time ratio {r['time_ratio']:.3g}  error {r['error_vs_static']:.1e}  ({state})"
-        )
-    return study
+    return tabulate(Study(NAME, rows, Path(out_dir) / f"{NAME}.csv"), out_dir, figure, _line)
+
+
+def _line(r: dict) -> str:
+    capped = f"capped at {r['simulated_seconds']:.1f} s simulated"
+    state = "equilibrium" if r["equilibrium"] else capped
+    return (
+        f"n = {r['n']:2d}  h = {r['h']:<6g} {r['wall_seconds']:7.2f} s  "
+        f"{r['steps']:6d} steps  {r['iterations_per_step']:.2f} it/step  "
+        f"time ratio {r['time_ratio']:.3g}  error {r['error_vs_static']:.1e}  ({state})"
+    )
 
 
 def figure(rows, out_dir):

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import csv
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
@@ -44,176 +45,149 @@ def read(path: Path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-def opensees(rows: list[dict]) -> str:
-    """CPU time (what a shared machine does not inflate), then wall time."""
-    cpu = [
-        "DOF",
-        "catenet solve",
-        "OpenSees analyze",
-        "OpenSees / catenet",
-        "`catenet run`",
-        "OpenSees process",
-        "OpenSees / catenet",
-        "Newton it. catenet / OpenSees",
-        "peak MiB catenet / OpenSees",
-        "largest difference / delta",
-    ]
-    body = [
-        [
-            r["dofs"],
-            g(r["catenet_engine_cpu_s"]),
-            g(r["opensees_engine_cpu_s"])
-            + ("" if r["opensees_engine_warm"] == "True" else "*")
-            + ("" if r["opensees_ok"] == "0" else " (no equilibrium)"),
-            g(r["engine_cpu_ratio"], 2) if r["opensees_ok"] == "0" else "-",
-            g(r["catenet_process_cpu_s"]),
-            g(r["opensees_process_cpu_s"]),
-            g(r["process_cpu_ratio"], 2) if r["opensees_ok"] == "0" else "-",
-            f"{r['catenet_iterations']} / {r['opensees_iterations']}",
-            f"{float(r['catenet_peak_mib']):.0f} / {float(r['opensees_peak_mib']):.0f}",
-            g(r["max_diff_over_delta"], 2) if r["opensees_ok"] == "0" else "-",
-        ]
-        for r in rows
-    ]
-    wall = [
-        "DOF",
-        "catenet solve",
-        "OpenSees analyze",
-        "`catenet run`",
-        "OpenSees process",
-        "rounds",
-    ]
-    body2 = [
-        [
-            r["dofs"],
-            g(r["catenet_engine_s"]),
-            g(r["opensees_engine_s"]),
-            g(r["catenet_process_s"]),
-            g(r["opensees_process_s"]),
-            r["rounds"],
-        ]
-        for r in rows
-    ]
+Cell = Callable[[dict], str]
+
+
+def num(key: str, digits: int = 3) -> Cell:
+    """The column ``key`` as a number in short form."""
+    return lambda r: g(r[key], digits)
+
+
+def text(key: str) -> Cell:
+    """The column ``key`` as it is."""
+    return lambda r: r[key]
+
+
+def table(rows: list[dict], columns: list[tuple[str, Cell]]) -> str:
+    """The Markdown table of ``rows``: one column per (header, cell) pair."""
+    return markdown([h for h, _ in columns], [[cell(r) for _, cell in columns] for r in rows])
+
+
+def cpu_and_wall(rows: list[dict], cpu, wall, cpu_note: str) -> str:
+    """A CPU time table (what a shared machine does not inflate), then wall time."""
     return (
-        "CPU time [s] (medians; * the analysis within the whole process, not warm):\n\n"
-        + markdown(cpu, body)
+        f"CPU time [s] ({cpu_note}):\n\n"
+        + table(rows, cpu)
         + "\n\nWall time [s] on the shared machine (medians of the same runs):\n\n"
-        + markdown(wall, body2)
+        + table(rows, wall)
     )
 
 
+def _if_ok(cell: Cell) -> Cell:
+    """An OpenSees row's cell where it found the equilibrium, else "-"."""
+    return lambda r: cell(r) if r["opensees_ok"] == "0" else "-"
+
+
+def _mib(a: str, b: str) -> Cell:
+    return lambda r: f"{float(r[a]):.0f} / {float(r[b]):.0f}"
+
+
+def opensees(rows: list[dict]) -> str:
+    """CPU time (what a shared machine does not inflate), then wall time."""
+
+    def engine(r: dict) -> str:
+        return (
+            g(r["opensees_engine_cpu_s"])
+            + ("" if r["opensees_engine_warm"] == "True" else "*")
+            + ("" if r["opensees_ok"] == "0" else " (no equilibrium)")
+        )
+
+    cpu = [
+        ("DOF", text("dofs")),
+        ("catenet solve", num("catenet_engine_cpu_s")),
+        ("OpenSees analyze", engine),
+        ("OpenSees / catenet", _if_ok(num("engine_cpu_ratio", 2))),
+        ("`catenet run`", num("catenet_process_cpu_s")),
+        ("OpenSees process", num("opensees_process_cpu_s")),
+        ("OpenSees / catenet", _if_ok(num("process_cpu_ratio", 2))),
+        (
+            "Newton it. catenet / OpenSees",
+            lambda r: f"{r['catenet_iterations']} / {r['opensees_iterations']}",
+        ),
+        ("peak MiB catenet / OpenSees", _mib("catenet_peak_mib", "opensees_peak_mib")),
+        ("largest difference / delta", _if_ok(num("max_diff_over_delta", 2))),
+    ]
+    wall = [
+        ("DOF", text("dofs")),
+        ("catenet solve", num("catenet_engine_s")),
+        ("OpenSees analyze", num("opensees_engine_s")),
+        ("`catenet run`", num("catenet_process_s")),
+        ("OpenSees process", num("opensees_process_s")),
+        ("rounds", text("rounds")),
+    ]
+    note = "medians; * the analysis within the whole process, not warm"
+    return cpu_and_wall(rows, cpu, wall, note)
+
+
 def check(rows: list[dict]) -> str:
-    header = [
-        "OpenSees system",
-        "converged",
-        "Newton it.",
-        "analyze [s]",
-        "largest difference / delta, same law",
-        "without the pretension",
-    ]
-    body = [
+    return table(
+        rows,
         [
-            r["system"],
-            "yes" if r["ok"] == "0" else f"no ({r['ok']})",
-            r["iterations"],
-            g(r["analyze_s"]),
-            g(r["diff_same_law"], 2),
-            g(r["diff_no_pretension"], 2),
-        ]
-        for r in rows
-    ]
-    return markdown(header, body)
+            ("OpenSees system", text("system")),
+            ("converged", lambda r: "yes" if r["ok"] == "0" else f"no ({r['ok']})"),
+            ("Newton it.", text("iterations")),
+            ("analyze [s]", num("analyze_s")),
+            ("largest difference / delta, same law", num("diff_same_law", 2)),
+            ("without the pretension", num("diff_no_pretension", 2)),
+        ],
+    )
 
 
 def formfind(rows: list[dict]) -> str:
     """CPU time, then wall time."""
     cpu = [
-        "edges",
-        "catenet `formfind`",
-        "with `Net.from_arrays`",
-        "compas_fd `fd_numpy`",
-        "catenet / compas_fd",
-        "`catenet formfind` process",
-        "compas_fd process",
-        "catenet / compas_fd",
-        "peak MiB catenet / compas_fd",
-        "largest difference / span",
-    ]
-    body = [
-        [
-            r["edges"],
-            g(r["catenet_engine_cpu_s"]),
-            g(r["catenet_engine_with_net_cpu_s"]),
-            g(r["compas_engine_cpu_s"]),
-            g(r["engine_cpu_ratio"], 2),
-            g(r["catenet_process_cpu_s"]),
-            g(r["compas_process_cpu_s"]),
-            g(r["process_cpu_ratio"], 2),
-            f"{float(r['catenet_peak_mib']):.0f} / {float(r['compas_peak_mib']):.0f}",
-            g(r["max_dx_over_span"], 2),
-        ]
-        for r in rows
+        ("edges", text("edges")),
+        ("catenet `formfind`", num("catenet_engine_cpu_s")),
+        ("with `Net.from_arrays`", num("catenet_engine_with_net_cpu_s")),
+        ("compas_fd `fd_numpy`", num("compas_engine_cpu_s")),
+        ("catenet / compas_fd", num("engine_cpu_ratio", 2)),
+        ("`catenet formfind` process", num("catenet_process_cpu_s")),
+        ("compas_fd process", num("compas_process_cpu_s")),
+        ("catenet / compas_fd", num("process_cpu_ratio", 2)),
+        ("peak MiB catenet / compas_fd", _mib("catenet_peak_mib", "compas_peak_mib")),
+        ("largest difference / span", num("max_dx_over_span", 2)),
     ]
     wall = [
-        "edges",
-        "catenet `formfind`",
-        "with `Net.from_arrays`",
-        "compas_fd `fd_numpy`",
-        "catenet / compas_fd",
-        "`catenet formfind` process",
-        "compas_fd process",
-        "rounds",
+        ("edges", text("edges")),
+        ("catenet `formfind`", num("catenet_engine_s")),
+        ("with `Net.from_arrays`", num("catenet_engine_with_net_s")),
+        ("compas_fd `fd_numpy`", num("compas_engine_s")),
+        ("catenet / compas_fd", num("engine_ratio", 2)),
+        ("`catenet formfind` process", num("catenet_process_s")),
+        ("compas_fd process", num("compas_process_s")),
+        ("rounds", text("rounds")),
     ]
-    body2 = [
-        [
-            r["edges"],
-            g(r["catenet_engine_s"]),
-            g(r["catenet_engine_with_net_s"]),
-            g(r["compas_engine_s"]),
-            g(r["engine_ratio"], 2),
-            g(r["catenet_process_s"]),
-            g(r["compas_process_s"]),
-            r["rounds"],
-        ]
-        for r in rows
-    ]
-    return (
-        "CPU time [s] (medians):\n\n"
-        + markdown(cpu, body)
-        + "\n\nWall time [s] on the shared machine (medians of the same runs):\n\n"
-        + markdown(wall, body2)
-    )
+    return cpu_and_wall(rows, cpu, wall, "medians")
 
 
 def pardiso(rows: list[dict]) -> str:
-    header = [
-        "DOF",
-        "binding",
-        "phase",
-        "CPU [s]",
-        "wall [s]",
-        "CPU x catenet's",
-        "largest difference / largest x",
-    ]
-    body = [
+    def if_set(key: str) -> Cell:
+        return lambda r: g(r[key], 2) if r[key] else ""
+
+    return table(
+        rows,
         [
-            r["dofs"],
-            r["tool"],
-            r["phase"],
-            g(r["cpu_s"]),
-            g(r["seconds"]),
-            g(r["over_catenet"], 2) if r["over_catenet"] else "",
-            g(r["max_dx_over_x"], 2) if r["max_dx_over_x"] else "",
-        ]
-        for r in rows
-    ]
-    return markdown(header, body)
+            ("DOF", text("dofs")),
+            ("binding", text("tool")),
+            ("phase", text("phase")),
+            ("CPU [s]", num("cpu_s")),
+            ("wall [s]", num("seconds")),
+            ("CPU x catenet's", if_set("over_catenet")),
+            ("largest difference / largest x", if_set("max_dx_over_x")),
+        ],
+    )
 
 
 def startup(rows: list[dict]) -> str:
-    header = ["fresh process", "CPU [s]", "CPU over the second [s]", "wall [s]"]
-    body = [[r["process"], g(r["cpu_s"]), g(r["cpu_over_floor_s"]), g(r["seconds"])] for r in rows]
-    return markdown(header, body)
+    return table(
+        rows,
+        [
+            ("fresh process", text("process")),
+            ("CPU [s]", num("cpu_s")),
+            ("CPU over the second [s]", num("cpu_over_floor_s")),
+            ("wall [s]", num("seconds")),
+        ],
+    )
 
 
 TABLES = (

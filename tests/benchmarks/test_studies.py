@@ -191,3 +191,25 @@ def test_import_costs_sums_own_times_by_package(tmp_path):
 
     costs = dict(import_costs(["-c", "import json, email.message"], {}, str(tmp_path), top=50))
     assert costs["json"] > 0 and costs["email"] > 0
+
+
+def test_tabulate_writes_the_table_the_figure_and_a_line_per_row(tmp_path):
+    from benchmarks.common import Study, read_csv, tabulate
+
+    rows = [{"n": 10, "seconds": 0.5}, {"n": 34, "seconds": 2.0, "note": "capped"}]
+    drawn = []
+
+    def figure(rows_, out_dir):
+        drawn.append((rows_, out_dir))
+        return out_dir / "bench-t.png"
+
+    study = Study("t", rows, tmp_path / "t.csv")
+    study.summary.append("first")
+    got = tabulate(study, tmp_path, figure, lambda r: None if r["n"] == 10 else f"n = {r['n']}")
+    assert got is study and study.figure == tmp_path / "bench-t.png"
+    assert drawn == [(rows, tmp_path)]
+    assert study.summary == ["first", "n = 34"]
+    assert read_csv(study.csv) == [
+        {"n": "10", "seconds": "0.5", "note": ""},
+        {"n": "34", "seconds": "2", "note": "capped"},
+    ]
