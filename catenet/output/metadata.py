@@ -27,14 +27,14 @@ def _with_tension(res, tension):
 
 def environment() -> dict[str, str]:
     """Versions of catenet, Python and the libraries it runs on ('' where missing)."""
-    from importlib.metadata import PackageNotFoundError, version
+    from importlib.metadata import PackageNotFoundError
 
     import catenet
 
     out = {"catenet": catenet.__version__, "python": platform.python_version()}
     for name in ("numpy", "scipy", "numba", "h5py", "click", "pypardiso", "mkl"):
         try:
-            out[name] = version(name)
+            out[name] = _version(name)
         except PackageNotFoundError:
             out[name] = ""
     try:
@@ -44,6 +44,21 @@ def environment() -> dict[str, str]:
     except ImportError:  # pragma: no cover - h5py is a dependency
         out["hdf5"] = ""
     return out
+
+
+def _version(name: str) -> str:
+    """The installed version of the distribution ``name`` (``importlib.metadata.version``):
+    read from the Version line of its metadata's headers, without parsing the whole file
+    (a long licence text) as e-mail, which took most of a result file's header time."""
+    from importlib.metadata import distribution
+
+    dist = distribution(name)
+    for line in (dist.read_text("METADATA") or dist.read_text("PKG-INFO") or "").splitlines():
+        if not line:  # the end of the headers
+            break
+        if line.startswith("Version:"):
+            return line[len("Version:") :].strip()
+    return dist.version
 
 
 def result_attrs(res, scene, tension=None) -> dict:

@@ -460,3 +460,20 @@ def test_spares_of_a_killed_run_are_removed_by_the_next(tmp_path):
         assert not (tmp_path / ".again.h5.prev").exists()
         w.frame(0.0, moved(scene, 0))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.h5", "again.xdmf"]
+
+
+def test_the_recorded_versions_are_the_installed_distributions():
+    """``environment`` reads each version from its metadata's headers: the same as
+    importlib.metadata.version, '' for a distribution that is not installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from catenet.output.metadata import environment
+
+    env = environment()
+    for name in ("numpy", "scipy", "numba", "h5py", "click", "pypardiso", "mkl"):
+        try:
+            expected = version(name)
+        except PackageNotFoundError:
+            expected = ""
+        assert env[name] == expected, name
+    assert env["numpy"] and env["h5py"]
