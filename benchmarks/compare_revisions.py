@@ -117,7 +117,7 @@ def main() -> None:
             for k, tree in enumerate(trees.values()):  # warm each tree's caches
                 run_once(tree, case, Path(tmp) / f"warm{k}.h5")
             differ = _differences(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
-            same = _same_content(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
+            problems = _same_content(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
             for k in range(args.repeat):
                 for name, tree in trees.items():
                     runs[name].append(run_once(tree, case, Path(tmp) / f"{name[:4]}{k}.h5"))
@@ -137,7 +137,7 @@ def main() -> None:
         w = csv.writer(fh)
         w.writerow(
             ["tree", "revision", "case", "median_s", "min_s", "median_cpu_s", "min_cpu_s"]
-            + ["runs", "dx_rel", "dtension_rel", "same_content"]
+            + ["runs", "dx_rel", "dtension_rel", "file_differences"]
         )
         for name in trees:
             rev = subprocess.run(
@@ -155,7 +155,7 @@ def main() -> None:
             w.writerow(
                 [name, rev, args.case, f"{median[name]:.4f}", f"{min(wall[name]):.4f}"]
                 + [f"{median_cpu[name]:.4f}", f"{min(cpu[name]):.4f}", len(wall[name])]
-                + [f"{differ['x']:.3e}", f"{differ['tension']:.3e}", int(not same)]
+                + [f"{differ['x']:.3e}", f"{differ['tension']:.3e}", "; ".join(problems) or "none"]
             )
     for name in trees:
         print(
@@ -167,7 +167,7 @@ def main() -> None:
         print(f"largest relative difference of /result/{key}: {value:.2e}")
     print(
         "every dataset and attribute of the other revision's file: "
-        + ("the same in this one" if not same else "; ".join(same))
+        + ("the same in this one" if not problems else "; ".join(problems))
     )
 
 

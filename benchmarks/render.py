@@ -157,6 +157,7 @@ FRAGMENTS = {
     "pareto": sections.pareto,
     "skips": sections.skips,
     "cold-start": sections.cold_start,
+    "revisions": sections.revisions,
     "formfind": sections.formfind,
     "flush": sections.flush,
     "reuse": sections_reuse.reuse,

@@ -248,6 +248,49 @@ def cold_start(results: Path) -> list[str]:
     return out
 
 
+def revisions(results: Path) -> list[str]:
+    """``benchmarks/compare_revisions.py``: whole `catenet run` processes of this revision
+    against another one, interleaved in one run."""
+    rows = read_study(results, "revisions")
+    if not rows or len(rows) != 2 or "median_cpu_s" not in rows[0]:
+        return []
+    this, other = rows
+    cpu = as_float(this["median_cpu_s"]) / as_float(other["median_cpu_s"])
+    wall = as_float(this["median_s"]) / as_float(other["median_s"])
+    same = this.get("dx_rel") == this.get("dtension_rel") == "0.000e+00"
+    out = md_table(
+        ["revision", "CPU [s], median", "CPU [s], least", "wall [s], median", "runs"],
+        [
+            [
+                f"`{r['revision']}`",
+                as_text(r["median_cpu_s"]),
+                as_text(r["min_cpu_s"]),
+                as_text(r["median_s"]),
+                r["runs"],
+            ]
+            for r in rows
+        ],
+    )
+    out += [
+        "",
+        f"`catenet run {this['case']}` at `{this['revision']}` takes **{cpu:.3f}x** the CPU "
+        f"time of `{other['revision']}` ({wall:.3f}x the wall time on the shared machine); "
+        + (
+            "the two give the same /result/x and /result/tension to the bit."
+            if same
+            else f"their /result/x differ by {this['dx_rel']} (relative)."
+        ),
+    ]
+    differences = this.get("file_differences", "")
+    if differences:
+        out += [
+            "",
+            "Datasets and attributes of the earlier file that the new one lacks or holds "
+            f"otherwise: {'none' if differences == 'none' else differences}.",
+        ]
+    return out
+
+
 def stress(results: Path) -> list[str]:
     rows = read_study(results, "stress")
     if not rows:

@@ -164,7 +164,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
         out, plain, every=case.output.every, xdmf=case.output.xdmf, attrs=attrs
     ) as writer:
         if writer.wants(0):
-            writer.frame(1.0, res.x, None, res.tension)
+            writer.frame(1.0, res.x, None, res.tension, last=True)
         writer.result(
             res,
             formfind_residual=float(found.residual),

@@ -280,10 +280,11 @@ class ResultWriter:
         self.obstacles.create_trajectory(g)  # moving obstacles' poses and surfaces
 
     # --- frames ----------------------------------------------------------------------------
-    def frame(self, t: float, x, v=None, tension=None, a=None) -> None:
+    def frame(self, t: float, x, v=None, tension=None, a=None, last: bool = False) -> None:
         """Takes a frame (a copy); it reaches the file with the next flush. ``v`` (``a``)
         None stores zeros when the file keeps velocities (accelerations); ``tension`` None
-        is computed from x.
+        is computed from x. ``last``: the run's final frame, with /result to follow at
+        once: it reaches the file with /result (one write, not two), or on ``close``.
         Raises OutputError for a non-finite frame (not kept). A failed write (a full disk)
         is remembered, and frames stop: the run goes on and ``result`` saves the final
         state elsewhere."""
@@ -306,7 +307,7 @@ class ResultWriter:
             _check_finite(name, arr, float(t))
         self._pending.append((float(t), data))
         self._pending_bytes += sum(arr.nbytes for arr in data.values())
-        if (
+        if not last and (
             self.clock() >= self._next_flush
             or (self.flush_frames > 0 and len(self._pending) >= self.flush_frames)
             or self._pending_bytes >= MAX_PENDING_BYTES

@@ -44,11 +44,11 @@ def run_steps(
 
         clock = Clock()
 
-    def keep(step, t, x, v, tension=None, force=False, a=None) -> None:
+    def keep(step, t, x, v, tension=None, force=False, a=None, last=False) -> None:
         if (force or writer.wants(step)) and written["step"] != step:
             with clock.aside():  # writing is neither start-up nor solving
                 tension = ws.system.tension(x) if tension is None else tension
-                writer.frame(t, x, v, tension, a=a)
+                writer.frame(t, x, v, tension, a=a, last=last)
             written["step"] = step
 
     if dynamic:
@@ -73,7 +73,8 @@ def run_steps(
         watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
-        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a)
+        # a static run's last load step: /result follows at once, written with it
+        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a, last=last)
         if progress is not None:
             if dynamic:
                 progress(step.time, total, rest=step.rest)

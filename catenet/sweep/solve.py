@@ -361,6 +361,6 @@ def _save_run(out: Path, index: int, level: int, scene, result) -> str:
         if not case.solver.method == "dynamic":
             result.time = t
         if every > 0:
-            writer.frame(t, result.x, result.v, result.tension)
+            writer.frame(t, result.x, result.v, result.tension, last=True)
         writer.result(result)
     return str(rel)

@@ -477,3 +477,24 @@ def test_the_recorded_versions_are_the_installed_distributions():
             expected = ""
         assert env[name] == expected, name
     assert env["numpy"] and env["h5py"]
+
+
+def test_a_last_frame_is_written_with_the_result_in_one_flush(tmp_path):
+    """``frame(..., last=True)``: the final frame waits for /result (one write, not two),
+    and reaches the file on close when no result comes."""
+    scene = make_scene()
+    path = tmp_path / "last.h5"
+    with ResultWriter(path, scene, every=1) as w:
+        w.frame(0.5, moved(scene, 0))
+        assert w.flushes == 1 and frames_on_disk(path) == 1  # the first frame at once
+        w.frame(1.0, moved(scene, 1), last=True)
+        assert w.flushes == 1 and frames_on_disk(path) == 1
+        w.result(fake_result(scene, moved(scene, 1)))
+        assert w.flushes == 2 and frames_on_disk(path) == 2
+    with h5py.File(path, "r") as h5:
+        assert list(h5["trajectory/time"][:]) == [0.5, 1.0] and "x" in h5["result"]
+    alone = tmp_path / "alone.h5"
+    with ResultWriter(alone, scene, every=1) as w:
+        w.frame(1.0, moved(scene, 1), last=True)
+        assert frames_on_disk(alone) == 0
+    assert frames_on_disk(alone) == 1
