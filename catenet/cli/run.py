@@ -16,6 +16,7 @@ from catenet.cli.common import (
     HELP,
     Progress,
     case_options,
+    collecting_later,
     errors_to_exit_codes,
     setup_logging,
     verbosity_options,
@@ -112,9 +113,10 @@ def command(
     setup_logging(quiet, verbose, debug)
     code = EXIT_OK
     with errors_to_exit_codes(debug):
-        from catenet.case import load_case
-        from catenet.errors import CatenetError, ConfigError
-        from catenet.run.runner import output_path, run_case
+        with collecting_later():
+            from catenet.case import load_case
+            from catenet.errors import CatenetError, ConfigError
+            from catenet.run.runner import output_path, run_case
 
         case = load_case(case_file, overrides)
         path = output_path(case, out)

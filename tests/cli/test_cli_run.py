@@ -385,6 +385,9 @@ optional = ("catenet.terms.strands", "catenet.kernels.strands", "catenet.terms.r
             "catenet.terms.body", "catenet.kernels.body", "catenet.terms.contact")
 print("LOADED", *sorted(m for m in optional if m in sys.modules))
 print("POOL", parallel._is_initialized)
+import atexit, gc
+atexit._run_exitfuncs()  # what the interpreter runs at exit, before its last collection
+print("FROZEN", gc.get_freeze_count() > 0, gc.isenabled())
 """
 
 
@@ -403,6 +406,28 @@ def test_a_plain_static_run_loads_only_what_it_uses(tmp_path, write_case):
     lines = dict(ln.split(" ", 1) if " " in ln else (ln, "") for ln in proc.stdout.splitlines())
     assert lines["LOADED"] == ""
     assert lines["POOL"] == "False"
+    # At exit every object is frozen: the last collection does not walk Numba's objects;
+    # the collector itself is on again after the imports.
+    assert lines["FROZEN"] == "True True"
+
+
+def test_collecting_later_restores_the_collector():
+    import gc
+
+    from catenet.cli.common import collecting_later
+
+    assert gc.isenabled()
+    with pytest.raises(RuntimeError), collecting_later():
+        assert not gc.isenabled()
+        raise RuntimeError("an import that fails")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with collecting_later():
+            pass
+        assert not gc.isenabled()  # left as it was
+    finally:
+        gc.enable()
 
 
 def test_set_numba_threads_starts_the_pool_set_threads_only_where_it_runs():
