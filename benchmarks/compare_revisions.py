@@ -80,9 +80,9 @@ def _same_content(this: Path, other: Path) -> list[str]:
                 if key in CLOCK:
                     continue
                 if key not in a.attrs:
-                    problems.append(f"{name} attribute {key}: missing")
+                    problems.append(f"attribute {key} of {name}: missing")
                 elif not np.array_equal(np.asarray(a.attrs[key]), np.asarray(b.attrs[key])):
-                    problems.append(f"{name} attribute {key}: differs")
+                    problems.append(f"attribute {key} of {name}: differs")
 
         def visit(name: str, obj) -> None:
             if name not in fa:

@@ -283,10 +283,15 @@ def revisions(results: Path) -> list[str]:
     ]
     differences = this.get("file_differences", "")
     if differences:
+        why = (
+            " (the resolved case text: each revision writes every key it knows)"
+            if "attribute case of /: differs" in differences
+            else ""
+        )
         out += [
             "",
-            "Datasets and attributes of the earlier file that the new one lacks or holds "
-            f"otherwise: {'none' if differences == 'none' else differences}.",
+            "Datasets and attributes of the earlier revision's file that the new one lacks "
+            f"or holds otherwise: {differences}{why}.",
         ]
     return out
 
