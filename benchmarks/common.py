@@ -80,9 +80,11 @@ def no_progress(done: float, total: float, note: str = "") -> None:
 
 def set_threads(k: int) -> None:
     """Threads of MKL (PARDISO), Numba and OpenBLAS: catenet.solver.threads.set_threads."""
+    from catenet.solver.threads import set_numba_threads
     from catenet.solver.threads import set_threads as set_catenet_threads
 
     set_catenet_threads(k)
+    set_numba_threads(k)  # Numba's pool too, as the studies were measured with it
 
 
 def thread_env(threads: int | None) -> dict:
