@@ -176,6 +176,7 @@ class TimeStepper:
         self.steps = 0
         self.residual = 0.0  # the last step's Newton residual; at rest the static one
         self.equilibrium = False
+        self.pseudo = False  # a run to rest through its stages: the path is only a path
 
     def begin(self, x0, v0, t0, a0, a_out) -> None:
         """The start state at t0: ``x0``, ``v0`` (default: reference positions at rest)
@@ -273,6 +274,8 @@ class TimeStepper:
         y_k = self.x.reshape(-1)[self.free]
         v_k = self.v.reshape(-1)[self.free]
         self.inertia.set_step(*self.scheme.weights(self.m_free, y_k, v_k, h_step, self.damping))
+        if self.pseudo:
+            self.start_still(x_trial)
         if self.kept is not None:
             self.kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
         try:
@@ -288,6 +291,16 @@ class TimeStepper:
             return None, str(exc)
         self.iterations += newton.iterations
         return newton, newton.reason
+
+    def start_still(self, x_trial: np.ndarray) -> None:
+        """In pseudo-time (a run to rest through its stages), Newton starts the step from
+        the last state instead of the scheme's predictor where the step's potential is
+        lower there: the step's equilibrium is the same, only Newton's start differs (the
+        predictor extrapolates a recoil after a stage change: catenet/solver/relax.py)."""
+        still = self.x.copy()
+        still[self.net.fixed] = x_trial[self.net.fixed]
+        if self.potential.evaluate(still).phi < self.potential.evaluate(x_trial).phi:
+            x_trial[:] = still
 
     def refresh(self, h_step: float, why: str) -> bool:
         """After a failed step: whether to retry it at the same h with fresh
@@ -340,6 +353,7 @@ class TimeStepper:
         smooth = slack_strain(self.net, self.x) if law.any_tension_only else 0.0
         first, *rest = rest_stages(self.potential, barriers, factors, smooth)
         self.potential = first
+        self.pseudo = True
         return rest
 
     def no_rest(self, control: RestControl) -> None:
@@ -476,8 +490,10 @@ def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> flo
 def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, float]:
     """The rest test of dynamic relaxation after a step of length h to (x, v): whether the
     static residual |grad E - f| and the inertial force |M v| / h are both below rtol
-    times the load scale (the larger of |f| and |grad E|); the residual and the larger of
-    the two over that tolerance (at most 1 at rest)."""
+    times the load scale (the larger of |f| and |grad E|), the residual's tolerance
+    raised to its round-off floor where every DOF's residual is within it (as a static
+    solve's: ``Potential.at_floor``; a long stiff chain's rtol is below that floor); the
+    residual and the larger of the two over that tolerance (at most 1 at rest)."""
     _, grad = system.gradient(x)
     r = grad.reshape(-1)[system.free_dofs] - potential.f_free
     scale = max(potential.f_norm, float(norm(grad.reshape(-1))))
@@ -486,8 +502,11 @@ def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, floa
     inertia = float(norm(m_free * v.reshape(-1)[system.free_dofs])) / h
     if not (math.isfinite(tol) and tol > 0 and math.isfinite(residual + inertia)):
         return False, residual, math.inf  # never at rest against a non-finite tolerance
-    ratio = max(residual, inertia) / tol
-    return (residual <= tol and inertia <= tol), residual, ratio
+    level = tol
+    if residual > tol and (floor := potential.at_floor(x, r, steps=False)) is not None:
+        level = floor
+    ratio = max(residual / level, inertia / tol)
+    return (residual <= level and inertia <= tol), residual, ratio
 
 
 def _check(dt, damping, t_end, t0, rtol, max_steps) -> None:

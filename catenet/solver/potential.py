@@ -142,18 +142,19 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
 
-    def at_floor(self, x: np.ndarray, g: np.ndarray) -> float | None:
+    def at_floor(self, x: np.ndarray, g: np.ndarray, steps: bool = True) -> float | None:
         """The norm of the residual's round-off floor, DOF by DOF, if the residual g (free
         DOFs) at x is within it in every free DOF: FLOOR_SAFETY eps of the forces that
         meet there (the edges' |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other
         terms' and the loads' forces); else None. A state there is converged, and that
-        norm is the tolerance it was held to (the caller compares it with the loads)."""
+        norm is the tolerance it was held to (the caller compares it with the loads).
+        ``steps=False``: the static residual's floor (a time step's inertia left out)."""
         stretch = self.system.stretch
         free = self.system.free_dofs
         level = np.repeat(stretch.node_roundoff(x), 3)[free]
         _, grad = self.system.gradient(x)
         level += 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
-        for term in self.steps:  # a time step's inertia
+        for term in self.steps if steps else ():  # a time step's inertia
             force = np.zeros_like(x)
             term.gradient(x, force)
             level += 2.0 * np.abs(force.reshape(-1)[free])

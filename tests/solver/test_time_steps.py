@@ -123,6 +123,33 @@ def test_the_rest_test_asks_for_equilibrium_and_no_inertial_force():
     assert not rest and ratio > 1.0 and residual > rtol * potential.f_norm
 
 
+def test_a_state_at_the_round_off_floor_of_its_forces_is_at_rest_if_nothing_moves():
+    """A tolerance below what double precision resolves (a long, stiff chain's rtol times
+    its load scale can be): the static residual is held to its round-off floor DOF by DOF
+    instead, as in a static solve; the inertial force still to rtol, so a state that
+    moves is not at rest however small its residual."""
+    net = cn.cable([0, 0, 0], [1, 0, 0], 11, cn.Material(EA=1e3, line_density=0.5), length=1.05)
+    loads = cn.Loads(gravity=[0.0, 0.0, -9.81])
+    eq = solve_static(net, loads, rtol=1e-13).x
+    ws = Workspace(net)
+    potential = ws.potential(loads)
+    system = ws.system
+    m_free = np.repeat(net.mass[~net.fixed], 3)
+    still = np.zeros_like(eq)
+    rtol = 1e-20  # rtol * scale: far below the round-off of these forces
+    rest, residual, ratio = at_rest(system, potential, eq, still, m_free, 0.01, rtol)
+    assert residual > rtol * potential.f_norm
+    assert rest and ratio <= 1.0
+    creeping = still.copy()  # a velocity of 1e-12 m/s: its inertial force above rtol
+    creeping[~net.fixed, 2] = 1e-12
+    rest, _, ratio = at_rest(system, potential, eq, creeping, m_free, 0.01, rtol)
+    assert not rest and ratio > 1.0
+    off = eq.copy()  # 1e-9 m off the equilibrium: forces far above their round-off
+    off[~net.fixed, 2] += 1e-9
+    rest, _, ratio = at_rest(system, potential, off, still, m_free, 0.01, rtol)
+    assert not rest and ratio > 1.0
+
+
 def _sagging_cable(move=None):
     """A cable under gravity; ``move``: its far end's displacement over 1 s."""
     net = cn.cable([0, 0, 0], [1, 0, 0], 11, cn.Material(EA=1e3, line_density=0.5), length=1.05)
