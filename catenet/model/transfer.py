@@ -97,14 +97,12 @@ def transfer(coarse: Net, x_coarse: np.ndarray, fine: Net) -> np.ndarray | None:
     are the coarse net's at ``x_coarse``, interpolated along each chain by arc length
     (module docstring); None where the nets are not a coarse and a fine net of the same
     cables."""
-    from scipy.spatial import cKDTree
-
     cc, fc = Chains(coarse), Chains(fine)
     if not (cc.ok and fc.ok) or cc.joints.size != fc.joints.size or cc.joints.size == 0:
         return None
     extent = float(np.max(np.ptp(fine.nodes, axis=0), initial=0.0))
-    gap, hit = cKDTree(coarse.nodes[cc.joints]).query(fine.nodes[fc.joints])
-    if np.any(gap > JOINT_RTOL * max(extent, 1e-300)) or np.unique(hit).size != hit.size:
+    hit = _same_places(coarse.nodes[cc.joints], fine.nodes[fc.joints], JOINT_RTOL * extent)
+    if hit is None:
         return None
     partner = cc.joints[hit]  # the coarse joint of every fine joint
     if not np.array_equal(coarse.fixed[partner], fine.fixed[fc.joints]):
@@ -149,3 +147,21 @@ def transfer(coarse: Net, x_coarse: np.ndarray, fine: Net) -> np.ndarray | None:
     w = np.clip(w, 0.0, 1.0)[:, None]
     u[inner_f] = (1.0 - w) * u_coarse[node_c[lo]] + w * u_coarse[node_c[hi]]
     return fine.nodes + u
+
+
+def _same_places(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray | None:
+    """For every point of ``b`` the index of the point of ``a`` at its place (to ``tol``),
+    or None unless the two sets of distinct points are the same (a grid of ``tol``)."""
+    if not (np.isfinite(tol) and tol > 0.0):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        qa, qb = np.round(a / tol), np.round(b / tol)
+    oa, ob = np.lexsort(qa.T[::-1]), np.lexsort(qb.T[::-1])
+    sa = qa[oa]
+    if not np.array_equal(sa, qb[ob]) or not np.all(np.isfinite(sa)):
+        return None
+    if len(sa) > 1 and np.any(np.all(sa[1:] == sa[:-1], axis=1)):
+        return None  # two joints at one place
+    hit = np.empty(len(b), dtype=np.int64)
+    hit[ob] = oa
+    return hit
