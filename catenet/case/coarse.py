@@ -15,6 +15,9 @@ import dataclasses
 import math
 from typing import Any
 
+from catenet.case.kinds.base import GeometryConfig
+from catenet.case.kinds.graph import GraphConfig
+from catenet.case.kinds.square_net import SquareNetConfig
 from catenet.case.parse import Case
 
 
@@ -22,16 +25,16 @@ def coarse_case(case: Case, factor: float) -> Case | None:
     """``case`` with every edge length times ``factor`` (> 1), or None where it has no
     edge length to lengthen or names renumbered nodes by index (module docstring)."""
     g = case.geometry
-    kind = getattr(g, "kind", "")
+    geometry: GeometryConfig
     if not (math.isfinite(factor) and factor > 1.0):
         return None
-    if kind == "square_net":
+    if isinstance(g, SquareNetConfig):
         stable = 0  # no node keeps its index
         geometry = dataclasses.replace(g, edge_length=g.edge_length * factor)
-    elif kind == "graph" and g.cables:
+    elif isinstance(g, GraphConfig) and g.cables:
         if g.edge_length is None and all(c.edge_length is None for c in g.cables):
             return None
-        if any(getattr(c, "rest_length", None) is not None for c in g.cables):
+        if any(c.rest_length is not None for c in g.cables):
             return None  # rest lengths per edge of the split cable
         stable = len(g.nodes)  # the given nodes come first, in every refinement
         cables = tuple(

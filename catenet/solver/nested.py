@@ -65,15 +65,15 @@ def coarse_factor(scene, settings, given_start: bool) -> float | None:
         return None
     forced = mode == "nested"
 
-    def no(why: str) -> None:
-        if forced:
-            raise ConfigError(f'solver.start = "nested": {why}; use "auto" or "stretched"')
-        return None
-
     if given_start or not callable(getattr(scene, "coarser", None)):
         return None  # the given state (a load case's base state); a net without its case
     if getattr(scene, "terms", ()):
-        return no("a net with obstacles, bodies or self-contact has no nested start")
+        if forced:
+            raise ConfigError(
+                'solver.start = "nested": a net with obstacles, bodies or self-contact has '
+                'no nested start; use "auto" or "stretched"'
+            )
+        return None
     net, loads = scene.net, scene.loads
     dofs = free_dofs(net)
     if not forced:

@@ -142,9 +142,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         if on_step is not None and on_step(Step(len(done), factor, r.x, None, r)):
             raise _Stop
 
-    x0, nested = start.x, _nested(scene, settings, start)
-    if nested is not None:
-        x0, nested = nested
+    nested = None
 
     def total(r: Result, **fields) -> Result:
         r.iterations = sum(q.iterations for q in done)
@@ -155,35 +153,31 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
             setattr(r, key, value)
         return r
 
+    def run(x0) -> None:
+        continuation(
+            scene.net,
+            scene.loads,
+            factors,
+            x0=x0,
+            rtol=settings.rtol,
+            max_iter=settings.max_iter,
+            on_step=seen,
+            workspace=ws,
+        )
+
     try:
+        found = _nested(scene, settings, start)
+        x0, nested = (start.x, None) if found is None else found
         try:
-            continuation(
-                scene.net,
-                scene.loads,
-                factors,
-                x0=x0,
-                rtol=settings.rtol,
-                max_iter=settings.max_iter,
-                on_step=seen,
-                workspace=ws,
-            )
+            run(x0)
         except ConvergenceError as exc:
             if nested is None or done or isinstance(exc, Interrupted):
                 raise
             # the nested start failed where the default start may not: that one, counted
             log.warning("the nested start did not converge (%s): the default start", exc)
-            spent = int(getattr(exc, "iterations", 0))
-            x0, nested = start.x, None
-            continuation(
-                scene.net,
-                scene.loads,
-                factors,
-                x0=x0,
-                rtol=settings.rtol,
-                max_iter=settings.max_iter,
-                on_step=seen,
-                workspace=ws,
-            )
+            spent = int(getattr(exc, "iterations", 0)) + nested.iterations
+            nested = None
+            run(start.x)
             done[0].iterations += spent
     except _Stop:
         if len(done) < steps:
@@ -198,7 +192,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         good = exc.last_good
         x, factor = (None, 0.0) if good is None else (good.x, good.time)
         if x is None:
-            x, factor = start_state(scene.net, scene.loads, x0, 0.0), 0.0
+            x, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
         spent = sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0))
         exc.last_good = LastGood(x, factor, len(done), spent)
         raise
@@ -291,7 +285,7 @@ def _nested(scene, settings: Settings, start: Start) -> tuple[np.ndarray, Nested
     try:  # the first load step's equilibrium: the continuation's first
         r = solve(coarse, first, on_step=lambda step: True)
     except CatenetError as exc:
-        if isinstance(exc, ConfigError):
+        if isinstance(exc, (ConfigError, Interrupted)):
             raise
         log.warning("the coarse net of the nested start failed (%s): the default start", exc)
         return None

@@ -5,6 +5,7 @@ grow with refinement, the default start's equilibrium, the default start untouch
 from __future__ import annotations
 
 import dataclasses
+import tomllib
 
 import numpy as np
 import pytest
@@ -122,6 +123,12 @@ def test_where_the_nested_start_cannot_apply():
         solve(CONFIGS / "catenary.toml", "nested")
     with pytest.raises(ConfigError, match="supports.fixed|node by an index"):
         solve(N10, "nested", "supports.fixed=[0, 1, 2, 3]")
+    data = tomllib.loads(N10.read_text())
+    data["obstacle"] = [{"kind": "plane", "point": [0, 0, -1.0], "normal": [0, 0, 1.0]}]
+    data["solver"]["start"] = "nested"
+    with pytest.raises(ConfigError, match="obstacles, bodies or self-contact"):
+        s = build(parse_case(data))
+        sv.solve(s, sv.Settings.of(parse_case(data).solver))
     with pytest.raises(ConfigError, match="static runs"):
         sv.Settings(method="dynamic", start="nested")
     with pytest.raises(ConfigError, match="solver.start = 'coarse': must be one of"):
