@@ -8,7 +8,7 @@ the finer the net (the paper's n = 34 net: 7, 8, 10 and 12 at 1 cm, 2 mm, 1 mm a
 within its discretisation error of the fine one, inside Newton's quadratic basin: 3
 iterations on the fine net at every size, after 7 on a net of about COARSE_DOFS.
 
-``solver.start`` chooses (``STARTS``): "stretched" the default start always; "nested"
+``solver.start`` chooses (``settings.STARTS``): "stretched" the default start always; "nested"
 this start wherever it applies (else bad input naming why); "auto" this start for a
 static run of a net of at least NESTED_DOFS free DOFs that starts flat and unstressed
 (the stretched start's nets), where the coarse solve pays for itself; the default start
@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.solver.settings import STARTS  # noqa: F401 (solver.start's values)
 from catenet.solver.start import start_state, unstressed
 
 NESTED_DOFS = 70_000  # auto: nets of this many free DOFs and more start nested
@@ -53,6 +52,7 @@ class NestedStart:
 
 
 def free_dofs(net) -> int:
+    """Free DOFs of a net: three per node that is not a support."""
     return 3 * int(np.count_nonzero(~net.fixed))
 
 
