@@ -11,6 +11,7 @@ difference of /result/x and /result/tension, relative to their largest entry), a
 benchmarks/results/revisions.csv.
 
 Usage: python benchmarks/compare_revisions.py [--base REV] [--repeat N] [--case PATH]
+       [--set KEY=VALUE ...]   (passed to both runs, e.g. --set geometry.edge_length=0.001)
 """
 
 from __future__ import annotations
@@ -29,14 +30,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run_once(tree: Path, case: Path, out: Path) -> tuple[float, float]:
+def run_once(tree: Path, case: Path, out: Path, sets: tuple[str, ...] = ()) -> tuple[float, float]:
     """(wall, CPU) seconds of one whole `catenet run` process in ``tree``."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
     env.pop("PYTHONDONTWRITEBYTECODE", None)  # bytecode cached as an installed package's
+    extra = [a for kv in sets for a in ("--set", kv)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     proc = subprocess.run(
-        [sys.executable, "-m", "catenet", "run", str(case), "-o", str(out), "-q"],
+        [sys.executable, "-m", "catenet", "run", str(case), "-o", str(out), "-q", *extra],
         cwd=tree,
         env=env,
         capture_output=True,
@@ -103,6 +105,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--case", default="configs/fig4i_n34_alpha_pi4.toml")
     parser.add_argument("-o", "--out", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument(
+        "--set", dest="sets", action="append", default=[], help="KEY=VALUE for both runs"
+    )
     args = parser.parse_args()
     case = (ROOT / args.case).resolve()
     with tempfile.TemporaryDirectory() as tmp:
@@ -115,12 +120,13 @@ def main() -> None:
             trees = {"this": ROOT, args.base: base}
             runs: dict[str, list[tuple[float, float]]] = {name: [] for name in trees}
             for k, tree in enumerate(trees.values()):  # warm each tree's caches
-                run_once(tree, case, Path(tmp) / f"warm{k}.h5")
+                run_once(tree, case, Path(tmp) / f"warm{k}.h5", tuple(args.sets))
             differ = _differences(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
             problems = _same_content(Path(tmp) / "warm0.h5", Path(tmp) / "warm1.h5")
             for k in range(args.repeat):
                 for name, tree in trees.items():
-                    runs[name].append(run_once(tree, case, Path(tmp) / f"{name[:4]}{k}.h5"))
+                    out_k = Path(tmp) / f"{name[:4]}{k}.h5"
+                    runs[name].append(run_once(tree, case, out_k, tuple(args.sets)))
         finally:
             subprocess.run(
                 ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)], check=False

@@ -1,17 +1,30 @@
-"""Newton iterations from the flat, unstressed net against refinement (issue: they grow).
+"""Newton iterations from the flat, unstressed net against refinement, by start.
 
 The paper's n = 34 net (configs/fig4g_n34_alpha_0.toml) at several edge lengths, solved
-statically at default settings (the stretched start, catenet/solver/start.py), and again
-from the coarse net's equilibrium interpolated onto the fine net (nested iteration, or grid
-continuation: the net solved at 1 cm edges, its displacements interpolated linearly
-over the plane of the flat net onto the fine net's nodes, which lie on the same cables).
-Prints a Markdown table: edge, DOF, iterations and the residual history of each start.
+statically from each of these starts (catenet/solver/start.py, catenet/solver/nested.py):
 
-    python benchmarks/refinement_start.py [EDGE ...]   (default: 0.01 0.002 0.001 0.0002)
+- stretched: the stretched start (``solver.start = "stretched"``, the default below
+  70 000 free DOFs);
+- nested: the same case solved on one coarse net of about 10 000 free DOFs (edges
+  dofs / 10 000 times longer, at least 2x), its displacements carried along each cable
+  onto the fine net (``solver.start = "nested"``; the default from 70 000 free DOFs);
+- nested 2x: a hierarchy of nets, each with edges twice as long as the next finer, the
+  coarsest below 15 000 free DOFs (the nested start with other constants);
+- 4 load steps: load continuation (``solver.steps = 4``) from the stretched start.
+
+Each cell: Newton iterations on the fine net (+ those on the coarse nets) and the
+seconds of the whole solve (coarse nets, workspace and analysis included; one run on a
+shared machine: ratios, not absolutes). Every start reaches the same equilibrium (the
+largest difference of positions from the stretched start's is printed). Prints a
+Markdown table.
+
+    python benchmarks/refinement_start.py [EDGE ...]   (default: 0.01 0.005 0.002 0.001 0.0002)
 """
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -22,8 +35,8 @@ if __package__ in (None, ""):  # python benchmarks/refinement_start.py
 import numpy as np
 
 CASE = "configs/fig4g_n34_alpha_0.toml"
-COARSE = 0.01  # m: the coarse net of the nested start
-EDGES = (0.01, 0.002, 0.001, 0.0002)
+EDGES = (0.01, 0.005, 0.002, 0.001, 0.0002)
+STARTS = ("stretched", "nested", "nested 2x", "4 load steps")
 
 
 def scene(edge: float):
@@ -34,50 +47,59 @@ def scene(edge: float):
     return build(case), Settings.of(case.solver)
 
 
-def interpolated_start(coarse_scene, coarse_x, fine_scene) -> np.ndarray:
-    """The coarse equilibrium's displacements, interpolated linearly over the flat net's
-    plane (x, y) onto the fine net's nodes (the reference positions where outside)."""
-    from scipy.interpolate import LinearNDInterpolator
+@contextlib.contextmanager
+def halving():
+    """The nested start as a hierarchy of nets, edges twice as long each level."""
+    from catenet.solver import nested
 
-    u = coarse_x - coarse_scene.net.nodes
-    nodes = fine_scene.net.nodes
-    x0 = nodes + LinearNDInterpolator(coarse_scene.net.nodes[:, :2], u)(nodes[:, :2])
-    outside = ~np.all(np.isfinite(x0), axis=1)
-    x0[outside] = nodes[outside]
-    return x0
+    saved = nested.COARSE_DOFS, nested.NESTED_DOFS
+    nested.COARSE_DOFS, nested.NESTED_DOFS = float("inf"), 15_000
+    try:
+        yield
+    finally:
+        nested.COARSE_DOFS, nested.NESTED_DOFS = saved
+
+
+def run(fine, settings, start: str):
+    """The Result of one start, and its seconds."""
+    from catenet.solver.path import solve
+
+    if start == "4 load steps":
+        settings = dataclasses.replace(settings, start="stretched", steps=4)
+    elif start == "nested 2x":
+        settings = dataclasses.replace(settings, start="nested")
+    else:
+        settings = dataclasses.replace(settings, start=start)
+    with halving() if start == "nested 2x" else contextlib.nullcontext():
+        t = time.perf_counter()
+        r = solve(fine, settings)
+        seconds = time.perf_counter() - t
+    assert r.converged, r.message
+    return r, seconds
+
+
+def cell(r, seconds: float) -> str:
+    coarse = f" + {r.nested.iterations}" if r.nested is not None else ""
+    return f"{r.iterations}{coarse} ({seconds:.2f} s)"
 
 
 def main(edges=EDGES) -> None:
-    from catenet.solver.path import Start, solve
+    from catenet.solver.nested import free_dofs
 
-    coarse, settings = scene(COARSE)
-    base = solve(coarse, settings)
-    print(f"coarse net ({COARSE} m edges): {base.iterations} iterations\n")
+    run(*scene(0.01), "stretched")  # warm-up: Numba's cache, the backend's first use
     print(
-        "| edge [m] | DOF | default start: iterations | residual history [N] | "
-        "nested start: iterations | residual history [N] |"
+        "| edge [m] | DOF | "
+        + " | ".join(f"{s}: iterations (s)" for s in STARTS)
+        + " | same state to [m] |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|" + "---|" * len(STARTS) + "---|")
     for edge in edges:
         fine, settings = scene(edge)
-        dof = 3 * int(np.count_nonzero(~fine.net.fixed))
-        t = time.perf_counter()
-        plain = solve(fine, settings)
-        t_plain = time.perf_counter() - t
-        t = time.perf_counter()
-        nested = solve(fine, settings, start=Start(interpolated_start(coarse, base.x, fine)))
-        t_nested = time.perf_counter() - t
-        assert plain.converged and nested.converged
-        gap = float(np.max(np.abs(plain.x - nested.x)))
-
-        def hist(r):
-            return " ".join(f"{h:.1e}" for h in r.history)
-
-        print(
-            f"| {edge:g} | {dof} | {plain.iterations} ({t_plain:.1f} s) | {hist(plain)} | "
-            f"{nested.iterations} ({t_nested:.1f} s; same state to {gap:.0e} m) | "
-            f"{hist(nested)} |"
-        )
+        results = [run(fine, settings, s) for s in STARTS]
+        base = results[0][0].x
+        gap = max(float(np.max(np.abs(r.x - base))) for r, _ in results[1:])
+        cells = " | ".join(cell(r, t) for r, t in results)
+        print(f"| {edge:g} | {free_dofs(fine.net)} | {cells} | {gap:.0e} |", flush=True)
 
 
 if __name__ == "__main__":

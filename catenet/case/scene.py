@@ -10,6 +10,7 @@ import numpy as np
 
 from catenet.case.bodies import add_bodies
 from catenet.case.clearance import Clearance
+from catenet.case.coarse import coarse_case
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
@@ -64,6 +65,20 @@ class Scene:
     probe_auto: bool = False
     cases: tuple = ()
     watch: Any = None  # stops a run where a free body meets another body or an obstacle
+
+    def coarser(self, factor: float) -> Scene | None:
+        """The same case built with every edge length times ``factor``, with fewer nodes
+        (the coarse net of a nested start, ``catenet.solver.nested``), or None where the
+        case has no edge length to lengthen (``catenet.case.coarse``) or that net does
+        not build."""
+        case = None if self.case is None else coarse_case(self.case, factor)
+        if case is None:
+            return None
+        try:
+            scene = build(case)
+        except ConfigError:
+            return None
+        return scene if scene.net.n_nodes < self.net.n_nodes else None
 
 
 def build(case: Case) -> Scene:

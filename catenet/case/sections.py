@@ -35,7 +35,7 @@ from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
 from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.relax import REST
-from catenet.solver.settings import METHODS, Settings
+from catenet.solver.settings import METHODS, STARTS, Settings
 
 LINEAR = ("auto", "pardiso", "scipy")
 
@@ -367,6 +367,15 @@ class SolverConfig(Declared):
     )
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
     max_iter: int = integer(Settings.max_iter, ge=1, le=10**6, doc="static: Newton iterations")
+    start: str = choice(
+        Settings.start,
+        STARTS,
+        write="changed",
+        doc="static: where Newton starts from a flat, unstressed net: the stretched start, "
+        "the nested start (the same case solved at longer edges: square nets, cables with "
+        "an edge_length), or auto: nested from 70 000 free DOFs, else stretched "
+        "(docs/guide/starts.md)",
+    )
     steps: int = integer(
         Settings.steps, ge=1, le=10**6, doc="static: load steps (equilibria at k/steps of the load)"
     )

@@ -259,9 +259,13 @@ def _summary(case, result, path: Path | None) -> None:
         if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
             advice = "an undamped run never rests: give solver.t_end or damping"
         detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
+    nested = getattr(result, "nested", None)  # a nested start: the coarse net's too
+    spent = f"{result.iterations} Newton iterations"
+    if nested is not None:
+        spent += f" {nested.describe()}"
     lines = [
         f"{'case':<12} {case.title or case.source}",
-        f"{'converged':<12} {state} ({detail}; {result.iterations} Newton iterations, "
+        f"{'converged':<12} {state} ({detail}; {spent}, "
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",

@@ -74,9 +74,13 @@ def result_attrs(res, scene, tension=None) -> dict:
     residual = float(res.residual)
     strain = float(res.max_strain)
     timing = res.timing
+    nested = getattr(res, "nested", None)
     return {
         "converged": bool(res.converged),
         "iterations": int(res.iterations),
+        # a nested start's Newton iterations on the coarse net (0: none; not in iterations)
+        "nested_iterations": 0 if nested is None else int(nested.iterations),
+        "nested_dofs": 0 if nested is None else int(nested.dofs),
         "residual": residual if not math.isnan(residual) else math.inf,
         "steps": int(res.steps),
         "wall_time": float(res.wall_time),

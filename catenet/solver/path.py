@@ -19,20 +19,26 @@ load factor, steps, iterations) is the last good state, so that callers can keep
 
 from __future__ import annotations
 
+import dataclasses
+import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.errors import CatenetError, ConfigError, ConvergenceError, LastGood
+from catenet.errors import CatenetError, ConfigError, ConvergenceError, Interrupted, LastGood
 from catenet.model.net import Loads, Net
 from catenet.model.peaks import Peaks
+from catenet.model.transfer import transfer
 from catenet.solver.loadsteps import continuation
+from catenet.solver.nested import NestedStart, coarse_factor, coarse_scene, free_dofs
 from catenet.solver.result import Outcome, Result
 from catenet.solver.settings import METHODS, Settings  # noqa: F401 (the path's face)
 from catenet.solver.start import start_state
 from catenet.solver.workspace import Workspace
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -136,25 +142,43 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         if on_step is not None and on_step(Step(len(done), factor, r.x, None, r)):
             raise _Stop
 
+    nested = None
+
     def total(r: Result, **fields) -> Result:
         r.iterations = sum(q.iterations for q in done)
         r.steps = len(done)
         r.wall_time = time.perf_counter() - begin
+        r.nested = nested
         for key, value in fields.items():
             setattr(r, key, value)
         return r
 
-    try:
+    def run(x0) -> None:
         continuation(
             scene.net,
             scene.loads,
             factors,
-            x0=start.x,
+            x0=x0,
             rtol=settings.rtol,
             max_iter=settings.max_iter,
             on_step=seen,
             workspace=ws,
         )
+
+    try:
+        found = _nested(scene, settings, start)
+        x0, nested = (start.x, None) if found is None else found
+        try:
+            run(x0)
+        except ConvergenceError as exc:
+            if nested is None or done or isinstance(exc, Interrupted):
+                raise
+            # the nested start failed where the default start may not: that one, counted
+            log.warning("the nested start did not converge (%s): the default start", exc)
+            spent = int(getattr(exc, "iterations", 0)) + nested.iterations
+            nested = None
+            run(start.x)
+            done[0].iterations += spent
     except _Stop:
         if len(done) < steps:
             return total(
@@ -243,3 +267,32 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
             last["x"], last["t"], last["steps"], iterations, last["v"], last["a"]
         )
         raise
+
+
+def _nested(scene, settings: Settings, start: Start) -> tuple[np.ndarray, NestedStart] | None:
+    """The nested start (``catenet.solver.nested``): the start on the fine net from the
+    coarse net's equilibrium at the first load step, and what that cost; None for the
+    default start (where it does not apply, or the coarse solve fails)."""
+    factor = coarse_factor(scene, settings, start.x is not None)
+    if factor is None:
+        return None
+    forced = settings.start == "nested"
+    begin = time.perf_counter()
+    coarse = coarse_scene(scene, factor, forced)
+    if coarse is None:
+        return None
+    first = dataclasses.replace(settings, start="auto")  # nested again only where it pays
+    try:  # the first load step's equilibrium: the continuation's first
+        r = solve(coarse, first, on_step=lambda step: True)
+    except CatenetError as exc:
+        if isinstance(exc, (ConfigError, Interrupted)):
+            raise
+        log.warning("the coarse net of the nested start failed (%s): the default start", exc)
+        return None
+    x0 = transfer(coarse.net, r.x, scene.net)
+    if x0 is None:
+        log.warning("the coarse net does not match the fine net: the default start")
+        return None
+    spent = r.iterations + (r.nested.iterations if r.nested is not None else 0)
+    took = time.perf_counter() - begin
+    return x0, NestedStart(factor, free_dofs(coarse.net), spent, took)

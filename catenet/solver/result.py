@@ -12,6 +12,7 @@ from catenet.model.net import Loads
 from catenet.model.peaks import Peaks
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
+    from catenet.solver.nested import NestedStart
     from catenet.solver.system import System
 
 
@@ -86,6 +87,8 @@ class Result:
         time step or load step (``catenet.model.peaks.Peaks``); None where not followed
     cases : the load cases and combinations solved from this (base) state, each a
         ``catenet.run.cases.CaseRun`` (name, Result, summary numbers, error)
+    nested : a static run's nested start (``catenet.solver.nested.NestedStart``: the
+        coarse net's solve, whose iterations ``iterations`` does not count), or None
     """
 
     x: np.ndarray
@@ -111,6 +114,7 @@ class Result:
     timing: Timing | None = None
     peaks: Peaks | None = None
     cases: list = field(default_factory=list)
+    nested: NestedStart | None = None
 
 
 def finish(

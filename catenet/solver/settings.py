@@ -12,6 +12,7 @@ from catenet.solver.integrators import INTEGRATORS, RHO_INF
 from catenet.solver.relax import MAX_STEPS, REST
 
 METHODS = ("static", "dynamic")
+STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,7 @@ class Settings:
     integrator: str = "implicit_euler"
     reuse: bool = False
     rho_inf: float = RHO_INF
+    start: str = "auto"  # static: "auto", "stretched" or "nested" (catenet.solver.nested)
 
     @classmethod
     def of(cls, config: Any, **changes) -> Settings:
@@ -52,5 +54,12 @@ class Settings:
             raise ConfigError(f"solver.rho_inf = {self.rho_inf!r}: must be in [0, 1]")
         if isinstance(self.t_end, str) and self.t_end != REST:
             raise ConfigError(f"solver.t_end = {self.t_end!r}: must be a number or {REST!r}")
+        if self.start not in STARTS:
+            raise ConfigError(f"solver.start = {self.start!r}: must be one of {', '.join(STARTS)}")
+        if self.start == "nested" and self.method == "dynamic":
+            raise ConfigError(
+                'solver.start = "nested": is for static runs (solver.method = "static"); '
+                'a dynamic run starts from the reference positions: use "auto"'
+            )
         if self.steps < 1:
             raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")
