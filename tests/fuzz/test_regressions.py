@@ -510,3 +510,44 @@ def test_a_body_spun_far_beyond_its_step_never_has_a_node_on_it(tmp_path, spin):
     gaps = _box_gaps(out)
     # Outside by the floor (0.02 m distance: 2e-8 m), less the rotation's round-off.
     assert gaps.min() > 0.5 * FLOOR_SHARE * 0.02, gaps.min()
+
+
+# --- a long run on a busy machine is no hang ---------------------------------------------------
+
+
+def test_the_time_limit_counts_processor_time_and_the_clock_only_for_waiting():
+    """The long run's seed 11 took the folded net's 10 s run (``solver.t_end`` removed: its
+    default) for a hang: 120 s on the clock, 41 s of processor time on a machine at a load
+    of 7 on 2 cores. A command is a hang after ``seconds`` of processor time (computing
+    for ever) or WALL_FACTOR times that on the clock (waiting for ever)."""
+    import time
+
+    from fuzzing import WALL_FACTOR, Hang, time_limit
+
+    start = time.process_time()
+    with pytest.raises(Hang, match="of processor time"), time_limit(0.3):
+        while time.process_time() - start < 10.0:
+            pass
+    assert time.process_time() - start < 2.0
+    with time_limit(0.3):  # waiting longer than the limit, not as long as the backstop
+        time.sleep(0.6)
+    start = time.perf_counter()
+    with pytest.raises(Hang, match="on the clock"), time_limit(0.3):
+        time.sleep(5.0)
+    assert time.perf_counter() - start == pytest.approx(0.3 * WALL_FACTOR, abs=0.5)
+
+
+@pytest.mark.slow
+def test_the_folded_net_run_to_its_default_end_is_ok(tmp_path):
+    """The case itself: ``configs/contact/folded_net.toml`` without ``solver.t_end`` (10 s,
+    1 000 steps of a net landing on itself) ends with exit 0 within the fuzz run's limit
+    of 120 s of processor time."""
+    from fuzzing import CONFIGS, copy_beside
+
+    copy_beside(CONFIGS / "contact" / "folded_net.toml", tmp_path)
+    text = (CONFIGS / "contact" / "folded_net.toml").read_text()
+    case = "\n".join(line for line in text.splitlines() if not line.startswith("t_end"))
+    path = tmp_path / "case.toml"
+    path.write_text(case)
+    result = invoke(["run", path, "-o", tmp_path / "o.h5", "-q"], seconds=120, cwd=tmp_path)
+    assert judge(result, tmp_path).kind == "ok", judge(result, tmp_path)
