@@ -557,3 +557,31 @@ def test_the_folded_net_run_to_its_default_end_is_ok(tmp_path):
     path.write_text(case)
     result = invoke(["run", path, "-o", tmp_path / "o.h5", "-q"], seconds=120, cwd=tmp_path)
     assert judge(result, tmp_path).kind == "ok", judge(result, tmp_path)
+
+
+# --- a node that starts on an obstacle within round-off -----------------------------------------
+
+
+@pytest.mark.parametrize("z", [5e-324, 1e-300, 1e-14])
+def test_a_node_on_the_seabed_within_round_off_is_bad_input(tmp_path, z):
+    """The long run's seed 12: the rough-seabed mooring with a node at z = 5e-324 over the
+    seabed z = 0 (a gap of the smallest number there is) ended in exit 1 at t = 0 with its
+    kept start's residual written as inf (the barrier's force kappa dhat^2 / d overflows).
+    A node within the round-off of its coordinates (20 m: about 4e-12 m) of an obstacle
+    starts on it: exit 2 naming the obstacle and the node, nothing written. 1e-9 m above
+    the bed is a start like any other."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["geometry"]["nodes"][5][2] = z
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2, text
+    assert "obstacle[0] (kind 'plane'): node 5 at [20.935, 0.0, " in text, text
+    assert "starts inside or on it" in text and judge(result, tmp_path).good
+    assert not (tmp_path / "o.h5").exists()
+    data["geometry"]["nodes"][5][2] = 1e-9
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 0 and judge(result, tmp_path, set()).good, text
