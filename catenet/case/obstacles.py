@@ -260,12 +260,24 @@ def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
     return tuple(terms)
 
 
+#: A node nearer an obstacle than ON_ROUNDOFF round-offs of its coordinates, or than
+#: ON_SHARE of the barrier's distance, starts on it: which side it is on is round-off
+#: (a node at z = 5e-324 over the plane z = 0, the long fuzz run's seed 12), and its
+#: barrier's force and stiffness (about kappa dhat^2 / d and kappa dhat^2 / d^2) are
+#: beyond floating point.
+ON_ROUNDOFF = 1e3
+ON_SHARE = 1e-100
+
+
 def check_clear(label: str, what: str, shape, nodes: np.ndarray, net) -> None:
     """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
     inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",
-    "a body")."""
+    "a body"): its gap is not above ON_ROUNDOFF round-offs of its coordinates and
+    ON_SHARE of the barrier's distance."""
     gap = shape.gap(net.nodes)
-    inside = np.flatnonzero(~(gap > 0.0))
+    scale = np.abs(net.nodes[nodes]).max(axis=1) if len(nodes) else np.zeros(0)
+    on = np.maximum(ON_ROUNDOFF * np.finfo(np.float64).eps * scale, ON_SHARE * shape.dhat)
+    inside = np.flatnonzero(~(gap > on))
     if inside.size:
         i = int(nodes[inside[0]])
         raise ConfigError(

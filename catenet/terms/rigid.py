@@ -27,6 +27,18 @@ the current orientation, this keeps the mass matrix constant and diagonal, the N
 and implicit Euler updates as they are for nodes, and the angular momentum exchange
 exact (the contact forces act at the points where they touch).
 
+Turning within a Newton step. A step's straight path of the four nodes makes A linear in
+the step length, A + t dA: a turn by an angle theta is its chord, which stretches the body
+by about theta^2 / 2 on the way (A^T A - 1 grows with theta^2), so a step that turns far
+sees the body as a stretched affine copy, its rigidity far from held. ``Rigidity`` is
+therefore a term that bounds the step (``max_step``): no step moves a point of the body
+by more than TURN_MAX times its distance from the centre (|t dA|_2 <= TURN_MAX, about a
+turn of that many radians): the body turns by at most 0.25 rad per Newton iteration,
+its stretch on the way within 3 %. A spin that a step cannot follow then takes several
+iterations (or a shorter step), never one long chord. The contact's step cap is
+conservative for any turn (the node's body-frame path is followed exactly, below), so
+the turn bound is about the body staying a body, not about the barrier's guarantee.
+
 Contact: ``BodyContact`` is a fixed shape's barrier term (``catenet.terms.shapes``,
 ``catenet.terms.contact``), built at the body's pose at t = 0, seeing every net node at
 X = c0 + A^T (x - c) (the body frame; A^T = A^-1 for a rotation). Its energy
@@ -51,6 +63,7 @@ TETRA = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, 
 TETRA /= math.sqrt(3.0)
 CA_SHARE = 0.1  # the step cap's chords are within this share of the smallest gap
 CA_ITER = 60  # pieces of the step cap (then the step is capped where they got)
+TURN_MAX = 0.25  # the most a Newton step turns a body [rad] (|t dA|_2, module docstring)
 EPS = np.finfo(np.float64).eps
 
 
@@ -157,6 +170,7 @@ class Rigidity(Term):
 
     role = "internal"
     convex = False  # positive semidefinite on the rotations, not everywhere
+    bounds_step = True  # the body's turn per Newton step (``max_step``)
 
     def __init__(self, frame: Frame, k: float, *, n_nodes: int):
         if not (math.isfinite(k) and k > 0):
@@ -216,3 +230,11 @@ class Rigidity(Term):
         s = np.zeros(self.n_nodes)
         s[self.frame.nodes] = self.k / self.frame.reach**2
         return s
+
+    def max_step(self, x, dx) -> float:
+        """The longest multiple t of the step dx that turns the body by at most TURN_MAX:
+        |t dA|_2 <= TURN_MAX (no point of the body moves by more than TURN_MAX times its
+        distance from the centre, relative to the centre); inf for a translation."""
+        _, dA = self.frame.state(dx)
+        turn = float(np.linalg.norm(dA, 2))
+        return TURN_MAX / turn if turn > 0.0 else math.inf

@@ -23,6 +23,17 @@ the offset grown) is a safe cap, exact for W = 0 (a body that does not turn in t
 step). delta is CA_SHARE of the smallest gap (at most dhat / 2, within a mesh's grid),
 so no iterate reaches the shape; the pieces go on to beyond every step a line search
 tries (inf).
+
+The cap keeps every node at least ``floor`` off the shape (the shape is grown by it as
+well): FLOOR_SHARE of dhat, and no less than ROUNDOFF round-offs of the body-frame
+coordinates (a node's X carries an error of eps |X|). A line search may go as near the
+cap as it likes, and where the barrier cannot hold a node off (a body spun so fast that
+its inertia dwarfs every contact force) Newton's iterates would otherwise close in on
+the surface until a node sat on it within round-off, its barrier infinite: a state, and
+a failed run's kept state, with a node on the body. A node at the floor (or nearer, a
+start placed so) keeps room to move: the floor stays SLACK of its gap below it, so each
+iteration that ends at the cap brings it at most that share nearer (10^4 such iterations
+per e-fold; a run fails long before, and a run the barrier holds never gets there).
 """
 
 from __future__ import annotations
@@ -38,6 +49,10 @@ from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, Frame
 
 T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS = 12)
+FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
+ROUNDOFF = 1e4  # ... nor than this many round-offs of its body-frame coordinates
+SLACK = 1e-4  # a node at the floor may come this share of its gap nearer (docstring)
+EPS = np.finfo(np.float64).eps
 
 
 @register("body_contact")
@@ -159,28 +174,38 @@ class BodyContact(Term):
         W = dU @ dA
         if not (np.any(V) or np.any(W)):
             return math.inf
-        return self._advance(X0, V, W)
+        return self._advance(X0, V, W, self._floor(X0, U))
 
-    def _advance(self, X0, V, W) -> float:
+    def _floor(self, X0, U) -> float:
+        """The nearest a node may come to the shape along a step from X0 (module
+        docstring): FLOOR_SHARE dhat, at least ROUNDOFF round-offs of the coordinates,
+        and below the smallest gap now by SLACK of it."""
+        self._buf[self.nodes] = X0
+        gap = float(self.shape.gap(self._buf).min())
+        scale = max(float(np.abs(X0).max()), float(np.abs(U).max()), float(np.abs(self.c0).max()))
+        floor = max(FLOOR_SHARE * self.dhat, ROUNDOFF * EPS * scale)
+        return min(floor, (1.0 - SLACK) * gap) if gap > 0.0 else 0.0
+
+    def _advance(self, X0, V, W, floor: float = 0.0) -> float:
         """The first contact along the quadratic paths X0 + t V + t^2 W (module
-        docstring): over pieces [t, t + h] (the step [0, 1], then doubling t) whose
-        chords stay within |W| h^2 / 4 <= delta of the paths, each chord's exact first
-        contact with the shape grown by that deviation, a contact no later than the true
-        one (exact where W = 0)."""
+        docstring) with the shape grown by ``floor``: over pieces [t, t + h] (the step
+        [0, 1], then doubling t) whose chords stay within |W| h^2 / 4 <= delta of the
+        paths, each chord's exact first contact with the shape grown by that deviation
+        too, a contact no later than the true one (exact where W = 0)."""
         w = float(np.linalg.norm(W, axis=1).max())
         t = 0.0
         for _ in range(CA_ITER):
             P = X0 + t * V + t * t * W
             self._buf[self.nodes] = P
             gap = self.shape.gap(self._buf)
-            delta = min(CA_SHARE * float(gap.min()), 0.5 * self.dhat)
-            if not delta > 0.0:  # a node on the shape already (round-off of a body turning
+            delta = min(CA_SHARE * (float(gap.min()) - floor), 0.5 * self.dhat)
+            if not delta > 0.0:  # a node at the floor already (round-off of a body turning
                 return t  # at an extreme rate, or NaN): no further advance is safe
             h = min(max(1.0, t), T_FAR - t)  # pieces of the step, then doubling
             if w > 0.0:
                 h = min(h, 2.0 * math.sqrt(delta / w))
             chord = h * V + (2.0 * t * h + h * h) * W  # X(t + h) - X(t)
-            s = self._ray(P, chord, 0.25 * w * h * h)
+            s = self._ray(P, chord, 0.25 * w * h * h + floor)
             if s <= 1.0:
                 return t + s * h
             t += h

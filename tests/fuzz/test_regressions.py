@@ -433,12 +433,8 @@ def test_a_body_thrown_too_fast_ends_the_run(tmp_path):
     assert judge(result, tmp_path, {tmp_path / "o.h5"}).good
 
 
-def test_a_body_spun_beyond_the_arithmetic_is_bad_input_and_a_fast_one_fails_cleanly(tmp_path):
-    """The quick tier found the Envisat capture with ``angular_velocity = [1e99, ...]``
-    ending in an internal IndexError (an infinite contact force in the summary). A spin
-    whose kinetic energy the arithmetic cannot carry is bad input naming the key; a spin
-    of 1e10 rad/s (within the limits, far beyond what a step resolves) ends with exit 1
-    and catenet's message, not with a math domain error in the body's step cap."""
+def _spun_capture(tmp_path, spin: float) -> str:
+    """The Envisat capture, small and 0.05 s long, its box spun at ``spin`` rad/s about x."""
     import tomllib
 
     import tomli_w
@@ -449,13 +445,143 @@ def test_a_body_spun_beyond_the_arithmetic_is_bad_input_and_a_fast_one_fails_cle
         (CONFIGS / "contact" / "envisat_capture.json").read_bytes()
     )
     data["solver"]["t_end"] = 0.05
-    data["obstacle"][0]["angular_velocity"][0] = 1e99
-    result, text = run(tmp_path, "-o", tmp_path / "huge.h5", case=tomli_w.dumps(data))
+    data["obstacle"][0]["angular_velocity"][0] = spin
+    return tomli_w.dumps(data)
+
+
+def test_a_body_spun_beyond_the_arithmetic_is_bad_input(tmp_path):
+    """The quick tier found the Envisat capture with ``angular_velocity = [1e99, ...]``
+    ending in an internal IndexError (an infinite contact force in the summary). A spin
+    whose kinetic energy the arithmetic cannot carry is bad input naming the key."""
+    case = _spun_capture(tmp_path, 1e99)
+    result, text = run(tmp_path, "-o", tmp_path / "huge.h5", case=case)
     assert result.exit_code == 2, text
     assert "obstacle[0].angular_velocity = [1e+99" in text or "[1e99" in text, text
     assert "kinetic energy of spin" in text and "Traceback" not in text, text
     assert judge(result, tmp_path).good
-    data["obstacle"][0]["angular_velocity"][0] = 1e10
-    result, text = run(tmp_path, "-o", tmp_path / "fast.h5", case=tomli_w.dumps(data))
-    assert result.exit_code == 1 and "internal error" not in text, text
-    assert "dynamic run stopped at t = " in text or "failed even with h" in text, text
+
+
+def _box_gaps(path) -> np.ndarray:
+    """(frames + 1, nodes) every net node's distance to the box (10 x 4 x 4 m) at its
+    pose in every frame of the file and in /result, from the written centre and rotation
+    alone (negative inside): the box's own check, not the barrier's."""
+    half = np.array([5.0, 2.0, 2.0])
+    with h5py.File(path) as h5:
+        axes = h5["mesh/obstacles/0/axes"][()]
+        frames = [
+            (h5["trajectory/x"][k], h5["trajectory/obstacles/0/center"][k],
+             h5["trajectory/obstacles/0/rotation"][k])
+            for k in range(len(h5["trajectory/time"]))
+        ]  # fmt: skip
+        frames.append(
+            (h5["result/x"][()], h5["result/obstacles/0/center"][()],
+             h5["result/obstacles/0/rotation"][()])
+        )  # fmt: skip
+    gaps = []
+    for x, c, R in frames:
+        q = (x[:-4] - c) @ R @ axes  # the net's nodes in the box's axes (the body's 4 last)
+        out = np.abs(q) - half
+        gaps.append(np.where(out.max(axis=1) > 0, np.linalg.norm(np.maximum(out, 0), axis=1),
+                             out.max(axis=1)))  # fmt: skip
+    return np.array(gaps)
+
+
+@pytest.mark.parametrize("spin", [1e3, 1e5, 1e7, 1e10])
+def test_a_body_spun_far_beyond_its_step_never_has_a_node_on_it(tmp_path, spin):
+    """The long fuzz run found the Envisat capture with its box spun at 1e10 rad/s failing
+    (exit 1, fine) with a kept state that had a net node on the box: the line search had
+    closed in on the step cap iteration after iteration (the barrier cannot hold a node
+    off a body whose inertia dwarfs every contact force) until a node sat on the surface
+    within round-off, its residual written as inf. Now a step comes no nearer the body
+    than the contact's floor and turns it by at most TURN_MAX: at 1e3 to 1e10 rad/s the
+    run ends with exit 0 or with catenet's own exit-1 message, and every frame and the
+    kept state have every node outside the box and finite numbers (the residual too)."""
+    from catenet.terms.rigid_contact import FLOOR_SHARE
+
+    out = tmp_path / "fast.h5"
+    result, text = run(tmp_path, "-o", out, case=_spun_capture(tmp_path, spin))
+    assert result.exit_code in (0, 1) and "internal error" not in text, text
+    if result.exit_code == 1:
+        assert "dynamic run stopped at t = " in text or "failed even with h" in text, text
+        assert "the last good state is in" in text, text
+    assert judge(result, tmp_path, set()).good, judge(result, tmp_path, set())
+    with h5py.File(out) as h5:
+        assert math.isfinite(h5["result"].attrs["residual"])
+    gaps = _box_gaps(out)
+    # Outside by the floor (0.02 m distance: 2e-8 m), less the rotation's round-off.
+    assert gaps.min() > 0.5 * FLOOR_SHARE * 0.02, gaps.min()
+
+
+# --- a long run on a busy machine is no hang ---------------------------------------------------
+
+
+def test_the_time_limit_counts_processor_time_and_the_clock_only_for_waiting():
+    """The long run's seed 11 took the folded net's 10 s run (``solver.t_end`` removed: its
+    default) for a hang: 120 s on the clock, 41 s of processor time on a machine at a load
+    of 7 on 2 cores. A command is a hang after ``seconds`` of processor time (computing
+    for ever) or WALL_FACTOR times that on the clock (waiting for ever)."""
+    import time
+
+    import fuzzing
+    from fuzzing import Hang, time_limit
+
+    assert fuzzing.WALL_FACTOR == 4.0
+    with time_limit(0.3):  # waiting longer than the limit, not as long as the backstop
+        time.sleep(0.6)
+    start = time.perf_counter()
+    with pytest.raises(Hang, match="after 1.2 s on the clock"), time_limit(0.3):
+        time.sleep(10.0)
+    assert 1.2 <= time.perf_counter() - start < 5.0
+    # Computing: 0.3 s of processor time, however long the clock takes to give them
+    # (the backstop set far off, so that a busy machine cannot trip it first).
+    start = time.process_time()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(fuzzing, "WALL_FACTOR", 1e3)
+        with pytest.raises(Hang, match="after 0.3 s of processor time"), time_limit(0.3):
+            while time.process_time() - start < 10.0:
+                pass
+    assert 0.25 <= time.process_time() - start < 2.0  # the timer counts in scheduler ticks
+
+
+@pytest.mark.slow
+def test_the_folded_net_run_to_its_default_end_is_ok(tmp_path):
+    """The case itself: ``configs/contact/folded_net.toml`` without ``solver.t_end`` (10 s,
+    1 000 steps of a net landing on itself) ends with exit 0 within the fuzz run's limit
+    of 120 s of processor time."""
+    from fuzzing import CONFIGS, copy_beside
+
+    copy_beside(CONFIGS / "contact" / "folded_net.toml", tmp_path)
+    text = (CONFIGS / "contact" / "folded_net.toml").read_text()
+    case = "\n".join(line for line in text.splitlines() if not line.startswith("t_end"))
+    path = tmp_path / "case.toml"
+    path.write_text(case)
+    result = invoke(["run", path, "-o", tmp_path / "o.h5", "-q"], seconds=120, cwd=tmp_path)
+    assert judge(result, tmp_path).kind == "ok", judge(result, tmp_path)
+
+
+# --- a node that starts on an obstacle within round-off -----------------------------------------
+
+
+@pytest.mark.parametrize("z", [5e-324, 1e-300, 1e-14])
+def test_a_node_on_the_seabed_within_round_off_is_bad_input(tmp_path, z):
+    """The long run's seed 12: the rough-seabed mooring with a node at z = 5e-324 over the
+    seabed z = 0 (a gap of the smallest number there is) ended in exit 1 at t = 0 with its
+    kept start's residual written as inf (the barrier's force kappa dhat^2 / d overflows).
+    A node within the round-off of its coordinates (20 m: about 4e-12 m) of an obstacle
+    starts on it: exit 2 naming the obstacle and the node, nothing written. 1e-9 m above
+    the bed is a start like any other."""
+    import tomllib
+
+    import tomli_w
+    from fuzzing import CONFIGS, small
+
+    data = small(tomllib.loads((CONFIGS / "friction" / "mooring_pulled.toml").read_text()))
+    data["geometry"]["nodes"][5][2] = z
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 2, text
+    assert "obstacle[0] (kind 'plane'): node 5 at [20.935, 0.0, " in text, text
+    assert "starts inside or on it" in text and judge(result, tmp_path).good
+    assert not (tmp_path / "o.h5").exists()
+    data["geometry"]["nodes"][5][2] = 1e-9
+    result, text = run(tmp_path, "-o", tmp_path / "o.h5", case=tomli_w.dumps(data))
+    assert result.exit_code == 0 and judge(result, tmp_path, set()).good, text

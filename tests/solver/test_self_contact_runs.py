@@ -2,8 +2,9 @@
 whose upper layer is thrown onto the lower one lands on it without a single pair of
 strands passing through each other, at steps from 1e-3 to 1e-1 s (every straight motion
 between two steps checked densely), while without the barrier it passes through; the
-capture scene with it on; off, the runs and the pattern are those without the key; bad
-input exits 2 naming the key."""
+capture scene with it on, and its contact phase at steps from 1e-4 to 1e-1 s with no node
+in the box and no strands crossing at or between any two steps; off, the runs and the
+pattern are those without the key; bad input exits 2 naming the key."""
 
 from __future__ import annotations
 
@@ -103,6 +104,43 @@ def test_the_capture_scene_with_self_contact_stays_penetration_free(tmp_path):
         x = np.asarray(f["trajectory/x"])
     assert min(contact.gap(xk).min() for xk in x) > 0.0
     assert strand_crossings(x, scene.net.edges) == []
+
+
+def _body_gaps_between(contact, frames, samples: int = 20) -> np.ndarray:
+    """The smallest gap of any net node to the body at each of ``samples`` - 1 states
+    between consecutive frames, every node moving straight (the body's four nodes too,
+    as the step cap's continuous check assumes)."""
+    s = np.linspace(0.0, 1.0, samples + 1)[1:-1]
+    pairs = zip(frames[:-1], frames[1:], strict=True)
+    return np.array([contact.gap((1.0 - si) * a + si * b).min() for a, b in pairs for si in s])
+
+
+@pytest.mark.parametrize("dt, t_end", [(1e-4, 0.02), (1e-3, 0.06), (1e-2, 0.4), (1e-1, 1.0)])
+def test_the_capture_never_has_a_node_in_the_box_nor_strands_crossing_at_any_step(dt, t_end):
+    """The capture scene with self-contact on, its box moved up to 3 cm below the net
+    (the net meets it at once: the contact phase, not the 1.3 s of flight before it),
+    at steps from 1e-4 to 1e-1 s: the nodes enter the barrier's reach (the net lands
+    and, at the longer steps, wraps over the box's top), and at every step and at 19
+    states between each two (linear interpolation of all positions, as the continuous
+    checks assume) no net node is inside the body and no two strands that share no
+    node cross or touch (``strand_crossings``: 50 samples and bisection per interval)."""
+    changes = [
+        "solver.self_contact=true", f"solver.dt={dt}", f"solver.t_end={t_end}",
+        "obstacle.0.center=[0.0, 0.0, 2.97]",
+    ]  # fmt: skip
+    scene = build(load_case(CONFIGS / "envisat_capture.toml", changes))
+    assert any(isinstance(t, SelfContact) for t in scene.terms)
+    contact = next(t for t in scene.terms if type(t) is BodyContact)
+    settings = sv.Settings.of(scene.case.solver)
+    frames = [scene.net.nodes.copy()]
+    res = sv.solve(scene, settings, on_step=lambda step: frames.append(step.x.copy()))
+    assert res.converged and res.time == pytest.approx(t_end)
+    frames = np.array(frames)
+    assert len(frames) > t_end / dt  # every step kept (a few cut ones too)
+    at_steps = np.array([contact.gap(x).min() for x in frames])
+    assert at_steps[0] == pytest.approx(0.03) and at_steps.min() < contact.dhat
+    assert at_steps.min() > 0.0 and _body_gaps_between(contact, frames).min() > 0.0
+    assert strand_crossings(frames, scene.net.edges) == []
 
 
 def test_off_the_scene_and_its_pattern_are_those_without_the_key():

@@ -1,7 +1,8 @@
 """Free rigid bodies of any shape (affine bodies on four lumped nodes,
 catenet/terms/rigid.py): the four nodes carry the body's mass, centre and second moment
 exactly; the orthogonality energy and the body-frame barrier pass finite differences and
-exchange force and torque honestly; the step cap never lets a node in; a torque-free
+exchange force and torque honestly; the step cap never lets a node in (nor nearer than
+its floor) and a Newton step turns a body by at most TURN_MAX; a torque-free
 body spinning near its intermediate axis keeps its angular momentum (drift falling as
 dt^2 under newmark) and flips as Euler's equations say; a box released onto a net rests
 at the static solve's equilibrium; a sphere body repeats the ball; bad input exits 2."""
@@ -16,11 +17,12 @@ import pytest
 from meshes import icosphere
 
 from catenet.case import build, parse_case
+from catenet.kernels.shapes import box_max_step
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import Sphere
-from catenet.terms.rigid import Frame, Rigidity, inertia_problem, second_moment
-from catenet.terms.rigid_contact import BodyContact
+from catenet.terms.rigid import TURN_MAX, Frame, Rigidity, inertia_problem, second_moment
+from catenet.terms.rigid_contact import FLOOR_SHARE, ROUNDOFF, SLACK, BodyContact
 from catenet.terms.shapes import Box, Capsule, Mesh, rotation
 
 INERTIA = np.array([[2.0, 0.3, -0.1], [0.3, 3.0, 0.2], [-0.1, 0.2, 4.0]])
@@ -161,14 +163,69 @@ def test_the_step_cap_lets_no_node_in_and_is_exact_for_a_body_that_does_not_turn
             hits += 1
             assert t > 0.5 * first  # and not far before it
     assert hits >= 20
-    # A translation only (W = 0): the cap is the box's exact first contact.
+    # A translation only (W = 0): the cap is the exact first contact with the box grown
+    # by the floor (FLOOR_SHARE dhat here: the coordinates' round-off is far below it).
     dx = np.zeros_like(x)
     dx[:K] = -x[:K]
     dx[K:] = [0.2, 0.1, 0.0]
     relative = dx.copy()
     relative[:K] -= [0.2, 0.1, 0.0]  # the nodes' motion seen from the body
-    exact = box.max_step(x, relative)
+    floor = FLOOR_SHARE * box.dhat
+    assert ROUNDOFF * np.finfo(float).eps * 2.0 < floor
+    nodes = np.arange(K)
+    exact = box_max_step(x, relative, nodes, box.center, box.axes, box.half, floor)
     assert math.isfinite(exact) and term.max_step(x, dx) == pytest.approx(exact, rel=1e-12)
+    assert exact < box.max_step(x, relative)
+
+
+@pytest.mark.parametrize("kind", ["box", "capsule", "sphere", "mesh"])
+def test_no_step_brings_a_node_nearer_the_body_than_the_floor(kind, tmp_path):
+    """However far a line search goes towards the cap (and however often: each Newton
+    iteration starts where the last one got), a node comes no nearer the turning body
+    than FLOOR_SHARE dhat (less SLACK of it per iteration spent at the floor): steps that
+    all head into the body close in on the floor, not on the surface (where the barrier
+    would be infinite within round-off)."""
+    rng = np.random.default_rng(3)
+    K = 12
+    c0 = np.array([0.1, 0.2, 0.3])
+    frame = Frame(K, 5.0, INERTIA, c0)
+    dhat = 0.05
+    shape = _shapes(tmp_path, np.arange(K), 1.0, dhat, c0)[kind]
+    term = BodyContact(shape, frame, n_nodes=K + 4)
+    x = np.zeros((K + 4, 3))
+    x[K:] = frame.center + frame.points
+    u = rng.standard_normal((K, 3))
+    x[:K] = c0 + 1.2 * u / np.linalg.norm(u, axis=1)[:, None]
+    floor = FLOOR_SHARE * dhat
+    for _ in range(60):
+        dx = np.zeros_like(x)
+        dx[:K] = c0 - x[:K]  # every node heads for the centre
+        dx[K:] = frame.points @ (0.02 * rng.standard_normal((3, 3))).T  # the body turns
+        t = term.max_step(x, dx)
+        assert 0.0 <= t < 1.0
+        x = x + (1.0 - 1e-12) * t * dx  # all but the whole way to the cap
+        assert term.gap(x).min() >= floor * (1.0 - SLACK) ** 60
+    assert term.gap(x).min() < 1.01 * floor  # it got there, and no further
+
+
+def test_a_newton_step_turns_a_body_by_at_most_turn_max():
+    """Rigidity caps a step at |t dA|_2 = TURN_MAX: a turn by theta about an axis
+    (dA = [w]x theta, |dA|_2 = theta) goes TURN_MAX / theta of the way; a translation and
+    the net's nodes are not capped."""
+    K = 3
+    frame = Frame(K, 5.0, INERTIA, np.zeros(3))
+    term = Rigidity(frame, 1e3, n_nodes=K + 4)
+    x = np.zeros((K + 4, 3))
+    x[K:] = frame.points
+    for theta in (0.1, 1.0, 1e10):
+        W = theta * np.array([[0.0, -0.6, 0.0], [0.6, 0.0, -0.8], [0.0, 0.8, 0.0]])
+        dx = np.zeros_like(x)
+        dx[K:] = frame.points @ W.T + [1.0, 2.0, 3.0]
+        assert term.max_step(x, dx) == pytest.approx(TURN_MAX / theta, rel=1e-12)
+    dx = np.zeros_like(x)
+    dx[:K] = 5.0
+    dx[K:] = [1.0, 2.0, 3.0]
+    assert term.max_step(x, dx) > 1e12  # dA is round-off: 1 times the sum of B's rows
 
 
 def spinning_case(dt: float, t_end: float) -> dict:
