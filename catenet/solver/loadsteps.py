@@ -20,7 +20,6 @@ from catenet.errors import (
     SingularSystemError,
 )
 from catenet.model.net import Loads, Net
-from catenet.solver.dynamic import solve_dynamic
 from catenet.solver.relax import REST
 from catenet.solver.result import Outcome, Result
 from catenet.solver.settings import Settings
@@ -189,6 +188,9 @@ def _relaxed(net, loads, target: float, good: LastGood, settings) -> Result | No
     which needs no continuation stage), then Newton on the exact potential from its rest
     state to the static tolerance (``solve_static(relaxed=True)``). The result, its
     iterations those of both (``good`` updated), or None when either fails."""
+    # (imported here, as in path.py: a plain static run loads no dynamic module)
+    from catenet.solver.dynamic import solve_dynamic
+
     default = Settings()
     log.info("load step from load factor %.6g: dynamic relaxation to rest", good.time)
     try:

@@ -20,6 +20,7 @@ import corpus
 import numpy as np
 import pytest
 
+import catenet.solver.dynamic as dynamic
 import catenet.solver.loadsteps as loadsteps
 from catenet.case import build, parse_case
 from catenet.errors import ConvergenceError
@@ -134,7 +135,7 @@ def test_the_last_rung_says_it_was_tried_when_it_fails(monkeypatch):
     def restless(*args, **kwargs):
         raise ConvergenceError("no rest within solver.max_steps = 20000 time steps")
 
-    monkeypatch.setattr(loadsteps, "solve_dynamic", restless)
+    monkeypatch.setattr(dynamic, "solve_dynamic", restless)
     with pytest.raises(ConvergenceError, match="dynamic relaxation to rest") as failed:
         run(mooring(6, 200))
     assert "pseudo-transient" in str(failed.value)
