@@ -1,9 +1,11 @@
 """Static runs in load steps: equilibria at increasing load factors, each from the last
-(``continuation``), a failing step cut back and, as the ladder's last rung, solved by a
-damped pseudo-transient solve; ``predict`` extrapolates a step's start."""
+(``continuation``), a failing step cut back, then solved by a damped pseudo-transient
+solve and, as the ladder's last rung, by dynamic relaxation to rest (``_relaxed``);
+``predict`` extrapolates a step's start."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -18,7 +20,9 @@ from catenet.errors import (
     SingularSystemError,
 )
 from catenet.model.net import Loads, Net
-from catenet.solver.result import Result
+from catenet.solver.relax import REST
+from catenet.solver.result import Outcome, Result
+from catenet.solver.settings import Settings
 from catenet.solver.start import start_state
 from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
@@ -27,6 +31,7 @@ log = logging.getLogger(__name__)
 
 
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
+DR_MAX_ITER = 25  # the last rung's Newton iterations per time step (a dynamic run's own)
 
 
 def continuation(
@@ -46,8 +51,9 @@ def continuation(
 
     A load step that fails is cut back: re-solved from the last equilibrium in sub-steps
     of half its load increment, halved again while one fails (``CUTBACKS`` times at most,
-    doubled again after two that succeed), the last rung a damped pseudo-transient solve;
-    the sub-steps' equilibria are not reported, their iterations count. A step that
+    doubled again after two that succeed), then a damped pseudo-transient solve, the last
+    rung dynamic relaxation to rest (``_relaxed``; a step to the full loads); the
+    sub-steps' equilibria are not reported, their iterations count. A step that
     still fails (or is interrupted) raises its ConvergenceError with ``last_good`` the
     last equilibrium found (a step's or a sub-step's, with its load factor; the start,
     supports in place, at load factor 0 before the first)."""
@@ -92,10 +98,13 @@ def _worth_cutting(exc: ConvergenceError) -> bool:
     return "round-off floor exceeds" not in str(exc)
 
 
-def _advice(exc: ConvergenceError, max_iter: int) -> str:
-    """The one setting most likely to help a static run that failed after cut-back."""
+def _advice(exc: ConvergenceError, max_iter: int, relaxed: bool = False) -> str:
+    """The one setting most likely to help a static run that failed after cut-back
+    (``relaxed``: and after dynamic relaxation to rest)."""
     if f"no convergence in {max_iter} iterations" in str(exc):
         return f"most likely to help: a larger solver.max_iter (now {max_iter})"
+    if relaxed:
+        return "most likely to help: more solver.steps (smaller load steps)"
     return (
         "most likely to help: solver.method = 'dynamic' (dynamic relaxation, the paper's "
         "method, which follows the net's motion to rest), or more solver.steps"
@@ -106,7 +115,8 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
     """The load step from the equilibrium ``good`` (updated: it holds the last one) to
     load factor ``target`` in sub-steps (see ``continuation``), in either direction of
     the load. Raises the last failure, its message saying what was tried, when sub-steps
-    of 1/2**CUTBACKS and the pseudo-transient solve still fail; an interrupt at once."""
+    of 1/2**CUTBACKS, the pseudo-transient solve and dynamic relaxation to rest (where
+    ``_can_relax``) still fail; an interrupt at once."""
     x, f = good.x, good.time
     increment = 0.5 * (target - f)
     spent = int(getattr(failure, "iterations", 0))
@@ -131,12 +141,18 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
                 continue
             if cuts >= CUTBACKS or not _worth_cutting(exc):
                 tried = f"load-step cut-back down to 1/{2**cuts} of the step"
-                if transient:
+                if transient and _can_relax(net, target, settings):
+                    relaxed = _relaxed(net, loads, target, good, settings)
+                    if relaxed is not None:
+                        relaxed.iterations += spent
+                        return relaxed
+                    tried += ", a damped pseudo-transient solve and dynamic relaxation to rest"
+                elif transient:
                     tried += " and a damped pseudo-transient solve"
                 exc.args = (
                     f"{exc}; tried: line search, a Levenberg-Marquardt shift, {tried} (the "
                     f"last equilibrium: load factor {good.time:.6g}); "
-                    f"{_advice(exc, settings['max_iter'])}",
+                    f"{_advice(exc, settings['max_iter'], 'dynamic relaxation' in tried)}",
                 )
                 exc.iterations = spent
                 exc.last_good = LastGood(good.x, good.time)
@@ -154,6 +170,66 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
         if done >= 2 and cuts > 1:  # two in a row: the step grows back
             increment *= 2.0
             cuts, done = cuts - 1, 0
+
+
+def _can_relax(net, target: float, settings) -> bool:
+    """Whether the last rung applies: a step to the full loads (``target`` 1) of a net
+    whose free nodes have mass, with a Newton budget ``max_iter`` of at least a time
+    step's DR_MAX_ITER (the rung would not keep a smaller one)."""
+    if target != 1.0 or settings["max_iter"] < DR_MAX_ITER:
+        return False
+    return bool(np.all(net.mass[~net.fixed] > 0.0))
+
+
+def _relaxed(net, loads, target: float, good: LastGood, settings) -> Result | None:
+    """The ladder's last rung: the equilibrium under the full loads (``target`` 1) by
+    dynamic relaxation to rest from the last equilibrium ``good`` (the paper's method,
+    ``solver.t_end = "rest"`` at the default dt and damping: it follows the net's motion,
+    which needs no continuation stage), then Newton on the exact potential from its rest
+    state to the static tolerance (``solve_static(relaxed=True)``). The result, its
+    iterations those of both (``good`` updated), or None when either fails."""
+    # (imported here, as in path.py: a plain static run loads no dynamic module)
+    from catenet.solver.dynamic import solve_dynamic
+
+    default = Settings()
+    log.info("load step from load factor %.6g: dynamic relaxation to rest", good.time)
+    try:
+        rest = solve_dynamic(
+            net,
+            _held(loads),
+            dt=default.dt,
+            damping=default.damping,
+            t_end=REST,
+            rtol=settings["rtol"],
+            max_iter=DR_MAX_ITER,
+            x0=good.x,
+            workspace=settings["workspace"],
+        )
+        if rest.outcome not in (Outcome.EQUILIBRIUM, Outcome.AT_FLOOR):
+            return None
+        r = solve_static(net, loads, x0=rest.x, factor=target, relaxed=True, **settings)
+    except ConvergenceError as exc:
+        if isinstance(exc, Interrupted):
+            raise
+        log.info("dynamic relaxation to rest did not help: %s", exc)
+        return None
+    r.iterations += rest.iterations
+    good.x, good.time = r.x, target
+    return r
+
+
+def _held(loads: Loads) -> Loads:
+    """``loads`` as a static run takes them, for a run to rest: every load and support
+    displacement at its full value from the start (no history, no ramp)."""
+    if not (loads.parts or loads.gravity_history or loads.support_history):
+        if loads.ramp_time is None:
+            return loads
+    force = None if loads.force is None else loads.force.copy()
+    for f, _ in loads.parts:
+        force = np.array(f, dtype=np.float64) if force is None else force + f
+    return dataclasses.replace(
+        loads, force=force, parts=(), gravity_history=None, ramp_time=None, support_history=()
+    )
 
 
 def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:

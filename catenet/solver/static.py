@@ -40,6 +40,7 @@ def solve_static(
     raise_on_failure: bool = True,
     accepted: np.ndarray | None = None,
     transient: bool = False,
+    relaxed: bool = False,
 ) -> Result:
     """Static equilibrium of ``net`` under ``loads`` scaled by ``factor``.
 
@@ -50,7 +51,9 @@ def solve_static(
     Newton fails (with the residual history and, as ``state``, the start: never an
     unconverged iterate), unless ``raise_on_failure`` is False. ``transient``: reach the
     equilibrium by a damped pseudo-transient solve (``_pseudo_transient``; the last rung
-    of the cut-back's ladder) instead of Newton directly.
+    of the cut-back's ladder) instead of Newton directly. ``relaxed``: x0 is at rest
+    already (dynamic relaxation's, the ladder's last rung): Newton on the exact potential
+    from it, without the continuation stages (they would move it away).
     """
     check_rtol(rtol)
     ws = workspace or Workspace(net, linear=linear)
@@ -61,7 +64,10 @@ def solve_static(
     if accepted is None:
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
     potential.begin_step(accepted)
-    result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
+    if relaxed:
+        result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static (from rest)")
+    else:
+        result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
     result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
     if result.converged and result.tolerance > potential.f_norm > 0:
         # Held only to a round-off floor above the loads: no digit of the answer is sure.
