@@ -88,6 +88,8 @@ def _build(case: Case) -> Scene:
     net, loads, velocity, rigid_terms, rigid = add_free_bodies(
         case, net, loads, velocity, float(built.size)
     )
+    for term in body_terms:  # the balls' terms, built before the bodies' nodes came
+        term.n_nodes = net.n_nodes
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     terms += rigid_terms
     if rigid:  # free bodies against each other, balls and fixed obstacles
