@@ -10,6 +10,7 @@ as the net (catenet.case.touching, catenet.terms.touch): closed forms and invari
 - A sphere falling onto a fixed capsule just off its top slides off it, never inside.
 - Two boxes dropped edge on edge: never overlapping, checked by the separating axis
   theorem at every step and sampled between, at steps from 1 ms to 0.1 s.
+- A closed mesh body dropped on a fixed box rests on its vertices, its weight carried.
 """
 
 from __future__ import annotations
@@ -197,3 +198,25 @@ def test_boxes_dropped_edge_on_edge_never_pass_through(dt):
     assert min(gaps) > 0.0
     lowest = min(body.frame.pose(x)[0][2] for x in states)
     assert lowest < h + 0.005  # it came down onto the edge (within the barrier's reach)
+
+
+def test_a_mesh_body_dropped_on_a_fixed_box_rests_on_its_vertices(tmp_path):
+    """A closed triangle mesh (an icosphere of radius 0.2, 162 vertices) as a 3 kg free
+    body dropped from 5 cm onto a fixed box: its vertices meet the box's top face; it
+    never reaches it, and at rest the box carries its weight, 29.43 N, straight up."""
+    from tests.meshes import icosphere, write_stl
+
+    V, T = icosphere(2)
+    write_stl(tmp_path / "ball.stl", V, T)
+    low = float((0.2 * V[:, 2]).min())
+    box = dict(BASE, distance=0.003)
+    mesh = {"kind": "mesh", "file": str(tmp_path / "ball.stl"), "scale": 0.2,
+            "offset": [0.0, 0.0, 0.2 - low + 0.05], "mass": 3.0, "distance": 0.003}  # fmt: skip
+    solver = {"method": "dynamic", "dt": 0.01, "damping": 0.0, "t_end": 1.0}
+    scene = scene_of([box, mesh], solver)
+    (term,) = [t for t in scene.terms if isinstance(t, BodyTouch)]
+    gaps = []
+    r = solve(scene, Settings.of(scene.case.solver), on_step=lambda s: gaps.append(term.gap(s.x)))
+    assert r.converged and min(gaps) > 0.0 and gaps[-1] < term.dhat
+    force = pushes(term, r.x, scene.rigid[0].frame.nodes)
+    assert np.allclose(force, [0.0, 0.0, 3.0 * 9.81], rtol=1e-4, atol=1e-3)
