@@ -9,8 +9,11 @@ tables' ``distance`` (each defaulting as for the net: DISTANCE_SHARE of the scen
 stiffness the larger given ``stiffness``, else the default barrier stiffness
 (``default_stiffness``) for the largest of the loads the pair may carry: a body's weight
 on four points and the force that stops the pair's initial kinetic energy within half
-the activation distance. Frictionless (a body's ``friction`` acts with the net only).
-Bodies that start touching are refused (exit 2) with both named.
+the activation distance.
+Coulomb friction where either table gives it: the larger ``friction`` of the two, the
+smaller ``slip`` given (else the activation distance), on the points' sides
+(``BodyTouchFriction``; edge on edge is frictionless). Bodies that start touching are
+refused (exit 2) with both named.
 """
 
 from __future__ import annotations
@@ -104,7 +107,7 @@ def touch_terms(case, rigid, balls, net, size: float) -> tuple:
     starts touching."""
     from catenet.case.obstacles import DISTANCE_SHARE
     from catenet.terms.contact import default_stiffness
-    from catenet.terms.touch import BodyTouch
+    from catenet.terms.touch import BodyTouch, BodyTouchFriction
 
     obstacles = case.obstacles
     gravity = case.load.gravity if getattr(case, "load", None) is not None else None
@@ -139,6 +142,11 @@ def touch_terms(case, rigid, balls, net, size: float) -> tuple:
                     "two solids must not overlap at the start; move them apart"
                 )
             terms.append(term)
+            mu = max(getattr(oa, "friction", 0.0), getattr(ob, "friction", 0.0))
+            if mu > 0.0:
+                slips = [v for v in (getattr(oa, "slip", None), getattr(ob, "slip", None)) if v]
+                slip = min(slips) if slips else dhat
+                terms.append(BodyTouchFriction(term, mu=mu, slip=slip))
     return tuple(terms)
 
 

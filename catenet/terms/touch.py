@@ -36,7 +36,10 @@ test, or BodyContact's chords of the body-frame path), and the edge pairs within
 reach of the step's motion by additive CCD up to STEP_CHECKED steps (longer ones are
 refused, as in self-contact). No iterate has two solids overlapping.
 
-Friction between solids: none (a body's ``friction`` acts with the net).
+Friction (``BodyTouchFriction``): the lagged Coulomb friction of the shapes
+(``catenet.terms.friction``) on the points' sides, seen in a body's frame as with the
+net (``BodyFriction``), chained to the pair's nodes like the barrier; the edges'
+contacts (edge on edge) are frictionless.
 """
 
 from __future__ import annotations
@@ -119,6 +122,12 @@ class _Side:
             self.term = shape
         self.M = M
         self.J = np.einsum("va,ij->viaj", M, np.eye(3)).reshape(len(M), 3, 3 * n)
+
+    def riding(self, term) -> _Side:
+        """This side with ``term`` in place of its barrier (its friction)."""
+        out = copy.copy(self)
+        out.term = term
+        return out
 
     def local(self, x, dx=None) -> np.ndarray:
         y = self.p.place(x) if dx is None else self.p.motion(dx)
@@ -319,3 +328,56 @@ def _segments(P) -> float:
 
     g, H = np.empty(12), np.empty((12, 12))
     return math.sqrt(sqdist(np.ascontiguousarray(P).ravel(), 0, g, H, False))
+
+
+@register("body_touch_friction")
+class BodyTouchFriction(Term):
+    """Coulomb friction (coefficient ``mu``, slip distance ``slip`` [m]) riding on the
+    barrier ``touch`` between two solids: on each of its points' sides the shape's
+    lagged friction (module docstring); frictionless edge on edge."""
+
+    lagged = True
+    role = "internal"
+    convex = False
+
+    def __init__(self, touch: BodyTouch, *, mu: float, slip: float):
+        from catenet.terms.friction import Friction
+        from catenet.terms.rigid_contact import BodyFriction
+
+        self.rides_on = touch
+        self.nodes, self.n_nodes = touch.nodes, touch.n_nodes
+        self.sides = []
+        for side in touch.sides:
+            if isinstance(side.term, BodyContact):
+                term = BodyFriction(Friction(side.term.shape, mu=mu, slip=slip), side.term)
+            else:
+                term = Friction(side.term, mu=mu, slip=slip)
+            self.sides.append(side.riding(term))
+
+    def begin_step(self, x, time, start=None) -> None:
+        for side in self.sides:
+            side.term.begin_step(side.local(x), time, start)
+
+    def relag(self, x) -> float:
+        return max((side.term.relag(side.local(x)) for side in self.sides), default=0.0)
+
+    def pattern(self):
+        return self.rides_on.pattern()
+
+    def gradient(self, x, grad):
+        gn = np.zeros((len(self.nodes), 3))
+        energy = sum(side.gradient(x, gn) for side in self.sides)
+        grad[self.nodes] += gn
+        return float(energy)
+
+    def energy(self, x):
+        return self.gradient(x, np.zeros_like(np.asarray(x)))
+
+    def hessian(self, x, values):
+        n = len(self.nodes)
+        Hn = np.zeros((3 * n, 3 * n))
+        acted = False
+        for side in self.sides:
+            acted = side.hessian(x, Hn) or acted
+        values[:] = Hn.ravel()
+        return acted

@@ -220,3 +220,57 @@ def test_a_mesh_body_dropped_on_a_fixed_box_rests_on_its_vertices(tmp_path):
     assert r.converged and min(gaps) > 0.0 and gaps[-1] < term.dhat
     force = pushes(term, r.x, scene.rigid[0].frame.nodes)
     assert np.allclose(force, [0.0, 0.0, 3.0 * 9.81], rtol=1e-4, atol=1e-3)
+
+
+def slope_case(mu: float, method: str = "dynamic") -> dict:
+    """A 5 kg box (0.4 x 0.4 x 0.2 m) on the top face of a fixed box tilted 20 degrees
+    about y, 1 mm above it (the pair's reach 2 mm), the slope's ``friction`` mu."""
+    th = math.radians(20.0)
+    normal = np.array([math.sin(th), 0.0, math.cos(th)])
+    turned = {"axis": [0.0, 1.0, 0.0], "angle": th, "distance": 0.002}
+    lower = {"kind": "box", "center": [0.0, 0.0, 0.0], "half_size": [1.0, 0.5, 0.2],
+             "friction": mu, **turned}  # fmt: skip
+    upper = {"kind": "box", "center": (0.301 * normal).tolist(), "half_size": [0.2, 0.2, 0.1],
+             "mass": 5.0, **turned}  # fmt: skip
+    solver = {"method": method}
+    if method == "dynamic":
+        solver.update(dt=0.005, damping=0.0, t_end=0.5)
+    return [lower, upper], solver
+
+
+@pytest.mark.parametrize("mu", [0.5, 0.2])
+def test_a_box_on_a_slope_sticks_or_slides_as_coulomb_says(mu):
+    """tan 20 deg = 0.364. With mu = 0.5 the box stays where it was put (within the slip
+    distance, 2 mm) over 0.5 s, and a static solve holds it there, the contact and
+    friction forces its weight; with mu = 0.2 it slides down the slope, its speed
+    growing at g (sin 20 deg - mu cos 20 deg) = 1.511 m/s^2 once it slips (to 1 %), the
+    friction force mu times the normal force."""
+    from catenet.terms.touch import BodyTouchFriction
+
+    obstacles, solver = slope_case(mu)
+    scene = scene_of(obstacles, solver)
+    frame = scene.rigid[0].frame
+    c0 = frame.state(scene.net.nodes)[0]
+    seen = []
+    r = solve(scene, Settings.of(scene.case.solver), on_step=lambda s: seen.append(s))
+    assert r.converged
+    moved = np.linalg.norm(frame.state(r.x)[0] - c0)
+    pair = [t for t in scene.terms if isinstance(t, (BodyTouch, BodyTouchFriction))]
+    if mu > math.tan(math.radians(20.0)):
+        assert moved < 0.002
+        obstacles, solver = slope_case(mu, "static")
+        static = scene_of(obstacles, solver)
+        rs = solve(static, Settings.of(static.case.solver))
+        assert rs.converged
+        held = sum(pushes(t, rs.x, frame.nodes) for t in static.terms
+                   if isinstance(t, (BodyTouch, BodyTouchFriction)))  # fmt: skip
+        assert np.allclose(held, [0.0, 0.0, 5.0 * 9.81], rtol=1e-6, atol=1e-6)
+        assert np.linalg.norm(frame.state(rs.x)[0] - c0) < 0.002
+        return
+    speed = [np.linalg.norm(frame.motion(s.x, s.v)[0]) for s in seen]
+    times = [s.time for s in seen]
+    rate = np.polyfit(times[40:], speed[40:], 1)[0]  # from t = 0.2 s
+    a = 9.81 * (math.sin(math.radians(20.0)) - mu * math.cos(math.radians(20.0)))
+    assert rate == pytest.approx(a, rel=0.01) and moved > 0.15
+    normal, friction = (pushes(t, r.x, frame.nodes) for t in pair)
+    assert np.linalg.norm(friction) == pytest.approx(mu * np.linalg.norm(normal), rel=1e-6)

@@ -23,7 +23,7 @@ from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.body_plane import BodyPlane
 from catenet.terms.rigid_contact import BodyContact
-from catenet.terms.touch import BodyTouch
+from catenet.terms.touch import BodyTouch, BodyTouchFriction
 
 
 def two_bowls(**solver) -> dict:
@@ -242,7 +242,8 @@ def test_two_spheres_that_meet_stop_each_other(tmp_path, dt):
 def test_a_static_run_holds_a_box_pushed_against_a_fixed_ball():
     """A static run: a 10 kg box on a net that 800 N at its centre push up towards a
     fixed ball above it: the box stops at the ball (within the pair's reach), and the
-    ball's push on the box, its weight and the net's push balance."""
+    ball's push on the box (its barrier and friction), its weight and the net's push
+    balance."""
     case = {
         "geometry": {
             "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
@@ -266,12 +267,12 @@ def test_a_static_run_holds_a_box_pushed_against_a_fixed_ball():
     (touch,) = [t for t in scene.terms if isinstance(t, BodyTouch)]
     assert 0.0 < touch.gap(r.x) < touch.dhat
     nodes = scene.rigid[0].frame.nodes
-    net_push = np.zeros_like(r.x)
+    net_push, ball = np.zeros_like(r.x), np.zeros_like(r.x)
     for term in scene.terms:
-        if getattr(term, "frame", None) is scene.rigid[0].frame and not isinstance(term, BodyTouch):
+        if isinstance(term, (BodyTouch, BodyTouchFriction)):
+            term.gradient(r.x, ball)
+        elif getattr(term, "frame", None) is scene.rigid[0].frame:
             term.gradient(r.x, net_push)
-    ball = np.zeros_like(r.x)
-    touch.gradient(r.x, ball)
     total = -net_push[nodes].sum(axis=0) - ball[nodes].sum(axis=0) + [0.0, 0.0, -98.1]
     assert np.abs(total).max() < 1e-6 * 800.0
     assert -ball[nodes].sum(axis=0)[2] < -1.0  # the ball pushes the box down

@@ -205,3 +205,24 @@ def test_nearly_parallel_edges_are_mollified_and_smooth(kind):
         x[term.nodes] += 2e-4 * rng.standard_normal((len(term.nodes), 3))
         grad_err, hess_err = check_derivatives(term, x, step=1e-7)
         assert grad_err < 1e-6 and hess_err < 1e-6
+
+
+@pytest.mark.parametrize("free", [False, True], ids=["fixed", "free"])
+def test_friction_between_solids_derivatives(free):
+    """The lagged Coulomb friction between a box resting on a box (``friction`` on the
+    lower table): its normal forces and anchors taken at the start, the gradient and
+    Hessian at a pose moved at random (sliding and turning a little) pass the
+    finite-difference check; it acts on the points' sides only."""
+    from catenet.terms.touch import BodyTouchFriction
+
+    lower = dict(BOTTOMS["box"], distance=0.01, friction=0.4, **({"mass": 5.0} if free else {}))
+    scene = scene_of([lower, dict(TOPS["box"], half_size=[0.2, 0.1, 0.1], distance=0.01)])
+    (friction,) = [t for t in scene.terms if isinstance(t, BodyTouchFriction)]
+    assert friction.rides_on is touch(scene) and len(friction.sides) == 2
+    x0 = scene.net.nodes
+    friction.begin_step(x0, 0.01, 0.0)
+    x = x0.copy()
+    x[friction.nodes] += 3e-4 * np.random.default_rng(4).standard_normal((len(friction.nodes), 3))
+    assert friction.energy(x) > 0.0
+    grad_err, hess_err = check_derivatives(friction, x, step=1e-7)
+    assert grad_err < 1e-6 and hess_err < 1e-6
