@@ -31,8 +31,9 @@ each other (a mesh: the same for its closed surface, faces, edges, vertices).
 
 ``max_step``: the bounding spheres of the two (about each centre of points, radii
 growing with the points' motion) first meet at t_b (exact, a quadratic): steps shorter
-than that are free. Otherwise the points' sides cap the step exactly (the shape's ray
-test, or BodyContact's chords of the body-frame path), and the edge pairs within
+than that are free. Otherwise the points' sides cap the step (exactly by the fixed
+shape's ray test; in a body's frame by BodyContact's chords of the points' quadratic
+paths, exact where it does not turn, conservative otherwise), and the edge pairs within
 reach of the step's motion by additive CCD up to STEP_CHECKED steps (longer ones are
 refused, as in self-contact). No iterate has two solids overlapping.
 
@@ -49,7 +50,7 @@ import math
 
 import numpy as np
 
-from catenet.kernels.strands import candidates
+from catenet.kernels.strands import candidates, sqdist
 from catenet.kernels.touch import touch_ccd, touch_edges
 from catenet.terms.base import Term, register
 from catenet.terms.rigid_contact import BodyContact
@@ -324,8 +325,6 @@ class BodyTouch(Term):
 
 def _segments(P) -> float:
     """The distance of the segments P[0]-P[1] and P[2]-P[3] (4, 3)."""
-    from catenet.kernels.strands import sqdist
-
     g, H = np.empty(12), np.empty((12, 12))
     return math.sqrt(sqdist(np.ascontiguousarray(P).ravel(), 0, g, H, False))
 
