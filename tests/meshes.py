@@ -192,3 +192,22 @@ def _crossed(x0, x1, quads, samples) -> list[int]:
         met = touch[flip] | (segment_distance(Ph) <= 1e-7 * size)
         out.update(int(i) for i in flip[met])
     return sorted(out)
+
+
+def boxes_apart(a, b) -> float:
+    """The largest separation of two boxes, each (centre (3,), axes (3, 3) as columns,
+    half sizes (3,)), along the 15 axes of the separating axis theorem (their faces'
+    normals and the cross products of their edges): > 0 where they are apart (a lower
+    bound of their distance), <= 0 where they overlap or touch."""
+    (ca, Ra, ha), (cb, Rb, hb) = a, b
+    axes = [*Ra.T, *Rb.T]
+    axes += [np.cross(u, v) for u in Ra.T for v in Rb.T]
+    best = -np.inf
+    for n in axes:
+        size = float(np.linalg.norm(n))
+        if size < 1e-9:
+            continue  # parallel edges: their normals are among the faces'
+        n = n / size
+        reach = float(np.abs(Ra.T @ n) @ ha + np.abs(Rb.T @ n) @ hb)
+        best = max(best, abs(float((cb - ca) @ n)) - reach)
+    return best

@@ -144,6 +144,8 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
     for i, other in enumerate(obstacles):
         if i == k or (getattr(other, "moves", False) and i < k):
             continue  # itself, or a pair built with the other ball
+        if getattr(other, "free", False):
+            continue  # a free body: its contact with the ball (catenet.case.touching)
         dhat = min(
             d if d is not None else DISTANCE_SHARE * size for d in (me.distance, other.distance)
         )

@@ -149,17 +149,16 @@ def add_free_bodies(case, net, loads, velocity, size: float):
 
 def _check_alone(case, which) -> None:
     """ConfigError for a free body beside an obstacle on a prescribed motion (a box,
-    capsule or mesh that moves: the watch of ``catenet.case.clearance`` does not follow
-    it). Several free bodies, fixed obstacles and balls are allowed: the watch stops a
-    run where one would meet another."""
+    capsule or mesh that moves: no contact term follows it). Several free bodies, fixed
+    obstacles and balls are allowed: they touch each other (``catenet.case.touching``)."""
     k = which[0]
     for i, obs in enumerate(case.obstacles):
         if getattr(obs, "rigid_motion", False):
             raise ConfigError(
                 f"obstacle[{i}] (kind {obs.kind!r}): an obstacle on a prescribed motion "
-                f"beside a free body (obstacle[{k}]): a free body meets the net only and "
-                "nothing would see it pass through the moving obstacle; drop one of them, "
-                "or give the other a fixed place"
+                f"beside a free body (obstacle[{k}]): a free body does not touch an "
+                "obstacle on a prescribed motion and would pass through it; drop one of "
+                "them, or give the other a fixed place"
             )
 
 

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from catenet.case.bodies import add_bodies
-from catenet.case.clearance import Clearance
 from catenet.case.coarse import coarse_case
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
@@ -21,6 +20,7 @@ from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
+from catenet.case.touching import touch_terms
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
@@ -64,7 +64,6 @@ class Scene:
     rigid: tuple = ()
     probe_auto: bool = False
     cases: tuple = ()
-    watch: Any = None  # stops a run where a free body meets another body or an obstacle
 
     def coarser(self, factor: float) -> Scene | None:
         """The same case built with every edge length times ``factor``, with fewer nodes
@@ -106,15 +105,14 @@ def _build(case: Case) -> Scene:
     net, loads, velocity, rigid_terms, rigid = add_free_bodies(
         case, net, loads, velocity, float(built.size)
     )
+    for term in body_terms:  # the balls' terms, built before the bodies' nodes came
+        term.n_nodes = net.n_nodes
     terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
     terms += rigid_terms
+    if rigid:  # free bodies against each other, balls and fixed obstacles
+        terms += touch_terms(case, rigid, bodies, net, float(built.size))
     if getattr(case.solver, "self_contact", False):
         terms += (self_contact(case.solver, net, loads),)
-    watch = Clearance(case, rigid, bodies) if rigid else None
-    if watch:  # something to watch
-        watch.start(net.nodes)
-    else:
-        watch = None
     return Scene(
         case=case,
         net=net,
@@ -129,7 +127,6 @@ def _build(case: Case) -> Scene:
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
         rigid=rigid,
-        watch=watch,
         probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
         cases=_load_cases(case, net, built),
     )

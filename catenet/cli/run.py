@@ -281,7 +281,7 @@ def _summary(case, result, path: Path | None) -> None:
             touch = "not touching the net" if first is None else "resting on the net"
             lines.insert(-1, head + touch)
             continue
-        touch = "no contact" if first is None else f"first contact at t = {first:.6g} s"
+        touch = "never touched the net" if first is None else f"first contact at t = {first:.6g} s"
         axis = ", ".join(f"{c:.3g}" for c in b["axis"])
         lines.insert(
             -1,

@@ -202,25 +202,43 @@ def mollifier(e, eps):
 
 
 @njit(cache=True, error_model="numpy")
+def _phi(D, reach2, r, dhat):
+    """b, b', b'' with respect to D: the barrier on the squared distance D itself
+    (r < 0, activation reach2) or on the gap sqrt(D) - r (activation dhat)."""
+    if r < 0.0:
+        return barrier(D, reach2)
+    s = np.sqrt(D)
+    b, db, ddb = barrier(s - r, dhat)
+    return b, 0.5 * db / s, 0.25 * (ddb - db / s) / D
+
+
+@njit(cache=True, error_model="numpy")
 def pair_energy(P, eps, dhat2, kappa, g, H, want):
     """The barrier energy of one edge pair (points P (12,)); its gradient into g (12,)
     and, with ``want``, its Hessian into H (12, 12) (both zero out of reach)."""
+    return edge_energy(P, eps, dhat2, -1.0, 0.0, kappa, g, H, want)
+
+
+@njit(cache=True, error_model="numpy")
+def edge_energy(P, eps, reach2, r, dhat, kappa, g, H, want):
+    """``pair_energy`` on the squared distance (r < 0, activation reach2) or on the gap
+    sqrt(D) - r of edges grown by r >= 0 (activation dhat, reach2 = (r + dhat)^2)."""
     g[:] = 0.0
     if want:
         H[:, :] = 0.0
     gd = np.empty(12)
     Hd = np.empty((12, 12))
     D = sqdist(P, 0, gd, Hd, False)
-    if D >= dhat2:
+    if D >= reach2:
         return 0.0  # out of reach: no Hessian to compute
     if want:
         sqdist(P, 0, gd, Hd, True)
-    if D <= 0.0:
+    if D <= 0.0 or D <= r * abs(r):
         return np.inf  # touching (m b would be 0 inf for parallel edges)
     ge = np.empty(12)
     He = np.empty((12, 12))
     m, dm, ddm = mollifier(parallelism(P, ge, He, want), eps)
-    b, db, ddb = barrier(D, dhat2)
+    b, db, ddb = _phi(D, reach2, r, dhat)
     energy = m * b
     gB = db * gd  # the gradient of B = b(D) - sum_j b(D_j)
     for p in range(12):
@@ -233,9 +251,9 @@ def pair_energy(P, eps, dhat2, kappa, g, H, want):
     if m < 1.0:
         for kind in range(1, 5):
             Dj = sqdist(P, kind, gd, Hd, want)
-            if Dj >= dhat2:
+            if Dj >= reach2:
                 continue
-            bj, dbj, ddbj = barrier(Dj, dhat2)
+            bj, dbj, ddbj = _phi(Dj, reach2, r, dhat)
             energy += (1.0 - m) * bj
             B -= bj
             for p in range(12):
@@ -457,7 +475,7 @@ CCD_ITERATIONS = 1000
 
 
 @njit(cache=True, error_model="numpy")
-def accd(P, dP, t_max):
+def accd(P, dP, t_max, r=0.0):
     """The first time t in (0, t_max] of additive CCD for the edge pair P (12,) moving
     with dP (12,): the segments' distance stays positive on [0, t] (it falls by at most
     l_p per unit of t, l_p the largest relative speeds of the two edges' ends); inf
@@ -474,7 +492,7 @@ def accd(P, dP, t_max):
     if lp == 0.0:
         return np.inf
     g, H, X = np.empty(12), np.empty((12, 12)), np.empty(12)
-    d = np.sqrt(sqdist(P, 0, g, H, False))
+    d = np.sqrt(sqdist(P, 0, g, H, False)) - r
     if not d > 0.0:
         return 0.0
     gap = CCD_SHARE * d
@@ -483,7 +501,7 @@ def accd(P, dP, t_max):
     for _ in range(CCD_ITERATIONS):
         for p in range(12):
             X[p] = P[p] + (t + tl) * dP[p]
-        d = np.sqrt(sqdist(X, 0, g, H, False))
+        d = np.sqrt(sqdist(X, 0, g, H, False)) - r
         if t > 0.0 and d < gap:
             return t
         t += tl

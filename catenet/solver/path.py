@@ -125,17 +125,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
     factors = [k / steps for k in range(1, steps + 1)]
     done: list[Result] = []
 
-    watch = getattr(scene, "watch", None)  # a case's free bodies meeting others: raises
-    if watch is not None:
-        watch.reset(scene.net.nodes if start.x is None else start.x)
-
     def seen(factor: float, r: Result) -> None:
-        if watch is not None:
-            try:
-                watch.check(r.x, f"load factor {factor:.6g}")
-            except CatenetError as exc:
-                exc.last_good = LastGood(done[-1].x, done[-1].time) if done else None
-                raise
         done.append(r)
         r.time = factor
         peaks.observe(factor, r.x, r.tension)
@@ -220,15 +210,9 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     def rest(ratio: float) -> None:
         last["rest"] = ratio
 
-    watch = getattr(scene, "watch", None)  # a case's free bodies meeting others: raises
-    if watch is not None:
-        watch.reset(x0)
-
     def seen(step: int, t: float, x, v) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
             raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
-        if watch is not None:
-            watch.check(x, f"t = {t:.6g} s")
         peaks.observe(t, x, tension(x))
         a = None if accel is None else accel.copy()
         last.update(steps=step, t=t, x=x.copy(), v=v.copy(), a=a)

@@ -131,7 +131,8 @@ def test_bad_free_bodies_exit_2_with_their_key_path(tmp_path, change, message):
     if (rho := change.pop("rho", None)) is not None:
         case["solver"].update(integrator="newmark", rho_inf=rho)
     if change.pop("second", None):  # several bodies are allowed, not overlapping
-        case["obstacle"].append({**obs, "center": [0.0, 0.0, 0.35]})
+        below = [c + d for c, d in zip(obs["center"], (0.05, 0.0, -0.02), strict=True)]
+        case["obstacle"].append({**obs, "center": below})
     if change.pop("ground", None):  # a ceiling through the body
         case["obstacle"].append({"kind": "plane", "point": [0, 0, 0.22], "normal": [0, 0, -1]})
     if change.pop("path", None):  # a box on a prescribed motion: not beside a free body

@@ -1,11 +1,12 @@
 """Several free rigid bodies in one case, and free bodies beside fixed obstacles and
-balls (catenet.case.rigid, catenet.case.clearance): two bodies dropped into one net
+balls (catenet.case.rigid, catenet.case.touching): two bodies dropped into one net
 come to rest at the static equilibrium with both; two bodies and a free net in zero
 gravity keep their momentum; a box lands on the ground (a plane's barrier on its
-corners: finite-difference checks, reaction = weight); a run stops (exit 1, the steps
-before kept) at the step where a body meets another body or a fixed ball, exactly for
-two spheres (over the path between two steps, not only at its ends), conservatively
-otherwise; bodies that start overlapping are refused (exit 2)."""
+corners: finite-difference checks, reaction = weight); two spheres flying at each other
+stop each other without ever overlapping, at any step (over the path between two
+steps too), their momentum kept; a static run holds a box pushed against a fixed ball;
+a ball dropped on a free box rests on it; bodies that start overlapping are refused
+(exit 2)."""
 
 from __future__ import annotations
 
@@ -16,13 +17,13 @@ import pytest
 from click.testing import CliRunner
 
 from catenet.case import build, dumps_toml, parse_case
-from catenet.case.clearance import BodiesMeet
 from catenet.cli import main
 from catenet.errors import ConfigError
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.body_plane import BodyPlane
 from catenet.terms.rigid_contact import BodyContact
+from catenet.terms.touch import BodyTouch, BodyTouchFriction
 
 
 def two_bowls(**solver) -> dict:
@@ -203,25 +204,46 @@ def spheres_case(offset: float, dt: float) -> dict:
 
 
 @pytest.mark.parametrize("dt", [0.01, 0.3])
-def test_two_spheres_that_meet_stop_the_run_at_that_step(tmp_path, dt):
-    """They touch when their centres are 0.1 apart: at t = 0.15. With dt = 0.01 the run
-    stops at the step where they overlap; with dt = 0.3 they would be through each other
-    after one step (0.2 past), and the check over the centres' path between the steps
-    still stops it there. 0.12 apart across, they pass: the run goes to its end."""
-    res, out = run_cli(tmp_path, spheres_case(0.0, dt), "meet")
-    assert res.exit_code == 1, res.output
-    assert "obstacle[0] (a free sphere) meets obstacle[1] (a free sphere)" in res.output
-    when = float(res.output.split("at t = ")[1].split(" s")[0])
-    assert 0.15 <= when < 0.15 + dt + 1e-9
+def test_two_spheres_that_meet_stop_each_other(tmp_path, dt):
+    """They would touch when their centres are 0.1 apart, at t = 0.15. With dt = 0.01,
+    and with dt = 0.3 (where one free step would take them 0.2 through each other),
+    their centres are never closer than the summed radii, at every step nor on the
+    straight path between two steps; the total momentum is kept (zero); the impact
+    took most of their speed. 0.12 apart across, they pass untouched."""
+    scene = build(parse_case(spheres_case(0.0, dt)))
+    a, b = scene.rigid
+    states = [scene.net.nodes.copy()]
+    total = []
+
+    def seen(s):
+        states.append(s.x.copy())
+        total.append(a.frame.momentum(s.x, s.v)[0] + b.frame.momentum(s.x, s.v)[0])
+
+    r = solve(scene, Settings.of(scene.case.solver), on_step=seen)
+    assert r.converged
+    gaps = []
+    for x0, x1 in zip(states[:-1], states[1:], strict=True):
+        for s in np.linspace(0.0, 1.0, 21):
+            x = (1 - s) * x0 + s * x1
+            gaps.append(np.linalg.norm(a.frame.state(x)[0] - b.frame.state(x)[0]) - 0.1)
+    mass = 2000.0 * 4 / 3 * math.pi * 0.05**3
+    assert min(gaps) > 0.0 and np.abs(total).max() < 1e-8 * mass
+    va, vb = a.frame.motion(r.x, r.v)[0], b.frame.motion(r.x, r.v)[0]
+    assert max(abs(va[0]), abs(vb[0])) < 0.5  # stopped (implicit Euler's loss in impact)
+    res, _ = run_cli(tmp_path, spheres_case(0.0, dt), "meet")
+    assert res.exit_code == 0, res.output
     scene = build(parse_case(spheres_case(0.12, dt)))
-    assert solve(scene, Settings.of(scene.case.solver)).converged
+    (term,) = [t for t in scene.terms if isinstance(t, BodyTouch)]
+    gaps = []
+    r = solve(scene, Settings.of(scene.case.solver), on_step=lambda s: gaps.append(term.gap(s.x)))
+    assert r.converged and min(gaps) > term.dhat  # never within reach
 
 
-def test_a_static_run_stops_where_a_body_meets_a_fixed_sphere():
+def test_a_static_run_holds_a_box_pushed_against_a_fixed_ball():
     """A static run: a 10 kg box on a net that 800 N at its centre push up towards a
-    fixed ball above it: the equilibrium of net and box has the box's bounding sphere
-    through the ball (the net's nodes stay below): BodiesMeet, conservative, the start
-    kept as the last good state."""
+    fixed ball above it: the box stops at the ball (within the pair's reach), and the
+    ball's push on the box (its barrier and friction), its weight and the net's push
+    balance."""
     case = {
         "geometry": {
             "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
@@ -235,15 +257,54 @@ def test_a_static_run_stops_where_a_body_meets_a_fixed_sphere():
         "obstacle": [
             {"kind": "sphere", "center": [0.0, 0.0, 0.4], "radius": 0.1},
             {"kind": "box", "center": [0.0, 0.0, 0.052], "half_size": [0.15, 0.15, 0.05],
-             "mass": 10.0, "distance": 0.005},
+             "mass": 10.0, "distance": 0.005, "friction": 0.5},
         ],
         "solver": {"method": "static"},
     }  # fmt: skip
     scene = build(parse_case(case))
-    match = r"at load factor 1: obstacle\[1\] \(a free box\) meets obstacle\[0\] \(sphere\)"
-    with pytest.raises(BodiesMeet, match=match + r" \(their bounding spheres") as e:
-        solve(scene, Settings.of(scene.case.solver))
-    assert e.value.last_good.time == 0.0
+    r = solve(scene, Settings.of(scene.case.solver))
+    assert r.converged
+    (touch,) = [t for t in scene.terms if isinstance(t, BodyTouch)]
+    assert 0.0 < touch.gap(r.x) < touch.dhat
+    nodes = scene.rigid[0].frame.nodes
+    net_push, ball = np.zeros_like(r.x), np.zeros_like(r.x)
+    for term in scene.terms:
+        if isinstance(term, (BodyTouch, BodyTouchFriction)):
+            term.gradient(r.x, ball)
+        elif getattr(term, "frame", None) is scene.rigid[0].frame:
+            term.gradient(r.x, net_push)
+    total = -net_push[nodes].sum(axis=0) - ball[nodes].sum(axis=0) + [0.0, 0.0, -98.1]
+    assert np.abs(total).max() < 1e-6 * 800.0
+    assert -ball[nodes].sum(axis=0)[2] < -1.0  # the ball pushes the box down
+
+
+def test_a_ball_dropped_on_a_free_box_rests_on_it():
+    """A ball (a sphere with mass alone: one node) dropped onto a 40 kg box lying on the
+    ground: it never enters the box (its centre's height above the box's top at every
+    step at least its radius), and at rest the ground carries both weights."""
+    case = ground_case(1.2, damping=0.0, t_end=1.5, dt=0.01)
+    case["obstacle"][1].update(center=[1.2, 0.0, -0.0995], velocity=[0.0, 0.0, 0.0])
+    case["obstacle"].append(
+        {"kind": "sphere", "center": [1.25, 0.03, 0.2], "radius": 0.05, "mass": 2.0,
+         "distance": 0.002}
+    )  # fmt: skip
+    scene = build(parse_case(case))
+    ball = scene.bodies[0].node
+    box = scene.rigid[0].frame
+    heights = []
+
+    def seen(s):
+        c, R = box.pose(s.x)
+        heights.append(float((s.x[ball] - c) @ R[:, 2]) - 0.05)
+
+    r = solve(scene, Settings.of(scene.case.solver), on_step=seen)
+    assert r.converged and min(heights) > 0.05
+    assert heights[-1] < 0.05 + 0.002 and abs(r.v[ball][2]) < 1e-3  # it may slide, on it
+    planes = [t for t in scene.terms if isinstance(t, BodyPlane)]
+    grad = np.zeros_like(r.x)
+    for p in planes:
+        p.gradient(r.x, grad)
+    assert -grad[box.nodes].sum(axis=0)[2] == pytest.approx(42.0 * 9.81, rel=1e-3)
 
 
 def test_bodies_that_start_overlapping_are_refused():
