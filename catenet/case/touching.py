@@ -18,9 +18,14 @@ refused (exit 2) with both named.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from catenet.errors import ConfigError
+
+if TYPE_CHECKING:
+    from catenet.terms.base import Term
 
 #: The corners of a unit box (the signs of its half sizes) and its 12 edges.
 SIGNS = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=np.float64)
@@ -119,7 +124,7 @@ def touch_terms(case, rigid, balls, net, size: float) -> tuple:
     for k, obs in enumerate(obstacles):
         if k not in taken and obs.kind != "plane":
             others.append((k, fixed_solid(k, obs), 0.0))
-    terms = []
+    terms: list[Term] = []
     for i in range(mine):
         ka, a, ma = others[i]
         for kb, b, mb in others[i + 1 :]:
