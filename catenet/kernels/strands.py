@@ -280,7 +280,8 @@ def edge_energy(P, eps, reach2, r, dhat, kappa, g, H, want):
 
 
 @njit(cache=True)
-def _gather(x, edges, a, b, P):
+def gather(x, edges, a, b, P):
+    """The coordinates of the two edges a and b (12 numbers into P); their node indices."""
     n = (edges[a, 0], edges[a, 1], edges[b, 0], edges[b, 1])
     for k in range(4):
         for i in range(3):
@@ -298,7 +299,7 @@ def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad):
     total = 0.0
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]
-        n = _gather(x, edges, a, b, P)
+        n = gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
         total += pair_energy(P, eps, dhat * dhat, kappa, g, H, False)
         for k in range(4):
@@ -318,7 +319,7 @@ def strand_hessian(x, edges, rest, pairs, slots, dhat, kappa, values):
     active = 0
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]
-        _gather(x, edges, a, b, P)
+        gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
         pair_energy(P, eps, dhat * dhat, kappa, g, H, True)
         at = 144 * slots[p]
@@ -443,7 +444,7 @@ def candidates(x, edges, grow, reach):
                 a, b = min(ids[p], ids[q]), max(ids[p], ids[q])
                 if not _owned(lo, hi, span, a, b, cx, cy, cz) or _shares(edges, a, b):
                     continue
-                _gather(x, edges, a, b, P)
+                gather(x, edges, a, b, P)
                 limit = reach + grow[a] + grow[b]
                 if sqdist(P, 0, g, H, False) > limit * limit:
                     continue
@@ -542,7 +543,7 @@ def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max):
     moved = t
     P, dP = np.empty(12), np.empty(12)
     for p in range(pairs.shape[0]):
-        _gather(x, edges, pairs[p, 0], pairs[p, 1], P)
-        _gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
+        gather(x, edges, pairs[p, 0], pairs[p, 1], P)
+        gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
         t = min(t, accd(P, dP, t))
     return t, moved

@@ -19,16 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.strands import EPS_PARALLEL, accd, edge_energy
-
-
-@njit(cache=True)
-def _points(Y, edges, a, b, P):
-    n = (edges[a, 0], edges[a, 1], edges[b, 0], edges[b, 1])
-    for k in range(4):
-        for i in range(3):
-            P[3 * k + i] = Y[n[k], i]
-    return n
+from catenet.kernels.strands import EPS_PARALLEL, accd, edge_energy, gather
 
 
 @njit(cache=True, error_model="numpy")
@@ -44,7 +35,7 @@ def touch_edges(Y, W, edges, rest, pairs, r, dhat, kappa, gn, Hn, want):
     nn = W.shape[1]
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]
-        pts = _points(Y, edges, a, b, P)
+        pts = gather(Y, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
         energy = edge_energy(P, eps, reach * reach, r, dhat, kappa, g, H, want)
         if energy == 0.0:
@@ -82,7 +73,7 @@ def touch_ccd(Y, dY, edges, pairs, r, t_max):
     t = np.inf
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]
-        _points(Y, edges, a, b, P)
-        _points(dY, edges, a, b, dP)
+        gather(Y, edges, a, b, P)
+        gather(dY, edges, a, b, dP)
         t = min(t, accd(P, dP, min(t, t_max), r))
     return t

@@ -99,18 +99,27 @@ def test_times_stay_on_the_grid_and_the_last_step_ends_at_t_end():
     assert control.advance(t, control.step(t)) == 10.305
 
 
+def _at_equilibrium(rtol):
+    """The sagging cable solved statically to ``rtol``: its net, equilibrium, system,
+    potential, free masses (per DOF) and a zero velocity."""
+    net, loads = _sagging_cable()
+    eq = solve_static(net, loads, rtol=rtol).x
+    ws = Workspace(net)
+    return (
+        net,
+        eq,
+        ws.system,
+        ws.potential(loads),
+        np.repeat(net.mass[~net.fixed], 3),
+        np.zeros_like(eq),
+    )
+
+
 def test_the_rest_test_asks_for_equilibrium_and_no_inertial_force():
     """At a static equilibrium with no velocity the run is at rest (ratio <= 1); the same
     state moving, or a state off the equilibrium, is not (ratio > 1)."""
-    net = cn.cable([0, 0, 0], [1, 0, 0], 11, cn.Material(EA=1e3, line_density=0.5), length=1.05)
-    loads = cn.Loads(gravity=[0.0, 0.0, -9.81])
     rtol = 1e-8
-    eq = solve_static(net, loads, rtol=1e-12).x
-    ws = Workspace(net)
-    potential = ws.potential(loads)
-    system = ws.system
-    m_free = np.repeat(net.mass[~net.fixed], 3)
-    still = np.zeros_like(eq)
+    net, eq, system, potential, m_free, still = _at_equilibrium(1e-12)
     rest, residual, ratio = at_rest(system, potential, eq, still, m_free, 0.01, rtol)
     assert rest and ratio <= 1.0 and residual <= rtol * potential.f_norm
     moving = still.copy()
@@ -128,14 +137,7 @@ def test_a_state_at_the_round_off_floor_of_its_forces_is_at_rest_if_nothing_move
     its load scale can be): the static residual is held to its round-off floor DOF by DOF
     instead, as in a static solve; the inertial force still to rtol, so a state that
     moves is not at rest however small its residual."""
-    net = cn.cable([0, 0, 0], [1, 0, 0], 11, cn.Material(EA=1e3, line_density=0.5), length=1.05)
-    loads = cn.Loads(gravity=[0.0, 0.0, -9.81])
-    eq = solve_static(net, loads, rtol=1e-13).x
-    ws = Workspace(net)
-    potential = ws.potential(loads)
-    system = ws.system
-    m_free = np.repeat(net.mass[~net.fixed], 3)
-    still = np.zeros_like(eq)
+    net, eq, system, potential, m_free, still = _at_equilibrium(1e-13)
     rtol = 1e-20  # rtol * scale: far below the round-off of these forces
     rest, residual, ratio = at_rest(system, potential, eq, still, m_free, 0.01, rtol)
     assert residual > rtol * potential.f_norm
