@@ -3,6 +3,8 @@ icosphere, and writing a mesh to a file with meshio (a case's mesh obstacle read
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 CUBE_V = np.array(
@@ -211,3 +213,20 @@ def boxes_apart(a, b) -> float:
         reach = float(np.abs(Ra.T @ n) @ ha + np.abs(Rb.T @ n) @ hb)
         best = max(best, abs(float((cb - ca) @ n)) - reach)
     return best
+
+
+def net_under_gravity(n: int, edge_length: float) -> dict:
+    """The paper's square net (1 m, E = 10 MPa, r = 1 cm, 1000 kg/m^3) of ``n`` cables at
+    45 degrees, pinned at its ends, under gravity: the geometry, material and load tables
+    of a case, for the tests that add bodies to it."""
+    return {
+        "geometry": {
+            "kind": "square_net",
+            "n": n,
+            "alpha": math.pi / 4,
+            "size": 1.0,
+            "edge_length": edge_length,
+        },
+        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+    }

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from meshes import CUBE_T, CUBE_V, write_stl
+from meshes import CUBE_T, CUBE_V, net_under_gravity, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.case.rigid import mass_properties
@@ -23,12 +23,7 @@ def drop(**body) -> dict:
         "mass": 12.0, **body,
     }  # fmt: skip
     return {
-        "geometry": {
-            "kind": "square_net", "n": 10, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.05,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(10, 0.05),
         "obstacle": [{k: v for k, v in obstacle.items() if v is not None}],
         "solver": {"method": "dynamic", "dt": 0.01, "damping": 0.0, "t_end": 0.05},
     }  # fmt: skip

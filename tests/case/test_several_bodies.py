@@ -15,6 +15,7 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from meshes import net_under_gravity
 
 from catenet.case import build, dumps_toml, parse_case
 from catenet.cli import main
@@ -120,12 +121,7 @@ def ground_case(x: float, **solver) -> dict:
     """A pinned net (1 m) above the ground at z = -0.15, a 40 kg box thrown down at
     3 m/s from its bottom at z = 0.25, at x (beside the net when x > 0.75)."""
     return {
-        "geometry": {
-            "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.05,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(6, 0.05),
         "obstacle": [
             {"kind": "plane", "point": [0.0, 0.0, -0.15], "normal": [0.0, 0.0, 1.0],
              "distance": 0.002},

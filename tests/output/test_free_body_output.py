@@ -5,11 +5,10 @@ same under /result/obstacles/<k>/ at the end."""
 
 from __future__ import annotations
 
-import math
-
 import h5py
 import numpy as np
 import pytest
+from meshes import net_under_gravity
 
 from catenet.case import build, dumps_toml, parse_case
 
@@ -20,12 +19,7 @@ def test_a_free_body_is_stored_with_its_pose_and_motion(tmp_path):
     from catenet.cli import main
 
     case = {
-        "geometry": {
-            "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.1,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(6, 0.1),
         "obstacle": [
             {
                 "kind": "capsule", "start": [-0.2, 0.0, 0.3], "end": [0.2, 0.0, 0.3],

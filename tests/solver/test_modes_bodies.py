@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from meshes import net_under_gravity
 
 from catenet.case import build, parse_case
 from catenet.errors import ConvergenceError
@@ -241,12 +242,7 @@ def test_frictionless_box_on_a_net_is_refused_as_unstable(tmp_path):
     warns, ``catenet modes`` refuses it naming the body; with friction it has modes
     (Lanczos as the dense solver), rigid on the body, the lowest one the box's."""
     case = {
-        "geometry": {
-            "kind": "square_net", "n": 6, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.05,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(6, 0.05),
         "obstacle": [
             {"kind": "box", "center": [0.0, 0.0, 0.022], "half_size": [0.15, 0.15, 0.02],
              "mass": 10.0, "distance": 0.005}

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from meshes import icosphere
+from meshes import icosphere, net_under_gravity
 
 from catenet.case import build, parse_case
 from catenet.kernels.shapes import box_max_step
@@ -290,12 +290,7 @@ def box_on_net(method: str, **solver) -> dict:
     """A 10 kg square box (0.3 x 0.3 x 0.1 m) placed 2 mm above the paper's square net
     (n = 10, 5 cm edges), under gravity."""
     return {
-        "geometry": {
-            "kind": "square_net", "n": 10, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.05,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(10, 0.05),
         "obstacle": [
             {
                 "kind": "box", "center": [0.0, 0.0, 0.052], "half_size": [0.15, 0.15, 0.05],
@@ -326,12 +321,7 @@ def test_a_sphere_body_repeats_the_ball():
     """A sphere with mass is a ball (its centre a node); with angular_velocity it is a
     six-DOF body. Frictionless, it never spins up: both follow the same path."""
     case = {
-        "geometry": {
-            "kind": "square_net", "n": 10, "alpha": math.pi / 4, "size": 1.0,
-            "edge_length": 0.05,
-        },
-        "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-        "load": {"gravity": [0.0, 0.0, -9.81]},
+        **net_under_gravity(10, 0.05),
         "obstacle": [
             {
                 "kind": "sphere", "center": [0.0, 0.0, 0.3], "radius": 0.15, "mass": 10.0,
@@ -407,12 +397,7 @@ def test_friction_slows_a_ball_spinning_on_a_net():
     spins = {}
     for mu in (0.0, 0.5):
         case = {
-            "geometry": {
-                "kind": "square_net", "n": 10, "alpha": math.pi / 4, "size": 1.0,
-                "edge_length": 0.05,
-            },
-            "material": {"E": 10e6, "radius": 0.01, "density": 1000.0},
-            "load": {"gravity": [0.0, 0.0, -9.81]},
+            **net_under_gravity(10, 0.05),
             "obstacle": [
                 {
                     "kind": "sphere", "center": [0.0, 0.0, 0.152], "radius": 0.15,
