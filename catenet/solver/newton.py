@@ -19,11 +19,14 @@ suffices, longer steps while the slope stays steep (a slack net falling freely),
 search inside a bracket otherwise. Where differences of Phi fall below round-off the norm
 of the gradient is the merit function instead.
 
-Convergence: |grad Phi| <= max(rtol * scale, floor), where scale is the load scale (the
-larger of |f| and |internal force|, supports included) and floor the round-off level of
-the gradient (which includes the strains' round-off, EA eps |x| / l0 per edge). A residual
-that stalls within STALL_FLOOR times the floor is converged as well; when the floor, not
-the tolerance, ended the run, one more Newton step is taken if it lowers the residual.
+Convergence: |grad Phi| <= rtol * scale, where scale is the load scale (the larger of |f|
+and |internal force|, supports included), or every DOF at its own round-off floor but for a
+part within rtol * scale (``Potential.at_floor``: eps of the forces that meet at that DOF,
+the strains' EA eps |x| / l0 per edge included, and each term's round-off on its own nodes).
+That test is made once the residual is within the global floor (the round-off of all
+forces together), or stalls within STALL_FLOOR times it (then allowed STALL_FLOOR times
+each DOF's floor). When the floor, not the tolerance, ended the run, one more Newton
+step is taken if it lowers the residual.
 A run in which neither the residual nor Phi falls beyond round-off for STAGNATION
 iterations stops at once ("stagnated") instead of spending the rest of max_iter; inside
 ``interruptible(stop)`` every iteration asks ``stop()`` first and raises Interrupted.
@@ -213,11 +216,13 @@ class _Newton:
         """The tolerance the loads ask for [N] (the floor aside)."""
         return self.rtol * self.ev.scale if self.atol is None else self.atol
 
-    def at_floor(self, reason: str | None) -> str | None:
-        """Convergence at round-off if the residual is within every DOF's floor (the
-        tolerance then that floor), else ``reason``."""
-        if (level := self.potential.at_floor(self.x, self.ev.g)) is not None:
-            self.tol = max(self.tol, level)
+    def at_floor(self, reason: str | None, factor: float = 1.0) -> str | None:
+        """Convergence at round-off if every DOF's residual is within its own floor (times
+        ``factor``) but for a part within the tolerance the loads ask for
+        (``Potential.at_floor``; the tolerance is then that bound), else ``reason``."""
+        level = self.potential.at_floor(self.x, self.ev.g, target=self.target(), factor=factor)
+        if level is not None:
+            self.tol = level
             return "converged (round-off floor)"
         return reason
 
@@ -229,11 +234,14 @@ class _Newton:
         scale = self.ev.scale
         if not (math.isfinite(self.tol) and math.isfinite(scale)):  # never "converged" vs inf
             return f"non-finite tolerance (load scale {scale:.3g} N): the arithmetic overflows"
-        if gnorm <= self.tol:  # which criterion held: the tolerance, or the floor above it
-            return "converged" if gnorm <= self.target() else "converged (round-off floor)"
-        if self.stall >= 3 and gnorm <= STALL_FLOOR * floor:
-            self.tol = max(self.tol, STALL_FLOOR * floor)
-            return "converged (round-off floor)"
+        if gnorm <= self.target():
+            return "converged"
+        # Near the global floor, the floor DOF by DOF decides: a stiff term's round-off
+        # (a free body's) must not excuse the residual of a cable beside it.
+        stuck = self.stall >= 3 and gnorm <= STALL_FLOOR * floor
+        if gnorm <= floor or stuck:
+            if (reason := self.at_floor(None, STALL_FLOOR if stuck else 1.0)) is not None:
+                return reason
         if self.it >= self.max_iter:
             return self.at_floor(f"no convergence in {self.max_iter} iterations")
         if _stop is not None and _stop():
@@ -291,11 +299,8 @@ class _Newton:
         """After a step the line search refused (x back at its start): why the iteration
         ends, or None to try again (a fresh matrix, or a larger c)."""
         self.ev = self.potential.evaluate(self.x)
-        floor = self.ev.floor
-        if self.gnorm <= STALL_FLOOR * floor:
-            self.tol = max(self.tol, STALL_FLOOR * floor)
-            return "converged (round-off floor)"
-        if (reason := self.at_floor(None)) is not None:
+        near = self.gnorm <= STALL_FLOOR * self.ev.floor
+        if (reason := self.at_floor(None, STALL_FLOOR if near else 1.0)) is not None:
             return reason
         if kept and self.reuse is not None:  # a fresh matrix before a larger c
             self.reuse.drop()

@@ -142,24 +142,45 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
 
-    def at_floor(self, x: np.ndarray, g: np.ndarray, steps: bool = True) -> float | None:
-        """The norm of the residual's round-off floor, DOF by DOF, if the residual g (free
-        DOFs) at x is within it in every free DOF: FLOOR_SAFETY eps of the forces that
-        meet there (the edges' |N| + EA |x| / l0, ``Stretch.node_roundoff``; the other
-        terms' and the loads' forces); else None. A state there is converged, and that
-        norm is the tolerance it was held to (the caller compares it with the loads).
+    def at_floor(
+        self,
+        x: np.ndarray,
+        g: np.ndarray,
+        steps: bool = True,
+        target: float = 0.0,
+        factor: float = 1.0,
+    ) -> float | None:
+        """Whether the residual g (free DOFs) at x is converged DOF by DOF: the part of
+        each DOF's residual above its round-off floor, in norm, is within ``target`` (the
+        tolerance the loads ask for; 0: every DOF within its floor). Returns the
+        tolerance the state then meets, ``target`` + the floor's norm (|g| is below it),
+        or None.
+
+        A DOF's floor is FLOOR_SAFETY eps (times ``factor``) of the forces that meet
+        there: the edges' |N| + EA |x| / l0 (``Stretch.node_roundoff``), every other
+        term's round-off on its own nodes (``Term.node_roundoff``: a free body's stiff
+        rigidity counts on the body alone), the net internal force and the load.
         ``steps=False``: the static residual's floor (a time step's inertia left out)."""
-        stretch = self.system.stretch
-        free = self.system.free_dofs
-        level = np.repeat(stretch.node_roundoff(x), 3)[free]
-        _, grad = self.system.gradient(x)
-        level += 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
+        system = self.system
+        free = system.free_dofs
+        _, grad = system.gradient(x)
+        nodes = np.zeros(x.shape[0])
+        for term, e in zip(system.terms, system.energies, strict=True):
+            if (level := term.node_roundoff(x, e)) is not None:
+                nodes += level
+        forces = 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
         for term in self.steps if steps else ():  # a time step's inertia
             force = np.zeros_like(x)
-            term.gradient(x, force)
-            level += 2.0 * np.abs(force.reshape(-1)[free])
-        level *= FLOOR_SAFETY * EPS
-        return float(np.linalg.norm(level)) if bool(np.all(np.abs(g) <= level)) else None
+            e = term.gradient(x, force)
+            forces += 2.0 * np.abs(force.reshape(-1)[free])
+            if (level := term.node_roundoff(x, e)) is not None:
+                nodes += level
+        floor = np.repeat(nodes, 3)[free] + forces
+        floor *= FLOOR_SAFETY * EPS * factor
+        excess = np.maximum(np.abs(g) - floor, 0.0)
+        if float(np.linalg.norm(excess)) > target:
+            return None
+        return target + float(np.linalg.norm(floor))
 
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""

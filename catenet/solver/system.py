@@ -269,6 +269,11 @@ class System:
         self.seconds += time.perf_counter() - start
         return energy, g
 
+    @property
+    def energies(self) -> list[float]:
+        """Each term's energy at the x of the last ``gradient`` call."""
+        return self._energies
+
     def roundoff(self, x: np.ndarray) -> tuple[float, float]:
         """Round-off levels of the terms' gradient norm and energy (see Term.roundoff) at
         the x of the last ``gradient`` call."""

@@ -12,6 +12,11 @@ function of the node positions x (N, 3):
   ``values`` (a preallocated slice of the assembled values).
 - ``roundoff(x, energy)``: the round-off levels of its gradient norm and of its energy,
   which set the floor below which Newton's residual and decrease cannot be resolved.
+- ``node_roundoff(x, energy)``: per node (N,), the round-off level of its forces there (or
+  None: none); convergence at round-off is decided DOF by DOF with it, so that a stiff
+  term's round-off (a free body's) counts on its own nodes only. Default: the gradient's
+  level of ``roundoff`` on every node where ``stiffness()`` is positive (on every node
+  for a term without stiffness).
 - ``stiffness()``: per node (N,), the scale of its Hessian diagonal (the regularisation of
   a singular start scales with it), or None.
 
@@ -112,6 +117,18 @@ class Term:
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
         return 0.0, abs(energy)
+
+    def node_roundoff(self, x: np.ndarray, energy: float) -> np.ndarray | None:
+        """Per node (N,), the round-off level of the term's forces there, in the units of
+        ``roundoff`` (without eps); None where it has none."""
+        level, _ = self.roundoff(x, energy)
+        if level == 0.0:
+            return None
+        out = np.full(x.shape[0], level)
+        stiffness = self.stiffness()
+        if stiffness is not None:
+            out[stiffness <= 0.0] = 0.0
+        return out
 
     def stiffness(self) -> np.ndarray | None:
         return None

@@ -102,7 +102,7 @@ class Stretch(Term):
         work = float(self._work[0])  # from the gradient at this x (System.roundoff)
         return self._k_norm * float(np.max(np.abs(x))), abs(energy) + 0.0625 * work
 
-    def node_roundoff(self, x: np.ndarray) -> np.ndarray:
+    def node_roundoff(self, x: np.ndarray, energy: float = 0.0) -> np.ndarray:
         """Per node, the round-off of the forces that meet there (units of eps): every
         edge's |N| + EA |x| / l0 (``kernels.stretch.stretch_node_roundoff``)."""
         level = np.zeros(x.shape[0])
