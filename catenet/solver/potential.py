@@ -142,25 +142,12 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
 
-    def at_floor(
-        self,
-        x: np.ndarray,
-        g: np.ndarray,
-        steps: bool = True,
-        target: float = 0.0,
-        factor: float = 1.0,
-    ) -> float | None:
-        """Whether the residual g (free DOFs) at x is converged DOF by DOF: the part of
-        each DOF's residual above its round-off floor, in norm, is within ``target`` (the
-        tolerance the loads ask for; 0: every DOF within its floor). Returns the
-        tolerance the state then meets, ``target`` + the floor's norm (|g| is below it),
-        or None.
-
-        A DOF's floor is FLOOR_SAFETY eps (times ``factor``) of the forces that meet
-        there: the edges' |N| + EA |x| / l0 (``Stretch.node_roundoff``), every other
-        term's round-off on its own nodes (``Term.node_roundoff``: a free body's stiff
-        rigidity counts on the body alone), the net internal force and the load.
-        ``steps=False``: the static residual's floor (a time step's inertia left out)."""
+    def floor_levels(self, x: np.ndarray, steps: bool = True) -> np.ndarray:
+        """Per free DOF, the round-off floor of the residual at x [N]: FLOOR_SAFETY eps of
+        the forces that meet there: the edges' |N| + EA |x| / l0 (``Stretch.node_roundoff``),
+        every other term's round-off on its own nodes (``Term.node_roundoff``: a free
+        body's stiff rigidity counts on the body alone), the net internal force and the
+        load. ``steps=False``: the static residual's floor (a time step's inertia left out)."""
         system = self.system
         free = system.free_dofs
         _, grad = system.gradient(x)
@@ -176,7 +163,23 @@ class Potential:
             if (level := term.node_roundoff(x, e)) is not None:
                 nodes += level
         floor = np.repeat(nodes, 3)[free] + forces
-        floor *= FLOOR_SAFETY * EPS * factor
+        floor *= FLOOR_SAFETY * EPS
+        return floor
+
+    def at_floor(
+        self,
+        x: np.ndarray,
+        g: np.ndarray,
+        steps: bool = True,
+        target: float = 0.0,
+        factor: float = 1.0,
+    ) -> float | None:
+        """Whether the residual g (free DOFs) at x is converged DOF by DOF: the part of
+        each DOF's residual above its round-off floor (``floor_levels``, times ``factor``),
+        in norm, is within ``target`` (the tolerance the loads ask for; 0: every DOF
+        within its floor). Returns the tolerance the state then meets, ``target`` + the
+        floor's norm (|g| is below it), or None."""
+        floor = self.floor_levels(x, steps) * factor
         excess = np.maximum(np.abs(g) - floor, 0.0)
         if float(np.linalg.norm(excess)) > target:
             return None
