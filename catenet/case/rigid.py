@@ -25,6 +25,8 @@ from catenet.case.keys import show
 from catenet.errors import ConfigError
 from catenet.model.limits import carried, too_large
 
+RESOLVED = 1e-8  # the share of a free body's size its coordinates' round-off may reach
+
 if TYPE_CHECKING:  # the terms load where a body is built
     from catenet.terms.rigid import Frame
 
@@ -174,6 +176,7 @@ def _frame(obs, k: int, first: int, case):
             f"{path}: the inertia of its shape is no inertia tensor ({why}): give inertia"
         )
     frame = Frame(first, mass, world, com)
+    _check_resolved(path, obs, frame)
     v = None if obs.velocity is None else np.asarray(obs.velocity, float)
     w = getattr(obs, "angular_velocity", None)
     P, V = frame.place(v, None if w is None else np.asarray(w, float))
@@ -227,6 +230,23 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
         slip = obs.slip if obs.slip is not None else dhat
         terms.append(BodyFriction(Friction(shape, mu=obs.friction, slip=slip), contact))
     return terms
+
+
+def _check_resolved(path: str, obs, frame) -> None:
+    """ConfigError where the body lies so far from the origin that the round-off of its
+    coordinates (|c| eps) is beyond RESOLVED of its size: its turns and its rigidity's
+    forces would be noise, or overflow."""
+    far = float(np.max(np.abs(frame.center)))
+    if far * np.finfo(float).eps <= RESOLVED * frame.reach:
+        return
+    key = {"mesh": "offset", "capsule": "start"}.get(obs.kind, "center")
+    limit = RESOLVED * frame.reach / np.finfo(float).eps
+    raise ConfigError(
+        f"{path}.{key} = {show(list(getattr(obs, key)))}: a free body {far:.3g} m from the "
+        f"origin is not resolved against its size ({frame.reach:.3g} m: its coordinates "
+        f"carry round-off of {far * np.finfo(float).eps:.3g} m); a free body this size must "
+        f"lie within {limit:.3g} m of the origin: place the origin near the scene"
+    )
 
 
 def _check_carried(path: str, obs, stiffness: float, turning: float, moving: float) -> None:

@@ -39,3 +39,11 @@ class Inertia(Term):
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
         return inertia_roundoff(x.reshape(-1), self.dofs, self.w, self.a)
+
+    def node_roundoff(self, x: np.ndarray, energy: float) -> np.ndarray:
+        """Per node, the largest w (|x| + |a|) of its DOFs: w (x - a) of two close large
+        numbers (units of eps)."""
+        out = np.zeros(x.shape[0])
+        level = self.w * (np.abs(x.reshape(-1)[self.dofs]) + np.abs(self.a))
+        np.maximum.at(out, self.dofs // 3, level)
+        return out

@@ -159,3 +159,11 @@ class Springs(Term):
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
         return float(np.linalg.norm(self.q)) * float(np.max(np.abs(x))), abs(energy)
+
+    def node_roundoff(self, x: np.ndarray, energy: float) -> np.ndarray:
+        """Per node, the sum of q of its edges times max |x| (units of eps)."""
+        out = np.zeros(x.shape[0])
+        edges = self.net.edges
+        np.add.at(out, edges[:, 0], self.q)
+        np.add.at(out, edges[:, 1], self.q)
+        return out * float(np.max(np.abs(x)))
