@@ -451,7 +451,7 @@ class ResultWriter:
                 n_edges=net.n_edges,
                 times=self.times,
                 velocities=self.velocities,
-                bodies=net.bodies,
+                bodies=len(getattr(self.scene, "bodies", ())),  # the balls of /mesh/bodies
                 obstacles=self.obstacles.grids(),
             )
         except OSError as exc:

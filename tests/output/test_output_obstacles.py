@@ -439,3 +439,33 @@ def test_export_writes_each_obstacle_beside_the_net(run, tmp_path, fmt):
     assert len(parts) == len(sets)  # one file per part and time
     for d in sets:
         assert (done.collection.parent / d.get("file")).is_file()
+
+
+def test_the_sidecar_of_a_free_body_names_only_datasets_the_file_has(tmp_path):
+    """A free box (four nodes of the net, no ball) at rest on a fixed table, a wire
+    beside it: the sidecar named a balls' grid (/mesh/bodies/node) the file did not have,
+    so VTK's reader failed on it. It now shows the table, the box and the wire."""
+    case = tmp_path / "crate.toml"
+    case.write_text(
+        'title = "a crate on a table"\n'
+        '[geometry]\nkind = "cable"\nstart = [-3.0, 0.0, 2.0]\nend = [-1.0, 0.0, 2.0]\n'
+        "length = 2.1\nnodes = 21\n"
+        "[material]\nE = 200e9\nradius = 0.003\ndensity = 7850.0\n"
+        "[load]\ngravity = [0.0, 0.0, -9.81]\n"
+        '[[obstacle]]\nkind = "box"\ncenter = [1.0, 0.0, 0.9]\nhalf_size = [0.8, 0.6, 0.1]\n'
+        '[[obstacle]]\nkind = "box"\ncenter = [1.0, 0.0, 1.26]\nhalf_size = [0.5, 0.4, 0.25]\n'
+        'mass = 200.0\n[solver]\nmethod = "static"\n'
+    )
+    out = tmp_path / "crate.h5"
+    run_case(load_case(case), out)
+    side = out.with_suffix(".xdmf")
+    found = check_xdmf(side)  # every DataItem's dataset exists with its stated shape
+    assert found["grids"] == 1 and found["others"] == 2  # the table; the box at 1 frame
+    with pv.VtkErrorCatcher() as caught:
+        reader = pv.get_reader(str(side))
+        reader.set_active_time_value(reader.time_values[-1])
+        blocks = reader.read()
+    assert not caught.events, caught.events
+    assert blocks.keys() == ["obstacles", "obstacle[1] box", "trajectory"]
+    assert blocks["obstacle[1] box"].n_cells == 12
+    assert blocks["trajectory"].n_cells == 20
