@@ -379,6 +379,22 @@ class SolverConfig(Declared):
     steps: int = integer(
         Settings.steps, ge=1, le=10**6, doc="static: load steps (equilibria at k/steps of the load)"
     )
+    energy_tolerance: float = real(
+        Settings.energy_tolerance,
+        gt=0,
+        write="changed",
+        doc="dynamic: the energy the integrator may create, as a share of the largest energy "
+        "of the run (kinetic, elastic, contact or work); beyond it the run stops with exit 1 "
+        "(the balance is /trajectory/energy)",
+    )
+    post_collapse: bool = boolean(
+        Settings.post_collapse,
+        write="changed",
+        doc="static: a load path that loses its stability (a mechanism folding, a snap-"
+        "through, a member falling) is followed through to the far equilibrium, labelled "
+        "post-collapse (/result stability), instead of ending with exit 1 at the last stable "
+        "state (docs/guide/stability.md)",
+    )
 
 
 def parse_solver(ck: Checker, s_v: Any, ctx: Context) -> SolverConfig | Any:

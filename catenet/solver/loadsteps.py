@@ -21,8 +21,18 @@ from catenet.errors import (
 )
 from catenet.model.net import Loads, Net
 from catenet.solver.relax import REST
-from catenet.solver.result import Outcome, Result
+from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.settings import Settings
+from catenet.solver.stability import (
+    COLLAPSED,
+    POST_COLLAPSE,
+    REFINE,
+    STABLE,
+    UNSTABLE,
+    CollapseError,
+    PathJudge,
+    describe_collapse,
+)
 from catenet.solver.start import start_state
 from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
@@ -45,6 +55,7 @@ def continuation(
     linear: str = "auto",
     on_step: Callable[[float, Result], None] | None = None,
     workspace: Workspace | None = None,
+    post_collapse: bool = False,
 ) -> list[Result]:
     """Equilibria at the given load factors, each starting from the previous one (a
     force-displacement curve). ``on_step(factor, result)`` sees each as it is found.
@@ -56,17 +67,25 @@ def continuation(
     sub-steps' equilibria are not reported, their iterations count. A step that
     still fails (or is interrupted) raises its ConvergenceError with ``last_good`` the
     last equilibrium found (a step's or a sub-step's, with its load factor; the start,
-    supports in place, at load factor 0 before the first)."""
+    supports in place, at load factor 0 before the first).
+
+    The path's stability is followed (``catenet.solver.stability.PathJudge``): a path that
+    collapses raises CollapseError with ``last_good`` its last stable state, unless
+    ``post_collapse``, where it goes on and its results' ``stability`` says
+    "post-collapse"."""
     if len(factors) == 0:
         raise ConfigError("continuation: factors is empty: give at least one load factor")
     ws = workspace or Workspace(net, linear=linear)
     results: list[Result] = []
     x = x0
     good = LastGood(start_state(net, loads, x0, 0.0), 0.0)
+    judge = PathJudge(ws, loads, post_collapse=post_collapse)
+    loaded = bool(np.any(loads.external_force(net, 1.0))) or loads.moves_supports
+    judge.begin(good.x, loaded)
+    settings: dict[str, Any] = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
-        settings: dict[str, Any] = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
         try:
             r = solve_static(
                 net,
@@ -77,17 +96,138 @@ def continuation(
                 **settings,
             )
         except ConvergenceError as exc:
+            if judge.start_unstable and not isinstance(exc, Interrupted):
+                # from an unstable start, a failure is the collapse (no cut-back helps)
+                _collapse(judge, judge.why_start(), 0.0, LastGood(judge.start_x, 0.0), x, exc)
             if isinstance(exc, Interrupted) or not _worth_cutting(exc):
                 exc.last_good = LastGood(good.x, good.time)
                 raise
             r = _cut_back(net, loads, float(factor), exc, good, settings)
+        last = k == len(factors) - 1
+        r = _judged(judge, net, loads, good, float(factor), r, last, settings)
         r.steps = k + 1
+        r.stability = _verdict(judge, r)
         results.append(r)
         good = LastGood(r.x, float(factor))
         x = r.x
         if on_step is not None:
             on_step(float(factor), r)
     return results
+
+
+def _verdict(judge: PathJudge, r: Result) -> str:
+    if judge.collapsed:
+        return POST_COLLAPSE
+    return UNSTABLE if r.stable is False else STABLE
+
+
+def _judged(judge, net, loads, good: LastGood, target: float, r: Result, last, settings):
+    """The load step from the equilibrium ``good`` to ``r`` at ``target``, judged by the
+    path's ``judge``: a step that jumps is halved (down to 1/2**REFINE of itself) to
+    tell a limit point from a large step; a collapse raises CollapseError (or, with
+    post-collapse, is noted and the path goes on). The step's result (a refined path's
+    end where the step was halved)."""
+    if not judge.active or judge.collapsed:
+        return r
+    start, f0 = good.x, float(good.time)
+    if f0 == 0.0 and not judge.start_unstable and not judge.balanced(start, settings["rtol"]):
+        # the given geometry is no equilibrium at load factor 0 (a strut given unstressed
+        # beside prestressed guys): the path starts at the one Newton finds from it
+        try:
+            start = solve_static(net, loads, x0=start, factor=0.0, accepted=start, **settings).x
+        except ConvergenceError:
+            return r  # no unloaded equilibrium to judge the first step from
+    why, at, before, r = _follow(judge, net, loads, start, f0, target, r, last, settings, 0)
+    if why and judge.start_unstable and not judge.loaded:
+        return _unstable_start(judge, loads, r, why)
+    if why:
+        _collapse(judge, why, at, LastGood(before, at), r.x)
+    return r
+
+
+def _unstable_start(judge: PathJudge, loads: Loads, r: Result, why: str) -> Result:
+    """The verdict on an unloaded run from an unstable given geometry: the geometry
+    itself, an unstable equilibrium (``stable`` False), wherever Newton went from it (a
+    round-off's push decides that, differently on each processor)."""
+    ws = judge.ws
+    x = judge.start_x
+    g = ws.potential(loads, 1.0).evaluate(x).gnorm
+    out = finish(
+        ws.system,
+        loads,
+        x,
+        1.0,
+        converged=True,
+        equilibrium=True,
+        iterations=r.iterations,
+        residual=float(g),
+        history=r.history,
+        message=r.message,
+        wall_time=r.wall_time,
+        stats=ws.stats(),
+        outcome=r.outcome,
+    )
+    out.stable = False
+    out.diagnosis = why
+    return out
+
+
+def _follow(judge, net, loads, x0, f0, f1, r, last, settings, depth):
+    """(why, load factor, last stable state, result) of the step from x0 at f0 to r at
+    f1, halving a step that does not come back when unloaded (see ``_judged``); why is
+    "" where the path holds."""
+    why = judge.step(x0, f0, f1, r.x, last)
+    if why and judge.start_unstable:
+        return why, 0.0, judge.start_x, r
+    if why or not judge.reversible_from(x0):
+        return why, f0, x0, r
+    try:
+        back = solve_static(net, loads, x0=r.x, factor=f0, accepted=r.x, **settings).x
+    except ConvergenceError:
+        back = r.x  # no way back found: judged as not coming back
+    if judge.returns(x0, back, r.x):
+        return "", f0, x0, r
+    why = judge.why_jump(f0, f1, x0, back)
+    if depth >= REFINE:
+        return why, f0, x0, r
+    mid = 0.5 * (f0 + f1)
+    try:
+        half = solve_static(net, loads, x0=x0, factor=mid, accepted=x0, **settings)
+    except ConvergenceError:
+        return why, f0, x0, r  # no equilibrium halfway: the step stands as judged
+    half.iterations += r.iterations
+    deeper = depth + 1
+    why, at, before, half = _follow(judge, net, loads, x0, f0, mid, half, False, settings, deeper)
+    if why:
+        return why, at, before, half
+    try:
+        rest = solve_static(net, loads, x0=half.x, factor=f1, accepted=half.x, **settings)
+    except ConvergenceError:
+        return judge.why_jump(mid, f1, half.x, r.x), mid, half.x, r
+    rest.iterations += half.iterations
+    return _follow(judge, net, loads, half.x, mid, f1, rest, last, settings, deeper)
+
+
+def _collapse(judge: PathJudge, why: str, at: float, good: LastGood, x1, exc=None) -> None:
+    """Raises CollapseError from the last stable state ``good`` (or notes the collapse
+    where the judge follows it through)."""
+    if judge.start_unstable or x1 is None:
+        nodes = judge.unstable_nodes(good.x)
+    else:
+        nodes = judge.moving_nodes(good.x, x1)
+        if nodes.size == 0:
+            nodes = judge.unstable_nodes(good.x)
+    message = describe_collapse(judge, why, at, nodes)
+    if judge.post_collapse and judge.loaded:
+        judge.collapsed = message
+        judge.collapse_factor = at
+        log.warning("%s", message.split(". ")[0] + ": followed through (solver.post_collapse)")
+        return
+    verdict = COLLAPSED if judge.loaded else UNSTABLE
+    error = CollapseError(message, factor=at, nodes=nodes, verdict=verdict)
+    error.iterations = int(getattr(exc, "iterations", 0))
+    error.last_good = LastGood(good.x, good.time)
+    raise error
 
 
 def _worth_cutting(exc: ConvergenceError) -> bool:

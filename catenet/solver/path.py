@@ -77,6 +77,7 @@ class Step:
     result: Result | None = None
     rest: float = float("nan")
     a: np.ndarray | None = None
+    energy: np.ndarray | None = None  # a dynamic step's energy balance (energy.COLUMNS)
 
 
 OnStep = Callable[[Step], bool | None]
@@ -153,6 +154,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
             max_iter=settings.max_iter,
             on_step=seen,
             workspace=ws,
+            post_collapse=settings.post_collapse,
         )
 
     try:
@@ -194,6 +196,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
 
 def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.energy import Ledger
 
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
@@ -210,6 +213,8 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     def rest(ratio: float) -> None:
         last["rest"] = ratio
 
+    ledger = Ledger(settings.energy_tolerance)
+
     def seen(step: int, t: float, x, v) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
             raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
@@ -218,7 +223,8 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
         last.update(steps=step, t=t, x=x.copy(), v=v.copy(), a=a)
         if on_step is None:
             return False
-        return bool(on_step(Step(step, t, x, v, rest=last["rest"], a=a)))
+        energy = ledger.row.copy()
+        return bool(on_step(Step(step, t, x, v, rest=last["rest"], a=a, energy=energy)))
 
     try:
         return solve_dynamic(
@@ -240,6 +246,7 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
             a0=start.a,
             a_out=accel,
             max_steps=settings.max_steps,
+            ledger=ledger,
         )
     except CatenetError as exc:
         if isinstance(exc, ConfigError):

@@ -89,6 +89,12 @@ class Result:
         ``catenet.run.cases.CaseRun`` (name, Result, summary numbers, error)
     nested : a static run's nested start (``catenet.solver.nested.NestedStart``: the
         coarse net's solve, whose iterations ``iterations`` does not count), or None
+    stability : the verdict on the state and the path to it (``catenet.solver.stability``):
+        "stable", "unstable", "collapsed" (a failed path: the last stable state),
+        "post-collapse" (``solver.post_collapse``), or "" where not judged (a transient)
+    energy : a dynamic run's energy balance at its end [J], in the order of
+        ``catenet.solver.energy.COLUMNS`` (kinetic, elastic, contact, external_work,
+        dissipated, numerical), or None
     """
 
     x: np.ndarray
@@ -115,6 +121,8 @@ class Result:
     peaks: Peaks | None = None
     cases: list = field(default_factory=list)
     nested: NestedStart | None = None
+    stability: str = ""
+    energy: np.ndarray | None = None
 
 
 def finish(

@@ -32,6 +32,8 @@ class Settings:
     reuse: bool = False
     rho_inf: float = RHO_INF
     start: str = "auto"  # static: "auto", "stretched" or "nested" (catenet.solver.nested)
+    post_collapse: bool = False  # static: follow a collapsing path through (else exit 1)
+    energy_tolerance: float = 1e-2  # dynamic: energy created, a share of the largest
 
     @classmethod
     def of(cls, config: Any, **changes) -> Settings:

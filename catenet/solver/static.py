@@ -20,6 +20,7 @@ from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import _c_start, raise_unconverged, solve
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
+from catenet.solver.stability import STABLE, UNSTABLE, tangent
 from catenet.solver.start import start_state, stretched_start, unstressed
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia, Stretch
@@ -156,16 +157,11 @@ def _relag(potential: Potential, x: np.ndarray, result, *, rtol: float, max_iter
 
 
 def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
-    """Whether the stiffness matrix at x is positive definite (None: cannot tell here).
-    Only bilateral nets can lose stability: tension-only stiffness is never negative."""
-    if ws.solver.name == "pardiso" and getattr(ws.solver, "mtype", None) != -2:
-        return None
-    try:
-        potential.factorize(x, 0.0)
-    except SingularSystemError:
-        return None  # singular (neutral) at equilibrium: no negative stiffness to name
-    negative = ws.solver.negative_eigenvalues()
-    return None if negative is None else negative == 0
+    """Whether the stiffness at x is positive definite, decided with the margins of
+    ``catenet.solver.stability`` (None: neutral within them, or cannot tell here). Only
+    bilateral nets can lose stability: tension-only stiffness is never negative."""
+    verdict = tangent(ws.system, ws.solver, x).verdict
+    return True if verdict == STABLE else False if verdict == UNSTABLE else None
 
 
 ROUNDOFF_HINT = 1e-2  # a failure held to a tolerance above this share of |f| is round-off

@@ -1,0 +1,350 @@
+"""Stability verdicts, decided the same way on every machine: one module for the static
+load path of ``run``, ``sweep``, load cases and the state ``modes`` starts from.
+
+A state's verdict comes from its tangent stiffness K, compared DOF by DOF with the scale
+of its own diagonal (``System.stiffness``, D): with S = D^(-1/2), the eigenvalues of S K S
+are read against a margin, ``MARGIN``, far above round-off (a few 1e-16 x the condition)
+and far below the negative stiffness of a physical instability (a compressed pinned strut
+pushes its joint sideways by N / l, that is its strain times its axial stiffness):
+
+- "unstable": the least eigenvalue is below -MARGIN (round-off cannot make that: the
+  eigenvalues of S K S carry errors of a few 1e-14);
+- "stable":   it is above +POSITIVE (an inextensible hanging chain's sway is a few
+  1e-11 of its axial stiffness: stable, and said so);
+- "neutral":  between them (a zero mode: a free node on slack edges, an untensioned
+  straight chain), neither stable nor unstable; never called unstable. Only the exit
+  code hangs on "unstable", so only its margin must be far from round-off.
+
+Small systems (up to ``DENSE`` free DOFs) take the dense eigenvalues; larger ones the
+inertia of K + MARGIN D and K - POSITIVE D from the symmetric-indefinite factorisation.
+
+A loaded path is a **collapse** when it loses stability on its way, wherever Newton then
+ends (that end depends on round-off, and so differs between processors; the verdict must
+not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continuation``:
+
+1. its start (supports in place, load factor 0) is unstable and loads act on it: a
+   collapse at load factor 0, unless the start was only a guess (compression alone,
+   no edge in tension balancing it: a bilateral cable given on its chord with slack) and
+   the path ends at a stable state with every bilateral edge in tension (the cable sagged
+   into its catenary); struts prestressed against guys that fold into tension collapsed;
+2. a load step ends at an unstable equilibrium: a collapse at that factor (the last step:
+   the path ends unstable);
+3. a load step from a stable state is not reversible: unloaded back to its start's load
+   factor, the net does not come back (within ``RETURN`` of the step's move): the step is
+   halved, down to 1/2**``REFINE``, and a step that stays irreversible as it shrinks
+   passes a limit point or a bifurcation (a snap-through, a fold). A stable elastic path
+   is reversible; each judged step costs one more solve, on nets with bilateral edges
+   only;
+4. a bilateral edge that carries no tension at the end of a step has turned through more
+   than ``ROTATION`` in it: a member that fell.
+
+The first three are decided with the margins above; the fourth by angles far from any
+threshold in the models that trigger it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConvergenceError, SingularSystemError
+
+log = logging.getLogger(__name__)
+
+MARGIN = 1e-11  # eigenvalues of S K S below -MARGIN are unstable (S = D^(-1/2)) ...
+POSITIVE = 1e-13  # ... above +POSITIVE stable, between them neutral
+DENSE = 900  # free DOFs up to which the verdict takes the dense eigenvalues
+RETURN = 0.05  # unloaded, a reversible step comes back within this share of its move
+RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
+REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
+ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than this fell
+TAUT = 1e-9  # a bilateral edge is in tension above this share of the largest |tension|
+
+STABLE, UNSTABLE, NEUTRAL = "stable", "unstable", "neutral"
+COLLAPSED, POST_COLLAPSE = "collapsed", "post-collapse"
+
+
+class CollapseError(ConvergenceError):
+    """A static load path lost its stability (``PathJudge``): ``factor`` the load factor
+    where, ``nodes`` the free nodes that move most in the collapse."""
+
+    def __init__(self, message: str, *, factor: float, nodes=(), verdict=COLLAPSED, **kwargs):
+        super().__init__(message, **kwargs)
+        self.verdict = verdict  # COLLAPSED, or UNSTABLE: an unloaded unstable start
+        self.factor = float(factor)
+        self.nodes = np.asarray(nodes, dtype=np.int64)
+
+
+@dataclass
+class Tangent:
+    """The tangent stiffness of a system at x on its free DOFs, and what it says."""
+
+    verdict: str  # STABLE, UNSTABLE or NEUTRAL
+    least: float  # the least eigenvalue of S K S (nan where the inertia decided)
+    mode: np.ndarray | None  # (N, 3) the least mode (dense only), else None
+
+
+def _scale(system) -> np.ndarray:
+    d = np.abs(system.stiffness())
+    top = float(d.max()) if d.size else 1.0
+    return np.maximum(d, 1e-12 * max(top, 1e-300))
+
+
+def tangent(system, solver, x: np.ndarray) -> Tangent:
+    """The tangent of ``system`` at x (``solver``: the workspace's linear solver, for the
+    inertia of large systems)."""
+    x = np.asarray(x, dtype=np.float64)
+    d = _scale(system)
+    n = system.n_free
+    if n == 0:
+        return Tangent(STABLE, math.inf, None)
+    if n <= DENSE:
+        return _dense(system, x, d)
+    return _sparse(system, solver, x, d)
+
+
+def _dense(system, x: np.ndarray, d: np.ndarray) -> Tangent:
+    k = system.matrix(system.hessian(x).copy()).toarray()
+    s = 1.0 / np.sqrt(d)
+    a = k * s[:, None] * s[None, :]
+    a = 0.5 * (a + a.T)
+    if not np.all(np.isfinite(a)):
+        return Tangent(NEUTRAL, math.nan, None)
+    lam, vec = np.linalg.eigh(a)
+    least = float(lam[0])
+    verdict = STABLE if least > POSITIVE else UNSTABLE if least < -MARGIN else NEUTRAL
+    mode = np.zeros(system.net.n_nodes * 3)
+    mode[system.free_dofs] = s * vec[:, 0]
+    return Tangent(verdict, least, mode.reshape(-1, 3))
+
+
+def _sparse(system, solver, x: np.ndarray, d: np.ndarray) -> Tangent:
+    """The inertia of K + MARGIN D (negative: unstable) and of K - POSITIVE D (none
+    negative: stable), where the factorisation tells; else NEUTRAL (cannot say)."""
+    if getattr(solver, "mtype", None) != -2:
+        return Tangent(NEUTRAL, math.nan, None)
+
+    def negatives(shift: float) -> int | None:
+        data = system.hessian(x, shift * d)
+        try:
+            solver.factorize(data, definite=False)
+        except SingularSystemError:
+            return None
+        return solver.negative_eigenvalues()
+
+    above = negatives(+MARGIN)
+    if above is None:
+        return Tangent(NEUTRAL, math.nan, None)
+    if above > 0:
+        return Tangent(UNSTABLE, math.nan, None)
+    below = negatives(-POSITIVE)
+    if below != 0:
+        return Tangent(NEUTRAL, math.nan, None)
+    return Tangent(STABLE, math.nan, None)
+
+
+def _bilateral(net) -> np.ndarray:
+    return ~np.asarray(net.law.tension_only, dtype=bool) & np.ones(net.n_edges, bool)
+
+
+def _directions(net, x: np.ndarray) -> np.ndarray:
+    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    length = np.linalg.norm(e, axis=1)
+    return e / np.where(length > 0.0, length, 1.0)[:, None]
+
+
+class PathJudge:
+    """Follows the stability of a static load path (see the module docstring). Inactive
+    (every call a no-op) for nets whose edges are all tension-only or that carry free
+    bodies (``catenet.solver.modal.stable_with_bodies`` judges those)."""
+
+    def __init__(self, ws, loads, *, post_collapse: bool = False, size: float | None = None):
+        from catenet.solver.modal import body_frames
+
+        self.ws = ws
+        self.net = ws.system.net
+        self.loads = loads
+        self.post_collapse = post_collapse
+        bilateral = _bilateral(self.net)
+        self.active = bool(np.any(bilateral)) and not body_frames(ws.system)
+        # friction makes a path irreversible by itself: no unloading test there
+        self.reversible = not any(t.lagged for t in ws.system.terms)
+        # the nodes a collapse moves: those of bilateral edges (struts); a tension-only
+        # edge's nodes may hang anywhere once it is slack
+        self.struts = np.zeros(self.net.n_nodes, bool)
+        self.struts[self.net.edges[bilateral].ravel()] = True
+        self.struts &= ~self.net.fixed
+        extent = np.ptp(self.net.nodes, axis=0) if self.net.n_nodes else np.zeros(3)
+        self.size = float(size) if size else float(np.linalg.norm(extent)) or 1.0
+        self.start_unstable = False
+        self.guessed = False
+        self.loaded = True
+        self.start_x: np.ndarray | None = None
+        self.collapsed: str = ""  # what happened, once a collapse was followed through
+        self.collapse_factor = math.nan
+
+    # --- what each state says ----------------------------------------------------------
+    def tangent(self, x: np.ndarray) -> Tangent:
+        return tangent(self.ws.system, self.ws.solver, x)
+
+    def begin(self, x: np.ndarray, loaded: bool) -> None:
+        """The path's start (supports in place, load factor 0)."""
+        if not self.active:
+            return
+        t = self.tangent(x)
+        self.start_unstable = t.verdict == UNSTABLE
+        self.loaded = loaded
+        # a start stressed in compression only (no edge in tension to balance it: a
+        # bilateral cable given on its chord with slack) is a guess, not a structure
+        tension = self.ws.system.tension(x)
+        self.guessed = not bool(np.any(tension > 0.0))
+        self.start_x = x.copy()
+
+    def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:
+        """The load step from the equilibrium ``prev`` at ``f0`` to ``x1`` at ``f1``:
+        "" when it keeps the path stable, else why it does not (one sentence)."""
+        if not self.active or self.collapsed:
+            return ""
+        if self.start_unstable:
+            if last and self._ends_taut(x1):
+                return ""
+            if not last:
+                return ""  # decided at the end: a slack bilateral cable sags into tension
+            return self.why_start()
+        if not self.loaded:
+            return ""  # unloaded from a stable start: the end's own verdict
+        t1 = self.tangent(x1)
+        if t1.verdict == UNSTABLE:
+            if last:
+                return ""  # an unstable end: the run's own verdict says so
+            return f"the equilibrium at load factor {f1:.6g} is unstable"
+        turned = self._turned(prev, x1)
+        if turned.size:
+            deg = math.degrees(self._angles(prev, x1)[turned].max())
+            return (
+                f"bilateral edges {_shown(turned)} turned through up to {deg:.0f} degrees "
+                f"between load factors {f0:.6g} and {f1:.6g} and carry no tension: a member "
+                "fell"
+            )
+        return ""
+
+    def balanced(self, x: np.ndarray, rtol: float) -> bool:
+        """Whether x is an equilibrium at load factor 0 (the given geometry under its
+        prestress alone), to rtol of its force scale or its round-off floor."""
+        ev = self.ws.potential(self.loads, 0.0).evaluate(x)
+        return ev.gnorm <= max(rtol * ev.scale, ev.floor)
+
+    def reversible_from(self, prev: np.ndarray) -> bool:
+        """Whether a step from ``prev`` is checked by unloading (``returns``): a loaded,
+        active path not yet collapsed, from a stable state (a neutral one, a flat net
+        that its load tightens, has no unique state to return to)."""
+        if not self.active or self.collapsed or not self.loaded or not self.reversible:
+            return False
+        return self.tangent(prev).verdict == STABLE
+
+    def returns(self, prev: np.ndarray, back: np.ndarray, x1: np.ndarray) -> bool:
+        """Whether unloading x1 to the step's start factor came ``back`` to ``prev``: its
+        largest distance from prev, over the nodes of bilateral edges, is within RETURN of
+        the step's largest move there (or RETURN_FLOOR of the structure's size). A stable
+        path is reversible; a step over a limit point or a bifurcation is not (the snapped
+        or folded state stays)."""
+        on = self.struts
+        moved = float(np.max(np.linalg.norm((x1 - prev)[on], axis=1), initial=0.0))
+        away = float(np.max(np.linalg.norm((back - prev)[on], axis=1), initial=0.0))
+        return away <= max(RETURN * moved, RETURN_FLOOR * self.size)
+
+    def why_jump(self, f0: float, f1: float, prev: np.ndarray, back: np.ndarray) -> str:
+        away = float(np.max(np.linalg.norm((back - prev)[self.struts], axis=1), initial=0.0))
+        return (
+            f"the step from load factor {f0:.6g} to {f1:.6g} passes a limit point or a "
+            f"bifurcation: unloaded again it stays {away:.3g} m away from where it started "
+            "(a snap-through or a fold)"
+        )
+
+    def why_start(self) -> str:
+        from catenet.solver.diagnose import describe_unstable
+
+        start = self.start_x if self.start_x is not None else self.net.nodes
+        what = describe_unstable(self.ws.system.stretch, start, ~self.net.fixed)
+        if not self.loaded:
+            return f"the given geometry is an unstable equilibrium under its prestress: {what}"
+        return f"the given geometry is unstable under its prestress, so any load folds it: {what}"
+
+    def _ends_taut(self, x: np.ndarray) -> bool:
+        """Whether x is stable with every bilateral edge in tension, from a start that was
+        only a guess (``guessed``: compression alone, nothing in tension balancing it). A
+        prestressed system (struts against guys) folded into tension is a collapse."""
+        if not self.guessed:
+            return False
+        tension = self.ws.system.tension(x)
+        top = float(np.max(np.abs(tension))) if tension.size else 0.0
+        bilateral = _bilateral(self.net)
+        if np.any(tension[bilateral] <= TAUT * top):
+            return False
+        return self.tangent(x).verdict != UNSTABLE
+
+    def _angles(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        cos = np.einsum("ij,ij->i", _directions(self.net, a), _directions(self.net, b))
+        return np.arccos(np.clip(cos, -1.0, 1.0))
+
+    def _turned(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        tension = self.ws.system.tension(b)
+        top = float(np.max(np.abs(tension))) if tension.size else 0.0
+        slack = tension <= TAUT * top
+        return np.flatnonzero(_bilateral(self.net) & slack & (self._angles(a, b) > ROTATION))
+
+    def moving_nodes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The free nodes that move most from a to b (within half of the largest move)."""
+        move = np.linalg.norm(b - a, axis=1)
+        move[self.net.fixed] = 0.0
+        top = float(move.max()) if move.size else 0.0
+        if top <= 0.0:
+            return np.zeros(0, np.int64)
+        nodes = np.flatnonzero(move >= 0.5 * top)
+        return nodes[np.argsort(-move[nodes])]
+
+    def unstable_nodes(self, x: np.ndarray) -> np.ndarray:
+        """The free nodes of negative own stiffness at x, else of its least mode (dense)."""
+        from catenet.solver.diagnose import unstable_nodes
+
+        own = unstable_nodes(self.ws.system.stretch, x, ~self.net.fixed)
+        if own.size:
+            return own
+        t = self.tangent(x)
+        if t.mode is not None:
+            amp = np.linalg.norm(t.mode, axis=1)
+            top = float(amp.max())
+            if top > 0.0:
+                nodes = np.flatnonzero(amp >= 0.3 * top)
+                return nodes[np.argsort(-amp[nodes])]
+        return own
+
+
+def _shown(items) -> str:
+    items = np.asarray(items)
+    head = ", ".join(map(str, items[:10]))
+    return head + (f" and {items.size - 10} more" if items.size > 10 else "")
+
+
+def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarray) -> str:
+    """The collapse's message: where, what, which nodes, and the fix."""
+    where = f"nodes {_shown(nodes)}" if nodes.size else "the net"
+    fix = (
+        ""
+        if judge.start_unstable
+        else f"; {where} move most. The structure is a mechanism or loses its stability "
+        "under these loads (a chain of pinned struts, an unbraced joint, a snap-through, "
+        "guys going slack): brace or fix those nodes, prestress the guys, make a strut one "
+        "edge, or lower the load"
+    )
+    kept = "The start" if judge.start_unstable else "The last stable state"
+    if not judge.loaded:
+        return f"{why}. {kept} is kept as the result"
+    return (
+        f"the load path collapses beyond load factor {factor:.6g}: {why}{fix}. {kept} is "
+        "kept as the result; solver.post_collapse = true follows the path through to the "
+        "far equilibrium and labels it post-collapse"
+    )

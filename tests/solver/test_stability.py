@@ -1,0 +1,252 @@
+"""Stability verdicts that do not hang on round-off (``catenet.solver.stability``).
+
+A generated corpus of models that collapse, in three unit systems, from zero to large
+loads: every one ends at a stable equilibrium (exit 0, /result stability "stable") or
+exits 1 with a collapse verdict that names the nodes; never exit 0 on a folded state.
+
+- Chains of k = 2..8 pinned bilateral struts stacked into a 30 m mast, guyed at the top
+  only, the struts precompressed by the guys' prestress: the joints have negative lateral
+  stiffness -N/l, so the given geometry is unstable and any load folds it.
+- A shallow three-bar truss (apex h above a ring of radius R, EA per bar): the apex load
+  against its height w is P(w) = 3 EA (h^2 - w^2) w / (2 L0^3) (L0 the bars' length, strain
+  (w^2 - h^2) / (2 L0^2), vertical share w / L0); dP/dw = 0 at w = h / sqrt(3) gives the
+  snap-through load P_cr = EA h^3 / (sqrt(3) L0^3). Below it the truss stands; above it
+  the path snaps, and the load factor of the collapse brackets P_cr / P.
+- A bilateral cable given on its chord with slack: its straight start is compressed and
+  unstable, but it sags into the catenary with every edge in tension: stable, exit 0.
+- The guyed mast of docs/howto/guyed-mast.md, stable as one strut edge; with its strut in
+  5 m edges it collapses (exit 1) and, with solver.post_collapse, it is followed through
+  and labelled post-collapse; its load cases are never reported from a collapsed base.
+
+Every test here is marked ``roundoff``: `make test` runs them again with every node moved
+by 1e-12 of the net's size and two threads (tests/conftest.py), and they must pass the
+same.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+import tomli_w
+from click.testing import CliRunner
+
+from catenet.cli import main
+
+pytestmark = pytest.mark.roundoff
+
+ROOT = Path(__file__).resolve().parents[2]
+MAST = ROOT / "configs" / "structures" / "guyed_mast.toml"
+
+# unit systems: (length factor, force factor): SI, kN-m, N-mm
+UNITS = {"SI": (1.0, 1.0), "kN-m": (1.0, 1e-3), "N-mm": (1e3, 1.0)}
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write(tmp_path, case: dict, name: str = "case") -> Path:
+    path = tmp_path / f"{name}.toml"
+    path.write_bytes(tomli_w.dumps(case).encode())
+    return path
+
+
+def stability(path) -> str:
+    with h5py.File(path, "r") as f:
+        return str(f["result"].attrs["stability"])
+
+
+def chain(k: int, load: float, units: str = "SI") -> dict:
+    """k pinned struts (EA 1e9 N) stacked into a 30 m mast, three guys (EA 1e7 N,
+    prestress 1e4 N) from its top to anchors 20 m away; the struts carry the guys'
+    vertical components as prestress; a horizontal load at the top."""
+    m, n = UNITS[units]
+    height = 30.0
+    nodes = [[0.0, 0.0, height * i / k * m] for i in range(k + 1)]
+    anchors = [[20.0, 0.0, 0.0], [-10.0, 17.320508, 0.0], [-10.0, -17.320508, 0.0]]
+    nodes += [[a * m for a in p] for p in anchors]
+    guy = math.hypot(20.0, height)
+    compression = 3 * 1e4 * height / guy
+    return {
+        "title": f"chain of {k} struts",
+        "units": units,
+        "geometry": {
+            "kind": "graph",
+            "nodes": nodes,
+            "edges": [[i, i + 1] for i in range(k)] + [[k, k + 1], [k, k + 2], [k, k + 3]],
+            "fixed": [0, k + 1, k + 2, k + 3],
+            "EA": [1e9 * n] * k + [1e7 * n] * 3,
+            "tension_only": [False] * k + [True] * 3,
+            "prestress": [-compression * n] * k + [1e4 * n] * 3,
+        },
+        "material": {"EA": 1e7 * n},
+        "load": {"point": [{"node": k, "force": [load * n, 0.0, 0.0]}]},
+    }
+
+
+H, R, EA = 0.5, 10.0, 1e6  # the shallow truss: apex height, ring radius, EA [m, m, N]
+L0 = math.hypot(H, R)
+P_CR = EA * H**3 / (math.sqrt(3.0) * L0**3)  # its snap-through load [N]
+
+
+def truss(load: float, units: str = "SI") -> dict:
+    m, n = UNITS[units]
+    turns = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
+    ring = [[R * math.cos(a), R * math.sin(a), 0.0] for a in turns]
+    return {
+        "title": "shallow three-bar truss",
+        "units": units,
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[c * m for c in p] for p in [[0.0, 0.0, H], *ring]],
+            "edges": [[0, 1], [0, 2], [0, 3]],
+            "fixed": [1, 2, 3],
+        },
+        "material": {"EA": EA * n, "tension_only": False},
+        "load": {"point": [{"node": 0, "force": [0.0, 0.0, -load * n]}]},
+    }
+
+
+@pytest.mark.parametrize("units", list(UNITS))
+@pytest.mark.parametrize("k", [2, 3, 5, 8])
+def test_a_chain_of_struts_never_ends_converged(tmp_path, k, units):
+    for load in (0.0, 100.0, 5e3):
+        out = tmp_path / f"chain{k}_{load:g}.h5"
+        r = invoke("run", write(tmp_path, chain(k, load, units)), "-o", out, "-q")
+        assert r.exit_code == 1, r.output
+        joints = ", ".join(str(i) for i in range(1, min(k, 11)))
+        assert f"nodes {joints}" in r.output, r.output
+        if load == 0.0:  # no load: the given geometry is an unstable equilibrium
+            assert "unstable" in r.output and stability(out) == "unstable"
+        else:  # loaded: the path collapses at once, whatever Newton would reach
+            assert "collapses beyond load factor 0:" in r.output, r.output
+            assert stability(out) == "collapsed"
+            with h5py.File(out, "r") as f:  # the start is kept, not a folded state
+                assert not f["result"].attrs["converged"]
+                top = f["result/x"][k] - f["mesh/nodes"][k]
+                assert np.linalg.norm(top) < 1e-6 * UNITS[units][0]
+
+
+@pytest.mark.parametrize("units", list(UNITS))
+def test_a_shallow_truss_stands_below_its_snap_through_load_and_collapses_above(
+    tmp_path, units
+):
+    below = tmp_path / "below.h5"
+    r = invoke("run", write(tmp_path, truss(0.8 * P_CR, units)), "-o", below, "-q")
+    assert r.exit_code == 0, r.output
+    assert stability(below) == "stable"
+    with h5py.File(below, "r") as f:  # still above the ring: w > h / sqrt(3)
+        assert f["result/x"][0, 2] > H / math.sqrt(3.0) * UNITS[units][0]
+    above = tmp_path / "above.h5"
+    load = 1.5 * P_CR
+    r = invoke("run", write(tmp_path, truss(load, units)), "-o", above, "-q")
+    assert r.exit_code == 1, r.output
+    assert "limit point" in r.output and "nodes 0" in r.output
+    assert stability(above) == "collapsed"
+    with h5py.File(above, "r") as f:
+        factor = float(f["result"].attrs["time"])
+        assert f["result/x"][0, 2] > 0.0  # the last stable state: not snapped
+    # the collapse is bracketed by the halved steps: within 1/2**6 of the load
+    assert factor <= P_CR / load <= factor + 1.0 / 64 + 1e-12
+
+
+def test_a_bilateral_cable_given_slack_on_its_chord_sags_and_is_stable(tmp_path):
+    case = {
+        "geometry": {
+            "kind": "cable",
+            "start": [0.0, 0.0, 0.0],
+            "end": [10.0, 0.0, 0.0],
+            "length": 12.0,
+            "nodes": 21,
+        },
+        "material": {"EA": 1e6, "density": 7850.0, "radius": 0.005, "tension_only": False},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+    }
+    out = tmp_path / "cable.h5"
+    r = invoke("run", write(tmp_path, case), "-o", out, "-q")
+    assert r.exit_code == 0, r.output
+    assert stability(out) == "stable"
+    with h5py.File(out, "r") as f:
+        assert np.all(f["result/tension"][()] > 0.0)
+
+
+def test_the_guyed_mast_stands_and_its_split_strut_collapses(tmp_path):
+    whole = tmp_path / "whole.h5"
+    assert invoke("run", MAST, "-o", whole, "-q").exit_code == 0
+    assert stability(whole) == "stable"
+    split = tmp_path / "split.h5"
+    r = invoke("run", MAST, "-o", split, "--set", "geometry.cable.0.edge_length=5")
+    assert r.exit_code == 1, r.output
+    assert "converged    yes" not in r.output
+    assert "collapses beyond load factor 0" in r.output and "nodes 6, 7, 8" in r.output
+    assert stability(split) == "collapsed"
+    followed = tmp_path / "followed.h5"
+    r = invoke(
+        "run",
+        MAST,
+        "-o",
+        followed,
+        "--set",
+        "geometry.cable.0.edge_length=5",
+        "--set",
+        "solver.post_collapse=true",
+    )
+    assert r.exit_code == 0, r.output
+    assert "post-collapse" in r.output
+    assert stability(followed) == "post-collapse"
+
+
+def test_an_unloaded_unstable_mast_never_prints_converged_yes(tmp_path):
+    out = tmp_path / "zero.h5"
+    r = invoke(
+        "run",
+        MAST,
+        "-o",
+        out,
+        "--set",
+        "geometry.cable.0.edge_length=5",
+        "--set",
+        "load.point.0.force=[0, 0, 0]",
+    )
+    assert r.exit_code == 1, r.output
+    assert "an unstable equilibrium" in r.output and "nodes 6, 7, 8" in r.output
+    assert "converged    yes" not in r.output
+    assert stability(out) == "unstable"
+
+
+def test_no_load_case_of_a_collapsed_mast_is_reported(tmp_path):
+    cases = ROOT / "configs" / "structures" / "mast_load_cases.toml"
+    text = cases.read_text()
+    out = tmp_path / "cases.h5"
+    r = invoke("run", cases, "-o", out, "--set", "geometry.cable.0.edge_length=5")
+    assert r.exit_code == 1, r.output
+    assert "converged    yes" not in r.output
+    with h5py.File(out, "r") as f:
+        assert "cases" not in f
+        assert not f["result"].attrs["converged"]
+    assert "edge_length" in text  # the --set above splits the strut the case gives
+
+
+def test_the_verdict_of_small_and_large_systems_agrees(monkeypatch):
+    """The dense eigenvalues (small systems) and the factorisation's inertia with the
+    margin's shifts (large ones) give the same verdicts."""
+    import catenet.solver.stability as st
+    from catenet.case import build, parse_case
+    from catenet.solver.workspace import Workspace
+
+    for model, verdict in ((chain(3, 0.0), st.UNSTABLE), (truss(0.0), st.STABLE)):
+        scene = build(parse_case(json.loads(json.dumps(model))))
+        ws = Workspace(scene.net)
+        x = scene.net.nodes.copy()
+        dense = st.tangent(ws.system, ws.solver, x).verdict
+        monkeypatch.setattr(st, "DENSE", 0)
+        sparse = st.tangent(ws.system, ws.solver, x).verdict
+        monkeypatch.setattr(st, "DENSE", 900)
+        assert dense == verdict
+        if getattr(ws.solver, "mtype", None) == -2:
+            assert sparse == verdict
