@@ -51,6 +51,11 @@ if TYPE_CHECKING:
 
 SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
 ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
+# w^2 below -NEGATIVE x max(K_ii / m_i) is unstable; between that and ZERO x max a zero
+# mode: an equilibrium held to rtol leaves its zero modes (a frictionless body's free
+# slide or turn) at w^2 of a few 1e-9 of that scale, of either sign as the processor's
+# round-off falls, so the negative side gets a margin far above it.
+NEGATIVE = 1e-7
 
 
 def rigidities(system) -> list:
@@ -236,6 +241,7 @@ class Operator:
         self.scale = float(np.max(k.diagonal()[live] / self.m[live]))  # max K_ii / m_i
         self.sigma = -SHIFT * self.scale  # the shift
         self.zero = ZERO * self.scale  # w^2 below: zero-frequency modes
+        self.negative = NEGATIVE * self.scale  # w^2 below -negative: unstable
         # Gershgorin on D^-1 K, D <= M the smallest eigenvalue of each 3 x 3 block of M
         # (block diagonal): w^2 <= bound. The DOFs without stiffness get a dummy w^2 of
         # 2 x bound: above every real mode.
@@ -293,7 +299,7 @@ def stable_with_bodies(workspace, x: np.ndarray) -> bool | None:
 
     try:
         op = Operator(workspace.system, np.asarray(x, dtype=np.float64), workspace.system.net.mass)
-        solver = op.factorized(workspace.solver, op.sigma)
+        solver = op.factorized(workspace.solver, -op.negative)
     except (SingularSystemError, ConfigError):
         return None
     negative = solver.negative_eigenvalues()

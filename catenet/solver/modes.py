@@ -190,9 +190,9 @@ def natural_modes(
     lam, vec = _rayleigh_ritz(op, vec)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
-    if lam.size and lam[0] < -op.zero:
+    if lam.size and lam[0] < -op.negative:
         _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
-    zero = lam < op.zero
+    zero = _zero_modes(lam, op)
     found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, sigma)
     found.added = None if blocks is None else np.where(net.fixed[:, None, None], 0.0, blocks)
     _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
@@ -233,6 +233,56 @@ def _few_masses(op: Operator, count: int) -> bool:
     )
 
 
+GAP = 1e4  # zero modes in the margin band lie this far below the first real mode
+
+
+def _zero_modes(lam: np.ndarray, op: Operator) -> np.ndarray:
+    """(len(lam),) bool: the zero-frequency modes of the ascending omega^2 ``lam``: those
+    below ``op.zero``, and the lowest j within the margin band |omega^2| < ``op.negative``
+    that a gap of GAP separates from the next (a frictionless body's free slide or turn
+    at an equilibrium held to rtol: its omega^2 is round-off of either sign, 1e-9 of the
+    stiffness scale, where the lowest real mode is orders of magnitude above it)."""
+    zero = lam < op.zero
+    band = int(np.count_nonzero(lam < op.negative))
+    for j in range(band, 0, -1):
+        low = max(float(np.max(np.abs(lam[:j]))), op.zero)
+        if j < lam.size and lam[j] > GAP * low:
+            zero[:j] = True
+            break
+    return zero
+
+
+def _condensed(op: Operator, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every mode of a net with massless DOFs whose K - sigma M is not positive definite
+    to round-off (a zero mode of a frictionless body beside massless strings: whether the
+    Cholesky of K - sigma M passes then hangs on the processor's round-off). The massless
+    DOFs carry no inertia, so condensing them out is exact: K* = K_mm - K_m0 K_00^-1
+    K_0m on the massive DOFs, then K* phi = w^2 M_mm phi, and phi_0 = -K_00^-1 K_0m phi.
+    Raises ConvergenceError where the massless part itself is singular or indefinite
+    (a massless mechanism: no frequency exists)."""
+    import scipy.linalg as sl
+
+    k = op.k.toarray()
+    massive = np.abs(m).sum(axis=1) > 0.0
+    zero = ~massive
+    k00 = k[np.ix_(zero, zero)]
+    try:
+        factor = sl.cho_factor(k00)
+    except np.linalg.LinAlgError:
+        raise ConvergenceError(
+            "modes: the stiffness is indefinite where free nodes have no mass (a massless "
+            "mechanism): give those nodes mass (material.density) or tension"
+        ) from None
+    coupling = k[np.ix_(zero, massive)]
+    solved = sl.cho_solve(factor, coupling)
+    reduced = k[np.ix_(massive, massive)] - coupling.T @ solved
+    lam, sub = sl.eigh(0.5 * (reduced + reduced.T), m[np.ix_(massive, massive)])
+    vec = np.zeros((k.shape[0], sub.shape[1]))
+    vec[massive] = sub
+    vec[zero] = -solved @ sub
+    return lam, vec
+
+
 def _check_count(count, n_free: int) -> None:
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
@@ -252,11 +302,9 @@ def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     m = op.mm.toarray()
     try:
         mu, vec = sl.eigh(m, a)
-    except np.linalg.LinAlgError:  # K - sigma M indefinite (compressed bilateral edges)
+    except np.linalg.LinAlgError:  # K - sigma M not positive definite to round-off
         if not (op.m > 0).all():
-            raise ConvergenceError(
-                "modes: the stiffness is indefinite and some free nodes have no mass"
-            ) from None
+            return _condensed(op, m)
         lam, vec = sl.eigh(op.k.toarray(), m)
         return lam, vec
     keep = mu > 1e-12 * max(float(mu.max(initial=0.0)), 1e-300)  # else: no mass, w infinite
@@ -275,8 +323,11 @@ def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarra
     stats["factorize_seconds"] = time.perf_counter() - start
     negative = solver.negative_eigenvalues()
     stats["negative"] = negative
-    if negative:  # Sylvester: that many omega^2 below sigma < 0
-        unstable(f"{negative} negative omega^2 (the inertia of K - sigma M)")
+    if negative:  # Sylvester: that many omega^2 below sigma < 0; confirmed beyond the margin
+        beyond = op.factorized(solver, -op.negative).negative_eigenvalues()
+        if beyond:
+            unstable(f"{beyond} negative omega^2 (the inertia of K + {op.negative:.3g} M)")
+        solver = op.factorized(solver, sigma)  # zero modes within round-off: go on
     limit = op.n - 1  # ARPACK: k < n
     k = min(count, limit)
     solves = 0

@@ -120,6 +120,7 @@ def test_body_mass_matrix_is_its_mass_and_inertia():
     assert np.allclose(block[:3, 3:], 0.0, atol=1e-12)
 
 
+@pytest.mark.roundoff
 def test_squeezed_box_bounce_and_rocking_closed_forms():
     """The box between the four strings, massless strings, zero gravity.
 
