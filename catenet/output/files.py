@@ -16,7 +16,9 @@ import re
 import shutil
 from pathlib import Path
 
-from catenet.errors import ConfigError
+import numpy as np
+
+from catenet.errors import ConfigError, OutputError
 
 __all__ = [
     "check_output_dir",
@@ -308,3 +310,21 @@ def detach(h5) -> None:
         pass
     finally:
         os.close(null)
+
+
+def check_finite(name: str, value, t: float) -> None:
+    arr = np.asarray(value, dtype=np.float64)
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.count_nonzero(~np.isfinite(arr)))
+        raise OutputError(
+            f"refusing to write a non-finite state at t = {t:.6g}: {name} has {bad} NaN or "
+            "infinite values (the solution diverged); the frames before it are kept"
+        )
+
+
+def utf8(value):
+    """A string attribute as UTF-8 text: the bytes of a path that are not UTF-8 (the
+    surrogates of os.fsdecode) written as \\xNN escapes; other values as they are."""
+    if isinstance(value, str):
+        return os.fsencode(value).decode("utf-8", "backslashreplace")
+    return value

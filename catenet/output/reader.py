@@ -35,7 +35,8 @@ log = logging.getLogger(__name__)
 # SWMR needs the file format of HDF5 1.10; a newer upper bound ("latest") would let the
 # HDF5 library in use write structures that the HDF5 bundled with ParaView cannot read.
 LIBVER = ("v110", "v110")
-TRAJECTORY = ("x", "v", "a", "tension")  # per-frame datasets of /trajectory, besides time
+# per-frame datasets of /trajectory, besides time (energy: a dynamic run's balance, [J])
+TRAJECTORY = ("x", "v", "a", "tension", "energy")
 REQUIRED = ("/mesh/nodes", "/mesh/edges")
 
 __all__ = [

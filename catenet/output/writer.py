@@ -49,11 +49,18 @@ from catenet.output.files import (
     spare_paths,
     write_image,
 )
+from catenet.output.files import (
+    check_finite as _check_finite,
+)
+from catenet.output.files import (
+    utf8 as _utf8,
+)
 from catenet.output.metadata import environment
 from catenet.output.obstacles import Obstacles
 from catenet.output.reader import LIBVER, TRAJECTORY
 from catenet.output.result_group import write_result_group
 from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
+from catenet.solver.energy import COLUMNS as ENERGY_COLUMNS
 
 log = logging.getLogger(__name__)
 
@@ -67,16 +74,6 @@ FLUSH_SHARE = 0.05
 MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
 
 __all__ = ["ResultWriter", "check_output_path"]
-
-
-def _check_finite(name: str, value, t: float) -> None:
-    arr = np.asarray(value, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.count_nonzero(~np.isfinite(arr)))
-        raise OutputError(
-            f"refusing to write a non-finite state at t = {t:.6g}: {name} has {bad} NaN or "
-            "infinite values (the solution diverged); the frames before it are kept"
-        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -127,6 +124,9 @@ class ResultWriter:
             velocities = getattr(solver, "method", "static") == "dynamic"
         self.velocities = bool(velocities)
         self.accelerations = bool(accelerations)
+        # dynamic runs (they keep velocities) keep their energy balance per frame
+        self.energies = self.velocities
+        self._energy = np.zeros(len(ENERGY_COLUMNS))  # the last balance given
         self.attrs = dict(attrs or {})
         self.obstacles = Obstacles(scene)  # their surfaces and poses (catenet.output.obstacles)
         self.flush_seconds = float(flush_seconds)
@@ -258,6 +258,8 @@ class ResultWriter:
             shapes["v"] = (n, 3)
         if self.accelerations:
             shapes["a"] = (n, 3)
+        if self.energies:
+            shapes["energy"] = (len(ENERGY_COLUMNS),)
         for name in TRAJECTORY:
             if name not in shapes:
                 continue
@@ -277,10 +279,17 @@ class ResultWriter:
                 fillvalue=np.nan,
             )
         g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
+        if self.energies:
+            import h5py
+
+            g["energy"].attrs["columns"] = np.array(ENERGY_COLUMNS, dtype=h5py.string_dtype())
+            g["energy"].attrs["unit"] = "J"
         self.obstacles.create_trajectory(g)  # moving obstacles' poses and surfaces
 
     # --- frames ----------------------------------------------------------------------------
-    def frame(self, t: float, x, v=None, tension=None, a=None, last: bool = False) -> None:
+    def frame(
+        self, t: float, x, v=None, tension=None, a=None, last: bool = False, energy=None
+    ) -> None:
         """Takes a frame (a copy); it reaches the file with the next flush. ``v`` (``a``)
         None stores zeros when the file keeps velocities (accelerations); ``tension`` None
         is computed from x. ``last``: the run's final frame, with /result to follow at
@@ -301,6 +310,10 @@ class ResultWriter:
             data["v"] = np.zeros_like(x) if v is None else np.array(v, dtype=np.float64)
         if self.accelerations:
             data["a"] = np.zeros_like(x) if a is None else np.array(a, dtype=np.float64)
+        if self.energies:  # None: the last balance given (a failed run's last frame)
+            if energy is not None:
+                self._energy = np.array(energy, dtype=np.float64)
+            data["energy"] = self._energy.copy()
         if not math.isfinite(float(t)):
             raise OutputError(f"refusing to write a frame at t = {t!r}: the time must be finite")
         for name, arr in data.items():
@@ -533,11 +546,3 @@ class ResultWriter:
             except OSError as exc:
                 log.warning("%s: cannot remove the spare copy: %s", self._spare, describe(exc))
             self._lock.release()
-
-
-def _utf8(value):
-    """A string attribute as UTF-8 text: the bytes of a path that are not UTF-8 (the
-    surrogates of os.fsdecode) written as \\xNN escapes; other values as they are."""
-    if isinstance(value, str):
-        return os.fsencode(value).decode("utf-8", "backslashreplace")
-    return value

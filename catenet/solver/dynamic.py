@@ -29,28 +29,26 @@ from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import norm
 from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
+from catenet.solver.energy import Ledger
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve
 from catenet.solver.relax import MAX_STEPS, REST, RestControl, rest_stages
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import HarmonicExtension
+from catenet.solver.stepping import (  # noqa: F401  (the step control's names, here too)
+    ALLOWANCE,
+    FAIL_ALLOWANCE,
+    GROW_AFTER,
+    MAX_CUTS,
+    SLOWDOWN,
+    StepControl,
+    _advance,
+)
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia
 from catenet.terms.moving import carry, moves
 
 log = logging.getLogger(__name__)
-
-MAX_CUTS = 20  # the smallest step is dt / 2**MAX_CUTS
-GROW_AFTER = 4
-#: The work a run may take: SLOWDOWN times the steps dt plans from t0 to t_end, plus
-#: ALLOWANCE tries (the cut-backs of a hard start or of a few impacts). A run whose steps
-#: stay short beyond that fails rather than run on for hours.
-SLOWDOWN = 4  # the examples take at most 2.2x (tether_capture: 532 tries for 240 steps)
-ALLOWANCE = 100
-#: Of these, at most half the steps dt plans plus FAIL_ALLOWANCE may fail (a failed try
-#: costs max_iter Newton iterations; a start cut down to the smallest step still fits).
-FAIL_ALLOWANCE = MAX_CUTS + 4
-
 
 def solve_dynamic(
     net: Net,
@@ -75,6 +73,7 @@ def solve_dynamic(
     a0: np.ndarray | None = None,
     a_out: np.ndarray | None = None,
     max_steps: int = MAX_STEPS,
+    ledger: Ledger | None = None,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -104,6 +103,9 @@ def solve_dynamic(
     its steps growing as the motion decays (catenet/solver/relax.py), their time
     pseudo-time; ConvergenceError when ``damping`` is 0 (an undamped run never rests)
     or when ``max_steps`` accepted steps do not reach rest.
+
+    ``ledger``: the run's energy balance (``catenet.solver.energy.Ledger``; a new one
+    where None), kept step by step; EnergyError where the integrator creates energy.
     """
     _check(dt, damping, t_end, t0, rtol, max_steps)
     to_rest = t_end == REST
@@ -121,6 +123,7 @@ def solve_dynamic(
         net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
     )
     start = time.perf_counter()
+    stepper.ledger = Ledger() if ledger is None else ledger
     stepper.begin(x0, v0, t0, a0, a_out)
     control: RestControl | StepControl
     if to_rest:
@@ -151,6 +154,7 @@ def solve_dynamic(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
         outcome=run,
+        energy=stepper.ledger.row.copy(),
     )
 
 
@@ -177,6 +181,7 @@ class TimeStepper:
         self.residual = 0.0  # the last step's Newton residual; at rest the static one
         self.equilibrium = False
         self.pseudo = False  # a run to rest through its stages: the path is only a path
+        self.ledger: Ledger | None = None  # the energy balance (catenet.solver.energy)
 
     def begin(self, x0, v0, t0, a0, a_out) -> None:
         """The start state at t0: ``x0``, ``v0`` (default: reference positions at rest)
@@ -202,6 +207,8 @@ class TimeStepper:
         self.scheme.begin(potential, x, v, self.m_free, self.damping, a_free)
         self.a_out = a_out
         _store(self.scheme, a_out, self.free)
+        if self.ledger is not None:
+            self.ledger.begin(self)
 
     def run(self, control, *, rest: bool, on_step, on_rest) -> Outcome:
         """Steps to ``control.t_end``, to rest (``rest``: dynamic relaxation, once the
@@ -209,6 +216,8 @@ class TimeStepper:
         ``control``: a StepControl, or a RestControl (a run to rest: its steps grow as the
         static residual decays; ConvergenceError after its ``max_steps`` steps)."""
         to_rest = isinstance(control, RestControl)
+        if self.pseudo and self.ledger is not None:
+            self.ledger.judged = False  # stages change the potential: pseudo-time only
         while self.t < control.t_end * (1 - 1e-12) and not self.equilibrium:
             h_step = control.step(self.t)
             newton, why = self.solve_step(h_step)
@@ -369,7 +378,27 @@ class TimeStepper:
     def accept(self, control: StepControl, h_step: float, newton) -> None:
         """The converged step becomes the state (Eq. 10c for implicit Euler)."""
         self.fresh = False
-        self.v = self.scheme.accept(self.x_trial, self.x, self.v, self.free, h_step)
+        loads = self.potential.f_norm
+        if 0.0 < loads < newton.tolerance:  # the step's digits are its forces' round-off
+            raise ConvergenceError(
+                f"the time step to t = {self.t + h_step:.6g} s is held only to "
+                f"{newton.tolerance:.3g} N, the round-off of its forces (a motion far faster "
+                f"than the step: a body spun beyond what dt resolves), above the loads "
+                f"({loads:.3g} N): no digit of this answer is sure; use a smaller solver.dt "
+                "or check the initial velocities and angular velocities",
+                iterations=self.iterations,
+                state=self.x.copy(),
+            )
+        v = self.scheme.accept(self.x_trial, self.x, self.v, self.free, h_step)
+        if self.ledger is not None:  # judged before the step becomes the state
+            self.ledger.step(self, self.x, self.x_trial, v, h_step)
+            try:
+                self.ledger.check(self.t + h_step)
+            except ConvergenceError as exc:
+                exc.iterations = self.iterations
+                exc.state = self.x.copy()
+                raise
+        self.v = v
         _store(self.scheme, self.a_out, self.free)
         self.x[:] = self.x_trial
         self.t = control.advance(self.t, h_step)
@@ -410,81 +439,6 @@ def start_acceleration(
     out = np.zeros_like(x)
     _store(scheme, out, workspace.system.free_dofs)
     return out
-
-
-class StepControl:
-    """The time step of a run from t0 to t_end: ``dt`` while steps converge; a failed step
-    is retried with half its length (``failed`` says whether that is still at least the
-    smallest step, dt / 2**MAX_CUTS); after GROW_AFTER accepted steps in a row a shortened
-    step doubles, back up to dt. ``advance`` gives the time after a step: exact multiples
-    of the smallest step after t0 (t0 + k dt with one rounding while the step is dt), not
-    sums of the steps' round-off. The tries (accepted and failed steps) are bounded:
-    ``spent`` says when they exceed SLOWDOWN times the steps dt plans plus ALLOWANCE, or
-    the failed ones half the steps dt plans plus FAIL_ALLOWANCE."""
-
-    def __init__(self, dt: float, t0: float, t_end: float):
-        self.dt, self.t0, self.t_end = dt, t0, t_end
-        self.quantum = dt / 2**MAX_CUTS  # every step is a multiple of it (but one at t_end)
-        self.h = dt  # the next step's length
-        self.good = 0  # steps accepted since the last change of h
-        self.planned = max(1, math.ceil((t_end - t0) / dt - 1e-9))
-        self.budget = SLOWDOWN * self.planned + ALLOWANCE
-        self.fail_budget = self.planned // 2 + FAIL_ALLOWANCE
-        self.tries = 0  # steps tried, accepted or failed
-        self.fails = 0
-
-    def step(self, t: float) -> float:
-        """The next step from t: h, cut short at t_end."""
-        return min(self.h, self.t_end - t)
-
-    def failed(self, h_step: float) -> bool:
-        """A step of ``h_step`` failed: the next try has half its length. False when that
-        is below the smallest step (the run fails)."""
-        self.h = 0.5 * h_step
-        self.good = 0
-        self.tries += 1
-        self.fails += 1
-        return not self.h < self.dt / 2**MAX_CUTS
-
-    def spent(self) -> bool:
-        """Whether the tries so far, or the failed ones, exceed the run's budget (the run
-        fails)."""
-        return self.tries > self.budget or self.fails > self.fail_budget
-
-    def spent_message(self, t: float) -> str:
-        """Why a run whose budget is spent stops at time t."""
-        mean = (t - self.t0) / max(1, self.tries - self.fails)
-        return (
-            f"dynamic run stopped at t = {t:.6g} s of solver.t_end = {self.t_end:g} s: "
-            f"{self.tries} steps tried ({self.fails} failed) where solver.dt = {self.dt:g} s "
-            f"plans {self.planned}; its steps stay about {self.dt / max(mean, self.quantum):.0f}x"
-            f" shorter than dt and would not finish in reasonable time (a model too stiff or"
-            f" too fast for this dt: try a smaller solver.dt, a larger solver.max_iter, or"
-            f" check the stiffness, masses and velocities); the last failed step"
-        )
-
-    def accepted(self) -> None:
-        """A step was accepted: after GROW_AFTER of them a shortened step doubles."""
-        self.tries += 1
-        self.good += 1
-        if self.h < self.dt and self.good >= GROW_AFTER:
-            self.h = min(self.dt, 2.0 * self.h)
-            self.good = 0
-
-    def advance(self, t: float, h_step: float) -> float:
-        """The time after the step of ``h_step`` from t."""
-        return _advance(t, h_step, self.t0, self.t_end, self.quantum)
-
-
-def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> float:
-    """t + h without accumulated round-off: t_end when the step ends there, else, for a
-    step of a whole number of quanta (every step but one cut short by t_end), the grid
-    point t0 + k quantum next to t + h."""
-    if h == t_end - t:
-        return t_end
-    if (h / quantum).is_integer():
-        return t0 + round((t + h - t0) / quantum) * quantum
-    return t + h
 
 
 def at_rest(system, potential, x, v, m_free, h, rtol) -> tuple[bool, float, float]:

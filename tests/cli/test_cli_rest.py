@@ -23,7 +23,9 @@ def without_t_end(text: str) -> str:
 
 
 def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(tmp_path, write_case):
-    # Newmark with rho_inf = 1 damps nothing: the net swings for ever
+    # Newmark with rho_inf = 1 damps nothing: the net swings for ever. (On this
+    # tension-only net at dt = 0.05 s it also gains energy at the slack-taut kink, which a
+    # run refuses by default: tests/solver/test_energy.py; here the check is off.)
     case = write_case(without_t_end(small_net(dt=0.05, damping=0.0)))
     out = tmp_path / "undamped.h5"
     r = invoke(
@@ -37,6 +39,8 @@ def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(tm
         "solver.rho_inf=1",
         "--set",
         "output.every=0",
+        "--set",
+        "solver.energy_tolerance=1e9",
     )
     assert r.exit_code == 0, r.output
     assert (

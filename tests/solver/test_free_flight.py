@@ -65,14 +65,20 @@ def test_a_free_net_and_a_free_box_keep_their_momentum():
     scale = float(np.linalg.norm(p0))
     assert max(float(np.abs(p - p0).max()) for p, _, _ in rows) < 1e-7 * scale
     # Angular momentum: newmark keeps it to a drift that falls with the step (the
-    # contact's impulse is not resolved by the step, so not at a clean order).
+    # contact's impulse is not resolved by the step, so not at a clean order). Newmark
+    # creates energy in this contact (8 % by t = 0.08 s at rho_inf = 0.9), which a run
+    # refuses by default (tests/solver/test_energy.py): the momenta are measured with
+    # that check off.
     m = scene.net.mass[:, None]
     scale = float(
         (m * np.linalg.norm(np.cross(scene.net.nodes, scene.velocity), axis=1)[:, None]).sum()
     )
     drifts = {}
     for dt in (0.004, 0.002):
-        _, _, L0, rows = run(thrown_net(dt=dt, integrator="newmark", rho_inf=0.9, t_end=0.12))
+        case = thrown_net(
+            dt=dt, integrator="newmark", rho_inf=0.9, t_end=0.12, energy_tolerance=1e9
+        )
+        _, _, L0, rows = run(case)
         drifts[dt] = max(float(np.linalg.norm(L - L0)) for _, L, _ in rows)
     assert drifts[0.004] < 2e-3 * scale and drifts[0.002] < 0.5 * drifts[0.004]
 

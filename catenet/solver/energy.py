@@ -1,0 +1,165 @@
+"""The energy balance of a dynamic run, step by step: what the net holds (kinetic,
+elastic, contact), what was put in (the work of loads, gravity and moving supports), what
+left it (damping and friction), and the remainder, which is the integrator's own:
+
+    numerical = (K + U + C) - (K + U + C)_0 - W + D
+
+K = 1/2 sum m v^2 over the free DOFs; U the edges' stretching energy; C every other
+conservative term's energy (barriers of obstacles, bodies and strands, springs, a free
+body's rigidity); W the work of the applied forces, sum over steps of
+1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
+move); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
+with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
+the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), and against
+friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force).
+
+Implicit Euler's remainder is never positive on a convex energy: the step adds
+-1/2 m |v_{n+1} - v_n|^2 to it (its numerical dissipation). An integrator whose
+remainder grows beyond ``tolerance`` x the largest energy seen creates energy: the run
+stops with EnergyError (exit 1), never ending as an answer. Where a term's energy
+depends on time by itself (an obstacle or a ball on a prescribed path) the balance is
+kept but not judged (``judged`` False): its work on the net is not counted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from catenet.errors import ConvergenceError
+
+COLUMNS = ("kinetic", "elastic", "contact", "external_work", "dissipated", "numerical")
+TOLERANCE = 1e-2  # solver.energy_tolerance's default: a share of the largest energy
+ROUNDOFF = 1e-9  # ... never below this share (the energies' own round-off, summed over steps)
+
+
+class EnergyError(ConvergenceError):
+    """A dynamic run whose energy balance shows the integrator creating energy."""
+
+
+class Ledger:
+    """The energy balance of one dynamic run (see the module docstring)."""
+
+    def __init__(self, tolerance: float = TOLERANCE):
+        self.tolerance = float(tolerance)
+        self.row = np.zeros(len(COLUMNS))
+        self.judged = True
+        self.largest = 0.0
+        self._start = 0.0
+        self._work = 0.0
+        self._dissipated = 0.0
+
+    # --- what the stepper calls ------------------------------------------------------
+    def begin(self, stepper) -> None:
+        """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
+        system = stepper.system
+        self._timed = bool(stepper.moving) or any(
+            type(t).__name__ == "Guide" for t in system.terms
+        )
+        self.judged = not self._timed
+        self._friction = [t for t in system.terms if t.lagged]
+        self._force = self._applied(stepper).copy()
+        self._reaction = self._support_force(stepper, stepper.x).copy()
+        k, u, c = self._held(stepper, stepper.x, stepper.v)
+        self._start = k + u + c
+        self._work = self._dissipated = 0.0
+        self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
+        self.largest = max(abs(k), abs(u), abs(c))
+
+    def step(self, stepper, x_old: np.ndarray, x_new: np.ndarray, v_new: np.ndarray, h: float):
+        """The accepted step from x_old to x_new (velocities v_new after it) of length h."""
+        net = stepper.net
+        dx = x_new - x_old
+        free = ~net.fixed
+        force = self._applied(stepper)
+        self._work += 0.5 * float(np.sum((self._force + force)[free] * dx[free]))
+        reaction = self._support_force(stepper, x_new)
+        fixed = net.fixed
+        self._work += 0.5 * float(np.sum((self._reaction + reaction)[fixed] * dx[fixed]))
+        self._force[:] = force
+        self._reaction[:] = reaction
+        flat = dx.reshape(-1)[stepper.free]
+        vel = v_new.reshape(-1)[stepper.free]
+        if stepper.scheme.name != "implicit_euler":  # the step's mean velocity
+            vel = 0.5 * (vel + stepper.v.reshape(-1)[stepper.free])
+        damping = stepper.damping * stepper.m_free * vel
+        self._dissipated += float(np.dot(damping, flat))
+        if self._friction:
+            g = np.zeros_like(x_new)
+            for term in self._friction:
+                term.gradient(x_new, g)
+            self._dissipated += float(np.sum(g[free] * dx[free]))
+        k, u, c = self._held(stepper, x_new, v_new)
+        remainder = k + u + c - self._start - self._work + self._dissipated
+        self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
+        self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
+
+    def check(self, t: float) -> None:
+        """EnergyError where the remainder shows energy created beyond the tolerance."""
+        if not self.judged:
+            return
+        remainder = float(self.row[-1])
+        allowed = max(self.tolerance, ROUNDOFF) * self.largest
+        if remainder > allowed and remainder > 0.0:
+            k, u, c, w, d, _ = self.row
+            raise EnergyError(
+                f"the integrator creates energy: by t = {t:.6g} s the net and bodies hold "
+                f"{k + u + c:.4g} J (kinetic {k:.4g}, elastic {u:.4g}, contact {c:.4g}) "
+                f"where the start's {self._start:.4g} J, the work of loads and supports "
+                f"({w:.4g} J) and the losses to damping and friction ({d:.4g} J) allow "
+                f"{k + u + c - remainder:.4g} J: {remainder:.4g} J appeared from nothing, "
+                f"more than solver.energy_tolerance = {self.tolerance:g} of the largest "
+                f"energy ({self.largest:.4g} J). Not an answer: use "
+                'solver.integrator = "implicit_euler", a smaller solver.dt, or a smaller '
+                "solver.rho_inf (<= 0.5 in contact)"
+            )
+
+    # --- the parts -------------------------------------------------------------------
+    def _applied(self, stepper) -> np.ndarray:
+        return np.asarray(stepper.potential.force, dtype=np.float64)
+
+    def _support_force(self, stepper, x: np.ndarray) -> np.ndarray:
+        """The force the supports exert on the net at x (0 at free nodes)."""
+        out = np.zeros_like(x)
+        fixed = stepper.net.fixed
+        if not np.any(fixed):
+            return out
+        _, grad = stepper.system.gradient(x)
+        out[fixed] = grad[fixed] - stepper.potential.force[fixed]
+        return out
+
+    def _held(self, stepper, x: np.ndarray, v: np.ndarray) -> tuple[float, float, float]:
+        """Kinetic, elastic and contact energy at (x, v)."""
+        vel = v.reshape(-1)[stepper.free]
+        kinetic = 0.5 * float(np.dot(stepper.m_free * vel, vel))
+        system = stepper.system
+        stretch = system.stretch
+        elastic = contact = 0.0
+        for term in system.terms:
+            if term.lagged:
+                continue
+            e = float(term.energy(x))
+            if term is stretch:
+                elastic += e
+            else:
+                contact += e
+        return kinetic, elastic, contact
+
+
+def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
+    """The balance's row of a start state (x, v): kinetic, elastic and contact energy,
+    nothing yet put in or taken out (the first frame of a dynamic run's file)."""
+    net = system.net
+    free = ~net.fixed
+    kinetic = 0.0
+    if v is not None:
+        kinetic = 0.5 * float(np.sum(net.mass[free] * np.sum(v[free] ** 2, axis=1)))
+    elastic = contact = 0.0
+    for term in system.terms:
+        if term.lagged:
+            continue
+        e = float(term.energy(x))
+        if term is system.stretch:
+            elastic += e
+        else:
+            contact += e
+    return np.array([kinetic, elastic, contact, 0.0, 0.0, 0.0])
