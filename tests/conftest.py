@@ -200,6 +200,44 @@ def pytest_configure(config):
     config.addinivalue_line(
         "markers", "slow: takes seconds (large nets, time stepping); still part of every run"
     )
+    config.addinivalue_line(
+        "markers",
+        "roundoff: a verdict on a degenerate model (a mechanism, an indefinite or singular "
+        "stiffness, a zero mode, a marginal contact); `make test` runs these once more with "
+        "CATENET_ROUNDOFF=1 (every built net's coordinates moved by 1e-12 of its size, and "
+        "two threads), so that a verdict that hangs on round-off fails here",
+    )
+    if os.environ.get("CATENET_ROUNDOFF"):
+        _perturb_every_scene()
+
+
+ROUNDOFF = 1e-12  # CATENET_ROUNDOFF: the relative move of every node of every built net
+ROUNDOFF_THREADS = 2  # ... and the threads every solve uses
+
+
+def _perturb_every_scene() -> None:
+    """The round-off pass (CATENET_ROUNDOFF=1): every scene built from a case has its
+    nodes (supports included) moved by ROUNDOFF of the net's size in a seeded random
+    direction, and every run uses ROUNDOFF_THREADS threads: a verdict that changes with
+    either was decided by round-off."""
+    import catenet.case as case_pkg
+    import catenet.case.scene as scene_mod
+    import catenet.solver.threads as threads_mod
+
+    build = scene_mod.build
+
+    def perturbed(case):
+        scene = build(case)
+        nodes = scene.net.nodes
+        size = float(np.max(np.ptp(nodes, axis=0))) if nodes.size else 1.0
+        rng = np.random.default_rng(12345)
+        nodes += ROUNDOFF * max(size, 1e-300) * rng.uniform(-1.0, 1.0, nodes.shape)
+        return scene
+
+    scene_mod.build = perturbed
+    case_pkg.build = perturbed
+    set_threads = threads_mod.set_threads
+    threads_mod.set_threads = lambda threads: set_threads(max(threads, ROUNDOFF_THREADS))
 
 
 # --- the examples in configs/, each run once per test session ------------------------------
