@@ -89,7 +89,32 @@ def read_restart(path: str | Path, scene) -> RestartState:
     from catenet.output.reader import read_peaks
 
     peaks = read_peaks(path, frame.t)
+    if peaks is not None and _relaxed(path):
+        log.info(
+            "%s: relaxed to rest (solver.t_end = 'rest': pseudo-time): its peaks are not "
+            "carried; the peaks count from this run's start at t = %.6g s",
+            label,
+            frame.t,
+        )
+        peaks = None
     return RestartState(path, frame.t, frame.x, frame.v, frame.source, a, peaks)
+
+
+def _relaxed(path: Path) -> bool:
+    """Whether the run that wrote ``path`` ran to rest (its case's solver.t_end = "rest"):
+    its time is pseudo-time, its peaks those of a relaxation, not of a physical motion."""
+    import tomllib
+
+    from catenet.output.reader import open_result
+
+    try:
+        with open_result(path) as h5:
+            text = h5.attrs.get("case", "")
+        text = text.decode() if isinstance(text, bytes) else str(text)
+        solver = tomllib.loads(text).get("solver", {})
+    except (OSError, ValueError, tomllib.TOMLDecodeError):
+        return False
+    return isinstance(solver, dict) and solver.get("t_end") == "rest"
 
 
 def _mesh_mismatch(mesh, net) -> list[str]:

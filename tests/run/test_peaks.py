@@ -108,3 +108,24 @@ def test_a_restart_goes_on_from_the_earlier_peaks(tmp_path):
     assert np.allclose(b["peak_tension"], a["peak_tension"], rtol=1e-9, atol=0)
     assert np.allclose(b["peak_tension_time"], a["peak_tension_time"], rtol=0, atol=1e-12)
     assert second.report.summary["peak_tension"] == pytest.approx(a["peak_tension"].max(), rel=1e-9)
+
+
+def test_a_restart_from_a_run_to_rest_counts_peaks_from_its_own_start(tmp_path):
+    """The documented way to start from equilibrium: the dropped cable relaxed to rest
+    (t_end = "rest": its overshoot is a pseudo-time transient), then restarted as a
+    physical run. The relaxation's peaks are not carried: the restarted run's peaks are
+    its own (no peak before its start, none above its own frames)."""
+    relax = dropped_cable(1)
+    relax["solver"]["t_end"] = "rest"
+    relax["solver"]["damping"] = 1.0
+    run_case(parse_case(relax), tmp_path / "rest.h5")
+    with h5py.File(tmp_path / "rest.h5") as h5:
+        t_rest = float(h5["result"].attrs["time"])
+        relax_peak = float(h5["result/peak_tension"][()].max())
+    go_on = dropped_cable(1, t_end=t_rest + 0.2)
+    run_case(parse_case(go_on), tmp_path / "on.h5", restart=tmp_path / "rest.h5")
+    b, _, tension_b, time_b, _, _ = read(tmp_path / "on.h5")
+    assert time_b[0] == pytest.approx(t_rest)
+    assert np.all(b["peak_tension_time"] >= t_rest)
+    assert np.allclose(b["peak_tension"], tension_b.max(axis=0), rtol=1e-12, atol=0)
+    assert relax_peak > b["peak_tension"].max()  # the relaxation's stays behind
