@@ -16,6 +16,7 @@ from catenet.case.keys import (
     MISSING,
     Checker,
     Context,
+    choice,
     declared,
     names,
     parse_table,
@@ -43,6 +44,9 @@ from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case
 from catenet.case.written import plain
 from catenet.errors import ConfigError
 
+#: The unit systems a case may name (top-level ``units``).
+UNITS = ("SI", "kN-m", "N-mm")
+
 #: The most time steps a dynamic run may be asked for (t_end / dt).
 MAX_TIME_STEPS = 1e8
 
@@ -52,6 +56,13 @@ class Case:
     """A validated case; ``source`` (the file it came from) is not compared."""
 
     title: str = text("", doc="free text")
+    units: str = choice(
+        "SI",
+        UNITS,
+        write="changed",
+        doc="the units the case's numbers are in: SI (N, m, Pa, kg), kN-m (kN, m, kPa, t) or "
+        "N-mm (N, mm, MPa, t); labels and plausibility ranges only, numbers stay as written",
+    )
     geometry: GeometryConfig
     material: MaterialConfig
     supports: SupportsConfig
@@ -72,6 +83,7 @@ class Case:
             load.pop("pressure")
         out = {
             "title": self.title,
+            "units": self.units,
             "geometry": self.geometry.to_dict(),
             "material": self.material.to_dict(),
             "supports": self.supports.to_dict(),
@@ -149,8 +161,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         raise ConfigError(f"{source}: the case must be a table of sections, not {show(data)}")
     ck.keys(data, "", TOP_KEYS)
 
-    (title_key,) = declared(Case)
+    title_key, units_key = declared(Case)
     title = value(ck, data, title_key, "", Context())
+    units = value(ck, data, units_key, "SI", Context())
 
     geometry, kind = _parse_geometry(ck, data, base_dir)
     ctx = Context(kind=kind)
@@ -223,6 +236,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     assert geometry is not None  # (else a problem says why)
     return Case(
         title=title,
+        units=units,
         geometry=geometry,
         material=material,
         supports=supports,

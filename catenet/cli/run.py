@@ -190,8 +190,9 @@ def command(
             failed = [r.name for r in result.cases if not r.converged]
             if failed:
                 click.echo(
-                    f"catenet: did not converge: load case {', '.join(failed)} (its last "
-                    "good state is in /cases/<name>, converged = false)",
+                    f"catenet: error: load case {', '.join(failed)} failed (did not "
+                    "converge, collapsed or implausible: its row above says which; its "
+                    "last good state is in /cases/<name>, converged = false)",
                     err=True,
                 )
                 code = EXIT_FAILED
@@ -245,6 +246,17 @@ def _timing(case) -> bool | str:
     return "rest" if case.solver.t_end == "rest" else True
 
 
+def _balance(row) -> str:
+    """The summary's line of a dynamic run's energy balance [J]."""
+    k, u, c, w, d, rest = (float(v) for v in row)
+    largest = max(abs(k), abs(u), abs(c), abs(w), 1e-300)
+    return (
+        f"{'energy':<12} kinetic {k:.4g} J, elastic {u:.4g} J, contact {c:.4g} J; work in "
+        f"{w:.4g} J, dissipated {d:.4g} J; numerical {rest:.3g} J ({rest / largest:+.2%} of "
+        "the largest: the integrator's own loss, /trajectory/energy)"
+    )
+
+
 def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import cases_table, envelope_lines, state_lines
     from catenet.run.advice import LARGE_BYTES, format_bytes, newmark_contact
@@ -254,6 +266,11 @@ def _summary(case, result, path: Path | None) -> None:
     warn = bool(s.strain_warning)
     state = "yes" if result.converged else "no"
     detail = result.message or ""
+    stability = getattr(result, "stability", "") or ""
+    if result.stable is False:  # an unstable equilibrium is no answer: never "yes"
+        state, detail = "no", "an unstable equilibrium"
+    elif stability == "post-collapse":
+        detail = f"{detail}; post-collapse: the path collapsed on its way here".lstrip("; ")
     if case.solver.method == "dynamic" and not result.equilibrium:
         advice = "raise solver.t_end"
         if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
@@ -272,6 +289,9 @@ def _summary(case, result, path: Path | None) -> None:
         *state_lines(numbers, _timing(case), len(result.tension), warn),
         _times(result),
     ]
+    energy = getattr(result, "energy", None)
+    if energy is not None:  # a dynamic run's balance (catenet.solver.energy)
+        lines.insert(-1, _balance(energy))
     for note in newmark_contact(case):  # the scheme's known failure in impacts
         lines.insert(-1, f"{'warning':<12} {note}")
     for k, b in s.bodies.items():  # free rigid bodies, one line each

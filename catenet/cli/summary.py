@@ -43,6 +43,13 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
         f"(node {probe}, {how}L = {s['size']:.6g} m; z-displacement, positive down)",
         f"{'probe':<{W}} node {probe} moves {vector(s['probe_displacement'])} m",
     ]
+    if "sag_normal" in s:  # a net that is one cable: its sag, as engineers measure it
+        vertical = s["sag_vertical"]
+        plumb = "" if vertical != vertical else f", {vertical:.6g} m vertical"
+        lines.append(
+            f"{'sag':<{W}} {s['sag_normal']:.6g} m normal to the chord{plumb} (largest at "
+            f"node {s['sag_node']}; the chord between the cable's ends in this state)"
+        )
     line = (
         f"{'max displ.':<{W}} {s['max_displacement']:.6g} m at node "
         f"{s['max_displacement_node']}: {vector(s['max_displacement_vector'])} m"
@@ -78,6 +85,8 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
         f"{'slack':<{W}} {s['slack_edges']} of {n_edges} edges (tension-only, shorter than "
         "their rest length)"
     )
+    if "applied_resultant" in s:  # beside the reactions: what they balance
+        lines.append(f"{'loads':<{W}} resultant {vector(s['applied_resultant'])} N (applied)")
     if s["max_reaction_node"] >= 0:
         lines.append(
             f"{'reactions':<{W}} resultant {vector(s['reaction_resultant'])} N; largest "

@@ -8,6 +8,8 @@ force (``catenet.kernels.stretch.stretch_tension``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from catenet.model.net import Net
@@ -112,3 +114,39 @@ def cable_stats(net: Net, x: np.ndarray, tension: np.ndarray, edge_cable: np.nda
     slack = np.bincount(c, weights=l0 * loose[on], minlength=n)
     total = np.bincount(c, weights=l0, minlength=n)
     return top, slack / np.where(total > 0, total, 1.0)
+
+
+def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None:
+    """The sag of a cable at x: the edges ``edges`` (indices; default every edge) must
+    form one chain between two end nodes. ``normal``: the largest distance of its nodes
+    from the chord between its ends (the sag normal to the chord); ``vertical``: the
+    largest drop of a node below the chord, measured vertically at the node's position
+    along the chord's plan (nan for a vertical chord); ``node`` where the normal sag is,
+    ``ends`` the chord's end nodes. None where the edges are not one chain."""
+    e = net.edges if edges is None else net.edges[np.asarray(edges, dtype=np.int64)]
+    if len(e) == 0:
+        return None
+    nodes, degree = np.unique(e, return_counts=True)
+    ends = nodes[degree == 1]
+    if ends.size != 2 or np.any(degree > 2) or len(nodes) != len(e) + 1:
+        return None
+    a, b = x[ends[0]], x[ends[1]]
+    chord = b - a
+    length = float(np.linalg.norm(chord))
+    if length == 0.0:
+        return None
+    p = x[nodes] - a
+    along = p @ chord / length
+    normal = np.linalg.norm(p - np.outer(along, chord / length), axis=1)
+    k = int(np.argmax(normal))
+    plan = chord[:2]
+    vertical = math.nan
+    if float(np.linalg.norm(plan)) > 1e-9 * length:
+        s = (p[:, :2] @ plan) / float(plan @ plan)
+        vertical = float(np.max(s * chord[2] - p[:, 2]))
+    return {
+        "normal": float(normal[k]),
+        "vertical": vertical,
+        "node": int(nodes[k]),
+        "ends": (int(ends[0]), int(ends[1])),
+    }

@@ -271,9 +271,12 @@ def probe_of(scene, x: np.ndarray) -> tuple[int, bool]:
     return int(scene.probe), False
 
 
-def summarize_result(scene, res) -> dict:
+def summarize_result(scene, res, loads=None) -> dict:
     """``summarize`` of a solver Result of a scene (net, probe, cables), with its peaks;
-    per cable under ``cables`` when the scene has cables."""
+    per cable under ``cables`` when the scene has cables. Also ``applied_resultant`` (3,)
+    [N]: the resultant of the loads acting in the state (``loads``, default the
+    scene's, at the result's load factor or time), and for a net that is one cable its
+    ``sag_normal``, ``sag_vertical`` [m] and ``sag_node`` (``catenet.model.measures.sag``)."""
     probe, auto = probe_of(scene, res.x)
     out = summarize(
         scene.net,
@@ -285,6 +288,12 @@ def summarize_result(scene, res) -> dict:
         probe_auto=auto,
         peaks=getattr(res, "peaks", None),
     )
+    out["applied_resultant"] = _applied(scene, res, loads)
+    chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
+    if chain is not None:
+        out["sag_normal"] = chain["normal"]
+        out["sag_vertical"] = chain["vertical"]
+        out["sag_node"] = chain["node"]
     cables = getattr(scene, "cables", None)
     if cables is not None:
         out["cables"] = cable_summary(
@@ -296,3 +305,21 @@ def summarize_result(scene, res) -> dict:
             peaks=getattr(res, "peaks", None),
         )
     return out
+
+
+def _applied(scene, res, loads=None) -> list[float]:
+    """The resultant of the applied loads in the state ``res`` [N] (a static state's at
+    its load factor, a dynamic one's at its time)."""
+    loads = scene.loads if loads is None else loads
+    net = scene.net
+    try:
+        if getattr(res, "v", None) is not None:
+            force = loads.external_force(net, time=float(res.time))
+        else:  # a run's load factor (a Python solve's 0: its full load; a failure's own)
+            factor = float(res.time)
+            if factor == 0.0 and getattr(res, "converged", True):
+                factor = 1.0
+            force = loads.external_force(net, factor)
+    except (TypeError, ValueError):
+        return [0.0, 0.0, 0.0]
+    return _vector(np.asarray(force, dtype=np.float64).sum(axis=0))

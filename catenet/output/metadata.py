@@ -76,7 +76,8 @@ def result_attrs(res, scene, tension=None) -> dict:
     timing = res.timing
     nested = getattr(res, "nested", None)
     return {
-        "converged": bool(res.converged),
+        # an unstable equilibrium is refused (exit 1): never converged in the file either
+        "converged": bool(res.converged) and getattr(res, "stable", None) is not False,
         "iterations": int(res.iterations),
         # a nested start's Newton iterations on the coarse net (0: none; not in iterations)
         "nested_iterations": 0 if nested is None else int(nested.iterations),
@@ -95,8 +96,34 @@ def result_attrs(res, scene, tension=None) -> dict:
         "max_strain": strain if math.isfinite(strain) else 0.0,
         # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
         "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
+        # stable | unstable | collapsed | post-collapse (catenet.solver.stability); a
+        # transient (a dynamic run that ran its time) is "not judged"
+        "stability": _stability(res),
+        # a dynamic run's energy balance at its end [J] (catenet.solver.energy.COLUMNS)
+        **_energy(res),
         # catenet run: seconds of the solve (the engine) and of the start-up before it
         # (imports, the case, the JIT cache); -1 where not measured
         "solve_time": -1.0 if timing is None else float(timing.solve),
         "startup_time": -1.0 if timing is None else float(timing.startup),
     }
+
+
+def _stability(res) -> str:
+    """The /result ``stability`` attr: the solve's verdict, else one from ``stable``."""
+    verdict = str(getattr(res, "stability", "") or "")
+    if verdict:
+        return verdict
+    stable = getattr(res, "stable", None)
+    if stable is False:
+        return "unstable"
+    return "stable" if getattr(res, "equilibrium", False) else "not judged"
+
+
+def _energy(res) -> dict:
+    """``energy_<column>`` attrs of a dynamic run's final balance [J] (none for static)."""
+    row = getattr(res, "energy", None)
+    if row is None:
+        return {}
+    from catenet.solver.energy import COLUMNS
+
+    return {f"energy_{name}": float(value) for name, value in zip(COLUMNS, row, strict=True)}

@@ -240,3 +240,185 @@ def strain_beyond_law(net, x: np.ndarray) -> str | None:
         f"strain {float(eps[worst]):.3g} at edge {worst} is beyond the material law's range: "
         f"{', '.join(parts)}: {advice}"
     )
+
+
+# Real cable materials in SI, with a margin: E from rubber cords (the paper's nets: 10 MPa)
+# through polyamide, polyester, aramid and HMPE ropes to steel strand and chain; density
+# from HMPE (970) to steel (7850); EA per edge from a thin elastic cord to a bridge's main
+# cable. A number outside is a unit slip far more often than a material.
+MATERIAL_RANGES = {
+    "E": (1e6, 3e11),
+    "density": (500.0, 9000.0),
+    "EA": (1.0, 1e12),
+    "area": (1e-9, 1.0),  # m^2: a 0.03 mm fibre to a 1.1 m bridge cable
+    "radius": (2e-5, 0.6),  # m
+}
+# What one unit of each quantity is in SI, per unit system (top-level ``units``).
+UNIT_FACTORS: dict[str, dict[str, float]] = {
+    "SI": {"E": 1.0, "density": 1.0, "EA": 1.0, "area": 1.0, "radius": 1.0},
+    "kN-m": {"E": 1e3, "density": 1e3, "EA": 1e3, "area": 1.0, "radius": 1.0},
+    "N-mm": {"E": 1e6, "density": 1e12, "EA": 1.0, "area": 1e-6, "radius": 1e-3},
+}
+# ... and the names of those units, as the case writes them
+UNIT_NAMES: dict[str, dict[str, str]] = {
+    "SI": {"E": "Pa", "density": "kg/m^3", "EA": "N", "area": "m^2", "radius": "m"},
+    "kN-m": {"E": "kPa", "density": "t/m^3", "EA": "kN", "area": "m^2", "radius": "m"},
+    "N-mm": {"E": "MPa", "density": "t/mm^3", "EA": "N", "area": "mm^2", "radius": "mm"},
+}
+
+
+def unit_slips(case, net) -> list[str]:
+    """Warnings for material numbers far outside real cable materials (steel, stainless,
+    aramid, polyester, polyamide, HMPE, chain) in the case's ``units``: E, density and
+    each edge's EA, each with the power of 1000 that would bring it into range."""
+    units = getattr(case, "units", "SI") or "SI"
+    factors = UNIT_FACTORS.get(units, UNIT_FACTORS["SI"])
+    names = UNIT_NAMES.get(units, UNIT_NAMES["SI"])
+    material = case.material
+    found = []
+    checks = [
+        ("E", getattr(material, "E", None), "material.E"),
+        ("area", getattr(material, "area", None), "material.area"),
+        ("radius", getattr(material, "radius", None), "material.radius"),
+    ]
+    density = getattr(material, "density", None)
+    if density:
+        checks.append(("density", density, "material.density"))
+    ea = np.asarray(net.EA, dtype=np.float64)
+    if ea.size and getattr(material, "E", None) is None:  # E's own check says it else
+        checks.append(("EA", float(np.min(ea)), "EA (the least of the edges')"))
+        checks.append(("EA", float(np.max(ea)), "EA (the largest of the edges')"))
+    for quantity, written, key in checks:
+        if written is None or not written > 0:
+            continue
+        low, high = MATERIAL_RANGES[quantity]
+        si = float(written) * factors[quantity]
+        if low <= si <= high:
+            continue
+        unit = names[quantity]
+        shift = _power_of_1000(si, low, high, TYPICAL[quantity])
+        guess = ""
+        if shift:
+            meant = float(written) * 10.0**shift
+            guess = f"; did you mean {meant:g} ({_si(meant * factors[quantity], quantity)})"
+        found.append(
+            f"check units: {key} = {float(written):g} {unit} ({units}) is far "
+            f"{'below' if si < low else 'above'} real cables ({low:g} to {high:g} "
+            f"{UNIT_NAMES['SI'][quantity]} in SI){guess}?"
+        )
+    return list(dict.fromkeys(found))
+
+
+def _si(value: float, quantity: str) -> str:
+    """A value in SI with a readable prefix (GPa for moduli)."""
+    if quantity == "E":
+        return f"{value / 1e9:g} GPa"
+    if quantity == "density":
+        return f"{value:g} kg/m^3"
+    if quantity == "area":
+        return f"{value * 1e6:g} mm^2"
+    if quantity == "radius":
+        return f"{value * 1e3:g} mm"
+    return f"{value / 1e3:g} kN"
+
+
+# the middle of each range, in SI
+TYPICAL = {"E": 1e11, "density": 2000.0, "EA": 1e6, "area": 1e-4, "radius": 5e-3}
+
+
+def _power_of_1000(si: float, low: float, high: float, typical: float) -> int:
+    """The exponent 3k (|k| <= 4) that brings ``si`` into [low, high], nearest to
+    ``typical`` on a log scale (0: none does)."""
+    fits = [e for k in range(1, 5) for e in (3 * k, -3 * k) if low <= si * 10.0**e <= high]
+    if not fits:
+        return 0
+    return min(fits, key=lambda e: abs(math.log10(si * 10.0**e / typical)))
+
+
+def implausible(net, x: np.ndarray, size: float) -> tuple[str, bool]:
+    """(message, extreme) for a state at ``x``: strains beyond the material law's range
+    or a displacement beyond the structure's size; ``extreme``: beyond 10x either, which
+    no cable structure survives (a unit slip, an unrestrained mechanism)."""
+    from catenet.model import measures
+
+    parts, extreme = [], False
+    beyond = strain_beyond_law(net, x)
+    if beyond:
+        parts.append(beyond)
+        eps = measures.strain(net, x)
+        extreme = bool(np.any(eps > 10.0 * net.law.max_strain()))
+    free = ~net.fixed
+    if np.any(free):
+        move = np.linalg.norm(x[free] - net.nodes[free], axis=1)
+        worst = float(move.max())
+        if worst > size > 0:
+            node = int(np.flatnonzero(free)[int(np.argmax(move))])
+            parts.append(
+                f"node {node} moves {worst:.4g} m, more than the structure's size {size:.4g} m"
+            )
+            extreme = extreme or worst > 10.0 * size
+    return "; ".join(parts), extreme
+
+
+def lines_without_catenary(case, scene) -> list[str]:
+    """Static runs: the cables (a graph's named cables, or a cable case's one) that lie
+    from a support on a frictionless plane (a seabed) to a support above it under
+    gravity, and whose unstretched length is at least the span along the plane plus the
+    height: no catenary holds such a line (it would hang straight down from the upper
+    support, its horizontal tension 0, the rest slack on the bed in no unique shape), so
+    no static equilibrium exists to find. One message per such cable."""
+    if case.solver.method != "static" or case.load.gravity is None:
+        return []
+    planes = [o for o in case.obstacles if o.kind == "plane" and not o.friction]
+    if not planes:
+        return []
+    net = scene.net
+    g = np.asarray(case.load.gravity, dtype=np.float64)
+    cables = getattr(scene, "cables", None)
+    if cables is not None:
+        chains = [(n, np.flatnonzero(cables.edge == k)) for k, n in enumerate(cables.names)]
+    else:
+        chains = [("the cable", np.arange(net.n_edges))]
+    out = []
+    for plane in planes:
+        normal = np.asarray(plane.normal, dtype=np.float64)
+        normal = normal / np.linalg.norm(normal)
+        if float(g @ normal) >= -0.5 * float(np.linalg.norm(g)):
+            continue  # gravity does not press the line onto this plane
+        for name, edges in chains:
+            found = _too_long(net, edges, plane, normal)
+            if found is not None:
+                length, span, height = found
+                out.append(
+                    f"cable {name}: its unstretched length {length:.6g} m is at least the span "
+                    f"along the seabed plus the height of its upper end ({span:.6g} + "
+                    f"{height:.6g} = {span + height:.6g} m): no catenary holds it (it would "
+                    "hang straight down with no horizontal tension and lie slack on the bed "
+                    "in no unique shape), so no static equilibrium exists: shorten the line, "
+                    "move the anchor away, or run it dynamically (solver.method = 'dynamic')"
+                )
+    return out
+
+
+def _too_long(net, edges: np.ndarray, plane, normal: np.ndarray):
+    """(length, span, height) of the chain ``edges`` between two supports, one on the
+    plane, when it is too long for a catenary; else None."""
+    from catenet.model.measures import sag
+
+    chain = sag(net, net.nodes, edges) if len(edges) else None
+    if chain is None:
+        return None
+    a, b = chain["ends"]
+    if not (net.fixed[a] and net.fixed[b]):
+        return None
+    point = np.asarray(plane.point, dtype=np.float64)
+    ha, hb = ((net.nodes[k] - point) @ normal for k in (a, b))
+    low, high = (a, b) if ha <= hb else (b, a)
+    reach = max(float(plane.distance or 0.0), 1e-9 * float(np.ptp(net.nodes)))
+    if min(ha, hb) > 10.0 * reach:
+        return None  # neither end rests on the bed
+    d = net.nodes[high] - net.nodes[low]
+    height = float(d @ normal)
+    span = float(np.linalg.norm(d - height * normal))
+    length = float(np.sum(net.rest_length[edges]))
+    return (length, span, height) if length >= span + height else None

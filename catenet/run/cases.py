@@ -65,10 +65,14 @@ def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRu
     the workspace ``ws``; a case that fails keeps its last good state and the others go on."""
     from catenet.model import summary
     from catenet.model.cases import Increment
+    from catenet.run.advice import implausible, unit_slips
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
+    from catenet.solver.stability import CollapseError
 
+    case = getattr(scene, "case", None)
+    slips = unit_slips(case, scene.net) if case is not None else []
     runs = []
     for c in cases:
         loads = Increment(base=scene.loads, added=c.force)
@@ -95,10 +99,20 @@ def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRu
                 time=0.0 if good is None else float(good.time),
                 message=str(exc),
                 outcome=Outcome.FAILED,
+                stability=exc.verdict if isinstance(exc, CollapseError) else "",
             )
             error = str(exc)
             log.error("%s %s: %s", _kind(c), c.name, exc)
-        runs.append(CaseRun(c.name, c.combination, r, summary.summarize_result(scene, r), error))
+        if r.converged and not error:  # strains and displacements a cable can have
+            what, extreme = implausible(scene.net, r.x, float(scene.size))
+            if what and slips:  # the likely cause, named with each case
+                what = f"{what}; {slips[0]}"
+            if what:
+                log.warning("%s %s: %s", _kind(c), c.name, what)
+            if extreme:
+                error = f"implausible (check units and supports): {what}"
+        numbers = summary.summarize_result(scene, r, loads)
+        runs.append(CaseRun(c.name, c.combination, r, numbers, error))
         if interrupt is not None and interrupt():  # a signal: the cases after it wait
             log.warning("interrupted: the load cases after %s are not solved", c.name)
             break
@@ -217,6 +231,9 @@ def solve_from_base(scene, settings, ws, result, cases, path, interrupt) -> tupl
     their summary numbers by name and the envelope (``governing``)."""
     if not result.converged:
         log.error("the base state did not converge: no load case is solved")
+        return {}, {}
+    if result.stable is False:
+        log.error("the base state is an unstable equilibrium: no load case is solved")
         return {}, {}
     result.cases = solve_cases(scene, settings, ws, result, cases, interrupt)
     numbers = {

@@ -119,6 +119,11 @@ def run_case(
             raise ConfigError(
                 f"--restart {restart}: is also the output file: give another one with -o"
             )
+    for slip in advice.unit_slips(case, scene.net):  # a material no cable is made of
+        log.warning("%s", slip)
+    hopeless = advice.lines_without_catenary(case, scene)
+    if hopeless:  # no static equilibrium to find: say so at once, not after minutes
+        raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
     for message in notes + advice.newmark_contact(case):
         log.warning("%s", message)

@@ -32,6 +32,7 @@ def run_steps(
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
+    from catenet.solver.stability import CollapseError
 
     dynamic = settings.method == "dynamic"
     total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
@@ -44,11 +45,11 @@ def run_steps(
 
         clock = Clock()
 
-    def keep(step, t, x, v, tension=None, force=False, a=None, last=False) -> None:
+    def keep(step, t, x, v, tension=None, force=False, a=None, last=False, energy=None):
         if (force or writer.wants(step)) and written["step"] != step:
             with clock.aside():  # writing is neither start-up nor solving
                 tension = ws.system.tension(x) if tension is None else tension
-                writer.frame(t, x, v, tension, a=a, last=last)
+                writer.frame(t, x, v, tension, a=a, last=last, energy=energy)
             written["step"] = step
 
     if dynamic:
@@ -67,21 +68,42 @@ def run_steps(
             a0 = start_acceleration(
                 scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
             )
-        keep(0, start.t, x0, v0, a=a0)
+        from catenet.solver.energy import held_energy
+
+        keep(0, start.t, x0, v0, a=a0, energy=held_energy(ws.system, x0, v0))
 
     def on_step(step: sv.Step) -> bool:
         watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
         # a static run's last load step: /result follows at once, written with it
-        keep(step.index, step.time, step.x, step.v, tension, force=last, a=step.a, last=last)
+        keep(
+            step.index,
+            step.time,
+            step.x,
+            step.v,
+            tension,
+            force=last,
+            a=step.a,
+            last=last,
+            energy=step.energy,
+        )
         if progress is not None:
             if dynamic:
                 progress(step.time, total, rest=step.rest)
             else:
                 progress(step.time, total)
         if stop is not None and stop():
-            keep(step.index, step.time, step.x, step.v, tension, force=dynamic, a=step.a)
+            keep(
+                step.index,
+                step.time,
+                step.x,
+                step.v,
+                tension,
+                force=dynamic,
+                a=step.a,
+                energy=step.energy,
+            )
             return True
         return False
 
@@ -129,6 +151,7 @@ def run_steps(
             stats=ws.stats(),
             timing=_timing(clock),
             peaks=peaks,
+            stability=exc.verdict if isinstance(exc, CollapseError) else "",
         )
         if stopped:  # within a step: like a stop between steps, not a failure
             log.info("interrupted during %s", "a time step" if dynamic else "a load step")

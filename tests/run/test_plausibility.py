@@ -1,0 +1,135 @@
+"""Unit slips and implausible states (``catenet.run.advice.unit_slips``, ``implausible``).
+
+A cable truss written in SI with one number in the wrong unit (E = 160 for 160 GPa, an
+area in mm^2, a kN-m case given N): the run names the key, the value, the range of real
+cable materials and the value it most likely meant; every load case whose state is
+beyond the material law's range (or moved beyond the structure's size) warns, naming
+the case and the unit slip, and beyond ten times either the case fails (exit 1).
+The bundled cases give no such warning.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+from click.testing import CliRunner
+
+from catenet.case import build, load_case, parse_case
+from catenet.cli import main
+from catenet.run.advice import unit_slips
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def truss(**material) -> dict:
+    """A 20 m prestressed steel cable (E 160 GPa, 10 mm radius) under its weight, with a
+    snow and a wind load case at its midpoint."""
+    return {
+        "title": "stay",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [20, 0, 0], "nodes": 11},
+        "material": {"E": 160e9, "radius": 0.01, "density": 7850.0, "prestress": 1e3, **material},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "load_case": [
+            {"name": "snow", "point": [{"node": "midpoint", "force": [0, 0, -500.0]}]},
+            {"name": "wind", "point": [{"node": "midpoint", "force": [0, 300.0, 0]}]},
+        ],
+    }
+
+
+def run(tmp_path, case: dict):
+    path = tmp_path / "case.toml"
+    path.write_bytes(tomli_w.dumps(case).encode())
+    return CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
+
+
+def test_a_modulus_in_the_wrong_unit_is_named_for_every_load_case(tmp_path):
+    r = run(tmp_path, truss(E=160.0))
+    assert r.exit_code == 1, r.output  # the cases' strains are beyond 10x the law's range
+    head = "check units: material.E = 160 Pa (SI) is far below real cables"
+    assert head in r.output and "did you mean 1.6e+11 (160 GPa)?" in r.output
+    for name in ("snow", "wind"):
+        assert f"load case {name}: strain" in r.output
+    assert r.output.count("check units: material.E") >= 3  # the run, and each case
+    assert "no: implausible" in r.output
+
+
+def test_the_same_truss_in_the_right_unit_says_nothing(tmp_path):
+    r = run(tmp_path, truss())
+    assert r.exit_code == 0, r.output
+    assert "check units" not in r.output and "beyond the material law" not in r.output
+
+
+@pytest.mark.parametrize(
+    "units, material, key, meant",
+    [
+        ("SI", {"radius": None, "area": 314.0}, "material.area = 314 m^2", "314 mm^2"),
+        ("SI", {"density": 7.85}, "material.density = 7.85 kg/m^3", "7850 kg/m^3"),
+        ("N-mm", {"E": 160e9}, "material.E = 1.6e+11 MPa (N-mm)", "160 GPa"),
+        ("kN-m", {"E": 160e9}, "material.E = 1.6e+11 kPa (kN-m)", "160 GPa"),
+    ],
+)
+def test_slips_in_each_unit_system_are_named_with_what_was_meant(units, material, key, meant):
+    case = truss(**material)
+    case["material"] = {k: v for k, v in case["material"].items() if v is not None}
+    case["units"] = units
+    case.pop("load_case")
+    parsed = parse_case(case)
+    slips = unit_slips(parsed, build(parsed).net)
+    assert any(key in s and f"({meant})?" in s for s in slips), slips
+
+
+def test_the_bundled_cases_have_no_unit_slip():
+    paths = sorted((ROOT / "configs").rglob("*.toml"))
+    paths.append(ROOT / "catenet" / "data" / "default.toml")
+    for path in paths:
+        case = load_case(path, ())
+        assert unit_slips(case, build(case).net) == [], path
+
+
+def test_a_drop_with_a_box_spun_beyond_its_step_is_not_an_answer(tmp_path):
+    """The drop of benchmarks/peers/mujoco_drop.toml with its box spun at 1e10 rad/s: the
+    steps converge only to the round-off of forces 1e12 times the loads (the spin's), so
+    no digit of the answer is sure: exit 1 saying so, the start kept (it used to end
+    "converged" with the box leaving at 18 m/s)."""
+    import tomllib
+
+    case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
+    case["obstacle"][0]["angular_velocity"] = [0.0, 0.0, 1e10]
+    r = run(tmp_path, case)
+    assert r.exit_code == 1, r.output
+    assert "the round-off of its forces" in r.output and "above the loads" in r.output
+    assert "converged    yes" not in r.output
+
+
+def mooring(prestrain: float) -> dict:
+    """The mooring line of docs/howto/mooring-line.md (anchor on the bed, fairlead 27 m
+    away and 8 m up), its rest length set by ``prestrain`` over the 28.16 m chord."""
+    return {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.005], [27.0, 0.0, 8.0]],
+            "fixed": [0, 1],
+            "edge_length": 0.5,
+            "prestrain": prestrain,
+            "cable": [{"name": "line", "nodes": [0, 1]}],
+        },
+        "material": {"EA": 1e6, "area": 1e-3, "density": 1019.4},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [{"kind": "plane", "distance": 0.01}],
+    }
+
+
+def test_a_mooring_line_too_long_for_a_catenary_is_named_at_once(tmp_path):
+    """36 m of line for a 27 m span and 8 m of height (27 + 7.995 = 34.995 m): it would
+    hang straight down and lie slack on the bed, H = 0, in no unique shape. The run says
+    so before solving (exit 2), where it used to fail after minutes advising a larger
+    solver.max_iter; the how-to's 30 m line runs."""
+    chord = float(np.hypot(27.0, 7.995))
+    r = run(tmp_path, mooring(chord / 36.0 - 1.0))
+    assert r.exit_code == 2, r.output
+    assert "cable line: its unstretched length 36 m is at least the span" in r.output
+    assert "no catenary holds it" in r.output and "max_iter" not in r.output
+    assert run(tmp_path, mooring(-0.061372)).exit_code == 0
