@@ -62,8 +62,9 @@ def case_input(rng, work: Path, cases, bases):
     fz.copy_beside(case, work)
     path = work / "case.toml"
     path.write_bytes(fz.render(data, rng))
-    command = "formfind" if "formfind" in data and rng.random() < 0.7 else "run"
-    return [command, path, "-o", work / "out.h5", "-q"], f"{case.name}: {what}"
+    command, *extra = fz.command_for(data, rng)
+    args = [command, path, "-o", work / "out.h5", *extra]
+    return [*args, "-q"], f"{case.name}: {what} ({command})"
 
 
 def net_input(rng, work: Path):

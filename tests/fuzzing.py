@@ -441,9 +441,27 @@ def nonfinite(path: Path) -> str:
     return ""
 
 
+SEEDS = Path(__file__).resolve().parent / "fuzz" / "cases"
+
+
 def example_cases() -> list[Path]:
-    """The bundled example cases (configs/), sweeps and form finding included."""
-    return sorted(CONFIGS.rglob("*.toml"))
+    """The bundled example cases (configs/), sweeps and form finding included, and the
+    fuzzing's own seeds (tests/fuzz/cases: a mechanism, a snap-through, load cases and
+    combinations with area loads, a run to rest)."""
+    return sorted(CONFIGS.rglob("*.toml")) + sorted(SEEDS.glob("*.toml"))
+
+
+def command_for(data: dict, rng) -> list[str]:
+    """The command a mutated case goes through: ``formfind`` for most form-finding cases,
+    ``modes`` for a quarter of the static ones (its equilibrium, then the modes), else
+    ``run``; the arguments after the case file (besides -o and -q)."""
+    if "formfind" in data and rng.random() < 0.7:
+        return ["formfind"]
+    solver = data.get("solver")
+    method = solver.get("method", "static") if isinstance(solver, dict) else "static"
+    if method == "static" and rng.random() < 0.25:
+        return ["modes", "--count", str(rng.choice([1, 3, 6]))]
+    return ["run"]
 
 
 def small(data: dict) -> dict:
@@ -458,7 +476,9 @@ def small(data: dict) -> dict:
     elif kind == "cable":
         geo["nodes"] = min(geo.get("nodes", 41), 41)
     solver = data.setdefault("solver", {})
-    if solver.get("method") == "dynamic":
+    if solver.get("method") == "dynamic" and solver.get("t_end") == "rest":
+        solver["max_steps"] = min(solver.get("max_steps", 400), 400)  # a run to rest
+    elif solver.get("method") == "dynamic":
         solver["t_end"] = min(solver.get("t_end", 0.3), 0.3)
         solver["dt"] = min(solver.get("dt", 0.01), solver["t_end"])
     else:

@@ -20,6 +20,7 @@ from fuzzing import (
     NET_CASE,
     NET_FILES,
     SWEEP_CASE,
+    command_for,
     copy_beside,
     example_cases,
     invoke,
@@ -67,8 +68,9 @@ def test_mutated_example_cases(tmp_path_factory, index, rng):
     work = _fresh(tmp_path_factory, case)
     path = work / "case.toml"
     path.write_bytes(render(data, rng))
-    command = "formfind" if "formfind" in data and rng.random() < 0.7 else "run"
-    result = invoke([command, path, "-o", work / "out.h5", "-q"], seconds=60, cwd=work)
+    command, *extra = command_for(data, rng)
+    args = [command, path, "-o", work / "out.h5", *extra]
+    result = invoke([*args, "-q"], seconds=60, cwd=work)
     _check(judge(result, work), f"{case.name}: {notes}")
 
 
