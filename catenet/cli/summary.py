@@ -50,9 +50,11 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
             f"{'sag':<{W}} {s['sag_normal']:.6g} m normal to the chord{plumb} (largest at "
             f"node {s['sag_node']}; the chord between the cable's ends in this state)"
         )
+    cable = s.get("max_displacement_cable")
     line = (
         f"{'max displ.':<{W}} {s['max_displacement']:.6g} m at node "
-        f"{s['max_displacement_node']}: {vector(s['max_displacement_vector'])} m"
+        f"{s['max_displacement_node']}{f' (cable {cable})' if cable else ''}: "
+        f"{vector(s['max_displacement_vector'])} m"
     )
     peak = s.get("peak_displacement")
     if peak is not None and _more(peak, s["max_displacement"]):

@@ -295,7 +295,8 @@ def summarize_result(scene, res, loads=None) -> dict:
         out["sag_vertical"] = chain["vertical"]
         out["sag_node"] = chain["node"]
     cables = getattr(scene, "cables", None)
-    if cables is not None:
+    if cables is not None:  # which cable the largest displacement belongs to
+        out["max_displacement_cable"] = _cable_of(scene.net, cables, out["max_displacement_node"])
         out["cables"] = cable_summary(
             scene.net,
             res.x,
@@ -323,3 +324,12 @@ def _applied(scene, res, loads=None) -> list[float]:
     except (TypeError, ValueError):
         return [0.0, 0.0, 0.0]
     return _vector(np.asarray(force, dtype=np.float64).sum(axis=0))
+
+
+def _cable_of(net: Net, cables, node: int) -> str:
+    """The name of a cable with an edge at ``node`` ("" for none)."""
+    if node < 0:
+        return ""
+    at = np.flatnonzero((net.edges == node).any(axis=1))
+    named = [int(c) for c in np.asarray(cables.edge)[at] if c >= 0]
+    return str(cables.names[min(named)]) if named else ""
