@@ -150,7 +150,7 @@ def _unstable_start(judge: PathJudge, loads: Loads, r: Result, why: str) -> Resu
     itself, an unstable equilibrium (``stable`` False), wherever Newton went from it (a
     round-off's push decides that, differently on each processor)."""
     ws = judge.ws
-    x = judge.start_x
+    x = judge.start_x if judge.start_x is not None else r.x
     g = ws.potential(loads, 1.0).evaluate(x).gnorm
     out = finish(
         ws.system,
