@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 ARMIJO = 1e-4
 MAX_HALVINGS = 30
 MAX_EXPANSIONS = 12
+REACH = 4.5  # the step cap is first sought up to this multiple of the Newton step
 WOLFE = 0.9  # curvature condition: |slope at the step| <= 0.9 |slope at 0|
 
 
@@ -85,10 +86,16 @@ class LineSearch:
         self.y_trial = y_trial
         self.free = potential.system.free_dofs
         self.y0 = x.reshape(-1)[self.free].copy()
-        self.cap = potential.max_step(x, dy)  # steps this long or longer touch an obstacle
+        # steps this long or longer touch an obstacle, known up to ``reach`` (a step the
+        # lengthening takes beyond it asks again: the search grows with the distance)
+        self.reach = REACH
+        self.cap = potential.max_step(x, dy, self.reach)
+        self._x0: np.ndarray | None = None
 
     def at(self, alpha: float) -> Trial:
         """Phi at y0 + alpha dy (x is left there)."""
+        if alpha >= self.reach and math.isinf(self.cap):
+            self._look_farther(alpha)
         if alpha >= self.cap:
             return Trial(alpha, None, math.inf, False)
         np.add(self.y0, alpha * self.dy, out=self.y_trial)
@@ -104,6 +111,13 @@ class LineSearch:
                 ev.gnorm <= (1.0 - ARMIJO * alpha) * start.gnorm or ev.gnorm <= self.tol
             )
         return Trial(alpha, ev.kept(), d, ok)
+
+    def _look_farther(self, alpha: float) -> None:
+        """The step cap known up to 4 alpha (the next lengthening's step), from x at y0."""
+        self.reach = 4.0 * alpha
+        x = self.x.copy()
+        x.reshape(-1)[self.free] = self.y0
+        self.cap = self.potential.max_step(x, self.dy, self.reach)
 
     def flat(self, d: float) -> bool:
         return abs(d) <= WOLFE * abs(self.slope)

@@ -400,7 +400,7 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
         dy = potential.solver.solve(-g)
     except SingularSystemError:
         return None
-    if potential.max_step(x, dy) <= 1.0:
+    if potential.max_step(x, dy, 2.0) <= 1.0:
         return None  # the full step would touch an obstacle
     xf[free] = y0 + dy
     new = potential.evaluate(x).gnorm

@@ -91,13 +91,18 @@ class Potential:
     def free(self, x: np.ndarray) -> np.ndarray:
         return x.reshape(-1)[self.system.free_dofs]
 
-    def max_step(self, x: np.ndarray, dy: np.ndarray) -> float:
+    def max_step(self, x: np.ndarray, dy: np.ndarray, upto: float = math.inf) -> float:
         """The largest multiple of the step dy (free DOFs) from x that keeps every node
-        outside every obstacle (inf when there are none)."""
+        outside every obstacle (inf when there are none); ``upto``: no multiple beyond it
+        is asked for, so terms whose search grows with the distance (``horizon``) stop
+        there (inf: no contact up to ``upto``)."""
         if not self._limits:
             return math.inf
         self._dx.reshape(-1)[self.system.free_dofs] = dy
-        return min(t.max_step(x, self._dx) for t in self._limits)
+        return min(
+            t.max_step(x, self._dx, upto) if t.horizon else t.max_step(x, self._dx)
+            for t in self._limits
+        )
 
     def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
         """``target`` if the straight path of the free nodes from x to it keeps every node
@@ -106,7 +111,7 @@ class Potential:
         if not self._limits:
             return target
         dx = target - x
-        t = min(o.max_step(x, dx) for o in self._limits)
+        t = min(o.max_step(x, dx, 2.0) if o.horizon else o.max_step(x, dx) for o in self._limits)
         if t > 1.0:
             return target
         out = target.copy()

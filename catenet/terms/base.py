@@ -88,6 +88,7 @@ class Term:
     role = "internal"
     bounds_step = False  # has max_step(x, dx)
     lagged = False  # has relag(x)
+    horizon = False  # max_step(x, dx, upto) looks no farther than upto (its cost grows)
     moving = False  # has set_pose(t)
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
@@ -135,7 +136,9 @@ class Term:
 
     def max_step(self, x: np.ndarray, dx: np.ndarray) -> float:
         """(``bounds_step`` terms) The largest multiple of the step dx from x that keeps
-        every node outside; inf when it never touches."""
+        every node outside; inf when it never touches. A term with ``horizon`` True
+        takes a third argument, ``upto``: it need not look beyond that multiple (inf
+        then means no contact up to it)."""
         return math.inf
 
     def relag(self, x: np.ndarray) -> float:

@@ -165,7 +165,9 @@ class BodyContact(Term):
         return s
 
     # ---- the step cap -----------------------------------------------------------------
-    def max_step(self, x, dx):
+    horizon = True  # its search walks the step in pieces: as far as asked, no farther
+
+    def max_step(self, x, dx, upto: float = T_FAR):
         c, A, U = self._local(x)
         X0 = self._buf[self.nodes].copy()
         dc, dA = self.frame.state(dx)
@@ -174,7 +176,7 @@ class BodyContact(Term):
         W = dU @ dA
         if not (np.any(V) or np.any(W)):
             return math.inf
-        return self._advance(X0, V, W, self._floor(X0, U))
+        return self._advance(X0, V, W, self._floor(X0, U), min(float(upto), T_FAR))
 
     def _floor(self, X0, U) -> float:
         """The nearest a node may come to the shape along a step from X0 (module
@@ -186,12 +188,13 @@ class BodyContact(Term):
         floor = max(FLOOR_SHARE * self.dhat, ROUNDOFF * EPS * scale)
         return min(floor, (1.0 - SLACK) * gap) if gap > 0.0 else 0.0
 
-    def _advance(self, X0, V, W, floor: float = 0.0) -> float:
+    def _advance(self, X0, V, W, floor: float = 0.0, far: float = T_FAR) -> float:
         """The first contact along the quadratic paths X0 + t V + t^2 W (module
         docstring) with the shape grown by ``floor``: over pieces [t, t + h] (the step
         [0, 1], then doubling t) whose chords stay within |W| h^2 / 4 <= delta of the
         paths, each chord's exact first contact with the shape grown by that deviation
-        too, a contact no later than the true one (exact where W = 0)."""
+        too, a contact no later than the true one (exact where W = 0); inf where none
+        comes before ``far`` (the line search asks again to look farther)."""
         w = float(np.linalg.norm(W, axis=1).max())
         t = 0.0
         for _ in range(CA_ITER):
@@ -201,7 +204,7 @@ class BodyContact(Term):
             delta = min(CA_SHARE * (float(gap.min()) - floor), 0.5 * self.dhat)
             if not delta > 0.0:  # a node at the floor already (round-off of a body turning
                 return t  # at an extreme rate, or NaN): no further advance is safe
-            h = min(max(1.0, t), T_FAR - t)  # pieces of the step, then doubling
+            h = min(max(1.0, t), far - t)  # pieces of the step, then doubling
             if w > 0.0:
                 h = min(h, 2.0 * math.sqrt(delta / w))
             chord = h * V + (2.0 * t * h + h * h) * W  # X(t + h) - X(t)
@@ -209,7 +212,7 @@ class BodyContact(Term):
             if s <= 1.0:
                 return t + s * h
             t += h
-            if t >= T_FAR:
+            if t >= far:
                 return math.inf
         return t  # still short of a contact: capped where the pieces got
 
