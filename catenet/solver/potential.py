@@ -99,10 +99,7 @@ class Potential:
         if not self._limits:
             return math.inf
         self._dx.reshape(-1)[self.system.free_dofs] = dy
-        return min(
-            t.max_step(x, self._dx, upto) if t.horizon else t.max_step(x, self._dx)
-            for t in self._limits
-        )
+        return min(t.max_step_within(x, self._dx, upto) for t in self._limits)
 
     def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
         """``target`` if the straight path of the free nodes from x to it keeps every node
@@ -111,7 +108,7 @@ class Potential:
         if not self._limits:
             return target
         dx = target - x
-        t = min(o.max_step(x, dx, 2.0) if o.horizon else o.max_step(x, dx) for o in self._limits)
+        t = min(o.max_step_within(x, dx, 2.0) for o in self._limits)
         if t > 1.0:
             return target
         out = target.copy()

@@ -136,10 +136,14 @@ class Term:
 
     def max_step(self, x: np.ndarray, dx: np.ndarray) -> float:
         """(``bounds_step`` terms) The largest multiple of the step dx from x that keeps
-        every node outside; inf when it never touches. A term with ``horizon`` True
-        takes a third argument, ``upto``: it need not look beyond that multiple (inf
-        then means no contact up to it)."""
+        every node outside; inf when it never touches."""
         return math.inf
+
+    def max_step_within(self, x: np.ndarray, dx: np.ndarray, upto: float) -> float:
+        """``max_step`` where no multiple beyond ``upto`` is asked for: a term whose
+        search grows with the distance (``horizon``) stops there (inf then means no
+        contact up to ``upto``); the others give their ``max_step``."""
+        return self.max_step(x, dx)
 
     def relag(self, x: np.ndarray) -> float:
         """(``lagged`` terms) Updates the lagged quantities at the equilibrium x; returns

@@ -167,7 +167,10 @@ class BodyContact(Term):
     # ---- the step cap -----------------------------------------------------------------
     horizon = True  # its search walks the step in pieces: as far as asked, no farther
 
-    def max_step(self, x, dx, upto: float = T_FAR):
+    def max_step(self, x, dx):
+        return self.max_step_within(x, dx, T_FAR)
+
+    def max_step_within(self, x, dx, upto: float) -> float:
         c, A, U = self._local(x)
         X0 = self._buf[self.nodes].copy()
         dc, dA = self.frame.state(dx)

@@ -41,7 +41,7 @@ def test_a_body_contacts_cap_up_to_a_reach_is_the_full_one_below_it():
         dx[~scene.net.fixed] = rng.normal(0.0, 0.05, (int((~scene.net.fixed).sum()), 3))
         full = contact.max_step(x, dx)
         for upto in (2.0, 4.0, 64.0):
-            near = contact.max_step(x, dx, upto)
+            near = contact.max_step_within(x, dx, upto)
             if full < upto:
                 assert near == full
             else:
