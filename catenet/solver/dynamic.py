@@ -379,13 +379,13 @@ class TimeStepper:
         """The converged step becomes the state (Eq. 10c for implicit Euler)."""
         self.fresh = False
         loads = self.potential.f_norm
-        if 0.0 < loads < newton.tolerance:  # the step's digits are its forces' round-off
+        if 0.0 < loads < newton.residual:  # what the step leaves is its forces' round-off
             raise ConvergenceError(
-                f"the time step to t = {self.t + h_step:.6g} s is held only to "
-                f"{newton.tolerance:.3g} N, the round-off of its forces (a motion far faster "
-                f"than the step: a body spun beyond what dt resolves), above the loads "
-                f"({loads:.3g} N): no digit of this answer is sure; use a smaller solver.dt "
-                "or check the initial velocities and angular velocities",
+                f"the time step to t = {self.t + h_step:.6g} s ends with a force imbalance "
+                f"of {newton.residual:.3g} N, the round-off of its forces (a motion far "
+                f"faster than the step: a body spun beyond what dt resolves), above the "
+                f"loads ({loads:.3g} N): no digit of this answer is sure; use a smaller "
+                "solver.dt or check the initial velocities and angular velocities",
                 iterations=self.iterations,
                 state=self.x.copy(),
             )

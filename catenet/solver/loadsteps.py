@@ -174,21 +174,20 @@ def _unstable_start(judge: PathJudge, loads: Loads, r: Result, why: str) -> Resu
 
 def _follow(judge, net, loads, x0, f0, f1, r, last, settings, depth):
     """(why, load factor, last stable state, result) of the step from x0 at f0 to r at
-    f1, halving a step that does not come back when unloaded (see ``_judged``); why is
-    "" where the path holds."""
+    f1, halving a step that loses stability (an unstable end, a member that fell, no way
+    back when unloaded) to bracket where (see ``_judged``); why is "" where the path
+    holds."""
     why = judge.step(x0, f0, f1, r.x, last)
     if why and judge.start_unstable:
         return why, 0.0, judge.start_x, r
-    if why or not judge.reversible_from(x0):
-        return why, f0, x0, r
-    try:
-        back = solve_static(net, loads, x0=r.x, factor=f0, accepted=r.x, **settings).x
-    except ConvergenceError:
-        back = r.x  # no way back found: judged as not coming back
-    if judge.returns(x0, back, r.x):
-        return "", f0, x0, r
-    why = judge.why_jump(f0, f1, x0, back)
-    if depth >= REFINE:
+    if not why and judge.reversible_from(x0):
+        try:
+            back = solve_static(net, loads, x0=r.x, factor=f0, accepted=r.x, **settings).x
+        except ConvergenceError:
+            back = r.x  # no way back found: judged as not coming back
+        if not judge.returns(x0, back, r.x):
+            why = judge.why_jump(f0, f1, x0, back)
+    if not why or depth >= REFINE:  # held, or bracketed to 1/2**REFINE of the step
         return why, f0, x0, r
     mid = 0.5 * (f0 + f1)
     try:

@@ -27,8 +27,8 @@ not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continu
    no edge in tension balancing it: a bilateral cable given on its chord with slack) and
    the path ends at a stable state with every bilateral edge in tension (the cable sagged
    into its catenary); struts prestressed against guys that fold into tension collapsed;
-2. a load step ends at an unstable equilibrium: a collapse at that factor (the last step:
-   the path ends unstable);
+2. a load step ends at an unstable equilibrium: a collapse beyond the step's start (the
+   last step too: wherever round-off lets Newton go from there, the verdict is the same);
 3. a load step from a stable state is not reversible: unloaded back to its start's load
    factor, the net does not come back (within ``RETURN`` of the step's move): the step is
    halved, down to 1/2**``REFINE``, and a step that stays irreversible as it shrinks
@@ -217,9 +217,7 @@ class PathJudge:
         if not self.loaded:
             return ""  # unloaded from a stable start: the end's own verdict
         t1 = self.tangent(x1)
-        if t1.verdict == UNSTABLE:
-            if last:
-                return ""  # an unstable end: the run's own verdict says so
+        if t1.verdict == UNSTABLE:  # from a stable start: it lost its stability on the way
             return f"the equilibrium at load factor {f1:.6g} is unstable"
         turned = self._turned(prev, x1)
         if turned.size:

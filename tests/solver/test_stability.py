@@ -250,3 +250,82 @@ def test_the_verdict_of_small_and_large_systems_agrees(monkeypatch):
         assert dense == verdict
         if getattr(ws.solver, "mtype", None) == -2:
             assert sparse == verdict
+
+
+def strut_net(split: bool, load: float, units: str = "SI") -> dict:
+    """Two prestressed cables (EA 1e6 N, 1 kN) crossing at a centre 2 m up, the centre held
+    up by a bilateral strut (EA 1e8 N) from the ground: one edge, or two with a free joint
+    between them (nothing holds the joint sideways); a load down on the centre."""
+    m, n = UNITS[units]
+    nodes = [[0, 0, 2], [-2, 0, 2], [2, 0, 2], [0, -2, 2], [0, 2, 2], [0, 0, 0]]
+    edges = [[0, 1], [0, 2], [0, 3], [0, 4]]
+    strut = [[5, 6], [6, 0]] if split else [[5, 0]]
+    if split:
+        nodes.append([0, 0, 1])
+    return {
+        "title": "net on a strut",
+        "units": units,
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[c * m for c in p] for p in nodes],
+            "edges": edges + strut,
+            "fixed": [1, 2, 3, 4, 5],
+            "EA": [1e6 * n] * 4 + [1e8 * n] * len(strut),
+            "tension_only": [True] * 4 + [False] * len(strut),
+            "prestress": [1e3 * n] * 4 + [-1.0 * n] * len(strut),
+        },
+        "material": {"EA": 1e6 * n},
+        "load": {"point": [{"node": 0, "force": [0.0, 0.0, -load * n]}]},
+    }
+
+
+@pytest.mark.parametrize("units", list(UNITS))
+def test_a_net_held_up_by_a_strut_stands_on_one_edge_and_folds_on_two(tmp_path, units):
+    for load in (0.0, 100.0, 1e4):
+        out = tmp_path / "one.h5"
+        r = invoke("run", write(tmp_path, strut_net(False, load, units)), "-o", out, "-q")
+        assert r.exit_code == 0, r.output
+        assert stability(out) == "stable"
+        out = tmp_path / "two.h5"
+        r = invoke("run", write(tmp_path, strut_net(True, load, units)), "-o", out, "-q")
+        assert r.exit_code == 1, r.output
+        assert "nodes 6" in r.output
+        assert stability(out) == ("unstable" if load == 0.0 else "collapsed")
+
+
+def slack_guys(load: float) -> dict:
+    """A 20 m one-edge mast (EA 1e6 N) held by three guys (EA 1e7 N, 100 N of prestress)
+    to anchors 10 m out, a vertical load on its top. The top's vertical stiffness is the
+    mast's 5e4 N/m and the guys' 1.07e6 N/m; the guys stretch 2.2e-4 m under their
+    prestress and lose it when the top has dropped by 2.5e-4 m: at about 280 N. Then
+    nothing holds the top sideways: the mast stands straight but unstable."""
+    anchors = [[10.0, 0.0, 0.0], [-5.0, 8.660254, 0.0], [-5.0, -8.660254, 0.0]]
+    guy = math.hypot(10.0, 20.0)
+    return {
+        "title": "mast whose guys go slack",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, 20.0], *anchors],
+            "edges": [[0, 1], [1, 2], [1, 3], [1, 4]],
+            "fixed": [0, 2, 3, 4],
+            "EA": [1e6, 1e7, 1e7, 1e7],
+            "tension_only": [False, True, True, True],
+            "prestress": [-3 * 100.0 * 20.0 / guy, 100.0, 100.0, 100.0],
+        },
+        "material": {"EA": 1e7},
+        "load": {"point": [{"node": 1, "force": [0.0, 0.0, -load]}]},
+    }
+
+
+def test_a_mast_whose_guys_go_slack_collapses_where_they_do(tmp_path):
+    out = tmp_path / "mast.h5"
+    r = invoke("run", write(tmp_path, slack_guys(100.0)), "-o", out, "-q")
+    assert r.exit_code == 0, r.output
+    assert stability(out) == "stable"
+    r = invoke("run", write(tmp_path, slack_guys(1e4)), "-o", out, "-q")
+    assert r.exit_code == 1, r.output
+    assert "is unstable" in r.output and "nodes 1" in r.output
+    assert stability(out) == "collapsed"
+    with h5py.File(out, "r") as f:  # the last stable state: bracketed below ~280 N
+        factor = float(f["result"].attrs["time"])
+    assert 150.0 <= factor * 1e4 <= 280.0
