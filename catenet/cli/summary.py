@@ -160,19 +160,22 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
     displacement and its node, the largest tension and its edge, the largest strut
     compression, the slack edges and the largest reaction, SI units."""
     head = (
-        f"{'load case':<16} {'max displ. [m]':>14} {'node':>6} {'max tension [N]':>15} "
-        f"{'edge':>6} {'compr. [N]':>11} {'slack':>6} {'max reaction [N]':>16}  converged"
+        f"{'load case':<16} {'loads [N]':>11} {'max displ. [m]':>14} {'node':>6} "
+        f"{'max tension [N]':>15} {'edge':>6} {'compr. [N]':>11} {'slack':>6} "
+        f"{'max reaction [N]':>16}  converged"
     )
     rows = [head]
     for name, s in cases.items():
+        applied = math.hypot(*s.get("applied_resultant", [0.0, 0.0, 0.0]))
         rows.append(
-            f"{name:<16} {s['max_displacement']:>14.6g} {s['max_displacement_node']:>6} "
-            f"{s['max_tension']:>15.6g} {s['max_tension_edge']:>6} "
-            f"{s['max_compression']:>11.6g} {s['slack_edges']:>6} {s['max_reaction']:>16.6g}  "
-            + ("yes" if s["converged"] else f"no: {s['error']}")
+            f"{name:<16} {applied:>11.6g} {s['max_displacement']:>14.6g} "
+            f"{s['max_displacement_node']:>6} {s['max_tension']:>15.6g} "
+            f"{s['max_tension_edge']:>6} {s['max_compression']:>11.6g} {s['slack_edges']:>6} "
+            f"{s['max_reaction']:>16.6g}  " + ("yes" if s["converged"] else f"no: {s['error']}")
         )
     rows.append(
-        f"{'':<16} (slack: edges of {n_edges}; each solved from the base state above; "
+        f"{'':<16} (loads: the resultant of each case's applied loads, the base state's "
+        f"included; slack: edges of {n_edges}; each solved from the base state above; "
         "results in /cases/<name>/, envelopes in /envelope/)"
     )
     return rows

@@ -422,3 +422,31 @@ def _too_long(net, edges: np.ndarray, plane, normal: np.ndarray):
     span = float(np.linalg.norm(d - height * normal))
     length = float(np.sum(net.rest_length[edges]))
     return (length, span, height) if length >= span + height else None
+
+
+def peak_strain_beyond_law(net, peaks, dynamic: bool) -> str | None:
+    """A message when an edge of the paper's linear law was strained beyond the law's
+    range at some step of the run (its peak tension / EA), although the final state may
+    not be (a rope in a drop test at 10 % for an instant); None otherwise."""
+    if peaks is None:
+        return None
+    from catenet.kernels.law_ids import LINEAR
+
+    arrays = peaks if isinstance(peaks, dict) else peaks.arrays()
+    tension = np.asarray(arrays["peak_tension"], dtype=np.float64)
+    linear = np.asarray(net.law.kind) == LINEAR
+    ea = np.asarray(net.EA, dtype=np.float64)
+    eps = np.where(linear & (ea > 0), tension / np.where(ea > 0, ea, 1.0), 0.0)
+    limit = net.law.max_strain()
+    over = eps > limit
+    if not np.any(over):
+        return None
+    worst = int(np.argmax(np.where(over, eps, -np.inf)))
+    when = float(np.asarray(arrays["peak_tension_time"])[worst])
+    at = f"t = {when:.6g} s" if dynamic else f"load factor {when:.6g}"
+    return (
+        f"peak strain {eps[worst]:.3g} at edge {worst} ({at}) is beyond the linear law's "
+        f"range (strains <= {float(limit[worst]):.3g}) on {int(np.count_nonzero(over))} edges "
+        "during the run, though not necessarily at its end: use a large-strain law "
+        "(material.law = 'neo_hookean'), a stiffer cable, or lower the load"
+    )

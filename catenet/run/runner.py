@@ -179,6 +179,11 @@ def run_case(
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
+    else:  # the peaks of the run: a rope strained beyond its law for an instant
+        dynamic = case.solver.method == "dynamic"
+        passed = advice.peak_strain_beyond_law(scene.net, result.peaks, dynamic)
+        if passed and not (dynamic and case.solver.t_end == "rest"):
+            log.warning("%s", passed)
     numbers = summary.summarize_result(scene, result)
     cables = getattr(scene, "cables", None)
     if result.stable is False:  # name the mechanism's nodes and cables

@@ -142,6 +142,11 @@ def _judged(judge, net, loads, good: LastGood, target: float, r: Result, last, s
         return _unstable_start(judge, loads, r, why)
     if why:
         _collapse(judge, why, at, LastGood(before, at), r.x)
+        # followed through (solver.post_collapse): on from where the bracket ended
+        # (Newton on the exact potential from there: no continuation stage moves it off)
+        r = solve_static(
+            net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings
+        )
     return r
 
 

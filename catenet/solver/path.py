@@ -227,7 +227,7 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
         return bool(on_step(Step(step, t, x, v, rest=last["rest"], a=a, energy=energy)))
 
     try:
-        return solve_dynamic(
+        result = solve_dynamic(
             net,
             loads,
             dt=settings.dt,
@@ -248,6 +248,8 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
             max_steps=settings.max_steps,
             ledger=ledger,
         )
+        _judge_rest(ws, result)
+        return result
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
             raise
@@ -287,3 +289,22 @@ def _nested(scene, settings: Settings, start: Start) -> tuple[np.ndarray, Nested
     spent = r.iterations + (r.nested.iterations if r.nested is not None else 0)
     took = time.perf_counter() - begin
     return x0, NestedStart(factor, free_dofs(coarse.net), spent, took)
+
+
+def _judge_rest(ws: Workspace, result: Result) -> None:
+    """A dynamic run that came to rest ends at a static equilibrium: its stability
+    verdict (``catenet.solver.stability``), as a static run's (a net with bilateral edges
+    may come to rest balanced on an unstable state); a transient is not judged."""
+    if not result.equilibrium:
+        return
+    net = ws.system.net
+    if net.bodies:
+        return  # free bodies at rest: catenet.solver.modal.stable_with_bodies's to judge
+    if net.law.all_tension_only:
+        result.stability = "stable"  # tension-only stiffness is never negative
+        return
+    from catenet.solver.stability import STABLE, UNSTABLE, tangent
+
+    verdict = tangent(ws.system, ws.solver, result.x).verdict
+    result.stable = True if verdict == STABLE else False if verdict == UNSTABLE else None
+    result.stability = "unstable" if verdict == UNSTABLE else "stable"

@@ -124,7 +124,7 @@ def test_one_case_alone_equals_it_among_all(tmp_path):
     )
     assert r.exit_code == 0, r.output
     assert "ULS_x" in r.output and "wind_y " not in r.output
-    assert "load case        max displ. [m]" in r.output
+    assert "load case          loads [N] max displ. [m]" in r.output
     r = CliRunner().invoke(
         main, ["run", str(_write(tmp_path, mast())), "--case", "snow", "-o", str(tmp_path / "d.h5")]
     )

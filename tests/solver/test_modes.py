@@ -328,6 +328,7 @@ def test_frequencies_do_not_depend_on_node_numbering(tmp_path):
     np.testing.assert_allclose(np.abs(b.shape[k][where]), np.abs(a.shape[k]), atol=1e-8)
 
 
+@pytest.mark.roundoff
 def test_node_on_slack_edges_is_named_not_returned():
     """A node held only by a slack edge has no stiffness: its three zero-frequency modes
     are left out and named, the taut part's modes are the string's."""
@@ -346,6 +347,7 @@ def test_node_on_slack_edges_is_named_not_returned():
         np.testing.assert_allclose(modes.frequency, f, rtol=1e-9)
 
 
+@pytest.mark.roundoff
 def test_part_joined_by_slack_edges_is_named():
     """A taut cable with a bilateral strut (at its rest length) hanging from it by a
     slack edge: the strut floats (only a slack edge joins it to the supports), its
@@ -410,6 +412,7 @@ def test_sagging_cable_converges_at_second_order():
     np.testing.assert_allclose(orders, 2.0, atol=0.1)
 
 
+@pytest.mark.roundoff
 def test_a_body_out_of_contact_is_named():
     """A rigid ball's centre (the net's last node, its mass a point mass) that touches
     nothing has no stiffness: three zero-frequency modes, named as the body's."""
