@@ -183,12 +183,20 @@ class PathJudge:
         self.guessed = False
         self.loaded = True
         self.start_x: np.ndarray | None = None
+        self._seen: list = []  # (x, Tangent) of the last two states judged
         self.collapsed: str = ""  # what happened, once a collapse was followed through
         self.collapse_factor = math.nan
 
     # --- what each state says ----------------------------------------------------------
     def tangent(self, x: np.ndarray) -> Tangent:
-        return tangent(self.ws.system, self.ws.solver, x)
+        """The tangent's verdict at x, kept for the last two states asked (a step's end is
+        the next step's start, and each is asked again by the unloading test)."""
+        for seen, verdict in self._seen:
+            if np.array_equal(seen, x):
+                return verdict
+        verdict = tangent(self.ws.system, self.ws.solver, x)
+        self._seen = [(np.array(x, copy=True), verdict), *self._seen[:1]]
+        return verdict
 
     def begin(self, x: np.ndarray, loaded: bool) -> None:
         """The path's start (supports in place, load factor 0)."""
