@@ -224,7 +224,6 @@ def _collapse(judge: PathJudge, why: str, at: float, good: LastGood, x1, exc=Non
     message = describe_collapse(judge, why, at, nodes)
     if judge.post_collapse and judge.loaded:
         judge.collapsed = message
-        judge.collapse_factor = at
         log.warning("%s", message.split(". ")[0] + ": followed through (solver.post_collapse)")
         return
     verdict = COLLAPSED if judge.loaded else UNSTABLE

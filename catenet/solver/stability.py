@@ -161,7 +161,7 @@ class PathJudge:
     (every call a no-op) for nets whose edges are all tension-only or that carry free
     bodies (``catenet.solver.modal.stable_with_bodies`` judges those)."""
 
-    def __init__(self, ws, loads, *, post_collapse: bool = False, size: float | None = None):
+    def __init__(self, ws, loads, *, post_collapse: bool = False):
         from catenet.solver.modal import body_frames
 
         self.ws = ws
@@ -178,14 +178,13 @@ class PathJudge:
         self.struts[self.net.edges[bilateral].ravel()] = True
         self.struts &= ~self.net.fixed
         extent = np.ptp(self.net.nodes, axis=0) if self.net.n_nodes else np.zeros(3)
-        self.size = float(size) if size else float(np.linalg.norm(extent)) or 1.0
+        self.size = float(np.linalg.norm(extent)) or 1.0
         self.start_unstable = False
         self.guessed = False
         self.loaded = True
         self.start_x: np.ndarray | None = None
         self._seen: list = []  # (x, Tangent) of the last two states judged
         self.collapsed: str = ""  # what happened, once a collapse was followed through
-        self.collapse_factor = math.nan
 
     # --- what each state says ----------------------------------------------------------
     def tangent(self, x: np.ndarray) -> Tangent:
