@@ -76,34 +76,19 @@ def run_steps(
         watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
-        # a static run's last load step: /result follows at once, written with it
-        keep(
-            step.index,
-            step.time,
-            step.x,
-            step.v,
-            tension,
-            force=last,
-            a=step.a,
-            last=last,
-            energy=step.energy,
-        )
+
+        def keep_step(force: bool, last: bool = False) -> None:
+            keep(step.index, step.time, step.x, step.v, tension, force=force, a=step.a,
+                 last=last, energy=step.energy)  # fmt: skip
+
+        keep_step(force=last, last=last)  # a static run's last step: /result follows at once
         if progress is not None:
             if dynamic:
                 progress(step.time, total, rest=step.rest)
             else:
                 progress(step.time, total)
         if stop is not None and stop():
-            keep(
-                step.index,
-                step.time,
-                step.x,
-                step.v,
-                tension,
-                force=dynamic,
-                a=step.a,
-                energy=step.energy,
-            )
+            keep_step(force=dynamic)
             return True
         return False
 
