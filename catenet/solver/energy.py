@@ -58,8 +58,8 @@ class Ledger:
         self.judged = not self._timed
         self._friction = [t for t in system.terms if t.lagged]
         self._force = self._applied(stepper).copy()
-        self._reaction = self._support_force(stepper, stepper.x).copy()
-        k, u, c = self._held(stepper, stepper.x, stepper.v)
+        k, u, c, reaction = self._state(stepper, stepper.x, stepper.v)
+        self._reaction = reaction
         self._start = k + u + c
         self._work = self._dissipated = 0.0
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
@@ -72,7 +72,7 @@ class Ledger:
         free = ~net.fixed
         force = self._applied(stepper)
         self._work += 0.5 * float(np.sum((self._force + force)[free] * dx[free]))
-        reaction = self._support_force(stepper, x_new)
+        k, u, c, reaction = self._state(stepper, x_new, v_new)
         fixed = net.fixed
         self._work += 0.5 * float(np.sum((self._reaction + reaction)[fixed] * dx[fixed]))
         self._force[:] = force
@@ -88,7 +88,6 @@ class Ledger:
             for term in self._friction:
                 term.gradient(x_new, g)
             self._dissipated += float(np.sum(g[free] * dx[free]))
-        k, u, c = self._held(stepper, x_new, v_new)
         remainder = k + u + c - self._start - self._work + self._dissipated
         self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
@@ -117,33 +116,17 @@ class Ledger:
     def _applied(self, stepper) -> np.ndarray:
         return np.asarray(stepper.potential.force, dtype=np.float64)
 
-    def _support_force(self, stepper, x: np.ndarray) -> np.ndarray:
-        """The force the supports exert on the net at x (0 at free nodes)."""
-        out = np.zeros_like(x)
-        fixed = stepper.net.fixed
-        if not np.any(fixed):
-            return out
-        _, grad = stepper.system.gradient(x)
-        out[fixed] = grad[fixed] - stepper.potential.force[fixed]
-        return out
-
-    def _held(self, stepper, x: np.ndarray, v: np.ndarray) -> tuple[float, float, float]:
-        """Kinetic, elastic and contact energy at (x, v)."""
+    def _state(self, stepper, x: np.ndarray, v: np.ndarray):
+        """Kinetic, elastic and contact energy at (x, v), and the force the supports
+        exert on the net there (0 at free nodes): one evaluation of the terms."""
         vel = v.reshape(-1)[stepper.free]
         kinetic = 0.5 * float(np.dot(stepper.m_free * vel, vel))
         system = stepper.system
-        stretch = system.stretch
-        elastic = contact = 0.0
-        for term in system.terms:
-            if term.lagged:
-                continue
-            e = float(term.energy(x))
-            if term is stretch:
-                elastic += e
-            else:
-                contact += e
-        return kinetic, elastic, contact
-
+        _, grad = system.gradient(x)
+        reaction = np.zeros_like(x)
+        fixed = stepper.net.fixed
+        reaction[fixed] = grad[fixed] - stepper.potential.force[fixed]
+        return (kinetic, *_stored(system), reaction)
 
 def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
     """The balance's row of a start state (x, v): kinetic, elastic and contact energy,
@@ -153,13 +136,19 @@ def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
     kinetic = 0.0
     if v is not None:
         kinetic = 0.5 * float(np.sum(net.mass[free] * np.sum(v[free] ** 2, axis=1)))
+    system.gradient(x)
+    return np.array([kinetic, *_stored(system), 0.0, 0.0, 0.0])
+
+
+def _stored(system) -> tuple[float, float]:
+    """(elastic, contact) energy of the system's last ``gradient`` evaluation: the edges'
+    stretching, and every other term's that is not lagged (friction dissipates)."""
     elastic = contact = 0.0
-    for term in system.terms:
+    for term, e in zip(system.terms, system.energies, strict=True):
         if term.lagged:
             continue
-        e = float(term.energy(x))
         if term is system.stretch:
-            elastic += e
+            elastic += float(e)
         else:
-            contact += e
-    return np.array([kinetic, elastic, contact, 0.0, 0.0, 0.0])
+            contact += float(e)
+    return elastic, contact
