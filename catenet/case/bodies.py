@@ -136,7 +136,7 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
     ConfigError for a ball that starts inside or on one of them."""
     from catenet.case.obstacles import DISTANCE_SHARE
     from catenet.terms.body import Ball
-    from catenet.terms.contact import Plane, Sphere, default_stiffness
+    from catenet.terms.contact import default_stiffness
 
     me = obstacles[k]
     out = []
@@ -155,14 +155,7 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
                 [nodes[i]], node, me.radius + other.radius, kappa=kappa, dhat=dhat,
                 n_nodes=net.n_nodes,
             )  # fmt: skip
-        elif other.kind == "plane":
-            normal = np.asarray(other.normal, dtype=np.float64)
-            normal = normal / np.linalg.norm(normal)
-            point = np.asarray(other.point) + me.radius * normal
-            term = Plane([node], point, normal, kappa=kappa, dhat=dhat)
-        elif other.kind == "sphere":
-            term = Sphere([node], other.center, other.radius + me.radius, kappa=kappa, dhat=dhat)
-        else:  # box, capsule, mesh: the centre against the shape grown by the radius
+        else:  # the centre against the shape grown by the radius
             term = other.term([node], kappa, dhat, offset=me.radius)
         gap = float(term.gap(net.nodes)[0])
         if not gap > 0.0:

@@ -39,6 +39,7 @@ from catenet.case.shapes import (
     BoxObstacle,
     CapsuleObstacle,
     MeshObstacle,
+    Shaped,
     _accuracy,
     _distance,
 )
@@ -49,7 +50,7 @@ STAGE_SHRINK = 10.0  # each continuation stage's barrier is this much narrower
 
 
 @dataclass(frozen=True)
-class PlaneObstacle(Declared):
+class PlaneObstacle(Shaped, Declared):
     """The half-space on the side of `normal`: a ground or seabed."""
 
     kind: str = choice("plane", ("plane",), doc="a half-space (ground, seabed)")
@@ -69,14 +70,9 @@ class PlaneObstacle(Declared):
         if not any(self.normal):
             ck.add(f"{path}.normal = {list(self.normal)}: must not be zero")
 
-    def term(self, nodes, kappa: float, dhat: float):
-        from catenet.terms.contact import Plane
-
-        return Plane(nodes, self.point, self.normal, kappa=kappa, dhat=dhat)
-
 
 @dataclass(frozen=True, kw_only=True)
-class SphereObstacle(FreeKeys, Declared):
+class SphereObstacle(Shaped, FreeKeys, Declared):
     """A ball: fixed, moving (`mass`; a path: `velocity`), or turning (`angular_velocity`)."""
 
     kind: str = choice("sphere", ("sphere",), doc="a ball")
@@ -145,11 +141,6 @@ class SphereObstacle(FreeKeys, Declared):
                 f"{path}.history: scales the velocity of a sphere on a prescribed path: "
                 "give velocity and no mass"
             )
-
-    def term(self, nodes, kappa: float, dhat: float):
-        from catenet.terms.contact import Sphere
-
-        return Sphere(nodes, self.center, self.radius, kappa=kappa, dhat=dhat)
 
 
 #: Obstacle kinds by name.

@@ -15,7 +15,6 @@ mesh's the world axes at t = 0; or 3 principal moments) is given.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -56,58 +55,10 @@ class FreeBody:
 def mass_properties(obs) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
     """(mass, centre of mass, inertia in the body axes, axes (columns)) of a free body
     table, uniform density unless ``mass``/``inertia`` say otherwise."""
-    volume, com, inertia_unit, axes = _shape(obs)  # inertia per unit mass
+    volume, com, inertia_unit, axes = obs.shape().mass_properties()  # inertia per unit mass
     mass = obs.mass if obs.mass is not None else obs.density * volume
     inertia = mass * inertia_unit if obs.inertia is None else np.array(obs.inertia, float)
     return float(mass), com, inertia, axes
-
-
-def _shape(obs):
-    """(volume, centre, inertia per unit mass in body axes, axes) of a shape."""
-    from catenet.terms.shapes import rotation
-
-    if obs.kind == "box":
-        h = np.asarray(obs.half_size, dtype=np.float64)
-        moments = np.array([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2])
-        axes = rotation(obs.axis, obs.angle)
-        return 8 * h.prod(), np.asarray(obs.center, float), np.diag(moments) / 3, axes
-    if obs.kind == "sphere":
-        r = obs.radius
-        ball = 0.4 * r * r * np.eye(3)
-        return 4 / 3 * math.pi * r**3, np.asarray(obs.center, float), ball, np.eye(3)
-    if obs.kind == "capsule":
-        return _capsule(obs)
-    return _mesh(obs)
-
-
-def _capsule(obs):
-    a, b, r = np.asarray(obs.start, float), np.asarray(obs.end, float), obs.radius
-    length = float(np.linalg.norm(b - a))
-    v_cyl, v_sph = math.pi * r * r * length, 4 / 3 * math.pi * r**3
-    volume = v_cyl + v_sph
-    mc, ms = v_cyl / volume, v_sph / volume  # per unit mass
-    axial = mc * r * r / 2 + ms * 0.4 * r * r
-    arm = length / 2 + 3 * r / 8  # each half ball's centre from the middle
-    side = mc * (r * r / 4 + length**2 / 12) + ms * (83 / 320 * r * r + arm**2)
-    z = (b - a) / length
-    helper = np.eye(3)[int(np.argmin(np.abs(z)))]
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    axes = np.column_stack([x, np.cross(z, x), z])
-    return volume, 0.5 * (a + b), np.diag([side, side, axial]), axes
-
-
-def _mesh(obs):
-    V, T = obs.surface()
-    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
-    vol = np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0  # signed tetrahedra from 0
-    volume = float(vol.sum())
-    com = (vol[:, None] * (a + b + c) / 4.0).sum(axis=0) / volume
-    s = a + b + c
-    outer = np.einsum("ki,kj->kij", a, a) + np.einsum("ki,kj->kij", b, b)
-    outer += np.einsum("ki,kj->kij", c, c) + np.einsum("ki,kj->kij", s, s)
-    J = (vol[:, None, None] * outer).sum(axis=0) / 20.0 / volume - np.outer(com, com)
-    return volume, com, np.trace(J) * np.eye(3) - J, np.eye(3)
 
 
 def add_free_bodies(case, net, loads, velocity, size: float):
@@ -239,7 +190,7 @@ def _check_resolved(path: str, obs, frame) -> None:
     far = float(np.max(np.abs(frame.center)))
     if far * np.finfo(float).eps <= RESOLVED * frame.reach:
         return
-    key = {"mesh": "offset", "capsule": "start"}.get(obs.kind, "center")
+    key = obs.shape().origin_key
     limit = RESOLVED * frame.reach / np.finfo(float).eps
     raise ConfigError(
         f"{path}.{key} = {show(list(getattr(obs, key)))}: a free body {far:.3g} m from the "
@@ -275,7 +226,7 @@ def _planes(case, body: FreeBody, net, dhat: float, load: float) -> list:
     from catenet.terms.contact import default_stiffness
 
     obs = case.obstacles[body.obstacle]
-    vertices, radius = _vertices(obs)
+    vertices, _, radius = obs.shape().outline()  # the shape lies within them grown by radius
     out = []
     for k, plane in enumerate(case.obstacles):
         if plane.kind != "plane":
@@ -299,19 +250,3 @@ def _planes(case, body: FreeBody, net, dhat: float, load: float) -> list:
             )
         out.append(term)
     return out
-
-
-def _vertices(obs) -> tuple[np.ndarray, float]:
-    """(V, 3) the points of a free body's shape at t = 0 nearest a plane, and the radius
-    they are grown by."""
-    if obs.kind == "sphere":
-        return np.asarray(obs.center, float)[None], float(obs.radius)
-    if obs.kind == "capsule":
-        return np.array([obs.start, obs.end], dtype=np.float64), float(obs.radius)
-    if obs.kind == "box":
-        from catenet.terms.shapes import rotation
-
-        signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)])
-        R = rotation(obs.axis, obs.angle)
-        return np.asarray(obs.center, float) + (signs * obs.half_size) @ R.T, 0.0
-    return np.asarray(obs.surface()[0], dtype=np.float64), 0.0

@@ -11,18 +11,18 @@ relative to its moving surface when it moves (``catenet.terms.friction``).
 from __future__ import annotations
 
 import dataclasses
-import functools
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from catenet.case.keys import MAGNITUDE, Checker, Declared, choice, real, text, vec3
-from catenet.case.meshfiles import read_mesh_file
+from catenet.case.keys import Checker, Declared, choice, real, text, vec3
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
+from catenet.scene.shapes.mesh import read_surface
+
+if TYPE_CHECKING:
+    from catenet.scene.shapes import Shape
 
 
 def _distance():
@@ -84,7 +84,21 @@ def _history():
     return history_key("moving box/capsule/mesh: velocities times factor(t) (dynamic runs)")
 
 
-class _Motion(FreeKeys):
+class Shaped:
+    """An ``[[obstacle]]`` table's shape (``catenet.scene.shapes``) and its barrier."""
+
+    def shape(self) -> Shape:
+        from catenet.scene.shapes import shape_of
+
+        return shape_of(vars(self))  # a dataclass's fields: the table's keys
+
+    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
+        (the shape grown by r)."""
+        return self.shape().barrier(nodes, kappa, dhat, offset)
+
+
+class _Motion(Shaped, FreeKeys):
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
     box, capsule or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
     ``density`` a free body instead (``catenet.case.rigid``)."""
@@ -106,17 +120,21 @@ class _Motion(FreeKeys):
                 "angular_velocity with it"
             )
 
-    def _moving(self, shape, origin, reach: float, offset: float = 0.0):
-        """``shape`` on the prescribed motion, if any; ``offset``: a ball's radius (the
-        shape grown by it, ``catenet.terms.collide``), which guards no supports."""
+    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+        """The barrier on ``nodes``, on the prescribed motion if any; ``offset`` r: on
+        the centres of balls of radius r (the shape grown by r,
+        ``catenet.terms.collide``), which guards no supports."""
+        shape = self.shape()
+        barrier = shape.barrier(nodes, kappa, dhat, offset)
         if not self.rigid_motion:
-            return shape
+            return barrier
         from catenet.model.histories import History
         from catenet.terms.moving import Moving
 
         hist = History(self.history, path="history") if self.history else None
+        reach = shape.reach + offset
         term = Moving(
-            shape, origin, self.velocity, self.angular_velocity, hist, reach=reach + offset
+            barrier, shape.origin, self.velocity, self.angular_velocity, hist, reach=reach
         )
         term.guards_supports = offset == 0.0
         return term
@@ -154,15 +172,6 @@ class BoxObstacle(_Motion, Declared):
             ck.add(f"{path}.axis = {list(self.axis)}: must not be zero")
         self._check_motion(ck, path)
 
-    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
-        (the box rounded by r)."""
-        from catenet.terms.shapes import Box, rotation
-
-        R = rotation(self.axis, self.angle)
-        box = Box(nodes, self.center, self.half_size, R, kappa=kappa, dhat=dhat, offset=offset)
-        return self._moving(box, self.center, float(np.linalg.norm(self.half_size)), offset)
-
 
 @dataclass(frozen=True, kw_only=True)
 class CapsuleObstacle(_Motion, Declared):
@@ -190,17 +199,6 @@ class CapsuleObstacle(_Motion, Declared):
         if self.start == self.end:
             ck.add(f"{path}.end = {list(self.end)}: must differ from {path}.start")
         self._check_motion(ck, path)
-
-    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
-        (the capsule of radius + r, exact)."""
-        from catenet.terms.shapes import Capsule
-
-        radius = self.radius + offset
-        capsule = Capsule(nodes, self.start, self.end, radius, kappa=kappa, dhat=dhat)
-        a, b = np.asarray(self.start), np.asarray(self.end)
-        reach = 0.5 * float(np.linalg.norm(b - a)) + self.radius
-        return self._moving(capsule, 0.5 * (a + b), reach, offset)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -242,58 +240,6 @@ class MeshObstacle(_Motion, Declared):
             ck.add(f"{path}.file = {self.file!r}: {exc}")
             return self
         return dataclasses.replace(self, file=str(full))
-
-    def surface(self) -> tuple[np.ndarray, np.ndarray]:
-        V, T = read_surface(self.file)
-        return V * self.scale + np.asarray(self.offset), T
-
-    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
-        (the mesh grown by r)."""
-        from catenet.terms.shapes import Mesh
-
-        V, T = self.surface()
-        mesh = Mesh(nodes, V, T, kappa=kappa, dhat=dhat, offset=offset)
-        origin = np.asarray(self.offset, dtype=np.float64)
-        reach = float(np.linalg.norm(V - origin, axis=1).max())
-        return self._moving(mesh, origin, reach, offset)
-
-
-def read_surface(file: str) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, triangles) of a closed surface file, outward oriented. Raises
-    ValueError with the reason (missing, unreadable, no triangles, not closed)."""
-    path = Path(file)
-    if not path.is_file():
-        raise ValueError(f"{'is a directory' if path.is_dir() else 'no such file'} ({path})")
-    stat = path.stat()
-    return _read_surface(str(path), stat.st_mtime_ns, stat.st_size)
-
-
-@functools.lru_cache(maxsize=8)
-def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndarray]:
-    from catenet.terms.shapes import closed_surface
-
-    try:
-        mesh = read_mesh_file(file)
-    except ImportError:
-        raise ValueError(
-            "reading a mesh obstacle needs the Python package meshio (pip install meshio)"
-        ) from None
-    except ValueError as exc:
-        raise ValueError(f"meshio cannot read it: {exc}") from None
-    tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
-    if not tris:
-        found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
-        raise ValueError(f"holds no triangles (it has {found}): a mesh obstacle is a surface")
-    points = np.asarray(mesh.points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.abs(points) <= MAGNITUDE):
-        raise ValueError(
-            f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}"
-        )
-    V, T = closed_surface(points, np.concatenate(tris))
-    V.setflags(write=False)
-    T.setflags(write=False)
-    return V, T
 
 
 def check_motion(case) -> None:

@@ -27,39 +27,11 @@ from catenet.errors import ConfigError
 if TYPE_CHECKING:
     from catenet.terms.base import Term
 
-#: The corners of a unit box (the signs of its half sizes) and its 12 edges.
-SIGNS = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=np.float64)
-BOX_EDGES = np.array(
-    [(a, b) for a in range(8) for b in range(a + 1, 8) if np.sum(SIGNS[a] != SIGNS[b]) == 1]
-)
-
-
-def surface(obs) -> tuple[np.ndarray, np.ndarray, float]:
-    """(points (V, 3), edges (E, 2), radius) of an obstacle's shape at t = 0."""
-    if obs.kind == "sphere":
-        return np.asarray(obs.center, float)[None], np.zeros((0, 2), np.int64), float(obs.radius)
-    if obs.kind == "capsule":
-        ends = np.array([obs.start, obs.end], dtype=np.float64)
-        return ends, np.array([[0, 1]], dtype=np.int64), float(obs.radius)
-    if obs.kind == "box":
-        from catenet.terms.shapes import rotation
-
-        R = rotation(obs.axis, obs.angle)
-        corners = np.asarray(obs.center, float) + (SIGNS * obs.half_size) @ R.T
-        return corners, BOX_EDGES.copy(), 0.0
-    V, T = obs.surface()
-    pairs = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    return np.asarray(V, dtype=np.float64), np.unique(pairs, axis=0), 0.0
-
 
 def _shape(obs):
     """shape(nodes, kappa, dhat, grow): the obstacle's barrier term at t = 0, grown."""
 
     def build(nodes, kappa, dhat, grow):
-        if obs.kind == "sphere":
-            from catenet.terms.contact import Sphere
-
-            return Sphere(nodes, obs.center, obs.radius + grow, kappa=kappa, dhat=dhat)
         return obs.term(nodes, kappa, dhat, offset=grow)
 
     return build
@@ -69,7 +41,7 @@ def body_solid(body, obs):
     """The Solid of a free body (``FreeBody``): its points ride on its four nodes."""
     from catenet.terms.touch import Solid
 
-    points, edges, radius = surface(obs)
+    points, edges, radius = obs.shape().outline()
     frame = body.frame
     weights = 0.25 + (points - frame.center) @ frame.B.T
     label = f"obstacle[{body.obstacle}] (a free {obs.kind})"
@@ -80,7 +52,7 @@ def fixed_solid(k: int, obs):
     """The Solid of a fixed sphere, box, capsule or mesh (no nodes)."""
     from catenet.terms.touch import Solid
 
-    points, edges, radius = surface(obs)
+    points, edges, radius = obs.shape().outline()
     weights = np.zeros((len(points), 0))
     return Solid(
         f"obstacle[{k}] ({obs.kind})",
@@ -160,6 +132,6 @@ def _kinetic(obs, mass: float) -> float:
     its size (an upper bound for the solid's)."""
     v = np.asarray(getattr(obs, "velocity", None) or (0.0, 0.0, 0.0), dtype=np.float64)
     w = np.asarray(getattr(obs, "angular_velocity", None) or (0.0, 0.0, 0.0), dtype=np.float64)
-    points, _, radius = surface(obs) if mass > 0 else (np.zeros((1, 3)), None, 0.0)
+    points, _, radius = obs.shape().outline() if mass > 0 else (np.zeros((1, 3)), None, 0.0)
     reach = float(np.linalg.norm(points - points.mean(axis=0), axis=1).max()) + radius
     return 0.5 * mass * (float(v @ v) + float(w @ w) * reach * reach)

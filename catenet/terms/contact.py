@@ -77,7 +77,12 @@ class Obstacle(Term):
 
     def max_step(self, x: np.ndarray, dx: np.ndarray) -> float:
         """The largest t for which x + t dx keeps every node outside (inf: never hits)."""
-        raise NotImplementedError
+        return self.first_hit(x, dx, 0.0)
+
+    def first_hit(self, x: np.ndarray, dx: np.ndarray, grow: float) -> float:
+        """The first t >= 0 at which a node on x + t dx meets the surface grown by
+        ``grow`` >= 0 (inf: never): the exact first contact."""
+        raise NotImplementedError(f"{type(self).__name__} has no first-hit test")
 
 
 @register("plane")
@@ -106,8 +111,8 @@ class Plane(Obstacle):
         args = (x, self.nodes, self.point, self.normal, self.kappa, self.dhat, values)
         return plane_hessian(*args) > 0
 
-    def max_step(self, x, dx):
-        return plane_max_step(x, dx, self.nodes, self.point, self.normal)
+    def first_hit(self, x, dx, grow):
+        return plane_max_step(x, dx, self.nodes, self.point + grow * self.normal, self.normal)
 
 
 @register("sphere")
@@ -135,5 +140,5 @@ class Sphere(Obstacle):
         args = (x, self.nodes, self.center, self.radius, self.kappa, self.dhat, values)
         return sphere_hessian(*args) > 0
 
-    def max_step(self, x, dx):
-        return sphere_max_step(x, dx, self.nodes, self.center, self.radius)
+    def first_hit(self, x, dx, grow):
+        return sphere_max_step(x, dx, self.nodes, self.center, self.radius + grow)

@@ -42,9 +42,6 @@ import math
 
 import numpy as np
 
-from catenet.kernels.contact import sphere_max_step
-from catenet.kernels.mesh import mesh_max_step
-from catenet.kernels.shapes import box_max_step, capsule_max_step
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, Frame
 
@@ -222,26 +219,13 @@ class BodyContact(Term):
     def _ray(self, P, D, grow: float) -> float:
         """The first contact of the nodes' segments P + s D (s in [0, 1]) with the shape
         grown by ``grow`` (inf: none)."""
-        from catenet.terms.contact import Sphere
-        from catenet.terms.shapes import Box, Capsule, Mesh
-
         x, dx = self._buf, self._g
         x[self.nodes] = P
         dx[self.nodes] = D
-        sh, nodes = self.shape, self.nodes
         try:
-            if isinstance(sh, Box):
-                return box_max_step(x, dx, nodes, sh.center, sh.axes, sh.half, sh.offset + grow)
-            if isinstance(sh, Capsule):
-                return capsule_max_step(x, dx, nodes, sh.a, sh.b, sh.radius + grow)
-            if isinstance(sh, Sphere):
-                return sphere_max_step(x, dx, nodes, sh.center, sh.radius + grow)
-            if isinstance(sh, Mesh):
-                args = (sh.vertices, sh.triangles, sh.fn, sh.offset + grow, *sh._grid())
-                return mesh_max_step(x, dx, nodes, *args)
-            raise TypeError(f"no ray test for {type(sh).__name__}")
+            return self.shape.first_hit(x, dx, grow)
         finally:
-            dx[nodes] = 0.0
+            dx[self.nodes] = 0.0
 
 
 @register("body_friction")

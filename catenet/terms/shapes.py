@@ -79,8 +79,8 @@ class Box(_Shape):
         self.kind = BOX
         self.geom = np.concatenate([self.center, self.axes.ravel(), self.half, [self.offset]])
 
-    def max_step(self, x, dx):
-        args = (self.nodes, self.center, self.axes, self.half, self.offset)
+    def first_hit(self, x, dx, grow):
+        args = (self.nodes, self.center, self.axes, self.half, self.offset + grow)
         return box_max_step(x, dx, *args)
 
 
@@ -100,8 +100,8 @@ class Capsule(_Shape):
         self.kind = CAPSULE
         self.geom = np.concatenate([self.a, self.b, [self.radius]])
 
-    def max_step(self, x, dx):
-        return capsule_max_step(x, dx, self.nodes, self.a, self.b, self.radius)
+    def first_hit(self, x, dx, grow):
+        return capsule_max_step(x, dx, self.nodes, self.a, self.b, self.radius + grow)
 
 
 def closed_surface(points, triangles) -> tuple[np.ndarray, np.ndarray]:
@@ -215,8 +215,8 @@ class Mesh(Obstacle):
         args = (*self._surface(), *self._grid(), self.kappa, self.dhat, self.offset, values)
         return mesh_hessian(x, self.nodes, *args) > 0
 
-    def max_step(self, x, dx):
-        args = (self.vertices, self.triangles, self.fn, self.offset, *self._grid())
+    def first_hit(self, x, dx, grow):
+        args = (self.vertices, self.triangles, self.fn, self.offset + grow, *self._grid())
         return mesh_max_step(x, dx, self.nodes, *args)
 
     def surface(self) -> tuple[np.ndarray, np.ndarray]:

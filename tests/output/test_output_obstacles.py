@@ -122,7 +122,7 @@ def test_every_kind_is_a_closed_outward_surface_and_the_moving_box_follows_its_m
     Vm, Tm = icosphere(2)
     assert len(mesh.triangles) == len(Tm) and volume(mesh.vertices, mesh.triangles) > 0
     assert np.allclose(np.linalg.norm(mesh.vertices - [0.3, -0.1, -0.45], axis=1), 0.1)
-    V4, T4 = case.obstacles[4].surface()  # as the solver's term takes it
+    V4, T4 = case.obstacles[4].shape().surface_mesh()  # as the solver's term takes it
     assert np.array_equal(mesh.vertices, V4) and np.array_equal(mesh.triangles, T4)
     # the plane: a quad at z = -0.6 facing up, covering the net 1.5 times
     assert len(plane.vertices) == 4 and np.allclose(plane.vertices[:, 2], -0.6)

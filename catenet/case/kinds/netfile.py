@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from catenet.case.keys import Checker, carried, too_large
-from catenet.case.meshfiles import read_mesh_file
+from catenet.scene.meshfiles import read_mesh_file
 
 log = logging.getLogger(__name__)
 

@@ -1,4 +1,4 @@
-"""Reading a mesh file with meshio for a case (a net's ``geometry.file``, a mesh obstacle):
+"""Reading a mesh file with meshio (a net's ``geometry.file``, a mesh obstacle):
 every way meshio fails, its own exit and messages included, as one ValueError."""
 
 from __future__ import annotations
