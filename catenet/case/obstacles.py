@@ -9,8 +9,9 @@ default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a 
 sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
 surface; ``catenet.terms.friction``), with ``slip`` (the distance below which a node
 sticks, default the activation distance); a moving sphere (a ball) is frictionless, a
-free body (``catenet.case.rigid``) is not. A new kind is one class here and one line in
-``OBSTACLES``.
+free body (``catenet.case.rigid``) is not. A new kind is its shape
+(``catenet.scene.shapes``) and its keys (``catenet.case.shapes``, where ``SHAPED`` lists
+it).
 """
 
 from __future__ import annotations
@@ -36,9 +37,7 @@ from catenet.case.keys import (
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
-    BoxObstacle,
-    CapsuleObstacle,
-    MeshObstacle,
+    SHAPED,
     Shaped,
     _accuracy,
     _distance,
@@ -145,7 +144,7 @@ class SphereObstacle(Shaped, FreeKeys, Declared):
 
 #: Obstacle kinds by name.
 OBSTACLES: dict[str, type] = {"plane": PlaneObstacle, "sphere": SphereObstacle}
-OBSTACLES.update(box=BoxObstacle, capsule=CapsuleObstacle, mesh=MeshObstacle)  # case/shapes.py
+OBSTACLES.update(SHAPED)  # the kinds of case/shapes.py
 
 
 def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tuple | Any:

@@ -242,6 +242,10 @@ class MeshObstacle(_Motion, Declared):
         return dataclasses.replace(self, file=str(full))
 
 
+#: The kinds of this module by name (``catenet.case.obstacles.OBSTACLES`` takes them).
+SHAPED: dict[str, type] = {"box": BoxObstacle, "capsule": CapsuleObstacle, "mesh": MeshObstacle}
+
+
 def check_motion(case) -> None:
     """Raises ConfigError (key path) for a box, capsule or mesh on a prescribed motion
     in a run that is not dynamic."""
