@@ -51,11 +51,13 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
             f"node {s['sag_node']}; the chord between the cable's ends in this state)"
         )
     cable = s.get("max_displacement_cable")
-    line = (
-        f"{'max displ.':<{W}} {s['max_displacement']:.6g} m at node "
-        f"{s['max_displacement_node']}{f' (cable {cable})' if cable else ''}: "
+    where = (
+        f"at node {s['max_displacement_node']}{f' (cable {cable})' if cable else ''}: "
         f"{vector(s['max_displacement_vector'])} m"
+        if s["max_displacement_node"] >= 0
+        else "(no free node of the net)"
     )
+    line = f"{'max displ.':<{W}} {s['max_displacement']:.6g} m {where}"
     peak = s.get("peak_displacement")
     if peak is not None and _more(peak, s["max_displacement"]):
         line += (

@@ -34,7 +34,8 @@ class BodyWatch:
         for body, contact in self.bodies:
             if contact is None or self.first[body.obstacle] is not None:
                 continue
-            if float(contact.gap(x).min()) < contact.dhat:
+            gap = contact.gap(x)  # empty where the net has no free node
+            if gap.size and float(gap.min()) < contact.dhat:
                 self.first[body.obstacle] = float(t)
 
     def stats(self, x, v) -> dict:
