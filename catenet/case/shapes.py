@@ -65,7 +65,7 @@ def _velocity():
         write="given",
         shown="none",
         unit="m/s",
-        doc="box/capsule/mesh: moves at this velocity (a free body: its initial one)",
+        doc="moves at this velocity (a free body: its initial one)",
     )
 
 
@@ -75,13 +75,13 @@ def _spin(about: str):
         write="given",
         shown="none",
         unit="rad/s",
-        doc=f"box/capsule/mesh: turns at this angular velocity (a vector) about {about} "
+        doc=f"turns at this angular velocity (a vector) about {about} "
         "(a free body: its initial one, about its centre of mass)",
     )
 
 
 def _history():
-    return history_key("moving box/capsule/mesh: velocities times factor(t) (dynamic runs)")
+    return history_key("on a prescribed motion: velocities times factor(t) (dynamic runs)")
 
 
 class Shaped:
@@ -202,6 +202,36 @@ class CapsuleObstacle(_Motion, Declared):
 
 
 @dataclass(frozen=True, kw_only=True)
+class CylinderObstacle(_Motion, Declared):
+    """A solid cylinder with flat ends (a pipe, a drum, a pile) about `start`-`end`; may move."""
+
+    kind: str = choice("cylinder", ("cylinder",), doc="a cylinder with flat ends")
+    start: tuple = vec3(
+        missing="[x, y, z] of the centre of one end [m]", unit="m", doc="cylinder: axis start"
+    )
+    end: tuple = vec3(
+        missing="[x, y, z] of the centre of the other end [m]", unit="m", doc="cylinder: axis end"
+    )
+    radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="cylinder: radius")
+    distance: float | None = _distance()
+    accuracy: float = _accuracy()
+    stiffness: float | None = _stiffness()
+    friction: float = _friction()
+    slip: float | None = _slip()
+    velocity: tuple | None = _velocity()
+    angular_velocity: tuple | None = _spin("the midpoint of start-end")
+    history: tuple | None = _history()
+    mass: float | None = mass_key()
+    density: float | None = density_key()
+    inertia: tuple | None = inertia_key()
+
+    def check(self, ck: Checker, path: str) -> None:
+        if self.start == self.end:
+            ck.add(f"{path}.end = {list(self.end)}: must differ from {path}.start")
+        self._check_motion(ck, path)
+
+
+@dataclass(frozen=True, kw_only=True)
 class MeshObstacle(_Motion, Declared):
     """A rigid body given by a closed triangle surface (a satellite, a rock); may move."""
 
@@ -243,7 +273,12 @@ class MeshObstacle(_Motion, Declared):
 
 
 #: The kinds of this module by name (``catenet.case.obstacles.OBSTACLES`` takes them).
-SHAPED: dict[str, type] = {"box": BoxObstacle, "capsule": CapsuleObstacle, "mesh": MeshObstacle}
+SHAPED: dict[str, type] = {
+    "box": BoxObstacle,
+    "capsule": CapsuleObstacle,
+    "cylinder": CylinderObstacle,
+    "mesh": MeshObstacle,
+}
 
 
 def check_motion(case) -> None:

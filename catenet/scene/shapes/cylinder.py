@@ -1,0 +1,149 @@
+"""A solid cylinder with flat ends: a pipe, a drum, a pile, a boom with cut ends.
+
+Its barrier (``CylinderBarrier``, kernels in ``catenet.kernels.cylinder``) is exact: the
+gap is a node's distance to the cylinder (side, end or rim), a ball's centre's to the
+cylinder grown by the ball, and the first contact along a step is exact for the
+cylinder and no later than the true one grown (so no node and no ball ever enters it).
+
+As a free body it touches other solids and planes through its outline: the prisms of
+OUTLINE sides circumscribed about its two end circles (their vertices at
+r / cos(pi / OUTLINE), their edges tangent to the circles). The outline holds the
+cylinder, so a free cylinder never enters a plane or another solid; it may rest up to
+r (1 / cos(pi / OUTLINE) - 1) = 0.48 % of its radius away where a vertex of the outline
+points at the plane or the solid. A node of the net and a ball meet its exact surface.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from catenet.kernels.cylinder import (
+    cylinder_gap,
+    cylinder_gradient,
+    cylinder_hessian,
+    cylinder_max_step,
+)
+from catenet.scene.shapes.base import MassProperties, Outline, axis_frame, lathe, positive, vec
+from catenet.terms.base import register
+from catenet.terms.contact import Obstacle
+
+OUTLINE = 32  # sides of the prisms that stand for it as a free body
+
+
+@register("cylinder")
+class CylinderBarrier(Obstacle):
+    """The log-barrier of the outside of the cylinder (centre ``center``, unit ``axis``,
+    ``half_length``, ``radius``) on ``nodes``; ``offset`` r > 0: on the centres of balls
+    of radius r (the cylinder grown by r)."""
+
+    convex = False  # the curved side's hess d times b' < 0: indefinite near contact
+
+    def __init__(self, nodes, center, axis, half_length, radius, *, kappa, dhat, offset=0.0):
+        super().__init__(nodes, kappa=kappa, dhat=dhat)
+        if not (math.isfinite(offset) and offset >= 0):
+            raise ValueError(f"cylinder: offset = {offset!r}: must be >= 0")
+        self.center = np.asarray(center, dtype=np.float64)
+        self.axis = np.asarray(axis, dtype=np.float64)
+        self.half_length = positive("cylinder: half length", half_length)
+        self.radius = positive("cylinder: radius", radius)
+        self.offset = float(offset)
+
+    def _geometry(self):
+        return self.center, self.axis, self.half_length, self.radius
+
+    def gap(self, x):
+        out = np.empty(len(self.nodes))
+        cylinder_gap(x, self.nodes, *self._geometry(), self.offset, out)
+        return out
+
+    def gradient(self, x, grad):
+        args = (*self._geometry(), self.offset, self.kappa, self.dhat, grad)
+        return cylinder_gradient(x, self.nodes, *args)
+
+    def hessian(self, x, values):
+        args = (*self._geometry(), self.offset, self.kappa, self.dhat, values)
+        return cylinder_hessian(x, self.nodes, *args) > 0
+
+    def first_hit(self, x, dx, grow):
+        return cylinder_max_step(x, dx, self.nodes, *self._geometry(), self.offset + grow)
+
+
+@dataclass(frozen=True, eq=False)
+class Cylinder:
+    """The solid cylinder of ``radius`` about the segment ``start``-``end``, flat at
+    both ends."""
+
+    start: np.ndarray
+    end: np.ndarray
+    radius: float
+
+    kind: ClassVar[str] = "cylinder"
+    origin_key: ClassVar[str] = "start"
+
+    def __post_init__(self):
+        object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
+        object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
+        object.__setattr__(self, "radius", positive("cylinder: radius", self.radius))
+        if not np.linalg.norm(self.end - self.start) > 0:
+            raise ValueError("cylinder: the two end points must differ")
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any]) -> Cylinder:
+        return cls(vec(table, "start"), vec(table, "end"), float(table["radius"]))
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.end - self.start))
+
+    @property
+    def axis(self) -> np.ndarray:
+        return (self.end - self.start) / self.length
+
+    @property
+    def origin(self) -> np.ndarray:
+        """The midpoint of its axis."""
+        return 0.5 * (self.start + self.end)
+
+    @property
+    def reach(self) -> float:
+        return math.hypot(0.5 * self.length, self.radius)
+
+    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0) -> CylinderBarrier:
+        args = (self.origin, self.axis, 0.5 * self.length, self.radius)
+        return CylinderBarrier(nodes, *args, kappa=kappa, dhat=dhat, offset=offset)
+
+    def outline(self) -> Outline:
+        """The circumscribed prisms of OUTLINE sides (module docstring): 2 OUTLINE points,
+        the rims' edges and the generators between them."""
+        x, y, e = axis_frame(self.start, self.end).T
+        u = 2 * np.pi * (np.arange(OUTLINE) + 0.5) / OUTLINE
+        ring = (np.cos(u)[:, None] * x + np.sin(u)[:, None] * y) * (
+            self.radius / math.cos(math.pi / OUTLINE)
+        )
+        points = np.concatenate([self.start + ring, self.end + ring])
+        k = np.arange(OUTLINE)
+        rims = [np.stack([k, (k + 1) % OUTLINE], axis=1) + j * OUTLINE for j in (0, 1)]
+        edges = np.concatenate([*rims, np.stack([k, k + OUTLINE], axis=1)])
+        return Outline(points, edges, 0.0)
+
+    def mass_properties(self) -> MassProperties:
+        """Axes (x', y', axis): inertia r^2/4 + L^2/12 across, r^2/2 about the axis."""
+        r, L = self.radius, self.length
+        side = r * r / 4 + L * L / 12
+        inertia = np.diag([side, side, r * r / 2])
+        frame = axis_frame(self.start, self.end)
+        return MassProperties(math.pi * r * r * L, self.origin, inertia, frame)
+
+    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+        """36 meridians: a flat end, the side, the other flat end (quads)."""
+        a, b, r = self.start, self.end, self.radius
+        points = np.array([a, a, b, b])
+        return lathe(points, np.array([0.0, r, r, 0.0]), b - a)
+
+
+SHAPE = Cylinder
