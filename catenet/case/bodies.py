@@ -58,7 +58,7 @@ def add_bodies(case, net: Net, loads: Loads, velocity, size: float):
     which = moving(case.obstacles)
     if not which:
         return net, loads, velocity, (), ()
-    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.scene.contact import DISTANCE_SHARE
     from catenet.terms.body import Ball, Guide, Path
     from catenet.terms.contact import default_stiffness
 
@@ -134,7 +134,7 @@ def _collisions(obstacles, k: int, node: int, net: Net, weight: float, size: flo
     by it, another moving sphere (of a later table) as a ball of the summed radii, a box,
     capsule or mesh (fixed or moving) grown by it (``catenet.terms.collide``). Raises
     ConfigError for a ball that starts inside or on one of them."""
-    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.scene.contact import DISTANCE_SHARE
     from catenet.terms.body import Ball
     from catenet.terms.contact import default_stiffness
 

@@ -16,11 +16,8 @@ it).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 from catenet.case.keys import (
     BAD,
@@ -42,10 +39,8 @@ from catenet.case.shapes import (
     _accuracy,
     _distance,
 )
-from catenet.errors import ConfigError
-
-DISTANCE_SHARE = 1e-3  # the static continuation's widest barrier, of the scene's length scale
-STAGE_SHRINK = 10.0  # each continuation stage's barrier is this much narrower
+from catenet.scene.contact import Reach
+from catenet.scene.contact import obstacle_terms as contact_terms
 
 
 @dataclass(frozen=True)
@@ -175,103 +170,16 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
     return BAD if BAD in out else tuple(out)
 
 
-#: The smallest friction slip distance, relative to the barrier's activation distance.
-MIN_SLIP = 1e-12
-
-
 def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
-    """The energy terms of a case's obstacles on the net's free nodes. Raises ConfigError
-    (with the obstacle's key path) for an obstacle that a node of the net starts in.
-
-    The activation distance dhat is ``distance``, else ``accuracy`` times the net's median
-    edge length: a node resting on the obstacle has a gap below dhat (the barrier acts
-    on no node farther away), so positions are exact to dhat and no node off the
-    obstacle by more than dhat feels it. A fixed obstacle whose dhat is below the wide
-    start (DISTANCE_SHARE of the scene's length scale) gets the wider barriers between
-    them, ten times narrower each, as ``stages``: static solves go through them first."""
+    """The energy terms of a case's fixed and moving obstacles on the net's free nodes,
+    by the contact policy (``catenet.scene.contact``). Raises ConfigError (with the
+    obstacle's key path) for an obstacle that a node of the net starts in."""
     if not obstacles:
         return ()
-    nodes = np.flatnonzero(~net.fixed[: net.n_net])  # a moving body's centre is no contact node
-    force = loads.external_force(net)[nodes]
-    per_node = float(np.mean(np.linalg.norm(force, axis=1))) if len(nodes) else 0.0
-    edge = float(np.median(net.rest_length[: net.n_edges])) if net.n_edges else size
+    reach = Reach.of(net, loads, size)
     terms = []
     for k, obs in enumerate(obstacles):
         if getattr(obs, "moves", False) or getattr(obs, "free", False):
             continue  # nodes of its own: catenet.case.bodies, catenet.case.rigid
-        dhat = obs.distance if obs.distance is not None else obs.accuracy * edge
-        load = per_node
-        if load <= 0.0:  # no loads: the force that strains an edge by dhat / l0
-            load = float(np.mean(net.EA / net.rest_length)) * dhat
-
-        def stiffness(distance: float, obs=obs, load=load) -> float:
-            if obs.stiffness is not None:
-                return obs.stiffness
-            from catenet.terms.contact import default_stiffness
-
-            return default_stiffness(load, distance)
-
-        widths = []  # the continuation's wider barriers, widest first
-        wide = DISTANCE_SHARE * size
-        if obs.distance is None and not getattr(obs, "rigid_motion", False) and wide > 10.0 * dhat:
-            while wide > dhat * (1.0 + 1e-9):  # tenfold narrower each, the last within 10x
-                widths.append(wide)
-                wide /= STAGE_SHRINK
-        kappa = stiffness(dhat)
-        if not (math.isfinite(kappa) and kappa > 0):
-            key = next(
-                (n for n in ("stiffness", "distance") if getattr(obs, n, None) is not None),
-                "accuracy",
-            )
-            raise ConfigError(
-                f"obstacle[{k}].{key} = {show(getattr(obs, key, None))}: the barrier's stiffness "
-                f"would be {kappa:.3g} N/m: give a larger distance (or a finite stiffness)"
-            )
-        first = obs.term(nodes, stiffness(widths[0]), widths[0]) if widths else None
-        term = obs.term(nodes, kappa, dhat) if first is None else first.narrowed(kappa, dhat)
-        if first is not None:  # (widths: the wider stages, none without)
-            term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
-        else:
-            term.stages = ()
-        if term.moving:  # on a prescribed motion: its name in messages
-            term.label = f"obstacle[{k}] (kind {obs.kind!r})"
-        check_clear(f"obstacle[{k}] (kind {obs.kind!r})", "an obstacle", term, nodes, net)
-        terms.append(term)
-        if getattr(obs, "friction", 0.0) > 0:  # Coulomb friction rides on the barrier
-            from catenet.terms.friction import Friction
-
-            slip = obs.slip if obs.slip is not None else dhat
-            if not slip >= MIN_SLIP * dhat:  # its stiffness mu lambda / slip would overflow
-                raise ConfigError(
-                    f"obstacle[{k}].slip = {show(obs.slip)}: must be at least "
-                    f"{MIN_SLIP:.0e} times the barrier's activation distance ({dhat:.3g})"
-                )
-            terms.append(Friction(term, mu=obs.friction, slip=slip))
+        terms += contact_terms(f"obstacle[{k}]", obs.shape(), obs.contact(), reach, net, show)
     return tuple(terms)
-
-
-#: A node nearer an obstacle than ON_ROUNDOFF round-offs of its coordinates, or than
-#: ON_SHARE of the barrier's distance, starts on it: which side it is on is round-off
-#: (a node at z = 5e-324 over the plane z = 0, the long fuzz run's seed 12), and its
-#: barrier's force and stiffness (about kappa dhat^2 / d and kappa dhat^2 / d^2) are
-#: beyond floating point.
-ON_ROUNDOFF = 1e3
-ON_SHARE = 1e-100
-
-
-def check_clear(label: str, what: str, shape, nodes: np.ndarray, net) -> None:
-    """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
-    inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",
-    "a body"): its gap is not above ON_ROUNDOFF round-offs of its coordinates and
-    ON_SHARE of the barrier's distance."""
-    gap = shape.gap(net.nodes)
-    scale = np.abs(net.nodes[nodes]).max(axis=1) if len(nodes) else np.zeros(0)
-    on = np.maximum(ON_ROUNDOFF * np.finfo(np.float64).eps * scale, ON_SHARE * shape.dhat)
-    inside = np.flatnonzero(~(gap > on))
-    if inside.size:
-        i = int(nodes[inside[0]])
-        raise ConfigError(
-            f"{label}: node {i} at {show(net.nodes[i].tolist())} starts inside or on it "
-            f"(gap {gap[inside[0]]:.3g} m), {inside.size} nodes in all: {what} must not "
-            "overlap the initial net; move it or the net"
-        )

@@ -143,7 +143,7 @@ def _frame(obs, k: int, first: int, case):
 
 def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     """The body's rigidity and its barrier with every free net node."""
-    from catenet.case.obstacles import DISTANCE_SHARE, check_clear
+    from catenet.scene.contact import DISTANCE_SHARE, check_clear
     from catenet.terms.contact import default_stiffness
     from catenet.terms.rigid import Rigidity
     from catenet.terms.rigid_contact import BodyContact
@@ -164,7 +164,7 @@ def _terms(case, body: FreeBody, net, loads, size: float) -> list:
     kappa = obs.stiffness if obs.stiffness is not None else default_stiffness(load, dhat)
     shape = obs.term(nodes, kappa, dhat)
     contact = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{path} (kind {obs.kind!r})")
-    check_clear(f"{path} (kind {obs.kind!r}, a free body)", "a body", shape, nodes, net)
+    check_clear(f"{path} (kind {obs.kind!r}, a free body)", "a body", shape, nodes, net, show)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
     reach = frame.reach  # about the body's size
     ea = float(np.max(net.EA)) if net.n_edges else stiff * size

@@ -19,6 +19,7 @@ from catenet.case.keys import Checker, Declared, choice, real, text, vec3
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
+from catenet.scene.contact import Contact, moving
 from catenet.scene.shapes.mesh import read_surface
 
 if TYPE_CHECKING:
@@ -85,17 +86,30 @@ def _history():
 
 
 class Shaped:
-    """An ``[[obstacle]]`` table's shape (``catenet.scene.shapes``) and its barrier."""
+    """An ``[[obstacle]]`` table's shape (``catenet.scene.shapes``), how it meets the net
+    (``catenet.scene.contact.Contact``) and its barrier."""
+
+    @property
+    def rigid_motion(self) -> bool:
+        """On a prescribed motion (a box, capsule, cylinder or mesh may be: ``_Motion``)."""
+        return False
 
     def shape(self) -> Shape:
         from catenet.scene.shapes import shape_of
 
         return shape_of(vars(self))  # a dataclass's fields: the table's keys
 
+    def contact(self) -> Contact:
+        table = vars(self)
+        motion = ("velocity", "angular_velocity", "history") if self.rigid_motion else ()
+        keys = ("distance", "accuracy", "stiffness", "friction", "slip", *motion)
+        return Contact(**{k: table[k] for k in keys})
+
     def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``; ``offset`` r: on the centres of balls of radius r
-        (the shape grown by r)."""
-        return self.shape().barrier(nodes, kappa, dhat, offset)
+        """The barrier on ``nodes``, on its prescribed motion if any; ``offset`` r: on
+        the centres of balls of radius r (the shape grown by r)."""
+        shape = self.shape()
+        return moving(shape.barrier(nodes, kappa, dhat, offset), shape, self.contact(), offset)
 
 
 class _Motion(Shaped, FreeKeys):
@@ -119,25 +133,6 @@ class _Motion(Shaped, FreeKeys):
                 f"{path}.history: scales a prescribed motion: give velocity or "
                 "angular_velocity with it"
             )
-
-    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``, on the prescribed motion if any; ``offset`` r: on
-        the centres of balls of radius r (the shape grown by r,
-        ``catenet.terms.collide``), which guards no supports."""
-        shape = self.shape()
-        barrier = shape.barrier(nodes, kappa, dhat, offset)
-        if not self.rigid_motion:
-            return barrier
-        from catenet.model.histories import History
-        from catenet.terms.moving import Moving
-
-        hist = History(self.history, path="history") if self.history else None
-        reach = shape.reach + offset
-        term = Moving(
-            barrier, shape.origin, self.velocity, self.angular_velocity, hist, reach=reach
-        )
-        term.guards_supports = offset == 0.0
-        return term
 
 
 @dataclass(frozen=True, kw_only=True)

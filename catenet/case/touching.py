@@ -82,7 +82,7 @@ def touch_terms(case, rigid, balls, net, size: float) -> tuple:
     """The BodyTouch term of every pair of a free body with a later free body, a ball or
     a fixed non-plane obstacle (module docstring). Raises ConfigError for a pair that
     starts touching."""
-    from catenet.case.obstacles import DISTANCE_SHARE
+    from catenet.scene.contact import DISTANCE_SHARE
     from catenet.terms.contact import default_stiffness
     from catenet.terms.touch import BodyTouch, BodyTouchFriction
 
