@@ -62,6 +62,8 @@ def area_load(
     if not len(sub):
         raise ConfigError("covers no area: no edge joins two of its nodes")
     used = np.unique(sub)
+    if len(used) < 3:  # one edge: its two nodes lie on a line
+        raise ConfigError(_no_area(False))
     xyz = nodes[used]
     local = np.searchsorted(used, sub)
     scale3 = float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0)))

@@ -84,6 +84,17 @@ def test_a_vertical_net_takes_wind_normal_to_it_and_no_snow():
         area_load(wall, edges, everything(wall), 100.0, "plan")
 
 
+@pytest.mark.parametrize("direction", ["normal", "plan"])
+def test_one_edge_covers_no_area(direction):
+    """Two nodes joined by one edge, out of the plan (the fuzz run of seed 19: a node set
+    of two nodes of a hypar under an area load normal to it was an internal error)."""
+    xyz = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.3], [2.0, 0.0, 1.0]])
+    edges = np.array([[0, 1], [1, 2]])
+    covered = np.array([True, True, False])
+    with pytest.raises(ConfigError, match="covers no area: its nodes lie on a line"):
+        area_load(xyz, edges, covered, 100.0, direction)
+
+
 @pytest.mark.parametrize("alpha", [0.0, 0.3, np.pi / 4, 1.2])
 def test_the_open_cells_of_a_cable_net_are_closed_through_its_outer_nodes(alpha):
     """The square net's cables end on the square, with no edge between their ends: the
