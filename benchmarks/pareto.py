@@ -147,6 +147,7 @@ def _scene(case: str, size, *, ramp: float = 0.0):
 
 
 def _solve(job: dict, budget: float, quick: bool):
+    from catenet.scene import Scene
     from catenet.solver import path as sv
 
     size = job.get("nodes", job["edge"])
@@ -154,7 +155,7 @@ def _solve(job: dict, budget: float, quick: bool):
         net, loads, probe = _scene(job["case"], size)
         settings = sv.Settings(rtol=job["rtol"])
         t, _, res = repeat(
-            lambda: sv.solve(sv.Problem(net, loads), settings), 3 if net.n_nodes < 2e4 else 1
+            lambda: sv.solve(Scene(net, loads), settings), 3 if net.n_nodes < 2e4 else 1
         )
         return (
             t,
@@ -168,7 +169,7 @@ def _solve(job: dict, budget: float, quick: bool):
         return time.perf_counter() - start > budget
 
     settings = sv.Settings("dynamic", dt=job["h"], damping=1.0, t_end=500.0, rtol=job["rtol"])
-    res = sv.solve(sv.Problem(net, loads), settings, on_step=stop)
+    res = sv.solve(Scene(net, loads), settings, on_step=stop)
     t = time.perf_counter() - start
     return (
         t,

@@ -4,6 +4,10 @@ Cables are discretised into nodes and edges with the stretching energy of the di
 catenary; equilibria come from Newton's method on the total potential (``solve_static``)
 or from the paper's implicit Euler with damping (``solve_dynamic``).
 
+In Python: ``catenet.Scene.of(net, loads)`` with obstacles of any shape
+(``.with_obstacle(catenet.Box(...), friction=0.3)``) and ``catenet.solve(scene,
+method="dynamic", dt=1e-3)``, the same computation as a case file's.
+
 From a case file: ``catenet.load_case(path)`` (a validated case; ``--set`` overrides as
 ``overrides=[...]``), ``catenet.run_case(case, out)`` (the run ``catenet run`` makes:
 its Result, ``result.report.summary`` the summary's numbers, ``result.cases`` the load cases),
@@ -37,6 +41,17 @@ _NAMES = {
     "Result": "catenet.solver.result",
     "Workspace": "catenet.solver.workspace",
     "continuation": "catenet.solver.loadsteps",
+    "Scene": "catenet.scene",
+    "Contact": "catenet.scene.contact",
+    "Box": "catenet.scene.shapes.box",
+    "Capsule": "catenet.scene.shapes.capsule",
+    "Cylinder": "catenet.scene.shapes.cylinder",
+    "Mesh": "catenet.scene.shapes.mesh",
+    "Plane": "catenet.scene.shapes.plane",
+    "Sphere": "catenet.scene.shapes.sphere",
+    "Settings": "catenet.solver.path",
+    "Start": "catenet.solver.path",
+    "solve": "catenet.solver.path",
     "solve_static": "catenet.solver.static",
     "solve_dynamic": "catenet.solver.dynamic",
     "load_case": "catenet.case",

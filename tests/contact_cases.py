@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 
 from catenet.kernels.contact import barrier
 from catenet.model.net import Loads, Net
-from catenet.solver.path import Problem
+from catenet.scene import Scene
 from catenet.terms.contact import Plane
 from catenet.terms.friction import Friction
 from catenet.terms.moving import Moving
@@ -46,7 +46,7 @@ def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0, obstacle=None):
     loads = Loads(force=f, support_displacement=move if pull else None)
     if obstacle is None:
         obstacle = Plane(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
-    return Problem(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
+    return Scene(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
 
 
 # --- shapes on a prescribed motion ----------------------------------------------------------

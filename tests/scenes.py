@@ -156,6 +156,7 @@ def eq_row(check, value, tol, results, net, loads, note="", factor=1.0):
 
 def _solve(net, loads, method: str, *, dt: float, damping: float, t_end: float, budget: float):
     """A scene through catenet's solve path; dynamic runs stop after ``budget`` seconds."""
+    from catenet.scene import Scene
     from catenet.solver import path as sv
 
     start = time.perf_counter()
@@ -164,7 +165,7 @@ def _solve(net, loads, method: str, *, dt: float, damping: float, t_end: float, 
         return time.perf_counter() - start > budget
 
     settings = sv.Settings(method, dt=dt, damping=damping, t_end=t_end)
-    return sv.solve(sv.Problem(net, loads), settings, on_step=stop if method == "dynamic" else None)
+    return sv.solve(Scene(net, loads), settings, on_step=stop if method == "dynamic" else None)
 
 
 def midpoint_load(

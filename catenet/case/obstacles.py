@@ -1,17 +1,18 @@
 """Obstacles of a case (``[[obstacle]]``): rigid bodies the net cannot enter.
 
-Each kind owns its keys and builds its energy term (``catenet.terms.contact``), registered
-by name in ``OBSTACLES``. Common keys: ``distance`` (the barrier's activation distance
-dhat; default ``accuracy``, 1e-4, of the net's median edge length: see
-``obstacle_terms``) and ``stiffness`` (kappa [N/m], default:
-the barrier holds the mean nodal load at half that distance). ``friction`` (mu_f >= 0,
-default 0: frictionless) adds Coulomb friction beside the barrier of a plane, a fixed
-sphere, or a box, capsule or mesh, fixed or on a prescribed motion (then relative to its
-surface; ``catenet.terms.friction``), with ``slip`` (the distance below which a node
-sticks, default the activation distance); a moving sphere (a ball) is frictionless, a
-free body (``catenet.case.rigid``) is not. A new kind is its shape
-(``catenet.scene.shapes``) and its keys (``catenet.case.shapes``, where ``SHAPED`` lists
-it).
+Each kind owns its keys (registered by name in ``OBSTACLES``) and names its shape
+(``catenet.scene.shapes``) and how it meets the net (``catenet.scene.contact.Contact``);
+``catenet.case.scene`` applies the contact policy to them (``catenet.scene.contact``), as
+a scene built in Python does. Common keys: ``distance`` (the barrier's activation
+distance dhat; default ``accuracy``, 1e-4, of the net's median edge length) and
+``stiffness`` (kappa [N/m], default: the barrier holds the mean nodal load at half that
+distance). ``friction`` (mu_f >= 0, default 0: frictionless) adds Coulomb friction beside
+the barrier of a plane, a fixed sphere, or a box, capsule, cylinder or mesh, fixed or on
+a prescribed motion (then relative to its surface; ``catenet.terms.friction``), with
+``slip`` (the distance below which a node sticks, default the activation distance); a
+moving sphere (a ball) is frictionless, a free body (``catenet.case.rigid``) is not. A
+new kind is its shape (``catenet.scene.shapes``) and its keys (``catenet.case.shapes``,
+where ``SHAPED`` lists it).
 """
 
 from __future__ import annotations
@@ -28,7 +29,6 @@ from catenet.case.keys import (
     names,
     parse_table,
     real,
-    show,
     vec3,
 )
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
@@ -39,8 +39,6 @@ from catenet.case.shapes import (
     _accuracy,
     _distance,
 )
-from catenet.scene.contact import Reach
-from catenet.scene.contact import obstacle_terms as contact_terms
 
 
 @dataclass(frozen=True)
@@ -168,18 +166,3 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
                 parsed = parsed.resolve(ck, path, base_dir)
         out.append(parsed)
     return BAD if BAD in out else tuple(out)
-
-
-def obstacle_terms(obstacles, net, loads, size: float) -> tuple:
-    """The energy terms of a case's fixed and moving obstacles on the net's free nodes,
-    by the contact policy (``catenet.scene.contact``). Raises ConfigError (with the
-    obstacle's key path) for an obstacle that a node of the net starts in."""
-    if not obstacles:
-        return ()
-    reach = Reach.of(net, loads, size)
-    terms = []
-    for k, obs in enumerate(obstacles):
-        if getattr(obs, "moves", False) or getattr(obs, "free", False):
-            continue  # nodes of its own: catenet.case.bodies, catenet.case.rigid
-        terms += contact_terms(f"obstacle[{k}]", obs.shape(), obs.contact(), reach, net, show)
-    return tuple(terms)

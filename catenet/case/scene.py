@@ -1,8 +1,11 @@
-"""A case built: the net, its loads, the probe node and the length scale."""
+"""A case built (``build``): its ``catenet.scene.Scene``, the net, its loads, the probe
+node, the length scale, the obstacles by the contact policy, the bodies, the load
+cases."""
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -16,7 +19,6 @@ from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
 from catenet.case.material import model_material
-from catenet.case.obstacles import obstacle_terms
 from catenet.case.parse import Case
 from catenet.case.rigid import add_free_bodies
 from catenet.case.shapes import check_motion
@@ -26,58 +28,25 @@ from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
 from catenet.model.histories import History
 from catenet.model.net import Loads, Net
+from catenet.scene.scene import Scene
 
 if TYPE_CHECKING:  # the strands' kernels load only for a case with self-contact
     from catenet.terms.strands import SelfContact
 
 
-@dataclass(frozen=True, eq=False)
-class Scene:
-    """A case built: the net, its loads, the probe node (whose z-deflection is "delta"),
-    the length scale L of delta/L, and the energy terms the case adds to the stretching
-    of the edges (``catenet.terms``; none for the paper's cases). ``cables`` names the
-    cable of every edge of a graph with cables (a ``catenet.case.kinds.cables.CableIndex``;
-    None: no cables). ``velocity`` (N, 3): the initial velocities of ``[[mass]]`` (None:
-    at rest). ``bodies``: the moving spheres (``catenet.case.bodies.Body``), whose centres
-    are among the net's last nodes (``Net.bodies``); ``rigid``: the free bodies
-    (``catenet.case.rigid.FreeBody``), four nodes each after them. ``sets``: the node
-    sets as node indices, ``at_nodes``: the node of each load.point given along a cable
-    (by its index), ``names``: the named nodes ("center"). ``probe_auto``: no probe was
-    named and the geometry has no natural one (a graph): the summary reports the free
-    node that moves most (``catenet.model.summary.probe_of``). ``cases``: per
-    ``[[load_case]]``, then per ``[[combination]]``, a ``LoadCase`` (its name and the
-    force it adds to the base loads, (N, 3) [N]). ``case``: the case built (None: a
-    scene written without it, as ``catenet formfind`` writes its result file)."""
-
-    case: Case | None
-    net: Net
-    loads: Loads
-    probe: int
-    size: float
-    terms: tuple = ()
-    cables: Any = None
-    velocity: np.ndarray | None = None
-    bodies: tuple = ()
-    sets: Any = None
-    at_nodes: Any = None
-    names: Any = None
-    rigid: tuple = ()
-    probe_auto: bool = False
-    cases: tuple = ()
-
-    def coarser(self, factor: float) -> Scene | None:
-        """The same case built with every edge length times ``factor``, with fewer nodes
-        (the coarse net of a nested start, ``catenet.solver.nested``), or None where the
-        case has no edge length to lengthen (``catenet.case.coarse``) or that net does
-        not build."""
-        case = None if self.case is None else coarse_case(self.case, factor)
-        if case is None:
-            return None
-        try:
-            scene = build(case)
-        except ConfigError:
-            return None
-        return scene if scene.net.n_nodes < self.net.n_nodes else None
+def _coarser(case: Case, n_nodes: int, factor: float) -> Scene | None:
+    """The case built with every edge length times ``factor``, with fewer nodes than
+    ``n_nodes`` (the coarse net of a nested start, ``catenet.solver.nested``), or None
+    where the case has no edge length to lengthen (``catenet.case.coarse``) or that net
+    does not build."""
+    coarse = coarse_case(case, factor)
+    if coarse is None:
+        return None
+    try:
+        scene = build(coarse)
+    except ConfigError:
+        return None
+    return scene if scene.net.n_nodes < n_nodes else None
 
 
 def build(case: Case) -> Scene:
@@ -107,29 +76,32 @@ def _build(case: Case) -> Scene:
     )
     for term in body_terms:  # the balls' terms, built before the bodies' nodes came
         term.n_nodes = net.n_nodes
-    terms = obstacle_terms(case.obstacles, net, loads, float(built.size)) + body_terms
-    terms += rigid_terms
-    if rigid:  # free bodies against each other, balls and fixed obstacles
-        terms += touch_terms(case, rigid, bodies, net, float(built.size))
-    if getattr(case.solver, "self_contact", False):
-        terms += (self_contact(case.solver, net, loads),)
-    return Scene(
-        case=case,
-        net=net,
-        loads=loads,
+    scene = Scene(
+        net,
+        loads,
         probe=_probe(case, built),
         size=float(built.size),
-        terms=terms,
-        cables=built.cables,
         velocity=velocity,
         bodies=bodies,
+        rigid=rigid,
+        cables=built.cables,
         sets=dict(built.sets or {}),
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
-        rigid=rigid,
         probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
         cases=_load_cases(case, net, built),
+        case=case,
+        coarsen=functools.partial(_coarser, case, net.n_nodes),
     )
+    for k, obs in enumerate(case.obstacles):  # the contact policy, as for a Python scene
+        if not (getattr(obs, "moves", False) or getattr(obs, "free", False)):
+            scene = scene.with_contact(obs.shape(), obs.contact(), index=k, shown=show)
+    scene = scene.with_terms(*body_terms, *rigid_terms)  # balls' nodes, free bodies
+    if rigid:  # free bodies against each other, balls and fixed obstacles
+        scene = scene.with_terms(*touch_terms(case, rigid, bodies, net, float(built.size)))
+    if getattr(case.solver, "self_contact", False):
+        scene = scene.with_terms(self_contact(case.solver, net, loads))
+    return scene
 
 
 #: The default activation distance of self-contact, per shortest edge.

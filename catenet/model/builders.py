@@ -66,16 +66,17 @@ class Material:
         only = self.tension_only if tension_only is None else tension_only
         return Law.uniform(n_edges, self.law, tension_only=only, table=rows)
 
-    def net(self, nodes, edges, *, fixed, EA=None, rest_length=None) -> Net:
+    def net(self, nodes, edges, *, fixed, EA=None, rest_length=None, flies=False) -> Net:
         """The net of these nodes and edges under this material: its law on every edge
         and, with a prestress, the rest lengths at which every edge carries it in the
         given geometry (else ``rest_length``, default the edges' lengths); ``EA`` per edge
-        overrides the material's."""
+        overrides the material's; ``flies``: parts of it may have no support (dynamic
+        runs)."""
         return self.prestressed(
-            self.unstressed(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length)
+            self.unstressed(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length, flies=flies)
         )
 
-    def unstressed(self, nodes, edges, *, fixed, EA=None, rest_length=None) -> Net:
+    def unstressed(self, nodes, edges, *, fixed, EA=None, rest_length=None, flies=False) -> Net:
         """``net`` without the prestress: the rest lengths as given."""
         return Net.from_arrays(
             nodes,
@@ -85,6 +86,7 @@ class Material:
             rest_length=rest_length,
             line_density=self.line_density,
             law=self.law_of(len(edges)),
+            flies=flies,
         )
 
     def prestressed(self, net: Net) -> Net:
@@ -276,7 +278,9 @@ def graph(
     *,
     rest_length=None,
     EA=None,
+    flies: bool = False,
 ) -> Net:
     """A net from explicit arrays under ``material``; ``EA`` per edge overrides the
-    material's."""
-    return material.net(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length)
+    material's; ``flies``: parts of it may have no support (a net flying free in a
+    dynamic run)."""
+    return material.net(nodes, edges, fixed=fixed, EA=EA, rest_length=rest_length, flies=flies)

@@ -21,6 +21,7 @@ import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.model.summary import first_extreme
+from catenet.scene import Scene
 
 if TYPE_CHECKING:  # the solvers load when a case is run
     from catenet.solver.result import Result
@@ -76,7 +77,7 @@ def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRu
     runs = []
     for c in cases:
         loads = Increment(base=scene.loads, added=c.force)
-        problem = sv.Problem(scene.net, loads, getattr(scene, "terms", ()))
+        problem = Scene(scene.net, loads, getattr(scene, "terms", ()))
         start = sv.Start(x=base.x)
         log.info("%s %s: solving from the base state", _kind(c), c.name)
         try:

@@ -50,6 +50,7 @@ from catenet.terms.moving import carry, moves
 
 log = logging.getLogger(__name__)
 
+
 def solve_dynamic(
     net: Net,
     loads: Loads,

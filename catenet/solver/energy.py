@@ -52,9 +52,7 @@ class Ledger:
     def begin(self, stepper) -> None:
         """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
         system = stepper.system
-        self._timed = bool(stepper.moving) or any(
-            type(t).__name__ == "Guide" for t in system.terms
-        )
+        self._timed = bool(stepper.moving) or any(type(t).__name__ == "Guide" for t in system.terms)
         self.judged = not self._timed
         self._friction = [t for t in system.terms if t.lagged]
         self._force = self._applied(stepper).copy()
@@ -127,6 +125,7 @@ class Ledger:
         fixed = stepper.net.fixed
         reaction[fixed] = grad[fixed] - stepper.potential.force[fixed]
         return (kinetic, *_stored(system), reaction)
+
 
 def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
     """The balance's row of a start state (x, v): kinetic, elastic and contact energy,

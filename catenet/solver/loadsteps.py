@@ -144,9 +144,7 @@ def _judged(judge, net, loads, good: LastGood, target: float, r: Result, last, s
         _collapse(judge, why, at, LastGood(before, at), r.x)
         # followed through (solver.post_collapse): on from where the bracket ended
         # (Newton on the exact potential from there: no continuation stage moves it off)
-        r = solve_static(
-            net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings
-        )
+        r = solve_static(net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings)
     return r
 
 

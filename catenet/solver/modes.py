@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.scene import Scene
 from catenet.solver.modal import Operator
 
 if TYPE_CHECKING:
@@ -482,10 +483,9 @@ def modes(
     method: str = "auto",
     added=None,
 ) -> Modes:
-    """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a scene: a case's
-    ``Scene`` or a ``catenet.solver.path.Problem``) under ``loads`` about its equilibrium,
-    found by the one solve path (``settings``: a ``catenet.solver.path.Settings``;
-    default: a case scene's [solver] keys, else static) unless ``x`` (N, 3) gives the
+    """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a ``catenet.scene.Scene``)
+    under ``loads`` about its equilibrium, found by the one solve path (``settings``: a
+    ``catenet.solver.path.Settings``; default: static) unless ``x`` (N, 3) gives the
     equilibrium. ``terms``: further internal terms (with a ``Net``); ``added`` (E,)
     [kg]: each edge's added mass of water (``natural_modes``). Raises
     ConvergenceError where the equilibrium is not found (or a dynamic run ends before
@@ -494,12 +494,13 @@ def modes(
     from catenet.model.net import Loads
     from catenet.solver import path
 
-    scene = net
-    if not hasattr(net, "net"):
-        scene = path.Problem(net, Loads() if loads is None else loads, tuple(terms))
-    if settings is None:  # a case's scene: its [solver] keys; else the defaults
-        solver = getattr(getattr(scene, "case", None), "solver", None)
-        settings = path.Settings() if solver is None else path.Settings.of(solver)
+    scene = (
+        net
+        if isinstance(net, Scene)
+        else Scene(net, Loads() if loads is None else loads, tuple(terms))
+    )
+    if settings is None:
+        settings = path.Settings()
     ws = workspace if workspace is not None else path.workspace(scene, settings)
     result = None
     if x is None:
@@ -509,7 +510,6 @@ def modes(
                 f"modes: no equilibrium to take the modes about: {result.message or 'not at rest'}"
             )
         x = result.x
-    cables = getattr(scene, "cables", None)
-    found = natural_modes(ws, x, k, mass=mass, method=method, cables=cables, added=added)
+    found = natural_modes(ws, x, k, mass=mass, method=method, cables=scene.cables, added=added)
     found.equilibrium = result
     return found

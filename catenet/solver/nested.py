@@ -65,9 +65,9 @@ def coarse_factor(scene, settings, given_start: bool) -> float | None:
         return None
     forced = mode == "nested"
 
-    if given_start or not callable(getattr(scene, "coarser", None)):
+    if given_start or scene.coarsen is None:
         return None  # the given state (a load case's base state); a net without its case
-    if getattr(scene, "terms", ()):
+    if scene.terms:
         if forced:
             raise ConfigError(
                 'solver.start = "nested": a net with obstacles, bodies or self-contact has '

@@ -1,9 +1,9 @@
 """One solve path: a scene under solver settings, static (in load steps) or dynamic.
 
 ``catenet run``, ``catenet sweep``, the benchmark studies and ``catenet validate`` all call
-``solve``; nothing else dispatches on the method. A scene is anything with ``net``,
-``loads`` and (optionally) ``terms``, the internal energy terms it adds to the stretching
-of its edges: a case's ``Scene`` or a ``Problem`` made in Python.
+``solve``; nothing else dispatches on the method. A scene is a ``catenet.scene.Scene``:
+a net, its loads and the internal energy terms it adds to the stretching of its edges,
+read from a case file or built in Python.
 
 Static runs find the equilibria at load factors k/steps, k = 1..steps, each from the
 last (a force-displacement curve; one step: the equilibrium directly). Dynamic runs are
@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError, ConvergenceError, Interrupted, LastGood
-from catenet.model.net import Loads, Net
 from catenet.model.peaks import Peaks
 from catenet.model.transfer import transfer
+from catenet.scene import Scene
 from catenet.solver.loadsteps import continuation
 from catenet.solver.nested import NestedStart, coarse_factor, coarse_scene, free_dofs
 from catenet.solver.result import Outcome, Result
@@ -39,15 +39,6 @@ from catenet.solver.start import start_state
 from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Problem:
-    """A scene made in Python: a net, its loads and further internal energy terms."""
-
-    net: Net
-    loads: Loads
-    terms: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -85,20 +76,26 @@ OnStep = Callable[[Step], bool | None]
 
 def workspace(scene, settings: Settings, **kwargs) -> Workspace:
     """The workspace of a scene: its terms' pattern and the linear solver's analysis."""
-    return Workspace(scene.net, linear=settings.linear, terms=getattr(scene, "terms", ()), **kwargs)
+    return Workspace(scene.net, linear=settings.linear, terms=scene.terms, **kwargs)
 
 
 def solve(
-    scene,
-    settings: Settings,
+    scene: Scene,
+    settings: Settings | None = None,
     *,
     workspace: Workspace | None = None,
     start: Start | None = None,
     on_step: OnStep | None = None,
     peaks: Peaks | None = None,
+    **keys,
 ) -> Result:
-    """Solves ``scene`` as ``settings`` say (see the module docstring). ``peaks``: where
-    the run's peaks accumulate (pass one to keep them when the run fails)."""
+    """Solves ``scene`` (a ``catenet.scene.Scene``) as ``settings`` say (see the module
+    docstring; None: the defaults), with any [solver] key changed by ``keys``
+    (``solve(scene, method="dynamic", dt=1e-3)``). ``peaks``: where the run's peaks
+    accumulate (pass one to keep them when the run fails)."""
+    settings = Settings() if settings is None else settings
+    if keys:
+        settings = dataclasses.replace(settings, **keys)
     ws = workspace if workspace is not None else globals()["workspace"](scene, settings)
     start = start or Start()
     if peaks is None:
@@ -200,7 +197,7 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
 
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
-    v_scene = getattr(scene, "velocity", None)  # a case's [[mass]] velocities
+    v_scene = scene.velocity  # a case's [[mass]] velocities
     v = start.v if start.v is not None else v_scene
     v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
     x0[net.fixed] = loads.support_positions(net, time=start.t)

@@ -91,5 +91,3 @@ def _advance(t: float, h: float, t0: float, t_end: float, quantum: float) -> flo
     if (h / quantum).is_integer():
         return t0 + round((t + h - t0) / quantum) * quantum
     return t + h
-
-

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from catenet.errors import CatenetError, ConfigError
+from catenet.scene import Scene
 from catenet.sweep.jobs import SUMMARY_COLUMNS, Job, Sweep, case_api, mode_columns, overrides
 
 log = logging.getLogger(__name__)
@@ -283,7 +284,7 @@ def _solve(case, scene, net, ws, x_prev):
     settings = sv.Settings.of(case.solver)
     if x_prev is not None and settings.method == "static":
         settings = dataclasses.replace(settings, steps=1)
-    problem = sv.Problem(net, scene.loads, getattr(scene, "terms", ()))
+    problem = Scene(net, scene.loads, getattr(scene, "terms", ()))
     r = sv.solve(problem, settings, workspace=ws, start=sv.Start(x=x_prev))
     if not r.converged:
         raise ConvergenceError(

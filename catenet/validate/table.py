@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.scene import Scene
 from catenet.validate import analytic
 
 log = logging.getLogger(__name__)
@@ -219,7 +220,7 @@ def _solve(net, loads, x0=None):
     """The static equilibrium through catenet's one solve path."""
     from catenet.solver import path as sv
 
-    problem = sv.Problem(net, loads)
+    problem = Scene(net, loads)
     return sv.solve(problem, sv.Settings(rtol=RTOL), start=sv.Start(x=x0))
 
 

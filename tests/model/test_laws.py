@@ -21,7 +21,8 @@ from catenet.case import build, parse_case
 from catenet.errors import ConfigError
 from catenet.kernels.laws import density, strain_for_force
 from catenet.model.laws import LAWS, Law, table_rows
-from catenet.solver.path import Problem, Settings, solve
+from catenet.scene import Scene
+from catenet.solver.path import Settings, solve
 from catenet.terms import Stretch, check_derivatives
 
 TABLE = [[0.02, 40.0], [0.1, 120.0], [0.3, 200.0], [0.6, 500.0]]  # strain, tension [N]
@@ -112,7 +113,7 @@ def test_a_bar_stretched_to_fifty_percent_matches_its_closed_form(name):
     net = bar(name, EA, l0)
     force = np.zeros((2, 3))
     force[1, 0] = F
-    r = solve(Problem(net, cn.Loads(force=force)), Settings(rtol=1e-12))
+    r = solve(Scene(net, cn.Loads(force=force)), Settings(rtol=1e-12))
     assert r.converged
     assert r.x[1, 0] == pytest.approx(l0 * (1 + eps), rel=1e-10)
     assert r.tension[0] == pytest.approx(F, rel=1e-10)

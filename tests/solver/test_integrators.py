@@ -388,9 +388,9 @@ def test_implicit_euler_is_the_default_and_unchanged():
 
 
 def cn_problem(net, loads):
-    from catenet.solver.path import Problem
+    from catenet.scene import Scene
 
-    return Problem(net, loads)
+    return Scene(net, loads)
 
 
 # --------------------------------------------------------------------------- mu's effect
@@ -464,7 +464,7 @@ def test_newmark_relaxes_the_paper_net_at_large_steps(dt):
 def test_newmark_keeps_every_node_outside_a_sphere(dt):
     """A net falling under its weight and a pressure onto a fixed sphere, with newmark:
     no node inside it at any accepted step of any step size."""
-    from catenet.solver.path import Problem
+    from catenet.scene import Scene
     from catenet.terms.contact import Sphere
 
     sq = cn.square_net(10, 0.3, 1.0, 0.05, cn.Material.from_E(10e6, radius=0.01, density=1000.0))
@@ -473,7 +473,7 @@ def test_newmark_keeps_every_node_outside_a_sphere(dt):
     ball = Sphere(np.flatnonzero(~net.fixed), [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
     gaps = []
     r = solve(
-        Problem(net, loads, (ball,)),
+        Scene(net, loads, (ball,)),
         Settings("dynamic", dt=dt, damping=5.0, t_end=0.3, integrator="newmark"),
         on_step=lambda s: gaps.append(float(ball.gap(s.x).min())),
     )

@@ -93,7 +93,7 @@ def test_lanczos_matches_dense_and_is_m_orthonormal():
     shapes are M-orthonormal to 1e-10 (Phi^T M Phi = I) and every mode satisfies
     K phi = omega^2 M phi to round-off."""
     net = taut_cable(3.0, 200.0, 2e5, 0.3, 60, axis=1)
-    ws = workspace(catenet.solver.path.Problem(net, Loads()), Settings())
+    ws = workspace(catenet.scene.Scene(net, Loads()), Settings())
     x = catenet.modes(net, None, 1).x
     dense = natural_modes(ws, x, 12, method="dense")
     lanczos = natural_modes(ws, x, 12, method="lanczos")
@@ -388,7 +388,7 @@ def test_unstable_equilibrium_is_refused():
 
     net = cable([0, 0, 0], [1, 0, 0], 101, Material(EA=1e4, line_density=0.1), length=1.01)
     net = net.replace(tension_only=False)
-    ws = workspace(catenet.solver.path.Problem(net, Loads()), Settings())
+    ws = workspace(catenet.scene.Scene(net, Loads()), Settings())
     for method in ("dense", "lanczos"):
         with pytest.raises(ConvergenceError, match="unstable.*compressed bilateral edges"):
             natural_modes(ws, net.nodes, 3, method=method)
@@ -447,7 +447,7 @@ def test_massless_cables_with_point_masses():
     half = taut_cable(L, T, EA, 0.5, 200)
     density = np.where(np.arange(half.n_edges) < 100, 0.0, 0.5)
     half = half.replace(line_density=density)
-    ws = workspace(catenet.solver.path.Problem(half, Loads()), Settings())
+    ws = workspace(catenet.scene.Scene(half, Loads()), Settings())
     x = catenet.modes(half, None, 1).x
     dense = natural_modes(ws, x, 6, method="dense")
     lanczos = natural_modes(ws, x, 6, method="lanczos")

@@ -13,8 +13,9 @@ import pytest
 
 from catenet.model.builders import Material, cable
 from catenet.model.net import Loads
+from catenet.scene import Scene
 from catenet.solver.modes import natural_modes
-from catenet.solver.path import Problem, Settings, workspace
+from catenet.solver.path import Settings, workspace
 
 RHO, AREA, EA, T = 7850.0, 1e-4, 2e7, 5000.0  # steel wire, N
 RHO_W, CA = 1025.0, 1.0
@@ -36,7 +37,7 @@ def test_string_in_water_lateral_scaled_axial_unchanged(edges, method):
     exactly (the same shapes), the axial ones (along t: no added mass) unchanged; and
     the continuum's f_n = n / (2 L) sqrt(T / (mu + Ca rho_w A)) in the limit."""
     net = string(edges, [1.0, 2.0, -0.7])
-    ws = workspace(Problem(net, Loads()), Settings())
+    ws = workspace(Scene(net, Loads()), Settings())
     added = CA * RHO_W * AREA * net.rest_length
     dry = natural_modes(ws, net.nodes, 12, method=method)
     wet = natural_modes(ws, net.nodes, 12, method=method, added=added)
@@ -68,7 +69,7 @@ def test_an_axial_mode_is_unchanged():
     """Enough modes to reach the first axial one (f = sqrt(EA / (rho A)) / (2 L0)):
     with and without the water, the same frequency."""
     net = string(20, [0.0, 1.0, 1.0])
-    ws = workspace(Problem(net, Loads()), Settings())
+    ws = workspace(Scene(net, Loads()), Settings())
     added = CA * RHO_W * AREA * net.rest_length
     every = 3 * 19
     dry = natural_modes(ws, net.nodes, every, method="dense")

@@ -14,6 +14,7 @@ from meshes import hypar_roof
 
 from catenet.case import build, load_case, parse_case
 from catenet.errors import ConfigError
+from catenet.scene import Scene
 from catenet.solver import nested
 from catenet.solver import path as sv
 
@@ -111,7 +112,7 @@ def test_a_load_case_from_the_base_state_is_not_nested():
     s, settings = scene(N10)
     base = sv.solve(s, settings)
     r = sv.solve(
-        sv.Problem(s.net, s.loads),
+        Scene(s.net, s.loads),
         dataclasses.replace(settings, start="nested"),
         start=sv.Start(x=base.x),
     )

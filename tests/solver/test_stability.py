@@ -133,9 +133,7 @@ def test_a_chain_of_struts_never_ends_converged(tmp_path, k, units):
 
 
 @pytest.mark.parametrize("units", list(UNITS))
-def test_a_shallow_truss_stands_below_its_snap_through_load_and_collapses_above(
-    tmp_path, units
-):
+def test_a_shallow_truss_stands_below_its_snap_through_load_and_collapses_above(tmp_path, units):
     below = tmp_path / "below.h5"
     r = invoke("run", write(tmp_path, truss(0.8 * P_CR, units)), "-o", below, "-q")
     assert r.exit_code == 0, r.output

@@ -25,7 +25,8 @@ import numpy as np
 from scipy.optimize import fsolve
 
 from catenet.model.net import Loads, Net
-from catenet.solver.path import Problem, Settings, solve
+from catenet.scene import Scene
+from catenet.solver.path import Settings, solve
 from catenet.terms.contact import Sphere, default_stiffness
 
 X, Z_S, LENGTH, W = 2.0, 0.0, 5.0, 1.0
@@ -80,7 +81,7 @@ def hang(n: int):
     )
     free = np.flatnonzero(~net.fixed)
     ball = Sphere(free, [0, 0, 0], R, kappa=default_stiffness(W * LENGTH / n, dhat), dhat=dhat)
-    r = solve(Problem(net, Loads(gravity=np.array([0, 0, -9.81])), (ball,)), Settings(rtol=1e-10))
+    r = solve(Scene(net, Loads(gravity=np.array([0, 0, -9.81])), (ball,)), Settings(rtol=1e-10))
     assert r.converged
     gap = ball.gap(r.x)
     assert gap.min() > 0.0

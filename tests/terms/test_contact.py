@@ -28,7 +28,8 @@ from scipy.optimize import brentq
 
 import catenet as cn
 from catenet.kernels.contact import barrier
-from catenet.solver.path import Problem, Settings, solve
+from catenet.scene import Scene
+from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import Plane, Sphere, default_stiffness
 
@@ -104,7 +105,7 @@ def seabed_chain(n: int, EA: float, dhat: float = 1e-2):
     a = brentq(
         lambda a: L - math.sqrt(h * h + 2 * a * h) + a * math.acosh(1 + h / a) - X, 1e-3, 1e4
     )
-    return Problem(net, loads, (bed,)), bed, a * w, L - math.sqrt(h * h + 2 * a * h), L / (n - 1)
+    return Scene(net, loads, (bed,)), bed, a * w, L - math.sqrt(h * h + 2 * a * h), L / (n - 1)
 
 
 @pytest.mark.parametrize("method", ["static", "dynamic"])
@@ -139,7 +140,7 @@ def test_no_node_ever_enters_a_sphere_that_catches_a_falling_net(dt):
     gaps = []
     settings = Settings("dynamic", dt=dt, damping=5.0, t_end=0.3)
     r = solve(
-        Problem(net, loads, (ball,)),
+        Scene(net, loads, (ball,)),
         settings,
         on_step=lambda s: gaps.append(float(ball.gap(s.x).min())),
     )

@@ -22,7 +22,8 @@ from contact_cases import block
 
 import catenet as cn
 from catenet.model.net import Loads, Net
-from catenet.solver.path import Problem, Settings, Start, solve
+from catenet.scene import Scene
+from catenet.solver.path import Settings, Start, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import Plane, Sphere, default_stiffness
 from catenet.terms.friction import Friction
@@ -171,7 +172,7 @@ def test_a_node_on_a_sphere_sticks_where_tan_theta_is_below_mu_and_slides_off_be
         kappa=default_stiffness(m * g * math.cos(theta), dhat),
         dhat=dhat,
     )
-    problem = Problem(
+    problem = Scene(
         net, Loads(gravity=np.array([0.0, 0.0, -g])), (ball, Friction(ball, mu=mu, slip=slip))
     )
     if mu > math.tan(theta):
@@ -204,7 +205,7 @@ def mooring(n=61):
     free = np.flatnonzero(~net.fixed)
     bed = Plane(free, [0, 0, 0], [0, 0, 1], kappa=default_stiffness(w * L / n, dhat), dhat=dhat)
     gravity = np.array([0.0, 0.0, -9.81])
-    laid = solve(Problem(net, Loads(gravity=gravity), (bed,)), Settings("static", rtol=1e-9))
+    laid = solve(Scene(net, Loads(gravity=gravity), (bed,)), Settings("static", rtol=1e-9))
     assert laid.converged
     return net, bed, gravity, laid.x
 
@@ -226,7 +227,7 @@ def test_a_mooring_line_on_the_seabed_keeps_its_grounded_part_under_a_sideways_p
     out = {}
     for mu in (0.0, 1.0):
         terms = (bed, Friction(bed, mu=mu, slip=bed.dhat)) if mu else (bed,)
-        r = solve(Problem(net, loads, terms), Settings("static", rtol=1e-9), start=Start(x=laid))
+        r = solve(Scene(net, loads, terms), Settings("static", rtol=1e-9), start=Start(x=laid))
         assert r.converged and bed.gap(r.x).min() > 0
         out[mu] = r.x
     slid = {mu: np.linalg.norm((x - laid)[:, :2], axis=1) for mu, x in out.items()}
@@ -238,9 +239,7 @@ def test_a_mooring_line_on_the_seabed_keeps_its_grounded_part_under_a_sideways_p
     # In 4 load steps (weight and pull growing together) the line ends where one step
     # puts it, to well within the slip distance.
     rough = (bed, Friction(bed, mu=1.0, slip=bed.dhat))
-    r = solve(
-        Problem(net, loads, rough), Settings("static", rtol=1e-9, steps=4), start=Start(x=laid)
-    )
+    r = solve(Scene(net, loads, rough), Settings("static", rtol=1e-9, steps=4), start=Start(x=laid))
     assert r.converged and np.abs(r.x - out[1.0]).max() < 0.1 * bed.dhat
 
 

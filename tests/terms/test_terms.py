@@ -19,7 +19,8 @@ import pytest
 from numba import njit
 
 import catenet as cn
-from catenet.solver.path import Problem, Settings, solve
+from catenet.scene import Scene
+from catenet.solver.path import Settings, solve
 from catenet.terms import (
     TERMS,
     ExternalForce,
@@ -93,7 +94,7 @@ def test_the_toy_term_gives_the_closed_form_static_answer(k):
     force = np.zeros((2, 3))
     force[1, 0] = F
     loads = cn.Loads(force=force)
-    r = solve(Problem(net, loads, (AnchorSpring(net, k),)), Settings(rtol=1e-12))
+    r = solve(Scene(net, loads, (AnchorSpring(net, k),)), Settings(rtol=1e-12))
     u = F / (EA / l0 + k)
     assert r.converged
     assert r.x[1] == pytest.approx([l0 + u, 0.0, 0.0], rel=1e-12, abs=1e-14)
@@ -113,7 +114,7 @@ def test_the_toy_term_holds_a_slack_net_that_would_be_a_mechanism():
     f = np.array([1e-3, -2e-3, -5e-3])
     force = np.zeros((net.n_nodes, 3))
     force[~net.fixed] = f
-    r = solve(Problem(net, cn.Loads(force=force), (AnchorSpring(net, k),)), Settings(rtol=1e-10))
+    r = solve(Scene(net, cn.Loads(force=force), (AnchorSpring(net, k),)), Settings(rtol=1e-10))
     free = ~net.fixed
     assert r.converged
     assert not r.tension.any()
@@ -132,7 +133,7 @@ def test_a_dynamic_run_with_the_toy_term_settles_on_its_static_answer():
     )
     force = np.zeros((2, 3))
     force[1, 0] = F
-    problem = Problem(net, cn.Loads(force=force), (AnchorSpring(net, k),))
+    problem = Scene(net, cn.Loads(force=force), (AnchorSpring(net, k),))
     r = solve(problem, Settings(method="dynamic", dt=0.01, damping=20.0, t_end=50.0))
     assert r.equilibrium
     assert r.x[1, 0] == pytest.approx(l0 + F / (EA / l0 + k), rel=1e-7)

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -26,11 +26,11 @@ FACES = np.array(
 @dataclass(frozen=True, eq=False)
 class Box:
     """The outside of a box: ``center``, ``half_size`` along its axes, which are the
-    columns of ``axes`` (a rotation matrix)."""
+    columns of ``axes`` (a rotation matrix; default the identity)."""
 
     center: np.ndarray
     half_size: np.ndarray
-    axes: np.ndarray
+    axes: np.ndarray = field(default_factory=lambda: np.eye(3))  # aligned with x, y, z
 
     kind: ClassVar[str] = "box"
     origin_key: ClassVar[str] = "center"

@@ -1,0 +1,130 @@
+"""A scene built in Python (``catenet.Scene.of(...).with_obstacle(...)``) and the same scene
+read from a case file are the same computation: the same terms by the same contact
+policy, the same trajectory to the bit.
+
+The capture scene: an 11 x 11 net of 1 m cells (E = 100 GPa, radius 1 mm, density 970,
+tension-only) thrown at 3 m/s onto a box (half sizes 1.5, 1, 1) with Coulomb friction
+0.3 and a cylinder lying beside it, in zero gravity, undamped; and a net pressed by its
+weight onto a plane (a static solve through the contact policy's stages)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import catenet
+from catenet.case import build, parse_case
+from catenet.errors import ConfigError
+
+N = 11
+
+
+def grid() -> tuple[list, list]:
+    nodes = [[i - 5.0, j - 5.0, 2.0] for j in range(N) for i in range(N)]
+    edges = [[j * N + i, j * N + i + 1] for j in range(N) for i in range(N - 1)]
+    edges += [[j * N + i, (j + 1) * N + i] for j in range(N - 1) for i in range(N)]
+    return nodes, edges
+
+
+def capture_case() -> dict:
+    nodes, edges = grid()
+    return {
+        "geometry": {
+            "kind": "graph", "nodes": nodes, "edges": edges, "fixed": [],
+            "sets": {"net": list(range(N * N))},
+        },
+        "material": {"E": 100e9, "radius": 0.001, "density": 970.0},
+        "mass": [{"node": "net", "mass": 0.0, "velocity": [0.0, 0.0, -3.0]}],
+        "obstacle": [
+            {"kind": "box", "center": [0.0, 0.0, 0.0], "half_size": [1.5, 1.0, 1.0],
+             "friction": 0.3},
+            {"kind": "cylinder", "start": [3.0, -2.0, 0.5], "end": [3.0, 2.0, 0.5],
+             "radius": 0.5},
+        ],
+        "solver": {"method": "dynamic", "dt": 0.002, "t_end": 0.4, "damping": 0.0},
+    }  # fmt: skip
+
+
+def capture_scene() -> catenet.Scene:
+    """The same scene, written from the Python API alone."""
+    nodes, edges = grid()
+    material = catenet.Material.from_E(100e9, radius=0.001, density=970.0)
+    net = catenet.graph(nodes, edges, [], material, flies=True)  # no support: it flies
+    velocity = np.tile([0.0, 0.0, -3.0], (net.n_nodes, 1))
+    return (
+        catenet.Scene.of(net, catenet.Loads(), velocity=velocity)
+        .with_obstacle(catenet.Box([0.0, 0.0, 0.0], [1.5, 1.0, 1.0]), friction=0.3)
+        .with_obstacle(catenet.Cylinder([3.0, -2.0, 0.5], [3.0, 2.0, 0.5], 0.5))
+    )
+
+
+def trajectory(scene, settings) -> list[np.ndarray]:
+    states: list[np.ndarray] = []
+    result = catenet.solve(scene, settings, on_step=lambda s: states.append(s.x.copy()))
+    assert result.converged or result.message
+    return [*states, result.x]
+
+
+def test_the_capture_from_python_and_from_toml_is_the_same_to_the_bit():
+    case = parse_case(capture_case())
+    read = build(case)
+    made = capture_scene()
+    assert [type(t).__name__ for t in read.terms] == [type(t).__name__ for t in made.terms]
+    for a, b in zip(read.terms, made.terms, strict=True):
+        assert vars(a).keys() == vars(b).keys()
+        for key, value in vars(a).items():  # every number the same (the barriers' kappa, dhat)
+            if isinstance(value, (float, np.ndarray)):
+                assert np.array_equal(value, vars(b)[key]), key
+    assert np.array_equal(read.net.nodes, made.net.nodes)
+    assert np.array_equal(read.velocity, made.velocity)
+    settings = catenet.Settings.of(case.solver)
+    assert settings == catenet.Settings("dynamic", dt=0.002, t_end=0.4, damping=0.0)
+    a = trajectory(read, settings)
+    b = trajectory(made, settings)
+    assert len(a) == len(b) > 100
+    touched = [float(read.terms[0].gap(x).min()) for x in a]
+    assert min(touched) < read.terms[0].dhat  # the net did meet the box
+    for xa, xb in zip(a, b, strict=True):
+        assert np.array_equal(xa, xb)
+
+
+def test_a_static_net_on_the_ground_from_python_and_from_toml():
+    """Static: the contact policy's continuation stages, from a case and from Python."""
+    nodes, edges = grid()
+    case = parse_case(
+        {
+            "geometry": {
+                "kind": "graph", "nodes": nodes, "edges": edges, "fixed": [0, 10, 110, 120]
+            },
+            "material": {"EA": 1e4, "density": 1000.0, "area": 1e-4},
+            "load": {"gravity": [0.0, 0.0, -9.81]},
+            "obstacle": [{"kind": "plane", "point": [0.0, 0.0, 1.9]}],
+            "solver": {"method": "static"},
+        }
+    )  # fmt: skip
+    read = build(case)
+    material = catenet.Material(EA=1e4, line_density=0.1)
+    net = catenet.graph(nodes, edges, [0, 10, 110, 120], material)
+    loads = catenet.Loads(gravity=np.array([0.0, 0.0, -9.81]))
+    made = catenet.Scene.of(net, loads).with_obstacle(catenet.Plane([0.0, 0.0, 1.9], [0, 0, 1.0]))
+    assert len(read.terms[0].stages) == len(made.terms[0].stages) > 0
+    ra = catenet.solve(read, catenet.Settings.of(case.solver))
+    rb = catenet.solve(made, catenet.Settings.of(case.solver))
+    assert ra.converged and rb.converged
+    assert np.array_equal(ra.x, rb.x)
+    assert ra.x[:, 2].min() > 1.9
+
+
+def test_the_builder_refuses_a_net_inside_an_obstacle_naming_it():
+    made = capture_scene()
+    with pytest.raises(ConfigError, match=r"obstacle\[2\] \(kind 'sphere'\): node 60"):
+        made.with_obstacle(catenet.Sphere([0.0, 0.0, 2.0], 0.2))
+
+
+def test_solve_takes_solver_keys():
+    nodes, edges = grid()
+    net = catenet.graph(nodes, edges, [0, 10, 110, 120], catenet.Material(EA=1e4, line_density=0.1))
+    scene = catenet.Scene.of(net, catenet.Loads(gravity=np.array([0.0, 0.0, -9.81])))
+    a = catenet.solve(scene, steps=2)
+    b = catenet.solve(scene, catenet.Settings(steps=2))
+    assert a.converged and np.array_equal(a.x, b.x)
