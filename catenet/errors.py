@@ -31,6 +31,7 @@ class CatenetError(Exception):
 
     last_good: LastGood | None = None
     output: Path | None = None
+    iterations: int = 0  # the Newton iterations the failing solve spent (where counted)
 
 
 class ConfigError(CatenetError, ValueError):

@@ -264,7 +264,7 @@ def probe_of(scene, x: np.ndarray) -> tuple[int, bool]:
     """The probe node of a scene's state x and whether it was chosen for it: the scene's
     (``output.probe``, else its geometry's), or with ``scene.probe_auto`` (a graph without
     ``output.probe``) the free node that moves most."""
-    if getattr(scene, "probe_auto", False):
+    if scene.probe_auto:
         k = most_moved(scene.net, x)
         if k >= 0:
             return k, True
@@ -294,7 +294,7 @@ def summarize_result(scene, res, loads=None) -> dict:
         out["sag_normal"] = chain["normal"]
         out["sag_vertical"] = chain["vertical"]
         out["sag_node"] = chain["node"]
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     if cables is not None:  # which cable the largest displacement belongs to
         out["max_displacement_cable"] = _cable_of(scene.net, cables, out["max_displacement_node"])
         out["cables"] = cable_summary(

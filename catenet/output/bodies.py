@@ -30,7 +30,7 @@ from catenet.output.reader import open_result, trajectory_length
 
 def write_bodies(mesh, scene) -> None:
     """Adds /mesh/bodies for the scene's moving spheres (nothing without any)."""
-    bodies = getattr(scene, "bodies", ())
+    bodies = scene.bodies
     if not bodies:
         return
     g = mesh.create_group("bodies")

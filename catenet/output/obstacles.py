@@ -205,7 +205,7 @@ class Obstacles:
     ``grids`` (for the sidecar)."""
 
     def __init__(self, scene):
-        case = getattr(scene, "case", None)
+        case = scene.case
         obstacles = getattr(case, "obstacles", ()) or ()
         self.items = []
         self.moving = []
@@ -216,7 +216,7 @@ class Obstacles:
         net = scene.net
         cover = net.nodes[: getattr(net, "n_net", net.n_nodes)]
         cap = frame_cap(net.n_nodes)
-        free = {b.obstacle: b for b in getattr(scene, "rigid", ())}
+        free = {b.obstacle: b for b in scene.rigid}
         for k, obs in enumerate(obstacles):
             s = surface(obs.to_dict(), k, cover)
             if s is not None:

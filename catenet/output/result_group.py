@@ -40,7 +40,7 @@ def write_result_group(
     g = h5.create_group(name)
     g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
     g.create_dataset("tension", data=tension)
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     peaks = getattr(res, "peaks", None)
     if cables is not None:
         per = summary.cable_summary(

@@ -120,7 +120,7 @@ class ResultWriter:
         self.every = int(every)
         self.xdmf = bool(xdmf)
         if velocities is None:
-            solver = getattr(getattr(scene, "case", None), "solver", None)
+            solver = getattr(scene.case, "solver", None)
             velocities = getattr(solver, "method", "static") == "dynamic"
         self.velocities = bool(velocities)
         self.accelerations = bool(accelerations)
@@ -237,7 +237,7 @@ class ResultWriter:
         mesh.attrs["size"] = float(scene.size)
         write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)
         self.obstacles.write_mesh(mesh)  # /mesh/obstacles
-        cables = getattr(scene, "cables", None)
+        cables = scene.cables
         if cables is not None:  # a graph's cables: the cable of every edge (-1: none)
             import h5py
 

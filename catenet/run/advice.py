@@ -374,7 +374,7 @@ def lines_without_catenary(case, scene) -> list[str]:
         return []
     net = scene.net
     g = np.asarray(case.load.gravity, dtype=np.float64)
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     if cables is not None:
         chains = [(n, np.flatnonzero(cables.edge == k)) for k, n in enumerate(cables.names)]
     else:

@@ -14,7 +14,7 @@ class BodyWatch:
     what the summary reports (``stats``)."""
 
     def __init__(self, scene):
-        rigid = getattr(scene, "rigid", ())
+        rigid = scene.rigid
         contacts = {}
         if rigid:  # (the contact kernels load only for a scene with free bodies)
             from catenet.terms.rigid_contact import BodyContact

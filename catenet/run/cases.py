@@ -72,12 +72,12 @@ def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRu
     from catenet.solver.result import Outcome, finish
     from catenet.solver.stability import CollapseError
 
-    case = getattr(scene, "case", None)
+    case = scene.case
     slips = unit_slips(case, scene.net) if case is not None else []
     runs = []
     for c in cases:
         loads = Increment(base=scene.loads, added=c.force)
-        problem = Scene(scene.net, loads, getattr(scene, "terms", ()))
+        problem = Scene(scene.net, loads, scene.terms)
         start = sv.Start(x=base.x)
         log.info("%s %s: solving from the base state", _kind(c), c.name)
         try:

@@ -31,7 +31,7 @@ MOST_SHARE = 0.1  # ... each with at least this share of the mode's kinetic ener
 def check_modes_input(scene, count) -> None:
     """ConfigError for a count that is not a positive integer or above the free DOFs,
     and for a net with no mass at its free nodes."""
-    n_free = 3 * int(np.count_nonzero(~scene.net.fixed)) - 6 * len(getattr(scene, "rigid", ()))
+    n_free = 3 * int(np.count_nonzero(~scene.net.fixed)) - 6 * len(scene.rigid)
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
@@ -58,7 +58,7 @@ def added_line(case, scene) -> np.ndarray | None:
     net = scene.net
     base = added_line_mass(case.material)
     per_edge = np.full(net.n_edges, base)
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     listed = getattr(case.geometry, "cables", ())
     if cables is not None and listed:
         from catenet.case.kinds.cables import cable_materials
@@ -168,7 +168,7 @@ def mode_rows(scene, modes) -> list[ModeRow]:
     with the largest shares of its kinetic energy (edge by edge, rho A l0 / 2 of each
     end), else the node that moves most."""
     net = scene.net
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     dominant = modes.dominant()
     total = np.where(modes.total_mass > 0, modes.total_mass, 1.0)
     rows = []
@@ -190,7 +190,7 @@ def _body_moves(scene, shape: np.ndarray, x: np.ndarray) -> str:
     """The free body that carries most of a mode's kinetic energy, if one carries at
     least half of it: "obstacle[k] (kind)", and "turning about [a, b, c]" where its
     rotation carries most of its own (else ""). The body's four nodes have masses m/4."""
-    rigid = getattr(scene, "rigid", ())
+    rigid = scene.rigid
     if not rigid:
         return ""
     mass = scene.net.mass

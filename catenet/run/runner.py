@@ -1,11 +1,13 @@
 """Running a case: build the scene, solve it (static in load steps, or dynamic), and write
 the result file while the run goes on.
 
-``run_case`` checks everything a user can get wrong (the case, the restart file, the
-output path, the linear backend) before it creates the output file, so bad input leaves no
-file behind. Once running it never loses what it has: a run that fails to converge, is
-interrupted (``stop()`` returns True) or is refused a non-finite state closes the file
-with its last good state in /result and ``converged = false``.
+``run_case`` is a plan (``plan``: everything a user can get wrong, the case, the restart
+file, the output path, the linear backend, checked before the output file is created, so
+bad input leaves no file behind), the solve with its file (``run_steps``), the load cases
+from the base state, and the report. Once running it never loses what it has: a run
+that fails to converge, is interrupted (``stop()`` returns True) or is refused a
+non-finite state closes the file with its last good state in /result and
+``converged = false``.
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ import logging
 import os
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.run.report import CableSummary, RunReport, RunResult
@@ -23,7 +27,15 @@ from catenet.run.steps import NoFile, run_steps
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RestartState", "output_path", "read_restart", "refuse_formfind", "run_case"]
+__all__ = [
+    "Plan",
+    "RestartState",
+    "output_path",
+    "plan",
+    "read_restart",
+    "refuse_formfind",
+    "run_case",
+]
 
 Progress = Callable[..., None]
 Stop = Callable[[], bool]
@@ -46,6 +58,82 @@ def refuse_formfind(case) -> None:
             f"formfind: {src} is a form-finding case: find its shape with `catenet formfind "
             f"{src} -o OUT.h5`, then run the case OUT.toml it writes"
         )
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A run checked before anything is written (``plan``): the ``case``, its built
+    ``scene``, the output ``path`` (None: no file), the ``restart`` state (None: from
+    the start), the load ``cases`` to solve from the base state, the solve ``settings``
+    with the resolved linear ``backend``, the ``trajectory`` estimate (None: no file)
+    and the result file's run ``attrs``."""
+
+    case: Any
+    scene: Any
+    path: Path | None
+    restart: RestartState | None
+    cases: tuple
+    settings: Any
+    backend: str
+    trajectory: Any
+    attrs: dict
+
+
+def plan(case, out=None, *, restart=None, scene=None, load_case=None) -> Plan:
+    """Everything a user can get wrong, checked before the output file is created (the
+    case, the restart file, the output path, the linear backend), and the warnings a case
+    earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
+    from catenet.case import build
+    from catenet.output import check_output_path
+    from catenet.run import advice
+    from catenet.run.cases import pick
+    from catenet.solver import path as sv
+    from catenet.solver.linear import resolve_backend
+    from catenet.solver.threads import set_threads
+
+    refuse_formfind(case)
+    path = output_path(case, out)
+    if path is not None:  # before anything is built: a bad path is found at once
+        check_output_path(path)
+        _probe_directory(path)
+    scene = build(case) if scene is None else scene
+    cases = pick(scene, load_case)
+    solver = case.solver
+    state = read_restart(restart, scene) if restart is not None else None
+    if path is not None:
+        source = Path(getattr(case, "source", "") or "")
+        if source.is_file() and _same_file(path, source):
+            raise ConfigError(f"output file {str(path)!r}: is the case file itself")
+        if restart is not None and _same_file(path, Path(restart)):
+            raise ConfigError(
+                f"--restart {restart}: is also the output file: give another one with -o"
+            )
+    for slip in advice.unit_slips(case, scene.net):  # a material no cable is made of
+        log.warning("%s", slip)
+    hopeless = advice.lines_without_catenary(case, scene)
+    if hopeless:  # no static equilibrium to find: say so at once, not after minutes
+        raise ConfigError(hopeless)
+    notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
+    for message in notes + advice.newmark_contact(case):
+        log.warning("%s", message)
+    trajectory = None
+    if path is not None:
+        trajectory = advice.trajectory(case, scene.net, 0.0 if state is None else state.t)
+    if trajectory is not None:
+        if trajectory.bytes > advice.WARN_BYTES:
+            log.warning("%s", trajectory.message())
+        else:
+            log.info("trajectory: up to %s", advice.format_bytes(trajectory.bytes))
+    backend = resolve_backend(solver.linear)
+    set_threads(solver.threads)
+    attrs = {"linear_backend": backend, "threads": int(solver.threads)}
+    if state is not None:
+        attrs["restart_from"] = str(state.path)
+        attrs["restart_time"] = float(state.t)
+    if getattr(case, "source", ""):
+        attrs["source"] = str(case.source)
+    settings = sv.Settings.of(solver, linear=backend)
+    return Plan(case, scene, path, state, cases, settings, backend, trajectory, attrs)
 
 
 def run_case(
@@ -90,92 +178,70 @@ def run_case(
     ``on_done(scene, workspace, result)`` is called after a solve that ended (not one
     that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
-    from catenet.case import build
-    from catenet.model import measures, summary
-    from catenet.output import ResultWriter, check_output_path
-    from catenet.run import advice
-    from catenet.run.cases import pick, solve_from_base
+    from catenet.run.cases import solve_from_base
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
-    from catenet.solver.linear import resolve_backend
-    from catenet.solver.threads import set_threads
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
-    refuse_formfind(case)
-    path = output_path(case, out)
-    if path is not None:  # before anything is built: a bad path is found at once
-        check_output_path(path)
-        _probe_directory(path)
-    scene = build(case) if scene is None else scene
-    cases = pick(scene, load_case)
-    solver = case.solver
-    state = read_restart(restart, scene) if restart is not None else None
-    if path is not None:
-        source = Path(getattr(case, "source", "") or "")
-        if source.is_file() and _same_file(path, source):
-            raise ConfigError(f"output file {str(path)!r}: is the case file itself")
-        if restart is not None and _same_file(path, Path(restart)):
-            raise ConfigError(
-                f"--restart {restart}: is also the output file: give another one with -o"
-            )
-    for slip in advice.unit_slips(case, scene.net):  # a material no cable is made of
-        log.warning("%s", slip)
-    hopeless = advice.lines_without_catenary(case, scene)
-    if hopeless:  # no static equilibrium to find: say so at once, not after minutes
-        raise ConfigError(hopeless)
-    notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
-    for message in notes + advice.newmark_contact(case):
-        log.warning("%s", message)
-    trajectory = None
-    if path is not None:
-        trajectory = advice.trajectory(case, scene.net, 0.0 if state is None else state.t)
-    if trajectory is not None:
-        if trajectory.bytes > advice.WARN_BYTES:
-            log.warning("%s", trajectory.message())
-        else:
-            log.info("trajectory: up to %s", advice.format_bytes(trajectory.bytes))
-    backend = resolve_backend(solver.linear)
-    set_threads(solver.threads)
-    settings = sv.Settings.of(solver, linear=backend)
+    run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
     with clock.solving():
-        ws = sv.workspace(scene, settings)
-    attrs = {"linear_backend": backend, "threads": int(solver.threads)}
-    if state is not None:
-        attrs["restart_from"] = str(state.path)
-        attrs["restart_time"] = float(state.t)
-    if getattr(case, "source", ""):
-        attrs["source"] = str(case.source)
-    newmark = solver.method == "dynamic" and solver.integrator == "newmark"
+        ws = sv.workspace(run.scene, run.settings)
+    bodies: dict = {}  # the free rigid bodies' summary, filled by run_steps
+    result = _solve(run, ws, progress, stop, interrupt, start, clock, bodies)
+    case_numbers: dict = {}  # each load case's summary numbers, by name
+    envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
+    if run.cases:
+        case_numbers, envelope = solve_from_base(
+            run.scene, run.settings, ws, result, run.cases, run.path, interrupt
+        )
+    done = RunResult.of(result, _report(run, ws, result, bodies, case_numbers, envelope))
+    if on_done is not None:
+        on_done(run.scene, ws, done)
+    return done
+
+
+def _solve(run: Plan, ws, progress, stop, interrupt, start: float, clock, bodies: dict):
+    """The base state's solve through ``run_steps``, with its result file (none without
+    a path); a failure re-raised with ``.output`` the file that holds its last good
+    state, and bad input found late leaving no file behind."""
+    from catenet.output import ResultWriter
+
+    case = run.case
+    newmark = case.solver.method == "dynamic" and case.solver.integrator == "newmark"
     writer = (
         ResultWriter(
-            path,
-            scene,
+            run.path,
+            run.scene,
             every=case.output.every,
             xdmf=case.output.xdmf,
             accelerations=newmark,
-            attrs=attrs,
+            attrs=run.attrs,
         )
-        if path is not None
+        if run.path is not None
         else NoFile()
     )
-    bodies: dict = {}  # the free rigid bodies' summary, filled by run_steps
     with writer:
         try:
-            result = run_steps(
-                scene, settings, ws, writer, state, progress, stop, interrupt, start, clock, bodies
-            )
+            return run_steps(
+                run.scene, run.settings, ws, writer, run.restart, progress, stop, interrupt,
+                start, clock, bodies,
+            )  # fmt: skip
         except CatenetError as exc:
-            exc.output = path if writer.has_result else None
+            exc.output = run.path if writer.has_result else None
             if isinstance(exc, ConfigError):
                 _remove(writer)  # bad input found late (exit 2): leave nothing behind
             raise
-    case_numbers: dict = {}  # each load case's summary numbers, by name
-    envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
-    if cases:
-        case_numbers, envelope = solve_from_base(
-            scene, settings, ws, result, cases, path, interrupt
-        )
+
+
+def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: dict):
+    """The RunReport of a solved run: the warnings its state earns (strain beyond the
+    law, at the end or at a peak), the summary's numbers, a mechanism named, per cable
+    the largest tension and the slack share."""
+    from catenet.model import measures, summary
+    from catenet.run import advice
+
+    scene, case = run.scene, run.case
     beyond = advice.strain_beyond_law(scene.net, result.x)
     if beyond:
         log.warning("%s", beyond)
@@ -185,7 +251,7 @@ def run_case(
         if passed and not (dynamic and case.solver.t_end == "rest"):
             log.warning("%s", passed)
     numbers = summary.summarize_result(scene, result)
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
         from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 
@@ -196,6 +262,7 @@ def run_case(
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
         )
+    per_cable = None
     if cables is not None:  # per cable: the largest tension and the slack share
         top, slack = measures.cable_stats(
             scene.net, result.x, result.tension, cables.edge, len(cables.names)
@@ -204,24 +271,20 @@ def run_case(
             name: CableSummary(float(t), float(s))
             for name, t, s in zip(cables.names, top, slack, strict=True)
         }
-    report = RunReport(
+    return RunReport(
         delta=float(numbers["delta"]),
         size=float(scene.size),
         probe=int(numbers["probe"]),
-        output=None if path is None else str(path),
-        backend=backend,
+        output=None if run.path is None else str(run.path),
+        backend=run.backend,
         strain_warning=beyond or "",
-        trajectory_bytes=0 if trajectory is None else trajectory.bytes,
-        cables=per_cable if cables is not None else None,
+        trajectory_bytes=0 if run.trajectory is None else run.trajectory.bytes,
+        cables=per_cable,
         bodies=bodies,
         summary=numbers,
         cases=case_numbers,
         envelope=envelope,
     )
-    run = RunResult.of(result, report)
-    if on_done is not None:
-        on_done(scene, ws, run)
-    return run
 
 
 def _probe_directory(path: Path) -> None:

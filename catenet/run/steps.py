@@ -53,7 +53,7 @@ def run_steps(
             written["step"] = step
 
     if dynamic:
-        v_start = getattr(scene, "velocity", None)  # [[mass]] velocity: initial velocities
+        v_start = scene.velocity  # [[mass]] velocity: initial velocities
         if state is None:
             start = sv.Start(v=v_start, t=0.0)
         else:

@@ -226,7 +226,7 @@ def _collapse(judge: PathJudge, why: str, at: float, good: LastGood, x1, exc=Non
         return
     verdict = COLLAPSED if judge.loaded else UNSTABLE
     error = CollapseError(message, factor=at, nodes=nodes, verdict=verdict)
-    error.iterations = int(getattr(exc, "iterations", 0))
+    error.iterations = 0 if exc is None else exc.iterations
     error.last_good = LastGood(good.x, good.time)
     raise error
 
@@ -260,7 +260,7 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
     ``_can_relax``) still fail; an interrupt at once."""
     x, f = good.x, good.time
     increment = 0.5 * (target - f)
-    spent = int(getattr(failure, "iterations", 0))
+    spent = failure.iterations
     cuts, done = 1, 0
     transient = False
     while True:
@@ -272,7 +272,7 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
                 net, loads, x0=x, factor=float(level), accepted=x, transient=transient, **settings
             )
         except ConvergenceError as exc:
-            spent += int(getattr(exc, "iterations", 0))
+            spent += exc.iterations
             if isinstance(exc, Interrupted):
                 exc.iterations = spent
                 exc.last_good = LastGood(good.x, good.time)

@@ -60,7 +60,7 @@ def coarse_factor(scene, settings, given_start: bool) -> float | None:
     """How much longer the coarse net's edges are, or None for the default start
     (module docstring). Raises ConfigError where ``solver.start = "nested"`` cannot
     apply, naming why."""
-    mode = getattr(settings, "start", "auto")
+    mode = settings.start
     if mode == "stretched" or settings.method == "dynamic":
         return None
     forced = mode == "nested"

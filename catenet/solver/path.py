@@ -164,7 +164,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
                 raise
             # the nested start failed where the default start may not: that one, counted
             log.warning("the nested start did not converge (%s): the default start", exc)
-            spent = int(getattr(exc, "iterations", 0)) + nested.iterations
+            spent = exc.iterations + nested.iterations
             nested = None
             run(start.x)
             done[0].iterations += spent
@@ -182,7 +182,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         x, factor = (None, 0.0) if good is None else (good.x, good.time)
         if x is None:
             x, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
-        spent = sum(q.iterations for q in done) + int(getattr(exc, "iterations", 0))
+        spent = sum(q.iterations for q in done) + exc.iterations
         exc.last_good = LastGood(x, factor, len(done), spent)
         raise
     r = total(done[-1])
@@ -250,7 +250,7 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
             raise
-        iterations = int(getattr(exc, "iterations", 0))
+        iterations = exc.iterations
         if last["steps"] == 0 and accel is not None:
             last["a"] = accel.copy()  # the start's state: solve_dynamic set it first
         exc.last_good = LastGood(

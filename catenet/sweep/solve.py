@@ -284,7 +284,7 @@ def _solve(case, scene, net, ws, x_prev):
     settings = sv.Settings.of(case.solver)
     if x_prev is not None and settings.method == "static":
         settings = dataclasses.replace(settings, steps=1)
-    problem = Scene(net, scene.loads, getattr(scene, "terms", ()))
+    problem = Scene(net, scene.loads, scene.terms)
     r = sv.solve(problem, settings, workspace=ws, start=sv.Start(x=x_prev))
     if not r.converged:
         raise ConvergenceError(
@@ -338,9 +338,9 @@ def _frequencies(scene, ws, result, count: int) -> dict:
     from catenet.run.modes import added_line
     from catenet.solver.modes import natural_modes
 
-    count = min(count, ws.system.n_free - 6 * len(getattr(scene, "rigid", ())))
+    count = min(count, ws.system.n_free - 6 * len(scene.rigid))
     added = added_line(scene.case, scene)  # material.added_mass, if any
-    cables = getattr(scene, "cables", None)
+    cables = scene.cables
     found = natural_modes(ws, result.x, count, cables=cables, added=added)
     f = np.full(count, np.nan)
     f[: found.count] = found.frequency
