@@ -75,7 +75,9 @@ class MoveConfig(Declared):
     factor(t) times it along a ``history`` (dynamic runs)."""
 
     node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
-    displacement: Vec3 = vec3(missing="[dx, dy, dz] [m]", unit="m", doc="[dx, dy, dz]")
+    displacement: Vec3 = vec3(
+        missing="[dx, dy, dz] [m]", unit="m", doc="its displacement (dx, dy, dz)"
+    )
     duration: float = real(
         0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
     )
