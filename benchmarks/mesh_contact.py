@@ -25,13 +25,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
 from test_shapes import icosphere  # noqa: E402
 
-from catenet.terms.shapes import Mesh  # noqa: E402
+from catenet.terms.shapes import MeshBarrier  # noqa: E402
 
 NODES = 10_000
 DHAT = 0.01
 
 
-def one_cell(term: Mesh) -> Mesh:
+def one_cell(term: MeshBarrier) -> MeshBarrier:
     """The same term with a grid of one cell holding every triangle."""
     term.h = float(np.ptp(term.vertices, axis=0).max()) + 1.0
     term.dims = np.ones(3, dtype=np.int64)
@@ -40,7 +40,7 @@ def one_cell(term: Mesh) -> Mesh:
     return term
 
 
-def evaluate(term: Mesh, x: np.ndarray, dx: np.ndarray, grad, values) -> float:
+def evaluate(term: MeshBarrier, x: np.ndarray, dx: np.ndarray, grad, values) -> float:
     start = time.perf_counter()
     grad.fill(0.0)
     term.gradient(x, grad)
@@ -64,9 +64,9 @@ def main(argv=None) -> None:
     for level in (2, 3, 4, 5):
         V, T = icosphere(level)
         V = V * (1.0 - 0.02 * 4.0**-level)  # inside the circumscribed sphere: no overlap
-        terms[("grid", len(T))] = Mesh(nodes, V, T, kappa=1.0, dhat=DHAT)
+        terms[("grid", len(T))] = MeshBarrier(nodes, V, T, kappa=1.0, dhat=DHAT)
         if level <= 3:
-            terms[("all", len(T))] = one_cell(Mesh(nodes, V, T, kappa=1.0, dhat=DHAT))
+            terms[("all", len(T))] = one_cell(MeshBarrier(nodes, V, T, kappa=1.0, dhat=DHAT))
     grad = np.zeros_like(x)
     values = np.zeros(9 * NODES)
     for term in terms.values():

@@ -72,14 +72,16 @@ def contact_scene(steps: int = STEPS):
     """(net, loads, sphere, keywords): the n = 34 net, weight and 300 Pa, onto a sphere."""
     from catenet.model.builders import pressure_force
     from catenet.model.net import Loads
-    from catenet.terms.contact import Sphere, default_stiffness
+    from catenet.terms.contact import SphereBarrier, default_stiffness
 
     sq, _ = paper_net(34, alpha=0.3)
     net = sq.net
     loads = Loads(force=pressure_force(net, 300.0, 1.0), gravity=np.array([0.0, 0.0, -9.81]))
     free = np.flatnonzero(~net.fixed)
     per_node = 300.0 / free.size + float(np.max(net.mass)) * 9.81
-    ball = Sphere(free, [0.0, 0.0, -0.23], 0.2, kappa=default_stiffness(per_node, 1e-2), dhat=1e-2)
+    ball = SphereBarrier(
+        free, [0.0, 0.0, -0.23], 0.2, kappa=default_stiffness(per_node, 1e-2), dhat=1e-2
+    )
     kw = {"dt": 1e-3, "damping": 5.0, "t_end": steps * 1e-3, "stop_at_equilibrium": False}
     return net, loads, ball, kw
 
@@ -114,7 +116,7 @@ def _static(net):
 def _scenes(quick: bool):
     """[(scene, net, {variant: runner}, reference variant, cost?)]."""
     from catenet.solver.linear import pardiso_available
-    from catenet.terms.contact import Sphere
+    from catenet.terms.contact import SphereBarrier
 
     before = pardiso_available()  # the earlier variants are of the PARDISO wrapper
     net, loads, kw = relax_scene()
@@ -129,7 +131,7 @@ def _scenes(quick: bool):
         "reuse": _runner(c_net, c_loads, c_kw, (ball,), reuse=True),
         "fresh": _runner(c_net, c_loads, c_kw, (ball,), reuse=False),
     }
-    far = Sphere(np.flatnonzero(~net.fixed), [0.0, 0.0, -5.0], 0.5, kappa=1.0, dhat=1e-2)
+    far = SphereBarrier(np.flatnonzero(~net.fixed), [0.0, 0.0, -5.0], 0.5, kappa=1.0, dhat=1e-2)
     idle = {"idle": _runner(net, loads, kw, (far,)), "none": _runner(net, loads, kw)}
     if before:
         idle["idle, before"] = _runner(net, loads, kw, (far,), solver=IndefiniteThroughout)

@@ -14,10 +14,10 @@ from scipy.optimize import brentq
 from catenet.kernels.contact import barrier
 from catenet.model.net import Loads, Net
 from catenet.scene import Scene
-from catenet.terms.contact import Plane
+from catenet.terms.contact import PlaneBarrier
 from catenet.terms.friction import Friction
 from catenet.terms.moving import Moving
-from catenet.terms.shapes import Box, Capsule, Mesh, rotation
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, rotation
 
 # --- friction: a block on a plane ---------------------------------------------------------
 
@@ -45,7 +45,7 @@ def block(*, mu, slip, force, mass=0.0, spring=None, pull=0.0, obstacle=None):
     move[0, 0] = -pull
     loads = Loads(force=f, support_displacement=move if pull else None)
     if obstacle is None:
-        obstacle = Plane(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
+        obstacle = PlaneBarrier(np.array([1]), [0, 0, 0], [0, 0, 1], kappa=KAPPA, dhat=DHAT)
     return Scene(net, loads, (obstacle, Friction(obstacle, mu=mu, slip=slip)))
 
 
@@ -58,9 +58,9 @@ W = [0.4, 1.1, -0.7]
 def moving_shapes(dhat=0.05, n=30, history=None):
     nodes = np.arange(n)
     R = rotation([1.0, 2.0, 3.0], 0.7)
-    box = Box(nodes, [0.1, 0.0, 0.0], [0.5, 0.3, 0.2], R, kappa=30.0, dhat=dhat)
-    capsule = Capsule(nodes, [0, 0, 0], [1.0, 0.5, 0.0], 0.3, kappa=30.0, dhat=dhat)
-    cube = Mesh(nodes, CUBE_V - 0.5, CUBE_T, kappa=30.0, dhat=dhat)
+    box = BoxBarrier(nodes, [0.1, 0.0, 0.0], [0.5, 0.3, 0.2], R, kappa=30.0, dhat=dhat)
+    capsule = CapsuleBarrier(nodes, [0, 0, 0], [1.0, 0.5, 0.0], 0.3, kappa=30.0, dhat=dhat)
+    cube = MeshBarrier(nodes, CUBE_V - 0.5, CUBE_T, kappa=30.0, dhat=dhat)
     return {
         "box": Moving(box, [0.1, 0, 0], V, W, history, reach=0.7),
         "capsule": Moving(capsule, [0.5, 0.25, 0], V, W, history, reach=0.9),

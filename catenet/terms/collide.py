@@ -6,8 +6,8 @@ on that one node, with the gap measured to the Minkowski sum of the shape and th
 
     g = d - r,   d the centre's distance to the shape,
 
-a box rounded by r (``Box(offset=r)``), a capsule of radius R + r (exact: a capsule is
-already a segment grown by a radius) and a mesh grown by r (``Mesh(offset=r)``). The
+a box rounded by r (``BoxBarrier(offset=r)``), a capsule of radius R + r (exact: a capsule is
+already a segment grown by a radius) and a mesh grown by r (``MeshBarrier(offset=r)``). The
 energy kappa b(g) has the gradient kappa b'(g) n and the Hessian
 kappa (b''(g) n n^T + b'(g) (P - n n^T) / d): the barrier's derivatives at the gap, the
 curvature of the offset surface over the true distance d (``catenet.kernels.shapes``).

@@ -86,7 +86,7 @@ class Obstacle(Term):
 
 
 @register("plane")
-class Plane(Obstacle):
+class PlaneBarrier(Obstacle):
     """The half-space n.(x - p) >= 0: a ground or a seabed (``point`` p, outward unit
     normal ``normal``)."""
 
@@ -116,7 +116,7 @@ class Plane(Obstacle):
 
 
 @register("sphere")
-class Sphere(Obstacle):
+class SphereBarrier(Obstacle):
     """The outside of the sphere |x - c| >= R (a fixed obstacle, or the shape of a rigid
     body whose centre the scene moves)."""
 

@@ -48,7 +48,7 @@ from catenet.kernels.friction import (
     update_anchors,
 )
 from catenet.terms.base import Term, node_block_pattern, register
-from catenet.terms.contact import Plane, Sphere
+from catenet.terms.contact import PlaneBarrier, SphereBarrier
 
 
 def contact_normals(obstacle, x: np.ndarray) -> np.ndarray:
@@ -59,9 +59,9 @@ def contact_normals(obstacle, x: np.ndarray) -> np.ndarray:
     own = getattr(obstacle, "normals", None)
     if own is not None:
         return np.ascontiguousarray(own(x), dtype=np.float64)
-    if isinstance(obstacle, Plane):
+    if isinstance(obstacle, PlaneBarrier):
         return np.ascontiguousarray(np.broadcast_to(obstacle.normal, (len(obstacle.nodes), 3)))
-    if isinstance(obstacle, Sphere):
+    if isinstance(obstacle, SphereBarrier):
         r = x[obstacle.nodes] - obstacle.center
         return np.ascontiguousarray(r / np.linalg.norm(r, axis=1)[:, None])
     grad = np.zeros_like(x)

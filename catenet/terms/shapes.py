@@ -58,7 +58,7 @@ class _Shape(Obstacle):
 
 
 @register("box")
-class Box(_Shape):
+class BoxBarrier(_Shape):
     """The outside of a box: ``center``, ``half`` sizes along its axes, which are the
     columns of ``axes`` (a rotation matrix; identity: aligned with x, y, z); with an
     ``offset`` r > 0, the outside of the box rounded by r (a ball's centre against it)."""
@@ -85,7 +85,7 @@ class Box(_Shape):
 
 
 @register("capsule")
-class Capsule(_Shape):
+class CapsuleBarrier(_Shape):
     """The outside of a capsule: the points within ``radius`` of the segment a-b."""
 
     def __init__(self, nodes, a, b, radius: float, *, kappa: float, dhat: float):
@@ -167,7 +167,7 @@ def pseudo_normals(V, T) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @register("mesh")
-class Mesh(Obstacle):
+class MeshBarrier(Obstacle):
     """The outside of a closed triangle mesh (``vertices`` (nv, 3), ``triangles``
     (nt, 3)), e.g. a satellite; see ``closed_surface`` for what it must be. With an
     ``offset`` r > 0, the outside of the mesh grown by r (a ball's centre against it)."""

@@ -9,7 +9,7 @@ import pytest
 import catenet as cn
 from catenet.solver.system import System
 from catenet.terms import Stretch, Term
-from catenet.terms.contact import Plane
+from catenet.terms.contact import PlaneBarrier
 from catenet.terms.inertia import Inertia
 
 
@@ -57,7 +57,7 @@ def test_pattern_equals_the_global_unique_of_its_keys(upper, seed):
     free = np.flatnonzero(~net.fixed)
     terms = [
         Stretch(net),
-        Plane(free[::2], [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1),
+        PlaneBarrier(free[::2], [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1),
         Inertia(np.flatnonzero(np.repeat(~net.fixed, 3))[5:]),
     ]
     system = System(net, terms, upper=upper)
@@ -94,7 +94,7 @@ def test_a_term_outside_the_pattern_is_refused_and_one_inside_is_placed():
     net = random_net(3)
     system = System(net)
     free = np.flatnonzero(~net.fixed)
-    ground = Plane(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)  # node blocks: fit
+    ground = PlaneBarrier(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)  # node blocks: fit
     i, j = net.edges[5]
     along = Coupling(i, j)
     _, _, targets, _ = reference(net, [Stretch(net), ground, along], True)
@@ -121,7 +121,7 @@ def test_small_systems_take_np_unique_and_get_the_same_arrays(monkeypatch, upper
 
     net = random_net(5)
     free = np.flatnonzero(~net.fixed)
-    terms = [Stretch(net), Plane(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)]
+    terms = [Stretch(net), PlaneBarrier(free, [0, 0, -2.0], [0, 0, 1], kappa=1.0, dhat=0.1)]
     by_kernels = System(net, terms, upper=upper)
     monkeypatch.setattr(catenet.solver.system, "SMALL_PATTERN", 10**9)
     small = System(net, terms, upper=upper)

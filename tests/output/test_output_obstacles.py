@@ -335,7 +335,7 @@ def test_the_capture_scene_file_shows_the_net_wrapping_the_tumbling_box(tmp_path
     and none is inside."""
     from conftest import CONFIGS
 
-    from catenet.terms.shapes import Box, rotation
+    from catenet.terms.shapes import BoxBarrier, rotation
 
     case = load_case(CONFIGS / "contact" / "tether_capture.toml", ["solver.t_end=0.6"])
     out = tmp_path / "capture.h5"
@@ -351,7 +351,7 @@ def test_the_capture_scene_file_shows_the_net_wrapping_the_tumbling_box(tmp_path
         want = c0 + Rotation.from_rotvec(w * t).apply(box.vertices - c0)
         np.testing.assert_allclose(box.frames[k], want, atol=1e-14)
         R = Rotation.from_rotvec(w * t).as_matrix() @ R0  # the box's axes at t
-        solid = Box(np.arange(x.shape[1]), c0, [0.5, 0.4, 0.3], R, kappa=1.0, dhat=0.01)
+        solid = BoxBarrier(np.arange(x.shape[1]), c0, [0.5, 0.4, 0.3], R, kappa=1.0, dhat=0.01)
         gaps.append(solid.gap(x[k]).min())
     assert min(gaps) > 0.0 and gaps[0] > 0.5  # thrown from afar, never inside
     assert min(gaps) < 0.01 and sum(g < 0.01 for g in gaps) > 10  # then wrapped round it

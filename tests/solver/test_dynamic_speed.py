@@ -18,7 +18,7 @@ from catenet.run.runner import run_case
 from catenet.solver.dynamic import solve_dynamic
 from catenet.solver.linear import make_solver, pardiso_available
 from catenet.solver.static import Workspace
-from catenet.terms.contact import Sphere
+from catenet.terms.contact import SphereBarrier
 from tests.conftest import small_net
 
 needs_pardiso = pytest.mark.skipif(not pardiso_available(), reason="MKL PARDISO not available")
@@ -53,7 +53,7 @@ def kinds_seen(ws):
 @needs_pardiso
 def test_an_obstacle_out_of_reach_keeps_cholesky_and_changes_nothing():
     net, loads = paper_net()
-    far = Sphere(np.flatnonzero(~net.fixed), [0.0, 0.0, -5.0], 0.5, kappa=1.0, dhat=1e-2)
+    far = SphereBarrier(np.flatnonzero(~net.fixed), [0.0, 0.0, -5.0], 0.5, kappa=1.0, dhat=1e-2)
     kw = {"dt": 1e-2, "damping": 1.0, "t_end": 0.3, "stop_at_equilibrium": False}
     with_ws, without_ws = Workspace(net, terms=(far,)), Workspace(net)
     assert with_ws.solver.mtype == -2 and without_ws.solver.mtype == 2  # the sphere is not convex
@@ -77,7 +77,7 @@ def test_a_net_reaching_a_sphere_switches_to_the_indefinite_factorisation():
     kw = {"dt": 1e-2, "damping": 5.0, "t_end": 0.5, "stop_at_equilibrium": False}
     paths = {}
     for linear in ("pardiso", "scipy"):
-        ball = Sphere(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
+        ball = SphereBarrier(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
         ws = Workspace(net, terms=(ball,), linear=linear)
         seen = kinds_seen(ws) if linear == "pardiso" else []
         steps = []
@@ -175,7 +175,7 @@ def test_keeping_a_slower_factorisation_near_the_tolerance_saves_factorisations(
     out = {}
     for ahead in (2, 0):  # 0: refresh whenever a kept step cuts less than REUSE_RATE
         monkeypatch.setattr(newton, "REUSE_AHEAD", ahead)
-        ball = Sphere(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
+        ball = SphereBarrier(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
         ws = Workspace(net, terms=(ball,))
         out[ahead] = solve_dynamic(net, loads, workspace=ws, reuse=True, **kw)
     assert out[2].stats.factorize_count < out[0].stats.factorize_count

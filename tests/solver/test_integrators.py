@@ -465,12 +465,12 @@ def test_newmark_keeps_every_node_outside_a_sphere(dt):
     """A net falling under its weight and a pressure onto a fixed sphere, with newmark:
     no node inside it at any accepted step of any step size."""
     from catenet.scene import Scene
-    from catenet.terms.contact import Sphere
+    from catenet.terms.contact import SphereBarrier
 
     sq = cn.square_net(10, 0.3, 1.0, 0.05, cn.Material.from_E(10e6, radius=0.01, density=1000.0))
     net = sq.net
     loads = cn.Loads(force=cn.pressure_force(net, 300.0, 1.0), gravity=np.array([0, 0, -9.81]))
-    ball = Sphere(np.flatnonzero(~net.fixed), [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
+    ball = SphereBarrier(np.flatnonzero(~net.fixed), [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
     gaps = []
     r = solve(
         Scene(net, loads, (ball,)),

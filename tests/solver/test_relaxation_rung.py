@@ -50,7 +50,7 @@ def closed_form_errors(tables: dict, r, scene) -> tuple[float, float, float, flo
     fair = fixed[np.argmax(r.x[fixed, 2])]
     T = float(np.linalg.norm(r.reaction[fair]))
     H = float(math.hypot(*r.reaction[fair, :2]))
-    (bed,) = [t for t in scene.terms if type(t).__name__ == "Plane"]
+    (bed,) = [t for t in scene.terms if type(t).__name__ == "PlaneBarrier"]
     on_bed = bed.nodes[bed.gap(r.x) < bed.dhat]
     free_on_bed = on_bed[~net.fixed[on_bed]]
     x_TD = float(np.max(r.x[free_on_bed, 0])) if free_on_bed.size else 0.0

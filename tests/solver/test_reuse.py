@@ -12,7 +12,7 @@ import catenet.solver.dynamic as dynamic
 from catenet.solver.dynamic import solve_dynamic
 from catenet.solver.newton import NewtonResult, Reuse, solve
 from catenet.solver.static import Workspace, solve_static
-from catenet.terms.contact import Sphere
+from catenet.terms.contact import SphereBarrier
 
 SAME = 1e-8  # relative to the largest displacement
 
@@ -26,7 +26,7 @@ def paper_net(n=10, edge=0.05, pressure=100.0):
 def falling_on_a_sphere():
     net, _ = paper_net()
     loads = cn.Loads(force=cn.pressure_force(net, 300.0, 1.0), gravity=np.array([0, 0, -9.81]))
-    ball = Sphere(np.flatnonzero(~net.fixed), [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
+    ball = SphereBarrier(np.flatnonzero(~net.fixed), [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
     return net, loads, ball
 
 

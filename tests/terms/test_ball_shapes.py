@@ -28,7 +28,7 @@ from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.body import Ball
 from catenet.terms.moving import Moving
-from catenet.terms.shapes import Box, Capsule, Mesh, rotation
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, rotation
 
 R_BALL = 0.2
 DHAT = 0.05
@@ -65,14 +65,14 @@ def near_feature(rng, center, axes, half, outside: int, n: int, r: float, dhat: 
 
 
 def grown_box(n=10, offset=R_BALL):
-    return Box(
+    return BoxBarrier(
         np.arange(n), [0.1, 0, 0], [0.5, 0.3, 0.2], TURN, kappa=30.0, dhat=DHAT, offset=offset
     )
 
 
 def grown_cube(n=10, offset=R_BALL):
     """The unit cube as a mesh, turned, grown by ``offset``."""
-    return Mesh(np.arange(n), CUBE_V @ TURN.T, CUBE_T, kappa=30.0, dhat=DHAT, offset=offset)
+    return MeshBarrier(np.arange(n), CUBE_V @ TURN.T, CUBE_T, kappa=30.0, dhat=DHAT, offset=offset)
 
 
 @pytest.mark.parametrize("outside", [1, 2, 3], ids=["face", "edge", "corner"])
@@ -96,7 +96,7 @@ def test_a_ball_against_a_mesh_passes_finite_differences_near_faces_edges_and_ve
     assert grad_err < 1e-6 and hess_err < 1e-5
     # A curved mesh (a sphere of 320 triangles): any feature.
     V, T = icosphere(2)
-    ball = Mesh(np.arange(10), 0.5 * V + 0.2, T, kappa=30.0, dhat=DHAT, offset=R_BALL)
+    ball = MeshBarrier(np.arange(10), 0.5 * V + 0.2, T, kappa=30.0, dhat=DHAT, offset=R_BALL)
     u = rng.standard_normal((10, 3))
     u /= np.linalg.norm(u, axis=1)[:, None]
     x = 0.2 + u * (0.5 + R_BALL + rng.uniform(0.05, 1.4, (10, 1)) * DHAT)
@@ -121,7 +121,7 @@ def test_a_grown_cube_mesh_acts_as_the_rounded_box():
     grown by r (faces, edge cylinders, corner balls)."""
     rng = np.random.default_rng(3)
     n = 30
-    box = Box(
+    box = BoxBarrier(
         np.arange(n), TURN @ [0.5, 0.5, 0.5], [0.5] * 3, TURN, kappa=5.0, dhat=DHAT, offset=R_BALL
     )
     mesh = grown_cube(n)
@@ -145,7 +145,9 @@ def test_a_grown_cube_mesh_acts_as_the_rounded_box():
 
 def capsule_with_ball(n=10):
     """The capsule a ball of radius R_BALL meets: its radius grown by R_BALL."""
-    return Capsule(np.arange(n), [0, 0, 0], [1.0, 0.5, 0.0], 0.3 + R_BALL, kappa=30.0, dhat=DHAT)
+    return CapsuleBarrier(
+        np.arange(n), [0, 0, 0], [1.0, 0.5, 0.0], 0.3 + R_BALL, kappa=30.0, dhat=DHAT
+    )
 
 
 def test_a_ball_against_a_capsule_passes_finite_differences_near_its_ends():
@@ -205,7 +207,7 @@ def test_max_step_never_lets_a_ball_overlap(kind):
         "box": lambda: (grown_box(1), np.array([0.1, 0, 0])),
         "cube mesh": lambda: (grown_cube(1), TURN @ [0.5, 0.5, 0.5]),
         "sphere mesh": lambda: (
-            Mesh(np.arange(1), 0.5 * V + 0.2, T, kappa=1.0, dhat=DHAT, offset=R_BALL),
+            MeshBarrier(np.arange(1), 0.5 * V + 0.2, T, kappa=1.0, dhat=DHAT, offset=R_BALL),
             np.full(3, 0.2),
         ),
         "capsule": lambda: (capsule_with_ball(1), np.array([0.5, 0.25, 0.0])),
@@ -366,8 +368,8 @@ def test_carrying_brings_a_balls_contacts_along():
     def scene_terms(ball_dhat):
         net = np.arange(3)  # net nodes 0, 1, 2; ball centre 3
         kw = dict(velocity=[0, 0, 1.0], reach=1.0)
-        box = Box(net, [0, 0, 0], [0.5] * 3, kappa=1.0, dhat=0.01)
-        grown = Box([3], [0, 0, 0], [0.5] * 3, kappa=1.0, dhat=ball_dhat, offset=0.1)
+        box = BoxBarrier(net, [0, 0, 0], [0.5] * 3, kappa=1.0, dhat=0.01)
+        grown = BoxBarrier([3], [0, 0, 0], [0.5] * 3, kappa=1.0, dhat=ball_dhat, offset=0.1)
         on_ball = Moving(grown, [0, 0, 0], **kw)
         on_ball.guards_supports = False
         terms = [
@@ -443,9 +445,9 @@ def test_a_ball_collides_with_every_kind_without_a_warning(caplog, tmp_path):
     assert "collide" not in caplog.text
     node = scene.bodies[0].node
     kinds = {type(t).__name__: t for t in scene.terms if list(t.nodes) == [node]}
-    assert set(kinds) == {"Box", "Capsule", "Mesh"}
-    assert kinds["Box"].offset == 0.1 and kinds["Mesh"].offset == 0.1
-    assert kinds["Capsule"].radius == pytest.approx(0.2)
+    assert set(kinds) == {"BoxBarrier", "CapsuleBarrier", "MeshBarrier"}
+    assert kinds["BoxBarrier"].offset == 0.1 and kinds["MeshBarrier"].offset == 0.1
+    assert kinds["CapsuleBarrier"].radius == pytest.approx(0.2)
 
 
 @pytest.mark.parametrize(

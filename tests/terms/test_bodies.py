@@ -358,7 +358,7 @@ def test_a_ball_no_longer_passes_through_a_box(caplog):
         scene = build(parse_case(case))
     assert "does not collide" not in caplog.text
     c = scene.net.n_nodes - 1
-    assert [type(t).__name__ for t in scene.terms if list(t.nodes) == [c]] == ["Box"]
+    assert [type(t).__name__ for t in scene.terms if list(t.nodes) == [c]] == ["BoxBarrier"]
 
 
 def test_a_ball_that_starts_on_the_ground_is_refused():

@@ -27,7 +27,7 @@ from scipy.optimize import fsolve
 from catenet.model.net import Loads, Net
 from catenet.scene import Scene
 from catenet.solver.path import Settings, solve
-from catenet.terms.contact import Sphere, default_stiffness
+from catenet.terms.contact import SphereBarrier, default_stiffness
 
 X, Z_S, LENGTH, W = 2.0, 0.0, 5.0, 1.0
 
@@ -80,7 +80,9 @@ def hang(n: int):
         nodes, edges, EA=1e7, fixed=[0, n - 1], rest_length=LENGTH / (n - 1), line_density=W / 9.81
     )
     free = np.flatnonzero(~net.fixed)
-    ball = Sphere(free, [0, 0, 0], R, kappa=default_stiffness(W * LENGTH / n, dhat), dhat=dhat)
+    ball = SphereBarrier(
+        free, [0, 0, 0], R, kappa=default_stiffness(W * LENGTH / n, dhat), dhat=dhat
+    )
     r = solve(Scene(net, Loads(gravity=np.array([0, 0, -9.81])), (ball,)), Settings(rtol=1e-10))
     assert r.converged
     gap = ball.gap(r.x)

@@ -31,7 +31,7 @@ from catenet.kernels.contact import barrier
 from catenet.scene import Scene
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
-from catenet.terms.contact import Plane, Sphere, default_stiffness
+from catenet.terms.contact import PlaneBarrier, SphereBarrier, default_stiffness
 
 
 def test_barrier_is_c2_at_the_activation_distance_and_infinite_at_contact():
@@ -68,13 +68,13 @@ def test_obstacle_terms_pass_finite_differences(kind):
         x = rng.uniform(-1, 1, (6, 3))
         x -= np.outer(x @ normal, normal)  # onto the plane through 0
         x += np.outer(rng.uniform(0.005, 0.07, 6), normal)  # some inside dhat, some not
-        term = Plane(np.arange(6), [0, 0, 0], normal, kappa=30.0, dhat=dhat)
+        term = PlaneBarrier(np.arange(6), [0, 0, 0], normal, kappa=30.0, dhat=dhat)
     else:
         c, R = np.array([0.1, 0.2, -0.3]), 0.5
         u = rng.standard_normal((6, 3))
         u /= np.linalg.norm(u, axis=1)[:, None]
         x = c + u * (R + rng.uniform(0.005, 0.07, 6))[:, None]
-        term = Sphere(np.arange(6), c, R, kappa=30.0, dhat=dhat)
+        term = SphereBarrier(np.arange(6), c, R, kappa=30.0, dhat=dhat)
     assert np.all(term.gap(x) > 0)
     grad_err, hess_err = check_derivatives(term, x, step=1e-7)
     assert grad_err < 1e-6 and hess_err < 1e-5
@@ -83,12 +83,12 @@ def test_obstacle_terms_pass_finite_differences(kind):
 @pytest.mark.parametrize("kind", ["plane", "sphere"])
 def test_max_step_is_the_first_contact_along_a_step(kind):
     if kind == "plane":
-        term = Plane(np.arange(2), [0, 0, 1.0], [0, 0, 1], kappa=1.0, dhat=0.1)
+        term = PlaneBarrier(np.arange(2), [0, 0, 1.0], [0, 0, 1], kappa=1.0, dhat=0.1)
         x = np.array([[0.0, 0.0, 3.0], [1.0, 0.0, 2.0]])
         dx = np.array([[0.0, 0.0, -4.0], [0.0, 0.0, -4.0]])
         assert term.max_step(x, dx) == pytest.approx(0.25)  # node 1 reaches z = 1 first
     else:
-        term = Sphere(np.arange(1), [0, 0, 0], 1.0, kappa=1.0, dhat=0.1)
+        term = SphereBarrier(np.arange(1), [0, 0, 0], 1.0, kappa=1.0, dhat=0.1)
         x = np.array([[-3.0, 0.0, 0.0]])
         dx = np.array([[6.0, 0.0, 0.0]])  # would pass right through the sphere
         assert term.max_step(x, dx) == pytest.approx(2.0 / 6.0)
@@ -101,7 +101,7 @@ def seabed_chain(n: int, EA: float, dhat: float = 1e-2):
     loads = cn.Loads(gravity=np.array([0.0, 0.0, -9.81]))
     free = np.flatnonzero(~net.fixed)
     kappa = default_stiffness(w * L / n, dhat)
-    bed = Plane(free, [0, 0, 0], [0, 0, 1], kappa=kappa, dhat=dhat)
+    bed = PlaneBarrier(free, [0, 0, 0], [0, 0, 1], kappa=kappa, dhat=dhat)
     a = brentq(
         lambda a: L - math.sqrt(h * h + 2 * a * h) + a * math.acosh(1 + h / a) - X, 1e-3, 1e4
     )
@@ -136,7 +136,7 @@ def test_no_node_ever_enters_a_sphere_that_catches_a_falling_net(dt):
     net = sq.net
     loads = cn.Loads(force=cn.pressure_force(net, 300.0, 1.0), gravity=np.array([0, 0, -9.81]))
     free = np.flatnonzero(~net.fixed)
-    ball = Sphere(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
+    ball = SphereBarrier(free, [0.0, 0.0, -0.23], 0.2, kappa=2e3, dhat=0.01)
     gaps = []
     settings = Settings("dynamic", dt=dt, damping=5.0, t_end=0.3)
     r = solve(
@@ -174,7 +174,7 @@ def test_a_case_names_its_obstacles_and_the_scene_carries_their_terms():
     case = parse_case(ball_case())
     scene = build(case)
     kinds = [type(t).__name__ for t in scene.terms]
-    assert kinds == ["Sphere", "Plane"]
+    assert kinds == ["SphereBarrier", "PlaneBarrier"]
     ball, ground = scene.terms
     # The ground's default barrier: 1e-4 of the median edge, reached in static solves
     # through wider ones from 1e-3 of L = 1 m, ten times narrower each.

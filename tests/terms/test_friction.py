@@ -25,7 +25,7 @@ from catenet.model.net import Loads, Net
 from catenet.scene import Scene
 from catenet.solver.path import Settings, Start, solve
 from catenet.terms import check_derivatives
-from catenet.terms.contact import Plane, Sphere, default_stiffness
+from catenet.terms.contact import PlaneBarrier, SphereBarrier, default_stiffness
 from catenet.terms.friction import Friction
 
 # --------------------------------------------------------------------------- the term
@@ -40,13 +40,13 @@ def rough(kind: str, rng, mu=0.4, slip=0.02):
         x = rng.uniform(-1, 1, (8, 3))
         x -= np.outer(x @ normal, normal)
         x += np.outer(rng.uniform(0.005, 0.07, 8), normal)
-        obstacle = Plane(np.arange(8), [0, 0, 0], normal, kappa=30.0, dhat=dhat)
+        obstacle = PlaneBarrier(np.arange(8), [0, 0, 0], normal, kappa=30.0, dhat=dhat)
     else:
         c, R = np.array([0.1, 0.2, -0.3]), 0.5
         u = rng.standard_normal((8, 3))
         u /= np.linalg.norm(u, axis=1)[:, None]
         x = c + u * (R + rng.uniform(0.005, 0.07, 8))[:, None]
-        obstacle = Sphere(np.arange(8), c, R, kappa=30.0, dhat=dhat)
+        obstacle = SphereBarrier(np.arange(8), c, R, kappa=30.0, dhat=dhat)
     term = Friction(obstacle, mu=mu, slip=slip)
     term.begin_step(x, None)
     return term, x
@@ -89,7 +89,7 @@ def test_friction_force_is_bounded_tangential_and_the_hessian_positive(kind):
 
 
 def test_a_sticking_node_does_not_creep_and_a_sliding_one_drags_its_anchor():
-    plane = Plane(np.arange(1), [0, 0, 0], [0, 0, 1], kappa=10.0, dhat=0.1)
+    plane = PlaneBarrier(np.arange(1), [0, 0, 0], [0, 0, 1], kappa=10.0, dhat=0.1)
     term = Friction(plane, mu=0.5, slip=0.01)
     x = np.array([[0.0, 0.0, 0.05]])
     term.begin_step(x, None)
@@ -107,7 +107,7 @@ def test_a_sticking_node_does_not_creep_and_a_sliding_one_drags_its_anchor():
 
 
 def test_bad_friction_arguments_raise():
-    plane = Plane(np.arange(1), [0, 0, 0], [0, 0, 1], kappa=10.0, dhat=0.1)
+    plane = PlaneBarrier(np.arange(1), [0, 0, 0], [0, 0, 1], kappa=10.0, dhat=0.1)
     with pytest.raises(ValueError, match="mu = -0.1"):
         Friction(plane, mu=-0.1, slip=0.01)
     with pytest.raises(ValueError, match="slip = nan"):
@@ -165,7 +165,7 @@ def test_a_node_on_a_sphere_sticks_where_tan_theta_is_below_mu_and_slides_off_be
     net = Net.from_arrays(
         [[-3.0, 0.0, 0.0], start], [[0, 1]], EA=1.0, fixed=[0], rest_length=20.0, point_mass=[0, m]
     )
-    ball = Sphere(
+    ball = SphereBarrier(
         np.array([1]),
         [0, 0, 0],
         R,
@@ -203,7 +203,9 @@ def mooring(n=61):
     L, X, h, w, dhat = 30.0, 24.0, 8.0, 10.0, 1e-2
     net = cn.cable([0, 0, 0], [X, 0, h], n, cn.Material(EA=1e6, line_density=w / 9.81), length=L)
     free = np.flatnonzero(~net.fixed)
-    bed = Plane(free, [0, 0, 0], [0, 0, 1], kappa=default_stiffness(w * L / n, dhat), dhat=dhat)
+    bed = PlaneBarrier(
+        free, [0, 0, 0], [0, 0, 1], kappa=default_stiffness(w * L / n, dhat), dhat=dhat
+    )
     gravity = np.array([0.0, 0.0, -9.81])
     laid = solve(Scene(net, Loads(gravity=gravity), (bed,)), Settings("static", rtol=1e-9))
     assert laid.converged
@@ -381,10 +383,10 @@ def test_a_frictionless_obstacle_builds_no_friction_term_and_the_case_reads_back
     from catenet.case import build, parse_case
 
     case = parse_case(rough_case())
-    assert [type(t).__name__ for t in build(case).terms] == ["Plane", "Friction"]
+    assert [type(t).__name__ for t in build(case).terms] == ["PlaneBarrier", "Friction"]
     assert parse_case(tomllib.loads(case.to_toml())) == case
     plain = parse_case(rough_case(friction=0.0))
-    assert [type(t).__name__ for t in build(plain).terms] == ["Plane"]
+    assert [type(t).__name__ for t in build(plain).terms] == ["PlaneBarrier"]
     unset = rough_case(distance=0.02)
     del unset["obstacle"][0]["slip"]
     assert build(parse_case(unset)).terms[1].slip == 0.02  # default: the activation distance

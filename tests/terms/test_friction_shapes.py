@@ -18,7 +18,7 @@ from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.friction import Friction, contact_normals
 from catenet.terms.moving import Moving
-from catenet.terms.shapes import Box, Capsule, Mesh, rotation
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, rotation
 
 # --------------------------------------------------------------------------- the term
 
@@ -27,7 +27,7 @@ def test_normals_from_the_barrier_are_the_gap_gradient_of_each_feature():
     """Box face, edge and corner; capsule side and end; mesh face: the unit normal is
     (x - nearest point) / distance, and +z where the barrier does not act."""
     nodes = np.arange(6)
-    box = Box(nodes, [0, 0, 0], [1.0, 1.0, 1.0], np.eye(3), kappa=10.0, dhat=0.1)
+    box = BoxBarrier(nodes, [0, 0, 0], [1.0, 1.0, 1.0], np.eye(3), kappa=10.0, dhat=0.1)
     x = np.array(
         [[0.2, 0.3, 1.05], [1.03, 1.04, 0.0], [1.02, 1.03, 1.01], [0, 0, 3.0], [-1.06, 0, 0.5],
          [0.5, -1.01, -0.2]]
@@ -36,12 +36,12 @@ def test_normals_from_the_barrier_are_the_gap_gradient_of_each_feature():
     want = (x - nearest) / np.linalg.norm(x - nearest, axis=1)[:, None]
     want[3] = [0, 0, 1]  # out of reach
     assert np.allclose(contact_normals(box, x), want, atol=1e-12)
-    cap = Capsule(np.arange(2), [0, 0, 0], [2.0, 0, 0], 0.5, kappa=10.0, dhat=0.1)
+    cap = CapsuleBarrier(np.arange(2), [0, 0, 0], [2.0, 0, 0], 0.5, kappa=10.0, dhat=0.1)
     x = np.array([[1.0, 0.3, 0.42], [2.3, 0.0, 0.45]])
     want = np.array([[0, 0.3, 0.42], [0.3, 0, 0.45]])
     want /= np.linalg.norm(want, axis=1)[:, None]
     assert np.allclose(contact_normals(cap, x), want, atol=1e-12)
-    cube = Mesh(np.arange(1), CUBE_V - 0.5, CUBE_T, kappa=10.0, dhat=0.1)
+    cube = MeshBarrier(np.arange(1), CUBE_V - 0.5, CUBE_T, kappa=10.0, dhat=0.1)
     assert np.allclose(contact_normals(cube, np.array([[0.1, 0.2, 0.53]])), [[0, 0, 1]])
 
 
@@ -68,7 +68,7 @@ def test_friction_on_moving_shapes_passes_finite_differences(kind):
 def test_anchors_and_normals_ride_with_the_obstacle_over_the_step():
     """A node touching a box that turns and translates: lagged at the step's start (its
     anchor is where it is), carried to the step's end by the obstacle's rigid motion."""
-    box = Box(np.arange(1), [0, 0, 0], [1.0, 1.0, 1.0], np.eye(3), kappa=10.0, dhat=0.1)
+    box = BoxBarrier(np.arange(1), [0, 0, 0], [1.0, 1.0, 1.0], np.eye(3), kappa=10.0, dhat=0.1)
     moving = Moving(box, [0, 0, 0], [0.5, 0, 0], [0, 0, 2.0], reach=2.0)
     x = np.array([[0.3, 0.2, 1.02]])
     term = Friction(moving, mu=0.5, slip=1e-3)
@@ -88,9 +88,9 @@ def tops(kinds=("box", "capsule", "mesh")):
     capsule's axis lies along x)."""
     one = np.array([1])
     out = {
-        "box": Box(one, [0, 0, -1.0], [3.0, 3.0, 1.0], np.eye(3), kappa=KAPPA, dhat=DHAT),
-        "capsule": Capsule(one, [-3, 0, -1.0], [3, 0, -1.0], 1.0, kappa=KAPPA, dhat=DHAT),
-        "mesh": Mesh(one, 6.0 * (CUBE_V - [0.5, 0.5, 1.0]), CUBE_T, kappa=KAPPA, dhat=DHAT),
+        "box": BoxBarrier(one, [0, 0, -1.0], [3.0, 3.0, 1.0], np.eye(3), kappa=KAPPA, dhat=DHAT),
+        "capsule": CapsuleBarrier(one, [-3, 0, -1.0], [3, 0, -1.0], 1.0, kappa=KAPPA, dhat=DHAT),
+        "mesh": MeshBarrier(one, 6.0 * (CUBE_V - [0.5, 0.5, 1.0]), CUBE_T, kappa=KAPPA, dhat=DHAT),
     }
     return [out[k] for k in kinds]
 
@@ -120,7 +120,7 @@ def conveyor(velocity, *, mu, spring=None, angular=None, mass=1.0, N=20.0, axis=
     optionally tied to support 0 one metre behind it (along -x) by a bilateral spring."""
     one = np.array([1])
     center = [axis[0], axis[1], -1.0]
-    box = Box(one, center, [5.0, 5.0, 1.0], np.eye(3), kappa=KAPPA, dhat=DHAT)
+    box = BoxBarrier(one, center, [5.0, 5.0, 1.0], np.eye(3), kappa=KAPPA, dhat=DHAT)
     belt = Moving(box, center, velocity, angular, reach=8.0)
     return block(mu=mu, slip=1e-4, force=[0, 0, -N], mass=mass, spring=spring, obstacle=belt)
 

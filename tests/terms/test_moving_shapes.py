@@ -18,7 +18,7 @@ from catenet.model.histories import History
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.moving import Moving
-from catenet.terms.shapes import Box, rotation
+from catenet.terms.shapes import BoxBarrier, rotation
 
 
 @pytest.mark.parametrize("kind", ["box", "capsule", "mesh"])
@@ -43,8 +43,8 @@ def test_a_moving_box_at_time_t_is_the_box_turned_and_moved_there():
     axis, angle, c0, d = np.array([1.0, 1.0, 0.3]), 1.3, np.array([0.2, -0.1, 0.4]), [0.5, 0, -0.2]
     half = [0.5, 0.4, 0.3]
     R = rotation(axis, angle)
-    fixed = Box(np.arange(n), c0 + d, half, R, kappa=7.0, dhat=0.04)
-    level = Box(np.arange(n), c0, half, None, kappa=7.0, dhat=0.04)
+    fixed = BoxBarrier(np.arange(n), c0 + d, half, R, kappa=7.0, dhat=0.04)
+    level = BoxBarrier(np.arange(n), c0, half, None, kappa=7.0, dhat=0.04)
     w = axis / np.linalg.norm(axis) * angle / T
     moving = Moving(level, c0, np.array(d) / T, w, reach=float(np.linalg.norm(half)))
     moving.begin_step(np.zeros((n, 3)), T)
@@ -260,7 +260,7 @@ def test_a_support_passed_over_within_one_step_is_found():
     """A thin plate rising 0.5 m in one step passes a support at z = 0 that neither
     its start nor its end pose covers: the sweep finds it, at t = 0.19 / 10 s; a support
     beside its way is left alone."""
-    plate = Box(np.array([0]), [0, 0, -0.2], [0.1, 0.1, 0.01], None, kappa=1.0, dhat=1e-3)
+    plate = BoxBarrier(np.array([0]), [0, 0, -0.2], [0.1, 0.1, 0.01], None, kappa=1.0, dhat=1e-3)
     term = Moving(plate, [0, 0, -0.2], [0, 0, 10.0], reach=0.15, label="obstacle[3] (kind 'box')")
     x = np.array([[2.0, 0, 0], [0.05, 0.0, 0.0]])
     beside = np.array([[2.0, 0, 0], [0.3, 0.0, 0.0]])

@@ -20,10 +20,10 @@ from catenet.case import build, parse_case
 from catenet.kernels.shapes import box_max_step
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
-from catenet.terms.contact import Sphere
+from catenet.terms.contact import SphereBarrier
 from catenet.terms.rigid import TURN_MAX, Frame, Rigidity, inertia_problem, second_moment
 from catenet.terms.rigid_contact import FLOOR_SHARE, ROUNDOFF, SLACK, BodyContact
-from catenet.terms.shapes import Box, Capsule, Mesh, rotation
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, rotation
 
 INERTIA = np.array([[2.0, 0.3, -0.1], [0.3, 3.0, 0.2], [-0.1, 0.2, 4.0]])
 
@@ -101,10 +101,14 @@ def test_rigidity_passes_finite_differences_and_exerts_no_force_or_torque():
 def _shapes(tmp_path, nodes, kappa, dhat, c0):
     V, T = icosphere(1)
     return {
-        "box": Box(nodes, c0, [0.5, 0.4, 0.3], rotation([0, 0, 1], 0.2), kappa=kappa, dhat=dhat),
-        "capsule": Capsule(nodes, c0 - [0.4, 0, 0], c0 + [0.4, 0, 0], 0.3, kappa=kappa, dhat=dhat),
-        "sphere": Sphere(nodes, c0, 0.5, kappa=kappa, dhat=dhat),
-        "mesh": Mesh(nodes, 0.6 * V + c0, T, kappa=kappa, dhat=dhat),
+        "box": BoxBarrier(
+            nodes, c0, [0.5, 0.4, 0.3], rotation([0, 0, 1], 0.2), kappa=kappa, dhat=dhat
+        ),
+        "capsule": CapsuleBarrier(
+            nodes, c0 - [0.4, 0, 0], c0 + [0.4, 0, 0], 0.3, kappa=kappa, dhat=dhat
+        ),
+        "sphere": SphereBarrier(nodes, c0, 0.5, kappa=kappa, dhat=dhat),
+        "mesh": MeshBarrier(nodes, 0.6 * V + c0, T, kappa=kappa, dhat=dhat),
     }
 
 
@@ -140,7 +144,7 @@ def test_the_step_cap_lets_no_node_in_and_is_exact_for_a_body_that_does_not_turn
     K = 30
     c0 = np.zeros(3)
     frame = Frame(K, 5.0, INERTIA, c0)
-    box = Box(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=1.0, dhat=0.05)
+    box = BoxBarrier(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=1.0, dhat=0.05)
     term = BodyContact(box, frame, n_nodes=K + 4)
     x = np.zeros((K + 4, 3))
     x[K:] = frame.center + frame.points
@@ -361,7 +365,7 @@ def test_body_friction_passes_finite_differences_and_balances_force_and_torque()
     K = 8
     c0 = np.array([0.1, 0.2, 0.3])
     frame = Frame(K, 5.0, INERTIA, c0)
-    box = Box(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=3.0, dhat=0.2)
+    box = BoxBarrier(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=3.0, dhat=0.2)
     x = np.zeros((K + 4, 3))
     x[K:] = posed(frame, rng, c0, rotation([1, 2, 3], 0.3))
 

@@ -29,7 +29,7 @@ from catenet.case import build, dumps_toml, parse_case
 from catenet.kernels.mesh import _cell
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
-from catenet.terms.shapes import Box, Capsule, Mesh, closed_surface, rotation
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, closed_surface, rotation
 
 
 def near_surface(term, rng, n, lo, hi, dhat):
@@ -48,11 +48,11 @@ def near_surface(term, rng, n, lo, hi, dhat):
 def shapes(dhat=0.05, n=30):
     nodes = np.arange(n)
     R = rotation([1.0, 2.0, 3.0], 0.7)
-    box = Box(nodes, [0.1, 0.0, 0.0], [0.5, 0.3, 0.2], R, kappa=30.0, dhat=dhat)
-    capsule = Capsule(nodes, [0, 0, 0], [1.0, 0.5, 0.0], 0.3, kappa=30.0, dhat=dhat)
-    cube = Mesh(nodes, CUBE_V @ R.T, CUBE_T, kappa=30.0, dhat=dhat)
+    box = BoxBarrier(nodes, [0.1, 0.0, 0.0], [0.5, 0.3, 0.2], R, kappa=30.0, dhat=dhat)
+    capsule = CapsuleBarrier(nodes, [0, 0, 0], [1.0, 0.5, 0.0], 0.3, kappa=30.0, dhat=dhat)
+    cube = MeshBarrier(nodes, CUBE_V @ R.T, CUBE_T, kappa=30.0, dhat=dhat)
     V, T = icosphere(2)
-    ball = Mesh(nodes, 0.5 * V + 0.2, T, kappa=30.0, dhat=dhat)
+    ball = MeshBarrier(nodes, 0.5 * V + 0.2, T, kappa=30.0, dhat=dhat)
     return {"box": box, "capsule": capsule, "cube mesh": cube, "sphere mesh": ball}
 
 
@@ -72,8 +72,8 @@ def test_a_mesh_of_a_box_acts_as_the_box():
     features (faces, edges, vertices) and pseudo-normal signs are the box's."""
     rng = np.random.default_rng(3)
     R = rotation([0.3, -1.0, 0.5], 1.1)
-    box = Box(np.arange(40), R @ [0.5, 0.5, 0.5], [0.5] * 3, R, kappa=5.0, dhat=0.05)
-    mesh = Mesh(np.arange(40), CUBE_V @ R.T, CUBE_T, kappa=5.0, dhat=0.05)
+    box = BoxBarrier(np.arange(40), R @ [0.5, 0.5, 0.5], [0.5] * 3, R, kappa=5.0, dhat=0.05)
+    mesh = MeshBarrier(np.arange(40), CUBE_V @ R.T, CUBE_T, kappa=5.0, dhat=0.05)
     x = near_surface(box, rng, 40, -0.5, 1.5, box.dhat)
     assert np.allclose(mesh.gap(x), box.gap(x), atol=1e-12)
     g1, g2 = np.zeros_like(x), np.zeros_like(x)
@@ -139,8 +139,8 @@ def test_the_mesh_grid_finds_what_every_triangle_finds():
     first contacts equal those of a one-cell grid (every triangle a candidate)."""
     rng = np.random.default_rng(5)
     V, T = icosphere(3)
-    fine = Mesh(np.arange(200), V, T, kappa=3.0, dhat=0.02)
-    one = Mesh(np.arange(200), V, T, kappa=3.0, dhat=0.02)
+    fine = MeshBarrier(np.arange(200), V, T, kappa=3.0, dhat=0.02)
+    one = MeshBarrier(np.arange(200), V, T, kappa=3.0, dhat=0.02)
     one.h = float(np.ptp(V, axis=0).max()) + 1.0
     one.dims = np.ones(3, dtype=np.int64)
     one.start = np.array([0, len(T)], dtype=np.int64)
@@ -171,7 +171,7 @@ def test_a_surface_that_is_not_closed_or_oriented_is_refused():
         closed_surface(V, flipped)
     Vi, Ti = closed_surface(V, T[:, ::-1])  # inward normals: turned outward
     assert np.all(
-        Mesh(np.arange(1), Vi, Ti, kappa=1, dhat=0.1).gap(np.array([[2.0, 0.5, 0.5]])) > 0
+        MeshBarrier(np.arange(1), Vi, Ti, kappa=1, dhat=0.1).gap(np.array([[2.0, 0.5, 0.5]])) > 0
     )
 
 
@@ -407,7 +407,7 @@ def test_a_mesh_path_is_relative_to_the_case_file_and_reads_back(tmp_path, monke
     assert Path(obs.file) == (tmp_path / "cases" / "ball.stl").resolve()
     assert parse_case(__import__("tomllib").loads(parsed.to_toml())) == parsed
     (term,) = build(parsed).terms
-    assert type(term).__name__ == "Mesh" and len(term.triangles) == 80
+    assert type(term).__name__ == "MeshBarrier" and len(term.triangles) == 80
     assert term.vertices[:, 2].min() == pytest.approx(-0.45)
 
 

@@ -381,7 +381,7 @@ def solve_mooring_line(L, EA, w, X, h, n, method="static"):
     assert all(
         tuple(sorted(p)) in edges for p in zip(order[:-1].tolist(), order[1:].tolist(), strict=True)
     )
-    (bed,) = [t for t in scene.terms if type(t).__name__ == "Plane"]
+    (bed,) = [t for t in scene.terms if type(t).__name__ == "PlaneBarrier"]
     touched = np.zeros(len(r.x), dtype=bool)
     touched[bed.nodes] = bed.gap(r.x) < bed.dhat
     on_bed = np.flatnonzero(touched[order])

@@ -1,4 +1,4 @@
-"""A box, optionally turned (``catenet.terms.shapes.Box``; kernels in
+"""A box, optionally turned (``catenet.terms.shapes.BoxBarrier``; kernels in
 ``catenet.kernels.shapes``)."""
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ class Box:
 
     def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
         """The box's barrier; ``offset`` r: the box rounded by r."""
-        from catenet.terms.shapes import Box as BoxTerm
+        from catenet.terms.shapes import BoxBarrier as BoxTerm
 
         args = (self.center, self.half_size, self.axes)
         return BoxTerm(nodes, *args, kappa=kappa, dhat=dhat, offset=offset)

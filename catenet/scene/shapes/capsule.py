@@ -1,4 +1,4 @@
-"""A capsule: the points within a radius of a segment (``catenet.terms.shapes.Capsule``;
+"""A capsule: the points within a radius of a segment (``catenet.terms.shapes.CapsuleBarrier``;
 kernels in ``catenet.kernels.shapes``)."""
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ class Capsule:
 
     def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
         """The capsule's barrier; ``offset`` r: the capsule of radius + r (exact)."""
-        from catenet.terms.shapes import Capsule as CapsuleTerm
+        from catenet.terms.shapes import CapsuleBarrier as CapsuleTerm
 
         radius = self.radius + offset
         return CapsuleTerm(nodes, self.start, self.end, radius, kappa=kappa, dhat=dhat)

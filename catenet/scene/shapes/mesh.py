@@ -1,5 +1,5 @@
 """A closed triangle surface read from a file (a satellite, a rock):
-``catenet.terms.shapes.Mesh``, kernels in ``catenet.kernels.mesh``. The file is read
+``catenet.terms.shapes.MeshBarrier``, kernels in ``catenet.kernels.mesh``. The file is read
 with meshio (``.stl``, ``.obj``, ``.ply``, ``.vtk``, ...) and must be a closed,
 consistently oriented surface (``catenet.terms.shapes.closed_surface``)."""
 
@@ -47,7 +47,7 @@ class Mesh:
 
     def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
         """The mesh's barrier; ``offset`` r: the mesh grown by r."""
-        from catenet.terms.shapes import Mesh as MeshTerm
+        from catenet.terms.shapes import MeshBarrier as MeshTerm
 
         return MeshTerm(nodes, self.vertices, self.triangles, kappa=kappa, dhat=dhat, offset=offset)
 

@@ -1,4 +1,4 @@
-"""A half-space: a ground, a seabed (``catenet.terms.contact.Plane``). Infinite: never a
+"""A half-space: a ground, a seabed (``catenet.terms.contact.PlaneBarrier``). Infinite: never a
 body; its drawing is the quad that covers the given points (the net) PLANE_COVER times."""
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ class Plane:
         return float("inf")
 
     def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        from catenet.terms.contact import Plane as PlaneTerm
+        from catenet.terms.contact import PlaneBarrier as PlaneTerm
 
         if offset == 0.0:
             return PlaneTerm(nodes, self.point, self.normal, kappa=kappa, dhat=dhat)

@@ -1,4 +1,4 @@
-"""A ball (``catenet.terms.contact.Sphere``): fixed, or the shape of a free body."""
+"""A ball (``catenet.terms.contact.SphereBarrier``): fixed, or the shape of a free body."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ class Sphere:
         return self.radius
 
     def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        from catenet.terms.contact import Sphere as SphereTerm
+        from catenet.terms.contact import SphereBarrier as SphereTerm
 
         return SphereTerm(nodes, self.center, self.radius + offset, kappa=kappa, dhat=dhat)
 
