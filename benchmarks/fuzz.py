@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import collections
 import copy
+import faulthandler
 import json
 import random
 import sys
@@ -115,6 +116,11 @@ def result_files(root: Path) -> dict:
     return files
 
 
+#: The watchdog's limit, in units of a case's time limit (``--seconds``): invoke's own
+#: limit counts processor time and allows a command that waits 4x on the clock.
+HANG = 10
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-n", type=int, default=10_000, help="cases (default 10^4)")
@@ -130,6 +136,7 @@ def main(argv=None) -> int:
     by_input: collections.Counter = collections.Counter()
     bad = []
     start = time.perf_counter()
+    trail = sys.stderr  # the input under way, for the watchdog's report
     with tempfile.TemporaryDirectory(prefix="catenet-fuzz-") as tmp:
         root = Path(tmp)
         files = result_files(root)
@@ -146,7 +153,14 @@ def main(argv=None) -> int:
             else:
                 argv_k, what = result_input(rng, work, files)
             before = set(work.rglob("*.h5"))
+            # A hang inside a library's C code (HDF5 reading a damaged heap, the run of
+            # seed 19) holds the interpreter: invoke's limit never fires. The watchdog
+            # ends the whole run then, naming the input and where it hung, instead of
+            # stalling without a word.
+            faulthandler.dump_traceback_later(HANG * args.seconds, exit=True)
+            print(f"input {k}: {what}", file=trail, flush=True)
             result = fz.invoke(argv_k, seconds=args.seconds, cwd=work)
+            faulthandler.cancel_dump_traceback_later()
             outcome = fz.judge(result, work, before)
             counts[outcome.kind] += 1
             by_input[f"{kind}: {outcome.kind}"] += 1
