@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import numpy as np
 
@@ -47,6 +47,14 @@ MIN_SLIP = 1e-12  # the smallest friction slip distance, relative to the activat
 #: beyond floating point.
 ON_ROUNDOFF = 1e3
 ON_SHARE = 1e-100
+
+
+class Gaps(Protocol):
+    """What ``check_clear`` reads of a barrier: its activation distance and gaps."""
+
+    dhat: float
+
+    def gap(self, x: np.ndarray) -> np.ndarray: ...
 
 
 def _shown(value: Any) -> str:
@@ -72,9 +80,9 @@ class Contact:
     stiffness: float | None = None
     friction: float = 0.0
     slip: float | None = None
-    velocity: tuple | None = None
-    angular_velocity: tuple | None = None
-    history: tuple | None = None
+    velocity: tuple[float, ...] | None = None
+    angular_velocity: tuple[float, ...] | None = None
+    history: tuple[tuple[float, float], ...] | None = None
 
     @property
     def moving(self) -> bool:
@@ -168,7 +176,7 @@ def obstacle_terms(
     else:
         term = moving(shape.barrier(nodes, kappa, dhat), shape, contact, label=label)
         term.stages = ()
-    check_clear(label, "an obstacle", term, nodes, net, shown)
+    check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
@@ -184,7 +192,7 @@ def obstacle_terms(
 
 
 def check_clear(
-    label: str, what: str, shape, nodes: np.ndarray, net: Net, shown: Shown = _shown
+    label: str, what: str, shape: Gaps, nodes: np.ndarray, net: Net, shown: Shown = _shown
 ) -> None:
     """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
     inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",

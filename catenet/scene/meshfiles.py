@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import contextlib
 import io
+from pathlib import Path
+from typing import Any
 
 
-def read_mesh_file(path):
+def read_mesh_file(path: str | Path) -> Any:
     """``meshio.read(path)``; ValueError with a one-line reason when it cannot be read
     (meshio raises many kinds of exceptions, and for some files prints a line and calls
     ``sys.exit``). ImportError when meshio is missing."""

@@ -12,11 +12,12 @@ from the builder is the same computation: the case's obstacles go through the sa
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.model.net import Loads, Net
 from catenet.scene.contact import ACCURACY, Contact, Reach, Shown, obstacle_terms
@@ -56,19 +57,19 @@ class Scene:
 
     net: Net
     loads: Loads = field(default_factory=Loads)
-    terms: tuple = ()
+    terms: tuple[Term, ...] = ()
     probe: int = 0
     size: float = 1.0
     velocity: np.ndarray | None = None
-    bodies: tuple = ()
-    rigid: tuple = ()
+    bodies: tuple[Any, ...] = ()
+    rigid: tuple[Any, ...] = ()
     cables: Any = None
     sets: Mapping[str, Any] = field(default_factory=dict)
     at_nodes: Mapping[int, int] = field(default_factory=dict)
     names: Mapping[str, int] = field(default_factory=dict)
     probe_auto: bool = False
-    cases: tuple = ()
-    obstacles: tuple = ()
+    cases: tuple[Any, ...] = ()
+    obstacles: tuple[tuple[int, Shape, Contact], ...] = ()
     case: Any = None
     coarsen: Callable[[float], Scene | None] | None = None
 
@@ -80,7 +81,7 @@ class Scene:
         *,
         probe: int | None = None,
         size: float | None = None,
-        velocity=None,
+        velocity: ArrayLike | None = None,
     ) -> Scene:
         """A scene of ``net`` under ``loads`` (None: none); ``probe`` (None: the free
         node that moves most), ``size`` (None: the net's bounding-box diagonal),
@@ -110,9 +111,9 @@ class Scene:
         stiffness: float | None = None,
         friction: float = 0.0,
         slip: float | None = None,
-        velocity=None,
-        angular_velocity=None,
-        history=None,
+        velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+        history: Sequence[Sequence[float]] | None = None,
     ) -> Scene:
         """This scene with an obstacle of ``shape`` (``catenet.scene.shapes``: Plane,
         Sphere, Box, Capsule, Cylinder, Mesh) acting on every free node of the net, by
@@ -124,9 +125,11 @@ class Scene:
             stiffness=stiffness,
             friction=friction,
             slip=slip,
-            velocity=None if velocity is None else tuple(velocity),
-            angular_velocity=None if angular_velocity is None else tuple(angular_velocity),
-            history=None if history is None else tuple(map(tuple, history)),
+            velocity=None if velocity is None else tuple(map(float, velocity)),
+            angular_velocity=None
+            if angular_velocity is None
+            else tuple(map(float, angular_velocity)),
+            history=None if history is None else tuple((float(t), float(f)) for t, f in history),
         )
         return self.with_contact(shape, contact)
 

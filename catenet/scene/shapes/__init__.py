@@ -31,7 +31,8 @@ def shape_class(kind: str) -> type[Shape]:
     """The class of shape ``kind``; ValueError naming the kinds there are."""
     if kind not in kinds():
         raise ValueError(f"unknown obstacle kind {kind!r}: one of {', '.join(kinds())}")
-    return importlib.import_module(f"{__name__}.{kind}").SHAPE
+    shape: type[Shape] = importlib.import_module(f"{__name__}.{kind}").SHAPE
+    return shape
 
 
 def shape_of(table: Mapping[str, Any]) -> Shape:

@@ -25,6 +25,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 if TYPE_CHECKING:
     from catenet.terms.contact import Obstacle
@@ -65,16 +66,18 @@ class Shape(Protocol):
     @property
     def reach(self) -> float: ...
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle: ...
+    def barrier(
+        self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0
+    ) -> Obstacle: ...
 
     def outline(self) -> Outline: ...
 
     def mass_properties(self) -> MassProperties: ...
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]: ...
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]: ...
 
 
-def vec(table: Mapping[str, Any], key: str, default=None) -> np.ndarray:
+def vec(table: Mapping[str, Any], key: str, default: ArrayLike | None = None) -> np.ndarray:
     """Table key ``key`` as a float vector (3,); KeyError where it is missing."""
     value = table.get(key, default)
     if value is None:
@@ -82,7 +85,9 @@ def vec(table: Mapping[str, Any], key: str, default=None) -> np.ndarray:
     return np.asarray(value, dtype=np.float64).reshape(3)
 
 
-def lathe(axis_points, radii, axis, n: int = SEGMENTS) -> tuple[np.ndarray, np.ndarray]:
+def lathe(
+    axis_points: np.ndarray, radii: np.ndarray, axis: ArrayLike, n: int = SEGMENTS
+) -> tuple[np.ndarray, np.ndarray]:
     """The surface swept by a profile about an axis: ``axis_points`` (m + 1, 3) on the
     axis with ``radii`` (m + 1,), 0 at both ends (the poles), ``axis`` from the first to
     the last; quads between consecutive parallels of n vertices (a quad at a pole
@@ -96,7 +101,7 @@ def lathe(axis_points, radii, axis, n: int = SEGMENTS) -> tuple[np.ndarray, np.n
     inner = axis_points[1:m, None, :] + radii[1:m, None, None] * ring[None]  # (m - 1, n, 3)
     V = np.concatenate([axis_points[:1], inner.reshape(-1, 3), axis_points[m:]])
 
-    def index(i, c):
+    def index(i: np.ndarray, c: np.ndarray) -> np.ndarray:
         c = c % n
         return np.where(i == 0, 0, np.where(i == m, 1 + (m - 1) * n, 1 + (i - 1) * n + c))
 
@@ -112,7 +117,7 @@ def across(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p, np.cross(e, p)
 
 
-def axis_frame(a, b) -> np.ndarray:
+def axis_frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Body axes (columns x', y', z') of a shape with its axis along a-b: z' = (b - a) / |b - a|."""
     z = (b - a) / float(np.linalg.norm(b - a))
     helper = np.eye(3)[int(np.argmin(np.abs(z)))]

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.scene.shapes.base import MassProperties, Outline, vec
 
@@ -23,6 +24,10 @@ FACES = np.array(
 )
 
 
+if TYPE_CHECKING:
+    from catenet.terms.contact import Obstacle
+
+
 @dataclass(frozen=True, eq=False)
 class Box:
     """The outside of a box: ``center``, ``half_size`` along its axes, which are the
@@ -35,7 +40,7 @@ class Box:
     kind: ClassVar[str] = "box"
     origin_key: ClassVar[str] = "center"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("center", "half_size", "axes"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float64))
         if not (self.half_size.shape == (3,) and np.all(self.half_size > 0)):
@@ -57,7 +62,7 @@ class Box:
     def reach(self) -> float:
         return float(np.linalg.norm(self.half_size))
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+    def barrier(self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle:
         """The box's barrier; ``offset`` r: the box rounded by r."""
         from catenet.terms.shapes import BoxBarrier as BoxTerm
 
@@ -65,7 +70,8 @@ class Box:
         return BoxTerm(nodes, *args, kappa=kappa, dhat=dhat, offset=offset)
 
     def corners(self) -> np.ndarray:
-        return self.center + (SIGNS * self.half_size) @ self.axes.T
+        corners: np.ndarray = self.center + (SIGNS * self.half_size) @ self.axes.T
+        return corners
 
     def outline(self) -> Outline:
         """Its 8 corners and 12 edges: exact."""
@@ -76,7 +82,7 @@ class Box:
         moments = np.array([h[1] ** 2 + h[2] ** 2, h[0] ** 2 + h[2] ** 2, h[0] ** 2 + h[1] ** 2])
         return MassProperties(8 * h.prod(), self.center.copy(), np.diag(moments) / 3, self.axes)
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         return self.corners(), FACES.copy()
 
 

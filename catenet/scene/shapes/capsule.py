@@ -6,13 +6,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.scene.shapes.base import MassProperties, Outline, axis_frame, lathe, positive, vec
 
 RINGS = 9  # parallels of each drawn end ball, pole to equator
+
+
+if TYPE_CHECKING:
+    from catenet.terms.contact import Obstacle
 
 
 @dataclass(frozen=True, eq=False)
@@ -26,7 +31,7 @@ class Capsule:
     kind: ClassVar[str] = "capsule"
     origin_key: ClassVar[str] = "start"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
         object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
         object.__setattr__(self, "radius", positive("capsule: radius", self.radius))
@@ -40,13 +45,14 @@ class Capsule:
     @property
     def origin(self) -> np.ndarray:
         """The midpoint of its axis."""
-        return 0.5 * (self.start + self.end)
+        mid: np.ndarray = 0.5 * (self.start + self.end)
+        return mid
 
     @property
     def reach(self) -> float:
         return 0.5 * float(np.linalg.norm(self.end - self.start)) + self.radius
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+    def barrier(self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle:
         """The capsule's barrier; ``offset`` r: the capsule of radius + r (exact)."""
         from catenet.terms.shapes import CapsuleBarrier as CapsuleTerm
 
@@ -71,7 +77,7 @@ class Capsule:
         inertia = np.diag([side, side, axial])
         return MassProperties(volume, 0.5 * (a + b), inertia, axis_frame(a, b))
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """36 meridians, RINGS parallels on each end ball."""
         a, b, radius = self.start, self.end, self.radius
         e = (b - a) / np.linalg.norm(b - a)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.kernels.cylinder import (
     cylinder_gap,
@@ -43,7 +44,18 @@ class CylinderBarrier(Obstacle):
 
     convex = False  # the curved side's hess d times b' < 0: indefinite near contact
 
-    def __init__(self, nodes, center, axis, half_length, radius, *, kappa, dhat, offset=0.0):
+    def __init__(
+        self,
+        nodes: ArrayLike,
+        center: ArrayLike,
+        axis: ArrayLike,
+        half_length: float,
+        radius: float,
+        *,
+        kappa: float,
+        dhat: float,
+        offset: float = 0.0,
+    ) -> None:
         super().__init__(nodes, kappa=kappa, dhat=dhat)
         if not (math.isfinite(offset) and offset >= 0):
             raise ValueError(f"cylinder: offset = {offset!r}: must be >= 0")
@@ -53,24 +65,24 @@ class CylinderBarrier(Obstacle):
         self.radius = positive("cylinder: radius", radius)
         self.offset = float(offset)
 
-    def _geometry(self):
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, float, float]:
         return self.center, self.axis, self.half_length, self.radius
 
-    def gap(self, x):
+    def gap(self, x: np.ndarray) -> np.ndarray:
         out = np.empty(len(self.nodes))
         cylinder_gap(x, self.nodes, *self._geometry(), self.offset, out)
         return out
 
-    def gradient(self, x, grad):
+    def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         args = (*self._geometry(), self.offset, self.kappa, self.dhat, grad)
-        return cylinder_gradient(x, self.nodes, *args)
+        return float(cylinder_gradient(x, self.nodes, *args))
 
-    def hessian(self, x, values):
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> bool:
         args = (*self._geometry(), self.offset, self.kappa, self.dhat, values)
-        return cylinder_hessian(x, self.nodes, *args) > 0
+        return bool(cylinder_hessian(x, self.nodes, *args) > 0)
 
-    def first_hit(self, x, dx, grow):
-        return cylinder_max_step(x, dx, self.nodes, *self._geometry(), self.offset + grow)
+    def first_hit(self, x: np.ndarray, dx: np.ndarray, grow: float) -> float:
+        return float(cylinder_max_step(x, dx, self.nodes, *self._geometry(), self.offset + grow))
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +97,7 @@ class Cylinder:
     kind: ClassVar[str] = "cylinder"
     origin_key: ClassVar[str] = "start"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
         object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
         object.__setattr__(self, "radius", positive("cylinder: radius", self.radius))
@@ -102,18 +114,22 @@ class Cylinder:
 
     @property
     def axis(self) -> np.ndarray:
-        return (self.end - self.start) / self.length
+        unit: np.ndarray = (self.end - self.start) / self.length
+        return unit
 
     @property
     def origin(self) -> np.ndarray:
         """The midpoint of its axis."""
-        return 0.5 * (self.start + self.end)
+        mid: np.ndarray = 0.5 * (self.start + self.end)
+        return mid
 
     @property
     def reach(self) -> float:
         return math.hypot(0.5 * self.length, self.radius)
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0) -> CylinderBarrier:
+    def barrier(
+        self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0
+    ) -> CylinderBarrier:
         args = (self.origin, self.axis, 0.5 * self.length, self.radius)
         return CylinderBarrier(nodes, *args, kappa=kappa, dhat=dhat, offset=offset)
 
@@ -139,7 +155,7 @@ class Cylinder:
         frame = axis_frame(self.start, self.end)
         return MassProperties(math.pi * r * r * L, self.origin, inertia, frame)
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """36 meridians: a flat end, the side, the other flat end (quads)."""
         a, b, r = self.start, self.end, self.radius
         points = np.array([a, a, b, b])

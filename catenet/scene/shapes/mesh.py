@@ -9,13 +9,17 @@ import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.model.limits import MAGNITUDE
 from catenet.scene.meshfiles import read_mesh_file
 from catenet.scene.shapes.base import MassProperties, Outline, vec
+
+if TYPE_CHECKING:
+    from catenet.terms.contact import Obstacle
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,7 +49,7 @@ class Mesh:
     def reach(self) -> float:
         return float(np.linalg.norm(self.vertices - self.origin, axis=1).max())
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+    def barrier(self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle:
         """The mesh's barrier; ``offset`` r: the mesh grown by r."""
         from catenet.terms.shapes import MeshBarrier as MeshTerm
 
@@ -71,7 +75,7 @@ class Mesh:
         J = (vol[:, None, None] * outer).sum(axis=0) / 20.0 / volume - np.outer(com, com)
         return MassProperties(volume, com, np.trace(J) * np.eye(3) - J, np.eye(3))
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         return self.vertices, self.triangles
 
 

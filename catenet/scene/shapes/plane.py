@@ -5,13 +5,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.scene.shapes.base import MassProperties, Outline, across, no_body, vec
 
 PLANE_COVER = 1.5  # the drawn quad covers the net's extent in the plane this many times
+
+
+if TYPE_CHECKING:
+    from catenet.terms.contact import Obstacle
 
 
 @dataclass(frozen=True, eq=False)
@@ -24,7 +29,7 @@ class Plane:
     kind: ClassVar[str] = "plane"
     origin_key: ClassVar[str] = "point"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         n = np.asarray(self.normal, dtype=np.float64)
         if not np.linalg.norm(n) > 0:
             raise ValueError("plane: the normal must not be zero")
@@ -33,7 +38,8 @@ class Plane:
 
     @property
     def unit_normal(self) -> np.ndarray:
-        return self.normal / np.linalg.norm(self.normal)
+        unit: np.ndarray = self.normal / np.linalg.norm(self.normal)
+        return unit
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any]) -> Plane:
@@ -47,7 +53,7 @@ class Plane:
     def reach(self) -> float:
         return float("inf")
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+    def barrier(self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle:
         from catenet.terms.contact import PlaneBarrier as PlaneTerm
 
         if offset == 0.0:
@@ -61,7 +67,7 @@ class Plane:
     def mass_properties(self) -> MassProperties:
         raise no_body(self.kind)
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The quad covering the projections of the points ``cover`` (K, 3) PLANE_COVER
         times about their middle (a square of the largest span where they span a line
         or a point; of side 1 m where they are one point), counter-clockwise seen from

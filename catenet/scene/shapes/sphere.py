@@ -5,13 +5,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.scene.shapes.base import MassProperties, Outline, lathe, positive, vec
 
 RINGS = 18  # parallels of a drawn sphere, pole to pole
+
+
+if TYPE_CHECKING:
+    from catenet.terms.contact import Obstacle
 
 
 @dataclass(frozen=True, eq=False)
@@ -24,7 +29,7 @@ class Sphere:
     kind: ClassVar[str] = "sphere"
     origin_key: ClassVar[str] = "center"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "center", np.asarray(self.center, dtype=np.float64))
         object.__setattr__(self, "radius", positive("sphere: radius", self.radius))
 
@@ -40,7 +45,7 @@ class Sphere:
     def reach(self) -> float:
         return self.radius
 
-    def barrier(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
+    def barrier(self, nodes: ArrayLike, kappa: float, dhat: float, offset: float = 0.0) -> Obstacle:
         from catenet.terms.contact import SphereBarrier as SphereTerm
 
         return SphereTerm(nodes, self.center, self.radius + offset, kappa=kappa, dhat=dhat)
@@ -54,7 +59,7 @@ class Sphere:
         ball = 0.4 * r * r * np.eye(3)
         return MassProperties(4 / 3 * math.pi * r**3, self.center.copy(), ball, np.eye(3))
 
-    def surface_mesh(self, cover=None) -> tuple[np.ndarray, np.ndarray]:
+    def surface_mesh(self, cover: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """RINGS parallels of quads, pole to pole along z."""
         e = np.array([0.0, 0.0, 1.0])
         phi = np.linspace(0.0, np.pi, RINGS + 1)
