@@ -23,7 +23,7 @@ from typing import Any
 from catenet.errors import CatenetError, ConfigError
 from catenet.run.report import CableSummary, RunReport, RunResult
 from catenet.run.restart import RestartState, read_restart
-from catenet.run.steps import NoFile, run_steps
+from catenet.run.steps import Hooks, NoFile, Solved, run_steps
 
 log = logging.getLogger(__name__)
 
@@ -187,21 +187,22 @@ def run_case(
     run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
     with clock.solving():
         ws = sv.workspace(run.scene, run.settings)
-    bodies: dict = {}  # the free rigid bodies' summary, filled by run_steps
-    result = _solve(run, ws, progress, stop, interrupt, start, clock, bodies)
+    hooks = Hooks(progress, stop, interrupt)
+    solved = _solve(run, ws, hooks, start, clock)
+    result = solved.result
     case_numbers: dict = {}  # each load case's summary numbers, by name
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if run.cases:
         case_numbers, envelope = solve_from_base(
             run.scene, run.settings, ws, result, run.cases, run.path, interrupt
         )
-    done = RunResult.of(result, _report(run, ws, result, bodies, case_numbers, envelope))
+    done = RunResult.of(result, _report(run, ws, result, solved.bodies, case_numbers, envelope))
     if on_done is not None:
         on_done(run.scene, ws, done)
     return done
 
 
-def _solve(run: Plan, ws, progress, stop, interrupt, start: float, clock, bodies: dict):
+def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
     """The base state's solve through ``run_steps``, with its result file (none without
     a path); a failure re-raised with ``.output`` the file that holds its last good
     state, and bad input found late leaving no file behind."""
@@ -223,10 +224,8 @@ def _solve(run: Plan, ws, progress, stop, interrupt, start: float, clock, bodies
     )
     with writer:
         try:
-            return run_steps(
-                run.scene, run.settings, ws, writer, run.restart, progress, stop, interrupt,
-                start, clock, bodies,
-            )  # fmt: skip
+            args = (run.scene, run.settings, ws, writer)
+            return run_steps(*args, restart=run.restart, hooks=hooks, begin=start, clock=clock)
         except CatenetError as exc:
             exc.output = run.path if writer.has_result else None
             if isinstance(exc, ConfigError):

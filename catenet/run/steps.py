@@ -8,154 +8,199 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from catenet.errors import CatenetError, ConfigError
-from catenet.solver.result import Timing
+from catenet.errors import CatenetError, ConfigError, ConvergenceError
+from catenet.solver.result import Outcome, Result, Timing
 
 log = logging.getLogger(__name__)
 
-__all__ = ["NoFile", "run_steps"]
+__all__ = ["Hooks", "NoFile", "Solved", "run_steps"]
 
 
-def run_steps(
-    scene, settings, ws, writer, state, progress, stop, interrupt, begin, clock=None, bodies=None
-):
-    """Solves through the one solve path, writing frames as the steps come; on failure
-    or interruption the last good state becomes /result (converged = false). ``bodies``
-    (a dict) receives the free rigid bodies' summary (``BodyWatch.stats``)."""
-    bodies = {} if bodies is None else bodies
+@dataclass(frozen=True)
+class Hooks:
+    """What a caller hears and says during a run (``catenet.run.runner.run_case``):
+    ``progress(done, total[, rest=])`` after every step, ``stop()`` asked after every
+    step (True ends the run there), ``interrupt()`` asked before every Newton iteration
+    (a signal handler's flag: cheap)."""
+
+    progress: Callable[..., None] | None = None
+    stop: Callable[[], bool] | None = None
+    interrupt: Callable[[], bool] | None = None
+
+
+@dataclass
+class Solved:
+    """A run's base state: its Result and the free rigid bodies' summary
+    (``BodyWatch.stats``, by obstacle index; empty without bodies)."""
+
+    result: Result
+    bodies: dict = field(default_factory=dict)
+
+
+class _Frames:
+    """The frames a run keeps: each step at most once, written aside from the solve
+    time (``catenet.run.clock.Clock``)."""
+
+    def __init__(self, writer, ws, clock):
+        self.writer, self.ws, self.clock = writer, ws, clock
+        self.written = -1
+
+    def keep(self, step, t, x, v, tension=None, force=False, a=None, last=False, energy=None):
+        if (force or self.writer.wants(step)) and self.written != step:
+            with self.clock.aside():  # writing is neither start-up nor solving
+                tension = self.ws.system.tension(x) if tension is None else tension
+                self.writer.frame(t, x, v, tension, a=a, last=last, energy=energy)
+            self.written = step
+
+
+def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin, clock) -> Solved:
+    """Solves through the one solve path from the start (or ``restart``'s state), writing
+    frames as the steps come; on failure or interruption the last good state becomes
+    /result (converged = false). ``begin``: when the run began (perf_counter)."""
     from catenet.errors import Interrupted
     from catenet.model.peaks import Peaks
     from catenet.run.bodies import BodyWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
-    from catenet.solver.result import Outcome, finish
-    from catenet.solver.stability import CollapseError
 
     dynamic = settings.method == "dynamic"
-    total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
-    start = None
-    written = {"step": -1}
+    frames = _Frames(writer, ws, clock)
+    start = _dynamic_start(scene, settings, ws, restart, frames) if dynamic else None
     watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
-
-    if clock is None:
-        from catenet.run.clock import Clock
-
-        clock = Clock()
-
-    def keep(step, t, x, v, tension=None, force=False, a=None, last=False, energy=None):
-        if (force or writer.wants(step)) and written["step"] != step:
-            with clock.aside():  # writing is neither start-up nor solving
-                tension = ws.system.tension(x) if tension is None else tension
-                writer.frame(t, x, v, tension, a=a, last=last, energy=energy)
-            written["step"] = step
-
+    on_step = _stepping(settings, frames, watch, hooks)
+    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
+    if restart is not None and restart.peaks is not None and peaks.seed(restart.peaks):
+        log.info("--restart: the peaks go on from those of %s", restart.path)
+    try:
+        with interruptible(hooks.interrupt), clock.solving():
+            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
+    except CatenetError as exc:
+        if isinstance(exc, ConfigError) or exc.last_good is None:
+            raise
+        res = _kept(exc, scene, settings, ws, frames, peaks, begin, clock)
+        if isinstance(exc, Interrupted):  # within a step: like a stop between steps
+            log.info("interrupted during %s", "a time step" if dynamic else "a load step")
+            _write_result(writer, res)
+            return Solved(res)
+        _write_result(writer, res, failed=exc)
+        raise
     if dynamic:
-        v_start = scene.velocity  # [[mass]] velocity: initial velocities
-        if state is None:
-            start = sv.Start(v=v_start, t=0.0)
-        else:
-            start = sv.Start(state.x, state.v, state.t, state.a)
-        x0 = scene.net.nodes.copy() if state is None else state.x.copy()
-        x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
-        v0 = start.v if start.v is not None else np.zeros_like(x0)
-        a0 = start.a
-        if a0 is None and settings.integrator == "newmark" and writer.wants(0):
-            from catenet.solver.dynamic import start_acceleration
+        frames.keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
+    if res.outcome is Outcome.INTERRUPTED:
+        log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
+    res.wall_time = time.perf_counter() - begin
+    res.timing = _timing(clock)
+    bodies = watch.stats(res.x, res.v) if watch else {}
+    _write_result(writer, res)
+    return Solved(res, bodies)
 
-            a0 = start_acceleration(
-                scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
-            )
-        from catenet.solver.energy import held_energy
 
-        keep(0, start.t, x0, v0, a=a0, energy=held_energy(ws.system, x0, v0))
+def _dynamic_start(scene, settings, ws, restart, frames: _Frames):
+    """A dynamic run's Start (the scene's initial velocities, or ``restart``'s state)
+    with its first frame kept: positions with the supports in place, velocities, the
+    newmark scheme's acceleration and the energies held."""
+    from catenet.solver import path as sv
+    from catenet.solver.energy import held_energy
 
-    def on_step(step: sv.Step) -> bool:
+    if restart is None:
+        start = sv.Start(v=scene.velocity, t=0.0)  # [[mass]] velocity: initial velocities
+    else:
+        start = sv.Start(restart.x, restart.v, restart.t, restart.a)
+    x0 = scene.net.nodes.copy() if restart is None else restart.x.copy()
+    x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
+    v0 = start.v if start.v is not None else np.zeros_like(x0)
+    a0 = start.a
+    if a0 is None and settings.integrator == "newmark" and frames.writer.wants(0):
+        from catenet.solver.dynamic import start_acceleration
+
+        a0 = start_acceleration(
+            scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
+        )
+    frames.keep(0, start.t, x0, v0, a=a0, energy=held_energy(ws.system, x0, v0))
+    return start
+
+
+def _stepping(settings, frames: _Frames, watch, hooks: Hooks):
+    """The solve path's ``on_step``: each step's frame kept, the bodies watched, progress
+    told, and True where ``hooks.stop()`` ends the run (its frame kept)."""
+    dynamic = settings.method == "dynamic"
+    total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
+
+    def on_step(step) -> bool:
         watch.see(step.time, step.x)  # free bodies: their first contact
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
 
         def keep_step(force: bool, last: bool = False) -> None:
-            keep(step.index, step.time, step.x, step.v, tension, force=force, a=step.a,
-                 last=last, energy=step.energy)  # fmt: skip
+            frames.keep(step.index, step.time, step.x, step.v, tension, force=force, a=step.a,
+                        last=last, energy=step.energy)  # fmt: skip
 
         keep_step(force=last, last=last)  # a static run's last step: /result follows at once
-        if progress is not None:
+        if hooks.progress is not None:
             if dynamic:
-                progress(step.time, total, rest=step.rest)
+                hooks.progress(step.time, total, rest=step.rest)
             else:
-                progress(step.time, total)
-        if stop is not None and stop():
+                hooks.progress(step.time, total)
+        if hooks.stop is not None and hooks.stop():
             keep_step(force=dynamic)
             return True
         return False
 
-    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
-    if state is not None and state.peaks is not None and peaks.seed(state.peaks):
-        log.info("--restart: the peaks go on from those of %s", state.path)
-    try:
-        with interruptible(interrupt), clock.solving():
-            res = sv.solve(scene, settings, workspace=ws, start=start, on_step=on_step, peaks=peaks)
-    except CatenetError as exc:
-        good = exc.last_good
-        if isinstance(exc, ConfigError) or good is None:
-            raise
-        stopped = isinstance(exc, Interrupted)
-        x = _usable(good.x, None, scene)
-        t = float(good.time)
-        if dynamic:  # the last good state is the file's last frame, then /result
-            try:
-                keep(good.steps, t, x, good.v, force=True, a=good.a)
-            except CatenetError:
-                pass
-        # The residual of the state kept (a dynamic run's: its static part under the loads
-        # at its time), not of the failed solve's iterate, which may not even be finite.
-        residual = _static_residual(ws, scene, x, t, dynamic)
-        if not math.isfinite(residual):  # a term's gradient beyond floating point there:
-            start = [r for r in getattr(exc, "history", None) or () if math.isfinite(r)]
-            residual = start[0] if start else residual  # the failed solve's first residual
-        res = finish(
-            ws.system,
-            scene.loads,
-            x,
-            1.0 if dynamic else t,
-            load_time=t if dynamic else None,
-            converged=False,
-            equilibrium=False,
-            iterations=int(good.iterations),
-            residual=residual,
-            steps=int(good.steps),
-            time=t,
-            v=good.v,
-            a=good.a,
-            message="interrupted" if stopped else str(exc),
-            outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
-            wall_time=time.perf_counter() - begin,
-            stats=ws.stats(),
-            timing=_timing(clock),
-            peaks=peaks,
-            stability=exc.verdict if isinstance(exc, CollapseError) else "",
-        )
-        if stopped:  # within a step: like a stop between steps, not a failure
-            log.info("interrupted during %s", "a time step" if dynamic else "a load step")
-            _write_result(writer, res)
-            return res
-        _write_result(writer, res, failed=exc)
-        raise
-    if dynamic:
-        keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
-    else:
-        res.wall_time = time.perf_counter() - begin
-    if res.outcome is Outcome.INTERRUPTED:
-        log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
-    res.wall_time = time.perf_counter() - begin
-    res.timing = _timing(clock)
-    if watch:
-        bodies.update(watch.stats(res.x, res.v))
-    _write_result(writer, res)
-    return res
+    return on_step
+
+
+def _kept(exc: CatenetError, scene, settings, ws, frames: _Frames, peaks, begin: float, clock):
+    """The Result of the last good state of a run that failed or was interrupted (its
+    ``exc.last_good``), its frame kept (dynamic): converged = false."""
+    from catenet.errors import Interrupted
+    from catenet.solver.result import finish
+    from catenet.solver.stability import CollapseError
+
+    good = exc.last_good
+    assert good is not None
+    dynamic = settings.method == "dynamic"
+    stopped = isinstance(exc, Interrupted)
+    x = _usable(good.x, None, scene)
+    t = float(good.time)
+    if dynamic:  # the last good state is the file's last frame, then /result
+        try:
+            frames.keep(good.steps, t, x, good.v, force=True, a=good.a)
+        except CatenetError:
+            pass
+    # The residual of the state kept (a dynamic run's: its static part under the loads
+    # at its time), not of the failed solve's iterate, which may not even be finite.
+    residual = _static_residual(ws, scene, x, t, dynamic)
+    if not math.isfinite(residual):  # a term's gradient beyond floating point there:
+        history = exc.history if isinstance(exc, ConvergenceError) else []
+        start = [r for r in history if math.isfinite(r)]
+        residual = start[0] if start else residual  # the failed solve's first residual
+    return finish(
+        ws.system,
+        scene.loads,
+        x,
+        1.0 if dynamic else t,
+        load_time=t if dynamic else None,
+        converged=False,
+        equilibrium=False,
+        iterations=int(good.iterations),
+        residual=residual,
+        steps=int(good.steps),
+        time=t,
+        v=good.v,
+        a=good.a,
+        message="interrupted" if stopped else str(exc),
+        outcome=Outcome.INTERRUPTED if stopped else Outcome.FAILED,
+        wall_time=time.perf_counter() - begin,
+        stats=ws.stats(),
+        timing=_timing(clock),
+        peaks=peaks,
+        stability=exc.verdict if isinstance(exc, CollapseError) else "",
+    )
 
 
 def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
