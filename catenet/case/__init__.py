@@ -19,7 +19,13 @@ from catenet.case.guard import (
     estimate_size,
     physical_memory,
 )
-from catenet.case.kinds import KINDS, CableConfig, GeometryConfig, GraphConfig, SquareNetConfig
+from catenet.case.kinds import (
+    KINDS,
+    GeometryConfig,
+    GraphConfig,
+    SingleCableConfig,
+    SquareNetConfig,
+)
 from catenet.case.parse import Case, load_case, parse_case
 from catenet.case.scene import Scene, build
 from catenet.case.sections import (
@@ -42,7 +48,7 @@ __all__ = [
     "MAX_NODES",
     "MEMORY_SHARE",
     "METHODS",
-    "CableConfig",
+    "SingleCableConfig",
     "Case",
     "GeometryConfig",
     "GraphConfig",

@@ -27,7 +27,7 @@ from catenet.model.limits import carried, too_large
 RESOLVED = 1e-8  # the share of a free body's size its coordinates' round-off may reach
 
 if TYPE_CHECKING:  # the terms load where a body is built
-    from catenet.terms.rigid import Frame
+    from catenet.terms.rigid import BodyFrame
 
 #: The orthogonality energy's k over the body's load scale (force x size): the body
 #: strains by about 1/RIGIDITY under a force of the scale.
@@ -45,7 +45,7 @@ class FreeBody:
     (their world directions at t = 0, as columns) and its centre of mass at t = 0."""
 
     obstacle: int
-    frame: Frame
+    frame: BodyFrame
     mass: float
     inertia: np.ndarray
     axes: np.ndarray
@@ -116,7 +116,7 @@ def _check_alone(case, which) -> None:
 
 
 def _frame(obs, k: int, first: int, case):
-    from catenet.terms.rigid import Frame, inertia_problem
+    from catenet.terms.rigid import BodyFrame, inertia_problem
 
     path = f"obstacle[{k}]"
     mass, com, inertia, axes = mass_properties(obs)
@@ -126,7 +126,7 @@ def _frame(obs, k: int, first: int, case):
         raise ConfigError(
             f"{path}: the inertia of its shape is no inertia tensor ({why}): give inertia"
         )
-    frame = Frame(first, mass, world, com)
+    frame = BodyFrame(first, mass, world, com)
     _check_resolved(path, obs, frame)
     v = None if obs.velocity is None else np.asarray(obs.velocity, float)
     w = getattr(obs, "angular_velocity", None)

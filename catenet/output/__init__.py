@@ -36,7 +36,7 @@ from catenet.output.metadata import environment, result_attrs
 from catenet.output.obstacles import read_obstacles
 from catenet.output.reader import (
     Frame,
-    Mesh,
+    NetMesh,
     ResultFile,
     open_result,
     probe_node,
@@ -51,7 +51,7 @@ from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 
 __all__ = [
     "Frame",
-    "Mesh",
+    "NetMesh",
     "Repair",
     "ResultFile",
     "ResultWriter",

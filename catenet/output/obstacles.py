@@ -28,7 +28,7 @@ pose and its surface there, and the same at /result's time:
 ```
 
 A free rigid body (``catenet.case.rigid``) is stored as a moving one, its pose read from
-the state (its four nodes, ``catenet.terms.rigid.Frame``; the origin is its centre of
+the state (its four nodes, ``catenet.terms.rigid.BodyFrame``; the origin is its centre of
 mass at t = 0), with more:
 
 ```

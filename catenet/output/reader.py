@@ -5,7 +5,7 @@ knows where a result file keeps what.
   the last complete frame of a run that stopped before writing it) and trajectory access,
   with every layout problem reported at once (``catenet plot``).
 - ``read_frame(path, index)`` -> ``Frame``: one stored state (``--restart``, tests).
-- ``read_mesh(path)`` -> ``Mesh``: the net a file was written for (``--restart``).
+- ``read_mesh(path)`` -> ``NetMesh``: the net a file was written for (``--restart``).
 - ``open_result`` and ``trajectory_length``: the h5py file and its complete frames, for
   tools that look at the datasets themselves (``catenet.output.repair`` rewrites a file
   that needs it as an ordinary one).
@@ -42,7 +42,7 @@ REQUIRED = ("/mesh/nodes", "/mesh/edges")
 __all__ = [
     "LIBVER",
     "Frame",
-    "Mesh",
+    "NetMesh",
     "ResultFile",
     "open_result",
     "probe_node",
@@ -258,7 +258,7 @@ def read_peaks(path: str | Path, t: float) -> dict[str, np.ndarray] | None:
 
 
 @dataclass
-class Mesh:
+class NetMesh:
     """The net of a result file (/mesh): nodes (N, 3) reference positions [m], edges (M, 2)
     node indices, rest_length and EA (M,) [m], [N], fixed (N,) bool pinned nodes. In a
     ``ResultFile`` the last three are None when a file does not hold them (in the right
@@ -271,7 +271,7 @@ class Mesh:
     fixed: np.ndarray | None
 
 
-def read_mesh(path: str | Path, *, what: str | None = None) -> Mesh:
+def read_mesh(path: str | Path, *, what: str | None = None) -> NetMesh:
     """The mesh of a result file, all of nodes, edges, rest lengths and supports present.
     Raises ConfigError naming ``what`` (default: the path) for a file without them."""
     what = str(path) if what is None else what
@@ -292,7 +292,7 @@ def read_mesh(path: str | Path, *, what: str | None = None) -> Mesh:
         raise ConfigError(f"{what}: cannot be read: {exc}") from None
     except DAMAGED as exc:
         raise damaged(what, exc) from None
-    return Mesh(nodes, edges, rest, EA, fixed)
+    return NetMesh(nodes, edges, rest, EA, fixed)
 
 
 # --------------------------------------------------------------------------------------------
@@ -304,7 +304,7 @@ def read_mesh(path: str | Path, *, what: str | None = None) -> Mesh:
 class ResultFile:
     """A result file as read by ``read_result``.
 
-    mesh: the net (``Mesh``); attrs: the root attributes (the resolved case as TOML,
+    mesh: the net (``NetMesh``); attrs: the root attributes (the resolved case as TOML,
     versions, ...), case: that TOML parsed ({} when missing or invalid), result_attrs:
     those of /result ({} without). x (N, 3): the final positions, /result/x, or the last
     complete trajectory frame for a run that stopped before writing it
@@ -316,7 +316,7 @@ class ResultFile:
     """
 
     path: Path
-    mesh: Mesh
+    mesh: NetMesh
     x: np.ndarray
     tension: np.ndarray | None
     probe: int
@@ -520,7 +520,7 @@ def read_result(path: str | Path) -> ResultFile:
         raise damaged(path, exc) from None
     return ResultFile(
         path=path,
-        mesh=Mesh(nodes, edges, rest, EA, fixed),
+        mesh=NetMesh(nodes, edges, rest, EA, fixed),
         x=x,
         tension=tension,
         probe=probe,

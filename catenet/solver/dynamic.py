@@ -31,7 +31,7 @@ from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
 from catenet.solver.energy import Ledger
 from catenet.solver.integrators import RHO_INF, Newmark, make
-from catenet.solver.newton import Reuse, solve
+from catenet.solver.newton import Reuse, solve_newton
 from catenet.solver.relax import MAX_STEPS, REST, RestControl, rest_stages
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import HarmonicExtension
@@ -289,7 +289,7 @@ class TimeStepper:
         if self.kept is not None:
             self.kept.keep(h_step)  # a new h changes the inertia diagonal: factorise afresh
         try:
-            newton = solve(
+            newton = solve_newton(
                 self.potential,
                 x_trial,
                 rtol=self.rtol * self.scheme.step_rtol,

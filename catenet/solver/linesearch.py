@@ -38,7 +38,7 @@ class Trial:
 
 
 @dataclass(frozen=True)
-class Outcome:
+class Searched:
     """What a line search found: the step length alpha, whether a step was taken (x then
     holds y0 + alpha dy), rho (actual over predicted decrease of Phi at the full step) and
     the evaluation at alpha (its gradient a copy, the caller's to keep)."""
@@ -132,11 +132,11 @@ class LineSearch:
             return (start.phi - ev.phi) / self.predicted
         return 1.0 if ev.gnorm < start.gnorm else 0.0
 
-    def run(self) -> Outcome:
+    def run(self) -> Searched:
         full = self.at(1.0)
         rho = self.rho(full)
         if full.ok and full.slope >= WOLFE * self.slope:
-            return Outcome(1.0, True, rho, full.evaluation)
+            return Searched(1.0, True, rho, full.evaluation)
         if full.ok:  # still steep at the full step: lengthen it
             best, lo, hi = self._lengthen(full)
         else:
@@ -145,10 +145,10 @@ class LineSearch:
             best = self._bracket(best, lo, hi)
         if best is None:
             self.x.reshape(-1)[self.free] = self.y0
-            return Outcome(0.0, False, rho, None)
+            return Searched(0.0, False, rho, None)
         np.add(self.y0, best.alpha * self.dy, out=self.y_trial)
         self.x.reshape(-1)[self.free] = self.y_trial
-        return Outcome(best.alpha, True, rho, best.evaluation)
+        return Searched(best.alpha, True, rho, best.evaluation)
 
     def _lengthen(self, full: Trial) -> tuple[Trial, Trial, Trial | None]:
         """Steps 4, 16, ... times as long while Phi falls and the slope stays steep:

@@ -67,7 +67,7 @@ def rigidities(system) -> list:
 
 
 def body_frames(system) -> list:
-    """The ``Frame`` of every free rigid body among the system's terms (its rigidity)."""
+    """The ``BodyFrame`` of every free rigid body among the system's terms (its rigidity)."""
     return [t.frame for t in rigidities(system)]
 
 

@@ -53,7 +53,7 @@ import numpy as np
 
 from catenet.errors import ConvergenceError, Interrupted, SingularSystemError
 from catenet.kernels.sparse import dot
-from catenet.solver.linesearch import LineSearch, Outcome
+from catenet.solver.linesearch import LineSearch, Searched
 from catenet.solver.potential import Potential
 
 log = logging.getLogger(__name__)
@@ -128,7 +128,7 @@ class Reuse:
         self._owner = None
 
 
-def solve(
+def solve_newton(
     potential: Potential,
     x: np.ndarray,
     *,
@@ -312,7 +312,7 @@ class _Newton:
         self.stall += 1
         return None
 
-    def accept(self, search: Outcome, kept: bool) -> None:
+    def accept(self, search: Searched, kept: bool) -> None:
         """Moves on to the state the line search reached; adapts c (or the kept matrix)."""
         prev = self.gnorm
         ev = search.trial

@@ -92,7 +92,7 @@ def stretched_start(potential: Potential, x: np.ndarray) -> None:
     refinement (the paper's n = 34 net: 7, 10 and 12 at 1 cm, 1 mm and 0.2 mm edges,
     where the flat start took 11, 14 and more than 600). Edges the move hardly
     lengthened (near the supports) are still soft across, so that Newton begins with a
-    small Levenberg-Marquardt shift (``newton.solve(shifted=True)``)."""
+    small Levenberg-Marquardt shift (``newton.solve_newton(shifted=True)``)."""
     net = potential.system.net
     u = np.zeros_like(x)
     springs = potential.with_system(

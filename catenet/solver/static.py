@@ -17,7 +17,7 @@ from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 from catenet.solver.modal import body_frames, stable_with_bodies
-from catenet.solver.newton import _c_start, raise_unconverged, solve
+from catenet.solver.newton import _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.stability import STABLE, UNSTABLE, tangent
@@ -66,7 +66,9 @@ def solve_static(
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
     potential.begin_step(accepted)
     if relaxed:
-        result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static (from rest)")
+        result = solve_newton(
+            potential, x, rtol=rtol, max_iter=max_iter, label="static (from rest)"
+        )
     else:
         result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
     result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
@@ -147,7 +149,9 @@ def _relag(potential: Potential, x: np.ndarray, result, *, rtol: float, max_iter
     for _ in range(LAG_ROUNDS if lagged else 0):
         if not result.converged or max(t.relag(x) for t in lagged) <= LAG_RTOL:
             return result
-        again = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static (lagged terms)")
+        again = solve_newton(
+            potential, x, rtol=rtol, max_iter=max_iter, label="static (lagged terms)"
+        )
         again.iterations += result.iterations
         again.history = result.history + again.history
         result = again
@@ -236,7 +240,7 @@ def equilibrium(
         """One loose solve with the stretching ``term`` in place of the exact one and the
         obstacles' barriers of continuation ``level`` (0: the widest)."""
         nonlocal iterations, history
-        result = solve(
+        result = solve_newton(
             potential.with_system(system.with_terms((term, *barriers(level)))),
             x,
             rtol=SMOOTH_RTOL,
@@ -267,7 +271,7 @@ def equilibrium(
     if transient:
         result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
     else:
-        result = solve(
+        result = solve_newton(
             potential, x, rtol=rtol, max_iter=max_iter, label="static", shifted=stretched
         )
     result.iterations += iterations
@@ -320,7 +324,7 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
         inertia.set_step(c * potential.D, y)
         step = Potential(system, potential.solver, potential.force, (inertia,))
         label = f"static (pseudo-time, c {c:.1e})"  # a way there: solved loosely, as stages
-        r = solve(step, x, rtol=max(rtol, SMOOTH_RTOL), max_iter=max_iter, label=label)
+        r = solve_newton(step, x, rtol=max(rtol, SMOOTH_RTOL), max_iter=max_iter, label=label)
         iterations += r.iterations
         history += r.history
         if r.converged:
@@ -329,7 +333,7 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
             x.reshape(-1)[free] = y
             c *= PT_GROW**2
         ev = potential.evaluate(x)
-    result = solve(potential, x, rtol=rtol, max_iter=max_iter, label="static")
+    result = solve_newton(potential, x, rtol=rtol, max_iter=max_iter, label="static")
     result.iterations += iterations
     result.history = history + result.history
     return result

@@ -3,7 +3,7 @@ ground under a box, the seabed under a buoy.
 
 A point of the body at X (its place at t = 0) is at p = c + A (X - c0) (the affine
 body's map), linear in the body's four nodes p_k: p = sum_k w_k p_k with
-w_k = 1/4 + B_k . (X - c0) (``Frame.B``; sum w_k = 1). Against a plane n . (y - q) >= 0
+w_k = 1/4 + B_k . (X - c0) (``BodyFrame.B``; sum w_k = 1). Against a plane n . (y - q) >= 0
 a convex polytope, and any closed triangle mesh, is nearest at one of its vertices, so
 the body's gap is the least of its vertices' gaps d_v = n . (p_v - q) - r (r: a sphere's
 or a capsule's radius about its centre or axis ends; 0 for a box's corners and a mesh's
@@ -26,7 +26,7 @@ import numpy as np
 
 from catenet.kernels.contact import barrier
 from catenet.terms.base import Term, register
-from catenet.terms.rigid import Frame
+from catenet.terms.rigid import BodyFrame
 
 
 @register("body_plane")
@@ -40,7 +40,7 @@ class BodyPlane(Term):
     convex = True
 
     def __init__(
-        self, frame: Frame, vertices, point, normal, *, radius: float = 0.0, kappa: float,
+        self, frame: BodyFrame, vertices, point, normal, *, radius: float = 0.0, kappa: float,
         dhat: float, n_nodes: int, label: str = "a free body and a plane",
     ):  # fmt: skip
         self.frame = frame

@@ -96,7 +96,7 @@ def _show(w) -> str:
     return "[" + ", ".join(f"{v:.6g}" for v in w) + "]"
 
 
-class Frame:
+class BodyFrame:
     """The four nodes ``first`` .. ``first + 3`` of a rigid body of ``mass`` [kg] whose
     world inertia at t = 0 is ``inertia`` (3, 3) [kg m^2] about its centre of mass
     ``center`` (see the module docstring)."""
@@ -172,7 +172,7 @@ class Rigidity(Term):
     convex = False  # positive semidefinite on the rotations, not everywhere
     bounds_step = True  # the body's turn per Newton step (``max_step``)
 
-    def __init__(self, frame: Frame, k: float, *, n_nodes: int):
+    def __init__(self, frame: BodyFrame, k: float, *, n_nodes: int):
         if not (math.isfinite(k) and k > 0):
             raise ValueError(f"rigidity: k = {k!r}: must be > 0")
         self.frame, self.k, self.n_nodes = frame, float(k), int(n_nodes)

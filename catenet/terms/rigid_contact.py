@@ -2,7 +2,7 @@
 
 The body's shape is a fixed obstacle term (box, capsule, sphere, mesh) built at the
 body's pose at t = 0; a node x is seen there at X = c0 + A^T (x - c), with (c, A) the
-body's pose, linear in its four nodes p (``Frame.state``). With g, H the shape's
+body's pose, linear in its four nodes p (``BodyFrame.state``). With g, H the shape's
 gradient and Hessian at X and u = x - c:
 
     dE/dx = A g,   dE/dc = -A g,   dE/dA = u g^T,
@@ -10,7 +10,7 @@ gradient and Hessian at X and u = x - c:
 and the Hessian in q = (x, c, a1, a2, a3) (a_m the columns of A) is L^T H L + S, with
 L = [A^T, -A^T, e_1 u^T, e_2 u^T, e_3 u^T] the Jacobian of X and S the second
 derivative of X weighted by g: g_m 1 between a_m and x, -g_m 1 between a_m and c. The
-chain to the body's nodes is the constant kron(T, 1) of ``Frame.chain``. Per contact
+chain to the body's nodes is the constant kron(T, 1) of ``BodyFrame.chain``. Per contact
 node the values are its (x, x) block (9), (x, p) (36) and (p, x) (36), then the
 body's (p, p) block (144) summed over the nodes.
 
@@ -43,7 +43,7 @@ import math
 import numpy as np
 
 from catenet.terms.base import Term, register
-from catenet.terms.rigid import CA_ITER, CA_SHARE, Frame
+from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
 
 T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS = 12)
 FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
@@ -61,7 +61,7 @@ class BodyContact(Term):
     role = "internal"
     convex = False
 
-    def __init__(self, shape, frame: Frame, *, n_nodes: int, label: str = "a free body"):
+    def __init__(self, shape, frame: BodyFrame, *, n_nodes: int, label: str = "a free body"):
         self.shape, self.frame = shape, frame
         self.nodes = shape.nodes
         self.kappa, self.dhat = getattr(shape, "kappa", 0.0), getattr(shape, "dhat", 0.0)

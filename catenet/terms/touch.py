@@ -5,7 +5,7 @@ A solid is its surface: points (a box's 8 corners, a mesh's vertices, a sphere's
 a capsule's axis ends), edges between them (a box's 12, a mesh's, a capsule's axis) and a
 radius r the surface is grown by (a sphere's, a capsule's; 0 otherwise). Each point is
 linear in the solid's nodes, y = W x (a body's point at X at t = 0: w_k = 1/4 + B_k .
-(X - c0), the affine map of ``Frame``; a ball's centre is its node; a fixed obstacle's
+(X - c0), the affine map of ``BodyFrame``; a ball's centre is its node; a fixed obstacle's
 points have no weights), so every chain rule below is a constant Jacobian.
 
 The barrier kappa b(gap) (``catenet.kernels.contact.barrier``) acts on every feature
@@ -65,7 +65,7 @@ class Solid:
     with their ``weights`` (V, len(nodes)) (y = weights @ x[nodes]; fixed points stay
     where they are); ``edges`` (E, 2) between the points; the ``radius`` the surface is
     grown by; ``kind`` ("box", "capsule", "sphere", "mesh"); ``frame``: a free body's
-    Frame (its shape is then seen in its body frame), else None; ``shape(nodes, kappa,
+    BodyFrame (its shape is then seen in its body frame), else None; ``shape(nodes, kappa,
     dhat, grow)``: its shape's barrier term at t = 0 grown by ``grow`` (None: a ball,
     whose shape is its centre)."""
 

@@ -124,7 +124,7 @@ def test_newton_refuses_a_non_finite_scale():
 
         system = type("S", (), {"free_dofs": np.arange(3)})()
 
-    result = newton.solve(Potential(), np.zeros((1, 3)), rtol=1e-8, max_iter=5)
+    result = newton.solve_newton(Potential(), np.zeros((1, 3)), rtol=1e-8, max_iter=5)
     assert not result.converged and "non-finite tolerance" in result.reason
 
 

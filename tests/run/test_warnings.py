@@ -285,7 +285,7 @@ def test_newton_stops_when_it_stagnates(monkeypatch):
     from catenet.solver import newton
 
     pot, x = _potential()
-    ref = newton.solve(pot, x.copy(), rtol=1e-8, max_iter=200)
+    ref = newton.solve_newton(pot, x.copy(), rtol=1e-8, max_iter=200)
     assert ref.converged and ref.reason == "converged"  # the usual case: no stagnation
     real = pot.evaluate
     rng = np.random.default_rng(0)
@@ -302,11 +302,11 @@ def test_newton_stops_when_it_stagnates(monkeypatch):
     monkeypatch.setattr(newton, "STALL_FLOOR", 0.0)  # its stop at the floor switched off
     # Noise within every DOF's own round-off floor (Potential.at_floor): converged there,
     # never "stagnated".
-    r = newton.solve(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
+    r = newton.solve_newton(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
     assert r.converged and r.reason == "converged (round-off floor)", r.reason
     # Noise a few times the round-off floor above the solution: stagnated, and soon.
     size["noise"] = 3.0
-    r = newton.solve(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
+    r = newton.solve_newton(pot, x.copy(), rtol=1e-30, max_iter=200, atol=0.0)
     assert not r.converged and r.reason.startswith("stagnated"), r.reason
     assert r.iterations <= ref.iterations + 2 * newton.STAGNATION < 200
     assert "round-off floor" in r.reason

@@ -10,7 +10,7 @@ import pytest
 import catenet as cn
 import catenet.solver.dynamic as dynamic
 from catenet.solver.dynamic import solve_dynamic
-from catenet.solver.newton import NewtonResult, Reuse, solve
+from catenet.solver.newton import NewtonResult, Reuse, solve_newton
 from catenet.solver.static import Workspace, solve_static
 from catenet.terms.contact import SphereBarrier
 
@@ -84,7 +84,7 @@ def test_static_newton_with_a_kept_factorisation_finds_the_same_equilibrium():
     results = {}
     for reuse in (None, Reuse()):
         x = start.copy()
-        r = solve(potential, x, rtol=1e-10, max_iter=200, reuse=reuse)
+        r = solve_newton(potential, x, rtol=1e-10, max_iter=200, reuse=reuse)
         assert r.converged
         results[reuse is None] = (x, r)
     (x_fresh, r_fresh), (x_kept, r_kept) = results[True], results[False]
@@ -94,9 +94,9 @@ def test_static_newton_with_a_kept_factorisation_finds_the_same_equilibrium():
     # A second solve from the same start keeps the first one's matrix from the outset.
     keep = Reuse()
     x = start.copy()
-    solve(potential, x, rtol=1e-10, max_iter=200, reuse=keep)
+    solve_newton(potential, x, rtol=1e-10, max_iter=200, reuse=keep)
     x = start.copy()
-    again = solve(potential, x, rtol=1e-10, max_iter=200, reuse=keep)
+    again = solve_newton(potential, x, rtol=1e-10, max_iter=200, reuse=keep)
     assert again.converged and again.reused > 0
     assert difference(x, x_fresh, net.nodes) < SAME
 
@@ -120,7 +120,7 @@ def test_a_kept_factorisation_is_dropped_when_another_solve_factorises():
 def _failing(monkeypatch, fail):
     """Wraps the dynamic solver's Newton: ``fail(call, kept)`` makes a call fail."""
     calls = []
-    real = dynamic.solve
+    real = dynamic.solve_newton
 
     def wrapped(potential, x, **kw):
         kept = kw.get("reuse") is not None and kw["reuse"].valid(potential, 0.0)
@@ -129,7 +129,7 @@ def _failing(monkeypatch, fail):
             return NewtonResult(False, 1, 1.0, 0.0, [1.0], "forced failure", 0, int(kept))
         return real(potential, x, **kw)
 
-    monkeypatch.setattr(dynamic, "solve", wrapped)
+    monkeypatch.setattr(dynamic, "solve_newton", wrapped)
     return calls
 
 

@@ -21,7 +21,7 @@ from catenet.kernels.shapes import box_max_step
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
 from catenet.terms.contact import SphereBarrier
-from catenet.terms.rigid import TURN_MAX, Frame, Rigidity, inertia_problem, second_moment
+from catenet.terms.rigid import TURN_MAX, BodyFrame, Rigidity, inertia_problem, second_moment
 from catenet.terms.rigid_contact import FLOOR_SHARE, ROUNDOFF, SLACK, BodyContact
 from catenet.terms.shapes import BoxBarrier, CapsuleBarrier, MeshBarrier, rotation
 
@@ -53,7 +53,7 @@ def near_surface(shape_gap, frame, x, rng, count, lo=0.01, hi=0.12):
 
 def test_four_nodes_carry_the_mass_centre_and_second_moment_exactly():
     c0 = np.array([1.0, -2.0, 0.5])
-    frame = Frame(0, 7.0, INERTIA, c0)
+    frame = BodyFrame(0, 7.0, INERTIA, c0)
     P, V = frame.place([0.1, 0.2, 0.3], [0.5, -1.0, 2.0])
     m = frame.mass / 4
     assert P.mean(axis=0) == pytest.approx(c0)
@@ -82,7 +82,7 @@ def test_inertia_that_no_body_has_is_named():
 
 def test_rigidity_passes_finite_differences_and_exerts_no_force_or_torque():
     rng = np.random.default_rng(3)
-    frame = Frame(1, 5.0, INERTIA, [0.2, 0.1, -0.3])
+    frame = BodyFrame(1, 5.0, INERTIA, [0.2, 0.1, -0.3])
     x = np.zeros((5, 3))
     x[1:] = posed(frame, rng, [0.3, 0.1, -0.2], rotation([1, 2, 3], 0.4))
     term = Rigidity(frame, 40.0, n_nodes=5)
@@ -117,7 +117,7 @@ def test_body_contact_passes_finite_differences_and_balances_force_and_torque(ki
     rng = np.random.default_rng(11)
     K = 8
     c0 = np.array([0.1, 0.2, 0.3])
-    frame = Frame(K, 5.0, INERTIA, c0)
+    frame = BodyFrame(K, 5.0, INERTIA, c0)
     shape = _shapes(tmp_path, np.arange(K), 3.0, 0.2, c0)[kind]
     x = np.zeros((K + 4, 3))
     x[K:] = posed(frame, rng, c0 + [0.05, -0.02, 0.01], rotation([1, 2, 3], 0.3))
@@ -143,7 +143,7 @@ def test_the_step_cap_lets_no_node_in_and_is_exact_for_a_body_that_does_not_turn
     rng = np.random.default_rng(5)
     K = 30
     c0 = np.zeros(3)
-    frame = Frame(K, 5.0, INERTIA, c0)
+    frame = BodyFrame(K, 5.0, INERTIA, c0)
     box = BoxBarrier(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=1.0, dhat=0.05)
     term = BodyContact(box, frame, n_nodes=K + 4)
     x = np.zeros((K + 4, 3))
@@ -192,7 +192,7 @@ def test_no_step_brings_a_node_nearer_the_body_than_the_floor(kind, tmp_path):
     rng = np.random.default_rng(3)
     K = 12
     c0 = np.array([0.1, 0.2, 0.3])
-    frame = Frame(K, 5.0, INERTIA, c0)
+    frame = BodyFrame(K, 5.0, INERTIA, c0)
     dhat = 0.05
     shape = _shapes(tmp_path, np.arange(K), 1.0, dhat, c0)[kind]
     term = BodyContact(shape, frame, n_nodes=K + 4)
@@ -217,7 +217,7 @@ def test_a_newton_step_turns_a_body_by_at_most_turn_max():
     (dA = [w]x theta, |dA|_2 = theta) goes TURN_MAX / theta of the way; a translation and
     the net's nodes are not capped."""
     K = 3
-    frame = Frame(K, 5.0, INERTIA, np.zeros(3))
+    frame = BodyFrame(K, 5.0, INERTIA, np.zeros(3))
     term = Rigidity(frame, 1e3, n_nodes=K + 4)
     x = np.zeros((K + 4, 3))
     x[K:] = frame.points
@@ -364,7 +364,7 @@ def test_body_friction_passes_finite_differences_and_balances_force_and_torque()
     rng = np.random.default_rng(2)
     K = 8
     c0 = np.array([0.1, 0.2, 0.3])
-    frame = Frame(K, 5.0, INERTIA, c0)
+    frame = BodyFrame(K, 5.0, INERTIA, c0)
     box = BoxBarrier(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=3.0, dhat=0.2)
     x = np.zeros((K + 4, 3))
     x[K:] = posed(frame, rng, c0, rotation([1, 2, 3], 0.3))

@@ -8,7 +8,7 @@ here and one line in the registration below.
 from __future__ import annotations
 
 from catenet.case.kinds.base import GeometryConfig
-from catenet.case.kinds.cable import CableConfig
+from catenet.case.kinds.cable import SingleCableConfig
 from catenet.case.kinds.graph import GraphConfig
 from catenet.case.kinds.square_net import SquareNetConfig
 
@@ -16,10 +16,10 @@ from catenet.case.kinds.square_net import SquareNetConfig
 KINDS: dict[str, type[GeometryConfig]] = {
     cls.kind: cls
     for cls in (
-        CableConfig,
+        SingleCableConfig,
         SquareNetConfig,
         GraphConfig,
     )
 }
 
-__all__ = ["KINDS", "CableConfig", "GeometryConfig", "GraphConfig", "SquareNetConfig"]
+__all__ = ["KINDS", "SingleCableConfig", "GeometryConfig", "GraphConfig", "SquareNetConfig"]

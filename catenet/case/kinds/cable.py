@@ -15,7 +15,7 @@ Vec3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
-class CableConfig(GeometryConfig):
+class SingleCableConfig(GeometryConfig):
     """A single cable: ``nodes`` nodes evenly on the chord from ``start`` to ``end``;
     ``length`` is the unstressed length (the chord when not given)."""
 
@@ -50,7 +50,7 @@ class CableConfig(GeometryConfig):
         return (self.nodes - 1) // 2
 
     @classmethod
-    def parse(cls, ck: Checker, g: dict, base_dir: Path) -> CableConfig | None:
+    def parse(cls, ck: Checker, g: dict, base_dir: Path) -> SingleCableConfig | None:
         v = parse_keys(ck, g, cls, "geometry", Context(kind=cls))
         if v["start"] is not BAD and v["end"] is not BAD:
             chord = math.dist(v["start"], v["end"])
