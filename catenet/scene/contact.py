@@ -84,6 +84,27 @@ class Contact:
     angular_velocity: tuple[float, ...] | None = None
     history: tuple[tuple[float, float], ...] | None = None
 
+    def __post_init__(self) -> None:
+        """ConfigError for a value a case file's keys would refuse (a scene built in
+        Python: ``Scene.with_obstacle``), naming the key."""
+        problems = []
+        for name, value in (("distance", self.distance), ("stiffness", self.stiffness),
+                            ("slip", self.slip)):  # fmt: skip
+            if value is not None and not (math.isfinite(value) and value > 0):
+                problems.append(f"{name} = {value!r}: must be a finite number > 0 (or None)")
+        if not (math.isfinite(self.accuracy) and 0 < self.accuracy < 1):
+            problems.append(f"accuracy = {self.accuracy!r}: must be a number in (0, 1)")
+        if not (math.isfinite(self.friction) and self.friction >= 0):
+            problems.append(f"friction = {self.friction!r}: must be a finite number >= 0")
+        for name, vector in (("velocity", self.velocity),
+                             ("angular_velocity", self.angular_velocity)):  # fmt: skip
+            if vector is not None and not (
+                len(vector) == 3 and all(math.isfinite(c) for c in vector)
+            ):
+                problems.append(f"{name} = {list(vector)!r}: must be 3 finite numbers")
+        if problems:
+            raise ConfigError([f"obstacle: {p}" for p in problems])
+
     @property
     def moving(self) -> bool:
         return self.velocity is not None or self.angular_velocity is not None

@@ -9,6 +9,8 @@ weight onto a plane (a static solve through the contact policy's stages)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -128,3 +130,18 @@ def test_solve_takes_solver_keys():
     a = catenet.solve(scene, steps=2)
     b = catenet.solve(scene, catenet.Settings(steps=2))
     assert a.converged and np.array_equal(a.x, b.x)
+
+
+@pytest.mark.parametrize(
+    ("keys", "message"),
+    [
+        ({"friction": -0.1}, "friction = -0.1: must be a finite number >= 0"),
+        ({"accuracy": 1.0}, "accuracy = 1.0: must be a number in (0, 1)"),
+        ({"distance": 0.0}, "distance = 0.0: must be a finite number > 0"),
+        ({"velocity": [1.0, 2.0]}, "velocity = [1.0, 2.0]: must be 3 finite numbers"),
+    ],
+)
+def test_the_builder_refuses_what_a_case_file_would_naming_the_key(keys, message):
+    made = capture_scene()
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        made.with_obstacle(catenet.Sphere([0.0, 0.0, -3.0], 0.2), **keys)
