@@ -417,20 +417,7 @@ def read_result(path: str | Path) -> ResultFile:
     trajectory frame stands in, with its tensions. /mesh/fixed of the wrong shape counts
     as missing.
     """
-    import h5py
-
-    path = Path(path)
-    if not path.exists():
-        raise ConfigError(f"{path}: no such file or directory")
-    if not path.is_file():
-        raise ConfigError(f"{path}: not a file")
-    try:
-        is_h5 = h5py.is_hdf5(path)
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read: {exc}") from exc
-    if not is_h5:
-        raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
-
+    path = _hdf5_file(path)
     problems: list[str] = []
     try:
         with open_result(path) as h5:  # also the file of a killed run
@@ -457,13 +444,9 @@ def read_result(path: str | Path) -> ResultFile:
                 problems.append(f"{path}: /trajectory/x must have shape (T, N, 3)")
             from_trajectory = False
             if x is None and "/result/x" not in h5:
-                if n_frames > 0:
-                    x = np.asarray(traj[n_frames - 1], dtype=np.float64)
+                if n_frames > 0:  # the last complete frame stands in, with its tensions
+                    x, tension = _last_frame(h5, traj, n_frames, tension)
                     from_trajectory = True
-                    t_traj = h5.get("/trajectory/tension")
-                    if tension is None and t_traj is not None and t_traj.ndim == 2:
-                        if t_traj.shape[0] >= n_frames:
-                            tension = np.asarray(t_traj[n_frames - 1], dtype=np.float64)
                 else:
                     missing.append("/result/x")
             if missing:
@@ -474,44 +457,14 @@ def read_result(path: str | Path) -> ResultFile:
                 )
             if problems:
                 raise ConfigError(problems)
-            n, m = len(nodes), len(edges)
-            if x.shape != nodes.shape:
-                problems.append(f"{path}: /result/x has shape {x.shape}: must be {nodes.shape}")
-            if m and (edges.min() < 0 or edges.max() >= n):
-                problems.append(f"{path}: /mesh/edges: node indices must be in 0..{n - 1}")
-            if fixed is not None and fixed.shape != (n,):
-                fixed = None
-            for name, arr in (("tension", tension), ("rest_length", rest), ("EA", EA)):
-                if arr is not None and arr.shape != (m,):
-                    problems.append(f"{path}: {name} has {len(arr)} values: must be {m}")
-            if problems:
-                raise ConfigError(problems)
+            fixed = _check_shapes(path, nodes, edges, x, fixed, tension, rest, EA)
             attrs = dict(h5.attrs)
             case = _case(attrs.get("case"), path)
             result_attrs = dict(h5["/result"].attrs) if "/result" in h5 else {}
             converged = bool(result_attrs["converged"]) if "converged" in result_attrs else None
-            probe = None
-            if "probe" in result_attrs:
-                try:
-                    probe = int(result_attrs["probe"])
-                except (TypeError, ValueError):
-                    probe = None
-                if probe is not None and not 0 <= probe < n:
-                    probe = None
-            if probe is None:
-                probe = probe_node(nodes, fixed)
-            times = np.zeros(0)
-            if n_frames and time is not None:
-                times = time[:n_frames]
-            series_t = series_delta = series_u = None
-            if n_frames > 1 and traj.shape[1:] == (n, 3):
-                xp = np.asarray(traj[:n_frames, probe : probe + 1], dtype=np.float64)
-                series_delta = measures.deflection(nodes[probe : probe + 1], xp, 0)
-                series_u = np.linalg.norm(xp[:, 0, :] - nodes[probe], axis=1)
-                if time is not None and len(time) >= n_frames:
-                    series_t = time[:n_frames]
-                else:
-                    series_t = np.arange(n_frames, dtype=np.float64)
+            probe = _probe(result_attrs, nodes, fixed)
+            times = time[:n_frames] if n_frames and time is not None else np.zeros(0)
+            series = _series(traj, time, n_frames, nodes, probe)
     except ConfigError:
         raise
     except OSError as exc:
@@ -529,12 +482,86 @@ def read_result(path: str | Path) -> ResultFile:
         result_attrs=result_attrs,
         converged=converged,
         times=times,
-        series_t=series_t,
-        series_delta=series_delta,
+        series_t=series[0],
+        series_delta=series[1],
         from_trajectory=from_trajectory,
         reaction=reaction,
-        series_u=series_u,
+        series_u=series[2],
     )
+
+
+def _hdf5_file(path: str | Path) -> Path:
+    """``path`` as a Path once it names an HDF5 file; ConfigError saying why not."""
+    import h5py
+
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(f"{path}: no such file or directory")
+    if not path.is_file():
+        raise ConfigError(f"{path}: not a file")
+    try:
+        is_h5 = h5py.is_hdf5(path)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read: {exc}") from exc
+    if not is_h5:
+        raise ConfigError(f"{path}: not an HDF5 file (expected a catenet result file)")
+    return path
+
+
+def _last_frame(h5, traj, n_frames: int, tension):
+    """(x, tension) of the last complete trajectory frame (the tension given, else the
+    frame's where stored)."""
+    x = np.asarray(traj[n_frames - 1], dtype=np.float64)
+    t_traj = h5.get("/trajectory/tension")
+    if tension is None and t_traj is not None and t_traj.ndim == 2:
+        if t_traj.shape[0] >= n_frames:
+            tension = np.asarray(t_traj[n_frames - 1], dtype=np.float64)
+    return x, tension
+
+
+def _check_shapes(path: Path, nodes, edges, x, fixed, tension, rest, EA):
+    """``fixed`` (None where its shape is wrong: it counts as missing) once the arrays
+    agree in size; ConfigError listing every disagreement."""
+    problems = []
+    n, m = len(nodes), len(edges)
+    if x.shape != nodes.shape:
+        problems.append(f"{path}: /result/x has shape {x.shape}: must be {nodes.shape}")
+    if m and (edges.min() < 0 or edges.max() >= n):
+        problems.append(f"{path}: /mesh/edges: node indices must be in 0..{n - 1}")
+    if fixed is not None and fixed.shape != (n,):
+        fixed = None
+    for name, arr in (("tension", tension), ("rest_length", rest), ("EA", EA)):
+        if arr is not None and arr.shape != (m,):
+            problems.append(f"{path}: {name} has {len(arr)} values: must be {m}")
+    if problems:
+        raise ConfigError(problems)
+    return fixed
+
+
+def _probe(result_attrs: dict, nodes, fixed) -> int:
+    """The probe node /result names (an index among the nodes), else the geometry's."""
+    probe = None
+    if "probe" in result_attrs:
+        try:
+            probe = int(result_attrs["probe"])
+        except (TypeError, ValueError):
+            probe = None
+        if probe is not None and not 0 <= probe < len(nodes):
+            probe = None
+    return probe_node(nodes, fixed) if probe is None else probe
+
+
+def _series(traj, time, n_frames: int, nodes, probe: int) -> tuple:
+    """(t, delta, |u|) of the probe over the trajectory's frames (None each without two
+    frames of the net's shape); t the frame index where times are missing."""
+    if not (n_frames > 1 and traj.shape[1:] == (len(nodes), 3)):
+        return None, None, None
+    xp = np.asarray(traj[:n_frames, probe : probe + 1], dtype=np.float64)
+    delta = measures.deflection(nodes[probe : probe + 1], xp, 0)
+    u = np.linalg.norm(xp[:, 0, :] - nodes[probe], axis=1)
+    if time is not None and len(time) >= n_frames:
+        return time[:n_frames], delta, u
+    return np.arange(n_frames, dtype=np.float64), delta, u
 
 
 def _case(text, path: Path) -> dict:
