@@ -2,7 +2,7 @@
 is damaged so that its free space has size 0: HDF5 reads it in an endless loop inside
 the library, which no signal or time limit can stop (the fuzz run of seed 19 hung for an
 hour in ``catenet repair``). Every command that reads a result file refuses it at once
-as damaged (exit 2, ``catenet.output.reader.check_heaps``)."""
+as damaged (exit 2, ``catenet.output.heaps.check_heaps``)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-from catenet.output.reader import GCOL, check_heaps
+from catenet.output.heaps import GCOL, check_heaps
 
 CASE = """
 [geometry]
