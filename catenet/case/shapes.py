@@ -114,7 +114,7 @@ class Shaped:
 
 class _Motion(Shaped, FreeKeys):
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
-    box, capsule or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
+    box, capsule, cylinder or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
     ``density`` a free body instead (``catenet.case.rigid``)."""
 
     velocity: Any  # the keys of the obstacle kinds that mix it in
