@@ -112,7 +112,8 @@ class PlaneBarrier(Obstacle):
         return plane_hessian(*args) > 0
 
     def first_hit(self, x, dx, grow):
-        return plane_max_step(x, dx, self.nodes, self.point + grow * self.normal, self.normal)
+        point = self.point if grow == 0.0 else self.point + grow * self.normal  # (max_step:
+        return plane_max_step(x, dx, self.nodes, point, self.normal)  # no array per call)
 
 
 @register("sphere")
