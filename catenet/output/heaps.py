@@ -3,6 +3,7 @@ damaged global heap collection in an endless loop inside the library (``check_he
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 #: A global heap collection (HDF5's store of variable-length data, e.g. the string
@@ -12,6 +13,14 @@ GCOL_MIN = 4096
 
 
 def check_heaps(path: str | Path) -> None:
+    """``_check_heaps`` once per file as it stands (its size and modification time): a
+    reader that opens one file several times (plot, export) scans it once."""
+    stat = Path(path).stat()
+    _check_heaps(str(Path(path).resolve()), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=64)
+def _check_heaps(path: str, mtime: int, size: int) -> None:
     """OSError where a global heap collection of the file is damaged: its objects do not
     tile it (an object past its end, or free space of size 0 before it). HDF5 reads such
     a collection in an endless loop inside the library (no time limit or signal can stop
