@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, Protocol
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, Protocol, Self
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -135,3 +136,38 @@ def positive(name: str, value: float) -> float:
     if not (math.isfinite(value) and value > 0):
         raise ValueError(f"{name} = {value!r}: must be > 0")
     return float(value)
+
+
+@dataclass(frozen=True, eq=False)
+class AboutSegment:
+    """The fields and checks a shape about the segment ``start``-``end`` of a ``radius``
+    shares (a capsule, a cylinder): its table's keys, its length and its origin (the
+    midpoint, which a prescribed motion turns about)."""
+
+    start: np.ndarray
+    end: np.ndarray
+    radius: float
+
+    kind: ClassVar[str] = ""
+    origin_key: ClassVar[str] = "start"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
+        object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
+        object.__setattr__(self, "radius", positive(f"{self.kind}: radius", self.radius))
+        if not np.linalg.norm(self.end - self.start) > 0:
+            raise ValueError(f"{self.kind}: the two end points must differ")
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any]) -> Self:
+        return cls(vec(table, "start"), vec(table, "end"), float(table["radius"]))
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.end - self.start))
+
+    @property
+    def origin(self) -> np.ndarray:
+        """The midpoint of its axis."""
+        mid: np.ndarray = 0.5 * (self.start + self.end)
+        return mid

@@ -4,14 +4,19 @@ kernels in ``catenet.kernels.shapes``)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from catenet.scene.shapes.base import MassProperties, Outline, axis_frame, lathe, positive, vec
+from catenet.scene.shapes.base import (
+    AboutSegment,
+    MassProperties,
+    Outline,
+    axis_frame,
+    lathe,
+)
 
 RINGS = 9  # parallels of each drawn end ball, pole to equator
 
@@ -21,32 +26,10 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True, eq=False)
-class Capsule:
+class Capsule(AboutSegment):
     """The outside of the points within ``radius`` of the segment ``start``-``end``."""
 
-    start: np.ndarray
-    end: np.ndarray
-    radius: float
-
     kind: ClassVar[str] = "capsule"
-    origin_key: ClassVar[str] = "start"
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
-        object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
-        object.__setattr__(self, "radius", positive("capsule: radius", self.radius))
-        if not np.linalg.norm(self.end - self.start) > 0:
-            raise ValueError("capsule: the two end points must differ")
-
-    @classmethod
-    def from_table(cls, table: Mapping[str, Any]) -> Capsule:
-        return cls(vec(table, "start"), vec(table, "end"), float(table["radius"]))
-
-    @property
-    def origin(self) -> np.ndarray:
-        """The midpoint of its axis."""
-        mid: np.ndarray = 0.5 * (self.start + self.end)
-        return mid
 
     @property
     def reach(self) -> float:

@@ -16,9 +16,8 @@ points at the plane or the solid. A node of the net and a ball meet its exact su
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -29,7 +28,14 @@ from catenet.kernels.cylinder import (
     cylinder_hessian,
     cylinder_max_step,
 )
-from catenet.scene.shapes.base import MassProperties, Outline, axis_frame, lathe, positive, vec
+from catenet.scene.shapes.base import (
+    AboutSegment,
+    MassProperties,
+    Outline,
+    axis_frame,
+    lathe,
+    positive,
+)
 from catenet.terms.base import register
 from catenet.terms.contact import Obstacle
 
@@ -86,42 +92,16 @@ class CylinderBarrier(Obstacle):
 
 
 @dataclass(frozen=True, eq=False)
-class Cylinder:
+class Cylinder(AboutSegment):
     """The solid cylinder of ``radius`` about the segment ``start``-``end``, flat at
     both ends."""
 
-    start: np.ndarray
-    end: np.ndarray
-    radius: float
-
     kind: ClassVar[str] = "cylinder"
-    origin_key: ClassVar[str] = "start"
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "start", np.asarray(self.start, dtype=np.float64))
-        object.__setattr__(self, "end", np.asarray(self.end, dtype=np.float64))
-        object.__setattr__(self, "radius", positive("cylinder: radius", self.radius))
-        if not np.linalg.norm(self.end - self.start) > 0:
-            raise ValueError("cylinder: the two end points must differ")
-
-    @classmethod
-    def from_table(cls, table: Mapping[str, Any]) -> Cylinder:
-        return cls(vec(table, "start"), vec(table, "end"), float(table["radius"]))
-
-    @property
-    def length(self) -> float:
-        return float(np.linalg.norm(self.end - self.start))
 
     @property
     def axis(self) -> np.ndarray:
         unit: np.ndarray = (self.end - self.start) / self.length
         return unit
-
-    @property
-    def origin(self) -> np.ndarray:
-        """The midpoint of its axis."""
-        mid: np.ndarray = 0.5 * (self.start + self.end)
-        return mid
 
     @property
     def reach(self) -> float:
