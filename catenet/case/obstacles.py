@@ -58,6 +58,11 @@ class PlaneObstacle(Shaped, Declared):
         None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"
     )
 
+    @property
+    def free(self) -> bool:
+        """A plane is never a free body."""
+        return False
+
     def check(self, ck: Checker, path: str) -> None:
         if not any(self.normal):
             ck.add(f"{path}.normal = {list(self.normal)}: must not be zero")

@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from catenet.case.bodies import add_bodies
 from catenet.case.coarse import coarse_case
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
@@ -20,9 +19,8 @@ from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.parse import Case
-from catenet.case.rigid import add_free_bodies
+from catenet.case.rigid import movers
 from catenet.case.shapes import check_motion
-from catenet.case.touching import touch_terms
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
@@ -62,45 +60,37 @@ def _build(case: Case) -> Scene:
     guard_material(case)
     built = case.geometry.build_case(_with_case_points(case), model_material(case.material))
     net = built.net
-    point_mass, velocity = point_masses(getattr(case, "masses", ()), net, built.names, built.sets)
+    point_mass, velocity = point_masses(case.masses, net, built.names, built.sets)
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
     loads = _loads(case, net, built.names, built.size, built)
     guard_scales(case, net, loads)
     check_motion(case)  # a moving box, capsule or mesh: dynamic runs only
-    net, loads, velocity, body_terms, bodies = add_bodies(
-        case, net, loads, velocity, float(built.size)
-    )
-    net, loads, velocity, rigid_terms, rigid = add_free_bodies(
-        case, net, loads, velocity, float(built.size)
-    )
-    for term in body_terms:  # the balls' terms, built before the bodies' nodes came
-        term.n_nodes = net.n_nodes
     scene = Scene(
         net,
         loads,
         probe=_probe(case, built),
         size=float(built.size),
         velocity=velocity,
-        bodies=bodies,
-        rigid=rigid,
         cables=built.cables,
         sets=dict(built.sets or {}),
         at_nodes=dict(built.at_nodes or {}),
         names=dict(built.names),
-        probe_auto=getattr(case.output, "probe", None) is None and case.geometry.kind == "graph",
-        cases=_load_cases(case, net, built),
+        probe_auto=case.output.probe is None and case.geometry.kind == "graph",
         case=case,
-        coarsen=functools.partial(_coarser, case, net.n_nodes),
+        shown=show,
     )
     for k, obs in enumerate(case.obstacles):  # the contact policy, as for a Python scene
-        if not (getattr(obs, "moves", False) or getattr(obs, "free", False)):
-            scene = scene.with_contact(obs.shape(), obs.contact(), index=k, shown=show)
-    scene = scene.with_terms(*body_terms, *rigid_terms)  # balls' nodes, free bodies
-    if rigid:  # free bodies against each other, balls and fixed obstacles
-        scene = scene.with_terms(*touch_terms(case, rigid, bodies, net, float(built.size)))
-    if getattr(case.solver, "self_contact", False):
-        scene = scene.with_terms(self_contact(case.solver, net, loads))
+        if not (obs.moves or obs.free):
+            scene = scene.with_contact(obs.shape(), obs.contact(), index=k)
+    scene = scene.with_movers(*movers(case))  # balls and free bodies
+    scene = dataclasses.replace(
+        scene,
+        cases=_load_cases(case, scene.net, built),
+        coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
+    )
+    if case.solver.self_contact:
+        scene = scene.with_terms(self_contact(case.solver, scene.net, scene.loads))
     return scene
 
 
@@ -178,7 +168,7 @@ def _load_cases(case: Case, net: Net, built: Any) -> tuple:
 
 def _probe(case: Case, built: Any) -> int:
     """The node whose z-deflection is delta: output.probe, else the geometry's."""
-    ref = getattr(case.output, "probe", None)
+    ref = case.output.probe
     if ref is None:
         return int(built.probe)
     return int(expand(ref, built.names, built.sets or {})[0])

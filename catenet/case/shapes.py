@@ -94,6 +94,11 @@ class Shaped:
         """On a prescribed motion (a box, capsule, cylinder or mesh may be: ``_Motion``)."""
         return False
 
+    @property
+    def moves(self) -> bool:
+        """A ball (a sphere with mass, or on a prescribed path: ``SphereObstacle``)."""
+        return False
+
     def shape(self) -> Shape:
         from catenet.scene.shapes import shape_of
 

@@ -57,7 +57,7 @@ class Gaps(Protocol):
     def gap(self, x: np.ndarray) -> np.ndarray: ...
 
 
-def _shown(value: Any) -> str:
+def shown_as_is(value: Any) -> str:
     """A value in a message (a case file's scene shows it as written: ``Shown``)."""
     if isinstance(value, np.ndarray):
         value = value.tolist()
@@ -152,7 +152,7 @@ def moving(
 
 
 def obstacle_terms(
-    path: str, shape: Shape, contact: Contact, reach: Reach, net: Net, shown: Shown = _shown
+    path: str, shape: Shape, contact: Contact, reach: Reach, net: Net, shown: Shown = shown_as_is
 ) -> list[Term]:
     """The barrier of ``shape`` on the net's free nodes and, with friction, its Coulomb
     friction (module docstring); ``path``: the obstacle's key path in messages
@@ -213,7 +213,7 @@ def obstacle_terms(
 
 
 def check_clear(
-    label: str, what: str, shape: Gaps, nodes: np.ndarray, net: Net, shown: Shown = _shown
+    label: str, what: str, shape: Gaps, nodes: np.ndarray, net: Net, shown: Shown = shown_as_is
 ) -> None:
     """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
     inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",

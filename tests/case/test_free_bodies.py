@@ -1,7 +1,8 @@
-"""Free rigid bodies in case files (catenet/case/rigid.py): which tables are free bodies,
-their mass properties from the shape (box, sphere, capsule, mesh) or as given, and bad
-input (zero or negative mass, an inertia that is not symmetric positive definite, a body
-overlapping the net, a mesh that is not closed, ...) exiting 2 with the key path."""
+"""Free rigid bodies in case files (catenet/case/rigid.py, catenet/scene/rigid.py): which
+tables are free bodies, their mass properties from the shape (box, sphere, capsule, mesh)
+or as given, and bad input (zero or negative mass, an inertia that is not symmetric
+positive definite, a body overlapping the net, a mesh that is not closed, ...) exiting 2
+with the key path."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import pytest
 from meshes import CUBE_T, CUBE_V, net_under_gravity, write_stl
 
 from catenet.case import build, dumps_toml, parse_case
-from catenet.case.rigid import mass_properties
+from catenet.case.rigid import movers
+from catenet.scene.rigid import mass_properties
 
 
 def drop(**body) -> dict:
@@ -45,8 +47,7 @@ def test_a_box_with_mass_is_four_nodes_with_its_weight_and_initial_motion():
 
 def test_mass_properties_of_each_shape(tmp_path):
     case = drop(density=500.0, mass=None, angle=0.4, axis=[0, 1, 0])
-    box = parse_case(case).obstacles[0]
-    m, c, inertia, axes = mass_properties(box)
+    m, c, inertia, axes = mass_properties(movers(parse_case(case))[0])
     assert m == pytest.approx(500.0 * 0.3 * 0.2 * 0.1) and c == pytest.approx([0, 0, 0.2])
     assert axes[:, 1] == pytest.approx([0, 1, 0])  # turned about y
     # A mesh of the same box (the unit cube scaled and moved) has the same properties.
@@ -56,7 +57,7 @@ def test_mass_properties_of_each_shape(tmp_path):
         "kind": "mesh", "file": str(tmp_path / "cube.stl"), "scale": 0.4,
         "offset": [-0.2, -0.2, 0.0], "density": 500.0,
     }  # fmt: skip
-    m2, c2, inertia2, axes2 = mass_properties(parse_case(mesh).obstacles[0])
+    m2, c2, inertia2, axes2 = mass_properties(movers(parse_case(mesh))[0])
     assert m2 == pytest.approx(500.0 * 0.4**3) and c2 == pytest.approx([0, 0, 0.2])
     assert inertia2 == pytest.approx(m2 * 0.4**2 / 6 * np.eye(3))
     assert axes2 == pytest.approx(np.eye(3))
@@ -66,7 +67,7 @@ def test_mass_properties_of_each_shape(tmp_path):
         "kind": "capsule", "start": [0, 0, 0], "end": [0.6, 0, 0], "radius": 0.2,
         "density": 1.0,
     }  # fmt: skip
-    m3, c3, inertia3, axes3 = mass_properties(parse_case(cap).obstacles[0])
+    m3, c3, inertia3, axes3 = mass_properties(movers(parse_case(cap))[0])
     g = np.linspace(-0.5, 0.5, 201)
     X, Y, Z = np.meshgrid(g + 0.3, g * 0.5, g * 0.5, indexing="ij")
     p = np.stack([X, Y, Z], axis=-1).reshape(-1, 3)
@@ -80,16 +81,16 @@ def test_mass_properties_of_each_shape(tmp_path):
     assert world == pytest.approx(np.trace(J) * np.eye(3) - J, rel=1e-2, abs=1e-6)
     sphere = copy.deepcopy(case)
     sphere["obstacle"][0] = {"kind": "sphere", "center": [0, 0, 1], "radius": 0.5, "density": 2.0}
-    m4, _, inertia4, _ = mass_properties(parse_case(sphere).obstacles[0])
+    m4, _, inertia4, _ = mass_properties(movers(parse_case(sphere))[0])
     assert m4 == pytest.approx(2.0 * 4 / 3 * math.pi / 8)
     assert inertia4 == pytest.approx(0.4 * m4 * 0.25 * np.eye(3))
 
 
 def test_a_given_inertia_and_principal_moments():
     full = [[0.2, 0.01, 0.0], [0.01, 0.3, 0.0], [0.0, 0.0, 0.4]]
-    box = parse_case(drop(inertia=full)).obstacles[0]
+    box = movers(parse_case(drop(inertia=full)))[0]
     assert mass_properties(box)[2] == pytest.approx(np.array(full))
-    box = parse_case(drop(inertia=[0.2, 0.3, 0.4])).obstacles[0]
+    box = movers(parse_case(drop(inertia=[0.2, 0.3, 0.4])))[0]
     assert mass_properties(box)[2] == pytest.approx(np.diag([0.2, 0.3, 0.4]))
 
 

@@ -145,3 +145,105 @@ def test_the_builder_refuses_what_a_case_file_would_naming_the_key(keys, message
     made = capture_scene()
     with pytest.raises(ConfigError, match=re.escape(message)):
         made.with_obstacle(catenet.Sphere([0.0, 0.0, -3.0], 0.2), **keys)
+
+
+def drop_case() -> dict:
+    """A free box and a ball dropped onto a net held at its corners, a ground below and a
+    fixed ball beside it, in gravity: the obstacles listed in another order than the
+    Python scene below adds them."""
+    nodes, edges = grid()
+    return {
+        "geometry": {"kind": "graph", "nodes": nodes, "edges": edges, "fixed": [0, 10, 110, 120]},
+        "material": {"EA": 2e5, "density": 1000.0, "area": 1e-4},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [
+            {"kind": "box", "center": [1.0, 0.5, 2.6], "half_size": [0.4, 0.3, 0.2],
+             "mass": 12.0, "velocity": [0.0, 0.0, -2.0], "angular_velocity": [0.0, 1.0, 0.0],
+             "friction": 0.2},
+            {"kind": "sphere", "center": [-2.0, -1.5, 2.5], "radius": 0.3, "mass": 5.0},
+            {"kind": "plane", "point": [0.0, 0.0, -4.0]},
+            {"kind": "sphere", "center": [3.0, 3.0, 3.0], "radius": 0.4},
+        ],
+        "solver": {"method": "dynamic", "dt": 0.002, "t_end": 0.3, "damping": 0.0},
+    }  # fmt: skip
+
+
+def test_bodies_from_python_in_any_order_and_from_toml_are_the_same_to_the_bit():
+    """``with_body`` and ``with_ball`` take the contact policy of the case's free bodies and
+    balls: the same nodes, terms and trajectory, whatever the order of the builder's calls
+    (the ground added after the body still holds it)."""
+    case = parse_case(drop_case())
+    read = build(case)
+    nodes, edges = grid()
+    net = catenet.graph(nodes, edges, [0, 10, 110, 120], catenet.Material(EA=2e5, line_density=0.1))
+    made = (
+        catenet.Scene.of(net, catenet.Loads(gravity=np.array([0.0, 0.0, -9.81])))
+        .with_body(
+            catenet.Box([1.0, 0.5, 2.6], [0.4, 0.3, 0.2]),
+            mass=12.0,
+            velocity=(0.0, 0.0, -2.0),
+            angular_velocity=(0.0, 1.0, 0.0),
+            friction=0.2,
+        )  # fmt: skip
+        .with_ball(catenet.Sphere([-2.0, -1.5, 2.5], 0.3), mass=5.0)
+        .with_obstacle(catenet.Plane([0.0, 0.0, -4.0], [0.0, 0.0, 1.0]))
+        .with_obstacle(catenet.Sphere([3.0, 3.0, 3.0], 0.4))
+    )
+    names = [type(t).__name__ for t in made.terms]
+    assert names == [type(t).__name__ for t in read.terms]
+    assert {"Rigidity", "BodyContact", "BodyPlane", "BodyFriction", "Ball", "BodyTouch"} <= set(
+        names
+    )
+    assert made.net.n_nodes == read.net.n_nodes == N * N + 1 + 4
+    assert [b.obstacle for b in made.rigid] == [0] and [b.obstacle for b in made.bodies] == [1]
+    assert np.array_equal(read.net.nodes, made.net.nodes)
+    assert np.array_equal(read.net.mass, made.net.mass)
+    assert np.array_equal(read.velocity, made.velocity)
+    for a, b in zip(read.terms, made.terms, strict=True):
+        for key, value in vars(a).items():
+            if isinstance(value, float):
+                assert value == vars(b)[key], (type(a).__name__, key)
+    settings = catenet.Settings.of(case.solver)
+    a = trajectory(read, settings)
+    b = trajectory(made, settings)
+    assert len(a) == len(b) > 100
+    assert a[-1][-4:, 2].mean() < 2.6 - 0.3  # the box fell
+    for xa, xb in zip(a, b, strict=True):
+        assert np.array_equal(xa, xb)
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2, 0.2, 0.2])), "give mass or density"),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0, density=2.0),
+            "give mass or density (one of them)",
+        ),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=-1.0),
+            "body: mass = -1.0: must be a finite number > 0",
+        ),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0, inertia=[1, 2]),
+            "must be 3 x 3 or 3 principal moments",
+        ),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0, velocity=[1, 2]),
+            "body: velocity = [1, 2]: must be 3 finite numbers",
+        ),
+        (lambda s: s.with_ball(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0), "must be a Sphere"),
+        (lambda s: s.with_ball(catenet.Sphere([0, 0, 5.0], 0.2)), "give mass"),
+        (
+            lambda s: s.with_ball(catenet.Sphere([0.0, 0.0, 2.0], 0.2), mass=1.0),
+            "obstacle[2] (kind 'sphere'): node 60",
+        ),
+        (
+            lambda s: s.with_body(catenet.Box([0.0, 0.0, 2.0], [0.2] * 3), mass=1.0),
+            "obstacle[2] (kind 'box', a free body): node 60",
+        ),
+    ],
+)
+def test_the_builder_refuses_a_bad_body_naming_it(call, message):
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        call(capture_scene())

@@ -1,0 +1,91 @@
+"""What the scene builder takes of a ball or a free body (``Mover``), of an obstacle the
+bodies meet (``Fixed``), what it records of a ball (``Body``), and the loads padded for
+the bodies' nodes (``pad_loads``): ``catenet.scene.bodies``, ``catenet.scene.rigid``,
+``catenet.scene.touching``."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from catenet.model.net import Loads
+from catenet.scene.contact import Contact
+
+if TYPE_CHECKING:
+    from catenet.scene.shapes import Shape
+    from catenet.terms.base import Term
+
+
+@dataclass(frozen=True)
+class Mover:
+    """A body the builder adds (module docstring): its obstacle ``index`` (its
+    ``obstacle[k]`` in messages), ``shape``, ``contact`` (distance, stiffness, friction,
+    slip), and its motion and mass: a free body (``free``) has ``mass`` or ``density``
+    [kg, kg/m^3], an optional ``inertia`` (3, 3) [kg m^2] about its centre of mass in its
+    body axes, an initial ``velocity`` and ``angular_velocity``; a ball has ``mass`` (None:
+    on the path ``velocity`` [m/s] scaled by ``history``)."""
+
+    index: int
+    shape: Shape
+    contact: Contact
+    free: bool
+    mass: float | None = None
+    density: float | None = None
+    inertia: np.ndarray | None = None
+    velocity: tuple[float, ...] | None = None
+    angular_velocity: tuple[float, ...] | None = None
+    history: tuple[tuple[float, float], ...] | None = None
+
+    @property
+    def path(self) -> str:
+        return f"obstacle[{self.index}]"
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """An obstacle the bodies meet: its index, shape and contact (``Scene.obstacles``)."""
+
+    index: int
+    shape: Shape
+    contact: Contact
+
+    def term(self, nodes: Any, kappa: float, dhat: float, offset: float = 0.0) -> Term:
+        """Its barrier on ``nodes`` (centres of balls of radius ``offset``), on its
+        prescribed motion if any."""
+        from catenet.scene.contact import moving
+
+        barrier = self.shape.barrier(nodes, kappa, dhat, offset)
+        return moving(barrier, self.shape, self.contact, offset)
+
+
+@dataclass(frozen=True)
+class Body:
+    """A moving sphere as the result file records it: its ``node`` (the centre), the
+    obstacle it comes from, radius [m], mass [kg] and whether it follows a prescribed
+    path."""
+
+    node: int
+    obstacle: int
+    radius: float
+    mass: float
+    prescribed: bool
+
+
+def pad_loads(loads: Loads, nb: int) -> Loads:
+    """The loads with ``nb`` unloaded, unsupported nodes appended."""
+
+    def pad(a: np.ndarray | None, width: int = 3) -> np.ndarray | None:
+        if a is None:
+            return None
+        return np.concatenate([a, np.zeros((nb, width) if a.ndim == 2 else nb)])
+
+    return dataclasses.replace(
+        loads,
+        force=pad(loads.force),
+        support_displacement=pad(loads.support_displacement),
+        ramp_time=pad(loads.ramp_time),
+        parts=tuple((pad(f), h) for f, h in loads.parts),
+    )
