@@ -157,6 +157,33 @@ def square_net(
     Every crossing is one shared node; each piece between break points gets
     ceil(length / edge_length - 1e-9) equal edges. Both ends of every cable are pinned.
     """
+    _check_square(n, alpha, size, edge_length)
+    made = _SquareNodes(_Cables.of(n, alpha, size))
+    fixed: list[int] = []
+    edges: list[np.ndarray] = []
+    for line_id in range(n):
+        breaks, ends = made.breaks(line_id)
+        fixed.extend(ends)
+        edges += made.pieces(line_id, breaks, edge_length)
+    xy = np.concatenate(made.points)
+    nodes = np.column_stack([xy, np.zeros(len(xy))])
+    edges_arr = np.concatenate(edges)
+    try:
+        net = material.unstressed(nodes, edges_arr, fixed=sorted(set(fixed)))
+    except ConfigError as exc:  # e.g. edges that round to zero length in a tiny square
+        raise ConfigError(
+            [
+                f"geometry.size = {size!r}, geometry.edge_length = {edge_length!r}: {p}"
+                for p in exc.problems
+            ]
+        ) from None
+    net = material.prestressed(net)
+    center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
+    return SquareNet(net=net, center=center, size=float(size), n=int(n), alpha=float(alpha))
+
+
+def _check_square(n: int, alpha: float, size: float, edge_length: float) -> None:
+    """ConfigError for square-net keys out of range or a net too large to build."""
     if not (isinstance(n, (int, np.integer)) and n >= 2 and n % 2 == 0):
         raise ConfigError(f"geometry.n = {n!r}: must be an even integer >= 2")
     if not (carried(size) and size > 0):
@@ -171,80 +198,103 @@ def square_net(
     # Each cable is at most L sqrt(2) long: a bound on the nodes before building anything.
     bound = m * m + n * (size * math.sqrt(2.0) / edge_length + 1.0)
     _check_size(bound, bound, f"geometry.edge_length = {edge_length!r}, geometry.n = {n}")
-    L = float(size)
-    half = 0.5 * L
-    tol = 1e-9 * L
-    d = L / (m + 1)
-    u = np.array([math.cos(alpha), math.sin(alpha)])
-    v = np.array([-math.sin(alpha), math.cos(alpha)])
-    c = (np.arange(m) - (m - 1) / 2) * d
 
-    # Lines: origin p, direction w. A_k: p = c_k v, w = u.  B_j: p = -c_j u, w = v.
-    lines = [(ck * v, u) for ck in c] + [(-cj * u, v) for cj in c]
-    spans = [_clip(p, w, half, tol) for p, w in lines]
 
-    # Node positions in blocks (one row per node, in the order of their ids) and edges in
-    # blocks of chains: the nodes along a piece are made at once, not one by one.
-    points: list[np.ndarray] = []
-    count = [0]  # nodes made so far
-    index: dict[tuple[int, int], int] = {}  # crossing (k, j) -> node id
+@dataclass(frozen=True)
+class _Cables:
+    """The square net's cables (``square_net``): m per family, the directions u and v,
+    the offsets c_k, the tolerance 1e-9 L, and each line (origin p, direction w; A_k
+    first, then B_j) with its parameter range [t0, t1] inside the square."""
 
-    def add(block: np.ndarray) -> int:
-        points.append(block.reshape(-1, 2))
-        count[0] += points[-1].shape[0]
-        return count[0] - points[-1].shape[0]
+    m: int
+    u: np.ndarray
+    v: np.ndarray
+    c: np.ndarray
+    tol: float
+    lines: list[tuple[np.ndarray, np.ndarray]]
+    spans: list[tuple[float, float]]
 
-    def crossing_node(k: int, j: int) -> int:
-        if (k, j) not in index:
-            index[(k, j)] = add(c[k] * v - c[j] * u)
-        return index[(k, j)]
+    @classmethod
+    def of(cls, n: int, alpha: float, size: float) -> _Cables:
+        """The ``n`` cables at angle ``alpha`` across the square of side ``size``."""
+        m = n // 2
+        L = float(size)
+        half = 0.5 * L
+        tol = 1e-9 * L
+        d = L / (m + 1)
+        u = np.array([math.cos(alpha), math.sin(alpha)])
+        v = np.array([-math.sin(alpha), math.cos(alpha)])
+        c = (np.arange(m) - (m - 1) / 2) * d
+        # Lines: origin p, direction w. A_k: p = c_k v, w = u.  B_j: p = -c_j u, w = v.
+        lines = [(ck * v, u) for ck in c] + [(-cj * u, v) for cj in c]
+        spans = [_clip(p, w, half, tol) for p, w in lines]
+        return cls(m, u, v, c, tol, lines, spans)
 
-    fixed: list[int] = []
-    edges: list[np.ndarray] = []
-    for line_id, ((p, w), (t0, t1)) in enumerate(zip(lines, spans, strict=True)):
+
+class _SquareNodes:
+    """The square net's nodes as they are made: positions in blocks (one row per node,
+    in the order of their ids; the nodes along a piece at once) and the crossings' ids."""
+
+    def __init__(self, cables: _Cables) -> None:
+        self.cables = cables
+        self.points: list[np.ndarray] = []
+        self.count = 0  # nodes made so far
+        self.index: dict[tuple[int, int], int] = {}  # crossing (k, j) -> node id
+
+    def add(self, block: np.ndarray) -> int:
+        """Makes the nodes of ``block`` (rows of x, y); returns the first one's id."""
+        self.points.append(block.reshape(-1, 2))
+        self.count += self.points[-1].shape[0]
+        return self.count - self.points[-1].shape[0]
+
+    def crossing(self, k: int, j: int) -> int:
+        """The node where A_k crosses B_j, made on first use."""
+        if (k, j) not in self.index:
+            c, u, v = self.cables.c, self.cables.u, self.cables.v
+            self.index[(k, j)] = self.add(c[k] * v - c[j] * u)
+        return self.index[(k, j)]
+
+    def breaks(self, line_id: int) -> tuple[list[tuple[float, int]], list[int]]:
+        """The break points (t, node id) of a line in order, its crossings and its ends,
+        and its two end nodes (a crossing at an end, else a node of its own)."""
+        cables = self.cables
+        (p, w), (t0, t1) = cables.lines[line_id], cables.spans[line_id]
+        m, c, tol = cables.m, cables.c, cables.tol
         family_a = line_id < m
         k = line_id if family_a else line_id - m
-        # Break points: (t, node id).
-        breaks: list[tuple[float, int]] = []
+        found: list[tuple[float, int]] = []
         for other in range(m):
             t = -c[other] if family_a else c[other]
             if t0 - tol <= t <= t1 + tol:
-                node = crossing_node(k, other) if family_a else crossing_node(other, k)
-                breaks.append((min(max(t, t0), t1), node))
-        breaks.sort()
+                node = self.crossing(k, other) if family_a else self.crossing(other, k)
+                found.append((min(max(t, t0), t1), node))
+        found.sort()
         ends: list[int] = []
         for t_end in (t0, t1):
-            near = [b for b in breaks if abs(b[0] - t_end) <= tol]
+            near = [b for b in found if abs(b[0] - t_end) <= tol]
             if near:
                 ends.append(near[0][1])
             else:
-                ends.append(add(p + t_end * w))
-                breaks.append((t_end, ends[-1]))
-        fixed.extend(ends)
-        breaks.sort()
+                ends.append(self.add(p + t_end * w))
+                found.append((t_end, ends[-1]))
+        found.sort()
+        return found, ends
+
+    def pieces(
+        self, line_id: int, breaks: list[tuple[float, int]], edge_length: float
+    ) -> list[np.ndarray]:
+        """The edges of a line, a chain per piece between consecutive break points:
+        ceil(length / edge_length - 1e-9) equal edges, their inner nodes made at once."""
+        p, w = self.cables.lines[line_id]
+        edges = []
         for (ta, na), (tb, nb) in zip(breaks[:-1], breaks[1:], strict=True):
             seg = tb - ta
             k_edges = max(1, math.ceil(seg / edge_length - 1e-9))
             steps = np.arange(1, k_edges)
-            first = add(p + (ta + seg * steps / k_edges)[:, None] * w)
+            first = self.add(p + (ta + seg * steps / k_edges)[:, None] * w)
             chain = np.concatenate([[na], first + steps - 1, [nb]]).astype(np.int64)
             edges.append(np.column_stack([chain[:-1], chain[1:]]))
-
-    xy = np.concatenate(points)
-    nodes = np.column_stack([xy, np.zeros(len(xy))])
-    edges_arr = np.concatenate(edges)
-    try:
-        net = material.unstressed(nodes, edges_arr, fixed=sorted(set(fixed)))
-    except ConfigError as exc:  # e.g. edges that round to zero length in a tiny square
-        raise ConfigError(
-            [
-                f"geometry.size = {size!r}, geometry.edge_length = {edge_length!r}: {p}"
-                for p in exc.problems
-            ]
-        ) from None
-    net = material.prestressed(net)
-    center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
-    return SquareNet(net=net, center=center, size=L, n=int(n), alpha=float(alpha))
+        return edges
 
 
 def _clip(p: np.ndarray, w: np.ndarray, half: float, tol: float) -> tuple[float, float]:

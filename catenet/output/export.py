@@ -26,15 +26,17 @@ import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.output.bodies import body_nodes
-from catenet.output.obstacles import read_obstacles
+from catenet.output.obstacles import StoredObstacle, read_obstacles
 from catenet.output.reader import (
     DAMAGED,
     Frame,
+    NetMesh,
     damaged,
     open_result,
     read_mesh,
@@ -129,13 +131,15 @@ def _frames(path: Path, spec: str) -> list[Frame]:
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
 
-def _check_shapes(path: Path, mesh, states: list[Frame]) -> None:
+def _check_shapes(path: Path, mesh: NetMesh, states: list[Frame]) -> None:
     """ConfigError when a stored state does not fit the mesh (a damaged file)."""
     n, m = len(mesh.nodes), len(mesh.edges)
-    want = {"x": (n, 3), "v": (n, 3), "tension": (m,)}
     for f in states:
-        for name, shape in want.items():
-            value = getattr(f, name)
+        for name, value, shape in (
+            ("x", f.x, (n, 3)),
+            ("v", f.v, (n, 3)),
+            ("tension", f.tension, (m,)),
+        ):
             if value is not None and np.shape(value) != shape:
                 raise ConfigError(
                     f"{path}: {name} of {f.source} frame {f.index} has shape "
@@ -183,6 +187,28 @@ def _mode_frames(path: Path, mode: int, spec: str) -> list[Frame]:
     return out
 
 
+@dataclass(frozen=True)
+class _Target:
+    """Where and how ``export`` writes its files: meshio, the directory, the extension,
+    meshio's writer name and the digits of a frame index in a file's name."""
+
+    meshio: ModuleType
+    out: Path
+    ext: str
+    writer: str
+    width: int
+
+    def name(self, stem: str, f: Frame) -> str:
+        """The file name (no extension) of state ``f``: STEM_K, STEM_result for /result."""
+        return f"{stem}_{f.index:0{self.width}d}" if f.index >= 0 else f"{stem}_result"
+
+    def write(self, name: str, mesh) -> Path:
+        """Writes ``mesh`` as ``name`` in the directory; returns its path."""
+        target = self.out / f"{name}.{self.ext}"
+        self.meshio.write(target, mesh, file_format=self.writer)
+        return target
+
+
 def export(
     path: str | Path,
     fmt: str,
@@ -217,82 +243,99 @@ def export(
     if out.exists() and not out.is_dir():
         raise ConfigError(f"-o {out}: exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
-    ext, writer = FORMATS[fmt]
     width = max(4, len(str(max(f.index for f in states))))
-    cells = [("line", np.asarray(mesh.edges, dtype=np.int64))]
+    target = _Target(meshio, out, *FORMATS[fmt], width)
     if fmt == "xdmf":  # meshio reads no vertex cells back from its mixed XDMF topology
         body = body[:0]
-    if body.size:
-        cells.append(("vertex", body[:, None]))
-    files = []
-    for f in states:
-        name = f"{stem}_{f.index:0{width}d}" if f.index >= 0 else f"{stem}_result"
-        point_data = {
-            "displacement": f.x - mesh.nodes,
-            "fixed": np.asarray(mesh.fixed, dtype=np.float64),  # VTK reads no int types
-        }
-        if f.v is not None:
-            point_data["velocity"] = f.v
-        if f.reaction is not None:
-            point_data["reaction"] = f.reaction
-        if f.contact_force is not None:
-            point_data["contact_force"] = f.contact_force
-        if f.shape is not None:
-            point_data["shape"] = f.shape
-        cell_data = {}
-        for key, value in (
-            ("tension", f.tension),
-            ("rest_length", mesh.rest_length),
-            ("EA", mesh.EA),
-        ):
-            if value is not None:
-                cell_data[key] = [np.asarray(value, dtype=np.float64)]
-                if body.size:
-                    cell_data[key].append(np.full(body.size, np.nan))
-        if body.size:
-            cell_data["radius"] = [np.full(len(mesh.edges), np.nan), radius]
-        target = out / f"{name}.{ext}"
-        meshio.write(
-            target,
-            meshio.Mesh(f.x, cells, point_data=point_data, cell_data=cell_data),
-            file_format=writer,
-        )
-        files.append(target)
+    files = _net_files(target, stem, mesh, states, body, radius)
     times = [f.t for f in states]
-    solids = _obstacles(meshio, path, obstacles, states, out, ext, writer, width)
+    solids = _obstacles(target, path, obstacles, states)
     parts = [files] + [w if len(w) == len(files) else w * len(files) for w in solids.values()]
     collection = _write_pvd(out / f"{stem}.pvd", parts, times) if fmt in PVD else None
     log.info("%s: %d frames written to %s", path, len(files), out)
     return Export(files, times, collection, solids)
 
 
-def _obstacles(meshio, path: Path, obstacles, states, out: Path, ext: str, writer: str, width):
+def _net_files(
+    target: _Target, stem: str, mesh: NetMesh, states: list[Frame], body, radius
+) -> list[Path]:
+    """Writes the net at every state, with a vertex cell per moving sphere's centre
+    (``body``, its ``radius``); returns the files in order."""
+    meshio = target.meshio
+    cells = [("line", np.asarray(mesh.edges, dtype=np.int64))]
+    if body.size:
+        cells.append(("vertex", body[:, None]))
+    files = []
+    for f in states:
+        point_data = _point_data(mesh, f)
+        cell_data = _cell_data(mesh, f, body, radius)
+        mesh_f = meshio.Mesh(f.x, cells, point_data=point_data, cell_data=cell_data)
+        files.append(target.write(target.name(stem, f), mesh_f))
+    return files
+
+
+def _point_data(mesh: NetMesh, f: Frame) -> dict[str, np.ndarray]:
+    """The point data of the net at state ``f``: displacement, fixed and whichever of
+    velocity, reaction, contact_force and shape it holds."""
+    point_data = {
+        "displacement": f.x - mesh.nodes,
+        "fixed": np.asarray(mesh.fixed, dtype=np.float64),  # VTK reads no int types
+    }
+    if f.v is not None:
+        point_data["velocity"] = f.v
+    if f.reaction is not None:
+        point_data["reaction"] = f.reaction
+    if f.contact_force is not None:
+        point_data["contact_force"] = f.contact_force
+    if f.shape is not None:
+        point_data["shape"] = f.shape
+    return point_data
+
+
+def _cell_data(mesh: NetMesh, f: Frame, body, radius) -> dict[str, list[np.ndarray]]:
+    """The cell data of the net at state ``f``, a block per cell type (the edges, then
+    the moving spheres' vertices): tension, rest_length and EA where stored (NaN on the
+    vertices), and the spheres' radius (NaN on the edges)."""
+    cell_data = {}
+    for key, value in (
+        ("tension", f.tension),
+        ("rest_length", mesh.rest_length),
+        ("EA", mesh.EA),
+    ):
+        if value is not None:
+            cell_data[key] = [np.asarray(value, dtype=np.float64)]
+            if body.size:
+                cell_data[key].append(np.full(body.size, np.nan))
+    if body.size:
+        cell_data["radius"] = [np.full(len(mesh.edges), np.nan), radius]
+    return cell_data
+
+
+def _obstacles(
+    target: _Target, path: Path, obstacles: list[StoredObstacle], states: list[Frame]
+) -> dict[int, list[Path]]:
     """Writes every obstacle's surface: once for a fixed one, at every state for a
     moving one (its frame's surface, or /result's for the final state); returns the
     files per obstacle index."""
+    meshio = target.meshio
     written: dict[int, list[Path]] = {}
     for o in obstacles:
         stem = f"{path.stem}_obstacle{o.index}"
         if not o.moving:
-            target = out / f"{stem}.{ext}"
             surface = meshio.Mesh(o.vertices, [("triangle", o.triangles)])
-            meshio.write(target, surface, file_format=writer)
-            written[o.index] = [target]
+            written[o.index] = [target.write(stem, surface)]
             continue
         files = []
         for f in states:
             if f.index >= 0:
                 stored = o.frames
-                name = f"{stem}_{f.index:0{width}d}"
                 points = None if stored is None else stored[f.index]
             else:
-                name, points = f"{stem}_result", o.final
+                points = o.final
             if points is None:  # a file of an older catenet: no surface at this state
                 break
-            target = out / f"{name}.{ext}"
             surface = meshio.Mesh(points, [("triangle", o.frame_triangles)])
-            meshio.write(target, surface, file_format=writer)
-            files.append(target)
+            files.append(target.write(target.name(stem, f), surface))
         if len(files) == len(states):
             written[o.index] = files
     return written

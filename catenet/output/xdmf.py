@@ -175,54 +175,79 @@ def write_xdmf(
     domain = ET.SubElement(root, "Domain")
     _obstacles(domain, h5name, obstacles, times)
     if len(times) and bodies:
-        series = ET.SubElement(
-            domain, "Grid", Name="bodies", GridType="Collection", CollectionType="Temporal"
-        )
-        for k, t in enumerate(times):
-            grid = ET.SubElement(series, "Grid", Name=f"bodies {k}", GridType="Uniform")
-            topo = ET.SubElement(
-                grid,
-                "Topology",
-                TopologyType="Polyvertex",
-                NodesPerElement="1",
-                NumberOfElements=str(bodies),
-            )
-            _hdf_item(topo, h5name, "/mesh/bodies/node", (bodies,), number="Int")
-            geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
-            ET.SubElement(grid, "Time", Value=repr(float(t)))
-            att = _attribute(grid, "radius", "Cell", "Scalar")
-            _hdf_item(att, h5name, "/mesh/bodies/radius", (bodies,))
+        _bodies(domain, h5name, times, bodies, n_nodes)
     if len(times):
-        series = ET.SubElement(
-            domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"
-        )
-        for k, t in enumerate(times):
-            grid = _grid(series, f"frame {k}", h5name, n_edges)
-            geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
-            ET.SubElement(grid, "Time", Value=repr(float(t)))
-            att = _attribute(grid, "tension", "Cell", "Scalar")
-            _hdf_item(att, h5name, f"/{VIEWS}/tension/{k}", (n_edges,))
-            att = _attribute(grid, "position", "Node", "Vector")
-            _hdf_item(att, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
-            if velocities:
-                att = _attribute(grid, "velocity", "Node", "Vector")
-                _hdf_item(att, h5name, f"/{VIEWS}/v/{k}", (n_nodes, 3))
+        _trajectory(domain, h5name, times, n_nodes, n_edges, velocities)
     else:
-        grid = _grid(domain, "result", h5name, n_edges)
-        geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-        _hdf_item(geom, h5name, "/result/x", (n_nodes, 3))
-        att = _attribute(grid, "tension", "Cell", "Scalar")
-        _hdf_item(att, h5name, "/result/tension", (n_edges,))
-        att = _attribute(grid, "reaction", "Node", "Vector")
-        _hdf_item(att, h5name, "/result/reaction", (n_nodes, 3))
-        if contact:
-            att = _attribute(grid, "contact_force", "Node", "Vector")
-            _hdf_item(att, h5name, "/result/contact_force", (n_nodes, 3))
+        _result(domain, h5name, n_nodes, n_edges, contact)
     ET.indent(root, space=" ")
-    text = '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-    path = Path(path)
+    _write_atomically(
+        Path(path), '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    )
+
+
+def _bodies(domain, h5name: str, times: list[float], bodies: int, n_nodes: int) -> None:
+    """The Temporal collection "bodies": per frame, a Polyvertex grid of the moving
+    spheres' centres with their radii (see ``write_xdmf``)."""
+    series = ET.SubElement(
+        domain, "Grid", Name="bodies", GridType="Collection", CollectionType="Temporal"
+    )
+    for k, t in enumerate(times):
+        grid = ET.SubElement(series, "Grid", Name=f"bodies {k}", GridType="Uniform")
+        topo = ET.SubElement(
+            grid,
+            "Topology",
+            TopologyType="Polyvertex",
+            NodesPerElement="1",
+            NumberOfElements=str(bodies),
+        )
+        _hdf_item(topo, h5name, "/mesh/bodies/node", (bodies,), number="Int")
+        geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+        _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
+        ET.SubElement(grid, "Time", Value=repr(float(t)))
+        att = _attribute(grid, "radius", "Cell", "Scalar")
+        _hdf_item(att, h5name, "/mesh/bodies/radius", (bodies,))
+
+
+def _trajectory(
+    domain, h5name: str, times: list[float], n_nodes: int, n_edges: int, velocities: bool
+) -> None:
+    """The net's Temporal collection "trajectory": a Polyline grid per frame on its views
+    (see ``write_xdmf``)."""
+    series = ET.SubElement(
+        domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"
+    )
+    for k, t in enumerate(times):
+        grid = _grid(series, f"frame {k}", h5name, n_edges)
+        geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+        _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
+        ET.SubElement(grid, "Time", Value=repr(float(t)))
+        att = _attribute(grid, "tension", "Cell", "Scalar")
+        _hdf_item(att, h5name, f"/{VIEWS}/tension/{k}", (n_edges,))
+        att = _attribute(grid, "position", "Node", "Vector")
+        _hdf_item(att, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
+        if velocities:
+            att = _attribute(grid, "velocity", "Node", "Vector")
+            _hdf_item(att, h5name, f"/{VIEWS}/v/{k}", (n_nodes, 3))
+
+
+def _result(domain, h5name: str, n_nodes: int, n_edges: int, contact: bool) -> None:
+    """The net's one grid of /result, for a file without a trajectory (see
+    ``write_xdmf``)."""
+    grid = _grid(domain, "result", h5name, n_edges)
+    geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
+    _hdf_item(geom, h5name, "/result/x", (n_nodes, 3))
+    att = _attribute(grid, "tension", "Cell", "Scalar")
+    _hdf_item(att, h5name, "/result/tension", (n_edges,))
+    att = _attribute(grid, "reaction", "Node", "Vector")
+    _hdf_item(att, h5name, "/result/reaction", (n_nodes, 3))
+    if contact:
+        att = _attribute(grid, "contact_force", "Node", "Vector")
+        _hdf_item(att, h5name, "/result/contact_force", (n_nodes, 3))
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """Writes ``text`` to ``path`` through a temporary file renamed over it."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         tmp.write_text(text, encoding="utf-8")

@@ -25,94 +25,122 @@ log = logging.getLogger(__name__)
 
 
 def _claims(d: SweepData, fit: ScalingFit | None, notes: list[str]) -> list[str]:
+    """The Markdown table of the paper's claims, what catenet measures and a verdict on
+    each; a claim the sweep cannot check gets a line in ``notes`` instead."""
     lines = ["| Paper | catenet measures | Verdict |", "|---|---|---|"]
     sub, p = fig7_subset(d, [])
-    # 1. Rigidity linear in n (Fig. 7a: delta decreases almost linearly with n).
-    ns = unique(sub.n) if sub is not None else np.array([])
-    if sub is not None and ns.size >= 3:
-        r2s, gammas = [], []
-        for a in unique(sub.alpha):
-            m = near(sub.alpha, a)
-            if np.count_nonzero(m) >= 3:
-                _, _, r2 = linear_r2(sub.n[m], sub.delta_bar[m])
-                g, _ = np.polyfit(np.log(sub.n[m]), np.log(sub.delta_bar[m]), 1)
-                r2s.append(r2)
-                gammas.append(g)
-        k_exp = -float(np.mean(gammas))
-        line_fit = (
-            "a straight line fits δ̄(n) well"
-            if min(r2s) > 0.98
-            else f"a straight line fits δ̄(n) only roughly (R² ≥ {min(r2s):.2f})"
-        )
-        if abs(k_exp - 1) > 0.2:
-            verdict = (
-                f"Partly: δ̄ decreases with n and {line_fit}, but the trend is a power law "
-                f"δ̄ ∝ n^γ: the rigidity F̄/δ̄ grows like n^{k_exp:.2f}, not like n."
-            )
-        else:
-            verdict = f"Agrees: the rigidity grows about linearly with n (n^{k_exp:.2f})."
-        lines.append(
-            f"| δ̄ decreases almost linearly with n (Fig. 7a, p = 10 Pa); rigidity grows "
-            f"linearly with n | straight-line fits of δ̄(n) at p = {p:g} Pa: R² = "
-            f"{min(r2s):.3f}–{max(r2s):.3f}; power law δ̄ ∝ n^γ with γ = "
-            f"{min(gammas):.3f} to {max(gammas):.3f} (one value per α) | {verdict} |"
-        )
-    else:
-        notes.append("Claim 'rigidity linear in n' not checked: needs ≥ 3 values of n.")
-    # 2. Cosine dependence on alpha.
-    alphas = unique(sub.alpha) if sub is not None else np.array([])
-    if sub is not None and alphas.size >= 3:
-        r2s, rels, Ds = [], [], []
-        for nv in unique(sub.n):
-            m = near(sub.n, nv)
-            if np.count_nonzero(m) >= 3:
-                a0, b0, r2, rel = fit_cosine(sub.alpha[m], sub.delta_bar[m])
-                r2s.append(r2)
-                rels.append(rel)
-                Ds.append((a0 + b0) / (a0 - b0))
-        good = min(r2s) > 0.95
-        lines.append(
-            f"| δ̄ follows a cosine in α (Fig. 7b) | δ̄ = a + b cos(4α+π) at p = {p:g} Pa, per n: "
-            f"R² = {min(r2s):.3f}–{max(r2s):.3f}, RMS relative residual "
-            f"{100 * min(rels):.2f}–{100 * max(rels):.2f} %; δ̄(π/4)/δ̄(0) of the fit = "
-            f"{min(Ds):.3f}–{max(Ds):.3f} | "
-            f"{'Agrees' if good else 'Does not agree well'}: the α-dependence "
-            f"{'is' if good else 'is not'} well described by cos(4α+π) |"
-        )
-    else:
-        notes.append("Claim 'cosine dependence on α' not checked: needs ≥ 3 values of α.")
-    # 3. D and 4. the form of the law.
-    if fit is not None and fit.fit_D:
-        z = (fit.D - PAPER_D) / fit.sigma_D if fit.sigma_D > 0 else float("inf")
-        close = abs(fit.D - PAPER_D) <= 0.05 * PAPER_D
-        lines.append(
-            f"| D ≈ {PAPER_D} (Eq. 19) | D = {fit.D:.4f} ± {fit.sigma_D:.4f} (1σ), "
-            f"{abs(z):.0f}σ from {PAPER_D} | "
-            f"{'Agrees within 5 %' if close else 'Does not agree'}: catenet's nets are "
-            f"{100 * (fit.D - 1):.0f} % softer at α = π/4 than at α = 0, the paper's "
-            f"{100 * (PAPER_D - 1):.0f} % |"
-        )
-    if fit is not None:
-        spread = 100 * math.expm1(fit.rms_log)
-        lines.append(
-            f"| δ̄/f(α) ~ F̄/n collapses all data (Eq. 18, Fig. 8) | δ̄/f(α) = C (F̄/n)^β with "
-            f"β = {fit.beta:.4f} ± {fit.sigma_beta:.4f}, C = {fit.C:.4g}; RMS log residual "
-            f"{fit.rms_log:.4f} (≈ {spread:.1f} %), largest {fit.max_log:.3f} over "
-            f"{fit.points} points | "
-            + (
-                "Agrees: the data collapse onto one power law in F̄/n"
-                if fit.rms_log < 0.05
-                else "Partly: the collapse has visible scatter"
-            )
-            + (
-                f"; the exponent is {fit.beta:.2f}, so δ̄ is not proportional to F̄/n "
-                "(a net without pretension stiffens as it deflects)"
-                if abs(fit.beta - 1) > 0.1
-                else ""
-            )
-            + " |"
-        )
+    for row in (
+        _linear_in_n(sub, p, notes),
+        _cosine_in_alpha(sub, p, notes),
+        _paper_D(fit),
+        _collapse(fit),
+    ):
+        if row is not None:
+            lines.append(row)
     return lines
+
+
+def _linear_in_n(sub: SweepData | None, p: float, notes: list[str]) -> str | None:
+    """Claim 1, the rigidity linear in n (Fig. 7a: delta decreases almost linearly with
+    n): its row, None (and a note) without 3 values of n."""
+    ns = unique(sub.n) if sub is not None else np.array([])
+    if sub is None or ns.size < 3:
+        notes.append("Claim 'rigidity linear in n' not checked: needs ≥ 3 values of n.")
+        return None
+    r2s, gammas = [], []
+    for a in unique(sub.alpha):
+        m = near(sub.alpha, a)
+        if np.count_nonzero(m) >= 3:
+            _, _, r2 = linear_r2(sub.n[m], sub.delta_bar[m])
+            g, _ = np.polyfit(np.log(sub.n[m]), np.log(sub.delta_bar[m]), 1)
+            r2s.append(r2)
+            gammas.append(g)
+    k_exp = -float(np.mean(gammas))
+    line_fit = (
+        "a straight line fits δ̄(n) well"
+        if min(r2s) > 0.98
+        else f"a straight line fits δ̄(n) only roughly (R² ≥ {min(r2s):.2f})"
+    )
+    if abs(k_exp - 1) > 0.2:
+        verdict = (
+            f"Partly: δ̄ decreases with n and {line_fit}, but the trend is a power law "
+            f"δ̄ ∝ n^γ: the rigidity F̄/δ̄ grows like n^{k_exp:.2f}, not like n."
+        )
+    else:
+        verdict = f"Agrees: the rigidity grows about linearly with n (n^{k_exp:.2f})."
+    return (
+        f"| δ̄ decreases almost linearly with n (Fig. 7a, p = 10 Pa); rigidity grows "
+        f"linearly with n | straight-line fits of δ̄(n) at p = {p:g} Pa: R² = "
+        f"{min(r2s):.3f}–{max(r2s):.3f}; power law δ̄ ∝ n^γ with γ = "
+        f"{min(gammas):.3f} to {max(gammas):.3f} (one value per α) | {verdict} |"
+    )
+
+
+def _cosine_in_alpha(sub: SweepData | None, p: float, notes: list[str]) -> str | None:
+    """Claim 2, delta a cosine in alpha (Fig. 7b): its row, None (and a note) without 3
+    values of alpha."""
+    alphas = unique(sub.alpha) if sub is not None else np.array([])
+    if sub is None or alphas.size < 3:
+        notes.append("Claim 'cosine dependence on α' not checked: needs ≥ 3 values of α.")
+        return None
+    r2s, rels, Ds = [], [], []
+    for nv in unique(sub.n):
+        m = near(sub.n, nv)
+        if np.count_nonzero(m) >= 3:
+            a0, b0, r2, rel = fit_cosine(sub.alpha[m], sub.delta_bar[m])
+            r2s.append(r2)
+            rels.append(rel)
+            Ds.append((a0 + b0) / (a0 - b0))
+    good = min(r2s) > 0.95
+    return (
+        f"| δ̄ follows a cosine in α (Fig. 7b) | δ̄ = a + b cos(4α+π) at p = {p:g} Pa, per n: "
+        f"R² = {min(r2s):.3f}–{max(r2s):.3f}, RMS relative residual "
+        f"{100 * min(rels):.2f}–{100 * max(rels):.2f} %; δ̄(π/4)/δ̄(0) of the fit = "
+        f"{min(Ds):.3f}–{max(Ds):.3f} | "
+        f"{'Agrees' if good else 'Does not agree well'}: the α-dependence "
+        f"{'is' if good else 'is not'} well described by cos(4α+π) |"
+    )
+
+
+def _paper_D(fit: ScalingFit | None) -> str | None:
+    """Claim 3, D close to the paper's (Eq. 19): its row, None when D was not fitted."""
+    if fit is None or not fit.fit_D:
+        return None
+    z = (fit.D - PAPER_D) / fit.sigma_D if fit.sigma_D > 0 else float("inf")
+    close = abs(fit.D - PAPER_D) <= 0.05 * PAPER_D
+    return (
+        f"| D ≈ {PAPER_D} (Eq. 19) | D = {fit.D:.4f} ± {fit.sigma_D:.4f} (1σ), "
+        f"{abs(z):.0f}σ from {PAPER_D} | "
+        f"{'Agrees within 5 %' if close else 'Does not agree'}: catenet's nets are "
+        f"{100 * (fit.D - 1):.0f} % softer at α = π/4 than at α = 0, the paper's "
+        f"{100 * (PAPER_D - 1):.0f} % |"
+    )
+
+
+def _collapse(fit: ScalingFit | None) -> str | None:
+    """Claim 4, the form of the law: every point on one curve in F/n (Eq. 18, Fig. 8);
+    its row, None without a fit."""
+    if fit is None:
+        return None
+    spread = 100 * math.expm1(fit.rms_log)
+    return (
+        f"| δ̄/f(α) ~ F̄/n collapses all data (Eq. 18, Fig. 8) | δ̄/f(α) = C (F̄/n)^β with "
+        f"β = {fit.beta:.4f} ± {fit.sigma_beta:.4f}, C = {fit.C:.4g}; RMS log residual "
+        f"{fit.rms_log:.4f} (≈ {spread:.1f} %), largest {fit.max_log:.3f} over "
+        f"{fit.points} points | "
+        + (
+            "Agrees: the data collapse onto one power law in F̄/n"
+            if fit.rms_log < 0.05
+            else "Partly: the collapse has visible scatter"
+        )
+        + (
+            f"; the exponent is {fit.beta:.2f}, so δ̄ is not proportional to F̄/n "
+            "(a net without pretension stiffens as it deflects)"
+            if abs(fit.beta - 1) > 0.1
+            else ""
+        )
+        + " |"
+    )
 
 
 def write_report(

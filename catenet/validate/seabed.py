@@ -253,12 +253,7 @@ def seabed_catenary(L: float, EA: float, w: float, X: float, h: float) -> Seabed
     limit: a line hanging vertically to h has V_0 = w L_v with h = L_v + w L_v^2/(2 EA)
     (if L_v <= L), and the rest, L - L_v, lies straight on the bed: X_min = L - L_v
     (0 if L_v >= L). For X <= X_min the grounded part would have to bunch up (H = 0 and
-    no unique shape): ``ConfigError``. Each solve is a bracketed ``brentq`` on a monotone
-    function (V for a given H inside, H outside, both in log scale), so it returns the
-    root to round-off. It is the fallback: Newton on (X), (h) with the analytic flexibility
-    matrix (``_seabed_flexibility``), from the starting guess of Jonkman's catenary routine
-    (FAST, MoorPy) and with steps halved until the residual falls, is tried first and
-    converges in a few steps. The end conditions are then checked to 1e-12 of L.
+    no unique shape): ``ConfigError``. The solve of (X), (h) for (H, V): ``_seabed_solve``.
 
     Limits: EA = inf gives the inextensible seabed catenary, on the seabed
     X = L - sqrt(h^2 + 2 a h) + a acosh(1 + h/a), a = H/w; a taut line (H >> w L) tends
@@ -270,6 +265,14 @@ def seabed_catenary(L: float, EA: float, w: float, X: float, h: float) -> Seabed
     X = _positive("X", X)
     h = _positive("h", h)
     inv_ea = 0.0 if math.isinf(EA) else 1.0 / EA
+    _check_reachable(L, inv_ea, w, X, h)
+    H, V = _seabed_solve(L, inv_ea, w, X, h)
+    return SeabedCatenary(L=L, EA=EA, w=w, X=X, h=h, H=H, V=V)
+
+
+def _check_reachable(L: float, inv_ea: float, w: float, X: float, h: float) -> None:
+    """ConfigError when no taut line reaches the fairlead: an inextensible line shorter
+    than the chord, or X at or below the slack limit X_min (``seabed_catenary``)."""
     if inv_ea == 0.0 and not math.hypot(X, h) < L:
         raise ConfigError(
             f"X = {X!r}, h = {h!r}: an inextensible line (EA = inf) needs "
@@ -284,17 +287,29 @@ def seabed_catenary(L: float, EA: float, w: float, X: float, h: float) -> Seabed
             f"the line hanging vertically to h = {h!r}); with H = 0 its shape is not unique"
         )
 
-    # Newton from the guess of Jonkman's (FAST's) catenary routine, as in MoorPy; the
-    # nested bracketed solve if Newton stalls.
+
+def _jonkman_guess(L: float, w: float, X: float, h: float) -> tuple[float, float]:
+    """The starting (H, V) of Jonkman's (FAST's) catenary routine, as in MoorPy."""
     chord = math.hypot(X, h)
     lam = math.sqrt(3.0 * ((L * L - h * h) / (X * X) - 1.0)) if L > chord else 0.2
     H0 = max(0.5 * w * X / lam, 1e-6 * w * L)
     V0 = 0.5 * w * (h / math.tanh(lam) + L)
-    sol = _seabed_newton(L, inv_ea, w, X, h, H0, V0)
+    return H0, V0
+
+
+def _seabed_solve(L: float, inv_ea: float, w: float, X: float, h: float) -> tuple[float, float]:
+    """(H, V) of the line that meets the end conditions (X), (h) of ``seabed_catenary``.
+
+    Newton on (X), (h) with the analytic flexibility matrix (``_seabed_flexibility``),
+    from the starting guess of Jonkman's catenary routine (FAST, MoorPy) and with steps
+    halved until the residual falls, is tried first and converges in a few steps. The
+    fallback, should it stall, is a bracketed ``brentq`` on a monotone function in each
+    solve (V for a given H inside, H outside, both in log scale), which returns the root
+    to round-off. The end conditions are then checked to 1e-12 of L (ArithmeticError)."""
+    sol = _seabed_newton(L, inv_ea, w, X, h, *_jonkman_guess(L, w, X, h))
     H, V = map(float, sol if sol is not None else _seabed_bracketed(L, inv_ea, w, X, h))
-    cat = SeabedCatenary(L=L, EA=EA, w=w, X=X, h=h, H=H, V=V)
     Xe, he = _seabed_ends(L, inv_ea, w, H, V)
     err = max(abs(Xe - X), abs(he - h)) / L
     if not err < 1e-12:
         raise ArithmeticError(f"seabed catenary: end conditions met only to {err:.1e} of L")
-    return cat
+    return H, V

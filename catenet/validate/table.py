@@ -54,12 +54,16 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.scene import Scene
 from catenet.validate import analytic
+
+if TYPE_CHECKING:
+    from catenet.model.builders import Material
 
 log = logging.getLogger(__name__)
 
@@ -111,8 +115,14 @@ class Row:
     note: str = ""
 
     def __post_init__(self) -> None:  # plain Python types (NumPy scalars print as np.float64(...))
-        for name in ("catenet", "analytic", "error", "order", "tolerance"):
-            object.__setattr__(self, name, float(getattr(self, name)))
+        for name, value in (
+            ("catenet", self.catenet),
+            ("analytic", self.analytic),
+            ("error", self.error),
+            ("order", self.order),
+            ("tolerance", self.tolerance),
+        ):
+            object.__setattr__(self, name, float(value))
         object.__setattr__(self, "resolution", int(self.resolution))
         if self.passed is not None:
             object.__setattr__(self, "passed", bool(self.passed))
@@ -231,14 +241,22 @@ def _interpolate(x_coarse: np.ndarray, n: int) -> np.ndarray:
     return np.column_stack([np.interp(s, s_old, x_coarse[:, k]) for k in range(3)])
 
 
+@dataclass(frozen=True)
+class _Resolutions:
+    """The compressed catenary at one dL/L, per node count (ascending): catenet's sag/L
+    and H (nan where no solve converged) and each solve's note."""
+
+    nodes: list[int]
+    sags: list[float]
+    Hs: list[float]
+    notes: list[str]
+
+
 def catenary_rows(
     dLs: Sequence[float] = CATENARY_DL, nodes: Sequence[int] = CATENARY_NODES
 ) -> list[Row]:
     """Case (ii): the compressed catenary against the exact elastic catenary, the exact
     discrete chain and Eq. 15 (see the module docstring)."""
-    from catenet.model.builders import cable
-    from catenet.model.net import Loads
-
     material = _material()
     EA, L = material.EA, LENGTH
     w = material.line_density * GRAVITY
@@ -249,78 +267,110 @@ def catenary_rows(
         span = L - dl * L
         exact = analytic.elastic_catenary(L, EA, w, span)
         sag_ex, H_ex = exact.sag / L, exact.H
-        sags, Hs, notes = [], [], []
-        x_prev = None
-        for n in nodes:
-            if n < 3 or n % 2 == 0:
-                raise ConfigError(f"catenary: nodes = {n}: must be odd and >= 3")
-            net = cable([-0.5 * L, 0.0, 0.0], [0.5 * L, 0.0, 0.0], n, material)
-            move = np.zeros((n, 3))
-            move[0, 0], move[-1, 0] = 0.5 * dl * L, -0.5 * dl * L
-            loads = Loads(gravity=np.array([0.0, 0.0, -GRAVITY]), support_displacement=move)
-            note = ""
-            try:
-                res = _solve(net, loads)
-            except ConvergenceError as exc:
-                log.warning("%s, N = %d, from the straight cable: %s", name, n, exc)
-                note = f"no convergence from the straight cable ({exc})"
-                res = None
-                if x_prev is not None:
-                    try:
-                        res = _solve(net, loads, _interpolate(x_prev, n))
-                        note += "; converged from the coarser equilibrium"
-                    except ConvergenceError as exc2:
-                        note += f"; nor from the coarser equilibrium ({exc2})"
-            notes.append(note)
-            if res is None:
-                sags.append(math.nan)
-                Hs.append(math.nan)
-                x_prev = None
-                continue
-            x_prev = res.x
-            sags.append(-res.x[(n - 1) // 2, 2] / L)
-            Hs.append(0.5 * (res.reaction[-1, 0] - res.reaction[0, 0]))
-        h = [L / (n - 1) for n in nodes]
-        for quantity, values, ex in (("sag/L", sags, sag_ex), ("H [N]", Hs, H_ex)):
-            errs = [_rel(v, ex) for v in values]
-            order = observed_order(h, errs)
-            order_ok = ORDER_BAND[0] <= order <= ORDER_BAND[1]
-            for n, hh, v, e, note in zip(nodes, h, values, errs, notes, strict=True):
-                tol = ERROR_CONSTANT * (hh / L) ** 2
-                rows.append(
-                    Row(
-                        name,
-                        f"{quantity} elastic",
-                        n,
-                        v,
-                        ex,
-                        e,
-                        order=order,
-                        tolerance=tol,
-                        passed=e <= tol and order_ok,
-                        note=note,
-                    )
-                )
-        # The finest resolution against the exact discrete chain and against Eq. 15.
-        n, sag, note = nodes[-1], sags[-1], notes[-1]
-        chain = analytic.discrete_catenary(L, EA, w, span, n - 1).sag / L
-        e = _rel(sag, chain)
-        rows.append(
-            Row(
-                name,
-                "sag/L chain",
-                n,
-                sag,
-                chain,
-                e,
-                tolerance=EXACT_TOL,
-                passed=e <= EXACT_TOL,
-                note=note,
-            )
-        )
-        eq15 = analytic.catenary_sag(L, dl * L) / L
-        rows.append(Row(name, "sag/L Eq.15", n, sag, eq15, _rel(sag, eq15), note=note))
+        runs = _catenary_runs(name, dl, nodes, material)
+        rows += _elastic_rows(name, runs, sag_ex, H_ex)
+        rows += _finest_rows(name, runs, dl, w, EA)
     return rows
+
+
+def _catenary_runs(name: str, dl: float, nodes: list[int], material: Material) -> _Resolutions:
+    """catenet's compressed catenary of dL/L = ``dl`` at every node count of ``nodes``."""
+    from catenet.model.builders import cable
+    from catenet.model.net import Loads
+
+    L = LENGTH
+    sags, Hs, notes = [], [], []
+    x_prev = None
+    for n in nodes:
+        if n < 3 or n % 2 == 0:
+            raise ConfigError(f"catenary: nodes = {n}: must be odd and >= 3")
+        net = cable([-0.5 * L, 0.0, 0.0], [0.5 * L, 0.0, 0.0], n, material)
+        move = np.zeros((n, 3))
+        move[0, 0], move[-1, 0] = 0.5 * dl * L, -0.5 * dl * L
+        loads = Loads(gravity=np.array([0.0, 0.0, -GRAVITY]), support_displacement=move)
+        res, note = _catenary_solve(net, loads, x_prev, name, n)
+        notes.append(note)
+        if res is None:
+            sags.append(math.nan)
+            Hs.append(math.nan)
+            x_prev = None
+            continue
+        x_prev = res.x
+        sags.append(-res.x[(n - 1) // 2, 2] / L)
+        Hs.append(0.5 * (res.reaction[-1, 0] - res.reaction[0, 0]))
+    return _Resolutions(nodes, sags, Hs, notes)
+
+
+def _catenary_solve(net, loads, x_prev, name: str, n: int):
+    """The equilibrium from the straight cable, else from ``x_prev`` (the coarser
+    equilibrium) interpolated onto the net, with the row's note; None if neither
+    converges."""
+    try:
+        return _solve(net, loads), ""
+    except ConvergenceError as exc:
+        log.warning("%s, N = %d, from the straight cable: %s", name, n, exc)
+        note = f"no convergence from the straight cable ({exc})"
+    res = None
+    if x_prev is not None:
+        try:
+            res = _solve(net, loads, _interpolate(x_prev, n))
+            note += "; converged from the coarser equilibrium"
+        except ConvergenceError as exc2:
+            note += f"; nor from the coarser equilibrium ({exc2})"
+    return res, note
+
+
+def _elastic_rows(name: str, runs: _Resolutions, sag_ex: float, H_ex: float) -> list[Row]:
+    """sag/L and H against the exact elastic catenary at every resolution, with the
+    observed order of each quantity."""
+    L = LENGTH
+    rows = []
+    h = [L / (n - 1) for n in runs.nodes]
+    for quantity, values, ex in (("sag/L", runs.sags, sag_ex), ("H [N]", runs.Hs, H_ex)):
+        errs = [_rel(v, ex) for v in values]
+        order = observed_order(h, errs)
+        order_ok = ORDER_BAND[0] <= order <= ORDER_BAND[1]
+        for n, hh, v, e, note in zip(runs.nodes, h, values, errs, runs.notes, strict=True):
+            tol = ERROR_CONSTANT * (hh / L) ** 2
+            rows.append(
+                Row(
+                    name,
+                    f"{quantity} elastic",
+                    n,
+                    v,
+                    ex,
+                    e,
+                    order=order,
+                    tolerance=tol,
+                    passed=e <= tol and order_ok,
+                    note=note,
+                )
+            )
+    return rows
+
+
+def _finest_rows(name: str, runs: _Resolutions, dl: float, w: float, EA: float) -> list[Row]:
+    """The finest resolution's sag/L against the exact discrete chain and against Eq. 15."""
+    L = LENGTH
+    span = L - dl * L
+    n, sag, note = runs.nodes[-1], runs.sags[-1], runs.notes[-1]
+    chain = analytic.discrete_catenary(L, EA, w, span, n - 1).sag / L
+    e = _rel(sag, chain)
+    eq15 = analytic.catenary_sag(L, dl * L) / L
+    return [
+        Row(
+            name,
+            "sag/L chain",
+            n,
+            sag,
+            chain,
+            e,
+            tolerance=EXACT_TOL,
+            passed=e <= EXACT_TOL,
+            note=note,
+        ),
+        Row(name, "sag/L Eq.15", n, sag, eq15, _rel(sag, eq15), note=note),
+    ]
 
 
 #: The table law of case (iii): (strain, tension / EA) points, first slope 1.
