@@ -5,12 +5,20 @@ and each once."""
 from __future__ import annotations
 
 import difflib
+from dataclasses import dataclass
 from typing import Any
 
 from catenet.case.keys import Checker, duplicates, show
-from catenet.case.kinds.base import GeometryConfig, Topology, expand, with_prefix
+from catenet.case.kinds.base import GeometryConfig, Topology, expand, resolve, with_prefix
+from catenet.case.kinds.graph import GraphConfig
 from catenet.case.kinds.netfile import flag_note
-from catenet.case.sections import LoadConfig, SupportsConfig
+from catenet.case.sections import (
+    LoadConfig,
+    MoveConfig,
+    NodeRef,
+    OutputConfig,
+    SupportsConfig,
+)
 from catenet.errors import ConfigError
 
 
@@ -49,7 +57,7 @@ def check_nodes(
     section failed) against the geometry ``g``; ``flies``: a dynamic run, where the net
     may have no support; ``prefix``: the loads' key path (a load case's
     ``load_case[k]``: then its loads alone are checked, not the supports)."""
-    probe = getattr(output, "probe", None)
+    probe = output.probe if isinstance(output, OutputConfig) else None
     if not _needs_topology(g, supports, load, probe):
         return
     try:
@@ -57,81 +65,119 @@ def check_nodes(
     except ConfigError as exc:  # the builder's own checks
         ck.problems.extend(with_prefix(p, "supports.fixed") for p in exc.problems)
         return
-    n = topo.n_nodes
-
-    def in_range(ref, path) -> bool:
-        if isinstance(ref, int) and ref >= n:
-            ck.bad(path, ref, f"must be a node index in 0..{n - 1} (or a named node)")
-            return False
-        if isinstance(ref, str) and ref not in topo.names and ref not in topo.sets:
-            ck.add(_unknown_name(path, ref, topo) + flag_note(getattr(g, "file", None)))
-            return False
-        return True
-
-    def resolve(ref) -> int:
-        return topo.names[ref] if isinstance(ref, str) else ref
-
+    refs = _Refs(ck, topo, g.file if isinstance(g, GraphConfig) else None)
     fixed = set(topo.default_fixed)
     fixed_key = g.default_supports
     before = len(ck.problems)
     if isinstance(supports, SupportsConfig):
         if supports.fixed is not None:
             fixed_key = "supports.fixed"
-            ok = [in_range(r, f"supports.fixed[{k}]") for k, r in enumerate(supports.fixed)]
-            if all(ok):
-                single = [r for r in supports.fixed if r not in topo.sets]
-                dups = duplicates([resolve(r) for r in single])
-                if dups:
-                    ck.bad(
-                        "supports.fixed",
-                        list(supports.fixed),
-                        f"node {dups[0]} appears more than once: list each node once",
-                    )
-                fixed = {i for r in supports.fixed for i in expand(r, topo.names, topo.sets)}
-            else:
-                fixed = set()
-        seen: dict[int, int] = {}
-        for k, mv in enumerate(supports.moves):
-            path = f"supports.move[{k}].node"
-            if not in_range(mv.node, path):
-                continue
-            for i in expand(mv.node, topo.names, topo.sets):
-                if fixed and i not in fixed:
-                    shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
-                    ck.add(
-                        f"{path} = {shown}: is not a fixed node: only supports move "
-                        f"(fixed: {fixed_key})"
-                    )
-                if i in seen:
-                    ck.add(
-                        f"{path} = {show(mv.node)}: node {i} already moves in "
-                        f"supports.move[{seen[i]}]: one move per node"
-                    )
-                seen[i] = k
+            fixed = _fixed_nodes(refs, supports.fixed)
+        _check_moves(refs, supports.moves, fixed, fixed_key)
     if isinstance(load, LoadConfig):
-        for k, pt in enumerate(load.points):
-            if pt.node is not None:
-                in_range(pt.node, f"{prefix}.point[{k}].node")
-            else:
-                _known_cable(ck, f"{prefix}.point[{k}].cable", pt.cable, g, topo)
-        for k, ln in enumerate(load.lines):
-            if ln.cable is not None:
-                _known_cable(ck, f"{prefix}.line[{k}].cable", ln.cable, g, topo)
-        for k, ar in enumerate(load.areas):
-            if isinstance(ar.nodes, str):
-                in_range(ar.nodes, f"{prefix}.area[{k}].nodes")
-            elif ar.nodes is not None:
-                for j, r in enumerate(ar.nodes):
-                    in_range(r, f"{prefix}.area[{k}].nodes[{j}]")
-    if probe is not None and in_range(probe, "output.probe"):
-        many = expand(probe, topo.names, topo.sets)
-        if len(many) != 1:
-            ck.add(
-                f"output.probe = {probe!r}: the node set has {len(many)} nodes: "
-                "the probe must be one node (an index, a node name or a set of one node)"
-            )
+        _check_loads(refs, load, g, prefix)
+    if probe is not None:
+        _check_probe(refs, probe)
     if len(ck.problems) == before and prefix == "load":
         g.check_supports(ck, fixed, fixed_key, flies)
+
+
+@dataclass(frozen=True)
+class _Refs:
+    """Node references checked against the topology ``topo``, problems added to ``ck``;
+    ``file``: the net file the geometry was read from (None: none), which messages name."""
+
+    ck: Checker
+    topo: Topology
+    file: str | None = None
+
+    def known(self, ref: NodeRef, path: str) -> bool:
+        """Whether ``ref`` is a node index in range, a named node or a node set (else a
+        problem at ``path``)."""
+        n = self.topo.n_nodes
+        if isinstance(ref, int) and ref >= n:
+            self.ck.bad(path, ref, f"must be a node index in 0..{n - 1} (or a named node)")
+            return False
+        if isinstance(ref, str) and ref not in self.topo.names and ref not in self.topo.sets:
+            self.ck.add(_unknown_name(path, ref, self.topo) + flag_note(self.file))
+            return False
+        return True
+
+    def nodes(self, ref: NodeRef) -> tuple[int, ...]:
+        """The nodes a known reference stands for."""
+        return expand(ref, self.topo.names, self.topo.sets)
+
+
+def _fixed_nodes(refs: _Refs, fixed: tuple[NodeRef, ...]) -> set[int]:
+    """The nodes supports.fixed pins (none while a reference is bad); a problem for a
+    node listed twice."""
+    ok = [refs.known(r, f"supports.fixed[{k}]") for k, r in enumerate(fixed)]
+    if not all(ok):
+        return set()
+    single = [r for r in fixed if r not in refs.topo.sets]
+    dups = duplicates([resolve(r, refs.topo.names) for r in single])
+    if dups:
+        refs.ck.bad(
+            "supports.fixed",
+            list(fixed),
+            f"node {dups[0]} appears more than once: list each node once",
+        )
+    return {i for r in fixed for i in refs.nodes(r)}
+
+
+def _check_moves(
+    refs: _Refs, moves: tuple[MoveConfig, ...], fixed: set[int], fixed_key: str
+) -> None:
+    """Problems of supports.move: a node that is not fixed (``fixed``, named by
+    ``fixed_key``), a node that moves twice."""
+    seen: dict[int, int] = {}
+    for k, mv in enumerate(moves):
+        path = f"supports.move[{k}].node"
+        if not refs.known(mv.node, path):
+            continue
+        for i in refs.nodes(mv.node):
+            if fixed and i not in fixed:
+                shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
+                refs.ck.add(
+                    f"{path} = {shown}: is not a fixed node: only supports move "
+                    f"(fixed: {fixed_key})"
+                )
+            if i in seen:
+                refs.ck.add(
+                    f"{path} = {show(mv.node)}: node {i} already moves in "
+                    f"supports.move[{seen[i]}]: one move per node"
+                )
+            seen[i] = k
+
+
+def _check_loads(refs: _Refs, load: LoadConfig, g: GeometryConfig, prefix: str) -> None:
+    """Problems of the loads' nodes and cables (under the key path ``prefix``)."""
+    for k, pt in enumerate(load.points):
+        if pt.node is not None:
+            refs.known(pt.node, f"{prefix}.point[{k}].node")
+        else:
+            _known_cable(refs.ck, f"{prefix}.point[{k}].cable", pt.cable, g, refs.topo)
+    for k, ln in enumerate(load.lines):
+        if ln.cable is not None:
+            _known_cable(refs.ck, f"{prefix}.line[{k}].cable", ln.cable, g, refs.topo)
+    for k, ar in enumerate(load.areas):
+        if isinstance(ar.nodes, str):
+            refs.known(ar.nodes, f"{prefix}.area[{k}].nodes")
+        elif ar.nodes is not None:
+            for j, r in enumerate(ar.nodes):
+                refs.known(r, f"{prefix}.area[{k}].nodes[{j}]")
+
+
+def _check_probe(refs: _Refs, probe: NodeRef) -> None:
+    """A problem unless output.probe names one node."""
+    if not refs.known(probe, "output.probe"):
+        return
+    many = refs.nodes(probe)
+    if len(many) != 1:
+        refs.ck.add(
+            f"output.probe = {probe!r}: the node set has {len(many)} nodes: "
+            "the probe must be one node (an index, a node name or a set of one node)"
+        )
 
 
 def _unknown_name(path: str, ref: str, topo: Topology) -> str:

@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from catenet.case.formfind import FormfindConfig, check_formfind_case, parse_formfind
 from catenet.case.guard import guard_size
@@ -183,51 +184,22 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         formfind = parse_formfind(ck, data["formfind"], ctx)
         check_formfind_case(ck, data)
 
-    # Rules between sections.
-    if isinstance(material, MaterialConfig) and material.prestress is not None:
-        raw = data.get("geometry")
-        g = raw if isinstance(raw, Mapping) else {}
-        for other in ("length", "rest_length", "prestrain"):
-            if other in g:
-                ck.add(
-                    f"material.prestress = {material.prestress!r}: gives the rest lengths; "
-                    f"give it or geometry.{other}, not both"
-                )
-    if isinstance(material, MaterialConfig) and geometry is not None:
-        geometry.check_material(ck, material)  # a graph's cables override [material]
-    if isinstance(material, MaterialConfig):
-        dens = material.density
-        if isinstance(solver, SolverConfig) and solver.method == "dynamic" and dens == 0:
-            ck.add(
-                f"material.density = {dens!r}: solver.method = 'dynamic' needs mass: "
-                "must be > 0 (with material.radius or material.area)"
-            )
-        if isinstance(load, LoadConfig) and load.gravity is not None and dens == 0:
-            ck.add(
-                f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
-                "set material.density > 0 (with material.radius or material.area)"
-            )
+    if isinstance(material, MaterialConfig):  # rules between sections
+        _check_prestress(ck, data, material)
+        if geometry is not None:
+            geometry.check_material(ck, material)  # a graph's cables override [material]
+        _check_mass(ck, data, material, solver, load)
     dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
-    if dynamic and solver.t_end is None:  # not given (a static case's stays None)
-        t_end = default_t_end(load, supports, solver, obstacles, masses)
-        solver = dataclasses.replace(solver, t_end=t_end)
-    t_end = solver.t_end if dynamic else None  # a number, or "rest"
-    if isinstance(t_end, (int, float)) and solver.dt > t_end:
-        ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {t_end!r}")
-    elif isinstance(t_end, (int, float)):
-        steps = t_end / solver.dt
-        if not steps <= MAX_TIME_STEPS:
-            ck.add(
-                f"solver.t_end = {solver.t_end!r}, solver.dt = {solver.dt!r}: {steps:.3g} time "
-                f"steps: at most {MAX_TIME_STEPS:.0e} (more would never finish): a larger dt "
-                "or a smaller t_end"
-            )
+    if dynamic:
+        if solver.t_end is None:  # not given (a static case's stays None)
+            t_end = default_t_end(load, supports, solver, obstacles, masses)
+            solver = dataclasses.replace(solver, t_end=t_end)
+        _check_time_steps(ck, solver)
 
     # Node references need the node count (and, for square nets, the built topology):
     # only once the geometry itself is sound.
     if geometry is not None:
-        flies = isinstance(solver, SolverConfig) and solver.method == "dynamic"
-        check_nodes(ck, geometry, supports, load, output, flies)
+        check_nodes(ck, geometry, supports, load, output, dynamic)
         for k, lc in enumerate(load_cases if isinstance(load_cases, tuple) else ()):
             check_nodes(ck, geometry, None, lc, prefix=f"load_case[{k}]")
 
@@ -250,6 +222,53 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         combinations=combinations,
         source=source,
     )
+
+
+def _check_prestress(ck: Checker, data: Mapping, material: MaterialConfig) -> None:
+    """A problem for each rest length the geometry gives besides material.prestress."""
+    if material.prestress is None:
+        return
+    raw = data.get("geometry")
+    g = raw if isinstance(raw, Mapping) else {}
+    for other in ("length", "rest_length", "prestrain"):
+        if other in g:
+            ck.add(
+                f"material.prestress = {material.prestress!r}: gives the rest lengths; "
+                f"give it or geometry.{other}, not both"
+            )
+
+
+def _check_mass(
+    ck: Checker, data: Mapping, material: MaterialConfig, solver: Any, load: Any
+) -> None:
+    """Problems where a dynamic run or gravity meets a massless material (``solver`` and
+    ``load``: BAD when their sections failed)."""
+    dens = material.density
+    if isinstance(solver, SolverConfig) and solver.method == "dynamic" and dens == 0:
+        ck.add(
+            f"material.density = {dens!r}: solver.method = 'dynamic' needs mass: "
+            "must be > 0 (with material.radius or material.area)"
+        )
+    if isinstance(load, LoadConfig) and load.gravity is not None and dens == 0:
+        ck.add(
+            f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
+            "set material.density > 0 (with material.radius or material.area)"
+        )
+
+
+def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:
+    """A problem when a dynamic run's dt exceeds its end time or makes too many steps."""
+    t_end = solver.t_end  # a number, or "rest"
+    if isinstance(t_end, (int, float)) and solver.dt > t_end:
+        ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {t_end!r}")
+    elif isinstance(t_end, (int, float)):
+        steps = t_end / solver.dt
+        if not steps <= MAX_TIME_STEPS:
+            ck.add(
+                f"solver.t_end = {solver.t_end!r}, solver.dt = {solver.dt!r}: {steps:.3g} time "
+                f"steps: at most {MAX_TIME_STEPS:.0e} (more would never finish): a larger dt "
+                "or a smaller t_end"
+            )
 
 
 def _parse_geometry(

@@ -8,6 +8,7 @@ import logging
 import sys
 import time
 from pathlib import Path
+from typing import NoReturn
 
 import click
 
@@ -84,7 +85,7 @@ def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) ->
     logging.getLogger("matplotlib").setLevel(logging.WARNING)
 
 
-def fail(message: str, code: int) -> None:
+def fail(message: str, code: int) -> NoReturn:
     """One clear message on stderr and the exit code."""
     click.echo(f"catenet: error: {message}", err=True)
     sys.exit(code)

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import signal
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -21,6 +22,11 @@ from catenet.cli.common import (
     setup_logging,
     verbosity_options,
 )
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
+    from catenet.errors import CatenetError
+    from catenet.run.report import RunResult
 
 EXIT_SIGINT = 130  # interrupted by Ctrl-C (SIGINT), as shells report it
 
@@ -115,88 +121,129 @@ def command(
     with errors_to_exit_codes(debug):
         with collecting_later():
             from catenet.case import load_case
-            from catenet.errors import CatenetError, ConfigError
-            from catenet.run.runner import output_path, run_case
+            from catenet.run.runner import output_path
 
         case = load_case(case_file, overrides)
         path = output_path(case, out)
-        dynamic = case.solver.method == "dynamic"
-        bar = Progress("rest" if dynamic else "load", enabled=None)
-        if quiet:
-            bar.enabled = False
-        relax = Relaxation()
-
-        def progress(done: float, total: float, rest: float = float("nan")) -> None:
-            if dynamic:  # toward rest, not t_end: dynamic relaxation stops at equilibrium
-                frac, note = relax.update(done, rest)
-                bar.update(frac, 1.0, note=note, eta=False)
-            else:
-                bar.update(done, total, note=f"{done:.4g}")
-
         with StopFlag() as stop:
-            try:
-                result = run_case(
-                    case,
-                    path,
-                    restart=restart,
-                    progress=progress,
-                    stop=stop,
-                    interrupt=stop,
-                    load_case=only_case,
-                )
-            except CatenetError as exc:
-                bar.close()
-                written = getattr(exc, "output", None)
-                if written is not None and not isinstance(exc, ConfigError):
-                    good = exc.last_good
-                    at = None if good is None else good.time
-                    label = ""
-                    if at is not None:
-                        label = f"t = {at:.6g} s, " if dynamic else f"load factor {at:.6g}, "
-                    exc.args = (
-                        f"{exc}\n  the last good state is in {written} "
-                        f"(/result, {label}converged = false)",
-                    )
-                raise
-            finally:
-                bar.close()
-        if stop.signal is not None:
-            if result.outcome == "interrupted":  # catenet.solver.result.Outcome
-                where = f"; the state so far is in {path}" if path is not None else ""
-                click.echo(
-                    f"catenet: interrupted at {_where(case, result)}{where} "
-                    "(/result converged = false)",
-                    err=True,
-                )
-            else:  # the signal came during the last step: the run is complete
-                if not quiet:
-                    _summary(case, result, path)
-                click.echo("catenet: stopped by a signal after the run had finished", err=True)
-            code = EXIT_SIGINT if stop.signal == signal.SIGINT else EXIT_FAILED
-        elif not result.converged:
-            click.echo(f"catenet: did not converge: {result.message}", err=True)
-            code = EXIT_FAILED
-        elif result.stable is False:
-            if not quiet:
-                _summary(case, result, path)
-            click.echo(
-                f"catenet: error: the equilibrium found is unstable: {result.diagnosis}",
-                err=True,
-            )
-            code = EXIT_FAILED
-        else:
-            if not quiet:
-                _summary(case, result, path)
-            failed = [r.name for r in result.cases if not r.converged]
-            if failed:
-                click.echo(
-                    f"catenet: error: load case {', '.join(failed)} failed (did not "
-                    "converge, collapsed or implausible: its row above says which; its "
-                    "last good state is in /cases/<name>, converged = false)",
-                    err=True,
-                )
-                code = EXIT_FAILED
+            result = _solve(case, path, restart, only_case, stop, quiet)
+        code = _exit_code(case, result, path, stop.signal, quiet)
     sys.exit(code)
+
+
+def _progress(dynamic: bool, quiet: bool) -> tuple[Progress, Callable[..., None]]:
+    """The run's progress bar and the callback that moves it: load factors of a static
+    run, a dynamic run's approach to rest."""
+    bar = Progress("rest" if dynamic else "load", enabled=None)
+    if quiet:
+        bar.enabled = False
+    relax = Relaxation()
+
+    def progress(done: float, total: float, rest: float = float("nan")) -> None:
+        if dynamic:  # toward rest, not t_end: dynamic relaxation stops at equilibrium
+            frac, note = relax.update(done, rest)
+            bar.update(frac, 1.0, note=note, eta=False)
+        else:
+            bar.update(done, total, note=f"{done:.4g}")
+
+    return bar, progress
+
+
+def _solve(
+    case: Case,
+    path: Path | None,
+    restart: Path | None,
+    only_case: str | None,
+    stop: StopFlag,
+    quiet: bool,
+) -> RunResult:
+    """The case solved into ``path`` with a progress bar (its RunResult); a failure that
+    left a result file says where its last good state is."""
+    from catenet.errors import CatenetError
+    from catenet.run.runner import run_case
+
+    dynamic = case.solver.method == "dynamic"
+    bar, progress = _progress(dynamic, quiet)
+    try:
+        return run_case(
+            case,
+            path,
+            restart=restart,
+            progress=progress,
+            stop=stop,
+            interrupt=stop,
+            load_case=only_case,
+        )
+    except CatenetError as exc:
+        bar.close()
+        _name_last_good(exc, dynamic)
+        raise
+    finally:
+        bar.close()
+
+
+def _name_last_good(exc: CatenetError, dynamic: bool) -> None:
+    """Adds to the message of a run's error the file that holds its last good state,
+    where one does (never for bad input)."""
+    from catenet.errors import ConfigError
+
+    written = exc.output
+    if written is not None and not isinstance(exc, ConfigError):
+        good = exc.last_good
+        at = None if good is None else good.time
+        label = ""
+        if at is not None:
+            label = f"t = {at:.6g} s, " if dynamic else f"load factor {at:.6g}, "
+        exc.args = (
+            f"{exc}\n  the last good state is in {written} (/result, {label}converged = false)",
+        )
+
+
+def _exit_code(
+    case: Case, result: RunResult, path: Path | None, signum: int | None, quiet: bool
+) -> int:
+    """The exit status of a finished run, with its summary (unless ``quiet``) and its
+    problems on stderr; ``signum``: the signal that stopped it, if one did."""
+    if signum is not None:
+        return _stopped(case, result, path, signum, quiet)
+    if not result.converged:
+        click.echo(f"catenet: did not converge: {result.message}", err=True)
+        return EXIT_FAILED
+    if result.stable is False:
+        if not quiet:
+            _summary(case, result, path)
+        click.echo(
+            f"catenet: error: the equilibrium found is unstable: {result.diagnosis}",
+            err=True,
+        )
+        return EXIT_FAILED
+    if not quiet:
+        _summary(case, result, path)
+    failed = [r.name for r in result.cases if not r.converged]
+    if failed:
+        click.echo(
+            f"catenet: error: load case {', '.join(failed)} failed (did not "
+            "converge, collapsed or implausible: its row above says which; its "
+            "last good state is in /cases/<name>, converged = false)",
+            err=True,
+        )
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _stopped(case: Case, result: RunResult, path: Path | None, signum: int, quiet: bool) -> int:
+    """The exit status of a run a signal stopped (130 for SIGINT), with what it left."""
+    if result.outcome == "interrupted":  # catenet.solver.result.Outcome
+        where = f"; the state so far is in {path}" if path is not None else ""
+        click.echo(
+            f"catenet: interrupted at {_where(case, result)}{where} (/result converged = false)",
+            err=True,
+        )
+    else:  # the signal came during the last step: the run is complete
+        if not quiet:
+            _summary(case, result, path)
+        click.echo("catenet: stopped by a signal after the run had finished", err=True)
+    return EXIT_SIGINT if signum == signal.SIGINT else EXIT_FAILED
 
 
 class Relaxation:
@@ -266,20 +313,18 @@ def _summary(case, result, path: Path | None) -> None:
     warn = bool(s.strain_warning)
     state = "yes" if result.converged else "no"
     detail = result.message or ""
-    stability = getattr(result, "stability", "") or ""
     if result.stable is False:  # an unstable equilibrium is no answer: never "yes"
         state, detail = "no", "an unstable equilibrium"
-    elif stability == "post-collapse":
+    elif result.stability == "post-collapse":
         detail = f"{detail}; post-collapse: the path collapsed on its way here".lstrip("; ")
     if case.solver.method == "dynamic" and not result.equilibrium:
         advice = "raise solver.t_end"
         if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
             advice = "an undamped run never rests: give solver.t_end or damping"
         detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
-    nested = getattr(result, "nested", None)  # a nested start: the coarse net's too
     spent = f"{result.iterations} Newton iterations"
-    if nested is not None:
-        spent += f" {nested.describe()}"
+    if result.nested is not None:  # a nested start: the coarse net's too
+        spent += f" {result.nested.describe()}"
     lines = [
         f"{'case':<12} {case.title or case.source}",
         f"{'converged':<12} {state} ({detail}; {spent}, "
@@ -289,9 +334,8 @@ def _summary(case, result, path: Path | None) -> None:
         *state_lines(numbers, _timing(case), len(result.tension), warn),
         _times(result),
     ]
-    energy = getattr(result, "energy", None)
-    if energy is not None:  # a dynamic run's balance (catenet.solver.energy)
-        lines.insert(-1, _balance(energy))
+    if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
+        lines.insert(-1, _balance(result.energy))
     for note in newmark_contact(case):  # the scheme's known failure in impacts
         lines.insert(-1, f"{'warning':<12} {note}")
     for k, b in s.bodies.items():  # free rigid bodies, one line each

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import contextlib
 import sys
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
@@ -17,6 +19,9 @@ from catenet.cli.common import (
     setup_logging,
     verbosity_options,
 )
+
+if TYPE_CHECKING:
+    from catenet.sweep import Sweep, SweepSummary
 
 
 @click.command(name="sweep", context_settings=HELP)
@@ -112,72 +117,114 @@ def command(
 
         spec = sw.load_sweep(case, params, modes=modes, load_case=load_case)
         out = output if output is not None else Path("out") / case.stem
-        jobs = spec.jobs
-        n_load = len(jobs[0].levels) if jobs and jobs[0].levels else 1
+        pool = _Pool(workers, scheduler)
         if not quiet:
-            if scheduler:
-                where = f"Dask scheduler {scheduler}"
-            else:
-                k = workers or sw.cores()
-                k_eff = min(k, len(jobs))
-                where = (
-                    "this process"
-                    if k == 1
-                    else f"{k_eff} worker processes x {sw.threads_per_worker(k_eff)} thread(s)"
-                )
-            click.echo(
-                f"sweep: {len(jobs)} case(s) x {n_load} load level(s) = {spec.n_rows} rows "
-                f"on {where} -> {out}",
-                err=True,
-            )
-        progress = Progress("sweep", enabled=False if quiet else None)
-        try:
-            summary = sw.run_sweep(
-                spec,
-                out,
-                workers=workers,
-                scheduler=scheduler,
-                save_runs=save_runs,
-                progress=progress.update,
-            )
-        except KeyboardInterrupt:
-            progress.close()
-            header, done = sw.read_journal(out)
-            rows = sum(len(r["rows"]) for r in done.values())
-            fail(
-                f"interrupted: {rows} of {spec.n_rows} rows done and kept in {out}; "
-                "run the same command again to resume",
-                130,
-            )
-            return
-        finally:
-            progress.close()
+            click.echo(_plan(spec, out, pool), err=True)
+        summary = _run(spec, out, pool, save_runs, quiet)
         if not quiet:
-            parts = [f"{summary.total_rows} rows"]
-            if summary.skipped_jobs:
-                parts.append(f"{summary.skipped_jobs} case(s) already done")
-            if summary.retried_jobs:
-                parts.append(f"{len(summary.retried_jobs)} case(s) retried after a worker died")
-            click.echo(
-                f"{', '.join(parts)}; {summary.wall_time:.1f} s. Tables: "
-                f"{out / sw.CSV_FILE}, {out / sw.H5_FILE}",
-                err=True,
-            )
+            click.echo(_finished(summary, out), err=True)
         if plot:
-            from catenet.cli.plot import sweep_figures
+            _plot(out, quiet)
+        _exit_if_rows_failed(spec, out)
 
-            for path in sweep_figures(out, None):
-                if not quiet:
-                    click.echo(str(path))
+
+@dataclass(frozen=True)
+class _Pool:
+    """Where a sweep's jobs run: ``workers`` processes (None: every core) or the Dask
+    cluster at ``scheduler``."""
+
+    workers: int | None
+    scheduler: str | None
+
+    def describe(self, jobs: int) -> str:
+        """Where ``jobs`` jobs run, as the sweep's first line says it."""
+        from catenet import sweep as sw
+
+        if self.scheduler:
+            return f"Dask scheduler {self.scheduler}"
+        k = self.workers or sw.cores()
+        k_eff = min(k, jobs)
+        if k == 1:
+            return "this process"
+        return f"{k_eff} worker processes x {sw.threads_per_worker(k_eff)} thread(s)"
+
+
+def _plan(spec: Sweep, out: Path, pool: _Pool) -> str:
+    """The line that opens a sweep: its cases, load levels and rows, where they run and
+    the directory they go to."""
+    jobs = spec.jobs
+    n_load = len(jobs[0].levels) if jobs and jobs[0].levels else 1
+    return (
+        f"sweep: {len(jobs)} case(s) x {n_load} load level(s) = {spec.n_rows} rows "
+        f"on {pool.describe(len(jobs))} -> {out}"
+    )
+
+
+def _run(spec: Sweep, out: Path, pool: _Pool, save_runs: bool, quiet: bool) -> SweepSummary:
+    """The sweep run into ``out`` with a progress bar; interrupted, it exits with 130 and
+    says how many rows are kept."""
+    from catenet import sweep as sw
+
+    progress = Progress("sweep", enabled=False if quiet else None)
+    try:
+        return sw.run_sweep(
+            spec,
+            out,
+            workers=pool.workers,
+            scheduler=pool.scheduler,
+            save_runs=save_runs,
+            progress=progress.update,
+        )
+    except KeyboardInterrupt:
+        progress.close()
         header, done = sw.read_journal(out)
-        failed = sum(1 for rec in done.values() for r in rec["rows"] if r.get("error"))
-        if failed:
-            click.echo(
-                f"catenet: {failed} of {spec.n_rows} rows failed or did not converge "
-                f"(see the error column of {out / sw.CSV_FILE})",
-                err=True,
-            )
-            sys.exit(EXIT_FAILED)
+        rows = sum(len(r["rows"]) for r in done.values())
+        fail(
+            f"interrupted: {rows} of {spec.n_rows} rows done and kept in {out}; "
+            "run the same command again to resume",
+            130,
+        )
+    finally:
+        progress.close()
+
+
+def _finished(summary: SweepSummary, out: Path) -> str:
+    """The line that closes a sweep: rows, cases skipped or retried, time and tables."""
+    from catenet import sweep as sw
+
+    parts = [f"{summary.total_rows} rows"]
+    if summary.skipped_jobs:
+        parts.append(f"{summary.skipped_jobs} case(s) already done")
+    if summary.retried_jobs:
+        parts.append(f"{len(summary.retried_jobs)} case(s) retried after a worker died")
+    return (
+        f"{', '.join(parts)}; {summary.wall_time:.1f} s. Tables: "
+        f"{out / sw.CSV_FILE}, {out / sw.H5_FILE}"
+    )
+
+
+def _plot(out: Path, quiet: bool) -> None:
+    """Draws the sweep's figures and report and prints their paths (unless ``quiet``)."""
+    from catenet.cli.plot import sweep_figures
+
+    for path in sweep_figures(out, None):
+        if not quiet:
+            click.echo(str(path))
+
+
+def _exit_if_rows_failed(spec: Sweep, out: Path) -> None:
+    """Exits with 1, saying how many, when any row of the sweep's journal failed."""
+    from catenet import sweep as sw
+
+    header, done = sw.read_journal(out)
+    failed = sum(1 for rec in done.values() for r in rec["rows"] if r.get("error"))
+    if failed:
+        click.echo(
+            f"catenet: {failed} of {spec.n_rows} rows failed or did not converge "
+            f"(see the error column of {out / sw.CSV_FILE})",
+            err=True,
+        )
+        sys.exit(EXIT_FAILED)
 
 
 @contextlib.contextmanager

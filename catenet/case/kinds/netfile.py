@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import logging
 import zlib
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -273,85 +274,109 @@ def _read_csv(ck: Checker, path: Path, label: str) -> dict | None:
     lines = text.lstrip("\ufeff").splitlines()  # (Excel writes a byte-order mark)
     first = next((ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")), "")
     sep = next((c for c in (";", "\t", ",") if c in first), ",")
-    tables: dict[str, list] = {"nodes": [], "edges": []}
-    seen: set[str] = set()
-    table = None
-    xyz = 3  # the nodes table's coordinate columns, then its flag columns:
-    flags: dict[str, list[bool]] = {}
-    accepted = " or ".join(repr(",".join(h)) for h in CSV_HEADERS)
+    sheet = _Sheet()
     for lineno, row in enumerate(csv.reader(lines, delimiter=sep), 1):
         cells = [c.strip() for c in row]
         while cells and not cells[-1]:
             cells.pop()
         if not cells or cells[0].startswith("#"):
             continue
-        shown = sep.join(row).strip()
         header = tuple(c.lower() for c in cells)
         lead = _coordinates(header)
         if header in CSV_HEADERS or lead:
-            table = CSV_HEADERS.get(header, "nodes")
-            if table in seen:
-                ck.add(f"{label}: line {lineno}: {shown!r}: a second {table} table")
-                return None
-            seen.add(table)
-            width = len(header)
-            if table == "nodes":
-                xyz = lead or width
-                flags = {name: [] for name in cells[xyz:]}
-                if len(flags) < width - xyz:
-                    ck.add(f"{label}: line {lineno}: {shown!r}: a flag column named twice")
-                    return None
-            continue
-        if table is None:
-            ck.add(f"{label}: line {lineno}: {shown!r}: must start with a header row {accepted}")
+            problem = sheet.start(cells, header, lead)
+        else:
+            problem = sheet.add(cells)
+        if problem is not None:
+            ck.add(f"{label}: line {lineno}: {sep.join(row).strip()!r}: {problem}")
             return None
-        if len(cells) != width:
-            ck.add(
-                f"{label}: line {lineno}: {shown!r}: has {len(cells)} cells: the {table} "
-                f"table has {width} columns"
-            )
-            return None
-        try:
-            if table == "nodes":
-                coords = [float(c) for c in cells[:xyz]]
-                if not all(map(carried, coords)):
-                    raise ValueError
-                tables["nodes"].append(coords + [0.0] * (3 - xyz))
-                for name, c in zip(flags, cells[xyz:], strict=True):
-                    if c not in ("0", "1"):
-                        ck.add(
-                            f"{label}: line {lineno}: {shown!r}: the flag column {name!r} "
-                            f"holds 0 or 1 (a node set: its nodes are the rows with 1), not {c!r}"
-                        )
-                        return None
-                    flags[name].append(c == "1")
-            else:
-                tables["edges"].append([int(c) for c in cells])
-        except ValueError:
-            need = (
-                f"finite numbers within {too_large()}"
-                if table == "nodes"
-                else "node indices (0, 1, ...)"
-            )
-            ck.add(f"{label}: line {lineno}: {shown!r}: the {table} table holds {need}")
-            return None
-        if table == "edges":
-            n = len(tables["nodes"]) if "nodes" in seen else None
-            bad = [k for k in tables["edges"][-1] if k < 0 or (n is not None and k >= n)]
-            if bad:
-                rows = f"0..{n - 1}" if n is not None else "counting from 0"
-                ck.add(
-                    f"{label}: line {lineno}: {shown!r}: node {bad[0]} is not a row of the "
-                    f"nodes table ({rows})"
-                )
-                return None
+    tables = sheet.tables
     missing = [t for t in ("nodes", "edges") if not tables[t]]
     if missing:
         head = "'x,y,z'" if missing[0] == "nodes" else "'i,j'"
         ck.add(f"{label}: has no {missing[0]}: give a header row {head} and a row per one")
         return None
-    sets = flag_sets({k: np.array(v, dtype=bool) for k, v in flags.items()})
+    sets = flag_sets({k: np.array(v, dtype=bool) for k, v in sheet.flags.items()})
     return {**tables, "sets": sets} if sets else tables
+
+
+@dataclass
+class _Sheet:
+    """The tables of a CSV net file as its rows are read: ``table`` the one under way
+    (None before the first header row), ``width`` its columns; the nodes table's ``xyz``
+    coordinate columns, then its ``flags`` columns (name -> a value per node)."""
+
+    tables: dict[str, list] = field(default_factory=lambda: {"nodes": [], "edges": []})
+    seen: set[str] = field(default_factory=set)
+    table: str | None = None
+    width: int = 0
+    xyz: int = 3
+    flags: dict[str, list[bool]] = field(default_factory=dict)
+
+    def start(self, cells: list[str], header: tuple[str, ...], lead: int) -> str | None:
+        """Starts the table a header row opens (``lead``: its coordinate columns before
+        flag columns, 0 for none); what is wrong with the row, or None."""
+        self.table = CSV_HEADERS.get(header, "nodes")
+        if self.table in self.seen:
+            return f"a second {self.table} table"
+        self.seen.add(self.table)
+        self.width = len(header)
+        if self.table == "nodes":
+            self.xyz = lead or self.width
+            self.flags = {name: [] for name in cells[self.xyz :]}
+            if len(self.flags) < self.width - self.xyz:
+                return "a flag column named twice"
+        return None
+
+    def add(self, cells: list[str]) -> str | None:
+        """Adds a row to the table under way; what is wrong with the row, or None."""
+        if self.table is None:
+            accepted = " or ".join(repr(",".join(h)) for h in CSV_HEADERS)
+            return f"must start with a header row {accepted}"
+        if len(cells) != self.width:
+            return f"has {len(cells)} cells: the {self.table} table has {self.width} columns"
+        try:
+            if self.table == "nodes":
+                problem = self._add_node(cells)
+                if problem is not None:
+                    return problem
+            else:
+                self.tables["edges"].append([int(c) for c in cells])
+        except ValueError:
+            need = (
+                f"finite numbers within {too_large()}"
+                if self.table == "nodes"
+                else "node indices (0, 1, ...)"
+            )
+            return f"the {self.table} table holds {need}"
+        if self.table == "edges":
+            return self._edge_problem()
+        return None
+
+    def _add_node(self, cells: list[str]) -> str | None:
+        """Adds a row of the nodes table (ValueError for a coordinate that is not a
+        finite number); what is wrong with its flags, or None."""
+        coords = [float(c) for c in cells[: self.xyz]]
+        if not all(map(carried, coords)):
+            raise ValueError
+        self.tables["nodes"].append(coords + [0.0] * (3 - self.xyz))
+        for name, c in zip(self.flags, cells[self.xyz :], strict=True):
+            if c not in ("0", "1"):
+                return (
+                    f"the flag column {name!r} holds 0 or 1 (a node set: its nodes are the "
+                    f"rows with 1), not {c!r}"
+                )
+            self.flags[name].append(c == "1")
+        return None
+
+    def _edge_problem(self) -> str | None:
+        """What is wrong with the last edge: a node that is no row of the nodes table."""
+        n = len(self.tables["nodes"]) if "nodes" in self.seen else None
+        bad = [k for k in self.tables["edges"][-1] if k < 0 or (n is not None and k >= n)]
+        if not bad:
+            return None
+        rows = f"0..{n - 1}" if n is not None else "counting from 0"
+        return f"node {bad[0]} is not a row of the nodes table ({rows})"
 
 
 def _coordinates(header: tuple[str, ...]) -> int:
