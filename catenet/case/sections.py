@@ -310,8 +310,8 @@ class SolverConfig(Declared):
         Settings.integrator,
         INTEGRATORS,
         write="changed",
-        doc="dynamic: the paper's implicit Euler (first order, damps numerically) or "
-        "newmark (second order)",
+        doc="dynamic: the paper's implicit Euler (first order, damps numerically), "
+        "newmark (second order) or bdf2 (second order, L-stable: right in contact)",
     )
     rho_inf: float = key(
         _check_unit_interval,

@@ -4,10 +4,11 @@ solver.energy_tolerance (1 % of the largest energy) in any frame kept, or the ru
 saying that the integrator creates energy. A finished run is not enough: its numerical
 column is read frame by frame.
 
-Measured (t_end 1 s for the capture): implicit Euler and newmark at rho_inf 0 and 0.25
-run to the end and only lose energy; at 0.5, 0.8 and 0.95 newmark creates energy in
-contact and exits 1 (tests/solver/test_energy.py keeps 0.5 and 0.95 at 1 s). The drop
-runs to the end with every integrator.
+Measured (t_end 1 s for the capture): implicit Euler, bdf2 and newmark at rho_inf 0 and
+0.25 run to the end and only lose energy (bdf2 8.6 % of it, implicit Euler about half);
+at 0.5, 0.8 and 0.95 newmark creates energy in contact and exits 1
+(tests/solver/test_energy.py keeps 0.5 and 0.95 at 1 s). The drop runs to the end with
+every integrator.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ INTEGRATORS = [
     {"integrator": "newmark", "rho_inf": 0.5},
     {"integrator": "newmark"},  # rho_inf's default, 0.8
     {"integrator": "newmark", "rho_inf": 0.95},  # the largest allowed with a free body
+    {"integrator": "bdf2"},
 ]
 
 
@@ -59,11 +61,11 @@ def never_creates_energy_or_says_so(tmp_path, case: dict) -> int:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("solver", INTEGRATORS[:3] + INTEGRATORS[4:5], ids=str)
+@pytest.mark.parametrize("solver", INTEGRATORS[:3] + INTEGRATORS[4:5] + INTEGRATORS[6:], ids=str)
 def test_the_capture_never_ends_as_an_answer_with_energy_created(tmp_path, solver):
     case = thrown_net(t_end=0.6, **solver)
     code = never_creates_energy_or_says_so(tmp_path, case)
-    if solver.get("rho_inf", 0.8) <= 0.25:
+    if solver["integrator"] != "newmark" or solver.get("rho_inf", 0.8) <= 0.25:
         assert code == 0  # these lose energy only (measured above)
 
 
