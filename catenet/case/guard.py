@@ -5,7 +5,7 @@ forces, extent), which the arithmetic must carry."""
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from catenet.case.keys import MAGNITUDE, Checker, show, too_large
 from catenet.case.kinds import GeometryConfig
@@ -17,6 +17,11 @@ from catenet.model.memory import (  # noqa: F401  (re-exported)
     estimate_memory,
     physical_memory,
 )
+
+if TYPE_CHECKING:
+    from catenet.case.material import MaterialConfig
+    from catenet.case.parse import Case
+    from catenet.case.sections import LoadConfig
 
 
 def estimate_size(geometry: GeometryConfig) -> tuple[float, float, float, str]:
@@ -57,27 +62,44 @@ ENERGY_SCALE = 1e250
 RATIO = 1e150
 
 
-def _given(section: Any, names: tuple[str, ...], prefix: str) -> str:
-    """``prefix.key = value`` for each of ``names`` given (not None, not zero)."""
+def _given(keys: tuple[tuple[str, Any], ...], prefix: str) -> str:
+    """``prefix.key = value`` for each (key, value) of ``keys`` given (not None, not zero)."""
     parts = [
-        f"{prefix}.{name} = {show(getattr(section, name))}"
-        for name in names
-        if getattr(section, name, None) not in (None, 0.0, ())
+        f"{prefix}.{name} = {show(value)}" for name, value in keys if value not in (None, 0.0, ())
     ]
     return ", ".join(parts) or prefix
 
 
-def guard_material(case: Any) -> None:
+def _stiffness_keys(mat: MaterialConfig) -> str:
+    """The [material] keys given that make EA, as a message names them."""
+    keys = (("E", mat.E), ("radius", mat.radius), ("area", mat.area), ("EA", mat.EA))
+    return _given((*keys, ("table", mat.table)), "material")
+
+
+def _mass_keys(mat: MaterialConfig) -> str:
+    """The [material] keys given that make the mass per length, as a message names them."""
+    return _given(
+        (("density", mat.density), ("radius", mat.radius), ("area", mat.area)), "material"
+    )
+
+
+def _load_keys(load: LoadConfig) -> str:
+    """The [load] keys given that make the node forces, as a message names them."""
+    keys = (("pressure", load.pressure), ("gravity", load.gravity))
+    return _given((*keys, ("points", load.points), ("lines", load.lines)), "load")
+
+
+def guard_material(case: Case) -> None:
     """ConfigError when the material's EA (E times the cross-section) or mass per length
     (density times it) is beyond MAGNITUDE, naming the keys given; before any net is built."""
     mat = case.material
     problems = []
     ea = mat.axial_stiffness
     if ea is not None and not abs(ea) <= MAGNITUDE:
-        keys = _given(mat, ("E", "radius", "area", "EA", "table"), "material")
+        keys = _stiffness_keys(mat)
         problems.append(f"{keys}: EA = {ea:.3g} N: must be within {too_large()}")
     if not abs(mat.line_density) <= MAGNITUDE:
-        keys = _given(mat, ("density", "radius", "area"), "material")
+        keys = _mass_keys(mat)
         problems.append(
             f"{keys}: mass per length {mat.line_density:.3g} kg/m: must be within {too_large()}"
         )
@@ -87,7 +109,7 @@ def guard_material(case: Any) -> None:
         raise ConfigError(problems)
 
 
-def guard_scales(case: Any, net: Any, loads: Any) -> None:
+def guard_scales(case: Case, net: Any, loads: Any) -> None:
     """ConfigError when the scene's numbers, each within MAGNITUDE, combine into forces
     or energies the arithmetic cannot carry: EA (from E and the cross-section), the
     stiffness EA / l0 over the net's extent, the node forces (pressure over the area,
@@ -95,7 +117,7 @@ def guard_scales(case: Any, net: Any, loads: Any) -> None:
     import numpy as np
 
     problems: list[str] = []
-    material = _given(case.material, ("E", "radius", "area", "EA", "table"), "material")
+    material = _stiffness_keys(case.material)
     ea = np.abs(net.EA)
     if ea.size and not float(ea.max()) <= MAGNITUDE:
         problems.append(f"{material}: EA = {float(ea.max()):.3g} N: must be within {too_large()}")
@@ -119,7 +141,7 @@ def guard_scales(case: Any, net: Any, loads: Any) -> None:
             f"their ratio is beyond {RATIO:.0e} (strains no arithmetic carries); check the units"
         )
     if not (f_max <= FORCE_SCALE and f_max * extent <= ENERGY_SCALE):
-        load = _given(case.load, ("pressure", "gravity", "points", "lines"), "load")
+        load = _load_keys(case.load)
         masses = ", material.density" if case.material.density else ""
         problems.append(
             f"{load}{masses}: node forces of up to {f_max:.3g} N over the net's extent "

@@ -19,12 +19,15 @@ import difflib
 import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from catenet.case.written import WrittenFloat, WrittenInt, as_written_float
 from catenet.model.limits import MAGNITUDE, MAX_COUNT, carried, too_large  # noqa: F401
+
+if TYPE_CHECKING:  # the geometry kinds declare their keys here
+    from catenet.case.kinds.base import GeometryConfig
 
 
 class _Marker:
@@ -224,7 +227,7 @@ class Checker:
             return self.bad(path, v, f"{need}, each within {too_large()}")
         return tuple(values)
 
-    def node_ref(self, v: Any, path: str, kind: Any) -> Any:
+    def node_ref(self, v: Any, path: str, kind: type[GeometryConfig] | None) -> Any:
         """A node index (checked against the node count later) or a node name of the
         geometry kind (its config class; None when the geometry is broken)."""
         names = kind.node_names if kind is not None else ()
@@ -234,7 +237,7 @@ class Checker:
                 return BAD
             if v in names:
                 return v
-            if getattr(kind, "node_sets", False) and v.strip():
+            if kind.node_sets and v.strip():
                 return v  # a node set of the geometry: checked against its topology
             return self.bad(path, v, f"must be a node index{alts} (geometry.kind = {kind.kind!r})")
         i = as_int(v)

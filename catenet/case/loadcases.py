@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from catenet.case.keys import BAD, Checker, Context, Declared, as_float, key, parse_table, show
-from catenet.case.sections import LoadConfig
+from catenet.case.sections import LoadConfig, SolverConfig
 
 #: A name usable as an HDF5 group (/cases/<name>) and a file name part.
 NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]*$")
@@ -154,7 +154,8 @@ def _unique(ck: Checker, items: list, what: str, taken: Mapping[str, str]) -> No
 
 def check_method(ck: Checker, cases: Any, combos: Any, solver: Any, density: Any) -> None:
     """Load cases are static analyses from the base state; gravity in one needs mass."""
-    if (cases or combos) and getattr(solver, "method", "static") == "dynamic":
+    dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+    if (cases or combos) and dynamic:
         ck.add(
             "solver.method = 'dynamic': [[load_case]] and [[combination]] are static "
             "analyses from the base state: set solver.method = 'static'"

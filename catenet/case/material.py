@@ -35,7 +35,8 @@ def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     try:
         table_rows(v, path=path)
     except (ConfigError, TypeError, ValueError) as exc:
-        problems = getattr(exc, "problems", None) or [f"{path} = {show(v)}: {exc}"]
+        own = exc.problems if isinstance(exc, ConfigError) else []
+        problems = own or [f"{path} = {show(v)}: {exc}"]
         ck.problems.extend(problems)
         return BAD
     return tuple((float(a), float(b)) for a, b in v)

@@ -35,6 +35,7 @@ from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
     SHAPED,
+    MeshObstacle,
     Shaped,
     _accuracy,
     _distance,
@@ -60,7 +61,7 @@ class PlaneObstacle(Shaped, Declared):
 
     @property
     def free(self) -> bool:
-        """A plane is never a free body."""
+        """A plane is never a free body (a sphere, box, capsule, cylinder or mesh may be)."""
         return False
 
     def check(self, ck: Checker, path: str) -> None:
@@ -167,7 +168,7 @@ def parse_obstacles(ck: Checker, value: Any, ctx: Context, base_dir=None) -> tup
         parsed = parse_table(ck, {k2: v for k2, v in t.items() if k2 in names(cls)}, cls, path, ctx)
         if parsed is not BAD:
             parsed.check(ck, path)
-            if hasattr(parsed, "resolve"):  # a mesh reads its file
+            if isinstance(parsed, MeshObstacle):  # a mesh reads its file
                 parsed = parsed.resolve(ck, path, base_dir)
         out.append(parsed)
     return BAD if BAD in out else tuple(out)

@@ -11,8 +11,11 @@ a path, a turning shape) or is a free body, an initial velocity, or no damping
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
+from catenet.case.obstacles import SphereObstacle
+from catenet.case.sections import LoadConfig, SolverConfig, SupportsConfig
 from catenet.solver.relax import REST
 
 #: solver.t_end's default where something depends on time [s].
@@ -25,20 +28,21 @@ def time_dependence(load: Any, supports: Any, solver: Any, obstacles: Any, masse
     for path, history in _histories(load):
         if history is not None:
             return f"{path}.history"
-    for k, move in enumerate(getattr(supports, "moves", ()) or ()):
+    moves = supports.moves if isinstance(supports, SupportsConfig) else ()
+    for k, move in enumerate(moves):
         if move.history is not None:
             return f"supports.move[{k}].history"
         if move.duration > 0:
             return f"supports.move[{k}].duration"
     for k, obs in enumerate(obstacles if isinstance(obstacles, tuple) else ()):
-        if getattr(obs, "free", False):
+        if obs.free:
             return f"obstacle[{k}] (a free body)"
-        if getattr(obs, "moves", False) or getattr(obs, "rigid_motion", False):
+        if (isinstance(obs, SphereObstacle) and obs.moves) or obs.rigid_motion:
             return f"obstacle[{k}] (it moves)"
     for k, m in enumerate(masses if isinstance(masses, tuple) else ()):
         if m.velocity is not None:
             return f"mass[{k}].velocity"
-    if getattr(solver, "damping", 1.0) == 0:
+    if isinstance(solver, SolverConfig) and solver.damping == 0:
         return "solver.damping = 0"
     return ""
 
@@ -49,11 +53,17 @@ def default_t_end(load: Any, supports: Any, solver: Any, obstacles: Any, masses:
     return T_END if time_dependence(load, supports, solver, obstacles, masses) else REST
 
 
-def _histories(load: Any):
-    """(key path, history) of the load and each of its point, line and area loads."""
-    if not hasattr(load, "history"):
+def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:
+    """(key path, history) of the load and each of its point, line and area loads (none
+    for a load that failed its checks)."""
+    if not isinstance(load, LoadConfig):
         return
     yield "load", load.history
-    for name, items in (("point", load.points), ("line", load.lines), ("area", load.areas)):
-        for k, item in enumerate(items):
-            yield f"load.{name}[{k}]", item.history
+    parts = (
+        ("point", [point.history for point in load.points]),
+        ("line", [line.history for line in load.lines]),
+        ("area", [area.history for area in load.areas]),
+    )
+    for name, histories in parts:
+        for k, history in enumerate(histories):
+            yield f"load.{name}[{k}]", history

@@ -222,11 +222,19 @@ class Net:
             return True
         if other is None or self.bodies != other.bodies:
             return False
-        arrays = ("nodes", "edges", "rest_length", "EA", "fixed", "line_density")
-        if not all(_equal(getattr(self, a), getattr(other, a)) for a in arrays):
+        arrays = (
+            (self.nodes, other.nodes),
+            (self.edges, other.edges),
+            (self.rest_length, other.rest_length),
+            (self.EA, other.EA),
+            (self.fixed, other.fixed),
+            (self.line_density, other.line_density),
+        )
+        if not all(_equal(mine, theirs) for mine, theirs in arrays):
             return False
         a, b = self.law, other.law
-        if not all(_equal(getattr(a, k), getattr(b, k)) for k in ("kind", "params", "table")):
+        laws = ((a.kind, b.kind), (a.params, b.params), (a.table, b.table))
+        if not all(_equal(mine, theirs) for mine, theirs in laws):
             return False
         if not _equal(a.tension_only, b.tension_only) or a.smooth != b.smooth:
             return False

@@ -25,10 +25,16 @@ cable's ``peak_tension``, its time and edge).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from catenet.model import measures
-from catenet.model.net import Net
+from catenet.model.net import Loads, Net
+
+if TYPE_CHECKING:  # a scene and its solved state, from the layers above
+    from catenet.scene.scene import Scene
+    from catenet.solver.result import Result
 
 # the summary's scalars a sweep table carries (``flat`` names: a vector's components)
 COLUMNS = (
@@ -271,7 +277,7 @@ def probe_of(scene, x: np.ndarray) -> tuple[int, bool]:
     return int(scene.probe), False
 
 
-def summarize_result(scene, res, loads=None) -> dict:
+def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> dict:
     """``summarize`` of a solver Result of a scene (net, probe, cables), with its peaks;
     per cable under ``cables`` when the scene has cables. Also ``applied_resultant`` (3,)
     [N]: the resultant of the loads acting in the state (``loads``, default the
@@ -283,10 +289,10 @@ def summarize_result(scene, res, loads=None) -> dict:
         res.x,
         res.tension,
         res.reaction,
-        getattr(res, "contact_force", None),
+        res.contact_force,
         probe,
         probe_auto=auto,
-        peaks=getattr(res, "peaks", None),
+        peaks=res.peaks,
     )
     out["applied_resultant"] = _applied(scene, res, loads)
     chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
@@ -303,22 +309,22 @@ def summarize_result(scene, res, loads=None) -> dict:
             res.tension,
             cables.edge,
             cables.names,
-            peaks=getattr(res, "peaks", None),
+            peaks=res.peaks,
         )
     return out
 
 
-def _applied(scene, res, loads=None) -> list[float]:
+def _applied(scene: Scene, res: Result, loads: Loads | None = None) -> list[float]:
     """The resultant of the applied loads in the state ``res`` [N] (a static state's at
     its load factor, a dynamic one's at its time)."""
     loads = scene.loads if loads is None else loads
     net = scene.net
     try:
-        if getattr(res, "v", None) is not None:
+        if res.v is not None:
             force = loads.external_force(net, time=float(res.time))
         else:  # a run's load factor (a Python solve's 0: its full load; a failure's own)
             factor = float(res.time)
-            if factor == 0.0 and getattr(res, "converged", True):
+            if factor == 0.0 and res.converged:
                 factor = 1.0
             force = loads.external_force(net, factor)
     except (TypeError, ValueError):

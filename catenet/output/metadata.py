@@ -6,15 +6,20 @@ from __future__ import annotations
 
 import math
 import platform
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.model import measures, summary
 
+if TYPE_CHECKING:
+    from catenet.scene.scene import Scene
+    from catenet.solver.result import Result
+
 __all__ = ["environment", "result_attrs"]
 
 
-def _with_tension(res, tension):
+def _with_tension(res: Result, tension: np.ndarray) -> Result:
     """The Result with the tension the file stores (a copy only when they differ)."""
     if res.tension is tension:
         return res
@@ -61,7 +66,7 @@ def _version(name: str) -> str:
     return dist.version
 
 
-def result_attrs(res, scene, tension=None) -> dict:
+def result_attrs(res: Result, scene: Scene, tension: np.ndarray | None = None) -> dict:
     """The /result attributes of a Result: contract §5 plus what a user reads first:
     the summary's numbers (``catenet.model.summary.summarize``; a vector v as v_x, v_y, v_z; -1
     for no node or edge, the per-cable table in datasets); ``tension``: the stored one
@@ -74,10 +79,10 @@ def result_attrs(res, scene, tension=None) -> dict:
     residual = float(res.residual)
     strain = float(res.max_strain)
     timing = res.timing
-    nested = getattr(res, "nested", None)
+    nested = res.nested
     return {
         # an unstable equilibrium is refused (exit 1): never converged in the file either
-        "converged": bool(res.converged) and getattr(res, "stable", None) is not False,
+        "converged": bool(res.converged) and res.stable is not False,
         "iterations": int(res.iterations),
         # a nested start's Newton iterations on the coarse net (0: none; not in iterations)
         "nested_iterations": 0 if nested is None else int(nested.iterations),
@@ -88,14 +93,14 @@ def result_attrs(res, scene, tension=None) -> dict:
         "equilibrium": bool(res.equilibrium),
         "message": str(res.message or ""),
         # how the solve ended: equilibrium, ... (catenet.solver.result.Outcome); "" unknown
-        "outcome": str(res.outcome) if getattr(res, "outcome", None) is not None else "",
+        "outcome": str(res.outcome) if res.outcome is not None else "",
         "time": float(res.time),
         **numbers,
         "delta_over_L": delta / float(scene.size),
         "size": float(scene.size),
         "max_strain": strain if math.isfinite(strain) else 0.0,
         # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
-        "stable": -1 if getattr(res, "stable", None) is None else int(bool(res.stable)),
+        "stable": -1 if res.stable is None else int(bool(res.stable)),
         # stable | unstable | collapsed | post-collapse (catenet.solver.stability); a
         # transient (a dynamic run that ran its time) is "not judged"
         "stability": _stability(res),
@@ -108,20 +113,19 @@ def result_attrs(res, scene, tension=None) -> dict:
     }
 
 
-def _stability(res) -> str:
+def _stability(res: Result) -> str:
     """The /result ``stability`` attr: the solve's verdict, else one from ``stable``."""
-    verdict = str(getattr(res, "stability", "") or "")
+    verdict = str(res.stability or "")
     if verdict:
         return verdict
-    stable = getattr(res, "stable", None)
-    if stable is False:
+    if res.stable is False:
         return "unstable"
-    return "stable" if getattr(res, "equilibrium", False) else "not judged"
+    return "stable" if res.equilibrium else "not judged"
 
 
-def _energy(res) -> dict:
+def _energy(res: Result) -> dict:
     """``energy_<column>`` attrs of a dynamic run's final balance [J] (none for static)."""
-    row = getattr(res, "energy", None)
+    row = res.energy
     if row is None:
         return {}
     from catenet.solver.energy import COLUMNS

@@ -170,9 +170,14 @@ def read_modes(path: str | Path) -> StoredModes | None:
         return StoredModes(
             array("frequency"), array("period"), array("shape"), array("effective_mass"),
             array("participation"), array("direction_share"), array("x"),
-            attrs={k: (v.item() if np.ndim(v) == 0 and hasattr(v, "item") else v)
-                   for k, v in g.attrs.items()},
+            attrs={k: _plain(v) for k, v in g.attrs.items()},
         )  # fmt: skip
+
+
+def _plain(value):
+    """An attribute as Python has it: a NumPy scalar (or 0-d array) as its Python value."""
+    scalar = isinstance(value, (np.generic, np.ndarray)) and np.ndim(value) == 0
+    return value.item() if scalar else value
 
 
 def add_to_sidecar(side: Path, h5name: str, n_nodes: int, n_edges: int, count: int, frames: int):

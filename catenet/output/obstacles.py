@@ -55,10 +55,16 @@ import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.output.reader import open_result, trajectory_length
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
+    from catenet.scene.scene import Scene
+    from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
@@ -76,14 +82,14 @@ def frame_cap(n_nodes: int) -> int:
     return max(FRAME_VERTICES, int(n_nodes))
 
 
-def frame_values(case, n_nodes: int) -> int:
+def frame_values(case: Case, n_nodes: int) -> int:
     """The float64 values per trajectory frame that the moving obstacles of ``case`` add
     (pose and surface; at most ``frame_cap`` vertices each)."""
     from catenet.output.surfaces import surface
 
     cap, total = frame_cap(n_nodes), 0
-    for k, obs in enumerate(getattr(case, "obstacles", ()) or ()):
-        moves = getattr(obs, "rigid_motion", False) or getattr(obs, "free", False)
+    for k, obs in enumerate(case.obstacles):
+        moves = obs.rigid_motion or obs.free
         shape = surface(obs.to_dict(), k) if moves else None
         if shape is not None:  # (a moving sphere is a node of the net: no surface)
             total += 3 * min(len(shape.vertices), cap) + 12
@@ -204,9 +210,8 @@ class Obstacles:
     obstacles): ``write_mesh``, ``create_trajectory``, ``append``, ``write_result`` and
     ``grids`` (for the sidecar)."""
 
-    def __init__(self, scene):
-        case = scene.case
-        obstacles = getattr(case, "obstacles", ()) or ()
+    def __init__(self, scene: Scene):
+        obstacles = scene.case.obstacles if scene.case is not None else ()
         self.items = []
         self.moving = []
         if not obstacles:
@@ -214,7 +219,7 @@ class Obstacles:
         from catenet.output.surfaces import surface
 
         net = scene.net
-        cover = net.nodes[: getattr(net, "n_net", net.n_nodes)]
+        cover = net.nodes[: net.n_net]
         cap = frame_cap(net.n_nodes)
         free = {b.obstacle: b for b in scene.rigid}
         for k, obs in enumerate(obstacles):
@@ -301,12 +306,12 @@ class Obstacles:
                 sets[3][n0:n1] = np.array([v for v, _ in motion])
                 sets[4][n0:n1] = np.array([w for _, w in motion])
 
-    def write_result(self, result, t: float, res=None) -> None:
+    def write_result(self, result, t: float, res: Result | None = None) -> None:
         """/result/obstacles: the moving obstacles at the final time t (the free bodies
         in the result ``res``'s state)."""
         if not self.moving or not math.isfinite(t):
             return
-        frame = {} if res is None else {"x": res.x, "v": getattr(res, "v", None)}
+        frame = {} if res is None else {"x": res.x, "v": res.v}
         for item in self.moving:
             if item.body is not None and res is None:
                 continue

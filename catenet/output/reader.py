@@ -108,6 +108,13 @@ def _complete(g, names, k: int) -> bool:
 DAMAGED = (OSError, RuntimeError, TypeError, ValueError, KeyError, AttributeError, IndexError)
 
 
+def is_dataset(obj) -> bool:
+    """Whether ``obj`` (what an open file holds at a name, or None) is a dataset."""
+    import h5py
+
+    return isinstance(obj, h5py.Dataset)
+
+
 def damaged(path, exc: BaseException) -> ConfigError:
     """The ConfigError for a result file that is damaged or not laid out as catenet's."""
     if isinstance(exc, ConfigError):
@@ -348,7 +355,7 @@ def _dataset(h5, name: str, path: Path, shape_tail: tuple, dtype, problems: list
     obj = h5.get(name)
     if obj is None:
         return None
-    if not hasattr(obj, "shape"):
+    if not is_dataset(obj):
         problems.append(f"{path}: {name} is a group: must be a dataset")
         return None
     arr = np.asarray(obj[()])
@@ -390,7 +397,7 @@ def read_result(path: str | Path) -> ResultFile:
             reaction = h5.get("/result/reaction")
             reaction = (
                 np.asarray(reaction, dtype=np.float64)
-                if nodes is not None and getattr(reaction, "shape", None) == (len(nodes), 3)
+                if nodes is not None and is_dataset(reaction) and reaction.shape == (len(nodes), 3)
                 else None
             )
             rest = _dataset(h5, "/mesh/rest_length", path, (), np.float64, problems)
@@ -398,7 +405,7 @@ def read_result(path: str | Path) -> ResultFile:
             time = _dataset(h5, "/trajectory/time", path, (), np.float64, problems)
             traj = h5.get("/trajectory/x")
             n_frames = 0
-            if traj is not None and hasattr(traj, "shape") and traj.ndim == 3:
+            if is_dataset(traj) and traj.ndim == 3:
                 n_frames = min(traj.shape[0], trajectory_length(h5))
             elif traj is not None:
                 problems.append(f"{path}: /trajectory/x must have shape (T, N, 3)")

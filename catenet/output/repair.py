@@ -24,6 +24,7 @@ from catenet.output.reader import (
     LIBVER,
     TRAJECTORY,
     damaged,
+    is_dataset,
     open_result,
     trajectory_length,
 )
@@ -67,7 +68,7 @@ def _copy_frames(src, dst, n: int) -> None:
     the moving obstacles') into the empty group ``dst``, extendable as the writer made
     them."""
     for key, ds in src.items():
-        if not hasattr(ds, "shape"):
+        if not is_dataset(ds):
             _copy_frames(ds, dst.create_group(key), n)
             continue
         copy = dst.create_dataset(

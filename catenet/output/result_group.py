@@ -8,10 +8,16 @@ reads first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from catenet.model import summary
 from catenet.output.metadata import result_attrs
+
+if TYPE_CHECKING:
+    from catenet.scene.scene import Scene
+    from catenet.solver.result import Result
 
 PEAKS = (
     "peak_tension",
@@ -24,9 +30,9 @@ PEAKS = (
 
 def write_result_group(
     h5,
-    scene,
-    res,
-    tension,
+    scene: Scene,
+    res: Result,
+    tension: np.ndarray,
     attrs: dict,
     velocities: bool,
     accelerations: bool,
@@ -41,7 +47,7 @@ def write_result_group(
     g.create_dataset("x", data=np.asarray(res.x, dtype=np.float64))
     g.create_dataset("tension", data=tension)
     cables = scene.cables
-    peaks = getattr(res, "peaks", None)
+    peaks = res.peaks
     if cables is not None:
         per = summary.cable_summary(
             scene.net, res.x, tension, cables.edge, cables.names, peaks=peaks
@@ -61,14 +67,14 @@ def write_result_group(
             g.create_dataset(key, data=value)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
-    contact = getattr(res, "contact_force", None)
+    contact = res.contact_force
     if contact is None or not np.all(np.isfinite(contact)):
         contact = np.zeros_like(res.x)
     g.create_dataset("contact_force", data=np.asarray(contact, dtype=np.float64))
-    v = getattr(res, "v", None)
+    v = res.v
     if velocities and v is not None and np.all(np.isfinite(v)):
         g.create_dataset("v", data=np.asarray(v, dtype=np.float64))
-    a = getattr(res, "a", None)
+    a = res.a
     if accelerations and a is not None and np.all(np.isfinite(a)):
         g.create_dataset("a", data=np.asarray(a, dtype=np.float64))
     for key, value in {**result_attrs(res, scene, tension), **attrs}.items():

@@ -29,6 +29,7 @@ import os
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,6 +39,7 @@ from catenet.output.bodies import write_bodies
 from catenet.output.chunks import FILTERS, encode, filters
 from catenet.output.files import (
     WriteLock,
+    check_finite,
     check_free_space,
     check_output_path,
     copy_atomically,
@@ -47,13 +49,8 @@ from catenet.output.files import (
     publish,
     remove_spares,
     spare_paths,
+    utf8,
     write_image,
-)
-from catenet.output.files import (
-    check_finite as _check_finite,
-)
-from catenet.output.files import (
-    utf8 as _utf8,
 )
 from catenet.output.metadata import environment
 from catenet.output.obstacles import Obstacles
@@ -61,6 +58,10 @@ from catenet.output.reader import LIBVER, TRAJECTORY
 from catenet.output.result_group import write_result_group
 from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 from catenet.solver.energy import COLUMNS as ENERGY_COLUMNS
+
+if TYPE_CHECKING:
+    from catenet.scene.scene import Scene
+    from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
@@ -103,7 +104,7 @@ class ResultWriter:
     def __init__(
         self,
         path: str | Path,
-        scene,
+        scene: Scene,
         *,
         every: int,
         xdmf: bool = True,
@@ -120,8 +121,7 @@ class ResultWriter:
         self.every = int(every)
         self.xdmf = bool(xdmf)
         if velocities is None:
-            solver = getattr(scene.case, "solver", None)
-            velocities = getattr(solver, "method", "static") == "dynamic"
+            velocities = scene.case is not None and scene.case.solver.method == "dynamic"
         self.velocities = bool(velocities)
         self.accelerations = bool(accelerations)
         # dynamic runs (they keep velocities) keep their energy balance per frame
@@ -217,14 +217,14 @@ class ResultWriter:
         h5.attrs["catenet_version"] = env["catenet"]
         h5.attrs["case"] = scene.case.to_toml() if scene.case is not None else ""
         h5.attrs["created"] = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
-        title = getattr(scene.case, "title", "")
+        title = scene.case.title if scene.case is not None else ""
         if title:
             h5.attrs["title"] = title
         for name, ver in env.items():
             if name != "catenet" and ver:
                 h5.attrs[f"{name}_version"] = ver
         for key, value in self.attrs.items():
-            h5.attrs[key] = _utf8(value)
+            h5.attrs[key] = utf8(value)
         mesh = h5.create_group("mesh")
         mesh.create_dataset("nodes", data=np.asarray(net.nodes, dtype=np.float64))
         mesh.create_dataset("edges", data=np.asarray(net.edges, dtype=np.int64))
@@ -317,7 +317,7 @@ class ResultWriter:
         if not math.isfinite(float(t)):
             raise OutputError(f"refusing to write a frame at t = {t!r}: the time must be finite")
         for name, arr in data.items():
-            _check_finite(name, arr, float(t))
+            check_finite(name, arr, float(t))
         self._pending.append((float(t), data))
         self._pending_bytes += sum(arr.nbytes for arr in data.values())
         if not last and (
@@ -464,19 +464,19 @@ class ResultWriter:
                 n_edges=net.n_edges,
                 times=self.times,
                 velocities=self.velocities,
-                bodies=len(getattr(self.scene, "bodies", ())),  # the balls of /mesh/bodies
+                bodies=len(self.scene.bodies),  # the balls of /mesh/bodies
                 obstacles=self.obstacles.grids(),
             )
         except OSError as exc:
             log.warning("%s: cannot write the XDMF sidecar: %s", self.sidecar, describe(exc))
 
     # --- result ----------------------------------------------------------------------------
-    def result(self, res, **attrs) -> None:
+    def result(self, res: Result, **attrs) -> None:
         """Writes /result (final state and its attributes; ``attrs`` add to them) with the
         pending frames. After a failed write, saves root attributes, mesh and /result to a
         temporary file and raises OutputError naming it (with ``.result`` and
         ``.saved_to`` set)."""
-        _check_finite("x", res.x, float(getattr(res, "time", 0.0)))
+        check_finite("x", res.x, float(res.time))
         if self.error is None:
             if not self._open:
                 raise OutputError(f"{self.path}: the writer is not open")
@@ -504,14 +504,14 @@ class ResultWriter:
         err.saved_to = self.saved_to
         raise err
 
-    def _write_result(self, h5, res, attrs: dict) -> None:
+    def _write_result(self, h5, res: Result, attrs: dict) -> None:
         tension = self._stored_tension(res.x, res.tension)
         group = write_result_group(
             h5, self.scene, res, tension, attrs, self.velocities, self.accelerations
         )
-        self.obstacles.write_result(group, float(getattr(res, "time", math.nan)), res)
+        self.obstacles.write_result(group, float(res.time), res)
 
-    def _save_elsewhere(self, res, attrs: dict) -> Path:
+    def _save_elsewhere(self, res: Result, attrs: dict) -> Path:
         fd, name = tempfile.mkstemp(prefix=f"{self.path.stem}-", suffix=".h5")
         os.close(fd)
         tmp = Path(name)

@@ -7,12 +7,17 @@ Matplotlib is imported by the caller (``catenet.plot.figure``); nothing here imp
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.output.reader import ResultFile
 
 SLACK_COLOUR = "darkorange"
 
 
-def slack_edges(res) -> np.ndarray:
+def slack_edges(res: ResultFile) -> np.ndarray:
     """Edges that are slack in the result (bool (M,)): no tension and shorter than their
     rest length (a strut in compression carries a negative tension: not slack)."""
     mesh = res.mesh
@@ -23,13 +28,13 @@ def slack_edges(res) -> np.ndarray:
     return shorter & (res.tension == 0.0)
 
 
-def wants_plan(res) -> bool:
+def wants_plan(res: ResultFile) -> bool:
     """A plan view for graphs (any net not the paper's square net or single cable)."""
     kind = res.case.get("geometry", {}).get("kind") if res.case else None
     return kind == "graph"
 
 
-def draw_plan(fig, ax, res, scale: float) -> None:
+def draw_plan(fig, ax, res: ResultFile, scale: float) -> None:
     """Plan view (x-y): the deformed net coloured by each edge's mean displacement |x - X|
     [m], the undeformed net dashed, supports as red dots, each support's reaction as an
     arrow of its horizontal part (the largest drawn at 15 % of the net's span), the node
@@ -58,7 +63,7 @@ def draw_plan(fig, ax, res, scale: float) -> None:
     if fixed is not None and fixed.any():
         f = x[fixed]
         ax.plot(f[:, 0], f[:, 1], "o", color="red", ms=3, zorder=5, label="supports")
-        r = getattr(res, "reaction", None)
+        r = res.reaction
         if r is not None:
             r = r[fixed]
             size = np.linalg.norm(r, axis=1)

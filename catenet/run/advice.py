@@ -10,8 +10,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
+    from catenet.case.sections import SolverConfig
 
 #: A trajectory estimated above this many bytes is warned about before the run.
 WARN_BYTES = 1 << 30
@@ -26,11 +31,20 @@ TYPICAL_REST_STEPS = 300
 #: Newton iterations of one dynamic time step (``catenet.solver.dynamic.solve_dynamic``).
 DYNAMIC_MAX_ITER = 25
 
-_STATIC_ONLY = ("steps", "max_iter")
-_DYNAMIC_ONLY = ("dt", "damping", "t_end", "integrator", "rho_inf", "max_steps")
+
+def _dynamic_only(solver: SolverConfig) -> dict[str, object]:
+    """The [solver] keys only dynamic runs read, with their values in ``solver``."""
+    return {
+        "dt": solver.dt,
+        "damping": solver.damping,
+        "t_end": solver.t_end,
+        "integrator": solver.integrator,
+        "rho_inf": solver.rho_inf,
+        "max_steps": solver.max_steps,
+    }
 
 
-def ignored_solver_keys(solver) -> list[str]:
+def ignored_solver_keys(solver: SolverConfig) -> list[str]:
     """Messages for the [solver] keys that ``solver.method`` ignores and that the case sets
     to something else than their default (a default is ignored silently)."""
     default = type(solver)()
@@ -55,9 +69,9 @@ def ignored_solver_keys(solver) -> list[str]:
                 "halved when they do not suffice)"
             )
     else:
-        for key in _DYNAMIC_ONLY:
-            value = getattr(solver, key)
-            if value != getattr(default, key):
+        defaults = _dynamic_only(default)
+        for key, value in _dynamic_only(solver).items():
+            if value != defaults[key]:
                 out.append(
                     f"solver.{key} = {value!r}: ignored with solver.method = {method!r} (only "
                     "dynamic runs use it; set solver.method = 'dynamic' or remove the key)"
@@ -69,7 +83,7 @@ def ignored_solver_keys(solver) -> list[str]:
 RHO_INF_CONTACT = 0.5
 
 
-def newmark_contact(case) -> list[str]:
+def newmark_contact(case: Case) -> list[str]:
     """The warning of a newmark run with contact: an ``[[obstacle]]`` (fixed or a free
     body) or ``solver.self_contact``.
 
@@ -87,7 +101,7 @@ def newmark_contact(case) -> list[str]:
     solver = case.solver
     if solver.method != "dynamic" or solver.integrator != "newmark":
         return []
-    if not case.obstacles and not getattr(solver, "self_contact", False):
+    if not case.obstacles and not solver.self_contact:
         return []
     head = f"solver.integrator = 'newmark' with contact (solver.rho_inf = {solver.rho_inf!r}): "
     if solver.rho_inf > RHO_INF_CONTACT:
@@ -105,7 +119,7 @@ def newmark_contact(case) -> list[str]:
     return [head + what + "solver.integrator = 'implicit_euler' (docs/howto/dynamic-runs.md)"]
 
 
-def ignored_histories(case) -> list[str]:
+def ignored_histories(case: Case) -> list[str]:
     """Messages for what a static run ignores of a case's time dependence: every load's
     and support motion's ``history`` (a static run applies each load and displacement in
     full, at the load factor 1 of its last load step) and the initial velocities of
@@ -113,8 +127,12 @@ def ignored_histories(case) -> list[str]:
     if case.solver.method != "static":
         return []
     paths = ["load.history"] if case.load.history is not None else []
-    for name, items in (("load.point", case.load.points), ("load.line", case.load.lines)):
-        paths += [f"{name}[{k}].history" for k, it in enumerate(items) if it.history is not None]
+    loads = (
+        ("load.point", [point.history for point in case.load.points]),
+        ("load.line", [line.history for line in case.load.lines]),
+    )
+    for name, histories in loads:
+        paths += [f"{name}[{k}].history" for k, h in enumerate(histories) if h is not None]
     moves = case.supports.moves
     paths += [f"supports.move[{k}].history" for k, m in enumerate(moves) if m.history is not None]
     out = [
@@ -123,7 +141,7 @@ def ignored_histories(case) -> list[str]:
         "solver.method = 'dynamic')"
         for path in paths
     ]
-    for k, m in enumerate(getattr(case, "masses", ())):
+    for k, m in enumerate(case.masses):
         if m.velocity is not None:
             out.append(
                 f"mass[{k}].velocity = {list(m.velocity)}: ignored with solver.method = "
@@ -170,7 +188,7 @@ class Trajectory:
         return max(1, math.ceil(self.frames * self.every / every))
 
 
-def trajectory(case, net, t0: float = 0.0) -> Trajectory | None:
+def trajectory(case: Case, net, t0: float = 0.0) -> Trajectory | None:
     """The size of the trajectory ``case`` will write for ``net`` (None: no trajectory,
     output.every = 0). Per frame: positions (N x 3), tensions (M), velocities (N x 3,
     dynamic), the newmark scheme's accelerations (N x 3), moving obstacles' poses and
@@ -267,25 +285,25 @@ UNIT_NAMES: dict[str, dict[str, str]] = {
 }
 
 
-def unit_slips(case, net) -> list[str]:
+def unit_slips(case: Case, net) -> list[str]:
     """Warnings for material numbers far outside real cable materials (steel, stainless,
     aramid, polyester, polyamide, HMPE, chain) in the case's ``units``: E, density and
     each edge's EA, each with the power of 1000 that would bring it into range."""
-    units = getattr(case, "units", "SI") or "SI"
+    units = case.units or "SI"
     factors = UNIT_FACTORS.get(units, UNIT_FACTORS["SI"])
     names = UNIT_NAMES.get(units, UNIT_NAMES["SI"])
     material = case.material
     found = []
     checks = [
-        ("E", getattr(material, "E", None), "material.E"),
-        ("area", getattr(material, "area", None), "material.area"),
-        ("radius", getattr(material, "radius", None), "material.radius"),
+        ("E", material.E, "material.E"),
+        ("area", material.area, "material.area"),
+        ("radius", material.radius, "material.radius"),
     ]
-    density = getattr(material, "density", None)
+    density = material.density
     if density:
         checks.append(("density", density, "material.density"))
     ea = np.asarray(net.EA, dtype=np.float64)
-    if ea.size and getattr(material, "E", None) is None:  # E's own check says it else
+    if ea.size and material.E is None:  # E's own check says it else
         checks.append(("EA", float(np.min(ea)), "EA (the least of the edges')"))
         checks.append(("EA", float(np.max(ea)), "EA (the largest of the edges')"))
     for quantity, written, key in checks:
@@ -360,7 +378,7 @@ def implausible(net, x: np.ndarray, size: float) -> tuple[str, bool]:
     return "; ".join(parts), extreme
 
 
-def lines_without_catenary(case, scene) -> list[str]:
+def lines_without_catenary(case: Case, scene) -> list[str]:
     """Static runs: the cables (a graph's named cables, or a cable case's one) that lie
     from a support on a frictionless plane (a seabed) to a support above it under
     gravity, and whose unstretched length is at least the span along the plane plus the

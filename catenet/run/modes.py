@@ -18,6 +18,7 @@ import numpy as np
 from catenet.errors import ConfigError, ConvergenceError
 
 if TYPE_CHECKING:  # the solvers load when a case is run
+    from catenet.case.parse import Case
     from catenet.case.scene import Scene
     from catenet.solver.modes import Modes
     from catenet.solver.result import Result
@@ -48,18 +49,19 @@ def check_modes_input(scene, count) -> None:
         )
 
 
-def added_line(case, scene) -> np.ndarray | None:
+def added_line(case: Case, scene: Scene) -> np.ndarray | None:
     """(E,) the added mass of water of each edge, Ca rho_w A l0 [kg] (its cable's
     [material] in a graph with cables, else [material]); None where no material asks
     for it (``material.added_mass``)."""
     from catenet.case.keys import Checker
+    from catenet.case.kinds.graph import GraphConfig
     from catenet.case.material import added_line_mass
 
     net = scene.net
     base = added_line_mass(case.material)
     per_edge = np.full(net.n_edges, base)
     cables = scene.cables
-    listed = getattr(case.geometry, "cables", ())
+    listed = case.geometry.cables if isinstance(case.geometry, GraphConfig) else ()
     if cables is not None and listed:
         from catenet.case.kinds.cables import cable_materials
 

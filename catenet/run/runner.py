@@ -18,12 +18,16 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.run.report import CableSummary, RunReport, RunResult
 from catenet.run.restart import RestartState, read_restart
 from catenet.run.steps import Hooks, NoFile, Solved, run_steps
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
+    from catenet.output.writer import ResultWriter
 
 log = logging.getLogger(__name__)
 
@@ -41,7 +45,7 @@ Progress = Callable[..., None]
 Stop = Callable[[], bool]
 
 
-def output_path(case, out: str | Path | None = None) -> Path | None:
+def output_path(case: Case, out: str | Path | None = None) -> Path | None:
     """The file a run writes: ``out``, else the case's output.file (None: no file)."""
     if out is not None:
         return Path(out)
@@ -49,11 +53,11 @@ def output_path(case, out: str | Path | None = None) -> Path | None:
     return Path(file) if file else None
 
 
-def refuse_formfind(case) -> None:
+def refuse_formfind(case: Case) -> None:
     """A case with a [formfind] table describes a net still to be form-found: running it
     would analyse its starting geometry. ConfigError saying what to do instead."""
-    if getattr(case, "formfind", None) is not None:
-        src = getattr(case, "source", "") or "CASE.toml"
+    if case.formfind is not None:
+        src = case.source or "CASE.toml"
         raise ConfigError(
             f"formfind: {src} is a form-finding case: find its shape with `catenet formfind "
             f"{src} -o OUT.h5`, then run the case OUT.toml it writes"
@@ -79,7 +83,7 @@ class Plan:
     attrs: dict
 
 
-def plan(case, out=None, *, restart=None, scene=None, load_case=None) -> Plan:
+def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> Plan:
     """Everything a user can get wrong, checked before the output file is created (the
     case, the restart file, the output path, the linear backend), and the warnings a case
     earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
@@ -101,7 +105,7 @@ def plan(case, out=None, *, restart=None, scene=None, load_case=None) -> Plan:
     solver = case.solver
     state = read_restart(restart, scene) if restart is not None else None
     if path is not None:
-        source = Path(getattr(case, "source", "") or "")
+        source = Path(case.source or "")
         if source.is_file() and _same_file(path, source):
             raise ConfigError(f"output file {str(path)!r}: is the case file itself")
         if restart is not None and _same_file(path, Path(restart)):
@@ -130,7 +134,7 @@ def plan(case, out=None, *, restart=None, scene=None, load_case=None) -> Plan:
     if state is not None:
         attrs["restart_from"] = str(state.path)
         attrs["restart_time"] = float(state.t)
-    if getattr(case, "source", ""):
+    if case.source:
         attrs["source"] = str(case.source)
     settings = sv.Settings.of(solver, linear=backend)
     return Plan(case, scene, path, state, cases, settings, backend, trajectory, attrs)
@@ -313,11 +317,13 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _remove(writer) -> None:
-    for p in (getattr(writer, "path", None), getattr(writer, "sidecar", None)):
-        if p is not None:
-            try:
-                writer.close()
-                Path(p).unlink(missing_ok=True)
-            except OSError:
-                pass
+def _remove(writer: ResultWriter | NoFile) -> None:
+    """Closes a result file and removes it with its sidecar (a run without a file: nothing)."""
+    if isinstance(writer, NoFile):
+        return
+    for p in (writer.path, writer.sidecar):
+        try:
+            writer.close()
+            p.unlink(missing_ok=True)
+        except OSError:
+            pass

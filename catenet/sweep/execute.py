@@ -178,9 +178,7 @@ def _largest_first(sweep: Sweep, jobs: list[Job]) -> list[Job]:
     """Jobs by estimated cost (nodes x load levels), largest first, so that the workers
     finish together instead of waiting for one large job at the end."""
     case = case_api()
-    estimate = getattr(case, "estimate_size", None)
-    if estimate is None:
-        return jobs
+    estimate = case.estimate_size
 
     def cost(job: Job) -> float:
         try:

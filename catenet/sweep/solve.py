@@ -13,10 +13,14 @@ import logging
 import os
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from catenet.errors import CatenetError, ConfigError
 from catenet.scene import Scene
 from catenet.sweep.jobs import SUMMARY_COLUMNS, Job, Sweep, case_api, mode_columns, overrides
+
+if TYPE_CHECKING:
+    from catenet.solver.result import Result
 
 log = logging.getLogger(__name__)
 
@@ -182,12 +186,13 @@ def _solve_levels(task: dict) -> list[dict]:
                 row["run_file"] = _save_run(Path(task["out"]), task["index"], k, scene, result)
         except (CatenetError, ArithmeticError, ValueError, MemoryError, OSError) as exc:
             row["error"] = _error_text(exc)
-            good = getattr(exc, "last_good", None)  # a catenet error's last good state
+            good = exc.last_good if isinstance(exc, CatenetError) else None
             state = None if good is None else good.x
             if state is not None and ws_net is not None and np.shape(state) == ws_net.nodes.shape:
                 x_prev = np.asarray(state)
             path = []
-            row["iterations"] = int(getattr(exc, "iterations", 0) or 0)
+            spent = exc.iterations if isinstance(exc, CatenetError) else 0
+            row["iterations"] = int(spent or 0)
             log.info("job %s level %s %s: %s", task["index"], k, values, row["error"])
         except Exception as exc:  # an unexpected failure of one case must not end the sweep
             row["error"] = _error_text(exc)
@@ -347,7 +352,7 @@ def _frequencies(scene, ws, result, count: int) -> dict:
     return {f"f{k + 1}": float(f[k]) for k in range(count)}
 
 
-def _save_run(out: Path, index: int, level: int, scene, result) -> str:
+def _save_run(out: Path, index: int, level: int, scene: Scene, result: Result) -> str:
     """The level's HDF5 result file (contract §5, as ``catenet run`` writes it: a
     static equilibrium is the frame at load factor 1) under DIR/runs/; its path relative
     to DIR."""
@@ -355,7 +360,7 @@ def _save_run(out: Path, index: int, level: int, scene, result) -> str:
 
     rel = Path(RUNS_DIR) / f"job{index:05d}-level{level:03d}.h5"
     case = scene.case
-    attrs = {"source": str(getattr(case, "source", "")), "sweep_job": index, "sweep_level": level}
+    attrs = {"source": str(case.source), "sweep_job": index, "sweep_level": level}
     every = int(case.output.every)
     with ResultWriter(out / rel, scene, every=every, xdmf=case.output.xdmf, attrs=attrs) as writer:
         t = float(result.time) if case.solver.method == "dynamic" else 1.0

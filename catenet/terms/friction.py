@@ -30,9 +30,10 @@ tumbling box) friction acts against motion relative to the obstacle's surface: l
 normals and the anchors are taken at the step's start with the obstacle at its pose
 then, and the anchors and normals ride with the obstacle to its pose at the step's end,
 where the step is solved. A node sticking to a moving obstacle is carried along with it;
-a sliding one feels mu_f lambda against its slip over the surface. The normals come from
-the obstacle's ``normals(x)``, else from the direction of its barrier's gradient, the
-gradient of its gap (the only normals that matter are those where the barrier acts).
+a sliding one feels mu_f lambda against its slip over the surface. The normals are a
+plane's normal and a sphere's radial direction, else the direction of the barrier's
+gradient, the gradient of its gap (the only normals that matter are those where the
+barrier acts).
 """
 
 from __future__ import annotations
@@ -52,13 +53,10 @@ from catenet.terms.contact import PlaneBarrier, SphereBarrier
 
 
 def contact_normals(obstacle, x: np.ndarray) -> np.ndarray:
-    """Unit outward normals (K, 3) of ``obstacle`` at its nodes' positions in x: its own
-    ``normals(x)`` where it has one, the plane's normal, the sphere's radial direction,
-    else the direction of the barrier's force (minus its gradient: the gap's gradient)
-    where the barrier acts and +z elsewhere, where no normal force needs one."""
-    own = getattr(obstacle, "normals", None)
-    if own is not None:
-        return np.ascontiguousarray(own(x), dtype=np.float64)
+    """Unit outward normals (K, 3) of ``obstacle`` at its nodes' positions in x: the
+    plane's normal, the sphere's radial direction, else the direction of the barrier's
+    force (minus its gradient: the gap's gradient) where the barrier acts and +z
+    elsewhere, where no normal force needs one."""
     if isinstance(obstacle, PlaneBarrier):
         return np.ascontiguousarray(np.broadcast_to(obstacle.normal, (len(obstacle.nodes), 3)))
     if isinstance(obstacle, SphereBarrier):

@@ -80,7 +80,10 @@ class Moving(Term):
         self.reach = float(reach)
         self.label = label
         self.center, self.R = self.pose(0.0)
-        self._x = self._g = self._dx = None  # body-frame buffers (_local)
+        # body-frame buffers: positions and displacements (_local), the gradient
+        self._x: np.ndarray | None = None
+        self._dx: np.ndarray | None = None
+        self._g: np.ndarray | None = None
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(c(t), R(t)): the origin's place and the body's rotation at time t."""
@@ -112,14 +115,18 @@ class Moving(Term):
     def pattern(self):
         return self.shape.pattern()
 
-    def _local(self, x, name: str = "_x", turn_only: bool = False) -> np.ndarray:
+    def _local(self, x, turn_only: bool = False) -> np.ndarray:
         """The rows of x (N, 3) at the obstacle's nodes in the body frame (``turn_only``:
-        a displacement, turned only), in a buffer kept across evaluations; the shape's
-        kernels read no other row. Saves a full (N, 3) copy per Newton evaluation."""
-        buf = getattr(self, name)
+        a displacement, turned only), in a buffer kept across evaluations (one for
+        positions, one for displacements); the shape's kernels read no other row. Saves a
+        full (N, 3) copy per Newton evaluation."""
+        buf = self._dx if turn_only else self._x
         if buf is None or buf.shape != np.shape(x):
             buf = np.zeros(np.shape(x))
-            setattr(self, name, buf)
+            if turn_only:
+                self._dx = buf
+            else:
+                self._x = buf
         rows = np.asarray(x)[self.nodes]
         if turn_only:
             buf[self.nodes] = rows @ self.R
@@ -149,7 +156,7 @@ class Moving(Term):
         return active
 
     def max_step(self, x, dx):
-        return self.shape.max_step(self._local(x), self._local(dx, "_dx", turn_only=True))
+        return self.shape.max_step(self._local(x), self._local(dx, turn_only=True))
 
     def sweep(self, t0: float, t1: float) -> float:
         """The largest displacement of any point of the obstacle from t0 to t1 [m]."""

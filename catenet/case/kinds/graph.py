@@ -203,7 +203,7 @@ class GraphConfig(GeometryConfig):
     @classmethod
     def gives_stiffness(cls, geometry: GeometryConfig | None) -> bool:
         # None: unknown, do not insist
-        return geometry is None or getattr(geometry, "EA", None) is not None
+        return geometry is None or (isinstance(geometry, GraphConfig) and geometry.EA is not None)
 
     def estimate_size(self) -> tuple[float, float, float, str]:
         n, m = len(self.nodes), len(self.edges)
