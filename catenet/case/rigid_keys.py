@@ -58,6 +58,7 @@ class FreeKeys:
     mass: float | None  # the keys of the obstacle kinds that mix it in
     density: float | None
     inertia: tuple | None
+    history: tuple | None  # the prescribed motion's factor, which a free body refuses
 
     @property
     def free(self) -> bool:
@@ -69,7 +70,7 @@ class FreeKeys:
             ck.add(f"{path}.density = {self.density!r}: give mass or density, not both")
         if self.inertia is not None and not self.free:
             ck.add(f"{path}.inertia: belongs to a free body: give mass or density with it")
-        if self.free and getattr(self, "history", None) is not None:
+        if self.free and self.history is not None:
             ck.add(
                 f"{path}.history: a free body moves as the forces on it say; history "
                 "scales a prescribed motion (drop mass and density for one)"

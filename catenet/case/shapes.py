@@ -287,9 +287,12 @@ def check_motion(case) -> None:
     if case.solver.method == "dynamic":
         return
     for k, obs in enumerate(case.obstacles):
-        if getattr(obs, "rigid_motion", False):
-            key = "velocity" if obs.velocity is not None else "angular_velocity"
-            value = getattr(obs, key)
+        if obs.rigid_motion:
+            key, value = (
+                ("velocity", obs.velocity)
+                if obs.velocity is not None
+                else ("angular_velocity", obs.angular_velocity)
+            )
             raise ConfigError(
                 f"obstacle[{k}].{key} = {list(value)}: a {obs.kind} on a prescribed motion "
                 "moves in dynamic runs only: set solver.method = 'dynamic', or drop "

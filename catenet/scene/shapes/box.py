@@ -41,8 +41,9 @@ class Box:
     origin_key: ClassVar[str] = "center"
 
     def __post_init__(self) -> None:
-        for name in ("center", "half_size", "axes"):
-            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float64))
+        object.__setattr__(self, "center", np.asarray(self.center, dtype=np.float64))
+        object.__setattr__(self, "half_size", np.asarray(self.half_size, dtype=np.float64))
+        object.__setattr__(self, "axes", np.asarray(self.axes, dtype=np.float64))
         if not (self.half_size.shape == (3,) and np.all(self.half_size > 0)):
             raise ValueError(f"box: half sizes {self.half_size.tolist()}: must be three values > 0")
 
