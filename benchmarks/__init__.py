@@ -25,6 +25,7 @@ STUDIES = {
     "formfind": "benchmarks.formfind",
     "reuse": "benchmarks.reuse",
     "integrators": "benchmarks.integrators",
+    "drop": "benchmarks.drop",
 }
 
 

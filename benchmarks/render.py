@@ -18,7 +18,7 @@ import re
 import shutil
 from pathlib import Path
 
-from benchmarks import integrators, sections, sections_peers, sections_reuse, sections_scale
+from benchmarks import drop, integrators, sections, sections_peers, sections_reuse, sections_scale
 from benchmarks.sections import as_float, as_text, read_study
 
 log = logging.getLogger(__name__)
@@ -163,6 +163,7 @@ FRAGMENTS = {
     "reuse": sections_reuse.reuse,
     "stress": sections.stress,
     "integrators": integrators.section,
+    "drop": drop.section,
     "peers-mujoco": sections_peers.mujoco,
 }
 

@@ -213,3 +213,14 @@ def test_tabulate_writes_the_table_the_figure_and_a_line_per_row(tmp_path):
         {"n": "10", "seconds": "0.5", "note": ""},
         {"n": "34", "seconds": "2", "note": "capped"},
     ]
+
+
+def test_the_drop_study_measures_one_run():
+    """benchmarks/drop.py's run of one integrator at one step: the box thrown back up, the
+    counts and the energy shares of its balance (the study's rows)."""
+    from benchmarks.drop import drop
+
+    row = drop("bdf2", None, 1e-2)
+    assert row["scheme"] == "bdf2" and row["converged"] and row["steps"] == 40
+    assert 15.5 < row["momentum"] < 16.8  # the fine-step answer 16.2 +- 0.1 (docs/performance.md)
+    assert row["created"] <= 1e-9 < row["lost"] < 0.2
