@@ -117,7 +117,7 @@ def solve_dynamic(
         net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
     )
     start = time.perf_counter()
-    stepper.ledger = Ledger() if ledger is None else ledger
+    stepper.ledger = balance = Ledger() if ledger is None else ledger
     stepper.begin(x0, v0, t0, a0, a_out)
     control = _control(stepper, dt, t0, t_end, max_steps)
     run = stepper.run(
@@ -126,7 +126,7 @@ def solve_dynamic(
         on_step=on_step,
         on_rest=on_rest,
     )
-    return _result(stepper, run, start)
+    return _result(stepper, balance, run, start)
 
 
 def _check_rest(t_end: float | str, damping: float, stop_at_equilibrium: bool) -> None:
@@ -151,9 +151,9 @@ def _control(
     return StepControl(dt, t0, float(t_end))
 
 
-def _result(stepper: TimeStepper, run: Outcome, start: float) -> Result:
-    """The Result of the run that ended as ``run``, from the stepper's last state (its
-    wall time counted from ``start``)."""
+def _result(stepper: TimeStepper, ledger: Ledger, run: Outcome, start: float) -> Result:
+    """The Result of the run that ended as ``run``, from the stepper's last state and its
+    energy balance ``ledger`` (its wall time counted from ``start``)."""
     ws, scheme = stepper.ws, stepper.scheme
     x, v, t = stepper.x, stepper.v, stepper.t
     return finish(
@@ -173,7 +173,7 @@ def _result(stepper: TimeStepper, run: Outcome, start: float) -> Result:
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
         outcome=run,
-        energy=stepper.ledger.row.copy(),
+        energy=ledger.row.copy(),
     )
 
 
