@@ -443,7 +443,7 @@ class _Barriers:
 def _definite(potential: Potential, x: np.ndarray) -> bool:
     """Whether the stiffness at x is positive definite (False where the solver cannot
     tell: then the caller takes the safe path)."""
-    if getattr(potential.solver, "mtype", -2) != -2:
+    if potential.solver.mtype not in (-2, None):  # PARDISO's Cholesky or LU: cannot tell
         return False
     try:
         potential.factorize(x, 0.0)
