@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 
 @dataclass
@@ -34,6 +34,16 @@ class CatenetError(Exception):
     iterations: int = 0  # the Newton iterations the failing solve spent (where counted)
 
 
+Error = TypeVar("Error", bound=CatenetError)
+
+
+def with_last_good(exc: Error, good: LastGood) -> Error:
+    """``exc`` holding ``good`` as the last good state of the run it ends: the solve path
+    sets it (``catenet.solver``), its callers read it."""
+    exc.last_good = good
+    return exc
+
+
 class ConfigError(CatenetError, ValueError):
     """Bad input: a case file, a command-line value or an argument of the Python API.
 
@@ -51,14 +61,23 @@ class ConvergenceError(CatenetError):
 
     ``history`` holds the residual norms of the failing iteration, ``state`` the start of
     the failing solve (N, 3) when there is one (never an unconverged iterate); the solve
-    path adds the run's ``last_good``.
+    path adds the run's ``last_good`` (``with_last_good``), or raises it with one.
     """
 
-    def __init__(self, message: str, *, iterations: int = 0, history=None, state=None):
+    def __init__(
+        self,
+        message: str,
+        *,
+        iterations: int = 0,
+        history=None,
+        state=None,
+        last_good: LastGood | None = None,
+    ):
         super().__init__(message)
         self.iterations = iterations
         self.history = list(history or [])
         self.state = state
+        self.last_good = last_good
 
 
 class Interrupted(ConvergenceError):

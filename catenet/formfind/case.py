@@ -19,6 +19,7 @@ import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from catenet.case.keys import show
 from catenet.errors import ConfigError
 from catenet.formfind.fdm import FormFound, formfind
 from catenet.formfind.tocase import PREFIX, to_case
+
+if TYPE_CHECKING:
+    from catenet.case import Case
 
 log = logging.getLogger(__name__)
 
@@ -125,7 +129,7 @@ def case_file_for(out: Path) -> Path:
     return out.with_suffix(".toml")
 
 
-def write_formfind(case, out: str | Path | None = None) -> Written:
+def write_formfind(case: Case, out: str | Path | None = None) -> Written:
     """Form-finds ``case`` and writes the result file ``out`` (default: the case's
     output.file) and the case OUT.toml beside it. Nothing is written when the input is
     bad or the targets cannot be met."""
@@ -137,7 +141,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
     toml_path = case_file_for(out)
     check_output_path(out)
     check_output_path(toml_path, what="case file")
-    source = Path(getattr(case, "source", "") or "")
+    source = Path(case.source or "")
     for p in (out, toml_path):
         if source.is_file() and p.exists() and p.resolve() == source.resolve():
             raise ConfigError(f"output file {str(p)!r}: is the case file itself: give another -o")
@@ -153,7 +157,7 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
         "case": resolved,
         "title": written.title,
         "linear_backend": found.backend,
-        "source": str(getattr(case, "source", "")),
+        "source": str(case.source),
         "formfind_method": found.method,
         "formfind_case": str(toml_path),
     }
@@ -175,8 +179,8 @@ def write_formfind(case, out: str | Path | None = None) -> Written:
     return Written(found, written, out, toml_path)
 
 
-def _header(case, found: FormFound, out: Path) -> str:
-    src = getattr(case, "source", "") or "<dict>"
+def _header(case: Case, found: FormFound, out: Path) -> str:
+    src = case.source or "<dict>"
     return (
         f"# Form found by `catenet formfind {src}` (method = {found.method!r}; result file "
         f"{out}).\n# `catenet run` on this case, without further load, reproduces the shape "

@@ -34,6 +34,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -41,6 +42,9 @@ from catenet.errors import ConfigError, ConvergenceError
 from catenet.formfind.newton import Stalled, newton
 from catenet.formfind.tocase import to_case
 from catenet.model.net import Net
+
+if TYPE_CHECKING:
+    from catenet.scene import Scene
 
 log = logging.getLogger(__name__)
 
@@ -213,6 +217,7 @@ class _Shape:
                 self.backend, p.indptr, p.indices, upper=True, dof_node=p.free_nodes, mtype=2
             )
         self.factorizations = 0
+        self.kkt_factorizations = 0  # Newton's on the force densities (formfind/newton.py)
         self.solves = 0
         self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
         self.weighs = gravity is not None and bool(np.any(net.line_density > 0))
@@ -281,7 +286,7 @@ def _zero_lengths(net: Net, x: np.ndarray, size: float, name: str) -> None:
 
 
 def formfind(
-    scene_or_net,
+    scene_or_net: Scene | Net,
     q=None,
     *,
     loads=None,
@@ -306,9 +311,9 @@ def formfind(
     for a case). Raises ConfigError for bad input or targets that cannot be met.
     """
     start = time.perf_counter()
-    net = getattr(scene_or_net, "net", scene_or_net)
-    if loads is None:
-        loads = getattr(scene_or_net, "loads", None)
+    net = scene_or_net if isinstance(scene_or_net, Net) else scene_or_net.net
+    if loads is None and not isinstance(scene_or_net, Net):
+        loads = scene_or_net.loads
     if method not in METHODS:
         raise ConfigError(f"{prefix}method = {method!r}: must be one of {', '.join(METHODS)}")
     if loads is not None and loads.moves_supports:

@@ -36,13 +36,15 @@ be met (``Stalled``, with the best state reached).
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 
 if TYPE_CHECKING:
+    from catenet.formfind.fdm import _Shape
     from catenet.solver.linear import LinearSolver
 
 log = logging.getLogger(__name__)
@@ -153,92 +155,154 @@ class Kkt:
         return x
 
 
-def newton(shape, method: str, target, q0, tol: float, max_iter: int, scale_free: bool):
+def newton(
+    shape: _Shape,
+    method: str,
+    target: np.ndarray,
+    q0: np.ndarray,
+    tol: float,
+    max_iter: int,
+    scale_free: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Force densities meeting ``target`` (lengths or forces per edge) to the relative
     ``tol``: (x, load, q, iterations, miss). Raises Stalled (see the module docstring)
     or, after ``max_iter`` evaluations, Stalled with why = "max_iter"."""
-    net, p = shape.net, shape.pattern
-    forces = method == "forces"
+    p = shape.pattern
     both_fixed = (p.a < 0) & (p.b < 0)
-    active = ~both_fixed
+    targets = _Targets(shape, target, method == "forces", ~both_fixed, tol)
+    s = np.log(q0)
+    now = targets.state(s)
+    if now is None:
+        raise Stalled("the starting force densities give no shape", None, 1)
+    iterations = 1
+    if both_fixed.any() and _miss(now.r[both_fixed]) > tol:
+        raise Stalled("an edge between two fixed nodes keeps its length", _best(now), iterations)
+    held = np.flatnonzero(both_fixed)
+    if scale_free:  # a common factor of q changes nothing: hold one edge's q
+        free_edges = np.flatnonzero(targets.active)
+        held = np.append(held, free_edges[np.argmax(now.q[free_edges])])
+    search = _Search(targets, Kkt(p, shape.backend, held), held, scale_free, max_iter)
+    mu = MU_MIN
+    while True:
+        if _miss(now.r) <= tol:
+            shape.kkt_factorizations = search.kkt.factorizations
+            return now.x, now.load, now.q, iterations, _miss(now.r)
+        step, now, mu, iterations = search.damped(s, now, mu, iterations)
+        mu = max(mu / 3.0, MU_MIN)
+        s = s + step
+        log.debug(
+            "form finding: Newton %d: largest miss %.3e (damping %.3g)",
+            iterations,
+            _miss(now.r),
+            mu,
+        )
 
-    def state(s):
+
+class _State(NamedTuple):
+    """Force densities ``q``, the shape ``x`` they give with its ``load``, the edge
+    vectors ``u``, their ``length`` and the misses ``r`` (the log of what an edge has over
+    its target)."""
+
+    q: np.ndarray
+    x: np.ndarray
+    load: np.ndarray
+    u: np.ndarray
+    length: np.ndarray
+    r: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Targets:
+    """What Newton meets: ``target`` lengths (or forces, ``forces``) of the ``shape``'s
+    ``active`` edges (not between two fixed nodes) to the relative ``tol``."""
+
+    shape: _Shape
+    target: np.ndarray
+    forces: bool
+    active: np.ndarray
+    tol: float
+
+    def state(self, s: np.ndarray) -> _State | None:
+        """The state at force densities exp(s); None where there is no shape (a step too
+        far: the caller halves it) or an active edge has no length."""
         q = np.exp(np.clip(s, -700.0, 700.0))
         try:
-            x, load = shape(q)
+            x, load = self.shape(q)
         except (SingularSystemError, ConvergenceError, ConfigError):
             return None  # a step too far: the caller halves it
+        net, active = self.shape.net, self.active
         u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
         length = np.linalg.norm(u, axis=1)
         if not np.all(length[active] > 0):
             return None
-        got = q * length if forces else length
-        r = np.log(got / target)
-        return q, x, load, u, length, r
+        got = q * length if self.forces else length
+        r = np.log(got / self.target)
+        return _State(q, x, load, u, length, r)
 
-    def merit(r):
-        return 0.5 * float(r[active] @ r[active])
+    def merit(self, r: np.ndarray) -> float:
+        """Half the sum of the active edges' squared misses."""
+        return 0.5 * float(r[self.active] @ r[self.active])
 
-    def miss(r):
-        return float(np.max(np.abs(np.expm1(r))))
 
-    s = np.log(q0)
-    now = state(s)
-    if now is None:
-        raise Stalled("the starting force densities give no shape", None, 1)
-    iterations = 1
-    if both_fixed.any() and miss(now[5][both_fixed]) > tol:
-        raise Stalled("an edge between two fixed nodes keeps its length", _best(now), iterations)
-    held = np.flatnonzero(both_fixed)
-    if scale_free:  # a common factor of q changes nothing: hold one edge's q
-        free_edges = np.flatnonzero(active)
-        held = np.append(held, free_edges[np.argmax(now[0][free_edges])])
-    kkt = Kkt(p, shape.backend, held)
-    n3 = 3 * p.n_free
-    mu = MU_MIN
-    while True:
-        q, x, load, u, length, r = now
-        if miss(r) <= tol:
-            shape.kkt_factorizations = kkt.factorizations
-            return x, load, q, iterations, miss(r)
-        f0 = merit(r)
-        rhs = np.zeros(kkt.n)
-        rhs[n3:] = -(length**2) * r
-        rhs[n3 + held] = 0.0
+def _miss(r: np.ndarray) -> float:
+    """The largest relative miss |got / target - 1| of the misses r."""
+    return float(np.max(np.abs(np.expm1(r))))
+
+
+@dataclass(frozen=True)
+class _Search:
+    """Newton's steps towards the ``targets`` on the saddle-point system ``kkt``: ``held``
+    the edges whose dq is 0, ``scale_free`` (the steps' mean taken out), at most
+    ``max_iter`` evaluations."""
+
+    targets: _Targets
+    kkt: Kkt
+    held: np.ndarray
+    scale_free: bool
+    max_iter: int
+
+    def damped(
+        self, s: np.ndarray, now: _State, mu: float, iterations: int
+    ) -> tuple[np.ndarray, _State, float, int]:
+        """(step, state, damping, iterations) of the step from s (the state ``now``),
+        damped from ``mu`` until it lowers the misses; raises Stalled where none does."""
+        targets, n3 = self.targets, 3 * self.kkt.nf
+        f0 = targets.merit(now.r)
+        rhs = np.zeros(self.kkt.n)
+        rhs[n3:] = -(now.length**2) * now.r
+        rhs[n3 + self.held] = 0.0
         while True:  # damped until the misses fall
-            if iterations >= max_iter:
+            if iterations >= self.max_iter:
                 raise Stalled("max_iter", _best(now), iterations)
-            g = (1.0 + mu) * length**2 / q if forces else -mu * length**2 / q
-            try:
-                weight = weight_jacobian(shape, q, u, length, held) if shape.weighs else None
-                step = kkt.solve(q, u, g, rhs, weight)[n3:] / q
-            except SingularSystemError:
-                step = None
-            if step is not None and np.all(np.isfinite(step)):
-                if scale_free:
-                    step -= np.mean(step)
-            else:
-                step = None
+            step = self.step(now, rhs, mu)
             if step is not None and float(np.max(np.abs(step))) <= MAX_STEP:
-                trial = state(s + step)
+                trial = targets.state(s + step)
                 iterations += 1
                 if trial is not None and (
-                    merit(trial[5]) <= (1.0 - ARMIJO) * f0 or miss(trial[5]) <= tol
+                    targets.merit(trial.r) <= (1.0 - ARMIJO) * f0 or _miss(trial.r) <= targets.tol
                 ):
-                    break
+                    return step, trial, mu, iterations
             mu = max(4.0 * mu, MU_MIN)
             if mu > MU_MAX:
                 why = "no step on the force densities lowers the misses further"
                 raise Stalled(why, _best(now), iterations)
-        mu = max(mu / 3.0, MU_MIN)
-        s = s + step
-        now = trial
-        log.debug(
-            "form finding: Newton %d: largest miss %.3e (damping %.3g)",
-            iterations,
-            miss(trial[5]),
-            mu,
-        )
+
+    def step(self, now: _State, rhs: np.ndarray, mu: float) -> np.ndarray | None:
+        """The step on s = log q from ``now`` with the damping ``mu`` (None where the
+        system is singular or the step not finite)."""
+        shape, n3 = self.targets.shape, 3 * self.kkt.nf
+        q, u, length = now.q, now.u, now.length
+        g = (1.0 + mu) * length**2 / q if self.targets.forces else -mu * length**2 / q
+        try:
+            weight = weight_jacobian(shape, q, u, length, self.held) if shape.weighs else None
+            step = self.kkt.solve(q, u, g, rhs, weight)[n3:] / q
+        except SingularSystemError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        if self.scale_free:
+            step -= np.mean(step)
+        return step
 
 
 def weight_jacobian(shape, q, u, length, held):
@@ -280,6 +344,6 @@ def weight_jacobian(shape, q, u, length, held):
     return np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))
 
 
-def _best(now):
-    """(x, load, q, r) of a state (q, x, load, u, L, r)."""
-    return now[1], now[2], now[0], now[5]
+def _best(now: _State) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(x, load, q, r) of a state."""
+    return now.x, now.load, now.q, now.r

@@ -33,7 +33,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
     built (a graph's cables, node sets and load nodes are kept then)."""
     net = found.net
     rest = found.rest_length(PREFIX + "force_density")
-    structured = scene is not None and getattr(case.geometry, "kind", "") == "graph"
+    structured = scene is not None and case.geometry.kind == "graph"
     if structured:
         geometry = _graph(found, case, scene, rest)
     else:
@@ -111,7 +111,13 @@ def _kept_tables(case, scene) -> dict:
     split so when the shape was found)."""
     out: dict = {}
     if scene is None:
-        return {k: [t.to_dict() for t in getattr(case, a)] for k, a in _ATTRS if getattr(case, a)}
+        tables = (
+            ("mass", case.masses),
+            ("obstacle", case.obstacles),
+            ("load_case", case.load_cases),
+            ("combination", case.combinations),
+        )
+        return {k: [t.to_dict() for t in items] for k, items in tables if items}
     if case.masses:
         out["mass"] = [{**m.to_dict(), "node": _refs(m.node, scene)} for m in case.masses]
     if case.obstacles:
@@ -142,14 +148,6 @@ def _kept_tables(case, scene) -> dict:
     if case.combinations:
         out["combination"] = [c.to_dict() for c in case.combinations]
     return out
-
-
-_ATTRS = (
-    ("mass", "masses"),
-    ("obstacle", "obstacles"),
-    ("load_case", "load_cases"),
-    ("combination", "combinations"),
-)
 
 
 def _graph(found: FormFound, case, scene, rest: np.ndarray) -> dict:

@@ -124,6 +124,18 @@ def block_pattern(edges, rank, n_nodes, upper):
     (indptr, indices, target, diag): the CSR arrays (the same as ``pattern_csr`` gives for
     the edges' entries and the diagonal), the position of each of the 36 values of every
     edge (-1: dropped) and of every diagonal entry."""
+    start, nbr = _adjacency(edges, rank, n_nodes)
+    lo, hi = _unique_neighbours(start, nbr, n_nodes, upper)
+    indptr, indices = _node_blocks(nbr, lo, hi, n_nodes, upper)
+    diag = _block_diagonal(nbr, lo, indptr, n_nodes, upper)
+    target = _edge_targets(edges, rank, nbr, lo, hi, indptr, upper)
+    return indptr, indices, target, diag
+
+
+@njit(cache=True)
+def _adjacency(edges, rank, n_nodes):
+    """(start, nbr): node i's neighbours through the edges between free nodes, itself
+    first, at nbr[start[i]:start[i + 1]] (repeated where edges are)."""
     m = edges.shape[0]
     start = np.zeros(n_nodes + 1, dtype=np.int64)
     for e in range(m):
@@ -147,6 +159,13 @@ def block_pattern(edges, rank, n_nodes, upper):
             cursor[a] += 1
             nbr[cursor[b]] = a
             cursor[b] += 1
+    return start, nbr
+
+
+@njit(cache=True)
+def _unique_neighbours(start, nbr, n_nodes, upper):
+    """(lo, hi): node i's unique neighbours, sorted, at nbr[lo[i]:hi[i]] (``nbr``
+    compacted in place; with ``upper`` from the first >= i)."""
     # unique, sorted neighbours per node (repeated edges: parallel cables)
     seen = np.full(max(n_nodes, 1), -1, dtype=np.int64)
     lo = np.empty(n_nodes, dtype=np.int64)  # first neighbour kept in the rows (upper: >= i)
@@ -172,6 +191,13 @@ def block_pattern(edges, rank, n_nodes, upper):
         if upper:
             while nbr[lo[i]] < i:
                 lo[i] += 1
+    return lo, hi
+
+
+@njit(cache=True)
+def _node_blocks(nbr, lo, hi, n_nodes, upper):
+    """(indptr, indices): the CSR arrays of every node's 3x3 blocks with its kept
+    neighbours (with ``upper``, the diagonal block's upper triangle)."""
     n = 3 * n_nodes
     indptr = np.zeros(n + 1, dtype=np.int32)
     for i in range(n_nodes):
@@ -189,6 +215,13 @@ def block_pattern(edges, rank, n_nodes, upper):
                         continue
                     indices[q] = 3 * j + d2
                     q += 1
+    return indptr, indices
+
+
+@njit(cache=True)
+def _block_diagonal(nbr, lo, indptr, n_nodes, upper):
+    """The position of every diagonal entry in the CSR data."""
+    n = 3 * n_nodes
     diag = np.empty(n, dtype=np.int64)
     for i in range(n_nodes):
         k = 0
@@ -197,6 +230,14 @@ def block_pattern(edges, rank, n_nodes, upper):
                 k += 1
         for d in range(3):
             diag[3 * i + d] = indptr[3 * i + d] + (0 if upper else 3 * k + d)
+    return diag
+
+
+@njit(cache=True)
+def _edge_targets(edges, rank, nbr, lo, hi, indptr, upper):
+    """The position in the CSR data of each of the 36 values of every edge's block
+    (-1: dropped, a support's or, with ``upper``, below the diagonal)."""
+    m = edges.shape[0]
     target = np.full(36 * m, -1, dtype=np.int64)
     ends = np.empty(2, dtype=np.int64)
     for e in range(m):
@@ -230,4 +271,4 @@ def block_pattern(edges, rank, n_nodes, upper):
                         else:
                             col = 3 * k + d2
                         target[36 * e + 6 * (3 * s + d) + 3 * t + d2] = row + col
-    return indptr, indices, target, diag
+    return target

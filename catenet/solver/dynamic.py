@@ -109,6 +109,28 @@ def solve_dynamic(
     where None), kept step by step; EnergyError where the integrator creates energy.
     """
     _check(dt, damping, t_end, t0, rtol, max_steps)
+    _check_rest(t_end, damping, stop_at_equilibrium)
+    scheme = make(integrator, rho_inf)
+    _check_mass(net)
+    ws = workspace or Workspace(net, linear=linear)
+    stepper = TimeStepper(
+        net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
+    )
+    start = time.perf_counter()
+    stepper.ledger = balance = Ledger() if ledger is None else ledger
+    stepper.begin(x0, v0, t0, a0, a_out)
+    control = _control(stepper, dt, t0, t_end, max_steps)
+    run = stepper.run(
+        control,
+        rest=stop_at_equilibrium,
+        on_step=on_step,
+        on_rest=on_rest,
+    )
+    return _result(stepper, balance, run, start)
+
+
+def _check_rest(t_end: float | str, damping: float, stop_at_equilibrium: bool) -> None:
+    """Raises where a run to rest (``t_end = "rest"``) cannot come to rest."""
     to_rest = t_end == REST
     if to_rest and not stop_at_equilibrium:
         raise ConfigError("t_end = 'rest' needs stop_at_equilibrium")
@@ -117,30 +139,26 @@ def solve_dynamic(
             "solver.t_end = 'rest' with solver.damping = 0: an undamped run never rests: "
             "give solver.t_end or damping"
         )
-    scheme = make(integrator, rho_inf)
-    _check_mass(net)
-    ws = workspace or Workspace(net, linear=linear)
-    stepper = TimeStepper(
-        net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
-    )
-    start = time.perf_counter()
-    stepper.ledger = Ledger() if ledger is None else ledger
-    stepper.begin(x0, v0, t0, a0, a_out)
-    control: RestControl | StepControl
-    if to_rest:
-        control = RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
-    else:
-        control = StepControl(dt, t0, float(t_end))
-    run = stepper.run(
-        control,
-        rest=stop_at_equilibrium,
-        on_step=on_step,
-        on_rest=on_rest,
-    )
+
+
+def _control(
+    stepper: TimeStepper, dt: float, t0: float, t_end: float | str, max_steps: int
+) -> RestControl | StepControl:
+    """The run's step control: to rest (its steps grown as the motion decays, through the
+    stepper's continuation stages) or to ``t_end``."""
+    if t_end == REST:
+        return RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
+    return StepControl(dt, t0, float(t_end))
+
+
+def _result(stepper: TimeStepper, ledger: Ledger, run: Outcome, start: float) -> Result:
+    """The Result of the run that ended as ``run``, from the stepper's last state and its
+    energy balance ``ledger`` (its wall time counted from ``start``)."""
+    ws, scheme = stepper.ws, stepper.scheme
     x, v, t = stepper.x, stepper.v, stepper.t
     return finish(
         ws.system,
-        loads,
+        stepper.loads,
         x,
         converged=run is not Outcome.INTERRUPTED,
         equilibrium=stepper.equilibrium,
@@ -155,7 +173,7 @@ def solve_dynamic(
         wall_time=time.perf_counter() - start,
         stats=ws.stats(),
         outcome=run,
-        energy=stepper.ledger.row.copy(),
+        energy=ledger.row.copy(),
     )
 
 

@@ -183,6 +183,7 @@ class LinearSolver:
     """
 
     name = "base"
+    mtype: int | None = None  # PARDISO's matrix type (None: another backend)
 
     def __init__(self, indptr, indices, *, upper: bool, dof_node: np.ndarray):
         self.indptr = np.ascontiguousarray(indptr, dtype=np.int32)
@@ -328,7 +329,7 @@ class PardisoSolver(LinearSolver):
 
     def __init__(self, indptr, indices, *, upper: bool, dof_node, mtype: int | None = None):
         super().__init__(indptr, indices, upper=upper, dof_node=dof_node)
-        self.mtype = (-2 if upper else 11) if mtype is None else mtype
+        self.mtype: int = (-2 if upper else 11) if mtype is None else mtype
         if (self.mtype in (2, -2)) != upper:
             raise ValueError("symmetric PARDISO types need the upper triangle, 11 the full matrix")
         self._wrapper = mkl_runtime()

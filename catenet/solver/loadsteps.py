@@ -18,6 +18,7 @@ from catenet.errors import (
     Interrupted,
     LastGood,
     SingularSystemError,
+    with_last_good,
 )
 from catenet.model.net import Loads, Net
 from catenet.solver.relax import REST
@@ -87,7 +88,7 @@ def continuation(
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
         try:
-            r = solve_static(
+            step: Result | ConvergenceError = solve_static(
                 net,
                 loads,
                 x0=x,
@@ -99,12 +100,11 @@ def continuation(
             if judge.start_unstable and not isinstance(exc, Interrupted):
                 # from an unstable start, a failure is the collapse (no cut-back helps)
                 _collapse(judge, judge.why_start(), 0.0, LastGood(judge.start_x, 0.0), x, exc)
-            if isinstance(exc, Interrupted) or not _worth_cutting(exc):
-                exc.last_good = LastGood(good.x, good.time)
-                raise
-            r = _cut_back(net, loads, float(factor), exc, good, settings)
+            step = _cut_back(net, loads, float(factor), exc, good, settings)
+        if isinstance(step, ConvergenceError):  # it fails: the last equilibrium found is kept
+            raise with_last_good(step, LastGood(good.x, good.time))
         last = k == len(factors) - 1
-        r = _judged(judge, net, loads, good, float(factor), r, last, settings)
+        r = _judged(judge, net, loads, good, float(factor), step, last, settings)
         r.steps = k + 1
         r.stability = _verdict(judge, r)
         results.append(r)
@@ -225,10 +225,14 @@ def _collapse(judge: PathJudge, why: str, at: float, good: LastGood, x1, exc=Non
         log.warning("%s", message.split(". ")[0] + ": followed through (solver.post_collapse)")
         return
     verdict = COLLAPSED if judge.loaded else UNSTABLE
-    error = CollapseError(message, factor=at, nodes=nodes, verdict=verdict)
-    error.iterations = 0 if exc is None else exc.iterations
-    error.last_good = LastGood(good.x, good.time)
-    raise error
+    raise CollapseError(
+        message,
+        factor=at,
+        nodes=nodes,
+        verdict=verdict,
+        iterations=0 if exc is None else exc.iterations,
+        last_good=LastGood(good.x, good.time),
+    )
 
 
 def _worth_cutting(exc: ConvergenceError) -> bool:
@@ -252,12 +256,18 @@ def _advice(exc: ConvergenceError, max_iter: int, relaxed: bool = False) -> str:
     )
 
 
-def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> Result:
+def _cut_back(
+    net, loads, target: float, failure, good: LastGood, settings
+) -> Result | ConvergenceError:
     """The load step from the equilibrium ``good`` (updated: it holds the last one) to
     load factor ``target`` in sub-steps (see ``continuation``), in either direction of
-    the load. Raises the last failure, its message saying what was tried, when sub-steps
-    of 1/2**CUTBACKS, the pseudo-transient solve and dynamic relaxation to rest (where
-    ``_can_relax``) still fail; an interrupt at once."""
+    the load, after its ``failure``: the step's result, or the failure for the caller to
+    raise: ``failure`` itself where sub-steps cannot help (an interrupt, a mechanism,
+    loads below round-off), a sub-step's interrupt at once, else the last failure, its
+    message saying what was tried, when sub-steps of 1/2**CUTBACKS, the pseudo-transient
+    solve and dynamic relaxation to rest (where ``_can_relax``) still fail."""
+    if isinstance(failure, Interrupted) or not _worth_cutting(failure):
+        return failure
     x, f = good.x, good.time
     increment = 0.5 * (target - f)
     spent = failure.iterations
@@ -275,8 +285,7 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
             spent += exc.iterations
             if isinstance(exc, Interrupted):
                 exc.iterations = spent
-                exc.last_good = LastGood(good.x, good.time)
-                raise
+                return exc
             if cuts >= CUTBACKS and _worth_cutting(exc) and not transient:
                 transient = True  # the last rung: a damped pseudo-transient solve
                 continue
@@ -296,8 +305,7 @@ def _cut_back(net, loads, target: float, failure, good: LastGood, settings) -> R
                     f"{_advice(exc, settings['max_iter'], 'dynamic relaxation' in tried)}",
                 )
                 exc.iterations = spent
-                exc.last_good = LastGood(good.x, good.time)
-                raise
+                return exc
             increment *= 0.5
             cuts, done = cuts + 1, 0
             continue

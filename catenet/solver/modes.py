@@ -42,16 +42,19 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.scene import Scene
 from catenet.solver.modal import Operator
 
 if TYPE_CHECKING:
+    from catenet.model.net import Net
     from catenet.solver.result import Result
+    from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
 
@@ -150,7 +153,7 @@ def natural_modes(
     ``added`` (E,) [kg]: each edge's added mass of water Ca rho_w A l0, moving with its
     ends sideways only (``catenet.solver.modal.added_mass_blocks``), or None."""
     begin = time.perf_counter()
-    system, solver = workspace.system, workspace.solver
+    system = workspace.system
     net = system.net
     mass = net.mass if mass is None else np.asarray(mass, dtype=np.float64)
     from catenet.solver.modal import body_frames
@@ -163,38 +166,15 @@ def natural_modes(
             "material.density [kg/m^3] or point masses to find its frequencies"
         )
     x = np.asarray(x, dtype=np.float64)
-    blocks = None
-    if added is not None:
-        from catenet.solver.modal import added_mass_blocks
-
-        added = np.asarray(added, dtype=np.float64)
-        if added.shape != (net.n_edges,) or not np.all(np.isfinite(added) & (added >= 0)):
-            raise ConfigError(
-                f"modes: added mass of shape {added.shape}: must be {net.n_edges} finite "
-                "masses >= 0 [kg], one per edge"
-            )
-        blocks = added_mass_blocks(net, x, added)
+    blocks = None if added is None else _added_blocks(net, x, added)
     op = Operator(system, x, mass, blocks)
-    if method not in ("auto", "dense", "lanczos"):
-        raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
-    # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
-    dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
-    dense = dense or _few_masses(op, count)
-    sigma = op.sigma
-    stats = {"method": "dense" if dense else "lanczos", "backend": solver.name}
-    if dense:
-        lam, vec = _dense(op, sigma)
-    else:
-        lam, vec = _lanczos_until(
-            op, solver, sigma, count, stats, lambda why: _unstable(why, workspace, x)
-        )
-    lam, vec = _rayleigh_ritz(op, vec)
+    lam, vec, stats = _solve(op, workspace, x, count, method)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
     if lam.size and lam[0] < -op.negative:
         _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
     zero = _zero_modes(lam, op)
-    found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, sigma)
+    found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, op.sigma)
     found.added = None if blocks is None else np.where(net.fixed[:, None, None], 0.0, blocks)
     _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
     found.stats = {
@@ -204,6 +184,51 @@ def natural_modes(
         "dofs": op.n,
         "bodies": bodies,
     }
+    _check_found(found, count)
+    return found
+
+
+def _added_blocks(net: Net, x: np.ndarray, added: ArrayLike) -> np.ndarray:
+    """The (N, 3, 3) added-mass blocks of the edges' added masses ``added`` (E,) [kg]
+    (``catenet.solver.modal.added_mass_blocks``); ConfigError where they are not E finite
+    masses >= 0."""
+    from catenet.solver.modal import added_mass_blocks
+
+    added = np.asarray(added, dtype=np.float64)
+    if added.shape != (net.n_edges,) or not np.all(np.isfinite(added) & (added >= 0)):
+        raise ConfigError(
+            f"modes: added mass of shape {added.shape}: must be {net.n_edges} finite "
+            "masses >= 0 [kg], one per edge"
+        )
+    return added_mass_blocks(net, x, added)
+
+
+def _solve(
+    op: Operator, workspace: Workspace, x: np.ndarray, count: int, method: str
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """(eigenvalues, M-orthonormal vectors, stats) of the operator by the dense solver or
+    the Lanczos method as ``method`` and the operator's size say, refined by Rayleigh-Ritz."""
+    if method not in ("auto", "dense", "lanczos"):
+        raise ConfigError(f"modes method = {method!r}: must be 'auto', 'dense' or 'lanczos'")
+    solver = workspace.solver
+    # every mode asked for (ARPACK finds at most n - 1): the dense solver whatever n
+    dense = method == "dense" or (method == "auto" and op.n <= DENSE) or count >= op.n - 1
+    dense = dense or _few_masses(op, count)
+    sigma = op.sigma
+    stats: dict[str, Any] = {"method": "dense" if dense else "lanczos", "backend": solver.name}
+    if dense:
+        lam, vec = _dense(op, sigma)
+    else:
+        lam, vec = _lanczos_until(
+            op, solver, sigma, count, stats, lambda why: _unstable(why, workspace, x)
+        )
+    lam, vec = _rayleigh_ritz(op, vec)
+    return lam, vec, stats
+
+
+def _check_found(found: Modes, count: int) -> None:
+    """ConvergenceError where the modes found are inaccurate; a warning where fewer than
+    ``count`` have a frequency."""
     if found.stats["residual"] > RESIDUAL_TOL:
         raise ConvergenceError(
             f"modes: the eigensolver's modes are inaccurate (relative residual "
@@ -216,7 +241,6 @@ def natural_modes(
             found.count,
             f" ({found.zero_modes} more of zero frequency)" if found.zero_modes else "",
         )
-    return found
 
 
 def _few_masses(op: Operator, count: int) -> bool:

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from catenet.errors import CatenetError, ConfigError, ConvergenceError, Interrupted, LastGood
+from catenet.errors import (
+    CatenetError,
+    ConfigError,
+    ConvergenceError,
+    Interrupted,
+    LastGood,
+    with_last_good,
+)
 from catenet.model.peaks import Peaks
 from catenet.model.transfer import transfer
 from catenet.scene import Scene
@@ -183,7 +190,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         if x is None:
             x, factor = start_state(scene.net, scene.loads, start.x, 0.0), 0.0
         spent = sum(q.iterations for q in done) + exc.iterations
-        exc.last_good = LastGood(x, factor, len(done), spent)
+        with_last_good(exc, LastGood(x, factor, len(done), spent))
         raise
     r = total(done[-1])
     if r.outcome in (Outcome.EQUILIBRIUM, Outcome.AT_FLOOR):
@@ -253,9 +260,8 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
         iterations = exc.iterations
         if last["steps"] == 0 and accel is not None:
             last["a"] = accel.copy()  # the start's state: solve_dynamic set it first
-        exc.last_good = LastGood(
-            last["x"], last["t"], last["steps"], iterations, last["v"], last["a"]
-        )
+        good = LastGood(last["x"], last["t"], last["steps"], iterations, last["v"], last["a"])
+        with_last_good(exc, good)
         raise
 
 

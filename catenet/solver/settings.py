@@ -36,11 +36,12 @@ class Settings:
     energy_tolerance: float = 1e-2  # dynamic: energy created, a share of the largest
 
     @classmethod
-    def of(cls, config: Any, **changes) -> Settings:
-        """The settings in any object with these attributes (a case's SolverConfig)."""
-        names = [f.name for f in dataclasses.fields(cls)]
+    def of(cls, config: object, **changes: Any) -> Settings:
+        """The settings in any object with these attributes (a case's SolverConfig): each
+        field read by its name."""
+        given = {f.name: getattr(config, f.name) for f in dataclasses.fields(cls)}
         # (None: not given, e.g. a static case's t_end: the default here)
-        values = {n: getattr(config, n) for n in names if getattr(config, n, None) is not None}
+        values = {n: v for n, v in given.items() if v is not None}
         return cls(**{**values, **changes})
 
     def __post_init__(self):

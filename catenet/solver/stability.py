@@ -124,7 +124,7 @@ def _dense(system, x: np.ndarray, d: np.ndarray) -> Tangent:
 def _sparse(system, solver, x: np.ndarray, d: np.ndarray) -> Tangent:
     """The inertia of K + MARGIN D (negative: unstable) and of K - POSITIVE D (none
     negative: stable), where the factorisation tells; else NEUTRAL (cannot say)."""
-    if getattr(solver, "mtype", None) != -2:
+    if solver.mtype != -2:  # only PARDISO's symmetric indefinite factors tell here
         return Tangent(NEUTRAL, math.nan, None)
 
     def negatives(shift: float) -> int | None:

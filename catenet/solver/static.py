@@ -17,7 +17,7 @@ from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 from catenet.solver.modal import body_frames, stable_with_bodies
-from catenet.solver.newton import _c_start, raise_unconverged, solve_newton
+from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.stability import STABLE, UNSTABLE, tangent
@@ -72,19 +72,7 @@ def solve_static(
     else:
         result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
     result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
-    if result.converged and result.tolerance > potential.f_norm > 0:
-        # Held only to a round-off floor above the loads: no digit of the answer is sure.
-        result.converged = False
-        result.reason = "the forces' round-off floor exceeds the loads"
-    if not result.converged and raise_on_failure:
-        hint = ""
-        if result.tolerance > ROUNDOFF_HINT * potential.f_norm:
-            hint = (
-                ": the round-off level of this net's forces (EA eps_mach |x| / l0 per edge) "
-                "is comparable to its loads, more than double precision can resolve; use "
-                "fewer, longer edges or check EA"
-            )
-        raise_unconverged(result, "static equilibrium", state=begin, hint=hint)
+    _check_converged(result, potential, begin, raise_on_failure)
     out = finish(
         ws.system,
         loads,
@@ -100,8 +88,40 @@ def solve_static(
         stats=ws.stats(),
         outcome=_outcome(result),
     )
+    if result.converged:
+        _judge_stability(ws, net, potential, x, out)
+    _warn_loose(ws, net, out)
+    return out
+
+
+def _check_converged(
+    result: NewtonResult, potential: Potential, begin: np.ndarray, raise_on_failure: bool
+) -> None:
+    """A converged result held only to a round-off floor above the loads is not converged
+    (no digit of the answer is sure); an unconverged one raises ConvergenceError (its
+    ``state`` the start ``begin``), unless not ``raise_on_failure``."""
+    if result.converged and result.tolerance > potential.f_norm > 0:
+        # Held only to a round-off floor above the loads: no digit of the answer is sure.
+        result.converged = False
+        result.reason = "the forces' round-off floor exceeds the loads"
+    if not result.converged and raise_on_failure:
+        hint = ""
+        if result.tolerance > ROUNDOFF_HINT * potential.f_norm:
+            hint = (
+                ": the round-off level of this net's forces (EA eps_mach |x| / l0 per edge) "
+                "is comparable to its loads, more than double precision can resolve; use "
+                "fewer, longer edges or check EA"
+            )
+        raise_unconverged(result, "static equilibrium", state=begin, hint=hint)
+
+
+def _judge_stability(
+    ws: Workspace, net: Net, potential: Potential, x: np.ndarray, out: Result
+) -> None:
+    """The equilibrium's stability into ``out`` (``stable``, ``diagnosis``; a warning
+    where it is unstable), where it can be lost: free bodies, or bilateral edges."""
     bodies = body_frames(ws.system)  # a free body may rest unstably on any net
-    if (bodies or not net.law.all_tension_only) and result.converged:
+    if bodies or not net.law.all_tension_only:
         out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, potential, x)
         if out.stable is False:
             out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
@@ -112,6 +132,10 @@ def solve_static(
                 "(any disturbance makes the net or a body move away): %s",
                 out.diagnosis,
             )
+
+
+def _warn_loose(ws: Workspace, net: Net, out: Result) -> None:
+    """A warning where free nodes hang on slack edges only and no other term holds them."""
     loose = loose_nodes(net, out.tension)
     for term in ws.system.terms:  # nodes that another term (a spring, contact) holds
         pattern = term.pattern() if term.edge_net is None else None
@@ -125,7 +149,6 @@ def solve_static(
             ", ".join(map(str, loose[:10])),
             " ..." if loose.size > 10 else "",
         )
-    return out
 
 
 def _outcome(result) -> Outcome:
@@ -206,77 +229,131 @@ def equilibrium(
     net = system.net
     stretch = system.stretch
     others = tuple(t for t in system.terms if t is not stretch)
-    history: list[float] = []
-    iterations = 0
     stretched = not others and potential.f_norm > 0 and unstressed(net, x)
     if stretched:
         stretched_start(potential, x)
-    if _compressed_bilateral(stretch, x) and not _definite(potential, x):
-        # Bilateral edges in compression: the straight compressed state is an unstable
-        # equilibrium beside the sagging one, and the Hessian is indefinite around it, so
-        # Newton from the start stalls near it. Where the sagging state has every edge in
-        # tension it is the tension-only equilibrium: that one first (its smoothing
-        # continuation handles the compressed edges as slack), then the exact law from
-        # there (converged at once where no edge ends in compression). A compressed strut
-        # that other edges hold (a guyed mast: the Hessian at the start is positive
-        # definite) is solved directly: the detour would let it fall over.
-        taut = stretch.with_law(stretch.law.with_tension_only(True))
-        first = equilibrium(
-            potential.with_system(system.with_terms((taut, *others))),
-            x,
-            rtol=rtol,
-            max_iter=max_iter,
-        )
-        iterations += first.iterations
-        history += first.history
+    first = _taut_first(potential, x, rtol=rtol, max_iter=max_iter)
     # Stages are held to the load scale: smoothing and scaling change the internal forces.
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
     factors = stiffness_factors(potential)
     mu = slack_strain(net, x) if stretch.law.any_tension_only else 0.0
 
-    barriers = _Barriers(others)
-
-    def stage(term: Stretch, label: str, level: int = 0) -> bool:
-        """One loose solve with the stretching ``term`` in place of the exact one and the
-        obstacles' barriers of continuation ``level`` (0: the widest)."""
-        nonlocal iterations, history
-        result = solve_newton(
-            potential.with_system(system.with_terms((term, *barriers(level)))),
-            x,
-            rtol=SMOOTH_RTOL,
-            atol=atol,
-            max_iter=max_iter,
-            label=f"static ({label})",
-        )
-        iterations += result.iterations
-        history += result.history
-        return result.converged and result.iterations > 0
-
-    for k, factor in enumerate(factors + [1.0]):
-        scaled = stretch.scaled(factor)
-        if k == 0:  # the smoothing continuation, at the first stiffness
-            for _ in range(SMOOTH_STAGES if mu > 0.0 else 0):
-                smooth = scaled.with_law(stretch.law.smoothed(mu))
-                if not stage(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
-                    break
-                strains = strain(net, x)
-                positive = strains[strains > 0]
-                if positive.size and mu < SMOOTH_END * float(np.min(positive)):
-                    break
-                mu /= SMOOTH_REDUCTION
-        if factor < 1.0:
-            stage(scaled, f"EA x {factor:.1e}")
-    for level in range(barriers.count):  # the obstacles' barriers, narrower each stage
-        stage(stretch, f"barrier stage {level + 1} of {barriers.count}", level)
+    stages = _Stages(potential, x, _Barriers(others), atol=atol, max_iter=max_iter)
+    if first is not None:
+        stages.count(first)
+    stages.continue_stiffness(factors, mu)
+    stages.narrow_barriers()
     if transient:
         result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
     else:
         result = solve_newton(
             potential, x, rtol=rtol, max_iter=max_iter, label="static", shifted=stretched
         )
-    result.iterations += iterations
-    result.history = history + result.history
+    result.iterations += stages.iterations
+    result.history = stages.history + result.history
     return result
+
+
+def _taut_first(
+    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
+) -> NewtonResult | None:
+    """The tension-only equilibrium first (x updated), for bilateral edges compressed at
+    x where the stiffness there is not positive definite: its result, else None."""
+    system = potential.system
+    stretch = system.stretch
+    others = tuple(t for t in system.terms if t is not stretch)
+    if not (_compressed_bilateral(stretch, x) and not _definite(potential, x)):
+        return None
+    # Bilateral edges in compression: the straight compressed state is an unstable
+    # equilibrium beside the sagging one, and the Hessian is indefinite around it, so
+    # Newton from the start stalls near it. Where the sagging state has every edge in
+    # tension it is the tension-only equilibrium: that one first (its smoothing
+    # continuation handles the compressed edges as slack), then the exact law from
+    # there (converged at once where no edge ends in compression). A compressed strut
+    # that other edges hold (a guyed mast: the Hessian at the start is positive
+    # definite) is solved directly: the detour would let it fall over.
+    taut = stretch.with_law(stretch.law.with_tension_only(True))
+    return equilibrium(
+        potential.with_system(system.with_terms((taut, *others))),
+        x,
+        rtol=rtol,
+        max_iter=max_iter,
+    )
+
+
+class _Stages:
+    """The loose solves of ``equilibrium``'s continuations from x (updated in place), held
+    to ``atol``, with the obstacles' ``barriers``; ``iterations`` and ``history`` count
+    every solve's."""
+
+    def __init__(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        barriers: _Barriers,
+        *,
+        atol: float,
+        max_iter: int,
+    ):
+        self.potential, self.x, self.barriers = potential, x, barriers
+        self.atol, self.max_iter = atol, max_iter
+        self.iterations = 0
+        self.history: list[float] = []
+
+    def count(self, result: NewtonResult) -> None:
+        """Adds a solve's iterations and residual history."""
+        self.iterations += result.iterations
+        self.history += result.history
+
+    def __call__(self, term: Stretch, label: str, level: int = 0) -> bool:
+        """One loose solve with the stretching ``term`` in place of the exact one and the
+        obstacles' barriers of continuation ``level`` (0: the widest): whether it
+        converged and moved."""
+        system = self.potential.system
+        result = solve_newton(
+            self.potential.with_system(system.with_terms((term, *self.barriers(level)))),
+            self.x,
+            rtol=SMOOTH_RTOL,
+            atol=self.atol,
+            max_iter=self.max_iter,
+            label=f"static ({label})",
+        )
+        self.count(result)
+        return result.converged and result.iterations > 0
+
+    def continue_stiffness(self, factors: list[float], mu: float) -> None:
+        """The stiffness continuation (EA scaled by each of ``factors``, then the exact
+        EA), with the smoothing continuation from ``mu`` at the first stiffness."""
+        stretch = self.potential.system.stretch
+        for k, factor in enumerate(factors + [1.0]):
+            scaled = stretch.scaled(factor)
+            if k == 0:  # the smoothing continuation, at the first stiffness
+                self.smooth(scaled, factor, mu)
+            if factor < 1.0:
+                self(scaled, f"EA x {factor:.1e}")
+
+    def smooth(self, scaled: Stretch, factor: float, mu: float) -> None:
+        """The smoothing continuation of the stretching ``scaled`` (EA x ``factor``): its
+        law smoothed by ``mu``, tenfold less per stage, until it is negligible against the
+        strains (none for ``mu`` 0)."""
+        system = self.potential.system
+        stretch, net = system.stretch, system.net
+        for _ in range(SMOOTH_STAGES if mu > 0.0 else 0):
+            smooth = scaled.with_law(stretch.law.smoothed(mu))
+            if not self(smooth, f"EA x {factor:.1e}, mu {mu:.1e}"):
+                break
+            strains = strain(net, self.x)
+            positive = strains[strains > 0]
+            if positive.size and mu < SMOOTH_END * float(np.min(positive)):
+                break
+            mu /= SMOOTH_REDUCTION
+
+    def narrow_barriers(self) -> None:
+        """The obstacles' barrier continuation: narrower each stage, to their own."""
+        stretch = self.potential.system.stretch
+        count = self.barriers.count
+        for level in range(count):
+            self(stretch, f"barrier stage {level + 1} of {count}", level)
 
 
 def stiffness_factors(potential: Potential) -> list[float]:
@@ -366,7 +443,7 @@ class _Barriers:
 def _definite(potential: Potential, x: np.ndarray) -> bool:
     """Whether the stiffness at x is positive definite (False where the solver cannot
     tell: then the caller takes the safe path)."""
-    if getattr(potential.solver, "mtype", -2) != -2:
+    if potential.solver.mtype not in (-2, None):  # PARDISO's Cholesky or LU: cannot tell
         return False
     try:
         potential.factorize(x, 0.0)
