@@ -4,6 +4,7 @@ between sections and the node references, all checked before anything is compute
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -40,7 +41,7 @@ from catenet.case.sections import (
     parse_output,
     parse_solver,
 )
-from catenet.case.timing import default_t_end
+from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.case.written import plain
 from catenet.errors import ConfigError
@@ -190,10 +191,12 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             geometry.check_material(ck, material)  # a graph's cables override [material]
         _check_mass(ck, data, material, solver, load)
     dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+    if dynamic and solver.t_end is None:  # not given (a static case's stays None)
+        t_end = default_t_end(load, supports, solver, obstacles, masses)
+        solver = dataclasses.replace(solver, t_end=t_end)
+    if isinstance(solver, SolverConfig):
+        solver = resolve_steps(solver)  # fixed or adaptive steps, and the integrator
     if dynamic:
-        if solver.t_end is None:  # not given (a static case's stays None)
-            t_end = default_t_end(load, supports, solver, obstacles, masses)
-            solver = dataclasses.replace(solver, t_end=t_end)
         _check_time_steps(ck, solver)
 
     # Node references need the node count (and, for square nets, the built topology):
@@ -257,11 +260,23 @@ def _check_mass(
 
 
 def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:
-    """A problem when a dynamic run's dt exceeds its end time or makes too many steps."""
+    """A problem when a dynamic run's dt exceeds its end time or makes too many steps, or
+    adaptive steps' bounds contradict each other."""
     t_end = solver.t_end  # a number, or "rest"
+    adaptive = solver.tolerance is not None and isinstance(t_end, (int, float))
+    if adaptive:
+        low = 0.0 if solver.dt_min is None else solver.dt_min
+        high = math.inf if solver.dt_max is None else solver.dt_max
+        if not low <= high:
+            ck.add(f"solver.dt_min = {solver.dt_min!r}: must be <= solver.dt_max = {high!r}")
+        elif not low <= solver.dt <= high:
+            ck.add(
+                f"solver.dt = {solver.dt!r}: the first adaptive step must lie within "
+                f"solver.dt_min = {low!r} and solver.dt_max = {high!r}"
+            )
     if isinstance(t_end, (int, float)) and solver.dt > t_end:
         ck.add(f"solver.dt = {solver.dt!r}: must be <= solver.t_end = {t_end!r}")
-    elif isinstance(t_end, (int, float)):
+    elif isinstance(t_end, (int, float)) and not adaptive:
         steps = t_end / solver.dt
         if not steps <= MAX_TIME_STEPS:
             ck.add(

@@ -304,12 +304,41 @@ class SolverConfig(Declared):
     method: str = choice(
         Settings.method, METHODS, doc="equilibrium directly, or the paper's damped implicit Euler"
     )
-    dt: float = real(Settings.dt, gt=0, unit="s", doc="dynamic: time step")
+    dt: float = real(
+        None,  # not given: catenet/case/parse.py decides (fixed, or the first adaptive step)
+        gt=0,
+        write="given",
+        unit="s",
+        shown="`0.01`; with solver.tolerance: t_end / 1000",
+        doc="dynamic: the time step (fixed); with solver.tolerance, the first step",
+    )
+    tolerance: float | None = real(
+        None,
+        gt=0,
+        lt=1,
+        write="given",
+        shown="none: fixed steps",
+        doc="dynamic, a number for t_end: steps chosen by accuracy: each step's local error "
+        "in positions and velocities, as a share of how far and how fast the motion goes "
+        "(docs/howto/dynamic-runs.md)",
+    )
+    dt_max: float | None = real(
+        None, gt=0, write="given", unit="s", shown="t_end", doc="adaptive steps: the longest"
+    )
+    dt_min: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="s",
+        shown="t_end / 2^40",
+        doc="adaptive steps: the shortest (a step there is taken, its error counted)",
+    )
     damping: float = real(Settings.damping, ge=0, unit="1/s", doc="dynamic: mass damping mu")
-    integrator: str = choice(
-        Settings.integrator,
+    integrator: str | None = choice(
+        None,  # not given: bdf2 where steps adapt, else implicit Euler (parse.py)
         INTEGRATORS,
-        write="changed",
+        write="given",
+        shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance',
         doc="dynamic: the paper's implicit Euler (first order, damps numerically), "
         "newmark (second order) or bdf2 (second order, L-stable: right in contact)",
     )

@@ -11,12 +11,16 @@ a path, a turning shape) or is a free body, an initial velocity, or no damping
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Iterator
 from typing import Any
 
 from catenet.case.obstacles import SphereObstacle
 from catenet.case.sections import LoadConfig, SolverConfig, SupportsConfig
+from catenet.solver.adaptive import FIRST_SHARE
 from catenet.solver.relax import REST
+from catenet.solver.settings import Settings
 
 #: solver.t_end's default where something depends on time [s].
 T_END = 10.0
@@ -51,6 +55,24 @@ def default_t_end(load: Any, supports: Any, solver: Any, obstacles: Any, masses:
     """solver.t_end when the case does not give it: "rest" where nothing depends on time
     (``time_dependence``), else T_END."""
     return T_END if time_dependence(load, supports, solver, obstacles, masses) else REST
+
+
+def resolve_steps(solver: SolverConfig) -> SolverConfig:
+    """A dynamic case's steps as the run takes them (its t_end decided): a run with a
+    number for t_end and a ``tolerance`` adapts its steps to it (``dt``: the first step,
+    else FIRST_SHARE of t_end, at most ``dt_max``) with bdf2 unless ``integrator`` says
+    otherwise (``catenet.solver.adaptive``); any other run steps by ``dt`` (default
+    0.01 s) with implicit Euler unless ``integrator`` says otherwise."""
+    if isinstance(solver.t_end, (int, float)) and solver.tolerance is not None:
+        dt_max = math.inf if solver.dt_max is None else solver.dt_max
+        first = min(dt_max, FIRST_SHARE * float(solver.t_end)) if solver.dt is None else solver.dt
+        return dataclasses.replace(solver, dt=first, integrator=solver.integrator or "bdf2")
+    dynamic = solver.method == "dynamic"  # (a static case keeps its integrator unset)
+    return dataclasses.replace(
+        solver,
+        dt=Settings.dt if solver.dt is None else solver.dt,
+        integrator=solver.integrator or (Settings.integrator if dynamic else None),
+    )
 
 
 def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:

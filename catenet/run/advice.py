@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from catenet.case.timing import resolve_steps
+
 if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.case.sections import SolverConfig
@@ -36,6 +38,9 @@ def _dynamic_only(solver: SolverConfig) -> dict[str, object]:
     """The [solver] keys only dynamic runs read, with their values in ``solver``."""
     return {
         "dt": solver.dt,
+        "tolerance": solver.tolerance,
+        "dt_max": solver.dt_max,
+        "dt_min": solver.dt_min,
         "damping": solver.damping,
         "t_end": solver.t_end,
         "integrator": solver.integrator,
@@ -47,7 +52,7 @@ def _dynamic_only(solver: SolverConfig) -> dict[str, object]:
 def ignored_solver_keys(solver: SolverConfig) -> list[str]:
     """Messages for the [solver] keys that ``solver.method`` ignores and that the case sets
     to something else than their default (a default is ignored silently)."""
-    default = type(solver)()
+    default = resolve_steps(type(solver)())  # dt and integrator as a case resolves them
     method = solver.method
     out = []
     if method == "dynamic":
@@ -57,6 +62,18 @@ def ignored_solver_keys(solver: SolverConfig) -> list[str]:
                 f"{solver.integrator!r} (it is the newmark integrator's high-frequency "
                 "dissipation; set solver.integrator = 'newmark' or remove the key)"
             )
+        if solver.tolerance is not None and not isinstance(solver.t_end, (int, float)):
+            out.append(
+                f"solver.tolerance = {solver.tolerance!r}: ignored with solver.t_end = "
+                f"{solver.t_end!r} (a run to rest grows its own steps; steps chosen by "
+                "accuracy need a number for t_end)"
+            )
+        for key, bound in (("dt_max", solver.dt_max), ("dt_min", solver.dt_min)):
+            if bound is not None and solver.tolerance is None:
+                out.append(
+                    f"solver.{key} = {bound!r}: ignored without solver.tolerance (it bounds "
+                    "the steps chosen by accuracy; steps are fixed at solver.dt)"
+                )
         if solver.steps != default.steps:
             out.append(
                 f"solver.steps = {solver.steps}: ignored with solver.method = 'dynamic' (load "

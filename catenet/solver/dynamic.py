@@ -29,6 +29,7 @@ from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
 from catenet.kernels.sparse import norm
 from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
+from catenet.solver.adaptive import ErrorControl
 from catenet.solver.energy import Ledger
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.newton import Reuse, solve_newton
@@ -75,6 +76,9 @@ def solve_dynamic(
     a_out: np.ndarray | None = None,
     max_steps: int = MAX_STEPS,
     ledger: Ledger | None = None,
+    tolerance: float | None = None,
+    dt_max: float | None = None,
+    dt_min: float | None = None,
 ) -> Result:
     """Time integration from ``t0`` (state ``x0``, ``v0``; default: reference positions
     at rest) to ``t_end`` or to equilibrium.
@@ -107,6 +111,9 @@ def solve_dynamic(
 
     ``ledger``: the run's energy balance (``catenet.solver.energy.Ledger``; a new one
     where None), kept step by step; EnergyError where the integrator creates energy.
+
+    ``tolerance`` (a number for t_end): steps chosen by accuracy, ``dt`` the first, within
+    [``dt_min``, ``dt_max``] (catenet/solver/adaptive.py; implicit Euler or bdf2).
     """
     _check(dt, damping, t_end, t0, rtol, max_steps)
     _check_rest(t_end, damping, stop_at_equilibrium)
@@ -119,7 +126,7 @@ def solve_dynamic(
     start = time.perf_counter()
     stepper.ledger = balance = Ledger() if ledger is None else ledger
     stepper.begin(x0, v0, t0, a0, a_out)
-    control = _control(stepper, dt, t0, t_end, max_steps)
+    control = _control(stepper, dt, t0, t_end, max_steps, (tolerance, dt_max, dt_min))
     run = stepper.run(
         control,
         rest=stop_at_equilibrium,
@@ -142,13 +149,22 @@ def _check_rest(t_end: float | str, damping: float, stop_at_equilibrium: bool) -
 
 
 def _control(
-    stepper: TimeStepper, dt: float, t0: float, t_end: float | str, max_steps: int
-) -> RestControl | StepControl:
+    stepper: TimeStepper,
+    dt: float,
+    t0: float,
+    t_end: float | str,
+    max_steps: int,
+    accuracy: tuple[float | None, float | None, float | None] = (None, None, None),
+) -> RestControl | StepControl | ErrorControl:
     """The run's step control: to rest (its steps grown as the motion decays, through the
-    stepper's continuation stages) or to ``t_end``."""
+    stepper's continuation stages), or to ``t_end`` by ``dt``, or by ``accuracy``
+    (tolerance, dt_max, dt_min; catenet/solver/adaptive.py) where its tolerance is given."""
     if t_end == REST:
         return RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
-    return StepControl(dt, t0, float(t_end))
+    tolerance, dt_max, dt_min = accuracy
+    if tolerance is None:
+        return StepControl(dt, t0, float(t_end))
+    return ErrorControl.of(stepper, dt, t0, float(t_end), tolerance, dt_max, dt_min)
 
 
 def _result(stepper: TimeStepper, ledger: Ledger, run: Outcome, start: float) -> Result:
@@ -218,6 +234,7 @@ class TimeStepper:
         moving_supports = loads.moves_supports and self.settle > t0
         self.follow = HarmonicExtension(net) if moving_supports else None
         self.t, self.x, self.v = t0, x, v
+        self.x0_free = x.reshape(-1)[self.free].copy()  # adaptive steps' displacements
         self.x_trial = np.empty_like(x)
         if a0 is not None and np.shape(a0) != net.nodes.shape:
             raise ConfigError(f"a0: must have shape {net.nodes.shape}")
@@ -244,6 +261,8 @@ class TimeStepper:
                 if not self.refresh(h_step, why):
                     self.cut(control, h_step, why, newton)
                 continue
+            if isinstance(control, ErrorControl) and not control.within(self, h_step):
+                continue  # its error beyond the tolerance: tried again, shorter
             self.accept(control, h_step, newton)
             if rest and self.t >= self.settle and not self.moving:  # else it runs to t_end
                 tol = control.rtol(self.rtol) if to_rest else self.rtol
@@ -424,6 +443,9 @@ class TimeStepper:
         self.steps += 1
         self.residual = newton.residual
         control.accepted()
+        if isinstance(control, ErrorControl):
+            moved = self.x.reshape(-1)[self.free] - self.x0_free
+            control.saw(moved, self.v.reshape(-1)[self.free], self.m_free)
 
 
 def _mass_and_damping(net: Net, damping: float):

@@ -99,7 +99,8 @@ class ImplicitEuler:
     a = None  # no acceleration state
 
     def begin(self, potential, x, v, m_free, damping, a0=None) -> None:
-        """Nothing to derive at the start of a run."""
+        """Nothing to derive at the start of a run (no last step)."""
+        self._prev = None
 
     def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None:
         """Newton's start (Eq. 11): x_trial (a copy of x_n) += h v_n on the free DOFs."""
@@ -111,9 +112,29 @@ class ImplicitEuler:
         a = (m_free / h**2 * (y_k + h * v_k) + damping * m_free / h * y_k) / w
         return w, a
 
+    keep = False  # keep the last state for ``estimate`` (steps chosen by accuracy)
+    _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
+
     def accept(self, x_new, x, v, free, h) -> np.ndarray:
         """The velocities of the accepted step (Eq. 10c)."""
+        if self.keep:
+            self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
         return (x_new - x) / h
+
+    def estimate(self, y_new, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray] | None:
+        """The local error of the step of ``h`` from (y_k, v_k) to y_new (free DOFs), in x
+        and in v: -R / (P - R) times the difference between the step's solution and the
+        line through the last two states extrapolated to t + h (R = -h^2/2 the residual
+        of the scheme's formula on y = t^2/2, P = h (h + h1) / 2 the line's error there:
+        the solution is off by -R y'', the line by -P y''); None on the first step."""
+        if self._prev is None:
+            return None
+        y1, v1, h1 = self._prev
+        v_new = (y_new - y_k) / h
+        share = h / (2.0 * h + h1)  # -R / (P - R)
+        ex = share * (y_new - (y_k + (h / h1) * (y_k - y1)))
+        ev = share * (v_new - (v_k + (h / h1) * (v_k - v1)))
+        return ex, ev
 
 
 class Newmark:
@@ -211,16 +232,19 @@ class BDF2:
 
     def __init__(self) -> None:
         self._prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of step n-1
+        self._older: tuple[np.ndarray, np.ndarray, float] | None = None  # ... of step n-2
         self._bar: tuple[np.ndarray, np.ndarray, float] | None = None  # this step's x, v, b
+        self._bdf = False  # this step is a BDF2 step (not implicit Euler's)
 
     def begin(self, potential, x, v, m_free, damping, a0=None) -> None:
         """A run starts with one implicit Euler step."""
-        self._prev = None
+        self._prev = self._older = None
 
     def _coefficients(self, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray, float]:
         """(c1 x_n - c2 x_{n-1}, c1 v_n - c2 v_{n-1}, b) of a step h from (y_k, v_k)."""
         prev = self._prev
-        if prev is None or h / prev[2] > self.MAX_RATIO:
+        self._bdf = prev is not None and h / prev[2] <= self.MAX_RATIO
+        if prev is None or not self._bdf:
             return y_k, v_k, h  # implicit Euler
         y_p, v_p, h_p = prev
         omega = h / h_p
@@ -251,8 +275,34 @@ class BDF2:
         y_bar, _, b = self._bar
         out = (x_new - x) / h
         out.reshape(-1)[free] = (x_new.reshape(-1)[free] - y_bar) / b
+        self._older = self._prev
         self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
         return out
+
+    def estimate(self, y_new, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray] | None:
+        """The local error of the step of ``h`` from (y_k, v_k) to y_new (free DOFs), in x
+        and in v: -R / (P - R) times the difference between the step's solution and the
+        parabola through the last three states extrapolated to t + h, R the residual of
+        the scheme's formula on y = t^3/6 (-2 h^3 / 9 on equal steps) and P the
+        parabola's error there (the solution is off by -R y3, the parabola by -P y3, y3
+        the third derivative: 2/11 of the difference on equal steps); None before the
+        scheme has those states, or for an implicit Euler step."""
+        if not self._bdf or self._older is None or self._prev is None or self._bar is None:
+            return None
+        y_bar, _, b = self._bar
+        v_new = (y_new - y_bar) / b
+        (y1, v1, h1), (y2, v2, h2) = self._prev, self._older
+        omega = h / h1
+        c2 = omega * omega / (1.0 + 2.0 * omega)
+        err_c = ((1.0 + c2) * h**3 - c2 * (h + h1) ** 3) / 6.0
+        err_p = h * (h + h1) * (h + h1 + h2) / 6.0
+        w0 = (h + h1) * (h + h1 + h2) / (h1 * (h1 + h2))  # the parabola's weights at t + h
+        w1 = -h * (h + h1 + h2) / (h1 * h2)
+        w2 = h * (h + h1) / ((h1 + h2) * h2)
+        share = -err_c / (err_p - err_c)
+        ex = share * (y_new - (w0 * y_k + w1 * y1 + w2 * y2))
+        ev = share * (v_new - (w0 * v_k + w1 * v1 + w2 * v2))
+        return ex, ev
 
 
 def make(name: str = "implicit_euler", rho_inf: float = RHO_INF):

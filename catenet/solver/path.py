@@ -251,6 +251,9 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
             a_out=accel,
             max_steps=settings.max_steps,
             ledger=ledger,
+            tolerance=settings.tolerance,
+            dt_max=settings.dt_max,
+            dt_min=settings.dt_min,
         )
         _judge_rest(ws, result)
         return result

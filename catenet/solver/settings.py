@@ -34,6 +34,9 @@ class Settings:
     start: str = "auto"  # static: "auto", "stretched" or "nested" (catenet.solver.nested)
     post_collapse: bool = False  # static: follow a collapsing path through (else exit 1)
     energy_tolerance: float = 1e-2  # dynamic: energy created, a share of the largest
+    tolerance: float | None = None  # dynamic: steps chosen by accuracy (catenet.solver.adaptive)
+    dt_max: float | None = None  # ... the longest step (None: t_end - t0)
+    dt_min: float | None = None  # ... the shortest
 
     @classmethod
     def of(cls, config: object, **changes: Any) -> Settings:
@@ -63,6 +66,16 @@ class Settings:
             raise ConfigError(
                 'solver.start = "nested": is for static runs (solver.method = "static"); '
                 'a dynamic run starts from the reference positions: use "auto"'
+            )
+        if self.tolerance is not None and not 0.0 < self.tolerance < 1.0:
+            raise ConfigError(f"solver.tolerance = {self.tolerance!r}: must be in (0, 1)")
+        for name, value in (("dt_max", self.dt_max), ("dt_min", self.dt_min)):
+            if value is not None and not value > 0.0:
+                raise ConfigError(f"solver.{name} = {value!r}: must be a number > 0")
+        if self.tolerance is not None and self.integrator == "newmark":
+            raise ConfigError(
+                "solver.tolerance: steps chosen by accuracy take integrator = 'bdf2' or "
+                "'implicit_euler', not 'newmark' (give solver.dt for fixed steps)"
             )
         if self.steps < 1:
             raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")

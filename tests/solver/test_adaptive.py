@@ -1,0 +1,130 @@
+"""Time steps chosen by accuracy (``solver.tolerance``; catenet/solver/adaptive.py): the
+error falls with the tolerance at the scheme's order against a closed form, the steps
+stay within their bounds, the case keys resolve and refuse what cannot run, and a case
+run from the command line writes its irregular frames."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import catenet as cn
+from catenet.case import build, parse_case
+from catenet.errors import ConfigError
+from catenet.solver.dynamic import solve_dynamic
+from tests.solver.test_energy import invoke, write
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def spring(integrator: str, tolerance: float, **keys) -> tuple[float, int, list[float]]:
+    """A 1 kg mass on an axial spring (EA = 100 N, l0 = 1 m; omega = 10 1/s) released 1 %
+    beyond its 2 % equilibrium strain, over 2 s (3.2 periods): (|x - x_exact| at the end,
+    steps, the steps' lengths)."""
+    nodes = np.array([[0.0, 0.0, 0.0], [1.03, 0.0, 0.0]])
+    net = cn.Net.from_arrays(
+        nodes, [[0, 1]], EA=100.0, fixed=[0], rest_length=1.0, point_mass=[0.0, 1.0]
+    )
+    loads = cn.Loads(force=np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]))
+    times = [0.0]
+    r = solve_dynamic(
+        net, loads, dt=1e-3, damping=0.0, t_end=2.0, rtol=1e-12, stop_at_equilibrium=False,
+        integrator=integrator, tolerance=tolerance, on_step=lambda k, t, x, v: times.append(t),
+        **keys,
+    )  # fmt: skip
+    assert r.converged and r.time == 2.0
+    return abs(r.x[1, 0] - (1.02 + 0.01 * math.cos(20.0))), r.steps, list(np.diff(times))
+
+
+@pytest.mark.parametrize("integrator, order", [("bdf2", 2), ("implicit_euler", 1)])
+def test_the_error_falls_with_the_tolerance_at_the_schemes_order(integrator, order):
+    """Per tenfold tighter tolerance the steps grow about 10^(1/(p+1)) times (2.2 for
+    bdf2, 3.2 for implicit Euler) and the error at the end falls."""
+    runs = [spring(integrator, tol) for tol in (1e-3, 1e-4, 1e-5)]
+    errors = [e for e, _, _ in runs]
+    steps = [n for _, n, _ in runs]
+    expected = 10 ** (1 / (order + 1))
+    for k in range(2):
+        assert 0.7 * expected < steps[k + 1] / steps[k] < 1.4 * expected, steps
+        assert errors[k + 1] < 0.5 * errors[k], errors
+    assert errors[-1] < (1e-4 if order == 2 else 3e-4)  # of an amplitude of 1e-2 m
+
+
+def test_the_steps_keep_within_dt_min_and_dt_max():
+    _, _, lengths = spring("bdf2", 1e-5, dt_max=5e-3, dt_min=2e-3)
+    assert max(lengths) <= 5e-3 * (1 + 1e-12) and min(lengths[:-1]) >= 2e-3 * (1 - 1e-12)
+    _, _, free = spring("bdf2", 1e-3)
+    assert max(free) > 5e-3  # unbounded, it takes longer steps
+
+
+def drop(**solver) -> dict:
+    case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
+    case["solver"] = {k: v for k, v in case["solver"].items() if k != "dt"} | solver
+    return case
+
+
+def test_a_tolerance_without_dt_steps_by_accuracy_with_bdf2():
+    solver = parse_case(drop(tolerance=1e-3)).solver
+    assert solver.integrator == "bdf2" and solver.dt == pytest.approx(0.4 / 1000)
+    fixed = parse_case(drop()).solver  # no tolerance: fixed steps of 0.01 s, implicit Euler
+    assert fixed.tolerance is None and fixed.dt == 0.01 and fixed.integrator == "implicit_euler"
+    given = parse_case(drop(tolerance=1e-3, dt=2e-3, integrator="implicit_euler")).solver
+    assert given.dt == 2e-3 and given.integrator == "implicit_euler"
+
+
+@pytest.mark.parametrize(
+    "solver, message",
+    [
+        ({"tolerance": 1e-3, "integrator": "newmark"}, "not 'newmark'"),
+        ({"tolerance": 1e-3, "dt_min": 0.1, "dt_max": 0.01}, "solver.dt_min = 0.1: must be <="),
+        ({"tolerance": 1e-3, "dt": 0.2, "dt_max": 0.01}, "solver.dt = 0.2: the first adaptive"),
+        ({"tolerance": 1.5}, "solver.tolerance = 1.5"),
+        ({"dt_max": -1.0}, "solver.dt_max = -1.0"),
+    ],
+)
+def test_bad_step_keys_exit_2_naming_the_key(tmp_path, solver, message):
+    r = invoke("run", write(tmp_path, drop(**solver)), "-o", tmp_path / "out.h5", "-q")
+    assert r.exit_code == 2 and message in r.output, r.output
+
+
+def test_the_drop_at_a_tolerance_and_its_result_file(tmp_path):
+    """The drop at tolerance 3e-3 from the command line: the box thrown back up within
+    3 % of the fine-step answer (16.17 kg m/s), every frame's time after the last, no
+    node inside the box (the run's own check), the file's solver keys as run."""
+    out = tmp_path / "drop.h5"
+    r = invoke("run", write(tmp_path, drop(tolerance=3e-3)), "-o", out, "-q")
+    assert r.exit_code == 0, r.output
+    with h5py.File(out, "r") as f:
+        t = f["trajectory/time"][()]
+        assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(0.4)
+        assert len(np.unique(np.round(np.diff(t), 12))) > 3  # the steps did change
+    case = parse_case(drop(tolerance=3e-3))
+    scene = build(case)
+    result = cn.solve(scene, cn.Settings.of(case.solver))
+    (body,) = scene.rigid
+    momentum = body.mass * float(result.v[body.frame.nodes, 2].mean())
+    assert abs(momentum / 16.17 - 1) < 0.03
+
+
+def test_settings_refuse_newmark_with_a_tolerance():
+    with pytest.raises(ConfigError, match="not 'newmark'"):
+        cn.Settings("dynamic", tolerance=1e-3, integrator="newmark")
+
+
+def test_step_keys_a_run_ignores_are_named():
+    from catenet.run.advice import ignored_solver_keys
+
+    rest = parse_case(drop(tolerance=1e-3, t_end="rest", damping=1.0)).solver
+    assert any("solver.tolerance = 0.001: ignored with solver.t_end = 'rest'" in m
+               for m in ignored_solver_keys(rest))  # fmt: skip
+    fixed = parse_case(drop(dt=0.01, dt_max=0.02)).solver
+    assert any("solver.dt_max = 0.02: ignored without solver.tolerance" in m
+               for m in ignored_solver_keys(fixed))  # fmt: skip
+    static = parse_case(drop(method="static", tolerance=1e-3)).solver
+    assert any("solver.tolerance = 0.001: ignored with solver.method = 'static'" in m
+               for m in ignored_solver_keys(static))  # fmt: skip
