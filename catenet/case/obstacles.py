@@ -10,7 +10,7 @@ distance). ``friction`` (mu_f >= 0, default 0: frictionless) adds Coulomb fricti
 the barrier of a plane, a fixed sphere, or a box, capsule, cylinder or mesh, fixed or on
 a prescribed motion (then relative to its surface; ``catenet.terms.friction``), with
 ``slip`` (the distance below which a node sticks, default the activation distance); a
-moving sphere (a ball) is frictionless, a free body (``catenet.case.rigid``) is not. A
+moving sphere (a ball) is frictionless, a free body (``catenet.scene.rigid``) is not. A
 new kind is its shape (``catenet.scene.shapes``) and its keys (``catenet.case.shapes``,
 where ``SHAPED`` lists it).
 """
@@ -110,7 +110,7 @@ class SphereObstacle(Shaped, FreeKeys, Declared):
 
     @property
     def free(self) -> bool:
-        """A free body with six degrees of freedom (``catenet.case.rigid``)."""
+        """A free body with six degrees of freedom (``catenet.scene.rigid``)."""
         spins = self.inertia is not None or self.angular_velocity is not None
         return self.density is not None or (self.mass is not None and spins)
 

@@ -1,7 +1,7 @@
 """The keys that make an ``[[obstacle]]`` a free rigid body (``mass``, ``density``,
 ``inertia``) and their checks, declared once for every kind that takes them (box,
 capsule, mesh: ``catenet.case.shapes``; sphere: ``catenet.case.obstacles``); the bodies
-are built by ``catenet.case.rigid``."""
+are built by ``catenet.scene.rigid`` (``catenet.case.rigid`` turns them into builder calls)."""
 
 from __future__ import annotations
 

@@ -120,7 +120,7 @@ class Shaped:
 class _Motion(Shaped, FreeKeys):
     """A prescribed rigid motion (``velocity``, ``angular_velocity``, ``history``) of a
     box, capsule, cylinder or mesh (``catenet.terms.moving``): dynamic runs only; with ``mass`` or
-    ``density`` a free body instead (``catenet.case.rigid``)."""
+    ``density`` a free body instead (``catenet.scene.rigid``)."""
 
     velocity: Any  # the keys of the obstacle kinds that mix it in
     angular_velocity: Any

@@ -1,6 +1,6 @@
 """Moving spheres in a result file: where their centres are and what they are.
 
-A rigid ball or a ball on a prescribed path (``catenet.case.bodies``) is a node of the
+A rigid ball or a ball on a prescribed path (``catenet.scene.bodies``) is a node of the
 net, after all of the net's own nodes, so its centre's trajectory is part of
 ``/trajectory/x`` and its final place part of ``/result/x``. The group ``/mesh/bodies``
 says which nodes they are:

@@ -27,7 +27,7 @@ pose and its surface there, and the same at /result's time:
 /result/obstacles/<k>/{center, rotation, vertices}   the same at the final time
 ```
 
-A free rigid body (``catenet.case.rigid``) is stored as a moving one, its pose read from
+A free rigid body (``catenet.scene.rigid``) is stored as a moving one, its pose read from
 the state (its four nodes, ``catenet.terms.rigid.BodyFrame``; the origin is its centre of
 mass at t = 0), with more:
 
@@ -161,7 +161,7 @@ class _Item:
 
     def __init__(self, surface, cap: int, body=None):
         self.surface = surface
-        self.body = body  # a free body (catenet.case.rigid.FreeBody), else None
+        self.body = body  # a free body (catenet.scene.rigid.FreeBody), else None
         self.vertices = np.ascontiguousarray(surface.vertices, dtype=np.float64)
         self.triangles = surface.triangles
         self.shown, self.shown_triangles = self.vertices, self.triangles

@@ -46,7 +46,7 @@ def is_body(d: dict) -> bool:
 
 
 def is_free(d: dict) -> bool:
-    """A free rigid body (``catenet.case.rigid``): it moves as the solver finds, its
+    """A free rigid body (``catenet.scene.rigid``): it moves as the solver finds, its
     pose is read from the state (``catenet.output.obstacles``), never a ``Motion``."""
     if d.get("density") is not None:
         return True

@@ -1,4 +1,4 @@
-"""What a run's summary says of its free rigid bodies (``catenet.case.rigid``): the time
+"""What a run's summary says of its free rigid bodies (``catenet.scene.rigid``): the time
 each first came within its barrier's reach of the net (the first contact), and its final
 speed and spin, from the states the runner sees."""
 

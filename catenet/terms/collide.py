@@ -1,6 +1,6 @@
 """Rigid balls against boxes, capsules and meshes, fixed or on a prescribed motion.
 
-A moving sphere (``catenet.case.bodies``) is one node, its centre c, of radius r. Its
+A moving sphere (``catenet.scene.bodies``) is one node, its centre c, of radius r. Its
 contact with a shape is the shape's own barrier term (``catenet.terms.shapes``) acting
 on that one node, with the gap measured to the Minkowski sum of the shape and the ball:
 
@@ -14,7 +14,7 @@ curvature of the offset surface over the true distance d (``catenet.kernels.shap
 
 Guarantee, the same as for every contact term: the ball never overlaps the shape, in
 static and dynamic runs, at any step size. The barrier is infinite at g <= 0, a ball that
-starts overlapping is refused (``catenet.case.bodies``), and the line search and every
+starts overlapping is refused (``catenet.scene.bodies``), and the line search and every
 predictor are capped at ``max_step``, the exact first contact of the centre's straight
 motion with the offset surface: for the box the entry of the ray into the rounded box
 (its three slabs grown by r and the 12 capsules of radius r on its edges, whose end balls

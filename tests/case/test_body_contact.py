@@ -1,5 +1,5 @@
 """Free bodies against each other and against fixed obstacles, in the same implicit step
-as the net (catenet.case.touching, catenet.terms.touch): closed forms and invariants.
+as the net (catenet.scene.touching, catenet.terms.touch): closed forms and invariants.
 
 - A box resting on a fixed box (statically, and dynamically after a drop): the contact
   force is its weight, the gap within the activation distance; a box on a free box on

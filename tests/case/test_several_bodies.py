@@ -1,5 +1,5 @@
 """Several free rigid bodies in one case, and free bodies beside fixed obstacles and
-balls (catenet.case.rigid, catenet.case.touching): two bodies dropped into one net
+balls (catenet.scene.rigid, catenet.scene.touching): two bodies dropped into one net
 come to rest at the static equilibrium with both; two bodies and a free net in zero
 gravity keep their momentum; a box lands on the ground (a plane's barrier on its
 corners: finite-difference checks, reaction = weight); two spheres flying at each other

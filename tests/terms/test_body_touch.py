@@ -1,4 +1,4 @@
-"""Contact between two rigid solids (catenet.terms.touch, catenet.case.touching): a free
+"""Contact between two rigid solids (catenet.terms.touch, catenet.scene.touching): a free
 body against a fixed or free box, sphere, capsule or mesh. Finite-difference checks of
 the gradient and Hessian of every pair of kinds, at strained, turned poses with
 features within reach (corner on face, crossing edges, a sphere's or a capsule's
