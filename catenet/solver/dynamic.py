@@ -110,10 +110,9 @@ def solve_dynamic(
     or when ``max_steps`` accepted steps do not reach rest.
 
     ``ledger``: the run's energy balance (``catenet.solver.energy.Ledger``; a new one
-    where None), kept step by step; EnergyError where the integrator creates energy.
-
-    ``tolerance`` (a number for t_end): steps chosen by accuracy, ``dt`` the first, within
-    [``dt_min``, ``dt_max``] (catenet/solver/adaptive.py; implicit Euler or bdf2).
+    where None); EnergyError where the integrator creates energy. ``tolerance`` (a number
+    for t_end): steps chosen by accuracy, ``dt`` the first, within [``dt_min``,
+    ``dt_max``] (catenet/solver/adaptive.py; implicit Euler or bdf2).
     """
     _check(dt, damping, t_end, t0, rtol, max_steps)
     _check_rest(t_end, damping, stop_at_equilibrium)
