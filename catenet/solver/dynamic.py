@@ -94,12 +94,11 @@ def solve_dynamic(
     the tolerance, so a run at rest stops a few steps apart and a restart does not
     repeat the uninterrupted run exactly). ``reuse=False``: a factorisation per iteration.
 
-    ``integrator``: "implicit_euler" (the paper's) or "newmark" (second order, its
-    high-frequency dissipation ``rho_inf``; catenet/solver/integrators.py). Its acceleration
-    state (N, 3), 0 at the supports: ``a0`` the start's (a restart's stored one; None:
-    the physical acceleration), ``a_out`` an array kept equal to it after the start and
-    every accepted step, and the result's ``a``; implicit Euler has none (``a0`` ignored,
-    ``a_out`` left alone, the result's ``a`` None).
+    ``integrator``: "implicit_euler" (the paper's), "bdf2" (second order, L-stable) or
+    "newmark" (second order, its high-frequency dissipation ``rho_inf``;
+    catenet/solver/integrators.py). Newmark's acceleration state (N, 3), 0 at the
+    supports: ``a0`` the start's (a restart's; None: the physical one), ``a_out`` an array
+    kept equal to it, and the result's ``a``; the others have none.
 
     Times are exact multiples of the smallest step dt / 2**MAX_CUTS after t0 (t0 + k dt
     with one rounding while the step is dt), not sums of the steps' round-off.
@@ -126,12 +125,7 @@ def solve_dynamic(
     stepper.ledger = balance = Ledger() if ledger is None else ledger
     stepper.begin(x0, v0, t0, a0, a_out)
     control = _control(stepper, dt, t0, t_end, max_steps, (tolerance, dt_max, dt_min))
-    run = stepper.run(
-        control,
-        rest=stop_at_equilibrium,
-        on_step=on_step,
-        on_rest=on_rest,
-    )
+    run = stepper.run(control, rest=stop_at_equilibrium, on_step=on_step, on_rest=on_rest)
     return _result(stepper, balance, run, start)
 
 
