@@ -7,7 +7,8 @@ case's ``[solver]`` asks of them:
   which moves in dynamic runs only;
 - a box, capsule, cylinder, mesh or sphere with ``mass`` or ``density`` (a sphere: with
   ``density``, ``inertia`` or ``angular_velocity``) is a free body, whose initial motion
-  acts in dynamic runs only, and which newmark runs must damp (``RHO_INF_MAX``).
+  acts in dynamic runs only, and which newmark runs must damp
+  (``catenet.scene.rigid.RHO_INF_MAX``).
 """
 
 from __future__ import annotations
@@ -18,11 +19,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.scene.movers import Mover
-
-#: The largest solver.rho_inf with a free body: its rigidity is a stiff mode that the
-#: newmark scheme must damp (at 0.99 a spinning box's momentum drifts by half, at 1 the
-#: run blows up; 0.95 and below keep the second-order drift).
-RHO_INF_MAX = 0.95
+from catenet.scene.rigid import RHO_INF_MAX
 
 
 def movers(case: Any) -> tuple[Mover, ...]:

@@ -31,6 +31,11 @@ if TYPE_CHECKING:
 
 RESOLVED = 1e-8  # the share of a free body's size its coordinates' round-off may reach
 
+#: The largest solver.rho_inf with a free body: its rigidity is a stiff mode that the
+#: newmark scheme must damp (at 0.99 a spinning box's momentum drifts by half, at 1 the
+#: run blows up; 0.95 and below keep the second-order drift).
+RHO_INF_MAX = 0.95
+
 #: The orthogonality energy's k over the body's load scale (force x size): the body
 #: strains by about 1/RIGIDITY under a force of the scale.
 RIGIDITY = 1e6
