@@ -38,12 +38,16 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.solver.integrators import BDF2, ImplicitEuler
 from catenet.solver.stepping import ALLOWANCE
+
+if TYPE_CHECKING:
+    from catenet.solver.stepper import TimeStepper
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +61,7 @@ FLOOR = 1e-2  # X and V at least this share of L and of sqrt(|g| L), L / (t_end 
 MAX_TRIES = 100_000  # a run that needs more steps fails (a tolerance too tight for it)
 
 
-def _rms(a, mass) -> float:
+def _rms(a: np.ndarray, mass: np.ndarray) -> float:
     """sqrt(sum m a^2 / sum m): a mass-weighted RMS over the free DOFs."""
     total = float(np.sum(mass))
     return math.sqrt(float(np.dot(mass, a * a)) / total) if total > 0 else 0.0
@@ -107,7 +111,7 @@ class ErrorControl:
     @classmethod
     def of(
         cls,
-        stepper: Any,
+        stepper: TimeStepper,
         first: float,
         t0: float,
         t_end: float,
@@ -118,7 +122,7 @@ class ErrorControl:
         """The control of a TimeStepper's run (``catenet.solver.dynamic``): its scheme's
         order, the net's size and gravity. ConfigError for a scheme without an estimate."""
         scheme = stepper.scheme
-        if scheme.name not in ADAPTIVE:
+        if not isinstance(scheme, (ImplicitEuler, BDF2)):  # the schemes of ADAPTIVE
             raise ConfigError(
                 f"solver.tolerance: steps chosen by accuracy take integrator = 'bdf2' or "
                 f"'implicit_euler', not {scheme.name!r} (give solver.dt for fixed steps)"
@@ -131,7 +135,7 @@ class ErrorControl:
             gravity=0.0 if gravity is None else float(np.linalg.norm(gravity)),
         )  # fmt: skip
 
-    def within(self, stepper: Any, h_step: float) -> bool:
+    def within(self, stepper: TimeStepper, h_step: float) -> bool:
         """Whether the converged step of ``h_step`` of a TimeStepper (in its x_trial) is
         within the tolerance, its estimate filtered through the step's matrix (module
         docstring): else the next try is shorter, and ConvergenceError where the run's
@@ -139,7 +143,9 @@ class ErrorControl:
         free = stepper.free
         y_k, v_k = stepper.x.reshape(-1)[free], stepper.v.reshape(-1)[free]
         y_new = stepper.x_trial.reshape(-1)[free]
-        estimate = stepper.scheme.estimate(y_new, y_k, v_k, h_step)
+        scheme = stepper.scheme
+        assert isinstance(scheme, (ImplicitEuler, BDF2))  # ``of`` takes no other
+        estimate = scheme.estimate(y_new, y_k, v_k, h_step)
         error = None
         if estimate is not None:
             w, solve = stepper.inertia.w, stepper.potential.solver.solve
@@ -155,14 +161,14 @@ class ErrorControl:
             )  # fmt: skip
         return False
 
-    def saw(self, u, v, mass) -> None:
+    def saw(self, u: np.ndarray, v: np.ndarray, mass: np.ndarray) -> None:
         """The displacements from the start and velocities of an accepted step (free
         DOFs, their masses): X and V grow to the largest mass-weighted RMS of each."""
         if len(v):
             self.reach = max(self.reach, _rms(u, mass))
             self.speed = max(self.speed, _rms(v, mass))
 
-    def error(self, ex, ev, mass) -> float:
+    def error(self, ex: np.ndarray, ev: np.ndarray, mass: np.ndarray) -> float:
         """A step's error over the tolerance from its estimates in x and v (free DOFs,
         their masses: mass-weighted RMS, so that a light node rattling in contact does
         not set the steps of a heavy body's motion)."""

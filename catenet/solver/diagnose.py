@@ -12,12 +12,22 @@ unstable equilibrium, with the edges (and cables) in compression that meet there
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.model.net import Net
+    from catenet.solver.system import System
+    from catenet.terms import Stretch
+    from catenet.terms.rigid_contact import BodyContact
 
 NEGATIVE = 1e-9  # a block eigenvalue below -NEGATIVE x the block's largest is negative
 
 
-def unstable_nodes(stretch, x: np.ndarray, free: np.ndarray) -> np.ndarray:
+def unstable_nodes(stretch: Stretch, x: np.ndarray, free: np.ndarray) -> np.ndarray:
     """Free nodes whose own block of the edges' tangent stiffness at x (N, 3) has a
     negative eigenvalue (``stretch``: the net's ``terms.Stretch``; ``free`` (N,) bool)."""
     net = stretch.net
@@ -32,7 +42,7 @@ def unstable_nodes(stretch, x: np.ndarray, free: np.ndarray) -> np.ndarray:
     return np.flatnonzero(free & (eig[:, 0] < -NEGATIVE * size))
 
 
-def compressed_edges(stretch, x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+def compressed_edges(stretch: Stretch, x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     """Bilateral edges in compression at x that meet one of ``nodes``."""
     net = stretch.net
     at = np.isin(net.edges, nodes).any(axis=1)
@@ -40,7 +50,11 @@ def compressed_edges(stretch, x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
 
 
 def describe_unstable(
-    stretch, x: np.ndarray, free: np.ndarray, cable_names=None, cable_of_edge=None
+    stretch: Stretch,
+    x: np.ndarray,
+    free: np.ndarray,
+    cable_names: Sequence[str] | None = None,
+    cable_of_edge: np.ndarray | None = None,
 ) -> str:
     """One sentence naming the nodes (and cables) of an unstable equilibrium and the fix."""
     nodes = unstable_nodes(stretch, x, free)
@@ -66,14 +80,14 @@ def describe_unstable(
     )
 
 
-def describe_unstable_bodies(system, x: np.ndarray) -> str:
+def describe_unstable_bodies(system: System, x: np.ndarray) -> str:
     """One sentence naming the free rigid bodies of an unstable equilibrium that no
     compressed bilateral edge explains (else ""): a body at rest on the net whose rigid
     motion has negative stiffness, and the fix."""
     stretch = system.stretch
     if np.any(stretch.tension(x) < 0.0):
         return ""  # compressed bilateral edges: ``describe_unstable`` names them
-    labels = [t.label for t in system.terms if type(t).__name__ == "BodyContact"]
+    labels = [t.label for t in _body_contacts(system)]
     if not labels:
         return ""
     names = ", ".join(labels)
@@ -87,7 +101,7 @@ def describe_unstable_bodies(system, x: np.ndarray) -> str:
     )
 
 
-def _held_by_terms(system) -> np.ndarray:
+def _held_by_terms(system: System) -> np.ndarray:
     """(N,) nodes that a term besides the edges' stretching holds (a spring, contact)."""
     held = np.zeros(system.net.n_nodes, bool)
     for term in system.terms:
@@ -97,7 +111,7 @@ def _held_by_terms(system) -> np.ndarray:
     return held
 
 
-def floating_parts(net, tension: np.ndarray, x: np.ndarray, held: np.ndarray) -> np.ndarray:
+def floating_parts(net: Net, tension: np.ndarray, x: np.ndarray, held: np.ndarray) -> np.ndarray:
     """(N,) bool: free nodes in a part of the net that only slack edges join to its
     supports (a rigid-body motion costs nothing). Taut: an edge in tension, at exactly
     zero strain (its axial stiffness counts) or bilateral; ``held`` nodes (another term
@@ -113,11 +127,17 @@ def floating_parts(net, tension: np.ndarray, x: np.ndarray, held: np.ndarray) ->
     _, label = connected_components(graph, directed=False)
     anchored = np.zeros(label.max() + 1, bool)
     anchored[label[net.fixed | held]] = True
-    return ~anchored[label] & ~net.fixed
+    floating: np.ndarray = ~anchored[label] & ~net.fixed
+    return floating
 
 
 def describe_zero_modes(
-    system, x: np.ndarray, nodes: np.ndarray, count: int, cable_names=None, cable_of_edge=None
+    system: System,
+    x: np.ndarray,
+    nodes: np.ndarray,
+    count: int,
+    cable_names: Sequence[str] | None = None,
+    cable_of_edge: np.ndarray | None = None,
 ) -> str:
     """One sentence on the zero-frequency modes of a net at x: how many, and the nodes
     that move in them by what holds them (slack edges only, a part joined to the supports
@@ -173,9 +193,18 @@ def describe_zero_modes(
     return f"{head}{where}: give them tension (prestress, a load) or a support"
 
 
-def _free_bodies(system) -> list:
+def _free_bodies(system: System) -> list[tuple[str, np.ndarray]]:
     """(label, nodes) of each free rigid body: its contact term's label and frame."""
-    return [(t.label, t.frame.nodes) for t in system.terms if type(t).__name__ == "BodyContact"]
+    return [(t.label, t.frame.nodes) for t in _body_contacts(system)]
+
+
+def _body_contacts(system: System) -> list[BodyContact]:
+    """The contact term (``BodyContact``, not its friction) of each free rigid body."""
+    if "catenet.terms.rigid_contact" not in sys.modules:
+        return []  # none exists before its module loads: not loaded to look
+    from catenet.terms.rigid_contact import BodyContact
+
+    return [t for t in system.terms if type(t) is BodyContact]
 
 
 def _shown(nodes: np.ndarray) -> str:
@@ -183,7 +212,12 @@ def _shown(nodes: np.ndarray) -> str:
     return head + (f" and {nodes.size - 10} more" if nodes.size > 10 else "")
 
 
-def _cables(net, nodes, cable_names, cable_of_edge) -> str:
+def _cables(
+    net: Net,
+    nodes: np.ndarray,
+    cable_names: Sequence[str] | None,
+    cable_of_edge: np.ndarray | None,
+) -> str:
     if cable_names is None or cable_of_edge is None:
         return ""
     at = np.isin(net.edges, nodes).any(axis=1)

@@ -23,9 +23,15 @@ kept but not judged (``judged`` False): its work on the net is not counted.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from catenet.errors import ConvergenceError
+
+if TYPE_CHECKING:
+    from catenet.solver.stepper import TimeStepper
+    from catenet.solver.system import System
 
 COLUMNS = ("kinetic", "elastic", "contact", "external_work", "dissipated", "numerical")
 TOLERANCE = 1e-2  # solver.energy_tolerance's default: a share of the largest energy
@@ -49,7 +55,7 @@ class Ledger:
         self._dissipated = 0.0
 
     # --- what the stepper calls ------------------------------------------------------
-    def begin(self, stepper) -> None:
+    def begin(self, stepper: TimeStepper) -> None:
         """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
         system = stepper.system
         self._timed = bool(stepper.moving) or any(type(t).__name__ == "Guide" for t in system.terms)
@@ -63,7 +69,14 @@ class Ledger:
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
         self.largest = max(abs(k), abs(u), abs(c))
 
-    def step(self, stepper, x_old: np.ndarray, x_new: np.ndarray, v_new: np.ndarray, h: float):
+    def step(
+        self,
+        stepper: TimeStepper,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        v_new: np.ndarray,
+        h: float,
+    ) -> None:
         """The accepted step from x_old to x_new (velocities v_new after it) of length h."""
         net = stepper.net
         dx = x_new - x_old
@@ -111,10 +124,12 @@ class Ledger:
             )
 
     # --- the parts -------------------------------------------------------------------
-    def _applied(self, stepper) -> np.ndarray:
+    def _applied(self, stepper: TimeStepper) -> np.ndarray:
         return np.asarray(stepper.potential.force, dtype=np.float64)
 
-    def _state(self, stepper, x: np.ndarray, v: np.ndarray):
+    def _state(
+        self, stepper: TimeStepper, x: np.ndarray, v: np.ndarray
+    ) -> tuple[float, float, float, np.ndarray]:
         """Kinetic, elastic and contact energy at (x, v), and the force the supports
         exert on the net there (0 at free nodes): one evaluation of the terms."""
         vel = v.reshape(-1)[stepper.free]
@@ -127,7 +142,7 @@ class Ledger:
         return (kinetic, *_stored(system), reaction)
 
 
-def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
+def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
     """The balance's row of a start state (x, v): kinetic, elastic and contact energy,
     nothing yet put in or taken out (the first frame of a dynamic run's file)."""
     net = system.net
@@ -139,7 +154,7 @@ def held_energy(system, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
     return np.array([kinetic, *_stored(system), 0.0, 0.0, 0.0])
 
 
-def _stored(system) -> tuple[float, float]:
+def _stored(system: System) -> tuple[float, float]:
     """(elastic, contact) energy of the system's last ``gradient`` evaluation: the edges'
     stretching, and every other term's that is not lagged (friction dissipates)."""
     elastic = contact = 0.0

@@ -81,13 +81,55 @@ the size of the discretisation error.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from catenet.errors import ConfigError
 
+if TYPE_CHECKING:
+    from catenet.solver.potential import Potential
+
 INTEGRATORS = ("implicit_euler", "newmark", "bdf2")
 RHO_INF = 0.8  # solver.rho_inf's default (module docstring)
+
+
+class Scheme(Protocol):
+    """A time integrator as the stepper (catenet/solver/stepper.py) uses it: ``a`` its
+    acceleration state on the free DOFs (None: it has none); ``damping`` is mu, one
+    number or per free DOF."""
+
+    name: str
+    order: int
+    step_rtol: float
+
+    @property
+    def a(self) -> np.ndarray | None: ...
+
+    def begin(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        v: np.ndarray,
+        m_free: np.ndarray,
+        damping: float | np.ndarray,
+        a0: np.ndarray | None = None,
+    ) -> None: ...
+
+    def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None: ...
+
+    def weights(
+        self,
+        m_free: np.ndarray,
+        y_k: np.ndarray,
+        v_k: np.ndarray,
+        h: float,
+        damping: float | np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def accept(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray: ...
 
 
 class ImplicitEuler:
@@ -98,7 +140,15 @@ class ImplicitEuler:
     step_rtol = 1.0  # Newton's tolerance per step, in units of the run's rtol
     a = None  # no acceleration state
 
-    def begin(self, potential, x, v, m_free, damping, a0=None) -> None:
+    def begin(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        v: np.ndarray,
+        m_free: np.ndarray,
+        damping: float | np.ndarray,
+        a0: np.ndarray | None = None,
+    ) -> None:
         """Nothing to derive at the start of a run (no last step)."""
         self._prev = None
 
@@ -106,7 +156,14 @@ class ImplicitEuler:
         """Newton's start (Eq. 11): x_trial (a copy of x_n) += h v_n on the free DOFs."""
         x_trial.reshape(-1)[free] += h * v.reshape(-1)[free]
 
-    def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
+    def weights(
+        self,
+        m_free: np.ndarray,
+        y_k: np.ndarray,
+        v_k: np.ndarray,
+        h: float,
+        damping: float | np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """w and a of the step's inertia term (Eq. 10a as a gradient)."""
         w = m_free * (1.0 / h**2 + damping / h)
         a = (m_free / h**2 * (y_k + h * v_k) + damping * m_free / h * y_k) / w
@@ -115,13 +172,18 @@ class ImplicitEuler:
     keep = False  # keep the last state for ``estimate`` (steps chosen by accuracy)
     _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
 
-    def accept(self, x_new, x, v, free, h) -> np.ndarray:
+    def accept(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray:
         """The velocities of the accepted step (Eq. 10c)."""
         if self.keep:
             self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
-        return (x_new - x) / h
+        v_new: np.ndarray = (x_new - x) / h
+        return v_new
 
-    def estimate(self, y_new, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray] | None:
+    def estimate(
+        self, y_new: np.ndarray, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray] | None:
         """The local error of the step of ``h`` from (y_k, v_k) to y_new (free DOFs), in x
         and in v: -R / (P - R) times the difference between the step's solution and the
         line through the last two states extrapolated to t + h (R = -h^2/2 the residual
@@ -162,7 +224,15 @@ class Newmark:
         self.a: np.ndarray | None = None  # the scheme's acceleration, free DOFs
         self._p: np.ndarray | None = None  # this step's x_n + h v_n + h^2 (1/2 - beta) a_n
 
-    def begin(self, potential, x, v, m_free, damping, a0=None) -> None:
+    def begin(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        v: np.ndarray,
+        m_free: np.ndarray,
+        damping: float | np.ndarray,
+        a0: np.ndarray | None = None,
+    ) -> None:
         """The acceleration state at the start: ``a0`` (free DOFs, a restart's stored
         state), else the physical acceleration M^-1 (f - grad E - mu M v)."""
         if a0 is not None:
@@ -183,7 +253,14 @@ class Newmark:
         """Newton's start: x_n + h v_n + h^2/2 a_n (constant acceleration over the step)."""
         x_trial.reshape(-1)[free] += h * v.reshape(-1)[free] + (0.5 * h * h) * self._a
 
-    def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
+    def weights(
+        self,
+        m_free: np.ndarray,
+        y_k: np.ndarray,
+        v_k: np.ndarray,
+        h: float,
+        damping: float | np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """w and a of the step's inertia term: the equation of motion above with
         a_{n+1} = (x - p)/(beta h^2), p = x_n + h v_n + h^2 (1/2 - beta) a_n."""
         a_n, beta, gamma, am = self._a, self.beta, self.gamma, self.alpha_m
@@ -193,13 +270,15 @@ class Newmark:
         rest = m_free * (am * a_n + damping * (v_k + h * (1.0 - gamma) * a_n))
         return w, p - rest / w
 
-    def accept(self, x_new, x, v, free, h) -> np.ndarray:
+    def accept(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray:
         """The new velocities (and acceleration) of the accepted step; supports'
         velocities are their mean over the step."""
         y_new = x_new.reshape(-1)[free]
         assert self._p is not None  # weights() came first
         a_new = (y_new - self._p) / (self.beta * h * h)
-        out = (x_new - x) / h
+        out: np.ndarray = (x_new - x) / h
         v_k = v.reshape(-1)[free]
         out.reshape(-1)[free] = v_k + h * ((1.0 - self.gamma) * self._a + self.gamma * a_new)
         self.a = a_new
@@ -228,6 +307,7 @@ class BDF2:
     order = 2
     step_rtol = 0.01  # as newmark: little damping of its own to absorb Newton's errors
     a = None  # no acceleration state
+    keep = True  # its last two states are its own: always kept (``estimate``)
     MAX_RATIO = 2.4  # the largest step ratio taken as a BDF2 step (zero-stable below 2.414)
 
     def __init__(self) -> None:
@@ -236,11 +316,21 @@ class BDF2:
         self._bar: tuple[np.ndarray, np.ndarray, float] | None = None  # this step's x, v, b
         self._bdf = False  # this step is a BDF2 step (not implicit Euler's)
 
-    def begin(self, potential, x, v, m_free, damping, a0=None) -> None:
+    def begin(
+        self,
+        potential: Potential,
+        x: np.ndarray,
+        v: np.ndarray,
+        m_free: np.ndarray,
+        damping: float | np.ndarray,
+        a0: np.ndarray | None = None,
+    ) -> None:
         """A run starts with one implicit Euler step."""
         self._prev = self._older = None
 
-    def _coefficients(self, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray, float]:
+    def _coefficients(
+        self, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray, float]:
         """(c1 x_n - c2 x_{n-1}, c1 v_n - c2 v_{n-1}, b) of a step h from (y_k, v_k)."""
         prev = self._prev
         self._bdf = prev is not None and h / prev[2] <= self.MAX_RATIO
@@ -260,7 +350,14 @@ class BDF2:
         y_bar, v_bar, b = self._coefficients(flat[free], v.reshape(-1)[free], h)
         flat[free] = y_bar + b * v_bar
 
-    def weights(self, m_free, y_k, v_k, h, damping) -> tuple[np.ndarray, np.ndarray]:
+    def weights(
+        self,
+        m_free: np.ndarray,
+        y_k: np.ndarray,
+        v_k: np.ndarray,
+        h: float,
+        damping: float | np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """w and a of the step's inertia term: implicit Euler's with (b, x_bar, v_bar)."""
         y_bar, v_bar, b = self._coefficients(y_k, v_k, h)
         self._bar = (y_bar, v_bar, b)
@@ -268,18 +365,22 @@ class BDF2:
         a = (m_free / b**2 * (y_bar + b * v_bar) + damping * m_free / b * y_bar) / w
         return w, a
 
-    def accept(self, x_new, x, v, free, h) -> np.ndarray:
+    def accept(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray:
         """The new velocities, (x_{n+1} - x_bar) / b on the free DOFs; supports' are
         their mean over the step. Step n becomes the scheme's previous step."""
         assert self._bar is not None  # weights() came first
         y_bar, _, b = self._bar
-        out = (x_new - x) / h
+        out: np.ndarray = (x_new - x) / h
         out.reshape(-1)[free] = (x_new.reshape(-1)[free] - y_bar) / b
         self._older = self._prev
         self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
         return out
 
-    def estimate(self, y_new, y_k, v_k, h) -> tuple[np.ndarray, np.ndarray] | None:
+    def estimate(
+        self, y_new: np.ndarray, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray] | None:
         """The local error of the step of ``h`` from (y_k, v_k) to y_new (free DOFs), in x
         and in v: -R / (P - R) times the difference between the step's solution and the
         parabola through the last three states extrapolated to t + h, R the residual of
@@ -305,7 +406,7 @@ class BDF2:
         return ex, ev
 
 
-def make(name: str = "implicit_euler", rho_inf: float = RHO_INF):
+def make(name: str = "implicit_euler", rho_inf: float = RHO_INF) -> Scheme:
     """The scheme called ``name`` (solver.integrator)."""
     if name == "implicit_euler":
         return ImplicitEuler()
@@ -316,7 +417,9 @@ def make(name: str = "implicit_euler", rho_inf: float = RHO_INF):
     raise ConfigError(f"solver.integrator = {name!r}: must be one of {', '.join(INTEGRATORS)}")
 
 
-def amplification(name: str, h_omega: float, xi: float = 0.0, rho_inf: float = RHO_INF):
+def amplification(
+    name: str, h_omega: float, xi: float = 0.0, rho_inf: float = RHO_INF
+) -> np.ndarray:
     """The matrix taking a scheme's state to the next for one oscillator
     x'' + 2 xi omega x' + omega^2 x = 0 at step h omega, with omega = 1 and h = h omega:
     (x, v) for implicit Euler, (x, v, a) for newmark (its spectral analysis: the principal
@@ -329,6 +432,7 @@ def amplification(name: str, h_omega: float, xi: float = 0.0, rho_inf: float = R
         v_x, v_v = -s / d, 1.0 / d
         return np.array([[1.0 + s * v_x, s * v_v], [v_x, v_v]])
     nm = make(name, rho_inf)
+    assert isinstance(nm, Newmark)  # (implicit Euler's is above; newmark's the other)
     out = np.empty((3, 3))
     for col, (x0, v0, a0) in enumerate(np.eye(3)):
         p = x0 + s * v0 + s * s * (0.5 - nm.beta) * a0

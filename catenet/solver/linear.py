@@ -26,11 +26,16 @@ import math
 import os
 import sys
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError, SingularSystemError
 from catenet.kernels.sparse import csr_matvec
+
+if TYPE_CHECKING:
+    from scipy.sparse.linalg import SuperLU
 
 log = logging.getLogger(__name__)
 
@@ -100,7 +105,7 @@ def mkl_candidates() -> tuple[str | None, list[str]]:
 
 
 @functools.cache
-def _find_mkl(key: tuple) -> MklRuntime | MklNotFound:
+def _find_mkl(key: tuple[str, ...]) -> MklRuntime | MklNotFound:
     """The runtime (or why it is missing), once per override setting."""
     var, paths = mkl_candidates()
     errors = []
@@ -185,7 +190,7 @@ class LinearSolver:
     name = "base"
     mtype: int | None = None  # PARDISO's matrix type (None: another backend)
 
-    def __init__(self, indptr, indices, *, upper: bool, dof_node: np.ndarray):
+    def __init__(self, indptr: ArrayLike, indices: ArrayLike, *, upper: bool, dof_node: np.ndarray):
         self.indptr = np.ascontiguousarray(indptr, dtype=np.int32)
         self.indices = np.ascontiguousarray(indices, dtype=np.int32)
         self.n = len(self.indptr) - 1
@@ -257,7 +262,7 @@ class LinearSolver:
         return True
 
     # --- checks --------------------------------------------------------------------------
-    def _check(self, b, x) -> None:
+    def _check(self, b: np.ndarray, x: np.ndarray) -> None:
         if not np.all(np.isfinite(x)):
             raise SingularSystemError(
                 "the linear solve gave non-finite values (a mechanism or an all-slack region)",
@@ -288,11 +293,11 @@ class LinearSolver:
         weak = np.flatnonzero(diag <= 1e-12 * max(self._anorm, 1e-300))
         return self._node_list(weak)
 
-    def _nodes(self, mask_data) -> list[int]:
+    def _nodes(self, mask_data: ArrayLike) -> list[int]:
         rows = np.repeat(np.arange(self.n), np.diff(self.indptr))
         return self._node_list(rows[np.asarray(mask_data)])
 
-    def _node_list(self, dofs) -> list[int]:
+    def _node_list(self, dofs: ArrayLike) -> list[int]:
         return sorted({int(self.dof_node[d]) for d in np.asarray(dofs).ravel()})[:20]
 
     def analyse(self, data: np.ndarray) -> None:
@@ -307,10 +312,10 @@ class LinearSolver:
         tells (symmetric indefinite), else None."""
         return None
 
-    def _factorize(self, data):
+    def _factorize(self, data: np.ndarray) -> None:
         raise NotImplementedError
 
-    def _solve(self, b):
+    def _solve(self, b: np.ndarray) -> np.ndarray:
         raise NotImplementedError
 
     def release(self) -> None:
@@ -327,7 +332,15 @@ class PardisoSolver(LinearSolver):
 
     name = "pardiso"
 
-    def __init__(self, indptr, indices, *, upper: bool, dof_node, mtype: int | None = None):
+    def __init__(
+        self,
+        indptr: ArrayLike,
+        indices: ArrayLike,
+        *,
+        upper: bool,
+        dof_node: np.ndarray,
+        mtype: int | None = None,
+    ):
         super().__init__(indptr, indices, upper=upper, dof_node=dof_node)
         self.mtype: int = (-2 if upper else 11) if mtype is None else mtype
         if (self.mtype in (2, -2)) != upper:
@@ -403,7 +416,7 @@ class PardisoSolver(LinearSolver):
         self.seconds["analyse"] += time.perf_counter() - start
         self.stats["analyse"] += 1
 
-    def _factorize(self, data):
+    def _factorize(self, data: np.ndarray) -> None:
         self._pardiso(22, data, self._dummy, self._dummy)
         if self.iparm[13] > 0:  # perturbed pivots: (nearly) singular
             raise SingularSystemError(
@@ -412,7 +425,8 @@ class PardisoSolver(LinearSolver):
                 nodes=self.weak_nodes(),
             )
 
-    def _solve(self, b):
+    def _solve(self, b: np.ndarray) -> np.ndarray:
+        assert self._data is not None  # factorize() came first
         np.copyto(self._b, b)
         x = np.empty(self.n)
         self._pardiso(33, self._data, self._b, x)
@@ -459,7 +473,7 @@ class PardisoSolver(LinearSolver):
                 pass
             self._analysed = False
 
-    def __del__(self):
+    def __del__(self) -> None:
         self.release()
 
 
@@ -468,11 +482,11 @@ class ScipySolver(LinearSolver):
 
     name = "scipy"
 
-    def __init__(self, indptr, indices, *, upper: bool, dof_node):
+    def __init__(self, indptr: ArrayLike, indices: ArrayLike, *, upper: bool, dof_node: np.ndarray):
         super().__init__(indptr, indices, upper=upper, dof_node=dof_node)
-        self._lu = None
+        self._lu: SuperLU | None = None
 
-    def _factorize(self, data):
+    def _factorize(self, data: np.ndarray) -> None:
         import scipy.sparse as sp
         from scipy.sparse.linalg import splu
 
@@ -491,8 +505,10 @@ class ScipySolver(LinearSolver):
                 f"SciPy: {exc}: a mechanism or an all-slack region", nodes=self.weak_nodes()
             ) from None
 
-    def _solve(self, b):
-        return self._lu.solve(np.asarray(b, dtype=np.float64))
+    def _solve(self, b: np.ndarray) -> np.ndarray:
+        assert self._lu is not None  # factorize() came first
+        x: np.ndarray = self._lu.solve(np.asarray(b, dtype=np.float64))
+        return x
 
     def negative_eigenvalues(self) -> int | None:
         """With symmetric pivoting (row order = column order) A = P' L U P and U's
@@ -507,7 +523,13 @@ class ScipySolver(LinearSolver):
 
 
 def make_solver(
-    backend: str, indptr, indices, *, upper: bool, dof_node, mtype: int | None = None
+    backend: str,
+    indptr: ArrayLike,
+    indices: ArrayLike,
+    *,
+    upper: bool,
+    dof_node: np.ndarray,
+    mtype: int | None = None,
 ) -> LinearSolver:
     backend = resolve_backend(backend)
     if backend == "pardiso":

@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -39,6 +39,14 @@ from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
+
+
+class StepSettings(TypedDict):
+    """What every static solve of a load path shares (``solve_static``'s keywords)."""
+
+    rtol: float
+    max_iter: int
+    workspace: Workspace
 
 
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
@@ -83,7 +91,7 @@ def continuation(
     judge = PathJudge(ws, loads, post_collapse=post_collapse)
     loaded = bool(np.any(loads.external_force(net, 1.0))) or loads.moves_supports
     judge.begin(good.x, loaded)
-    settings: dict[str, Any] = dict(rtol=rtol, max_iter=max_iter, workspace=ws)
+    settings = StepSettings(rtol=rtol, max_iter=max_iter, workspace=ws)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
@@ -121,7 +129,16 @@ def _verdict(judge: PathJudge, r: Result) -> str:
     return UNSTABLE if r.stable is False else STABLE
 
 
-def _judged(judge, net, loads, good: LastGood, target: float, r: Result, last, settings):
+def _judged(
+    judge: PathJudge,
+    net: Net,
+    loads: Loads,
+    good: LastGood,
+    target: float,
+    r: Result,
+    last: bool,
+    settings: StepSettings,
+) -> Result:
     """The load step from the equilibrium ``good`` to ``r`` at ``target``, judged by the
     path's ``judge``: a step that jumps is halved (down to 1/2**REFINE of itself) to
     tell a limit point from a large step; a collapse raises CollapseError (or, with
@@ -175,7 +192,18 @@ def _unstable_start(judge: PathJudge, loads: Loads, r: Result, why: str) -> Resu
     return out
 
 
-def _follow(judge, net, loads, x0, f0, f1, r, last, settings, depth):
+def _follow(
+    judge: PathJudge,
+    net: Net,
+    loads: Loads,
+    x0: np.ndarray,
+    f0: float,
+    f1: float,
+    r: Result,
+    last: bool,
+    settings: StepSettings,
+    depth: int,
+) -> tuple[str, float, np.ndarray | None, Result]:
     """(why, load factor, last stable state, result) of the step from x0 at f0 to r at
     f1, halving a step that loses stability (an unstable end, a member that fell, no way
     back when unloaded) to bracket where (see ``_judged``); why is "" where the path
@@ -210,7 +238,14 @@ def _follow(judge, net, loads, x0, f0, f1, r, last, settings, depth):
     return _follow(judge, net, loads, half.x, mid, f1, rest, last, settings, deeper)
 
 
-def _collapse(judge: PathJudge, why: str, at: float, good: LastGood, x1, exc=None) -> None:
+def _collapse(
+    judge: PathJudge,
+    why: str,
+    at: float,
+    good: LastGood,
+    x1: np.ndarray | None,
+    exc: ConvergenceError | None = None,
+) -> None:
     """Raises CollapseError from the last stable state ``good`` (or notes the collapse
     where the judge follows it through)."""
     if judge.start_unstable or x1 is None:
@@ -257,7 +292,12 @@ def _advice(exc: ConvergenceError, max_iter: int, relaxed: bool = False) -> str:
 
 
 def _cut_back(
-    net, loads, target: float, failure, good: LastGood, settings
+    net: Net,
+    loads: Loads,
+    target: float,
+    failure: ConvergenceError,
+    good: LastGood,
+    settings: StepSettings,
 ) -> Result | ConvergenceError:
     """The load step from the equilibrium ``good`` (updated: it holds the last one) to
     load factor ``target`` in sub-steps (see ``continuation``), in either direction of
@@ -321,7 +361,7 @@ def _cut_back(
             cuts, done = cuts - 1, 0
 
 
-def _can_relax(net, target: float, settings) -> bool:
+def _can_relax(net: Net, target: float, settings: StepSettings) -> bool:
     """Whether the last rung applies: a step to the full loads (``target`` 1) of a net
     whose free nodes have mass, with a Newton budget ``max_iter`` of at least a time
     step's DR_MAX_ITER (the rung would not keep a smaller one)."""
@@ -330,7 +370,9 @@ def _can_relax(net, target: float, settings) -> bool:
     return bool(np.all(net.mass[~net.fixed] > 0.0))
 
 
-def _relaxed(net, loads, target: float, good: LastGood, settings) -> Result | None:
+def _relaxed(
+    net: Net, loads: Loads, target: float, good: LastGood, settings: StepSettings
+) -> Result | None:
     """The ladder's last rung: the equilibrium under the full loads (``target`` 1) by
     dynamic relaxation to rest from the last equilibrium ``good`` (the paper's method,
     ``solver.t_end = "rest"`` at the default dt and damping: it follows the net's motion,

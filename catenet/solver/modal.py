@@ -47,7 +47,16 @@ import numpy as np
 from catenet.errors import ConfigError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import scipy.sparse as sp
+    from numpy.typing import ArrayLike
+
+    from catenet.model.net import Net
+    from catenet.solver.linear import LinearSolver
+    from catenet.solver.system import System
+    from catenet.solver.workspace import Workspace
+    from catenet.terms.rigid import BodyFrame, Rigidity
 
 SHIFT = 1e-10  # sigma = -SHIFT x max(K_ii / m_i)
 ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
@@ -58,15 +67,16 @@ ZERO = 1e-12  # w^2 below ZERO x max(K_ii / m_i) is a zero-frequency mode
 NEGATIVE = 1e-7
 
 
-def rigidities(system) -> list:
+def rigidities(system: System) -> list[Rigidity]:
     """The orthogonality terms (``Rigidity``) of the system's free rigid bodies."""
-    rigid = sys.modules.get("catenet.terms.rigid")
-    if rigid is None:  # no Rigidity exists before its module loads: not loaded to look
-        return []
-    return [t for t in system.terms if isinstance(t, rigid.Rigidity)]
+    if "catenet.terms.rigid" not in sys.modules:
+        return []  # no Rigidity exists before its module loads: not loaded to look
+    from catenet.terms.rigid import Rigidity
+
+    return [t for t in system.terms if isinstance(t, Rigidity)]
 
 
-def body_frames(system) -> list:
+def body_frames(system: System) -> list[BodyFrame]:
     """The ``BodyFrame`` of every free rigid body among the system's terms (its rigidity)."""
     return [t.frame for t in rigidities(system)]
 
@@ -76,7 +86,7 @@ class Reduction:
     body (translation, rotation about its centre at x). ``node``: each q's node (a body's
     first node for its six); ``bodies``: (frame, first q index) per body."""
 
-    def __init__(self, system, x: np.ndarray, frames):
+    def __init__(self, system: System, x: np.ndarray, frames: Sequence[BodyFrame]):
         import scipy.sparse as sp
 
         x = np.asarray(x, dtype=np.float64)
@@ -89,7 +99,7 @@ class Reduction:
         keep = np.flatnonzero(~body_dof)
         rows, cols, vals = [keep], [np.arange(keep.size)], [np.ones(keep.size)]
         node = [free_node[keep]]
-        self.bodies = []
+        self.bodies: list[tuple[BodyFrame, int]] = []
         q = keep.size
         for frame in frames:
             c = x[frame.nodes].mean(axis=0)
@@ -113,7 +123,7 @@ class Reduction:
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, q)
         )
 
-    def rigidity(self, terms, x: np.ndarray) -> sp.csr_matrix:
+    def rigidity(self, terms: Sequence[Rigidity], x: np.ndarray) -> sp.csr_matrix:
         """Z^T H Z of the bodies' orthogonality energies ``terms``, exactly: on a rigid
         motion dA = W A (W skew: a turn; 0: a translation) dC = dA^T A + A^T dA = 0,
         so of the Hessian k (dC1 : dC2 + C : (dA1^T dA2 + dA2^T dA1)) only the stress
@@ -143,10 +153,11 @@ class Reduction:
 
     def expand(self, q: np.ndarray) -> np.ndarray:
         """The free DOFs u = Z q of reduced vectors (columns)."""
-        return self.z @ q
+        u: np.ndarray = self.z @ q
+        return u
 
 
-def added_mass_blocks(net, x: np.ndarray, line: np.ndarray) -> np.ndarray:
+def added_mass_blocks(net: Net, x: np.ndarray, line: ArrayLike) -> np.ndarray:
     """(N, 3, 3) the added mass at each node [kg]: each edge's ``line`` (E,) [kg]
     (Ca rho_w A l0) times (I - t t^T) / 2 at each of its ends, t its direction at x."""
     x = np.asarray(x, dtype=np.float64)
@@ -164,7 +175,7 @@ def added_mass_blocks(net, x: np.ndarray, line: np.ndarray) -> np.ndarray:
     return blocks
 
 
-def mass_data(system, mass: np.ndarray, blocks: np.ndarray | None) -> np.ndarray:
+def mass_data(system: System, mass: np.ndarray, blocks: np.ndarray | None) -> np.ndarray:
     """The CSR data, in the system's own pattern, of the mass matrix: the lumped ``mass``
     (N,) on the diagonal plus the 3 x 3 ``blocks`` (N, 3, 3) (or None) of each free node
     (every free node's own block is in the pattern: its edges put it there)."""
@@ -187,7 +198,7 @@ def mass_data(system, mass: np.ndarray, blocks: np.ndarray | None) -> np.ndarray
     return data
 
 
-def _locate(system, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+def _locate(system: System, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """Positions of the entries (rows, cols) in the system's CSR pattern (each present)."""
     n = system.n_free
     keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(system.indptr)) * n
@@ -195,7 +206,7 @@ def _locate(system, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     order = np.argsort(keys, kind="stable")
     want = rows.astype(np.int64) * n + cols
     k = np.searchsorted(keys, want, sorter=order)
-    pos = order[np.minimum(k, keys.size - 1)]
+    pos: np.ndarray = order[np.minimum(k, keys.size - 1)]
     if not np.array_equal(keys[pos], want):
         raise ValueError("a mass block's entry is not in the system's pattern")
     return pos
@@ -207,7 +218,9 @@ class Operator:
     ``k``, ``mm`` as SciPy CSR (both triangles), ``m`` M's diagonal, ``node`` each
     coordinate's node, and the DOFs taken out (``dead``: no stiffness)."""
 
-    def __init__(self, system, x: np.ndarray, mass: np.ndarray, blocks=None):
+    def __init__(
+        self, system: System, x: np.ndarray, mass: np.ndarray, blocks: np.ndarray | None = None
+    ):
         import scipy.sparse as sp
 
         net = system.net
@@ -254,7 +267,7 @@ class Operator:
             self.k_data[system.diag_pos[self.dead]] = fix[self.dead]
         self.k = (k + sp.diags(fix)).tocsr()
 
-    def factorized(self, solver, sigma: float):
+    def factorized(self, solver: LinearSolver, sigma: float) -> LinearSolver:
         """A linear solver holding the factors of K - sigma M: the workspace's own
         ``solver`` on the system's pattern, or (with free bodies) a new one of the same
         backend on the reduced pattern."""
@@ -279,7 +292,7 @@ class Operator:
         return vec if self.reduction is None else self.reduction.expand(vec)
 
 
-def _block_low(mm, m: np.ndarray) -> np.ndarray:
+def _block_low(mm: sp.csr_matrix, m: np.ndarray) -> np.ndarray:
     """Each coordinate's lower bound of M's eigenvalues: the smallest eigenvalue of its
     3 x 3 diagonal block (M is block diagonal in the coordinates' triples)."""
     n = m.size
@@ -290,7 +303,7 @@ def _block_low(mm, m: np.ndarray) -> np.ndarray:
     return np.repeat(np.linalg.eigvalsh(blocks)[:, 0], 3)
 
 
-def stable_with_bodies(workspace, x: np.ndarray) -> bool | None:
+def stable_with_bodies(workspace: Workspace, x: np.ndarray) -> bool | None:
     """Whether the equilibrium x of a net with free bodies is stable: no omega^2 below
     the shift of ``natural_modes`` (just below zero) on the bodies' rigid motions (a
     frictionless body's free sliding or turning has no stiffness: it is neutral, not

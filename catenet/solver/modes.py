@@ -41,28 +41,42 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.scene import Scene
+from catenet.solver.eigen import dense_modes, lanczos_modes, rayleigh_ritz
 from catenet.solver.modal import Operator
 
 if TYPE_CHECKING:
-    from catenet.model.net import Net
+    from catenet.model.net import Loads, Net
     from catenet.solver.result import Result
+    from catenet.solver.settings import Settings
     from catenet.solver.workspace import Workspace
+    from catenet.terms import Term
 
 log = logging.getLogger(__name__)
 
 DENSE = 240  # at most this many free DOFs: a dense eigensolver (and any count)
 DENSE_MAX = 4000  # ... and up to this many where too few DOFs carry mass for Lanczos
 RESIDUAL_TOL = 1e-6  # largest accepted |K phi - w^2 M phi| / (|K phi| + w^2 |M phi|)
-TOL = 1e-10  # ARPACK: relative accuracy of the Ritz values (refined by Rayleigh-Ritz after)
 AXES = "xyz"
+
+
+class Cables(Protocol):
+    """A case's cable index (``Scene.cables``): each cable's name and each edge's cable
+    (its index in ``names``, -1: none)."""
+
+    @property
+    def names(self) -> Sequence[str]: ...
+
+    @property
+    def edge(self) -> np.ndarray: ...
 
 
 @dataclass
@@ -96,7 +110,7 @@ class Modes:
     zero_modes: int = 0
     zero_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     zero_message: str = ""
-    stats: dict = field(default_factory=dict)
+    stats: dict[str, Any] = field(default_factory=dict)
     equilibrium: Result | None = None  # the static Result the modes are about, if solved here
     mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
     added: np.ndarray | None = None  # (N, 3, 3) added mass of water of the free nodes [kg]
@@ -114,7 +128,7 @@ class Modes:
     def direction_share(self) -> np.ndarray:
         """(K, 3) each mode's kinetic energy share along x, y, z (sum m_i phi_id^2, and
         phi_id (A_i phi_i)_d with an added mass A_i)."""
-        share = np.einsum("n,knd->kd", self._mass(), self.shape**2)
+        share: np.ndarray = np.einsum("n,knd->kd", self._mass(), self.shape**2)
         if self.added is not None:
             share += np.einsum("knd,nde,kne->kd", self.shape, self.added, self.shape)
         return share
@@ -126,7 +140,7 @@ class Modes:
     def node_share(self) -> np.ndarray:
         """(K, N) each node's share of each mode's kinetic energy phi_i^T M_i phi_i (sums
         to 1; M_i = m_i 1 plus any added mass)."""
-        share = self._mass()[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
+        share: np.ndarray = self._mass()[None, :] * np.einsum("knd,knd->kn", self.shape, self.shape)
         if self.added is not None:
             share += np.einsum("knd,nde,kne->kn", self.shape, self.added, self.shape)
         return share
@@ -137,14 +151,14 @@ class Modes:
 
 
 def natural_modes(
-    workspace,
-    x: np.ndarray,
+    workspace: Workspace,
+    x: ArrayLike,
     count: int,
     *,
-    mass=None,
+    mass: ArrayLike | None = None,
     method: str = "auto",
-    cables=None,
-    added=None,
+    cables: Cables | None = None,
+    added: ArrayLike | None = None,
 ) -> Modes:
     """The ``count`` lowest natural modes of the workspace's net about the equilibrium x
     (see the module docstring). ``mass`` (N,) [kg] defaults to ``Net.mass``; ``method``:
@@ -155,28 +169,28 @@ def natural_modes(
     begin = time.perf_counter()
     system = workspace.system
     net = system.net
-    mass = net.mass if mass is None else np.asarray(mass, dtype=np.float64)
+    masses = net.mass if mass is None else np.asarray(mass, dtype=np.float64)
     from catenet.solver.modal import body_frames
 
     bodies = len(body_frames(system))
     _check_count(count, system.n_free - 6 * bodies)
-    if not float(np.sum(mass[~net.fixed])) > 0.0:
+    if not float(np.sum(masses[~net.fixed])) > 0.0:
         raise ConfigError(
             "modes: the net has no mass (material.density = 0 and no [[mass]]): give "
             "material.density [kg/m^3] or point masses to find its frequencies"
         )
-    x = np.asarray(x, dtype=np.float64)
-    blocks = None if added is None else _added_blocks(net, x, added)
-    op = Operator(system, x, mass, blocks)
-    lam, vec, stats = _solve(op, workspace, x, count, method)
+    at = np.asarray(x, dtype=np.float64)
+    blocks = None if added is None else _added_blocks(net, at, added)
+    op = Operator(system, at, masses, blocks)
+    lam, vec, stats = _solve(op, workspace, at, count, method)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
     if lam.size and lam[0] < -op.negative:
-        _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, x)
+        _unstable(f"omega^2 = {lam[0]:.3g} 1/s^2 < 0", workspace, at)
     zero = _zero_modes(lam, op)
-    found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], mass, x, op.sigma)
+    found = _assemble(net, op, lam[~zero][:count], vec[:, ~zero][:, :count], masses, at, op.sigma)
     found.added = None if blocks is None else np.where(net.fixed[:, None, None], 0.0, blocks)
-    _name_zero_modes(found, op, vec[:, zero], workspace, x, cables)
+    _name_zero_modes(found, op, vec[:, zero], workspace, at, cables)
     found.stats = {
         **stats,
         "seconds": time.perf_counter() - begin,
@@ -194,13 +208,13 @@ def _added_blocks(net: Net, x: np.ndarray, added: ArrayLike) -> np.ndarray:
     masses >= 0."""
     from catenet.solver.modal import added_mass_blocks
 
-    added = np.asarray(added, dtype=np.float64)
-    if added.shape != (net.n_edges,) or not np.all(np.isfinite(added) & (added >= 0)):
+    line = np.asarray(added, dtype=np.float64)
+    if line.shape != (net.n_edges,) or not np.all(np.isfinite(line) & (line >= 0)):
         raise ConfigError(
-            f"modes: added mass of shape {added.shape}: must be {net.n_edges} finite "
+            f"modes: added mass of shape {line.shape}: must be {net.n_edges} finite "
             "masses >= 0 [kg], one per edge"
         )
-    return added_mass_blocks(net, x, added)
+    return added_mass_blocks(net, x, line)
 
 
 def _solve(
@@ -217,12 +231,12 @@ def _solve(
     sigma = op.sigma
     stats: dict[str, Any] = {"method": "dense" if dense else "lanczos", "backend": solver.name}
     if dense:
-        lam, vec = _dense(op, sigma)
+        lam, vec = dense_modes(op, sigma)
     else:
-        lam, vec = _lanczos_until(
+        lam, vec = lanczos_modes(
             op, solver, sigma, count, stats, lambda why: _unstable(why, workspace, x)
         )
-    lam, vec = _rayleigh_ritz(op, vec)
+    lam, vec = rayleigh_ritz(op, vec)
     return lam, vec, stats
 
 
@@ -277,38 +291,7 @@ def _zero_modes(lam: np.ndarray, op: Operator) -> np.ndarray:
     return zero
 
 
-def _condensed(op: Operator, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every mode of a net with massless DOFs whose K - sigma M is not positive definite
-    to round-off (a zero mode of a frictionless body beside massless strings: whether the
-    Cholesky of K - sigma M passes then hangs on the processor's round-off). The massless
-    DOFs carry no inertia, so condensing them out is exact: K* = K_mm - K_m0 K_00^-1
-    K_0m on the massive DOFs, then K* phi = w^2 M_mm phi, and phi_0 = -K_00^-1 K_0m phi.
-    Raises ConvergenceError where the massless part itself is singular or indefinite
-    (a massless mechanism: no frequency exists)."""
-    import scipy.linalg as sl
-
-    k = op.k.toarray()
-    massive = np.abs(m).sum(axis=1) > 0.0
-    zero = ~massive
-    k00 = k[np.ix_(zero, zero)]
-    try:
-        factor = sl.cho_factor(k00)
-    except np.linalg.LinAlgError:
-        raise ConvergenceError(
-            "modes: the stiffness is indefinite where free nodes have no mass (a massless "
-            "mechanism): give those nodes mass (material.density) or tension"
-        ) from None
-    coupling = k[np.ix_(zero, massive)]
-    solved = sl.cho_solve(factor, coupling)
-    reduced = k[np.ix_(massive, massive)] - coupling.T @ solved
-    lam, sub = sl.eigh(0.5 * (reduced + reduced.T), m[np.ix_(massive, massive)])
-    vec = np.zeros((k.shape[0], sub.shape[1]))
-    vec[massive] = sub
-    vec[zero] = -solved @ sub
-    return lam, vec
-
-
-def _check_count(count, n_free: int) -> None:
+def _check_count(count: int, n_free: int) -> None:
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
@@ -318,102 +301,7 @@ def _check_count(count, n_free: int) -> None:
         )
 
 
-def _dense(op: Operator, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """Every mode, by a dense symmetric eigensolver (small nets): M phi = mu (K - sigma M)
-    phi, mu = 1 / (w^2 - sigma), which allows massless DOFs (mu = 0: w infinite)."""
-    import scipy.linalg as sl
-
-    a = (op.k - sigma * op.mm).toarray()
-    m = op.mm.toarray()
-    try:
-        mu, vec = sl.eigh(m, a)
-    except np.linalg.LinAlgError:  # K - sigma M not positive definite to round-off
-        if not (op.m > 0).all():
-            return _condensed(op, m)
-        lam, vec = sl.eigh(op.k.toarray(), m)
-        return lam, vec
-    keep = mu > 1e-12 * max(float(mu.max(initial=0.0)), 1e-300)  # else: no mass, w infinite
-    mu, vec = mu[keep], vec[:, keep] / np.sqrt(mu[keep])  # phi^T M phi = 1
-    order = np.argsort(-mu)
-    return sigma + 1.0 / mu[order], vec[:, order]
-
-
-def _lanczos_until(op, solver, sigma, count, stats, unstable) -> tuple[np.ndarray, np.ndarray]:
-    """The lowest modes by shift-invert Lanczos, asking again for more while zero modes
-    take the places of real ones (they are nearest the shift, so every one is found
-    before the first real mode). ``unstable(why)`` raises for a negative omega^2 that
-    the factorisation's inertia shows."""
-    start = time.perf_counter()
-    solver = op.factorized(solver, sigma)
-    stats["factorize_seconds"] = time.perf_counter() - start
-    negative = solver.negative_eigenvalues()
-    stats["negative"] = negative
-    if negative:  # Sylvester: that many omega^2 below sigma < 0; confirmed beyond the margin
-        beyond = op.factorized(solver, -op.negative).negative_eigenvalues()
-        if beyond:
-            unstable(f"{beyond} negative omega^2 (the inertia of K + {op.negative:.3g} M)")
-        solver = op.factorized(solver, sigma)  # zero modes within round-off: go on
-    limit = op.n - 1  # ARPACK: k < n
-    k = min(count, limit)
-    solves = 0
-    while True:
-        lam, vec, used = _lanczos(op, solver, sigma, k)
-        solves += used
-        zero = int(np.count_nonzero(lam < op.zero))
-        if len(lam) - zero >= count or k >= limit:
-            break
-        k = min(limit, count + zero if zero < k else 2 * k)
-    stats["solves"] = solves
-    stats["lanczos_seconds"] = time.perf_counter() - start
-    return lam, vec
-
-
-def _lanczos(op, solver, sigma, k) -> tuple[np.ndarray, np.ndarray, int]:
-    """k eigenpairs nearest sigma by ARPACK with OPinv = the kept factorisation."""
-    from scipy.sparse.linalg import ArpackError, LinearOperator, eigsh
-
-    n = op.n
-    used = [0]
-
-    def inverse(b):
-        used[0] += 1
-        return solver.solve(np.asarray(b, dtype=np.float64).ravel())
-
-    k_matrix = op.k
-    opinv = LinearOperator((n, n), matvec=inverse, dtype=np.float64)
-    m_op = LinearOperator((n, n), matvec=lambda v: op.mm @ np.ravel(v), dtype=np.float64)
-    v0 = np.random.default_rng(12345).standard_normal(n) * (op.m > 0)
-    ncv = min(n, max(2 * k + 1, k + 20))
-    try:
-        lam, vec = eigsh(
-            k_matrix, k=k, M=m_op, sigma=sigma, which="LM", OPinv=opinv, v0=v0, ncv=ncv,
-            tol=TOL, mode="normal",
-        )  # fmt: skip
-    except ArpackError as exc:
-        raise ConvergenceError(f"modes: the Lanczos iteration (ARPACK) failed: {exc}") from None
-    order = np.argsort(lam)
-    return lam[order], vec[:, order], used[0]
-
-
-def _rayleigh_ritz(op: Operator, vec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The best eigenpairs in the span of ``vec``: an M-orthonormal basis of it (the
-    directions of no mass, massless DOFs' infinite modes, left out), then the
-    eigenpairs of K in that basis, so that the shapes are M-orthonormal to round-off
-    and the w^2 are Rayleigh quotients."""
-    import scipy.linalg as sl
-
-    if vec.shape[1] == 0:
-        return np.zeros(0), vec
-    mr = vec.T @ (op.mm @ vec)
-    w, u = sl.eigh(0.5 * (mr + mr.T))
-    keep = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
-    basis = vec @ (u[:, keep] / np.sqrt(w[keep]))
-    kr = basis.T @ (op.k @ basis)
-    lam, y = sl.eigh(0.5 * (kr + kr.T))
-    return lam, basis @ y
-
-
-def _unstable(how: str, workspace, x) -> None:
+def _unstable(how: str, workspace: Workspace, x: np.ndarray) -> NoReturn:
     """Raises ConvergenceError: the equilibrium is unstable (``how``), its nodes named."""
     from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
 
@@ -424,7 +312,15 @@ def _unstable(how: str, workspace, x) -> None:
     raise ConvergenceError(f"modes: the equilibrium is unstable ({how}): {why}")
 
 
-def _assemble(net, op, lam, vec, mass, x, sigma) -> Modes:
+def _assemble(
+    net: Net,
+    op: Operator,
+    lam: np.ndarray,
+    vec: np.ndarray,
+    mass: np.ndarray,
+    x: np.ndarray,
+    sigma: float,
+) -> Modes:
     """Modes of the net: shapes on every node (a free body's four nodes moving rigidly),
     signs fixed, participation phi^T M r_d with the whole M (added mass too)."""
     k = lam.size
@@ -468,7 +364,14 @@ def _residual(op: Operator, lam: np.ndarray, vec: np.ndarray) -> float:
     return float(np.max(r / np.maximum(scale, 1e-300)))
 
 
-def _name_zero_modes(found: Modes, op: Operator, zero_vec, workspace, x, cables) -> None:
+def _name_zero_modes(
+    found: Modes,
+    op: Operator,
+    zero_vec: np.ndarray,
+    workspace: Workspace,
+    x: np.ndarray,
+    cables: Cables | None,
+) -> None:
     """Counts and names the zero-frequency modes: the DOFs without stiffness and the
     mechanisms the Lanczos method found."""
     from catenet.solver.diagnose import describe_zero_modes
@@ -495,17 +398,17 @@ def _name_zero_modes(found: Modes, op: Operator, zero_vec, workspace, x, cables)
 
 
 def modes(
-    net,
-    loads=None,
+    net: Net | Scene,
+    loads: Loads | None = None,
     k: int = 10,
     *,
     x: np.ndarray | None = None,
-    settings=None,
-    terms=(),
-    workspace=None,
-    mass=None,
+    settings: Settings | None = None,
+    terms: Sequence[Term] = (),
+    workspace: Workspace | None = None,
+    mass: ArrayLike | None = None,
     method: str = "auto",
-    added=None,
+    added: ArrayLike | None = None,
 ) -> Modes:
     """The ``k`` lowest natural modes of ``net`` (a ``Net``, or a ``catenet.scene.Scene``)
     under ``loads`` about its equilibrium, found by the one solve path (``settings``: a

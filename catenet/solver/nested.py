@@ -21,11 +21,17 @@ given start state, a restart, a load case from the base state, or form finding).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.net import Net
 from catenet.solver.start import start_state, unstressed
+
+if TYPE_CHECKING:
+    from catenet.scene import Scene
+    from catenet.solver.settings import Settings
 
 NESTED_DOFS = 70_000  # auto: nets of this many free DOFs and more start nested
 COARSE_DOFS = 10_000  # the coarse net has about this many free DOFs ...
@@ -51,12 +57,12 @@ class NestedStart:
         )
 
 
-def free_dofs(net) -> int:
+def free_dofs(net: Net) -> int:
     """Free DOFs of a net: three per node that is not a support."""
     return 3 * int(np.count_nonzero(~net.fixed))
 
 
-def coarse_factor(scene, settings, given_start: bool) -> float | None:
+def coarse_factor(scene: Scene, settings: Settings, given_start: bool) -> float | None:
     """How much longer the coarse net's edges are, or None for the default start
     (module docstring). Raises ConfigError where ``solver.start = "nested"`` cannot
     apply, naming why."""
@@ -86,7 +92,7 @@ def coarse_factor(scene, settings, given_start: bool) -> float | None:
     return max(MIN_FACTOR, float(f"{dofs / COARSE_DOFS:.2g}"))  # 10x, not 10.18x
 
 
-def coarse_scene(scene, factor: float, forced: bool):
+def coarse_scene(scene: Scene, factor: float, forced: bool) -> Scene | None:
     """The coarse scene (``scene.coarser(factor)``); None (or, forced, ConfigError)
     where the case has no edge length to lengthen."""
     coarse = scene.coarser(factor)

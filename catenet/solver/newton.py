@@ -46,7 +46,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,7 +71,7 @@ _stop: Callable[[], bool] | None = None  # asked before every iteration (see int
 
 
 @contextlib.contextmanager
-def interruptible(stop: Callable[[], bool] | None):
+def interruptible(stop: Callable[[], bool] | None) -> Iterator[None]:
     """While inside, every Newton iteration first asks ``stop()``; True raises Interrupted
     (a signal handler's flag: a long solve stops within one iteration, not one step)."""
     global _stop
@@ -102,11 +102,12 @@ class Reuse:
     when it was made (any other factorisation on the solver makes it stale). ``keep(key)``
     drops it when the key changes (a time step's h: the inertia diagonal changes)."""
 
-    def __init__(self):
-        self._owner = None  # (potential, c, solver's factorisation count)
-        self._key = None
+    def __init__(self) -> None:
+        # (potential, c, the solver's factorisation count) of the kept factorisation
+        self._owner: tuple[Potential, float, int] | None = None
+        self._key: object = None
 
-    def keep(self, key) -> None:
+    def keep(self, key: object) -> None:
         if key != self._key:
             self._key = key
             self._owner = None
@@ -410,7 +411,9 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
     return None
 
 
-def _update_regularisation(c, alpha, rho, good, potential, g) -> float:
+def _update_regularisation(
+    c: float, alpha: float, rho: float, good: int, potential: Potential, g: np.ndarray
+) -> float:
     """Trust-region rule: well-predicted full steps (rho near 1) let c shrink, by 2, 4,
     8, ... for a run of them; a poorly predicted or shortened step makes it grow; a
     lengthened one shrinks it."""
@@ -436,7 +439,9 @@ def _c_start(potential: Potential, g: np.ndarray) -> float:
     return float(min(max(np.max(per_dof, initial=0.0), C_MIN * 10), C_MAX))
 
 
-def raise_unconverged(result: NewtonResult, what: str, state=None, hint: str = "") -> None:
+def raise_unconverged(
+    result: NewtonResult, what: str, state: np.ndarray | None = None, hint: str = ""
+) -> None:
     count = "" if "iterations" in result.reason else f" after {result.iterations} Newton iterations"
     raise ConvergenceError(
         f"{what}: {result.reason}{count} (residual {result.residual:.3e} N, tolerance "

@@ -24,6 +24,7 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -81,9 +82,10 @@ class Step:
 OnStep = Callable[[Step], bool | None]
 
 
-def workspace(scene, settings: Settings, **kwargs) -> Workspace:
-    """The workspace of a scene: its terms' pattern and the linear solver's analysis."""
-    return Workspace(scene.net, linear=settings.linear, terms=scene.terms, **kwargs)
+def workspace(scene: Scene, settings: Settings, *, mtype: int | None = None) -> Workspace:
+    """The workspace of a scene: its terms' pattern and the linear solver's analysis
+    (``mtype``: PARDISO's matrix type; None: as its terms call for)."""
+    return Workspace(scene.net, linear=settings.linear, terms=scene.terms, mtype=mtype)
 
 
 def solve(
@@ -94,7 +96,7 @@ def solve(
     start: Start | None = None,
     on_step: OnStep | None = None,
     peaks: Peaks | None = None,
-    **keys,
+    **keys: Any,  # [solver] keys, checked by Settings
 ) -> Result:
     """Solves ``scene`` (a ``catenet.scene.Scene``) as ``settings`` say (see the module
     docstring; None: the defaults), with any [solver] key changed by ``keys``
@@ -124,7 +126,14 @@ class _Stop(Exception):
     """Raised from the continuation's callback when on_step asks to stop."""
 
 
-def _static(scene, settings, ws, start, on_step, peaks) -> Result:
+def _static(
+    scene: Scene,
+    settings: Settings,
+    ws: Workspace,
+    start: Start,
+    on_step: OnStep | None,
+    peaks: Peaks,
+) -> Result:
     begin = time.perf_counter()
     steps = settings.steps
     factors = [k / steps for k in range(1, steps + 1)]
@@ -137,9 +146,9 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
         if on_step is not None and on_step(Step(len(done), factor, r.x, None, r)):
             raise _Stop
 
-    nested = None
+    nested: NestedStart | None = None
 
-    def total(r: Result, **fields) -> Result:
+    def total(r: Result, **fields: object) -> Result:
         r.iterations = sum(q.iterations for q in done)
         r.steps = len(done)
         r.wall_time = time.perf_counter() - begin
@@ -148,7 +157,7 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
             setattr(r, key, value)
         return r
 
-    def run(x0) -> None:
+    def run(x0: np.ndarray | None) -> None:
         continuation(
             scene.net,
             scene.loads,
@@ -198,7 +207,14 @@ def _static(scene, settings, ws, start, on_step, peaks) -> Result:
     return r
 
 
-def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
+def _dynamic(
+    scene: Scene,
+    settings: Settings,
+    ws: Workspace,
+    start: Start,
+    on_step: OnStep | None,
+    peaks: Peaks,
+) -> Result:
     from catenet.solver.dynamic import solve_dynamic
     from catenet.solver.energy import Ledger
 
@@ -208,27 +224,27 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
     v = start.v if start.v is not None else v_scene
     v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
     x0[net.fixed] = loads.support_positions(net, time=start.t)
-    last = {"steps": 0, "t": start.t, "x": x0.copy(), "v": v0.copy(), "rest": float("nan")}
+    last = _Last(0, start.t, x0.copy(), v0.copy())
     accel = np.zeros_like(x0) if settings.integrator == "newmark" else None
-    last["a"] = None if start.a is None else np.array(start.a, dtype=np.float64)
+    last.a = None if start.a is None else np.array(start.a, dtype=np.float64)
     tension = ws.system.tension
     peaks.observe(start.t, x0, tension(x0))
 
     def rest(ratio: float) -> None:
-        last["rest"] = ratio
+        last.rest = ratio
 
     ledger = Ledger(settings.energy_tolerance)
 
-    def seen(step: int, t: float, x, v) -> bool:
+    def seen(step: int, t: float, x: np.ndarray, v: np.ndarray) -> bool:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
             raise ConvergenceError(f"the state became non-finite at t = {t:.6g} s")
         peaks.observe(t, x, tension(x))
         a = None if accel is None else accel.copy()
-        last.update(steps=step, t=t, x=x.copy(), v=v.copy(), a=a)
+        last.steps, last.t, last.x, last.v, last.a = step, t, x.copy(), v.copy(), a
         if on_step is None:
             return False
         energy = ledger.row.copy()
-        return bool(on_step(Step(step, t, x, v, rest=last["rest"], a=a, energy=energy)))
+        return bool(on_step(Step(step, t, x, v, rest=last.rest, a=a, energy=energy)))
 
     try:
         result = solve_dynamic(
@@ -261,14 +277,30 @@ def _dynamic(scene, settings, ws, start, on_step, peaks) -> Result:
         if isinstance(exc, ConfigError):
             raise
         iterations = exc.iterations
-        if last["steps"] == 0 and accel is not None:
-            last["a"] = accel.copy()  # the start's state: solve_dynamic set it first
-        good = LastGood(last["x"], last["t"], last["steps"], iterations, last["v"], last["a"])
+        if last.steps == 0 and accel is not None:
+            last.a = accel.copy()  # the start's state: solve_dynamic set it first
+        good = LastGood(last.x, last.t, last.steps, iterations, last.v, last.a)
         with_last_good(exc, good)
         raise
 
 
-def _nested(scene, settings: Settings, start: Start) -> tuple[np.ndarray, NestedStart] | None:
+@dataclass
+class _Last:
+    """A dynamic run's last accepted state (its start until a step is accepted): steps
+    done, time, positions, velocities, the newmark scheme's acceleration state (else
+    None), and how far it is from rest (``Step.rest``)."""
+
+    steps: int
+    t: float
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray | None = None
+    rest: float = float("nan")
+
+
+def _nested(
+    scene: Scene, settings: Settings, start: Start
+) -> tuple[np.ndarray, NestedStart] | None:
     """The nested start (``catenet.solver.nested``): the start on the fine net from the
     coarse net's equilibrium at the first load step, and what that cost; None for the
     default start (where it does not apply, or the coarse solve fails)."""

@@ -164,7 +164,7 @@ class Potential:
             forces += 2.0 * np.abs(force.reshape(-1)[free])
             if (level := term.node_roundoff(x, e)) is not None:
                 nodes += level
-        floor = np.repeat(nodes, 3)[free] + forces
+        floor: np.ndarray = np.repeat(nodes, 3)[free] + forces
         floor *= FLOOR_SAFETY * EPS
         return floor
 

@@ -56,6 +56,12 @@ tensions (tests/validate/test_seabed_catenary.py).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from catenet.solver.potential import Potential
+    from catenet.solver.static import _Barriers
 
 REST = "rest"  # solver.t_end's value for a run to rest
 MAX_STEPS = 20_000  # solver.max_steps's default: accepted steps of a run to rest
@@ -75,7 +81,14 @@ class RestControl:
 
     t_end = math.inf
 
-    def __init__(self, dt: float, t0: float, max_cuts: int, max_steps: int, stages=()):
+    def __init__(
+        self,
+        dt: float,
+        t0: float,
+        max_cuts: int,
+        max_steps: int,
+        stages: Iterable[Potential] = (),
+    ):
         self.dt, self.t0 = dt, t0
         self.stages = list(stages)  # potentials of the barrier stages still to come
         self.h = dt
@@ -128,13 +141,15 @@ class RestControl:
         """The rest test's tolerance: loose at a barrier stage before the last."""
         return max(rtol, STAGE_RTOL) if self.stages else rtol
 
-    def next_stage(self):
-        """The potential of the next barrier stage (None after the last)."""
+    def next_stage(self) -> Potential:
+        """The potential of the next barrier stage (the caller checks ``stages``)."""
         self.previous = math.nan
-        return self.stages.pop(0) if self.stages else None
+        return self.stages.pop(0)
 
 
-def rest_stages(potential, barriers, factors, smooth: float = 0.0) -> list:
+def rest_stages(
+    potential: Potential, barriers: _Barriers, factors: list[float], smooth: float = 0.0
+) -> list[Potential]:
     """The potentials of a run to rest, as the static solve's continuations
     (``static.equilibrium``): with the widest barriers, the law smoothed by ``smooth``
     and its SMOOTH_STAGES tenfold reductions (none when 0) at the first stiffness, then

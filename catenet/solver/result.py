@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from catenet.model.net import Loads
 from catenet.model.peaks import Peaks
 
 if TYPE_CHECKING:  # the solvers (and Numba) load only when a solve runs
+    from catenet.run.cases import CaseRun
     from catenet.solver.nested import NestedStart
     from catenet.solver.system import System
 
@@ -119,7 +120,7 @@ class Result:
     outcome: Outcome | None = None
     timing: Timing | None = None
     peaks: Peaks | None = None
-    cases: list = field(default_factory=list)
+    cases: list[CaseRun] = field(default_factory=list)
     nested: NestedStart | None = None
     stability: str = ""
     energy: np.ndarray | None = None
@@ -132,7 +133,7 @@ def finish(
     factor: float = 1.0,
     *,
     load_time: float | None = None,
-    **fields,
+    **fields: Any,
 ) -> Result:
     """Tension and reactions at x (``catenet.model.measures``), and the Result around them;
     ``load_time``: the time of a dynamic state (loads with a history at their value then)."""

@@ -47,7 +47,7 @@ class Settings:
         values = {n: v for n, v in given.items() if v is not None}
         return cls(**{**values, **changes})
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise ConfigError(
                 f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"

@@ -47,10 +47,18 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.errors import ConvergenceError, SingularSystemError
+
+if TYPE_CHECKING:
+    from catenet.model.net import Loads, Net
+    from catenet.solver.linear import LinearSolver
+    from catenet.solver.system import System
+    from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
 
@@ -71,7 +79,15 @@ class CollapseError(ConvergenceError):
     """A static load path lost its stability (``PathJudge``): ``factor`` the load factor
     where, ``nodes`` the free nodes that move most in the collapse."""
 
-    def __init__(self, message: str, *, factor: float, nodes=(), verdict=COLLAPSED, **kwargs):
+    def __init__(
+        self,
+        message: str,
+        *,
+        factor: float,
+        nodes: ArrayLike = (),
+        verdict: str = COLLAPSED,
+        **kwargs: Any,
+    ):
         super().__init__(message, **kwargs)
         self.verdict = verdict  # COLLAPSED, or UNSTABLE: an unloaded unstable start
         self.factor = float(factor)
@@ -87,13 +103,14 @@ class Tangent:
     mode: np.ndarray | None  # (N, 3) the least mode (dense only), else None
 
 
-def _scale(system) -> np.ndarray:
+def _scale(system: System) -> np.ndarray:
     d = np.abs(system.stiffness())
     top = float(d.max()) if d.size else 1.0
-    return np.maximum(d, 1e-12 * max(top, 1e-300))
+    scale: np.ndarray = np.maximum(d, 1e-12 * max(top, 1e-300))
+    return scale
 
 
-def tangent(system, solver, x: np.ndarray) -> Tangent:
+def tangent(system: System, solver: LinearSolver, x: np.ndarray) -> Tangent:
     """The tangent of ``system`` at x (``solver``: the workspace's linear solver, for the
     inertia of large systems)."""
     x = np.asarray(x, dtype=np.float64)
@@ -106,7 +123,7 @@ def tangent(system, solver, x: np.ndarray) -> Tangent:
     return _sparse(system, solver, x, d)
 
 
-def _dense(system, x: np.ndarray, d: np.ndarray) -> Tangent:
+def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
     k = system.matrix(system.hessian(x).copy()).toarray()
     s = 1.0 / np.sqrt(d)
     a = k * s[:, None] * s[None, :]
@@ -121,7 +138,7 @@ def _dense(system, x: np.ndarray, d: np.ndarray) -> Tangent:
     return Tangent(verdict, least, mode.reshape(-1, 3))
 
 
-def _sparse(system, solver, x: np.ndarray, d: np.ndarray) -> Tangent:
+def _sparse(system: System, solver: LinearSolver, x: np.ndarray, d: np.ndarray) -> Tangent:
     """The inertia of K + MARGIN D (negative: unstable) and of K - POSITIVE D (none
     negative: stable), where the factorisation tells; else NEUTRAL (cannot say)."""
     if solver.mtype != -2:  # only PARDISO's symmetric indefinite factors tell here
@@ -146,14 +163,15 @@ def _sparse(system, solver, x: np.ndarray, d: np.ndarray) -> Tangent:
     return Tangent(STABLE, math.nan, None)
 
 
-def _bilateral(net) -> np.ndarray:
+def _bilateral(net: Net) -> np.ndarray:
     return ~np.asarray(net.law.tension_only, dtype=bool) & np.ones(net.n_edges, bool)
 
 
-def _directions(net, x: np.ndarray) -> np.ndarray:
+def _directions(net: Net, x: np.ndarray) -> np.ndarray:
     e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
     length = np.linalg.norm(e, axis=1)
-    return e / np.where(length > 0.0, length, 1.0)[:, None]
+    unit: np.ndarray = e / np.where(length > 0.0, length, 1.0)[:, None]
+    return unit
 
 
 class PathJudge:
@@ -161,7 +179,7 @@ class PathJudge:
     (every call a no-op) for nets whose edges are all tension-only or that carry free
     bodies (``catenet.solver.modal.stable_with_bodies`` judges those)."""
 
-    def __init__(self, ws, loads, *, post_collapse: bool = False):
+    def __init__(self, ws: Workspace, loads: Loads, *, post_collapse: bool = False):
         from catenet.solver.modal import body_frames
 
         self.ws = ws
@@ -183,7 +201,7 @@ class PathJudge:
         self.guessed = False
         self.loaded = True
         self.start_x: np.ndarray | None = None
-        self._seen: list = []  # (x, Tangent) of the last two states judged
+        self._seen: list[tuple[np.ndarray, Tangent]] = []  # the last two states judged
         self.collapsed: str = ""  # what happened, once a collapse was followed through
 
     # --- what each state says ----------------------------------------------------------
@@ -293,7 +311,8 @@ class PathJudge:
 
     def _angles(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         cos = np.einsum("ij,ij->i", _directions(self.net, a), _directions(self.net, b))
-        return np.arccos(np.clip(cos, -1.0, 1.0))
+        angles: np.ndarray = np.arccos(np.clip(cos, -1.0, 1.0))
+        return angles
 
     def _turned(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         tension = self.ws.system.tension(b)
@@ -328,7 +347,7 @@ class PathJudge:
         return own
 
 
-def _shown(items) -> str:
+def _shown(items: ArrayLike) -> str:
     items = np.asarray(items)
     head = ", ".join(map(str, items[:10]))
     return head + (f" and {items.size - 10} more" if items.size > 10 else "")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError, SingularSystemError
 from catenet.model.measures import strain
@@ -15,7 +16,7 @@ from catenet.solver.potential import Potential
 from catenet.terms.stretch import Springs
 
 
-def start_state(net: Net, loads: Loads, x0, factor: float) -> np.ndarray:
+def start_state(net: Net, loads: Loads, x0: ArrayLike | None, factor: float) -> np.ndarray:
     """The starting guess: x0 (or the reference positions) with the supports put in place.
     Where supports move, the free nodes follow them by the harmonic extension of the
     support displacement, so no edge starts out stretched many times its length."""

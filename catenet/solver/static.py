@@ -23,7 +23,7 @@ from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.stability import STABLE, UNSTABLE, tangent
 from catenet.solver.start import start_state, stretched_start, unstressed
 from catenet.solver.workspace import Workspace, check_rtol
-from catenet.terms import Inertia, Stretch
+from catenet.terms import Inertia, Stretch, Term
 
 log = logging.getLogger(__name__)
 
@@ -151,7 +151,7 @@ def _warn_loose(ws: Workspace, net: Net, out: Result) -> None:
         )
 
 
-def _outcome(result) -> Outcome:
+def _outcome(result: NewtonResult) -> Outcome:
     """The Outcome of a load step's Newton result: which criterion held, or failed."""
     if not result.converged:
         return Outcome.FAILED
@@ -162,7 +162,9 @@ LAG_ROUNDS = 20  # a static load step re-solved at most this often for its lagge
 LAG_RTOL = 1e-6  # until their lagged quantities change less than this share
 
 
-def _relag(potential: Potential, x: np.ndarray, result, *, rtol: float, max_iter: int):
+def _relag(
+    potential: Potential, x: np.ndarray, result: NewtonResult, *, rtol: float, max_iter: int
+) -> NewtonResult:
     """A static load step has no time: terms with lagged quantities (friction: the normal
     forces of the step's start) have them updated at the equilibrium found (``relag``,
     returning the relative change) and the step is solved again from there, until they
@@ -203,7 +205,7 @@ CONTACT_STRAIN = 3e-2  # nets that touch obstacles start the stiffness continuat
 
 def equilibrium(
     potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int, transient: bool = False
-):
+) -> NewtonResult:
     """Newton to equilibrium from x (updated in place), through two continuations when
     the start calls for them; the last solve always uses the exact law and stiffness to
     the full tolerance.
@@ -379,7 +381,9 @@ PT_GROW = 4.0  # its step grows (c shrinks) this much after each converged step
 PT_END = 1e-8  # ... until c is this share of its start: then Newton on the true potential
 
 
-def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int):
+def _pseudo_transient(
+    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
+) -> NewtonResult:
     """The equilibrium by a damped pseudo-transient solve: implicit Euler steps of the
     gradient flow D dy/dt = -grad Phi (D the axial stiffness diagonal; pseudo-time, no
     inertia), each the minimum of Phi + (c/2) |y - y_k|_D^2 by Newton (an ``Inertia``
@@ -393,7 +397,8 @@ def _pseudo_transient(potential: Potential, x: np.ndarray, *, rtol: float, max_i
     inertia = Inertia(free)
     ev = potential.evaluate(x)
     c = c_first = _c_start(potential, ev.g)
-    iterations, history = 0, []
+    iterations = 0
+    history: list[float] = []
     for _ in range(PT_STEPS):
         if c < PT_END * c_first or float(np.linalg.norm(ev.g)) <= max(rtol * ev.scale, ev.floor):
             break
@@ -422,14 +427,14 @@ class _Barriers:
     ``count`` (the exact terms). Obstacles with fewer stages reach their own barrier
     earlier, so all arrive together; friction rides on the exact barriers only."""
 
-    def __init__(self, others: tuple):
+    def __init__(self, others: tuple[Term, ...]):
         self.others = others
         self.count = max((len(t.stages) for t in others), default=0)
 
-    def __call__(self, level: int) -> tuple:
+    def __call__(self, level: int) -> tuple[Term, ...]:
         if level >= self.count:
             return self.others
-        out = []
+        out: list[Term] = []
         for term in self.others:
             stages = term.stages
             if stages:

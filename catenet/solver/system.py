@@ -34,6 +34,9 @@ _NO_ELEMS = np.zeros((0, 2), dtype=np.int64)
 _NO_DOFS = np.zeros(0, dtype=np.int64)
 
 
+#: A sparsity pattern: (indptr, indices, each term's targets, the diagonal's positions).
+Pattern = tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]
+
 #: Below this many Hessian values (about 1e5 edges), the pattern is made by one np.unique
 #: (milliseconds, nothing to compile); above it, at node level by a kernel (linear time).
 SMALL_PATTERN = 4_000_000
@@ -97,7 +100,7 @@ class System:
         self.seconds += time.perf_counter() - start
         return True
 
-    def _block_pattern(self) -> tuple | None:
+    def _block_pattern(self) -> Pattern | None:
         """The pattern at node level (catenet.kernels.pattern.block_pattern): the edges'
         node adjacency as 3x3 blocks, when every free node has an edge and the other
         terms' entries fall into it (node-local terms do); else None."""
@@ -131,7 +134,7 @@ class System:
         """How many Hessian values the terms have (36 per edge for the stretching)."""
         return sum(self._entries(term)[3] for term in self.terms)
 
-    def _unique_pattern(self) -> tuple:
+    def _unique_pattern(self) -> Pattern:
         """The pattern by one np.unique over the keys row * n + col of every kept entry:
         for small systems, where it takes milliseconds and the kernels of the other two
         ways would first have to compile (seconds on a first run; the same arrays)."""
@@ -162,7 +165,7 @@ class System:
             targets.append(target)
         return indptr, (unique % width).astype(np.int32), targets, inverse[start:]
 
-    def _entry_pattern(self) -> tuple:
+    def _entry_pattern(self) -> Pattern:
         """The pattern from every entry of every term (catenet.kernels.pattern): bucketed
         by row and made unique per row, no global sort."""
         upper = self.upper

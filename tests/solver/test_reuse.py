@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import catenet as cn
-import catenet.solver.dynamic as dynamic
+import catenet.solver.stepper as stepper
 from catenet.solver.dynamic import solve_dynamic
 from catenet.solver.newton import NewtonResult, Reuse, solve_newton
 from catenet.solver.static import Workspace, solve_static
@@ -120,7 +120,7 @@ def test_a_kept_factorisation_is_dropped_when_another_solve_factorises():
 def _failing(monkeypatch, fail):
     """Wraps the dynamic solver's Newton: ``fail(call, kept)`` makes a call fail."""
     calls = []
-    real = dynamic.solve_newton
+    real = stepper.solve_newton
 
     def wrapped(potential, x, **kw):
         kept = kw.get("reuse") is not None and kw["reuse"].valid(potential, 0.0)
@@ -129,7 +129,7 @@ def _failing(monkeypatch, fail):
             return NewtonResult(False, 1, 1.0, 0.0, [1.0], "forced failure", 0, int(kept))
         return real(potential, x, **kw)
 
-    monkeypatch.setattr(dynamic, "solve_newton", wrapped)
+    monkeypatch.setattr(stepper, "solve_newton", wrapped)
     return calls
 
 
