@@ -20,7 +20,7 @@ from catenet.case.obstacles import SphereObstacle
 from catenet.case.sections import LoadConfig, SolverConfig, SupportsConfig
 from catenet.solver.adaptive import FIRST_SHARE
 from catenet.solver.relax import REST
-from catenet.solver.settings import Settings
+from catenet.solver.settings import DT
 
 #: solver.t_end's default where something depends on time [s].
 T_END = 10.0
@@ -70,8 +70,8 @@ def resolve_steps(solver: SolverConfig) -> SolverConfig:
     dynamic = solver.method == "dynamic"  # (a static case keeps its integrator unset)
     return dataclasses.replace(
         solver,
-        dt=Settings.dt if solver.dt is None else solver.dt,
-        integrator=solver.integrator or (Settings.integrator if dynamic else None),
+        dt=DT if solver.dt is None else solver.dt,
+        integrator=solver.integrator or ("implicit_euler" if dynamic else None),
     )
 
 

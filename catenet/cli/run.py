@@ -293,14 +293,16 @@ def _timing(case) -> bool | str:
     return "rest" if case.solver.t_end == "rest" else True
 
 
-def _balance(row) -> str:
-    """The summary's line of a dynamic run's energy balance [J]."""
+def _balance(row, scale: float) -> str:
+    """The summary's line of a dynamic run's energy balance [J]; its numerical part as a
+    share of ``scale``, the run's largest energy (the last row's where not known)."""
     k, u, c, w, d, rest = (float(v) for v in row)
     largest = max(abs(k), abs(u), abs(c), abs(w), 1e-300)
+    largest = scale if scale > 0 else largest  # (nan: not known)
     return (
         f"{'energy':<12} kinetic {k:.4g} J, elastic {u:.4g} J, contact {c:.4g} J; work in "
         f"{w:.4g} J, dissipated {d:.4g} J; numerical {rest:.3g} J ({rest / largest:+.2%} of "
-        "the largest: the integrator's own loss, /trajectory/energy)"
+        "the run's largest energy: the integrator's own loss, /trajectory/energy)"
     )
 
 
@@ -335,7 +337,7 @@ def _summary(case, result, path: Path | None) -> None:
         _times(result),
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
-        lines.insert(-1, _balance(result.energy))
+        lines.insert(-1, _balance(result.energy, result.energy_scale))
     for note in newmark_contact(case):  # the scheme's known failure in impacts
         lines.insert(-1, f"{'warning':<12} {note}")
     for k, b in s.bodies.items():  # free rigid bodies, one line each

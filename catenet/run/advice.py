@@ -19,6 +19,8 @@ from catenet.case.timing import resolve_steps
 if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.case.sections import SolverConfig
+    from catenet.scene.scene import Scene
+    from catenet.scene.shapes import Shape
 
 #: A trajectory estimated above this many bytes is warned about before the run.
 WARN_BYTES = 1 << 30
@@ -489,3 +491,48 @@ def peak_strain_beyond_law(net, peaks, dynamic: bool) -> str | None:
         "during the run, though not necessarily at its end: use a large-strain law "
         "(material.law = 'neo_hookean'), a stiffer cable, or lower the load"
     )
+
+
+#: A solid narrower than this share of the net's median edge can pass between its nodes.
+NARROW_SHARE = 1.0
+
+
+def between_nodes(scene: Scene) -> list[str]:
+    """Warnings for each obstacle, ball or free body (not a plane) narrower than the
+    net's median edge: the net touches solids at its nodes only (the barriers act on
+    nodes), so such a solid can pass between them, or sit across a strand, and no check
+    sees it."""
+    net = scene.net
+    if not net.n_edges:
+        return []
+    ends = net.nodes[net.edges]
+    edge = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
+    solids = [(k, shape, "") for k, shape, _ in scene.obstacles]
+    solids += [(m.index, m.shape, "a free " if m.free else "a moving ") for m in scene.movers]
+    out = []
+    for k, shape, what in sorted(solids, key=lambda s: s[0]):
+        if shape.kind == "plane":
+            continue
+        width = _width(shape)
+        if width < NARROW_SHARE * edge:
+            out.append(
+                f"obstacle[{k}] ({what}{shape.kind}, {width:.3g} m across) is narrower than "
+                f"the net's edges ({edge:.3g} m, the median): the net touches solids at its "
+                "nodes only, so it may pass between them or lie across a strand unseen; "
+                "refine the net (edges well below the solid's width) "
+                "(docs/guide/bodies.md#how-it-works-and-its-limits)"
+            )
+    return out
+
+
+def _width(shape: Shape) -> float:
+    """The smallest extent of a shape across its principal directions [m]: its
+    outline's points' extent there plus its radius on both sides."""
+    points, _, radius = shape.outline()
+    centred = points - points.mean(axis=0)
+    if len(points) < 2:
+        return 2.0 * float(radius)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    spans = [float(np.ptp(centred @ axis)) for axis in axes]
+    spans += [0.0] * (3 - len(spans))  # a flat or straight outline: none across the rest
+    return min(spans) + 2.0 * float(radius)

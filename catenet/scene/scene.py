@@ -218,6 +218,8 @@ class Scene:
         balls and the fixed obstacles (``catenet.scene.rigid``, ``catenet.scene.touching``),
         with Coulomb ``friction`` against the net and the solids. Four nodes of the net.
         Raises ConfigError where it starts overlapping anything."""
+        if shape.kind == "plane":
+            raise ConfigError("body: a plane cannot be a free body (it has no mass)")
         if (mass is None) == (density is None):
             raise ConfigError("body: give mass or density (one of them)")
         mover = Mover(
@@ -299,6 +301,8 @@ def _positive(what: str, value: float | None) -> float | None:
     """``value`` as a float, None as None; ConfigError unless finite and > 0."""
     if value is None:
         return None
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ConfigError(f"{what} = {value!r}: must be a number")
     v = float(value)
     if not (math.isfinite(v) and v > 0):
         raise ConfigError(f"{what} = {value!r}: must be a finite number > 0")
@@ -326,7 +330,14 @@ def _inertia(value: ArrayLike | None) -> np.ndarray | None:
         return None
     from catenet.terms.rigid import inertia_problem
 
-    tensor = np.asarray(value, dtype=np.float64)
+    try:
+        tensor = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"body: inertia = {value!r}: must be 3 x 3 or 3 principal moments"
+        ) from None
+    if not np.all(np.isfinite(tensor)):
+        raise ConfigError(f"body: inertia = {value!r}: must be finite numbers")
     if tensor.shape == (3,):
         tensor = np.diag(tensor)
     why = "must be 3 x 3 or 3 principal moments" if tensor.shape != (3, 3) else None

@@ -127,6 +127,10 @@ class ErrorControl:
                 f"solver.tolerance: steps chosen by accuracy take integrator = 'bdf2' or "
                 f"'implicit_euler', not {scheme.name!r} (give solver.dt for fixed steps)"
             )
+        if stepper.ledger is not None:
+            from catenet.solver.energy import ADAPTIVE_REMEDY
+
+            stepper.ledger.remedy = ADAPTIVE_REMEDY
         scheme.keep = True
         nodes, gravity = stepper.net.nodes, stepper.loads.gravity
         return cls(

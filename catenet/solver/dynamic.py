@@ -182,6 +182,7 @@ def _result(stepper: TimeStepper, ledger: Ledger, run: Outcome, start: float) ->
         stats=ws.stats(),
         outcome=run,
         energy=ledger.row.copy(),
+        energy_scale=ledger.largest,
     )
 
 

@@ -38,6 +38,15 @@ TOLERANCE = 1e-2  # solver.energy_tolerance's default: a share of the largest en
 ROUNDOFF = 1e-9  # ... never below this share (the energies' own round-off, summed over steps)
 
 
+#: What an EnergyError advises, by integrator (steps chosen by accuracy: ADAPTIVE_REMEDY).
+REMEDIES = {
+    "newmark": 'solver.integrator = "bdf2" (or "implicit_euler"), a smaller solver.dt, or a '
+    "smaller solver.rho_inf (<= 0.5 in contact)",
+    "": "a smaller solver.dt",
+}
+ADAPTIVE_REMEDY = "a smaller solver.tolerance or solver.dt_max"
+
+
 class EnergyError(ConvergenceError):
     """A dynamic run whose energy balance shows the integrator creating energy."""
 
@@ -50,6 +59,7 @@ class Ledger:
         self.row = np.zeros(len(COLUMNS))
         self.judged = True
         self.largest = 0.0
+        self.remedy = REMEDIES[""]  # what an EnergyError advises (``begin``)
         self._start = 0.0
         self._work = 0.0
         self._dissipated = 0.0
@@ -68,6 +78,7 @@ class Ledger:
         self._work = self._dissipated = 0.0
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
         self.largest = max(abs(k), abs(u), abs(c))
+        self.remedy = REMEDIES.get(stepper.scheme.name, REMEDIES[""])
 
     def step(
         self,
@@ -118,9 +129,7 @@ class Ledger:
                 f"({w:.4g} J) and the losses to damping and friction ({d:.4g} J) allow "
                 f"{k + u + c - remainder:.4g} J: {remainder:.4g} J appeared from nothing, "
                 f"more than solver.energy_tolerance = {self.tolerance:g} of the largest "
-                f"energy ({self.largest:.4g} J). Not an answer: use "
-                'solver.integrator = "implicit_euler", a smaller solver.dt, or a smaller '
-                "solver.rho_inf (<= 0.5 in contact)"
+                f"energy ({self.largest:.4g} J). Not an answer: use {self.remedy}"
             )
 
     # --- the parts -------------------------------------------------------------------

@@ -102,9 +102,11 @@ def solve(
     docstring; None: the defaults), with any [solver] key changed by ``keys``
     (``solve(scene, method="dynamic", dt=1e-3)``). ``peaks``: where the run's peaks
     accumulate (pass one to keep them when the run fails)."""
-    settings = Settings() if settings is None else settings
-    if keys:
+    if settings is None:  # the keys given, the rest resolved as a case file's
+        settings = Settings(**keys)
+    elif keys:
         settings = dataclasses.replace(settings, **keys)
+    _check_bodies(scene, settings)
     ws = workspace if workspace is not None else globals()["workspace"](scene, settings)
     start = start or Start()
     if peaks is None:
@@ -120,6 +122,20 @@ def solve(
         result = _static(scene, settings, ws, start, on_step, peaks)
     result.peaks = peaks
     return result
+
+
+def _check_bodies(scene: Scene, settings: Settings) -> None:
+    """ConfigError where newmark's rho_inf cannot damp a free body's rigidity (as a case
+    file's ``catenet.case.rigid``)."""
+    from catenet.scene.rigid import RHO_INF_MAX
+
+    newmark = settings.method == "dynamic" and settings.integrator == "newmark"
+    if scene.rigid and newmark and settings.rho_inf > RHO_INF_MAX:
+        raise ConfigError(
+            f"solver.rho_inf = {settings.rho_inf!r}: must be <= {RHO_INF_MAX} with a free "
+            f"body (obstacle[{scene.rigid[0].obstacle}]): its rigidity is a stiff mode the "
+            "newmark scheme must damp; the default 0.8 does"
+        )
 
 
 class _Stop(Exception):

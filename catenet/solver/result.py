@@ -95,7 +95,8 @@ class Result:
         "post-collapse" (``solver.post_collapse``), or "" where not judged (a transient)
     energy : a dynamic run's energy balance at its end [J], in the order of
         ``catenet.solver.energy.COLUMNS`` (kinetic, elastic, contact, external_work,
-        dissipated, numerical), or None
+        dissipated, numerical), or None; energy_scale : the largest of the run's kinetic,
+        elastic, contact energies and work [J] (what the energy verdict measures against)
     """
 
     x: np.ndarray
@@ -124,6 +125,7 @@ class Result:
     nested: NestedStart | None = None
     stability: str = ""
     energy: np.ndarray | None = None
+    energy_scale: float = float("nan")
 
 
 def finish(

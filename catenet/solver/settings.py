@@ -4,14 +4,17 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
 from catenet.errors import ConfigError
+from catenet.solver.adaptive import FIRST_SHARE
 from catenet.solver.integrators import INTEGRATORS, RHO_INF
 from catenet.solver.relax import MAX_STEPS, REST
 
 METHODS = ("static", "dynamic")
+DT = 1e-2  # solver.dt's default with fixed steps
 STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
 
 
@@ -20,7 +23,7 @@ class Settings:
     """How to solve: the [solver] keys (contract §3) that a solve uses."""
 
     method: str = "static"
-    dt: float = 1e-2
+    dt: float = math.nan  # not given: 0.01, or with a tolerance t_end / 1000 (__post_init__)
     damping: float = 1.0
     t_end: float | str = 10.0  # or "rest" (a case's default when nothing depends on time)
     max_steps: int = MAX_STEPS  # t_end = "rest": the most time steps
@@ -28,7 +31,7 @@ class Settings:
     max_iter: int = 200
     steps: int = 1
     linear: str = "auto"
-    integrator: str = "implicit_euler"
+    integrator: str = ""  # not given: "implicit_euler", or with a tolerance "bdf2"
     reuse: bool = False
     rho_inf: float = RHO_INF
     start: str = "auto"  # static: "auto", "stretched" or "nested" (catenet.solver.nested)
@@ -37,6 +40,19 @@ class Settings:
     tolerance: float | None = None  # dynamic: steps chosen by accuracy (catenet.solver.adaptive)
     dt_max: float | None = None  # ... the longest step (None: t_end - t0)
     dt_min: float | None = None  # ... the shortest
+
+    def _resolve_steps(self) -> None:
+        """dt and integrator where not given: with a tolerance (and a number for t_end),
+        the first step t_end / 1000 (at most dt_max) and bdf2; else 0.01 s and implicit
+        Euler (as a case file's, ``catenet.case.timing.resolve_steps``)."""
+        adaptive = self.tolerance is not None and not isinstance(self.t_end, str)
+        if math.isnan(self.dt) and adaptive:
+            first = min(self.dt_max or math.inf, FIRST_SHARE * float(self.t_end))
+            object.__setattr__(self, "dt", first)
+        elif math.isnan(self.dt):
+            object.__setattr__(self, "dt", DT)
+        if not self.integrator:
+            object.__setattr__(self, "integrator", "bdf2" if adaptive else "implicit_euler")
 
     @classmethod
     def of(cls, config: object, **changes: Any) -> Settings:
@@ -48,6 +64,7 @@ class Settings:
         return cls(**{**values, **changes})
 
     def __post_init__(self) -> None:
+        self._resolve_steps()
         if self.method not in METHODS:
             raise ConfigError(
                 f"solver.method = {self.method!r}: must be one of {', '.join(METHODS)}"
@@ -72,6 +89,11 @@ class Settings:
         for name, value in (("dt_max", self.dt_max), ("dt_min", self.dt_min)):
             if value is not None and not value > 0.0:
                 raise ConfigError(f"solver.{name} = {value!r}: must be a number > 0")
+        low, high = self.dt_min or 0.0, self.dt_max or math.inf
+        if self.tolerance is not None and not low <= high:
+            raise ConfigError(
+                f"solver.dt_min = {self.dt_min!r}: must be <= solver.dt_max = {high!r}"
+            )
         if self.tolerance is not None and self.integrator == "newmark":
             raise ConfigError(
                 "solver.tolerance: steps chosen by accuracy take integrator = 'bdf2' or "

@@ -233,6 +233,18 @@ def test_bodies_from_python_in_any_order_and_from_toml_are_the_same_to_the_bit()
             "body: velocity = [1, 2]: must be 3 finite numbers",
         ),
         (lambda s: s.with_ball(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0), "must be a Sphere"),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass="100"),
+            "body: mass = '100': must be a number",
+        ),
+        (
+            lambda s: s.with_body(catenet.Box([0, 0, 5.0], [0.2] * 3), mass=1.0, inertia="big"),
+            "body: inertia = 'big': must be 3 x 3",
+        ),
+        (
+            lambda s: s.with_body(catenet.Plane([0, 0, 5.0], [0, 0, 1.0]), mass=1.0),
+            "a plane cannot be a free body",
+        ),
         (lambda s: s.with_ball(catenet.Sphere([0, 0, 5.0], 0.2)), "give mass"),
         (
             lambda s: s.with_ball(catenet.Sphere([0.0, 0.0, 2.0], 0.2), mass=1.0),
@@ -247,3 +259,39 @@ def test_bodies_from_python_in_any_order_and_from_toml_are_the_same_to_the_bit()
 def test_the_builder_refuses_a_bad_body_naming_it(call, message):
     with pytest.raises(ConfigError, match=re.escape(message)):
         call(capture_scene())
+
+
+def test_a_solid_narrower_than_the_cells_is_warned_about():
+    """The net touches solids at its nodes only: a free bar 0.1 m across over 1 m cells,
+    or a fixed thin pipe, may pass between them, and the run says so
+    (``catenet.run.advice.between_nodes``); a box wider than the cells does not."""
+    from catenet.run.advice import between_nodes
+
+    nodes, edges = grid()
+    net = catenet.graph(nodes, edges, [0, 10, 110, 120], catenet.Material(EA=1e4, line_density=0.1))
+    scene = catenet.Scene.of(net, catenet.Loads())
+    bar = scene.with_body(catenet.Capsule([-2.0, 0.3, 3.0], [2.0, 0.3, 3.0], 0.05), mass=5.0)
+    pipe = scene.with_obstacle(catenet.Cylinder([-2.0, 0.5, 1.0], [2.0, 0.5, 1.0], 0.1))
+    box = scene.with_body(catenet.Box([0.0, 0.0, 4.0], [1.5, 1.5, 0.75]), mass=5.0)
+    (warning,) = between_nodes(bar)
+    assert warning.startswith("obstacle[0] (a free capsule, 0.1 m across) is narrower than")
+    assert "the net's edges (1 m, the median)" in warning
+    (warning,) = between_nodes(pipe)
+    assert warning.startswith("obstacle[0] (cylinder, 0.2 m across)")
+    assert between_nodes(box) == []
+    assert between_nodes(scene.with_obstacle(catenet.Plane([0, 0, 0.0], [0, 0, 1.0]))) == []
+
+
+def test_solve_refuses_newmark_that_cannot_damp_a_free_body():
+    """As a case file does (``solver.rho_inf`` <= 0.95 with a free body)."""
+    scene = catenet.Scene.of(*_net_and_gravity()).with_body(
+        catenet.Box([0.0, 0.0, 3.0], [0.3, 0.3, 0.3]), mass=5.0
+    )
+    with pytest.raises(ConfigError, match=r"solver.rho_inf = 0.99: must be <= 0.95 with a free"):
+        catenet.solve(scene, method="dynamic", integrator="newmark", rho_inf=0.99, t_end=0.1)
+
+
+def _net_and_gravity():
+    nodes, edges = grid()
+    net = catenet.graph(nodes, edges, [0, 10, 110, 120], catenet.Material(EA=1e4, line_density=0.1))
+    return net, catenet.Loads(gravity=np.array([0.0, 0.0, -9.81]))

@@ -5,6 +5,7 @@ run from the command line writes its irregular frames."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from pathlib import Path
@@ -128,3 +129,17 @@ def test_step_keys_a_run_ignores_are_named():
     static = parse_case(drop(method="static", tolerance=1e-3)).solver
     assert any("solver.tolerance = 0.001: ignored with solver.method = 'static'" in m
                for m in ignored_solver_keys(static))  # fmt: skip
+
+
+def test_python_settings_resolve_as_a_case_file():
+    """A tolerance from Python steps as a case file's does: bdf2, t_end / 1000 first;
+    without one, 0.01 s and implicit Euler; crossed bounds refused."""
+    adaptive = cn.Settings("dynamic", t_end=0.4, tolerance=1e-3)
+    assert adaptive.integrator == "bdf2" and adaptive.dt == pytest.approx(4e-4)
+    assert cn.Settings("dynamic", t_end=0.4, tolerance=1e-3, dt_max=1e-4).dt == 1e-4
+    fixed = cn.Settings("dynamic", t_end=0.4)
+    assert fixed.integrator == "implicit_euler" and fixed.dt == 0.01
+    from_case = cn.Settings.of(parse_case(drop(tolerance=1e-3)).solver)
+    assert from_case == dataclasses.replace(adaptive, damping=0.0)  # the drop is undamped
+    with pytest.raises(ConfigError, match="solver.dt_min = 0.1: must be <="):
+        cn.Settings("dynamic", tolerance=1e-3, dt_min=0.1, dt_max=0.01)
