@@ -34,10 +34,11 @@ def movers(case: Any) -> tuple[Mover, ...]:
         else:
             continue
         inertia = None if obs.inertia is None else np.array(obs.inertia, float)
+        shape = obs.shape()
         mover = Mover(
-            k, obs.shape(), obs.contact(), free=obs.free, mass=obs.mass, density=obs.density,
+            k, shape, obs.contact(), free=obs.free, mass=obs.mass, density=obs.density,
             inertia=inertia, velocity=obs.velocity, angular_velocity=obs.angular_velocity,
-            history=obs.history,
+            history=obs.history, placed=obs.given(shape.origin_key),
         )  # fmt: skip
         out.append(mover)
     return tuple(out)

@@ -104,6 +104,10 @@ class Shaped:
 
         return shape_of(vars(self))  # a dataclass's fields: the table's keys
 
+    def given(self, key: str) -> Any:
+        """The value of the table's key ``key``, as parsed (a message shows it as written)."""
+        return vars(self)[key]
+
     def contact(self) -> Contact:
         table = vars(self)
         motion = ("velocity", "angular_velocity", "history") if self.rigid_motion else ()

@@ -38,6 +38,7 @@ class Mover:
     velocity: tuple[float, ...] | None = None
     angular_velocity: tuple[float, ...] | None = None
     history: tuple[tuple[float, float], ...] | None = None
+    placed: Any = None  # its shape's origin key as its case file gives it (messages)
 
     @property
     def path(self) -> str:

@@ -15,7 +15,7 @@ world axes at t = 0) is given.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -199,12 +199,18 @@ def _check_resolved(body: Mover, frame: BodyFrame, shown: Shown) -> None:
     key = body.shape.origin_key
     limit = RESOLVED * frame.reach / np.finfo(float).eps
     raise ConfigError(
-        f"{body.path}.{key}: a free body {far:.3g} m from the origin (its centre of mass "
-        f"at {shown(frame.center.tolist())}) is not resolved against its size "
-        f"({frame.reach:.3g} m: its coordinates carry round-off of "
-        f"{far * np.finfo(float).eps:.3g} m); a free body this size must lie within "
-        f"{limit:.3g} m of the origin: place the origin near the scene"
+        f"{body.path}.{key} = {shown(_placed(body))}: a free body {far:.3g} m "
+        f"from the origin is not resolved against its size ({frame.reach:.3g} m: its "
+        f"coordinates carry round-off of {far * np.finfo(float).eps:.3g} m); a free body "
+        f"this size must lie within {limit:.3g} m of the origin: place the origin near "
+        "the scene"
     )
+
+
+def _placed(body: Mover) -> Any:
+    """Where the body's shape is placed (its origin key's value), as its case file gives
+    it where it came from one."""
+    return body.shape.placed.tolist() if body.placed is None else list(body.placed)
 
 
 def _check_carried(

@@ -6,9 +6,12 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from catenet.errors import ConfigError
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 from catenet.solver.adaptive import FIRST_SHARE
 from catenet.solver.integrators import INTEGRATORS, RHO_INF
 from catenet.solver.relax import MAX_STEPS, REST
@@ -55,12 +58,12 @@ class Settings:
             object.__setattr__(self, "integrator", "bdf2" if adaptive else "implicit_euler")
 
     @classmethod
-    def of(cls, config: object, **changes: Any) -> Settings:
-        """The settings in any object with these attributes (a case's SolverConfig): each
-        field read by its name."""
-        given = {f.name: getattr(config, f.name) for f in dataclasses.fields(cls)}
-        # (None: not given, e.g. a static case's t_end: the default here)
-        values = {n: v for n, v in given.items() if v is not None}
+    def of(cls, config: DataclassInstance, **changes: Any) -> Settings:
+        """The settings in a dataclass with these fields (a case's SolverConfig; its other
+        fields ignored, a None the default here: not given, e.g. a static case's t_end)."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        given = dataclasses.asdict(config)
+        values = {n: v for n, v in given.items() if n in names and v is not None}
         return cls(**{**values, **changes})
 
     def __post_init__(self) -> None:

@@ -65,6 +65,11 @@ class Shape(Protocol):
     def origin(self) -> np.ndarray: ...
 
     @property
+    def placed(self) -> np.ndarray:
+        """The value of its ``origin_key`` (where its table places it; messages)."""
+        ...
+
+    @property
     def reach(self) -> float: ...
 
     def barrier(
@@ -165,6 +170,10 @@ class AboutSegment:
     @property
     def length(self) -> float:
         return float(np.linalg.norm(self.end - self.start))
+
+    @property
+    def placed(self) -> np.ndarray:
+        return self.start
 
     @property
     def origin(self) -> np.ndarray:

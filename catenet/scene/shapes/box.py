@@ -60,6 +60,10 @@ class Box:
         return self.center
 
     @property
+    def placed(self) -> np.ndarray:
+        return self.center
+
+    @property
     def reach(self) -> float:
         return float(np.linalg.norm(self.half_size))
 

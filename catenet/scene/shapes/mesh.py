@@ -46,6 +46,10 @@ class Mesh:
         return np.asarray(self.offset, dtype=np.float64)
 
     @property
+    def placed(self) -> np.ndarray:
+        return self.origin
+
+    @property
     def reach(self) -> float:
         return float(np.linalg.norm(self.vertices - self.origin, axis=1).max())
 

@@ -50,6 +50,10 @@ class Plane:
         return self.point
 
     @property
+    def placed(self) -> np.ndarray:
+        return self.point
+
+    @property
     def reach(self) -> float:
         return float("inf")
 

@@ -42,6 +42,10 @@ class Sphere:
         return self.center
 
     @property
+    def placed(self) -> np.ndarray:
+        return self.center
+
+    @property
     def reach(self) -> float:
         return self.radius
 
