@@ -20,8 +20,8 @@ at most ``dt_max``): the scheme's first steps, before it has the states to
 estimate its error from, are taken at that length. Steps stay within
 [``dt_min``, ``dt_max``]; a step that fails to converge (Newton) is retried at half its
 length, as with fixed steps, and the run fails where that is below ``dt_min``; a step at
-``dt_min`` whose error is still beyond the tolerance is accepted (and counted: the run
-says so). A run that takes more than MAX_TRIES steps fails (a tolerance too tight for it).
+``dt_min`` whose error is still beyond the tolerance is accepted (the run warns once). A
+run that takes more than MAX_TRIES steps fails (a tolerance too tight for it).
 Each estimate is filtered through the step's own matrix (W^-1 w e, W = w + K the Newton
 matrix, w the inertia weights): a component the step resolves keeps its size, a stiff one
 it cannot (a free body's rigidity, a barrier's) is damped as bdf2 and implicit Euler damp
@@ -104,6 +104,7 @@ class ErrorControl:
         self.fails = 0
         self.rejected = 0  # steps that converged but whose error was beyond the tolerance
         self.beyond = 0  # steps accepted at dt_min with their error beyond the tolerance
+        self.least = self.dt_min  # the shortest the next step may be (``step``)
         self.planned = max(1, math.ceil(span / self.dt_max - 1e-9))
         self.budget = MAX_TRIES + ALLOWANCE  # many short steps may be what the tolerance asks
         self.largest_error = 0.0
@@ -186,9 +187,12 @@ class ErrorControl:
         """The next step from t: h, cut short at t_end, or half what is left where h would
         leave a sliver shorter than itself."""
         left = self.t_end - t
+        self.least = self.dt_min  # the shortest this step may be (judge)
+        if 2.0 * self.h > left and 0.5 * left < self.dt_min:
+            self.least = left  # what is left, in one step: no shorter one fits
         if self.h >= left:
             return left
-        return 0.5 * left if 2.0 * self.h > left else self.h
+        return 0.5 * left if 2.0 * self.h > left and self.least < left else self.h
 
     def judge(self, h_step: float, error: float | None) -> bool:
         """A step of ``h_step`` converged with ``error`` (its estimate over the tolerance;
@@ -205,8 +209,16 @@ class ErrorControl:
         if error > 1.0:
             self.rejected += 1
             self.h = max(self.dt_min, h_step * max(SHRINK_MIN, min(factor, 0.9)))
-            if h_step <= self.dt_min:  # accepted: the run cannot do better (counted)
+            if h_step <= self.least * (1.0 + 1e-9):  # taken: no shorter step (said once)
                 self.beyond += 1
+                self.rejected -= 1
+                if self.beyond == 1:
+                    log.warning(
+                        "a step at solver.dt_min = %.3g s has an error %.3g times "
+                        "solver.tolerance = %g: taken, as every such step (a tolerance "
+                        "tighter than dt_min allows: a smaller dt_min, or a larger "
+                        "tolerance)", self.dt_min, error, self.tolerance,
+                    )  # fmt: skip
                 return True
             return False
         self.largest_error = max(self.largest_error, error)
@@ -238,4 +250,5 @@ class ErrorControl:
 
     def advance(self, t: float, h_step: float) -> float:
         """The time after the step of ``h_step`` from t (t_end exactly at the end)."""
-        return self.t_end if h_step == self.t_end - t else t + h_step
+        end = t + h_step
+        return self.t_end if h_step == self.t_end - t or end >= self.t_end * (1 - 1e-12) else end

@@ -143,3 +143,11 @@ def test_python_settings_resolve_as_a_case_file():
     assert from_case == dataclasses.replace(adaptive, damping=0.0)  # the drop is undamped
     with pytest.raises(ConfigError, match="solver.dt_min = 0.1: must be <="):
         cn.Settings("dynamic", tolerance=1e-3, dt_min=0.1, dt_max=0.01)
+
+
+def test_a_tolerance_dt_min_cannot_meet_is_warned_about_once(caplog):
+    with caplog.at_level("WARNING", logger="catenet.solver.adaptive"):
+        _, _, lengths = spring("bdf2", 1e-8, dt_min=5e-3)
+    said = [r.getMessage() for r in caplog.records if "solver.dt_min" in r.getMessage()]
+    assert len(said) == 1 and "times solver.tolerance = 1e-08: taken" in said[0]
+    assert min(lengths[:-1]) >= 5e-3 * (1 - 1e-12)
