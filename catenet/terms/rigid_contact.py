@@ -139,7 +139,7 @@ class BodyContact(Term):
         L[:, :, 3:6] = -A.T
         for m in range(3):
             L[:, m, 6 + 3 * m : 9 + 3 * m] = u
-        Kq = L.transpose(0, 2, 1) @ Ha @ L  # (Ka, 15, 15): batched, as einsum's path
+        Kq = np.einsum("kai,kab,kbj->kij", L, Ha, L)
         eye = np.eye(3)
         for m in range(3):
             s = ga[:, m, None, None] * eye  # (Ka, 3, 3)
@@ -148,7 +148,7 @@ class BodyContact(Term):
             Kq[:, 0:3, a] += s
             Kq[:, a, 3:6] -= s
             Kq[:, 3:6, a] -= s
-        Kp = self._T.T @ Kq @ self._T
+        Kp = np.einsum("ia,kij,jb->kab", self._T, Kq, self._T)
         blocks = values[: 81 * K].reshape(K, 81)
         blocks[act, 0:9] = Kp[:, :3, :3].reshape(Ka, 9)
         blocks[act, 9:45] = Kp[:, :3, 3:].reshape(Ka, 36)
