@@ -19,7 +19,7 @@ from catenet.case.keys import Checker, Declared, choice, real, text, vec3
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
-from catenet.scene.contact import Contact, moving
+from catenet.scene.contact import Contact
 from catenet.scene.shapes.mesh import read_surface
 
 if TYPE_CHECKING:
@@ -113,12 +113,6 @@ class Shaped:
         motion = ("velocity", "angular_velocity", "history") if self.rigid_motion else ()
         keys = ("distance", "accuracy", "stiffness", "friction", "slip", *motion)
         return Contact(**{k: table[k] for k in keys})
-
-    def term(self, nodes, kappa: float, dhat: float, offset: float = 0.0):
-        """The barrier on ``nodes``, on its prescribed motion if any; ``offset`` r: on
-        the centres of balls of radius r (the shape grown by r)."""
-        shape = self.shape()
-        return moving(shape.barrier(nodes, kappa, dhat, offset), shape, self.contact(), offset)
 
 
 class _Motion(Shaped, FreeKeys):

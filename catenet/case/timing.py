@@ -12,15 +12,13 @@ a path, a turning shape) or is a free body, an initial velocity, or no damping
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Iterator
 from typing import Any
 
 from catenet.case.obstacles import SphereObstacle
 from catenet.case.sections import LoadConfig, SolverConfig, SupportsConfig
-from catenet.solver.adaptive import FIRST_SHARE
 from catenet.solver.relax import REST
-from catenet.solver.settings import DT
+from catenet.solver.settings import steps_given
 
 #: solver.t_end's default where something depends on time [s].
 T_END = 10.0
@@ -62,17 +60,11 @@ def resolve_steps(solver: SolverConfig) -> SolverConfig:
     number for t_end and a ``tolerance`` adapts its steps to it (``dt``: the first step,
     else FIRST_SHARE of t_end, at most ``dt_max``) with bdf2 unless ``integrator`` says
     otherwise (``catenet.solver.adaptive``); any other run steps by ``dt`` (default
-    0.01 s) with implicit Euler unless ``integrator`` says otherwise."""
-    if isinstance(solver.t_end, (int, float)) and solver.tolerance is not None:
-        dt_max = math.inf if solver.dt_max is None else solver.dt_max
-        first = min(dt_max, FIRST_SHARE * float(solver.t_end)) if solver.dt is None else solver.dt
-        return dataclasses.replace(solver, dt=first, integrator=solver.integrator or "bdf2")
+    0.01 s) with implicit Euler unless ``integrator`` says otherwise
+    (``catenet.solver.settings.steps_given``, as a Settings made in Python)."""
+    dt, integrator = steps_given(solver.dt, solver.integrator, solver)
     dynamic = solver.method == "dynamic"  # (a static case keeps its integrator unset)
-    return dataclasses.replace(
-        solver,
-        dt=DT if solver.dt is None else solver.dt,
-        integrator=solver.integrator or ("implicit_euler" if dynamic else None),
-    )
+    return dataclasses.replace(solver, dt=dt, integrator=integrator if dynamic else None)
 
 
 def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:

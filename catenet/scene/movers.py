@@ -54,12 +54,18 @@ class Fixed:
     contact: Contact
 
     def term(self, nodes: Any, kappa: float, dhat: float, offset: float = 0.0) -> Term:
-        """Its barrier on ``nodes`` (centres of balls of radius ``offset``), on its
-        prescribed motion if any."""
-        from catenet.scene.contact import moving
+        """Its barrier on ``nodes`` (centres of balls of radius ``offset``)."""
+        return placed_barrier(self.shape, self.contact, nodes, kappa, dhat, offset)
 
-        barrier = self.shape.barrier(nodes, kappa, dhat, offset)
-        return moving(barrier, self.shape, self.contact, offset)
+
+def placed_barrier(
+    shape: Shape, contact: Contact, nodes: Any, kappa: float, dhat: float, offset: float = 0.0
+) -> Term:
+    """The barrier of ``shape`` on ``nodes`` (centres of balls of radius ``offset``: the
+    shape grown by it), on the contact's prescribed motion if any."""
+    from catenet.scene.contact import moving
+
+    return moving(shape.barrier(nodes, kappa, dhat, offset), shape, contact, offset)
 
 
 @dataclass(frozen=True)

@@ -35,11 +35,10 @@ if TYPE_CHECKING:
 
 def _barrier(owner: Fixed | Mover) -> Callable[[Any, float, float, float], Term]:
     """shape(nodes, kappa, dhat, grow): the shape's barrier term at t = 0, grown."""
-    from catenet.scene.contact import moving
+    from catenet.scene.movers import placed_barrier
 
     def build(nodes: Any, kappa: float, dhat: float, grow: float) -> Term:
-        barrier = owner.shape.barrier(nodes, kappa, dhat, grow)
-        return moving(barrier, owner.shape, owner.contact, grow)
+        return placed_barrier(owner.shape, owner.contact, nodes, kappa, dhat, grow)
 
     return build
 

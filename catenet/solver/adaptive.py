@@ -107,7 +107,6 @@ class ErrorControl:
         self.least = self.dt_min  # the shortest the next step may be (``step``)
         self.planned = max(1, math.ceil(span / self.dt_max - 1e-9))
         self.budget = MAX_TRIES + ALLOWANCE  # many short steps may be what the tolerance asks
-        self.largest_error = 0.0
 
     @classmethod
     def of(
@@ -221,7 +220,6 @@ class ErrorControl:
                     )  # fmt: skip
                 return True
             return False
-        self.largest_error = max(self.largest_error, error)
         self.h = min(self.dt_max, h_step * min(GROW_MAX, max(1.0, factor)))
         return True
 

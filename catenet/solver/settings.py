@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from catenet.errors import ConfigError
 
@@ -19,6 +19,28 @@ from catenet.solver.relax import MAX_STEPS, REST
 METHODS = ("static", "dynamic")
 DT = 1e-2  # solver.dt's default with fixed steps
 STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
+
+
+class Steps(Protocol):
+    """The keys that decide a dynamic run's steps (Settings, a case's SolverConfig)."""
+
+    @property
+    def t_end(self) -> float | str | None: ...
+    @property
+    def tolerance(self) -> float | None: ...
+    @property
+    def dt_max(self) -> float | None: ...
+
+
+def steps_given(dt: float | None, integrator: str | None, keys: Steps) -> tuple[float, str]:
+    """(dt, integrator) where not given (None): with a tolerance and a number for t_end,
+    the first step FIRST_SHARE of t_end (at most dt_max) and bdf2 (steps chosen by
+    accuracy, ``catenet.solver.adaptive``); else DT and implicit Euler (fixed steps)."""
+    t_end = keys.t_end if isinstance(keys.t_end, (int, float)) else None
+    adaptive = keys.tolerance is not None and t_end is not None
+    if dt is None and adaptive and t_end is not None:
+        dt = min(keys.dt_max or math.inf, FIRST_SHARE * float(t_end))
+    return DT if dt is None else dt, integrator or ("bdf2" if adaptive else "implicit_euler")
 
 
 @dataclass(frozen=True)
@@ -45,17 +67,11 @@ class Settings:
     dt_min: float | None = None  # ... the shortest
 
     def _resolve_steps(self) -> None:
-        """dt and integrator where not given: with a tolerance (and a number for t_end),
-        the first step t_end / 1000 (at most dt_max) and bdf2; else 0.01 s and implicit
-        Euler (as a case file's, ``catenet.case.timing.resolve_steps``)."""
-        adaptive = self.tolerance is not None and not isinstance(self.t_end, str)
-        if math.isnan(self.dt) and adaptive:
-            first = min(self.dt_max or math.inf, FIRST_SHARE * float(self.t_end))
-            object.__setattr__(self, "dt", first)
-        elif math.isnan(self.dt):
-            object.__setattr__(self, "dt", DT)
-        if not self.integrator:
-            object.__setattr__(self, "integrator", "bdf2" if adaptive else "implicit_euler")
+        """dt and integrator where not given (``steps_given``)."""
+        dt = None if math.isnan(self.dt) else self.dt
+        dt, integrator = steps_given(dt, self.integrator or None, self)
+        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "integrator", integrator)
 
     @classmethod
     def of(cls, config: DataclassInstance, **changes: Any) -> Settings:
