@@ -64,7 +64,9 @@ def resolve_steps(solver: SolverConfig) -> SolverConfig:
     (``catenet.solver.settings.steps_given``, as a Settings made in Python)."""
     dt, integrator = steps_given(solver.dt, solver.integrator, solver)
     dynamic = solver.method == "dynamic"  # (a static case keeps its integrator unset)
-    return dataclasses.replace(solver, dt=dt, integrator=integrator if dynamic else None)
+    return dataclasses.replace(
+        solver, dt=dt, integrator=integrator if dynamic else solver.integrator
+    )
 
 
 def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:
