@@ -141,7 +141,15 @@ def section(results: Path) -> list[str]:
     if not rows:
         return []
     return md_table(
-        ["integrator", "h (mean) [s]", "momentum [kg m/s]", "error", "steps", "CPU [s]", "energy lost"],
+        [
+            "integrator",
+            "h (mean) [s]",
+            "momentum [kg m/s]",
+            "error",
+            "steps",
+            "CPU [s]",
+            "energy lost",
+        ],
         [
             [
                 r["scheme"],

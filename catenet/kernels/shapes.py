@@ -161,9 +161,11 @@ def _rounded_entry(q, v, half, r):
 
 
 @njit(cache=True, error_model="numpy")
-def box_max_step(x, dx, nodes, center, axes, half, offset):
+def box_max_step(x, dx, nodes, center, axes, half, offset, upto=np.inf):
     """The largest t with every node outside the box (grown by ``offset``: the rounded
-    box) along x + t dx: the first entry of each node's line (inf if none)."""
+    box) along x + t dx: the first entry of each node's line (inf if none); a node whose
+    path up to t = ``upto`` clears the box's bounds is not tested (its entry, if any,
+    comes later: the result is exact up to ``upto``)."""
     t_max = np.inf
     q = np.empty(3)
     v = np.empty(3)
@@ -175,12 +177,27 @@ def box_max_step(x, dx, nodes, center, axes, half, offset):
             for j in range(3):
                 q[a] += axes[j, a] * (x[i, j] - center[j])
                 v[a] += axes[j, a] * dx[i, j]
+        if _misses(q, v, half, offset, upto):
+            continue  # the segment's bounds clear the box grown by offset on every side
         if offset > 0.0:
             t = _rounded_entry(q, v, half, offset)
         else:
             t = _slab_entry(q, v, half)
         t_max = min(t_max, t)
     return t_max
+
+
+@njit(cache=True, error_model="numpy")
+def _misses(q, v, half, r, upto):
+    """Whether the path q + t v, t in [0, upto], stays on one axis outside the box grown
+    by r along every axis (which holds the box rounded by r): it cannot touch it."""
+    for a in range(3):
+        end = q[a] + upto * v[a] if v[a] != 0.0 else q[a]  # (inf * 0 is NaN)
+        lo = min(q[a], end)
+        hi = max(q[a], end)
+        if lo > half[a] + r or hi < -half[a] - r:
+            return True
+    return False
 
 
 # --------------------------------------------------------------------------- capsule

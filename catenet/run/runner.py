@@ -253,6 +253,8 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
         passed = advice.peak_strain_beyond_law(scene.net, result.peaks, dynamic)
         if passed and not (dynamic and case.solver.t_end == "rest"):
             log.warning("%s", passed)
+    if lost := advice.integrator_loss(case, result):
+        log.warning("%s", lost)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables

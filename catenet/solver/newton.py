@@ -139,6 +139,7 @@ def solve_newton(
     label: str = "newton",
     reuse: Reuse | None = None,
     shifted: bool = False,
+    polish: bool = True,
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
@@ -146,7 +147,10 @@ def solve_newton(
     ``atol`` replaces rtol * scale by a fixed tolerance [N] (never below the floor).
     ``reuse``: modified Newton with the factorisation it keeps (module docstring).
     ``shifted``: start with the regularisation a rejected first step would bring
-    (SHRINK x ``_c_start``), for a start known to be stiff in some directions only."""
+    (SHRINK x ``_c_start``), for a start known to be stiff in some directions only.
+    ``polish``: where the round-off floor ended the solve, one more Newton step (its
+    factorisation) to land below it; a time step, whose next step starts from its
+    state and whose truncation error is far above the floor, goes without."""
     run = _Newton(potential, x, rtol=rtol, atol=atol, max_iter=max_iter, label=label, reuse=reuse)
     if shifted:
         run.c = SHRINK * _c_start(potential, run.ev.g)
@@ -174,7 +178,8 @@ def solve_newton(
         elif (reason := run.reject(kept)) is not None:
             break
     run.reason = reason
-    run.polish()
+    if polish:
+        run.polish()
     return run.result()
 
 

@@ -66,6 +66,7 @@ class TimeStepper:
         self.inertia = Inertia(self.free)  # the step's inertia and damping, refilled every step
         self.potential = ws.potential(loads, steps=(self.inertia,))
         self.rtol, self.max_iter = rtol, max_iter
+        self.polish = True  # Newton polishes below its floor (``run``: only toward rest)
         self.kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
         self.fresh = False  # this step's retry with fresh factorisations (its kept one failed)
         self.iterations = 0
@@ -123,6 +124,7 @@ class TimeStepper:
         ``control``: a StepControl, or a RestControl (a run to rest: its steps grow as the
         static residual decays; ConvergenceError after its ``max_steps`` steps)."""
         to_rest = control if isinstance(control, RestControl) else None
+        self.polish = rest  # a run that may end at rest tests the static residual: polished
         if self.pseudo and self.ledger is not None:
             self.ledger.judged = False  # stages change the potential: pseudo-time only
         while self.t < control.t_end * (1 - 1e-12) and not self.equilibrium:
@@ -216,6 +218,7 @@ class TimeStepper:
                 max_iter=self.max_iter,
                 label="step",
                 reuse=None if self.fresh else self.kept,
+                polish=self.polish,
             )
         except SingularSystemError as exc:
             return None, str(exc)

@@ -79,9 +79,13 @@ class Obstacle(Term):
         """The largest t for which x + t dx keeps every node outside (inf: never hits)."""
         return self.first_hit(x, dx, 0.0)
 
-    def first_hit(self, x: np.ndarray, dx: np.ndarray, grow: float) -> float:
+    def first_hit(
+        self, x: np.ndarray, dx: np.ndarray, grow: float, upto: float = math.inf
+    ) -> float:
         """The first t >= 0 at which a node on x + t dx meets the surface grown by
-        ``grow`` >= 0 (inf: never): the exact first contact."""
+        ``grow`` >= 0 (inf: never): the exact first contact; exact up to t = ``upto``
+        at least (a shape may skip nodes that cannot arrive before it: a larger value
+        may then be inf)."""
         raise NotImplementedError(f"{type(self).__name__} has no first-hit test")
 
 
@@ -111,7 +115,7 @@ class PlaneBarrier(Obstacle):
         args = (x, self.nodes, self.point, self.normal, self.kappa, self.dhat, values)
         return plane_hessian(*args) > 0
 
-    def first_hit(self, x, dx, grow):
+    def first_hit(self, x, dx, grow, upto=math.inf):
         point = self.point if grow == 0.0 else self.point + grow * self.normal  # (max_step:
         return plane_max_step(x, dx, self.nodes, point, self.normal)  # no array per call)
 
@@ -141,5 +145,5 @@ class SphereBarrier(Obstacle):
         args = (x, self.nodes, self.center, self.radius, self.kappa, self.dhat, values)
         return sphere_hessian(*args) > 0
 
-    def first_hit(self, x, dx, grow):
+    def first_hit(self, x, dx, grow, upto=math.inf):
         return sphere_max_step(x, dx, self.nodes, self.center, self.radius + grow)

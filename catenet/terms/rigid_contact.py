@@ -42,6 +42,7 @@ import math
 
 import numpy as np
 
+from catenet.kernels.rigid import frame_contact_hessian
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
 
@@ -70,11 +71,7 @@ class BodyContact(Term):
         self.c0 = frame.center.copy()
         self._buf = np.zeros((n_nodes, 3))
         self._g = np.zeros((n_nodes, 3))
-        chain = frame.chain()
-        T = np.zeros((15, 15))
-        T[:3, :3] = np.eye(3)
-        T[3:, 3:] = chain
-        self._T = T
+        self._chain = np.ascontiguousarray(frame.chain())
 
     # ---- evaluation -------------------------------------------------------------------
     def _local(self, x):
@@ -132,28 +129,8 @@ class BodyContact(Term):
         act = np.flatnonzero(np.any(H.reshape(K, 9) != 0.0, axis=1) | np.any(g != 0.0, axis=1))
         if act.size == 0:
             return False
-        Ka = act.size
-        u, Ha, ga = U[act], H[act], g[act]
-        L = np.zeros((Ka, 3, 15))
-        L[:, :, 0:3] = A.T
-        L[:, :, 3:6] = -A.T
-        for m in range(3):
-            L[:, m, 6 + 3 * m : 9 + 3 * m] = u
-        Kq = np.einsum("kai,kab,kbj->kij", L, Ha, L)
-        eye = np.eye(3)
-        for m in range(3):
-            s = ga[:, m, None, None] * eye  # (Ka, 3, 3)
-            a = slice(6 + 3 * m, 9 + 3 * m)
-            Kq[:, a, 0:3] += s
-            Kq[:, 0:3, a] += s
-            Kq[:, a, 3:6] -= s
-            Kq[:, 3:6, a] -= s
-        Kp = np.einsum("ia,kij,jb->kab", self._T, Kq, self._T)
         blocks = values[: 81 * K].reshape(K, 81)
-        blocks[act, 0:9] = Kp[:, :3, :3].reshape(Ka, 9)
-        blocks[act, 9:45] = Kp[:, :3, 3:].reshape(Ka, 36)
-        blocks[act, 45:81] = Kp[:, 3:, :3].reshape(Ka, 36)
-        values[81 * K :] = Kp[:, 3:, 3:].sum(axis=0).ravel()
+        frame_contact_hessian(A, U, H, g, self._chain, act, blocks, values[81 * K :])
         return True
 
     def stiffness(self):
@@ -218,12 +195,12 @@ class BodyContact(Term):
 
     def _ray(self, P, D, grow: float) -> float:
         """The first contact of the nodes' segments P + s D (s in [0, 1]) with the shape
-        grown by ``grow`` (inf: none)."""
+        grown by ``grow`` (inf, or a value beyond 1: none)."""
         x, dx = self._buf, self._g
         x[self.nodes] = P
         dx[self.nodes] = D
         try:
-            return self.shape.first_hit(x, dx, grow)
+            return self.shape.first_hit(x, dx, grow, 1.0)
         finally:
             dx[self.nodes] = 0.0
 

@@ -79,8 +79,8 @@ class BoxBarrier(_Shape):
         self.kind = BOX
         self.geom = np.concatenate([self.center, self.axes.ravel(), self.half, [self.offset]])
 
-    def first_hit(self, x, dx, grow):
-        args = (self.nodes, self.center, self.axes, self.half, self.offset + grow)
+    def first_hit(self, x, dx, grow, upto=math.inf):
+        args = (self.nodes, self.center, self.axes, self.half, self.offset + grow, upto)
         return box_max_step(x, dx, *args)
 
 
@@ -100,7 +100,7 @@ class CapsuleBarrier(_Shape):
         self.kind = CAPSULE
         self.geom = np.concatenate([self.a, self.b, [self.radius]])
 
-    def first_hit(self, x, dx, grow):
+    def first_hit(self, x, dx, grow, upto=math.inf):
         return capsule_max_step(x, dx, self.nodes, self.a, self.b, self.radius + grow)
 
 
@@ -215,7 +215,7 @@ class MeshBarrier(Obstacle):
         args = (*self._surface(), *self._grid(), self.kappa, self.dhat, self.offset, values)
         return mesh_hessian(x, self.nodes, *args) > 0
 
-    def first_hit(self, x, dx, grow):
+    def first_hit(self, x, dx, grow, upto=math.inf):
         args = (self.vertices, self.triangles, self.fn, self.offset + grow, *self._grid())
         return mesh_max_step(x, dx, self.nodes, *args)
 

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import catenet as cn
+from catenet.kernels.shapes import box_max_step
 from catenet.kernels.stretch import stretch_energy, stretch_gradient, stretch_hessian
 from catenet.solver.system import System
 
@@ -159,3 +160,29 @@ def test_lumped_mass_and_reactions_balance():
     total = r.reaction.sum(axis=0) + loads.external_force(net).sum(axis=0)
     assert np.abs(total).max() < 1e-8 * np.abs(loads.external_force(net)).sum()
     assert not r.reaction[~net.fixed].any()
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.03])
+def test_box_first_entry_up_to_a_horizon_is_exact(offset):
+    """``box_max_step`` with ``upto`` skips the nodes whose path to t = upto clears the
+    box's bounds: up to upto it finds the same first entry as without (bit for bit), and
+    beyond it nothing earlier than the true entry."""
+    rng = np.random.default_rng(11)
+    half = np.array([0.3, 0.2, 0.1])
+    axes = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    axes *= np.sign(np.linalg.det(axes))
+    center = np.array([0.1, -0.2, 0.05])
+    nodes = np.arange(40)
+    checked = 0
+    for _ in range(300):
+        x = center + rng.uniform(-1.0, 1.0, size=(40, 3))
+        dx = rng.normal(scale=0.5, size=(40, 3))
+        full = box_max_step(x, dx, nodes, center, axes, half, offset)
+        for upto in (0.5, 1.0, 3.0):
+            t = box_max_step(x, dx, nodes, center, axes, half, offset, upto)
+            if full <= upto:
+                assert t == full
+                checked += 1
+            else:
+                assert t > upto and t >= full
+    assert checked > 100

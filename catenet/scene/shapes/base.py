@@ -3,7 +3,8 @@
 - ``barrier(nodes, kappa, dhat, offset)``: its log-barrier term on nodes
   (``catenet.terms.contact.Obstacle``), grown by ``offset`` (a ball's radius: the
   Minkowski sum of the shape and the ball). The term's ``max_step`` is the exact first
-  contact along a step and ``first_hit(x, dx, grow)`` the same with the shape grown.
+  contact along a step and ``first_hit(x, dx, grow, upto)`` the same with the shape grown
+  (exact up to t = upto at least).
 - ``outline()``: the points, edges and radius that stand for its surface where it
   touches another solid or a plane as a free body (``catenet.terms.touch``,
   ``catenet.terms.body_plane``); the shape lies within the outline grown by the radius.

@@ -87,7 +87,9 @@ class CylinderBarrier(Obstacle):
         args = (*self._geometry(), self.offset, self.kappa, self.dhat, values)
         return bool(cylinder_hessian(x, self.nodes, *args) > 0)
 
-    def first_hit(self, x: np.ndarray, dx: np.ndarray, grow: float) -> float:
+    def first_hit(
+        self, x: np.ndarray, dx: np.ndarray, grow: float, upto: float = math.inf
+    ) -> float:
         return float(cylinder_max_step(x, dx, self.nodes, *self._geometry(), self.offset + grow))
 
 
