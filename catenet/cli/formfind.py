@@ -66,17 +66,47 @@ def _summary(written) -> None:
         else f"{f.iterations} iterations, {f.factorizations} factorisations, "
         f"targets met to {f.residual:.2g}"
     )
+    if f.design is not None:
+        d = f.design
+        detail = (
+            f"{d.message}: {d.evaluations} iterations, {d.gradients} adjoint gradients, "
+            f"{f.factorizations} factorisations"
+        )
     lines = [
         f"{'case':<12} {written.case.title or written.case.source}",
         f"{'method':<12} {f.method} ({detail})",
         f"{'net':<12} {f.net.n_net} nodes, {f.net.n_edges} edges, "
         f"{int(np.count_nonzero(f.net.fixed[: f.net.n_net]))} fixed",
         f"{'tension':<12} {float(force.min()):.6g} .. {float(force.max()):.6g} N",
+        *_targets(f),
         f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
         f"{'output':<12} {written.result_file}",
         f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
     ]
     click.echo("\n".join(lines))
+    if f.design is not None and not f.design.all_met:
+        click.echo(
+            "catenet: warning: the targets are not all met: the shape is the weighted "
+            "least-squares compromise (misses above)",
+            err=True,
+        )
+
+
+def _targets(f) -> list[str]:
+    """The design variables found and each target's achieved value."""
+    if f.design is None:
+        return []
+    from catenet.formfind import report
+
+    d = f.design
+    what = "edge" if d.vary == "edges" else "cable"
+    out = [
+        f"{'design':<12} {d.variables} force densities (one per {what}): "
+        f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m"
+        + (f", {d.at_bound} at a bound" if d.at_bound else "")
+    ]
+    out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
+    return out
 
 
 __all__ = ["command"]
