@@ -186,7 +186,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None
-    targets = parse_targets(ck, data.get("target"), ctx)
+    targets = parse_targets(ck, data.get("target"), ctx, base_dir)
     if "formfind" in data:
         formfind = parse_formfind(ck, data["formfind"], ctx, bool(data.get("target")))
         check_formfind_case(ck, data)

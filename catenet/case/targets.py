@@ -2,7 +2,9 @@
 densities to reach.
 
 A target is a node's coordinate (``node`` with ``x``, ``y``, ``z`` or ``point``; a node
-set: each of its nodes, the value one for all or one per node) or a cable's tension
+set: each of its nodes, the value one for all or one per node), a surface the nodes lie
+on (``surface``, a triangle mesh file taken as a height field, optionally ``within`` a
+vertical distance of it) or a cable's tension
 (``cable`` with ``tension``: every edge of the cable, or of each cable a pattern matches;
 a number, or a range ``[low, high]``). Each weighs in the least squares with ``weight``;
 ``hard = true`` makes it a bound that must be met. The nodes and cables are resolved on
@@ -11,7 +13,9 @@ the built net (``catenet.formfind.goals``), where a fixed node is refused.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from catenet.case.keys import (
@@ -102,6 +106,20 @@ class TargetConfig(Declared):
         unit="m",
         doc="node: the point it reaches",
     )
+    surface: str | None = text(
+        None,
+        nonempty=True,
+        write="given",
+        doc="node: a triangle mesh file (.stl, .obj, ...; relative to the case file), a "
+        "height field z = f(x, y) the nodes lie on",
+    )
+    within: float | None = real(
+        None,
+        ge=0,
+        write="given",
+        unit="m",
+        doc="surface: how far above or below it the nodes may lie (default: on it)",
+    )
     tension: Any = key(
         _tension,
         "a number > 0 or a range [low, high]",
@@ -116,7 +134,7 @@ class TargetConfig(Declared):
     @property
     def kind(self) -> str:
         """'x', 'y', 'z', 'point' or 'tension' (the first given)."""
-        for k in (*AXES, "point", "tension"):
+        for k in (*AXES, "point", "surface", "tension"):
             if getattr(self, k) is not None:
                 return k
         return ""
@@ -131,11 +149,16 @@ class TargetConfig(Declared):
         if self.cable is not None:
             return f"cable {self.cable!r} tension"
         what = "point" if self.point is not None else " ".join(self.axes)
+        if self.surface is not None:
+            what = f"on {Path(self.surface).name}"
+            if self.node is None:
+                return f"free nodes {what}"
         return f"node {self.node!r} {what}"
 
 
-def parse_targets(ck: Checker, value: Any, ctx: Context) -> tuple | Any:
-    """The ``[[target]]`` array of tables (absent: none) with the rules between keys."""
+def parse_targets(ck: Checker, value: Any, ctx: Context, base_dir: Path) -> tuple | Any:
+    """The ``[[target]]`` array of tables (absent: none) with the rules between keys; a
+    surface's file made absolute (from ``base_dir``, the case file's folder)."""
     if value is None:
         return ()
     out = []
@@ -144,13 +167,26 @@ def parse_targets(ck: Checker, value: Any, ctx: Context) -> tuple | Any:
         tgt = parse_table(ck, t, TargetConfig, path, ctx)
         if tgt is not BAD and not _consistent(ck, tgt, t, path):
             tgt = BAD
+        if tgt is not BAD and tgt.surface is not None:
+            file = Path(tgt.surface)
+            full = (file if file.is_absolute() else base_dir / file).resolve()
+            if not full.is_file():
+                ck.add(f"{path}.surface = {tgt.surface!r}: no such file ({full})")
+                tgt = BAD
+            else:
+                tgt = dataclasses.replace(tgt, surface=str(full))
         out.append(tgt)
     return BAD if BAD in out else tuple(out)
 
 
 def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
     """The rules between a target's keys: a node or a cable; what each needs."""
-    node_keys = [k for k in (*AXES, "point") if getattr(tgt, k) is not None]
+    node_keys = [k for k in (*AXES, "point", "surface") if getattr(tgt, k) is not None]
+    if tgt.within is not None and tgt.surface is None:
+        ck.add(f"{path}.within = {show(raw['within'])}: only with surface")
+        return False
+    if tgt.node is None and tgt.cable is None and tgt.surface is not None:
+        return True  # (every free node)
     if (tgt.node is None) == (tgt.cable is None):
         both = tgt.node is not None
         ck.add(
@@ -163,11 +199,14 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
             ck.add(f"{path}.tension = {show(raw['tension'])}: a cable's target: give cable")
             return False
         if not node_keys:
-            ck.add(f"{path}: node = {show(tgt.node)} needs x, y, z or point: what it reaches")
+            ck.add(
+                f"{path}: node = {show(tgt.node)} needs x, y, z, point or surface: what it reaches"
+            )
             return False
-        if tgt.point is not None and len(node_keys) > 1:
-            ck.add(f"{path}.point = {show(raw['point'])}: give point or x, y, z, not both")
-            return False
+        for one in ("point", "surface"):
+            if getattr(tgt, one) is not None and len(node_keys) > 1:
+                ck.add(f"{path}.{one} = {show(raw[one])}: give {one} alone, not with x, y, z")
+                return False
         return True
     if node_keys:
         ck.add(f"{path}.{node_keys[0]} = {show(raw[node_keys[0]])}: a node's target: give node")

@@ -51,6 +51,7 @@ class Adjoint:
                 cols.append(e)
                 vals.append(sign * u[e, c])
         self.lu = None
+        self.a = _matrix_a(p, q)
         if shape.weighs:
             length = np.linalg.norm(u, axis=1)
             wv, (wr, wc) = weight_jacobian(shape, q, u, length, np.zeros(0, dtype=np.int64))
@@ -58,7 +59,11 @@ class Adjoint:
             rows.append(wr[on_q])
             cols.append(wc[on_q] - n3)
             vals.append(-wv[on_q])
-            self.lu = _factor_a(p, q, wv[~on_q], wr[~on_q], wc[~on_q], n3)
+            on_x = ~on_q
+            self.a = self.a - sp.csr_matrix((wv[on_x], (wr[on_x], wc[on_x])), shape=(n3, n3))
+            from scipy.sparse.linalg import splu
+
+            self.lu = splu(self.a.tocsc())
         self.bg: sp.csr_matrix = sp.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
             shape=(n3, net.n_edges),
@@ -88,16 +93,13 @@ class Adjoint:
         return out.reshape(shape)
 
 
-def _factor_a(p, q, wv, wr, wc, n3):
-    """SuperLU of A = I_3 (x) D - G_x (the net weighs)."""
+def _matrix_a(p, q):
+    """I_3 (x) D, the DOFs interleaved (3 f + c), as a sparse matrix."""
     import scipy.sparse as sp
-    from scipy.sparse.linalg import splu
 
     d = sp.csr_matrix((p.values(q), p.indices, p.indptr), shape=(p.n_free, p.n_free))
     d = d + sp.triu(d, k=1).T
-    a = sp.kron(d, sp.identity(3), format="csr")
-    a = a - sp.csr_matrix((wv, (wr, wc)), shape=(n3, n3))
-    return splu(a.tocsc())
+    return sp.kron(d, sp.identity(3), format="csr")
 
 
 def jacobian_dense(
@@ -114,24 +116,69 @@ def jacobian_dense(
     return np.asarray((d_q @ dq_ds).toarray() - d_x @ adj.solve(bg))
 
 
-def jacobian_operator(adj: Adjoint, d_x, d_q, dq_ds):
-    """J = dr/ds as a LinearOperator: J v one forward solve, J^T z one adjoint solve."""
-    from scipy.sparse.linalg import LinearOperator
+class SparseJacobian:
+    """J = dr/ds never formed: ``matvec`` (one forward solve), ``rmatvec`` (one adjoint
+    solve), and ``damped``: the step p of min |J p + r|^2 + mu |p|^2 from one sparse
+    factorisation of the symmetric saddle-point system in (p, dx, lambda, e)
 
-    d_qs = (d_q @ dq_ds).tocsr()
-    bg_s = (adj.bg @ dq_ds).tocsr()
+        [ mu I   0    Bs^T  Rq^T ] [p ]   [ 0 ]
+        [ 0      0    A^T   Rx^T ] [dx] = [ 0 ]
+        [ Bs     A    0     0    ] [l ]   [ 0 ]
+        [ Rq     Rx   0     -I   ] [e ]   [ -r]
 
-    def matvec(v):
+    (the linearised equilibrium A dx + Bs p = 0 as a constraint, e = Rx dx + Rq p + r the
+    residual after the step), whose size is that of the equilibrium's tangent plus the
+    variables and rows: a step costs about one factorisation of the net's size."""
+
+    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds):
+        self.adj, self.d_x = adj, d_x.tocsr()
+        self.rq = (d_q @ dq_ds).tocsr()
+        self.bs = (adj.bg @ dq_ds).tocsr()
+        self.shape = (d_x.shape[0], dq_ds.shape[1])
+
+    def matvec(self, v: np.ndarray) -> np.ndarray:
         v = np.ravel(v)
-        return d_qs @ v - d_x @ adj.solve(bg_s @ v)
+        return self.rq @ v - self.d_x @ self.adj.solve(self.bs @ v)
 
-    def rmatvec(z):
+    def rmatvec(self, z: np.ndarray) -> np.ndarray:
         z = np.ravel(z)
-        return d_qs.T @ z - bg_s.T @ adj.solve_t(d_x.T @ z)
+        return self.rq.T @ z - self.bs.T @ self.adj.solve_t(self.d_x.T @ z)
 
-    return LinearOperator(
-        (d_x.shape[0], dq_ds.shape[1]), matvec=matvec, rmatvec=rmatvec, dtype=np.float64
-    )
+    def damped(self, r: np.ndarray, mu: float, keep: np.ndarray) -> np.ndarray:
+        """The damped step (0 where not ``keep``); SingularSystemError where it has none."""
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        from catenet.errors import SingularSystemError
+
+        nv, rows, n3 = self.shape[1], self.shape[0], self.adj.a.shape[0]
+        k = sp.diags(keep.astype(np.float64))
+        bs, rq = self.bs @ k, self.rq @ k
+        diag = sp.diags(np.where(keep, mu, 1.0))
+        kkt = sp.bmat(
+            [
+                [diag, None, bs.T, rq.T],
+                [None, sp.csr_matrix((n3, n3)), self.adj.a.T, self.d_x.T],
+                [bs, self.adj.a, None, None],
+                [rq, self.d_x, None, -sp.identity(rows)],
+            ],
+            format="csc",
+        )
+        rhs = np.zeros(kkt.shape[0])
+        rhs[nv + 2 * n3 :] = -r
+        try:
+            sol = splu(kkt).solve(rhs)
+        except RuntimeError as exc:  # exactly singular
+            raise SingularSystemError(f"SciPy: {exc}") from None
+        p = sol[:nv] * keep
+        if not np.all(np.isfinite(p)):
+            raise SingularSystemError("the damped step is not finite")
+        return p
 
 
-__all__ = ["Adjoint", "jacobian_dense", "jacobian_operator"]
+def jacobian_operator(adj: Adjoint, d_x, d_q, dq_ds) -> SparseJacobian:
+    """J = dr/ds as a SparseJacobian (see there)."""
+    return SparseJacobian(adj, d_x, d_q, dq_ds)
+
+
+__all__ = ["Adjoint", "SparseJacobian", "jacobian_dense", "jacobian_operator"]

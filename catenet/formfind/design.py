@@ -91,7 +91,7 @@ class _Search:
             self.now = (q, x, load, a)
             self.key = key  # (the shape's factors are this state's)
             r = self.goals.w * self.goals.miss(a)
-            if self.best is None or r @ r < self.best[0]:
+            if np.all(np.isfinite(r)) and (self.best is None or r @ r < self.best[0]):
                 self.best = (float(r @ r), s.copy(), self.now)
         return self.now
 
@@ -100,6 +100,8 @@ class _Search:
             q, x, load, a = self.state(s)
         except (SingularSystemError, ConvergenceError, ConfigError):
             return np.full(self.goals.rows, 1e150)  # no shape there: the step is refused
+        if not np.all(np.isfinite(a)):
+            return np.full(self.goals.rows, 1e150)  # a node off a surface's plan: refused
         if self.goals.met(a).all():
             raise _Met
         return self.goals.w * self.goals.miss(a)
@@ -130,6 +132,9 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) ->
     s = np.zeros(n_var)
     search = _Search(shape, goals, groups, base)
     q, x, load, a = search.state(s)
+    outside = goals.outside(a)
+    if outside is not None:
+        raise ConfigError(outside)
     evaluations, rounds, message = 0, 0, "met at the start"
     used = goals
     while not goals.met(a).all():

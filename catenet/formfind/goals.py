@@ -49,6 +49,8 @@ class Goals:
     hard: np.ndarray
     of: np.ndarray
     tol: float
+    surface: np.ndarray  # per row: the index in ``surfaces`` (-1: none)
+    surfaces: tuple = ()
 
     @property
     def rows(self) -> int:
@@ -61,6 +63,9 @@ class Goals:
         a[pos] = x[self.node[pos], self.axis[pos]]
         e = self.edge[~pos]
         a[~pos] = q[e] * length[e]
+        for k, field in enumerate(self.surfaces):
+            rows = np.flatnonzero(self.surface == k)
+            a[rows] = field.offset(x[self.node[rows]])[0]
         return a
 
     def miss(self, a: np.ndarray) -> np.ndarray:
@@ -86,6 +91,13 @@ class Goals:
         rows_x.append(pos)
         cols_x.append(3 * index[self.node[pos]] + self.axis[pos])
         vals_x.append(slope[pos])
+        for k, field in enumerate(self.surfaces):  # d(z - f(x, y)) = dz - f_x dx - f_y dy
+            rows = np.flatnonzero(self.surface == k)
+            grad = field.offset(x[self.node[rows]])[1]
+            for c in range(2):
+                rows_x.append(rows)
+                cols_x.append(3 * index[self.node[rows]] + c)
+                vals_x.append(-slope[rows] * grad[:, c])
         ten = np.flatnonzero(self.edge >= 0)
         e = self.edge[ten]
         ends = net.edges[e]
@@ -107,6 +119,19 @@ class Goals:
         d_q = sp.csr_matrix((slope[ten] * length, (ten, e)), shape=(r, net.n_edges))
         return d_x, d_q
 
+    def outside(self, a: np.ndarray) -> str | None:
+        """Where a surface row has no value (its node off the plan): the message."""
+        bad = np.flatnonzero(~np.isfinite(a))
+        if not bad.size:
+            return None
+        j = int(bad[0])
+        k = int(self.of[j])
+        return (
+            f"target[{k}].surface = {self.targets[k].surface!r}: node {int(self.node[j])} is "
+            f"outside its plan in the shape of the starting force densities ({bad.size} "
+            "nodes): the surface must cover the net in plan"
+        )
+
     def weighted(self, rounds: int) -> Goals:
         """The goals with the hard rows' weights raised ``rounds`` times."""
         w = self.w * np.where(self.hard, HARD_FACTOR**rounds, 1.0)
@@ -119,9 +144,10 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
     values that do not match the nodes."""
     net = scene.net
     cols: dict[str, list] = {k: [] for k in ("node", "axis", "edge", "lo", "hi", "sc", "w")}
-    cols.update(hard=[], of=[])
+    cols.update(hard=[], of=[], surface=[])
+    surfaces: list = []
 
-    def add(k, t, node, axis, edge, lo, hi, scale):
+    def add(k, t, node, axis, edge, lo, hi, scale, surface=-1):
         n = len(lo)
         for name, v in (("node", node), ("axis", axis), ("edge", edge)):
             cols[name].append(np.broadcast_to(np.asarray(v, dtype=np.int64), (n,)))
@@ -131,6 +157,7 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
         cols["w"].append(np.full(n, t.weight / scale))
         cols["hard"].append(np.full(n, t.hard))
         cols["of"].append(np.full(n, k))
+        cols["surface"].append(np.full(n, surface))
 
     for k, t in enumerate(targets):
         if t.cable is not None:
@@ -140,6 +167,12 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
             add(k, t, -1, -1, edges, np.full(n, lo), np.full(n, hi), hi)
             continue
         nodes = _nodes(k, t, scene)
+        if t.surface is not None:
+            surfaces.append(_surface(k, t, scene.net, nodes))
+            d = 0.0 if t.within is None else t.within
+            n = len(nodes)
+            add(k, t, nodes, 2, -1, np.full(n, -d), np.full(n, d), size, len(surfaces) - 1)
+            continue
         given = [(a, getattr(t, a)) for a in ("x", "y", "z")] if t.point is None else []
         if t.point is not None:
             pts = np.asarray(t.point, dtype=np.float64).reshape(-1, 3)
@@ -166,12 +199,28 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
         hard=arr["hard"].astype(bool),
         of=arr["of"],
         tol=tol,
+        surface=arr["surface"],
+        surfaces=tuple(surfaces),
     )
+
+
+def _surface(k: int, t, net, nodes: np.ndarray):
+    """The height field of a surface target, read."""
+    from catenet.formfind.surface import read_height_field
+
+    path = f"target[{k}].surface"
+    try:
+        field = read_height_field(t.surface)
+    except ValueError as exc:
+        raise ConfigError(f"{path} = {t.surface!r}: {exc}") from None
+    return field
 
 
 def _nodes(k: int, t, scene) -> np.ndarray:
     net = scene.net
     path = f"target[{k}].node"
+    if t.node is None:  # (a surface: every free node of the net)
+        return np.flatnonzero(~net.fixed[: net.n_net])
     try:
         nodes = np.asarray(expand(t.node, scene.names or {}, scene.sets or {}), dtype=np.int64)
     except KeyError:

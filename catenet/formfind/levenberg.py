@@ -3,14 +3,16 @@
 Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
 its bound whose gradient pushes it out is held): by the SVD of J where J is given whole,
-by LSMR (each product one solve of the equilibrium) where it is a linear operator. With
+else by one sparse factorisation of the saddle-point system that holds J without forming
+it (``catenet.formfind.adjoint.SparseJacobian``). With
 mu = 0 the step is Gauss-Newton's least-norm step, which meets a reachable target with
 more variables than rows (a spider's centre by its force densities) in a few steps:
 SciPy's trust region methods keep such steps on their trust radius, and so converge
-only linearly there. No variable moves by more than ``MAX_STEP`` in one step (log q: a
-factor e); the step is clipped to the bounds. A step that does not lower f raises mu
-(by 4, from a scale of J's largest singular value squared); one that does lowers it by 3
-(to 0 below ``MU_MIN`` of that scale).
+only linearly there. mu starts at ``MU_FIRST`` of J's largest singular value squared
+(found once: the SVD, or power iterations), grows by 4 after a step that does not lower
+f and falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable
+moves by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
+the bounds.
 
 It ends when ``residual`` raises (the caller's test: every target met), when the
 evaluations reach ``budget``, or when no step lowers f by more than ``FTOL`` of it (or
@@ -28,8 +30,6 @@ import numpy as np
 MAX_STEP = 1.0
 FTOL = 1e-12
 MU_FIRST, MU_MIN, MU_MAX = 1e-6, 1e-12, 1e8
-LSMR_TOL = 1e-10
-LSMR_ITER = 400
 
 
 @dataclass
@@ -52,7 +52,7 @@ def levenberg(
     lo, hi = bounds
     r = residual(s)
     f = 0.5 * float(r @ r)
-    evaluations, mu, scale = 1, 0.0, None
+    evaluations, mu, scale = 1, 0.0, 0.0
     while True:
         jac = jacobian(s)
         dense = isinstance(jac, np.ndarray)
@@ -60,58 +60,59 @@ def levenberg(
         held = ((s <= lo) & (g > 0)) | ((s >= hi) & (g < 0))
         if not np.any(g[~held]):
             return Ended("stationary", s, evaluations)
-        sigma = None
+        if not scale:  # (once: J's largest singular value squared)
+            scale = (float(np.linalg.norm(jac, 2)) if dense else _largest(jac)) ** 2 or 1.0
+            mu = MU_FIRST * scale
         while True:
             if evaluations >= budget:
                 return Ended("max_iter", s, evaluations)
-            p, sigma = _step(jac, r, mu, held, dense, sigma)
-            if scale is None:
-                scale = sigma**2
-            big = float(np.max(np.abs(p), initial=0.0))
-            if big > MAX_STEP:
-                p *= MAX_STEP / big
-            trial = np.clip(s + p, lo, hi)
-            r_new = residual(trial)
-            evaluations += 1
-            f_new = 0.5 * float(r_new @ r_new)
-            if f_new < f:
-                break
-            mu = max(4.0 * mu, MU_FIRST * scale)
+            p = _step(jac, r, mu, ~held, dense)
+            if p is not None:
+                big = float(np.max(np.abs(p), initial=0.0))
+                if big > MAX_STEP:
+                    p *= MAX_STEP / big
+                trial = np.clip(s + p, lo, hi)
+                r_new = residual(trial)
+                evaluations += 1
+                f_new = 0.5 * float(r_new @ r_new)
+                if f_new < f:
+                    break
+            mu *= 4.0
             if mu > MU_MAX * scale:
                 return Ended("stationary", s, evaluations)
         done = f - f_new <= FTOL * f
         s, r, f = trial, r_new, f_new
         if done:
             return Ended("stationary", s, evaluations)
-        mu = mu / 3.0 if mu / 3.0 >= MU_MIN * scale else 0.0
+        mu = max(mu / 3.0, MU_MIN * scale)
 
 
-def _step(jac, r: np.ndarray, mu: float, held: np.ndarray, dense: bool, sigma):
-    """(p, largest singular value) of min |J p + r|^2 + mu |p|^2, p = 0 where held."""
-    keep = ~held
-    if dense:
-        j = jac[:, keep]
-        u, sv, vt = np.linalg.svd(j, full_matrices=False)
-        top = float(sv[0]) if sv.size else 0.0
-        if mu > 0:
-            inv = sv / (sv**2 + mu)
-        else:
-            inv = np.where(sv > 1e-12 * top, 1.0 / np.where(sv > 0, sv, 1.0), 0.0)
-        p = np.zeros(len(keep))
-        p[keep] = -(vt.T @ (inv * (u.T @ r)))
-        return p, top
-    from scipy.sparse.linalg import LinearOperator, lsmr
+def _step(jac, r: np.ndarray, mu: float, keep: np.ndarray, dense: bool) -> np.ndarray | None:
+    """The p of min |J p + r|^2 + mu |p|^2 with p = 0 where not ``keep``; None where the
+    system is singular."""
+    if not dense:
+        from catenet.errors import SingularSystemError
 
-    mask = keep.astype(np.float64)
-    op = LinearOperator(
-        jac.shape,
-        matvec=lambda v: jac.matvec(np.ravel(v) * mask),
-        rmatvec=lambda z: jac.rmatvec(np.ravel(z)) * mask,
-        dtype=np.float64,
-    )
-    out = lsmr(op, -r, damp=float(np.sqrt(mu)), atol=LSMR_TOL, btol=LSMR_TOL, maxiter=LSMR_ITER)
-    top = sigma if sigma is not None else float(out[5]) / np.sqrt(max(min(jac.shape), 1))
-    return out[0] * mask, top
+        try:
+            return jac.damped(r, mu, keep)
+        except SingularSystemError:
+            return None
+    u, sv, vt = np.linalg.svd(jac[:, keep], full_matrices=False)
+    p = np.zeros(len(keep))
+    p[keep] = -(vt.T @ (sv / (sv**2 + mu) * (u.T @ r)))
+    return p
+
+
+def _largest(jac, count: int = 8) -> float:
+    """J's largest singular value, by a few power iterations on J^T J."""
+    v = np.random.default_rng(0).standard_normal(jac.shape[1])
+    top = 0.0
+    for _ in range(count):
+        v /= np.linalg.norm(v)
+        w = jac.rmatvec(jac.matvec(v))
+        top = float(np.sqrt(np.linalg.norm(w)))
+        v = w
+    return top
 
 
 __all__ = ["Ended", "levenberg"]
