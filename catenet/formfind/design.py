@@ -10,9 +10,10 @@ per variable, whichever are fewer) up to ``DENSE`` of them, else as a linear ope
 
 It stops as soon as every row is met to ``tol`` (a start that meets them costs no
 iteration); otherwise where the least squares can lower the misses no further: the
-compromise the weights choose, which the report says. Hard targets get their weight
-raised by ``HARD_FACTOR`` and the search resumes, at most ``HARD_ROUNDS`` times; one
-still unmet is a ConfigError.
+compromise the weights choose, which the report says. Hard targets left unmet then
+get a second search on their rows alone from there: Gauss-Newton's least-norm steps,
+the least change of the force densities that meets them (each search at most
+``max_iter`` evaluations); one still unmet is a ConfigError.
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from catenet.formfind.levenberg import levenberg
 log = logging.getLogger(__name__)
 
 DENSE = 200  # whole Jacobians up to this many solves; beyond, a linear operator
-HARD_ROUNDS = 3
 
 
 class _Met(Exception):
@@ -80,20 +80,22 @@ class _Search:
         self.best: tuple | None = None
 
     def state(self, s: np.ndarray):
+        """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``
+        each time: the goals may change between searches)."""
         key = s.tobytes()
         if key != self.key:
             self.key = None
             q = np.exp(np.clip(self.base + self.p @ s, -700.0, 700.0))
             x, load = self.shape(q)
             u = x[self.shape.net.edges[:, 1]] - x[self.shape.net.edges[:, 0]]
-            length = np.linalg.norm(u, axis=1)
-            a = self.goals.achieved(x, q, length)
-            self.now = (q, x, load, a)
+            self.now = (q, x, load, np.linalg.norm(u, axis=1))
             self.key = key  # (the shape's factors are this state's)
+            a = self.goals.achieved(x, q, self.now[3])
             r = self.goals.w * self.goals.miss(a)
             if np.all(np.isfinite(r)) and (self.best is None or r @ r < self.best[0]):
-                self.best = (float(r @ r), s.copy(), self.now)
-        return self.now
+                self.best = (float(r @ r), s.copy())
+        q, x, load, length = self.now
+        return q, x, load, self.goals.achieved(x, q, length)
 
     def residual(self, s: np.ndarray) -> np.ndarray:
         try:
@@ -135,20 +137,20 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) ->
     outside = goals.outside(a)
     if outside is not None:
         raise ConfigError(outside)
-    evaluations, rounds, message = 0, 0, "met at the start"
-    used = goals
-    while not goals.met(a).all():
-        if rounds > HARD_ROUNDS or shape.factorizations > max_iter:
-            break
-        used = goals.weighted(rounds)
-        search.goals = used
-        search.best = None
-        message, s = _search(search, s, (lo, hi), max_iter - shape.factorizations)
+    rounds, message = 0, "met at the start"
+    if not goals.met(a).all():
+        message, s = _search(search, s, (lo, hi), max_iter)
         q, x, load, a = search.state(s)
-        evaluations = shape.factorizations - 1
-        if not (goals.hard & ~goals.met(a)).any():
-            break
-        rounds += 1
+    if (goals.hard & ~goals.met(a)).any():  # the least change that meets the hard ones
+        rounds = 1
+        search.goals = goals.select(goals.hard)
+        search.best = None
+        why, s = _search(search, s, (lo, hi), max_iter)
+        search.goals = goals
+        q, x, load, a = search.state(s)
+        if why != "met":
+            message = f"{why} on the hard targets alone"
+    evaluations = shape.factorizations - 1
     at_bound = int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
     out = Design(
         goals=goals,
@@ -176,7 +178,7 @@ def _search(search: _Search, s0: np.ndarray, bounds, budget: int) -> tuple[str, 
     best = search.best
     s = ended.s if best is None else best[1]
     if ended.why == "max_iter":
-        return f"formfind.max_iter reached ({ended.evaluations} evaluations)", s
+        return "formfind.max_iter reached", s
     return "least-squares compromise: the targets are not all compatible", s
 
 
@@ -284,6 +286,6 @@ def _unmet_message(d: Design, k: int) -> str:
     want = f"{lo:.9g}" if lo == hi else f"[{lo:.9g}, {hi:.9g}]"
     return (
         f"target[{k}] ({t.describe()}, hard = true): cannot be met to formfind.tol: reaches "
-        f"{d.achieved[worst]:.9g}, target {want} ({d.message}; its weight raised "
-        f"{d.rounds} times): relax it, widen formfind.force_density_min/max or drop hard"
+        f"{d.achieved[worst]:.9g}, target {want} ({d.message}): relax it, widen "
+        "formfind.force_density_min/max or drop hard"
     )

@@ -28,9 +28,6 @@ from catenet.errors import ConfigError
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
-#: The weight a hard target's rows get more in each round that leaves one unmet.
-HARD_FACTOR = 1e3
-
 
 @dataclass
 class Goals:
@@ -132,10 +129,10 @@ class Goals:
             "nodes): the surface must cover the net in plan"
         )
 
-    def weighted(self, rounds: int) -> Goals:
-        """The goals with the hard rows' weights raised ``rounds`` times."""
-        w = self.w * np.where(self.hard, HARD_FACTOR**rounds, 1.0)
-        return Goals(**{**self.__dict__, "w": w})
+    def select(self, rows: np.ndarray) -> Goals:
+        """The goals of these rows only (a mask)."""
+        per_row = ("node", "axis", "edge", "lo", "hi", "scale", "w", "hard", "of", "surface")
+        return Goals(**{**self.__dict__, **{k: getattr(self, k)[rows] for k in per_row}})
 
 
 def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
@@ -274,4 +271,4 @@ def _cable_edges(k: int, t, scene) -> np.ndarray:
     return np.flatnonzero(np.isin(np.asarray(cables.edge), hits))
 
 
-__all__ = ["HARD_FACTOR", "Goals", "resolve_goals"]
+__all__ = ["Goals", "resolve_goals"]

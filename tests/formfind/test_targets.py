@@ -184,19 +184,33 @@ def test_incompatible_targets_give_the_weighted_compromise(tmp_path):
 
 
 def test_a_hard_bound_is_met_where_a_weighted_target_gives_way():
-    """The radials' tension at most 400 N (hard) leaves the centre short of 3 m below the
-    ring (the weight needs more tension at that sag): the bound is met, the sag not."""
+    """The radials' tension at most 400 N (hard): the weight then hangs the centre lower
+    than 3 m below the ring (less tension, more sag): the bound is met, the sag not. (No
+    force densities do best: the search ends at formfind.max_iter.)"""
     targets = [
         {"node": "centre", "z": -3.0},
         {"cable": "radial*", "tension": [0.0, 400.0], "hard": True},
     ]
-    f = found(spider(target=targets))
+    f = found(spider(formfind={"force_density": 500.0, "max_iter": 20}, target=targets))
     d = f.design
     radial = np.flatnonzero(d.goals.of == 1)
     assert d.met[radial].all() and not d.met[d.goals.of == 0].all()
     tension = f.q * f.length
     assert tension[d.goals.edge[radial]].max() <= 400.0 * (1 + 1e-9)
-    assert centre_z(f) < -3.0  # (less tension: a deeper sag)
+    assert centre_z(f) < -3.0
+
+
+def test_a_hard_bound_that_cannot_be_met_exits_2(tmp_path):
+    """The same bound with the force densities held within 100 .. 2000 N/m: unreachable."""
+    targets = [
+        {"node": "centre", "z": -3.0},
+        {"cable": "radial*", "tension": [0.0, 400.0], "hard": True},
+    ]
+    bounds = {"force_density_min": 100.0, "force_density_max": 2000.0, "vary": "cables"}
+    r, out = invoke(tmp_path, spider(formfind={"force_density": 500.0, **bounds}, target=targets))
+    assert r.exit_code == 2, r.output
+    assert "target[1] (cable 'radial*' tension, hard = true): cannot be met" in r.output
+    assert not out.exists()
 
 
 def test_tensions_and_a_position_are_met_and_kept_by_the_case_written(tmp_path):
