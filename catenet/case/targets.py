@@ -91,7 +91,11 @@ def _coord(axis: str) -> Any:
 class TargetConfig(Declared):
     """One target of form finding; see the module docstring."""
 
-    node: Any = node(None, write="given", doc="the node (index, name or node set) to place")
+    node: Any = node(
+        None,
+        write="given",
+        doc="the node (index, name or node set) to place; with surface, none: every free node",
+    )
     cable: str | None = text(
         None, nonempty=True, write="given", doc='the cable (name or pattern "guy*") to tension'
     )
@@ -133,7 +137,7 @@ class TargetConfig(Declared):
 
     @property
     def kind(self) -> str:
-        """'x', 'y', 'z', 'point' or 'tension' (the first given)."""
+        """'x', 'y', 'z', 'point', 'surface' or 'tension' (the first given)."""
         for k in (*AXES, "point", "surface", "tension"):
             if getattr(self, k) is not None:
                 return k

@@ -35,13 +35,17 @@ def command(
     debug: bool,
 ) -> None:
     """Find the shape of CASE.toml's net that carries the forces its [formfind] table
-    asks for (force densities, target forces or target lengths), and write the result
-    file OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
+    asks for (force densities, target forces or target lengths), or the force densities
+    that reach its [[target]] tables (nodes' positions, nodes on a surface, cables'
+    tensions: each target's achieved value is reported), and write the result file
+    OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
     lengths that carry those forces, which `catenet run OUT.toml` reproduces.
 
     \b
-    Exit status: 0 found; 1 failed while running; 2 bad input (case file, --set values,
-    paths, force densities that make nodes coincide, targets that cannot be met).
+    Exit status: 0 found (targets not all met: the weighted least-squares compromise,
+    with a warning); 1 failed while running; 2 bad input (case file, --set values, paths,
+    force densities that make nodes coincide, targets that cannot be met, hard targets
+    unmet).
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):

@@ -2,14 +2,14 @@
 
 Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
-its bound whose gradient pushes it out is held): by the SVD of J where J is given whole,
+its bound whose gradient pushes it out is held): by Cholesky on J J^T + mu (or J^T J + mu, the smaller) where J is given whole,
 else by one sparse factorisation of the saddle-point system that holds J without forming
 it (``catenet.formfind.adjoint.SparseJacobian``). With
 mu = 0 the step is Gauss-Newton's least-norm step, which meets a reachable target with
 more variables than rows (a spider's centre by its force densities) in a few steps:
 SciPy's trust region methods keep such steps on their trust radius, and so converge
 only linearly there. mu starts at ``MU_FIRST`` of J's largest singular value squared
-(found once: the SVD, or power iterations), grows by 4 after a step that does not lower
+(found once: its Frobenius norm, or power iterations), grows by 4 after a step that does not lower
 f and falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable
 moves by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
 the bounds.
@@ -61,7 +61,7 @@ def levenberg(
         if not np.any(g[~held]):
             return Ended("stationary", s, evaluations)
         if not scale:  # (once: J's largest singular value squared)
-            scale = (float(np.linalg.norm(jac, 2)) if dense else _largest(jac)) ** 2 or 1.0
+            scale = (float(np.linalg.norm(jac)) if dense else _largest(jac)) ** 2 or 1.0
             mu = MU_FIRST * scale
         while True:
             if evaluations >= budget:
@@ -97,10 +97,22 @@ def _step(jac, r: np.ndarray, mu: float, keep: np.ndarray, dense: bool) -> np.nd
             return jac.damped(r, mu, keep)
         except SingularSystemError:
             return None
-    u, sv, vt = np.linalg.svd(jac[:, keep], full_matrices=False)
+    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+    j = jac[:, keep]
     p = np.zeros(len(keep))
-    p[keep] = -(vt.T @ (sv / (sv**2 + mu) * (u.T @ r)))
-    return p
+    try:
+        if j.shape[0] <= j.shape[1]:  # p = -J^T (J J^T + mu)^-1 r: the rows' system
+            gram = j @ j.T
+            gram[np.diag_indices_from(gram)] += mu
+            p[keep] = -(j.T @ cho_solve(cho_factor(gram), r))
+        else:  # (J^T J + mu) p = -J^T r
+            gram = j.T @ j
+            gram[np.diag_indices_from(gram)] += mu
+            p[keep] = -cho_solve(cho_factor(gram), j.T @ r)
+    except LinAlgError:  # (not positive definite in round-off: more damping)
+        return None
+    return p if np.all(np.isfinite(p)) else None
 
 
 def _largest(jac, count: int = 8) -> float:

@@ -45,7 +45,7 @@ class Row:
             got = f"{self.achieved[0]:.6g} {self.unit}"
         else:
             got = f"{self.achieved.min():.6g} .. {self.achieved.max():.6g} {self.unit} ({n})"
-        lo, hi = float(self.lo.min()), float(self.hi.max())
+        lo, hi = float(self.lo.min()) + 0.0, float(self.hi.max()) + 0.0  # (no -0)
         want = f"{lo:.6g}" if lo == hi else f"[{lo:.6g}, {hi:.6g}]"
         if lo == hi and np.ptp(self.lo) > 0:
             want = "one per node"
