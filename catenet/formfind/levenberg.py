@@ -2,16 +2,17 @@
 
 Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
-its bound whose gradient pushes it out is held): by Cholesky on J J^T + mu (or J^T J + mu, the smaller) where J is given whole,
-else by one sparse factorisation of the saddle-point system that holds J without forming
-it (``catenet.formfind.adjoint.SparseJacobian``). With
-mu = 0 the step is Gauss-Newton's least-norm step, which meets a reachable target with
-more variables than rows (a spider's centre by its force densities) in a few steps:
-SciPy's trust region methods keep such steps on their trust radius, and so converge
-only linearly there. mu starts at ``MU_FIRST`` of J's largest singular value squared
-(found once: its Frobenius norm, or power iterations), grows by 4 after a step that does not lower
-f and falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable
-moves by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
+its bound whose gradient pushes it out is held): where J is given whole, by Cholesky on
+J J^T + mu (or J^T J + mu, the smaller); else by one sparse factorisation of the
+saddle-point system that holds J without forming it
+(``catenet.formfind.adjoint.SparseJacobian``). With mu small the step is Gauss-Newton's
+least-norm step, which meets a reachable target with more variables than rows (a
+spider's centre by its force densities) in a few steps: SciPy's trust region methods
+keep such steps on their trust radius, and so converge only linearly there. mu starts at
+``MU_FIRST`` of the square of J's Frobenius norm (or of its largest singular value, by
+power iterations, for the sparse form), grows by 4 after a step that does not lower f and
+falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable moves
+by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
 the bounds.
 
 It ends when ``residual`` raises (the caller's test: every target met), when the
