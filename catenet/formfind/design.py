@@ -196,8 +196,8 @@ def formfind_targets(
 ):
     """The shape of a case's ``scene`` whose force densities reach ``targets`` (the
     case's [[target]] tables): a FormFound with method "targets" and its ``design``.
-    ``q``: the start (one number, one per edge; None: the loads per unit size of the
-    net, or 1 N/m without loads). ConfigError for bad input and hard targets unmet."""
+    ``q``: the start (one number, one per edge; None: ``_default_start``). ConfigError
+    for bad input and hard targets unmet."""
     import time
 
     from catenet.formfind.fdm import FormFound, _Shape, _zero_lengths, per_edge
@@ -247,14 +247,19 @@ def formfind_targets(
 
 
 def _default_start(shape) -> float:
-    """A force density of the order the loads ask for: the total load over the net's
-    size (1 N/m without loads)."""
+    """A force density that carries the loads with a small sag: the total load over the
+    mean edge length (a cable of n edges under its weight W then sags about L / 8; 1 N/m
+    without loads)."""
     net = shape.net
     total = float(np.abs(shape.force).sum())
     if shape.weighs:
         g = float(np.linalg.norm(shape.gravity))
         total += g * float(np.sum(net.line_density * net.rest_length))
-    return total / shape.size if total > 0 else 1.0
+    if total <= 0:
+        return 1.0
+    ends = net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]]
+    mean = float(np.mean(np.linalg.norm(ends, axis=1)))
+    return total / (mean if mean > 0 else shape.size)
 
 
 def _groups(scene, vary: str, prefix: str) -> np.ndarray:

@@ -39,18 +39,28 @@ class Row:
     hard: bool
 
     def line(self) -> str:
-        """``target[0]  node 'centre' z: -3 m reached (target -3 m, met)``."""
-        n = len(self.achieved)
-        if n == 1:
-            got = f"{self.achieved[0]:.6g} {self.unit}"
-        else:
-            got = f"{self.achieved.min():.6g} .. {self.achieved.max():.6g} {self.unit} ({n})"
-        lo, hi = float(self.lo.min()) + 0.0, float(self.hi.max()) + 0.0  # (no -0)
-        want = f"{lo:.6g}" if lo == hi else f"[{lo:.6g}, {hi:.6g}]"
-        if lo == hi and np.ptp(self.lo) > 0:
-            want = "one per node"
+        """``node 'centre' z: -3 m (target -3 m, miss 3.8e-14, met)``."""
+        got, want = _shown(self.achieved), _shown(self.lo)
+        if not np.array_equal(self.lo, self.hi):
+            want = f"[{_shown(self.lo)}, {_shown(self.hi)}]"
+        if len(self.where) > 1:
+            got += f" ({len(self.where)})"
+            if np.ptp(self.lo) > 0 or np.ptp(self.hi) > 0:
+                want = "one per node"
         verdict = "met" if self.met else "NOT met"
-        return f"{self.about}: {got} (target {want} {self.unit}, miss {self.miss:.2g}, {verdict})"
+        u = self.unit
+        return f"{self.about}: {got} {u} (target {want} {u}, miss {self.miss:.2g}, {verdict})"
+
+
+def _shown(v: np.ndarray) -> str:
+    """One value, one point, or the range of many."""
+    v = np.asarray(v, dtype=np.float64) + 0.0  # (no -0)
+    if v.ndim == 2 and v.shape[0] == 1:
+        return "[" + ", ".join(f"{c:.6g}" for c in v[0]) + "]"
+    if v.size == 1:
+        return f"{float(v.ravel()[0]):.6g}"
+    lo, hi = float(v.min()), float(v.max())
+    return f"{lo:.6g}" if lo == hi else f"{lo:.6g} .. {hi:.6g}"
 
 
 def rows(design) -> list[Row]:
