@@ -30,7 +30,7 @@ from catenet.case.keys import (
     show,
 )
 
-FORMFIND_METHODS = ("linear", "forces", "lengths")
+FORMFIND_METHODS = ("linear", "forces", "lengths", "elastic")
 
 #: What the targets ([[target]]) vary: a force density per edge, or one per cable.
 VARY = ("edges", "cables")
@@ -91,7 +91,9 @@ class FormfindConfig(Declared):
     method: str = choice(
         "linear",
         FORMFIND_METHODS,
-        doc="linear: the force densities as given; forces, lengths: meet the targets",
+        doc="linear: the force densities as given (with [[target]]: found); forces, "
+        "lengths: meet the targets; elastic: the rest lengths that reach [[target]] in the "
+        "elastic equilibrium",
     )
     force_density: float | tuple[float, ...] | None = _per_edge(
         shown="linear: required; else the start",
@@ -114,12 +116,13 @@ class FormfindConfig(Declared):
     max_iter: int = integer(
         100, ge=1, doc="forces, lengths, [[target]]: iterations (one factorisation each)"
     )
-    vary: str = choice(
-        "edges",
+    vary: str | None = choice(
+        None,
         VARY,
-        write="changed",
-        doc="[[target]]: the design variables: a force density per edge, or one per cable "
-        "(and per own edge of a graph)",
+        write="given",
+        shown='"edges" (elastic: "cables")',
+        doc="[[target]]: the design variables: a force density (elastic: a rest-length "
+        "factor) per edge, or one per cable (and per own edge of a graph)",
     )
     force_density_min: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="[[target]]: the least force density"
@@ -140,7 +143,9 @@ def parse_formfind(
     ck.keys(f, "formfind", names(FormfindConfig))
     v = parse_keys(ck, f, FormfindConfig, "formfind", ctx)
     method = v["method"]
-    if targets and method not in ("linear", BAD):
+    if method == "elastic" and not targets:
+        ck.add("formfind.method = 'elastic': finds rest lengths for [[target]] tables: add them")
+    if targets and method not in ("linear", "elastic", BAD):
         ck.add(
             f"formfind.method = {method!r}: [[target]] varies the force densities itself: "
             "remove formfind.method (or the targets)"
@@ -177,7 +182,10 @@ def parse_formfind(
 
 def check_formfind_case(ck: Checker, data: Any) -> None:
     """Problems of the other sections that form finding cannot honour: the rest lengths
-    it derives itself, and support motions."""
+    it derives itself (method "elastic" starts from them), and support motions."""
+    table = data.get("formfind")
+    if isinstance(table, dict) and table.get("method") == "elastic":
+        return
     geometry = data.get("geometry") if isinstance(data.get("geometry"), dict) else {}
     material = data.get("material") if isinstance(data.get("material"), dict) else {}
     supports = data.get("supports") if isinstance(data.get("supports"), dict) else {}

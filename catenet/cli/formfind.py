@@ -72,9 +72,10 @@ def _summary(written) -> None:
     )
     if f.design is not None:
         d = f.design
+        solves = "equilibria" if f.method == "elastic" else "factorisations"
         detail = (
             f"{d.message}: {d.evaluations} iterations, {d.gradients} adjoint gradients, "
-            f"{f.factorizations} factorisations"
+            f"{f.factorizations} {solves}"
         )
     lines = [
         f"{'case':<12} {written.case.title or written.case.source}",
@@ -104,11 +105,20 @@ def _targets(f) -> list[str]:
 
     d = f.design
     what = "edge" if d.vary == "edges" else "cable"
-    out = [
-        f"{'design':<12} {d.variables} force densities (one per {what}): "
-        f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m"
-        + (f", {d.at_bound} at a bound" if d.at_bound else "")
-    ]
+    if f.method == "elastic":
+        rest = f.net.rest_length
+        design = (
+            f"{d.variables} rest-length factors (one per {what}): rest lengths "
+            f"{float(rest.min()):.9g} .. {float(rest.max()):.9g} m, "
+            f"{float(rest.sum()):.12g} m in all"
+        )
+    else:
+        design = (
+            f"{d.variables} force densities (one per {what}): "
+            f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m"
+            + (f", {d.at_bound} at a bound" if d.at_bound else "")
+        )
+    out = [f"{'design':<12} {design}"]
     out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
     return out
 

@@ -45,6 +45,17 @@ def formfind_scene(scene) -> FormFound:
     if net.bodies:  # free bodies' nodes (no edges) stay where they are: the run moves them
         held = net.fixed | (np.arange(net.n_nodes) >= net.n_net)
         scene = dataclasses.replace(scene, net=net.replace(fixed=held))
+    if cfg.method == "elastic":
+        from catenet.formfind.elastic import formfind_elastic
+
+        return formfind_elastic(
+            scene,
+            targets=scene.case.targets,
+            vary=cfg.vary or "cables",
+            tol=cfg.tol,
+            max_iter=cfg.max_iter,
+            prefix=PREFIX,
+        )
     if scene.case.targets:
         from catenet.formfind.design import formfind_targets
 
@@ -52,7 +63,7 @@ def formfind_scene(scene) -> FormFound:
             scene,
             by_cable(scene, cfg.force_density, "force_density"),
             targets=scene.case.targets,
-            vary=cfg.vary,
+            vary=cfg.vary or "edges",
             bounds=(cfg.force_density_min, cfg.force_density_max),
             tol=cfg.tol,
             max_iter=cfg.max_iter,

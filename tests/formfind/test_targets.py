@@ -377,3 +377,86 @@ def test_targets_need_a_formfind_table_and_cables_to_vary(tmp_path):
     data["formfind"]["vary"] = "cables"
     with pytest.raises(ConfigError, match="formfind.vary = 'cables': this net has no named"):
         formfind_scene(build(parse_case(data, base_dir=tmp_path)))
+
+
+# ------------------------------------------------------------------- the elastic problem
+
+
+def stay(sag: float = 2.0, n: int = 20, **formfind) -> dict:
+    """A level stay of 100 m span, EA = 1e8 N, 0.02 m steel, under its own weight; its
+    midpoint asked ``sag`` below the supports (formfind.method = "elastic")."""
+    return {
+        "title": "stay",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [100, 0, 0], "nodes": n + 1},
+        "material": {"EA": 1e8, "density": 7850.0, "radius": 0.02},
+        "load": {"gravity": [0, 0, -9.81]},
+        "solver": {"rtol": 1e-12},
+        "formfind": {"method": "elastic", **formfind},
+        "target": [{"node": "midpoint", "z": -sag}],
+    }
+
+
+def test_a_stay_with_a_given_sag_has_the_elastic_catenary_rest_length(tmp_path):
+    """The rest length found for a 2 m sag is the exact discrete elastic chain's (the
+    catenary with its weight lumped at the nodes: catenet's model of it) to 1e-8; `catenet
+    run` on the case written keeps the midpoint 2 m down."""
+    import math
+
+    from analytic import discrete_catenary
+    from scipy.optimize import brentq
+
+    r, out = invoke(tmp_path, stay())
+    assert r.exit_code == 0, r.output
+    assert "1 rest-length factors (one per cable)" in r.output
+    with h5py.File(out) as h5:
+        assert bool(h5["result/targets/0"].attrs["met"])
+    f = found(stay())
+    w = 7850.0 * math.pi * 0.02**2 * 9.81
+    exact = brentq(
+        lambda L0: discrete_catenary(L0, 1e8, w, 100.0, 20).sag - 2.0, 100.0, 101.0, xtol=1e-14
+    )
+    assert abs(f.net.rest_length.sum() - exact) <= 1e-8 * exact
+    assert f.design.gradients <= 10
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][10, 2] + 2.0) < 1e-8
+
+
+def test_the_elastic_adjoint_jacobian_is_the_finite_differences_one():
+    """dr/ds of node targets by one solve with the tangent stiffness, a rest-length factor
+    per edge, against central differences of the equilibria (self-weight follows l0)."""
+    from catenet.formfind.elastic import _Equilibria
+    from catenet.formfind.goals import resolve_goals
+    from catenet.solver.settings import Settings
+
+    data = stay(n=8, vary="edges")
+    data["target"] = [{"node": 3, "point": [40.0, 0.0, -1.0]}, {"node": "midpoint", "z": -2.0}]
+    case = parse_case(data)
+    scene = build(case)
+    settings = Settings.of(case.solver)
+    goals = resolve_goals(case.targets, scene, 100.0, 1e-30)
+    eq = _Equilibria(scene, settings, np.arange(8))
+    s = 1e-3 * np.random.default_rng(1).standard_normal(8)
+
+    def residual(s):
+        net, _, x = eq(s)
+        length = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
+        return goals.w * goals.miss(goals.achieved(x, np.zeros(8), length))
+
+    j = eq.jacobian(s, goals)
+    h = 1e-6
+    fd = np.column_stack([(residual(s + h * e) - residual(s - h * e)) / (2 * h) for e in np.eye(8)])
+    assert np.abs(j - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+def test_elastic_form_finding_needs_node_targets(tmp_path):
+    data = stay()
+    del data["target"]
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "formfind.method = 'elastic': finds rest lengths" in r.output
+    data = spider(formfind={"method": "elastic"}, target=[{"cable": "ring1", "tension": 1e3}])
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "method = 'elastic' takes node targets" in r.output
