@@ -145,6 +145,12 @@ def parse_formfind(
     method = v["method"]
     if method == "elastic" and not targets:
         ck.add("formfind.method = 'elastic': finds rest lengths for [[target]] tables: add them")
+    for k in ("force_density", "force_density_min", "force_density_max"):
+        if method == "elastic" and k in f:
+            ck.add(
+                f"formfind.{k} = {show(f[k])}: method = 'elastic' varies the rest lengths "
+                "(the geometry's are the start): remove it"
+            )
     if targets and method not in ("linear", "elastic", BAD):
         ck.add(
             f"formfind.method = {method!r}: [[target]] varies the force densities itself: "
