@@ -30,7 +30,10 @@ from catenet.case.keys import (
     show,
 )
 
-FORMFIND_METHODS = ("linear", "forces", "lengths")
+FORMFIND_METHODS = ("linear", "forces", "lengths", "elastic")
+
+#: What the targets ([[target]]) vary: a force density per edge, or one per cable.
+VARY = ("edges", "cables")
 
 #: What each method needs besides the force densities: its target key.
 TARGETS = {"forces": "force", "lengths": "length"}
@@ -88,7 +91,9 @@ class FormfindConfig(Declared):
     method: str = choice(
         "linear",
         FORMFIND_METHODS,
-        doc="linear: the force densities as given; forces, lengths: meet the targets",
+        doc="linear: the force densities as given (with [[target]]: found); forces, "
+        "lengths: meet the targets; elastic: the rest lengths that reach [[target]] in the "
+        "elastic equilibrium",
     )
     force_density: float | tuple[float, ...] | None = _per_edge(
         shown="linear: required; else the start",
@@ -101,19 +106,67 @@ class FormfindConfig(Declared):
     length: float | tuple[float, ...] | None = _per_edge(
         unit="m", doc='method = "lengths": the length of every edge'
     )
-    tol: float = real(1e-9, gt=0, lt=1, doc="forces, lengths: relative tolerance on the targets")
-    max_iter: int = integer(100, ge=1, doc="forces, lengths: iterations (one factorisation each)")
+    tol: float = real(
+        1e-9,
+        gt=0,
+        lt=1,
+        doc="forces, lengths, [[target]]: relative tolerance on the targets (a position's: "
+        "of the net's size)",
+    )
+    max_iter: int = integer(
+        100, ge=1, doc="forces, lengths, [[target]]: iterations (one factorisation each)"
+    )
+    vary: str | None = choice(
+        None,
+        VARY,
+        write="given",
+        shown='"edges" (elastic: "cables")',
+        doc="[[target]]: the design variables: a force density (elastic: a rest-length "
+        "factor) per edge, or one per cable (and per own edge of a graph)",
+    )
+    force_density_min: float | None = real(
+        None, gt=0, write="given", unit="N/m", doc="[[target]]: the least force density"
+    )
+    force_density_max: float | None = real(
+        None, gt=0, write="given", unit="N/m", doc="[[target]]: the largest force density"
+    )
 
 
-def parse_formfind(ck: Checker, f_v: Any, ctx: Context) -> FormfindConfig | Any:
-    """The [formfind] table with the rules between its keys."""
+def parse_formfind(
+    ck: Checker, f_v: Any, ctx: Context, targets: bool = False
+) -> FormfindConfig | Any:
+    """The [formfind] table with the rules between its keys; ``targets``: the case has
+    [[target]] tables (the force densities given are then the start)."""
     f = ck.table(f_v, "formfind")
     if f is None:
         return BAD
     ck.keys(f, "formfind", names(FormfindConfig))
     v = parse_keys(ck, f, FormfindConfig, "formfind", ctx)
     method = v["method"]
-    if method == "linear" and "force_density" not in f:
+    if method == "elastic" and not targets:
+        ck.add("formfind.method = 'elastic': finds rest lengths for [[target]] tables: add them")
+    for k in ("force_density", "force_density_min", "force_density_max"):
+        if method == "elastic" and k in f:
+            ck.add(
+                f"formfind.{k} = {show(f[k])}: method = 'elastic' varies the rest lengths "
+                "(the geometry's are the start): remove it"
+            )
+    if targets and method not in ("linear", "elastic", BAD):
+        ck.add(
+            f"formfind.method = {method!r}: [[target]] varies the force densities itself: "
+            "remove formfind.method (or the targets)"
+        )
+    lo, hi = v["force_density_min"], v["force_density_max"]
+    if lo not in (None, BAD) and hi not in (None, BAD) and not lo < hi:
+        ck.add(
+            f"formfind.force_density_max = {show(hi)}: must be > formfind.force_density_min "
+            f"({show(lo)})"
+        )
+    if not targets:
+        for k in ("vary", "force_density_min", "force_density_max"):
+            if k in f:
+                ck.add(f"formfind.{k} = {show(f[k])}: only with [[target]] tables (none given)")
+    if method == "linear" and "force_density" not in f and not targets:
         ck.add(
             "formfind.force_density: missing: method = 'linear' needs the force density "
             "q [N/m] (one number, or one per edge)"
@@ -135,7 +188,10 @@ def parse_formfind(ck: Checker, f_v: Any, ctx: Context) -> FormfindConfig | Any:
 
 def check_formfind_case(ck: Checker, data: Any) -> None:
     """Problems of the other sections that form finding cannot honour: the rest lengths
-    it derives itself, and support motions."""
+    it derives itself (method "elastic" starts from them), and support motions."""
+    table = data.get("formfind")
+    if isinstance(table, dict) and table.get("method") == "elastic":
+        return
     geometry = data.get("geometry") if isinstance(data.get("geometry"), dict) else {}
     material = data.get("material") if isinstance(data.get("material"), dict) else {}
     supports = data.get("supports") if isinstance(data.get("supports"), dict) else {}

@@ -41,6 +41,7 @@ from catenet.case.sections import (
     parse_output,
     parse_solver,
 )
+from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.case.written import plain
@@ -76,6 +77,7 @@ class Case:
     masses: tuple = ()  # [[mass]]: point masses and initial velocities at nodes
     load_cases: tuple = ()  # [[load_case]]: loads solved from the base state
     combinations: tuple = ()  # [[combination]]: factored sums of load cases
+    targets: tuple = ()  # [[target]]: what `catenet formfind` varies the force densities for
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -103,6 +105,8 @@ class Case:
             out["load_case"] = [c.to_dict() for c in self.load_cases]
         if self.combinations:
             out["combination"] = [c.to_dict() for c in self.combinations]
+        if self.targets:
+            out["target"] = [t.to_dict() for t in self.targets]
         return plain(out)
 
     def to_toml(self) -> str:
@@ -124,6 +128,7 @@ TOP_KEYS = (
     "mass",
     "load_case",
     "combination",
+    "target",
 )
 
 
@@ -181,9 +186,15 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None
+    targets = parse_targets(ck, data.get("target"), ctx, base_dir)
     if "formfind" in data:
-        formfind = parse_formfind(ck, data["formfind"], ctx)
+        formfind = parse_formfind(ck, data["formfind"], ctx, bool(data.get("target")))
         check_formfind_case(ck, data)
+    elif "target" in data:
+        ck.add(
+            "target: form finding's targets need a [formfind] table (its force_density, "
+            "if given, is the start): add [formfind]"
+        )
 
     if isinstance(material, MaterialConfig):  # rules between sections
         _check_prestress(ck, data, material)
@@ -223,6 +234,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         masses=masses,
         load_cases=load_cases,
         combinations=combinations,
+        targets=targets,
         source=source,
     )
 

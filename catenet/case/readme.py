@@ -18,6 +18,7 @@ from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
 from catenet.case.sections import SECTIONS
+from catenet.case.targets import TargetConfig
 
 BEGIN, END = "<!-- case-keys:begin -->", "<!-- case-keys:end -->"
 NOTE = (
@@ -76,6 +77,11 @@ def keys_table() -> str:
     for name, section in SECTIONS.items():
         rows += _rows(name, declared(section))
     rows += _rows("formfind", declared(FormfindConfig))  # catenet formfind only
+    rows.append(
+        "| `[[target]]` | an array of tables | none | catenet formfind: a node's position, "
+        "nodes on a surface or a cable's tension to reach by the force densities |"
+    )
+    rows += _rows("target[k]", declared(TargetConfig))
     for name, obstacle in OBSTACLES.items():
         rows.append(
             f'| **`[[obstacle]]` kind = "{name}"** | | | {(obstacle.__doc__ or "").strip()} |'

@@ -35,13 +35,17 @@ def command(
     debug: bool,
 ) -> None:
     """Find the shape of CASE.toml's net that carries the forces its [formfind] table
-    asks for (force densities, target forces or target lengths), and write the result
-    file OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
+    asks for (force densities, target forces or target lengths), or the force densities
+    that reach its [[target]] tables (nodes' positions, nodes on a surface, cables'
+    tensions: each target's achieved value is reported), and write the result file
+    OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
     lengths that carry those forces, which `catenet run OUT.toml` reproduces.
 
     \b
-    Exit status: 0 found; 1 failed while running; 2 bad input (case file, --set values,
-    paths, force densities that make nodes coincide, targets that cannot be met).
+    Exit status: 0 found (targets not all met: the weighted least-squares compromise,
+    with a warning); 1 failed while running; 2 bad input (case file, --set values, paths,
+    force densities that make nodes coincide, targets that cannot be met, hard targets
+    unmet).
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):
@@ -66,17 +70,57 @@ def _summary(written) -> None:
         else f"{f.iterations} iterations, {f.factorizations} factorisations, "
         f"targets met to {f.residual:.2g}"
     )
+    if f.design is not None:
+        d = f.design
+        solves = "equilibria" if f.method == "elastic" else "factorisations"
+        detail = (
+            f"{d.message}: {d.evaluations} iterations, {d.gradients} adjoint gradients, "
+            f"{f.factorizations} {solves}"
+        )
     lines = [
         f"{'case':<12} {written.case.title or written.case.source}",
         f"{'method':<12} {f.method} ({detail})",
         f"{'net':<12} {f.net.n_net} nodes, {f.net.n_edges} edges, "
         f"{int(np.count_nonzero(f.net.fixed[: f.net.n_net]))} fixed",
         f"{'tension':<12} {float(force.min()):.6g} .. {float(force.max()):.6g} N",
+        *_targets(f),
         f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
         f"{'output':<12} {written.result_file}",
         f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
     ]
     click.echo("\n".join(lines))
+    if f.design is not None and not f.design.all_met:
+        click.echo(
+            "catenet: warning: the targets are not all met: the shape is the weighted "
+            "least-squares compromise (misses above)",
+            err=True,
+        )
+
+
+def _targets(f) -> list[str]:
+    """The design variables found and each target's achieved value."""
+    if f.design is None:
+        return []
+    from catenet.formfind import report
+
+    d = f.design
+    what = "edge" if d.vary == "edges" else "cable"
+    if f.method == "elastic":
+        rest = f.net.rest_length
+        design = (
+            f"{d.variables} rest-length factors (one per {what}): rest lengths "
+            f"{float(rest.min()):.9g} .. {float(rest.max()):.9g} m, "
+            f"{float(rest.sum()):.12g} m in all"
+        )
+    else:
+        design = (
+            f"{d.variables} force densities (one per {what}): "
+            f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m"
+            + (f", {d.at_bound} at a bound" if d.at_bound else "")
+        )
+    out = [f"{'design':<12} {design}"]
+    out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
+    return out
 
 
 __all__ = ["command"]

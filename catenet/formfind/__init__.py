@@ -2,7 +2,10 @@
 
 ``fdm`` is the force density method on a net (``formfind``, ``FormFound``); ``case``
 form-finds a case with a [formfind] table and writes the graph case that ``catenet run``
-reproduces the shape with, and the result file (``write_formfind``, ``to_case``).
+reproduces the shape with, and the result file (``write_formfind``, ``to_case``);
+``design`` finds the force densities that reach a case's [[target]] tables
+(``formfind_targets``: ``goals``, ``adjoint``, ``levenberg``, ``surface``, ``report``),
+``elastic`` the rest lengths that reach them in the elastic equilibrium.
 """
 
 from catenet.formfind.case import Written, case_file_for, formfind_scene, to_case, write_formfind

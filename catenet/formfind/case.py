@@ -45,6 +45,31 @@ def formfind_scene(scene) -> FormFound:
     if net.bodies:  # free bodies' nodes (no edges) stay where they are: the run moves them
         held = net.fixed | (np.arange(net.n_nodes) >= net.n_net)
         scene = dataclasses.replace(scene, net=net.replace(fixed=held))
+    if cfg.method == "elastic":
+        from catenet.formfind.elastic import formfind_elastic
+
+        return formfind_elastic(
+            scene,
+            targets=scene.case.targets,
+            vary=cfg.vary or "cables",
+            tol=cfg.tol,
+            max_iter=cfg.max_iter,
+            prefix=PREFIX,
+        )
+    if scene.case.targets:
+        from catenet.formfind.design import formfind_targets
+
+        return formfind_targets(
+            scene,
+            by_cable(scene, cfg.force_density, "force_density"),
+            targets=scene.case.targets,
+            vary=cfg.vary or "edges",
+            bounds=(cfg.force_density_min, cfg.force_density_max),
+            tol=cfg.tol,
+            max_iter=cfg.max_iter,
+            linear=scene.case.solver.linear,
+            prefix=PREFIX,
+        )
     return formfind(
         scene,
         by_cable(scene, cfg.force_density, "force_density"),
@@ -174,6 +199,10 @@ def write_formfind(case: Case, out: str | Path | None = None) -> Written:
             formfind_residual=float(found.residual),
             factorizations=int(found.factorizations),
         )
+    if found.design is not None:
+        from catenet.formfind import report
+
+        report.write(out, found)
     toml_path.parent.mkdir(parents=True, exist_ok=True)
     toml_path.write_text(_header(case, found, out) + resolved, encoding="utf-8")
     return Written(found, written, out, toml_path)
@@ -181,10 +210,15 @@ def write_formfind(case: Case, out: str | Path | None = None) -> Written:
 
 def _header(case: Case, found: FormFound, out: Path) -> str:
     src = case.source or "<dict>"
+    targets = ""
+    if found.design is not None:
+        from catenet.formfind import report
+
+        targets = "".join(f"# {line}\n" for line in report.header_lines(found))
     return (
         f"# Form found by `catenet formfind {src}` (method = {found.method!r}; result file "
         f"{out}).\n# `catenet run` on this case, without further load, reproduces the shape "
-        "and the forces.\n\n"
+        f"and the forces.\n{targets}\n"
     )
 
 

@@ -34,7 +34,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -146,6 +146,7 @@ class FormFound:
     wall_time: float = 0.0
     backend: str = ""
     stats: dict = field(default_factory=dict)
+    design: Any = None  # method "targets": the targets reached (catenet.formfind.design)
     _rest: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property

@@ -1,0 +1,296 @@
+"""Force densities that reach form finding's targets (``[[target]]``).
+
+The design variables are s = log q (so q stays positive), one per edge or one per cable
+(``vary``), within optional bounds on q; q = exp(P s) with P the edges' assignment. The
+targets' residual r(s) (``catenet.formfind.goals``) is minimised in the least-squares
+sense by SciPy's trust region reflective method (``least_squares``, bounds honoured
+exactly) with the Jacobian of ``catenet.formfind.adjoint``: whole (one solve per row or
+per variable, whichever are fewer) up to ``DENSE`` of them, else as a linear operator
+(LSMR's products: one solve each). Each new s costs one factorisation of D.
+
+It stops as soon as every row is met to ``tol`` (a start that meets them costs no
+iteration); otherwise where the least squares can lower the misses no further: the
+compromise the weights choose, which the report says. Hard targets left unmet then
+get a second search on their rows alone from there: Gauss-Newton's least-norm steps,
+the least change of the force densities that meets them (each search at most
+``max_iter`` evaluations); one still unmet is a ConfigError.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from catenet.errors import ConfigError, ConvergenceError, SingularSystemError
+from catenet.formfind.adjoint import Adjoint, jacobian_dense, jacobian_operator
+from catenet.formfind.goals import Goals
+from catenet.formfind.levenberg import levenberg
+
+log = logging.getLogger(__name__)
+
+DENSE = 200  # whole Jacobians up to this many solves; beyond, a linear operator
+
+
+class _Met(Exception):
+    """Every target met: the search stops here."""
+
+
+@dataclass
+class Design:
+    """What the search found: per row the value ``achieved`` (a) and whether ``met``; the
+    design variables (``variables``, their ``kind``), how it went."""
+
+    goals: Goals
+    achieved: np.ndarray
+    met: np.ndarray
+    variables: int
+    vary: str
+    evaluations: int = 0
+    gradients: int = 0
+    rounds: int = 0
+    message: str = ""
+    bounds: tuple = (None, None)
+    at_bound: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def all_met(self) -> bool:
+        return bool(self.met.all())
+
+    def miss(self) -> np.ndarray:
+        return self.goals.miss(self.achieved)
+
+
+class _Search:
+    """The residual and its Jacobian as functions of s, sharing one state per s."""
+
+    def __init__(self, shape, goals: Goals, groups: np.ndarray, base: np.ndarray):
+        import scipy.sparse as sp
+
+        n_var = len(base)
+        self.base = base[groups]  # log q of each edge at s = 0
+        self.shape, self.goals = shape, goals
+        m = shape.net.n_edges
+        self.p = sp.csr_matrix((np.ones(m), (np.arange(m), groups)), shape=(m, n_var))
+        self.key: bytes | None = None
+        self.gradients = 0
+        self.best: tuple | None = None
+
+    def state(self, s: np.ndarray):
+        """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``
+        each time: the goals may change between searches)."""
+        key = s.tobytes()
+        if key != self.key:
+            self.key = None
+            q = np.exp(np.clip(self.base + self.p @ s, -700.0, 700.0))
+            x, load = self.shape(q)
+            u = x[self.shape.net.edges[:, 1]] - x[self.shape.net.edges[:, 0]]
+            self.now = (q, x, load, np.linalg.norm(u, axis=1))
+            self.key = key  # (the shape's factors are this state's)
+            a = self.goals.achieved(x, q, self.now[3])
+            r = self.goals.w * self.goals.miss(a)
+            if np.all(np.isfinite(r)) and (self.best is None or r @ r < self.best[0]):
+                self.best = (float(r @ r), s.copy())
+        q, x, load, length = self.now
+        return q, x, load, self.goals.achieved(x, q, length)
+
+    def residual(self, s: np.ndarray) -> np.ndarray:
+        try:
+            q, x, load, a = self.state(s)
+        except (SingularSystemError, ConvergenceError, ConfigError):
+            return np.full(self.goals.rows, 1e150)  # no shape there: the step is refused
+        if not np.all(np.isfinite(a)):
+            return np.full(self.goals.rows, 1e150)  # a node off a surface's plan: refused
+        if self.goals.met(a).all():
+            raise _Met
+        return self.goals.w * self.goals.miss(a)
+
+    def jacobian(self, s: np.ndarray):
+        import scipy.sparse as sp
+
+        q, x, _, a = self.state(s)  # (the shape's factors are the last state's)
+        self.gradients += 1
+        adj = Adjoint(self.shape, q, x)
+        d_x, d_q = self.goals.partials(x, q, a, self.shape.pattern.index, self.shape.net)
+        dq_ds = sp.diags(q) @ self.p
+        if min(d_x.shape[0], dq_ds.shape[1]) <= DENSE:
+            return jacobian_dense(adj, d_x, d_q, dq_ds)
+        return jacobian_operator(adj, d_x, d_q, dq_ds)
+
+
+def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) -> Design:
+    """The force densities (one per group: ``groups`` (M,) the variable of each edge) that
+    reach ``goals`` from ``q0`` (M,), q within ``bounds`` (low, high; None: open), at
+    most ``max_iter`` evaluations; the state reached is ``Design.extra["state"]``."""
+    n_var = int(groups.max()) + 1
+    log_lo = -np.inf if bounds[0] is None else math.log(bounds[0])
+    log_hi = np.inf if bounds[1] is None else math.log(bounds[1])
+    base = np.bincount(groups, np.log(q0), n_var) / np.bincount(groups, minlength=n_var)
+    base = np.clip(base, log_lo, log_hi)  # the start; s = log q - base
+    lo, hi = log_lo - base, log_hi - base
+    s = np.zeros(n_var)
+    search = _Search(shape, goals, groups, base)
+    q, x, load, a = search.state(s)
+    outside = goals.outside(a)
+    if outside is not None:
+        raise ConfigError(outside)
+    rounds, message = 0, "met at the start"
+    if not goals.met(a).all():
+        message, s = _search(search, s, (lo, hi), max_iter)
+        q, x, load, a = search.state(s)
+    if (goals.hard & ~goals.met(a)).any():  # the least change that meets the hard ones
+        rounds = 1
+        search.goals = goals.select(goals.hard)
+        search.best = None
+        why, s = _search(search, s, (lo, hi), max_iter)
+        search.goals = goals
+        q, x, load, a = search.state(s)
+        if why != "met":
+            message = f"{why} on the hard targets alone"
+    evaluations = shape.factorizations - 1
+    at_bound = int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+    out = Design(
+        goals=goals,
+        achieved=a,
+        met=goals.met(a),
+        variables=n_var,
+        vary=vary,
+        evaluations=evaluations,
+        gradients=search.gradients,
+        rounds=rounds,
+        message=message,
+        bounds=bounds,
+        at_bound=at_bound,
+    )
+    out.extra["state"] = (q, x, load)
+    return out
+
+
+def _search(search: _Search, s0: np.ndarray, bounds, budget: int) -> tuple[str, np.ndarray]:
+    """(how it ended, s) of Levenberg-Marquardt from s0 (``catenet.formfind.levenberg``)."""
+    try:
+        ended = levenberg(search.residual, search.jacobian, s0, bounds, max(budget, 1))
+    except _Met:
+        return "met", np.frombuffer(search.key or s0.tobytes()).copy()
+    best = search.best
+    s = ended.s if best is None else best[1]
+    if ended.why == "max_iter":
+        return "formfind.max_iter reached", s
+    return "least-squares compromise: the targets are not all compatible", s
+
+
+def formfind_targets(
+    scene,
+    q=None,
+    *,
+    targets,
+    vary="edges",
+    bounds=(None, None),
+    tol=1e-9,
+    max_iter=100,
+    linear="auto",
+    prefix="formfind.",
+):
+    """The shape of a case's ``scene`` whose force densities reach ``targets`` (the
+    case's [[target]] tables): a FormFound with method "targets" and its ``design``.
+    ``q``: the start (one number, one per edge; None: ``_default_start``). ConfigError
+    for bad input and hard targets unmet."""
+    import time
+
+    from catenet.formfind.fdm import FormFound, _Shape, _zero_lengths, per_edge
+    from catenet.formfind.goals import resolve_goals
+
+    start = time.perf_counter()
+    net, loads = scene.net, scene.loads
+    if loads is not None and loads.moves_supports:
+        raise ConfigError("supports.move: form finding holds the fixed nodes where they are")
+    q_name = f"{prefix}force_density"
+    const = np.zeros((net.n_nodes, 3)) if loads is None or loads.force is None else loads.force
+    gravity = None if loads is None else loads.gravity
+    shape = _Shape(net, np.array(const, dtype=np.float64), gravity, linear, q_name)
+    if not shape.pattern.n_free:
+        raise ConfigError("target: every node is fixed: nothing to form find")
+    goals = resolve_goals(targets, scene, shape.size, tol)
+    groups = _groups(scene, vary, prefix)
+    q0 = per_edge(q, net.n_edges, q_name, required=False)
+    if q0 is None:
+        q0 = np.full(net.n_edges, _default_start(shape))
+    d = design(shape, goals, q0, groups, bounds, max_iter, vary)
+    q, x, load = d.extra.pop("state")
+    _zero_lengths(net, x, shape.size, q_name)
+    unmet = goals.hard & ~d.met
+    if unmet.any():
+        raise ConfigError(_unmet_message(d, int(goals.of[np.argmax(unmet)])))
+    rel = np.abs(d.miss()) / goals.scale
+    found = FormFound(
+        net=net,
+        x=x,
+        q=q,
+        load=load,
+        method="targets",
+        iterations=d.evaluations,
+        factorizations=shape.factorizations,
+        residual=float(rel.max()),
+        backend=shape.backend,
+        stats={"solves": shape.solves, "n_free": shape.pattern.n_free},
+        design=d,
+    )
+    found.rest_length(q_name)
+    found.wall_time = time.perf_counter() - start
+    log.info(
+        "targets: %s after %d evaluations, %d gradients", d.message, d.evaluations, d.gradients
+    )
+    return found
+
+
+def _default_start(shape) -> float:
+    """A force density that carries the loads with a small sag: the total load over the
+    mean edge length (a cable of n edges under its weight W then sags about L / 8; 1 N/m
+    without loads)."""
+    net = shape.net
+    total = float(np.abs(shape.force).sum())
+    if shape.weighs:
+        g = float(np.linalg.norm(shape.gravity))
+        total += g * float(np.sum(net.line_density * net.rest_length))
+    if total <= 0:
+        return 1.0
+    ends = net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]]
+    mean = float(np.mean(np.linalg.norm(ends, axis=1)))
+    return total / (mean if mean > 0 else shape.size)
+
+
+def _groups(scene, vary: str, prefix: str) -> np.ndarray:
+    """The design variable of each edge: its own (``edges``), or its cable's (``cables``:
+    a graph's own edges keep one each)."""
+    m = scene.net.n_edges
+    if vary == "edges":
+        return np.arange(m)
+    cables = scene.cables
+    if cables is None or not cables.names:
+        raise ConfigError(
+            f"{prefix}vary = 'cables': this net has no named cables (a graph's "
+            "[[geometry.cable]]): vary = 'edges'"
+        )
+    edge = np.asarray(cables.edge)
+    n = len(cables.names)
+    own = edge < 0
+    out = edge.copy()
+    out[own] = n + np.arange(int(own.sum()))
+    groups = np.unique(out, return_inverse=True)[1]  # (a cable without edges: none)
+    return groups.astype(np.int64)
+
+
+def _unmet_message(d: Design, k: int) -> str:
+    t = d.goals.targets[k]
+    rows = np.flatnonzero(d.goals.of == k)
+    worst = rows[np.argmax(np.abs(d.miss()[rows]))]
+    lo, hi = d.goals.lo[worst], d.goals.hi[worst]
+    want = f"{lo:.9g}" if lo == hi else f"[{lo:.9g}, {hi:.9g}]"
+    return (
+        f"target[{k}] ({t.describe()}, hard = true): cannot be met to formfind.tol: reaches "
+        f"{d.achieved[worst]:.9g}, target {want} ({d.message}): relax it, widen "
+        "formfind.force_density_min/max or drop hard"
+    )

@@ -1,0 +1,274 @@
+"""Targets of form finding resolved on a net: one residual vector and its partial
+derivatives.
+
+Each ``[[target]]`` becomes rows of one vector: a node's coordinate (a row per node and
+axis: the value a = x_i,c) or an edge's tension (a row per edge of the cable: a = q_e L_e,
+the force density method's tension). A row asks a in [lo, hi] (lo = hi: a value); its
+miss is m = a - clip(a, lo, hi) and its residual r = w m / s, with the target's weight w
+and its scale s (the net's size for positions, the target tension for tensions), so that
+positions and forces weigh alike. A row is met when |m| <= tol s.
+
+The partial derivatives, with u_e = x_b - x_a and L = |u_e|: da/dx_i,c = 1 for a
+position; for a tension dN/dq_e = L_e and dN/dx_b = -dN/dx_a = q_e u_e / L_e. Inside its
+range a row's residual is flat (its derivative 0).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from catenet.case.keys import show
+from catenet.case.kinds.base import expand
+from catenet.errors import ConfigError
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+
+@dataclass
+class Goals:
+    """The rows of every target: ``node``/``axis`` (positions, -1 for tensions),
+    ``edge`` (tensions, -1 for positions), the range ``lo``..``hi``, the scale, the
+    weight (``w``: weight / scale), ``hard`` and which target (``of``) each row is."""
+
+    targets: tuple
+    node: np.ndarray
+    axis: np.ndarray
+    edge: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    scale: np.ndarray
+    w: np.ndarray
+    hard: np.ndarray
+    of: np.ndarray
+    tol: float
+    surface: np.ndarray  # per row: the index in ``surfaces`` (-1: none)
+    surfaces: tuple = ()
+
+    @property
+    def rows(self) -> int:
+        return len(self.lo)
+
+    def achieved(self, x: np.ndarray, q: np.ndarray, length: np.ndarray) -> np.ndarray:
+        """The value of every row at the shape x with force densities q."""
+        pos = self.edge < 0
+        a = np.empty(self.rows)
+        a[pos] = x[self.node[pos], self.axis[pos]]
+        e = self.edge[~pos]
+        a[~pos] = q[e] * length[e]
+        for k, field in enumerate(self.surfaces):
+            rows = np.flatnonzero(self.surface == k)
+            a[rows] = field.offset(x[self.node[rows]])[0]
+        return a
+
+    def miss(self, a: np.ndarray) -> np.ndarray:
+        return a - np.clip(a, self.lo, self.hi)
+
+    def met(self, a: np.ndarray) -> np.ndarray:
+        """Per row: met to tol (relative to its scale)."""
+        return np.abs(self.miss(a)) <= self.tol * self.scale
+
+    def partials(
+        self, x: np.ndarray, q: np.ndarray, a: np.ndarray, index: np.ndarray, net
+    ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """(dr/dx_f, dr/dq): the residual's partial derivatives, sparse, (R, 3 n_free)
+        and (R, M), the DOFs of the free nodes interleaved (3 f + c); ``index`` gives a
+        node's free index (-1: fixed)."""
+        import scipy.sparse as sp
+
+        n3 = 3 * int(np.count_nonzero(index >= 0))
+        out = (a < self.lo) | (a > self.hi) | (self.lo == self.hi)
+        slope = np.where(out, self.w, 0.0)
+        rows_x, cols_x, vals_x = [], [], []
+        pos = np.flatnonzero(self.edge < 0)
+        rows_x.append(pos)
+        cols_x.append(3 * index[self.node[pos]] + self.axis[pos])
+        vals_x.append(slope[pos])
+        for k, field in enumerate(self.surfaces):  # d(z - f(x, y)) = dz - f_x dx - f_y dy
+            rows = np.flatnonzero(self.surface == k)
+            grad = field.offset(x[self.node[rows]])[1]
+            for c in range(2):
+                rows_x.append(rows)
+                cols_x.append(3 * index[self.node[rows]] + c)
+                vals_x.append(-slope[rows] * grad[:, c])
+        ten = np.flatnonzero(self.edge >= 0)
+        e = self.edge[ten]
+        ends = net.edges[e]
+        u = x[ends[:, 1]] - x[ends[:, 0]]
+        length = np.linalg.norm(u, axis=1)
+        g = (slope[ten] * q[e] / length)[:, None] * u  # dN/dx_b, weighted
+        for end, sign in ((ends[:, 0], -1.0), (ends[:, 1], 1.0)):
+            f = index[end]
+            free = f >= 0
+            for c in range(3):
+                rows_x.append(ten[free])
+                cols_x.append(3 * f[free] + c)
+                vals_x.append(sign * g[free, c])
+        r = self.rows
+        d_x = sp.csr_matrix(
+            (np.concatenate(vals_x), (np.concatenate(rows_x), np.concatenate(cols_x))),
+            shape=(r, n3),
+        )
+        d_q = sp.csr_matrix((slope[ten] * length, (ten, e)), shape=(r, net.n_edges))
+        return d_x, d_q
+
+    def outside(self, a: np.ndarray) -> str | None:
+        """Where a surface row has no value (its node off the plan): the message."""
+        bad = np.flatnonzero(~np.isfinite(a))
+        if not bad.size:
+            return None
+        j = int(bad[0])
+        k = int(self.of[j])
+        return (
+            f"target[{k}].surface = {self.targets[k].surface!r}: node {int(self.node[j])} is "
+            f"outside its plan in the shape of the starting force densities ({bad.size} "
+            "nodes): the surface must cover the net in plan"
+        )
+
+    def select(self, rows: np.ndarray) -> Goals:
+        """The goals of these rows only (a mask)."""
+        per_row = ("node", "axis", "edge", "lo", "hi", "scale", "w", "hard", "of", "surface")
+        return Goals(**{**self.__dict__, **{k: getattr(self, k)[rows] for k in per_row}})
+
+
+def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
+    """The targets of a case on its built ``scene``; ``size`` scales the positions.
+    ConfigError (key path, value) for an unknown node, set or cable, a fixed node, or
+    values that do not match the nodes."""
+    net = scene.net
+    cols: dict[str, list] = {k: [] for k in ("node", "axis", "edge", "lo", "hi", "sc", "w")}
+    cols.update(hard=[], of=[], surface=[])
+    surfaces: list = []
+
+    def add(k, t, node, axis, edge, lo, hi, scale, surface=-1):
+        n = len(lo)
+        for name, v in (("node", node), ("axis", axis), ("edge", edge)):
+            cols[name].append(np.broadcast_to(np.asarray(v, dtype=np.int64), (n,)))
+        cols["lo"].append(lo)
+        cols["hi"].append(hi)
+        cols["sc"].append(np.full(n, scale))
+        cols["w"].append(np.full(n, t.weight / scale))
+        cols["hard"].append(np.full(n, t.hard))
+        cols["of"].append(np.full(n, k))
+        cols["surface"].append(np.full(n, surface))
+
+    for k, t in enumerate(targets):
+        if t.cable is not None:
+            edges = _cable_edges(k, t, scene)
+            lo, hi = t.tension if isinstance(t.tension, tuple) else (t.tension, t.tension)
+            n = len(edges)
+            add(k, t, -1, -1, edges, np.full(n, lo), np.full(n, hi), hi)
+            continue
+        nodes = _nodes(k, t, scene)
+        if t.surface is not None:
+            surfaces.append(_surface(k, t, scene.net, nodes))
+            d = 0.0 if t.within is None else t.within
+            n = len(nodes)
+            add(k, t, nodes, 2, -1, np.full(n, -d), np.full(n, d), size, len(surfaces) - 1)
+            continue
+        given = [(a, getattr(t, a)) for a in ("x", "y", "z")] if t.point is None else []
+        if t.point is not None:
+            pts = np.asarray(t.point, dtype=np.float64).reshape(-1, 3)
+            given = [(a, pts[:, c]) for c, a in enumerate("xyz")]
+        for axis, value in given:
+            if value is None:
+                continue
+            what = "point" if t.point is not None else axis
+            v = _per_node(k, what, t, value, nodes)
+            add(k, t, nodes, "xyz".index(axis), -1, v, v, size)
+    if not cols["lo"]:
+        raise ConfigError("target: no target")
+    arr = {k: np.concatenate(v) for k, v in cols.items()}
+    del net
+    return Goals(
+        targets=tuple(targets),
+        node=arr["node"],
+        axis=arr["axis"],
+        edge=arr["edge"],
+        lo=arr["lo"].astype(np.float64),
+        hi=arr["hi"].astype(np.float64),
+        scale=arr["sc"],
+        w=arr["w"],
+        hard=arr["hard"].astype(bool),
+        of=arr["of"],
+        tol=tol,
+        surface=arr["surface"],
+        surfaces=tuple(surfaces),
+    )
+
+
+def _surface(k: int, t, net, nodes: np.ndarray):
+    """The height field of a surface target, read."""
+    from catenet.formfind.surface import read_height_field
+
+    path = f"target[{k}].surface"
+    try:
+        field = read_height_field(t.surface)
+    except ValueError as exc:
+        raise ConfigError(f"{path} = {t.surface!r}: {exc}") from None
+    return field
+
+
+def _nodes(k: int, t, scene) -> np.ndarray:
+    net = scene.net
+    path = f"target[{k}].node"
+    if t.node is None:  # (a surface: every free node of the net)
+        return np.flatnonzero(~net.fixed[: net.n_net])
+    try:
+        nodes = np.asarray(expand(t.node, scene.names or {}, scene.sets or {}), dtype=np.int64)
+    except KeyError:
+        known = [*(scene.names or {}), *(s for s in scene.sets or {} if ":" not in s)]
+        accepted = ", ".join(map(repr, known)) or "none: give a node index"
+        raise ConfigError(
+            f"{path} = {show(t.node)}: is neither a node name nor a node set of the net "
+            f"(accepted: {accepted})"
+        ) from None
+    n = net.n_net
+    bad = nodes[(nodes < 0) | (nodes >= n)]
+    if bad.size:
+        raise ConfigError(f"{path} = {show(t.node)}: must be a node index in 0..{n - 1}")
+    fixed = nodes[net.fixed[nodes]]
+    if fixed.size:
+        which = f"node {int(fixed[0])} is" if nodes.size == 1 else f"nodes {fixed[:5].tolist()} are"
+        raise ConfigError(
+            f"{path} = {show(t.node)}: {which} fixed (a support): form finding does not move "
+            "it: target free nodes"
+        )
+    if not nodes.size:
+        raise ConfigError(f"{path} = {show(t.node)}: the node set is empty")
+    return nodes
+
+
+def _per_node(k: int, what: str, t, value, nodes: np.ndarray) -> np.ndarray:
+    v = np.asarray(value, dtype=np.float64)
+    if v.ndim == 0:
+        return np.full(len(nodes), float(v))
+    if v.shape != (len(nodes),):
+        raise ConfigError(
+            f"target[{k}].{what} = {show(getattr(t, what))}: has {v.shape[0]} values for the "
+            f"{len(nodes)} nodes of {show(t.node)}: give one or one per node"
+        )
+    return v
+
+
+def _cable_edges(k: int, t, scene) -> np.ndarray:
+    path = f"target[{k}].cable"
+    cables = scene.cables
+    if cables is None or not cables.names:
+        raise ConfigError(
+            f"{path} = {t.cable!r}: this net has no named cables (a graph's "
+            "[[geometry.cable]] names them)"
+        )
+    hits = [c for c, n in enumerate(cables.names) if fnmatch.fnmatchcase(n, t.cable)]
+    if not hits:
+        raise ConfigError(
+            f"{path} = {t.cable!r}: matches no cable (the cables: {', '.join(cables.names)})"
+        )
+    return np.flatnonzero(np.isin(np.asarray(cables.edge), hits))
+
+
+__all__ = ["Goals", "resolve_goals"]

@@ -1,0 +1,131 @@
+"""Levenberg-Marquardt within bounds, for form finding's targets.
+
+Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
+squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
+its bound whose gradient pushes it out is held): where J is given whole, by Cholesky on
+J J^T + mu (or J^T J + mu, the smaller); else by one sparse factorisation of the
+saddle-point system that holds J without forming it
+(``catenet.formfind.adjoint.SparseJacobian``). With mu small the step is Gauss-Newton's
+least-norm step, which meets a reachable target with more variables than rows (a
+spider's centre by its force densities) in a few steps: SciPy's trust region methods
+keep such steps on their trust radius, and so converge only linearly there. mu starts at
+``MU_FIRST`` of the square of J's Frobenius norm (or of its largest singular value, by
+power iterations, for the sparse form), grows by 4 after a step that does not lower f and
+falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable moves
+by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
+the bounds.
+
+It ends when ``residual`` raises (the caller's test: every target met), when the
+evaluations reach ``budget``, or when no step lowers f by more than ``FTOL`` of it (or
+mu exceeds ``MU_MAX`` of the scale): the least-squares compromise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+MAX_STEP = 1.0
+FTOL = 1e-12
+MU_FIRST, MU_MIN, MU_MAX = 1e-6, 1e-12, 1e8
+
+
+@dataclass
+class Ended:
+    """How the search ended: ``why`` ("max_iter" or "stationary"), at ``s``."""
+
+    why: str
+    s: np.ndarray
+    evaluations: int
+
+
+def levenberg(
+    residual: Callable[[np.ndarray], np.ndarray],
+    jacobian: Callable[[np.ndarray], Any],
+    s: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    budget: int,
+) -> Ended:
+    """The search from s (see the module docstring); ``residual`` may raise to stop."""
+    lo, hi = bounds
+    r = residual(s)
+    f = 0.5 * float(r @ r)
+    evaluations, mu, scale = 1, 0.0, 0.0
+    while True:
+        jac = jacobian(s)
+        dense = isinstance(jac, np.ndarray)
+        g = jac.T @ r if dense else jac.rmatvec(r)
+        held = ((s <= lo) & (g > 0)) | ((s >= hi) & (g < 0))
+        if not np.any(g[~held]):
+            return Ended("stationary", s, evaluations)
+        if not scale:  # (once: J's largest singular value squared)
+            scale = (float(np.linalg.norm(jac)) if dense else _largest(jac)) ** 2 or 1.0
+            mu = MU_FIRST * scale
+        while True:
+            if evaluations >= budget:
+                return Ended("max_iter", s, evaluations)
+            p = _step(jac, r, mu, ~held, dense)
+            if p is not None:
+                big = float(np.max(np.abs(p), initial=0.0))
+                if big > MAX_STEP:
+                    p *= MAX_STEP / big
+                trial = np.clip(s + p, lo, hi)
+                r_new = residual(trial)
+                evaluations += 1
+                f_new = 0.5 * float(r_new @ r_new)
+                if f_new < f:
+                    break
+            mu *= 4.0
+            if mu > MU_MAX * scale:
+                return Ended("stationary", s, evaluations)
+        done = f - f_new <= FTOL * f
+        s, r, f = trial, r_new, f_new
+        if done:
+            return Ended("stationary", s, evaluations)
+        mu = max(mu / 3.0, MU_MIN * scale)
+
+
+def _step(jac, r: np.ndarray, mu: float, keep: np.ndarray, dense: bool) -> np.ndarray | None:
+    """The p of min |J p + r|^2 + mu |p|^2 with p = 0 where not ``keep``; None where the
+    system is singular."""
+    if not dense:
+        from catenet.errors import SingularSystemError
+
+        try:
+            return jac.damped(r, mu, keep)
+        except SingularSystemError:
+            return None
+    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+    j = jac[:, keep]
+    p = np.zeros(len(keep))
+    try:
+        if j.shape[0] <= j.shape[1]:  # p = -J^T (J J^T + mu)^-1 r: the rows' system
+            gram = j @ j.T
+            gram[np.diag_indices_from(gram)] += mu
+            p[keep] = -(j.T @ cho_solve(cho_factor(gram), r))
+        else:  # (J^T J + mu) p = -J^T r
+            gram = j.T @ j
+            gram[np.diag_indices_from(gram)] += mu
+            p[keep] = -cho_solve(cho_factor(gram), j.T @ r)
+    except LinAlgError:  # (not positive definite in round-off: more damping)
+        return None
+    return p if np.all(np.isfinite(p)) else None
+
+
+def _largest(jac, count: int = 8) -> float:
+    """J's largest singular value, by a few power iterations on J^T J."""
+    v = np.random.default_rng(0).standard_normal(jac.shape[1])
+    top = 0.0
+    for _ in range(count):
+        v /= np.linalg.norm(v)
+        w = jac.rmatvec(jac.matvec(v))
+        top = float(np.sqrt(np.linalg.norm(w)))
+        v = w
+    return top
+
+
+__all__ = ["Ended", "levenberg"]

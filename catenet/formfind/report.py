@@ -1,0 +1,162 @@
+"""What form finding by targets reports: each target's achieved value (``rows``), the
+result file's ``/result/targets/<k>`` groups and ``/result/force_density`` (``write``),
+and the lines of the written case's header (``header_lines``).
+
+``/result/targets/<k>`` (k: the target's index in [[target]]) has the attrs ``kind``
+("x", "y", "z", "point" or "tension"), ``about`` (what it is about, as the summary says),
+``nodes`` or ``edges`` (the nodes or edges it concerns), ``target`` (one value per node
+or edge; a range: ``low`` and ``high``), ``achieved`` (the same shape), ``miss`` (the
+largest |miss|, 0 within a range), ``weight``, ``hard`` and ``met`` (to formfind.tol);
+``/result/targets`` itself: ``met`` (all), ``message``, ``variables``, ``vary``,
+``evaluations`` and ``gradients``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Row:
+    """One target as reported: ``k``, what it is ``about``, its unit, the ``target``
+    (lo, hi per row of it), ``achieved`` and ``met``."""
+
+    k: int
+    about: str
+    kind: str
+    unit: str
+    where: np.ndarray  # nodes (positions) or edges (tensions)
+    lo: np.ndarray
+    hi: np.ndarray
+    achieved: np.ndarray
+    miss: float
+    met: bool
+    weight: float
+    hard: bool
+
+    def line(self) -> str:
+        """``node 'centre' z: -3 m (target -3 m, miss 3.8e-14, met)``."""
+        got, want = _shown(self.achieved), _shown(self.lo)
+        if not np.array_equal(self.lo, self.hi):
+            want = f"[{_shown(self.lo)}, {_shown(self.hi)}]"
+        if len(self.where) > 1:
+            got += f" ({len(self.where)})"
+            if np.ptp(self.lo) > 0 or np.ptp(self.hi) > 0:
+                want = "one per node"
+        verdict = "met" if self.met else "NOT met"
+        u = self.unit
+        return f"{self.about}: {got} {u} (target {want} {u}, miss {self.miss:.2g}, {verdict})"
+
+
+def _shown(v: np.ndarray) -> str:
+    """One value, one point, or the range of many."""
+    v = np.asarray(v, dtype=np.float64) + 0.0  # (no -0)
+    if v.ndim == 2 and v.shape[0] == 1:
+        return "[" + ", ".join(f"{c:.6g}" for c in v[0]) + "]"
+    if v.size == 1:
+        return f"{float(v.ravel()[0]):.6g}"
+    lo, hi = float(v.min()), float(v.max())
+    return f"{lo:.6g}" if lo == hi else f"{lo:.6g} .. {hi:.6g}"
+
+
+def rows(design) -> list[Row]:
+    """The targets of ``design`` (catenet.formfind.design.Design) as reported."""
+    g = design.goals
+    miss = design.miss()
+    out = []
+    for k, t in enumerate(g.targets):
+        sel = np.flatnonzero(g.of == k)
+        tension = t.cable is not None
+        where = g.edge[sel] if tension else g.node[sel]
+        where = where[: len(sel) // _axes(t)]  # (rows by axis: x of every node, y ...)
+        out.append(
+            Row(
+                k=k,
+                about=t.describe(),
+                kind=t.kind,
+                unit="N" if tension else "m",
+                where=where,
+                lo=_shaped(g.lo[sel], t),
+                hi=_shaped(g.hi[sel], t),
+                achieved=_shaped(design.achieved[sel], t),
+                miss=float(np.max(np.abs(miss[sel]))),
+                met=bool(design.met[sel].all()),
+                weight=float(t.weight),
+                hard=bool(t.hard),
+            )
+        )
+    return out
+
+
+def _axes(t) -> int:
+    """The coordinates a target gives per node (1 for a tension)."""
+    return 3 if t.point is not None else max(len(t.axes), 1)
+
+
+def _shaped(v: np.ndarray, t) -> np.ndarray:
+    """The rows of a target of several coordinates (by axis) as (nodes, axes); of one
+    coordinate or a tension, as they are."""
+    n = _axes(t)
+    return v.reshape(n, -1).T.copy() if n > 1 else v.copy()
+
+
+def write(path: str | Path, found) -> None:
+    """Adds /result/targets and /result/force_density to the result file ``path``."""
+    import h5py
+
+    from catenet.output.files import copy_atomically
+    from catenet.output.reader import LIBVER
+
+    path = Path(path)
+    d = found.design
+    tmp = path.with_name(f".{path.name}.targets.{os.getpid()}")
+    copy_atomically(path, tmp)
+    try:
+        with h5py.File(tmp, "r+", libver=LIBVER) as h5:
+            h5["result"].create_dataset("force_density", data=np.asarray(found.q))
+            group = h5["result"].create_group("targets")
+            for key, value in (
+                ("met", d.all_met),
+                ("message", d.message),
+                ("variables", d.variables),
+                ("vary", d.vary),
+                ("evaluations", d.evaluations),
+                ("gradients", d.gradients),
+            ):
+                group.attrs[key] = value
+            for row in rows(d):
+                _write_row(group.create_group(str(row.k)), row)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _write_row(g, row: Row) -> None:
+    g.attrs["kind"] = row.kind
+    g.attrs["about"] = row.about
+    g.attrs["edges" if row.unit == "N" else "nodes"] = row.where.astype(np.int64)
+    if np.array_equal(row.lo, row.hi):
+        g.attrs["target"] = row.lo
+    else:
+        g.attrs["low"], g.attrs["high"] = row.lo, row.hi
+    g.attrs["achieved"] = row.achieved
+    g.attrs["miss"] = row.miss
+    g.attrs["weight"] = row.weight
+    g.attrs["hard"] = row.hard
+    g.attrs["met"] = row.met
+
+
+def header_lines(found) -> list[str]:
+    """The targets as the written case's header names them."""
+    d = found.design
+    lines = [f"Targets ({d.message}; {d.variables} force densities by {d.vary[:-1]}):"]
+    lines += [f"  target[{r.k}] {r.line()}" for r in rows(d)]
+    return lines
+
+
+__all__ = ["Row", "header_lines", "rows", "write"]

@@ -1,0 +1,79 @@
+"""A surface that form finding's targets put nodes on: a triangle mesh read from a file
+(meshio: .stl, .obj, .ply, .vtu, ...), taken as a height field z = f(x, y) over its plan,
+linear on each triangle (an architect's roof surface).
+
+A node's offset from it is z - f(x, y), with the derivatives (-f_x, -f_y, 1); a node
+outside the surface's plan has none (``offset`` gives NaN there).
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+
+
+class HeightField:
+    """The triangle mesh (``vertices``, ``triangles``) as z = f(x, y)."""
+
+    def __init__(self, vertices: np.ndarray, triangles: np.ndarray):
+        from matplotlib.tri import LinearTriInterpolator, Triangulation
+
+        self.vertices, self.triangles = vertices, triangles
+        tri = Triangulation(vertices[:, 0], vertices[:, 1], triangles)
+        tri.get_trifinder()  # (RuntimeError where triangles overlap in plan)
+        self._f = LinearTriInterpolator(tri, vertices[:, 2])
+
+    def offset(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(z - f(x, y), (f_x, f_y)) at the points x (n, 3); NaN outside the plan."""
+        z = np.ma.filled(self._f(x[:, 0], x[:, 1]), np.nan)
+        fx, fy = (np.ma.filled(g, np.nan) for g in self._f.gradient(x[:, 0], x[:, 1]))
+        return x[:, 2] - z, np.column_stack([fx, fy])
+
+
+def read_height_field(file: str) -> HeightField:
+    """The height field of a mesh file; ValueError with the reason."""
+    path = Path(file)
+    if not path.is_file():
+        raise ValueError(f"{'is a directory' if path.is_dir() else 'no such file'} ({path})")
+    stat = path.stat()
+    return _read(str(path), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=4)
+def _read(file: str, mtime: int, size: int) -> HeightField:
+    from catenet.scene.meshfiles import read_mesh_file
+
+    try:
+        mesh = read_mesh_file(file)
+    except ImportError:
+        raise ValueError(
+            "reading a surface needs the Python package meshio (pip install meshio)"
+        ) from None
+    except ValueError as exc:
+        raise ValueError(f"meshio cannot read it: {exc}") from None
+    tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
+    if not tris:
+        found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
+        raise ValueError(f"holds no triangles (it has {found}): a surface is a triangle mesh")
+    v = np.asarray(mesh.points, dtype=np.float64)
+    t = np.concatenate(tris)
+    if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
+        raise ValueError(f"its points (shape {v.shape}) must be finite 3D points")
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    plan = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    extent = float(np.ptp(v[:, :2], axis=0).max())
+    flat = np.flatnonzero(np.abs(plan) <= 1e-12 * extent**2)
+    if flat.size:
+        raise ValueError(
+            f"triangle {int(flat[0])} is vertical (no area in plan; {flat.size} in all): a "
+            "target surface is a height field z = f(x, y)"
+        )
+    try:
+        return HeightField(v, t)
+    except (ValueError, RuntimeError) as exc:
+        raise ValueError(f"is not a height field over its plan ({exc})") from None
+
+
+__all__ = ["HeightField", "read_height_field"]

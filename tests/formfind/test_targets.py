@@ -1,0 +1,462 @@
+"""Form finding by targets ([[target]], `catenet formfind`): the adjoint Jacobian against
+finite differences, the spider net whose centre lies 3 m below its ring, targets met at
+the start, incompatible targets (the weighted least-squares compromise, closed form),
+hard bounds, tensions, bounds on the force densities, nodes on a surface, and bad input.
+"""
+
+from __future__ import annotations
+
+import tomllib
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import CONFIGS
+
+from catenet.case import build, dumps_toml, parse_case
+from catenet.cli import main
+from catenet.errors import ConfigError
+from catenet.formfind.case import formfind_scene
+
+SPIDER = CONFIGS / "formfind" / "spider.toml"
+
+
+def spider(**changes) -> dict:
+    """The spider net of configs/formfind/spider.toml as a dict; ``changes`` replace its
+    top-level tables (``target`` a list of tables, ``formfind`` a table)."""
+    data = tomllib.loads(SPIDER.read_text())
+    data["geometry"]["file"] = str(CONFIGS / "formfind" / "spider.json")
+    data.update(changes)
+    return data
+
+
+def found(data: dict):
+    return formfind_scene(build(parse_case(data)))
+
+
+def invoke(tmp_path, data: dict, *more):
+    case = tmp_path / "case.toml"
+    case.write_text(dumps_toml(data))
+    out = tmp_path / "out.h5"
+    result = CliRunner().invoke(main, ["formfind", str(case), "-o", str(out), *more])
+    return result, out
+
+
+def centre_z(f) -> float:
+    return float(f.x[0, 2])
+
+
+# ------------------------------------------------------------------- the adjoint
+
+
+def search_at(data: dict, seed: int = 0):
+    """The search of a case's targets (its residual and Jacobian as functions of s) and
+    a point s near its start."""
+    from catenet.formfind.design import _groups, _Search
+    from catenet.formfind.fdm import _Shape
+    from catenet.formfind.goals import resolve_goals
+
+    case = parse_case(data)
+    scene = build(case)
+    net, loads = scene.net, scene.loads
+    force = np.zeros((net.n_nodes, 3)) if loads.force is None else np.array(loads.force)
+    shape = _Shape(net, force, loads.gravity, "auto", "q")
+    goals = resolve_goals(case.targets, scene, shape.size, 1e-30)  # (never met)
+    groups = _groups(scene, case.formfind.vary, "formfind.")
+    n = int(groups.max()) + 1
+    rng = np.random.default_rng(seed)
+    search = _Search(shape, goals, groups, np.log(500.0) + 0.3 * rng.standard_normal(n))
+    return search, 0.2 * rng.standard_normal(n)
+
+
+TARGETS = [
+    {"node": "centre", "z": -3.0},
+    {"node": 14, "point": [4.0, 2.0, -1.5], "weight": 2.0},
+    {"cable": "ring1", "tension": [0.0, 100.0]},  # above the range: its slope counts
+    {"cable": "radial3", "tension": 900.0},
+]
+
+
+@pytest.mark.parametrize("gravity", [True, False])
+@pytest.mark.parametrize("vary", ["edges", "cables"])
+def test_the_adjoint_jacobian_is_the_finite_differences_one(gravity, vary):
+    """J = dr/ds by adjoint solves (whole, and as the sparse operator's products) against
+    central differences of the residual, with and without self-weight (whose derivative
+    with the shape and q enters the adjoint), per edge and per cable."""
+    from catenet.formfind.adjoint import SparseJacobian, jacobian_operator
+
+    load = (
+        {"gravity": [0, 0, -9.81]} if gravity else {"point": [{"node": 0, "force": [0, 0, -3e3]}]}
+    )
+    data = spider(target=TARGETS, load=load, formfind={"vary": vary})
+    search, s = search_at(data)
+    whole = np.asarray(search.jacobian(s))
+    h = 1e-6
+    cols = np.arange(0, len(s), 5)  # (every fifth variable: a radial's, a ring's)
+    fd = np.column_stack(
+        [
+            (search.residual(s + h * e) - search.residual(s - h * e)) / (2 * h)
+            for e in np.eye(len(s))[cols]
+        ]
+    )
+    scale = np.abs(whole).max()
+    assert np.abs(fd).max() > 1e-3 * scale
+    assert np.abs(whole[:, cols] - fd).max() <= 1e-6 * scale
+    q, x, _, a = search.state(s)
+    import scipy.sparse as sp
+
+    from catenet.formfind.adjoint import Adjoint
+
+    adj = Adjoint(search.shape, q, x)
+    d_x, d_q = search.goals.partials(x, q, a, search.shape.pattern.index, search.shape.net)
+    op = jacobian_operator(adj, d_x, d_q, sp.diags(q) @ search.p)
+    assert isinstance(op, SparseJacobian)
+    by_columns = np.column_stack([op.matvec(e) for e in np.eye(len(s))])
+    by_rows = np.vstack([op.rmatvec(e) for e in np.eye(search.goals.rows)])
+    assert np.abs(by_columns - whole).max() <= 1e-10 * scale
+    assert np.abs(by_rows - whole).max() <= 1e-10 * scale
+    # The damped step of the saddle-point system is the SVD's.
+    r = search.residual(s)
+    keep = np.ones(len(s), dtype=bool)
+    keep[::3] = False
+    mu = 1e-3 * scale**2
+    u, sv, vt = np.linalg.svd(whole[:, keep], full_matrices=False)
+    expected = np.zeros(len(s))
+    expected[keep] = -(vt.T @ (sv / (sv**2 + mu) * (u.T @ r)))
+    step = op.damped(r, mu, keep)
+    assert np.abs(step - expected).max() <= 1e-8 * np.abs(expected).max()
+
+
+# ------------------------------------------------------------------- the spider net
+
+
+def test_the_spider_net_centre_lies_3_m_below_its_ring_by_one_command(tmp_path):
+    """configs/formfind/spider.toml: one `catenet formfind` puts the centre 3 m below the
+    ring (to 1 mm: met to round-off), reports it, writes /result/targets/0, and `catenet
+    run` on the case it writes keeps the centre there."""
+    out = tmp_path / "spider.h5"
+    runner = CliRunner()
+    r = runner.invoke(main, ["formfind", str(SPIDER), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "target[0]" in r.output and "node 'centre' z" in r.output and "met)" in r.output
+    assert "84 force densities (one per edge)" in r.output
+    with h5py.File(out) as h5:
+        g = h5["result/targets/0"].attrs
+        assert g["kind"] == "z" and bool(g["met"]) and list(g["nodes"]) == [0]
+        assert abs(float(g["achieved"][0]) + 3.0) < 1e-3
+        assert float(g["target"][0]) == -3.0
+        assert bool(h5["result/targets"].attrs["met"])
+        q = h5["result/force_density"][()]
+        assert q.shape == (84,) and np.all(q > 0)
+        assert abs(h5["result/x"][0, 2] + 3.0) < 1e-3
+    case = out.with_suffix(".toml")
+    assert "target[0] node 'centre' z" in case.read_text()
+    r = runner.invoke(main, ["run", str(case), "-o", str(tmp_path / "run.h5")])
+    assert r.exit_code == 0, r.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][0, 2] + 3.0) < 1e-3
+
+
+def test_a_target_met_at_the_start_costs_no_iteration():
+    """The centre's z of the start's own shape as the target: no step, one factorisation."""
+    start = found(spider(formfind={"method": "linear", "force_density": 500.0}, target=[]))
+    z = centre_z(start)
+    f = found(spider(target=[{"node": "centre", "z": z}]))
+    assert f.design.evaluations == 0 and f.design.gradients == 0
+    assert f.factorizations == 1 and f.design.all_met
+    assert np.allclose(f.q, 500.0)
+
+
+def test_incompatible_targets_give_the_weighted_compromise(tmp_path):
+    """The centre at z = -3 (weight 1) and at z = -2 (weight 3): least squares puts it at
+    (1 (-3) + 9 (-2)) / (1 + 9) = -2.1, says the targets are not met, exits 0."""
+    targets = [{"node": "centre", "z": -3.0}, {"node": 0, "z": -2.0, "weight": 3.0}]
+    r, out = invoke(tmp_path, spider(target=targets))
+    assert r.exit_code == 0, r.output
+    assert "not all met" in r.output and "least-squares compromise" in r.output
+    assert "NOT met" in r.output
+    with h5py.File(out) as h5:
+        assert abs(h5["result/x"][0, 2] + 2.1) < 1e-6
+        assert not bool(h5["result/targets"].attrs["met"])
+        assert not bool(h5["result/targets/1"].attrs["met"])
+        assert abs(float(h5["result/targets/1"].attrs["miss"]) - 0.1) < 1e-6
+
+
+def test_a_hard_bound_is_met_where_a_weighted_target_gives_way():
+    """The radials' tension at most 400 N (hard): the weight then hangs the centre lower
+    than 3 m below the ring (less tension, more sag): the bound is met, the sag not. (No
+    force densities do best: the search ends at formfind.max_iter.)"""
+    targets = [
+        {"node": "centre", "z": -3.0},
+        {"cable": "radial*", "tension": [0.0, 400.0], "hard": True},
+    ]
+    f = found(spider(formfind={"force_density": 500.0, "max_iter": 20}, target=targets))
+    d = f.design
+    radial = np.flatnonzero(d.goals.of == 1)
+    assert d.met[radial].all() and not d.met[d.goals.of == 0].all()
+    tension = f.q * f.length
+    assert tension[d.goals.edge[radial]].max() <= 400.0 * (1 + 1e-9)
+    assert centre_z(f) < -3.0
+
+
+def test_a_hard_bound_that_cannot_be_met_exits_2(tmp_path):
+    """The same bound with the force densities held within 100 .. 2000 N/m: unreachable."""
+    targets = [
+        {"node": "centre", "z": -3.0},
+        {"cable": "radial*", "tension": [0.0, 400.0], "hard": True},
+    ]
+    bounds = {"force_density_min": 100.0, "force_density_max": 2000.0, "vary": "cables"}
+    r, out = invoke(tmp_path, spider(formfind={"force_density": 500.0, **bounds}, target=targets))
+    assert r.exit_code == 2, r.output
+    assert "target[1] (cable 'radial*' tension, hard = true): cannot be met" in r.output
+    assert not out.exists()
+
+
+def test_tensions_and_a_position_are_met_and_kept_by_the_case_written(tmp_path):
+    """Every edge of ring1 at 1.5 kN, of ring2 within 0.8 .. 1 kN, the centre 3 m down:
+    met; `catenet run` on the case written gives those tensions."""
+    targets = [
+        {"node": "centre", "z": -3.0},
+        {"cable": "ring1", "tension": 1500.0},
+        {"cable": "ring2", "tension": [800.0, 1000.0]},
+    ]
+    r, out = invoke(tmp_path, spider(target=targets))
+    assert r.exit_code == 0, r.output
+    scene = build(parse_case(spider(target=targets)))
+    ring1 = np.flatnonzero(scene.cables.edge == list(scene.cables.names).index("ring1"))
+    ring2 = np.flatnonzero(scene.cables.edge == list(scene.cables.names).index("ring2"))
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        tension = h5["result/tension"][()]
+        assert np.allclose(tension[ring1], 1500.0, rtol=1e-6)
+        assert np.all(
+            (tension[ring2] > 800.0 * (1 - 1e-6)) & (tension[ring2] < 1000.0 * (1 + 1e-6))
+        )
+        assert abs(h5["result/x"][0, 2] + 3.0) < 1e-6
+
+
+def test_one_force_density_per_cable():
+    """vary = "cables": 15 variables (12 radials, 3 rings), every edge of a cable the same."""
+    f = found(spider(formfind={"vary": "cables"}, target=[{"node": "centre", "z": -3.0}]))
+    assert f.design.variables == 15 and f.design.all_met
+    scene = build(parse_case(spider()))
+    for c in range(15):
+        q = f.q[scene.cables.edge == c]
+        assert np.ptp(q) <= 1e-12 * q.max()
+
+
+def test_bounds_hold_the_force_densities():
+    """A centre 0.2 m down needs more force density than 600 N/m allows: every force
+    density at most 600 N/m, the target missed (the compromise), said so."""
+    data = spider(
+        formfind={"force_density": 500.0, "force_density_max": 600.0},
+        target=[{"node": "centre", "z": -0.2}],
+    )
+    f = found(data)
+    assert f.q.max() <= 600.0 * (1 + 1e-12)
+    assert not f.design.all_met and f.design.at_bound > 0
+    assert "compromise" in f.design.message
+
+
+# ------------------------------------------------------------------- a roof on a surface
+
+
+def hypar(tmp_path, n: int, half=12.0, rise=1.5):
+    """A hypar roof: an n x n grid net on [-half, half]^2 held on z = rise (x^2 - y^2) /
+    half^2 along its border, under self-weight; the surface itself as an OBJ file of
+    2n x 2n squares, each two triangles. Its free nodes start flat."""
+
+    def f(x, y):
+        return rise * (x * x - y * y) / half**2
+
+    s = np.linspace(-half, half, n + 1)
+    gx, gy = np.meshgrid(s, s)
+    border = (np.abs(gx) == half) | (np.abs(gy) == half)
+    nodes = np.column_stack([gx.ravel(), gy.ravel(), np.where(border, f(gx, gy), 0.0).ravel()])
+    k = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    edges = np.vstack(
+        [
+            np.column_stack([k[1:-1, :-1].ravel(), k[1:-1, 1:].ravel()]),
+            np.column_stack([k[:-1, 1:-1].ravel(), k[1:, 1:-1].ravel()]),
+        ]
+    )
+    m = 2 * n
+    t = np.linspace(-half, half, m + 1)
+    vx, vy = np.meshgrid(t, t)
+    lines = [
+        f"v {x!r} {y!r} {f(x, y)!r}"
+        for x, y in zip(vx.ravel().tolist(), vy.ravel().tolist(), strict=True)
+    ]
+    a = (np.arange(m)[None, :] + (m + 1) * np.arange(m)[:, None]).ravel() + 1
+    for i in a:
+        lines += [f"f {i} {i + 1} {i + m + 2}", f"f {i} {i + m + 2} {i + m + 1}"]
+    (tmp_path / "surface.obj").write_text("\n".join(lines) + "\n")
+    data = {
+        "title": "hypar roof on a surface",
+        "geometry": {
+            "kind": "graph",
+            "nodes": nodes.tolist(),
+            "edges": edges.tolist(),
+            "fixed": np.flatnonzero(border.ravel()).tolist(),
+        },
+        "material": {"E": 160e9, "radius": 0.006, "density": 7850.0},
+        "load": {"gravity": [0, 0, -9.81]},
+        "formfind": {"force_density": 1e4},
+        "target": [{"surface": "surface.obj"}],
+    }
+    return data, f
+
+
+def test_a_roof_of_a_thousand_force_densities_lies_on_its_surface(tmp_path):
+    """1104 force densities put the 529 free nodes of a weighing hypar roof on the given
+    surface (to 1e-9 of its size) within a few tens of adjoint gradients; the offsets
+    checked against the surface's triangles directly."""
+    data, f = hypar(tmp_path, 24)
+    got = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
+    d = got.design
+    assert d.variables == 1104 and d.all_met and d.gradients <= 30
+    free = ~np.asarray(got.net.fixed)
+    x = got.x[free]
+    # The surface is linear on each triangle of its 1 m grid: interpolate by hand.
+    h = 24.0 / 48
+    i = np.clip(np.floor((x[:, 0] + 12.0) / h), 0, 47)
+    j = np.clip(np.floor((x[:, 1] + 12.0) / h), 0, 47)
+    u, v = (x[:, 0] + 12.0) / h - i, (x[:, 1] + 12.0) / h - j
+    x0, y0 = -12.0 + i * h, -12.0 + j * h
+    z00, z11 = f(x0, y0), f(x0 + h, y0 + h)
+    lower = u >= v  # the triangle (i, i + 1, i + m + 2): below the diagonal
+    z = np.where(
+        lower,
+        z00 + u * (f(x0 + h, y0) - z00) + v * (z11 - f(x0 + h, y0)),
+        z00 + v * (f(x0, y0 + h) - z00) + u * (z11 - f(x0, y0 + h)),
+    )
+    assert np.abs(x[:, 2] - z).max() <= 1e-9 * 34.0
+
+
+# ------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize(
+    ("target", "extra", "message"),
+    [
+        ({"node": "hub", "z": -3.0}, {}, "target[0].node = 'hub': is neither a node name"),
+        ({"node": 40, "z": -3.0}, {}, "target[0].node = 40: node 40 is fixed"),
+        ({"node": 0, "z": -3.0, "weight": -1.0}, {}, "target[0].weight = -1.0: must be"),
+        ({"node": 0, "zz": -3.0}, {}, "target[0].zz: unknown key"),
+        ({"node": 0, "cable": "ring1", "z": 1.0}, {}, "gives both node and cable"),
+        ({"node": 0}, {}, "needs x, y, z, point or surface"),
+        ({"node": "centre", "z": [1.0, 2.0]}, {}, "has 2 values for the 1 nodes"),
+        ({"cable": "guy*", "tension": 1.0}, {}, "target[0].cable = 'guy*': matches no cable"),
+        ({"cable": "ring1", "tension": [5.0, 1.0]}, {}, "target[0].tension = [5.0, 1.0]"),
+        ({"node": 0, "surface": "nowhere.obj"}, {}, "target[0].surface = 'nowhere.obj': no such"),
+        ({"node": 0, "z": 1.0, "within": 0.1}, {}, "target[0].within = 0.1: only with surface"),
+        ({"node": 0, "z": -3.0}, {"method": "forces", "force": 1.0}, "formfind.method = 'forces'"),
+        ({"node": 0, "z": -3.0}, {"force_density_min": 5.0, "force_density_max": 1.0}, "must be >"),
+    ],
+)
+def test_bad_targets_exit_2_with_one_message(tmp_path, target, extra, message):
+    data = spider(target=[target], formfind={"force_density": 500.0, **extra})
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 2, r.output
+    assert message in r.output, r.output
+    assert "Traceback" not in r.output and not out.exists()
+
+
+def test_targets_need_a_formfind_table_and_cables_to_vary(tmp_path):
+    data = spider(target=[{"node": 0, "z": -3.0}])
+    del data["formfind"]
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "target: form finding's targets need a [formfind]" in r.output
+    r, _ = invoke(tmp_path, spider(formfind={"vary": "cables"}, target=[]))
+    assert r.exit_code == 2 and "formfind.vary = 'cables': only with [[target]]" in r.output
+    data, _ = hypar(tmp_path, 2)
+    data["formfind"]["vary"] = "cables"
+    with pytest.raises(ConfigError, match="formfind.vary = 'cables': this net has no named"):
+        formfind_scene(build(parse_case(data, base_dir=tmp_path)))
+
+
+# ------------------------------------------------------------------- the elastic problem
+
+
+def stay(sag: float = 2.0, n: int = 20, **formfind) -> dict:
+    """A level stay of 100 m span, EA = 1e8 N, 0.02 m steel, under its own weight; its
+    midpoint asked ``sag`` below the supports (formfind.method = "elastic")."""
+    return {
+        "title": "stay",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [100, 0, 0], "nodes": n + 1},
+        "material": {"EA": 1e8, "density": 7850.0, "radius": 0.02},
+        "load": {"gravity": [0, 0, -9.81]},
+        "solver": {"rtol": 1e-12},
+        "formfind": {"method": "elastic", **formfind},
+        "target": [{"node": "midpoint", "z": -sag}],
+    }
+
+
+def test_a_stay_with_a_given_sag_has_the_elastic_catenary_rest_length(tmp_path):
+    """The rest length found for a 2 m sag is the exact discrete elastic chain's (the
+    catenary with its weight lumped at the nodes: catenet's model of it) to 1e-8; `catenet
+    run` on the case written keeps the midpoint 2 m down."""
+    import math
+
+    from analytic import discrete_catenary
+    from scipy.optimize import brentq
+
+    r, out = invoke(tmp_path, stay())
+    assert r.exit_code == 0, r.output
+    assert "1 rest-length factors (one per cable)" in r.output
+    with h5py.File(out) as h5:
+        assert bool(h5["result/targets/0"].attrs["met"])
+    f = found(stay())
+    w = 7850.0 * math.pi * 0.02**2 * 9.81
+    exact = brentq(
+        lambda L0: discrete_catenary(L0, 1e8, w, 100.0, 20).sag - 2.0, 100.0, 101.0, xtol=1e-14
+    )
+    assert abs(f.net.rest_length.sum() - exact) <= 1e-8 * exact
+    assert f.design.gradients <= 10
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][10, 2] + 2.0) < 1e-8
+
+
+def test_the_elastic_adjoint_jacobian_is_the_finite_differences_one():
+    """dr/ds of node targets by one solve with the tangent stiffness, a rest-length factor
+    per edge, against central differences of the equilibria (self-weight follows l0)."""
+    from catenet.formfind.elastic import _Equilibria
+    from catenet.formfind.goals import resolve_goals
+    from catenet.solver.settings import Settings
+
+    data = stay(n=8, vary="edges")
+    data["target"] = [{"node": 3, "point": [40.0, 0.0, -1.0]}, {"node": "midpoint", "z": -2.0}]
+    case = parse_case(data)
+    scene = build(case)
+    settings = Settings.of(case.solver)
+    goals = resolve_goals(case.targets, scene, 100.0, 1e-30)
+    eq = _Equilibria(scene, settings, np.arange(8))
+    s = 1e-3 * np.random.default_rng(1).standard_normal(8)
+
+    def residual(s):
+        net, _, x = eq(s)
+        length = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
+        return goals.w * goals.miss(goals.achieved(x, np.zeros(8), length))
+
+    j = eq.jacobian(s, goals)
+    h = 1e-6
+    fd = np.column_stack([(residual(s + h * e) - residual(s - h * e)) / (2 * h) for e in np.eye(8)])
+    assert np.abs(j - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+def test_elastic_form_finding_needs_node_targets(tmp_path):
+    data = stay()
+    del data["target"]
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "formfind.method = 'elastic': finds rest lengths" in r.output
+    data = spider(formfind={"method": "elastic"}, target=[{"cable": "ring1", "tension": 1e3}])
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "method = 'elastic' takes node targets" in r.output
