@@ -123,7 +123,7 @@ class MaterialConfig(Declared):
         0.0,
         write="changed",
         unit="N m^2",
-        doc='rods: bending stiffness (> 0: the cable\'s edges bend, see docs/howto/rods.md); '
+        doc="rods: bending stiffness (> 0: the cable's edges bend, see docs/howto/rods.md); "
         '"section": E pi (r^4 - ri^4) / 4 from E, radius and inner_radius',
     )
     natural_curvature: str = choice(
@@ -274,7 +274,10 @@ def _bending_rules(ck: Checker, m: dict, v: dict) -> None:
     ri = v["inner_radius"]
     if ri not in (None, BAD):
         if "radius" not in m:
-            ck.add(f"material.inner_radius = {ri!r}: a tube needs its outer radius: give material.radius")
+            ck.add(
+                f"material.inner_radius = {ri!r}: a tube needs its outer radius: "
+                "give material.radius"
+            )
             v["inner_radius"] = BAD
         elif v["radius"] not in (None, BAD) and not ri < v["radius"]:
             ck.bad("material.inner_radius", ri, f"must be < material.radius = {v['radius']!r}")
