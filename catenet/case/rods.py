@@ -15,6 +15,7 @@ import numpy as np
 from catenet.case.keys import Checker, show
 from catenet.case.kinds.base import expand
 from catenet.case.kinds.cables import cable_materials
+from catenet.case.kinds.warn import warn_once
 from catenet.errors import ConfigError
 from catenet.model.net import Net
 from catenet.model.rods import Rods, build_rods
@@ -72,7 +73,14 @@ def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | N
                 "a clamp holds a rod's end: give material.EI > 0 (or a cable's)"
             )
         return None
-    return build_rods(net, ei, line, natural=given, clamped=clamped)
+    rods = build_rods(net, ei, line, natural=given, clamped=clamped)
+    if not len(rods):
+        warn_once(
+            "material.EI > 0, but no two bending edges of one cable meet and nothing is "
+            "clamped: nothing bends (rods bend along cables: a graph's [[geometry.cable]], "
+            "not its geometry.edges; a cable of one edge bends only where clamped)"
+        )
+    return rods
 
 
 def bending_term(rods: Rods, n_nodes: int) -> Bending:
