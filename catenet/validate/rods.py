@@ -19,9 +19,10 @@ share), in n equal edges (``catenet.terms.bending``):
     100 edges for both coordinates of the tip, information at 50. (At 10, tip angle 82
     degrees, the errors at 100 edges are 5.4e-5 and 7.0e-5: tests/validate/test_rods.py.)
 (c) The first natural frequency (``catenet.solver.modes``, lumped masses rho A l0 / 2,
-    rho A = 1 kg/m, EA = 1e5 N: the straight rod's bending modes do not depend on it) of a simply supported rod (beta L = pi), a cantilever (beta L =
-    1.87510407) and a rod clamped at both ends (beta L = 4.73004074), omega = (beta
-    L)^2 sqrt(EI / (rho A L^4)); tolerance 1e-3 (at 50 edges, 100 for the clamped one).
+    rho A = 1 kg/m, EA = 1e5 N: the straight rod's bending modes do not depend on it)
+    of a simply supported rod (beta L = pi), a cantilever (beta L = 1.87510407) and a
+    rod clamped at both ends (beta L = 4.73004074), omega = (beta L)^2 sqrt(EI / (rho A
+    L^4)); tolerance 1e-3 (at 50 edges, 100 for the clamped one).
 
 Nothing here prints; the rows are plain dicts of ``catenet.validate.table.Row``'s
 fields.
