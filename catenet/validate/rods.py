@@ -17,7 +17,8 @@ share), in n equal edges (``catenet.terms.bending``):
     integrals of ``elastica_tip``), at P L^2 / EI = 1 and 3 (tip angles 26 and 56
     degrees). The error is second order in the edge length; tolerance 1e-4 of L at
     100 edges for both coordinates of the tip, information at 50. (At 10, tip angle 82
-    degrees, the errors at 100 edges are 5.4e-5 and 7.0e-5: tests/validate/test_rods.py.)
+    degrees, the errors at 100 edges are 5.4e-5 and 7.0e-5:
+    tests/validate/test_rod_closed_forms.py.)
 (c) The first natural frequency (``catenet.solver.modes``, lumped masses rho A l0 / 2,
     rho A = 1 kg/m, EA = 1e5 N: the straight rod's bending modes do not depend on it)
     of a simply supported rod (beta L = pi), a cantilever (beta L = 1.87510407) and a
