@@ -42,6 +42,15 @@ def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return tuple((float(a), float(b)) for a, b in v)
 
 
+def _check_bending(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """EI [N m^2]: a number >= 0, or "section" (E times the round section's I)."""
+    if v == "section":
+        return v
+    if isinstance(v, str):
+        return ck.bad(path, v, 'must be a number >= 0 [N m^2] or "section"')
+    return ck.real(v, path, ge=0, need='>= 0 [N m^2], or "section"')
+
+
 @dataclass(frozen=True)
 class MaterialConfig(Declared):
     """Either E with radius or area, or EA directly; density needs radius or area."""
@@ -101,6 +110,28 @@ class MaterialConfig(Declared):
         unit="N",
         doc="tension of every edge in the given geometry (rest lengths derived from it)",
     )
+    inner_radius: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="m",
+        doc="a tube's inner radius (radius is then its outer one): A = pi (r^2 - ri^2)",
+    )
+    EI: float | str = key(
+        _check_bending,
+        'a number >= 0 [N m^2], or "section"',
+        0.0,
+        write="changed",
+        unit="N m^2",
+        doc="rods: bending stiffness (> 0: the cable's edges bend, see docs/howto/rods.md); "
+        '"section": E pi (r^4 - ri^4) / 4 from E, radius and inner_radius',
+    )
+    natural_curvature: str = choice(
+        "straight",
+        ("straight", "given"),
+        write="changed",
+        doc="rods: the unloaded shape: straight, or as given in the geometry",
+    )
 
     @property
     def cross_section(self) -> float | None:
@@ -108,8 +139,17 @@ class MaterialConfig(Declared):
         if self.area is not None:
             return self.area
         if self.radius is not None:
-            return math.pi * self.radius**2
+            return math.pi * (self.radius**2 - (self.inner_radius or 0.0) ** 2)
         return None
+
+    @property
+    def bending_stiffness(self) -> float:
+        """EI [N m^2]: as given, or from E and the round (or tube) section; 0: no bending."""
+        if self.EI == "section":
+            if self.E is None or self.radius is None:
+                return 0.0  # refused by parse_material
+            return self.E * math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 4.0
+        return float(self.EI)
 
     @property
     def axial_stiffness(self) -> float | None:
@@ -204,6 +244,7 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
             )
     elif "table" in m and v["law"] is not BAD:
         ck.add(f"material.table: only with material.law = 'table' (this is {v['law']!r})")
+    _bending_rules(ck, m, v)
     prestress = v["prestress"]
     if prestress not in (None, BAD) and prestress < 0 and v["tension_only"] is True:
         ck.add(
@@ -219,3 +260,27 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
     if BAD in v.values():
         return BAD
     return MaterialConfig(**v)
+
+
+def _bending_rules(ck: Checker, m: dict, v: dict) -> None:
+    """EI = "section" needs E and radius; inner_radius needs radius and is smaller; a rod
+    carries compression unless tension_only is given (then v's default is changed)."""
+    if v["EI"] == "section" and ("E" not in m or "radius" not in m):
+        ck.add(
+            'material.EI = "section": needs material.E and material.radius (a round '
+            "section; a tube: inner_radius too), or give EI in N m^2"
+        )
+        v["EI"] = BAD
+    ri = v["inner_radius"]
+    if ri not in (None, BAD):
+        if "radius" not in m:
+            ck.add(
+                f"material.inner_radius = {ri!r}: a tube needs its outer radius: "
+                "give material.radius"
+            )
+            v["inner_radius"] = BAD
+        elif v["radius"] not in (None, BAD) and not ri < v["radius"]:
+            ck.bad("material.inner_radius", ri, f"must be < material.radius = {v['radius']!r}")
+            v["inner_radius"] = BAD
+    if v["EI"] not in (0.0, BAD) and "tension_only" not in m:
+        v["tension_only"] = False  # a rod carries compression

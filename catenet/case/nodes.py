@@ -30,6 +30,7 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
     refs = [probe]
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
+        refs += list(supports.clamped)
     if isinstance(load, LoadConfig):
         refs += [p.node for p in load.points if p.node is not None]
         for a in load.areas:
@@ -74,6 +75,8 @@ def check_nodes(
             fixed_key = "supports.fixed"
             fixed = _fixed_nodes(refs, supports.fixed)
         _check_moves(refs, supports.moves, fixed, fixed_key)
+        for k, r in enumerate(supports.clamped):
+            refs.known(r, f"supports.clamped[{k}]")
     if isinstance(load, LoadConfig):
         _check_loads(refs, load, g, prefix)
     if probe is not None:

@@ -20,6 +20,7 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.parse import Case
 from catenet.case.rigid import movers
+from catenet.case.rods import bending_term, case_rods, clamped_nodes, with_clamps
 from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
@@ -59,7 +60,9 @@ def build(case: Case) -> Scene:
 def _build(case: Case) -> Scene:
     guard_material(case)
     built = case.geometry.build_case(_with_case_points(case), model_material(case.material))
-    net = built.net
+    clamped = clamped_nodes(case, built)
+    net = with_clamps(built.net, clamped)
+    rods = case_rods(case, built, net, clamped)
     point_mass, velocity = point_masses(case.masses, net, built.names, built.sets)
     if point_mass is not None:
         net = net.with_point_mass(point_mass)
@@ -84,6 +87,8 @@ def _build(case: Case) -> Scene:
         if not (obs.moves or obs.free):
             scene = scene.with_contact(obs.shape(), obs.contact(), index=k)
     scene = scene.with_movers(*movers(case))  # balls and free bodies
+    if rods is not None:
+        scene = scene.with_terms(bending_term(rods, scene.net.n_nodes))
     scene = dataclasses.replace(
         scene,
         cases=_load_cases(case, scene.net, built),

@@ -109,6 +109,14 @@ class SupportsConfig(Declared):
     moves: tuple[MoveConfig, ...] = tables(
         MoveConfig, name="move", doc="moving supports: only fixed nodes move, each once"
     )
+    clamped: tuple[NodeRef, ...] = key(
+        _node_list,
+        "a non-empty array of nodes (indices or names), each the end of a rod",
+        (),
+        write="given",
+        shown="none",
+        doc="rod ends held in place with their given tangent (material.EI > 0)",
+    )
 
 
 # --------------------------------------------------------------------------- load

@@ -85,6 +85,11 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
             f"{'compression':<{W}} {s['max_compression']:.6g} N (edge "
             f"{s['max_compression_edge']}; {n} strut{'' if n == 1 else 's'} in compression)"
         )
+    if "max_bending_moment" in s:
+        lines.append(
+            f"{'bending':<{W}} max moment {s['max_bending_moment']:.6g} N m at node "
+            f"{s['max_bending_moment_node']} (curvature {s['max_curvature']:.6g} 1/m there)"
+        )
     lines.append(
         f"{'slack':<{W}} {s['slack_edges']} of {n_edges} edges (tension-only, shorter than "
         "their rest length)"

@@ -144,6 +144,7 @@ class SquareNet:
     size: float
     n: int
     alpha: float
+    line: np.ndarray | None = None  # (M,) the cable of every edge (A_k first, then B_j)
 
 
 def square_net(
@@ -161,10 +162,13 @@ def square_net(
     made = _SquareNodes(_Cables.of(n, alpha, size))
     fixed: list[int] = []
     edges: list[np.ndarray] = []
+    line: list[np.ndarray] = []
     for line_id in range(n):
         breaks, ends = made.breaks(line_id)
         fixed.extend(ends)
-        edges += made.pieces(line_id, breaks, edge_length)
+        pieces = made.pieces(line_id, breaks, edge_length)
+        edges += pieces
+        line += [np.full(len(p), line_id, dtype=np.int64) for p in pieces]
     xy = np.concatenate(made.points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])
     edges_arr = np.concatenate(edges)
@@ -179,7 +183,14 @@ def square_net(
         ) from None
     net = material.prestressed(net)
     center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
-    return SquareNet(net=net, center=center, size=float(size), n=int(n), alpha=float(alpha))
+    return SquareNet(
+        net=net,
+        center=center,
+        size=float(size),
+        n=int(n),
+        alpha=float(alpha),
+        line=np.concatenate(line),
+    )
 
 
 def _check_square(n: int, alpha: float, size: float, edge_length: float) -> None:

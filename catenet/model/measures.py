@@ -70,12 +70,13 @@ def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.n
 
 
 def contact_force(system, x: np.ndarray) -> np.ndarray:
-    """Force (N, 3) that every internal term besides the edges' stretching (obstacles,
-    rigid bodies, friction) exerts on each node: minus the sum of their gradients. Zero
-    for a net held by its edges and supports alone."""
+    """Force (N, 3) that every internal term besides the structure's own (the edges'
+    stretching, the rods' bending: ``structural``) exerts on each node (obstacles, rigid
+    bodies, friction): minus the sum of their gradients. Zero for a net held by its
+    edges and supports alone."""
     force = np.zeros_like(x)
     for term in system.terms:
-        if term is not system.stretch:
+        if term is not system.stretch and not term.structural:
             term.gradient(x, force)
     return np.negative(force, out=force)
 

@@ -13,6 +13,8 @@ source of the run's printed summary, the /result attributes and the sweep table'
   tension-only) and ``max_compression_edge``; ``compressed_edges`` (struts in compression);
 - ``max_strain`` (|e|/l0 - 1, 0 when none is stretched) and ``max_strain_edge``;
 - ``slack_edges``: tension-only edges shorter than their rest length (slack);
+- with rods: ``max_bending_moment`` [N m], ``max_bending_moment_node`` and
+  ``max_curvature`` [1/m] there (``catenet.model.rods.bending_moment``);
 - ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``;
 - ``contact_resultant`` (3,) [N], ``max_contact`` [N], ``contact_nodes`` (nodes touched);
 - with peaks: ``peak_tension`` [N], ``peak_tension_edge``, ``peak_tension_time`` (s, or
@@ -31,6 +33,7 @@ import numpy as np
 
 from catenet.model import measures
 from catenet.model.net import Loads, Net
+from catenet.model.rods import Rods, bending_moment
 
 if TYPE_CHECKING:  # a scene and its solved state, from the layers above
     from catenet.scene.scene import Scene
@@ -295,6 +298,7 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
         peaks=res.peaks,
     )
     out["applied_resultant"] = _applied(scene, res, loads)
+    out.update(_bending(scene, res.x))
     chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
     if chain is not None:
         out["sag_normal"] = chain["normal"]
@@ -312,6 +316,29 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
             peaks=res.peaks,
         )
     return out
+
+
+def scene_rods(scene: Scene) -> Rods | None:
+    """The rods of a scene's ``Bending`` term (None: nothing bends)."""
+    for term in scene.terms:
+        rods = getattr(term, "rods", None)
+        if isinstance(rods, Rods):
+            return rods
+    return None
+
+
+def _bending(scene: Scene, x: np.ndarray) -> dict:
+    """The largest bending moment, its node and the curvature there (none without rods)."""
+    rods = scene_rods(scene)
+    if rods is None:
+        return {}
+    moment, kappa = bending_moment(rods, x, scene.net.n_nodes)
+    node = int(np.argmax(moment))
+    return {
+        "max_bending_moment": float(moment[node]),
+        "max_bending_moment_node": node,
+        "max_curvature": float(kappa[node]),
+    }
 
 
 def _applied(scene: Scene, res: Result, loads: Loads | None = None) -> list[float]:

@@ -2,7 +2,8 @@
 tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 ``cable_peak_tension`` and ``cable_peak_tension_time``), reactions and contact forces,
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
-``least_tension``, ``peak_displacement``, ``peak_displacement_time``), velocities and
+``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
+``bending_moment`` and ``curvature`` per node, velocities and
 the newmark scheme's acceleration where the run keeps them, and the attributes a user
 reads first (``catenet.model.summary``)."""
 
@@ -13,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.model import summary
+from catenet.model.rods import bending_moment
 from catenet.output.metadata import result_attrs
 
 if TYPE_CHECKING:
@@ -65,6 +67,11 @@ def write_result_group(
     if peaks is not None:
         for key, value in peaks.arrays().items():
             g.create_dataset(key, data=value)
+    rods = summary.scene_rods(scene)
+    if rods is not None:  # per node [N m] and [1/m], 0 where nothing bends
+        moment, kappa = bending_moment(rods, np.asarray(res.x, dtype=np.float64), len(res.x))
+        g.create_dataset("bending_moment", data=moment)
+        g.create_dataset("curvature", data=kappa)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
     contact = res.contact_force

@@ -76,7 +76,8 @@ def describe_unstable(
         f"a mechanism: the stiffness is negative at {where}, where compressed bilateral "
         f"edges{cables} push the net sideways more than anything holds it (a chain of "
         "pinned struts, a straight compressed strut): fix or brace those nodes (a support, "
-        "an edge to a support, guys with prestress), or make the strut one edge"
+        "an edge to a support, guys with prestress), make the strut one edge, or give it "
+        "bending stiffness (material.EI: a rod; a rod beyond its Euler load buckles)"
     )
 
 

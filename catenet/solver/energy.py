@@ -4,7 +4,8 @@ left it (damping and friction), and the remainder, which is the integrator's own
 
     numerical = (K + U + C) - (K + U + C)_0 - W + D
 
-K = 1/2 sum m v^2 over the free DOFs; U the edges' stretching energy; C every other
+K = 1/2 sum m v^2 over the free DOFs; U the structure's elastic energy (the edges'
+stretching, the rods' bending: ``structural`` terms); C every other
 conservative term's energy (barriers of obstacles, bodies and strands, springs, a free
 body's rigidity); W the work of the applied forces, sum over steps of
 1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
@@ -165,12 +166,13 @@ def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarr
 
 def _stored(system: System) -> tuple[float, float]:
     """(elastic, contact) energy of the system's last ``gradient`` evaluation: the edges'
-    stretching, and every other term's that is not lagged (friction dissipates)."""
+    stretching and the rods' bending, and every other term's that is not lagged
+    (friction dissipates)."""
     elastic = contact = 0.0
     for term, e in zip(system.terms, system.energies, strict=True):
         if term.lagged:
             continue
-        if term is system.stretch:
+        if term is system.stretch or term.structural:
             elastic += float(e)
         else:
             contact += float(e)

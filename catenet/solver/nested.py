@@ -76,7 +76,7 @@ def coarse_factor(scene: Scene, settings: Settings, given_start: bool) -> float 
     if scene.terms:
         if forced:
             raise ConfigError(
-                'solver.start = "nested": a net with obstacles, bodies or self-contact has '
+                'solver.start = "nested": a net with obstacles, bodies, rods or self-contact has '
                 'no nested start; use "auto" or "stretched"'
             )
         return None

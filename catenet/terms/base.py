@@ -95,6 +95,7 @@ class Term:
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
+    structural = False  # the structure's own energy (rods' bending): its force is no contact
 
     @property
     def convex(self) -> bool:

@@ -436,7 +436,8 @@ def law_rows() -> list[Row]:
 
 
 def run(progress: Callable[[str], None] | None = None) -> list[Row]:
-    """Every row of the validation table: cases (i), (ii) and (iii)."""
+    """Every row of the validation table: cases (i), (ii), (iii) and the rods' (iv),
+    ``catenet.validate.rods``."""
     if progress:
         progress("midpoint load (Eqs. 16-17)")
     rows = midpoint_load_rows()
@@ -446,6 +447,9 @@ def run(progress: Callable[[str], None] | None = None) -> list[Row]:
     if progress:
         progress("material laws (small strain, 50 % strain)")
     rows += law_rows()
+    from catenet.validate.rods import rod_rows
+
+    rows += [Row(**row) for row in rod_rows(progress)]
     return rows
 
 

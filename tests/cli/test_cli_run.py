@@ -382,7 +382,8 @@ except SystemExit as exc:
     assert not exc.code, exc.code
 from numba.np.ufunc import parallel
 optional = ("catenet.terms.strands", "catenet.kernels.strands", "catenet.terms.rigid",
-            "catenet.terms.body", "catenet.kernels.body", "catenet.terms.contact")
+            "catenet.terms.body", "catenet.kernels.body", "catenet.terms.contact",
+            "catenet.terms.bending", "catenet.kernels.bending")
 print("LOADED", *sorted(m for m in optional if m in sys.modules))
 print("POOL", parallel._is_initialized)
 import atexit, gc
@@ -392,7 +393,7 @@ print("FROZEN", gc.get_freeze_count() > 0, gc.isenabled())
 
 
 def test_a_plain_static_run_loads_only_what_it_uses(tmp_path, write_case):
-    """No self-contact, bodies or obstacles: their terms and kernels stay unloaded, and
+    """No self-contact, bodies, obstacles or rods: their terms and kernels stay unloaded, and
     Numba's thread pool (catenet's kernels are serial) is not started."""
     case = write_case(small_net(method="static"))
     proc = subprocess.run(

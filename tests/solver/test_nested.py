@@ -127,7 +127,7 @@ def test_where_the_nested_start_cannot_apply():
     data = tomllib.loads(N10.read_text())
     data["obstacle"] = [{"kind": "plane", "point": [0, 0, -1.0], "normal": [0, 0, 1.0]}]
     data["solver"]["start"] = "nested"
-    with pytest.raises(ConfigError, match="obstacles, bodies or self-contact"):
+    with pytest.raises(ConfigError, match="obstacles, bodies, rods or self-contact"):
         s = build(parse_case(data))
         sv.solve(s, sv.Settings.of(parse_case(data).solver))
     with pytest.raises(ConfigError, match="static runs"):

@@ -35,7 +35,9 @@ class Built(NamedTuple):
     material: its law and prestress), the probe node whose z-deflection is reported, the
     length scale L of delta/L and the named nodes; ``sets`` are its node sets, ``cables``
     its cables (a ``catenet.case.kinds.cables.CableIndex``, None: none) and ``at_nodes``
-    the node of each load.point given by a position along a cable (by its index)."""
+    the node of each load.point given by a position along a cable (by its index);
+    ``lines`` (M,) the line (cable) of every edge where ``cables`` does not say it (the
+    square net's; None: one line, or the graph's cables), along which rods bend."""
 
     net: Net
     probe: int
@@ -44,6 +46,7 @@ class Built(NamedTuple):
     sets: Mapping[str, tuple[int, ...]] = {}
     cables: Any = None
     at_nodes: Mapping[int, int] = {}
+    lines: Any = None
 
 
 def resolve(ref: int | str, names: Mapping[str, int]) -> int:

@@ -447,6 +447,8 @@ def cable_materials(ck: Checker, base: Any, cables: Sequence[CableConfig]) -> li
         over = cable.material.as_dict() if cable.material is not None else {}
         if cable.prestress is not None:
             over["prestress"] = cable.prestress
+        if over.get("EI", 0.0) != 0.0 and "tension_only" not in over:
+            over["tension_only"] = False  # a rod carries compression (unless it says)
         if not over:
             out.append(base)
             continue

@@ -85,7 +85,8 @@ class SquareNetConfig(GeometryConfig):
     def build(self, material: geo.Material, fixed: Any) -> Built:
         sq = geo.square_net(self.n, self.alpha, self.size, self.edge_length, material)
         names = {"center": sq.center}
-        return Built(refit(sq.net, names, fixed, self.prestrain), sq.center, self.size, names)
+        net = refit(sq.net, names, fixed, self.prestrain)
+        return Built(net, sq.center, self.size, names, lines=sq.line)
 
     def area_force(self, net, pressure: float, size: float) -> Any:
         """The paper's pressure (contract §2): p L^2 over the square, shared equally by

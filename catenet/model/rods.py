@@ -1,0 +1,181 @@
+"""Rods: the edges of a net that bend, as arrays (``catenet.kernels.bending``).
+
+A rod is a polyline of edges with bending stiffness EI > 0: consecutive edges of one
+line (a cable of a graph, a cable of the square net, the single cable) that share a
+node. Every interior node of a rod is a hinge (i, j, k) between its edges (i, j) and
+(j, k); a closed line (its last edge ends where its first begins) bends at that node
+too. Where lines meet (a joint of two cables) or where an edge belongs to no line (a
+graph's own edges), nothing bends: such joints are pins. A clamp holds the tangent of a
+rod's end edge at its given direction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConfigError
+from catenet.model.net import Net
+
+#: How a rod's natural curvature is taken: straight, or that of the given geometry.
+NATURAL = ("straight", "given")
+
+
+@dataclass(frozen=True, eq=False)
+class Rods:
+    """The hinges and clamps of a net's rods.
+
+    hinges : (H, 3) int64, nodes (i, j, k) of each hinge, j the interior node
+    EI : (H,) bending stiffness of each hinge [N m^2]
+    voronoi : (H,) its Voronoi length (l1 + l2) / 2 from the rest lengths [m]
+    s0 : (H,) its natural |t2 - t1| (0: straight)
+    clamps : (C, 2) int64, the clamped node c and the other node o of its end edge
+    tangent : (C, 3) the held unit tangent (from c to o, in the given geometry)
+    clamp_EI : (C,) the end edge's EI [N m^2]; clamp_length : (C,) its rest length [m]
+    """
+
+    hinges: np.ndarray
+    EI: np.ndarray
+    voronoi: np.ndarray
+    s0: np.ndarray
+    clamps: np.ndarray
+    tangent: np.ndarray
+    clamp_EI: np.ndarray
+    clamp_length: np.ndarray
+
+    @property
+    def k(self) -> np.ndarray:
+        """Each hinge's k = EI / (l1 + l2) [N m]."""
+        return self.EI / (2.0 * self.voronoi)
+
+    @property
+    def kc(self) -> np.ndarray:
+        """Each clamp's kc = EI / l [N m]."""
+        return self.clamp_EI / self.clamp_length
+
+    def __len__(self) -> int:
+        return len(self.hinges) + len(self.clamps)
+
+
+def rod_hinges(edges: np.ndarray, line: np.ndarray, bends: np.ndarray) -> np.ndarray:
+    """(H, 5): the edges a, b and the nodes i, j, k of every hinge: consecutive edges of
+    one line (``line`` >= 0), both bending, a = (i, j) and b = (j, k) in that order."""
+    out = []
+    by_line: dict[int, list[int]] = {}
+    for e in np.flatnonzero(bends & (line >= 0)):
+        by_line.setdefault(int(line[e]), []).append(int(e))
+    for chain in by_line.values():
+        pairs = list(zip(chain[:-1], chain[1:], strict=True))
+        if len(chain) > 2:
+            pairs.append((chain[-1], chain[0]))  # a closed line
+        for a, b in pairs:
+            i, j = edges[a]
+            j2, k = edges[b]
+            if j == j2 and i != k:
+                out.append((a, b, i, j, k))
+    return np.asarray(out, dtype=np.int64).reshape(-1, 5)
+
+
+def build_rods(
+    net: Net,
+    EI: np.ndarray,
+    line: np.ndarray,
+    *,
+    natural: np.ndarray | None = None,
+    clamped: np.ndarray | None = None,
+    clamp_key: str = "supports.clamped",
+) -> Rods:
+    """The rods of ``net``: EI (M,) per edge [N m^2] (0: no bending), ``line`` (M,) the
+    line of every edge (-1: none), ``natural`` (M,) bool: the edge's rod is naturally
+    curved as given (default straight), ``clamped`` node indices (each a rod end)."""
+    EI = np.asarray(EI, dtype=np.float64)
+    bends = EI > 0.0
+    pairs = rod_hinges(net.edges, np.asarray(line), bends)
+    a, b = pairs[:, 0], pairs[:, 1]
+    hinges = np.ascontiguousarray(pairs[:, 2:])
+    l0 = net.rest_length
+    curved = np.zeros(net.n_edges, bool) if natural is None else np.asarray(natural, bool)
+    s0 = np.zeros(len(hinges))
+    if curved.any():
+        x = net.nodes
+        t1 = x[hinges[:, 1]] - x[hinges[:, 0]]
+        t2 = x[hinges[:, 2]] - x[hinges[:, 1]]
+        t1 /= np.linalg.norm(t1, axis=1)[:, None]
+        t2 /= np.linalg.norm(t2, axis=1)[:, None]
+        s0 = np.where(curved[a], np.linalg.norm(t2 - t1, axis=1), 0.0)
+    clamps, tangent, c_ei, c_len = _clamps(net, EI, hinges, clamped, clamp_key)
+    return Rods(
+        hinges=hinges,
+        EI=np.ascontiguousarray(0.5 * (EI[a] + EI[b])),
+        voronoi=np.ascontiguousarray(0.5 * (l0[a] + l0[b])),
+        s0=np.ascontiguousarray(s0),
+        clamps=clamps,
+        tangent=tangent,
+        clamp_EI=c_ei,
+        clamp_length=c_len,
+    )
+
+
+def _clamps(net: Net, EI: np.ndarray, hinges: np.ndarray, clamped, key: str):
+    """The clamps' (node, other node) pairs, held tangents, EI and rest lengths; a
+    ConfigError naming each clamped node that is no rod end."""
+    nodes = np.zeros(0, np.int64) if clamped is None else np.asarray(clamped, np.int64)
+    interior = set(hinges[:, 1].tolist())
+    pairs, problems = [], []
+    for c in nodes.tolist():
+        ends = [e for e in np.flatnonzero(EI > 0.0) if c in net.edges[e]]
+        if c in interior or len(ends) != 1:
+            why = (
+                "an interior node of a rod"
+                if c in interior
+                else "on no edge with EI > 0"
+                if not ends
+                else f"the end of {len(ends)} rods (a joint)"
+            )
+            problems.append(
+                f"{key}: node {c} is {why}: a clamped node must be the end of exactly one "
+                "rod (an edge with EI > 0, the first or last of its line)"
+            )
+            continue
+        e = int(ends[0])
+        other = int(net.edges[e, 1] if net.edges[e, 0] == c else net.edges[e, 0])
+        pairs.append((c, other, e))
+    if problems:
+        raise ConfigError(problems)
+    arr = np.asarray(pairs, dtype=np.int64).reshape(-1, 3)
+    t = net.nodes[arr[:, 1]] - net.nodes[arr[:, 0]]
+    t = t / np.linalg.norm(t, axis=1)[:, None] if len(t) else t.reshape(0, 3)
+    return (
+        np.ascontiguousarray(arr[:, :2]),
+        np.ascontiguousarray(t, dtype=np.float64),
+        np.ascontiguousarray(EI[arr[:, 2]]),
+        np.ascontiguousarray(net.rest_length[arr[:, 2]]),
+    )
+
+
+def curvature_measures(rods: Rods, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """|t2 - t1| of every hinge and |t - t0| of every clamp at x (N, 3)."""
+    from catenet.kernels.bending import bend_measure
+
+    s = np.zeros(len(rods.hinges))
+    d = np.zeros(len(rods.clamps))
+    bend_measure(np.ascontiguousarray(x), rods.hinges, rods.clamps, rods.tangent, s, d)
+    return s, d
+
+
+def bending_moment(rods: Rods, x: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per node (N,), the bending moment |M| [N m] and the curvature |kappa| [1/m]: at a
+    hinge EI |s - s0| / lbar and s / lbar (lbar its Voronoi length), at a clamp the
+    mirrored end's 2 EI |t - t0| / l and 2 |t - t0| / l; 0 where nothing bends (the
+    largest where a node is a hinge of several rods)."""
+    s, d = curvature_measures(rods, x)
+    moment = np.zeros(n_nodes)
+    kappa = np.zeros(n_nodes)
+    j = rods.hinges[:, 1]
+    np.maximum.at(moment, j, rods.EI * np.abs(s - rods.s0) / rods.voronoi)
+    np.maximum.at(kappa, j, s / rods.voronoi)
+    c = rods.clamps[:, 0]
+    np.maximum.at(moment, c, 2.0 * rods.clamp_EI * d / rods.clamp_length)
+    np.maximum.at(kappa, c, 2.0 * d / rods.clamp_length)
+    return moment, kappa
