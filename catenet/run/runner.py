@@ -182,17 +182,18 @@ def run_case(
     ``on_done(scene, workspace, result)`` is called after a solve that ended (not one
     that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
-    from catenet.run.cases import solve_from_base
+    from catenet.run.cases import heard, solve_from_base, write_warnings
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
-    run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
-    with clock.solving():
-        ws = sv.workspace(run.scene, run.settings)
-    hooks = Hooks(progress, stop, interrupt)
-    solved = _solve(run, ws, hooks, start, clock)
+    with heard() as base_heard:  # the base state's warnings, kept in /result
+        run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
+        with clock.solving():
+            ws = sv.workspace(run.scene, run.settings)
+        hooks = Hooks(progress, stop, interrupt)
+        solved = _solve(run, ws, hooks, start, clock)
     result = solved.result
     case_numbers: dict = {}  # each load case's summary numbers, by name
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
@@ -200,7 +201,11 @@ def run_case(
         case_numbers, envelope = solve_from_base(
             run.scene, run.settings, ws, result, run.cases, run.path, interrupt
         )
-    done = RunResult.of(result, _report(run, ws, result, solved.bodies, case_numbers, envelope))
+    with heard() as report_heard:
+        report = _report(run, ws, result, solved.bodies, case_numbers, envelope)
+    if run.path is not None:
+        write_warnings(run.path, base_heard.messages + report_heard.messages)
+    done = RunResult.of(result, report)
     if on_done is not None:
         on_done(run.scene, ws, done)
     return done
