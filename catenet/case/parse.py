@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from catenet.case.design import DesignConfig
 from catenet.case.formfind import FormfindConfig, check_formfind_case, parse_formfind
 from catenet.case.guard import guard_size
 from catenet.case.keys import (
@@ -76,6 +77,7 @@ class Case:
     masses: tuple = ()  # [[mass]]: point masses and initial velocities at nodes
     load_cases: tuple = ()  # [[load_case]]: loads solved from the base state
     combinations: tuple = ()  # [[combination]]: factored sums of load cases
+    design: DesignConfig | None = None  # [design]: partial factors (None: the defaults)
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -103,6 +105,8 @@ class Case:
             out["load_case"] = [c.to_dict() for c in self.load_cases]
         if self.combinations:
             out["combination"] = [c.to_dict() for c in self.combinations]
+        if self.design is not None and self.design.to_dict():
+            out["design"] = self.design.to_dict()
         return plain(out)
 
     def to_toml(self) -> str:
@@ -124,6 +128,7 @@ TOP_KEYS = (
     "mass",
     "load_case",
     "combination",
+    "design",
 )
 
 
@@ -178,6 +183,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     masses = parse_masses(ck, data.get("mass"), ctx)
     load_cases = parse_load_cases(ck, data.get("load_case"), ctx)
     combinations = parse_combinations(ck, data.get("combination"), ctx, load_cases)
+    design = None
+    if "design" in data:
+        design = parse_table(ck, data["design"], DesignConfig, "design", ctx)
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None
@@ -223,6 +231,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         masses=masses,
         load_cases=load_cases,
         combinations=combinations,
+        design=design,
         source=source,
     )
 

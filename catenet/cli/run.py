@@ -307,7 +307,7 @@ def _balance(row, scale: float) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    from catenet.cli.summary import cases_table, envelope_lines, state_lines
+    from catenet.cli.summary import cases_table, envelope_lines, state_lines, utilisation_line
     from catenet.run.advice import LARGE_BYTES, format_bytes, newmark_contact
 
     s = result.report
@@ -357,6 +357,7 @@ def _summary(case, result, path: Path | None) -> None:
     if s.cases:
         table = cases_table(s.cases, len(result.tension))
         lines[-1:-1] = table + envelope_lines(s.envelope)
+    lines.insert(-1, utilisation_line(s.summary, s.cases))
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -138,6 +138,32 @@ def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
     return line
 
 
+def utilisation_line(base: dict, cases: dict) -> str:
+    """The largest utilisation (design tension / design resistance) of the base state
+    ``base`` and the load cases ``cases`` (each the summary's numbers), with its edge,
+    cable and case; or that no material gives a breaking load."""
+    states = [("the base state", base), *cases.items()]
+    known = [
+        (s["max_utilisation"], name, s)
+        for name, s in states
+        if math.isfinite(s.get("max_utilisation", math.nan))
+    ]
+    if not known:
+        return (
+            f"{'utilisation':<{W}} not checked: no material gives breaking_load "
+            "(material.breaking_load [N])"
+        )
+    value, name, s = max(known, key=lambda row: row[0])  # the first of equals
+    cable = s.get("max_utilisation_cable", "")
+    where = f"edge {s['max_utilisation_edge']}" + (f", cable {cable}" if cable else "")
+    line = f"{'utilisation':<{W}} {value:.4g} ({where}; {name}"
+    peak = s.get("peak_utilisation", math.nan)
+    if math.isfinite(peak) and _more(peak, value):
+        line += f"; peak over the run {peak:.4g} at t = {s['peak_utilisation_time']:.4g} s"
+    verdict = "exceeds 1: the design resistance is exceeded" if value > 1.0 else "<= 1"
+    return line + f"; F_Ed / F_Rd, EN 1993-1-11 with [design]'s factors: {verdict})"
+
+
 def envelope_lines(env: dict) -> list[str]:
     """The envelope over the load cases: its extremes and the cases that give them."""
     lines = []
@@ -145,6 +171,7 @@ def envelope_lines(env: dict) -> list[str]:
         ("tension_max", "largest tension", "edge", "N"),
         ("tension_min", "least tension", "edge", "N"),
         ("displacement_max", "largest displacement", "node", "m"),
+        ("utilisation_max", "largest utilisation", "edge", ""),
     ):
         if key in env:
             e = env[key]
@@ -152,7 +179,8 @@ def envelope_lines(env: dict) -> list[str]:
             if key == "tension_min" and value < 0:  # a strut: its compression
                 what, value = "largest compression", -value
             lines.append(
-                f"{'envelope':<{W}} {what} {value:.6g} {unit} ({where} {e['at']}, {e['case']})"
+                f"{'envelope':<{W}} {what} {value:.6g}{' ' if unit else ''}{unit} "
+                f"({where} {e['at']}, {e['case']})"
             )
     return lines
 

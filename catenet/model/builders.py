@@ -144,6 +144,7 @@ class SquareNet:
     size: float
     n: int
     alpha: float
+    cable: np.ndarray | None = None  # (M,) each edge's cable: A_k is k, B_j is m + j
 
 
 def square_net(
@@ -161,10 +162,13 @@ def square_net(
     made = _SquareNodes(_Cables.of(n, alpha, size))
     fixed: list[int] = []
     edges: list[np.ndarray] = []
+    owner: list[np.ndarray] = []
     for line_id in range(n):
         breaks, ends = made.breaks(line_id)
         fixed.extend(ends)
-        edges += made.pieces(line_id, breaks, edge_length)
+        pieces = made.pieces(line_id, breaks, edge_length)
+        edges += pieces
+        owner += [np.full(len(p), line_id, dtype=np.int64) for p in pieces]
     xy = np.concatenate(made.points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])
     edges_arr = np.concatenate(edges)
@@ -179,7 +183,21 @@ def square_net(
         ) from None
     net = material.prestressed(net)
     center = int(np.argmin(np.hypot(nodes[:, 0], nodes[:, 1])))
-    return SquareNet(net=net, center=center, size=float(size), n=int(n), alpha=float(alpha))
+    return SquareNet(
+        net=net,
+        center=center,
+        size=float(size),
+        n=int(n),
+        alpha=float(alpha),
+        cable=np.concatenate(owner),
+    )
+
+
+def square_net_cables(n: int) -> tuple[str, ...]:
+    """The names of the square net's cables, in the order of ``SquareNet.cable``: A0 ..
+    A(m-1) (family A, along u), then B0 .. B(m-1) (family B, along v)."""
+    m = n // 2
+    return tuple(f"A{k}" for k in range(m)) + tuple(f"B{k}" for k in range(m))
 
 
 def _check_square(n: int, alpha: float, size: float, edge_length: float) -> None:
