@@ -70,7 +70,6 @@ class States:
     cable: np.ndarray | None = None
     cable_names: tuple[str, ...] = ()
     sets: dict[str, np.ndarray] = field(default_factory=dict)
-    load_cases: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def read_states(path: str | Path) -> States:
@@ -81,13 +80,15 @@ def read_states(path: str | Path) -> States:
         with open_result(head.path) as h5:
             base = _state(h5.get("result"), "base", "base", head.x, head.tension)
             states = [base]
-            cases = h5.get("cases")
-            if cases is not None:
-                for name in cases:
-                    g = cases[name]
-                    kind = str(g.attrs.get("kind", "load_case"))
-                    states.append(_state(g, str(name), kind, None, None))
             envelope, env_cases = _envelope(h5.get("envelope"))
+            cases = h5.get("cases")
+            if cases is not None:  # in the order solved (the envelope's), else by name
+                names = [n for n in env_cases if n in cases]
+                names += sorted(n for n in cases if n not in names)
+                for name in names:
+                    g = cases[name]
+                    kind = str(_plain(g.attrs.get("kind", "load_case")))
+                    states.append(_state(g, str(name), kind, None, None))
             mesh = h5["mesh"]
             cable, names = _cables(mesh, len(head.mesh.edges))
             sets = read_sets(mesh)

@@ -220,6 +220,14 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
             if run.error:
                 attrs["error"] = run.error
             attrs["warnings"] = "\n".join(run.warnings)  # one a line, "" when none
+            applied = run.numbers.get("applied_resultant")  # the case's loads, not the base's
+            if applied is not None:
+                attrs.update(
+                    {
+                        f"applied_resultant_{a}": float(v)
+                        for a, v in zip("xyz", applied, strict=True)
+                    }
+                )
             write_result_group(
                 h5,
                 scene,
