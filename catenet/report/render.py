@@ -22,7 +22,10 @@ FORMATS = ("md", "csv", "html")
 
 
 def cell(v) -> str:
-    """A value as a report shows it: 6 significant digits, "n/a" for NaN."""
+    """A value as a report shows it: 6 significant digits, "n/a" for NaN or None (not
+    known)."""
+    if v is None:
+        return "n/a"
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, float):
@@ -69,6 +72,8 @@ def markdown(report: Report) -> str:
 
 
 def _csv_value(v):
+    if v is None:
+        return ""
     if isinstance(v, float):
         return "" if math.isnan(v) else repr(v)
     return v

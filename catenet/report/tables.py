@@ -131,12 +131,13 @@ def _strain(states: States, x: np.ndarray) -> np.ndarray | None:
     return length / rest - 1.0
 
 
-def _at(values: np.ndarray, idx: np.ndarray, largest: bool) -> tuple[float, int]:
-    """The largest (least) finite value among ``idx`` and its first index (NaN, -1: none)."""
+def _at(values: np.ndarray, idx: np.ndarray, largest: bool) -> tuple[float, int | None]:
+    """The largest (least) finite value among ``idx`` and its first index (NaN, None:
+    none)."""
     v = values[idx]
     ok = np.isfinite(v)
     if not ok.any():
-        return math.nan, -1
+        return math.nan, None
     k = int(np.argmax(np.where(ok, v, -np.inf)) if largest else np.argmin(np.where(ok, v, np.inf)))
     return float(v[k]), int(idx[k])
 
@@ -180,7 +181,7 @@ def cable_table(states: States, g: Groups, s: State, peaks: bool) -> Table:
         row = [name, int(idx.size), top, top_e, low, low_e, u, u_e, length, int(loose.size)]
         if peaks:
             p, p_e = _at(s.arrays["peak_tension"], idx, True)
-            when = s.arrays["peak_tension_time"][p_e] if p_e >= 0 else math.nan
+            when = s.arrays["peak_tension_time"][p_e] if p_e is not None else math.nan
             pu = s.get("peak_utilisation")
             row += [p, float(when), _at(pu, idx, True)[0] if pu is not None else math.nan]
         rows.append(row)
@@ -246,10 +247,11 @@ def displacement_table(states: States, g: Groups, s: State, peaks: bool) -> Tabl
         if idx.size == 0:
             continue
         value, k = _at(size, idx, True)
-        row = [name, value, k, *(float(c) for c in u[k])]
+        row = [name, value, k, *(float(c) for c in (u[k] if k is not None else np.full(3, np.nan)))]
         if peaks and s.get("peak_displacement") is not None:
             p, pk = _at(s.arrays["peak_displacement"], idx, True)
-            row += [p, pk, float(s.arrays["peak_displacement_time"][pk]) if pk >= 0 else math.nan]
+            when = s.arrays["peak_displacement_time"][pk] if pk is not None else math.nan
+            row += [p, pk, float(when)]
         rows.append(row)
     return Table("displacements", "Displacements", tuple(columns), rows, "")
 
@@ -284,9 +286,9 @@ def _envelope_section(states: States, g: Groups) -> Section:
     return Section("envelope", "envelope", verdict, [], tables)
 
 
-def _case_name(states: States, key: str, edge: int) -> str:
+def _case_name(states: States, key: str, edge: int | None) -> str:
     idx = states.envelope.get(f"{key}_case")
-    if idx is None or edge < 0 or not 0 <= int(idx[edge]) < len(states.envelope_cases):
+    if idx is None or edge is None or not 0 <= int(idx[edge]) < len(states.envelope_cases):
         return ""
     return states.envelope_cases[int(idx[edge])]
 
@@ -318,7 +320,7 @@ def envelope_cables(states: States, g: Groups) -> Table:
             value, e = _at(env.get(key, np.full(m, np.nan)), idx, largest)
             row += [value, e, _case_name(states, key, e)]
         u, e = _at(env.get("utilisation_max", np.full(m, np.nan)), idx, True)
-        row += [u, e, _case_name(states, "utilisation_max", e) if e >= 0 else ""]
+        row += [u, e, _case_name(states, "utilisation_max", e)]
         rows.append(row)
     return Table("envelope_cables", "Cables over the cases", columns, rows, "")
 
