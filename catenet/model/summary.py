@@ -336,7 +336,7 @@ def _utilisation(scene: Scene, use: np.ndarray, design, peaks) -> dict:
     """The largest utilisation, its edge and cable ("" without one); with the run's
     peaks, the largest over the run (from each edge's peak tension), edge and time."""
     k, value = _largest_known(use)
-    out = {"max_utilisation": value, "max_utilisation_edge": k}
+    out: dict = {"max_utilisation": value, "max_utilisation_edge": k}
     if scene.cables is not None:
         out["max_utilisation_cable"] = _edge_cable(scene.cables, k)
     if peaks is not None:

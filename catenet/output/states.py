@@ -83,9 +83,9 @@ def read_states(path: str | Path) -> States:
             envelope, env_cases = _envelope(h5.get("envelope"))
             cases = h5.get("cases")
             if cases is not None:  # in the order solved (the envelope's), else by name
-                names = [n for n in env_cases if n in cases]
-                names += sorted(n for n in cases if n not in names)
-                for name in names:
+                order = [n for n in env_cases if n in cases]
+                order += sorted(n for n in cases if n not in order)
+                for name in order:
                     g = cases[name]
                     kind = str(_plain(g.attrs.get("kind", "load_case")))
                     states.append(_state(g, str(name), kind, None, None))

@@ -95,7 +95,7 @@ def _net(states: States, s: State) -> str:
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.2))
     fixed = states.mesh.fixed
     for ax, (a, b) in zip(axes, ((0, 1), (side, 2)), strict=True):
-        segs = np.stack([x[e[:, 0]][:, [a, b]], x[e[:, 1]][:, [a, b]]], axis=1)
+        segs = list(np.stack([x[e[:, 0]][:, [a, b]], x[e[:, 1]][:, [a, b]]], axis=1))
         lines = LineCollection(segs, array=values, cmap="viridis", norm=norm, linewidths=1.5)
         ax.add_collection(lines)
         if fixed is not None and fixed.any():

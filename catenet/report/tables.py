@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from catenet.model.summary import first_extreme
 from catenet.output.states import State, States
 from catenet.report.groups import Groups, groups
 
@@ -134,12 +135,12 @@ def _strain(states: States, x: np.ndarray) -> np.ndarray | None:
 def _at(values: np.ndarray, idx: np.ndarray, largest: bool) -> tuple[float, int | None]:
     """The largest (least) finite value among ``idx`` and its first index (NaN, None:
     none)."""
-    v = values[idx]
-    ok = np.isfinite(v)
-    if not ok.any():
+    known = idx[np.isfinite(values[idx])]
+    if known.size == 0:
         return math.nan, None
-    k = int(np.argmax(np.where(ok, v, -np.inf)) if largest else np.argmin(np.where(ok, v, np.inf)))
-    return float(v[k]), int(idx[k])
+    k = first_extreme(values, known, largest)  # ties at round-off: the first, as the summary
+    v = values[known]
+    return float(v.max() if largest else v.min()), int(k)
 
 
 def cable_table(states: States, g: Groups, s: State, peaks: bool) -> Table:
@@ -266,7 +267,7 @@ def balance_table(s: State) -> Table:
     for key, label in (("reaction", "reactions"), ("contact_force", "contact")):
         f = s.get(key)
         parts[label] = np.zeros(3) if f is None else f.sum(axis=0)
-    total = sum(parts.values())
+    total = np.sum(list(parts.values()), axis=0)
     rows = [[k, *(float(c) for c in v)] for k, v in parts.items()]
     rows.append(["sum (0 at equilibrium)", *(float(c) for c in total)])
     return Table("balance", "Loads against reactions and contact", columns, rows, "")

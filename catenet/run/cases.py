@@ -171,16 +171,39 @@ def heard(what: str = ""):
         return record
 
     handler = Heard()
-    root = logging.getLogger("catenet")
-    root.addHandler(handler)
+    own = logging.getLogger("catenet")
+    level, shown = own.level, own.getEffectiveLevel()
+    mute = _Below(shown)  # what the log did not show (-q: errors only) it still does not
+    outputs = logging.getLogger().handlers if shown > logging.WARNING else []
+    if outputs:
+        own.setLevel(logging.WARNING)  # made, so that they are kept
+    for out in outputs:
+        out.addFilter(mute)
+    own.addHandler(handler)
     if what:
         logging.setLogRecordFactory(factory)
     try:
         yield handler
     finally:
-        root.removeHandler(handler)
+        own.removeHandler(handler)
+        for out in outputs:
+            out.removeFilter(mute)
+        if outputs:
+            own.setLevel(level)
         if what:
             logging.setLogRecordFactory(make)
+
+
+class _Below(logging.Filter):
+    """Drops catenet's records below ``level`` (the level the log showed)."""
+
+    def __init__(self, level: int) -> None:
+        super().__init__()
+        self.level = level
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        return not own or record.levelno >= self.level
 
 
 def _kind(c) -> str:
@@ -214,7 +237,7 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
         for run in runs:
             if run.result is None:
                 continue
-            attrs = {"kind": "combination" if run.combination else "load_case"}
+            attrs: dict = {"kind": "combination" if run.combination else "load_case"}
             if run.name in combos:
                 attrs["factors"] = json.dumps(combos[run.name])
             if run.error:
