@@ -18,19 +18,27 @@ from catenet.errors import ConfigError
 from catenet.output.netsets import read_sets
 from catenet.output.reader import DAMAGED, NetMesh, damaged, is_dataset, open_result, read_result
 
-#: The per-edge and per-node arrays of a state group, besides x.
-ARRAYS = (
-    "tension",
-    "reaction",
-    "contact_force",
-    "utilisation",
-    "peak_tension",
-    "peak_tension_time",
-    "least_tension",
-    "peak_displacement",
-    "peak_displacement_time",
-    "peak_utilisation",
-)
+#: The arrays of a state group besides x, by their shape: "M" per edge, "N" per node,
+#: "N3" a vector per node.
+ARRAYS = {
+    "tension": "M",
+    "reaction": "N3",
+    "contact_force": "N3",
+    "utilisation": "M",
+    "peak_tension": "M",
+    "peak_tension_time": "M",
+    "least_tension": "M",
+    "peak_displacement": "N",
+    "peak_displacement_time": "N",
+    "peak_utilisation": "M",
+}
+#: The envelope's arrays by their shape.
+ENVELOPE = {
+    "tension_max": "M",
+    "tension_min": "M",
+    "displacement_max": "N",
+    "utilisation_max": "M",
+}
 
 
 @dataclass
@@ -76,11 +84,13 @@ def read_states(path: str | Path) -> States:
     """Every state of the result file ``path`` (ConfigError: missing, not HDF5, not a
     catenet result file, damaged)."""
     head = read_result(path)  # the layout checked, a killed run's last frame as /result
+    m, n = len(head.mesh.edges), len(head.mesh.nodes)
+    shapes: dict[str, tuple[int, ...]] = {"M": (m,), "N": (n,), "N3": (n, 3)}
     try:
         with open_result(head.path) as h5:
-            base = _state(h5.get("result"), "base", "base", head.x, head.tension)
+            base = _state(h5.get("result"), "base", "base", head.x, head.tension, shapes)
             states = [base]
-            envelope, env_cases = _envelope(h5.get("envelope"))
+            envelope, env_cases = _envelope(h5.get("envelope"), shapes)
             cases = h5.get("cases")
             if cases is not None:  # in the order solved (the envelope's), else by name
                 order = [n for n in env_cases if n in cases]
@@ -88,7 +98,7 @@ def read_states(path: str | Path) -> States:
                 for name in order:
                     g = cases[name]
                     kind = str(_plain(g.attrs.get("kind", "load_case")))
-                    states.append(_state(g, str(name), kind, None, None))
+                    states.append(_state(g, str(name), kind, None, None, shapes))
             mesh = h5["mesh"]
             cable, names = _cables(mesh, len(head.mesh.edges))
             sets = read_sets(mesh)
@@ -112,28 +122,48 @@ def read_states(path: str | Path) -> States:
     )
 
 
-def _state(g, name: str, kind: str, x, tension) -> State:
+def _array(g, key: str, shape: tuple, dtype=np.float64) -> np.ndarray:
+    """The dataset ``key`` of the group ``g`` in ``shape`` (ValueError naming it when
+    it is not: the file is damaged)."""
+    obj = g.get(key)
+    if not is_dataset(obj) or obj.shape != shape:
+        got = obj.shape if is_dataset(obj) else "a group"
+        raise ValueError(f"{g.name}/{key} is {got}: must be of shape {shape}")
+    return np.asarray(obj[()], dtype=dtype)
+
+
+def _state(g, name: str, kind: str, x, tension, shapes: dict) -> State:
     """The State of the group ``g`` (None: /result missing; ``x``, ``tension``: the
-    reader's, a killed run's last frame)."""
+    reader's, a killed run's last frame); ``shapes``: "M", "N", "N3" as tuples."""
     arrays: dict[str, np.ndarray] = {}
     attrs: dict = {}
     if g is not None:
         attrs = {k: _plain(v) for k, v in g.attrs.items()}
-        for key in ARRAYS:
-            if is_dataset(g.get(key)):
-                arrays[key] = np.asarray(g[key], dtype=np.float64)
+        for key, shape in ARRAYS.items():
+            if key in g:
+                arrays[key] = _array(g, key, shapes[shape])
         if x is None:
-            x = np.asarray(g["x"], dtype=np.float64)
+            x = _array(g, "x", shapes["N3"])
     if tension is not None:
         arrays["tension"] = np.asarray(tension, dtype=np.float64)
     return State(name, kind, np.asarray(x, dtype=np.float64), arrays, attrs)
 
 
-def _envelope(g) -> tuple[dict[str, np.ndarray], tuple[str, ...]]:
+def _envelope(g, shapes: dict) -> tuple[dict[str, np.ndarray], tuple[str, ...]]:
+    """The envelope's arrays (and their ``*_case`` indices into the names of the cases,
+    checked) and those names."""
     if g is None:
         return {}, ()
-    arrays = {k: np.asarray(v) for k, v in g.items() if is_dataset(v)}
-    names = tuple(_plain(c) for c in g.attrs.get("cases", ()))
+    names = tuple(str(_plain(c)) for c in np.atleast_1d(g.attrs.get("cases", ())))
+    arrays = {}
+    for key, shape in ENVELOPE.items():
+        if key in g:
+            arrays[key] = _array(g, key, shapes[shape])
+            if f"{key}_case" in g:
+                index = _array(g, f"{key}_case", shapes[shape], np.int64)
+                if index.size and not (0 <= index.min() and index.max() < len(names)):
+                    raise ValueError(f"{g.name}/{key}_case: indices beyond its {len(names)} cases")
+                arrays[f"{key}_case"] = index
     return arrays, names
 
 
