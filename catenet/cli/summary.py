@@ -131,6 +131,8 @@ def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
         f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N"
         f"{_cable_peak(c, dynamic)}, slack {100 * c['slack_fraction']:.3g} % of its length"
     )
+    if math.isfinite(c.get("max_utilisation", math.nan)):
+        line += f", utilisation {c['max_utilisation']:.4g}"
     if c.get("slack_edges"):
         line += f" ({c['slack_edges']} slack edges)"
     if c.get("max_compression", 0) > 0:
@@ -189,19 +191,22 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
     """One row per load case and combination (``result.report.cases``): the largest
     displacement and its node, the largest tension and its edge, the largest strut
     compression, the slack edges and the largest reaction, SI units."""
+    util = any(math.isfinite(s.get("max_utilisation", math.nan)) for s in cases.values())
     head = (
         f"{'load case':<16} {'loads [N]':>11} {'max displ. [m]':>14} {'node':>6} "
         f"{'max tension [N]':>15} {'edge':>6} {'compr. [N]':>11} {'slack':>6} "
-        f"{'max reaction [N]':>16}  converged"
+        f"{'max reaction [N]':>16}" + (f" {'utilisation':>11}" if util else "") + "  converged"
     )
     rows = [head]
     for name, s in cases.items():
         applied = math.hypot(*s.get("applied_resultant", [0.0, 0.0, 0.0]))
+        use = f" {s.get('max_utilisation', math.nan):>11.4g}" if util else ""
         rows.append(
             f"{name:<16} {applied:>11.6g} {s['max_displacement']:>14.6g} "
             f"{s['max_displacement_node']:>6} {s['max_tension']:>15.6g} "
             f"{s['max_tension_edge']:>6} {s['max_compression']:>11.6g} {s['slack_edges']:>6} "
-            f"{s['max_reaction']:>16.6g}  " + ("yes" if s["converged"] else f"no: {s['error']}")
+            f"{s['max_reaction']:>16.6g}{use}  "
+            + ("yes" if s["converged"] else f"no: {s['error']}")
         )
     rows.append(
         f"{'':<16} (loads: the resultant of each case's applied loads, the base state's "

@@ -35,6 +35,11 @@ def cell(v) -> str:
     return str(v)
 
 
+def _none(sec) -> str:
+    """What a section without warnings says: none, or that the file keeps none."""
+    return "none" if sec.recorded or sec.kind == "envelope" else "not recorded in the file"
+
+
 def _md_escape(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
@@ -64,7 +69,7 @@ def markdown(report: Report) -> str:
             lines.append(f"- **warnings** ({len(sec.warnings)}):")
             lines += [f"    - {_md_escape(w)}" for w in sec.warnings]
         else:
-            lines.append("- **warnings**: none")
+            lines.append(f"- **warnings**: {_none(sec)}")
         lines.append("")
         for t in sec.tables:
             lines += markdown_table(t)
@@ -134,7 +139,7 @@ def html_document(report: Report, figures: dict[str, list[str]]) -> str:
             items = "".join(f"<li>{e(w)}</li>" for w in sec.warnings)
             parts.append(f"<p>warnings ({len(sec.warnings)}):</p><ul>{items}</ul>")
         else:
-            parts.append("<p>warnings: none</p>")
+            parts.append(f"<p>warnings: {_none(sec)}</p>")
         parts += [_img(png) for png in figures.get(sec.name, [])]
         parts += [_html_table(t) for t in sec.tables]
     parts.append("</body></html>")

@@ -38,14 +38,15 @@ class Table:
 @dataclass
 class Section:
     """One state's part of the report: its ``name``, ``kind`` ("base", "load_case",
-    "combination", "envelope"), ``verdict`` (label -> text, in order), ``warnings`` and
-    ``tables``."""
+    "combination", "envelope"), ``verdict`` (label -> text, in order), ``warnings``
+    (``recorded``: False where the file keeps none) and ``tables``."""
 
     name: str
     kind: str
     verdict: dict[str, str]
     warnings: list[str]
     tables: list[Table]
+    recorded: bool = True  # whether the file keeps the state's warnings
 
     @property
     def heading(self) -> str:
@@ -100,7 +101,8 @@ def _section(states: States, g: Groups, s: State, dynamic: bool) -> Section:
         balance_table(s),
     ]
     warnings = [w for w in str(s.attrs.get("warnings", "")).split("\n") if w]
-    return Section(_label(s), s.kind, _verdict(s, dynamic), warnings, tables)
+    recorded = "warnings" in s.attrs  # (files of older versions keep none)
+    return Section(_label(s), s.kind, _verdict(s, dynamic), warnings, tables, recorded)
 
 
 def _verdict(s: State, dynamic: bool) -> dict[str, str]:
