@@ -57,7 +57,8 @@ def _cable_bars(report: Report) -> str | None:
         col = tables[0].columns.index("max tension [N]")
         use = np.array([[row[col] for row in t.rows] for t in tables], dtype=np.float64)
         what = "max tension [N]"
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.5 * len(names) * len(states) ** 0.5), 3.5))
+    wide = min(16.0, max(6.0, 2.0 + 0.3 * len(names) * len(states) ** 0.5))
+    fig, ax = plt.subplots(figsize=(wide, 3.5))
     width = 0.8 / len(states)
     pos = np.arange(len(names))
     for k, s in enumerate(states):
