@@ -88,7 +88,7 @@ def _build(case: Case) -> Scene:
     scene = dataclasses.replace(
         scene,
         cases=_load_cases(case, scene.net, built),
-        design=edge_design(case, scene.net.n_edges, built.cables),
+        design=edge_design(case, scene.net, built),
         coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
     )
     if case.solver.self_contact:

@@ -166,6 +166,25 @@ def utilisation_line(base: dict, cases: dict) -> str:
     return line + f"; F_Ed / F_Rd, EN 1993-1-11 with [design]'s factors: {verdict})"
 
 
+def support_line(base: dict, cases: dict) -> str | None:
+    """The largest support utilisation (|R| / capacity, [[design.support]]) of the base
+    state and the cases, with its node and case; None where no support has a capacity."""
+    states = [("the base state", base), *cases.items()]
+    known = [
+        (s["max_support_utilisation"], name, s)
+        for name, s in states
+        if math.isfinite(s.get("max_support_utilisation", math.nan))
+    ]
+    if not known:
+        return None
+    value, name, s = max(known, key=lambda row: row[0])
+    verdict = "exceeds 1: a support's capacity is exceeded" if value > 1.0 else "<= 1"
+    return (
+        f"{'supports':<{W}} utilisation {value:.4g} (node {s['max_support_utilisation_node']}; "
+        f"{name}; |R| / capacity of [[design.support]]: {verdict})"
+    )
+
+
 def envelope_lines(env: dict) -> list[str]:
     """The envelope over the load cases: its extremes and the cases that give them."""
     lines = []
@@ -174,6 +193,7 @@ def envelope_lines(env: dict) -> list[str]:
         ("tension_min", "least tension", "edge", "N"),
         ("displacement_max", "largest displacement", "node", "m"),
         ("utilisation_max", "largest utilisation", "edge", ""),
+        ("support_utilisation_max", "largest support utilisation", "node", ""),
     ):
         if key in env:
             e = env[key]

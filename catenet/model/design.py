@@ -17,7 +17,9 @@ key of ``[design]`` (``catenet.case.design``), so that another edition or annex 
 change of numbers, not of code.
 
 An edge in compression (a strut) or slack has utilisation 0; an edge whose material
-gives no breaking load has NaN (no resistance is known: "not checked").
+gives no breaking load has NaN (no resistance is known: "not checked"). A support may
+have a capacity (``[[design.support]]``: its anchor's or fitting's design resistance
+[N]); its utilisation is |R| / capacity.
 """
 
 from __future__ import annotations
@@ -46,12 +48,27 @@ class Design:
     breaking_factor: float = BREAKING_FACTOR
     k_e: float = K_E
     load_factor: float = LOAD_FACTOR
+    capacity: np.ndarray | None = None  # (N,) each support's capacity [N] (NaN: none)
 
     @classmethod
     def uniform(cls, n_edges: int, breaking_load: float | None, **factors) -> Design:
         """Every edge of one material (``breaking_load`` None: none given)."""
         value = np.nan if breaking_load is None else float(breaking_load)
         return cls(np.full(n_edges, value), np.full(n_edges, np.nan), **factors)
+
+    @property
+    def anchored(self) -> bool:
+        """Whether any support has a capacity (``support_utilisation``)."""
+        return self.capacity is not None and bool(np.isfinite(self.capacity).any())
+
+    def support_utilisation(self, reaction: np.ndarray) -> np.ndarray:
+        """|R| / capacity (N,) of the reactions ``reaction`` (N, 3) [N]: a support's
+        anchor or fitting against its own resistance (no partial factor: give the design
+        capacity); NaN where no capacity is given."""
+        size = np.linalg.norm(np.asarray(reaction, dtype=np.float64), axis=-1)
+        if self.capacity is None:
+            return np.full(size.shape, np.nan)
+        return size / self.capacity
 
     @property
     def given(self) -> bool:

@@ -22,7 +22,8 @@ source of the run's printed summary, the /result attributes and the sweep table'
 ``summarize_result`` adds, where the scene's materials give a breaking load
 (``catenet.model.design``), ``max_utilisation`` (design tension / design resistance),
 ``max_utilisation_edge`` and, with cables, ``max_utilisation_cable``; with peaks also
-``peak_utilisation``, ``peak_utilisation_edge`` and ``peak_utilisation_time``.
+``peak_utilisation``, ``peak_utilisation_edge`` and ``peak_utilisation_time``; where
+supports have a capacity, ``max_support_utilisation`` (|R| / capacity) and its node.
 
 ``cable_summary`` gives the same per cable of a graph with cables (with peaks: each
 cable's ``peak_tension``, its time and edge; with utilisations: ``max_utilisation``).
@@ -318,6 +319,10 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     use = None if design is None else design.utilisation(res.tension)
     if use is not None:
         out.update(_utilisation(scene, use, design, res.peaks))
+    anchored = scene.design is not None and scene.design.anchored and res.reaction is not None
+    if anchored:  # supports with a capacity: the largest |R| / capacity
+        k, value = _largest_known(scene.design.support_utilisation(res.reaction))
+        out["max_support_utilisation"], out["max_support_utilisation_node"] = value, k
     if cables is not None:  # which cable the largest displacement belongs to
         out["max_displacement_cable"] = _cable_of(scene.net, cables, out["max_displacement_node"])
         out["cables"] = cable_summary(

@@ -75,6 +75,8 @@ def write_result_group(
             g.create_dataset(key, data=value)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
+    if scene.design is not None and scene.design.anchored:  # |R| / capacity per node
+        g.create_dataset("support_utilisation", data=scene.design.support_utilisation(reaction))
     contact = res.contact_force
     if contact is None or not np.all(np.isfinite(contact)):
         contact = np.zeros_like(res.x)

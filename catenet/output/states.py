@@ -31,6 +31,7 @@ ARRAYS = {
     "peak_displacement": "N",
     "peak_displacement_time": "N",
     "peak_utilisation": "M",
+    "support_utilisation": "N",
 }
 #: The envelope's arrays by their shape.
 ENVELOPE = {
@@ -38,6 +39,7 @@ ENVELOPE = {
     "tension_min": "M",
     "displacement_max": "N",
     "utilisation_max": "M",
+    "support_utilisation_max": "N",
 }
 
 

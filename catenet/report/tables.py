@@ -200,15 +200,23 @@ def cable_table(states: States, g: Groups, s: State, peaks: bool) -> Table:
 def support_table(states: States, g: Groups, s: State) -> Table:
     """The reaction [N] of each support set (the sum over its nodes) and of each
     supported node (up to MAX_NODE_ROWS, the largest first beyond that)."""
-    columns = ("support", "nodes", "Rx [N]", "Ry [N]", "Rz [N]", "|R| [N]")
+    columns: tuple[str, ...] = ("support", "nodes", "Rx [N]", "Ry [N]", "Rz [N]", "|R| [N]")
     r = s.get("reaction")
+    su = s.get("support_utilisation")
     fixed = states.mesh.fixed
     rows: list[list] = []
     note = "the force each support exerts on the net"
     if r is None or fixed is None:
         return Table("supports", "Support reactions", columns, rows, note + " (not stored)")
+    if su is not None:
+        columns += ("max utilisation [-]",)
+        note += "; utilisation: |R| / capacity of [[design.support]], a set's largest node's"
+
+    def use(nodes) -> list:
+        return [] if su is None else [_at(su, np.atleast_1d(nodes), True)[0]]
+
     for name, nodes in g.supports.items():
-        rows.append([name, int(nodes.size), *_force(r[nodes].sum(axis=0))])
+        rows.append([name, int(nodes.size), *_force(r[nodes].sum(axis=0)), *use(nodes)])
     pinned = np.flatnonzero(fixed[: len(r)])
     size = np.linalg.norm(r[pinned], axis=1)
     shown = pinned
@@ -216,8 +224,8 @@ def support_table(states: States, g: Groups, s: State) -> Table:
         shown = np.sort(pinned[np.argsort(-size, kind="stable")[:MAX_NODE_ROWS]])
         note += f"; the {MAX_NODE_ROWS} largest of {pinned.size} supported nodes"
     for i in shown:
-        rows.append([_node(g, int(i)), 1, *_force(r[i])])
-    rows.append(["all supports", int(pinned.size), *_force(r[pinned].sum(axis=0))])
+        rows.append([_node(g, int(i)), 1, *_force(r[i]), *use(i)])
+    rows.append(["all supports", int(pinned.size), *_force(r[pinned].sum(axis=0)), *use(pinned)])
     return Table("supports", "Support reactions", columns, rows, note)
 
 
@@ -331,7 +339,10 @@ def envelope_cables(states: States, g: Groups) -> Table:
 def envelope_supports(states: States, g: Groups, cases: list[State]) -> Table:
     """Per support set and supported node the largest reaction over the cases and the
     case that gives it (from each case's reactions)."""
-    columns = ("support", "max |R| [N]", "case", "Rx [N]", "Ry [N]", "Rz [N]")
+    columns: tuple[str, ...] = ("support", "max |R| [N]", "case", "Rx [N]", "Ry [N]", "Rz [N]")
+    su = states.envelope.get("support_utilisation_max")
+    if su is not None:
+        columns += ("max utilisation [-]", "utilisation case")
     fixed = states.mesh.fixed
     with_r = [s for s in cases if s.get("reaction") is not None]
     rows: list[list] = []
@@ -344,9 +355,11 @@ def envelope_supports(states: States, g: Groups, cases: list[State]) -> Table:
     for name, nodes in parts.items():
         forces = np.array([s.arrays["reaction"][nodes].sum(axis=0) for s in with_r])
         k = int(np.argmax(np.linalg.norm(forces, axis=1)))
-        rows.append(
-            [name, float(np.linalg.norm(forces[k])), with_r[k].name, *map(float, forces[k])]
-        )
+        row = [name, float(np.linalg.norm(forces[k])), with_r[k].name, *map(float, forces[k])]
+        if su is not None:
+            u, i = _at(su, nodes, True)
+            row += [u, _case_name(states, "support_utilisation_max", i)]
+        rows.append(row)
     return Table("envelope_supports", "Support reactions over the cases", columns, rows)
 
 

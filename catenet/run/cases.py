@@ -278,6 +278,18 @@ def envelope(net, runs: list[CaseRun], design=None) -> dict[str, np.ndarray]:
     u = np.array([np.linalg.norm(np.asarray(r.x) - net.nodes, axis=1) for r in results])
     use = np.full_like(t, np.nan) if design is None else design.utilisation(t)
     known = np.isfinite(use).any(axis=0)
+    extra = {}
+    if design is not None and design.anchored:  # each support's largest |R| / capacity
+        r = np.array(
+            [np.zeros_like(t0.x) if t0.reaction is None else t0.reaction for t0 in results]
+        )
+        su = np.nan_to_num(design.support_utilisation(r), nan=-np.inf)
+        extra = {
+            "support_utilisation_max": np.where(
+                np.isfinite(design.capacity), su.max(axis=0), np.nan
+            ),
+            "support_utilisation_max_case": su.argmax(axis=0),
+        }
     return {
         "tension_max": t.max(axis=0),
         "tension_max_case": t.argmax(axis=0),
@@ -287,6 +299,7 @@ def envelope(net, runs: list[CaseRun], design=None) -> dict[str, np.ndarray]:
         "displacement_max_case": u.argmax(axis=0),
         "utilisation_max": np.where(known, np.nan_to_num(use, nan=-np.inf).max(axis=0), np.nan),
         "utilisation_max_case": np.nan_to_num(use, nan=-np.inf).argmax(axis=0),
+        **extra,
     }
 
 
@@ -307,7 +320,10 @@ def governing(net, runs: list[CaseRun], design=None) -> dict:
         ("tension_min", False, None),
         ("displacement_max", True, free),
         ("utilisation_max", True, np.isfinite(env["utilisation_max"])),
+        ("support_utilisation_max", True, np.isfinite(env.get("support_utilisation_max", []))),
     ):
+        if key not in env:
+            continue
         values = env[key]
         idx = np.flatnonzero(where) if where is not None else np.arange(len(values))
         if idx.size == 0:

@@ -190,3 +190,41 @@ def test_design_keys_round_trip_through_the_resolved_case():
     cable = again.geometry.cables[0].material.as_dict()
     assert cable == {"breaking_load": 5.0e3}
     assert "design" not in parse_case(graph_with_cables()).to_dict()  # defaults: not written
+
+
+def test_support_capacities_give_each_support_its_utilisation(tmp_path):
+    """The pulled cable's start carries the left half's tension: |R| = T0, T0 + P / 2,
+    T0 + 0.75 P in the base state, "pull" and "ULS"; against a 4 kN capacity."""
+    data = pulled()
+    data["design"] = {"support": [{"node": "start", "capacity": 4.0e3}]}
+    out = tmp_path / "anchored.h5"
+    result = run_case(parse_case(data), out)
+    with h5py.File(out) as h5:
+        for group, r in (("result", T0), ("cases/pull", T0 + P / 2), ("cases/ULS", T0 + 0.75 * P)):
+            u = h5[group]["support_utilisation"][:]
+            assert u[0] == pytest.approx(r / 4.0e3, rel=1e-9) and np.isnan(u[1:]).all()
+        env = h5["envelope/support_utilisation_max"][:]
+        assert env[0] == pytest.approx((T0 + 0.75 * P) / 4.0e3, rel=1e-9)
+    top = result.report.envelope["support_utilisation_max"]
+    assert (top["at"], top["case"]) == (0, "ULS")
+    assert result.report.summary["max_support_utilisation_node"] == 0
+
+
+@pytest.mark.parametrize(
+    ("support", "message"),
+    [
+        ({"node": "midpoint", "capacity": 1e3}, "node 1 is not a support"),
+        ({"node": 7, "capacity": 1e3}, "design.support[0].node = 7"),
+        ({"node": "start", "capacity": -1.0}, "design.support[0].capacity = -1.0: must be"),
+    ],
+)
+def test_bad_support_capacities_exit_2_with_one_message(support, message, tmp_path):
+    from catenet.case import dumps_toml
+
+    data = pulled()
+    data["design"] = {"support": [support]}
+    case = tmp_path / "bad.toml"
+    case.write_text(dumps_toml(data))
+    res = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "bad.h5")])
+    assert res.exit_code == 2, res.output
+    assert message in res.output and not (tmp_path / "bad.h5").exists()
