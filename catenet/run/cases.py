@@ -280,9 +280,8 @@ def envelope(net, runs: list[CaseRun], design=None) -> dict[str, np.ndarray]:
     known = np.isfinite(use).any(axis=0)
     extra = {}
     if design is not None and design.anchored:  # each support's largest |R| / capacity
-        r = np.array(
-            [np.zeros_like(t0.x) if t0.reaction is None else t0.reaction for t0 in results]
-        )
+        zero = np.zeros_like(net.nodes)
+        r = np.array([zero if res.reaction is None else res.reaction for res in results])
         su = np.nan_to_num(design.support_utilisation(r), nan=-np.inf)
         extra = {
             "support_utilisation_max": np.where(
