@@ -418,7 +418,8 @@ def judge(result, work: Path, before: set[Path] = frozenset()) -> Outcome:
 
 def nonfinite(path: Path) -> str:
     """The first dataset of /result, /trajectory or /mesh (a result file) or of a sweep's
-    table with a non-finite number where a number is due, else ''."""
+    table with a non-finite number where a number is due, else '' (a utilisation is NaN
+    where no breaking load or capacity is given: not checked, as documented)."""
     import h5py
 
     try:
@@ -434,6 +435,8 @@ def nonfinite(path: Path) -> str:
             if group not in h5 or not hasattr(h5[group], "items"):
                 continue
             for name, ds in h5[group].items():
+                if "utilisation" in name:  # NaN: no breaking load or capacity (documented)
+                    continue
                 if hasattr(ds, "dtype") and ds.dtype.kind == "f" and ds.size:
                     arr = ds[()]
                     if not np.all(np.isfinite(arr)):

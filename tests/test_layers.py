@@ -3,7 +3,7 @@ goes to the same layer or a lower one, and no two modules import each other (dir
 round a loop), so that no import inside a function hides a cycle.
 
     errors < kernels < model < terms < scene < solver < case, output < formfind, run < validate
-    < sweep < plot < study < cli
+    < sweep < plot, report < study < cli
 
 (``catenet/__init__.py`` and ``__main__.py`` load any layer on first use.) Imports under
 ``if TYPE_CHECKING:`` are annotations only and do not count. Also: no module over
@@ -32,7 +32,7 @@ LAYERS = (
     ("formfind", "run"),
     ("validate",),
     ("sweep",),
-    ("plot",),
+    ("plot", "report"),
     ("study",),
     ("cli",),
 )

@@ -132,6 +132,22 @@ class MaterialConfig(Declared):
         write="changed",
         doc="rods: the unloaded shape: straight, or as given in the geometry",
     )
+    breaking_load: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="N",
+        doc="minimum breaking force F_min of the cable, for its utilisation (see [design]); "
+        "none: the utilisation of its edges is NaN (not checked)",
+    )
+    proof_load: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="N",
+        doc="characteristic proof force F_k (0.2 % or 0.1 % proof load), optional: "
+        "F_Rd = min(k_e F_min / (1.5 gamma_R), F_k / gamma_R)",
+    )
 
     @property
     def cross_section(self) -> float | None:
@@ -250,6 +266,11 @@ def parse_material(ck: Checker, m_v: Any, ctx: Context, geometry: Any) -> Materi
         ck.add(
             f"material.prestress = {prestress!r}: tension-only cables carry no compression: "
             "must be >= 0 (or set material.tension_only = false for struts)"
+        )
+    if v["proof_load"] not in (None, BAD) and v["breaking_load"] is None:
+        ck.add(
+            f"material.proof_load = {v['proof_load']!r}: needs material.breaking_load (the "
+            "resistance F_Rd is min(k_e F_min / (1.5 gamma_R), F_k / gamma_R))"
         )
     density = v["density"]
     if density not in (BAD, 0.0) and "EA" in given and not given & {"radius", "area"}:

@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from catenet.case.design import DesignConfig
 from catenet.case.formfind import FormfindConfig, check_formfind_case, parse_formfind
 from catenet.case.guard import guard_size
 from catenet.case.keys import (
@@ -78,6 +79,7 @@ class Case:
     load_cases: tuple = ()  # [[load_case]]: loads solved from the base state
     combinations: tuple = ()  # [[combination]]: factored sums of load cases
     targets: tuple = ()  # [[target]]: what `catenet formfind` varies the force densities for
+    design: DesignConfig | None = None  # [design]: partial factors (None: the defaults)
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -107,6 +109,8 @@ class Case:
             out["combination"] = [c.to_dict() for c in self.combinations]
         if self.targets:
             out["target"] = [t.to_dict() for t in self.targets]
+        if self.design is not None and self.design.to_dict():
+            out["design"] = self.design.to_dict()
         return plain(out)
 
     def to_toml(self) -> str:
@@ -129,6 +133,7 @@ TOP_KEYS = (
     "load_case",
     "combination",
     "target",
+    "design",
 )
 
 
@@ -183,6 +188,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     masses = parse_masses(ck, data.get("mass"), ctx)
     load_cases = parse_load_cases(ck, data.get("load_case"), ctx)
     combinations = parse_combinations(ck, data.get("combination"), ctx, load_cases)
+    design = None
+    if "design" in data:
+        design = parse_table(ck, data["design"], DesignConfig, "design", ctx)
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None
@@ -235,6 +243,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         load_cases=load_cases,
         combinations=combinations,
         targets=targets,
+        design=design,
         source=source,
     )
 

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from catenet.case.coarse import coarse_case
+from catenet.case.design import edge_design
 from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import show
 from catenet.case.kinds.base import expand, with_prefix
@@ -92,6 +93,7 @@ def _build(case: Case) -> Scene:
     scene = dataclasses.replace(
         scene,
         cases=_load_cases(case, scene.net, built),
+        design=edge_design(case, scene.net, built),
         coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
     )
     if case.solver.self_contact:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from catenet.case.design import DesignConfig
 from catenet.case.keys import (
     BAD,
     Checker,
@@ -508,4 +509,5 @@ SECTIONS: dict[str, type] = {
     "load": LoadConfig,
     "solver": SolverConfig,
     "output": OutputConfig,
+    "design": DesignConfig,
 }

@@ -21,6 +21,10 @@ COMMANDS = {
     "validate": ("catenet.cli.validate", "Check catenet against the analytic cable solutions."),
     "bench": ("catenet.cli.bench", "Time the n = 34 solve, backend, threads and cold start here."),
     "plot": ("catenet.cli.plot", "Draw figures from a result file or a sweep directory."),
+    "report": (
+        "catenet.cli.report",
+        "Tables of a result file's cases: tensions, utilisation, reactions.",
+    ),
     "export": ("catenet.cli.export", "Write a result file's frames as VTU, VTK or XDMF files."),
     "repair": ("catenet.cli.repair", "Make a result file open in every reader (killed runs)."),
     "info": ("catenet.cli.info", "Versions, linear-solver backend, threads, JIT cache."),

@@ -61,7 +61,8 @@ def command(
     --mode K (a file of catenet modes): mode K's frames over one period,
     STEM_modeK_0000.vtu ..., times the phase, point data shape (mass-normalised).
 
-    Needs meshio (pip install meshio). Prints the directory and the number of files.
+    Writes through meshio (installed with catenet). Prints the directory and the number
+    of files.
     Exit status 2 for a missing or unreadable file or a bad --frames.
     """
     setup_logging(quiet, verbose, debug)

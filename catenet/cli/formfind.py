@@ -83,6 +83,9 @@ def _summary(written) -> None:
         f"{'net':<12} {f.net.n_net} nodes, {f.net.n_edges} edges, "
         f"{int(np.count_nonzero(f.net.fixed[: f.net.n_net]))} fixed",
         f"{'tension':<12} {float(force.min()):.6g} .. {float(force.max()):.6g} N",
+        f"{'density':<12} {float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m "
+        "(force densities q = tension / length)",
+        *shape_lines(f, written.scene),
         *_targets(f),
         f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
         f"{'output':<12} {written.result_file}",
@@ -121,6 +124,50 @@ def _targets(f) -> list[str]:
     out = [f"{'design':<12} {design}"]
     out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
     return out
+
+
+def shape_lines(f, scene) -> list[str]:
+    """What the shape found is: the supports' span, the lowest and highest node, each
+    node set's height against the supports (a rise above them, a sag below), and per
+    cable its tension and force-density range."""
+    import numpy as np
+
+    n = f.net.n_net
+    x = f.x[:n]
+    fixed = np.flatnonzero(f.net.fixed[:n])
+    lines = []
+    if fixed.size >= 2:
+        plan = x[fixed, :2]
+        span = float(np.max(np.linalg.norm(plan[:, None] - plan[None], axis=2)))
+        lines.append(f"{'span':<12} {span:.6g} m (the largest plan distance between supports)")
+    low, high = int(np.argmin(x[:, 2])), int(np.argmax(x[:, 2]))
+    lines.append(
+        f"{'height':<12} lowest node {low} at z = {x[low, 2]:.6g} m, highest node {high} at "
+        f"z = {x[high, 2]:.6g} m"
+    )
+    base = float(x[fixed, 2].mean()) if fixed.size else 0.0
+    sets = {} if scene is None else dict(scene.sets or {})
+    for name, nodes in sets.items():
+        if str(name).startswith("cable:") or not len(nodes):
+            continue
+        z = x[np.asarray(nodes, dtype=np.int64), 2]
+        rise = float(z.mean()) - base
+        what = "rise" if rise >= 0 else "sag"
+        lines.append(
+            f"{'set':<12} {name}: z = {z.min():.6g} .. {z.max():.6g} m, {what} "
+            f"{abs(rise):.6g} m (its mean against the supports' mean z = {base:.6g} m)"
+        )
+    cables = None if scene is None else scene.cables
+    if cables is not None:
+        force, q = f.force, f.q
+        for k, name in enumerate(cables.names):
+            on = np.asarray(cables.edge) == k
+            if on.any():
+                lines.append(
+                    f"{'cable':<12} {name}: tension {force[on].min():.6g} .. "
+                    f"{force[on].max():.6g} N, q {q[on].min():.6g} .. {q[on].max():.6g} N/m"
+                )
+    return lines
 
 
 __all__ = ["command"]

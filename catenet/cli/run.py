@@ -307,8 +307,15 @@ def _balance(row, scale: float) -> str:
 
 
 def _summary(case, result, path: Path | None) -> None:
-    from catenet.cli.summary import cases_table, envelope_lines, state_lines
-    from catenet.run.advice import LARGE_BYTES, format_bytes, newmark_contact
+    from catenet.cli.summary import (
+        cases_table,
+        envelope_lines,
+        state_lines,
+        support_line,
+        utilisation_line,
+    )
+    from catenet.run.advice import LARGE_BYTES, format_bytes
+    from catenet.run.integrator_advice import newmark_contact
 
     s = result.report
     numbers = {**s.summary, "delta_over_L": s.delta_over_L, "size": s.size}
@@ -357,6 +364,10 @@ def _summary(case, result, path: Path | None) -> None:
     if s.cases:
         table = cases_table(s.cases, len(result.tension))
         lines[-1:-1] = table + envelope_lines(s.envelope)
+    lines.insert(-1, utilisation_line(s.summary, s.cases))
+    anchors = support_line(s.summary, s.cases)
+    if anchors is not None:
+        lines.insert(-1, anchors)
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

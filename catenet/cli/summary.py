@@ -136,11 +136,58 @@ def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
         f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N"
         f"{_cable_peak(c, dynamic)}, slack {100 * c['slack_fraction']:.3g} % of its length"
     )
+    if math.isfinite(c.get("max_utilisation", math.nan)):
+        line += f", utilisation {c['max_utilisation']:.4g}"
     if c.get("slack_edges"):
         line += f" ({c['slack_edges']} slack edges)"
     if c.get("max_compression", 0) > 0:
         line += f", compression {c['max_compression']:.6g} N in its struts"
     return line
+
+
+def utilisation_line(base: dict, cases: dict) -> str:
+    """The largest utilisation (design tension / design resistance) of the base state
+    ``base`` and the load cases ``cases`` (each the summary's numbers), with its edge,
+    cable and case; or that no material gives a breaking load."""
+    states = [("the base state", base), *cases.items()]
+    known = [
+        (s["max_utilisation"], name, s)
+        for name, s in states
+        if math.isfinite(s.get("max_utilisation", math.nan))
+    ]
+    if not known:
+        return (
+            f"{'utilisation':<{W}} not checked: no material gives breaking_load "
+            "(material.breaking_load [N])"
+        )
+    value, name, s = max(known, key=lambda row: row[0])  # the first of equals
+    cable = s.get("max_utilisation_cable", "")
+    where = f"edge {s['max_utilisation_edge']}" + (f", cable {cable}" if cable else "")
+    line = f"{'utilisation':<{W}} {value:.4g} ({where}; {name}"
+    peak = s.get("peak_utilisation", math.nan)
+    if math.isfinite(peak) and _more(peak, value):
+        line += f"; peak over the run {peak:.4g} at t = {s['peak_utilisation_time']:.4g} s"
+    verdict = "exceeds 1: the design resistance is exceeded" if value > 1.0 else "<= 1"
+    return line + f"; F_Ed / F_Rd, EN 1993-1-11 with [design]'s factors: {verdict})"
+
+
+def support_line(base: dict, cases: dict) -> str | None:
+    """The largest support utilisation (|R| / capacity, [[design.support]]) of the base
+    state and the cases, with its node and case; None where no support has a capacity."""
+    states = [("the base state", base), *cases.items()]
+    known = [
+        (s["max_support_utilisation"], name, s)
+        for name, s in states
+        if math.isfinite(s.get("max_support_utilisation", math.nan))
+    ]
+    if not known:
+        return None
+    value, name, s = max(known, key=lambda row: row[0])
+    verdict = "exceeds 1: a support's capacity is exceeded" if value > 1.0 else "<= 1"
+    return (
+        f"{'supports':<{W}} utilisation {value:.4g} (node {s['max_support_utilisation_node']}; "
+        f"{name}; |R| / capacity of [[design.support]]: {verdict})"
+    )
 
 
 def envelope_lines(env: dict) -> list[str]:
@@ -150,6 +197,8 @@ def envelope_lines(env: dict) -> list[str]:
         ("tension_max", "largest tension", "edge", "N"),
         ("tension_min", "least tension", "edge", "N"),
         ("displacement_max", "largest displacement", "node", "m"),
+        ("utilisation_max", "largest utilisation", "edge", ""),
+        ("support_utilisation_max", "largest support utilisation", "node", ""),
     ):
         if key in env:
             e = env[key]
@@ -157,7 +206,8 @@ def envelope_lines(env: dict) -> list[str]:
             if key == "tension_min" and value < 0:  # a strut: its compression
                 what, value = "largest compression", -value
             lines.append(
-                f"{'envelope':<{W}} {what} {value:.6g} {unit} ({where} {e['at']}, {e['case']})"
+                f"{'envelope':<{W}} {what} {value:.6g}{' ' if unit else ''}{unit} "
+                f"({where} {e['at']}, {e['case']})"
             )
     return lines
 
@@ -166,19 +216,22 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
     """One row per load case and combination (``result.report.cases``): the largest
     displacement and its node, the largest tension and its edge, the largest strut
     compression, the slack edges and the largest reaction, SI units."""
+    util = any(math.isfinite(s.get("max_utilisation", math.nan)) for s in cases.values())
     head = (
         f"{'load case':<16} {'loads [N]':>11} {'max displ. [m]':>14} {'node':>6} "
         f"{'max tension [N]':>15} {'edge':>6} {'compr. [N]':>11} {'slack':>6} "
-        f"{'max reaction [N]':>16}  converged"
+        f"{'max reaction [N]':>16}" + (f" {'utilisation':>11}" if util else "") + "  converged"
     )
     rows = [head]
     for name, s in cases.items():
         applied = math.hypot(*s.get("applied_resultant", [0.0, 0.0, 0.0]))
+        use = f" {s.get('max_utilisation', math.nan):>11.4g}" if util else ""
         rows.append(
             f"{name:<16} {applied:>11.6g} {s['max_displacement']:>14.6g} "
             f"{s['max_displacement_node']:>6} {s['max_tension']:>15.6g} "
             f"{s['max_tension_edge']:>6} {s['max_compression']:>11.6g} {s['slack_edges']:>6} "
-            f"{s['max_reaction']:>16.6g}  " + ("yes" if s["converged"] else f"no: {s['error']}")
+            f"{s['max_reaction']:>16.6g}{use}  "
+            + ("yes" if s["converged"] else f"no: {s['error']}")
         )
     rows.append(
         f"{'':<16} (loads: the resultant of each case's applied loads, the base state's "

@@ -147,6 +147,7 @@ class Written:
     case: object
     result_file: Path
     case_file: Path
+    scene: object = None  # the form-finding case's scene (its cables and node sets)
 
 
 def case_file_for(out: Path) -> Path:
@@ -205,7 +206,7 @@ def write_formfind(case: Case, out: str | Path | None = None) -> Written:
         report.write(out, found)
     toml_path.parent.mkdir(parents=True, exist_ok=True)
     toml_path.write_text(_header(case, found, out) + resolved, encoding="utf-8")
-    return Written(found, written, out, toml_path)
+    return Written(found, written, out, toml_path, scene)
 
 
 def _header(case: Case, found: FormFound, out: Path) -> str:

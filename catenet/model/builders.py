@@ -144,7 +144,7 @@ class SquareNet:
     size: float
     n: int
     alpha: float
-    line: np.ndarray | None = None  # (M,) the cable of every edge (A_k first, then B_j)
+    cable: np.ndarray | None = None  # (M,) each edge's cable: A_k is k, B_j is m + j
 
 
 def square_net(
@@ -162,13 +162,13 @@ def square_net(
     made = _SquareNodes(_Cables.of(n, alpha, size))
     fixed: list[int] = []
     edges: list[np.ndarray] = []
-    line: list[np.ndarray] = []
+    owner: list[np.ndarray] = []
     for line_id in range(n):
         breaks, ends = made.breaks(line_id)
         fixed.extend(ends)
         pieces = made.pieces(line_id, breaks, edge_length)
         edges += pieces
-        line += [np.full(len(p), line_id, dtype=np.int64) for p in pieces]
+        owner += [np.full(len(p), line_id, dtype=np.int64) for p in pieces]
     xy = np.concatenate(made.points)
     nodes = np.column_stack([xy, np.zeros(len(xy))])
     edges_arr = np.concatenate(edges)
@@ -189,8 +189,15 @@ def square_net(
         size=float(size),
         n=int(n),
         alpha=float(alpha),
-        line=np.concatenate(line),
+        cable=np.concatenate(owner),
     )
+
+
+def square_net_cables(n: int) -> tuple[str, ...]:
+    """The names of the square net's cables, in the order of ``SquareNet.cable``: A0 ..
+    A(m-1) (family A, along u), then B0 .. B(m-1) (family B, along v)."""
+    m = n // 2
+    return tuple(f"A{k}" for k in range(m)) + tuple(f"B{k}" for k in range(m))
 
 
 def _check_square(n: int, alpha: float, size: float, edge_length: float) -> None:

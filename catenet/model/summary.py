@@ -21,8 +21,14 @@ source of the run's printed summary, the /result attributes and the sweep table'
   the load factor of a static run), ``peak_displacement`` [m], ``peak_displacement_node``,
   ``peak_displacement_time``.
 
+``summarize_result`` adds, where the scene's materials give a breaking load
+(``catenet.model.design``), ``max_utilisation`` (design tension / design resistance),
+``max_utilisation_edge`` and, with cables, ``max_utilisation_cable``; with peaks also
+``peak_utilisation``, ``peak_utilisation_edge`` and ``peak_utilisation_time``; where
+supports have a capacity, ``max_support_utilisation`` (|R| / capacity) and its node.
+
 ``cable_summary`` gives the same per cable of a graph with cables (with peaks: each
-cable's ``peak_tension``, its time and edge).
+cable's ``peak_tension``, its time and edge; with utilisations: ``max_utilisation``).
 """
 
 from __future__ import annotations
@@ -211,7 +217,7 @@ def _peaks(p: dict, free: np.ndarray) -> dict:
 
 
 def cable_summary(
-    net: Net, x, tension, edge_cable: np.ndarray, names, peaks=None
+    net: Net, x, tension, edge_cable: np.ndarray, names, peaks=None, utilisation=None
 ) -> dict[str, dict]:
     """Per cable (``edge_cable`` (M,): each edge's cable index, -1: none): ``max_tension``
     (the largest axial force, negative for a strut in compression: cable_max_tension),
@@ -219,7 +225,8 @@ def cable_summary(
     ``slack_edges`` (tension-only edges slack), ``strut`` (no edge of it is tension-only).
     With the run's ``peaks`` (a ``Peaks`` or its ``arrays()``) also ``peak_tension``: the
     largest of its edges' peak tensions over the run (``/result/cable_peak_tension``),
-    ``peak_tension_time`` and ``peak_tension_edge``."""
+    ``peak_tension_time`` and ``peak_tension_edge``. With ``utilisation`` (M,) per edge
+    (NaN: not known) also ``max_utilisation``: the largest of its edges' (NaN: none known)."""
     tension = np.asarray(tension, dtype=np.float64)
     n = len(names)
     top, slack = measures.cable_stats(net, x, tension, edge_cable, n)
@@ -245,6 +252,13 @@ def cable_summary(
         arrays = peaks if isinstance(peaks, dict) else peaks.arrays()
         for row, peak in zip(out.values(), _cable_peaks(arrays, edge_cable, n), strict=True):
             row.update(peak)
+    if utilisation is not None:
+        u = np.asarray(utilisation, dtype=np.float64)
+        top_u = np.full(n, -np.inf)
+        known = on & np.isfinite(u)
+        np.maximum.at(top_u, edge_cable[known], u[known])
+        for row, value in zip(out.values(), top_u, strict=True):
+            row["max_utilisation"] = float(value) if np.isfinite(value) else float("nan")
     return out
 
 
@@ -305,6 +319,14 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
         out["sag_vertical"] = chain["vertical"]
         out["sag_node"] = chain["node"]
     cables = scene.cables
+    design = scene.design if scene.design is not None and scene.design.given else None
+    use = None if design is None else design.utilisation(res.tension)
+    if use is not None:
+        out.update(_utilisation(scene, use, design, res.peaks))
+    anchored = scene.design is not None and scene.design.anchored and res.reaction is not None
+    if anchored:  # supports with a capacity: the largest |R| / capacity
+        k, value = _largest_known(scene.design.support_utilisation(res.reaction))
+        out["max_support_utilisation"], out["max_support_utilisation_node"] = value, k
     if cables is not None:  # which cable the largest displacement belongs to
         out["max_displacement_cable"] = _cable_of(scene.net, cables, out["max_displacement_node"])
         out["cables"] = cable_summary(
@@ -314,6 +336,7 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
             cables.edge,
             cables.names,
             peaks=res.peaks,
+            utilisation=use,
         )
     return out
 
@@ -339,6 +362,41 @@ def _bending(scene: Scene, x: np.ndarray) -> dict:
         "max_bending_moment_node": node,
         "max_curvature": float(kappa[node]),
     }
+
+
+def _utilisation(scene: Scene, use: np.ndarray, design, peaks) -> dict:
+    """The largest utilisation, its edge and cable ("" without one); with the run's
+    peaks, the largest over the run (from each edge's peak tension), edge and time."""
+    k, value = _largest_known(use)
+    out: dict = {"max_utilisation": value, "max_utilisation_edge": k}
+    if scene.cables is not None:
+        out["max_utilisation_cable"] = _edge_cable(scene.cables, k)
+    if peaks is not None:
+        arrays = peaks if isinstance(peaks, dict) else peaks.arrays()
+        top = design.utilisation(np.nan_to_num(arrays["peak_tension"], nan=0.0))
+        e, peak = _largest_known(top)
+        out["peak_utilisation"] = peak
+        out["peak_utilisation_edge"] = e
+        when = arrays["peak_tension_time"]
+        out["peak_utilisation_time"] = float(when[e]) if e >= 0 else float("nan")
+    return out
+
+
+def _largest_known(values: np.ndarray) -> tuple[int, float]:
+    """The first edge of the largest finite value and the value ((-1, NaN): none)."""
+    known = np.flatnonzero(np.isfinite(values))
+    if known.size == 0:
+        return -1, float("nan")
+    k = first_extreme(values, known)
+    return k, float(np.max(values[known]))
+
+
+def _edge_cable(cables, edge: int) -> str:
+    """The name of the cable of ``edge`` ("" for none)."""
+    if edge < 0:
+        return ""
+    c = int(np.asarray(cables.edge)[edge])
+    return str(cables.names[c]) if c >= 0 else ""
 
 
 def _applied(scene: Scene, res: Result, loads: Loads | None = None) -> list[float]:

@@ -14,8 +14,8 @@ once for a fixed one, ``STEM_obstacleJ_K.ext`` at every exported frame for a mov
 (``STEM.pvd``) that gives every file its time, the net as part 0 and each obstacle as a
 part of its own.
 
-meshio is an optional dependency (``pip install meshio`` or ``catenet[export]``): it is
-imported only here, when a file is exported.
+meshio is a dependency of every install (pyproject.toml); it is imported only here, when
+a file is exported (an environment without it gets one clear message).
 """
 
 from __future__ import annotations

@@ -3,9 +3,11 @@ tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 ``cable_peak_tension`` and ``cable_peak_tension_time``), reactions and contact forces,
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
 ``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
-``bending_moment`` and ``curvature`` per node, velocities and
-the newmark scheme's acceleration where the run keeps them, and the attributes a user
-reads first (``catenet.model.summary``)."""
+``bending_moment`` and ``curvature`` per node, velocities and the newmark scheme's
+acceleration where the run keeps them, each edge's ``utilisation`` (and
+``peak_utilisation`` from its peak tension; per cable ``cable_max_utilisation``; NaN where
+no breaking load is given: ``catenet.model.design``) and the attributes a user reads
+first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 
@@ -50,15 +52,21 @@ def write_result_group(
     g.create_dataset("tension", data=tension)
     cables = scene.cables
     peaks = res.peaks
+    use = utilisation(scene, tension)
+    g.create_dataset("utilisation", data=use)
+    if peaks is not None and np.isfinite(use).any():
+        top = np.nan_to_num(np.asarray(peaks.arrays()["peak_tension"]), nan=0.0)
+        g.create_dataset("peak_utilisation", data=utilisation(scene, top))
     if cables is not None:
         per = summary.cable_summary(
-            scene.net, res.x, tension, cables.edge, cables.names, peaks=peaks
+            scene.net, res.x, tension, cables.edge, cables.names, peaks=peaks, utilisation=use
         )
         keys = [
             ("max_tension", np.float64),
             ("slack_fraction", np.float64),
             ("max_compression", np.float64),
             ("slack_edges", np.int64),
+            ("max_utilisation", np.float64),
         ]
         if peaks is not None:
             keys += [("peak_tension", np.float64), ("peak_tension_time", np.float64)]
@@ -74,6 +82,8 @@ def write_result_group(
         g.create_dataset("curvature", data=kappa)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
+    if scene.design is not None and scene.design.anchored:  # |R| / capacity per node
+        g.create_dataset("support_utilisation", data=scene.design.support_utilisation(reaction))
     contact = res.contact_force
     if contact is None or not np.all(np.isfinite(contact)):
         contact = np.zeros_like(res.x)
@@ -87,3 +97,13 @@ def write_result_group(
     for key, value in {**result_attrs(res, scene, tension), **attrs}.items():
         g.attrs[key] = value
     return g
+
+
+def utilisation(scene: Scene, tension: np.ndarray) -> np.ndarray:
+    """Each edge's utilisation (design tension / design resistance, ``scene.design``) of
+    the tensions ``tension`` (M,); NaN where no breaking load is given (every edge of a
+    scene without design data)."""
+    design = scene.design
+    if design is None:
+        return np.full(len(tension), np.nan)
+    return np.asarray(design.utilisation(tension), dtype=np.float64)

@@ -53,6 +53,7 @@ from catenet.output.files import (
     write_image,
 )
 from catenet.output.metadata import environment
+from catenet.output.netsets import write_net_index
 from catenet.output.obstacles import Obstacles
 from catenet.output.reader import LIBVER, TRAJECTORY
 from catenet.output.result_group import write_result_group
@@ -237,12 +238,7 @@ class ResultWriter:
         mesh.attrs["size"] = float(scene.size)
         write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)
         self.obstacles.write_mesh(mesh)  # /mesh/obstacles
-        cables = scene.cables
-        if cables is not None:  # a graph's cables: the cable of every edge (-1: none)
-            import h5py
-
-            mesh.create_dataset("cable", data=np.asarray(cables.edge, dtype=np.int64))
-            mesh.attrs["cable_names"] = np.array(cables.names, dtype=h5py.string_dtype())
+        write_net_index(mesh, scene)  # cables and node sets by name (catenet.output.netsets)
 
     def _create_trajectory(self, h5) -> None:
         n, m = self.scene.net.n_nodes, self.scene.net.n_edges

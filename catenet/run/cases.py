@@ -6,12 +6,14 @@ base run's workspace (one sparsity pattern, one symbolic analysis); not superpos
 Results go to ``/cases/<name>/`` with the layout of ``/result`` (its attributes: the
 summary's numbers, ``kind`` "load_case" or "combination", a combination's ``factors``),
 and the envelopes over the cases solved to ``/envelope/``: ``tension_max``,
-``tension_min`` (M,) [N], ``displacement_max`` (N,) [m], each with the index of the case
-that governs (``*_case``, into the attribute ``cases``).
+``tension_min`` (M,) [N], ``displacement_max`` (N,) [m], ``utilisation_max`` (M,) (NaN
+where no breaking load is given), each with the index of the case that governs
+(``*_case``, into the attribute ``cases``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 from dataclasses import dataclass, field
@@ -34,13 +36,15 @@ __all__ = ["CaseRun", "governing", "pick", "solve_cases", "write_cases"]
 @dataclass
 class CaseRun:
     """A load case or combination solved: its name, kind, the Result (None when it
-    failed before any state), the summary's numbers and the error's text ("" when none)."""
+    failed before any state), the summary's numbers, the error's text ("" when none)
+    and the warnings and errors logged while it was solved."""
 
     name: str
     combination: bool
     result: Result | None
     numbers: dict = field(default_factory=dict)
     error: str = ""
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def converged(self) -> bool:
@@ -63,61 +67,143 @@ def pick(scene, only: str | None) -> tuple:
 
 def solve_cases(scene, settings, ws, base, cases, interrupt=None) -> list[CaseRun]:
     """Solves each of ``cases`` (``catenet.case.scene.LoadCase``) from the base Result on
-    the workspace ``ws``; a case that fails keeps its last good state and the others go on."""
-    from catenet.model import summary
-    from catenet.model.cases import Increment
-    from catenet.run.advice import implausible, unit_slips
-    from catenet.solver import path as sv
-    from catenet.solver.newton import interruptible
-    from catenet.solver.result import Outcome, finish
-    from catenet.solver.stability import CollapseError
+    the workspace ``ws``; a case that fails keeps its last good state and the others go
+    on. Every warning and error logged while a case is solved names it, and is kept
+    with it (``CaseRun.warnings``)."""
+    from catenet.run.advice import unit_slips
 
     case = scene.case
     slips = unit_slips(case, scene.net) if case is not None else []
     runs = []
     for c in cases:
-        loads = Increment(base=scene.loads, added=c.force)
-        problem = Scene(scene.net, loads, scene.terms)
-        start = sv.Start(x=base.x)
         log.info("%s %s: solving from the base state", _kind(c), c.name)
-        try:
-            with interruptible(interrupt):
-                r = sv.solve(problem, settings, workspace=ws, start=start)
-            error = "" if r.converged else r.message
-        except CatenetError as exc:
-            if isinstance(exc, ConfigError):
-                raise
-            good = exc.last_good
-            x = base.x if good is None or good.x is None else good.x
-            r = finish(
-                ws.system,
-                loads,
-                np.asarray(x, dtype=np.float64),
-                1.0 if good is None else float(good.time),
-                converged=False,
-                iterations=0 if good is None else int(good.iterations),
-                residual=float("inf"),
-                time=0.0 if good is None else float(good.time),
-                message=str(exc),
-                outcome=Outcome.FAILED,
-                stability=exc.verdict if isinstance(exc, CollapseError) else "",
-            )
-            error = str(exc)
-            log.error("%s %s: %s", _kind(c), c.name, exc)
-        if r.converged and not error:  # strains and displacements a cable can have
-            what, extreme = implausible(scene.net, r.x, float(scene.size))
-            if what and slips:  # the likely cause, named with each case
-                what = f"{what}; {slips[0]}"
-            if what:
-                log.warning("%s %s: %s", _kind(c), c.name, what)
-            if extreme:
-                error = f"implausible (check units and supports): {what}"
-        numbers = summary.summarize_result(scene, r, loads)
-        runs.append(CaseRun(c.name, c.combination, r, numbers, error))
+        with heard(f"{_kind(c)} {c.name}") as got:
+            run = _solve_one(scene, settings, ws, base, c, interrupt, slips)
+        run.warnings = list(got.messages)
+        runs.append(run)
         if interrupt is not None and interrupt():  # a signal: the cases after it wait
             log.warning("interrupted: the load cases after %s are not solved", c.name)
             break
     return runs
+
+
+def _solve_one(scene, settings, ws, base, c, interrupt, slips) -> CaseRun:
+    """One load case or combination ``c`` solved from the base Result (its messages
+    logged without its name: ``heard`` adds it)."""
+    from catenet.model import summary
+    from catenet.model.cases import Increment
+    from catenet.run.advice import implausible
+    from catenet.solver import path as sv
+    from catenet.solver.newton import interruptible
+    from catenet.solver.result import Outcome, finish
+    from catenet.solver.stability import CollapseError
+
+    loads = Increment(base=scene.loads, added=c.force)
+    problem = Scene(scene.net, loads, scene.terms)
+    start = sv.Start(x=base.x)
+    try:
+        with interruptible(interrupt):
+            r = sv.solve(problem, settings, workspace=ws, start=start)
+        error = "" if r.converged else r.message
+    except CatenetError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        good = exc.last_good
+        x = base.x if good is None or good.x is None else good.x
+        r = finish(
+            ws.system,
+            loads,
+            np.asarray(x, dtype=np.float64),
+            1.0 if good is None else float(good.time),
+            converged=False,
+            iterations=0 if good is None else int(good.iterations),
+            residual=float("inf"),
+            time=0.0 if good is None else float(good.time),
+            message=str(exc),
+            outcome=Outcome.FAILED,
+            stability=exc.verdict if isinstance(exc, CollapseError) else "",
+        )
+        error = str(exc)
+        log.error("%s", exc)
+    if r.converged and not error:  # strains and displacements a cable can have
+        what, extreme = implausible(scene.net, r.x, float(scene.size))
+        if what and slips:  # the likely cause, named with each case
+            what = f"{what}; {slips[0]}"
+        if what:
+            log.warning("%s", what)
+        if extreme:
+            error = f"implausible (check units and supports): {what}"
+    numbers = summary.summarize_result(scene, r, loads)
+    return CaseRun(c.name, c.combination, r, numbers, error)
+
+
+class Heard(logging.Handler):
+    """Collects the warnings and errors catenet logs (each message once, in order)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+        except (TypeError, ValueError):
+            text = str(record.msg)
+        if text not in self.messages:
+            self.messages.append(text)
+
+
+@contextlib.contextmanager
+def heard(what: str = ""):
+    """Inside the block, the warnings and errors catenet logs go to the yielded ``Heard``
+    as well; with ``what`` (a load case's "load case NAME"), each starts with ``what: ``
+    unless it names it already, so that the solver's warnings say which case they
+    concern."""
+    make = logging.getLogRecordFactory()
+    lead = f"{what}: "
+
+    def factory(*args, **kwargs):
+        record = make(*args, **kwargs)
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        if own and record.levelno >= logging.WARNING and not str(record.msg).startswith(lead):
+            text = lead.replace("%", "%%") if record.args else lead
+            record.msg = text + str(record.msg)
+        return record
+
+    handler = Heard()
+    own = logging.getLogger("catenet")
+    level, shown = own.level, own.getEffectiveLevel()
+    mute = _Below(shown)  # what the log did not show (-q: errors only) it still does not
+    outputs = logging.getLogger().handlers if shown > logging.WARNING else []
+    if outputs:
+        own.setLevel(logging.WARNING)  # made, so that they are kept
+    for out in outputs:
+        out.addFilter(mute)
+    own.addHandler(handler)
+    if what:
+        logging.setLogRecordFactory(factory)
+    try:
+        yield handler
+    finally:
+        own.removeHandler(handler)
+        for out in outputs:
+            out.removeFilter(mute)
+        if outputs:
+            own.setLevel(level)
+        if what:
+            logging.setLogRecordFactory(make)
+
+
+class _Below(logging.Filter):
+    """Drops catenet's records below ``level`` (the level the log showed)."""
+
+    def __init__(self, level: int) -> None:
+        super().__init__()
+        self.level = level
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        return not own or record.levelno >= self.level
 
 
 def _kind(c) -> str:
@@ -151,11 +237,20 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
         for run in runs:
             if run.result is None:
                 continue
-            attrs = {"kind": "combination" if run.combination else "load_case"}
+            attrs: dict = {"kind": "combination" if run.combination else "load_case"}
             if run.name in combos:
                 attrs["factors"] = json.dumps(combos[run.name])
             if run.error:
                 attrs["error"] = run.error
+            attrs["warnings"] = "\n".join(run.warnings)  # one a line, "" when none
+            applied = run.numbers.get("applied_resultant")  # the case's loads, not the base's
+            if applied is not None:
+                attrs.update(
+                    {
+                        f"applied_resultant_{a}": float(v)
+                        for a, v in zip("xyz", applied, strict=True)
+                    }
+                )
             write_result_group(
                 h5,
                 scene,
@@ -168,17 +263,32 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
             )
         done = [r for r in runs if r.result is not None]
         if done:
-            write_envelope(h5.create_group("envelope"), scene.net, done)
+            write_envelope(h5.create_group("envelope"), scene.net, done, scene.design)
 
 
-def envelope(net, runs: list[CaseRun]) -> dict[str, np.ndarray]:
+def envelope(net, runs: list[CaseRun], design=None) -> dict[str, np.ndarray]:
     """Over the cases: each edge's largest and least tension [N], each node's largest
-    displacement [m], and the index (into ``runs``: each with its Result) of the case
-    that governs each."""
+    displacement [m], each edge's largest utilisation (``design``, a
+    ``catenet.model.design.Design``; NaN where no breaking load is given), and the index
+    (into ``runs``: each with its Result) of the case that governs each (0 where no
+    utilisation is known)."""
     results = [r.result for r in runs if r.result is not None]
     assert len(results) == len(runs), "the envelope is over the cases solved"
     t = np.array([np.asarray(r.tension) for r in results])
     u = np.array([np.linalg.norm(np.asarray(r.x) - net.nodes, axis=1) for r in results])
+    use = np.full_like(t, np.nan) if design is None else design.utilisation(t)
+    known = np.isfinite(use).any(axis=0)
+    extra = {}
+    if design is not None and design.anchored:  # each support's largest |R| / capacity
+        zero = np.zeros_like(net.nodes)
+        r = np.array([zero if res.reaction is None else res.reaction for res in results])
+        su = np.nan_to_num(design.support_utilisation(r), nan=-np.inf)
+        extra = {
+            "support_utilisation_max": np.where(
+                np.isfinite(design.capacity), su.max(axis=0), np.nan
+            ),
+            "support_utilisation_max_case": su.argmax(axis=0),
+        }
     return {
         "tension_max": t.max(axis=0),
         "tension_max_case": t.argmax(axis=0),
@@ -186,17 +296,21 @@ def envelope(net, runs: list[CaseRun]) -> dict[str, np.ndarray]:
         "tension_min_case": t.argmin(axis=0),
         "displacement_max": u.max(axis=0),
         "displacement_max_case": u.argmax(axis=0),
+        "utilisation_max": np.where(known, np.nan_to_num(use, nan=-np.inf).max(axis=0), np.nan),
+        "utilisation_max_case": np.nan_to_num(use, nan=-np.inf).argmax(axis=0),
+        **extra,
     }
 
 
-def governing(net, runs: list[CaseRun]) -> dict:
+def governing(net, runs: list[CaseRun], design=None) -> dict:
     """The envelope's extremes and the cases that give them: ``tension_max`` [N] (edge,
     case), ``tension_min`` [N] (edge, case: the least tension, negative for a strut in
-    compression), ``displacement_max`` [m] (node, case); {} without a case solved."""
+    compression), ``displacement_max`` [m] (node, case), ``utilisation_max`` (edge,
+    case; only where a breaking load is given); {} without a case solved."""
     done = [r for r in runs if r.result is not None]
     if not done:
         return {}
-    env = envelope(net, done)
+    env = envelope(net, done, design)
     free = ~np.asarray(net.fixed, dtype=bool)
     free[net.n_net :] = False
     out = {}
@@ -204,7 +318,11 @@ def governing(net, runs: list[CaseRun]) -> dict:
         ("tension_max", True, None),
         ("tension_min", False, None),
         ("displacement_max", True, free),
+        ("utilisation_max", True, np.isfinite(env["utilisation_max"])),
+        ("support_utilisation_max", True, np.isfinite(env.get("support_utilisation_max", []))),
     ):
+        if key not in env:
+            continue
         values = env[key]
         idx = np.flatnonzero(where) if where is not None else np.arange(len(values))
         if idx.size == 0:
@@ -218,13 +336,29 @@ def governing(net, runs: list[CaseRun]) -> dict:
     return out
 
 
-def write_envelope(group, net, runs: list[CaseRun]) -> None:
-    for key, value in envelope(net, runs).items():
+def write_envelope(group, net, runs: list[CaseRun], design=None) -> None:
+    for key, value in envelope(net, runs, design).items():
         group.create_dataset(key, data=value)
     import h5py
 
     group.attrs["cases"] = np.array([r.name for r in runs], dtype=h5py.string_dtype())
     group.attrs["converged"] = all(r.converged for r in runs)
+
+
+def write_warnings(path, messages: list[str]) -> None:
+    """The base state's warnings as /result's attribute ``warnings`` (one a line, ""
+    when none) of the closed result file ``path`` (OutputError when it cannot be)."""
+    import h5py
+
+    from catenet.errors import OutputError
+    from catenet.output.files import describe
+
+    try:
+        with h5py.File(path, "a") as h5:
+            if "result" in h5:
+                h5["result"].attrs["warnings"] = "\n".join(dict.fromkeys(messages))
+    except OSError as exc:
+        raise OutputError(f"{path}: writing /result's warnings failed: {describe(exc)}") from None
 
 
 def solve_from_base(scene, settings, ws, result, cases, path, interrupt) -> tuple[dict, dict]:
@@ -240,7 +374,7 @@ def solve_from_base(scene, settings, ws, result, cases, path, interrupt) -> tupl
     numbers = {
         r.name: {**r.numbers, "converged": r.converged, "error": r.error} for r in result.cases
     }
-    envelope = governing(scene.net, result.cases)
+    envelope = governing(scene.net, result.cases, scene.design)
     if path is not None:
         write_cases(path, scene, scene.case, result.cases)
     return numbers, envelope

@@ -89,7 +89,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
     from catenet.case import build
     from catenet.output import check_output_path
-    from catenet.run import advice
+    from catenet.run import advice, integrator_advice
     from catenet.run.cases import pick
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -118,7 +118,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     if hopeless:  # no static equilibrium to find: say so at once, not after minutes
         raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
-    for message in notes + advice.newmark_contact(case) + advice.between_nodes(scene):
+    for message in notes + integrator_advice.newmark_contact(case) + advice.between_nodes(scene):
         log.warning("%s", message)
     trajectory = None
     if path is not None:
@@ -182,17 +182,18 @@ def run_case(
     ``on_done(scene, workspace, result)`` is called after a solve that ended (not one
     that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
-    from catenet.run.cases import solve_from_base
+    from catenet.run.cases import heard, solve_from_base, write_warnings
     from catenet.run.clock import Clock
     from catenet.solver import path as sv
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
-    run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
-    with clock.solving():
-        ws = sv.workspace(run.scene, run.settings)
-    hooks = Hooks(progress, stop, interrupt)
-    solved = _solve(run, ws, hooks, start, clock)
+    with heard() as base_heard:  # the base state's warnings, kept in /result
+        run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
+        with clock.solving():
+            ws = sv.workspace(run.scene, run.settings)
+        hooks = Hooks(progress, stop, interrupt)
+        solved = _solve(run, ws, hooks, start, clock)
     result = solved.result
     case_numbers: dict = {}  # each load case's summary numbers, by name
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
@@ -200,7 +201,11 @@ def run_case(
         case_numbers, envelope = solve_from_base(
             run.scene, run.settings, ws, result, run.cases, run.path, interrupt
         )
-    done = RunResult.of(result, _report(run, ws, result, solved.bodies, case_numbers, envelope))
+    with heard() as report_heard:
+        report = _report(run, ws, result, solved.bodies, case_numbers, envelope)
+    if run.path is not None:
+        write_warnings(run.path, base_heard.messages + report_heard.messages)
+    done = RunResult.of(result, report)
     if on_done is not None:
         on_done(run.scene, ws, done)
     return done
@@ -242,7 +247,7 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
     law, at the end or at a peak), the summary's numbers, a mechanism named, per cable
     the largest tension and the slack share."""
     from catenet.model import measures, summary
-    from catenet.run import advice
+    from catenet.run import advice, integrator_advice
 
     scene, case = run.scene, run.case
     beyond = advice.strain_beyond_law(scene.net, result.x)
@@ -253,7 +258,7 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
         passed = advice.peak_strain_beyond_law(scene.net, result.peaks, dynamic)
         if passed and not (dynamic and case.solver.t_end == "rest"):
             log.warning("%s", passed)
-    if lost := advice.integrator_loss(case, result):
+    if lost := integrator_advice.integrator_loss(case, result):
         log.warning("%s", lost)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables

@@ -58,6 +58,8 @@ class Scene:
     - ``obstacles``: (index, shape, Contact) of each obstacle the builder added (the
       index: its ``obstacle[k]`` in messages and in a case file); ``shown``: how
       messages show a value (a case file's scene: as written);
+    - ``design``: each edge's breaking load and the partial factors of its utilisation
+      (``catenet.model.design.Design``; None: no utilisation, all NaN);
     - ``case``: the case file's case it was built from (None: built in Python);
       ``coarsen(factor)``: the same scene with every edge ``factor`` times longer, or
       None (a nested start, ``catenet.solver.nested``; None: it cannot be coarsened).
@@ -79,6 +81,7 @@ class Scene:
     cases: tuple[Any, ...] = ()
     obstacles: tuple[tuple[int, Shape, Contact], ...] = ()
     case: Any = None
+    design: Any = None
     coarsen: Callable[[float], Scene | None] | None = None
     movers: tuple[Mover, ...] = ()
     own: Own | None = None

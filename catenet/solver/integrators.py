@@ -61,7 +61,7 @@ fine-step momentum to 1 % at 10 ms steps (implicit Euler: 47 % short), and on th
 capture scene it only loses energy (8.6 % in 1 s), where newmark above rho_inf 0.25
 creates it.
 
-In contact keep rho_inf <= 0.5 (``catenet.run.advice.newmark_contact`` warns): at 0.8 a
+In contact keep rho_inf <= 0.5 (``catenet.run.integrator_advice.newmark_contact`` warns): at 0.8 a
 box or ball dropped onto a net leaves it faster than it came and the rebound does not
 converge with h; at 0.5 it does (docs/howto/dynamic-runs.md). Likely mechanism: the
 barrier is a mode far beyond 1/h that a_n carries from step to step, losing only a factor

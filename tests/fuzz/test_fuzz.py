@@ -203,7 +203,7 @@ def result_files(tmp_path_factory):
 @settings(max_examples=80, **SETTINGS)
 @given(
     method=st.sampled_from(["dynamic", "static"]),
-    command=st.sampled_from(["plot", "export", "repair", "restart"]),
+    command=st.sampled_from(["plot", "export", "repair", "restart", "report"]),
     rng=st.randoms(use_true_random=False),
 )
 def test_damaged_result_files(tmp_path_factory, result_files, method, command, rng):
@@ -218,6 +218,9 @@ def test_damaged_result_files(tmp_path_factory, result_files, method, command, r
         args = ["export", damaged, "--to", rng.choice(["vtu", "xdmf"]), "-o", work / "ex"]
     elif command == "repair":
         args = ["repair", damaged]
+    elif command == "report":
+        args = ["report", damaged, "--format", rng.choice(["md", "csv", "html"])]
+        args += ["-o", work / "report"]
     else:
         args = ["run", case, "--restart", damaged, "-o", work / "again.h5", "-q"]
         args += ["--set", "solver.t_end=0.6", "--set", "solver.method=dynamic"]

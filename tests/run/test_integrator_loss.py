@@ -1,7 +1,7 @@
 """A dynamic run whose integrator removes much of the energy on its own says so: the
 box of benchmarks/peers/mujoco_drop.toml dropped onto the net, at the default 10 ms
 steps, leaves with half its momentum under implicit Euler (49 % of the energy gone) and
-within 1 % under bdf2 (``catenet.run.advice.integrator_loss``)."""
+within 1 % under bdf2 (``catenet.run.integrator_advice.integrator_loss``)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from catenet.case import load_case
-from catenet.run import advice
+from catenet.run import integrator_advice as advice
 from catenet.run.runner import run_case
 
 DROP = Path(__file__).parents[2] / "benchmarks" / "peers" / "mujoco_drop.toml"

@@ -16,7 +16,7 @@ from conftest import small_net
 from catenet.case import load_case
 from catenet.case.kinds import warn
 from catenet.cli import main
-from catenet.run import advice
+from catenet.run import integrator_advice as advice
 
 SPHERE = """
 [[obstacle]]

@@ -86,7 +86,7 @@ class SquareNetConfig(GeometryConfig):
         sq = geo.square_net(self.n, self.alpha, self.size, self.edge_length, material)
         names = {"center": sq.center}
         net = refit(sq.net, names, fixed, self.prestrain)
-        return Built(net, sq.center, self.size, names, lines=sq.line)
+        return Built(net, sq.center, self.size, names, lines=sq.cable)
 
     def area_force(self, net, pressure: float, size: float) -> Any:
         """The paper's pressure (contract §2): p L^2 over the square, shared equally by
