@@ -124,7 +124,8 @@ class TimeStepper:
         ``control``: a StepControl, or a RestControl (a run to rest: its steps grow as the
         static residual decays; ConvergenceError after its ``max_steps`` steps)."""
         to_rest = control if isinstance(control, RestControl) else None
-        self.polish = rest  # a run that may end at rest tests the static residual: polished
+        # a run that may end at rest (damped) tests the static residual: its steps polished
+        self.polish = rest and bool(np.any(np.asarray(self.damping) > 0.0))
         if self.pseudo and self.ledger is not None:
             self.ledger.judged = False  # stages change the potential: pseudo-time only
         while self.t < control.t_end * (1 - 1e-12) and not self.equilibrium:

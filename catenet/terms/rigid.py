@@ -158,6 +158,9 @@ class BodyFrame:
         return (3 * self.nodes[:, None] + np.arange(3)).ravel()
 
 
+_EYE = np.eye(3)
+
+
 def _dense_pattern(dofs_a, dofs_b):
     rows = np.repeat(dofs_a, len(dofs_b))
     cols = np.tile(dofs_b, len(dofs_a))
@@ -203,14 +206,12 @@ class Rigidity(Term):
 
     def hessian(self, x, values):
         A, C = self._C(x)
-        H = np.zeros((9, 9))  # vec(A) row-major: index 3 l + m
-        M = np.zeros((9, 9))  # column e: vec(dC) for dA = E_e
-        for e in range(9):
-            E = np.zeros((3, 3))
-            E.flat[e] = 1.0
-            M[:, e] = (E.T @ A + A.T @ E).ravel()
-        H += M.T @ M
-        H += 2.0 * np.kron(np.eye(3), C)  # C:(dA^T dA) = sum_l dA_lm C_mm' dA_lm'
+        # vec(A) row-major (index 3 l + m); column (l, m) of M: vec(dC) for dA = E_lm,
+        # dC_ij = E^T A + A^T E = delta_im A_lj + A_li delta_jm
+        M = (_EYE[:, None, None, :] * A[None, :, :, None].transpose(0, 2, 1, 3)).reshape(9, 9)
+        M += (A.T[:, None, :, None] * _EYE[None, :, None, :]).reshape(9, 9)
+        H = M.T @ M
+        H += 2.0 * np.kron(_EYE, C)  # C:(dA^T dA) = sum_l dA_lm C_mm' dA_lm'
         Hp = self._D.T @ (self.k * H) @ self._D
         values[:] = Hp.ravel()
         return True
