@@ -237,7 +237,7 @@ def _dynamic(
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
     if settings.initial_state == "equilibrium" and start.x is None:
-        x0 = _equilibrium(scene, settings, ws, start.t)
+        x0 = equilibrium_start(scene, settings, ws, start.t)
     v_scene = scene.velocity  # a case's [[mass]] velocities
     v = start.v if start.v is not None else v_scene
     v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
@@ -302,7 +302,7 @@ def _dynamic(
         raise
 
 
-def _equilibrium(scene: Scene, settings: Settings, ws: Workspace, t0: float) -> np.ndarray:
+def equilibrium_start(scene: Scene, settings: Settings, ws: Workspace, t0: float) -> np.ndarray:
     """solver.initial_state = "equilibrium": the static equilibrium of the scene under
     its loads, supports and water as they are at t0 (``Loads.at``), in settings.steps
     load steps; a failure raises as a static run's does (its last equilibrium kept)."""

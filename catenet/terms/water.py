@@ -71,6 +71,12 @@ class Buoyancy(Term):
         self.surface = float(water.surface)
         self.factor = 1.0
         self._scaled = self.weight
+        # E counts from the reference positions (a constant: forces unchanged), so that
+        # the energy balance compares energies of the motion's size, not of the depth
+        scratch = np.zeros_like(net.nodes)
+        self._zero = float(
+            buoyancy_gradient(net.nodes, self.edges, self.weight, self.half, self.surface, scratch)
+        )
 
     def set_factor(self, factor: float) -> None:
         self.factor = float(factor)
@@ -83,7 +89,8 @@ class Buoyancy(Term):
         return rows, cols
 
     def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
-        return float(buoyancy_gradient(x, self.edges, self._scaled, self.half, self.surface, grad))
+        e = buoyancy_gradient(x, self.edges, self._scaled, self.half, self.surface, grad)
+        return float(e) - self.factor * self._zero
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> bool:
         buoyancy_hessian(x, self.edges, self._scaled, self.half, self.surface, values)
