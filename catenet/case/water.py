@@ -27,6 +27,7 @@ from catenet.errors import ConfigError
 from catenet.model.limits import carried
 from catenet.model.water import G_STANDARD, Hydro, Water, Wave, jonswap
 
+MAX_SPEED = 1e6  # m/s: the water's speeds a case may give (the drag's energy goes as u^3)
 CURRENT = "[[z, ux, uy], ...]: at least one row of three finite numbers, z all different"
 
 
@@ -41,6 +42,10 @@ def _check_current(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
         if not ok or not all(carried(float(a)) for a in row):
             return ck.bad(f"{path}[{k}]", row, "must be [z, ux, uy]: three finite numbers [m, m/s]")
         rows.append(tuple(float(a) for a in row))
+    fast = [k for k, r in enumerate(rows) if math.hypot(r[1], r[2]) > MAX_SPEED]
+    if fast:
+        k = fast[0]
+        return ck.bad(f"{path}[{k}]", v[k], f"a speed beyond {MAX_SPEED:g} m/s (drag ~ u^3)")
     zs = [r[0] for r in rows]
     if len(set(zs)) != len(zs):
         return ck.bad(path, v, f"two rows at one depth z: must be {CURRENT}")
@@ -95,7 +100,7 @@ class WaterConfig(Declared):
     tp: float | None = real(
         None, gt=0, write="given", unit="s", shown="none", doc="spectrum: peak period"
     )
-    gamma: float = real(3.3, ge=1, unit="-", doc="spectrum: JONSWAP peak enhancement")
+    gamma: float = real(3.3, ge=1, lt=100, unit="-", doc="spectrum: JONSWAP peak enhancement")
     seed: int = integer(0, ge=0, doc="spectrum: the seed of its random phases")
     components: int = integer(100, ge=1, le=10000, doc="spectrum: regular components summed")
     heading: float = real(0.0, unit="deg", doc="spectrum: the direction the sea travels")
@@ -124,6 +129,16 @@ def parse_water(ck: Checker, value: Any, ctx: Context) -> WaterConfig | None | A
         missing = "hs" if w.hs is None else "tp"
         ck.add(f"water.{missing}: missing: water.spectrum = 'jonswap' needs hs and tp")
         return BAD
+    heights = [(f"water.wave[{k}]", v.height, v.period) for k, v in enumerate(w.waves)]
+    if w.spectrum is not None:
+        heights.append(("water.hs", w.hs, w.tp))
+    for path, height, period in heights:  # the orbital speed at the surface, pi H / T
+        if not math.pi * height / period <= MAX_SPEED:
+            ck.add(
+                f"{path}: height {height:g} m in {period:g} s: its water moves faster than "
+                f"{MAX_SPEED:g} m/s (drag ~ u^3)"
+            )
+            return BAD
     return w
 
 

@@ -211,6 +211,9 @@ node = "end"
         ({"water": "hs = 2.0"}, "only with water.spectrum"),
         ({"water": "[[water.wave]]\nheight = 1.0\nperiod = 0"}, "water.wave[0].period"),
         ({"water": "density = -1"}, "water.density"),
+        ({"water": "current = [[0, 1e100, 0]]"}, "a speed beyond"),
+        ({"water": 'spectrum = "jonswap"\nhs = 1e100\ntp = 1.0'}, "water.hs: height"),
+        ({"water": 'spectrum = "jonswap"\nhs = 1.0\ntp = 1.0\ngamma = 1e100'}, "water.gamma"),
         (
             {"material": "EA = 1e6", "load": "", "solver": 'method = "static"'},
             "material.hydro_diameter: missing",
