@@ -246,14 +246,24 @@ class Newmark:
         a0: np.ndarray | None = None,
     ) -> None:
         """The acceleration state at the start: ``a0`` (free DOFs, a restart's stored
-        state), else the physical acceleration M^-1 (f - grad E - mu M v)."""
+        state), else the physical acceleration M^-1 (f - grad E - mu M v) (M with the
+        water's added mass, ``Term.mass_blocks``)."""
         if a0 is not None:
             self.a = np.array(a0, dtype=np.float64)
             return
         system = potential.system
         _, grad = system.gradient(x)
         force = potential.f_free - grad.reshape(-1)[system.free_dofs]
-        self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
+        media = [t for t in system.terms if t.medium]  # water: its added mass moves too
+        if not media:
+            self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
+            return
+        free = ~system.net.fixed
+        blocks = sum(t.mass_blocks()[free] for t in media) + np.einsum(
+            "n,ij->nij", m_free[::3], np.eye(3)
+        )
+        a = np.linalg.solve(blocks, force.reshape(-1, 3)[..., None])[..., 0].reshape(-1)
+        self.a = a - damping * v.reshape(-1)[system.free_dofs]
 
     @property
     def _a(self) -> np.ndarray:

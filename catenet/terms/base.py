@@ -176,6 +176,10 @@ class Term:
         """(``medium`` terms) The kinetic energy it carries at velocities v (N, 3)."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
 
+    def mass_blocks(self) -> np.ndarray:
+        """(``medium`` terms) (N, 3, 3) the mass it adds at each node [kg]."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
+
     def losses(
         self, x_old: np.ndarray, x_new: np.ndarray, h: float, mean: bool = False
     ) -> tuple[float, float]:

@@ -257,6 +257,10 @@ class WaterForce(Term):
         return level, abs(energy) + self.ka * float(np.sum(mass * size * size))
 
     # --- the energy balance (catenet.solver.energy) ----------------------------------
+    def mass_blocks(self) -> np.ndarray:
+        """(N, 3, 3) the added mass at each node (the step's, or the start's) [kg]."""
+        return self.added
+
     def kinetic(self, v: np.ndarray) -> float:
         """1/2 v^T M_a v: the kinetic energy of the water the net carries along."""
         return 0.5 * float(np.einsum("ni,nij,nj->", v, self.added, v))
