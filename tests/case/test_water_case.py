@@ -142,13 +142,18 @@ def test_the_mooring_chains_peak_tension_converges_with_the_step():
     the fairlead surged +-5 m at 12 s, from its equilibrium): the peak fairlead tension
     changes by < 1 % between dt and dt / 2, since drag, not the integrator, damps the
     line (coarser edges and one and a quarter periods here, to keep it short)."""
-    peaks = []
+    peaks, rows = [], []
     for dt in (0.1, 0.05):
         c = load_case(MOORING, [f"solver.dt={dt}", "solver.t_end=15", "geometry.edge_length=20"])
-        r = solve(build(c), Settings.of(c.solver))
+        r = solve(build(c), Settings.of(c.solver), on_step=lambda st: rows.append(st.energy))
         peaks.append(float(np.max(r.peaks.tension)))
     assert 2.3e5 < peaks[1] < 3.2e5
     assert abs(peaks[0] - peaks[1]) < 0.01 * peaks[1]
+    # the balance closes: the work put in leaves through the drag (implicit Euler's
+    # own loss is the small negative remainder)
+    kinetic, elastic, contact, work, lost, left = rows[-1]
+    assert lost > 0.5 * work > 0
+    assert -0.03 * work < left <= 0.0
 
 
 def test_airy_kinematics():
@@ -249,3 +254,16 @@ def test_bad_water_input_exits_2(tmp_path, parts, message):
     assert r.exit_code == 2, r.output
     assert message in r.stderr, r.stderr
     assert "Traceback" not in r.output
+
+
+def test_modes_in_water_take_the_materials_added_mass():
+    """catenet modes of a case with [water]: each edge's added mass is rho_w ca_n A l0
+    (the materials'), normal to it."""
+    from catenet.run.modes import added_line
+
+    case = line_case(material={"area": 1e-3, "density": 7850.0, "ca_n": 0.8})
+    c = parse_case(case)
+    scene = build(c)
+    line = added_line(c, scene)
+    assert line is not None
+    assert np.allclose(line, 1025.0 * 0.8 * 1e-3 * scene.net.rest_length, rtol=1e-14)
