@@ -92,6 +92,34 @@ class MaterialConfig(Declared):
         write="changed",
         doc="modes: the water's density (with added_mass)",
     )
+    cd_n: float = real(
+        1.2,
+        ge=0,
+        unit="-",
+        write="changed",
+        doc="[water]: drag coefficient normal to the cable (on its projected area d l)",
+    )
+    cd_t: float = real(
+        0.008,
+        ge=0,
+        unit="-",
+        write="changed",
+        doc="[water]: drag coefficient along the cable (on its surface pi d l, as MoorDyn's)",
+    )
+    ca_n: float = real(
+        1.0, ge=0, unit="-", write="changed", doc="[water]: added-mass coefficient normal to it"
+    )
+    ca_t: float = real(
+        0.0, ge=0, unit="-", write="changed", doc="[water]: added-mass coefficient along it"
+    )
+    hydro_diameter: float | None = real(
+        None,
+        gt=0,
+        write="given",
+        unit="m",
+        shown="the cross-section's diameter",
+        doc="[water]: the diameter drag acts on (a studless chain: 1.8 x its nominal one)",
+    )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
     law: str = choice(
         "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"

@@ -42,9 +42,11 @@ from catenet.case.sections import (
     parse_output,
     parse_solver,
 )
+from catenet.case.sine import check_move
 from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
+from catenet.case.water import parse_water
 from catenet.case.written import plain
 from catenet.errors import ConfigError
 
@@ -80,6 +82,7 @@ class Case:
     combinations: tuple = ()  # [[combination]]: factored sums of load cases
     targets: tuple = ()  # [[target]]: what `catenet formfind` varies the force densities for
     design: DesignConfig | None = None  # [design]: partial factors (None: the defaults)
+    water: Any = None  # [water]: catenet.case.water.WaterConfig, or None
     source: str = field(default="<dict>", compare=False)
 
     def to_dict(self) -> dict:
@@ -111,6 +114,8 @@ class Case:
             out["target"] = [t.to_dict() for t in self.targets]
         if self.design is not None and self.design.to_dict():
             out["design"] = self.design.to_dict()
+        if self.water is not None:
+            out["water"] = self.water.to_dict()
         return plain(out)
 
     def to_toml(self) -> str:
@@ -134,6 +139,7 @@ TOP_KEYS = (
     "combination",
     "target",
     "design",
+    "water",
 )
 
 
@@ -191,6 +197,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     design = None
     if "design" in data:
         design = parse_table(ck, data["design"], DesignConfig, "design", ctx)
+    water = parse_water(ck, data.get("water"), ctx)
+    for k, mv in enumerate(supports.moves if isinstance(supports, SupportsConfig) else ()):
+        check_move(ck, mv, f"supports.move[{k}]")
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None
@@ -210,6 +219,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             geometry.check_material(ck, material)  # a graph's cables override [material]
         _check_mass(ck, data, material, solver, load)
     dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+    given = data.get("solver")
+    if water not in (None, BAD) and dynamic and "damping" not in (given or {}):
+        solver = dataclasses.replace(solver, damping=0.0)  # the water damps, not mu M
     if dynamic and solver.t_end is None:  # not given (a static case's stays None)
         t_end = default_t_end(load, supports, solver, obstacles, masses)
         solver = dataclasses.replace(solver, t_end=t_end)
@@ -244,6 +256,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         combinations=combinations,
         targets=targets,
         design=design,
+        water=water,
         source=source,
     )
 

@@ -17,8 +17,9 @@ from catenet.case.loadcases import CombinationConfig, LoadCaseConfig
 from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
-from catenet.case.sections import SECTIONS
+from catenet.case.sections import SECTIONS, SineConfig
 from catenet.case.targets import TargetConfig
+from catenet.case.water import WaterConfig
 
 BEGIN, END = "<!-- case-keys:begin -->", "<!-- case-keys:end -->"
 NOTE = (
@@ -76,6 +77,9 @@ def keys_table() -> str:
         rows += _rows("geometry", declared(kind))
     for name, section in SECTIONS.items():
         rows += _rows(name, declared(section))
+    rows.append(f"| `[water]` | a table | none | {_doc(WaterConfig)} |")
+    rows += _rows("water", declared(WaterConfig))
+    rows += _rows("supports.move[k].sine", declared(SineConfig))
     rows += _rows("formfind", declared(FormfindConfig))  # catenet formfind only
     rows.append(
         "| `[[target]]` | an array of tables | none | catenet formfind: a node's position, "

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -26,7 +27,7 @@ from catenet.case.shapes import check_motion
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
-from catenet.model.histories import History
+from catenet.model.histories import History, Sine
 from catenet.model.net import Loads, Net
 from catenet.scene.scene import Scene
 
@@ -98,6 +99,10 @@ def _build(case: Case) -> Scene:
     )
     if case.solver.self_contact:
         scene = scene.with_terms(self_contact(case.solver, scene.net, scene.loads))
+    if case.water is not None:
+        from catenet.case.water import water_terms
+
+        scene = scene.with_terms(*water_terms(case, scene))
     return scene
 
 
@@ -254,6 +259,10 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
                     raise ConfigError(
                         f"supports.move[{k}].node = {show(mv.node)}: must be a fixed node"
                     )
+                if mv.sine is not None:  # amplitude times the sine's factor
+                    disp[i] = mv.sine.amplitude
+                    moving.setdefault(_sine_key(mv.sine), []).append(i)
+                    continue
                 disp[i] = mv.displacement
                 ramp[i] = mv.duration
                 if mv.history is not None:
@@ -265,5 +274,18 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
         ramp_time=ramp,
         parts=parts,
         gravity_history=g_history,
-        support_history=tuple((np.array(n), History(h)) for h, n in moving.items()),
+        support_history=tuple((np.array(n), _motion(h)) for h, n in moving.items()),
     )
+
+
+def _sine_key(sine) -> tuple:
+    """A sine motion as the key of the supports that share it."""
+    ramp = sine.period if sine.ramp is None else sine.ramp
+    return ("sine", sine.period, math.radians(sine.phase), ramp)
+
+
+def _motion(key: tuple) -> History | Sine:
+    """The factor(t) of a support motion: a history table, or a sine (``_sine_key``)."""
+    if key and key[0] == "sine":
+        return Sine(*key[1:])
+    return History(key)

@@ -31,12 +31,13 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS
 from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (a section)
+from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
 from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
 from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.relax import REST
-from catenet.solver.settings import METHODS, STARTS, Settings
+from catenet.solver.settings import INITIAL_STATES, METHODS, STARTS, Settings
 
 LINEAR = ("auto", "pardiso", "scipy")
 
@@ -73,17 +74,26 @@ def history_key(doc: str) -> Any:
 @dataclass(frozen=True)
 class MoveConfig(Declared):
     """A support that moves by ``displacement`` over ``duration`` seconds, or by
-    factor(t) times it along a ``history`` (dynamic runs)."""
+    factor(t) times it along a ``history``, or along a ``sine`` (dynamic runs)."""
 
     node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
-    displacement: Vec3 = vec3(
-        missing="[dx, dy, dz] [m]", unit="m", doc="its displacement (dx, dy, dz)"
+    displacement: Vec3 | None = vec3(
+        None, write="given", unit="m", doc="its displacement (dx, dy, dz) (or sine)"
     )
     duration: float = real(
         0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
     )
     history: tuple | None = history_key(
         "dynamic: displacement times factor(t), instead of a ramp over duration"
+    )
+    sine: SineConfig | None = key(
+        check_sine,
+        SINE,
+        None,
+        write="given",
+        doc="dynamic: amplitude r(t) sin(2 pi t / period + phase), r a smooth start from 0 "
+        "to 1 over ramp (default one period; 0: none), instead of displacement; static "
+        "runs and an equilibrium start take it at t = 0",
     )
 
 
@@ -342,7 +352,13 @@ class SolverConfig(Declared):
         shown="t_end / 2^40",
         doc="adaptive steps: the shortest (a step there is taken, its error counted)",
     )
-    damping: float = real(Settings.damping, ge=0, unit="1/s", doc="dynamic: mass damping mu")
+    damping: float = real(
+        Settings.damping,
+        ge=0,
+        unit="1/s",
+        shown="`1.0`; `0.0` with [water]",
+        doc="dynamic: mass damping mu",
+    )
     integrator: str | None = choice(
         None,  # not given: bdf2 where steps adapt, else implicit Euler (parse.py)
         INTEGRATORS,
@@ -426,6 +442,14 @@ class SolverConfig(Declared):
         doc="dynamic: the energy the integrator may create, as a share of the largest energy "
         "of the run (kinetic, elastic, contact or work); beyond it the run stops with exit 1 "
         "(the balance is /trajectory/energy)",
+    )
+    initial_state: str = choice(
+        Settings.initial_state,
+        INITIAL_STATES,
+        write="changed",
+        doc='dynamic: "given" (the geometry as given, or a restart\'s state) or '
+        '"equilibrium": the static equilibrium under the loads, supports and water at t = 0, '
+        "at rest (velocities as [[mass]] gives them)",
     )
     post_collapse: bool = boolean(
         Settings.post_collapse,

@@ -34,6 +34,8 @@ def time_dependence(load: Any, supports: Any, solver: Any, obstacles: Any, masse
     for k, move in enumerate(moves):
         if move.history is not None:
             return f"supports.move[{k}].history"
+        if move.sine is not None:
+            return f"supports.move[{k}].sine"
         if move.duration > 0:
             return f"supports.move[{k}].duration"
     for k, obs in enumerate(obstacles if isinstance(obstacles, tuple) else ()):

@@ -76,3 +76,34 @@ def history_problem(points) -> str:
 def _show(v) -> str:
     text = repr(v)
     return text if len(text) <= 72 else text[:68] + " ..."
+
+
+class Sine:
+    """factor(t) = r(t) sin(2 pi t / period + phase) of a sinusoidal motion (its
+    amplitude the displacement it scales), r(t) = (1 - cos(pi t / ramp)) / 2 over the
+    ramp and 1 after it: a smooth start (position and velocity zero at t = 0; ramp 0:
+    the sine at once). It never settles (``end`` infinite); a static run takes its value
+    at t = 0 (``static``)."""
+
+    __slots__ = ("period", "phase", "ramp")
+
+    def __init__(self, period: float, phase: float = 0.0, ramp: float = 0.0):
+        self.period, self.phase, self.ramp = float(period), float(phase), float(ramp)
+
+    def __call__(self, t: float) -> float:
+        r = 1.0
+        if self.ramp > 0.0:
+            r = 0.0 if t <= 0.0 else 0.5 * (1.0 - math.cos(math.pi * min(t / self.ramp, 1.0)))
+        return r * math.sin(2.0 * math.pi * t / self.period + self.phase)
+
+    @property
+    def end(self) -> float:
+        return math.inf
+
+    @property
+    def static(self) -> float:
+        """The factor a static run takes: the motion's value at t = 0."""
+        return self(0.0)
+
+    def __repr__(self) -> str:
+        return f"Sine(period={self.period}, phase={self.phase}, ramp={self.ramp})"

@@ -366,8 +366,9 @@ class Loads:
         in a dynamic run [s] (0: at once); static runs reach the final place directly
     parts : ((N, 3) force, History) pairs: forces that follow a history in dynamic runs
     gravity_history : the history of gravity, or None (constant)
-    support_history : (node indices, History) pairs: supports whose displacement is
-        factor(t) times ``support_displacement`` in dynamic runs (instead of a ramp)
+    support_history : (node indices, History or Sine) pairs: supports whose displacement
+        is factor(t) times ``support_displacement`` in dynamic runs (instead of a ramp); a
+        static run takes a sine motion at t = 0
 
     Static runs (``time`` None) take every load and displacement at its full value: a
     history's factor is used in dynamic runs only.
@@ -414,8 +415,11 @@ class Loads:
         if self.support_displacement is None:
             return x
         d = self.support_displacement[net.fixed]
-        if time is None:
-            return x + factor * d
+        if time is None:  # a history in full, a sine motion at its t = 0 value
+            at = np.ones(net.n_nodes)
+            for nodes, history in self.support_history:
+                at[nodes] = getattr(history, "static", 1.0)
+            return x + (factor * at[net.fixed])[:, None] * d
         ramp = np.zeros(len(d)) if self.ramp_time is None else self.ramp_time[net.fixed]
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(ramp > 0, np.clip(time / np.where(ramp > 0, ramp, 1.0), 0.0, 1.0), 1.0)
@@ -428,6 +432,15 @@ class Loads:
                 moved[nodes] = True
             s = np.where(moved[net.fixed], full[net.fixed], s)
         return x + s[:, None] * d
+
+    def at(self, net: Net, time: float) -> Loads:
+        """The loads frozen at ``time``: every force at its value then (gravity included)
+        and the supports where they are then, as constant loads of a static solve."""
+        disp = None
+        if self.support_displacement is not None:
+            disp = np.zeros((net.n_nodes, 3))
+            disp[net.fixed] = self.support_positions(net, time=time) - net.nodes[net.fixed]
+        return Loads(force=self.external_force(net, time=time), support_displacement=disp)
 
     def settle_time(self) -> float:
         """Time after which nothing changes: every support has reached its final place

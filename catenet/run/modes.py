@@ -58,6 +58,12 @@ def added_line(case: Case, scene: Scene) -> np.ndarray | None:
     from catenet.case.material import added_line_mass
 
     net = scene.net
+    if case.water is not None:  # [water]: the materials' ca_n (lateral; ca_t not here)
+        from catenet.case.water import hydro_edges
+
+        hydro = hydro_edges(case, scene)
+        line = case.water.density * hydro.ca_n * hydro.area * net.rest_length
+        return line if line.any() else None
     base = added_line_mass(case.material)
     per_edge = np.full(net.n_edges, base)
     cables = scene.cables

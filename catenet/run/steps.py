@@ -112,6 +112,9 @@ def _dynamic_start(scene, settings, ws, restart, frames: _Frames):
     else:
         start = sv.Start(restart.x, restart.v, restart.t, restart.a)
     x0 = scene.net.nodes.copy() if restart is None else restart.x.copy()
+    if restart is None and settings.initial_state == "equilibrium":  # at rest, at t = 0
+        x0 = sv.equilibrium_start(scene, settings, ws, 0.0)
+        start = sv.Start(x0.copy(), start.v, start.t)
     x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
     v0 = start.v if start.v is not None else np.zeros_like(x0)
     a0 = start.a

@@ -14,6 +14,10 @@ with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identit
 the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), and against
 friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force).
 
+In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
+drag's work against the motion relative to the water, -F_d . (dx - h U), and W the
+water's work on the net: the current's F_d . h U and the flow's inertia force's.
+
 Implicit Euler's remainder is never positive on a convex energy: the step adds
 -1/2 m |v_{n+1} - v_n|^2 to it (its numerical dissipation). An integrator whose
 remainder grows beyond ``tolerance`` x the largest energy seen creates energy: the run
@@ -71,7 +75,8 @@ class Ledger:
         system = stepper.system
         self._timed = bool(stepper.moving) or any(type(t).__name__ == "Guide" for t in system.terms)
         self.judged = not self._timed
-        self._friction = [t for t in system.terms if t.lagged]
+        self._friction = [t for t in system.terms if t.lagged and not t.medium]
+        self._media = [t for t in system.terms if t.medium]  # water: its own losses
         self._force = self._applied(stepper).copy()
         k, u, c, reaction = self._state(stepper, stepper.x, stepper.v)
         self._reaction = reaction
@@ -111,6 +116,11 @@ class Ledger:
             for term in self._friction:
                 term.gradient(x_new, g)
             self._dissipated += float(np.sum(g[free] * dx[free]))
+        for term in self._media:
+            mean = stepper.scheme.name != "implicit_euler"
+            lost, put = term.losses(x_old, x_new, h, mean)
+            self._dissipated += lost
+            self._work += put
         remainder = k + u + c - self._start - self._work + self._dissipated
         self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
@@ -144,6 +154,7 @@ class Ledger:
         exert on the net there (0 at free nodes): one evaluation of the terms."""
         vel = v.reshape(-1)[stepper.free]
         kinetic = 0.5 * float(np.dot(stepper.m_free * vel, vel))
+        kinetic += sum(t.kinetic(v) for t in stepper.media)
         system = stepper.system
         _, grad = system.gradient(x)
         reaction = np.zeros_like(x)
@@ -160,6 +171,7 @@ def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarr
     kinetic = 0.0
     if v is not None:
         kinetic = 0.5 * float(np.sum(net.mass[free] * np.sum(v[free] ** 2, axis=1)))
+        kinetic += sum(t.kinetic(v) for t in system.terms if t.medium)
     system.gradient(x)
     return np.array([kinetic, *_stored(system), 0.0, 0.0, 0.0])
 

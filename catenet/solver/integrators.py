@@ -127,6 +127,10 @@ class Scheme(Protocol):
         damping: float | np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]: ...
 
+    def motion(
+        self, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[float, np.ndarray, float, np.ndarray]: ...
+
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray: ...
@@ -168,6 +172,14 @@ class ImplicitEuler:
         w = m_free * (1.0 / h**2 + damping / h)
         a = (m_free / h**2 * (y_k + h * v_k) + damping * m_free / h * y_k) / w
         return w, a
+
+    def motion(
+        self, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[float, np.ndarray, float, np.ndarray]:
+        """The step's velocity k (y - c) and acceleration k_a (y - c_a) as affine maps of
+        its free DOFs y: (k, c, k_a, c_a) (after ``weights``; water's drag and added
+        mass, catenet/terms/water.py)."""
+        return 1.0 / h, y_k, 1.0 / h**2, y_k + h * v_k
 
     keep = False  # keep the last state for ``estimate`` (steps chosen by accuracy)
     _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
@@ -234,14 +246,24 @@ class Newmark:
         a0: np.ndarray | None = None,
     ) -> None:
         """The acceleration state at the start: ``a0`` (free DOFs, a restart's stored
-        state), else the physical acceleration M^-1 (f - grad E - mu M v)."""
+        state), else the physical acceleration M^-1 (f - grad E - mu M v) (M with the
+        water's added mass, ``Term.mass_blocks``)."""
         if a0 is not None:
             self.a = np.array(a0, dtype=np.float64)
             return
         system = potential.system
         _, grad = system.gradient(x)
         force = potential.f_free - grad.reshape(-1)[system.free_dofs]
-        self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
+        media = [t for t in system.terms if t.medium]  # water: its added mass moves too
+        if not media:
+            self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
+            return
+        free = ~system.net.fixed
+        blocks = sum(t.mass_blocks()[free] for t in media) + np.einsum(
+            "n,ij->nij", m_free[::3], np.eye(3)
+        )
+        a = np.linalg.solve(blocks, force.reshape(-1, 3)[..., None])[..., 0].reshape(-1)
+        self.a = a - damping * v.reshape(-1)[system.free_dofs]
 
     @property
     def _a(self) -> np.ndarray:
@@ -269,6 +291,19 @@ class Newmark:
         w = m_free * ((1.0 - am) / (beta * h * h) + damping * gamma / (beta * h))
         rest = m_free * (am * a_n + damping * (v_k + h * (1.0 - gamma) * a_n))
         return w, p - rest / w
+
+    def motion(
+        self, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[float, np.ndarray, float, np.ndarray]:
+        """(k, c, k_a, c_a) as ``ImplicitEuler.motion``: v_{n+1} = k (y - c) and the
+        acceleration of the equation of motion, (1 - alpha_m) a_{n+1} + alpha_m a_n =
+        k_a (y - c_a) (after ``weights``)."""
+        a_n, beta, gamma, am = self._a, self.beta, self.gamma, self.alpha_m
+        assert self._p is not None  # weights() came first
+        k = gamma / (beta * h)
+        ka = (1.0 - am) / (beta * h * h)
+        c = self._p - (v_k + h * (1.0 - gamma) * a_n) / k
+        return k, c, ka, self._p - am * a_n / ka
 
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
@@ -364,6 +399,14 @@ class BDF2:
         w = m_free * (1.0 / b**2 + damping / b)
         a = (m_free / b**2 * (y_bar + b * v_bar) + damping * m_free / b * y_bar) / w
         return w, a
+
+    def motion(
+        self, y_k: np.ndarray, v_k: np.ndarray, h: float
+    ) -> tuple[float, np.ndarray, float, np.ndarray]:
+        """(k, c, k_a, c_a) as ``ImplicitEuler.motion``, with (b, x_bar, v_bar)."""
+        assert self._bar is not None  # weights() came first
+        y_bar, v_bar, b = self._bar
+        return 1.0 / b, y_bar, 1.0 / b**2, y_bar + b * v_bar
 
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float

@@ -159,20 +159,19 @@ class Reduction:
 
 def added_mass_blocks(net: Net, x: np.ndarray, line: ArrayLike) -> np.ndarray:
     """(N, 3, 3) the added mass at each node [kg]: each edge's ``line`` (E,) [kg]
-    (Ca rho_w A l0) times (I - t t^T) / 2 at each of its ends, t its direction at x."""
+    (Ca rho_w A l0) times (I - t t^T) / 2 at each of its ends, t its direction at x
+    (``catenet.model.water.added_mass_blocks``, the dynamic runs' too)."""
+    from catenet.model.water import added_mass_blocks as blocks
+
     x = np.asarray(x, dtype=np.float64)
-    blocks = np.zeros((net.n_nodes, 3, 3))
     if not net.n_edges:
-        return blocks
+        return np.zeros((net.n_nodes, 3, 3))
     d = x[net.edges[:, 1]] - x[net.edges[:, 0]]
     length = np.linalg.norm(d, axis=1)
     t = d / np.where(length > 0, length, 1.0)[:, None]
-    lateral = np.eye(3)[None] - np.einsum("ei,ej->eij", t, t)
-    lateral[length == 0] = np.eye(3) * (2.0 / 3.0)  # a zero-length edge: no direction
-    half = 0.5 * np.asarray(line, dtype=np.float64)[:, None, None] * lateral
-    np.add.at(blocks, net.edges[:, 0], half)
-    np.add.at(blocks, net.edges[:, 1], half)
-    return blocks
+    half = 0.5 * np.asarray(line, dtype=np.float64)
+    ends = np.concatenate([net.edges[:, 0], net.edges[:, 1]])
+    return blocks(net.n_nodes, ends, np.concatenate([t, t]), np.tile(half, 2), np.zeros(ends.size))
 
 
 def mass_data(system: System, mass: np.ndarray, blocks: np.ndarray | None) -> np.ndarray:

@@ -236,6 +236,8 @@ def _dynamic(
 
     net, loads = scene.net, scene.loads
     x0 = net.nodes.copy() if start.x is None else np.array(start.x, dtype=np.float64)
+    if settings.initial_state == "equilibrium" and start.x is None:
+        x0 = equilibrium_start(scene, settings, ws, start.t)
     v_scene = scene.velocity  # a case's [[mass]] velocities
     v = start.v if start.v is not None else v_scene
     v0 = np.zeros_like(x0) if v is None else np.array(v, dtype=np.float64)
@@ -298,6 +300,25 @@ def _dynamic(
         good = LastGood(last.x, last.t, last.steps, iterations, last.v, last.a)
         with_last_good(exc, good)
         raise
+
+
+def equilibrium_start(scene: Scene, settings: Settings, ws: Workspace, t0: float) -> np.ndarray:
+    """solver.initial_state = "equilibrium": the static equilibrium of the scene under
+    its loads, supports and water as they are at t0 (``Loads.at``), in settings.steps
+    load steps; a failure raises as a static run's does (its last equilibrium kept)."""
+    net = scene.net
+    frozen = scene.loads.at(net, t0)
+    factors = [k / settings.steps for k in range(1, settings.steps + 1)]
+    log.info("the dynamic run starts from its static equilibrium at t = %.6g s", t0)
+    found = continuation(
+        net,
+        frozen,
+        factors,
+        rtol=settings.rtol,
+        max_iter=settings.max_iter,
+        workspace=ws,
+    )
+    return np.array(found[-1].x, dtype=np.float64)
 
 
 @dataclass

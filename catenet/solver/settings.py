@@ -19,6 +19,7 @@ from catenet.solver.relax import MAX_STEPS, REST
 METHODS = ("static", "dynamic")
 DT = 1e-2  # solver.dt's default with fixed steps
 STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
+INITIAL_STATES = ("given", "equilibrium")  # dynamic: where a run starts (solver.initial_state)
 
 
 class Steps(Protocol):
@@ -60,6 +61,7 @@ class Settings:
     reuse: bool = False
     rho_inf: float = RHO_INF
     start: str = "auto"  # static: "auto", "stretched" or "nested" (catenet.solver.nested)
+    initial_state: str = "given"  # dynamic: "given" or "equilibrium" (at rest at t0)
     post_collapse: bool = False  # static: follow a collapsing path through (else exit 1)
     energy_tolerance: float = 1e-2  # dynamic: energy created, a share of the largest
     tolerance: float | None = None  # dynamic: steps chosen by accuracy (catenet.solver.adaptive)
@@ -117,6 +119,11 @@ class Settings:
             raise ConfigError(
                 "solver.tolerance: steps chosen by accuracy take integrator = 'bdf2' or "
                 "'implicit_euler', not 'newmark' (give solver.dt for fixed steps)"
+            )
+        if self.initial_state not in INITIAL_STATES:
+            raise ConfigError(
+                f"solver.initial_state = {self.initial_state!r}: must be one of "
+                f"{', '.join(INITIAL_STATES)}"
             )
         if self.steps < 1:
             raise ConfigError(f"solver.steps = {self.steps!r}: must be an integer >= 1")

@@ -75,6 +75,7 @@ class TimeStepper:
         self.equilibrium = False
         self.pseudo = False  # a run to rest through its stages: the path is only a path
         self.ledger: Ledger | None = None  # the energy balance (catenet.solver.energy)
+        self.media = [t for t in self.system.terms if t.medium]  # water (terms/water.py)
 
     def begin(
         self,
@@ -105,6 +106,8 @@ class TimeStepper:
             raise ConfigError(f"a0: must have shape {net.nodes.shape}")
         a_free = None if a0 is None else np.asarray(a0, dtype=np.float64).reshape(-1)[self.free]
         potential = potential_at(self.potential, loads, net, t0)
+        for term in self.media:
+            term.begin_run(x, t0)
         self.scheme.begin(potential, x, v, self.m_free, self.damping, a_free)
         self.a_out = a_out
         store_acceleration(self.scheme, a_out, self.free)
@@ -207,6 +210,8 @@ class TimeStepper:
         y_k = self.x.reshape(-1)[self.free]
         v_k = self.v.reshape(-1)[self.free]
         self.inertia.set_step(*self.scheme.weights(self.m_free, y_k, v_k, h_step, self.damping))
+        if self.media:
+            self.set_motion(y_k, v_k, h_step)
         if self.pseudo:
             self.start_still(x_trial)
         if self.kept is not None:
@@ -225,6 +230,16 @@ class TimeStepper:
             return None, str(exc)
         self.iterations += newton.iterations
         return newton, newton.reason
+
+    def set_motion(self, y_k: np.ndarray, v_k: np.ndarray, h_step: float) -> None:
+        """Gives the water's terms the step's velocity and acceleration as affine maps of
+        its positions (``Scheme.motion``)."""
+        kv, c, ka, c_a = self.scheme.motion(y_k, v_k, h_step)
+        centre, centre_a = self.x.copy(), self.x.copy()
+        centre.reshape(-1)[self.free] = c
+        centre_a.reshape(-1)[self.free] = c_a
+        for term in self.media:
+            term.set_motion(kv, centre, ka, centre_a)
 
     def start_still(self, x_trial: np.ndarray) -> None:
         """In pseudo-time (a run to rest through its stages), Newton starts the step from

@@ -72,6 +72,9 @@ class Workspace:
     def potential(self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()) -> Potential:
         """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""
         force = loads.external_force(self.net, factor)
+        for term in self.system.terms:
+            if term.loadlike:  # load-like terms (water) follow the load factor
+                term.set_factor(factor)
         return Potential(self.system, self.solver, force, steps)
 
     def stats(self) -> SolverStats:

@@ -33,6 +33,12 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``grows`` (with ``grew``): a term whose pattern may change at ``begin_step`` (the
   candidate pairs of self-contact); it sets ``grew`` then, and the time stepping
   rebuilds the system with the new pattern (``Workspace.refresh``), which clears it.
+- ``loadlike`` (with ``set_factor(factor)``): a load-like term (water's buoyancy and
+  drag) that a static run's load factor scales as it scales the applied loads.
+- ``medium`` (with ``begin_run``, ``set_motion``, ``kinetic`` and ``losses``): a term of
+  the step's velocity (water's drag and added mass, ``catenet.terms.water``): the
+  stepper gives it the scheme's velocity and acceleration maps every step, the energy
+  balance its kinetic energy and losses.
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
@@ -90,6 +96,8 @@ class Term:
     lagged = False  # has relag(x)
     horizon = False  # max_step(x, dx, upto) looks no farther than upto (its cost grows)
     moving = False  # has set_pose(t)
+    loadlike = False  # has set_factor(factor): a static run's load factor scales it
+    medium = False  # has begin_run, set_motion, kinetic, losses (catenet.terms.water)
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
@@ -150,6 +158,33 @@ class Term:
         """(``lagged`` terms) Updates the lagged quantities at the equilibrium x; returns
         their relative change."""
         raise NotImplementedError(f"{type(self).__name__} lags nothing")
+
+    def set_factor(self, factor: float) -> None:
+        """(``loadlike`` terms) The load factor of a static load step (1: in full)."""
+        raise NotImplementedError(f"{type(self).__name__} is no load")
+
+    def begin_run(self, x: np.ndarray, t: float) -> None:
+        """(``medium`` terms) A dynamic run's start state x at time t, at rest."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def set_motion(self, kv: float, centre: np.ndarray, ka: float, centre_a: np.ndarray) -> None:
+        """(``medium`` terms) The step's velocity kv (x - centre) and acceleration
+        ka (x - centre_a) as maps of its positions x (N, 3) (``Scheme.motion``)."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def kinetic(self, v: np.ndarray) -> float:
+        """(``medium`` terms) The kinetic energy it carries at velocities v (N, 3)."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def mass_blocks(self) -> np.ndarray:
+        """(``medium`` terms) (N, 3, 3) the mass it adds at each node [kg]."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def losses(
+        self, x_old: np.ndarray, x_new: np.ndarray, h: float, mean: bool = False
+    ) -> tuple[float, float]:
+        """(``medium`` terms) (dissipated, work) of the accepted step x_old -> x_new."""
+        raise NotImplementedError(f"{type(self).__name__} is no medium")
 
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time

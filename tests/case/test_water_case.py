@@ -1,0 +1,269 @@
+"""Cases in water (docs/howto/moorings-in-water.md): a taut line in a current deflects as
+the string under the drag's line load, a sine support motion exact and ramped, a
+dynamic run from its own static equilibrium, the mooring chain of configs/water whose
+peak fairlead tension converges with the time step, the Airy and JONSWAP kinematics, and
+bad input's messages (exit 2)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from catenet.case import load_case, parse_case
+from catenet.case.scene import build
+from catenet.cli import main
+from catenet.model.water import Water, Wave, jonswap, wave_number
+from catenet.solver.path import Settings, solve
+
+ROOT = Path(__file__).resolve().parents[2]
+MOORING = ROOT / "configs" / "water" / "mooring_surge.toml"
+
+
+def line_case(**over) -> dict:
+    """A vertical line 40 m long, 10 m below the surface, pinned at both ends at
+    tension T = 50 kN, in a uniform current of 1 m/s along x."""
+    case = {
+        "geometry": {"kind": "cable", "start": [0, 0, -50.0], "end": [0, 0, -10.0], "nodes": 41},
+        "material": {"EA": 1e7, "prestress": 5e4, "hydro_diameter": 0.1, "cd_n": 1.2},
+        "water": {"current": [[-100.0, 1.0, 0.0], [0.0, 1.0, 0.0]]},
+        "solver": {"method": "static"},
+    }
+    for k, v in over.items():
+        case[k] = {**case.get(k, {}), **v}
+    return case
+
+
+def run(case: dict, **keys):
+    c = parse_case(case)
+    scene = build(c)
+    return c, scene, solve(scene, Settings.of(c.solver), **keys)
+
+
+def test_a_taut_line_in_a_current_deflects_as_a_string_under_its_drag():
+    """The static drag of the current on the line at rest, q = 1/2 rho_w cd_n d U^2 per
+    length normal to it, bends the taut line into the string's parabola, q L^2 / (8 T)
+    at the middle, T the string's tension (the prestress and the deflection's stretch),
+    to O(slope^2) (the drag is that of the velocity normal to the deflected line),
+    whatever the load steps; no current, no deflection."""
+    c, scene, r = run(line_case())
+    q = 0.5 * 1025.0 * 1.2 * 0.1 * 1.0**2
+    e = np.diff(r.x, axis=0)
+    along = r.tension * e[:, 2] / np.linalg.norm(e, axis=1)  # the string's tension
+    assert np.ptp(along) < 1e-3 * along.mean()  # constant to O(slope^2)
+    assert 5e4 < along.mean() < 5.1e4  # the prestress and the stretch of the deflection
+    expected = q * 40.0**2 / (8 * along.mean())
+    mid = scene.net.n_nodes // 2
+    assert r.x[mid, 0] == pytest.approx(expected, rel=2e-3)
+    assert np.allclose(r.x[:, 1], 0.0, atol=1e-12)
+    s = (r.x[:, 2] + 50.0) / 40.0
+    assert np.allclose(r.x[:, 0], 4 * expected * s * (1 - s), rtol=3e-3, atol=1e-4)
+    _, _, r4 = run(line_case(solver={"steps": 4}))
+    assert np.allclose(r4.x, r.x, atol=1e-6 * expected)
+    _, _, still = run(line_case(water={"current": [[0.0, 0.0, 0.0]]}))
+    assert np.abs(still.x[:, 0]).max() < 1e-12
+
+
+@pytest.mark.parametrize("ramp", [None, 0.0, 0.25])
+def test_sine_motion_of_a_support(ramp):
+    """supports.move sine: the support at A r(t) sin(2 pi t / T + phase) at every step,
+    r the smooth start (1 - cos(pi t / ramp)) / 2 over ramp (default: one period; 0:
+    none); a static run takes it at t = 0."""
+    sine = {"amplitude": [0.1, 0.0, 0.05], "period": 0.5, "phase": 30.0}
+    if ramp is not None:
+        sine["ramp"] = ramp
+    case = line_case(
+        supports={"move": [{"node": "end", "sine": sine}]},
+        solver={"method": "dynamic", "dt": 0.01, "t_end": 0.7, "damping": 1.0},
+        material={"area": 1e-3, "density": 7850.0},
+    )
+    seen = []
+    c, scene, r = run(case, on_step=lambda st: seen.append((st.time, st.x[-1].copy())) and False)
+    ramp_t = 0.5 if ramp is None else ramp
+    for t, x in seen:
+        r_t = 1.0 if ramp_t == 0 or t >= ramp_t else 0.5 * (1 - math.cos(math.pi * t / ramp_t))
+        factor = r_t * math.sin(2 * math.pi * t / 0.5 + math.radians(30.0))
+        expected = np.array([0.0, 0.0, -10.0]) + factor * np.array([0.1, 0.0, 0.05])
+        assert np.allclose(x, expected, atol=1e-12)
+    assert len(seen) == 70
+    static = dict(case, solver={"method": "static"})
+    _, sc, rs = run(static)
+    at0 = 0.0 if ramp_t > 0 else math.sin(math.radians(30.0))  # the sine at t = 0
+    assert np.allclose(rs.x[-1], at0 * np.array([0.1, 0.0, 0.05]) + [0, 0, -10.0], atol=1e-12)
+
+
+def chain_case(**solver) -> dict:
+    """A chain hanging in water between two supports, in a current: weight, buoyancy
+    and drag at rest."""
+    return {
+        "geometry": {
+            "kind": "cable",
+            "start": [0, 0, -40.0],
+            "end": [30, 0, -5.0],
+            "nodes": 21,
+            "length": 50.0,
+        },
+        "material": {"EA": 1e8, "area": 0.005, "density": 7850.0, "cd_n": 2.0},
+        "water": {"current": [[-50.0, 0.3, 0.2], [0.0, 0.8, 0.0]]},
+        "load": {"gravity": [0, 0, -9.81]},
+        "solver": {"method": "static", **solver},
+    }
+
+
+def test_a_run_from_its_equilibrium_starts_and_stays_at_rest():
+    """solver.initial_state = "equilibrium": the dynamic run starts from the static
+    solution (weight, buoyancy, current), at rest (no kinetic energy at t = 0), and
+    nothing moves while nothing changes; the peaks count from t = 0."""
+    case = chain_case()
+    _, _, static = run(case)
+    dyn = dict(case, solver={"method": "dynamic", "dt": 0.05, "t_end": 1.0})
+    dyn["solver"]["initial_state"] = "equilibrium"
+    rows, xs = [], []
+
+    def seen(st):
+        rows.append(st.energy)
+        xs.append(st.x.copy())
+
+    c, scene, r = run(dyn, on_step=seen)
+    assert c.solver.damping == 0.0  # the water damps
+    scale = np.abs(static.x).max()
+    assert np.abs(xs[0] - static.x).max() < 1e-7 * scale
+    assert np.abs(r.x - static.x).max() < 1e-7 * scale
+    assert np.abs(r.v).max() < 1e-6
+    assert rows[0][0] < 1e-9 * max(abs(rows[0][2]), 1.0)  # kinetic
+    assert np.allclose(r.peaks.tension, static.tension, rtol=1e-6)
+
+
+def test_the_mooring_chains_peak_tension_converges_with_the_step():
+    """configs/water/mooring_surge.toml (800 m of studless chain in 100 m of water,
+    the fairlead surged +-5 m at 12 s, from its equilibrium): the peak fairlead tension
+    changes by < 1 % between dt and dt / 2, since drag, not the integrator, damps the
+    line (coarser edges and one and a quarter periods here, to keep it short)."""
+    peaks, rows = [], []
+    for dt in (0.1, 0.05):
+        c = load_case(MOORING, [f"solver.dt={dt}", "solver.t_end=15", "geometry.edge_length=20"])
+        r = solve(build(c), Settings.of(c.solver), on_step=lambda st: rows.append(st.energy))
+        peaks.append(float(np.max(r.peaks.tension)))
+    assert 2.3e5 < peaks[1] < 3.2e5
+    assert abs(peaks[0] - peaks[1]) < 0.01 * peaks[1]
+    # the balance closes: the work put in leaves through the drag (implicit Euler's
+    # own loss is the small negative remainder)
+    kinetic, elastic, contact, work, lost, left = rows[-1]
+    assert lost > 0.5 * work > 0
+    assert -0.03 * work < left <= 0.0
+
+
+def test_airy_kinematics():
+    """Linear wave kinematics: the dispersion relation, the surface's vertical velocity
+    d eta / dt, continuity (du/dx + dw/dz = 0), finite depth tending to deep water, the
+    ramp's smooth start; a JONSWAP sea's components make its significant height."""
+    g, depth, omega = 9.81, 30.0, 0.8
+    k = wave_number(omega, g, depth)
+    assert omega**2 == pytest.approx(g * k * math.tanh(k * depth), rel=1e-13)
+    water = Water(1025.0, g=g, waves=(Wave(1.5, omega, 0.0, 0.4),), depth=depth)
+    t = 3.1
+    x = np.array([[2.0, 0.0, 0.0], [2.0, 0.0, -7.0], [2.0, 0.0, -30.0]])
+    v, a = water.flow(x, t)
+    theta = k * 2.0 - omega * t + 0.4
+    assert v[0, 2] == pytest.approx(1.5 * omega * math.sin(theta), rel=1e-12)  # d eta / dt
+    assert abs(v[2, 2]) < 1e-12  # no flow through the seabed
+    h = 1e-5
+    p = np.array([[2.0, 0.0, -7.0]])
+    dudx = (water.flow(p + [h, 0, 0], t)[0] - water.flow(p - [h, 0, 0], t)[0])[0, 0] / (2 * h)
+    dwdz = (water.flow(p + [0, 0, h], t)[0] - water.flow(p - [0, 0, h], t)[0])[0, 2] / (2 * h)
+    assert abs(dudx + dwdz) < 1e-8 * abs(dudx)
+    dvdt = (water.flow(x, t + h)[0] - water.flow(x, t - h)[0]) / (2 * h)
+    assert np.allclose(a, dvdt, rtol=1e-7, atol=1e-9)
+    deep = Water(1025.0, g=g, waves=(Wave(1.5, 2.0),))
+    nearly = Water(1025.0, g=g, waves=(Wave(1.5, 2.0),), depth=1000.0)
+    assert np.allclose(deep.flow(x, t)[0], nearly.flow(x, t)[0], rtol=1e-10, atol=1e-12)
+    ramped = Water(1025.0, g=g, waves=(Wave(1.5, omega),), ramp=10.0)
+    assert np.abs(ramped.flow(x, 0.0)[0]).max() == 0.0
+    sea = jonswap(4.0, 10.0, 3.3, seed=7)
+    assert 4.0 * math.sqrt(sum(w.amplitude**2 / 2 for w in sea)) == pytest.approx(4.0, rel=1e-12)
+    assert jonswap(4.0, 10.0, 3.3, seed=7) == sea
+
+
+BASE = """
+[geometry]
+kind = "cable"
+start = [0, 0, -50.0]
+end = [0, 0, -10.0]
+nodes = 5
+[material]
+{material}
+[water]
+{water}
+[load]
+{load}
+[solver]
+{solver}
+[[supports.move]]
+node = "end"
+{move}
+"""
+
+
+@pytest.mark.parametrize(
+    "parts, message",
+    [
+        ({"water": "current = [[0, 1]]"}, "water.current[0]"),
+        ({"water": "current = [[0, 1, 0], [0, 2, 0]]"}, "two rows at one depth"),
+        ({"water": 'spectrum = "jonswap"\nhs = 2.0'}, "water.tp: missing"),
+        ({"water": "hs = 2.0"}, "only with water.spectrum"),
+        ({"water": "[[water.wave]]\nheight = 1.0\nperiod = 0"}, "water.wave[0].period"),
+        ({"water": "density = -1"}, "water.density"),
+        ({"water": "current = [[0, 1e100, 0]]"}, "a speed beyond"),
+        ({"water": 'spectrum = "jonswap"\nhs = 1e100\ntp = 1.0'}, "water.hs: height"),
+        ({"water": 'spectrum = "jonswap"\nhs = 1.0\ntp = 1.0\ngamma = 1e100'}, "water.gamma"),
+        (
+            {"material": "EA = 1e6", "load": "", "solver": 'method = "static"'},
+            "material.hydro_diameter: missing",
+        ),
+        ({"material": "EA = 1e6\nhydro_diameter = 0.1\ncd_n = -1"}, "material.cd_n"),
+        ({"load": "gravity = [1.0, 0, -9.81]"}, "must point along -z"),
+        (
+            {"move": "sine = { amplitude = [1, 0, 0], period = 1 }\ndisplacement = [1, 0, 0]"},
+            "not both",
+        ),
+        ({"move": "sine = { amplitude = [1, 0, 0] }"}, "supports.move[0].sine.period: missing"),
+        ({"move": "sine = { amplitude = [1, 0, 0], period = 2, ramp = -1 }"}, "sine.ramp"),
+        ({"move": "sine = { amplitude = [1, 0, 0], period = 2 }\nduration = 1.0"}, "no history"),
+        ({"move": ""}, "give displacement"),
+        ({"solver": 'method = "dynamic"\ninitial_state = "rest"'}, "solver.initial_state"),
+    ],
+)
+def test_bad_water_input_exits_2(tmp_path, parts, message):
+    values = {
+        "material": "EA = 1e6\narea = 1e-3\ndensity = 7850.0",
+        "water": "",
+        "load": "gravity = [0, 0, -9.81]",
+        "solver": 'method = "dynamic"\nt_end = 0.1',
+        "move": "sine = { amplitude = [0.1, 0, 0], period = 1.0 }",
+    }
+    values.update(parts)
+    text = BASE.format(**values)
+    if "[[water.wave]]" in values["water"]:  # after the table's own keys
+        text = text.replace("[water]\n" + values["water"], "[water]\n") + values["water"] + "\n"
+    path = tmp_path / "case.toml"
+    path.write_text(text)
+    r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5"), "-q"])
+    assert r.exit_code == 2, r.output
+    assert message in r.stderr, r.stderr
+    assert "Traceback" not in r.output
+
+
+def test_modes_in_water_take_the_materials_added_mass():
+    """catenet modes of a case with [water]: each edge's added mass is rho_w ca_n A l0
+    (the materials'), normal to it."""
+    from catenet.run.modes import added_line
+
+    case = line_case(material={"area": 1e-3, "density": 7850.0, "ca_n": 0.8})
+    c = parse_case(case)
+    scene = build(c)
+    line = added_line(c, scene)
+    assert line is not None
+    assert np.allclose(line, 1025.0 * 0.8 * 1e-3 * scene.net.rest_length, rtol=1e-14)
