@@ -240,7 +240,7 @@ class Newmark:
             return
         system = potential.system
         _, grad = system.gradient(x)
-        force = potential.f_free - grad.reshape(-1)[system.free_dofs]
+        force = potential.f_free - system.restrict(grad.reshape(-1))
         self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]
 
     @property
