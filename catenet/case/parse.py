@@ -42,8 +42,8 @@ from catenet.case.sections import (
     parse_output,
     parse_solver,
 )
-from catenet.case.targets import parse_targets
 from catenet.case.supports import check_fixed
+from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.case.written import plain
