@@ -35,6 +35,8 @@ _NAMES = {
     "pressure_force": "catenet.model.builders",
     "square_net": "catenet.model.builders",
     "Loads": "catenet.model.net",
+    "Guides": "catenet.model.guides",
+    "Elastic": "catenet.model.guides",
     "Net": "catenet.model.net",
     "Modes": "catenet.solver.modes",
     "modes": "catenet.solver.modes",

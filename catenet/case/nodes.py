@@ -31,6 +31,7 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
         refs += list(supports.clamped)
+        refs += [r for _, _, part in partial_supports(supports) for r in part.nodes]
     if isinstance(load, LoadConfig):
         refs += [p.node for p in load.points if p.node is not None]
         for a in load.areas:
@@ -74,9 +75,11 @@ def check_nodes(
         if supports.fixed is not None:
             fixed_key = "supports.fixed"
             fixed = _fixed_nodes(refs, supports.fixed)
-        _check_moves(refs, supports.moves, fixed, fixed_key)
+        held = _check_partial(refs, supports, fixed, fixed_key)
+        _check_moves(refs, supports.moves, fixed, fixed_key, held)
         for k, r in enumerate(supports.clamped):
             refs.known(r, f"supports.clamped[{k}]")
+        fixed = fixed | set(held)
     if isinstance(load, LoadConfig):
         _check_loads(refs, load, g, prefix)
     if probe is not None:
@@ -128,18 +131,74 @@ def _fixed_nodes(refs: _Refs, fixed: tuple[NodeRef, ...]) -> set[int]:
     return {i for r in fixed for i in refs.nodes(r)}
 
 
+def partial_supports(supports: SupportsConfig) -> list[tuple[str, int, Any]]:
+    """(kind, index, table) of every roller, slider and spring of ``supports``."""
+    out: list[tuple[str, int, Any]] = []
+    for kind, tables in (
+        ("roller", supports.rollers),
+        ("slider", supports.sliders),
+        ("spring", supports.springs),
+    ):
+        out += [(kind, k, t) for k, t in enumerate(tables)]
+    return out
+
+
+def _check_partial(
+    refs: _Refs, supports: SupportsConfig, fixed: set[int], fixed_key: str
+) -> dict[int, str]:
+    """Problems of the rollers', sliders' and springs' nodes: unknown, fixed as well
+    (``fixed``, named by ``fixed_key``), on two guides; the supported nodes, each with
+    the key that holds it."""
+    guided: dict[int, str] = {}
+    held: dict[int, str] = {}
+    for kind, k, part in partial_supports(supports):
+        here = f"supports.{kind}[{k}].nodes"
+        for j, ref in enumerate(part.nodes):
+            path = here if len(part.nodes) == 1 else f"{here}[{j}]"
+            if not refs.known(ref, path):
+                continue
+            for i in refs.nodes(ref):
+                shown = ref if isinstance(ref, int) else f"{ref!r} (node {i})"
+                if i in fixed:
+                    refs.ck.add(
+                        f"{path} = {shown}: node {i} is fixed already ({fixed_key}): a fixed "
+                        f"node is held in every direction, a {kind} there would hold nothing: "
+                        "leave it out of the fixed nodes (supports.fixed) or of this support"
+                    )
+                elif kind != "spring" and i in guided:
+                    refs.ck.add(
+                        f"{path} = {shown}: node {i} is on {guided[i]} already: one roller or "
+                        "slider per node (a node held in every direction is a fixed node)"
+                    )
+                elif kind != "spring":
+                    guided[i] = f"supports.{kind}[{k}]"
+                held.setdefault(i, f"supports.{kind}[{k}]")
+    return held
+
+
 def _check_moves(
-    refs: _Refs, moves: tuple[MoveConfig, ...], fixed: set[int], fixed_key: str
+    refs: _Refs,
+    moves: tuple[MoveConfig, ...],
+    fixed: set[int],
+    fixed_key: str,
+    held: dict[int, str] | None = None,
 ) -> None:
     """Problems of supports.move: a node that is not fixed (``fixed``, named by
-    ``fixed_key``), a node that moves twice."""
+    ``fixed_key``; ``held``: the nodes on rollers, sliders and springs), a node that
+    moves twice."""
     seen: dict[int, int] = {}
+    held = held or {}
     for k, mv in enumerate(moves):
         path = f"supports.move[{k}].node"
         if not refs.known(mv.node, path):
             continue
         for i in refs.nodes(mv.node):
-            if fixed and i not in fixed:
+            if i in held:
+                refs.ck.add(
+                    f"{path} = {show(mv.node)}: node {i} is on {held[i]}: a roller, slider or "
+                    "spring does not move (supports.move moves fixed nodes only)"
+                )
+            elif fixed and i not in fixed:
                 shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
                 refs.ck.add(
                     f"{path} = {shown}: is not a fixed node: only supports move "

@@ -43,6 +43,7 @@ from catenet.case.sections import (
     parse_solver,
 )
 from catenet.case.sine import check_move
+from catenet.case.supports import check_fixed
 from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
@@ -187,6 +188,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     ctx = Context(kind=kind)
     material = parse_material(ck, data.get("material", MISSING), ctx, geometry)
     supports = parse_table(ck, data.get("supports", {}), SupportsConfig, "supports", ctx)
+    if isinstance(supports, SupportsConfig):
+        check_fixed(ck, supports)  # [] only with rollers, sliders or springs
     load = parse_table(ck, data.get("load", {}), LoadConfig, "load", ctx)
     solver = parse_solver(ck, data.get("solver", {}), ctx)
     output = parse_output(ck, data.get("output", {}), ctx, source)

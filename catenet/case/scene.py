@@ -24,6 +24,7 @@ from catenet.case.parse import Case
 from catenet.case.rigid import movers
 from catenet.case.rods import bending_term, case_rods, clamped_nodes, with_clamps
 from catenet.case.shapes import check_motion
+from catenet.case.supports import with_partial_supports
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
 from catenet.model.areas import area_load, with_chains
@@ -63,7 +64,9 @@ def _build(case: Case) -> Scene:
     guard_material(case)
     built = case.geometry.build_case(_with_case_points(case), model_material(case.material))
     clamped = clamped_nodes(case, built)
+    flies = built.net.flies and case.solver.method == "dynamic"
     net = with_clamps(built.net, clamped)
+    net = with_partial_supports(case.supports, net, built.names, built.sets or {}, flies)
     rods = case_rods(case, built, net, clamped)
     point_mass, velocity = point_masses(case.masses, net, built.names, built.sets)
     if point_mass is not None:

@@ -32,6 +32,8 @@ from catenet.case.keys import (
 from catenet.case.kinds import KINDS
 from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (a section)
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
+from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, fixed_list
+from catenet.case.supports import node_list as _node_list
 from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
@@ -97,23 +99,16 @@ class MoveConfig(Declared):
     )
 
 
-def _node_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    if not isinstance(v, (list, tuple)) or not v:
-        return ck.bad(path, v, "must be a non-empty array of nodes")
-    refs = [ck.node_ref(x, f"{path}[{k}]", ctx.kind) for k, x in enumerate(v)]
-    return BAD if BAD in refs else tuple(refs)
-
-
 @dataclass(frozen=True)
 class SupportsConfig(Declared):
     """``fixed``: the pinned nodes, replacing the geometry's default supports (None: the
     defaults); ``moves``: prescribed motions of pinned nodes."""
 
     fixed: tuple[NodeRef, ...] | None = key(
-        _node_list,
-        "a non-empty array of nodes (indices or names)",
+        fixed_list,
+        "an array of nodes (indices or names; empty where rollers, sliders or springs hold)",
         None,
-        write="given",
+        write="changed",
         shown="the geometry's own",
         doc="pinned nodes, replacing the geometry's default supports",
     )
@@ -128,6 +123,20 @@ class SupportsConfig(Declared):
         shown="none",
         doc="rod ends held in place with their given tangent (material.EI > 0)",
     )
+    rollers: tuple[RollerConfig, ...] = tables(
+        RollerConfig, name="roller", doc="nodes held along a normal only (free in its plane)"
+    )
+    sliders: tuple[SliderConfig, ...] = tables(
+        SliderConfig, name="slider", doc="nodes free along a direction only"
+    )
+    springs: tuple[SpringConfig, ...] = tables(
+        SpringConfig, name="spring", doc="elastic supports toward the nodes' given positions"
+    )
+
+    @property
+    def partial(self) -> bool:
+        """Whether there are rollers, sliders or springs."""
+        return bool(self.rollers or self.sliders or self.springs)
 
 
 # --------------------------------------------------------------------------- load

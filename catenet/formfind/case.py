@@ -42,6 +42,13 @@ def formfind_scene(scene) -> FormFound:
             "formfind: missing: the case needs a [formfind] table (force_density = q [N/m])"
         )
     net = scene.net
+    if net.guides is not None or net.springs is not None:
+        raise ConfigError(
+            "formfind: the case has rollers, sliders or springs ([[supports.roller]], "
+            "[[supports.slider]], [[supports.spring]]): the force density method holds "
+            "fixed nodes only: form-find with those nodes fixed, then run the shape found "
+            "with its rollers, sliders and springs"
+        )
     if net.bodies:  # free bodies' nodes (no edges) stay where they are: the run moves them
         held = net.fixed | (np.arange(net.n_nodes) >= net.n_net)
         scene = dataclasses.replace(scene, net=net.replace(fixed=held))

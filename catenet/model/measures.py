@@ -61,22 +61,47 @@ def slack_edges(net: Net, x: np.ndarray) -> int:
     return int(np.count_nonzero((strain(net, x) < 0.0) & net.law.tension_only))
 
 
-def reaction(net: Net, internal_gradient: np.ndarray, force: np.ndarray) -> np.ndarray:
+def reaction(
+    net: Net,
+    internal_gradient: np.ndarray,
+    force: np.ndarray,
+    springs: np.ndarray | None = None,
+) -> np.ndarray:
     """Force each support exerts on the net (N, 3) (0 at free nodes): it balances the
-    internal forces (the gradient of the internal terms) and the applied loads there."""
+    internal forces (the gradient of the internal terms, ``springs``' included) and the
+    applied loads there: all of it at a fixed node, its held part Q (grad - f) at a
+    node on a roller (along the normal) or a slider (across the direction); plus the
+    force ``springs`` (N, 3) of the elastic supports, -K (x - X) (None: none)."""
     r = np.zeros_like(internal_gradient)
     r[net.fixed] = internal_gradient[net.fixed] - force[net.fixed]
+    if net.guides is not None:
+        k = net.guides.nodes
+        r[k] = net.guides.held_part(internal_gradient[k] - force[k])
+    if springs is not None:
+        r += springs
     return r
+
+
+def support_force(system, x: np.ndarray) -> np.ndarray | None:
+    """(N, 3) the force of the elastic supports (the ``holds`` terms) on the net, or
+    None (none)."""
+    held = [t for t in system.terms if t.holds]
+    if not held:
+        return None
+    out = np.zeros_like(x)
+    for term in held:
+        term.gradient(x, out)
+    return np.negative(out, out=out)
 
 
 def contact_force(system, x: np.ndarray) -> np.ndarray:
     """Force (N, 3) that every internal term besides the structure's own (the edges'
-    stretching, the rods' bending: ``structural``) exerts on each node (obstacles, rigid
-    bodies, friction): minus the sum of their gradients. Zero for a net held by its
-    edges and supports alone."""
+    stretching, the rods' bending: ``structural``) and the supports' springs (``holds``)
+    exerts on each node (obstacles, rigid bodies, friction): minus the sum of their
+    gradients. Zero for a net held by its edges and supports alone."""
     force = np.zeros_like(x)
     for term in system.terms:
-        if term is not system.stretch and not term.structural:
+        if term is not system.stretch and not term.structural and not term.holds:
             term.gradient(x, force)
     return np.negative(force, out=force)
 

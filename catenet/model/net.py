@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.guides import Elastic, Guides
 from catenet.model.laws import Law
 from catenet.model.limits import MAGNITUDE, too_large
 
@@ -50,6 +51,10 @@ class Net:
         mass in ``point_mass``; ``catenet.terms.body``), 0 for a net alone
     flies : parts of the net may have no support (a net flying free, dynamic runs only:
         its rigid-body motion is inertia's to hold); False: every part needs one
+    guides : nodes on rollers and sliders (``catenet.model.guides.Guides``: held in some
+        directions only; never fixed nodes), or None
+    springs : elastic supports (``catenet.model.guides.Elastic``: a spring toward the
+        node's given position; ``catenet.terms.supports.ElasticSupport``), or None
     """
 
     nodes: np.ndarray
@@ -62,6 +67,8 @@ class Net:
     point_mass: np.ndarray | None = None
     bodies: int = 0
     flies: bool = False
+    guides: Guides | None = None
+    springs: Elastic | None = None
 
     @property
     def tension_only(self) -> bool:
@@ -83,13 +90,15 @@ class Net:
         point_mass=None,
         bodies: int = 0,
         flies: bool = False,
+        guides: Guides | None = None,
+        springs: Elastic | None = None,
     ) -> Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
         ``law`` (one entry per edge) defaults to the paper's linear law with
         ``tension_only`` for every edge (ignored where a law is given); ``point_mass``
         (N,) [kg] adds to the lumped masses; ``flies``: parts without a support are
-        allowed (dynamic runs)."""
+        allowed (dynamic runs); ``guides``, ``springs``: rollers and sliders, springs."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
         edges = _as_array("edges", edges, np.int64, (2,))
         n, m = len(nodes), len(edges)
@@ -118,11 +127,7 @@ class Net:
             problems.append(
                 f"edges[{e}] = {edges[e].tolist()}: an edge must join two different nodes"
             )
-        key = np.sort(edges, axis=1)
-        _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
-        if (counts > 1).any():
-            dup = key[first[np.argmax(counts > 1)]].tolist()
-            problems.append(f"edges: {dup} appears {int(counts.max())} times: edges must be unique")
+        _duplicate_edges(edges, problems)
         length = np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1)
         if rest_length is None:
             l0 = length.copy()
@@ -142,11 +147,12 @@ class Net:
             problems.append(f"law: {len(law.kind)} entries: must have one per edge ({m})")
         if point_mass is not None:
             point_mass = _broadcast("point_mass", point_mass, n, problems, allow_zero=True)
+        held = _partial(guides, springs, n, mask, problems)  # rollers, sliders, springs
         if problems:
             raise ConfigError(problems)
         if law is None:
             law = Law.uniform(m, tension_only=bool(tension_only))
-        net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies, bool(flies))
+        net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies, bool(flies), *held)
         net._check_supported()
         return net
 
@@ -203,6 +209,8 @@ class Net:
             point_mass=self.point_mass,
             bodies=self.bodies,
             flies=self.flies,
+            guides=self.guides,
+            springs=self.springs,
         )
         unknown = set(changes) - set(fields)
         if unknown:
@@ -238,6 +246,14 @@ class Net:
             return False
         if not _equal(a.tension_only, b.tension_only) or a.smooth != b.smooth:
             return False
+        if (self.guides is None) != (other.guides is None):
+            return False
+        if self.guides is not None and not self.guides.same_as(other.guides):
+            return False
+        if (self.springs is None) != (other.springs is None):
+            return False
+        if self.springs is not None and not self.springs.same_as(other.springs):
+            return False
         pa, pb = self.point_mass, other.point_mass
         return (pa is None and pb is None) or (pa is not None and pb is not None and _equal(pa, pb))
 
@@ -269,7 +285,28 @@ class Net:
             point_mass=np.concatenate([point, np.asarray(masses, dtype=np.float64)]),
             bodies=self.bodies + nb,
             flies=self.flies,
+            guides=self.guides,
+            springs=self.springs,
         )
+
+    def with_guides(self, *guides: Guides) -> Net:
+        """A copy with these nodes on rollers and sliders besides the net's own
+        (``Guides.roller``, ``Guides.slider``)."""
+        return self.replace(guides=Guides.join([self.guides, *guides]))
+
+    def with_springs(self, *springs: Elastic) -> Net:
+        """A copy with these elastic supports besides the net's own (``Elastic.of``)."""
+        return self.replace(springs=Elastic.join([self.springs, *springs]))
+
+    @property
+    def supported(self) -> np.ndarray:
+        """(N,) bool: the nodes a support holds in some direction (fixed, guided or on
+        a spring)."""
+        mask = self.fixed.copy()
+        for part in (self.guides, self.springs):
+            if part is not None:
+                mask[part.nodes] = True
+        return mask
 
     def components(self) -> np.ndarray:
         """Connected-component label (0, 1, ... in order of first node) of every node
@@ -281,6 +318,8 @@ class Net:
         problems = []
         degree = np.bincount(self.edges.ravel(), minlength=self.n_nodes)
         lonely = np.flatnonzero((degree == 0) & ~self.fixed)
+        if self.guides is not None and np.isin(self.guides.nodes, lonely).any():
+            problems.append("guides: a node on a roller or slider needs an edge")
         lonely = lonely[lonely < self.n_nodes - self.bodies]  # a body's centre has none
         if lonely.size:
             problems.append(
@@ -292,15 +331,16 @@ class Net:
             return
         labels = self.components()
         supported = np.zeros(labels.max() + 1, bool)
-        supported[labels[self.fixed]] = True
+        supported[labels[self.supported]] = True
         loose = np.flatnonzero(~supported[labels] & (degree > 0))
         if loose.size:
             problems.append(
                 f"nodes {loose[:10].tolist()}{' ...' if loose.size > 10 else ''}: "
                 "a part of the net has no support (a mechanism): fix at least one of its nodes "
-                "(a dynamic run, solver.method = 'dynamic', lets it fly free)"
+                "or hold it by rollers, sliders or springs (a dynamic run, solver.method = "
+                "'dynamic', lets it fly free)"
             )
-        if not self.fixed.any():
+        if not self.supported.any():
             problems.append(
                 "supports: no node is fixed: a net without supports moves as a rigid body and "
                 "has no static equilibrium: fix at least one node, or let it fly in a dynamic "
@@ -308,6 +348,27 @@ class Net:
             )
         if problems:
             raise ConfigError(problems)
+
+
+def _duplicate_edges(edges: np.ndarray, problems: list) -> None:
+    """A problem for an edge listed more than once (either way round)."""
+    key = np.sort(edges, axis=1)
+    _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+    if (counts > 1).any():
+        dup = key[first[np.argmax(counts > 1)]].tolist()
+        problems.append(f"edges: {dup} appears {int(counts.max())} times: edges must be unique")
+
+
+def _partial(guides, springs, n: int, mask: np.ndarray, problems: list) -> tuple:
+    """The rollers and sliders, the springs (each None where there are none), their
+    problems on a net of ``n`` nodes pinned at ``mask`` added to ``problems``."""
+    if guides is not None and not problems:
+        problems.extend(guides.check(n, mask))
+    if springs is not None and not problems:
+        problems.extend(springs.check(n))
+    guides = guides if guides is not None and len(guides) else None
+    springs = springs if springs is not None and len(springs) else None
+    return guides, springs
 
 
 def _equal(a, b) -> bool:

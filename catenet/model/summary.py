@@ -178,7 +178,7 @@ def summarize(
     e, out["max_strain"] = _largest(eps, eps > 0)
     out["max_strain_edge"] = e
     out["slack_edges"] = int(np.count_nonzero(only & (eps < 0)))
-    out.update(_forces("reaction", reaction, x, net.fixed))
+    out.update(_forces("reaction", reaction, x, net.supported))
     out.update(_forces("contact", contact, x, None))
     if peaks is not None:
         out.update(_peaks(peaks if isinstance(peaks, dict) else peaks.arrays(), free))

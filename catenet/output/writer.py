@@ -57,6 +57,7 @@ from catenet.output.netsets import write_net_index
 from catenet.output.obstacles import Obstacles
 from catenet.output.reader import LIBVER, TRAJECTORY
 from catenet.output.result_group import write_result_group
+from catenet.output.supports import write_supports
 from catenet.output.xdmf import sidecar_path, write_views, write_xdmf
 from catenet.solver.energy import COLUMNS as ENERGY_COLUMNS
 
@@ -237,6 +238,7 @@ class ResultWriter:
         mesh.attrs["probe"] = int(scene.probe)
         mesh.attrs["size"] = float(scene.size)
         write_bodies(mesh, scene)  # moving spheres: /mesh/bodies (catenet.output.bodies)
+        write_supports(mesh, net)  # rollers, sliders, springs: /mesh/supports
         self.obstacles.write_mesh(mesh)  # /mesh/obstacles
         write_net_index(mesh, scene)  # cables and node sets by name (catenet.output.netsets)
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.output import read_result
+from catenet.output.supports import read_supported
 from catenet.plot.plan import draw_plan, draw_slack, slack_edges, wants_plan
 
 if TYPE_CHECKING:
@@ -289,6 +290,7 @@ class _Drawn:
     nodes: np.ndarray
     x: np.ndarray
     fixed: np.ndarray | None
+    guided: np.ndarray | None  # on rollers, sliders and springs
     seg_ref: np.ndarray
     seg_def: np.ndarray
     colours: _Colours | None
@@ -309,7 +311,10 @@ class _Drawn:
         lo, hi = _limits(seg_ref, seg_def, *balls.extent())
         lo, hi = _limits(seg_ref, seg_def, *balls.extent(), *obstacles.extent(lo, hi))
         slack = slack_edges(res)
-        return cls(nodes, x, mesh.fixed, seg_ref, seg_def, colours, slack, balls, obstacles, lo, hi)
+        guided = read_supported(res.path, len(nodes))
+        return cls(
+            nodes, x, mesh.fixed, guided, seg_ref, seg_def, colours, slack, balls, obstacles, lo, hi
+        )
 
     def deformed(self, lines) -> None:
         """Colours the deformed edges by tension (one colour without tensions)."""
@@ -344,6 +349,9 @@ def _view_3d(ax3, d: _Drawn) -> None:
     if d.fixed is not None and d.fixed.any():
         f = d.x[d.fixed]
         ax3.scatter(f[:, 0], f[:, 1], f[:, 2], color="red", s=8, depthshade=False)
+    if d.guided is not None:
+        g = d.x[d.guided]
+        ax3.scatter(g[:, 0], g[:, 1], g[:, 2], color="darkorange", marker="^", s=14)
     d.balls.draw3d(ax3)
     d.obstacles.draw3d(ax3, mid - half, mid + half)
     ax3.set_xlabel("x [m]")
@@ -376,6 +384,9 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     if d.fixed is not None and d.fixed.any():
         f = x[d.fixed]
         ax2.plot(f[:, h], f[:, 2], "o", color="red", ms=3, label="supports", zorder=5)
+    if d.guided is not None:
+        g, what = x[d.guided], "rollers, sliders, springs"
+        ax2.plot(g[:, h], g[:, 2], "^", color="darkorange", ms=5, label=what, zorder=5)
     p = res.probe
     ax2.plot(
         [x[p, h]],

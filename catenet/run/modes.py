@@ -33,12 +33,14 @@ def check_modes_input(scene, count) -> None:
     """ConfigError for a count that is not a positive integer or above the free DOFs,
     and for a net with no mass at its free nodes."""
     n_free = 3 * int(np.count_nonzero(~scene.net.fixed)) - 6 * len(scene.rigid)
+    if scene.net.guides is not None:
+        n_free -= scene.net.guides.held_count  # rollers and sliders
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
         raise ConfigError(
             f"--count = {count}: more than the net's {n_free} free DOFs (3 per free node, "
-            "6 per free body): "
+            "6 per free body, fewer on rollers and sliders): "
             f"ask for at most {n_free}"
         )
     if not float(np.sum(scene.net.mass[~scene.net.fixed])) > 0.0:

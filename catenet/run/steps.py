@@ -215,7 +215,11 @@ def _static_residual(ws, scene, x, at: float, dynamic: bool = False) -> float:
         force = scene.loads.external_force(net, time=at)
     else:
         force = scene.loads.external_force(net, at)
-    return float(np.linalg.norm((grad - force)[~net.fixed]))
+    r = grad - force
+    r[net.fixed] = 0.0
+    if net.guides is not None:  # rollers and sliders: their free directions
+        r[net.guides.nodes] = net.guides.project(r[net.guides.nodes])
+    return float(np.linalg.norm(r))
 
 
 def _timing(clock) -> Timing:

@@ -127,7 +127,7 @@ def floating_parts(net: Net, tension: np.ndarray, x: np.ndarray, held: np.ndarra
     graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
     _, label = connected_components(graph, directed=False)
     anchored = np.zeros(label.max() + 1, bool)
-    anchored[label[net.fixed | held]] = True
+    anchored[label[net.supported | held]] = True
     floating: np.ndarray = ~anchored[label] & ~net.fixed
     return floating
 

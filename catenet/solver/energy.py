@@ -5,9 +5,9 @@ left it (damping and friction), and the remainder, which is the integrator's own
     numerical = (K + U + C) - (K + U + C)_0 - W + D
 
 K = 1/2 sum m v^2 over the free DOFs; U the structure's elastic energy (the edges'
-stretching, the rods' bending: ``structural`` terms); C every other
-conservative term's energy (barriers of obstacles, bodies and strands, springs, a free
-body's rigidity); W the work of the applied forces, sum over steps of
+stretching, the rods' bending: ``structural`` terms) and the elastic supports' springs
+(``holds``); C every other conservative term's energy (barriers of obstacles, bodies and
+strands, a free body's rigidity); W the work of the applied forces, sum over steps of
 1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
 move); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
 with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
@@ -184,7 +184,7 @@ def _stored(system: System) -> tuple[float, float]:
     for term, e in zip(system.terms, system.energies, strict=True):
         if term.lagged:
             continue
-        if term is system.stretch or term.structural:
+        if term is system.stretch or term.structural or term.holds:  # springs: elastic
             elastic += float(e)
         else:
             contact += float(e)

@@ -253,7 +253,7 @@ class Newmark:
             return
         system = potential.system
         _, grad = system.gradient(x)
-        force = potential.f_free - grad.reshape(-1)[system.free_dofs]
+        force = potential.f_free - system.restrict(grad.reshape(-1))
         media = [t for t in system.terms if t.medium]  # water: its added mass moves too
         if not media:
             self.a = force / m_free - damping * v.reshape(-1)[system.free_dofs]

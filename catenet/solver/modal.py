@@ -96,6 +96,9 @@ class Reduction:
         reduced = system._reduced
         for frame in frames:
             body_dof[reduced[frame.dofs()]] = True
+        guides = system.guides
+        if guides is not None:  # rollers and sliders: their free directions only
+            body_dof[reduced[3 * guides.nodes[:, None] + np.arange(3)].ravel()] = True
         keep = np.flatnonzero(~body_dof)
         rows, cols, vals = [keep], [np.arange(keep.size)], [np.ones(keep.size)]
         node = [free_node[keep]]
@@ -117,6 +120,17 @@ class Reduction:
                     vals.append(np.cross(np.eye(3)[d], r[k]))
             node.append(np.full(6, frame.nodes[0]))
             q += 6
+        groups = [np.arange(q) // 3]  # M's blocks: each node's, each body's two triples
+        if guides is not None:
+            for g, basis in zip(guides.nodes, guides.basis(), strict=True):
+                k = basis.shape[1]
+                rows.append(np.tile(reduced[3 * g + np.arange(3)], k))
+                cols.append(np.repeat(q + np.arange(k), 3))
+                vals.append(basis.T.ravel())
+                node.append(np.full(k, g))
+                groups.append(np.full(k, q))  # a group id past every triple's
+                q += k
+        self.groups = np.concatenate(groups)
         self.n = q
         self.node = np.concatenate(node).astype(np.int64)
         self.z = sp.csr_matrix(
@@ -229,16 +243,20 @@ class Operator:
         self.convex = system.convex
         self.m_data = mass_data(system, mass, blocks)
         self.m_free = system.matrix(self.m_data)  # M on the free DOFs (participation)
-        self.reduction = Reduction(system, x, [t.frame for t in rigid]) if rigid else None
+        reduce = rigid or system.guides is not None  # bodies, rollers and sliders
+        self.reduction = Reduction(system, x, [t.frame for t in rigid]) if reduce else None
         if self.reduction is None:
             self.node = np.flatnonzero(~net.fixed).repeat(3)
             k, self.mm = system.matrix(self.k_data), self.m_free
+            groups = np.arange(k.shape[0]) // 3
         else:
             self.node = self.reduction.node
             k = self.reduction.reduce(system.matrix(self.k_data))
-            k = (k + self.reduction.rigidity(rigid, x)).tocsr()
+            if rigid:
+                k = (k + self.reduction.rigidity(rigid, x)).tocsr()
             self.mm = self.reduction.reduce(self.m_free)
-            self.convex = False
+            self.convex = self.convex and not rigid
+            groups = self.reduction.groups
         self.n = k.shape[0]
         self.m = self.mm.diagonal()
         rowsum = np.asarray(abs(k).sum(axis=1)).ravel()
@@ -257,7 +275,7 @@ class Operator:
         # Gershgorin on D^-1 K, D <= M the smallest eigenvalue of each 3 x 3 block of M
         # (block diagonal): w^2 <= bound. The DOFs without stiffness get a dummy w^2 of
         # 2 x bound: above every real mode.
-        low = _block_low(self.mm, self.m)
+        low = _block_low(self.mm, self.m, groups)
         self.bound = float(np.max(rowsum[live] / low[live]))
         self.dummy = 2.0 * self.bound
         ref = np.where(self.m > 0, self.m, float(np.median(self.m[self.m > 0])))
@@ -291,15 +309,22 @@ class Operator:
         return vec if self.reduction is None else self.reduction.expand(vec)
 
 
-def _block_low(mm: sp.csr_matrix, m: np.ndarray) -> np.ndarray:
+def _block_low(mm: sp.csr_matrix, m: np.ndarray, groups: np.ndarray) -> np.ndarray:
     """Each coordinate's lower bound of M's eigenvalues: the smallest eigenvalue of its
-    3 x 3 diagonal block (M is block diagonal in the coordinates' triples)."""
-    n = m.size
+    diagonal block (M is block diagonal in the coordinates' ``groups``, each of at most
+    three consecutive coordinates: a node's triple, a guided node's free directions)."""
+    ids, first, group = np.unique(groups, return_index=True, return_inverse=True)
+    slot = np.arange(m.size) - first[group]  # each coordinate's place in its group
     coo = mm.tocoo()
-    own = coo.row // 3 == coo.col // 3
-    blocks = np.zeros((n // 3, 3, 3))
-    np.add.at(blocks, (coo.row[own] // 3, coo.row[own] % 3, coo.col[own] % 3), coo.data[own])
-    return np.repeat(np.linalg.eigvalsh(blocks)[:, 0], 3)
+    own = group[coo.row] == group[coo.col]
+    blocks = np.zeros((ids.size, 3, 3))
+    np.add.at(blocks, (group[coo.row[own]], slot[coo.row[own]], slot[coo.col[own]]), coo.data[own])
+    size = np.bincount(group, minlength=ids.size)
+    big = 4.0 * float(np.max(np.abs(m), initial=0.0)) + 1.0  # above every block's eigenvalues
+    for k in (1, 2):  # the unused places of a smaller group: out of the minimum
+        blocks[size <= k, k, k] = big
+    low: np.ndarray = np.linalg.eigvalsh(blocks)[:, 0][group]
+    return low
 
 
 def stable_with_bodies(workspace: Workspace, x: np.ndarray) -> bool | None:

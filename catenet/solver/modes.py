@@ -173,7 +173,8 @@ def natural_modes(
     from catenet.solver.modal import body_frames
 
     bodies = len(body_frames(system))
-    _check_count(count, system.n_free - 6 * bodies)
+    held = 0 if net.guides is None else net.guides.held_count  # rollers and sliders
+    _check_count(count, system.n_free - 6 * bodies - held)
     if not float(np.sum(masses[~net.fixed])) > 0.0:
         raise ConfigError(
             "modes: the net has no mass (material.density = 0 and no [[mass]]): give "

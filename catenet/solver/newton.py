@@ -271,7 +271,7 @@ class _Newton:
         if reuse is not None and reuse.valid(potential, self.c):
             # modified Newton: the kept matrix, if it gives a descent direction
             try:
-                dy = potential.solver.solve(-g)
+                dy = potential.solve(-g)
                 slope = float(dot(g, dy))
             except SingularSystemError:
                 slope = math.nan
@@ -284,7 +284,7 @@ class _Newton:
             try:
                 potential.factorize(self.x, self.c)
                 self.factorizations += 1
-                dy = potential.solver.solve(-g)
+                dy = potential.solve(-g)
                 slope = float(dot(g, dy))
                 if slope < 0.0:
                     if reuse is not None:
@@ -403,7 +403,7 @@ def _polish(potential: Potential, x: np.ndarray, g: np.ndarray, gnorm: float) ->
     y0 = xf[free].copy()
     try:
         potential.factorize(x, 0.0)
-        dy = potential.solver.solve(-g)
+        dy = potential.solve(-g)
     except SingularSystemError:
         return None
     if potential.max_step(x, dy, 2.0) <= 1.0:

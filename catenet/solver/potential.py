@@ -56,7 +56,7 @@ class Potential:
         self.solver = solver
         external = ExternalForce(force)
         self.force = external.force  # (N, 3) external force
-        self.f_free = external.flat[system.free_dofs].copy()
+        self.f_free = system.restrict(external.flat)
         self.f_norm = external.norm
         self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
         self.steps = tuple(steps)
@@ -72,7 +72,7 @@ class Potential:
         time step, without rebuilding the potential (the pattern and solver stay)."""
         external = ExternalForce(force)
         self.force = external.force
-        self.f_free = external.flat[self.system.free_dofs].copy()
+        self.f_free = self.system.restrict(external.flat)
         self.f_norm = external.norm
         self.external = external if self.f_norm > 0 else None
 
@@ -139,6 +139,8 @@ class Potential:
             phi_scale += e_level
         g = self._g
         np.subtract(grad.reshape(-1)[self.system.free_dofs], self.f_free, out=g)
+        if self.system.guided is not None:  # rollers, sliders: their free directions
+            self.system.guided.project(g)
         scale = max(self.f_norm, internal)
         floor *= 4.0 * EPS
         phi_scale *= 64.0 * EPS
@@ -186,6 +188,15 @@ class Potential:
         if float(np.linalg.norm(excess)) > target:
             return None
         return target + float(np.linalg.norm(floor))
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """The factorised matrix's solution for ``rhs`` (free DOFs), a guided node's in
+        its free directions (``catenet.solver.guided``: the held part is zero but for
+        round-off, which no step then carries into the constraint)."""
+        dy: np.ndarray = self.solver.solve(rhs)
+        if self.system.guided is not None:
+            self.system.guided.project(dy)
+        return dy
 
     def factorize(self, x: np.ndarray, c: float) -> None:
         """Fills J + c D at x and factorises it."""

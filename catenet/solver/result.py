@@ -143,7 +143,8 @@ def finish(
 
     net = system.net
     _, grad = system.gradient(x)
-    reaction = measures.reaction(net, grad, loads.external_force(net, factor, time=load_time))
+    f = loads.external_force(net, factor, time=load_time)
+    reaction = measures.reaction(net, grad, f, measures.support_force(system, x))
     return Result(
         x=x.copy(),
         tension=system.tension(x),

@@ -30,6 +30,8 @@ def start_state(net: Net, loads: Loads, x0: ArrayLike | None, factor: float) -> 
     if loads.moves_supports:
         x += harmonic_extension(net, target - x[net.fixed])
     x[net.fixed] = target
+    if net.guides is not None:  # rollers and sliders: on their guides
+        net.guides.place(x, net.nodes)
     return x
 
 
@@ -97,11 +99,13 @@ def stretched_start(potential: Potential, x: np.ndarray) -> None:
     net = potential.system.net
     u = np.zeros_like(x)
     springs = potential.with_system(
-        potential.system.with_terms([Springs(net, 1.0 / net.rest_length)])
+        potential.system.with_terms(
+            [Springs(net, 1.0 / net.rest_length), *(t for t in potential.system.terms if t.holds)]
+        )
     )
     try:
         springs.factorize(x, 0.0)
-        u.reshape(-1)[potential.system.free_dofs] = potential.solver.solve(springs.f_free)
+        u.reshape(-1)[potential.system.free_dofs] = springs.solve(springs.f_free)
     except SingularSystemError:
         return  # a part without support: the usual path says so
     if not np.all(np.isfinite(u)):

@@ -30,6 +30,7 @@ from catenet.terms import Inertia
 from catenet.terms.moving import carry, moves
 
 if TYPE_CHECKING:
+    from catenet.model.guides import Guides
     from catenet.solver.potential import Potential
     from catenet.solver.system import System
 
@@ -94,6 +95,9 @@ class TimeStepper:
         if x.shape != net.nodes.shape or v.shape != net.nodes.shape:
             raise ConfigError(f"x0, v0: must have shape {net.nodes.shape}")
         x[net.fixed] = loads.support_positions(net, time=t0)
+        if net.guides is not None:  # rollers and sliders: on their guides, moving along
+            net.guides.place(x, net.nodes)
+            _along_guides(net.guides, v)
         self.settle = loads.settle_time()
         # an obstacle on a prescribed motion, at its t0 pose
         self.moving = moves(self.potential, t0)
@@ -113,6 +117,17 @@ class TimeStepper:
         store_acceleration(self.scheme, a_out, self.free)
         if self.ledger is not None:
             self.ledger.begin(self)
+
+    def _on_guides(self, v: np.ndarray) -> None:
+        """The step's end state exactly on the rollers and sliders: positions on the
+        guides, velocities and the scheme's acceleration in their free directions."""
+        guides = self.net.guides
+        assert guides is not None
+        guides.place(self.x_trial, self.net.nodes)
+        v[guides.nodes] = guides.project(v[guides.nodes])
+        a = getattr(self.scheme, "a", None)
+        if a is not None and self.system.guided is not None:
+            self.system.guided.project(a)
 
     def run(
         self,
@@ -201,6 +216,8 @@ class TimeStepper:
         except ConvergenceError as exc:
             raise ConvergenceError(str(exc), iterations=self.iterations, state=x.copy()) from None
         x_trial[:] = potential.toward(base, x_trial)  # a predictor inside an obstacle is cut
+        if net.guides is not None:  # rollers and sliders: Newton's steps keep them there
+            net.guides.place(x_trial, net.nodes)
         return x_trial
 
     def solve_step(self, h_step: float) -> tuple[NewtonResult | None, str]:
@@ -339,6 +356,8 @@ class TimeStepper:
                 state=self.x.copy(),
             )
         v = self.scheme.accept(self.x_trial, self.x, self.v, self.free, h_step)
+        if self.net.guides is not None:  # round-off kept off the guides (no drift)
+            self._on_guides(v)
         if self.ledger is not None:  # judged before the step becomes the state
             self.ledger.step(self, self.x, self.x_trial, v, h_step)
             try:
@@ -395,7 +414,7 @@ def at_rest(
     solve's: ``Potential.at_floor``; a long stiff chain's rtol is below that floor); the
     residual and the larger of the two over that tolerance (at most 1 at rest)."""
     _, grad = system.gradient(x)
-    r = grad.reshape(-1)[system.free_dofs] - potential.f_free
+    r = system.restrict(grad.reshape(-1)) - potential.f_free
     scale = max(potential.f_norm, float(norm(grad.reshape(-1))))
     tol = rtol * scale
     residual = float(norm(r.reshape(-1)))
@@ -414,3 +433,19 @@ def potential_at(potential: Potential, loads: Loads, net: Net, t: float) -> Pote
     if loads.varies:
         potential.set_force(loads.external_force(net, time=t))
     return potential
+
+
+def _along_guides(guides: Guides, v: np.ndarray) -> None:
+    """A start's velocities (in place) at the rollers and sliders in their free
+    directions, with a warning where a given velocity had a held part."""
+    given = v[guides.nodes]
+    free = guides.project(given)
+    lost = np.linalg.norm(given - free, axis=1)
+    if np.any(lost > 1e-9 * (np.linalg.norm(given, axis=1) + 1e-300)):
+        k = int(guides.nodes[np.argmax(lost)])
+        log.warning(
+            "the initial velocity of node %d (and %d more) has a part along the direction "
+            "its roller or slider holds: left out (%.3g m/s)",
+            k, int(np.count_nonzero(lost > 0)) - 1, float(lost.max()),
+        )  # fmt: skip
+    v[guides.nodes] = free

@@ -25,6 +25,7 @@ from catenet.kernels.pattern import (
 )
 from catenet.kernels.sparse import add_diagonal, scatter_add
 from catenet.model.net import Net
+from catenet.solver.guided import Guided, guided_blocks
 from catenet.terms import Stretch, Term
 
 if TYPE_CHECKING:  # SciPy is imported where a matrix is asked for: not on a run's path
@@ -63,6 +64,8 @@ class System:
         self.n_free = int(self.free_dofs.size)
         self._reduced = np.full(3 * n, -1, dtype=np.int64)
         self._reduced[self.free_dofs] = np.arange(self.n_free)
+        self.guides = net.guides  # rollers and sliders: projected rows (``catenet.solver.guided``)
+        self.guided: Guided | None = None
 
         self._build()
         self._grad = np.zeros((n, 3))
@@ -78,7 +81,7 @@ class System:
             if term.grows:
                 term.grew = False
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
-        if self._entry_count() <= SMALL_PATTERN:
+        if self.guides is not None or self._entry_count() <= SMALL_PATTERN:
             found = self._unique_pattern()
         else:
             found = self._block_pattern() or self._entry_pattern()
@@ -152,8 +155,13 @@ class System:
             parts.append((rows * width + cols)[keep])
             kept.append(keep)
         diag = np.arange(self.n_free, dtype=np.int64)
+        if self.guides is not None:  # a guided node's blocks whole: its rows mix
+            dofs = self._guided_dofs()
+            parts.append(guided_blocks(np.concatenate(parts), dofs, width, self.upper))
         parts.append(diag * width + diag)
         unique, inverse = np.unique(np.concatenate(parts), return_inverse=True)
+        if self.guides is not None:
+            self.guided = Guided(self.guides, self._guided_dofs(), unique, width, self.upper)
         indptr = np.zeros(self.n_free + 1, dtype=np.int32)
         np.cumsum(np.bincount(unique // width, minlength=self.n_free), out=indptr[1:])
         targets, start = [], 0
@@ -163,7 +171,12 @@ class System:
             target[np.flatnonzero(keep)] = inverse[start : start + count]
             start += count
             targets.append(target)
-        return indptr, (unique % width).astype(np.int32), targets, inverse[start:]
+        return (
+            indptr,
+            (unique % width).astype(np.int32),
+            targets,
+            inverse[inverse.size - diag.size :],
+        )
 
     def _entry_pattern(self) -> Pattern:
         """The pattern from every entry of every term (catenet.kernels.pattern): bucketed
@@ -254,6 +267,20 @@ class System:
         """The stretching term (every net has one)."""
         return next(t for t in self.terms if isinstance(t, Stretch))
 
+    def _guided_dofs(self) -> np.ndarray:
+        """(K, 3) the reduced DOFs of the guided nodes (none without guides)."""
+        nodes = np.zeros(0, np.int64) if self.guides is None else self.guides.nodes
+        dofs: np.ndarray = self._reduced[3 * nodes[:, None] + np.arange(3)]
+        return dofs
+
+    def restrict(self, flat: np.ndarray) -> np.ndarray:
+        """A force or gradient (3N,) on the free DOFs: the free DOFs' entries, a guided
+        node's projected on its free directions (a new array)."""
+        out: np.ndarray = flat[self.free_dofs]
+        if self.guided is not None:
+            self.guided.project(out)
+        return out
+
     # --- scalar and vector terms -------------------------------------------------------
     def energy(self, x: np.ndarray) -> float:
         return float(sum(term.energy(x) for term in self.terms))
@@ -332,6 +359,8 @@ class System:
             scatter_add(values, target, data)
         if shift is not None:
             add_diagonal(self.diag_pos, shift, data)
+        if self.guided is not None:
+            self.guided.project_matrix(data)
         self.convex = definite
         self.seconds += time.perf_counter() - start
         return data

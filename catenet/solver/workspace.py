@@ -31,7 +31,7 @@ class Workspace:
         mtype: int | None = None,
         terms: Sequence[Term] = (),
     ):
-        all_terms = (Stretch(net), *terms)
+        all_terms = (Stretch(net), *support_terms(net), *terms)
         if mtype is None:  # Cholesky where the matrices are positive (semi)definite
             mtype = 2 if all(t.convex for t in all_terms) else -2
         upper = mtype != 11
@@ -94,6 +94,15 @@ class Workspace:
             assembly_seconds=self.system.seconds,
             setup_seconds=self.setup_seconds,
         )
+
+
+def support_terms(net: Net) -> tuple[Term, ...]:
+    """The terms of a net's elastic supports (``Net.springs``), every solve's."""
+    if net.springs is None:
+        return ()
+    from catenet.terms.supports import ElasticSupport
+
+    return (ElasticSupport(net),)
 
 
 def check_rtol(rtol: float) -> None:

@@ -42,6 +42,8 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
+- ``holds``: a support's term (the elastic supports' springs,
+  ``catenet.terms.supports``): its force counts in the reactions, not the contact forces.
 
 ``role`` says how a solver uses the term: "internal" terms belong to the structure
 (stretching, springs, contact; support reactions balance them), "external" ones are the
@@ -104,6 +106,7 @@ class Term:
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
     structural = False  # the structure's own energy (rods' bending): its force is no contact
+    holds = False  # a support's term (springs): its force is a reaction, not a contact
 
     @property
     def convex(self) -> bool:

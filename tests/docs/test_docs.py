@@ -38,6 +38,7 @@ OWN = {
     "docs/guide/bodies.md",
     "docs/guide/results.md",
     "docs/guide/reliability.md",
+    "docs/guide/supports.md",
 }
 
 

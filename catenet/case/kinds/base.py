@@ -68,7 +68,9 @@ def refit(net: Net, names: dict[str, int], fixed: Any, prestrain: float) -> Net:
     if fixed is None and not prestrain:
         return net
     mask = net.fixed if fixed is None else sorted(resolve(r, names) for r in fixed)
-    return net.replace(fixed=mask, rest_length=net.rest_length / (1.0 + prestrain))
+    # none pinned: rollers, sliders or springs hold it (checked when they are added)
+    flies = net.flies or (fixed is not None and not fixed)
+    return net.replace(fixed=mask, rest_length=net.rest_length / (1.0 + prestrain), flies=flies)
 
 
 def with_prefix(message: str, fixed_key: str = "geometry.fixed") -> str:

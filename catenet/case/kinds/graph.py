@@ -320,7 +320,8 @@ class GraphConfig(GeometryConfig):
             rest_length=rest,
             line_density=rho,
             law=Law.concat(laws),
-            flies=case.solver.method == "dynamic",  # a dynamic run needs no support
+            # a dynamic run needs no support; rollers and springs are checked when added
+            flies=case.solver.method == "dynamic" or case.supports.partial,
         )
         cables = self._index(mesh)
         return Built(net, probe, _size(net), names, sets, cables, mesh.at_nodes)

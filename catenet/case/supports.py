@@ -1,0 +1,158 @@
+"""The keys of supports that hold a node in some directions only: ``[[supports.roller]]``,
+``[[supports.slider]]`` and ``[[supports.spring]]`` (``catenet.model.guides``), and the
+node lists every support key takes."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from catenet.case.keys import BAD, Checker, Context, Declared, key
+from catenet.errors import ConfigError
+from catenet.model.net import Net
+
+Vec3 = tuple[float, float, float]
+NodeRef = int | str
+
+
+def node_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A non-empty array of node references (indices, names, node sets)."""
+    if not isinstance(v, (list, tuple)) or not v:
+        return ck.bad(path, v, "must be a non-empty array of nodes")
+    refs = [ck.node_ref(x, f"{path}[{k}]", ctx.kind) for k, x in enumerate(v)]
+    return BAD if BAD in refs else tuple(refs)
+
+
+def fixed_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """``supports.fixed``: a non-empty array of nodes, or [] (no node pinned: the
+    rollers, sliders and springs hold the net; ``check_fixed`` says where there are
+    none)."""
+    if isinstance(v, (list, tuple)) and not v:
+        return ()
+    return node_list(ck, v, path, ctx)
+
+
+def check_fixed(ck: Checker, supports: Any) -> None:
+    """``supports.fixed = []`` only where rollers, sliders or springs hold the net."""
+    partial = supports.rollers or supports.sliders or supports.springs
+    if supports.fixed == () and not partial:
+        ck.bad(
+            "supports.fixed",
+            [],
+            "must be a non-empty array of nodes ([] only where [[supports.roller]], "
+            "[[supports.slider]] or [[supports.spring]] hold the net)",
+        )
+
+
+def _node_refs(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """One node reference (an index, a name, a node set) or a non-empty array of them."""
+    if isinstance(v, (list, tuple)):
+        return node_list(ck, v, path, ctx)
+    ref = ck.node_ref(v, path, ctx.kind)
+    return BAD if ref is BAD else (ref,)
+
+
+def _direction(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A direction [x, y, z]: three finite numbers, not all zero."""
+    vec = ck.vec3(v, path)
+    if vec is BAD:
+        return BAD
+    if not any(vec):
+        return ck.bad(path, v, "must not be [0, 0, 0]: it names a direction")
+    return vec
+
+
+def _stiffness(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """[kx, ky, kz] >= 0 (not all 0), or a symmetric positive semidefinite 3x3 [N/m]."""
+    from catenet.model.guides import spring_matrix
+
+    try:
+        spring_matrix(v, path)
+    except ConfigError as exc:
+        ck.problems.extend(exc.problems)
+        return BAD
+    rows = [tuple(float(c) for c in r) for r in v] if isinstance(v[0], (list, tuple)) else None
+    return tuple(rows) if rows is not None else tuple(float(c) for c in v)
+
+
+def _guide_nodes(what: str) -> Any:
+    return key(
+        _node_refs,
+        "a node (index, name or node set) or an array of them",
+        missing=f"the nodes {what}",
+        doc=f"the nodes {what}: an index, a name, a node set or an array of them",
+    )
+
+
+@dataclass(frozen=True)
+class RollerConfig(Declared):
+    """Nodes held along ``normal`` only: free to move in the plane across it."""
+
+    nodes: tuple[NodeRef, ...] = _guide_nodes("on the roller")
+    normal: Vec3 = key(
+        _direction,
+        "[nx, ny, nz], not zero",
+        missing="[nx, ny, nz]: the direction the nodes are held in",
+        doc="the held direction (any length, any orientation)",
+    )
+
+
+@dataclass(frozen=True)
+class SliderConfig(Declared):
+    """Nodes free along ``direction`` only: held in the two directions across it."""
+
+    nodes: tuple[NodeRef, ...] = _guide_nodes("on the slider")
+    direction: Vec3 = key(
+        _direction,
+        "[dx, dy, dz], not zero",
+        missing="[dx, dy, dz]: the direction the nodes slide along",
+        doc="the free direction (any length, any orientation)",
+    )
+
+
+@dataclass(frozen=True)
+class SpringConfig(Declared):
+    """Elastic supports: each node held toward its given position by a linear spring."""
+
+    nodes: tuple[NodeRef, ...] = _guide_nodes("on springs")
+    stiffness: Any = key(
+        _stiffness,
+        "[kx, ky, kz] >= 0, not all 0, or a symmetric positive semidefinite 3x3",
+        missing="[kx, ky, kz] [N/m]",
+        unit="N/m",
+        doc="per node: kx, ky, kz along x, y and z, or a 3x3 matrix of rows (kxx, kxy, kxz) ...",
+    )
+
+
+def with_partial_supports(
+    supports: Any, net: Net, names: Mapping, sets: Mapping, flies: bool = False
+) -> Net:
+    """The net with the case's rollers, sliders and springs (``supports``, a sound
+    ``SupportsConfig``; node references resolved by ``names`` and ``sets``), every part
+    of it supported (``flies``: a dynamic run, where none need be)."""
+    from catenet.case.kinds.base import expand
+    from catenet.model.guides import Elastic, Guides
+
+    def nodes(refs: tuple[NodeRef, ...]) -> list[int]:
+        return [i for r in refs for i in expand(r, names, sets)]
+
+    guides = [
+        Guides.roller(nodes(t.nodes), t.normal, f"supports.roller[{k}].normal")
+        for k, t in enumerate(supports.rollers)
+    ]
+    guides += [
+        Guides.slider(nodes(t.nodes), t.direction, f"supports.slider[{k}].direction")
+        for k, t in enumerate(supports.sliders)
+    ]
+    springs = [
+        Elastic.of(nodes(t.nodes), t.stiffness, f"supports.spring[{k}].stiffness")
+        for k, t in enumerate(supports.springs)
+    ]
+    if guides:
+        net = net.with_guides(*guides)
+    if springs:
+        net = net.with_springs(*springs)
+    if net.flies != flies:  # supported now, with the rollers and springs
+        net = net.replace(flies=flies)
+    return net
