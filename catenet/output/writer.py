@@ -311,8 +311,8 @@ class ResultWriter:
         if self.history is None or self.error is not None or not self._open:
             return
         self.history.take(t, row)
-        if self.clock() >= self._next_flush:
-            self.flush()
+        if (self.frames or not self.every) and self.clock() >= self._next_flush:
+            self.flush()  # (a trajectory's first flush is its first frame's, at once)
 
     def _stored_tension(self, x, tension) -> np.ndarray:
         """The tensions stored with positions x: as given, else computed from the law (the
