@@ -2,7 +2,9 @@
 ``catenet.output.history``) against time, one panel each where the run has them:
 
 - "reactions": the resultant of the reactions of all supports (x, y, z) and the
-  magnitude |R| at the support nodes of the largest peak reaction (up to ``LARGEST``);
+  magnitude of the resultant of each support set (a node set of the case, ``/mesh/sets``,
+  all of whose nodes are supports), else |R| at the support nodes of the largest peak
+  reaction (up to ``LARGEST``);
 - "contact": the magnitude of the total force of each obstacle, ball or free body on
   the net (``obstacle[k]``, its kind);
 - "cable end tensions": each named cable's tension at its first and at its last edge.
@@ -53,14 +55,32 @@ def plot_history(path: str | Path, out: str | Path | None = None, *, dpi: int = 
             'dynamic runs (solver.method = "dynamic"); plot it without --history'
         )
     out = check_output(history_output(path) if out is None else out)
-    fig = history_figure(hist)
+    fig = history_figure(hist, support_sets(path, hist.reaction_nodes))
     fig.savefig(out, dpi=dpi)
     log.info("wrote %s", out)
     return out
 
 
-def history_figure(hist: History):
-    """The figure of a history (see the module docstring), a matplotlib Figure."""
+def support_sets(path: str | Path, supports: np.ndarray) -> dict[str, np.ndarray]:
+    """The case's node sets in the file ``path`` all of whose nodes are among
+    ``supports``: each as the positions of its nodes in ``supports``."""
+    import h5py
+
+    from catenet.output.netsets import read_sets
+
+    with h5py.File(path, "r") as h5:
+        sets = read_sets(h5["mesh"])
+    where = {int(n): j for j, n in enumerate(supports)}
+    return {
+        name: np.array([where[int(n)] for n in nodes], dtype=np.int64)
+        for name, nodes in sets.items()
+        if len(nodes) and all(int(n) in where for n in nodes)
+    }
+
+
+def history_figure(hist: History, sets: dict[str, np.ndarray] | None = None):
+    """The figure of a history (see the module docstring; ``sets``: the support sets,
+    ``support_sets``), a matplotlib Figure."""
     import matplotlib
 
     matplotlib.rcParams["svg.hashsalt"] = "catenet"
@@ -82,14 +102,14 @@ def history_figure(hist: History):
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     for ax, draw in zip(axes, panels, strict=True):
-        draw(ax, hist)
+        draw(ax, hist, sets or {})
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize="small", loc="best")
     axes[-1].set_xlabel(TIME)
     return fig
 
 
-def _reactions(ax, hist: History) -> None:
+def _reactions(ax, hist: History, sets: dict[str, np.ndarray]) -> None:
     ax.set_label("reactions")
     ax.set_title("support reactions", fontsize="medium")
     t, r = hist.time, hist.reaction
@@ -97,14 +117,16 @@ def _reactions(ax, hist: History) -> None:
     for j, axis in enumerate("xyz"):
         ax.plot(t, total[:, j], label=f"resultant R{axis}", lw=1.4)
     size = np.linalg.norm(r, axis=2)
-    if r.shape[1] > 1:
+    for name, at in sets.items():
+        ax.plot(t, np.linalg.norm(r[:, at].sum(axis=1), axis=1), "--", lw=1.1, label=f"|R| {name}")
+    if r.shape[1] > 1 and not sets:
         top = np.argsort(-size.max(axis=0, initial=0.0), kind="stable")[:LARGEST]
         for j in top:
             ax.plot(t, size[:, j], "--", lw=0.9, label=f"|R| node {hist.reaction_nodes[j]}")
     ax.set_ylabel("reaction [N]")
 
 
-def _contact(ax, hist: History) -> None:
+def _contact(ax, hist: History, sets=None) -> None:
     ax.set_label("contact")
     ax.set_title("contact force on the net", fontsize="medium")
     size = np.linalg.norm(hist.contact, axis=2)
@@ -113,7 +135,7 @@ def _contact(ax, hist: History) -> None:
     ax.set_ylabel("contact force [N]")
 
 
-def _cables(ax, hist: History) -> None:
+def _cables(ax, hist: History, sets=None) -> None:
     ax.set_label("cable end tensions")
     ax.set_title("cable end tensions", fontsize="medium")
     for j, name in enumerate(hist.cable_names):

@@ -129,6 +129,7 @@ def test_named_cables_keep_the_tension_of_their_end_edges(tmp_path):
         "geometry": {
             "kind": "graph", "nodes": [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
             "cable": [{"name": "line", "nodes": [0, 1], "edge_length": 0.25}],
+            "sets": {"anchors": [0, 1], "left": [0]},
         },
         "material": {"E": 1e9, "radius": 0.002, "density": 1000.0},
         "supports": {"fixed": [0, 1]},
@@ -147,6 +148,20 @@ def test_named_cables_keep_the_tension_of_their_end_edges(tmp_path):
     assert edges.tolist() == [[0, 7]]
     assert hist.cable_end_tension[-1, 0] == pytest.approx(tension[[0, 7]], rel=1e-12)
     assert hist.contact.shape == (11, 0, 3)
+    # the figure: reactions per support set, the cable's ends
+    from catenet.plot.history import history_figure, support_sets
+
+    sets = support_sets(out, hist.reaction_nodes)
+    assert {k: v.tolist() for k, v in sets.items()} == {"anchors": [0, 1], "left": [0]}
+    axes = {ax.get_label(): ax for ax in history_figure(hist, sets).axes}
+    assert set(axes) == {"reactions", "cable end tensions"}
+    lines = [line.get_label() for line in axes["reactions"].get_lines()]
+    assert lines == ["resultant Rx", "resultant Ry", "resultant Rz", "|R| anchors", "|R| left"]
+    anchors = axes["reactions"].get_lines()[3].get_ydata()
+    weight = np.linalg.norm(hist.reaction.sum(axis=1), axis=1)
+    assert anchors == pytest.approx(weight)
+    assert axes["cable end tensions"].get_ylabel() == "tension [N]"
+    assert axes["cable end tensions"].get_xlabel() == "t [s]"
 
 
 def test_plot_history_draws_the_rows_and_refuses_a_static_file(dropped, tmp_path):
