@@ -62,8 +62,9 @@ def command(
     its figures 5-8 and report.md (catenet.study).
 
     --history: a dynamic run's histories (every time step): the reactions'
-    resultant and the largest support reactions, the contact force of each
-    obstacle or body on the net, the tension at both ends of each named cable.
+    resultant and that of each support set (else the largest supports), the
+    contact force of each obstacle or body on the net, the tension at both ends
+    of each named cable.
 
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
