@@ -124,6 +124,23 @@ def test_a_stopped_run_keeps_its_rows(tmp_path):
     assert hist.reaction[-1] == pytest.approx(reaction, rel=1e-9, abs=1e-12)
 
 
+def test_a_run_interrupted_within_a_step_keeps_its_rows_to_the_last_good_state(tmp_path):
+    out = tmp_path / "interrupted.h5"
+    asked = []
+
+    def interrupt() -> bool:  # asked before every Newton iteration
+        asked.append(1)
+        return len(asked) >= 40
+
+    res = run_case(parse_case({**drop(), "output": {"every": 0}}), out, interrupt=interrupt)
+    hist = read_history(out)
+    assert not res.converged and 0 < res.steps < 40
+    assert len(hist.time) == res.steps + 1 and hist.time[-1] == pytest.approx(res.time)
+    with h5py.File(out) as f:
+        reaction = np.asarray(f["result/reaction"])[hist.reaction_nodes]
+    assert hist.reaction[-1] == pytest.approx(reaction, rel=1e-9, abs=1e-12)
+
+
 def test_named_cables_keep_the_tension_of_their_end_edges(tmp_path):
     case = {
         "geometry": {
