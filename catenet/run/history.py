@@ -63,31 +63,29 @@ class Recorder:
     def __init__(self, scene, ws, writer, shape: HistoryLayout):
         self.scene, self.ws, self.writer, self.layout = scene, ws, writer, shape
         self.last: float | None = None  # the time of the last row (a restart's seed)
-        by: dict[int, list] = {k: [] for k in shape.obstacles}
-        for term in ws.system.terms:
-            if term.owner in by:
-                by[term.owner].append(term)
-        self.owned = [by[k] for k in shape.obstacles]
+        slot = {k: j for j, k in enumerate(shape.obstacles)}
+        # each term once a row: an obstacle's into its own array, the others' together
+        self.terms = [(term, slot.get(term.owner, -1)) for term in ws.system.terms]
+        n = scene.net.n_nodes
+        self.grad = np.zeros((n, 3))
+        self.owned = np.zeros((len(slot), n, 3))
         self.n_net = scene.net.n_net
         self.cables = bool(shape.cable_names)
 
     def row(self, t: float, x: np.ndarray) -> dict[str, np.ndarray]:
         """The history's row of state x at time t."""
-        net, system = self.scene.net, self.ws.system
-        _, grad = system.gradient(x)
+        net, grad, owned = self.scene.net, self.grad, self.owned
+        grad.fill(0.0)
+        owned.fill(0.0)
+        for term, j in self.terms:  # the system's gradient, by owner
+            term.gradient(x, grad if j < 0 else owned[j])
+        grad += owned.sum(axis=0)
         force = self.scene.loads.external_force(net, time=t)
         support = self.layout.reaction_nodes
         out = {"reaction": measures.reaction(net, grad, force)[support]}
-        contact = np.zeros((len(self.owned), 3))
-        g = np.zeros_like(x)
-        for j, terms in enumerate(self.owned):
-            g[:] = 0.0
-            for term in terms:
-                term.gradient(x, g)
-            contact[j] = -np.sum(g[: self.n_net], axis=0)  # on the net's own nodes
-        out["contact"] = contact
+        out["contact"] = -owned[:, : self.n_net].sum(axis=1)  # on the net's own nodes
         if self.cables:
-            out["cable_end_tension"] = system.tension(x)[self.layout.cable_edges]
+            out["cable_end_tension"] = self.ws.system.tension(x)[self.layout.cable_edges]
         return out
 
     def record(self, t: float, x: np.ndarray) -> None:
