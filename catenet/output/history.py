@@ -4,7 +4,7 @@ time step, not only at the stored frames, kept compactly (a few numbers a step).
 ```
 /history/time                (S,) [s]: the start, then every accepted time step
 /history/reaction            (S, Ns, 3) [N]: the force each support node exerts on the net
-/history/reaction_nodes      (Ns,) int64: those nodes (the fixed nodes, moved supports too)
+/history/reaction_nodes      (Ns,) int64: those nodes (fixed, moved, rollers, sliders, springs)
 /history/contact             (S, K, 3) [N]: the total force of each obstacle, ball or free
                              body on the net; attrs obstacles (K,) their indices k
                              (``obstacle[k]``), names, kinds

@@ -3,8 +3,8 @@ time step, the reaction at each support node, the total force of each obstacle, 
 free body on the net, and the tension of each named cable's end edges, computed by
 ``catenet.model.measures`` as /result's reaction and contact force are.
 
-The reaction of a support node is what /result/reaction is at that state (the internal
-forces there less the applied loads); the force of obstacle k on the net is minus the
+The reaction of a support node (fixed, on a roller or a slider, or on a spring) is what
+/result/reaction is at that state; the force of obstacle k on the net is minus the
 gradient, at the net's own nodes, of the terms that are its part (``Term.owner``): its
 barrier and friction, a ball's or a free body's barrier with the net and its friction (a
 body's pairs with other solids act on the solids only). So, at every step of an implicit
@@ -48,7 +48,7 @@ def layout(scene) -> HistoryLayout:
             rows.append((mine[0], mine[-1]) if mine.size else (0, 0))
         names, ends = tuple(cables.names), np.asarray(rows, dtype=np.int64).reshape(-1, 2)
     return HistoryLayout(
-        reaction_nodes=np.flatnonzero(net.fixed).astype(np.int64),
+        reaction_nodes=np.flatnonzero(net.supported).astype(np.int64),
         obstacles=tuple(owned),
         names=tuple(f"obstacle[{k}]" for k in owned),
         kinds=tuple(kinds[k] for k in owned),
@@ -64,25 +64,33 @@ class Recorder:
         self.scene, self.ws, self.writer, self.layout = scene, ws, writer, shape
         self.last: float | None = None  # the time of the last row (a restart's seed)
         slot = {k: j for j, k in enumerate(shape.obstacles)}
-        # each term once a row: an obstacle's into its own array, the others' together
-        self.terms = [(term, slot.get(term.owner, -1)) for term in ws.system.terms]
+        # each term once a row: an obstacle's into its own array, the supports' springs
+        # into theirs (-2), the others' together (-1)
+        self.terms = [
+            (term, -2 if term.holds else slot.get(term.owner, -1)) for term in ws.system.terms
+        ]
+        self.held = any(term.holds for term in ws.system.terms)
         n = scene.net.n_nodes
         self.grad = np.zeros((n, 3))
+        self.springs = np.zeros((n, 3))
         self.owned = np.zeros((len(slot), n, 3))
         self.n_net = scene.net.n_net
         self.cables = bool(shape.cable_names)
 
     def row(self, t: float, x: np.ndarray) -> dict[str, np.ndarray]:
         """The history's row of state x at time t."""
-        net, grad, owned = self.scene.net, self.grad, self.owned
+        net, grad, owned, springs = self.scene.net, self.grad, self.owned, self.springs
         grad.fill(0.0)
         owned.fill(0.0)
+        springs.fill(0.0)
         for term, j in self.terms:  # the system's gradient, by owner
-            term.gradient(x, grad if j < 0 else owned[j])
+            term.gradient(x, grad if j == -1 else springs if j == -2 else owned[j])
         grad += owned.sum(axis=0)
+        grad += springs
         force = self.scene.loads.external_force(net, time=t)
         support = self.layout.reaction_nodes
-        out = {"reaction": measures.reaction(net, grad, force)[support]}
+        held = np.negative(springs) if self.held else None  # the springs' force on the net
+        out = {"reaction": measures.reaction(net, grad, force, held)[support]}
         out["contact"] = -owned[:, : self.n_net].sum(axis=1)  # on the net's own nodes
         if self.cables:
             out["cable_end_tension"] = self.ws.system.tension(x)[self.layout.cable_edges]

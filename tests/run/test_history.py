@@ -149,7 +149,7 @@ def test_named_cables_keep_the_tension_of_their_end_edges(tmp_path):
             "sets": {"anchors": [0, 1], "left": [0]},
         },
         "material": {"E": 1e9, "radius": 0.002, "density": 1000.0},
-        "supports": {"fixed": [0, 1]},
+        "supports": {"fixed": [0], "spring": [{"nodes": [1], "stiffness": [1e5, 1e5, 1e5]}]},
         "load": {"gravity": [0.0, 0.0, -9.81]},
         "solver": {"method": "dynamic", "dt": 0.01, "t_end": 0.1, "damping": 1.0},
         "output": {"every": 0},
@@ -164,6 +164,11 @@ def test_named_cables_keep_the_tension_of_their_end_edges(tmp_path):
         assert "trajectory" not in f
     assert edges.tolist() == [[0, 7]]
     assert hist.cable_end_tension[-1, 0] == pytest.approx(tension[[0, 7]], rel=1e-12)
+    assert hist.reaction_nodes.tolist() == [0, 1]  # the fixed node and the spring's
+    with h5py.File(out) as f:
+        reaction = np.asarray(f["result/reaction"])[[0, 1]]
+    assert np.abs(reaction[1]).max() > 1.0  # the spring holds
+    assert hist.reaction[-1] == pytest.approx(reaction, rel=1e-9, abs=1e-9)
     assert hist.contact.shape == (11, 0, 3)
     # the figure: reactions per support set, the cable's ends
     from catenet.plot.history import history_figure, support_sets
