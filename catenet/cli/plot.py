@@ -27,9 +27,22 @@ from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbos
     show_default=True,
     help="Draw displacements this many times larger (small deflections become visible).",
 )
+@click.option(
+    "--history",
+    is_flag=True,
+    help="Plot a dynamic run's histories against time instead (/history: support "
+    "reactions, contact forces per obstacle or body, cable end tensions), into "
+    "RESULT-history.png by default.",
+)
 @verbosity_options
 def command(
-    path: Path, output: Path | None, scale: float, quiet: bool, verbose: int, debug: bool
+    path: Path,
+    output: Path | None,
+    scale: float,
+    history: bool,
+    quiet: bool,
+    verbose: int,
+    debug: bool,
 ) -> None:
     """Draw the figures of PATH: a result file (OUT.h5) or a sweep output directory.
 
@@ -48,6 +61,11 @@ def command(
     swept parameter, sweep_<key>.png; for sweeps of the paper's square net also
     its figures 5-8 and report.md (catenet.study).
 
+    --history: a dynamic run's histories (every time step): the reactions'
+    resultant and that of each support set (else the largest supports), the
+    contact force of each obstacle or body on the net, the tension at both ends
+    of each named cable.
+
     Prints the path of every figure written. Exit status 2 for a missing or
     unreadable file or a file without the result layout.
     """
@@ -55,7 +73,19 @@ def command(
     with errors_to_exit_codes(debug):
         from catenet.errors import ConfigError
 
-        if path.is_dir():
+        if history:
+            from catenet.plot.history import plot_history
+
+            if path.is_dir():
+                raise ConfigError(
+                    f"{path}: --history: give a result file (RESULT.h5), not a directory"
+                )
+            if not path.exists():
+                raise ConfigError(f"{path}: no such file or directory")
+            if scale != 1.0:
+                raise ConfigError("--history draws no net: give it without --scale")
+            files = [plot_history(path, output)]
+        elif path.is_dir():
             files = sweep_figures(path, output)
         elif not path.exists():
             raise ConfigError(f"{path}: no such file or directory")

@@ -15,6 +15,8 @@
                         max_strain, max_tension, stable (1/0; -1: not checked)
     /xdmf/x/<k>, /xdmf/tension/<k>, /xdmf/v/<k>: frame k of the trajectory, for the XDMF
                         sidecar (virtual datasets: views of /trajectory, no data)
+    /history/time (S,), reaction (S, Ns, 3), reaction_nodes (Ns,), contact (S, K, 3),
+                        cable_end_tension (S, C, 2): a dynamic run's every step (``history``)
     /mesh/bodies, /mesh/obstacles, /trajectory/obstacles, /result/obstacles,
     /xdmf/obstacles/<k>/vertices/<f>: moving spheres (``bodies``) and the other obstacles'
                         surfaces and moving ones' frames (``obstacles``)
@@ -25,13 +27,14 @@ disks), ``files`` (``check_output_path``, the spare copy, atomic publishing),
 ``reader`` (``read_result``, ``read_frame``, ``read_mesh``, ``open_result``: the only
 code that reads the layout, also of killed runs), ``repair`` (``recover``, ``repair``:
 files that need mending), ``bodies`` and ``obstacles`` (moving spheres; the obstacles'
-surfaces, ``read_obstacles``), ``xdmf`` (the
+surfaces, ``read_obstacles``), ``history`` (a dynamic run's rows, ``read_history``), ``xdmf`` (the
 sidecar and the per-frame views /xdmf/<name>/<k> it names), ``export`` (frames to other
 formats through meshio).
 """
 
 from catenet.output.bodies import read_bodies
 from catenet.output.files import check_output_path, remove_spares
+from catenet.output.history import read_history
 from catenet.output.metadata import environment, result_attrs
 from catenet.output.obstacles import read_obstacles
 from catenet.output.reader import (
@@ -61,6 +64,7 @@ __all__ = [
     "probe_node",
     "read_bodies",
     "read_frame",
+    "read_history",
     "read_mesh",
     "read_obstacles",
     "read_result",

@@ -3,10 +3,12 @@ writes the same chunk to both copies of a result file (``catenet.output.writer``
 
 from __future__ import annotations
 
+import math
 import zlib
 
 import numpy as np
 
+MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
 # HDF5's filters on the trajectory's datasets (byte shuffle, then deflate level 4).
 FILTERS = ((2, ()), (1, (4,)))  # (H5Z_FILTER_SHUFFLE, ...), (H5Z_FILTER_DEFLATE, level)
 
@@ -33,3 +35,31 @@ def encode(batch) -> dict[str, list[bytes]]:
             raw = np.ascontiguousarray(arr, dtype="<f8").view(np.uint8).reshape(-1, 8)
             out[name].append(zlib.compress(raw.T.tobytes(), 4))
     return out
+
+
+def create_trajectory(h5, shapes: dict[str, tuple[int, ...]]):
+    """The empty /trajectory group of a new file: ``time`` and a dataset of each frame
+    shape in ``shapes``, one frame a chunk (split above MAX_CHUNK_BYTES), with FILTERS.
+    Fill value NaN: a frame that never fully reached the disk (a file written by a killed
+    earlier catenet version, or copied while incomplete) reads as NaN, and readers skip it."""
+    g = h5.create_group("trajectory")
+    g.create_dataset(
+        "time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,), fillvalue=np.nan
+    )
+    for name, tail in shapes.items():
+        chunk = list(tail)
+        while 8 * math.prod(chunk) > MAX_CHUNK_BYTES:
+            chunk[0] = max(1, chunk[0] // 2)
+        g.create_dataset(
+            name,
+            shape=(0, *tail),
+            maxshape=(None, *tail),
+            dtype="f8",
+            chunks=(1, *chunk),
+            compression="gzip",
+            compression_opts=4,
+            shuffle=True,
+            fillvalue=np.nan,
+        )
+    g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
+    return g

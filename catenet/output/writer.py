@@ -36,7 +36,7 @@ import numpy as np
 from catenet.errors import ConfigError, OutputError
 from catenet.model import measures
 from catenet.output.bodies import write_bodies
-from catenet.output.chunks import FILTERS, encode, filters
+from catenet.output.chunks import FILTERS, create_trajectory, encode, filters
 from catenet.output.files import (
     WriteLock,
     check_finite,
@@ -52,6 +52,7 @@ from catenet.output.files import (
     utf8,
     write_image,
 )
+from catenet.output.history import HistoryLayout, HistoryLog
 from catenet.output.metadata import environment
 from catenet.output.netsets import write_net_index
 from catenet.output.obstacles import Obstacles
@@ -74,7 +75,6 @@ FLUSH_FRAMES = 1000
 MAX_PENDING_BYTES = 64 * 2**20
 # a flush (written twice, the sidecar rewritten) takes at most this share of the run's time.
 FLUSH_SHARE = 0.05
-MAX_CHUNK_BYTES = 32 * 2**20  # a trajectory chunk holds one frame, split above this size
 
 __all__ = ["ResultWriter", "check_output_path"]
 
@@ -95,6 +95,7 @@ class ResultWriter:
     scheme's acceleration state that a restart goes on from; ``attrs`` are extra root
     attributes. ``flush_seconds`` and ``flush_frames``
     (0: no limit) say how often frames reach the file (see the module's docstring).
+    ``history``: the file keeps a dynamic run's /history (``record`` takes its rows).
 
     ``frames`` counts the frames in the file, ``pending`` those in memory, ``flushes``
     and ``flush_time`` [s] the flushes so far and the wall time they took.
@@ -115,6 +116,7 @@ class ResultWriter:
         attrs: dict | None = None,
         flush_seconds: float = FLUSH_SECONDS,
         flush_frames: int = FLUSH_FRAMES,
+        history: HistoryLayout | None = None,
     ):
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 0:
             raise ConfigError(f"output.every = {every!r}: must be an integer >= 0")
@@ -131,6 +133,7 @@ class ResultWriter:
         self._energy = np.zeros(len(ENERGY_COLUMNS))  # the last balance given
         self.attrs = dict(attrs or {})
         self.obstacles = Obstacles(scene)  # their surfaces and poses (catenet.output.obstacles)
+        self.history = HistoryLog(history) if history is not None else None
         self.flush_seconds = float(flush_seconds)
         self.flush_frames = int(flush_frames)
         self.frames = 0
@@ -193,6 +196,8 @@ class ResultWriter:
             self._write_header(h5)
             if self.every > 0:
                 self._create_trajectory(h5)
+            if self.history is not None:
+                self.history.create(h5)  # /history (catenet.output.history)
 
         try:
             check_free_space(self.path, 2 * header_bytes(self.scene.net))
@@ -244,13 +249,6 @@ class ResultWriter:
 
     def _create_trajectory(self, h5) -> None:
         n, m = self.scene.net.n_nodes, self.scene.net.n_edges
-        g = h5.create_group("trajectory")
-        # Fill value NaN: a frame that never fully reached the disk (a file written by a
-        # killed earlier catenet version, or copied while incomplete) reads as NaN, and readers
-        # skip it.
-        g.create_dataset(
-            "time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,), fillvalue=np.nan
-        )
         shapes = {"x": (n, 3), "tension": (m,)}
         if self.velocities:
             shapes["v"] = (n, 3)
@@ -258,25 +256,7 @@ class ResultWriter:
             shapes["a"] = (n, 3)
         if self.energies:
             shapes["energy"] = (len(ENERGY_COLUMNS),)
-        for name in TRAJECTORY:
-            if name not in shapes:
-                continue
-            tail = shapes[name]
-            chunk = list(tail)
-            while 8 * math.prod(chunk) > MAX_CHUNK_BYTES:
-                chunk[0] = max(1, chunk[0] // 2)
-            g.create_dataset(
-                name,
-                shape=(0, *tail),
-                maxshape=(None, *tail),
-                dtype="f8",
-                chunks=(1, *chunk),
-                compression="gzip",
-                compression_opts=4,
-                shuffle=True,
-                fillvalue=np.nan,
-            )
-        g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
+        g = create_trajectory(h5, {name: shapes[name] for name in TRAJECTORY if name in shapes})
         if self.energies:
             import h5py
 
@@ -325,6 +305,15 @@ class ResultWriter:
         ):
             self.flush()
 
+    def record(self, t: float, row: dict) -> None:
+        """Takes a row of the run's /history at time t (``HistoryLog.take``); it reaches
+        the file with the next flush, at the latest ``flush_seconds`` later."""
+        if self.history is None or self.error is not None or not self._open:
+            return
+        self.history.take(t, row)
+        if (self.frames or not self.every) and self.clock() >= self._next_flush:
+            self.flush()  # (a trajectory's first flush is its first frame's, at once)
+
     def _stored_tension(self, x, tension) -> np.ndarray:
         """The tensions stored with positions x: as given, else computed from the law (the
         one place where the writer derives a measure)."""
@@ -339,12 +328,13 @@ class ResultWriter:
         if self.error is not None or not self._open:
             return False
         batch = self._pending
-        if not batch and result is None:
+        rows = (self.history.pending, self.history.rows) if self.history else ([], 0)
+        if not batch and not rows[0] and result is None:
             return True
         start = time.perf_counter()
         n0 = self.frames
         encoded = encode(batch)  # compressed once, written twice (or copied)
-        if not self._write_spare(batch, encoded, n0, result):
+        if not self._write_spare(batch, encoded, n0, result, rows=rows):
             return False
         written = time.perf_counter() - start
         try:
@@ -353,12 +343,15 @@ class ResultWriter:
             self._fail(exc)
             return False
         self._pending, self._pending_bytes = [], 0
+        if self.history is not None:
+            self.history.published(len(rows[0]))
         self.frames += len(batch)
         self.times.extend(t for t, _ in batch)
         if result is not None:
             self._result_written = True
         self._write_sidecar()  # right after the file: it names only frames in the file
-        if result is None and batch and not self._update_spare(batch, encoded, n0, written):
+        again = batch or rows[0]
+        if result is None and again and not self._update_spare(batch, encoded, n0, written, rows):
             return False
         cost = time.perf_counter() - start
         self.flushes += 1
@@ -366,24 +359,24 @@ class ResultWriter:
         self._next_flush = self.clock() + max(self.flush_seconds, cost / FLUSH_SHARE)
         return True
 
-    def _update_spare(self, batch, encoded, n0: int, written: float) -> bool:
+    def _update_spare(self, batch, encoded, n0: int, written: float, rows) -> bool:
         """Brings the spare (the version just replaced) up to date: by appending the batch
         again, or, where that is predicted to take longer (small files, many frames), by
         copying the published file."""
         size = self.path.stat().st_size
         if self._copy_rate * size >= written:
-            return self._write_spare(batch, encoded, n0, again=True)
+            return self._write_spare(batch, encoded, n0, again=True, rows=rows)
         start = time.perf_counter()
         try:
             copy_atomically(self.path, self._spare)
         except OSError:  # try the other way before giving up
-            return self._write_spare(batch, encoded, n0, again=True)
+            return self._write_spare(batch, encoded, n0, again=True, rows=rows)
         self._copy_rate = (time.perf_counter() - start) / max(size, 1)
         return True
 
-    def _write_spare(self, batch, encoded, n0: int, result=None, again: bool = False) -> bool:
-        """Appends ``batch`` (frames n0, n0 + 1, ...; ``encoded``: see ``chunks.encode``) and
-        ``result`` to the spare.
+    def _write_spare(self, batch, encoded, n0: int, result=None, again=False, rows=None) -> bool:
+        """Appends ``batch`` (frames n0, n0 + 1, ...; ``encoded``: see ``chunks.encode``),
+        ``rows`` (the history's rows and the index of the first) and ``result`` to the spare.
         ``again``: the spare is the version just replaced; when it cannot be opened (a
         reader holds it), it is replaced by a copy of the published file."""
         import h5py
@@ -396,6 +389,8 @@ class ResultWriter:
             h5 = h5py.File(self._spare, "r+", libver=LIBVER, rdcc_nbytes=0)
             if batch:
                 self._append(h5, batch, encoded, n0, held)
+            if rows and rows[0] and self.history is not None:
+                self.history.append(h5, rows[0], rows[1], held)
             if result is not None:
                 self._write_result(h5, *result)
             h5.close()

@@ -216,9 +216,11 @@ def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
     a path); a failure re-raised with ``.output`` the file that holds its last good
     state, and bad input found late leaving no file behind."""
     from catenet.output import ResultWriter
+    from catenet.run.history import layout as history_layout
 
     case = run.case
-    newmark = case.solver.method == "dynamic" and case.solver.integrator == "newmark"
+    dynamic = case.solver.method == "dynamic"
+    newmark = dynamic and case.solver.integrator == "newmark"
     writer = (
         ResultWriter(
             run.path,
@@ -227,6 +229,7 @@ def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
             xdmf=case.output.xdmf,
             accelerations=newmark,
             attrs=run.attrs,
+            history=history_layout(run.scene) if dynamic else None,
         )
         if run.path is not None
         else NoFile()

@@ -44,11 +44,19 @@ class Solved:
 
 class _Frames:
     """The frames a run keeps: each step at most once, written aside from the solve
-    time (``catenet.run.clock.Clock``)."""
+    time (``catenet.run.clock.Clock``); with a ``history`` (``catenet.run.history``), a
+    dynamic run's row of every step."""
 
-    def __init__(self, writer, ws, clock):
+    def __init__(self, writer, ws, clock, history=None):
         self.writer, self.ws, self.clock = writer, ws, clock
+        self.history = history
         self.written = -1
+
+    def record(self, t: float, x) -> None:
+        """The history's row of the state x at time t (none without a history)."""
+        if self.history is not None:
+            with self.clock.aside():
+                self.history.record(t, x)
 
     def keep(self, step, t, x, v, tension=None, force=False, a=None, last=False, energy=None):
         if (force or self.writer.wants(step)) and self.written != step:
@@ -69,7 +77,7 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
     from catenet.solver.newton import interruptible
 
     dynamic = settings.method == "dynamic"
-    frames = _Frames(writer, ws, clock)
+    frames = _Frames(writer, ws, clock, _recorder(scene, ws, writer, restart) if dynamic else None)
     start = _dynamic_start(scene, settings, ws, restart, frames) if dynamic else None
     watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
     on_step = _stepping(settings, frames, watch, hooks)
@@ -124,8 +132,22 @@ def _dynamic_start(scene, settings, ws, restart, frames: _Frames):
         a0 = start_acceleration(
             scene.net, scene.loads, x0, v0, damping=settings.damping, t=start.t, workspace=ws
         )
+    frames.record(start.t, x0)  # before the frame: the two reach the file together
     frames.keep(0, start.t, x0, v0, a=a0, energy=held_energy(ws.system, x0, v0))
     return start
+
+
+def _recorder(scene, ws, writer, restart):
+    """The history's recorder of a dynamic run whose file keeps one (None: no file), its
+    first rows a restart's."""
+    if getattr(writer, "history", None) is None:
+        return None
+    from catenet.run.history import Recorder
+
+    recorder = Recorder(scene, ws, writer, writer.history.layout)
+    if restart is not None:
+        recorder.seed(restart.path, restart.t)
+    return recorder
 
 
 def _stepping(settings, frames: _Frames, watch, hooks: Hooks):
@@ -143,6 +165,8 @@ def _stepping(settings, frames: _Frames, watch, hooks: Hooks):
             frames.keep(step.index, step.time, step.x, step.v, tension, force=force, a=step.a,
                         last=last, energy=step.energy)  # fmt: skip
 
+        if dynamic:
+            frames.record(step.time, step.x)
         keep_step(force=last, last=last)  # a static run's last step: /result follows at once
         if hooks.progress is not None:
             if dynamic:

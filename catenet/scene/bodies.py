@@ -81,6 +81,8 @@ def assemble(
     records = []
     for j, ball in enumerate(balls):
         made, record = _ball_terms(ball, centres[ball.index], masses[j], net, scale, size, shown)
+        for term in made:
+            term.owner = ball.index
         terms += made
         records.append(record)
         others: list[Fixed | Mover] = [*fixed, *(m for m in balls if m.index > ball.index)]

@@ -100,7 +100,10 @@ def add_free_bodies(
     loads = pad_loads(loads, 4 * len(free))
     terms: list[Term] = []
     for body, record in zip(free, built, strict=True):
-        terms += _terms(body, record, fixed, net, loads, size, shown)
+        made = _terms(body, record, fixed, net, loads, size, shown)
+        for term in made:
+            term.owner = body.index
+        terms += made
     return net, loads, velocity, tuple(built), terms
 
 

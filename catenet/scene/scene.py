@@ -161,6 +161,8 @@ class Scene:
         terms = obstacle_terms(
             f"obstacle[{k}]", shape, contact, reach, own.net, shown or self.shown
         )
+        for term in terms:
+            term.owner = k  # the obstacle whose force on the net it is (histories)
         own = dataclasses.replace(own, terms=(*own.terms, *terms))
         return self._with(own, self.movers, (*self.obstacles, (k, shape, contact)))
 

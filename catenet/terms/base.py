@@ -107,6 +107,7 @@ class Term:
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
     structural = False  # the structure's own energy (rods' bending): its force is no contact
     holds = False  # a support's term (springs): its force is a reaction, not a contact
+    owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
 
     @property
     def convex(self) -> bool:
