@@ -43,22 +43,9 @@ def read_height_field(file: str) -> HeightField:
 
 @functools.lru_cache(maxsize=4)
 def _read(file: str, mtime: int, size: int) -> HeightField:
-    from catenet.scene.meshfiles import read_mesh_file
+    from catenet.scene.meshfiles import read_triangles
 
-    try:
-        mesh = read_mesh_file(file)
-    except ImportError:
-        raise ValueError(
-            "reading a surface needs the Python package meshio (pip install meshio)"
-        ) from None
-    except ValueError as exc:
-        raise ValueError(f"meshio cannot read it: {exc}") from None
-    tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
-    if not tris:
-        found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
-        raise ValueError(f"holds no triangles (it has {found}): a surface is a triangle mesh")
-    v = np.asarray(mesh.points, dtype=np.float64)
-    t = np.concatenate(tris)
+    v, t = read_triangles(file, "a surface")
     if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
         raise ValueError(f"its points (shape {v.shape}) must be finite 3D points")
     a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from catenet.model.limits import MAGNITUDE
-from catenet.scene.meshfiles import read_mesh_file
+from catenet.scene.meshfiles import read_triangles
 from catenet.scene.shapes.base import MassProperties, Outline, vec
 
 if TYPE_CHECKING:
@@ -97,24 +97,12 @@ def read_surface(file: str) -> tuple[np.ndarray, np.ndarray]:
 def _read_surface(file: str, mtime: int, size: int) -> tuple[np.ndarray, np.ndarray]:
     from catenet.terms.shapes import closed_surface
 
-    try:
-        mesh = read_mesh_file(file)
-    except ImportError:
-        raise ValueError(
-            "reading a mesh obstacle needs the Python package meshio (pip install meshio)"
-        ) from None
-    except ValueError as exc:
-        raise ValueError(f"meshio cannot read it: {exc}") from None
-    tris = [np.asarray(c.data, dtype=np.int64) for c in mesh.cells if c.type == "triangle"]
-    if not tris:
-        found = ", ".join(sorted({c.type for c in mesh.cells})) or "no cells"
-        raise ValueError(f"holds no triangles (it has {found}): a mesh obstacle is a surface")
-    points = np.asarray(mesh.points, dtype=np.float64)
+    points, triangles = read_triangles(file, "a mesh obstacle")
     if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.abs(points) <= MAGNITUDE):
         raise ValueError(
             f"its points (shape {points.shape}) must be finite 3D points, within +-{MAGNITUDE:.0e}"
         )
-    V, T = closed_surface(points, np.concatenate(tris))
+    V, T = closed_surface(points, triangles)
     V.setflags(write=False)
     T.setflags(write=False)
     return V, T
