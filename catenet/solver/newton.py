@@ -149,8 +149,8 @@ def solve_newton(
     ``shifted``: start with the regularisation a rejected first step would bring
     (SHRINK x ``_c_start``), for a start known to be stiff in some directions only.
     ``polish``: where the round-off floor ended the solve, one more Newton step (its
-    factorisation) to land below it; a time step, whose next step starts from its
-    state and whose truncation error is far above the floor, goes without."""
+    factorisation) to land below it; a time step that no rest test reads (its
+    truncation error far above the floor) goes without (``TimeStepper.run``)."""
     run = _Newton(potential, x, rtol=rtol, atol=atol, max_iter=max_iter, label=label, reuse=reuse)
     if shifted:
         run.c = SHRINK * _c_start(potential, run.ev.g)
