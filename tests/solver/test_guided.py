@@ -160,17 +160,23 @@ def test_modes_keep_a_rollers_free_directions(n):
     assert np.abs(found.shape[:, n, :]).max() > 0.1 * np.abs(found.shape).max()
 
 
-def _swinging(dt: float, integrator: str) -> tuple[Net, object]:
-    """A chain pinned at one end, its other end on a tilted roller plane and a middle
-    node on a slider, one node on springs, falling from the straight line under gravity
-    without damping."""
+def _guided_chain() -> Net:
+    """Eight edges pinned at node 0, node 8 on a tilted roller plane, node 4 on a
+    slider, node 2 on springs."""
     n = 8
     nodes = np.column_stack([np.linspace(0.0, 4.0, n + 1), np.zeros(n + 1), np.zeros(n + 1)])
     edges = np.column_stack([np.arange(n), np.arange(1, n + 1)])
     net = Net.from_arrays(nodes, edges, EA=2e3, fixed=[0], rest_length=0.55, line_density=1.0)
-    net = net.with_guides(
+    return net.with_guides(
         Guides.roller([n], [1.0, 0.2, 0.6]), Guides.slider([n // 2], [0.3, 1.0, -0.2])
     ).with_springs(Elastic.of([2], [50.0, 80.0, 20.0]))
+
+
+def _swinging(dt: float, integrator: str) -> tuple[Net, object]:
+    """A chain pinned at one end, its other end on a tilted roller plane and a middle
+    node on a slider, one node on springs, falling from the straight line under gravity
+    without damping."""
+    net = _guided_chain()
     res = catenet.solve(
         Scene.of(net, Loads(gravity=np.array([0.0, 0.0, -G]))),
         method="dynamic",
@@ -280,13 +286,7 @@ def test_run_to_rest_and_bdf2_end_where_the_static_solve_does():
     """The chain on its guides and springs: a damped run to rest (dynamic relaxation)
     ends at the static equilibrium, and bdf2 with steps chosen by accuracy keeps the
     guides exactly."""
-    n = 8
-    nodes = np.column_stack([np.linspace(0.0, 4.0, n + 1), np.zeros(n + 1), np.zeros(n + 1)])
-    edges = np.column_stack([np.arange(n), np.arange(1, n + 1)])
-    net = Net.from_arrays(nodes, edges, EA=2e3, fixed=[0], rest_length=0.55, line_density=1.0)
-    net = net.with_guides(
-        Guides.roller([n], [1.0, 0.2, 0.6]), Guides.slider([n // 2], [0.3, 1.0, -0.2])
-    ).with_springs(Elastic.of([2], [50.0, 80.0, 20.0]))
+    net = _guided_chain()
     scene = Scene.of(net, Loads(gravity=np.array([0.0, 0.0, -G])))
     static = catenet.solve(scene)
     rest = catenet.solve(scene, method="dynamic", t_end="rest", damping=2.0)
@@ -296,6 +296,6 @@ def test_run_to_rest_and_bdf2_end_where_the_static_solve_does():
     bdf2 = catenet.solve(
         scene, method="dynamic", integrator="bdf2", tolerance=1e-3, t_end=0.3, damping=0.0
     )
-    moved = bdf2.x[net.guides.nodes] - nodes[net.guides.nodes]
+    moved = bdf2.x[net.guides.nodes] - net.nodes[net.guides.nodes]
     assert bdf2.converged and np.abs(net.guides.held_part(moved)).max() < 1e-14
     assert bdf2.energy[-1] <= 0.0
