@@ -18,8 +18,9 @@ run in benchmarks/fuzz.py draw the same kinds of input):
 
 ``judge(result, work)`` sorts an outcome into "ok" (exit 0, every number in the files
 finite), "bad input" (exit 2: one message naming what was wrong, no NumPy reprs, nothing
-left behind), "failed" (exit 1 with catenet's message) or a bad class: "traceback",
-"hang", "exit code", "unclear message", "numpy repr", "non-finite result", "leftover".
+left behind), "failed" (exit 1 with catenet's message), "long" (a dynamic run still
+taking steps when its time was up: slow, not stuck) or a bad class: "traceback", "hang",
+"exit code", "unclear message", "numpy repr", "non-finite result", "leftover".
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ import os
 import random
 import re
 import signal
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +41,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "configs"
 
-GOOD = ("ok", "bad input", "failed")
+GOOD = ("ok", "bad input", "failed", "long")
 
 HOSTILE = [
     math.nan,
@@ -295,6 +297,10 @@ class Hang(BaseException):
     unexpected exceptions must not take it for one of the command's own)."""
 
 
+class Long(Hang):
+    """A dynamic run stopped at its checkpoint while still taking steps: long, not hung."""
+
+
 @dataclass
 class Outcome:
     kind: str
@@ -309,26 +315,77 @@ class Outcome:
 WALL_FACTOR = 4.0
 
 
+@dataclass
+class Progress:
+    """The time steps a command has taken: how many, to what time, and this process's
+    processor time at the last one."""
+
+    steps: int = 0
+    t: float = 0.0
+    cpu: float = -math.inf
+
+
 @contextlib.contextmanager
-def time_limit(seconds: float):
+def watching_steps():
+    """Yields a Progress that every accepted time step of the command updates."""
+    import pytest
+
+    from catenet.solver.stepper import TimeStepper
+
+    progress = Progress()
+    accept = TimeStepper.accept
+
+    def counted(stepper, *args, **kwargs):
+        accept(stepper, *args, **kwargs)
+        progress.steps += 1
+        progress.t = stepper.t
+        progress.cpu = time.process_time()
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(TimeStepper, "accept", counted)
+        yield progress
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float, long_after: float | None = None):
     """Raises Hang in the main thread after ``seconds`` of this process's processor time
     (a command computing for ever), or WALL_FACTOR times as long on the clock (one
     waiting for ever). Processor time, not the clock: on a machine shared with other
     work a long but finite run gets the processor for a share of the clock only (the long
     fuzz run's seed 11 stopped the folded net's 10 s run, 41 s of processor time, after
     120 s on a machine at a load of 7 on 2 cores). Python code only: a hang inside C code
-    would outlast it, which the test's own timeout then catches."""
+    would outlast it, which the test's own timeout then catches.
+
+    ``long_after``: a checkpoint (processor seconds) where a dynamic run that took a time
+    step within the last quarter of it is stopped as Long: still advancing, so slow and
+    not stuck (a 10 s default run of a capture takes minutes; the checkpoint bounds what
+    it costs the fuzzing without calling it a hang). A run not advancing there goes on to
+    ``seconds``."""
+    checkpoint = long_after is not None and long_after < seconds
+    watch = watching_steps() if checkpoint else contextlib.nullcontext(Progress())
 
     def alarm(signum, frame):
         if signum == signal.SIGALRM:
             raise Hang(f"no end after {WALL_FACTOR * seconds:g} s on the clock")
+        now = time.process_time()
+        if state["checkpoint"]:
+            state["checkpoint"] = False
+            if progress.steps and now - progress.cpu < 0.25 * long_after:
+                raise Long(
+                    f"still advancing after {long_after:g} s of processor time: "
+                    f"t = {progress.t:.4g} s after {progress.steps} steps"
+                )
+            signal.setitimer(signal.ITIMER_PROF, seconds - long_after)
+            return
         raise Hang(f"no end after {seconds:g} s of processor time")
 
+    state = {"checkpoint": checkpoint}
     previous = signal.signal(signal.SIGALRM, alarm), signal.signal(signal.SIGPROF, alarm)
-    signal.setitimer(signal.ITIMER_PROF, seconds)
-    signal.setitimer(signal.ITIMER_REAL, WALL_FACTOR * seconds)
     try:
-        yield
+        with watch as progress:
+            signal.setitimer(signal.ITIMER_PROF, long_after if checkpoint else seconds)
+            signal.setitimer(signal.ITIMER_REAL, WALL_FACTOR * seconds)
+            yield
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.setitimer(signal.ITIMER_PROF, 0)
@@ -351,8 +408,10 @@ def small_machine():
         yield
 
 
-def invoke(args: list[str], seconds: float = 60.0, cwd: Path | None = None):
-    """``catenet *args`` in this process (click's CliRunner), bounded in time."""
+def invoke(
+    args: list[str], seconds: float = 60.0, cwd: Path | None = None, long_after: float | None = None
+):
+    """``catenet *args`` in this process (click's CliRunner), bounded in time (time_limit)."""
     from click.testing import CliRunner
 
     from catenet.cli import main
@@ -361,7 +420,7 @@ def invoke(args: list[str], seconds: float = 60.0, cwd: Path | None = None):
     try:
         if cwd is not None:
             os.chdir(cwd)
-        with small_machine(), time_limit(seconds):
+        with small_machine(), time_limit(seconds, long_after):
             return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=True)
     except Hang as exc:  # CliRunner lets a BaseException through
         return Stopped(exc)
@@ -385,6 +444,8 @@ def judge(result, work: Path, before: set[Path] = frozenset()) -> Outcome:
     ``before``: the files that were there already."""
     out = result.output + (result.stderr if result.stderr_bytes is not None else "")
     exc = result.exception
+    if isinstance(exc, Long):
+        return Outcome("long", str(exc))
     if isinstance(exc, Hang):
         return Outcome("hang", str(exc))
     if exc is not None and not isinstance(exc, SystemExit):

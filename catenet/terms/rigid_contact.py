@@ -98,6 +98,8 @@ class BodyContact(Term):
     def gradient(self, x, grad):
         _, A, U = self._local(x)
         energy, g = self._shape_gradient()
+        if not math.isfinite(energy):  # a node in the shape: no step, no gradient to add
+            return energy
         fx = g @ A.T
         grad[self.nodes] += fx
         gA = U.T @ g

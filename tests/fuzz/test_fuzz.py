@@ -42,6 +42,9 @@ SETTINGS = dict(
     derandomize=False,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
+#: Processor seconds after which a dynamic run still taking steps is judged long, not hung
+#: (a mutation that removes solver.t_end runs a capture for its default 10 s).
+LONG = 10.0
 CASES = [p for p in example_cases() if "sweeps" not in p.parts]
 BASES = {p: small(tomllib.loads(p.read_text())) for p in CASES}
 
@@ -70,7 +73,7 @@ def test_mutated_example_cases(tmp_path_factory, index, rng):
     path.write_bytes(render(data, rng))
     command, *extra = command_for(data, rng)
     args = [command, path, "-o", work / "out.h5", *extra]
-    result = invoke([*args, "-q"], seconds=60, cwd=work)
+    result = invoke([*args, "-q"], seconds=60, cwd=work, long_after=LONG)
     _check(judge(result, work), f"{case.name}: {notes}")
 
 
@@ -104,7 +107,8 @@ def test_case_files_from_the_declared_keys(tmp_path_factory, rng):
     work = _fresh(tmp_path_factory)
     path = work / "case.toml"
     path.write_bytes(render(data, rng))
-    result = invoke(["run", path, "-o", work / "out.h5", "-q"], seconds=60, cwd=work)
+    args = ["run", path, "-o", work / "out.h5", "-q"]
+    result = invoke(args, seconds=60, cwd=work, long_after=LONG)
     _check(judge(result, work), data)
 
 

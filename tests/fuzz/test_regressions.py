@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import subprocess
 import warnings
 from pathlib import Path
@@ -542,6 +543,40 @@ def test_the_time_limit_counts_processor_time_and_the_clock_only_for_waiting():
             while time.process_time() - start < 10.0:
                 pass
     assert 0.25 <= time.process_time() - start < 2.0  # the timer counts in scheduler ticks
+
+
+def test_a_run_still_taking_steps_at_its_checkpoint_is_long_and_a_stuck_one_a_hang(tmp_path):
+    """The suite's seed of tether_capture.toml with solver.t_end removed (its default 10 s:
+    minutes of a capture) once ran past the 60 s limit and was called a hang. A run that
+    has taken a time step within the last quarter of its checkpoint is long, not hung, and
+    is stopped there; a command computing without taking steps goes on to its limit and is
+    a hang."""
+    import time
+    import tomllib
+
+    import fuzzing
+    import tomli_w
+    from fuzzing import CONFIGS, Hang, Long, copy_beside, small, time_limit
+
+    source = CONFIGS / "contact" / "tether_capture.toml"
+    copy_beside(source, tmp_path)
+    data = small(tomllib.loads(source.read_text()))
+    del data["solver"]["t_end"]
+    (tmp_path / "case.toml").write_text(tomli_w.dumps(data))
+    args = ["run", tmp_path / "case.toml", "-o", tmp_path / "o.h5", "-q"]
+    outcome = judge(invoke(args, seconds=60, cwd=tmp_path, long_after=4.0), tmp_path)
+    assert outcome.kind == "long" and outcome.good, outcome
+    assert re.search(r"t = [0-9.e+-]+ s after [1-9][0-9]* steps", outcome.detail), outcome
+
+    start = time.process_time()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(fuzzing, "WALL_FACTOR", 1e3)
+        with pytest.raises(Hang, match="after 0.6 s of processor time") as caught:
+            with time_limit(0.6, long_after=0.2):
+                while time.process_time() - start < 10.0:
+                    pass
+    assert not isinstance(caught.value, Long)
+    assert 0.5 <= time.process_time() - start < 3.0
 
 
 @pytest.mark.slow
