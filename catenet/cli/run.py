@@ -310,6 +310,7 @@ def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import (
         cases_table,
         envelope_lines,
+        relabel,
         state_lines,
         support_line,
         utilisation_line,
@@ -368,6 +369,7 @@ def _summary(case, result, path: Path | None) -> None:
     anchors = support_line(s.summary, s.cases)
     if anchors is not None:
         lines.insert(-1, anchors)
+    lines[1:] = relabel(lines[1:], case.units or "SI")  # the title as written
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side})" if case.output.xdmf else ""

@@ -248,19 +248,41 @@ MATERIAL_RANGES = {
     "density": (500.0, 9000.0),
     "EA": (1.0, 1e12),
     "area": (1e-9, 1.0),  # m^2: a 0.03 mm fibre to a 1.1 m bridge cable
+    "gravity": (1.0, 30.0),  # m/s^2: the Moon's 1.6 to Jupiter's 25
     "radius": (2e-5, 0.6),  # m
 }
 # What one unit of each quantity is in SI, per unit system (top-level ``units``).
 UNIT_FACTORS: dict[str, dict[str, float]] = {
-    "SI": {"E": 1.0, "density": 1.0, "EA": 1.0, "area": 1.0, "radius": 1.0},
-    "kN-m": {"E": 1e3, "density": 1e3, "EA": 1e3, "area": 1.0, "radius": 1.0},
-    "N-mm": {"E": 1e6, "density": 1e12, "EA": 1.0, "area": 1e-6, "radius": 1e-3},
+    "SI": {"E": 1.0, "density": 1.0, "EA": 1.0, "area": 1.0, "radius": 1.0, "gravity": 1.0},
+    "kN-m": {"E": 1e3, "density": 1e3, "EA": 1e3, "area": 1.0, "radius": 1.0, "gravity": 1.0},
+    "N-mm": {"E": 1e6, "density": 1e12, "EA": 1.0, "area": 1e-6, "radius": 1e-3, "gravity": 1e-3},
 }
 # ... and the names of those units, as the case writes them
 UNIT_NAMES: dict[str, dict[str, str]] = {
-    "SI": {"E": "Pa", "density": "kg/m^3", "EA": "N", "area": "m^2", "radius": "m"},
-    "kN-m": {"E": "kPa", "density": "t/m^3", "EA": "kN", "area": "m^2", "radius": "m"},
-    "N-mm": {"E": "MPa", "density": "t/mm^3", "EA": "N", "area": "mm^2", "radius": "mm"},
+    "SI": {
+        "E": "Pa",
+        "density": "kg/m^3",
+        "EA": "N",
+        "area": "m^2",
+        "radius": "m",
+        "gravity": "m/s^2",
+    },
+    "kN-m": {
+        "E": "kPa",
+        "density": "t/m^3",
+        "EA": "kN",
+        "area": "m^2",
+        "radius": "m",
+        "gravity": "m/s^2",
+    },
+    "N-mm": {
+        "E": "MPa",
+        "density": "t/mm^3",
+        "EA": "N",
+        "area": "mm^2",
+        "radius": "mm",
+        "gravity": "mm/s^2",
+    },
 }
 
 
@@ -281,6 +303,9 @@ def unit_slips(case: Case, net) -> list[str]:
     density = material.density
     if density:
         checks.append(("density", density, "material.density"))
+    gravity = case.load.gravity
+    if gravity is not None:
+        checks.append(("gravity", float(np.linalg.norm(gravity)), "|load.gravity|"))
     ea = np.asarray(net.EA, dtype=np.float64)
     if ea.size and material.E is None:  # E's own check says it else
         checks.append(("EA", float(np.min(ea)), "EA (the least of the edges')"))
@@ -316,11 +341,13 @@ def _si(value: float, quantity: str) -> str:
         return f"{value * 1e6:g} mm^2"
     if quantity == "radius":
         return f"{value * 1e3:g} mm"
+    if quantity == "gravity":
+        return f"{value:g} m/s^2"
     return f"{value / 1e3:g} kN"
 
 
 # the middle of each range, in SI
-TYPICAL = {"E": 1e11, "density": 2000.0, "EA": 1e6, "area": 1e-4, "radius": 5e-3}
+TYPICAL = {"E": 1e11, "density": 2000.0, "EA": 1e6, "area": 1e-4, "radius": 5e-3, "gravity": 9.81}
 
 
 def _power_of_1000(si: float, low: float, high: float, typical: float) -> int:

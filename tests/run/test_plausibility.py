@@ -10,6 +10,7 @@ The bundled cases give no such warning.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +41,7 @@ def truss(**material) -> dict:
 
 
 def run(tmp_path, case: dict):
+    tmp_path.mkdir(parents=True, exist_ok=True)
     path = tmp_path / "case.toml"
     path.write_bytes(tomli_w.dumps(case).encode())
     return CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
@@ -79,6 +81,30 @@ def test_slips_in_each_unit_system_are_named_with_what_was_meant(units, material
     parsed = parse_case(case)
     slips = unit_slips(parsed, build(parsed).net)
     assert any(key in s and f"({meant})?" in s for s in slips), slips
+
+
+@pytest.mark.parametrize(
+    "units, gravity, slip",
+    [
+        ("N-mm", -9.81, "|load.gravity| = 9.81 mm/s^2 (N-mm)"),
+        ("N-mm", -9810.0, ""),
+        ("SI", -9810.0, "|load.gravity| = 9810 m/s^2 (SI)"),
+        ("kN-m", -9.81, ""),
+    ],
+)
+def test_gravity_in_the_wrong_length_unit_is_a_slip(units, gravity, slip):
+    """Gravity has no default: a case in N-mm that writes -9.81 asks for 9.81 mm/s^2, a
+    thousandth of the Earth's (the cable then hangs a thousand times too taut)."""
+    case = truss()
+    case["units"] = units
+    case["load"] = {"gravity": [0.0, 0.0, gravity]}
+    case.pop("load_case")
+    parsed = parse_case(case)
+    slips = [s for s in unit_slips(parsed, build(parsed).net) if "gravity" in s]
+    if slip:
+        assert len(slips) == 1 and slip in slips[0], slips
+    else:
+        assert slips == [], slips
 
 
 def test_the_bundled_cases_have_no_unit_slip():
@@ -183,3 +209,30 @@ def test_a_bilateral_cable_relaxed_to_rest_has_a_stability_verdict(tmp_path):
     r = run(tmp_path, case)
     with h5py.File(tmp_path / "out.h5", "r") as f:
         assert f["result"].attrs["stability"] == "not judged"
+
+
+def test_a_case_in_n_mm_is_summarised_in_mm_and_its_numbers_as_written(tmp_path):
+    """The stay of ``truss`` written in N-mm (mm, MPa, t/mm^3, mm/s^2): the same state as
+    in SI, its lengths printed in mm and its forces in N, no unit slip; the numbers are
+    the case's own (the sag 1000x the SI run's, the tension the same)."""
+    si = run(tmp_path / "si", truss() | {"load_case": []})
+    case = truss(E=160e3, radius=10.0, density=7.85e-9, prestress=1e3)
+    case["geometry"]["end"] = [20000, 0, 0]
+    case["load"] = {"gravity": [0.0, 0.0, -9810.0]}
+    case["units"] = "N-mm"
+    case.pop("load_case")
+    mm = run(tmp_path / "mm", case)
+    assert si.exit_code == 0 and mm.exit_code == 0, (si.output, mm.output)
+    assert "check units" not in mm.output, mm.output
+
+    def line(output, label):
+        return next(x for x in output.splitlines() if x.startswith(label))
+
+    sag_si, sag_mm = line(si.output, "sag"), line(mm.output, "sag")
+    assert re.search(r"^sag +[0-9.e+-]+ m normal", sag_si), sag_si
+    assert re.search(r"^sag +[0-9.e+-]+ mm normal", sag_mm), sag_mm
+    value = [float(x.split()[1]) for x in (sag_si, sag_mm)]
+    assert value[1] == pytest.approx(1e3 * value[0], rel=1e-6)
+    tension = [line(x.output, "max tension") for x in (si, mm)]
+    assert all(re.search(r"max tension +[0-9.e+-]+ N \(edge", t) for t in tension), tension
+    assert float(tension[1].split()[2]) == pytest.approx(float(tension[0].split()[2]), 1e-6)
