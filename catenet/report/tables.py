@@ -223,10 +223,17 @@ def support_table(states: States, g: Groups, s: State) -> Table:
     if pinned.size > MAX_NODE_ROWS:
         shown = np.sort(pinned[np.argsort(-size, kind="stable")[:MAX_NODE_ROWS]])
         note += f"; the {MAX_NODE_ROWS} largest of {pinned.size} supported nodes"
+    single = _one_node_sets(g)
     for i in shown:
-        rows.append([_node(g, int(i)), 1, *_force(r[i]), *use(i)])
+        if int(i) not in single:  # a set of this node alone has its row already
+            rows.append([_node(g, int(i)), 1, *_force(r[i]), *use(i)])
     rows.append(["all supports", int(pinned.size), *_force(r[pinned].sum(axis=0)), *use(pinned)])
     return Table("supports", "Support reactions", columns, rows, note)
+
+
+def _one_node_sets(g: Groups) -> set[int]:
+    """The nodes that are a support set of their own."""
+    return {int(v[0]) for v in g.supports.values() if np.size(v) == 1}
 
 
 def _node(g: Groups, i: int) -> str:
@@ -351,7 +358,8 @@ def envelope_supports(states: States, g: Groups, cases: list[State]) -> Table:
     parts = dict(g.supports)
     pinned = np.flatnonzero(fixed)
     if pinned.size <= MAX_NODE_ROWS:
-        parts.update({_node(g, int(i)): np.array([i]) for i in pinned})
+        single = _one_node_sets(g)
+        parts.update({_node(g, int(i)): np.array([i]) for i in pinned if int(i) not in single})
     for name, nodes in parts.items():
         forces = np.array([s.arrays["reaction"][nodes].sum(axis=0) for s in with_r])
         k = int(np.argmax(np.linalg.norm(forces, axis=1)))

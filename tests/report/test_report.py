@@ -113,7 +113,10 @@ def test_markdown_report_holds_the_files_numbers_for_every_state(mast, tmp_path)
         reactions = {r[0]: r for r in table(body, "Support reactions")[1:]}
         anchors = s["reaction"][[2, 3, 4, 5]].sum(axis=0)
         assert reactions["anchors"][2:5] == [g6(c) for c in anchors]
-        assert reactions["node 0 (foot)"][5] == g6(np.linalg.norm(s["reaction"][0]))
+        # the foot is a set of node 0 alone: one row, not the set's and then the node's
+        assert reactions["foot"][1] == "1" and "node 0 (foot)" not in reactions
+        assert reactions["foot"][5] == g6(np.linalg.norm(s["reaction"][0]))
+        assert reactions["node 2 (anchors)"][5] == g6(np.linalg.norm(s["reaction"][2]))
         u = np.linalg.norm(s["x"] - f["nodes"], axis=1)
         u[f["fixed"]] = -1
         disp = table(body, "Displacements")[1]
