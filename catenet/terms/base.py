@@ -105,7 +105,7 @@ class Term:
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge
-    structural = False  # the structure's own energy (rods' bending): its force is no contact
+    structural = False  # the structure's own energy (rods' bending, a body's rigidity): no contact
     holds = False  # a support's term (springs): its force is a reaction, not a contact
     owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
 

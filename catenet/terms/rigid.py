@@ -174,6 +174,7 @@ class Rigidity(Term):
     role = "internal"
     convex = False  # positive semidefinite on the rotations, not everywhere
     bounds_step = True  # the body's turn per Newton step (``max_step``)
+    structural = True  # the body's own: its force (round-off) is no contact with the net
 
     def __init__(self, frame: BodyFrame, k: float, *, n_nodes: int):
         if not (math.isfinite(k) and k > 0):

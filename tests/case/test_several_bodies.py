@@ -325,3 +325,20 @@ def test_a_free_body_beside_a_moving_box_is_refused():
     }  # fmt: skip
     with pytest.raises(ConfigError, match=r"obstacle\[0\] \(kind 'box'\): an obstacle on a"):
         build(parse_case(case))
+
+
+def test_a_body_in_free_flight_is_no_contact_in_the_summary():
+    """A sphere that falls beside the two bowls and never reaches the net: its frame's
+    rigidity is the body's own (round-off forces on its frame nodes), not a contact, so
+    the run touches no node and its summary says no contact."""
+    from catenet.run.runner import run_case
+
+    data = two_bowls(method="dynamic", dt=0.01, t_end=0.05, damping=0.0)
+    data["obstacle"][1]["center"] = [2.0, 0.0, 0.5]  # far from the net
+    data["obstacle"][1]["velocity"] = [0.3, 0.0, 0.0]
+    data["obstacle"][1]["angular_velocity"] = [0.0, 5.0, 0.0]
+    data["obstacle"] = data["obstacle"][1:]
+    result = run_case(parse_case(data), None)
+    summary = result.report.summary
+    assert summary["contact_nodes"] == 0 and summary["max_contact"] == 0.0, summary
+    assert result.report.bodies[0]["first_contact"] is None
