@@ -1,7 +1,9 @@
 """Running a Markdown page as written: the steps of its code blocks, in order.
 
 - a shell line starting with ``$ `` in a plain (or ``console``, ``bash``, ``sh``) code
-  block runs as a subprocess (shlex-split, no shell); when the next line shows
+  block runs shlex-split, no shell: ``catenet`` commands through catenet's own entry
+  point in this process (``catenet sweep`` and ``catenet bench``, which start processes
+  of their own, and every other program as a subprocess); when the next line shows
   ``catenet: error: ...`` the command must fail with exit status 2 and that message,
   otherwise it must succeed;
 - a ```python block is executed;
@@ -95,6 +97,30 @@ def toml_blocks(path: Path) -> list[tuple[int, str]]:
     return out
 
 
+def in_process(argv: list[str], directory: Path) -> subprocess.CompletedProcess:
+    """``catenet ...`` run by the console script's entry point (``catenet.cli:main``) in
+    this process, in ``directory``, as a completed process: what a subprocess would give,
+    without a second start of the interpreter, NumPy, Numba and the JIT cache for each
+    command (a page's commands share them). Numba's thread count is put back after."""
+    from click.testing import CliRunner
+
+    import catenet.cli
+
+    numba = sys.modules.get("numba")
+    threads = numba.get_num_threads() if numba is not None else None
+    here = os.getcwd()
+    os.chdir(directory)
+    try:
+        result = CliRunner().invoke(catenet.cli.main, argv[1:], catch_exceptions=True)
+    finally:
+        os.chdir(here)
+        if threads is not None:
+            numba.set_num_threads(threads)
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return subprocess.CompletedProcess(argv, result.exit_code, result.stdout, result.stderr)
+
+
 def run_page(path: Path, directory: Path) -> list[subprocess.CompletedProcess]:
     """Runs every step of ``path`` in ``directory`` (the current directory meanwhile);
     the commands' completed processes, in order (what they printed)."""
@@ -111,14 +137,13 @@ def run_page(path: Path, directory: Path) -> list[subprocess.CompletedProcess]:
             code = compile(step.text, f"{where}:{step.line}", "exec")
             exec(code, {"__name__": "docs"})
             continue
-        done = subprocess.run(
-            shlex.split(step.text),
-            cwd=directory,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=900,
-        )
+        argv = shlex.split(step.text)
+        if argv[:1] == ["catenet"] and argv[1:2] not in (["sweep"], ["bench"]):
+            done = in_process(argv, directory)
+        else:
+            done = subprocess.run(
+                argv, cwd=directory, env=env, capture_output=True, text=True, timeout=900
+            )
         done_all.append(done)
         context = f"{where}:{step.line}: $ {step.text}\n{done.stdout}\n{done.stderr}"
         if step.error is None:
