@@ -125,7 +125,7 @@ class TimeStepper:
         assert guides is not None
         guides.place(self.x_trial, self.net.nodes)
         v[guides.nodes] = guides.project(v[guides.nodes])
-        a = getattr(self.scheme, "a", None)
+        a = self.scheme.a  # (None: a scheme without an acceleration state)
         if a is not None and self.system.guided is not None:
             self.system.guided.project(a)
 
