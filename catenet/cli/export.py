@@ -56,7 +56,10 @@ def command(
     \b
     Each file: points at the frame's positions, one line cell per edge; point data
     displacement, fixed, velocity (dynamic runs) or reaction (final state); cell data
-    tension [N], rest_length [m], EA [N].
+    tension [N], rest_length [m], EA [N]. The final state also carries what /result
+    holds of bending_moment, curvature, peak_displacement (point data) and
+    utilisation, peak_utilisation, peak_tension, twisting_moment, force_density
+    (cell data).
 
     --mode K (a file of catenet modes): mode K's frames over one period,
     STEM_modeK_0000.vtu ..., times the phase, point data shape (mass-normalised).

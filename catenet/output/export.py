@@ -38,6 +38,7 @@ from catenet.output.reader import (
     Frame,
     NetMesh,
     damaged,
+    is_dataset,
     open_result,
     read_mesh,
     read_result,
@@ -102,6 +103,38 @@ def select_frames(spec: str, n: int) -> list[int]:
     return picked
 
 
+#: /result's datasets per node and per edge that a file of the final state carries as
+#: point and cell data, where stored (rods, peaks, utilisation, form finding).
+PER_NODE = ("bending_moment", "curvature", "peak_displacement")
+PER_EDGE = ("utilisation", "peak_utilisation", "peak_tension", "twisting_moment", "force_density")
+
+
+def _results(group, names: tuple[str, ...], count: int) -> dict[str, np.ndarray]:
+    """The datasets ``names`` of ``group`` that are numbers, one (or a row) per item of
+    ``count``."""
+    out = {}
+    for name in names:
+        ds = group.get(name)
+        if not is_dataset(ds) or ds.dtype.kind not in "fiub" or not ds.shape:
+            continue
+        if ds.shape[0] == count and len(ds.shape) <= 2:
+            out[name] = np.asarray(ds, dtype=np.float64)
+    return out
+
+
+def _final_results(h5, frame: Frame, n: int) -> None:
+    """/result's per-node and per-edge datasets on ``frame`` when it is the run's last
+    stored frame and that is /result's state."""
+    r = h5.get("result")
+    if frame.index != n - 1 or r is None or not is_dataset(r.get("x")):
+        return
+    if r["x"].shape != frame.x.shape or not np.array_equal(r["x"][()], frame.x):
+        return
+    frame.per_node = _results(r, PER_NODE, len(frame.x))
+    if frame.tension is not None:
+        frame.per_edge = _results(r, PER_EDGE, len(frame.tension))
+
+
 def _frames(path: Path, spec: str) -> list[Frame]:
     with open_result(path) as h5:
         n = trajectory_length(h5)
@@ -113,6 +146,7 @@ def _frames(path: Path, spec: str) -> list[Frame]:
                 tension = np.asarray(g["tension"][k], dtype=np.float64)
                 x = np.asarray(g["x"][k], dtype=np.float64)
                 out.append(Frame(float(g["time"][k]), x, v, "trajectory", k, tension))
+            _final_results(h5, out[-1], n)
             return out
         if "result" in h5 and "x" in h5["result"]:
             r = h5["result"]
@@ -127,6 +161,9 @@ def _frames(path: Path, spec: str) -> list[Frame]:
             )
             frame.reaction = np.asarray(r["reaction"]) if "reaction" in r else None
             frame.contact_force = np.asarray(r["contact_force"]) if "contact_force" in r else None
+            frame.per_node = _results(r, PER_NODE, len(frame.x))
+            if frame.tension is not None:
+                frame.per_edge = _results(r, PER_EDGE, len(frame.tension))
             return [frame]
     raise ConfigError(f"{path}: holds no stored state (no trajectory frame and no /result)")
 
@@ -276,7 +313,7 @@ def _net_files(
 
 def _point_data(mesh: NetMesh, f: Frame) -> dict[str, np.ndarray]:
     """The point data of the net at state ``f``: displacement, fixed and whichever of
-    velocity, reaction, contact_force and shape it holds."""
+    velocity, reaction, contact_force, shape and /result's per-node datasets it holds."""
     point_data = {
         "displacement": f.x - mesh.nodes,
         "fixed": np.asarray(mesh.fixed, dtype=np.float64),  # VTK reads no int types
@@ -289,18 +326,21 @@ def _point_data(mesh: NetMesh, f: Frame) -> dict[str, np.ndarray]:
         point_data["contact_force"] = f.contact_force
     if f.shape is not None:
         point_data["shape"] = f.shape
+    point_data.update(f.per_node)
     return point_data
 
 
 def _cell_data(mesh: NetMesh, f: Frame, body, radius) -> dict[str, list[np.ndarray]]:
     """The cell data of the net at state ``f``, a block per cell type (the edges, then
-    the moving spheres' vertices): tension, rest_length and EA where stored (NaN on the
-    vertices), and the spheres' radius (NaN on the edges)."""
+    the moving spheres' vertices): tension, rest_length, EA and /result's per-edge
+    datasets where stored (NaN on the vertices), and the spheres' radius (NaN on the
+    edges)."""
     cell_data = {}
     for key, value in (
         ("tension", f.tension),
         ("rest_length", mesh.rest_length),
         ("EA", mesh.EA),
+        *f.per_edge.items(),
     ):
         if value is not None:
             cell_data[key] = [np.asarray(value, dtype=np.float64)]

@@ -147,6 +147,8 @@ class Frame:
     reaction: np.ndarray | None = None
     contact_force: np.ndarray | None = None
     shape: np.ndarray | None = None
+    per_node: dict[str, np.ndarray] = field(default_factory=dict)  # /result's, by name
+    per_edge: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def _array(g, name: str) -> np.ndarray | None:
