@@ -7,6 +7,8 @@ tests/case/test_case.py checks that the page holds what ``keys_table()`` gives.
 
 from __future__ import annotations
 
+import functools
+import re
 import sys
 from pathlib import Path
 
@@ -100,6 +102,58 @@ def keys_table() -> str:
     rows.append(f"| `[[combination]]` | an array of tables | none | {_doc(CombinationConfig)} |")
     rows += _rows("combination[k]", declared(CombinationConfig))
     return "\n".join(rows)
+
+
+def _walk(prefix: str, keys: tuple[Key, ...]):
+    """(path, key) of every key under ``prefix``, arrays of tables as ``[k]``."""
+    for k in keys:
+        path = f"{prefix}.{k.name}" if prefix else k.name
+        if k.section is not None:
+            yield from _walk(f"{path}[k]", declared(k.section))
+        else:
+            yield path, k
+
+
+def _sections():
+    """(prefix, keys) of every section the key table lists, in its order."""
+    yield "", declared(Case)
+    for kind in KINDS.values():
+        yield "geometry", declared(kind)
+    for name, section in SECTIONS.items():
+        yield name, declared(section)
+    yield "water", declared(WaterConfig)
+    yield "supports.move[k].sine", declared(SineConfig)
+    yield "formfind", declared(FormfindConfig)
+    yield "target[k]", declared(TargetConfig)
+    for obstacle in OBSTACLES.values():
+        yield "obstacle[k]", declared(obstacle)
+    yield "mass[k]", declared(MassConfig)
+    yield "load_case[k]", declared(LoadCaseConfig)
+    yield "combination[k]", declared(CombinationConfig)
+
+
+@functools.cache
+def key_units() -> dict[str, str]:
+    """Each declared key path (arrays of tables as ``[k]``) -> its unit (SI, as declared)."""
+    out: dict[str, str] = {}
+    for prefix, keys in _sections():
+        for path, k in _walk(prefix, keys):
+            if k.unit:
+                out.setdefault(path, k.unit)
+    return out
+
+
+def key_unit(path: str) -> str:
+    """The declared unit of a key path as a sweep or ``--set`` writes it
+    (``load.point.0.force``, ``geometry.cable[1].prestress``; a graph cable's own
+    ``material`` as ``[material]``'s); "" where the key has none or is not declared."""
+    norm = re.sub(r"\[\d+\]", "[k]", re.sub(r"\.(\d+)(?=\.|$)", "[k]", path))
+    units = key_units()
+    if norm in units:
+        return units[norm]
+    if ".material." in norm:
+        return units.get("material." + norm.rsplit(".material.", 1)[1], "")
+    return ""
 
 
 def _doc(section: type) -> str:

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
     from catenet.plot.bodies import Balls
     from catenet.plot.obstacles import Obstacles
+    from catenet.plot.state import Shown
 
 log = logging.getLogger(__name__)
 
@@ -162,19 +163,38 @@ def _limits(*arrays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def plot_result(
-    path: str | Path, out: str | Path | None = None, *, dpi: int = 150, scale: float = 1.0
+    path: str | Path,
+    out: str | Path | None = None,
+    *,
+    dpi: int = 150,
+    scale: float = 1.0,
+    case: str | None = None,
+    time: float | None = None,
+    frame: int | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> Path:
     """Draws the figure of the result file ``path`` into ``out`` (.png, .svg or .pdf;
-    default: ``path`` with the suffix .png) and returns ``out`` (see ``figure``)."""
+    default: ``path`` with the suffix .png, or RESULT-<state>.png for a chosen state)
+    and returns ``out`` (see ``figure``). ``case``, ``time``, ``frame``: the state drawn
+    (``catenet.plot.state.select``: a load case, combination or the envelope; the stored
+    frame nearest to a time, or a frame by index); ``say`` is given the note of the frame
+    that ``time`` found (when it is not at that time)."""
+    from catenet.plot.state import select, state_output
+
     res = read_result(path)  # ConfigError for anything but a result file
-    out = check_output(default_output(path) if out is None else out)
-    fig = figure(res, scale=scale)
+    res, shown, note = select(res, case=case, time=time, frame=frame)
+    if note and say is not None:
+        say(note)
+    if out is None:
+        out = default_output(path) if shown is None else state_output(path, shown)
+    out = check_output(out)
+    fig = figure(res, scale=scale, shown=shown)
     fig.savefig(out, dpi=dpi)
     log.info("wrote %s", out)
     return out
 
 
-def figure(res, *, scale: float = 1.0):
+def figure(res, *, scale: float = 1.0, shown: Shown | None = None):
     """The figure of a result (a ``catenet.output.ResultFile``), a matplotlib Figure.
 
     Panels: the deformed net, coloured by tension over the range of the data (colour bar
@@ -191,6 +211,8 @@ def figure(res, *, scale: float = 1.0):
     moves (|x - X|: a mast's top moves sideways). Slack edges (no tension, shorter
     than their rest length) are dotted in their own colour; a graph gets a plan view
     coloured by displacement with the reactions as arrows (``catenet.plot.plan``).
+    ``shown``: the state drawn when it is not the final one (``catenet.plot.state``):
+    said in the title, its quantity on the colour bar, its frame marked on the time panel.
     """
     if not (math.isfinite(scale) and scale > 0):
         raise ConfigError(f"--scale = {scale!r}: must be a number > 0")
@@ -221,12 +243,16 @@ def figure(res, *, scale: float = 1.0):
     colours = drawn.colours
     if colours is not None:
         cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
-        cb.set_label(f"tension [N], {colours.t_min:.6g} to {colours.t_max:.6g}")
+        what = "tension" if shown is None else shown.tension
+        cb.set_label(f"{what} [N], {colours.t_min:.6g} to {colours.t_max:.6g}")
+    marker = None if shown is None else shown.marker
     if series:
-        _deflection(fig.add_subplot(1, ncols, 3), res, curve, drawn.balls, whole=plan)
+        ax_t = fig.add_subplot(1, ncols, 3)
+        _deflection(ax_t, res, curve, drawn.balls, whole=plan, marker=marker)
     if plan:
-        draw_plan(fig, fig.add_subplot(1, ncols, ncols), res, scale)
-    status = ""
+        moved = None if shown is None else shown.displacement
+        draw_plan(fig, fig.add_subplot(1, ncols, ncols), res, scale, displacement=moved)
+    status = "" if shown is None else f": {shown.label}"
     if res.converged is False:
         status = " (NOT converged)"
     if res.from_trajectory:
@@ -409,10 +435,15 @@ def _side_view(ax2, d: _Drawn, res, curve: PaperCurve | None, scale: float):
     return lines2
 
 
-def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls, *, whole: bool) -> None:
+def _deflection(
+    ax_t, res, curve: PaperCurve | None, balls: Balls, *, whole: bool, marker: float | None = None
+) -> None:
     """The probe's deflection along the trajectory (against time or load factor; a static
     run's from zero load), or the paper's plot with its closed form. ``whole``: a graph,
-    whose probe's whole displacement |x - X| is drawn (a mast's top moves sideways)."""
+    whose probe's whole displacement |x - X| is drawn (a mast's top moves sideways).
+    ``marker``: the time (or load factor) of the frame drawn, a vertical line."""
+    if marker is not None:
+        ax_t.axvline(marker, color="C3", lw=1.0, ls="--", label="frame drawn", zorder=1)
     ax_t.grid(True, lw=0.3)
     t, d = res.series_t, res.series_delta
     if curve is not None:
@@ -447,3 +478,5 @@ def _deflection(ax_t, res, curve: PaperCurve | None, balls: Balls, *, whole: boo
     else:
         ax_t.set_ylabel(f"deflection δ of node {res.probe} [m] (down)")
     balls.draw_series(ax_t)
+    if marker is not None:
+        ax_t.legend(loc="best", fontsize="small")

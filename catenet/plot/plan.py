@@ -34,9 +34,10 @@ def wants_plan(res: ResultFile) -> bool:
     return kind == "graph"
 
 
-def draw_plan(fig, ax, res: ResultFile, scale: float) -> None:
+def draw_plan(fig, ax, res: ResultFile, scale: float, displacement=None) -> None:
     """Plan view (x-y): the deformed net coloured by each edge's mean displacement |x - X|
-    [m], the undeformed net dashed, supports as red dots, each support's reaction as an
+    [m] (``displacement`` (N,): those values instead, the envelope's largest over the
+    cases), the undeformed net dashed, supports as red dots, each support's reaction as an
     arrow of its horizontal part (the largest drawn at 15 % of the net's span), the node
     that moves most marked."""
     from matplotlib import colormaps
@@ -45,7 +46,8 @@ def draw_plan(fig, ax, res: ResultFile, scale: float) -> None:
 
     mesh = res.mesh
     nodes, edges, fixed = mesh.nodes, mesh.edges, mesh.fixed
-    u = np.linalg.norm(res.x - nodes, axis=1)
+    envelope = displacement is not None
+    u = np.linalg.norm(res.x - nodes, axis=1) if not envelope else np.asarray(displacement)
     x = nodes + scale * (res.x - nodes)
     ax.set_axisbelow(True)
     ax.grid(True, lw=0.3, zorder=0)
@@ -58,7 +60,8 @@ def draw_plan(fig, ax, res: ResultFile, scale: float) -> None:
     lines.set_norm(Normalize(0.0, top))
     ax.add_collection(lines)
     cb = fig.colorbar(lines, ax=ax, location="bottom", shrink=0.8, pad=0.02)
-    cb.set_label(f"displacement |x - X| [m], largest {top:.4g} m")
+    what = "largest displacement over the cases" if envelope else "displacement |x - X|"
+    cb.set_label(f"{what} [m], largest {top:.4g} m")
     span = float(np.max(np.ptp(nodes[:, :2], axis=0))) or 1.0
     if fixed is not None and fixed.any():
         f = x[fixed]

@@ -55,6 +55,13 @@ RESULT_COLUMNS = (
     "attempts",
     "run_file",
 )
+# the utilisation's columns, where a material of the sweep gives material.breaking_load
+DESIGN_COLUMNS = (
+    "max_utilisation",
+    "max_utilisation_edge",
+    "max_utilisation_cable",
+    "peak_utilisation",
+)
 MAX_VALIDATED = 5_000  # combinations checked as cases before a sweep starts
 
 
@@ -122,6 +129,7 @@ class Sweep:
     base_resolved: dict = field(default_factory=dict)
     modes: int = 0  # the lowest natural frequencies per row, columns f1..fK [Hz]
     load_case: str | None = None  # the [[load_case]] or [[combination]] each row reports
+    design: bool = False  # a material gives breaking_load: the utilisation's columns
 
     @property
     def keys(self) -> list[str]:
@@ -129,7 +137,8 @@ class Sweep:
 
     @property
     def columns(self) -> list[str]:
-        return self.keys + list(RESULT_COLUMNS) + mode_columns(self.modes)
+        design = list(DESIGN_COLUMNS) if self.design else []
+        return self.keys + list(RESULT_COLUMNS) + design + mode_columns(self.modes)
 
     @property
     def jobs(self) -> list[Job]:
@@ -262,6 +271,7 @@ def make_sweep(
         base_resolved=base_case.to_dict(),
         modes=modes,
         load_case=load_case,
+        design=_breaking_load(base_case.to_dict()) or any(_breaking_load(p.key) for p in params),
     )
     problems: list[str] = []
     for param in params:  # each value on its own first: one message per bad value
@@ -294,3 +304,16 @@ def _validate(case, base, settings, source, base_dir, problems) -> None:
             msg = f"--param {where}: {line}" if len(settings) == 1 else f"[{where}] {line}"
             if msg not in problems:
                 problems.append(msg)
+
+
+def _breaking_load(data: Any) -> bool:
+    """Whether a resolved case (or a swept key's path) gives a material.breaking_load."""
+    if isinstance(data, str):
+        return data.endswith("breaking_load")
+    if isinstance(data, dict):
+        if data.get("breaking_load") is not None:
+            return True
+        return any(_breaking_load(v) for v in data.values() if isinstance(v, dict | list))
+    if isinstance(data, list):
+        return any(_breaking_load(v) for v in data if isinstance(v, dict | list))
+    return False

@@ -106,6 +106,10 @@ def nan_row() -> dict:
             key: (-1 if key.endswith(("_node", "_edge")) or key == "probe" else nan)
             for key in SUMMARY_COLUMNS
         },
+        "max_utilisation": nan,
+        "max_utilisation_edge": -1,
+        "max_utilisation_cable": "",
+        "peak_utilisation": nan,
         "iterations": 0,
         "wall_time": 0.0,
         "converged": False,
@@ -329,6 +333,10 @@ def _measure(scene, net, result, np) -> dict:
         "max_strain": float(result.max_strain),
         "slack_edges": numbers["slack_edges"],
         **{key: numbers[key] for key in SUMMARY_COLUMNS},
+        "max_utilisation": numbers.get("max_utilisation", float("nan")),
+        "max_utilisation_edge": numbers.get("max_utilisation_edge", -1),
+        "max_utilisation_cable": numbers.get("max_utilisation_cable", ""),
+        "peak_utilisation": numbers.get("peak_utilisation", float("nan")),
         "iterations": int(result.iterations),
         "converged": bool(result.converged),
     }

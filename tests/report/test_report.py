@@ -157,6 +157,7 @@ def test_csv_report_is_one_table_per_file_to_the_last_digit(mast, tmp_path):
 
 def test_csv_report_opens_in_pandas(mast, tmp_path):
     import pandas  # the test extras install it: the check never skips
+
     assert invoke("report", mast, "--format", "csv", "-o", tmp_path / "t").exit_code == 0
     frame = pandas.read_csv(tmp_path / "t" / "supports.csv")
     assert {"state", "kind", "support", "Rx [N]", "|R| [N]"} <= set(frame.columns)
