@@ -31,15 +31,16 @@ class SupportCapacityConfig(Declared):
 class DesignConfig(Declared):
     """Partial factors of the utilisation F_Ed / F_Rd of every edge whose material gives
     material.breaking_load: F_Rd = min(k_e F_min / (breaking_factor gamma_R),
-    F_k / gamma_R), F_Ed = load_factor x tension (EN 1993-1-11, 6.2)."""
+    F_k / gamma_R), F_Ed = load_factor x tension (EN 1993-1-11, section 6)."""
 
     gamma_R: float = real(
         rule.GAMMA_R,
         gt=0,
         write="changed",
         unit="-",
-        doc="partial factor of the tension resistance (EN 1993-1-11: 0.90 where bending "
-        "at the anchorages is limited, 1.00 where not)",
+        doc="partial factor of the tension resistance (EN 1993-1-11 recommends 0.90 where "
+        "measures limit bending at the anchorages, 1.00 where none are taken; a national "
+        "annex may set others)",
     )
     breaking_factor: float = real(
         rule.BREAKING_FACTOR,

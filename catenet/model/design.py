@@ -1,20 +1,25 @@
 """Utilisation of tension components: design tension over design resistance, per edge.
 
-The rule is the cable resistance of EN 1993-1-11 (tension components), section 6.2:
+The rule is the cable resistance of EN 1993-1-11:2006 (tension components, groups B and
+C), section 6:
 
     F_Ed / F_Rd <= 1,     F_Rd = min(F_uk / (1.5 gamma_R), F_k / gamma_R),
     F_uk = k_e F_min,     F_Ed = gamma_F T
 
 with F_min the minimum breaking force of the cable (``material.breaking_load``), k_e the
-loss factor of its end terminations (1.0 for metal or resin sockets), F_k the
-characteristic proof force (its 0.2 % or 0.1 % proof load: ``material.proof_load``,
-optional: without it the first term alone decides), gamma_R the partial factor (0.90
-where bending at the anchorages is limited, 1.00 otherwise: the standard's recommended
-values, a national annex may give others) and T the edge's tension as solved. gamma_F
-(``design.load_factor``, default 1) scales the tension of every state: a combination
-whose factors already are the design factors of EN 1990 needs none. Every factor is a
-key of ``[design]`` (``catenet.case.design``), so that another edition or annex is a
-change of numbers, not of code.
+loss factor of its end terminations (1.0 for metal or resin sockets, 0.9 for swaged
+ones), F_k the characteristic proof force (its 0.2 % or 0.1 % proof load:
+``material.proof_load``, optional: without it the first term alone decides), gamma_R the
+partial factor and T the edge's tension as solved. gamma_R is a nationally determined
+parameter; the edition's recommended values are 0.90 where measures limit bending at the
+anchorages and 1.00 where none are taken. catenet cannot know which applies, so its
+default is the larger, 1.00: give ``gamma_R = 0.9`` where the detailing limits bending,
+or the national annex's value. gamma_F (``design.load_factor``, default 1) scales the
+tension of every state: a combination whose factors already are the design factors of
+EN 1990 needs none. Every factor is a key of ``[design]`` (``catenet.case.design``), so
+that another edition or annex is a change of numbers, not of code. What of this was
+checked against published text, and what not, is in docs/howto/reports.md ("The
+utilisation rule").
 
 An edge in compression (a strut) or slack has utilisation 0; an edge whose material
 gives no breaking load has NaN (no resistance is known: "not checked"). A support may
@@ -28,8 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: EN 1993-1-11's recommended factors, the defaults of [design].
-GAMMA_R = 0.90
+#: The defaults of [design]: EN 1993-1-11's factors, gamma_R the larger of its two
+#: recommended values (no measures against bending at the anchorages assumed).
+GAMMA_R = 1.00
 BREAKING_FACTOR = 1.5
 K_E = 1.0
 LOAD_FACTOR = 1.0

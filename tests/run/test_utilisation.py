@@ -40,7 +40,7 @@ def pulled(**design) -> dict:
     return data
 
 
-def expected(t, gamma_R=0.9, k_e=1.0, load_factor=1.0, factor=1.5, proof=None):
+def expected(t, gamma_R=1.0, k_e=1.0, load_factor=1.0, factor=1.5, proof=None):
     """EN 1993-1-11's F_Ed / F_Rd, written out: F_Rd = min(k_e F_min / (1.5 gamma_R),
     F_k / gamma_R), F_Ed = gamma_F T."""
     rd = k_e * F_MIN / (factor * gamma_R)
@@ -69,8 +69,8 @@ def test_utilisation_of_a_cable_of_known_tension_in_every_case(tmp_path):
         governs = [cases[k] for k in h5["envelope/utilisation_max_case"][:]]
         assert governs == ["ULS", "pull"]
         top = h5["result"].attrs["max_utilisation"]
-    # 1000 N x 1.5 x 0.9 / 20 kN: the base state's utilisation
-    assert top == pytest.approx(0.0675, rel=1e-9)
+    # 1000 N x 1.5 x 1.0 / 20 kN: the base state's utilisation (gamma_R = 1.00 by default)
+    assert top == pytest.approx(0.075, rel=1e-9)
     assert result.report.envelope["utilisation_max"]["case"] == "ULS"
     assert result.report.cases["ULS"]["max_utilisation"] == pytest.approx(
         expected(T0 + 0.75 * P), rel=1e-9
@@ -99,7 +99,7 @@ def test_design_factors_and_proof_load_change_the_rule_as_documented(tmp_path):
 
 def test_a_strut_in_compression_and_a_slack_edge_have_utilisation_zero():
     d = Design.uniform(3, 1000.0)
-    np.testing.assert_allclose(d.utilisation(np.array([-50.0, 0.0, 100.0])), [0, 0, 0.135])
+    np.testing.assert_allclose(d.utilisation(np.array([-50.0, 0.0, 100.0])), [0, 0, 0.15])
     none = Design.uniform(2, None)
     assert np.isnan(none.utilisation(np.array([10.0, 20.0]))).all() and not none.given
 
@@ -131,7 +131,7 @@ def test_cables_own_materials_give_their_breaking_loads_and_the_summary_names_th
         u = h5["result/utilisation"][:]
         per_cable = h5["result/cable_max_utilisation"][:]
     assert np.isnan(u[1]) and np.isnan(per_cable[1])
-    assert u[0] == pytest.approx(t[0] * 1.35 / 5.0e3, rel=1e-12)
+    assert u[0] == pytest.approx(t[0] * 1.5 / 5.0e3, rel=1e-12)
     assert per_cable[0] == pytest.approx(u[0], rel=1e-12)
     s = result.report.summary
     assert s["max_utilisation_cable"] == "stay" and s["max_utilisation_edge"] == 0
@@ -183,7 +183,7 @@ def test_bad_design_keys_are_one_clear_message_each(change, message):
 def test_design_keys_round_trip_through_the_resolved_case():
     data = graph_with_cables()
     data["material"]["breaking_load"] = F_MIN
-    data["design"] = {"gamma_R": 1.0}
+    data["design"] = {"gamma_R": 0.9}
     case = parse_case(data)
     again = parse_case(case.to_dict())
     assert again.design == case.design and again.material.breaking_load == F_MIN
