@@ -102,6 +102,7 @@ def command(
     2e-2f, Eqs. 14-17).
     A file of `catenet modes` also gets STEM-modes.png beside that figure: its
     lowest modes (up to six), each with its frequency.
+
     --case NAME: the load case, combination or envelope NAME (the envelope:
     the largest tension over the cases on the base state's shape, the plan
     view by the largest displacement); --time T, --frame K: a stored frame of

@@ -244,7 +244,8 @@ def figure(res, *, scale: float = 1.0, shown: Shown | None = None):
     if colours is not None:
         cb = fig.colorbar(lines2, ax=[ax3, ax2], location="right", shrink=0.85, pad=0.02)
         what = "tension" if shown is None else shown.tension
-        cb.set_label(f"{what} [N], {colours.t_min:.6g} to {colours.t_max:.6g}")
+        span = f"{colours.t_min:.6g} to {colours.t_max:.6g}"
+        cb.set_label(f"{what} [N], {span}" if len(what) < 12 else f"{what} [N]\n{span}")
     marker = None if shown is None else shown.marker
     if series:
         ax_t = fig.add_subplot(1, ncols, 3)

@@ -60,8 +60,10 @@ def draw_plan(fig, ax, res: ResultFile, scale: float, displacement=None) -> None
     lines.set_norm(Normalize(0.0, top))
     ax.add_collection(lines)
     cb = fig.colorbar(lines, ax=ax, location="bottom", shrink=0.8, pad=0.02)
-    what = "largest displacement over the cases" if envelope else "displacement |x - X|"
-    cb.set_label(f"{what} [m], largest {top:.4g} m")
+    if envelope:
+        cb.set_label(f"largest displacement of the cases [m], up to {top:.4g}")
+    else:
+        cb.set_label(f"displacement |x - X| [m], largest {top:.4g} m")
     span = float(np.max(np.ptp(nodes[:, :2], axis=0))) or 1.0
     if fixed is not None and fixed.any():
         f = x[fixed]

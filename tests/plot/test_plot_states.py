@@ -109,10 +109,10 @@ def test_the_envelope_colours_by_the_largest_tension_and_displacement(mast):
     plan = panel(fig, "plan view")
     lines = next(c for c in plan.collections if c.get_array() is not None)
     np.testing.assert_allclose(lines.get_array(), 0.5 * (u_max[edges[:, 0]] + u_max[edges[:, 1]]))
-    bar = [
-        a.get_xlabel() for a in fig.axes if "largest displacement over the cases" in a.get_xlabel()
-    ]
-    assert bar and f"largest {u_max.max():.4g} m" in bar[0]
+    bars = [a.get_xlabel() for a in fig.axes]
+    assert f"largest displacement of the cases [m], up to {u_max.max():.4g}" in bars
+    (side,) = [a.get_ylabel() for a in fig.axes if a.get_ylabel().startswith("largest tension")]
+    assert side == f"largest tension of the cases [N]\n{t_max.min():.6g} to {t_max.max():.6g}"
     assert "envelope over 5 cases" in fig.get_suptitle()
 
 
