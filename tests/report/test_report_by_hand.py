@@ -70,9 +70,8 @@ MODELS = {
         "breaking": {"": 3.0e5},  # the guys' strand; the mast, a strut, in compression
         "states": {"ice": "load_case", "ULS_wind_x": "combination", "ULS_wind_y": "combination"},
         "supports": {
-            "foot": [0],
+            "foot": [0],  # a set of one node: its one row
             "anchors": [2, 3, 4, 5],
-            "node 0 (foot)": [0],
             "node 3 (anchors)": [3],
             "all supports": [0, 2, 3, 4, 5],
         },
