@@ -232,14 +232,19 @@ def _in_system(unit: str, units: str) -> str:
     return re.sub(r"[A-Za-z]+", lambda m: table.get(m.group(0), m.group(0)), unit)
 
 
+def _key(name: str) -> str:
+    """The column of ``name``: KEY of an element KEY[i], else the name."""
+    m = ELEMENT.match(name)
+    return m.group(1) if m else name
+
+
 def _file_name(*parts: str) -> str:
     return "sweep_" + "_".join(re.sub(r"[^A-Za-z0-9_.-]+", "_", p) for p in parts) + ".png"
 
 
 def _groups(table: Table, x_name: str) -> dict[tuple, list[int]]:
     """The rows by the values of the swept keys other than ``x_name``'s."""
-    base = ELEMENT.match(x_name).group(1) if ELEMENT.match(x_name) else x_name  # type: ignore[union-attr]
-    others = [k for k in table.keys if k != base]
+    others = [k for k in table.keys if k != _key(x_name)]
     groups: dict[tuple, list[int]] = {}
     for i in range(table.rows):
         groups.setdefault(tuple(str(table.columns[k][i]) for k in others), []).append(i)
@@ -252,9 +257,9 @@ def _figure(table: Table, x_name: str, panels: list[str], title: str, dpi: int, 
     from matplotlib.figure import Figure
 
     x = table.values(x_name)
-    assert x is not None
-    base = ELEMENT.match(x_name).group(1) if ELEMENT.match(x_name) else x_name  # type: ignore[union-attr]
-    others = [k for k in table.keys if k != base]
+    if x is None:
+        raise ConfigError(f"--x {x_name!r}: no numbers to plot against")
+    others = [k for k in table.keys if k != _key(x_name)]
     groups = _groups(table, x_name)
     cols = 2 if len(panels) == 4 else min(3, len(panels))
     rows = math.ceil(len(panels) / cols)
