@@ -42,3 +42,20 @@ def test_cantilever_at_ten_meets_the_elastica():
     _, x, y = rods.elastica_tip(10.0)
     tip = rods.tip(100, 10.0)
     assert abs(tip[0] - x) < 1e-4 and abs(tip[1] - y) < 1e-4
+
+
+def test_a_ring_under_diametral_load_meets_roarks_thin_ring():
+    """Case (d): the ring as a case writes it (a closed cable, natural curvature as
+    given, rollers in its plane, a slider under the load): both diameters' changes and
+    the moment under the load within 1e-3 of the thin ring's at 400 edges, and the
+    error falls about 4-fold per halving of the edge."""
+    rows = rods.ring_rows()
+    for row in rows:
+        assert row["passed"] is not False, row
+        if row["resolution"] == rods.RING_EDGES[-1]:
+            assert row["error"] < rods.RING_TOL, row
+        if "order" in row:
+            assert 1.8 <= row["order"] <= 2.2, row
+    moment = rows[-1]
+    assert moment["quantity"] == "M under the load"
+    assert moment["catenet"] == pytest.approx(rods.RING_LOAD / math.pi, rel=1e-4)
