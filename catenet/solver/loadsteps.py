@@ -400,8 +400,8 @@ def _relaxed(
             return None
         r = solve_static(net, loads, x0=rest.x, factor=target, relaxed=True, **settings)
     except ConvergenceError as exc:
-        if isinstance(exc, Interrupted):
-            raise
+        if isinstance(exc, Interrupted):  # the last equilibrium is kept, not the motion's
+            raise with_last_good(exc, LastGood(good.x, good.time)) from None
         log.info("dynamic relaxation to rest did not help: %s", exc)
         return None
     r.iterations += rest.iterations

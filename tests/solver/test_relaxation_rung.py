@@ -142,6 +142,34 @@ def test_the_last_rung_says_it_was_tried_when_it_fails(monkeypatch):
     assert failed.value.last_good.time == 0.0
 
 
+def test_an_interrupted_last_rung_keeps_the_last_equilibrium(monkeypatch):
+    """Two load steps: the first converges at load factor 0.5, every static solve of the
+    second fails, and its last rung (dynamic relaxation) is interrupted: the run's last
+    good state is the first step's equilibrium at 0.5, not the relaxation's motion (a
+    state at a pseudo-time, no equilibrium) nor the start."""
+    from catenet.errors import Interrupted
+
+    real = loadsteps.solve_static
+    solved = []
+
+    def static(*args, relaxed=False, **kwargs):
+        if not solved:
+            solved.append(real(*args, relaxed=relaxed, **kwargs))
+            return solved[0]
+        raise ConvergenceError("no convergence in 200 iterations (made to fail)")
+
+    def interrupted(net, loads, **kwargs):
+        moved = kwargs["x0"] + 0.1  # somewhere on the way to rest
+        raise Interrupted("interrupted at t = 0.37 s", iterations=7, state=moved)
+
+    monkeypatch.setattr(loadsteps, "solve_static", static)
+    monkeypatch.setattr(dynamic, "solve_dynamic", interrupted)
+    with pytest.raises(Interrupted) as stopped:
+        run(mooring(6, 200), steps=2)
+    good = stopped.value.last_good
+    assert good.time == 0.5 and np.array_equal(good.x, solved[0].x)
+
+
 @pytest.mark.parametrize("max_iter", [1, 24])
 def test_a_newton_budget_below_a_time_steps_is_respected(monkeypatch, max_iter):
     """A ``solver.max_iter`` below the 25 iterations a time step may take: the last rung
