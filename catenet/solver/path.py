@@ -353,7 +353,10 @@ def _nested(
     try:  # the first load step's equilibrium: the continuation's first
         r = solve(coarse, first, on_step=lambda step: True)
     except CatenetError as exc:
-        if isinstance(exc, (ConfigError, Interrupted)):
+        if isinstance(exc, Interrupted):  # the coarse net's state is no state of this net
+            exc.last_good = None  # (the caller keeps this net's start)
+            raise
+        if isinstance(exc, ConfigError):
             raise
         log.warning("the coarse net of the nested start failed (%s): the default start", exc)
         return None

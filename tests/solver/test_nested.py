@@ -143,3 +143,24 @@ def test_a_coarse_net_that_does_not_match_falls_back(monkeypatch, caplog):
     s, r = solve(N10, "nested", "geometry.edge_length=0.005")
     assert r.converged and r.nested is None and r.iterations == 7
     assert "does not match" in caplog.text
+
+
+def test_an_interrupted_coarse_solve_keeps_the_fine_nets_start(monkeypatch):
+    """The coarse net's solve interrupted (its last good state is a state of the coarse
+    net, fewer nodes): the run's last good state is the fine net's start at load factor
+    0, of the fine net's shape (the coarse one's would be written as this net's)."""
+    from catenet.errors import Interrupted, LastGood, with_last_good
+
+    s, settings = scene(N10, "geometry.edge_length=0.005")
+    real = sv.solve
+
+    def coarse_interrupted(coarse, *args, **kwargs):
+        assert coarse.net.n_nodes < s.net.n_nodes
+        stop = Interrupted("interrupted", iterations=3)
+        raise with_last_good(stop, LastGood(coarse.net.nodes.copy(), 0.5))
+
+    monkeypatch.setattr(sv, "solve", coarse_interrupted)
+    with pytest.raises(Interrupted) as stopped:
+        real(s, dataclasses.replace(settings, start="nested"))
+    good = stopped.value.last_good
+    assert good.time == 0.0 and good.x.shape == s.net.nodes.shape
