@@ -161,7 +161,12 @@ def _judged(
         _collapse(judge, why, at, LastGood(before, at), r.x)
         # followed through (solver.post_collapse): on from where the bracket ended
         # (Newton on the exact potential from there: no continuation stage moves it off)
-        r = solve_static(net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings)
+        try:
+            r = solve_static(
+                net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings
+            )
+        except ConvergenceError as exc:  # the last equilibrium before this step is kept
+            raise with_last_good(exc, LastGood(good.x, good.time)) from None
     return r
 
 

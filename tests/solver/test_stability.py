@@ -327,3 +327,35 @@ def test_a_mast_whose_guys_go_slack_collapses_where_they_do(tmp_path):
     with h5py.File(out, "r") as f:  # the last stable state: bracketed below ~280 N
         factor = float(f["result"].attrs["time"])
     assert 150.0 <= factor * 1e4 <= 280.0
+
+
+def test_a_failed_post_collapse_resolve_keeps_the_last_equilibrium(monkeypatch):
+    """The mast whose split strut collapses, followed through (solver.post_collapse) in
+    two load steps: where Newton from the bracket's end fails to reach the step's load,
+    the error carries the last equilibrium before that step (continuation's callers
+    write it; without it they fell back to the start)."""
+    import catenet.solver.loadsteps as loadsteps
+    from catenet.case import build, load_case
+    from catenet.errors import ConvergenceError
+    from catenet.solver.path import Settings
+    from catenet.solver.workspace import Workspace
+
+    case = load_case(MAST, ["geometry.cable.0.edge_length=5", "solver.post_collapse=true"])
+    scene = build(case)
+    real = loadsteps.solve_static
+
+    def failing_resolve(*args, relaxed=False, **kwargs):
+        if relaxed:
+            raise ConvergenceError("no convergence in 200 iterations (made to fail)")
+        return real(*args, relaxed=relaxed, **kwargs)
+
+    monkeypatch.setattr(loadsteps, "solve_static", failing_resolve)
+    settings = Settings.of(case.solver)
+    ws = Workspace(scene.net, terms=scene.terms)
+    with pytest.raises(ConvergenceError, match="made to fail") as failed:
+        loadsteps.continuation(
+            scene.net, scene.loads, [0.5, 1.0], rtol=settings.rtol, workspace=ws, post_collapse=True
+        )
+    good = failed.value.last_good
+    assert good is not None and good.time in (0.0, 0.5), good
+    assert good.x.shape == scene.net.nodes.shape and np.all(np.isfinite(good.x))
