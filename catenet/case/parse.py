@@ -230,7 +230,6 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         solver = dataclasses.replace(solver, t_end=t_end)
     if isinstance(solver, SolverConfig):
         solver = resolve_steps(solver)  # fixed or adaptive steps, and the integrator
-        _check_rho_inf(ck, given, solver)
     if dynamic:
         _check_time_steps(ck, solver)
 
@@ -295,24 +294,6 @@ def _check_mass(
             f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
             "set material.density > 0 (with material.radius or material.area)"
         )
-
-
-def _check_rho_inf(ck: Checker, given: Any, solver: SolverConfig) -> None:
-    """solver.rho_inf is newmark's alone: given for another integrator (or a static run)
-    it would change nothing, silently."""
-    if not isinstance(given, Mapping) or "rho_inf" not in given:
-        return
-    if solver.method == "dynamic" and solver.integrator == "newmark":
-        return
-    run = (
-        f"solver.integrator = {solver.integrator!r}"
-        if solver.method == "dynamic"
-        else "a static run"
-    )
-    ck.add(
-        f"solver.rho_inf = {show(given['rho_inf'])}: only with solver.integrator = 'newmark' "
-        f"(this is {run}, which has no such parameter): remove it or choose newmark"
-    )
 
 
 def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:

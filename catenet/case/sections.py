@@ -382,7 +382,7 @@ class SolverConfig(Declared):
         Settings.rho_inf,
         write="changed",
         doc="newmark: spectral radius at h omega -> inf (1: average acceleration, "
-        "no numerical damping); given with another integrator or a static run: an error",
+        "no numerical damping)",
     )
     t_end: float | str = key(
         _check_t_end,

@@ -100,24 +100,3 @@ def test_rest_skips_the_end_time_checks_of_dt():
     with pytest.raises(ConfigError, match="must be <= solver.t_end"):
         parse_case(cable(dt=2.0, t_end=1.0))
     assert parse_case(cable(dt=2.0)).solver.t_end == "rest"
-
-
-@pytest.mark.parametrize(
-    "solver, run",
-    [
-        ({"t_end": 1.0}, "solver.integrator = 'implicit_euler'"),
-        ({"t_end": 1.0, "integrator": "bdf2"}, "solver.integrator = 'bdf2'"),
-        ({"t_end": 1.0, "tolerance": 1e-3}, "solver.integrator = 'bdf2'"),
-        ({"method": "static"}, "a static run"),
-    ],
-)
-def test_rho_inf_without_newmark_is_bad_input(solver, run):
-    """rho_inf is newmark's parameter alone: given to another integrator it changed
-    nothing, silently; now it is refused, naming the integrator of the run."""
-    with pytest.raises(ConfigError) as caught:
-        parse_case(cable(rho_inf=0.5, **solver))
-    text = str(caught.value)
-    assert "solver.rho_inf = 0.5: only with solver.integrator = 'newmark'" in text, text
-    assert f"(this is {run}," in text, text
-    newmark = parse_case(cable(rho_inf=0.5, t_end=1.0, integrator="newmark")).solver
-    assert newmark.rho_inf == 0.5
