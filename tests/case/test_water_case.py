@@ -1,4 +1,4 @@
-"""Cases in water (docs/howto/moorings-in-water.md): a taut line in a current deflects as
+"""Cases in water (docs/howto/mooring-dynamics.md): a taut line in a current deflects as
 the string under the drag's line load, a sine support motion exact and ramped, a
 dynamic run from its own static equilibrium, the mooring chain of configs/water whose
 peak fairlead tension converges with the time step, the Airy and JONSWAP kinematics, and
