@@ -7,6 +7,7 @@ heaving support, and bad input's messages."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -202,3 +203,19 @@ def test_a_node_moved_twice_is_refused(tmp_path):
     res = CliRunner().invoke(main, ["run", str(path)])
     assert res.exit_code == 2
     assert "node 2 already moves in supports.move[0]: one move per node" in res.output
+
+
+WATER_CONFIGS = sorted((Path(__file__).resolve().parents[2] / "configs" / "water").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", WATER_CONFIGS, ids=lambda p: p.stem)
+def test_the_water_examples_parse_and_build(path):
+    """One example per feature in configs/water/ (docs/howto/mooring-dynamics.md): each
+    is a sound dynamic case from its equilibrium, its comment says how to run it."""
+    from catenet.case import load_case
+
+    c = load_case(path)
+    scene = build(c)
+    assert c.solver.method == "dynamic" and c.solver.initial_state == "equilibrium"
+    assert c.water is not None and scene.net.n_edges > 10
+    assert "Run: catenet run configs/water/" in path.read_text()
