@@ -116,7 +116,7 @@ class SupportsConfig(Declared):
     moves: tuple[MoveConfig, ...] = tables(
         MoveConfig, name="move", doc="moving supports: only fixed nodes move, each once"
     )
-    vessels: tuple[VesselConfig, ...] = tables(VesselConfig, name="vessel", doc="vessels")
+    vessels: tuple = tables(VesselConfig, name="vessel", doc="vessels moving supports together")
     clamped: tuple[NodeRef, ...] = key(
         _node_list,
         "a non-empty array of nodes (indices or names), each the end of a rod",
