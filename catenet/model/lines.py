@@ -71,6 +71,52 @@ def line_paths(nodes: np.ndarray, edges: np.ndarray, rest: np.ndarray, cable_edg
     return paths
 
 
+class Lines:
+    """Every line's records of a state at once (``LinePath``s, None: a cable without
+    edges): the arrays padded to the longest line, so that a step costs a few array
+    operations whatever the number of lines."""
+
+    def __init__(self, paths: list):
+        c = len(paths)
+        k = max((p.edges.size for p in paths if p is not None), default=0)
+        self.edges = np.zeros((c, k), dtype=np.int64)
+        self.nodes = np.zeros((c, k + 1), dtype=np.int64)
+        self.arc = np.zeros((c, k + 1))
+        self.count = np.zeros(c, dtype=np.int64)  # edges of each line (0: none)
+        for i, p in enumerate(paths):
+            if p is None:
+                continue
+            n = p.edges.size
+            self.count[i] = n
+            self.edges[i, :n], self.edges[i, n:] = p.edges, p.edges[-1]  # pad: repeat
+            self.nodes[i, : n + 1], self.nodes[i, n + 1 :] = p.nodes, p.nodes[-1]
+            self.arc[i, : n + 1], self.arc[i, n + 1 :] = p.arc, p.arc[-1]
+
+    def tension_range(self, tension: np.ndarray) -> np.ndarray:
+        """(C, 2) each line's least and largest edge tension (0, 0 without edges)."""
+        t = tension[self.edges]
+        out = np.column_stack([t.min(axis=1), t.max(axis=1)]) if t.size else np.zeros((0, 2))
+        out[self.count == 0] = 0.0
+        return out.reshape(-1, 2)
+
+    def uplift(self, x: np.ndarray) -> np.ndarray:
+        """(C,) each line's angle above the horizontal at its anchor [deg]."""
+        if not self.nodes.shape[1] > 1:
+            return np.zeros(len(self.count))
+        d = x[self.nodes[:, 1]] - x[self.nodes[:, 0]]
+        out = np.degrees(np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])))
+        return np.where(self.count > 0, out, 0.0)
+
+    def touchdown(self, grounded: np.ndarray) -> np.ndarray:
+        """(C,) each line's arc length from its anchor to the end of the grounded
+        stretch that starts there (``LinePath.touchdown``) [m]."""
+        on = grounded[self.nodes[:, 1:]]
+        inside = np.arange(on.shape[1])[None, :] < self.count[:, None]
+        off = ~on & inside
+        lead = np.where(off.any(axis=1), off.argmax(axis=1), self.count)
+        return self.arc[np.arange(len(self.count)), lead]
+
+
 def snaps(time: np.ndarray, least: np.ndarray, largest: float) -> np.ndarray:
     """The times at which a line goes taut again after being slack: its least tension
     ``least`` (S,) at ``time`` (S,) rises above SLACK x ``largest`` (its largest tension

@@ -23,7 +23,7 @@ import logging
 import numpy as np
 
 from catenet.model import measures
-from catenet.model.lines import line_paths
+from catenet.model.lines import Lines, line_paths
 from catenet.output.history import HistoryLayout, read_history
 
 log = logging.getLogger(__name__)
@@ -94,11 +94,12 @@ class Recorder:
         self.owned = np.zeros((len(slot), n, 3))
         self.n_net = scene.net.n_net
         self.cables = bool(shape.cable_names)
-        self.paths: list = []
+        self.lines = Lines([])
         line = lines_of(scene)
         if self.cables and line is not None:
             net = scene.net
-            self.paths = line_paths(net.nodes, net.edges, net.rest_length, line[1])
+            paths = line_paths(net.nodes, net.edges, net.rest_length, line[1])
+            self.lines = Lines(paths + [None] * (len(line[0]) - len(paths)))
 
     def row(self, t: float, x: np.ndarray) -> dict[str, np.ndarray]:
         """The history's row of state x at time t."""
@@ -122,22 +123,15 @@ class Recorder:
         return out
 
     def _lines(self, x: np.ndarray, tension: np.ndarray, owned: np.ndarray) -> dict:
-        """Each named cable's least and largest tension, uplift angle at its anchor and
-        touchdown point (``catenet.model.lines``)."""
-        c = len(self.paths)
-        span, uplift, down = np.zeros((c, 2)), np.zeros(c), np.zeros(c)
-        grounded = np.any(owned != 0.0, axis=(0, 2)) if self.layout.grounds else None
-        for k, path in enumerate(self.paths):
-            if path is None:
-                continue
-            t = tension[path.edges]
-            span[k] = (t.min(), t.max())
-            uplift[k] = path.uplift(x)
-            if grounded is not None:
-                down[k] = path.touchdown(grounded)
-        out = {"cable_tension_range": span, "anchor_uplift": uplift}
-        if grounded is not None:
-            out["touchdown"] = down
+        """Each line's least and largest tension, uplift angle at its anchor and
+        touchdown point (``catenet.model.lines.Lines``)."""
+        lines = self.lines
+        out = {
+            "cable_tension_range": lines.tension_range(tension),
+            "anchor_uplift": lines.uplift(x),
+        }
+        if self.layout.grounds:
+            out["touchdown"] = lines.touchdown(np.any(owned != 0.0, axis=(0, 2)))
         return out
 
     def record(self, t: float, x: np.ndarray) -> None:

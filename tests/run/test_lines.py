@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
-from catenet.model.lines import line_paths, snaps, spectral_summary, spectrum
+from catenet.model.lines import Lines, line_paths, snaps, spectral_summary, spectrum
 from catenet.output.history import read_history
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -37,6 +37,12 @@ def test_a_lines_path_uplift_and_touchdown():
     assert path.touchdown(grounded) == 6.0  # nodes 3 and 2 on the ground
     assert path.touchdown(np.zeros(5, bool)) == 0.0  # lifted at the anchor
     assert path.touchdown(np.ones(5, bool)) == 18.0
+    lines = Lines([path, None, path])  # all at once, a line without edges among them
+    t = np.array([1.0, 5.0, -2.0, 3.0])
+    assert lines.tension_range(t).tolist() == [[-2.0, 5.0], [0.0, 0.0], [-2.0, 5.0]]
+    assert lines.uplift(lifted) == pytest.approx([45.0, 0.0, 45.0])
+    for g in (grounded, np.zeros(5, bool), np.ones(5, bool)):
+        assert lines.touchdown(g).tolist() == [path.touchdown(g), 0.0, path.touchdown(g)]
 
 
 def test_snaps_and_spectrum_of_records():
