@@ -58,6 +58,7 @@ def node_indices(case: Case) -> list[int]:
     s, load = case.supports, case.load
     refs += list(s.fixed or ())
     refs += [m.node for m in s.moves]
+    refs += [r for vessel in s.vessels for r in vessel.nodes]
     refs += [r for roller in s.rollers for r in roller.nodes]
     refs += [r for slider in s.sliders for r in slider.nodes]
     refs += [r for spring in s.springs for r in spring.nodes]

@@ -14,7 +14,6 @@ from catenet.case.kinds.graph import GraphConfig
 from catenet.case.kinds.netfile import flag_note
 from catenet.case.sections import (
     LoadConfig,
-    MoveConfig,
     NodeRef,
     OutputConfig,
     SupportsConfig,
@@ -30,6 +29,7 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
     refs = [probe]
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
+        refs += [r for v in supports.vessels for r in v.nodes]
         refs += list(supports.clamped)
         refs += [r for _, _, part in partial_supports(supports) for r in part.nodes]
     if isinstance(load, LoadConfig):
@@ -41,7 +41,7 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
         if any(ln.cable is not None for ln in load.lines):
             return True
     return any(isinstance(r, int) for r in refs) or bool(
-        isinstance(supports, SupportsConfig) and supports.moves
+        isinstance(supports, SupportsConfig) and (supports.moves or supports.vessels)
     )
 
 
@@ -76,7 +76,7 @@ def check_nodes(
             fixed_key = "supports.fixed"
             fixed = _fixed_nodes(refs, supports.fixed)
         held = _check_partial(refs, supports, fixed, fixed_key)
-        _check_moves(refs, supports.moves, fixed, fixed_key, held)
+        _check_moves(refs, _moved(supports), fixed, fixed_key, held)
         for k, r in enumerate(supports.clamped):
             refs.known(r, f"supports.clamped[{k}]")
         fixed = fixed | set(held)
@@ -176,9 +176,17 @@ def _check_partial(
     return held
 
 
+def _moved(supports: SupportsConfig) -> list[tuple[str, NodeRef]]:
+    """(key path, node) of every support that moves: supports.move's and the vessels'."""
+    out = [(f"supports.move[{k}].node", mv.node) for k, mv in enumerate(supports.moves)]
+    for k, vessel in enumerate(supports.vessels):
+        out += [(f"supports.vessel[{k}].nodes", r) for r in vessel.nodes]
+    return out
+
+
 def _check_moves(
     refs: _Refs,
-    moves: tuple[MoveConfig, ...],
+    moves: list[tuple[str, NodeRef]],
     fixed: set[int],
     fixed_key: str,
     held: dict[int, str] | None = None,
@@ -186,30 +194,29 @@ def _check_moves(
     """Problems of supports.move: a node that is not fixed (``fixed``, named by
     ``fixed_key``; ``held``: the nodes on rollers, sliders and springs), a node that
     moves twice."""
-    seen: dict[int, int] = {}
+    seen: dict[int, str] = {}
     held = held or {}
-    for k, mv in enumerate(moves):
-        path = f"supports.move[{k}].node"
-        if not refs.known(mv.node, path):
+    for path, ref in moves:
+        if not refs.known(ref, path):
             continue
-        for i in refs.nodes(mv.node):
+        for i in refs.nodes(ref):
             if i in held:
                 refs.ck.add(
-                    f"{path} = {show(mv.node)}: node {i} is on {held[i]}: a roller, slider or "
+                    f"{path} = {show(ref)}: node {i} is on {held[i]}: a roller, slider or "
                     "spring does not move (supports.move moves fixed nodes only)"
                 )
             elif fixed and i not in fixed:
-                shown = mv.node if isinstance(mv.node, int) else f"{mv.node!r} (node {i})"
+                shown = ref if isinstance(ref, int) else f"{ref!r} (node {i})"
                 refs.ck.add(
                     f"{path} = {shown}: is not a fixed node: only supports move "
                     f"(fixed: {fixed_key})"
                 )
-            if i in seen:
+            if i in seen and seen[i] != path:
                 refs.ck.add(
-                    f"{path} = {show(mv.node)}: node {i} already moves in "
-                    f"supports.move[{seen[i]}]: one move per node"
+                    f"{path} = {show(ref)}: node {i} already moves in "
+                    f"{seen[i].rsplit('.', 1)[0]}: one move per node"
                 )
-            seen[i] = k
+            seen[i] = path
 
 
 def _check_loads(refs: _Refs, load: LoadConfig, g: GeometryConfig, prefix: str) -> None:

@@ -47,6 +47,7 @@ from catenet.case.supports import check_fixed
 from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, resolve_steps
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
+from catenet.case.vessel import check_vessel
 from catenet.case.water import parse_water
 from catenet.case.written import plain
 from catenet.errors import ConfigError
@@ -203,6 +204,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     water = parse_water(ck, data.get("water"), ctx)
     for k, mv in enumerate(supports.moves if isinstance(supports, SupportsConfig) else ()):
         check_move(ck, mv, f"supports.move[{k}]")
+    for k, vs in enumerate(supports.vessels if isinstance(supports, SupportsConfig) else ()):
+        check_vessel(ck, vs, f"supports.vessel[{k}]")
     density = material.density if isinstance(material, MaterialConfig) else None
     check_method(ck, load_cases, combinations, solver, density)
     formfind = None

@@ -166,7 +166,7 @@ def _load_cases(case: Case, net: Net, built: Any) -> tuple:
         }
         offset += len(lc.points)
         sub = dataclasses.replace(
-            case, load=lc, supports=dataclasses.replace(case.supports, moves=())
+            case, load=lc, supports=dataclasses.replace(case.supports, moves=(), vessels=())
         )
         try:
             loads = _loads(sub, net, built.names, float(built.size), built._replace(at_nodes=at))
@@ -278,7 +278,26 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
         parts=parts,
         gravity_history=g_history,
         support_history=tuple((np.array(n), _motion(h)) for h, n in moving.items()),
+        vessels=_vessels(case, net, names, sets),
     )
+
+
+def _vessels(case: Case, net, names, sets) -> tuple:
+    """(node indices, Vessel) of each [[supports.vessel]]; ConfigError where a node it
+    carries is not fixed."""
+    from catenet.case.vessel import vessel_model
+
+    out = []
+    for k, vs in enumerate(case.supports.vessels):
+        nodes = [i for r in vs.nodes for i in expand(r, names, sets)]
+        loose = [i for i in nodes if not (0 <= i < net.n_nodes and net.fixed[i])]
+        if loose:
+            raise ConfigError(
+                f"supports.vessel[{k}].nodes: node {loose[0]} is not a fixed node: a "
+                "vessel carries supports only"
+            )
+        out.append((np.array(nodes, dtype=np.int64), vessel_model(vs)))
+    return tuple(out)
 
 
 def _sine_key(sine) -> tuple:

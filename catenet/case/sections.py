@@ -34,6 +34,7 @@ from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
 from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, fixed_list
 from catenet.case.supports import node_list as _node_list
+from catenet.case.vessel import VesselConfig
 from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.model.histories import NEED, history_problem
@@ -115,6 +116,7 @@ class SupportsConfig(Declared):
     moves: tuple[MoveConfig, ...] = tables(
         MoveConfig, name="move", doc="moving supports: only fixed nodes move, each once"
     )
+    vessels: tuple = tables(VesselConfig, name="vessel", doc="vessels moving supports together")
     clamped: tuple[NodeRef, ...] = key(
         _node_list,
         "a non-empty array of nodes (indices or names), each the end of a rod",

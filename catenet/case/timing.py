@@ -38,6 +38,8 @@ def time_dependence(load: Any, supports: Any, solver: Any, obstacles: Any, masse
             return f"supports.move[{k}].sine"
         if move.duration > 0:
             return f"supports.move[{k}].duration"
+    if isinstance(supports, SupportsConfig) and supports.vessels:
+        return "supports.vessel[0]"
     for k, obs in enumerate(obstacles if isinstance(obstacles, tuple) else ()):
         if obs.free:
             return f"obstacle[{k}] (a free body)"

@@ -67,7 +67,7 @@ class WaveConfig(Declared):
 @dataclass(frozen=True)
 class WaterConfig(Declared):
     """Water around the net: buoyancy, drag and added mass on every wetted edge
-    (the material's cd_n, cd_t, ca_n, ca_t, hydro_diameter; docs/howto/moorings-in-water.md)."""
+    (the material's cd_n, cd_t, ca_n, ca_t, hydro_diameter; docs/howto/mooring-dynamics.md)."""
 
     density: float = real(1025.0, gt=0, unit="kg/m^3", doc="the water's density")
     surface: float = real(0.0, unit="m", doc="z of the still water level")

@@ -15,6 +15,7 @@ from catenet.errors import ConfigError
 from catenet.model.guides import Elastic, Guides
 from catenet.model.laws import Law
 from catenet.model.limits import MAGNITUDE, too_large
+from catenet.model.motions import support_positions
 
 
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -430,6 +431,8 @@ class Loads:
     support_history : (node indices, History or Sine) pairs: supports whose displacement
         is factor(t) times ``support_displacement`` in dynamic runs (instead of a ramp); a
         static run takes a sine motion at t = 0
+    vessels : (node indices, ``catenet.model.motions.Vessel``) pairs: supports carried by
+        a vessel's rigid motion (a static run takes it at t = 0)
 
     Static runs (``time`` None) take every load and displacement at its full value: a
     history's factor is used in dynamic runs only.
@@ -442,6 +445,7 @@ class Loads:
     parts: tuple = ()
     gravity_history: Any = None
     support_history: tuple = ()
+    vessels: tuple = ()  # (node indices, catenet.model.motions.Vessel) pairs
 
     def external_force(
         self, net: Net, factor: float = 1.0, time: float | None = None
@@ -470,29 +474,10 @@ class Loads:
         return bool(self.parts) or (self.gravity is not None and self.gravity_history is not None)
 
     def support_positions(self, net: Net, *, time: float | None = None, factor: float = 1.0):
-        """Positions of the fixed nodes (K, 3): at ``time`` along each ramp or history
-        (dynamic), or at ``factor`` of the final displacement (static continuation)."""
-        x = net.nodes[net.fixed].copy()
-        if self.support_displacement is None:
-            return x
-        d = self.support_displacement[net.fixed]
-        if time is None:  # a history in full, a sine motion at its t = 0 value
-            at = np.ones(net.n_nodes)
-            for nodes, history in self.support_history:
-                at[nodes] = getattr(history, "static", 1.0)
-            return x + (factor * at[net.fixed])[:, None] * d
-        ramp = np.zeros(len(d)) if self.ramp_time is None else self.ramp_time[net.fixed]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = np.where(ramp > 0, np.clip(time / np.where(ramp > 0, ramp, 1.0), 0.0, 1.0), 1.0)
-        if self.support_history:
-            full = np.ones(net.n_nodes)
-            for nodes, history in self.support_history:
-                full[nodes] = history(time)
-            moved = np.zeros(net.n_nodes, bool)
-            for nodes, _ in self.support_history:
-                moved[nodes] = True
-            s = np.where(moved[net.fixed], full[net.fixed], s)
-        return x + s[:, None] * d
+        """Positions of the fixed nodes (K, 3): at ``time`` along each ramp, history or
+        vessel (dynamic), or at ``factor`` of the final displacement (static continuation)
+        (``catenet.model.motions.support_positions``)."""
+        return support_positions(self, net, time, factor)
 
     def at(self, net: Net, time: float) -> Loads:
         """The loads frozen at ``time``: every force at its value then (gravity included)
@@ -509,14 +494,15 @@ class Loads:
         t = 0.0
         if self.support_displacement is not None and self.ramp_time is not None:
             t = float(np.max(self.ramp_time, initial=0.0))
-        ends = [h.end for _, h in (*self.parts, *self.support_history)]
+        ends = [h.end for _, h in (*self.parts, *self.support_history, *self.vessels)]
         if self.gravity is not None and self.gravity_history is not None:
             ends.append(self.gravity_history.end)
         return max([t, *ends])
 
     @property
     def has_histories(self) -> bool:
-        return bool(self.parts or self.support_history or self.gravity_history is not None)
+        timed = self.parts or self.support_history or self.vessels
+        return bool(timed or self.gravity_history is not None)
 
     @property
     def moves_supports(self) -> bool:

@@ -10,7 +10,15 @@ time step, not only at the stored frames, kept compactly (a few numbers a step).
                              (``obstacle[k]``), names, kinds
 /history/cable_end_tension   (S, C, 2) [N]: the tension of each named cable's end edges
                              (its first edge, its last); attrs cable_names (C,), edges (C, 2)
+/history/cable_tension_range (S, C, 2) [N]: each named cable's least and largest edge
+                             tension
+/history/anchor_uplift       (S, C) [deg]: each named cable's angle above the horizontal
+                             at its anchor (its end lower in the given geometry)
+/history/touchdown           (S, C) [m]: the unstretched arc length from each named
+                             cable's anchor to its touchdown point (runs with obstacles)
 ```
+
+(``catenet.model.lines``: the line's path from its anchor, uplift and touchdown.)
 
 A dataset is there only where the run has what it counts (supports, obstacles or
 bodies, named cables). The rows gather in memory and reach the file with the trajectory's
@@ -33,6 +41,7 @@ from catenet.output.files import check_finite
 GROUP = "history"
 ROWS_PER_CHUNK = 256  # rows of a chunk (fewer where a row is large)
 CHUNK_BYTES = 2**20
+UNITS = {"anchor_uplift": "deg", "touchdown": "m"}  # the others' [N]
 
 __all__ = ["GROUP", "HistoryLayout", "HistoryLog", "read_history"]
 
@@ -48,6 +57,7 @@ class HistoryLayout:
     kinds: tuple[str, ...] = ()
     cable_names: tuple[str, ...] = ()
     cable_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    grounds: bool = False  # touchdown points recorded (the run has obstacles)
 
     def shapes(self) -> dict[str, tuple[int, ...]]:
         """Each dataset's row shape (only those the run has)."""
@@ -57,7 +67,10 @@ class HistoryLayout:
         if self.obstacles:
             out["contact"] = (len(self.obstacles), 3)
         if self.cable_names:
-            out["cable_end_tension"] = (len(self.cable_names), 2)
+            c = len(self.cable_names)
+            out.update(cable_end_tension=(c, 2), cable_tension_range=(c, 2), anchor_uplift=(c,))
+            if self.grounds:
+                out["touchdown"] = (c,)
         return out
 
 
@@ -106,17 +119,18 @@ class HistoryLog:
                 compression_opts=4,
                 shuffle=True,
             )
-            g[name].attrs["unit"] = "N"
+            g[name].attrs["unit"] = UNITS.get(name, "N")
         strings = h5py.string_dtype()
         if "contact" in g:
             c = g["contact"]
             c.attrs["obstacles"] = np.asarray(layout.obstacles, dtype=np.int64)
             c.attrs["names"] = np.array(layout.names, dtype=strings)
             c.attrs["kinds"] = np.array(layout.kinds, dtype=strings)
+        for name in ("cable_end_tension", "cable_tension_range", "anchor_uplift", "touchdown"):
+            if name in g:
+                g[name].attrs["cable_names"] = np.array(layout.cable_names, dtype=strings)
         if "cable_end_tension" in g:
-            c = g["cable_end_tension"]
-            c.attrs["cable_names"] = np.array(layout.cable_names, dtype=strings)
-            c.attrs["edges"] = np.asarray(layout.cable_edges, dtype=np.int64)
+            g["cable_end_tension"].attrs["edges"] = np.asarray(layout.cable_edges, dtype=np.int64)
 
     def append(self, h5, batch, n0: int, held: list) -> None:
         """Appends ``batch`` (rows n0, n0 + 1, ...) to the file's /history; ``held``
@@ -138,7 +152,8 @@ class HistoryLog:
 class History:
     """A result file's history (``read_history``): ``time`` (S,), ``reaction`` (S, Ns, 3)
     at ``reaction_nodes``, ``contact`` (S, K, 3) of ``obstacles`` (their ``names``),
-    ``cable_end_tension`` (S, C, 2) of ``cable_names``; empty arrays where the run has none."""
+    ``cable_end_tension`` (S, C, 2) of ``cable_names``, their ``cable_tension_range`` (S, C, 2),
+    ``anchor_uplift`` (S, C) and ``touchdown`` (S, C); empty arrays where the run has none."""
 
     time: np.ndarray
     reaction: np.ndarray
@@ -148,6 +163,9 @@ class History:
     names: list[str]
     cable_end_tension: np.ndarray
     cable_names: list[str]
+    cable_tension_range: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))
+    anchor_uplift: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    touchdown: np.ndarray | None = None  # None: not recorded (no obstacle)
 
 
 def read_history(path: str | Path) -> History | None:
@@ -184,6 +202,9 @@ def read_history(path: str | Path) -> History | None:
                 names=names("contact", "names"),
                 cable_end_tension=rows("cable_end_tension", (0, 2)),
                 cable_names=names("cable_end_tension", "cable_names"),
+                cable_tension_range=rows("cable_tension_range", (0, 2)),
+                anchor_uplift=rows("anchor_uplift", (0,)),
+                touchdown=rows("touchdown", (0,)) if "touchdown" in g else None,
             )
     except (OSError, KeyError, ValueError) as exc:
         raise ConfigError(f"{path}: its /history cannot be read: {exc}") from None

@@ -52,6 +52,11 @@ def make_report(path: Path, fmt: str):
 
     states = read_states(path)
     report = build_report(states)
+    from catenet.report.lines import lines_tables
+
+    base = [s for s in report.sections if s.kind == "base"]
+    if base:  # a dynamic run's lines over time (its /history)
+        base[0].tables += lines_tables(states)
     if fmt == "md":
         return markdown(report)
     if fmt == "html":

@@ -23,6 +23,7 @@ import logging
 import numpy as np
 
 from catenet.model import measures
+from catenet.model.lines import Lines, line_paths
 from catenet.output.history import HistoryLayout, read_history
 
 log = logging.getLogger(__name__)
@@ -39,14 +40,14 @@ def layout(scene) -> HistoryLayout:
     owned = sorted(kinds)
     names: tuple[str, ...] = ()
     ends = np.zeros((0, 2), dtype=np.int64)
-    cables = scene.cables
-    if cables is not None and len(cables.names):
-        edge = np.asarray(cables.edge)
+    line = lines_of(scene)
+    if line is not None:
+        names, edge = line
         rows = []
-        for c in range(len(cables.names)):
+        for c in range(len(names)):
             mine = np.flatnonzero(edge == c)
             rows.append((mine[0], mine[-1]) if mine.size else (0, 0))
-        names, ends = tuple(cables.names), np.asarray(rows, dtype=np.int64).reshape(-1, 2)
+        ends = np.asarray(rows, dtype=np.int64).reshape(-1, 2)
     return HistoryLayout(
         reaction_nodes=np.flatnonzero(net.supported).astype(np.int64),
         obstacles=tuple(owned),
@@ -54,7 +55,24 @@ def layout(scene) -> HistoryLayout:
         kinds=tuple(kinds[k] for k in owned),
         cable_names=names,
         cable_edges=ends,
+        grounds=bool(owned),
     )
+
+
+def lines_of(scene) -> tuple[tuple[str, ...], np.ndarray] | None:
+    """(names, each edge's line (-1: none)): the named cables, or a net that is one
+    open path of edges (a single cable) as the line "cable"; None: no line."""
+    cables = scene.cables
+    if cables is not None and len(cables.names):
+        return tuple(cables.names), np.asarray(cables.edge)
+    net = scene.net
+    edges = np.asarray(net.edges)
+    if not len(edges):
+        return None
+    degree = np.bincount(edges.ravel(), minlength=net.n_nodes)
+    path = len(edges) == np.count_nonzero(degree) - 1 and degree.max() <= 2
+    chained = path and all(set(edges[k]) & set(edges[k + 1]) for k in range(len(edges) - 1))
+    return (("cable",), np.zeros(len(edges), dtype=np.int64)) if chained else None
 
 
 class Recorder:
@@ -76,6 +94,12 @@ class Recorder:
         self.owned = np.zeros((len(slot), n, 3))
         self.n_net = scene.net.n_net
         self.cables = bool(shape.cable_names)
+        self.lines = Lines([])
+        line = lines_of(scene)
+        if self.cables and line is not None:
+            net = scene.net
+            paths = line_paths(net.nodes, net.edges, net.rest_length, line[1])
+            self.lines = Lines(paths + [None] * (len(line[0]) - len(paths)))
 
     def row(self, t: float, x: np.ndarray) -> dict[str, np.ndarray]:
         """The history's row of state x at time t."""
@@ -93,7 +117,21 @@ class Recorder:
         out = {"reaction": measures.reaction(net, grad, force, held)[support]}
         out["contact"] = -owned[:, : self.n_net].sum(axis=1)  # on the net's own nodes
         if self.cables:
-            out["cable_end_tension"] = self.ws.system.tension(x)[self.layout.cable_edges]
+            tension = self.ws.system.tension(x)
+            out["cable_end_tension"] = tension[self.layout.cable_edges]
+            out.update(self._lines(x, tension, owned))
+        return out
+
+    def _lines(self, x: np.ndarray, tension: np.ndarray, owned: np.ndarray) -> dict:
+        """Each line's least and largest tension, uplift angle at its anchor and
+        touchdown point (``catenet.model.lines.Lines``)."""
+        lines = self.lines
+        out = {
+            "cable_tension_range": lines.tension_range(tension),
+            "anchor_uplift": lines.uplift(x),
+        }
+        if self.layout.grounds:
+            out["touchdown"] = lines.touchdown(np.any(owned != 0.0, axis=(0, 2)))
         return out
 
     def record(self, t: float, x: np.ndarray) -> None:
@@ -116,6 +154,7 @@ class Recorder:
             np.array_equal(old.reaction_nodes, lay.reaction_nodes)
             and list(old.obstacles) == list(lay.obstacles)
             and old.cable_names == list(lay.cable_names)
+            and old.cable_tension_range.shape[1:] == (len(lay.cable_names), 2)
         )
         if not same or old is None:
             log.info("--restart: %s has no history of the same columns: it begins anew", path)
@@ -126,7 +165,11 @@ class Recorder:
                 "reaction": old.reaction[i],
                 "contact": old.contact[i],
                 "cable_end_tension": old.cable_end_tension[i],
+                "cable_tension_range": old.cable_tension_range[i],
+                "anchor_uplift": old.anchor_uplift[i],
             }
+            if old.touchdown is not None:
+                row["touchdown"] = old.touchdown[i]
             self.writer.record(float(old.time[i]), row)
         if keep.size:
             self.last = float(old.time[keep[-1]])

@@ -53,19 +53,21 @@ def check_modes_input(scene, count) -> None:
 
 def added_line(case: Case, scene: Scene) -> np.ndarray | None:
     """(E,) the added mass of water of each edge, Ca rho_w A l0 [kg] (its cable's
-    [material] in a graph with cables, else [material]); None where no material asks
-    for it (``material.added_mass``)."""
+    [material] in a graph with cables, else [material]), sideways; with [water] (E, 2):
+    rho_w A l0 times ca_n (sideways) and ca_t (along the edge); None where no material
+    asks for any (``material.added_mass``, ``ca_n``, ``ca_t``)."""
     from catenet.case.keys import Checker
     from catenet.case.kinds.graph import GraphConfig
     from catenet.case.material import added_line_mass
 
     net = scene.net
-    if case.water is not None:  # [water]: the materials' ca_n (lateral; ca_t not here)
+    if case.water is not None:  # [water]: the materials' ca_n and ca_t
         from catenet.case.water import hydro_edges
 
         hydro = hydro_edges(case, scene)
-        line = case.water.density * hydro.ca_n * hydro.area * net.rest_length
-        return line if line.any() else None
+        water = case.water.density * hydro.area * net.rest_length
+        pair = np.column_stack([water * hydro.ca_n, water * hydro.ca_t])
+        return pair if pair.any() else None
     base = added_line_mass(case.material)
     per_edge = np.full(net.n_edges, base)
     cables = scene.cables

@@ -98,8 +98,8 @@ class Ledger:
         net = stepper.net
         dx = x_new - x_old
         free = ~net.fixed
-        force = self._applied(stepper)
-        self._work += 0.5 * float(np.sum((self._force + force)[free] * dx[free]))
+        force = self._applied(stepper)  # its work at a moving support too: the node's
+        self._work += 0.5 * float(np.sum((self._force + force) * dx))  # own load moves
         k, u, c, reaction = self._state(stepper, x_new, v_new)
         fixed = net.fixed
         self._work += 0.5 * float(np.sum((self._reaction + reaction)[fixed] * dx[fixed]))

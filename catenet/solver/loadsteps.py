@@ -417,14 +417,21 @@ def _relaxed(
 def _held(loads: Loads) -> Loads:
     """``loads`` as a static run takes them, for a run to rest: every load and support
     displacement at its full value from the start (no history, no ramp)."""
-    if not (loads.parts or loads.gravity_history or loads.support_history):
+    if not (loads.parts or loads.gravity_history or loads.support_history or loads.vessels):
         if loads.ramp_time is None:
             return loads
     force = None if loads.force is None else loads.force.copy()
     for f, _ in loads.parts:
         force = np.array(f, dtype=np.float64) if force is None else force + f
+    vessels = tuple((nodes, vessel.frozen()) for nodes, vessel in loads.vessels)
     return dataclasses.replace(
-        loads, force=force, parts=(), gravity_history=None, ramp_time=None, support_history=()
+        loads,
+        force=force,
+        parts=(),
+        gravity_history=None,
+        ramp_time=None,
+        support_history=(),
+        vessels=vessels,
     )
 
 

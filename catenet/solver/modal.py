@@ -171,9 +171,12 @@ class Reduction:
         return u
 
 
-def added_mass_blocks(net: Net, x: np.ndarray, line: ArrayLike) -> np.ndarray:
+def added_mass_blocks(
+    net: Net, x: np.ndarray, line: ArrayLike, axial: ArrayLike | None = None
+) -> np.ndarray:
     """(N, 3, 3) the added mass at each node [kg]: each edge's ``line`` (E,) [kg]
-    (Ca rho_w A l0) times (I - t t^T) / 2 at each of its ends, t its direction at x
+    (Ca rho_w A l0) times (I - t t^T) / 2 and ``axial`` (E,) (ca_t rho_w A l0; None: 0)
+    times t t^T / 2 at each of its ends, t its direction at x
     (``catenet.model.water.added_mass_blocks``, the dynamic runs' too)."""
     from catenet.model.water import added_mass_blocks as blocks
 
@@ -184,8 +187,9 @@ def added_mass_blocks(net: Net, x: np.ndarray, line: ArrayLike) -> np.ndarray:
     length = np.linalg.norm(d, axis=1)
     t = d / np.where(length > 0, length, 1.0)[:, None]
     half = 0.5 * np.asarray(line, dtype=np.float64)
+    along = np.zeros_like(half) if axial is None else 0.5 * np.asarray(axial, dtype=np.float64)
     ends = np.concatenate([net.edges[:, 0], net.edges[:, 1]])
-    return blocks(net.n_nodes, ends, np.concatenate([t, t]), np.tile(half, 2), np.zeros(ends.size))
+    return blocks(net.n_nodes, ends, np.concatenate([t, t]), np.tile(half, 2), np.tile(along, 2))
 
 
 def mass_data(system: System, mass: np.ndarray, blocks: np.ndarray | None) -> np.ndarray:

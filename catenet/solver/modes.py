@@ -165,7 +165,8 @@ def natural_modes(
     "auto" (dense up to DENSE free DOFs, else Lanczos), "dense" or "lanczos";
     ``cables`` (``names``, ``edge``: a case's cable index) names cables in messages;
     ``added`` (E,) [kg]: each edge's added mass of water Ca rho_w A l0, moving with its
-    ends sideways only (``catenet.solver.modal.added_mass_blocks``), or None."""
+    ends sideways only, or (E, 2): sideways and along the edge (ca_n and ca_t's)
+    (``catenet.solver.modal.added_mass_blocks``), or None."""
     begin = time.perf_counter()
     system = workspace.system
     net = system.net
@@ -204,18 +205,21 @@ def natural_modes(
 
 
 def _added_blocks(net: Net, x: np.ndarray, added: ArrayLike) -> np.ndarray:
-    """The (N, 3, 3) added-mass blocks of the edges' added masses ``added`` (E,) [kg]
-    (``catenet.solver.modal.added_mass_blocks``); ConfigError where they are not E finite
-    masses >= 0."""
+    """The (N, 3, 3) added-mass blocks of the edges' added masses ``added`` (E,) or
+    (E, 2) [kg] (``catenet.solver.modal.added_mass_blocks``); ConfigError where they are
+    not finite masses >= 0, one (sideways) or two (sideways, along) per edge."""
     from catenet.solver.modal import added_mass_blocks
 
     line = np.asarray(added, dtype=np.float64)
-    if line.shape != (net.n_edges,) or not np.all(np.isfinite(line) & (line >= 0)):
+    shaped = line.shape in ((net.n_edges,), (net.n_edges, 2))
+    if not shaped or not np.all(np.isfinite(line) & (line >= 0)):
         raise ConfigError(
             f"modes: added mass of shape {line.shape}: must be {net.n_edges} finite "
-            "masses >= 0 [kg], one per edge"
+            "masses >= 0 [kg], one per edge (or two: sideways and along it)"
         )
-    return added_mass_blocks(net, x, line)
+    if line.ndim == 1:
+        return added_mass_blocks(net, x, line)
+    return added_mass_blocks(net, x, line[:, 0], line[:, 1])
 
 
 def _solve(

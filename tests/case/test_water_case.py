@@ -1,4 +1,4 @@
-"""Cases in water (docs/howto/moorings-in-water.md): a taut line in a current deflects as
+"""Cases in water (docs/howto/mooring-dynamics.md): a taut line in a current deflects as
 the string under the drag's line load, a sine support motion exact and ramped, a
 dynamic run from its own static equilibrium, the mooring chain of configs/water whose
 peak fairlead tension converges with the time step, the Airy and JONSWAP kinematics, and
@@ -258,12 +258,14 @@ def test_bad_water_input_exits_2(tmp_path, parts, message):
 
 def test_modes_in_water_take_the_materials_added_mass():
     """catenet modes of a case with [water]: each edge's added mass is rho_w ca_n A l0
-    (the materials'), normal to it."""
+    normal to it and rho_w ca_t A l0 along it (the materials')."""
     from catenet.run.modes import added_line
 
-    case = line_case(material={"area": 1e-3, "density": 7850.0, "ca_n": 0.8})
+    case = line_case(material={"area": 1e-3, "density": 7850.0, "ca_n": 0.8, "ca_t": 0.3})
     c = parse_case(case)
     scene = build(c)
     line = added_line(c, scene)
-    assert line is not None
-    assert np.allclose(line, 1025.0 * 0.8 * 1e-3 * scene.net.rest_length, rtol=1e-14)
+    assert line is not None and line.shape == (scene.net.n_edges, 2)
+    water = 1025.0 * 1e-3 * scene.net.rest_length
+    assert np.allclose(line[:, 0], 0.8 * water, rtol=1e-14)
+    assert np.allclose(line[:, 1], 0.3 * water, rtol=1e-14)

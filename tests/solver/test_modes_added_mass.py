@@ -82,3 +82,30 @@ def test_an_axial_mode_is_unchanged():
         return modes.omega2[k]
 
     assert first_axial(wet) == pytest.approx(first_axial(dry), rel=1e-10)
+
+
+def test_tangential_added_mass_scales_the_axial_modes():
+    """``added`` (E, 2): ca_n sideways and ca_t along each edge: the axial modes' omega^2
+    scale by m / (m + ca_t rho_w A), the lateral ones by m / (m + ca_n rho_w A), each
+    exactly (the string is straight: the blocks split the two directions)."""
+    net = string(20, [0.0, 1.0, 1.0])
+    ws = workspace(Scene(net, Loads()), Settings())
+    water = RHO_W * AREA * net.rest_length
+    ca_n, ca_t = 1.0, 0.4
+    every = 3 * 19
+    dry = natural_modes(ws, net.nodes, every, method="dense")
+    wet = natural_modes(
+        ws, net.nodes, every, method="dense", added=np.column_stack([ca_n * water, ca_t * water])
+    )
+    t = np.array([0.0, 1.0, 1.0]) / math.sqrt(2)
+
+    def split(modes):
+        along = np.abs(np.einsum("knd,d->kn", modes.shape, t)).sum(axis=1)
+        axial = along > 0.5 * np.abs(modes.shape).sum(axis=(1, 2))
+        return modes.omega2[axial], modes.omega2[~axial]
+
+    (ax_dry, lat_dry), (ax_wet, lat_wet) = split(dry), split(wet)
+    assert ax_dry.size >= 3 and ax_wet.size == ax_dry.size
+    assert np.allclose(ax_wet, ax_dry * RHO / (RHO + ca_t * RHO_W), rtol=1e-9)
+    n = min(lat_dry.size, lat_wet.size)
+    assert np.allclose(lat_wet[:n], lat_dry[:n] * RHO / (RHO + ca_n * RHO_W), rtol=1e-9)
