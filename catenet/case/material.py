@@ -120,6 +120,15 @@ class MaterialConfig(Declared):
         shown="the cross-section's diameter",
         doc="[water]: the diameter drag acts on (a studless chain: 1.8 x its nominal one)",
     )
+    contact_radius: float | None = real(
+        None,
+        ge=0,
+        write="given",
+        unit="m",
+        shown="radius (0 without one)",
+        doc="solver.edge_contact: every edge is a capsule of this radius where it meets "
+        "obstacles, balls and free bodies (the [material] table's, for every cable)",
+    )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
     law: str = choice(
         "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"

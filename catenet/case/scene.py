@@ -87,6 +87,7 @@ def _build(case: Case) -> Scene:
         probe_auto=case.output.probe is None and case.geometry.kind == "graph",
         case=case,
         shown=show,
+        edge_radius=_edge_radius(case),
     )
     for k, obs in enumerate(case.obstacles):  # the contact policy, as for a Python scene
         if not (obs.moves or obs.free):
@@ -107,6 +108,15 @@ def _build(case: Case) -> Scene:
 
         scene = scene.with_terms(*water_terms(case, scene))
     return scene
+
+
+def _edge_radius(case: Case) -> float | None:
+    """The edges' contact radius where ``solver.edge_contact`` is on (None: off):
+    ``material.contact_radius``, else the cable's radius, else 0."""
+    if not case.solver.edge_contact:
+        return None
+    m = case.material
+    return m.contact_radius if m.contact_radius is not None else (m.radius or 0.0)
 
 
 #: The default activation distance of self-contact, per shortest edge.

@@ -427,6 +427,12 @@ class SolverConfig(Declared):
         doc="self_contact: the barrier's activation distance: strands touching rest closer "
         "than this, and no farther pair feels the other",
     )
+    edge_contact: bool = boolean(
+        False,
+        write="changed",
+        doc="obstacles, balls and free bodies meet the whole of every edge, a capsule of "
+        "material.contact_radius, not only the nodes (docs/guide/edge-contact.md)",
+    )
     linear: str = choice(
         Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
     )
