@@ -51,6 +51,13 @@ def _check_bending(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return ck.real(v, path, ge=0, need='>= 0 [N m^2], or "section"')
 
 
+#: solver.edge_contact's doc (the key is the solver's, its radius the material's).
+EDGE_CONTACT = (
+    "obstacles, balls and free bodies meet the whole of every edge, a capsule of "
+    "material.contact_radius, not only the nodes (docs/guide/edge-contact.md)"
+)
+
+
 @dataclass(frozen=True)
 class MaterialConfig(Declared):
     """Either E with radius or area, or EA directly; density needs radius or area."""

@@ -35,7 +35,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.strands import CCD_ITERATIONS, CCD_SHARE, EPS_PARALLEL, _phi, edge_energy, sqdist
+from catenet.kernels.strands import (
+    CCD_ITERATIONS,
+    CCD_SHARE,
+    EPS_PARALLEL,
+    _phi,
+    edge_energy,
+    sqdist,
+)
 
 POINT = 3  # the strands' distance kind of point b0 against edge a
 

@@ -81,8 +81,9 @@ def add_free_bodies(
 ) -> tuple[Net, Loads, np.ndarray | None, tuple[FreeBody, ...], list[Term]]:
     """(net, loads, velocity, bodies, terms) with the free bodies appended (four nodes
     each); ``radius``: the edges' contact radius where they meet every edge as a capsule
-    (None: the nodes only). Raises ConfigError for a body that starts overlapping the net or a plane, that
-    shares the scene with an obstacle on a prescribed motion, or has a bad inertia."""
+    (None: the nodes only). Raises ConfigError for a body that starts overlapping the
+    net or a plane, that shares the scene with an obstacle on a prescribed motion, or has
+    a bad inertia."""
     from catenet.scene.movers import pad_loads
 
     if not free:
@@ -200,7 +201,13 @@ def _terms(
 
 
 def _edges(
-    body: Mover, frame: BodyFrame, net: Net, r: float, kappa: float, dhat: float, label: str,
+    body: Mover,
+    frame: BodyFrame,
+    net: Net,
+    r: float,
+    kappa: float,
+    dhat: float,
+    label: str,
     shown: Shown,
 ) -> Term:
     """The barrier of the net's edges, capsules of radius r, and the body's outline,

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError
 
@@ -30,7 +31,13 @@ def contact_edges(net: Net) -> np.ndarray:
 
 
 def edge_barrier(
-    shape: Shape, net: Net, r: float, kappa: float, dhat: float, weights=None, bnodes=None
+    shape: Shape,
+    net: Net,
+    r: float,
+    kappa: float,
+    dhat: float,
+    weights: ArrayLike | None = None,
+    bnodes: ArrayLike | None = None,
 ) -> EdgeContact | None:
     """The barrier of the net's capsules of radius r against ``shape``'s outline, its
     points riding on ``bnodes`` by ``weights`` (a ball's, a body's; None: fixed); None

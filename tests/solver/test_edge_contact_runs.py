@@ -6,9 +6,8 @@ the edges cut into both; off, the scene is the one without the key; bad input ex
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest

@@ -40,6 +40,7 @@ def _term(shape, x, **kw) -> EdgeContact:
 
 
 BOX = Box([0.0, 0.0, 0.0], [0.3, 0.2, 0.1])
+CAPSULE = Capsule([-0.3, 0, 0], [0.3, 0, 0], 0.1)
 CASES = {
     # box: across its top edge (both parameters free), past a corner (one clamped),
     # nearly parallel to its top edge (the mollifier), ends clamped against a corner
@@ -49,8 +50,8 @@ CASES = {
     "box end on a corner": (BOX, [[0.32, 0.22, 0.125], [0.6, 0.5, 0.4]]),
     "sphere, middle": (Sphere([0, 0, 0], 0.3), [[-0.2, 0.1, 0.305], [0.2, 0.05, 0.31]]),
     "sphere, end": (Sphere([0, 0, 0], 0.3), [[0.05, 0.0, 0.33], [0.4, 0.1, 0.5]]),
-    "capsule": (Capsule([-0.3, 0, 0], [0.3, 0, 0], 0.1), [[-0.1, -0.1, 0.115], [0.1, 0.12, 0.12]]),
-    "capsule parallel": (Capsule([-0.3, 0, 0], [0.3, 0, 0], 0.1), [[-0.1, 0, 0.13], [0.1, 0.0005, 0.131]]),
+    "capsule": (CAPSULE, [[-0.1, -0.1, 0.115], [0.1, 0.12, 0.12]]),
+    "capsule parallel": (CAPSULE, [[-0.1, 0, 0.13], [0.1, 0.0005, 0.131]]),
     "cylinder": (Cylinder([0, 0, -0.2], [0, 0, 0.2], 0.1), [[0.12, -0.1, 0.2], [0.1, 0.1, 0.25]]),
     "cube mesh": (Mesh(CUBE_V, CUBE_T, np.zeros(3)), [[-0.3, 0.3, 1.03], [0.3, 0.6, 1.035]]),
 }  # fmt: skip
