@@ -312,3 +312,25 @@ def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, r, t_max):
         _points(dx, edges, e, dY, F, lone, f, dP)
         t = min(t, _ccd(P, dP, min(t, t_max), r, kind))
     return t
+
+
+@njit(cache=True, error_model="numpy")
+def pair_forces(x, edges, rest, Y, F, flen, lone, pairs, r, dhat, kappa, force, share):
+    """Per pair (K,): the force of the solid on the net edge (force (K, 3): minus the
+    barrier's gradient on its two nodes) and the share of it on its second node
+    (share (K,): where along the edge the force acts, in [0, 1]; 0 out of reach)."""
+    g = np.empty(12)
+    H = np.empty((1, 1))
+    for k in range(pairs.shape[0]):
+        e, f = pairs[k, 0], pairs[k, 1]
+        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, False)
+        total = 0.0
+        for a in range(3):
+            force[k, a] = -(g[a] + g[3 + a]) if np.isfinite(energy) else 0.0
+            total += force[k, a] * force[k, a]
+        share[k] = 0.0
+        if total > 0.0:
+            on_j = 0.0
+            for a in range(3):
+                on_j -= g[3 + a] * force[k, a]
+            share[k] = min(max(on_j / total, 0.0), 1.0)

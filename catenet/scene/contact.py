@@ -213,6 +213,7 @@ def obstacle_terms(
         term.stages = ()
     check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
+    edge = None
     if radius is not None:
         from catenet.scene.segments import check_edges_clear, edge_barrier
 
@@ -231,6 +232,10 @@ def obstacle_terms(
                 f"times the barrier's activation distance ({dhat:.3g})"
             )
         out.append(Friction(term, mu=contact.friction, slip=slip))
+        if radius is not None and edge is not None:  # and where the edges touch
+            from catenet.terms.segments import EdgeFriction
+
+            out.append(EdgeFriction(edge, mu=contact.friction, slip=slip))
     return out
 
 

@@ -33,7 +33,13 @@ needed). The barriers sum: an edge that rests across a box's edge near a node fe
 both the node's and the edge's barrier (as in incremental potential contact), so it
 rests a little farther out than one barrier alone would hold it, still within dhat.
 
-Frictionless: the friction of an obstacle (``friction``) acts at the nodes only.
+Friction (``EdgeFriction``, a fixed obstacle's ``friction``): the nodes' lagged Coulomb
+friction (``catenet.terms.friction``) at the point of the edge where each outline
+feature pushes it, that material point y = (1 - s) x_i + s x_j held with s, the normal
+force and the normal lagged from the step's start: convex within the step, its force
+never above mu times the edge's normal force, opposing the slip of the edge's material
+over the solid (a rope sliding lengthwise over a box's edge, or sideways). A free body's
+and a ball's edge contact is frictionless (their nodes' friction stays).
 """
 
 from __future__ import annotations
@@ -43,8 +49,10 @@ import math
 
 import numpy as np
 
+from catenet.kernels.friction import friction_gradient, friction_hessian
 from catenet.kernels.segments import (
     near_pairs,
+    pair_forces,
     segment_ccd,
     segment_gaps,
     segment_gradient,
@@ -171,3 +179,143 @@ class EdgeContact(Term):
         if not len(pairs):
             return math.inf
         return segment_ccd(x, dx, self.edges, Y, dY, self.lines, self.lone, pairs, self.r, upto)
+
+
+@register("edge_friction")
+class EdgeFriction(Term):
+    """Coulomb friction ``mu`` with slip distance ``slip`` [m] where the outline of
+    ``contact`` (a fixed obstacle's ``EdgeContact``) pushes the net's edges (module
+    docstring): per pushing pair, lagged at the step's start, its normal force, normal
+    and the edge's material point s; anchors kept per pair from step to step (a pair
+    that sticks stays within ``slip`` of where it stuck)."""
+
+    lagged = True
+    role = "internal"
+    convex = True
+
+    def __init__(self, contact: EdgeContact, *, mu: float, slip: float):
+        if not (math.isfinite(mu) and mu >= 0 and math.isfinite(slip) and slip > 0):
+            raise ValueError(f"edge_friction: mu = {mu!r}, slip = {slip!r}: must be >= 0, > 0")
+        if len(contact.bnodes):
+            raise ValueError("edge_friction: on a fixed obstacle only")
+        self.contact = self.rides_on = contact
+        self.mu, self.slip = float(mu), float(slip)
+        self.pairs = np.zeros((0, 2), dtype=np.int64)
+        self.share = np.zeros(0)
+        self.normal = np.zeros((0, 3))
+        self.weight = np.zeros(0)
+        self.anchor = np.zeros((0, 3))
+        self._anchors: dict[tuple[int, int], np.ndarray] = {}
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        de = (3 * self.contact.edges[:, :, None] + np.arange(3)).reshape(-1, 6)
+        return np.repeat(de, 6, axis=1).ravel(), np.tile(de, (1, 6)).ravel()
+
+    def _pushes(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(pairs, normal forces, unit normals, shares) of the pairs that push at x."""
+        c = self.contact
+        Y = c.place(x)
+        pairs = c._pairs(x, Y)
+        force = np.zeros((len(pairs), 3))
+        share = np.zeros(len(pairs))
+        args = (c.lines, c.flen, c.lone, pairs, c.r, c.dhat, c.kappa, force, share)
+        pair_forces(x, c.edges, c.rest, Y, *args)
+        size = np.linalg.norm(force, axis=1)
+        on = size > 0.0
+        return pairs[on], size[on], force[on] / size[on, None], share[on]
+
+    def _points(self, x) -> np.ndarray:
+        e = self.contact.edges[self.pairs[:, 0]]
+        s = self.share[:, None]
+        return np.ascontiguousarray((1.0 - s) * x[e[:, 0]] + s * x[e[:, 1]])
+
+    def begin_step(self, x, time, start=None) -> None:
+        """The pushing pairs, their lagged normal forces and normals at the accepted
+        state x, and where each holds the edge: a pair that sticks keeps its material
+        point s and anchor (a rope sliding lengthwise moves its material over the
+        contact, which stays where it is in space); one whose material point slid
+        farther than ``slip`` takes the contact's point now and drags its anchor to
+        ``slip`` behind it; a new pair anchors where it touches."""
+        pairs, lam, normal, share = self._pushes(x)
+        keys = [(int(e), int(f)) for e, f in pairs.tolist()]
+        held = [self._anchors.get(k) for k in keys]
+        was = np.array([h is not None for h in held], dtype=bool)
+        s = share.copy()
+        anchor = np.zeros((len(keys), 3))
+        for i, h in enumerate(held):
+            if h is not None:
+                anchor[i], s[i] = h[:3], h[3]
+        self.pairs, self.normal = pairs, np.ascontiguousarray(normal)
+        self.weight = self.mu * lam
+        self.share = s
+        u = self._points(x) - anchor
+        u -= np.sum(u * normal, axis=1)[:, None] * normal
+        slid = np.linalg.norm(u, axis=1)
+        moved = was & (slid > self.slip)
+        self.share = np.where(moved | ~was, share, s)
+        y = self._points(x)
+        anchor[~was] = y[~was]
+        behind = self.slip / np.where(moved, slid, 1.0)
+        anchor[moved] = y[moved] - behind[moved, None] * u[moved]
+        self.anchor = np.ascontiguousarray(anchor)
+        self._remember(keys)
+
+    def _remember(self, keys: list) -> None:
+        rows = np.concatenate([self.anchor, self.share[:, None]], axis=1)
+        self._anchors = dict(zip(keys, rows, strict=True))
+
+    def relag(self, x) -> float:
+        """Normal forces and normals taken at x (the pairs that push there; the anchors
+        and material points of the known pairs kept, a new pair's where it is): the
+        largest change of a pair's normal force, relative to the largest one."""
+        before = dict(zip(map(tuple, self.pairs.tolist()), self.weight, strict=True))
+        top = float(self.weight.max(initial=0.0))
+        pairs, lam, normal, share = self._pushes(x)
+        keys = [(int(e), int(f)) for e, f in pairs.tolist()]
+        self.pairs, self.normal = pairs, np.ascontiguousarray(normal)
+        self.weight = self.mu * lam
+        self.share = share.copy()
+        y = self._points(x)
+        anchor = y.copy()
+        for i, k in enumerate(keys):
+            h = self._anchors.get(k)
+            if h is not None:
+                anchor[i], self.share[i] = h[:3], h[3]
+        self.anchor = np.ascontiguousarray(anchor)
+        self._remember(keys)
+        now = dict(zip(keys, self.weight, strict=True))
+        change = max(
+            (abs(now.get(k, 0.0) - before.get(k, 0.0)) for k in {*now, *before}), default=0.0
+        )
+        top = max(top, float(self.weight.max(initial=0.0)))
+        return change / top if top > 0.0 else 0.0
+
+    def gradient(self, x, grad) -> float:
+        if not len(self.pairs):
+            return 0.0
+        y = self._points(x)
+        g = np.zeros_like(y)
+        idx = np.arange(len(y), dtype=np.int64)
+        energy = friction_gradient(y, idx, self.anchor, self.normal, self.weight, self.slip, g)
+        e = self.contact.edges[self.pairs[:, 0]]
+        s = self.share[:, None]
+        np.add.at(grad, e[:, 0], (1.0 - s) * g)
+        np.add.at(grad, e[:, 1], s * g)
+        return float(energy)
+
+    def hessian(self, x, values) -> bool:
+        values[:] = 0.0
+        if not len(self.pairs):
+            return False
+        y = self._points(x)
+        blocks = np.zeros(9 * len(y))
+        idx = np.arange(len(y), dtype=np.int64)
+        args = (self.anchor, self.normal, self.weight, self.slip, blocks)
+        if friction_hessian(y, idx, *args) == 0:
+            return False
+        s = self.share
+        w = np.stack([1.0 - s, s], axis=1)  # (K, 2): the two nodes' weights
+        H = blocks.reshape(-1, 3, 3)
+        per = np.einsum("ka,kb,kij->kaibj", w, w, H).reshape(-1, 36)
+        np.add.at(values.reshape(-1, 36), self.pairs[:, 0], per)
+        return True

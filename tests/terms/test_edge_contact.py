@@ -5,7 +5,9 @@ capsule's axis, a cylinder's prisms, a mesh's edges; riding on a ball's node and
 free body's four nodes), the step cap across a box's edge and a thin plate, and the
 closed form of a taut two-edge cable drawn over a box's edge: the first edge rests on
 the edge in its middle, straight and tangent to the capsule of the contact radius
-about the box's edge, its node where the tensions balance by hand."""
+about the box's edge, its node where the tensions balance by hand; friction along the
+edge (finite differences; a rope piece across two rods sticks below mu times its weight
+and slides at (pull - mu W) / m above)."""
 
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ from scipy.optimize import brentq
 
 import catenet
 from catenet.model.measures import tension
-from catenet.model.net import Net
+from catenet.model.net import Loads, Net
 from catenet.scene.shapes.box import Box
 from catenet.scene.shapes.capsule import Capsule
 from catenet.scene.shapes.cylinder import Cylinder
@@ -26,7 +28,7 @@ from catenet.scene.shapes.mesh import Mesh
 from catenet.scene.shapes.sphere import Sphere
 from catenet.terms import check_derivatives
 from catenet.terms.rigid import BodyFrame
-from catenet.terms.segments import EdgeContact
+from catenet.terms.segments import EdgeContact, EdgeFriction
 
 R = 0.01  # the edges' contact radius
 DHAT = 0.05
@@ -179,3 +181,57 @@ def test_a_cable_drawn_over_a_box_edge_wraps_it_as_the_closed_form_says():
     u0 = (m1 - A0) / np.linalg.norm(m1 - A0)
     foot0 = A0 - (A0 @ u0) * u0
     assert foot0[2] < -0.05  # below the ridge, inside the box
+
+
+def test_edge_friction_passes_finite_differences():
+    x = np.array([*CASES["box across an edge"][1], [5.0, 5.0, 5.0]])
+    contact = _term(BOX, x)
+    friction = EdgeFriction(contact, mu=0.5, slip=1e-3)
+    friction.begin_step(x, 0.1, 0.0)
+    assert len(friction.pairs) == 1 and 0.0 < friction.share[0] < 1.0  # across the edge
+    for move in (2e-4, 5e-3):  # sticking (within slip) and sliding
+        y = x + move * np.array([[1.0, 0.3, 0.0], [0.5, -0.2, 0.1], [0.0, 0.0, 0.0]])
+        assert friction.energy(y) > 0.0
+        assert max(check_derivatives(friction, y, step=1e-8)) < 1e-6
+
+
+def _rope_on_two_rods(pull: float, mu: float):
+    """A 1 m rope piece (two 0.5 kg end masses) lying across two rods (capsules of
+    radius 0.05 m along y at x = -0.3 and 0.3) under gravity, its ends beyond them (only
+    the edge touches), pulled along its length by ``pull`` [N] at one end: (times,
+    positions, velocities) of every step."""
+    z = 0.05 + R + 2e-4
+    nodes = np.array([[-0.5, 0.0, z], [0.5, 0.0, z]])
+    net = Net.from_arrays(nodes, [[0, 1]], EA=1e5, fixed=[], point_mass=[0.5, 0.5],
+                          flies=True, tension_only=False)  # fmt: skip
+    force = np.zeros((2, 3))
+    force[1, 0] = pull
+    loads = Loads(force=force, gravity=np.array([0.0, 0.0, -9.81]))
+    scene = catenet.Scene.of(net, loads, edge_radius=R)
+    for x0 in (-0.3, 0.3):
+        rod = Capsule([x0, -0.5, 0.0], [x0, 0.5, 0.0], 0.05)
+        scene = scene.with_obstacle(rod, friction=mu, distance=1e-3)
+    assert any(isinstance(t, EdgeFriction) for t in scene.terms) == (mu > 0)
+    times, xs, vs = [0.0], [nodes], [np.zeros_like(nodes)]
+
+    def keep(step):
+        times.append(step.time)
+        xs.append(step.x.copy())
+        vs.append(step.v.copy())
+
+    catenet.solve(scene, method="dynamic", dt=0.005, t_end=0.5, damping=0.0, on_step=keep)
+    return np.array(times), np.array(xs), np.array(vs)
+
+
+@pytest.mark.parametrize("pull, mu", [(3.0, 0.5), (8.0, 0.5), (3.0, 0.0)])
+def test_a_rope_on_two_rods_sticks_below_mu_times_its_weight_and_slides_above(pull, mu):
+    """Coulomb: the rods' friction on the edge holds at most mu W = 4.905 N (W its
+    weight, 9.81 N, the rods' normal forces); below it the rope moves less than the
+    slip distance (frictionless: 0.38 m), above it slides at (pull - mu W) / m."""
+    t, x, v = _rope_on_two_rods(pull, mu)
+    later = t >= 0.2
+    accel = (v[-1, :, 0].mean() - v[later][0, :, 0].mean()) / (t[-1] - t[later][0])
+    if pull < mu * 9.81:
+        assert np.abs(x[-1, :, 0] - x[0, :, 0]).max() < 1e-3  # within the slip distance
+    else:
+        assert accel == pytest.approx(pull - mu * 9.81, rel=0.05)
