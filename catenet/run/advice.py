@@ -484,9 +484,9 @@ def between_nodes(scene: Scene) -> list[str]:
     """Warnings for each obstacle, ball or free body (not a plane) narrower than the
     net's median edge: the net touches solids at its nodes only (the barriers act on
     nodes), so such a solid can pass between them, or sit across a strand, and no check
-    sees it."""
+    sees it. None where every edge meets them (``solver.edge_contact``)."""
     net = scene.net
-    if not net.n_edges:
+    if not net.n_edges or scene.edge_radius is not None:
         return []
     ends = net.nodes[net.edges]
     edge = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
@@ -502,8 +502,8 @@ def between_nodes(scene: Scene) -> list[str]:
                 f"obstacle[{k}] ({what}{shape.kind}, {width:.3g} m across) is narrower than "
                 f"the net's edges ({edge:.3g} m, the median): the net touches solids at its "
                 "nodes only, so it may pass between them or lie across a strand unseen; "
-                "refine the net (edges well below the solid's width) "
-                "(docs/guide/bodies.md#how-it-works-and-its-limits)"
+                "refine the net (edges well below the solid's width) or set "
+                "solver.edge_contact = true (docs/guide/edge-contact.md)"
             )
     return out
 
