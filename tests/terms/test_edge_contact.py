@@ -27,8 +27,10 @@ from catenet.scene.shapes.cylinder import Cylinder
 from catenet.scene.shapes.mesh import Mesh
 from catenet.scene.shapes.sphere import Sphere
 from catenet.terms import check_derivatives
+from catenet.terms.contact import default_stiffness
 from catenet.terms.rigid import BodyFrame
 from catenet.terms.segments import EdgeContact, EdgeFriction
+from catenet.terms.strands import SelfContact
 
 R = 0.01  # the edges' contact radius
 DHAT = 0.05
@@ -235,3 +237,45 @@ def test_a_rope_on_two_rods_sticks_below_mu_times_its_weight_and_slides_above(pu
         assert np.abs(x[-1, :, 0] - x[0, :, 0]).max() < 1e-3  # within the slip distance
     else:
         assert accel == pytest.approx(pull - mu * 9.81, rel=0.05)
+
+
+def _crossing(gap: float, radius: float):
+    """Two straight cords of 4 edges crossing at right angles, ``gap`` apart (centre
+    lines), the upper thrown down at 2 m/s: the net and its strands' barrier, capsules
+    of ``radius``."""
+    s = np.linspace(-0.2, 0.2, 5)
+    lower = np.column_stack([s, np.zeros(5), np.zeros(5)])
+    upper = np.column_stack([np.zeros(5) + 0.013, s + 0.031, np.full(5, gap)])  # no node on a node
+    edges = [[k, k + 1] for k in range(4)] + [[5 + k, 6 + k] for k in range(4)]
+    net = Net.from_arrays(np.vstack([lower, upper]), edges, EA=1e3, fixed=[0, 4],
+                          line_density=0.01, flies=True, tension_only=False)  # fmt: skip
+    term = SelfContact(net, kappa=default_stiffness(1.0, 1e-3), dhat=1e-3, radius=radius)
+    return net, term
+
+
+def test_the_strands_barrier_with_a_contact_radius_passes_finite_differences():
+    net, term = _crossing(2 * R + 5e-4, R)
+    x = net.nodes.copy()
+    assert 0.0 < term.energy(x) < math.inf  # within reach of the capsules' gap
+    assert max(check_derivatives(term, x, step=1e-8)) < 1e-5
+
+
+def test_strands_with_a_contact_radius_stay_twice_it_apart():
+    """The upper cord, thrown at the lower one, bounces off at a distance of the two
+    radii (centre lines), never nearer, at every step."""
+    from catenet.model.net import Loads
+    from catenet.solver.dynamic import solve_dynamic
+    from catenet.solver.workspace import Workspace
+
+    net, term = _crossing(0.05, R)
+    v0 = np.zeros_like(net.nodes)
+    v0[5:, 2] = -2.0
+    closest = []
+
+    def keep(k, t, x, v):
+        closest.append(term.distances(x, 0.05)[:1].min(initial=np.inf))
+
+    ws = Workspace(net, terms=[term])
+    solve_dynamic(net, Loads(), dt=0.005, damping=0.0, t_end=0.06, workspace=ws, v0=v0,
+                  stop_at_equilibrium=False, on_step=keep)  # fmt: skip
+    assert 2 * R < min(closest) < 2 * R + term.dhat  # met, never nearer than the radii
