@@ -26,6 +26,10 @@ the (i j, i j) block (36), the (i j, b) block (18 nb) and the (b, i j) block (18
 row-major, at S k with S = 36 + 36 nb; after them the (b, b) block (9 nb^2) summed
 over the edges.
 
+Candidates (``near_pairs``, every evaluation): the pairs whose bounding boxes, grown by
+the reach, overlap, the features binned in a uniform grid (a mesh of thousands of edges
+costs its cells, not its edges, per net edge).
+
 ``segment_ccd`` caps a step by the strands' additive CCD of every pair within reach of
 the step's motion (points of a body move linearly with its nodes: W is constant).
 """
@@ -45,6 +49,7 @@ from catenet.kernels.strands import (
 )
 
 POINT = 3  # the strands' distance kind of point b0 against edge a
+GRID_CELLS = 1 << 18  # the features' grid never has more cells
 
 
 @njit(cache=True, error_model="numpy")
@@ -114,16 +119,12 @@ def _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, want):
 
 
 @njit(cache=True, error_model="numpy")
-def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
-    """The pairs (net edge, feature) (K, 2) whose boxes, swept along x + t dx and
-    Y + t dY for t in [0, upto] and grown by ``reach``, overlap: every pair that can come
-    within reach in that motion (features: the outline edges, then the lone points)."""
-    nf = F.shape[0]
-    total = nf + lone.shape[0]
+def _feature_boxes(Y, dY, F, lone, reach, upto):
+    """Each feature's box (lo, hi) (T, 3), swept along Y + t dY for t in [0, upto] and
+    grown by ``reach``."""
+    total = F.shape[0] + lone.shape[0]
     lo = np.empty((total, 3))
     hi = np.empty((total, 3))
-    glo = np.full(3, np.inf)
-    ghi = np.full(3, -np.inf)
     for f in range(total):
         p, q = _ends(F, lone, f)
         if q < 0:
@@ -132,12 +133,74 @@ def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
             v = (Y[p, a], Y[q, a], Y[p, a] + upto * dY[p, a], Y[q, a] + upto * dY[q, a])
             lo[f, a] = min(min(v[0], v[1]), min(v[2], v[3])) - reach
             hi[f, a] = max(max(v[0], v[1]), max(v[2], v[3])) + reach
-            glo[a] = min(glo[a], lo[f, a])
-            ghi[a] = max(ghi[a], hi[f, a])
+    return lo, hi
+
+
+@njit(cache=True, error_model="numpy")
+def _grid(lo, hi):
+    """A uniform grid of the feature boxes: (origin, cell, dims, start, items), each
+    cell listing the boxes that overlap it (cells about the median box's size, at most
+    GRID_CELLS of them)."""
+    total = lo.shape[0]
+    origin = np.empty(3)
+    top = np.empty(3)
+    sizes = np.empty(total)
+    for a in range(3):
+        origin[a] = lo[:, a].min()
+        top[a] = hi[:, a].max()
+    for f in range(total):
+        sizes[f] = max(hi[f, 0] - lo[f, 0], max(hi[f, 1] - lo[f, 1], hi[f, 2] - lo[f, 2]))
+    cell = max(np.median(sizes), 1e-300)
+    dims = np.empty(3, dtype=np.int64)
+    while True:
+        for a in range(3):
+            dims[a] = int((top[a] - origin[a]) / cell) + 1
+        if dims[0] * dims[1] * dims[2] <= GRID_CELLS:
+            break
+        cell *= 1.5
+    count = np.zeros(dims[0] * dims[1] * dims[2] + 1, dtype=np.int64)
+    span = np.empty((total, 6), dtype=np.int64)
+    for f in range(total):
+        for a in range(3):
+            span[f, a] = min(int((lo[f, a] - origin[a]) / cell), dims[a] - 1)
+            span[f, 3 + a] = min(int((hi[f, a] - origin[a]) / cell), dims[a] - 1)
+        for cx in range(span[f, 0], span[f, 3] + 1):
+            for cy in range(span[f, 1], span[f, 4] + 1):
+                for cz in range(span[f, 2], span[f, 5] + 1):
+                    count[(cx * dims[1] + cy) * dims[2] + cz + 1] += 1
+    for c in range(count.shape[0] - 1):
+        count[c + 1] += count[c]
+    items = np.empty(count[-1], dtype=np.int64)
+    fill = count[:-1].copy()
+    for f in range(total):
+        for cx in range(span[f, 0], span[f, 3] + 1):
+            for cy in range(span[f, 1], span[f, 4] + 1):
+                for cz in range(span[f, 2], span[f, 5] + 1):
+                    c = (cx * dims[1] + cy) * dims[2] + cz
+                    items[fill[c]] = f
+                    fill[c] += 1
+    return origin, cell, dims, count, items
+
+
+@njit(cache=True, error_model="numpy")
+def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
+    """The pairs (net edge, feature) (K, 2) whose boxes, swept along x + t dx and
+    Y + t dY for t in [0, upto] and grown by ``reach``, overlap: every pair that can come
+    within reach in that motion (features: the outline edges, then the lone points).
+    The features' boxes are binned in a uniform grid, so each net edge tests only the
+    features of the cells its box covers."""
+    lo, hi = _feature_boxes(Y, dY, F, lone, reach, upto)
+    total = lo.shape[0]
     out = np.empty((16, 2), dtype=np.int64)
+    if total == 0:
+        return out[:0]
+    origin, cell, dims, start, items = _grid(lo, hi)
+    seen = np.full(total, -1, dtype=np.int64)
     count = 0
     elo = np.empty(3)
     ehi = np.empty(3)
+    c0 = np.empty(3, dtype=np.int64)
+    c1 = np.empty(3, dtype=np.int64)
     for e in range(edges.shape[0]):
         i, j = edges[e, 0], edges[e, 1]
         clear = False
@@ -145,24 +208,35 @@ def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
             v = (x[i, a], x[j, a], x[i, a] + upto * dx[i, a], x[j, a] + upto * dx[j, a])
             elo[a] = min(min(v[0], v[1]), min(v[2], v[3]))
             ehi[a] = max(max(v[0], v[1]), max(v[2], v[3]))
-            clear = clear or elo[a] > ghi[a] or ehi[a] < glo[a]
+            top = origin[a] + dims[a] * cell
+            clear = clear or elo[a] > top or ehi[a] < origin[a] or not ehi[a] >= elo[a]
+            c0[a] = max(int((elo[a] - origin[a]) / cell), 0) if not clear else 0
+            c1[a] = min(int((ehi[a] - origin[a]) / cell), dims[a] - 1) if not clear else -1
         if clear:
             continue
-        for f in range(total):
-            hit = True
-            for a in range(3):
-                if elo[a] > hi[f, a] or ehi[a] < lo[f, a]:
-                    hit = False
-                    break
-            if not hit:
-                continue
-            if count == out.shape[0]:
-                more = np.empty((2 * count, 2), dtype=np.int64)
-                more[:count] = out
-                out = more
-            out[count, 0] = e
-            out[count, 1] = f
-            count += 1
+        for cx in range(c0[0], c1[0] + 1):
+            for cy in range(c0[1], c1[1] + 1):
+                for cz in range(c0[2], c1[2] + 1):
+                    c = (cx * dims[1] + cy) * dims[2] + cz
+                    for k in range(start[c], start[c + 1]):
+                        f = items[k]
+                        if seen[f] == e:
+                            continue
+                        seen[f] = e
+                        hit = True
+                        for a in range(3):
+                            if elo[a] > hi[f, a] or ehi[a] < lo[f, a]:
+                                hit = False
+                                break
+                        if not hit:
+                            continue
+                        if count == out.shape[0]:
+                            more = np.empty((2 * count, 2), dtype=np.int64)
+                            more[:count] = out
+                            out = more
+                        out[count, 0] = e
+                        out[count, 1] = f
+                        count += 1
     return out[:count]
 
 
