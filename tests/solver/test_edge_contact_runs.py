@@ -1,8 +1,9 @@
-"""Dynamic runs with solver.edge_contact: a 0.25 m ball dropped on a net of 0.1 m edges
-and the capture scene of configs/contact/ (its box moved under the net: the contact
-phase), every step checked at 41 points along every edge: no point of an edge is ever
-inside the ball or the box (it stays the contact radius off), where with the nodes alone
-the edges cut into both; off, the scene is the one without the key; bad input exits 2."""
+"""Dynamic runs with solver.edge_contact: a 0.25 m ball dropped on a net of 0.1 m edges,
+the capture scene of configs/contact/ (its box moved under the net: the contact phase)
+and a strand sagging onto a box's corner between its nodes, every step checked at 41
+points along every edge: no point of an edge is ever inside the ball or the box (it
+stays the contact radius off), where with the nodes alone the edges cut into all three;
+off, the scene is the one without the key; bad input exits 2."""
 
 from __future__ import annotations
 
@@ -157,3 +158,63 @@ def test_an_edge_through_a_ball_at_the_start_is_refused(write_case, tmp_path):
     res = CliRunner().invoke(main, ["run", str(write_case(text)), "-o", str(tmp_path / "o.h5")])
     assert res.exit_code == 2, res.output
     assert "passes through it or within the contact radius" in res.output
+
+
+CORNER = """
+[geometry]
+kind = "square_net"
+n = 6
+alpha = 0.0
+size = 1.0
+edge_length = 0.25
+
+[material]
+E = 1e8
+radius = 0.004
+density = 1000.0
+
+[load]
+gravity = [0.0, 0.0, -9.81]
+
+[[obstacle]]
+kind = "box"
+center = CENTER
+half_size = [0.04, 0.04, 0.04]
+axis = [1.0, 1.0, 0.0]
+angle = 0.9553166181245093  # a corner up
+
+[solver]
+method = "dynamic"
+dt = 0.01
+t_end = 0.6
+damping = 2.0
+edge_contact = EDGES
+"""
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_a_strand_sagging_onto_a_box_corner_between_its_nodes_wraps_it(on):
+    """A net of 0.25 m cells sags under its weight onto a small box whose top corner is
+    5 mm below the middle of a strand (0.125 m from the nodes): with the nodes alone the
+    strand cuts into the corner; as capsules it rests on it, the cord's radius off, at
+    every step."""
+    from catenet.terms.shapes import rotation
+
+    turn = rotation([1.0, 1.0, 0.0], 0.9553166181245093)
+    corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * 0.04
+    top = (corners @ turn.T)[np.argmax((corners @ turn.T)[:, 2])]
+    centre = [float(0.125 - top[0]), float(-top[1]), float(-0.005 - top[2])]
+    text = CORNER.replace("CENTER", str(centre)).replace("EDGES", str(on).lower())
+    scene = build(_case(text))
+    frames = _steps(scene)
+    ((_, shape, _),) = scene.obstacles
+    gaps = []
+    for x in frames:
+        X = (_points(scene, x) - shape.center) @ shape.axes
+        e = np.abs(X) - shape.half_size
+        outside = np.linalg.norm(np.maximum(e, 0.0), axis=-1)
+        gaps.append(np.where(outside > 0.0, outside, e.max(axis=-1)).min())
+    if on:
+        assert 0.004 < min(gaps) < 0.004 + scene.terms[0].dhat + 1e-3  # resting on it
+    else:
+        assert min(gaps) < -0.005  # cut through the corner
