@@ -98,6 +98,18 @@ def ignored_solver_keys(solver: SolverConfig) -> list[str]:
     return out
 
 
+def ignored_contact_radius(case: Case) -> list[str]:
+    """A message where ``material.contact_radius`` is given without
+    ``solver.edge_contact`` (the nodes alone meet the solids: it acts on nothing)."""
+    radius = case.material.contact_radius
+    if radius is None or case.solver.edge_contact:
+        return []
+    return [
+        f"material.contact_radius = {radius!r}: ignored without solver.edge_contact = true "
+        "(obstacles and bodies meet the nodes only; docs/guide/edge-contact.md)"
+    ]
+
+
 def ignored_histories(case: Case) -> list[str]:
     """Messages for what a static run ignores of a case's time dependence: every load's
     and support motion's ``history`` (a static run applies each load and displacement in

@@ -218,3 +218,10 @@ def test_a_strand_sagging_onto_a_box_corner_between_its_nodes_wraps_it(on):
         assert 0.004 < min(gaps) < 0.004 + scene.terms[0].dhat + 1e-3  # resting on it
     else:
         assert min(gaps) < -0.005  # cut through the corner
+
+
+def test_a_contact_radius_without_edge_contact_is_said_to_be_ignored(write_case, tmp_path):
+    text = small_net(t_end=0.02).replace("[material]\n", "[material]\ncontact_radius = 0.01\n")
+    res = CliRunner().invoke(main, ["run", str(write_case(text)), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 0, res.output
+    assert "material.contact_radius = 0.01: ignored without solver.edge_contact" in res.output
