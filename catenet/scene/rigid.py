@@ -188,8 +188,9 @@ def _terms(
     scale = max(ea * reach, record.mass * g * reach, spin * w0**2, record.mass * v0**2)
     _check_carried(body, RIGIDITY * scale, spin * w0**2, record.mass * v0**2, shown)
     terms: list[Term] = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), touch]
-    if radius is not None:
-        terms.append(_edges(body, frame, net, radius, kappa, dhat, label, shown))
+    edges = None if radius is None else _edges(body, frame, net, radius, kappa, dhat, label, shown)
+    if edges is not None:
+        terms.append(edges)
     terms += _planes(body, record, fixed, net, dhat, load, shown)
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
@@ -197,6 +198,10 @@ def _terms(
 
         slip = contact.slip if contact.slip is not None else dhat
         terms.append(BodyFriction(Friction(shape, mu=contact.friction, slip=slip), touch))
+        if edges is not None:  # and where its outline pushes the edges
+            from catenet.terms.body_segments import BodyEdgeFriction
+
+            terms.append(BodyEdgeFriction(edges, frame, mu=contact.friction, slip=slip))
     return terms
 
 

@@ -38,8 +38,8 @@ friction (``catenet.terms.friction``) at the point of the edge where each outlin
 feature pushes it, that material point y = (1 - s) x_i + s x_j held with s, the normal
 force and the normal lagged from the step's start: convex within the step, its force
 never above mu times the edge's normal force, opposing the slip of the edge's material
-over the solid (a rope sliding lengthwise over a box's edge, or sideways). A free body's
-and a ball's edge contact is frictionless (their nodes' friction stays).
+over the solid (a rope sliding lengthwise over a box's edge, or sideways). On a free
+body: ``catenet.terms.body_segments.BodyEdgeFriction``; a ball is frictionless.
 """
 
 from __future__ import annotations
@@ -181,6 +181,22 @@ class EdgeContact(Term):
         return segment_ccd(x, dx, self.edges, Y, dY, self.lines, self.lone, pairs, self.r, upto)
 
 
+def pushes(contact: EdgeContact, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(pairs, normal forces, unit normals, shares) of the pairs of ``contact`` that push
+    the net's edges at x: the pair (edge, feature), the size and direction of the force
+    on the edge and where along it it acts (the share on its second node)."""
+    c = contact
+    Y = c.place(x)
+    pairs = c._pairs(x, Y)
+    force = np.zeros((len(pairs), 3))
+    share = np.zeros(len(pairs))
+    args = (c.lines, c.flen, c.lone, pairs, c.r, c.dhat, c.kappa, force, share)
+    pair_forces(x, c.edges, c.rest, Y, *args)
+    size = np.linalg.norm(force, axis=1)
+    on = size > 0.0
+    return pairs[on], size[on], force[on] / size[on, None], share[on]
+
+
 @register("edge_friction")
 class EdgeFriction(Term):
     """Coulomb friction ``mu`` with slip distance ``slip`` [m] where the outline of
@@ -212,17 +228,7 @@ class EdgeFriction(Term):
         return np.repeat(de, 6, axis=1).ravel(), np.tile(de, (1, 6)).ravel()
 
     def _pushes(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(pairs, normal forces, unit normals, shares) of the pairs that push at x."""
-        c = self.contact
-        Y = c.place(x)
-        pairs = c._pairs(x, Y)
-        force = np.zeros((len(pairs), 3))
-        share = np.zeros(len(pairs))
-        args = (c.lines, c.flen, c.lone, pairs, c.r, c.dhat, c.kappa, force, share)
-        pair_forces(x, c.edges, c.rest, Y, *args)
-        size = np.linalg.norm(force, axis=1)
-        on = size > 0.0
-        return pairs[on], size[on], force[on] / size[on, None], share[on]
+        return pushes(self.contact, x)
 
     def _points(self, x) -> np.ndarray:
         e = self.contact.edges[self.pairs[:, 0]]

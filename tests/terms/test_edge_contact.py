@@ -279,3 +279,27 @@ def test_strands_with_a_contact_radius_stay_twice_it_apart():
     solve_dynamic(net, Loads(), dt=0.005, damping=0.0, t_end=0.06, workspace=ws, v0=v0,
                   stop_at_equilibrium=False, on_step=keep)  # fmt: skip
     assert 2 * R < min(closest) < 2 * R + term.dhat  # met, never nearer than the radii
+
+
+def test_edge_friction_on_a_free_body_passes_finite_differences_and_is_internal():
+    """Seen in the body's frame: its derivatives in the edge's and the body's nodes, and
+    its forces on the edge and on the body equal and opposite."""
+    from catenet.terms.body_segments import BodyEdgeFriction
+
+    frame = BodyFrame(2, 12.0, np.diag([1.0, 1.5, 2.0]), [0.0, 0.0, 0.0])
+    places, _ = frame.place()
+    points, lines, _ = BOX.outline()
+    weights = 0.25 + (points - frame.center) @ frame.B.T
+    x = np.vstack([CASES["box across an edge"][1], places])
+    contact = EdgeContact([[0, 1]], [0.4], points, lines, 0.0, r=R, kappa=10.0, dhat=DHAT,
+                          n_nodes=6, weights=weights, bnodes=frame.nodes)  # fmt: skip
+    friction = BodyEdgeFriction(contact, frame, mu=0.5, slip=1e-3)
+    friction.begin_step(x, 0.1, 0.0)
+    assert len(friction.pairs) == 1
+    rng = np.random.default_rng(2)
+    for move in (2e-4, 5e-3):  # sticking and sliding, the body moved and turned a little
+        y = x + move * rng.standard_normal(x.shape)
+        grad = np.zeros_like(y)
+        friction.gradient(y, grad)
+        assert np.abs(grad.sum(axis=0)).max() < 1e-12 * np.abs(grad).max()
+        assert max(check_derivatives(friction, y, step=1e-8)) < 1e-6
