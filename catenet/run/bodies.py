@@ -24,7 +24,7 @@ class BodyWatch:
                 for t in scene.terms
                 if isinstance(t, BodyContact) and t.bounds_step
             }  # the barriers (not the friction riding on them)
-            for b in rigid:  # and the edges' (solver.edge_contact), which meet it first
+            for b in rigid if scene.edge_radius is not None else ():  # and the edges'
                 contacts.setdefault(id(b.frame), []).extend(_edges(scene, b.frame.nodes))
         self.bodies = [(b, contacts.get(id(b.frame), [])) for b in rigid]
         self.kinds = {b.obstacle: scene.case.obstacles[b.obstacle].kind for b, _ in self.bodies}

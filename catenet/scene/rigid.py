@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from catenet.scene.movers import Fixed, Mover
     from catenet.terms.base import Term
     from catenet.terms.rigid import BodyFrame
+    from catenet.terms.segments import EdgeContact
 
 RESOLVED = 1e-8  # the share of a free body's size its coordinates' round-off may reach
 
@@ -214,7 +215,7 @@ def _edges(
     dhat: float,
     label: str,
     shown: Shown,
-) -> Term:
+) -> EdgeContact:
     """The barrier of the net's edges, capsules of radius r, and the body's outline,
     its points riding on the four nodes (``catenet.scene.touching.body_solid``'s
     weights); ConfigError where an edge starts within r of the body."""

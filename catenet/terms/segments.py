@@ -274,7 +274,7 @@ class EdgeFriction(Term):
         """Normal forces and normals taken at x (the pairs that push there; the anchors
         and material points of the known pairs kept, a new pair's where it is): the
         largest change of a pair's normal force, relative to the largest one."""
-        before = dict(zip(map(tuple, self.pairs.tolist()), self.weight, strict=True))
+        before = {(int(e), int(f)): w for (e, f), w in zip(self.pairs, self.weight, strict=True)}
         top = float(self.weight.max(initial=0.0))
         pairs, lam, normal, share = self._pushes(x)
         keys = [(int(e), int(f)) for e, f in pairs.tolist()]
