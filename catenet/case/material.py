@@ -51,6 +51,13 @@ def _check_bending(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     return ck.real(v, path, ge=0, need='>= 0 [N m^2], or "section"')
 
 
+#: solver.edge_contact's doc (the key is the solver's, its radius the material's).
+EDGE_CONTACT = (
+    "obstacles, balls and free bodies meet the whole of every edge, a capsule of "
+    "material.contact_radius, not only the nodes (docs/guide/edge-contact.md)"
+)
+
+
 @dataclass(frozen=True)
 class MaterialConfig(Declared):
     """Either E with radius or area, or EA directly; density needs radius or area."""
@@ -119,6 +126,15 @@ class MaterialConfig(Declared):
         unit="m",
         shown="the cross-section's diameter",
         doc="[water]: the diameter drag acts on (a studless chain: 1.8 x its nominal one)",
+    )
+    contact_radius: float | None = real(
+        None,
+        ge=0,
+        write="given",
+        unit="m",
+        shown="radius (0 without one)",
+        doc="solver.edge_contact: every edge is a capsule of this radius where it meets "
+        "obstacles, balls and free bodies (the [material] table's, for every cable)",
     )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
     law: str = choice(

@@ -87,6 +87,7 @@ def _build(case: Case) -> Scene:
         probe_auto=case.output.probe is None and case.geometry.kind == "graph",
         case=case,
         shown=show,
+        edge_radius=_edge_radius(case),
     )
     for k, obs in enumerate(case.obstacles):  # the contact policy, as for a Python scene
         if not (obs.moves or obs.free):
@@ -101,7 +102,8 @@ def _build(case: Case) -> Scene:
         coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
     )
     if case.solver.self_contact:
-        scene = scene.with_terms(self_contact(case.solver, scene.net, scene.loads))
+        strands = self_contact(case.solver, scene.net, scene.loads, scene.edge_radius)
+        scene = scene.with_terms(strands)
     if case.water is not None:
         from catenet.case.water import water_terms
 
@@ -109,16 +111,27 @@ def _build(case: Case) -> Scene:
     return scene
 
 
+def _edge_radius(case: Case) -> float | None:
+    """The edges' contact radius where ``solver.edge_contact`` is on (None: off):
+    ``material.contact_radius``, else the cable's radius, else 0."""
+    if not case.solver.edge_contact:
+        return None
+    m = case.material
+    return m.contact_radius if m.contact_radius is not None else (m.radius or 0.0)
+
+
 #: The default activation distance of self-contact, per shortest edge.
 STRAND_DISTANCE_SHARE = 1e-2
 
 
-def self_contact(solver, net: Net, loads: Loads) -> SelfContact:
+def self_contact(solver, net: Net, loads: Loads, radius: float | None = None) -> SelfContact:
     """The barrier between the net's strands (``solver.self_contact``): activation
     distance ``solver.self_contact_distance``, else STRAND_DISTANCE_SHARE of the shortest
     edge; stiffness such that two strands dhat/2 apart push each other with a node's
     mean share of the loads (without loads: the force that strains an average edge by
-    dhat / l0)."""
+    dhat / l0); ``radius`` > 0 (``solver.edge_contact``): capsules of that radius, on
+    their gap (ConfigError where two start closer than twice the radius)."""
+    from catenet.terms.contact import default_stiffness
     from catenet.terms.strands import SelfContact, default_strand_stiffness
 
     edges = net.rest_length
@@ -127,7 +140,17 @@ def self_contact(solver, net: Net, loads: Loads) -> SelfContact:
     load = float(np.mean(np.linalg.norm(force, axis=1)))
     if not load > 0.0:
         load = float(np.mean(net.EA / edges)) * dhat
-    return SelfContact(net, kappa=default_strand_stiffness(load, dhat), dhat=dhat)
+    if not radius:
+        return SelfContact(net, kappa=default_strand_stiffness(load, dhat), dhat=dhat)
+    term = SelfContact(net, kappa=default_stiffness(load, dhat), dhat=dhat, radius=radius)
+    near = term.distances(net.nodes, 2.0 * radius)
+    if near.size:
+        raise ConfigError(
+            f"solver.self_contact: two strands start {near[0]:.3g} m apart, closer than twice "
+            f"the contact radius (material.contact_radius, {radius:.3g} m): they overlap; "
+            "move them apart or give a smaller contact radius"
+        )
+    return term
 
 
 @dataclass(frozen=True, eq=False)

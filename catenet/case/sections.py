@@ -30,7 +30,7 @@ from catenet.case.keys import (
     vec3,
 )
 from catenet.case.kinds import KINDS
-from catenet.case.material import MaterialConfig, parse_material  # noqa: F401 (a section)
+from catenet.case.material import EDGE_CONTACT, MaterialConfig, parse_material  # noqa: F401
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
 from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, fixed_list
 from catenet.case.supports import node_list as _node_list
@@ -429,6 +429,7 @@ class SolverConfig(Declared):
         doc="self_contact: the barrier's activation distance: strands touching rest closer "
         "than this, and no farther pair feels the other",
     )
+    edge_contact: bool = boolean(False, write="changed", doc=EDGE_CONTACT)
     linear: str = choice(
         Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
     )

@@ -290,9 +290,9 @@ def gather(x, edges, a, b, P):
 
 
 @njit(cache=True, error_model="numpy")
-def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad):
-    """Adds the barrier's gradient of the edge ``pairs`` (K, 2) to grad (N, 3); returns
-    the energy."""
+def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad, r=-1.0):
+    """Adds the barrier's gradient of the edge ``pairs`` (K, 2) to grad (N, 3) (r >= 0:
+    on the gap d - r, ``edge_energy``); returns the energy."""
     P = np.empty(12)
     g = np.empty(12)
     H = np.empty((12, 12))
@@ -301,7 +301,7 @@ def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad):
         a, b = pairs[p, 0], pairs[p, 1]
         n = gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
-        total += pair_energy(P, eps, dhat * dhat, kappa, g, H, False)
+        total += edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, False)
         for k in range(4):
             for i in range(3):
                 grad[n[k], i] += g[3 * k + i]
@@ -309,7 +309,7 @@ def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad):
 
 
 @njit(cache=True, error_model="numpy")
-def strand_hessian(x, edges, rest, pairs, slots, dhat, kappa, values):
+def strand_hessian(x, edges, rest, pairs, slots, dhat, kappa, values, r=-1.0):
     """Writes the 12x12 blocks (row-major, points a0 a1 b0 b1) of the ``pairs`` at
     values[144 slot:]; the other blocks are zero. Returns how many pairs act."""
     values[:] = 0.0
@@ -321,7 +321,7 @@ def strand_hessian(x, edges, rest, pairs, slots, dhat, kappa, values):
         a, b = pairs[p, 0], pairs[p, 1]
         gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
-        pair_energy(P, eps, dhat * dhat, kappa, g, H, True)
+        edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, True)
         at = 144 * slots[p]
         nonzero = False
         for i in range(12):
@@ -513,7 +513,7 @@ def accd(P, dP, t_max, r=0.0):
 
 
 @njit(cache=True, error_model="numpy")
-def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max):
+def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max, r=0.0):
     """(t, t1): the largest multiple t (at most t_max: longer steps are never checked)
     of the step dx from x that keeps (1) every node's motion from ``base`` relative to
     the mean motion of ``nodes`` within its ``radius`` and (2) every candidate pair apart
@@ -545,5 +545,5 @@ def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max):
     for p in range(pairs.shape[0]):
         gather(x, edges, pairs[p, 0], pairs[p, 1], P)
         gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
-        t = min(t, accd(P, dP, t))
+        t = min(t, accd(P, dP, t, r))
     return t, moved

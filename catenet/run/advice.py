@@ -98,6 +98,18 @@ def ignored_solver_keys(solver: SolverConfig) -> list[str]:
     return out
 
 
+def ignored_contact_radius(case: Case) -> list[str]:
+    """A message where ``material.contact_radius`` is given without
+    ``solver.edge_contact`` (the nodes alone meet the solids: it acts on nothing)."""
+    radius = case.material.contact_radius
+    if radius is None or case.solver.edge_contact:
+        return []
+    return [
+        f"material.contact_radius = {radius!r}: ignored without solver.edge_contact = true "
+        "(obstacles and bodies meet the nodes only; docs/guide/edge-contact.md)"
+    ]
+
+
 def ignored_histories(case: Case) -> list[str]:
     """Messages for what a static run ignores of a case's time dependence: every load's
     and support motion's ``history`` (a static run applies each load and displacement in
@@ -484,9 +496,9 @@ def between_nodes(scene: Scene) -> list[str]:
     """Warnings for each obstacle, ball or free body (not a plane) narrower than the
     net's median edge: the net touches solids at its nodes only (the barriers act on
     nodes), so such a solid can pass between them, or sit across a strand, and no check
-    sees it."""
+    sees it. None where every edge meets them (``solver.edge_contact``)."""
     net = scene.net
-    if not net.n_edges:
+    if not net.n_edges or scene.edge_radius is not None:
         return []
     ends = net.nodes[net.edges]
     edge = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
@@ -502,8 +514,8 @@ def between_nodes(scene: Scene) -> list[str]:
                 f"obstacle[{k}] ({what}{shape.kind}, {width:.3g} m across) is narrower than "
                 f"the net's edges ({edge:.3g} m, the median): the net touches solids at its "
                 "nodes only, so it may pass between them or lie across a strand unseen; "
-                "refine the net (edges well below the solid's width) "
-                "(docs/guide/bodies.md#how-it-works-and-its-limits)"
+                "refine the net (edges well below the solid's width) or set "
+                "solver.edge_contact = true (docs/guide/edge-contact.md)"
             )
     return out
 

@@ -20,9 +20,13 @@ class BodyWatch:
             from catenet.terms.rigid_contact import BodyContact
 
             contacts = {
-                id(t.frame): t for t in scene.terms if isinstance(t, BodyContact) and t.bounds_step
+                id(t.frame): [t]
+                for t in scene.terms
+                if isinstance(t, BodyContact) and t.bounds_step
             }  # the barriers (not the friction riding on them)
-        self.bodies = [(b, contacts.get(id(b.frame))) for b in rigid]
+            for b in rigid if scene.edge_radius is not None else ():  # and the edges'
+                contacts.setdefault(id(b.frame), []).extend(_edges(scene, b.frame.nodes))
+        self.bodies = [(b, contacts.get(id(b.frame), [])) for b in rigid]
         self.kinds = {b.obstacle: scene.case.obstacles[b.obstacle].kind for b, _ in self.bodies}
         self.first = {b.obstacle: None for b, _ in self.bodies}
 
@@ -31,12 +35,14 @@ class BodyWatch:
 
     def see(self, t: float, x) -> None:
         """A state x (N, 3) at time t."""
-        for body, contact in self.bodies:
-            if contact is None or self.first[body.obstacle] is not None:
+        for body, contacts in self.bodies:
+            if self.first[body.obstacle] is not None:
                 continue
-            gap = contact.gap(x)  # empty where the net has no free node
-            if gap.size and float(gap.min()) < contact.dhat:
-                self.first[body.obstacle] = float(t)
+            for contact in contacts:
+                gap = contact.gap(x)  # empty where the net has no free node
+                if gap.size and float(gap.min()) < contact.dhat:
+                    self.first[body.obstacle] = float(t)
+                    break
 
     def stats(self, x, v) -> dict:
         """Per body (its obstacle index): kind, first contact time (None: none), final
@@ -53,3 +59,12 @@ class BodyWatch:
                 "axis": (spin / w).tolist() if w > 0 else [0.0, 0.0, 0.0],
             }
         return out
+
+
+def _edges(scene, nodes) -> list:
+    """The edge barriers (``catenet.terms.segments.EdgeContact``) riding on ``nodes``."""
+    from catenet.terms.segments import EdgeContact
+
+    return [
+        t for t in scene.terms if isinstance(t, EdgeContact) and np.array_equal(t.bnodes, nodes)
+    ]

@@ -118,6 +118,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     if hopeless:  # no static equilibrium to find: say so at once, not after minutes
         raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
+    notes += advice.ignored_contact_radius(case)
     for message in notes + integrator_advice.newmark_contact(case) + advice.between_nodes(scene):
         log.warning("%s", message)
     trajectory = None

@@ -61,9 +61,12 @@ def assemble(
     fixed: tuple[Fixed, ...],
     size: float,
     shown: Shown,
+    radius: float | None = None,
 ) -> Assembled:
     """The scene's balls, then free bodies, then their pairs (module docstring), added
-    to ``net``; ``fixed``: the scene's obstacles, ``size`` its length scale."""
+    to ``net``; ``fixed``: the scene's obstacles, ``size`` its length scale; ``radius``:
+    the edges' contact radius where the balls and bodies meet every edge as a capsule
+    (``catenet.scene.segments``; None: the nodes only)."""
     from catenet.scene.rigid import add_free_bodies
     from catenet.scene.touching import touch_terms
 
@@ -74,13 +77,15 @@ def assemble(
     n0 = net.n_nodes
     net, loads, velocity, masses = _add_balls(net, loads, velocity, balls, shown)
     net, loads, velocity, rigid, rigid_terms = add_free_bodies(
-        net, loads, velocity, free, fixed, size, shown
+        net, loads, velocity, free, fixed, size, shown, radius
     )
     centres = {m.index: n0 + j for j, m in enumerate(balls)}
     terms: list[Term] = []
     records = []
     for j, ball in enumerate(balls):
-        made, record = _ball_terms(ball, centres[ball.index], masses[j], net, scale, size, shown)
+        made, record = _ball_terms(
+            ball, centres[ball.index], masses[j], net, scale, size, shown, radius
+        )
         for term in made:
             term.owner = ball.index
         terms += made
@@ -153,9 +158,17 @@ def _dhat(mover: Mover | Fixed, size: float) -> float:
 
 
 def _ball_terms(
-    ball: Mover, node: int, mass: float, net: Net, scale: _Scale, size: float, shown: Shown
+    ball: Mover,
+    node: int,
+    mass: float,
+    net: Net,
+    scale: _Scale,
+    size: float,
+    shown: Shown,
+    r: float | None = None,
 ) -> tuple[list[Term], Body]:
-    """([its barrier with the net's free nodes, its path spring], its Body record)."""
+    """([its barrier with the net's free nodes, with ``r`` its barrier with every edge
+    (a capsule of radius r), its path spring], its Body record)."""
     from catenet.terms.body import Ball, Guide, Path
     from catenet.terms.contact import default_stiffness
 
@@ -177,13 +190,30 @@ def _ball_terms(
             f"{kappa:.3g} N/m: give a larger distance (or a finite stiffness)"
         )
     radius = ball.shape.reach
+    grow = 0.0 if r is None else r
     terms: list[Term] = [
-        Ball(scale.free, node, radius, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
+        Ball(scale.free, node, radius + grow, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
     ]
+    if r is not None:
+        terms.append(_ball_edges(ball, node, net, r, kappa, dhat, shown))
     if prescribed:
         route = Path(ball.shape.origin, ball.velocity, _history(ball))
         terms.append(Guide(node, route, GUIDE_SHARE * scale.stiff, n_nodes=net.n_nodes))
     return terms, Body(node, ball.index, float(radius), mass, prescribed)
+
+
+def _ball_edges(
+    ball: Mover, node: int, net: Net, r: float, kappa: float, dhat: float, shown: Shown
+) -> Term:
+    """The barrier of the net's edges, capsules of radius r, and the ball's centre (its
+    node); ConfigError where an edge starts within r of the ball."""
+    from catenet.scene.segments import check_edges_clear, edge_barrier
+
+    label = f"{ball.path} (kind 'sphere')"
+    check_edges_clear(label, ball.shape, r, dhat, net, shown)
+    term = edge_barrier(ball.shape, net, r, kappa, dhat, np.ones((1, 1)), [node])
+    assert term is not None  # a sphere has an outline
+    return term
 
 
 def _collisions(

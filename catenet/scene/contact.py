@@ -152,11 +152,19 @@ def moving(
 
 
 def obstacle_terms(
-    path: str, shape: Shape, contact: Contact, reach: Reach, net: Net, shown: Shown = shown_as_is
+    path: str,
+    shape: Shape,
+    contact: Contact,
+    reach: Reach,
+    net: Net,
+    shown: Shown = shown_as_is,
+    radius: float | None = None,
 ) -> list[Term]:
     """The barrier of ``shape`` on the net's free nodes and, with friction, its Coulomb
     friction (module docstring); ``path``: the obstacle's key path in messages
-    ("obstacle[k]"), ``shown`` how they show a value."""
+    ("obstacle[k]"), ``shown`` how they show a value; ``radius``: the edges' contact
+    radius where every edge is a capsule (``catenet.scene.segments``; None: the nodes
+    alone meet it)."""
     dhat = contact.distance if contact.distance is not None else contact.accuracy * reach.edge
     load = reach.per_node
     if load <= 0.0:  # no loads: the force that strains an edge by dhat / l0
@@ -189,16 +197,31 @@ def obstacle_terms(
         )
     nodes = reach.nodes
     label = f"{path} (kind {shape.kind!r})"
+    if radius is not None and contact.moving:
+        raise ConfigError(
+            f"{path}: solver.edge_contact on an obstacle on a prescribed motion: not "
+            "supported (its edges would pass through it); drop its motion or edge_contact"
+        )
+    grow = 0.0 if radius is None else radius  # the nodes against the shape grown by it
     term: Term
     if widths:
-        first = shape.barrier(nodes, stiffness(widths[0]), widths[0])
+        first = shape.barrier(nodes, stiffness(widths[0]), widths[0], grow)
         term = first.narrowed(kappa, dhat)
         term.stages = tuple(first.narrowed(stiffness(w), w) for w in widths)
     else:
-        term = moving(shape.barrier(nodes, kappa, dhat), shape, contact, label=label)
+        term = moving(shape.barrier(nodes, kappa, dhat, grow), shape, contact, label=label)
         term.stages = ()
     check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
+    edge = None
+    if radius is not None:
+        from catenet.scene.segments import check_edges_clear, edge_barrier
+
+        check_edges_clear(label, shape, radius, dhat, net, shown)
+        edge = edge_barrier(shape, net, radius, kappa, dhat)
+        if edge is not None:
+            edge.stages = tuple(edge.narrowed(stiffness(w), w) for w in widths)
+            out.append(edge)
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
 
@@ -209,6 +232,10 @@ def obstacle_terms(
                 f"times the barrier's activation distance ({dhat:.3g})"
             )
         out.append(Friction(term, mu=contact.friction, slip=slip))
+        if radius is not None and edge is not None:  # and where the edges touch
+            from catenet.terms.segments import EdgeFriction
+
+            out.append(EdgeFriction(edge, mu=contact.friction, slip=slip))
     return out
 
 

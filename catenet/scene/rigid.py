@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from catenet.scene.movers import Fixed, Mover
     from catenet.terms.base import Term
     from catenet.terms.rigid import BodyFrame
+    from catenet.terms.segments import EdgeContact
 
 RESOLVED = 1e-8  # the share of a free body's size its coordinates' round-off may reach
 
@@ -77,10 +78,13 @@ def add_free_bodies(
     fixed: tuple[Fixed, ...],
     size: float,
     shown: Shown,
+    radius: float | None = None,
 ) -> tuple[Net, Loads, np.ndarray | None, tuple[FreeBody, ...], list[Term]]:
     """(net, loads, velocity, bodies, terms) with the free bodies appended (four nodes
-    each). Raises ConfigError for a body that starts overlapping the net or a plane, that
-    shares the scene with an obstacle on a prescribed motion, or has a bad inertia."""
+    each); ``radius``: the edges' contact radius where they meet every edge as a capsule
+    (None: the nodes only). Raises ConfigError for a body that starts overlapping the
+    net or a plane, that shares the scene with an obstacle on a prescribed motion, or has
+    a bad inertia."""
     from catenet.scene.movers import pad_loads
 
     if not free:
@@ -100,7 +104,7 @@ def add_free_bodies(
     loads = pad_loads(loads, 4 * len(free))
     terms: list[Term] = []
     for body, record in zip(free, built, strict=True):
-        made = _terms(body, record, fixed, net, loads, size, shown)
+        made = _terms(body, record, fixed, net, loads, size, shown, radius)
         for term in made:
             term.owner = body.index
         terms += made
@@ -150,9 +154,11 @@ def _terms(
     loads: Loads,
     size: float,
     shown: Shown,
+    radius: float | None = None,
 ) -> list[Term]:
-    """The body's rigidity, its barrier with every free net node, its planes' barriers
-    and its friction."""
+    """The body's rigidity, its barrier with every free net node (with ``radius``: the
+    shape grown by it, and its barrier with every edge, ``catenet.scene.segments``), its
+    planes' barriers and its friction."""
     from catenet.scene.contact import check_clear
     from catenet.terms.contact import default_stiffness
     from catenet.terms.rigid import Rigidity
@@ -171,9 +177,10 @@ def _terms(
     if load <= 0.0:
         load = stiff * dhat
     kappa = contact.stiffness if contact.stiffness is not None else default_stiffness(load, dhat)
-    shape = body.shape.barrier(nodes, kappa, dhat)
+    shape = body.shape.barrier(nodes, kappa, dhat, 0.0 if radius is None else radius)
     touch = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{body.path} (kind {kind!r})")
-    check_clear(f"{body.path} (kind {kind!r}, a free body)", "a body", shape, nodes, net, shown)
+    label = f"{body.path} (kind {kind!r}, a free body)"
+    check_clear(label, "a body", shape, nodes, net, shown)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
     reach = frame.reach  # about the body's size
     ea = float(np.max(net.EA)) if net.n_edges else stiff * size
@@ -182,6 +189,9 @@ def _terms(
     scale = max(ea * reach, record.mass * g * reach, spin * w0**2, record.mass * v0**2)
     _check_carried(body, RIGIDITY * scale, spin * w0**2, record.mass * v0**2, shown)
     terms: list[Term] = [Rigidity(frame, RIGIDITY * scale, n_nodes=net.n_nodes), touch]
+    edges = None if radius is None else _edges(body, frame, net, radius, kappa, dhat, label, shown)
+    if edges is not None:
+        terms.append(edges)
     terms += _planes(body, record, fixed, net, dhat, load, shown)
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
@@ -189,7 +199,34 @@ def _terms(
 
         slip = contact.slip if contact.slip is not None else dhat
         terms.append(BodyFriction(Friction(shape, mu=contact.friction, slip=slip), touch))
+        if edges is not None:  # and where its outline pushes the edges
+            from catenet.terms.body_segments import BodyEdgeFriction
+
+            terms.append(BodyEdgeFriction(edges, frame, mu=contact.friction, slip=slip))
     return terms
+
+
+def _edges(
+    body: Mover,
+    frame: BodyFrame,
+    net: Net,
+    r: float,
+    kappa: float,
+    dhat: float,
+    label: str,
+    shown: Shown,
+) -> EdgeContact:
+    """The barrier of the net's edges, capsules of radius r, and the body's outline,
+    its points riding on the four nodes (``catenet.scene.touching.body_solid``'s
+    weights); ConfigError where an edge starts within r of the body."""
+    from catenet.scene.segments import check_edges_clear, edge_barrier
+
+    check_edges_clear(label, body.shape, r, dhat, net, shown)
+    points = body.shape.outline().points
+    weights = 0.25 + (points - frame.center) @ frame.B.T
+    term = edge_barrier(body.shape, net, r, kappa, dhat, weights, frame.nodes)
+    assert term is not None  # a free body is no plane
+    return term
 
 
 def _check_resolved(body: Mover, frame: BodyFrame, shown: Shown) -> None:

@@ -62,7 +62,10 @@ class Scene:
       (``catenet.model.design.Design``; None: no utilisation, all NaN);
     - ``case``: the case file's case it was built from (None: built in Python);
       ``coarsen(factor)``: the same scene with every edge ``factor`` times longer, or
-      None (a nested start, ``catenet.solver.nested``; None: it cannot be coarsened).
+      None (a nested start, ``catenet.solver.nested``; None: it cannot be coarsened);
+    - ``edge_radius``: the contact radius [m] of every edge where obstacles, balls and
+      free bodies meet the whole edge, a capsule (``catenet.scene.segments``; None: the
+      nodes alone); obstacles and bodies added later take it.
     """
 
     net: Net
@@ -86,6 +89,7 @@ class Scene:
     movers: tuple[Mover, ...] = ()
     own: Own | None = None
     shown: Shown = shown_as_is
+    edge_radius: float | None = None
 
     @classmethod
     def of(
@@ -96,10 +100,15 @@ class Scene:
         probe: int | None = None,
         size: float | None = None,
         velocity: ArrayLike | None = None,
+        edge_radius: float | None = None,
     ) -> Scene:
         """A scene of ``net`` under ``loads`` (None: none); ``probe`` (None: the free
         node that moves most), ``size`` (None: the net's bounding-box diagonal),
-        ``velocity`` (N, 3) initial velocities (None: at rest)."""
+        ``velocity`` (N, 3) initial velocities (None: at rest), ``edge_radius`` [m]:
+        every edge a capsule of that radius for obstacles, balls and bodies (None: they
+        meet the nodes only)."""
+        if edge_radius is not None and not (math.isfinite(edge_radius) and edge_radius >= 0):
+            raise ConfigError(f"edge_radius = {edge_radius!r}: must be a finite number >= 0")
         v = None if velocity is None else np.asarray(velocity, dtype=np.float64)
         if v is not None and v.shape != net.nodes.shape:
             raise ValueError(f"velocity: shape {v.shape}, the net's nodes are {net.nodes.shape}")
@@ -110,6 +119,7 @@ class Scene:
             size=extent(net) if size is None else float(size),
             velocity=v,
             probe_auto=probe is None,
+            edge_radius=None if edge_radius is None else float(edge_radius),
         )
 
     def with_terms(self, *terms: Term) -> Scene:
@@ -159,8 +169,9 @@ class Scene:
         own = self._own()
         reach = Reach.of(own.net, own.loads, self.size)
         terms = obstacle_terms(
-            f"obstacle[{k}]", shape, contact, reach, own.net, shown or self.shown
-        )
+            f"obstacle[{k}]", shape, contact, reach, own.net, shown or self.shown,
+            self.edge_radius,
+        )  # fmt: skip
         for term in terms:
             term.owner = k  # the obstacle whose force on the net it is (histories)
         own = dataclasses.replace(own, terms=(*own.terms, *terms))
@@ -278,7 +289,7 @@ class Scene:
             )
         fixed = tuple(Fixed(k, shape, contact) for k, shape, contact in obstacles)
         args = (own.net, own.loads, own.velocity, movers, fixed, self.size, self.shown)
-        built = assemble(*args)
+        built = assemble(*args, radius=self.edge_radius)
         return dataclasses.replace(
             self, net=built.net, loads=built.loads, velocity=built.velocity,
             terms=(*own.terms, *built.terms), bodies=built.balls, rigid=built.rigid,

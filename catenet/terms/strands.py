@@ -68,17 +68,25 @@ def default_strand_stiffness(force: float, dhat: float) -> float:
 class SelfContact(Term):
     """The barrier between the net's edges that share no node (see the module
     docstring): stiffness ``kappa`` [N/m^3] on squared distances, activation distance
-    ``dhat`` [m]; the candidate pairs at the positions ``x`` (default: the net's)."""
+    ``dhat`` [m]; the candidate pairs at the positions ``x`` (default: the net's). With a
+    contact ``radius`` r > 0 (``solver.edge_contact``) each edge is a capsule: the barrier
+    acts on the gap d - 2 r (kappa then in N/m, ``default_stiffness``)."""
 
     bounds_step = True
     grows = True
     convex = False
     role = "internal"
 
-    def __init__(self, net, *, kappa: float, dhat: float, x: np.ndarray | None = None):
+    def __init__(
+        self, net, *, kappa: float, dhat: float, x: np.ndarray | None = None, radius: float = 0.0
+    ):
         if not (math.isfinite(kappa) and kappa > 0 and math.isfinite(dhat) and dhat > 0):
             raise ValueError(f"self_contact: kappa = {kappa!r}, dhat = {dhat!r}: must be > 0")
+        if not (math.isfinite(radius) and radius >= 0):
+            raise ValueError(f"self_contact: radius = {radius!r}: must be >= 0")
         self.kappa, self.dhat = float(kappa), float(dhat)
+        self.gap_r = 2.0 * float(radius)  # > 0: on the gap d - 2 radius (capsules)
+        self._r = self.gap_r if radius > 0 else -1.0  # the kernels' r (< 0: squared distance)
         self.edges = np.ascontiguousarray(net.edges, dtype=np.int64)
         self.rest = np.ascontiguousarray(net.rest_length, dtype=np.float64)
         self.nodes = np.unique(self.edges)
@@ -112,7 +120,7 @@ class SelfContact(Term):
 
     def _gather(self, x: np.ndarray) -> None:
         edge_radius = np.maximum(self.radius[self.edges[:, 0]], self.radius[self.edges[:, 1]])
-        pairs = candidates(x, self.edges, edge_radius, self.dhat)
+        pairs = candidates(x, self.edges, edge_radius, self.dhat + self.gap_r)
         if len(self.known) > PATTERN_SLACK * max(len(pairs), 32):  # mostly stale: start anew
             self.known = np.zeros((0, 2), dtype=np.int64)
             self._slot = {}
@@ -141,7 +149,8 @@ class SelfContact(Term):
         return rows, cols
 
     def gradient(self, x, grad) -> float:
-        return strand_gradient(x, self.edges, self.rest, self.pairs, self.dhat, self.kappa, grad)
+        args = (x, self.edges, self.rest, self.pairs, self.dhat, self.kappa, grad, self._r)
+        return strand_gradient(*args)
 
     def hessian(self, x, values) -> bool:
         if values.size != 144 * len(self.known):
@@ -150,12 +159,12 @@ class SelfContact(Term):
                 "Workspace.refresh() rebuilds it"
             )
         args = (x, self.edges, self.rest, self.pairs, self.slots, self.dhat, self.kappa, values)
-        return strand_hessian(*args) > 0
+        return strand_hessian(*args, self._r) > 0
 
     def max_step(self, x, dx) -> float:
         base = x if self.base is None else self.base
         args = (x, dx, base, self.nodes, self.radius, self.edges, self.pairs, STEP_CHECKED)
-        t, moved = strand_max_step(*args)
+        t, moved = strand_max_step(*args, self.gap_r)
         self.held = self.held or moved < 1.0
         return t
 

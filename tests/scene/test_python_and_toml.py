@@ -280,6 +280,10 @@ def test_a_solid_narrower_than_the_cells_is_warned_about():
     assert warning.startswith("obstacle[0] (cylinder, 0.2 m across)")
     assert between_nodes(box) == []
     assert between_nodes(scene.with_obstacle(catenet.Plane([0, 0, 0.0], [0, 0, 1.0]))) == []
+    # with every edge meeting solids (solver.edge_contact), nothing passes between nodes
+    whole = catenet.Scene.of(net, catenet.Loads(), edge_radius=0.0)
+    bar = whole.with_body(catenet.Capsule([-2.0, 0.3, 3.0], [2.0, 0.3, 3.0], 0.05), mass=5.0)
+    assert between_nodes(bar) == []
 
 
 def test_solve_refuses_newmark_that_cannot_damp_a_free_body():

@@ -1,0 +1,80 @@
+"""Contact along the whole edge (``solver.edge_contact``), for the scene builder: which
+edges are capsules, their barrier against an obstacle's, a ball's or a free body's
+outline (``catenet.terms.segments.EdgeContact``) and the start check that no edge
+passes through a solid.
+
+The node barriers of the same solids are grown by the contact radius r where they are
+built (``catenet.scene.contact``, ``catenet.scene.bodies``, ``catenet.scene.rigid``);
+a plane needs no more (a segment cannot cross a plane without an end crossing it)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from catenet.errors import ConfigError
+
+if TYPE_CHECKING:
+    from catenet.model.net import Net
+    from catenet.scene.contact import Shown
+    from catenet.scene.shapes import Shape
+    from catenet.terms.segments import EdgeContact
+
+
+def contact_edges(net: Net) -> np.ndarray:
+    """The net's edges (K, 2) with at least one free node: the capsules."""
+    edges = net.edges[: net.n_edges]
+    free = ~net.fixed
+    return np.ascontiguousarray(edges[free[edges[:, 0]] | free[edges[:, 1]]], dtype=np.int64)
+
+
+def edge_barrier(
+    shape: Shape,
+    net: Net,
+    r: float,
+    kappa: float,
+    dhat: float,
+    weights: ArrayLike | None = None,
+    bnodes: ArrayLike | None = None,
+) -> EdgeContact | None:
+    """The barrier of the net's capsules of radius r against ``shape``'s outline, its
+    points riding on ``bnodes`` by ``weights`` (a ball's, a body's; None: fixed); None
+    for a plane (the nodes' barrier holds a segment off it)."""
+    from catenet.terms.segments import EdgeContact
+
+    if shape.kind == "plane":
+        return None
+    points, lines, radius = shape.outline()
+    edges = contact_edges(net)
+    rest = np.linalg.norm(net.nodes[edges[:, 1]] - net.nodes[edges[:, 0]], axis=1)
+    return EdgeContact(
+        edges, rest, points, lines, radius, r=r, kappa=kappa, dhat=dhat,
+        n_nodes=net.n_nodes, weights=weights, bnodes=bnodes,
+    )  # fmt: skip
+
+
+def check_edges_clear(
+    label: str, shape: Shape, r: float, dhat: float, net: Net, shown: Shown
+) -> None:
+    """ConfigError where an edge of the net starts inside or on ``shape`` grown by r:
+    the exact first contact of each segment, walked from one end to the other, with
+    the shape (its nodes are checked by the node barrier's own check)."""
+    edges = contact_edges(net)
+    if not len(edges) or shape.kind == "plane":
+        return
+    start = np.ascontiguousarray(net.nodes[edges[:, 0]])
+    along = np.ascontiguousarray(net.nodes[edges[:, 1]] - start)
+    probe = shape.barrier(np.arange(len(edges)), 1.0, dhat, offset=r)
+    if not probe.first_hit(start, along, 0.0, 1.0) <= 1.0:
+        return
+    one = shape.barrier(np.zeros(1, dtype=np.int64), 1.0, dhat, offset=r)
+    for k, (i, j) in enumerate(edges.tolist()):  # the first edge that does, for the message
+        if one.first_hit(start[k : k + 1], along[k : k + 1], 0.0, 1.0) <= 1.0:
+            raise ConfigError(
+                f"{label}: the edge {i}-{j} from {shown(net.nodes[i].tolist())} to "
+                f"{shown(net.nodes[j].tolist())} passes through it or within the contact "
+                f"radius {r:.3g} m of it at the start: an obstacle must not overlap the "
+                "initial net; move it or the net"
+            )

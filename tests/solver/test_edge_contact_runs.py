@@ -1,0 +1,241 @@
+"""Dynamic runs with solver.edge_contact: a 0.25 m ball dropped on a net of 0.1 m edges,
+the capture scene of configs/contact/ (its box moved under the net: the contact phase)
+and a strand sagging onto a box's corner between its nodes, every step checked at 41
+points along every edge: no point of an edge is ever inside the ball or the box (it
+stays the contact radius off), where with the nodes alone the edges cut into all three;
+off, the scene is the one without the key; bad input exits 2."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import small_net
+
+from catenet.case import build, load_case, parse_case
+from catenet.cli import main
+from catenet.solver import path as sv
+from catenet.terms.body_segments import BodyEdgeFriction
+from catenet.terms.segments import EdgeContact
+
+CONFIGS = Path(__file__).parents[2] / "configs" / "contact"
+ALONG = np.linspace(0.0, 1.0, 41)[:, None, None]
+
+DROP = """
+title = "a 0.25 m ball dropped on a coarse net"
+
+[geometry]
+kind = "square_net"
+n = 6
+alpha = 0.0
+size = 1.0
+edge_length = 0.1
+
+[material]
+E = 1e7
+radius = 0.005
+density = 1000.0
+
+[load]
+gravity = [0.0, 0.0, -9.81]
+
+[[obstacle]]
+kind = "sphere"
+center = [0.07, 0.03, 0.27]
+radius = 0.25
+mass = 20.0
+velocity = [0.0, 0.0, -1.0]
+distance = 0.005
+
+[solver]
+method = "dynamic"
+dt = 0.01
+t_end = 0.3
+damping = 1.0
+edge_contact = EDGES
+"""
+
+
+def _case(text: str):
+    return parse_case(tomllib.loads(text))
+
+
+def _steps(scene, speeds=None):
+    settings = sv.Settings.of(scene.case.solver)
+    frames = [scene.net.nodes.copy()]
+
+    def keep(step):
+        frames.append(step.x.copy())
+        if speeds is not None:
+            speeds.append(step.v.copy())
+
+    res = sv.solve(scene, settings, on_step=keep)
+    assert res.converged
+    return np.array(frames)
+
+
+def _points(scene, x):
+    """(41, M, 3) points along every edge of the net."""
+    edges = scene.net.edges[: scene.net.n_edges]
+    return (1.0 - ALONG) * x[edges[:, 0]] + ALONG * x[edges[:, 1]]
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_a_ball_dropped_on_a_net_never_has_an_edge_inside(on):
+    scene = build(_case(DROP.replace("EDGES", str(on).lower())))
+    assert any(isinstance(t, EdgeContact) for t in scene.terms) == on
+    frames = _steps(scene)
+    (ball,) = scene.bodies
+    depth = np.array(
+        [(np.linalg.norm(_points(scene, x) - x[ball.node], axis=-1) - 0.25).min() for x in frames]
+    )
+    if on:  # every point of every edge at least the contact radius off the ball
+        assert depth.min() > 0.005 and depth.min() < 0.005 + 0.005  # and touching
+    else:  # nodes only: the edges between them cut into the ball
+        assert depth.min() < -0.003
+
+
+def _box_gaps(scene, frames) -> np.ndarray:
+    """The least distance of the points along every edge to the free box, at each step
+    (negative: inside), in the box's frame as the solver sees it."""
+    (body,) = scene.rigid
+    shape = scene.movers[0].shape
+    out = []
+    for x in frames:
+        c, A = body.frame.state(x)
+        X = (_points(scene, x) - c) @ A @ shape.axes  # the box's axes, about its centre
+        e = np.abs(X) - shape.half_size
+        outside = np.linalg.norm(np.maximum(e, 0.0), axis=-1)
+        out.append(np.where(outside > 0.0, outside, e.max(axis=-1)).min())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_the_capture_never_has_an_edge_in_the_box_at_any_step(on):
+    changes = [
+        f"solver.edge_contact={str(on).lower()}", "solver.dt=0.01", "solver.t_end=0.4",
+        "obstacle.0.center=[0.0, 0.0, 2.97]",
+    ]  # fmt: skip
+    scene = build(load_case(CONFIGS / "envisat_capture.toml", changes))
+    speeds: list = []
+    frames = _steps(scene, speeds)
+    gaps = _box_gaps(scene, frames)
+    if on:
+        r = scene.edge_radius
+        assert r == 0.002  # material.radius
+        assert gaps.min() > r and gaps.min() < r + 0.02  # touching, never inside
+        # the edges' barrier and friction (the box's friction = 0.3) are internal: net
+        # and box keep their momentum (the tether is slack, no gravity in orbit)
+        assert any(isinstance(t, BodyEdgeFriction) for t in scene.terms)
+        m, free = scene.net.mass[:, None], ~scene.net.fixed
+        p = np.array([(m * v)[free].sum(axis=0) for v in speeds])
+        assert np.abs(p - p[0]).max() < 1e-6 * np.abs(p[0]).max()
+    else:
+        assert gaps.min() < -0.1  # the strands cut through the box's edges
+
+
+def test_off_the_scene_is_the_one_without_the_key():
+    case = CONFIGS / "net_on_sphere.toml"
+    plain = build(load_case(case))
+    off = build(load_case(case, ["solver.edge_contact=false"]))
+    assert [type(t) for t in off.terms] == [type(t) for t in plain.terms]
+    assert plain.edge_radius is None
+    on = build(load_case(case, ["solver.edge_contact=true", "material.contact_radius=0.003"]))
+    assert on.edge_radius == 0.003 and any(isinstance(t, EdgeContact) for t in on.terms)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ('edge_contact = "yes"', "solver.edge_contact = 'yes': must be true or false"),
+        ("edge_contact = true\n[material]\ncontact_radius = -1", "material.contact_radius = -1"),
+    ],
+)
+def test_bad_edge_contact_input_exits_2_naming_the_key(write_case, tmp_path, change, message):
+    text = small_net(t_end=0.05).replace("[solver]\n", "[solver]\n" + change.split("\n")[0] + "\n")
+    if "[material]" in change:
+        text = text.replace("[material]\n", "[material]\ncontact_radius = -1\n")
+    res = CliRunner().invoke(main, ["run", str(write_case(text)), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 2, res.output
+    assert message in res.output and "Traceback" not in res.output
+
+
+def test_an_edge_through_a_ball_at_the_start_is_refused(write_case, tmp_path):
+    net = build(_case(DROP.replace("EDGES", "false"))).net
+    i, j = net.edges[0]
+    mid = 0.5 * (net.nodes[i] + net.nodes[j]) + [0.0, 0.0, 0.25 - 0.002]  # dips 2 mm below
+    assert (np.linalg.norm(net.nodes[: net.n_net] - mid, axis=1) > 0.25).all()  # no node in
+    text = DROP.replace("EDGES", "true").replace("[0.07, 0.03, 0.27]", str(mid.tolist()))
+    res = CliRunner().invoke(main, ["run", str(write_case(text)), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 2, res.output
+    assert "passes through it or within the contact radius" in res.output
+
+
+CORNER = """
+[geometry]
+kind = "square_net"
+n = 6
+alpha = 0.0
+size = 1.0
+edge_length = 0.25
+
+[material]
+E = 1e8
+radius = 0.004
+density = 1000.0
+
+[load]
+gravity = [0.0, 0.0, -9.81]
+
+[[obstacle]]
+kind = "box"
+center = CENTER
+half_size = [0.04, 0.04, 0.04]
+axis = [1.0, 1.0, 0.0]
+angle = 0.9553166181245093  # a corner up
+
+[solver]
+method = "dynamic"
+dt = 0.01
+t_end = 0.6
+damping = 2.0
+edge_contact = EDGES
+"""
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_a_strand_sagging_onto_a_box_corner_between_its_nodes_wraps_it(on):
+    """A net of 0.25 m cells sags under its weight onto a small box whose top corner is
+    5 mm below the middle of a strand (0.125 m from the nodes): with the nodes alone the
+    strand cuts into the corner; as capsules it rests on it, the cord's radius off, at
+    every step."""
+    from catenet.terms.shapes import rotation
+
+    turn = rotation([1.0, 1.0, 0.0], 0.9553166181245093)
+    corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * 0.04
+    top = (corners @ turn.T)[np.argmax((corners @ turn.T)[:, 2])]
+    centre = [float(0.125 - top[0]), float(-top[1]), float(-0.005 - top[2])]
+    text = CORNER.replace("CENTER", str(centre)).replace("EDGES", str(on).lower())
+    scene = build(_case(text))
+    frames = _steps(scene)
+    ((_, shape, _),) = scene.obstacles
+    gaps = []
+    for x in frames:
+        X = (_points(scene, x) - shape.center) @ shape.axes
+        e = np.abs(X) - shape.half_size
+        outside = np.linalg.norm(np.maximum(e, 0.0), axis=-1)
+        gaps.append(np.where(outside > 0.0, outside, e.max(axis=-1)).min())
+    if on:
+        assert 0.004 < min(gaps) < 0.004 + scene.terms[0].dhat + 1e-3  # resting on it
+    else:
+        assert min(gaps) < -0.005  # cut through the corner
+
+
+def test_a_contact_radius_without_edge_contact_is_said_to_be_ignored(write_case, tmp_path):
+    text = small_net(t_end=0.02).replace("[material]\n", "[material]\ncontact_radius = 0.01\n")
+    res = CliRunner().invoke(main, ["run", str(write_case(text)), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 0, res.output
+    assert "material.contact_radius = 0.01: ignored without solver.edge_contact" in res.output
