@@ -111,12 +111,12 @@ def test_order_of_convergence_on_a_string(integrator, low, high):
     assert all(low < q < high for q in ratios(errors)), errors
 
 
-@pytest.mark.parametrize("integrator, low, high", ORDERS)
+@pytest.mark.parametrize("integrator, low, high", [o for o in ORDERS if o[0] != "newmark"])
 def test_order_of_convergence_in_contact_with_a_plane(integrator, low, high):
     """The same scene with a fixed obstacle, damped (mu = 2): implicit Euler converges at
-    first order, newmark and bdf2 at second (the damping enters at second order), every
-    node outside the plane at every step."""
-    ref = plane_run(5e-5, "newmark", 1.0)
+    first order, bdf2 at second (the damping enters at second order), every node outside
+    the plane at every step (newmark is refused in contact)."""
+    ref = plane_run(5e-5, "bdf2")
     errors = [np.abs(plane_run(dt, integrator) - ref).max() for dt in (1e-3, 5e-4, 2.5e-4)]
     assert all(low < q < high for q in ratios(errors)), errors
 
