@@ -71,7 +71,8 @@ def net_on_plane(dt: float, integrator: str, rho_inf: float = RHO_INF) -> dict:
         "obstacle": [{"kind": "plane", "point": [0, 0, -0.01], "normal": [0, 0, 1],
                       "distance": 0.02}],
         "solver": {"method": "dynamic", "dt": dt, "damping": 2.0, "t_end": 0.1, "rtol": 1e-10,
-                   "integrator": integrator, "rho_inf": rho_inf},
+                   "integrator": integrator}
+        | ({"rho_inf": rho_inf} if integrator == "newmark" else {}),
     }  # fmt: skip
 
 
