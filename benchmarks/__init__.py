@@ -26,6 +26,7 @@ STUDIES = {
     "reuse": "benchmarks.reuse",
     "integrators": "benchmarks.integrators",
     "drop": "benchmarks.drop",
+    "accuracy": "benchmarks.accuracy",
 }
 
 

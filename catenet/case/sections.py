@@ -339,7 +339,7 @@ class SolverConfig(Declared):
         gt=0,
         write="given",
         unit="s",
-        shown="`0.01`; with solver.tolerance: t_end / 1000",
+        shown="`0.01`; with solver.tolerance (or contact): t_end / 1000",
         doc="dynamic: the time step (fixed); with solver.tolerance, the first step",
     )
     tolerance: float | None = real(
@@ -347,10 +347,10 @@ class SolverConfig(Declared):
         gt=0,
         lt=1,
         write="given",
-        shown="none: fixed steps",
+        shown="none: fixed steps; `1e-3` with contact and no dt",
         doc="dynamic, a number for t_end: steps chosen by accuracy: each step's local error "
-        "in positions and velocities, as a share of how far and how fast the motion goes "
-        "(docs/howto/dynamic-runs.md)",
+        "in positions, strains and bodies' momenta, as a share of how far the motion goes, "
+        "the largest strain and momentum (docs/howto/dynamic-runs.md)",
     )
     dt_max: float | None = real(
         None, gt=0, write="given", unit="s", shown="t_end", doc="adaptive steps: the longest"
@@ -374,7 +374,7 @@ class SolverConfig(Declared):
         None,  # not given: bdf2 where steps adapt, else implicit Euler (parse.py)
         INTEGRATORS,
         write="given",
-        shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance',
+        shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance (or contact and no dt)',
         doc="dynamic: the paper's implicit Euler (first order, damps numerically), "
         "newmark (second order) or bdf2 (second order, L-stable: right in contact)",
     )

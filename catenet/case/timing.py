@@ -17,6 +17,7 @@ from typing import Any
 
 from catenet.case.obstacles import SphereObstacle
 from catenet.case.sections import LoadConfig, SolverConfig, SupportsConfig
+from catenet.solver.adaptive import ADAPTIVE, TOLERANCE
 from catenet.solver.relax import REST
 from catenet.solver.settings import steps_given
 
@@ -59,17 +60,44 @@ def default_t_end(load: Any, supports: Any, solver: Any, obstacles: Any, masses:
     return T_END if time_dependence(load, supports, solver, obstacles, masses) else REST
 
 
-def resolve_steps(solver: SolverConfig) -> SolverConfig:
+def resolve_steps(solver: SolverConfig, contact: bool = False) -> SolverConfig:
     """A dynamic case's steps as the run takes them (its t_end decided): a run with a
     number for t_end and a ``tolerance`` adapts its steps to it (``dt``: the first step,
     else FIRST_SHARE of t_end, at most ``dt_max``) with bdf2 unless ``integrator`` says
     otherwise (``catenet.solver.adaptive``); any other run steps by ``dt`` (default
     0.01 s) with implicit Euler unless ``integrator`` says otherwise
-    (``catenet.solver.settings.steps_given``, as a Settings made in Python)."""
+    (``catenet.solver.settings.steps_given``, as a Settings made in Python).
+
+    A run to a time with ``contact`` (an obstacle, a ball, a free body or self-contact)
+    that gives neither ``dt`` nor ``tolerance`` takes the default tolerance
+    (``catenet.solver.adaptive.TOLERANCE``): its impacts are what it is run for, and
+    fixed steps of a guessed size step over them (docs/howto/dynamic-runs.md)."""
+    if (
+        contact
+        and solver.method == "dynamic"
+        and isinstance(solver.t_end, (int, float))
+        and solver.dt is None
+        and solver.tolerance is None
+        and solver.integrator in (None, *ADAPTIVE)
+    ):
+        solver = dataclasses.replace(solver, tolerance=TOLERANCE)
     dt, integrator = steps_given(solver.dt, solver.integrator, solver)
     dynamic = solver.method == "dynamic"  # (a static case keeps its integrator unset)
     return dataclasses.replace(
         solver, dt=dt, integrator=integrator if dynamic else solver.integrator
+    )
+
+
+def newmark_refused(obstacles: Any) -> str:
+    """The problem of a dynamic case with contact that asks for newmark: at its default
+    rho_inf it gains momentum in impacts and does not converge with the step, and below
+    it its steps fail at first contact (docs/howto/dynamic-runs.md)."""
+    what = f"obstacle[0] ({obstacles[0].kind})" if obstacles else "solver.self_contact"
+    return (
+        f"solver.integrator = 'newmark': not for a run with contact ({what}): newmark "
+        "gains momentum in impacts (a box dropped onto a net leaves it faster than it "
+        "came) or fails at first contact; use 'bdf2' (second order and right in contact, "
+        "the default there) or 'implicit_euler' (docs/howto/dynamic-runs.md)"
     )
 
 

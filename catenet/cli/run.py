@@ -316,7 +316,6 @@ def _summary(case, result, path: Path | None) -> None:
         utilisation_line,
     )
     from catenet.run.advice import LARGE_BYTES, format_bytes
-    from catenet.run.integrator_advice import newmark_contact
 
     s = result.report
     numbers = {**s.summary, "delta_over_L": s.delta_over_L, "size": s.size}
@@ -346,8 +345,6 @@ def _summary(case, result, path: Path | None) -> None:
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
         lines.insert(-1, _balance(result.energy, result.energy_scale))
-    for note in newmark_contact(case):  # the scheme's known failure in impacts
-        lines.insert(-1, f"{'warning':<12} {note}")
     for k, b in s.bodies.items():  # free rigid bodies, one line each
         first = b["first_contact"]
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "

@@ -89,7 +89,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
     from catenet.case import build
     from catenet.output import check_output_path
-    from catenet.run import advice, integrator_advice
+    from catenet.run import advice
     from catenet.run.cases import pick
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -119,7 +119,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
         raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
     notes += advice.ignored_contact_radius(case)
-    for message in notes + integrator_advice.newmark_contact(case) + advice.between_nodes(scene):
+    for message in notes + advice.between_nodes(scene):
         log.warning("%s", message)
     trajectory = None
     if path is not None:

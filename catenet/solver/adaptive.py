@@ -4,16 +4,35 @@ solution and the polynomial through the last states, extrapolated), measured aga
 tolerance, and the step is accepted where that error is within it and retried shorter
 where not; the next step is sized so that its error comes out at SAFETY of the tolerance.
 
-The error of a step is the larger of
+The error of a step is the largest of
 
-    |error in x| / (tolerance X)   and   |error in v| / (tolerance V)
+    |error in x| / (tolerance X),   |error in strain| / (tolerance S),
+    |error in a body's momentum| / (MOMENTUM tolerance P)
 
-in the mass-weighted RMS over the free DOFs (so that a light node rattling in contact
-does not set the steps of a heavy body), with X and V the motion's own scales: the largest
-mass-weighted RMS displacement from the start and speed of the run so far, at least FLOOR
-of the net's size L (its bounding box's diagonal) and of sqrt(|g| L) or L / (t_end - t0).
-So a tolerance of 1e-3 asks every step to keep its positions within 1e-3 of how far the
-motion has gone and its velocities within 1e-3 of how fast.
+with X the motion's reach (the largest mass-weighted RMS displacement from the start so
+far, over the free DOFs; at least FLOOR of the net's size L, its bounding box's
+diagonal), S the largest strain of an edge so far (at least STRAIN_FLOOR) and P each free
+body's or ball's largest momentum |sum m v| so far (at least its mass times FLOOR of
+sqrt(|g| L) or L / (t_end - t0)). The strain error of an edge is the positions' error
+projected on the edge over its rest length; its RMS over the edges taut at the step's end
+(or within their error of it; every edge that is not tension-only), weighted by their
+rest lengths, counts: the tensions of the loaded ropes. (The largest edge's error instead
+took 1215 steps on the drop at 1e-3, against 360.) The net's velocities are left out:
+their error is that of its light nodes ringing across the ropes (100 to 1000 times the
+rest on an impact), which no design value depends on and which set every step (the drop
+took 783 steps at 1e-3 with them); a transverse swing changes no strain to first order,
+and the positions' error keeps the net's motion within the tolerance of its reach. A
+body's momentum is where an impact's error shows first, and its errors add up over the
+tens of steps of a contact: it is held to MOMENTUM of the tolerance (at the tolerance
+itself, a ball dropped 1 m on the ground rebounded 3.6 % slow and two boxes colliding head
+on 10 %; at a tenth, the ball's bounce keeps its period to 0.02 %, the boxes their speed
+within 5 %). So a tolerance of 1e-3 asks every step to keep its
+positions within 1e-3 of how far the motion has gone, the strains (the tensions) within
+1e-3 of the largest and each body's momentum within 1e-4 of its largest.
+
+Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
+converged step across one is tried again ending there, before its error is judged, so
+that the impact is resolved from its first instant.
 
 A run starts with ``first`` (``solver.dt`` where given, else FIRST_SHARE of the run's span,
 at most ``dt_max``): the scheme's first steps, before it has the states to
@@ -22,16 +41,17 @@ estimate its error from, are taken at that length. Steps stay within
 length, as with fixed steps, and the run fails where that is below ``dt_min``; a step at
 ``dt_min`` whose error is still beyond the tolerance is accepted (the run warns once). A
 run that takes more than MAX_TRIES steps fails (a tolerance too tight for it).
-Each estimate is filtered through the step's own matrix (W^-1 w e, W = w + K the Newton
-matrix, w the inertia weights): a component the step resolves keeps its size, a stiff one
-it cannot (a free body's rigidity, a barrier's) is damped as bdf2 and implicit Euler damp
-it, so it does not set the steps (Shampine's filter, as in stiff ODE codes).
+The estimate of the positions is filtered through the step's own matrix (W^-1 w e,
+W = w + K the Newton matrix, w the inertia weights): a component the step resolves keeps
+its size, a stiff one it cannot (a free body's rigidity, a rope's axial ringing) is damped
+as bdf2 and implicit Euler damp it, so it does not set the steps (Shampine's filter, as in
+stiff ODE codes). The bodies' momenta are not filtered: a barrier's stiffness is the
+bounce itself (filtered, a ball dropped on the ground lost its rebound in one long step),
+and a body's rigidity does not change its momentum.
 
-Measured on the drop of benchmarks/peers/mujoco_drop.toml (the box's momentum at 0.4 s;
-bdf2 at fixed 0.31 ms steps: 16.17 kg m/s): tolerance 1e-2, 31 steps, 16.54 (+2.3 %);
-3e-3, 185 steps, 16.44 (+1.7 %); 1e-3, 783 steps, 16.18 (+0.03 %); fixed 10 ms steps:
-40 steps, 16.29 (+0.8 %). Where the contact phase is short against the free flight, a
-tolerance above 1e-3 steps over part of it: adaptive steps are not yet the default.
+Measured on the drop of benchmarks/peers/mujoco_drop.toml without its dt (the box's
+momentum at 0.4 s; bdf2 at fixed 0.31 ms steps: 16.17 kg m/s) and on the safety net of
+benchmarks/safety_net.toml: benchmarks/accuracy.py, docs/howto/dynamic-runs.md.
 """
 
 from __future__ import annotations
@@ -43,10 +63,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.solver.events import Events
 from catenet.solver.integrators import BDF2, ImplicitEuler
 from catenet.solver.stepping import ALLOWANCE
 
 if TYPE_CHECKING:
+    from catenet.model.net import Net
+    from catenet.solver.newton import NewtonResult
     from catenet.solver.stepper import TimeStepper
 
 log = logging.getLogger(__name__)
@@ -58,7 +81,87 @@ SHRINK_MIN = 0.2  # a rejected step shrinks at most fivefold
 FIRST_SHARE = 1e-3  # the first step, of the run's span (t_end - t0)
 ADAPTIVE = ("implicit_euler", "bdf2")  # the schemes that estimate their error
 FLOOR = 1e-2  # X and V at least this share of L and of sqrt(|g| L), L / (t_end - t0)
+STRAIN_FLOOR = 1e-4  # S at least this strain (0.01 %)
+MOMENTUM = 0.1  # a body's momentum error against this share of the tolerance
 MAX_TRIES = 100_000  # a run that needs more steps fails (a tolerance too tight for it)
+
+
+class Edges:
+    """A net's edges for the strain error (module docstring): node pairs (M, 2), rest
+    lengths, which are tension-only; ``where`` maps a free DOF's error into the net's
+    (N * 3) flat positions."""
+
+    def __init__(self, net: Net, free: np.ndarray):
+        self.i, self.j = net.edges[:, 0], net.edges[:, 1]
+        self.l0 = np.asarray(net.rest_length, dtype=np.float64)
+        self.only = np.asarray(net.law.tension_only, dtype=bool)
+        self.free = free
+        self.n = len(net.nodes)
+
+    def strain(self, x: np.ndarray) -> float:
+        """The largest strain of an edge in state x (N, 3), 0 for none."""
+        if not len(self.l0):
+            return 0.0
+        d = x[self.j] - x[self.i]
+        return max(0.0, float(np.max(np.sqrt(np.einsum("ij,ij->i", d, d)) / self.l0 - 1.0)))
+
+    def error(self, x: np.ndarray, ex: np.ndarray) -> float:
+        """The RMS error in strain along the edges taut in state x (N, 3) (weighted by
+        their rest lengths), from the error ``ex`` of the free DOFs' positions."""
+        if not len(self.l0):
+            return 0.0
+        full = np.zeros(3 * self.n)
+        full[self.free] = ex
+        e = full.reshape(-1, 3)
+        d = x[self.j] - x[self.i]
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        length[length == 0.0] = 1.0
+        de = np.abs(np.einsum("ij,ij->i", d, e[self.j] - e[self.i])) / (length * self.l0)
+        taut = ~self.only | (length / self.l0 - 1.0 + de > 0.0)
+        w = self.l0 * taut  # the RMS along the taut rope
+        tot = float(w.sum())
+        return math.sqrt(float(np.dot(w, de * de)) / tot) if tot > 0 else 0.0
+
+
+class Bodies:
+    """The free bodies and balls of a run for the momentum error (module docstring): each
+    one's free-DOF positions (k, 3) in the free DOFs' vector (a free body's four frame
+    nodes, a ball's node), its masses, and the largest momentum |sum m v| it has had."""
+
+    def __init__(self, stepper: TimeStepper, floor: float):
+        from catenet.terms.rigid import Rigidity
+
+        net, free = stepper.net, stepper.free
+        where = np.full(3 * len(net.nodes), -1)
+        where[free] = np.arange(len(free))
+        frames = [
+            np.asarray(t.frame.nodes) for t in stepper.system.terms if isinstance(t, Rigidity)
+        ]
+        framed = set(int(k) for nodes in frames for k in nodes)
+        balls = [np.array([k]) for k in range(net.n_net, len(net.nodes)) if k not in framed]
+        self.dofs = []
+        for nodes in frames + balls:
+            dofs = where[3 * nodes[:, None] + np.arange(3)]
+            if np.all(dofs >= 0):
+                self.dofs.append(dofs)
+        m = stepper.m_free
+        self.mass = [m[d] for d in self.dofs]
+        self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
+
+    def momenta(self, v: np.ndarray) -> list[float]:
+        """|sum m v| of each body from the free DOFs' velocities (or their errors) v."""
+        return [
+            float(np.linalg.norm(np.sum(ms * v[d], axis=0)))
+            for d, ms in zip(self.dofs, self.mass, strict=True)
+        ]
+
+    def saw(self, v: np.ndarray) -> None:
+        self.largest = [max(a, b) for a, b in zip(self.largest, self.momenta(v), strict=True)]
+
+    def error(self, ev: np.ndarray) -> float:
+        """The largest error in a body's momentum over its largest momentum so far."""
+        errors = self.momenta(ev)
+        return max((e / p for e, p in zip(errors, self.largest, strict=True)), default=0.0)
 
 
 def _rms(a: np.ndarray, mass: np.ndarray) -> float:
@@ -92,6 +195,10 @@ class ErrorControl:
         self.size = float(size) if size > 0 else 1.0  # L
         self.reach = FLOOR * self.size  # X: grows with the motion's displacements
         self.speed = FLOOR * max(math.sqrt(gravity * self.size), self.size / span)  # V, grows
+        self.strain = STRAIN_FLOOR  # S: grows with the largest strain
+        self.edges: Edges | None = None  # the net's (``of``): no strain error without
+        self.bodies: Bodies | None = None  # the free bodies and balls (``of``)
+        self.events: Events | None = None  # contact events landed on (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
         self.dt_max = span if dt_max is None else float(dt_max)
@@ -104,6 +211,7 @@ class ErrorControl:
         self.fails = 0
         self.rejected = 0  # steps that converged but whose error was beyond the tolerance
         self.beyond = 0  # steps accepted at dt_min with their error beyond the tolerance
+        self.landed = 0  # steps tried again to end at a contact event
         self.least = self.dt_min  # the shortest the next step may be (``step``)
         self.planned = max(1, math.ceil(span / self.dt_max - 1e-9))
         self.budget = MAX_TRIES + ALLOWANCE  # many short steps may be what the tolerance asks
@@ -132,18 +240,27 @@ class ErrorControl:
 
             stepper.ledger.remedy = ADAPTIVE_REMEDY
         scheme.keep = True
-        nodes, gravity = stepper.net.nodes, stepper.loads.gravity
-        return cls(
+        net, gravity = stepper.net, stepper.loads.gravity
+        nodes = net.nodes
+        out = cls(
             t0, t_end, order=scheme.order, tolerance=tolerance, first=first, dt_max=dt_max,
             dt_min=dt_min, size=float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0))),
             gravity=0.0 if gravity is None else float(np.linalg.norm(gravity)),
         )  # fmt: skip
+        out.edges = Edges(net, stepper.free)
+        out.bodies = Bodies(stepper, out.speed)
+        out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
+        out.events = Events(stepper.system.terms, stepper.x)
+        return out
 
-    def within(self, stepper: TimeStepper, h_step: float) -> bool:
+    def within(self, stepper: TimeStepper, h_step: float, newton: NewtonResult) -> bool:
         """Whether the converged step of ``h_step`` of a TimeStepper (in its x_trial) is
         within the tolerance, its estimate filtered through the step's matrix (module
         docstring): else the next try is shorter, and ConvergenceError where the run's
         tries are spent."""
+        if self.lands(stepper, h_step):
+            self.tries += 1
+            return False
         free = stepper.free
         y_k, v_k = stepper.x.reshape(-1)[free], stepper.v.reshape(-1)[free]
         y_new = stepper.x_trial.reshape(-1)[free]
@@ -152,8 +269,11 @@ class ErrorControl:
         estimate = scheme.estimate(y_new, y_k, v_k, h_step)
         error = None
         if estimate is not None:
+            if newton.iterations == 0:  # no step matrix factorised yet: the filter's
+                stepper.potential.factorize(stepper.x_trial, 0.0)
             w, solve = stepper.inertia.w, stepper.potential.solver.solve
-            error = self.error(solve(w * estimate[0]), solve(w * estimate[1]), stepper.m_free)
+            ex = solve(w * estimate[0])
+            error = self.error(ex, estimate[1], stepper.m_free, stepper.x_trial)
         if self.judge(h_step, error):
             return True
         log.info("t = %.6g: step %.3g beyond the tolerance (%.3g); retrying with %.3g",
@@ -165,22 +285,47 @@ class ErrorControl:
             )  # fmt: skip
         return False
 
-    def saw(self, u: np.ndarray, v: np.ndarray, mass: np.ndarray) -> None:
-        """The displacements from the start and velocities of an accepted step (free
-        DOFs, their masses): X and V grow to the largest mass-weighted RMS of each."""
+    def lands(self, stepper: TimeStepper, h_step: float) -> bool:
+        """Whether the converged step of ``h_step`` crosses a contact event it should end
+        at (catenet/solver/events.py): then the next try is that short."""
+        if self.events is None:
+            return False
+        share = self.events.landing(stepper.x, stepper.v, stepper.x_trial, h_step)
+        if share is None or share * h_step < self.least:
+            return False
+        self.h = share * h_step
+        self.landed += 1
+        return True
+
+    def saw(self, x: np.ndarray, u: np.ndarray, v: np.ndarray, mass: np.ndarray) -> None:
+        """The state x (N, 3) of an accepted step with its displacements from the start
+        and velocities (free DOFs, their masses): X and V grow to the largest
+        mass-weighted RMS of each (V of the bodies'), S to the largest strain."""
         if len(v):
             self.reach = max(self.reach, _rms(u, mass))
-            self.speed = max(self.speed, _rms(v, mass))
+            if self.bodies is not None:
+                self.bodies.saw(v)
+        if self.edges is not None:
+            self.strain = max(self.strain, self.edges.strain(x))
+        if self.events is not None:
+            self.events.take(x)
 
-    def error(self, ex: np.ndarray, ev: np.ndarray, mass: np.ndarray) -> float:
+    def error(
+        self, ex: np.ndarray, ev: np.ndarray, mass: np.ndarray, x: np.ndarray | None = None
+    ) -> float:
         """A step's error over the tolerance from its estimates in x and v (free DOFs,
-        their masses: mass-weighted RMS, so that a light node rattling in contact does
-        not set the steps of a heavy body's motion)."""
+        their masses) at its end state x (N, 3): the positions' mass-weighted RMS (a
+        light node rattling in contact does not set the steps of a heavy body's motion),
+        the largest strain error of a taut edge, the bodies' velocities' RMS (module
+        docstring)."""
         if not len(ex):
             return 0.0
-        ratio_x = _rms(ex, mass) / (self.tolerance * self.reach)
-        ratio_v = _rms(ev, mass) / (self.tolerance * self.speed)
-        return max(ratio_x, ratio_v)
+        ratio = _rms(ex, mass) / (self.tolerance * self.reach)
+        if self.edges is not None and x is not None:
+            ratio = max(ratio, self.edges.error(x, ex) / (self.tolerance * self.strain))
+        if self.bodies is not None:
+            ratio = max(ratio, self.bodies.error(ev) / (MOMENTUM * self.tolerance))
+        return ratio
 
     def step(self, t: float) -> float:
         """The next step from t: h, cut short at t_end, or half what is left where h would

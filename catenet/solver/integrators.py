@@ -61,12 +61,12 @@ fine-step momentum to 1 % at 10 ms steps (implicit Euler: 47 % short), and on th
 capture scene it only loses energy (8.6 % in 1 s), where newmark above rho_inf 0.25
 creates it.
 
-In contact keep rho_inf <= 0.5 (``catenet.run.integrator_advice.newmark_contact`` warns): at 0.8 a
-box or ball dropped onto a net leaves it faster than it came and the rebound does not
-converge with h; at 0.5 it does (docs/howto/dynamic-runs.md). Likely mechanism: the
-barrier is a mode far beyond 1/h that a_n carries from step to step, losing only a factor
-rho_inf per step, and the one-sided barrier pushes back on each swing toward the obstacle
-and lets the swings away go.
+In contact keep rho_inf <= 0.5 (a case file with contact refuses newmark:
+``catenet.case.timing.newmark_refused``): at 0.8 a box or ball dropped onto a net leaves
+it faster than it came and the rebound does not converge with h; at 0.5 it does
+(docs/howto/dynamic-runs.md). Likely mechanism: the barrier is a mode far beyond 1/h
+that a_n carries from step to step, losing only a factor rho_inf per step, and the one-
+sided barrier pushes back on each swing toward the obstacle and lets the swings away go.
 
 The scheme's acceleration a_n is part of its state. A run starts at t = 0 with the
 physical acceleration M^-1 (f - grad E - mu M v). With rho_inf < 1 the a_n of later

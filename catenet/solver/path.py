@@ -246,6 +246,7 @@ def _dynamic(
     accel = np.zeros_like(x0) if settings.integrator == "newmark" else None
     last.a = None if start.a is None else np.array(start.a, dtype=np.float64)
     tension = ws.system.tension
+    peaks.between |= settings.tolerance is not None  # peaks between steps chosen by accuracy
     peaks.observe(start.t, x0, tension(x0))
 
     def rest(ratio: float) -> None:

@@ -153,7 +153,7 @@ class TimeStepper:
                 if not self.refresh(h_step, why):
                     self.cut(control, h_step, why, newton)
                 continue
-            if isinstance(control, ErrorControl) and not control.within(self, h_step):
+            if isinstance(control, ErrorControl) and not control.within(self, h_step, newton):
                 continue  # its error beyond the tolerance: tried again, shorter
             self.accept(control, h_step, newton)
             if rest and self.t >= self.settle and not self.moving:  # else it runs to t_end
@@ -375,7 +375,7 @@ class TimeStepper:
         control.accepted()
         if isinstance(control, ErrorControl):
             moved = self.x.reshape(-1)[self.free] - self.x0_free
-            control.saw(moved, self.v.reshape(-1)[self.free], self.m_free)
+            control.saw(self.x, moved, self.v.reshape(-1)[self.free], self.m_free)
 
 
 def mass_and_damping(net: Net, damping: float) -> tuple[np.ndarray, float | np.ndarray]:

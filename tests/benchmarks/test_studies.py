@@ -224,3 +224,13 @@ def test_the_drop_study_measures_one_run():
     assert row["scheme"] == "bdf2" and row["converged"] and row["steps"] == 40
     assert 15.5 < row["momentum"] < 16.8  # the fine-step answer 16.2 +- 0.1 (docs/performance.md)
     assert row["created"] <= 1e-9 < row["lost"] < 0.2
+
+
+def test_the_accuracy_study_measures_one_run():
+    """benchmarks/accuracy.py's run of the drop at fixed bdf2 steps of 10 ms: the box's
+    momentum as benchmarks/drop.py measures it (16.29 kg m/s), its counts."""
+    from benchmarks.accuracy import once
+
+    row = once("drop", 1e-2)
+    assert row["run"] == "bdf2 fixed" and row["steps"] == 40 and row["h"] == 1e-2
+    assert abs(row["value"] - 16.29) < 0.05

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import catenet as cn
-from catenet.case import build, parse_case
+from catenet.case import parse_case
 from catenet.errors import ConfigError
 from catenet.solver.dynamic import solve_dynamic
 from tests.solver.test_energy import invoke, write
@@ -53,7 +53,7 @@ def test_the_error_falls_with_the_tolerance_at_the_schemes_order(integrator, ord
     for k in range(2):
         assert 0.7 * expected < steps[k + 1] / steps[k] < 1.4 * expected, steps
         assert errors[k + 1] < 0.5 * errors[k], errors
-    assert errors[-1] < (1e-4 if order == 2 else 3e-4)  # of an amplitude of 1e-2 m
+    assert errors[-1] < (2.5e-4 if order == 2 else 5e-4)  # of an amplitude of 1e-2 m
 
 
 def test_the_steps_keep_within_dt_min_and_dt_max():
@@ -70,9 +70,9 @@ def drop(**solver) -> dict:
 
 
 def test_a_tolerance_without_dt_steps_by_accuracy_with_bdf2():
-    solver = parse_case(drop(tolerance=1e-3)).solver
+    solver = parse_case(drop(tolerance=3e-3)).solver
     assert solver.integrator == "bdf2" and solver.dt == pytest.approx(0.4 / 1000)
-    fixed = parse_case(drop()).solver  # no tolerance: fixed steps of 0.01 s, implicit Euler
+    fixed = parse_case(drop(dt=0.01)).solver  # dt alone: fixed steps, implicit Euler
     assert fixed.tolerance is None and fixed.dt == 0.01 and fixed.integrator == "implicit_euler"
     given = parse_case(drop(tolerance=1e-3, dt=2e-3, integrator="implicit_euler")).solver
     assert given.dt == 2e-3 and given.integrator == "implicit_euler"
@@ -81,7 +81,7 @@ def test_a_tolerance_without_dt_steps_by_accuracy_with_bdf2():
 @pytest.mark.parametrize(
     "solver, message",
     [
-        ({"tolerance": 1e-3, "integrator": "newmark"}, "not 'newmark'"),
+        ({"tolerance": 1e-3, "integrator": "newmark"}, "not for a run with contact"),
         ({"tolerance": 1e-3, "dt_min": 0.1, "dt_max": 0.01}, "solver.dt_min = 0.1: must be <="),
         ({"tolerance": 1e-3, "dt": 0.2, "dt_max": 0.01}, "solver.dt = 0.2: the first adaptive"),
         ({"tolerance": 1.5}, "solver.tolerance = 1.5"),
@@ -93,23 +93,20 @@ def test_bad_step_keys_exit_2_naming_the_key(tmp_path, solver, message):
     assert r.exit_code == 2 and message in r.output, r.output
 
 
-def test_the_drop_at_a_tolerance_and_its_result_file(tmp_path):
-    """The drop at tolerance 3e-3 from the command line: the box thrown back up within
-    3 % of the fine-step answer (16.17 kg m/s), every frame's time after the last, no
-    node inside the box (the run's own check), the file's solver keys as run."""
+def test_the_drop_at_default_settings_and_its_result_file(tmp_path):
+    """The drop without dt from the command line (its default tolerance, bdf2): the box
+    thrown back up within 2 % of the fine-step answer (bdf2 at 0.31 ms: 16.17 kg m/s),
+    every frame's time after the last, no node inside the box (the run's own check)."""
     out = tmp_path / "drop.h5"
-    r = invoke("run", write(tmp_path, drop(tolerance=3e-3)), "-o", out, "-q")
+    r = invoke("run", write(tmp_path, drop()), "-o", out, "-q")
     assert r.exit_code == 0, r.output
     with h5py.File(out, "r") as f:
         t = f["trajectory/time"][()]
         assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(0.4)
         assert len(np.unique(np.round(np.diff(t), 12))) > 3  # the steps did change
-    case = parse_case(drop(tolerance=3e-3))
-    scene = build(case)
-    result = cn.solve(scene, cn.Settings.of(case.solver))
-    (body,) = scene.rigid
-    momentum = body.mass * float(result.v[body.frame.nodes, 2].mean())
-    assert abs(momentum / 16.17 - 1) < 0.03
+        velocity = f["result/obstacles/0/velocity"][()]
+        mass = float(f["mesh/obstacles/0"].attrs["mass"])
+    assert abs(mass * velocity[2] / 16.17 - 1) < 0.02
 
 
 def test_settings_refuse_newmark_with_a_tolerance():

@@ -71,7 +71,8 @@ def net_on_plane(dt: float, integrator: str, rho_inf: float = RHO_INF) -> dict:
         "obstacle": [{"kind": "plane", "point": [0, 0, -0.01], "normal": [0, 0, 1],
                       "distance": 0.02}],
         "solver": {"method": "dynamic", "dt": dt, "damping": 2.0, "t_end": 0.1, "rtol": 1e-10,
-                   "integrator": integrator, "rho_inf": rho_inf},
+                   "integrator": integrator}
+        | ({"rho_inf": rho_inf} if integrator == "newmark" else {}),
     }  # fmt: skip
 
 
@@ -111,12 +112,12 @@ def test_order_of_convergence_on_a_string(integrator, low, high):
     assert all(low < q < high for q in ratios(errors)), errors
 
 
-@pytest.mark.parametrize("integrator, low, high", ORDERS)
+@pytest.mark.parametrize("integrator, low, high", [o for o in ORDERS if o[0] != "newmark"])
 def test_order_of_convergence_in_contact_with_a_plane(integrator, low, high):
     """The same scene with a fixed obstacle, damped (mu = 2): implicit Euler converges at
-    first order, newmark and bdf2 at second (the damping enters at second order), every
-    node outside the plane at every step."""
-    ref = plane_run(5e-5, "newmark", 1.0)
+    first order, bdf2 at second (the damping enters at second order), every node outside
+    the plane at every step (newmark is refused in contact)."""
+    ref = plane_run(5e-5, "bdf2")
     errors = [np.abs(plane_run(dt, integrator) - ref).max() for dt in (1e-3, 5e-4, 2.5e-4)]
     assert all(low < q < high for q in ratios(errors)), errors
 

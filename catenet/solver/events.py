@@ -1,0 +1,104 @@
+"""Contact events of a run whose steps are chosen by accuracy (catenet/solver/adaptive.py):
+a first touch (an obstacle's, a ball's or a free body's barrier that held no energy at the
+step's start holds some at its end) and a release (the other way round), landed on rather
+than stepped over.
+
+A contact term's barrier is active where a gap is below its activation distance dhat, so
+whether it touches is whether its energy is positive. After a converged step from (x, v)
+to x_new, a term whose state changed had its event somewhere in the step: its time is
+found by bisection along the predictor x + s h v (s in [0, 1]: where the motion would go
+without the contact, the time of a first touch within dhat) and along the step's path,
+the parabola x + s h v + s^2 (x_new - x - h v) (the predictor bent to meet the step's
+end: a release), as the first s where any term's state differs from the step's start
+(BISECTIONS halvings: to 2^-BISECTIONS of the step). A step whose event lies at s in
+(EARLY, LATE) is tried again with length s h (its end the first state in contact, or the
+last one touching), so that the next step starts at the event: the error estimate then
+sees the impact from its first instant rather than a step that straddles it, and a peak
+force is resolved from the touch on. An event in the first EARLY or last 1 - LATE of a
+step is the step's start or end already: the step is taken as it is (no step is cut to a
+sliver, and a step landed on its event is not cut again).
+
+Terms on a prescribed motion are judged at their pose at the step's end (the events of a
+moving obstacle are found to within its motion over the step).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+
+import numpy as np
+
+from catenet.terms import Term
+
+log = logging.getLogger(__name__)
+
+BISECTIONS = 12  # the event's time to 2^-12 of the step
+EARLY = 0.05  # an event in the step's first 5 %: at its start already
+LATE = 0.95  # ... in its last 5 %: at its end already
+
+
+def contact_terms(terms: Sequence[Term]) -> tuple[Term, ...]:
+    """The terms with a barrier (an activation distance dhat > 0): obstacles, balls,
+    free bodies' contact with the net and with each other, self-contact."""
+    return tuple(t for t in terms if float(getattr(t, "dhat", 0.0) or 0.0) > 0.0)
+
+
+class Events:
+    """The contact state of a run's barrier terms (``contact_terms``) and the events of
+    its steps (module docstring): ``landing`` after a converged step, ``take`` once a
+    step is accepted. ``touches`` and ``releases`` count the events landed on."""
+
+    def __init__(self, terms: Sequence[Term], x: np.ndarray):
+        self.terms = contact_terms(terms)
+        self.state = self._state(x)
+        self.touches = 0
+        self.releases = 0
+
+    def _state(self, x: np.ndarray) -> tuple[bool, ...]:
+        """Whether each term touches at x (a barrier energy that is not 0: a node inside,
+        whose energy is not finite, touches too)."""
+        return tuple(not t.energy(x) <= 0.0 for t in self.terms)
+
+    def _first(self, x: np.ndarray, dx: np.ndarray, bend: np.ndarray | None) -> float | None:
+        """The first share s of the path x + s dx (+ s^2 bend) where the contact state
+        differs from the step's start (to 2^-BISECTIONS), None where it does not at s = 1."""
+        end = x + dx if bend is None else x + dx + bend
+        if self._state(end) == self.state:
+            return None
+        low, high = 0.0, 1.0  # the state at low is the start's, at high it is not
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (low + high)
+            at = x + mid * dx if bend is None else x + mid * dx + mid * mid * bend
+            if self._state(at) == self.state:
+                low = mid
+            else:
+                high = mid
+        return high
+
+    def landing(self, x: np.ndarray, v: np.ndarray, x_new: np.ndarray, h: float) -> float | None:
+        """The share s of the step of ``h`` from (x, v) to ``x_new`` at which its first
+        contact event lies, where the step should be tried again with length s h; None
+        where it has none to land on (none, or one at its start or end). A touch is
+        looked for along the predictor x + s h v (the barrier stops the step's own path
+        at its end, where it is already inside dhat), a release along the step's path."""
+        if not self.terms:
+            return None
+        found = [
+            self._first(x, h * v, None),
+            self._first(x, h * v, x_new - x - h * v),
+        ]
+        shares = [f for f in found if f is not None]
+        if not shares or not EARLY < min(shares) < LATE:
+            return None
+        share = min(shares)
+        log.info("contact event at %.3g of the step of %.3g s: landed on", share, h)
+        return share
+
+    def take(self, x: np.ndarray) -> None:
+        """The accepted step's end (x) is the contact state from now on; the events it
+        ended counted."""
+        state = self._state(x)
+        self.touches += sum(b and not a for a, b in zip(self.state, state, strict=True))
+        self.releases += sum(a and not b for a, b in zip(self.state, state, strict=True))
+        self.state = state
