@@ -10,12 +10,13 @@ Phi(y) = sum_edges EA / (2 r) (l - r)^2 [l > r]            tension-only linear e
 
 with the box an affine body on four nodes p (c = mean p, A = P^T B), a node seen in the
 body frame at X = c0 + A^T (x - c), d the distance of X to the box (body frame at t = 0)
-and b(d) = -(d - dhat)^2 ln(d / dhat) for d < dhat. The Hessian is projected Newton's (each contact's 15 x 15 block and the rigidity's
-9 x 9 block with their negative eigenvalues clamped to zero, as IPC and affine body
-dynamics do), so every matrix is positive definite; it goes into a bordered
-band: the net's free DOFs in a band of half width p (LAPACK's ``dpbtrf`` lower storage,
-``band[i - j, j]`` = H[i, j] for j <= i <= j + p), the body's 12 DOFs as a dense border
-``C`` (n1, 12) and ``D`` (12, 12, lower triangle).
+and b(d) = -(d - dhat)^2 ln(d / dhat) for d < dhat. The Hessian is projected Newton's
+(each contact's 15 x 15 block and the rigidity's 9 x 9 block with their negative
+eigenvalues clamped to zero, as IPC and affine body dynamics do), so every matrix is
+positive definite; it goes into a bordered band: the net's free DOFs in a band of half
+width p (LAPACK's ``dpbtrf`` lower storage, ``band[i - j, j]`` = H[i, j] for
+j <= i <= j + p), the body's 12 DOFs as a dense border ``C`` (n1, 12) and ``D`` (12, 12,
+lower triangle).
 """
 
 from __future__ import annotations
@@ -177,9 +178,12 @@ def psd(H):
 
 
 @njit(cache=True)
-def hessian(x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat, w, band, C, D):
+def hessian(
+    x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat, w, band, C, D, project
+):
     """The Hessian of ``potential`` into the bordered band (band, C, D: zeroed here);
-    ``pos[node]`` the node's place in the ordering (-1 fixed), the body's nodes last."""
+    ``pos[node]`` the node's place in the ordering (-1 fixed), the body's nodes last;
+    ``project``: the blocks' negative eigenvalues clamped (else the exact Hessian)."""
     band[:] = 0.0
     C[:] = 0.0
     D[:] = 0.0
@@ -230,7 +234,7 @@ def hessian(x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat,
         for m in range(3):
             for k in range(4):
                 J[3 * i + m, 3 * k + i] = B[k, m]
-    Hb = J.T @ psd(HA) @ J
+    Hb = J.T @ (psd(HA) if project else HA) @ J
     # the barrier: L = d X / d q, q = (x, c, a1, a2, a3), chained to (x, p)
     center, axes, half = box[:3], box[3:12].reshape(3, 3), box[12:15]
     T = np.zeros((12, 12))  # (c, a1, a2, a3) = T (p0..p3), per axis
@@ -273,7 +277,8 @@ def hessian(x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat,
         for m in range(3):
             for i in range(3):
                 L[m, 6 + 3 * m + i] = 0.0
-        Kq = psd(Kq)
+        if project:
+            Kq = psd(Kq)
         xb = np.ascontiguousarray(Kq[:3, 3:]) @ T  # (x, p)
         pn = pos[node]
         for a in range(3):
