@@ -42,6 +42,7 @@ import math
 
 import numpy as np
 
+from catenet.kernels.bodycap import body_paths, body_step_cap
 from catenet.kernels.rigid import frame_contact_hessian
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
@@ -147,6 +148,14 @@ class BodyContact(Term):
         return self.max_step_within(x, dx, T_FAR)
 
     def max_step_within(self, x, dx, upto: float) -> float:
+        far = min(float(upto), T_FAR)
+        if getattr(self.shape, "geom", None) is not None:  # a box or capsule: one kernel
+            frame = self.frame
+            X0, V, W, scale = body_paths(x, dx, self.nodes, frame.nodes, frame.B, self.c0)
+            return float(
+                body_step_cap(self.shape.kind, self.shape.geom, X0, V, W, scale, self.dhat,
+                              CA_SHARE, CA_ITER, FLOOR_SHARE, ROUNDOFF, SLACK, far)
+            )  # fmt: skip
         c, A, U = self._local(x)
         X0 = self._buf[self.nodes].copy()
         dc, dA = self.frame.state(dx)
@@ -155,7 +164,7 @@ class BodyContact(Term):
         W = dU @ dA
         if not (np.any(V) or np.any(W)):
             return math.inf
-        return self._advance(X0, V, W, self._floor(X0, U), min(float(upto), T_FAR))
+        return self._advance(X0, V, W, self._floor(X0, U), far)
 
     def _floor(self, X0, U) -> float:
         """The nearest a node may come to the shape along a step from X0 (module

@@ -1,0 +1,152 @@
+"""The step cap of a free body's contact with the net's nodes (``BodyContact.max_step``,
+``catenet.terms.rigid_contact``, whose docstring derives it) for a box or a capsule, in
+one kernel: the body's pose and its change along the step, every node's quadratic
+body-frame path X0 + t V + t^2 W, the floor, and the pieces' chords tested exactly
+against the shape grown by their deviation.
+
+Only the candidates are walked: the nodes whose path could come within the grown shape
+before ``far`` (gap(X0) <= |V| far + |W| far^2 plus the most the shape is grown, dhat / 2
+plus twice the floor). A node that is no candidate cannot touch the shape before ``far``,
+so leaving it out keeps the cap safe; the pieces' lengths then follow the smallest gap
+of the candidates (the nodes the chords are tested for) instead of every node's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from catenet.kernels.shapes import BOX, box_max_step, capsule_max_step, shape_feature
+
+
+@njit(cache=True, error_model="numpy")
+def frame_pose(x, body, B):
+    """(c, A) of the body's four nodes ``body`` in x (N, 3): c their mean, A = P^T B."""
+    c = np.zeros(3)
+    A = np.zeros((3, 3))
+    for k in range(4):
+        p = body[k]
+        for i in range(3):
+            c[i] += x[p, i]
+            for m in range(3):
+                A[i, m] += x[p, i] * B[k, m]
+    for i in range(3):
+        c[i] *= 0.25
+    return c, A
+
+
+@njit(cache=True, error_model="numpy")
+def body_paths(x, dx, nodes, body, B, c0):
+    """Each node's body-frame point X0 and its path's V and W along the step dx, and the
+    coordinates' scale max(|X0|, |U|, |c0|) (U = x - c)."""
+    c, A = frame_pose(x, body, B)
+    dc, dA = frame_pose(dx, body, B)
+    K = nodes.shape[0]
+    X0 = np.empty((K, 3))
+    V = np.empty((K, 3))
+    W = np.empty((K, 3))
+    scale = 0.0
+    for m in range(3):
+        scale = max(scale, abs(c0[m]))
+    for k in range(K):
+        i = nodes[k]
+        u = np.empty(3)
+        du = np.empty(3)
+        for j in range(3):
+            u[j] = x[i, j] - c[j]
+            du[j] = dx[i, j] - dc[j]
+            scale = max(scale, abs(u[j]))
+        for m in range(3):
+            s = c0[m]
+            v = 0.0
+            w = 0.0
+            for j in range(3):
+                s += u[j] * A[j, m]
+                v += du[j] * A[j, m] + u[j] * dA[j, m]
+                w += du[j] * dA[j, m]
+            X0[k, m] = s
+            V[k, m] = v
+            W[k, m] = w
+            scale = max(scale, abs(s))
+    return X0, V, W, scale
+
+
+@njit(cache=True, error_model="numpy")
+def _ray(kind, geom, P, D, grow):
+    """The first contact of the segments P + s D (s in [0, 1]) with the shape grown by
+    ``grow`` (inf, or beyond 1: none)."""
+    nodes = np.arange(P.shape[0])
+    if kind == BOX:
+        axes = geom[3:12].reshape(3, 3)
+        return box_max_step(P, D, nodes, geom[0:3], axes, geom[12:15], geom[15] + grow, 1.0)
+    return capsule_max_step(P, D, nodes, geom[0:3], geom[3:6], geom[6] + grow)
+
+
+@njit(cache=True, error_model="numpy")
+def body_step_cap(kind, geom, X0, V, W, scale, dhat, share, pieces, floor_share, roundoff,
+                  slack, far):  # fmt: skip
+    """The first contact of the paths X0 + t V + t^2 W (K, 3) with the shape (``kind``,
+    ``geom``: ``catenet.kernels.shapes``) grown by the floor (FLOOR_SHARE dhat, at least
+    ROUNDOFF round-offs of ``scale``, below the smallest gap by SLACK of it), over
+    pieces whose chords stay within ``share`` of the smallest gap: a contact no later
+    than the true one; inf where none comes before ``far``."""
+    if not (np.any(V != 0.0) or np.any(W != 0.0)):
+        return np.inf
+    n = np.empty(3)
+    P3 = np.empty((3, 3))
+    K = X0.shape[0]
+    gap = np.empty(K)
+    g_min = np.inf
+    for k in range(K):
+        gap[k] = shape_feature(kind, X0[k], geom, n, P3)
+        g_min = min(g_min, gap[k])
+    floor = max(floor_share * dhat, roundoff * np.finfo(np.float64).eps * scale)
+    floor = min(floor, (1.0 - slack) * g_min) if g_min > 0.0 else 0.0
+    w = 0.0
+    reach = np.empty(K)
+    for k in range(K):
+        wk = np.sqrt(W[k, 0] ** 2 + W[k, 1] ** 2 + W[k, 2] ** 2)
+        vk = np.sqrt(V[k, 0] ** 2 + V[k, 1] ** 2 + V[k, 2] ** 2)
+        w = max(w, wk)
+        reach[k] = (vk * far + wk * far * far) if (vk > 0.0 or wk > 0.0) else 0.0
+    take = np.empty(K, dtype=np.int64)
+    m = 0
+    for k in range(K):  # the candidates (module docstring)
+        if not gap[k] > reach[k] + 0.5 * dhat + 2.0 * floor:
+            take[m] = k
+            m += 1
+    if m == 0:
+        return np.inf
+    Xc = np.empty((m, 3))
+    Vc = np.empty((m, 3))
+    Wc = np.empty((m, 3))
+    for j in range(m):
+        for a in range(3):
+            Xc[j, a] = X0[take[j], a]
+            Vc[j, a] = V[take[j], a]
+            Wc[j, a] = W[take[j], a]
+    Pc = np.empty((m, 3))
+    D = np.empty((m, 3))
+    t = 0.0
+    for _ in range(pieces):
+        g_c = np.inf
+        for j in range(m):
+            for a in range(3):
+                Pc[j, a] = Xc[j, a] + t * Vc[j, a] + t * t * Wc[j, a]
+            g_c = min(g_c, shape_feature(kind, Pc[j], geom, n, P3))
+        delta = min(share * (g_c - floor), 0.5 * dhat)
+        if not delta > 0.0:  # a node at the floor already (or NaN): no safe advance
+            return t
+        h = min(max(1.0, t), far - t)  # pieces of the step, then doubling
+        if w > 0.0:
+            h = min(h, 2.0 * np.sqrt(delta / w))
+        for j in range(m):
+            for a in range(3):
+                D[j, a] = h * Vc[j, a] + (2.0 * t * h + h * h) * Wc[j, a]
+        s = _ray(kind, geom, Pc, D, 0.25 * w * h * h + floor)
+        if s <= 1.0:
+            return t + s * h
+        t += h
+        if t >= far:
+            return np.inf
+    return t
