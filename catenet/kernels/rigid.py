@@ -18,6 +18,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from catenet.kernels.contact import barrier
+from catenet.kernels.shapes import shape_feature
+
 
 @njit(cache=True, error_model="numpy")
 def frame_contact_hessian(A, U, H, g, chain, active, blocks, body):
@@ -79,3 +82,136 @@ def frame_contact_hessian(A, U, H, g, chain, active, blocks, body):
                 for q in range(12):
                     s += chain[p, a] * bb[p, q] * chain[q, b]
             body[12 * a + b] = s
+
+
+@njit(cache=True, error_model="numpy")
+def frame_state(x, body, B):
+    """(c, A) of a body's four nodes ``body`` in x (N, 3): c their mean, A = P^T B
+    (``catenet.terms.rigid.BodyFrame.state``)."""
+    c = np.zeros(3)
+    A = np.zeros((3, 3))
+    for k in range(4):
+        p = body[k]
+        for i in range(3):
+            c[i] += x[p, i]
+            for m in range(3):
+                A[i, m] += x[p, i] * B[k, m]
+    for i in range(3):
+        c[i] *= 0.25
+    return c, A
+
+
+@njit(cache=True, error_model="numpy")
+def frame_local(x, nodes, body, B, c0):
+    """(c, A, U, X): the body's pose, the nodes' offsets U = x - c from its centre and
+    their body-frame points X = c0 + A^T U, (K, 3) each."""
+    c, A = frame_state(x, body, B)
+    K = nodes.shape[0]
+    U = np.empty((K, 3))
+    X = np.empty((K, 3))
+    for k in range(K):
+        for j in range(3):
+            U[k, j] = x[nodes[k], j] - c[j]
+        for m in range(3):
+            s = 0.0
+            for j in range(3):
+                s += U[k, j] * A[j, m]
+            X[k, m] = c0[m] + s
+    return c, A, U, X
+
+
+@njit(cache=True, error_model="numpy")
+def rigidity_gradient(x, body, B, k, grad):
+    """Adds the gradient of E = k |A^T A - 1|_F^2 / 2 (``catenet.terms.rigid.Rigidity``)
+    at the body's nodes into grad (N, 3); returns E."""
+    _, A = frame_state(x, body, B)
+    C = A.T @ A
+    energy = 0.0
+    for i in range(3):
+        C[i, i] -= 1.0
+        for j in range(3):
+            energy += C[i, j] * C[i, j]
+    gA = 2.0 * k * (A @ C)
+    for q in range(4):
+        for i in range(3):
+            s = 0.0
+            for m in range(3):
+                s += B[q, m] * gA[i, m]
+            grad[body[q], i] += s
+    return 0.5 * k * energy
+
+
+@njit(cache=True, error_model="numpy")
+def rigidity_hessian(x, body, B, k, D, values):
+    """The (12, 12) Hessian of the rigidity at the body's nodes, row-major into values:
+    D^T (k H) D with H = M^T M + 2 kron(1, C) in vec(A) (row-major), M the Jacobian of
+    vec(C) (``catenet.terms.rigid.Rigidity.hessian``)."""
+    _, A = frame_state(x, body, B)
+    C = A.T @ A
+    for i in range(3):
+        C[i, i] -= 1.0
+    M = np.zeros((9, 9))
+    for i in range(3):  # column (l, m): dC_ij = delta_im A_lj + A_li delta_jm
+        for j in range(3):
+            for lv in range(3):
+                for m in range(3):
+                    v = 0.0
+                    if i == m:
+                        v += A[lv, j]
+                    if j == m:
+                        v += A[lv, i]
+                    M[3 * i + j, 3 * lv + m] = v
+    H = M.T @ M
+    for lv in range(3):
+        for m in range(3):
+            for q in range(3):
+                H[3 * lv + m, 3 * lv + q] += 2.0 * C[m, q]
+    Hp = D.T @ (k * H) @ D
+    for a in range(12):
+        for b in range(12):
+            values[12 * a + b] = Hp[a, b]
+
+
+@njit(cache=True, error_model="numpy")
+def rigidity_turn(dx, body, B):
+    """|dA|_2: the largest singular value of the step's change of A."""
+    _, dA = frame_state(dx, body, B)
+    return np.linalg.svd(dA)[1][0]
+
+
+@njit(cache=True, error_model="numpy")
+def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad):
+    """Adds the gradient of the barrier of a box or capsule riding on the body (``kind``,
+    ``geom``: ``catenet.kernels.shapes``) at the contact ``nodes`` and the body's four
+    nodes into grad (N, 3): A g at a node, -A g at the centre, U g^T on A
+    (``catenet.terms.rigid_contact``); returns the energy."""
+    _, A, U, X = frame_local(x, nodes, body, B, c0)
+    n = np.empty(3)
+    P = np.empty((3, 3))
+    total = 0.0
+    fsum = np.zeros(3)
+    gA = np.zeros((3, 3))
+    for k in range(nodes.shape[0]):
+        d = shape_feature(kind, X[k], geom, n, P)
+        if d >= dhat:
+            continue
+        b, db, _ = barrier(d, dhat)
+        total += kappa * b
+        if not d > 0.0:
+            continue
+        g = np.empty(3)
+        for m in range(3):
+            g[m] = kappa * db * n[m]
+        for i in range(3):
+            f = A[i, 0] * g[0] + A[i, 1] * g[1] + A[i, 2] * g[2]
+            grad[nodes[k], i] += f
+            fsum[i] += f
+            for m in range(3):
+                gA[i, m] += U[k, i] * g[m]
+    for q in range(4):
+        for i in range(3):
+            s = -0.25 * fsum[i]
+            for m in range(3):
+                s += B[q, m] * gA[i, m]
+            grad[body[q], i] += s
+    return total

@@ -56,6 +56,7 @@ import math
 
 import numpy as np
 
+from catenet.kernels.rigid import frame_state, rigidity_gradient, rigidity_hessian, rigidity_turn
 from catenet.terms.base import Term, register
 
 #: Unit vertices of a regular tetrahedron (sum 0, sum v v^T = 4/3 1).
@@ -124,8 +125,7 @@ class BodyFrame:
 
     def state(self, x):
         """(c, A) of the positions x (N, 3) (or the rates of velocities v)."""
-        P = np.asarray(x)[self.nodes]
-        return 0.25 * P.sum(axis=0), P.T @ self.B  # (the mean, without its overhead)
+        return frame_state(np.asarray(x, dtype=np.float64), self.nodes, self.B)
 
     def pose(self, x):
         """(c, R): the centre and the rotation from the pose at t = 0 (the nearest
@@ -156,9 +156,6 @@ class BodyFrame:
 
     def dofs(self) -> np.ndarray:
         return (3 * self.nodes[:, None] + np.arange(3)).ravel()
-
-
-_EYE = np.eye(3)
 
 
 def _dense_pattern(dofs_a, dofs_b):
@@ -200,21 +197,13 @@ class Rigidity(Term):
         return 0.5 * self.k * float(np.sum(C * C))
 
     def gradient(self, x, grad):
-        A, C = self._C(x)
-        gA = 2.0 * self.k * (A @ C)
-        grad[self.frame.nodes] += self.frame.B @ gA.T
-        return 0.5 * self.k * float(np.sum(C * C))
+        return float(rigidity_gradient(x, self.frame.nodes, self.frame.B, self.k, grad))
 
     def hessian(self, x, values):
-        A, C = self._C(x)
         # vec(A) row-major (index 3 l + m); column (l, m) of M: vec(dC) for dA = E_lm,
-        # dC_ij = E^T A + A^T E = delta_im A_lj + A_li delta_jm
-        M = (_EYE[:, None, None, :] * A[None, :, :, None].transpose(0, 2, 1, 3)).reshape(9, 9)
-        M += (A.T[:, None, :, None] * _EYE[None, :, None, :]).reshape(9, 9)
-        H = M.T @ M
-        H += 2.0 * np.kron(_EYE, C)  # C:(dA^T dA) = sum_l dA_lm C_mm' dA_lm'
-        Hp = self._D.T @ (self.k * H) @ self._D
-        values[:] = Hp.ravel()
+        # dC_ij = E^T A + A^T E = delta_im A_lj + A_li delta_jm; H = M^T M + 2 kron(1, C)
+        # (C:(dA^T dA) = sum_l dA_lm C_mm' dA_lm'), chained to the nodes by D
+        rigidity_hessian(x, self.frame.nodes, self.frame.B, self.k, self._D, values)
         return True
 
     def roundoff(self, x, energy):
@@ -237,6 +226,7 @@ class Rigidity(Term):
         """The longest multiple t of the step dx that turns the body by at most TURN_MAX:
         |t dA|_2 <= TURN_MAX (no point of the body moves by more than TURN_MAX times its
         distance from the centre, relative to the centre); inf for a translation."""
-        _, dA = self.frame.state(dx)
-        turn = float(np.linalg.norm(dA, 2))
+        turn = float(
+            rigidity_turn(np.asarray(dx, dtype=np.float64), self.frame.nodes, self.frame.B)
+        )
         return TURN_MAX / turn if turn > 0.0 else math.inf

@@ -43,9 +43,10 @@ import math
 import numpy as np
 
 from catenet.kernels.bodycap import body_paths, body_step_cap
-from catenet.kernels.rigid import frame_contact_hessian
+from catenet.kernels.rigid import frame_contact_gradient, frame_contact_hessian, frame_local
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
+from catenet.terms.shapes import BoxBarrier, CapsuleBarrier
 
 T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS = 12)
 FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
@@ -76,9 +77,9 @@ class BodyContact(Term):
 
     # ---- evaluation -------------------------------------------------------------------
     def _local(self, x):
-        c, A = self.frame.state(x)
-        U = np.asarray(x)[self.nodes] - c
-        self._buf[self.nodes] = self.c0 + U @ A
+        frame = self.frame
+        c, A, U, X = frame_local(x, self.nodes, frame.nodes, frame.B, self.c0)
+        self._buf[self.nodes] = X
         return c, A, U
 
     def gap(self, x):
@@ -97,6 +98,12 @@ class BodyContact(Term):
         return self.shape.energy(self._buf)
 
     def gradient(self, x, grad):
+        shape, frame = self.shape, self.frame
+        if isinstance(shape, (BoxBarrier, CapsuleBarrier)):  # a box or capsule: one kernel
+            return float(
+                frame_contact_gradient(shape.kind, shape.geom, self.kappa, self.dhat, x,
+                                       self.nodes, frame.nodes, frame.B, self.c0, grad)
+            )  # fmt: skip
         _, A, U = self._local(x)
         energy, g = self._shape_gradient()
         if not math.isfinite(energy):  # a node in the shape: no step, no gradient to add
@@ -149,7 +156,7 @@ class BodyContact(Term):
 
     def max_step_within(self, x, dx, upto: float) -> float:
         far = min(float(upto), T_FAR)
-        if getattr(self.shape, "geom", None) is not None:  # a box or capsule: one kernel
+        if isinstance(self.shape, (BoxBarrier, CapsuleBarrier)):  # one kernel
             frame = self.frame
             X0, V, W, scale = body_paths(x, dx, self.nodes, frame.nodes, frame.B, self.c0)
             return float(
