@@ -366,3 +366,17 @@ def step_cap(x, dx, body, B, c0, box, contact, share):
                 break
             t += h
     return t_cap
+
+
+@njit(cache=True)
+def closest(x, body, B, c0, box, contact):
+    """The smallest distance of a contact node to the box [m]."""
+    c, A = pose(x, body, B)
+    center, axes, half = box[:3], box[3:12].reshape(3, 3), box[12:15]
+    n = np.zeros(3)
+    P = np.zeros((3, 3))
+    out = np.inf
+    for kk in range(contact.shape[0]):
+        X = c0 + A.T @ (x[contact[kk]] - c)
+        out = min(out, box_distance(X, center, axes, half, n, P))
+    return out

@@ -38,9 +38,23 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee  # noqa: E402
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from floor_kernels import box_distance, hessian, pose, potential, step_cap  # type: ignore
+    from floor_kernels import (  # type: ignore[import-not-found,no-redef]
+        box_distance,
+        closest,
+        hessian,
+        pose,
+        potential,
+        step_cap,
+    )
 else:
-    from benchmarks.peers.floor_kernels import box_distance, hessian, pose, potential, step_cap
+    from benchmarks.peers.floor_kernels import (
+        box_distance,
+        closest,
+        hessian,
+        pose,
+        potential,
+        step_cap,
+    )
 
 ARMIJO = 1e-4
 WOLFE = 0.9  # a step whose slope is still steeper than this share of the start's is lengthened
@@ -283,7 +297,7 @@ class Floor:
 
     def gap(self, x) -> float:
         """The smallest distance of a contact node to the box [m]."""
-        return min(self.gap_of(x, k) for k in range(len(self.contact)))
+        return float(closest(x, self.body, self.B, self.c0, self.box, self.contact))
 
     def momentum(self) -> np.ndarray:
         return (self.mass[self.body, None] * self.v[self.body]).sum(axis=0)

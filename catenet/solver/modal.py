@@ -304,7 +304,13 @@ class Operator:
         if upper:
             a = sp.triu(a, format="csr")
         a.sort_indices()
-        own = make_solver(solver.name, a.indptr, a.indices, upper=upper, dof_node=self.node)
+        own = make_solver(
+            getattr(solver, "backend", solver.name),
+            a.indptr,
+            a.indices,
+            upper=upper,
+            dof_node=self.node,
+        )
         own.factorize(a.data)
         return own
 

@@ -32,6 +32,7 @@ class Workspace:
         terms: Sequence[Term] = (),
     ):
         all_terms = (Stretch(net), *support_terms(net), *terms)
+        self._small = mtype is None  # a PARDISO type asked for: PARDISO, never the band
         if mtype is None:  # Cholesky where the matrices are positive (semi)definite
             mtype = 2 if all(t.convex for t in all_terms) else -2
         upper = mtype != 11
@@ -46,8 +47,9 @@ class Workspace:
         linear, upper, dof_node, mtype = self._linear
         system = self.system
         return make_solver(
-            linear, system.indptr, system.indices, upper=upper, dof_node=dof_node, mtype=mtype
-        )
+            linear, system.indptr, system.indices, upper=upper, dof_node=dof_node, mtype=mtype,
+            small=self._small,
+        )  # fmt: skip
 
     def refresh(self, *potentials: Potential) -> bool:
         """After a time step's ``begin_step``: when a term's pattern grew (``Term.grows``:

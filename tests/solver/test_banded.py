@@ -1,0 +1,92 @@
+"""The small-system solver (catenet/solver/banded.py): the bordered band's Cholesky
+factorisation solves a step's matrix of a net with a free box as PARDISO does (to
+round-off), checked as every solve; a matrix that is not positive definite goes to
+PARDISO (its inertia, its singular-system error); "auto" picks it below BAND_MAX_DOF,
+"pardiso" never."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scenes import paper_net
+
+from catenet.case import build, parse_case
+from catenet.errors import SingularSystemError
+from catenet.solver.banded import BAND_MAX_DOF, BandSolver
+from catenet.solver.linear import PardisoSolver, make_solver, pardiso_available
+from catenet.solver.workspace import Workspace
+from catenet.terms import Inertia
+
+pytestmark = pytest.mark.skipif(not pardiso_available(), reason="MKL's PARDISO is missing")
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _step_matrix(shift: float = 0.0):
+    case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
+    case["geometry"]["n"] = 6
+    case["geometry"]["edge_length"] = 0.5 / 6
+    scene = build(parse_case(case))
+    ws = Workspace(scene.net, terms=scene.terms)
+    free = ws.system.free_dofs
+    m = np.repeat(scene.net.mass[~scene.net.fixed], 3)
+    inertia = Inertia(free)
+    inertia.set_step(m / 1e-4, scene.net.nodes.reshape(-1)[free])
+    x = scene.net.nodes.copy()
+    x[:, 2] -= 0.002 * np.cos(3.0 * x[:, 0])
+    data = ws.system.hessian(x, None, (inertia,)).copy()
+    if shift:
+        diag = ws.system.indices == np.repeat(
+            np.arange(ws.system.n_free), np.diff(ws.system.indptr)
+        )
+        data[diag] -= shift
+    return ws, data
+
+
+def test_auto_bands_a_small_step_and_solves_it_as_pardiso_does():
+    ws, data = _step_matrix()
+    band = ws.solver
+    assert isinstance(band, BandSolver) and band.layout.nb == 12  # the box's four nodes
+    s = ws.system
+    pardiso = make_solver("pardiso", s.indptr, s.indices, upper=True, dof_node=band.dof_node)
+    assert isinstance(pardiso, PardisoSolver)
+    b = np.random.default_rng(0).normal(size=s.n_free)
+    band.factorize(data, definite=False)
+    pardiso.factorize(data, definite=False)
+    x_band, x_pardiso = band.solve(b), pardiso.solve(b)
+    assert band.stats["band"] == 1 and band.fallback.stats["factorize"] == 0
+    assert np.abs(x_band - x_pardiso).max() <= 1e-10 * np.abs(x_pardiso).max()
+    assert band.negative_eigenvalues() == 0
+
+
+def test_an_indefinite_matrix_goes_to_pardiso_with_its_inertia():
+    ws, data = _step_matrix()
+    big = float(np.abs(data).max())
+    ws, data = _step_matrix(shift=1e-3 * big)
+    band = ws.solver
+    band.factorize(data, definite=False)
+    assert band.stats["band"] == 0 and band.fallback.stats["factorize"] == 1
+    b = np.ones(ws.system.n_free)
+    x = band.solve(b)  # checked: a small backward error
+    assert np.all(np.isfinite(x)) and band.negative_eigenvalues() > 0
+
+
+def test_a_singular_flat_net_raises_as_pardiso_does():
+    sq, _ = paper_net(6, edge=0.1)
+    ws = Workspace(sq.net)
+    assert isinstance(ws.solver, BandSolver)
+    data = ws.system.hessian(sq.net.nodes, None, ()).copy()  # slack and flat: singular
+    with pytest.raises(SingularSystemError):
+        ws.solver.factorize(data)
+        ws.solver.solve(np.ones(ws.system.n_free))
+
+
+def test_pardiso_alone_above_the_threshold_or_when_asked():
+    sq, _ = paper_net(34)  # about 1e4 DOF
+    assert Workspace(sq.net).system.n_free > BAND_MAX_DOF
+    assert isinstance(Workspace(sq.net).solver, PardisoSolver)
+    assert isinstance(
+        Workspace(paper_net(6, edge=0.1)[0].net, linear="pardiso").solver, PardisoSolver
+    )
