@@ -178,42 +178,9 @@ def psd(H):
 
 
 @njit(cache=True)
-def hessian(
-    x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat, w, band, C, D, project
-):
-    """The Hessian of ``potential`` into the bordered band (band, C, D: zeroed here);
-    ``pos[node]`` the node's place in the ordering (-1 fixed), the body's nodes last;
-    ``project``: the blocks' negative eigenvalues clamped (else the exact Hessian)."""
-    band[:] = 0.0
-    C[:] = 0.0
-    D[:] = 0.0
-    n1 = band.shape[1]
-    nb = 4
-    blk = np.zeros((3, 3))
-    for k in range(edges.shape[0]):
-        i, j = edges[k, 0], edges[k, 1]
-        e = x[j] - x[i]
-        length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
-        if length <= l0[k]:
-            continue
-        kk = ea[k] / l0[k]
-        tension = kk * (length - l0[k])
-        for p in range(3):
-            for q in range(3):
-                t = e[p] * e[q] / (length * length)
-                blk[p, q] = kk * t + tension / length * ((1.0 if p == q else 0.0) - t)
-        pi, pj = pos[i], pos[j]
-        if pi >= 0:
-            _add(pos, nb, band, C, D, pi, pi, blk)
-        if pj >= 0:
-            _add(pos, nb, band, C, D, pj, pj, blk)
-        if pi >= 0 and pj >= 0:
-            if pi > pj:
-                _add(pos, nb, band, C, D, pi, pj, -blk)
-            else:
-                _add(pos, nb, band, C, D, pj, pi, -blk)
-    # the rigidity: the 9 x 9 Hessian in vec(A) (row-major, 3 i + m), then to the nodes
-    c, A = pose(x, body, B)
+def rigidity_block(A, B, krig, project):
+    """The rigidity's (12, 12) Hessian at the body's nodes: the 9 x 9 Hessian in vec(A)
+    (row-major, 3 i + m), clamped where ``project``, chained by d vec(A) / d p."""
     Cm = A.T @ A - np.eye(3)
     HA = np.zeros((9, 9))
     for p in range(9):
@@ -228,14 +195,21 @@ def hessian(
             v = krig * (np.sum(dC * eC) + np.sum(Cm * curv))
             HA[p, q] = v
             HA[q, p] = v
-    # d vec(A) / d p: A[i, m] = sum_k p_k[i] B[k, m]
-    J = np.zeros((9, 12))
+    J = np.zeros((9, 12))  # A[i, m] = sum_k p_k[i] B[k, m]
     for i in range(3):
         for m in range(3):
             for k in range(4):
                 J[3 * i + m, 3 * k + i] = B[k, m]
-    Hb = J.T @ (psd(HA) if project else HA) @ J
-    # the barrier: L = d X / d q, q = (x, c, a1, a2, a3), chained to (x, p)
+    return J.T @ (psd(HA) if project else HA) @ J
+
+
+@njit(cache=True)
+def contact_blocks(x, c, A, pos, B, c0, box, contact, kappa, dhat, band, C, D, project):
+    """The barrier's blocks: each contact node's (x, x) into the band, (x, p) into the
+    border C; returns the body's (p, p) block (12, 12). L = d X / d q, q = (x, c, a1,
+    a2, a3), chained to (x, p)."""
+    nb = 4
+    blk = np.zeros((3, 3))
     center, axes, half = box[:3], box[3:12].reshape(3, 3), box[12:15]
     T = np.zeros((12, 12))  # (c, a1, a2, a3) = T (p0..p3), per axis
     for k in range(4):
@@ -289,7 +263,47 @@ def hessian(
             for s in range(12):
                 C[3 * pn + a, s] += xb[a, s]
         Kbb += Kq[3:, 3:]
-    Hb += T.T @ Kbb @ T
+    return T.T @ Kbb @ T
+
+
+@njit(cache=True)
+def hessian(
+    x, pos, edges, l0, ea, body, B, krig, c0, box, contact, kappa, dhat, w, band, C, D, project
+):
+    """The Hessian of ``potential`` into the bordered band (band, C, D: zeroed here);
+    ``pos[node]`` the node's place in the ordering (-1 fixed), the body's nodes last;
+    ``project``: the blocks' negative eigenvalues clamped (else the exact Hessian)."""
+    band[:] = 0.0
+    C[:] = 0.0
+    D[:] = 0.0
+    n1 = band.shape[1]
+    nb = 4
+    blk = np.zeros((3, 3))
+    for k in range(edges.shape[0]):
+        i, j = edges[k, 0], edges[k, 1]
+        e = x[j] - x[i]
+        length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+        if length <= l0[k]:
+            continue
+        kk = ea[k] / l0[k]
+        tension = kk * (length - l0[k])
+        for p in range(3):
+            for q in range(3):
+                t = e[p] * e[q] / (length * length)
+                blk[p, q] = kk * t + tension / length * ((1.0 if p == q else 0.0) - t)
+        pi, pj = pos[i], pos[j]
+        if pi >= 0:
+            _add(pos, nb, band, C, D, pi, pi, blk)
+        if pj >= 0:
+            _add(pos, nb, band, C, D, pj, pj, blk)
+        if pi >= 0 and pj >= 0:
+            if pi > pj:
+                _add(pos, nb, band, C, D, pi, pj, -blk)
+            else:
+                _add(pos, nb, band, C, D, pj, pi, -blk)
+    c, A = pose(x, body, B)
+    Hb = rigidity_block(A, B, krig, project)
+    Hb += contact_blocks(x, c, A, pos, B, c0, box, contact, kappa, dhat, band, C, D, project)
     for r in range(12):
         for s in range(r + 1):
             D[r, s] += Hb[r, s]
