@@ -28,8 +28,10 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+if __name__ == "__main__":  # one thread (set before NumPy, MKL and Numba load; never on
+    # import: a test process's threads are set already)
+    for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
 import scipy.linalg.lapack as lapack  # noqa: E402
@@ -38,7 +40,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee  # noqa: E402
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from floor_kernels import (  # type: ignore[import-not-found,no-redef]
+    from floor_kernels import (  # type: ignore
         box_distance,
         closest,
         hessian,

@@ -530,18 +530,8 @@ def make_solver(
     upper: bool,
     dof_node: np.ndarray,
     mtype: int | None = None,
-    small: bool = True,
 ) -> LinearSolver:
-    """The solver of ``backend``: PARDISO (or SciPy where MKL is missing) for "auto", and
-    below a measured size, where its band serves, the bordered band over PARDISO
-    (``catenet.solver.banded``; ``small`` False: never); "pardiso" and "scipy" give those
-    alone."""
-    chosen = resolve_backend(backend)
-    if chosen == "pardiso":
-        solver = PardisoSolver(indptr, indices, upper=upper, dof_node=dof_node, mtype=mtype)
-        if backend != "auto" or not small:
-            return solver
-        from catenet.solver.banded import small_solver
-
-        return small_solver(indptr, indices, upper=upper, dof_node=dof_node, fallback=solver)
+    backend = resolve_backend(backend)
+    if backend == "pardiso":
+        return PardisoSolver(indptr, indices, upper=upper, dof_node=dof_node, mtype=mtype)
     return ScipySolver(indptr, indices, upper=upper, dof_node=dof_node)

@@ -10,7 +10,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.model.net import Loads, Net
-from catenet.solver.linear import LinearSolver, make_solver
+from catenet.solver.linear import LinearSolver, PardisoSolver, make_solver
 from catenet.solver.potential import Potential
 from catenet.solver.result import SolverStats
 from catenet.solver.system import System
@@ -46,10 +46,16 @@ class Workspace:
     def _make_solver(self) -> LinearSolver:
         linear, upper, dof_node, mtype = self._linear
         system = self.system
-        return make_solver(
-            linear, system.indptr, system.indices, upper=upper, dof_node=dof_node, mtype=mtype,
-            small=self._small,
-        )  # fmt: skip
+        solver = make_solver(
+            linear, system.indptr, system.indices, upper=upper, dof_node=dof_node, mtype=mtype
+        )
+        if linear != "auto" or not self._small or not isinstance(solver, PardisoSolver):
+            return solver
+        from catenet.solver.banded import small_solver  # below a measured size, a band
+
+        return small_solver(
+            system.indptr, system.indices, upper=upper, dof_node=dof_node, fallback=solver
+        )
 
     def refresh(self, *potentials: Potential) -> bool:
         """After a time step's ``begin_step``: when a term's pattern grew (``Term.grows``:
