@@ -86,6 +86,23 @@ def write(model: dict, path: str | Path) -> Path:
     return path
 
 
+def run_in_process(case: str, result: str) -> tuple[int | str, str]:
+    """``catenet run CASE -o RESULT -q`` through catenet's entry point in this process
+    (a worker that runs many models starts the interpreter and the JIT cache once): its
+    exit status and what it printed to stderr ("exception" and the traceback where the
+    command raised)."""
+    import traceback
+
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    done = CliRunner().invoke(main, ["run", case, "-o", result, "-q"])
+    if done.exception is not None and not isinstance(done.exception, SystemExit):
+        return "exception", "".join(traceback.format_exception(done.exception))
+    return done.exit_code, done.stderr
+
+
 def check_equilibrium(path: str | Path) -> float:
     """Relative global force imbalance of a result file.
 

@@ -12,22 +12,23 @@ residual of rtol = 1e-8 (the default) of the load scale per degree of freedom; s
 free nodes' residuals into one resultant leaves a factor of 100 for their accumulation
 (sqrt(N) for N up to 1e4 nodes) and round-off.
 
-The runs go through the command line (the README documents no Python entry point that
-runs a case file), two at a time, all of the module's selected models started by one
-fixture (so the module belongs on one worker, as `make test`'s --dist loadfile does):
-20 models of each family, about a minute on two cores; those above 3000 edges are marked
-slow.
+The runs go through the command line's entry point (``catenet run``: the README
+documents no Python entry point that runs a case file), in two worker processes that
+start the interpreter and the JIT cache once each (``corpus.run_in_process``), all of
+the module's selected models started by one fixture (so the module belongs on one
+worker, as `make test`'s --dist loadfile does): 20 models of each family; those above
+3000 edges are marked slow.
 """
 
 from __future__ import annotations
 
-import subprocess
-from concurrent.futures import ThreadPoolExecutor
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import TimeoutError as Late
 
 import corpus
 import h5py
 import pytest
-from conftest import catenet_command, subprocess_env
 
 pytestmark = pytest.mark.slow  # 120 whole runs: make test, not make test-fast
 
@@ -44,37 +45,38 @@ def _params():
             yield pytest.param(family, seed, id=f"{family}-{seed}", marks=marks)
 
 
-def _run(family: str, seed: int, out) -> tuple:
-    """Write the model, run it; (case path, exit status, stderr, result path)."""
-    case = corpus.write(corpus.generate(seed, family), out / f"{family}-{seed}.toml")
-    result = case.with_suffix(".h5")
-    command = catenet_command("run", case, "-o", result, "-q")
-    try:
-        done = subprocess.run(
-            command, env=subprocess_env(), capture_output=True, text=True, timeout=TIMEOUT
-        )
-        return case, done.returncode, done.stderr, result
-    except subprocess.TimeoutExpired:
-        return case, "timeout", f"no answer within {TIMEOUT:g} s", result
-
-
 @pytest.fixture(scope="module")
 def runs(request, tmp_path_factory):
-    """Every selected model of this module, started at once, two at a time."""
+    """Every selected model of this module, written, then run two at a time."""
     out = tmp_path_factory.mktemp("corpus")
     wanted = [
         (item.callspec.params["family"], item.callspec.params["seed"])
         for item in request.session.items
         if item.module is request.module and hasattr(item, "callspec")
     ]
-    pool = ThreadPoolExecutor(2)
-    yield {key: pool.submit(_run, *key, out) for key in wanted}
-    pool.shutdown(cancel_futures=True)
+    pool = ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"))
+    futures = {}
+    for family, seed in wanted:
+        case = corpus.write(corpus.generate(seed, family), out / f"{family}-{seed}.toml")
+        result = case.with_suffix(".h5")
+        futures[family, seed] = (
+            case,
+            result,
+            pool.submit(corpus.run_in_process, str(case), str(result)),
+        )
+    yield futures
+    for process in list(getattr(pool, "_processes", {}).values()):  # a hung run, if any
+        process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 @pytest.mark.parametrize(("family", "seed"), list(_params()))
 def test_model_converges_and_balances(runs, family, seed):
-    case, status, stderr, result = runs[family, seed].result()
+    case, result, future = runs[family, seed]
+    try:
+        status, stderr = future.result(timeout=TIMEOUT)
+    except Late:
+        status, stderr = "timeout", f"no answer within {TIMEOUT:g} s"
     command = f"catenet run {case} -o {result}"
     assert status == 0, f"{command} exited {status}:\n{stderr}"
     with h5py.File(result, "r") as f:
