@@ -1,5 +1,5 @@
-"""The small-system solver: a bordered band factorised by LAPACK, PARDISO where it does not
-serve.
+"""The small-system solver: a bordered band factorised in Numba (no LAPACK call), PARDISO
+where it does not serve.
 
 Below BAND_MAX_DOF unknowns PARDISO's fixed cost per call (its handle, its checks, its
 threads' set-up: about 0.3 ms) outweighs the arithmetic of a net's matrix, whose rows
