@@ -17,17 +17,17 @@ from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbos
     "output",
     metavar="FILE",
     default=None,
-    help="Where the report goes: a file (md, html), a directory (csv), or - for the "
-    "standard output (md, html). Default: beside the result file, STEM.md, STEM.html "
-    "or the directory STEM-csv.",
+    help="Where the report goes: a file (md, html, xlsx), a directory (csv), or - for the "
+    "standard output (md, html). Default: beside the result file, STEM.md, STEM.html, "
+    "STEM.xlsx or the directory STEM-csv.",
 )
 @click.option(
     "--format",
     "fmt",
-    metavar="md|csv|html",
+    metavar="md|csv|html|xlsx",
     default=None,
-    help="Markdown (the default), CSV files (one per table) or HTML with figures; "
-    "default: from the suffix of -o, else md.",
+    help="Markdown (the default), CSV files (one per table), HTML with figures or an Excel "
+    "workbook (a sheet per table); default: from the suffix of -o, else md.",
 )
 @verbosity_options
 def command(
@@ -54,6 +54,8 @@ def command(
 
             if kind == "csv":
                 raise ConfigError("-o -: --format csv writes one file per table: give a directory")
+            if kind == "xlsx":
+                raise ConfigError("-o -: --format xlsx writes a workbook: give a file (.xlsx)")
             click.echo(make_report(path, kind), nl=False)
             return
         files = write_report(path, None if output is None else Path(output), kind)

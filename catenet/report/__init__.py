@@ -14,13 +14,20 @@ from catenet.errors import ConfigError
 
 __all__ = ["FORMATS", "default_output", "make_report", "write_report"]
 
-FORMATS = ("md", "csv", "html")
-SUFFIXES = {".md": "md", ".markdown": "md", ".html": "html", ".htm": "html", ".csv": "csv"}
+FORMATS = ("md", "csv", "html", "xlsx")
+SUFFIXES = {
+    ".md": "md",
+    ".markdown": "md",
+    ".html": "html",
+    ".htm": "html",
+    ".csv": "csv",
+    ".xlsx": "xlsx",
+}
 
 
 def default_output(path: Path, fmt: str) -> Path:
-    """Where a report goes without -o: beside the result file, STEM.md, STEM.html or the
-    directory STEM-csv."""
+    """Where a report goes without -o: beside the result file, STEM.md, STEM.html,
+    STEM.xlsx or the directory STEM-csv."""
     path = Path(path)
     if fmt == "csv":
         return path.with_name(f"{path.stem}-csv")
@@ -45,7 +52,7 @@ def format_of(out: Path | None, fmt: str | None) -> str:
 
 def make_report(path: Path, fmt: str):
     """The report of the result file ``path`` in ``fmt``: the text (md, html) or the
-    Report itself (csv, written by ``write_report``)."""
+    Report itself (csv, xlsx: written by ``write_report``)."""
     from catenet.output.states import read_states
     from catenet.report.render import html_document, markdown
     from catenet.report.tables import build_report
@@ -70,7 +77,7 @@ def write_report(path: Path, out: Path | None, fmt: str) -> list[Path]:
     """Writes the report of ``path`` to ``out`` (None: ``default_output``; for csv a
     directory); the files written. ConfigError for a file that is no result file or an
     output that cannot be written."""
-    from catenet.report.render import write_csv
+    from catenet.report.render import write_csv, write_xlsx
 
     target = default_output(path, fmt) if out is None else Path(out)
     if fmt == "csv" and target.suffix.lower() == ".csv":
@@ -82,6 +89,8 @@ def write_report(path: Path, out: Path | None, fmt: str) -> list[Path]:
     try:
         if fmt == "csv":
             return write_csv(made, target)
+        if fmt == "xlsx":
+            return [write_xlsx(made, target)]
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(made, encoding="utf-8")
     except OSError as exc:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from catenet.report.tables import Report, Table
 
-FORMATS = ("md", "csv", "html")
+FORMATS = ("md", "csv", "html", "xlsx")
 
 
 def cell(v) -> str:
@@ -84,9 +84,9 @@ def _csv_value(v):
     return v
 
 
-def write_csv(report: Report, directory: Path) -> list[Path]:
-    """The report's tables as CSV files in ``directory`` (created); the files written."""
-    directory.mkdir(parents=True, exist_ok=True)
+def sheets(report: Report) -> list[tuple[str, list[list]]]:
+    """The report's tables as sheets: per kind of table (its key) a header row and the
+    rows of every state (columns ``state`` and ``kind`` first), then ``verdicts``."""
     tables: dict[str, tuple[tuple[str, ...], list[list]]] = {}
     for sec in report.sections:
         for t in sec.tables:
@@ -100,11 +100,39 @@ def write_csv(report: Report, directory: Path) -> list[Path]:
             [sec.name, sec.kind, v.get("converged", ""), v.get("stability", ""), detail]
             + ["\n".join(sec.warnings)]
         )
-    written = []
-    for key, (columns, rows) in tables.items():
-        written.append(_write(directory / f"{key}.csv", [list(columns), *rows]))
-    written.append(_write(directory / "verdicts.csv", verdicts))
-    return written
+    out = [(key, [list(columns), *rows]) for key, (columns, rows) in tables.items()]
+    return [*out, ("verdicts", verdicts)]
+
+
+def write_csv(report: Report, directory: Path) -> list[Path]:
+    """The report's tables as CSV files in ``directory`` (created); the files written."""
+    directory.mkdir(parents=True, exist_ok=True)
+    return [_write(directory / f"{key}.csv", rows) for key, rows in sheets(report)]
+
+
+def write_xlsx(report: Report, path: Path) -> Path:
+    """The report's tables as one Excel workbook (openpyxl), a sheet per kind of table as
+    in the CSV files: numbers as numbers (NaN: an empty cell), a frozen header row."""
+    from openpyxl import Workbook
+
+    book = Workbook()
+    book.remove(book.active)
+    for key, rows in sheets(report):
+        sheet = book.create_sheet(key[:31])  # Excel's longest sheet name
+        for row in rows:
+            sheet.append([_xlsx_value(v) for v in row])
+        sheet.freeze_panes = "A2"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    book.save(path)
+    return path
+
+
+def _xlsx_value(v):
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return None
+    if isinstance(v, (bool, int, float, str)):
+        return v
+    return str(v)
 
 
 def _write(path: Path, rows: list[list]) -> Path:

@@ -165,6 +165,37 @@ def test_csv_report_opens_in_pandas(mast, tmp_path):
     assert cables["max utilisation [-]"].dtype.kind == "f"
 
 
+def test_xlsx_report_is_the_csv_tables_in_one_workbook(mast, tmp_path):
+    """--format xlsx (or -o NAME.xlsx): a sheet per CSV file, the same cells, numbers as
+    numbers to the 15 digits a workbook keeps (pandas reads them as floats); -o -
+    refused (a workbook is no text)."""
+    import openpyxl
+    import pandas
+
+    assert invoke("report", mast, "--format", "csv", "-o", tmp_path / "t").exit_code == 0
+    res = invoke("report", mast, "-o", tmp_path / "mast.xlsx")
+    assert res.exit_code == 0, res.output
+    book = openpyxl.load_workbook(tmp_path / "mast.xlsx")
+    assert sorted(book.sheetnames) == sorted(p.stem for p in (tmp_path / "t").glob("*.csv"))
+    for name in book.sheetnames:
+        with open(tmp_path / "t" / f"{name}.csv", newline="") as fh:
+            rows = list(csv.reader(fh))
+        cells = [
+            ["" if v is None else v for v in r] for r in book[name].iter_rows(values_only=True)
+        ]
+        assert len(cells) == len(rows), name
+        for got, want in zip(cells, rows, strict=True):
+            for g, w in zip(got, want, strict=True):
+                if isinstance(g, (int, float)) and not isinstance(g, bool):  # 16 digits kept
+                    assert g == pytest.approx(float(w), rel=1e-15, abs=0.0), (name, g, w)
+                else:
+                    assert str(g) == w, (name, g, w)
+    cables = pandas.read_excel(tmp_path / "mast.xlsx", sheet_name="cables")
+    assert cables["max tension [N]"].dtype.kind == "f"
+    refused = invoke("report", mast, "--format", "xlsx", "-o", "-")
+    assert refused.exit_code == 2 and "give a file (.xlsx)" in refused.output
+
+
 def test_html_report_embeds_its_figures(mast, tmp_path):
     res = invoke("report", mast, "-o", tmp_path / "mast.html")
     assert res.exit_code == 0, res.output
