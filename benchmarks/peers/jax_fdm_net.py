@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import os
 
-for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-    os.environ[_var] = "1"
+if __name__ == "__main__":  # one thread (set before NumPy, MKL and Numba load; never on
+    # import: a test process's threads are set already)
+    for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[_var] = "1"
 os.environ.setdefault("JAX_ENABLE_X64", "1")  # double precision, as catenet
 os.environ.setdefault(
     "XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import os
 
-for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ[_var] = "1"  # before NumPy, MKL and Numba load
+if __name__ == "__main__":  # one thread (set before NumPy, MKL and Numba load; never on
+    # import: a test process's threads are set already)
+    for _var in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ[_var] = "1"  # before NumPy, MKL and Numba load
 
 import argparse  # noqa: E402
 import json  # noqa: E402

@@ -36,8 +36,10 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-for _k in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_k, "1")
+if __name__ == "__main__":  # one thread (set before NumPy, MKL and Numba load; never on
+    # import: a test process's threads are set already)
+    for _k in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(_k, "1")
 
 import numpy as np  # noqa: E402
 

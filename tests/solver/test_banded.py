@@ -24,6 +24,14 @@ pytestmark = pytest.mark.skipif(not pardiso_available(), reason="MKL's PARDISO i
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.fixture(autouse=True)
+def band_in_auto(monkeypatch):
+    """The band as "auto" takes it when catenet.solver.banded.AUTO is on."""
+    import catenet.solver.banded as banded
+
+    monkeypatch.setattr(banded, "AUTO", True)
+
+
 def _step_matrix(shift: float = 0.0):
     case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
     case["geometry"]["n"] = 6

@@ -125,7 +125,7 @@ def thrown_net(**solver) -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("rho_inf", [0.5, 0.95])
+@pytest.mark.parametrize("rho_inf", [0.8, 0.95])  # (at 0.5 its gain is marginal)
 def test_newmark_creating_energy_in_contact_is_stopped(tmp_path, rho_inf):
     """A case file refuses newmark with contact (exit 2); through Python's solve_dynamic,
     which still takes it, the energy balance stops the run where it creates energy."""

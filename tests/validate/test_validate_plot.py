@@ -189,8 +189,9 @@ def test_plot_directory_goes_to_the_sweep_figures(tmp_path, monkeypatch):
         return [tmp_path / "a.png", tmp_path / "b.png"]
 
     monkeypatch.setitem(sys.modules, "catenet.study", types.SimpleNamespace(plot_sweep=plot_sweep))
-    # a sweep of the paper's square net (its figures and report), with no rows yet
-    header = {"catenet_sweep": 1, "params": [["geometry.n", [10]]], "columns": ["geometry.n"]}
+    # a sweep of the paper's square net over n and alpha (its figures and report), no rows yet
+    params = [["geometry.n", [10]], ["geometry.alpha", [0.0]]]
+    header = {"catenet_sweep": 1, "params": params, "columns": ["geometry.n", "geometry.alpha"]}
     header["base"] = {"geometry": {"kind": "square_net"}}
     (tmp_path / "results.jsonl").write_text(json.dumps(header) + "\n")
     res = invoke("plot", str(tmp_path))
