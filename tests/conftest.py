@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import subprocess
 import sys
@@ -48,6 +49,21 @@ every = {every}
 
 def small_net(method="dynamic", dt=0.01, damping=1.0, t_end=5.0, every=1) -> str:
     return SMALL_NET.format(method=method, dt=dt, damping=damping, t_end=t_end, every=every)
+
+
+@pytest.fixture(autouse=True)
+def _logging_as_it_was():
+    """A command run in this process (click's CliRunner) sets the root logger as
+    ``catenet`` does (``setup_logging``: level, a handler on the command's stderr); the
+    next test gets the root logger's level back and loses that handler (else a -q run
+    leaves warnings filtered for every test after it on the worker)."""
+    root = logging.getLogger()
+    level, before = root.level, set(root.handlers)
+    yield
+    root.setLevel(level)
+    for handler in list(root.handlers):
+        if handler not in before and type(handler) is logging.StreamHandler:
+            root.removeHandler(handler)
 
 
 @pytest.fixture
