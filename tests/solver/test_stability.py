@@ -330,36 +330,41 @@ def test_a_mast_whose_guys_go_slack_collapses_where_they_do(tmp_path):
 
 
 def test_a_failed_post_collapse_resolve_keeps_the_last_equilibrium(monkeypatch):
-    """The mast whose split strut collapses, followed through (solver.post_collapse) in
-    two load steps: where Newton from the bracket's end fails to reach the step's load,
-    the error carries the last equilibrium before that step (continuation's callers
-    write it; without it they fell back to the start)."""
+    """The guyed mast in two load steps, followed through (solver.post_collapse): the
+    second step is made to collapse (``_follow`` says so) and Newton from the bracket's end
+    is made to fail; the error carries the first step's equilibrium at load factor 0.5
+    (continuation's callers write it; without it they fell back to the start)."""
     import catenet.solver.loadsteps as loadsteps
     from catenet.case import build, load_case
     from catenet.errors import ConvergenceError
     from catenet.solver.path import Settings
     from catenet.solver.workspace import Workspace
 
-    case = load_case(MAST, ["geometry.cable.0.edge_length=5", "solver.post_collapse=true"])
+    case = load_case(MAST, ["solver.post_collapse=true"])
     scene = build(case)
-    real = loadsteps.solve_static
+    real_static, real_follow = loadsteps.solve_static, loadsteps._follow
+    first = []
 
     def failing_resolve(*args, relaxed=False, **kwargs):
         if relaxed:
             raise ConvergenceError("no convergence in 200 iterations (made to fail)")
-        return real(*args, relaxed=relaxed, **kwargs)
+        r = real_static(*args, relaxed=relaxed, **kwargs)
+        first.append(r.x.copy())
+        return r
+
+    def collapsing(judge, net, loads, x0, f0, f1, r, last, settings, depth):
+        if f1 < 1.0:
+            return real_follow(judge, net, loads, x0, f0, f1, r, last, settings, depth)
+        return "made to collapse", f0, x0, r
 
     monkeypatch.setattr(loadsteps, "solve_static", failing_resolve)
+    monkeypatch.setattr(loadsteps, "_follow", collapsing)
     settings = Settings.of(case.solver)
     ws = Workspace(scene.net, terms=scene.terms)
-    # (where the round-off of the start decides that the path collapses at once, the
-    # CollapseError carries its own last stable state: either way one is kept)
-    with pytest.raises(ConvergenceError) as failed:
+    with pytest.raises(ConvergenceError, match="made to fail") as failed:
         loadsteps.continuation(
             scene.net, scene.loads, [0.5, 1.0], rtol=settings.rtol, workspace=ws, post_collapse=True
         )
     good = failed.value.last_good
-    assert good is not None, failed.value
-    if "made to fail" in str(failed.value):  # the re-solve after the followed collapse
-        assert good.time in (0.0, 0.5), good
-    assert good.x.shape == scene.net.nodes.shape and np.all(np.isfinite(good.x))
+    assert good is not None and good.time == 0.5, good
+    assert np.array_equal(good.x, first[0])
