@@ -16,31 +16,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from catenet.kernels.rigid import frame_state
 from catenet.kernels.shapes import BOX, box_max_step, capsule_max_step, shape_feature
-
-
-@njit(cache=True, error_model="numpy")
-def frame_pose(x, body, B):
-    """(c, A) of the body's four nodes ``body`` in x (N, 3): c their mean, A = P^T B."""
-    c = np.zeros(3)
-    A = np.zeros((3, 3))
-    for k in range(4):
-        p = body[k]
-        for i in range(3):
-            c[i] += x[p, i]
-            for m in range(3):
-                A[i, m] += x[p, i] * B[k, m]
-    for i in range(3):
-        c[i] *= 0.25
-    return c, A
 
 
 @njit(cache=True, error_model="numpy")
 def body_paths(x, dx, nodes, body, B, c0):
     """Each node's body-frame point X0 and its path's V and W along the step dx, and the
     coordinates' scale max(|X0|, |U|, |c0|) (U = x - c)."""
-    c, A = frame_pose(x, body, B)
-    dc, dA = frame_pose(dx, body, B)
+    c, A = frame_state(x, body, B)
+    dc, dA = frame_state(dx, body, B)
     K = nodes.shape[0]
     X0 = np.empty((K, 3))
     V = np.empty((K, 3))

@@ -45,6 +45,7 @@ from catenet.kernels.strands import (
     EPS_PARALLEL,
     _phi,
     edge_energy,
+    relative_speed,
     sqdist,
 )
 
@@ -343,15 +344,7 @@ def _ccd(P, dP, t_max, r, kind):
     """The strands' additive CCD (``catenet.kernels.strands.accd``) of the distance
     ``kind`` of P moving with dP: the first t in (0, t_max] at which the gap d - r may
     have fallen below CCD_SHARE of its start; inf when none comes before t_max."""
-    q = dP.copy()
-    for i in range(3):
-        mean = 0.25 * (dP[i] + dP[3 + i] + dP[6 + i] + dP[9 + i])
-        for k in range(4):
-            q[3 * k + i] -= mean
-    speed = np.empty(4)
-    for k in range(4):
-        speed[k] = np.sqrt(q[3 * k] ** 2 + q[3 * k + 1] ** 2 + q[3 * k + 2] ** 2)
-    lp = max(speed[0], speed[1]) + max(speed[2], speed[3])
+    lp = relative_speed(dP)
     if lp == 0.0:
         return np.inf
     g, H, X = np.empty(12), np.empty((1, 1)), np.empty(12)

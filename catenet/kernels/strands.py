@@ -476,20 +476,21 @@ CCD_ITERATIONS = 1000
 
 
 @njit(cache=True, error_model="numpy")
+def relative_speed(dP):
+    """Additive CCD's l_p for four points moving with dP (12,): the largest speed of the
+    first two plus that of the last two, relative to their mean motion."""
+    q = dP.reshape(4, 3) - 0.25 * (dP[0:3] + dP[3:6] + dP[6:9] + dP[9:12])
+    speed = np.sqrt(q[:, 0] ** 2 + q[:, 1] ** 2 + q[:, 2] ** 2)
+    return max(speed[0], speed[1]) + max(speed[2], speed[3])
+
+
+@njit(cache=True, error_model="numpy")
 def accd(P, dP, t_max, r=0.0):
     """The first time t in (0, t_max] of additive CCD for the edge pair P (12,) moving
     with dP (12,): the segments' distance stays positive on [0, t] (it falls by at most
     l_p per unit of t, l_p the largest relative speeds of the two edges' ends); inf
     when none comes before t_max."""
-    q = dP.copy()
-    for i in range(3):
-        mean = 0.25 * (dP[i] + dP[3 + i] + dP[6 + i] + dP[9 + i])
-        for k in range(4):
-            q[3 * k + i] -= mean
-    speed = np.empty(4)
-    for k in range(4):
-        speed[k] = np.sqrt(q[3 * k] ** 2 + q[3 * k + 1] ** 2 + q[3 * k + 2] ** 2)
-    lp = max(speed[0], speed[1]) + max(speed[2], speed[3])
+    lp = relative_speed(dP)
     if lp == 0.0:
         return np.inf
     g, H, X = np.empty(12), np.empty((12, 12)), np.empty(12)
