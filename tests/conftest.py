@@ -51,19 +51,28 @@ def small_net(method="dynamic", dt=0.01, damping=1.0, t_end=5.0, every=1) -> str
     return SMALL_NET.format(method=method, dt=dt, damping=damping, t_end=t_end, every=every)
 
 
+#: The root logger's level as the session began (a command run in the process changes it).
+ROOT_LEVEL = logging.getLogger().level
+
+
 @pytest.fixture(autouse=True)
 def _logging_as_it_was():
-    """A command run in this process (click's CliRunner) sets the root logger as
-    ``catenet`` does (``setup_logging``: level, a handler on the command's stderr); the
-    next test gets the root logger's level back and loses that handler (else a -q run
-    leaves warnings filtered for every test after it on the worker)."""
+    """A command run in this process (click's CliRunner: in a test or in a module's
+    fixture) sets the root logger as ``catenet`` does (``setup_logging``: its level, a
+    handler on the command's stderr). Each test starts and ends with the session's level
+    and without such handlers (else a -q run leaves warnings filtered for every test
+    after it on the worker, and caplog reads nothing)."""
     root = logging.getLogger()
-    level, before = root.level, set(root.handlers)
+
+    def restore() -> None:
+        root.setLevel(ROOT_LEVEL)
+        for handler in list(root.handlers):
+            if type(handler) is logging.StreamHandler:  # catenet's, not pytest's
+                root.removeHandler(handler)
+
+    restore()
     yield
-    root.setLevel(level)
-    for handler in list(root.handlers):
-        if handler not in before and type(handler) is logging.StreamHandler:
-            root.removeHandler(handler)
+    restore()
 
 
 @pytest.fixture
