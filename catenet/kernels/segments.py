@@ -40,12 +40,10 @@ import numpy as np
 from numba import njit
 
 from catenet.kernels.strands import (
-    CCD_ITERATIONS,
-    CCD_SHARE,
     EPS_PARALLEL,
     _phi,
+    accd,
     edge_energy,
-    relative_speed,
     sqdist,
 )
 
@@ -340,34 +338,6 @@ def segment_gaps(x, edges, Y, F, lone, r, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _ccd(P, dP, t_max, r, kind):
-    """The strands' additive CCD (``catenet.kernels.strands.accd``) of the distance
-    ``kind`` of P moving with dP: the first t in (0, t_max] at which the gap d - r may
-    have fallen below CCD_SHARE of its start; inf when none comes before t_max."""
-    lp = relative_speed(dP)
-    if lp == 0.0:
-        return np.inf
-    g, H, X = np.empty(12), np.empty((1, 1)), np.empty(12)
-    d = np.sqrt(sqdist(P, kind, g, H, False)) - r
-    if not d > 0.0:
-        return 0.0
-    gap = CCD_SHARE * d
-    t = 0.0
-    tl = (1.0 - CCD_SHARE) * d / lp
-    for _ in range(CCD_ITERATIONS):
-        for p in range(12):
-            X[p] = P[p] + (t + tl) * dP[p]
-        d = np.sqrt(sqdist(X, kind, g, H, False)) - r
-        if t > 0.0 and d < gap:
-            return t
-        t += tl
-        if t > t_max:
-            return np.inf
-        tl = 0.9 * d / lp
-    return t
-
-
-@njit(cache=True, error_model="numpy")
 def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, r, t_max):
     """The first time in (0, t_max] at which a pair, moving with dx and dY, may come
     within r (the additive CCD's conservative time); inf when none does."""
@@ -377,7 +347,7 @@ def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, r, t_max):
         e, f = pairs[k, 0], pairs[k, 1]
         kind = _points(x, edges, e, Y, F, lone, f, P)
         _points(dx, edges, e, dY, F, lone, f, dP)
-        t = min(t, _ccd(P, dP, min(t, t_max), r, kind))
+        t = min(t, accd(P, dP, min(t, t_max), r, kind))
     return t
 
 

@@ -485,16 +485,16 @@ def relative_speed(dP):
 
 
 @njit(cache=True, error_model="numpy")
-def accd(P, dP, t_max, r=0.0):
+def accd(P, dP, t_max, r=0.0, kind=0):
     """The first time t in (0, t_max] of additive CCD for the edge pair P (12,) moving
-    with dP (12,): the segments' distance stays positive on [0, t] (it falls by at most
-    l_p per unit of t, l_p the largest relative speeds of the two edges' ends); inf
-    when none comes before t_max."""
+    with dP (12,): the distance ``kind`` (``sqdist``'s) stays above r on [0, t] (it falls
+    by at most l_p per unit of t, l_p the largest relative speeds of the two edges'
+    ends); inf when none comes before t_max."""
     lp = relative_speed(dP)
     if lp == 0.0:
         return np.inf
-    g, H, X = np.empty(12), np.empty((12, 12)), np.empty(12)
-    d = np.sqrt(sqdist(P, 0, g, H, False)) - r
+    g, H, X = np.empty(12), np.empty((1, 1)), np.empty(12)  # (no Hessian asked for)
+    d = np.sqrt(sqdist(P, kind, g, H, False)) - r
     if not d > 0.0:
         return 0.0
     gap = CCD_SHARE * d
@@ -503,7 +503,7 @@ def accd(P, dP, t_max, r=0.0):
     for _ in range(CCD_ITERATIONS):
         for p in range(12):
             X[p] = P[p] + (t + tl) * dP[p]
-        d = np.sqrt(sqdist(X, 0, g, H, False)) - r
+        d = np.sqrt(sqdist(X, kind, g, H, False)) - r
         if t > 0.0 and d < gap:
             return t
         t += tl
