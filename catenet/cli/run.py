@@ -310,11 +310,11 @@ def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import (
         cases_table,
         envelope_lines,
-        relabel,
         state_lines,
         support_line,
         utilisation_line,
     )
+    from catenet.model.units import relabel
     from catenet.run.advice import LARGE_BYTES, format_bytes
 
     s = result.report

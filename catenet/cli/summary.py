@@ -1,51 +1,14 @@
 """The lines ``catenet run`` prints after a run: the numbers of
 ``catenet.model.summary`` (the same as the /result attributes and the sweep columns), one
-quantity a line, labelled in the case's ``units`` (``relabel``: the numbers are as the case
-wrote them, only the unit names change)."""
+quantity a line; ``catenet run`` labels them in the case's ``units``
+(``catenet.model.units.relabel``: the numbers are as the case wrote them, only the unit
+names change)."""
 
 from __future__ import annotations
 
 import math
-import re
 
 W = 12  # the label column
-
-#: The unit names of each system (top-level ``units``) for the SI names the lines are
-#: written with: the numbers stay as the case gave them (kN-m: kN, m, kPa, t; N-mm: N, mm,
-#: MPa, t), so only the labels change.
-UNIT_LABELS: dict[str, dict[str, str]] = {
-    "kN-m": {"N": "kN", "N m": "kN m", "N/m": "kN/m", "Pa": "kPa", "kg": "t", "J": "kJ"},
-    "N-mm": {
-        "m": "mm",
-        "m/s": "mm/s",
-        "m/s^2": "mm/s^2",
-        "m^2": "mm^2",
-        "N m": "N mm",
-        "N/m": "N/mm",
-        "Pa": "MPa",
-        "kg": "t",
-        "J": "mJ",
-    },
-}
-_UNIT = "N m|N/m|m/s\\^2|m/s|m\\^2|m|N|kg|Pa|J"
-_AFTER_NUMBER = re.compile(rf"(?<=[\d\])]) ({_UNIT})(?=$|[\s,;:)(])")
-_BRACKETED = re.compile(rf"\[({_UNIT})\]")
-
-
-def relabel(lines: list[str], units: str) -> list[str]:
-    """``lines`` with each unit name after a number or a vector (``1.5 m``, ``[0, 0, 1] m``)
-    and each bracketed column unit (``[N]``) named as in ``units``."""
-    names = UNIT_LABELS.get(units)
-    if not names:
-        return lines
-
-    def after(m: re.Match) -> str:
-        return " " + names.get(m.group(1), m.group(1))
-
-    def bracketed(m: re.Match) -> str:
-        return "[" + names.get(m.group(1), m.group(1)) + "]"
-
-    return [_BRACKETED.sub(bracketed, _AFTER_NUMBER.sub(after, line)) for line in lines]
 
 
 def vector(v) -> str:

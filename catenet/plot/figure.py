@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.units import relabel, system
 from catenet.output import read_result
 from catenet.output.supports import read_supported
 from catenet.plot.plan import draw_plan, draw_slack, slack_edges, wants_plan
@@ -154,6 +155,21 @@ def check_output(out: str | Path) -> Path:
     return out
 
 
+def in_units(fig, units: object) -> None:
+    """Names the units of every text of ``fig`` (axis labels, titles, colour bars,
+    legends) as the case's ``units`` do (``catenet.model.units``: kN-m, N-mm); the
+    numbers drawn are the file's, in the case's units already."""
+    from matplotlib.text import Text
+
+    units = system(units)
+    if units == "SI":
+        return
+    for t in fig.findobj(Text):
+        text = t.get_text()
+        if text:
+            t.set_text(relabel([text], units)[0])
+
+
 def _limits(*arrays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     pts = np.concatenate([a.reshape(-1, 3) for a in arrays])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -189,6 +205,7 @@ def plot_result(
         out = default_output(path) if shown is None else state_output(path, shown)
     out = check_output(out)
     fig = figure(res, scale=scale, shown=shown)
+    in_units(fig, res.case.get("units"))
     fig.savefig(out, dpi=dpi)
     log.info("wrote %s", out)
     return out

@@ -22,7 +22,7 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.output import read_result
 from catenet.output.history import History, read_history
-from catenet.plot.figure import check_output
+from catenet.plot.figure import check_output, in_units
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +56,7 @@ def plot_history(path: str | Path, out: str | Path | None = None, *, dpi: int = 
         )
     out = check_output(history_output(path) if out is None else out)
     fig = history_figure(hist, support_sets(path, hist.reaction_nodes))
+    in_units(fig, res.case.get("units"))
     fig.savefig(out, dpi=dpi)
     log.info("wrote %s", out)
     return out

@@ -26,13 +26,15 @@ def plot_modes(path: str | Path, out: str | Path, *, dpi: int = 150) -> Path | N
     """Draws the lowest modes of the result file ``path`` into ``out``; None (nothing
     written) where the file has no /modes."""
     from catenet.output.modes import read_modes
-    from catenet.output.reader import read_mesh
+    from catenet.output.reader import read_mesh, read_result
+    from catenet.plot.figure import in_units
 
     stored = read_modes(path)
     if stored is None or stored.count == 0:
         return None
     mesh = read_mesh(path)
     fig = figure(stored, mesh.edges, mesh.fixed)
+    in_units(fig, read_result(path).case.get("units"))
     fig.savefig(out, dpi=dpi)
     log.info("wrote %s", out)
     return Path(out)

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.units import unit_in
 
 log = logging.getLogger(__name__)
 
@@ -72,10 +73,6 @@ OUTPUTS.update({"slack_edges": "slack edges", "iterations": "Newton iterations"}
 SKIP = {"converged", "error", "run_file"}
 # units by the case's `units`: force, length
 SYSTEMS = {"SI": ("N", "m"), "kN-m": ("kN", "m"), "N-mm": ("N", "mm")}
-TOKENS = {
-    "kN-m": {"N": "kN", "Pa": "kPa", "kg": "t"},
-    "N-mm": {"m": "mm", "Pa": "MPa", "kg": "t"},
-}
 FORMATS = (".png", ".svg", ".pdf")
 ELEMENT = re.compile(r"^(.*)\[(\d+)\]$")
 
@@ -173,7 +170,7 @@ class Table:
             from catenet.case.readme import key_unit
 
             unit = key_unit(base)
-            unit = _in_system(unit, self.units) if unit else ""
+            unit = unit_in(unit, self.units) if unit else ""
             return f"{name} [{unit}]" if unit else name
         if re.fullmatch(r"f\d+", name):
             return f"natural frequency {name} [Hz]"
@@ -224,12 +221,6 @@ def _number(v) -> float:
         return float(v)
     except (TypeError, ValueError):
         return math.nan
-
-
-def _in_system(unit: str, units: str) -> str:
-    """An SI unit as written in the case's units (``N/m`` -> ``kN/m`` in kN-m)."""
-    table = TOKENS.get(units, {})
-    return re.sub(r"[A-Za-z]+", lambda m: table.get(m.group(0), m.group(0)), unit)
 
 
 def _key(name: str) -> str:

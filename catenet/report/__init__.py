@@ -55,7 +55,7 @@ def make_report(path: Path, fmt: str):
     Report itself (csv, xlsx: written by ``write_report``)."""
     from catenet.output.states import read_states
     from catenet.report.render import html_document, markdown
-    from catenet.report.tables import build_report
+    from catenet.report.tables import build_report, in_units
 
     states = read_states(path)
     report = build_report(states)
@@ -64,6 +64,7 @@ def make_report(path: Path, fmt: str):
     base = [s for s in report.sections if s.kind == "base"]
     if base:  # a dynamic run's lines over time (its /history)
         base[0].tables += lines_tables(states)
+    report = in_units(report)
     if fmt == "md":
         return markdown(report)
     if fmt == "html":

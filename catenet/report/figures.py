@@ -10,6 +10,7 @@ import io
 
 import numpy as np
 
+from catenet.model.units import unit_in
 from catenet.output.states import State, States
 from catenet.report.tables import Report
 
@@ -28,7 +29,7 @@ def figures(report: Report, states: States) -> dict[str, list[str]]:
     if bars is not None:
         out[""] = [bars]
     for state, sec in zip(states.states, report.sections, strict=False):
-        out[sec.name] = [_net(states, state)]
+        out[sec.name] = [_net(states, state, report.units)]
     return out
 
 
@@ -54,9 +55,9 @@ def _cable_bars(report: Report) -> str | None:
     use = np.array([[row[col] for row in t.rows] for t in tables], dtype=np.float64)
     what = "max utilisation [-]"
     if not np.isfinite(use).any():
-        col = tables[0].columns.index("max tension [N]")
+        col = next(k for k, c in enumerate(tables[0].columns) if c.startswith("max tension ["))
         use = np.array([[row[col] for row in t.rows] for t in tables], dtype=np.float64)
-        what = "max tension [N]"
+        what = tables[0].columns[col]
     wide = min(16.0, max(6.0, 2.0 + 0.3 * len(names) * len(states) ** 0.5))
     fig, ax = plt.subplots(figsize=(wide, 3.5))
     width = 0.8 / len(states)
@@ -71,7 +72,7 @@ def _cable_bars(report: Report) -> str | None:
     return _png(fig)
 
 
-def _net(states: States, s: State) -> str:
+def _net(states: States, s: State, units: str) -> str:
     """The net of state ``s`` in plan (x-y) and in elevation (its wider horizontal
     axis against z), edges coloured by utilisation (0 to at least 1) or else tension,
     supports as black squares."""
@@ -84,7 +85,7 @@ def _net(states: States, s: State) -> str:
     use = s.get("utilisation")
     label = "utilisation [-]"
     if use is None or not np.isfinite(use).any():
-        use, label = s.get("tension"), "tension [N]"
+        use, label = s.get("tension"), f"tension [{unit_in('N', units)}]"
     values = np.zeros(len(e)) if use is None else np.nan_to_num(use)
     top = float(values.max()) if values.size else 1.0
     low = 0.0 if label.startswith("utilisation") else float(min(values.min(initial=0.0), 0.0))
@@ -103,8 +104,8 @@ def _net(states: States, s: State) -> str:
             ax.plot(x[fixed, a], x[fixed, b], "ks", ms=4)
         ax.autoscale()
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel(f"{'xyz'[a]} [m]")
-        ax.set_ylabel(f"{'xyz'[b]} [m]")
+        ax.set_xlabel(f"{'xyz'[a]} [{unit_in('m', units)}]")
+        ax.set_ylabel(f"{'xyz'[b]} [{unit_in('m', units)}]")
     axes[0].set_title("plan")
     axes[1].set_title("elevation")
     fig.colorbar(lines, ax=list(axes), label=label)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from catenet.model.summary import first_extreme
+from catenet.model.units import relabel, system
 from catenet.output.states import State, States
 from catenet.report.groups import Groups, groups
 
@@ -66,6 +67,7 @@ class Report:
     about: dict[str, str]
     sections: list[Section]
     groups: Groups
+    units: str = "SI"  # the case's units system: the labels' names (catenet.model.units)
 
 
 def build_report(states: States) -> Report:
@@ -82,7 +84,26 @@ def build_report(states: States) -> Report:
         f"{len(g.names)} cable{'' if len(g.names) == 1 else 's'}",
         "states": ", ".join(_label(s) for s in states.states),
     }
-    return Report(states.title, str(states.path), about, sections, g)
+    units = system(states.case.get("units"))
+    return Report(states.title, str(states.path), about, sections, g, units)
+
+
+def in_units(report: Report) -> Report:
+    """``report`` with every unit name (columns, notes, verdicts, warnings) as its case's
+    ``units`` name them (kN-m: kN, kPa; N-mm: mm, MPa): the numbers are the file's."""
+    if report.units == "SI":
+        return report
+
+    def text(line: str) -> str:
+        return relabel([line], report.units)[0]
+
+    for sec in report.sections:
+        sec.verdict = {k: text(v) for k, v in sec.verdict.items()}
+        sec.warnings = [text(w) for w in sec.warnings]
+        for t in sec.tables:
+            t.columns = tuple(text(c) for c in t.columns)
+            t.note = text(t.note)
+    return report
 
 
 def _label(s: State) -> str:
