@@ -436,8 +436,9 @@ def law_rows() -> list[Row]:
 
 
 def run(progress: Callable[[str], None] | None = None) -> list[Row]:
-    """Every row of the validation table: cases (i), (ii), (iii) and the rods' (iv),
-    ``catenet.validate.rods``."""
+    """Every row of the validation table: cases (i), (ii), (iii), the rods' (iv),
+    ``catenet.validate.rods``, and a published mooring system's (v),
+    ``catenet.validate.moorings``."""
     if progress:
         progress("midpoint load (Eqs. 16-17)")
     rows = midpoint_load_rows()
@@ -450,6 +451,11 @@ def run(progress: Callable[[str], None] | None = None) -> list[Row]:
     from catenet.validate.rods import rod_rows
 
     rows += [Row(**row) for row in rod_rows(progress)]
+    if progress:
+        progress("OC3-Hywind mooring lines: published restoring stiffness")
+    from catenet.validate.moorings import oc3_rows
+
+    rows += [Row(**row) for row in oc3_rows()]
     return rows
 
 

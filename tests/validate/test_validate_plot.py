@@ -64,6 +64,8 @@ def test_validate_passes_and_writes_csv(tmp_path):
     assert elastic and all(1.8 <= float(r["order"]) <= 2.2 for r in elastic)
     eq15 = [r for r in rows if "Eq.15" in r["quantity"]]
     assert len(eq15) == 3 and all(r["pass"] == "" and float(r["rel_error"]) > 0 for r in eq15)
+    oc3 = [r for r in rows if r["case"].startswith("OC3-Hywind") and r["pass"] == "True"]
+    assert [r["quantity"].split()[0] for r in oc3] == ["K11", "K33", "K66"]
 
 
 def test_validate_quiet_and_bad_output(tmp_path):
