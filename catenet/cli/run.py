@@ -306,10 +306,23 @@ def _balance(row, scale: float) -> str:
     )
 
 
+def _line_records(path: Path) -> list:
+    """The named lines' records of a dynamic run's /history ([] where it has none)."""
+    from catenet.errors import ConfigError
+    from catenet.report.lines import line_records, lines_history
+
+    try:
+        history = lines_history(path)
+    except (ConfigError, OSError):
+        return []
+    return [] if history is None else line_records(history)
+
+
 def _summary(case, result, path: Path | None) -> None:
     from catenet.cli.summary import (
         cases_table,
         envelope_lines,
+        line_lines,
         state_lines,
         support_line,
         utilisation_line,
@@ -359,6 +372,8 @@ def _summary(case, result, path: Path | None) -> None:
             head + f"spin {b['spin']:.4g} deg/s about [{axis}], speed {b['speed']:.4g} m/s "
             f"at the end; {touch}",
         )
+    if case.solver.method == "dynamic" and case.water is not None and path is not None:
+        lines[-1:-1] = line_lines(_line_records(path))  # lines in water: over the run
     if s.cases:
         table = cases_table(s.cases, len(result.tension))
         lines[-1:-1] = table + envelope_lines(s.envelope)

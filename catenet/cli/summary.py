@@ -241,3 +241,24 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
         "results in /cases/<name>/, envelopes in /envelope/)"
     )
     return rows
+
+
+def line_lines(records) -> list[str]:
+    """A line per named cable of a dynamic run, from its /history
+    (``catenet.report.lines.line_records``): its tension range over the run, its snap
+    events, its anchor's largest uplift and its touchdown's range."""
+    out = []
+    for r in records:
+        text = (
+            f"{'line':<12} {r.name}: tension {r.least:.6g} N (t = {r.least_t:.4g} s) to "
+            f"{r.largest:.6g} N (t = {r.largest_t:.4g} s) over the run"
+        )
+        n = int(r.snaps.size)
+        text += f", {n} snap event{'' if n == 1 else 's'}"
+        if n:
+            text += f" (first at t = {float(r.snaps[0]):.4g} s)"
+        text += f", anchor uplift up to {r.uplift:.3g} deg"
+        if math.isfinite(r.touchdown[0]):
+            text += f", touchdown {r.touchdown[0]:.4g} m to {r.touchdown[1]:.4g} m from the anchor"
+        out.append(text)
+    return out

@@ -8,6 +8,7 @@ its fairlead tension (peak period, significant range); with an irregular sea
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -24,16 +25,25 @@ def lines_tables(states: States) -> list[Table]:
     """The lines' tables of a dynamic run with named cables (none otherwise)."""
     if states.method != "dynamic":
         return []
-    history = read_history(states.path)
-    if history is None or not history.cable_names or len(history.time) < 2:
+    history = lines_history(states.path)
+    if history is None:
         return []
-    if history.cable_tension_range.shape[1:] != (len(history.cable_names), 2):
-        return []  # a file written before these histories
     tables = [lines_table(history)]
     water = states.case.get("water") if isinstance(states.case, dict) else None
     if isinstance(water, dict) and water.get("spectrum"):
         tables.append(spectrum_table(history))
     return tables
+
+
+def lines_history(path) -> History | None:
+    """The /history of a result file with named lines and at least two steps (None
+    otherwise, or for a file written before the lines' histories)."""
+    history = read_history(path)
+    if history is None or not history.cable_names or len(history.time) < 2:
+        return None
+    if history.cable_tension_range.shape[1:] != (len(history.cable_names), 2):
+        return None  # a file written before these histories
+    return history
 
 
 def _fairlead(history: History, k: int) -> np.ndarray:
@@ -43,8 +53,48 @@ def _fairlead(history: History, k: int) -> np.ndarray:
     return ends[:, int(np.argmax(ends.max(axis=0)))]
 
 
-def lines_table(history: History) -> Table:
+@dataclass
+class LineRecord:
+    """One named line over a dynamic run (``line_records``): its largest and least
+    tension [N] with their times [s], its snap events' times, its largest anchor uplift
+    [deg] with its time, its touchdown range [m] (NaN without a seabed) and its fairlead
+    tension's peak period [s] and significant range 4 sqrt(m0) [N]."""
+
+    name: str
+    largest: float
+    largest_t: float
+    least: float
+    least_t: float
+    snaps: np.ndarray
+    uplift: float
+    uplift_t: float
+    touchdown: tuple[float, float]
+    period: float
+    significant: float
+
+
+def line_records(history: History) -> list[LineRecord]:
+    """Each named line's record over the run's /history (every accepted step)."""
     t = history.time
+    out = []
+    for k, name in enumerate(history.cable_names):
+        low, high = history.cable_tension_range[:, k, 0], history.cable_tension_range[:, k, 1]
+        hi, lo = int(np.argmax(high)), int(np.argmin(low))
+        up = history.anchor_uplift[:, k]
+        u = int(np.argmax(up))
+        down = history.touchdown[:, k] if history.touchdown is not None else None
+        reach = (float(down.min()), float(down.max())) if down is not None else (math.nan,) * 2
+        period, sig = spectral_summary(*spectrum(t, _fairlead(history, k)))
+        out.append(
+            LineRecord(
+                name, float(high[hi]), float(t[hi]), float(low[lo]), float(t[lo]),
+                snaps(t, low, float(high[hi])), float(up[u]), float(t[u]), reach, period, sig,
+            )
+        )  # fmt: skip
+    return out
+
+
+def lines_table(history: History) -> Table:
     columns = (
         "line",
         "largest tension [N]",
@@ -61,34 +111,16 @@ def lines_table(history: History) -> Table:
         "fairlead 4 sigma [N]",
     )
     rows = []
-    for k, name in enumerate(history.cable_names):
-        low, high = history.cable_tension_range[:, k, 0], history.cable_tension_range[:, k, 1]
-        hi, lo = int(np.argmax(high)), int(np.argmin(low))
-        events = snaps(t, low, float(high[hi]))
-        shown = ", ".join(f"{v:.4g}" for v in events[:MAX_SNAP_TIMES])
-        if events.size > MAX_SNAP_TIMES:
+    for r in line_records(history):
+        shown = ", ".join(f"{v:.4g}" for v in r.snaps[:MAX_SNAP_TIMES])
+        if r.snaps.size > MAX_SNAP_TIMES:
             shown += ", ..."
-        up = history.anchor_uplift[:, k]
-        u = int(np.argmax(up))
-        down = history.touchdown[:, k] if history.touchdown is not None else None
-        period, sig = spectral_summary(*spectrum(t, _fairlead(history, k)))
         rows.append(
             [
-                name,
-                float(high[hi]),
-                float(t[hi]),
-                float(low[lo]),
-                float(t[lo]),
-                int(events.size),
-                shown or "none",
-                float(up[u]),
-                float(t[u]),
-                float(down.min()) if down is not None else math.nan,
-                float(down.max()) if down is not None else math.nan,
-                period,
-                sig,
+                r.name, r.largest, r.largest_t, r.least, r.least_t, int(r.snaps.size),
+                shown or "none", r.uplift, r.uplift_t, *r.touchdown, r.period, r.significant,
             ]
-        )
+        )  # fmt: skip
     note = (
         "every accepted time step (/history): tension over the line's edges; a snap: the "
         "line's least tension rises from slack (at most 1e-6 of its largest) to taut; "

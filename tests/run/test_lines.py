@@ -91,8 +91,8 @@ def test_the_mooring_chain_records_its_touchdown_uplift_and_tension_range(tmp_pa
 
 def test_a_slack_line_snaps(tmp_path):
     """A short taut tether whose top heaves down faster than it can follow goes slack
-    and snaps taut again: the history's least tension shows it, and the report counts
-    the same events."""
+    and snaps taut again: the history's least tension shows it, and the summary and the
+    report count the same events."""
     case = tmp_path / "snap.toml"
     case.write_text(
         """
@@ -126,12 +126,15 @@ t_end = 3.0
 """
     )
     out = tmp_path / "s.h5"
-    res = CliRunner().invoke(main, ["run", str(case), "-o", str(out), "-q"])
+    res = CliRunner().invoke(main, ["run", str(case), "-o", str(out)])
     assert res.exit_code == 0, res.output
     h = read_history(out)
     low, high = h.cable_tension_range[:, 0, 0], h.cable_tension_range[:, 0, 1]
     events = snaps(h.time, low, high.max())
     assert events.size >= 2
+    said = next(x for x in res.output.splitlines() if x.startswith("line "))
+    assert f"to {high.max():.6g} N" in said and f", {events.size} snap events" in said, said
+    assert f"(first at t = {events[0]:.4g} s)" in said, said
     assert (low == 0.0).any() and high.max() > 3 * 200.0  # the snap loads
     rep = CliRunner().invoke(main, ["report", str(out), "-o", "-"])
     lines = rep.output.split("Lines over time")[1].splitlines()
