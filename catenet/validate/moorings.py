@@ -69,7 +69,8 @@ def oc3_case(move: str = "", d: float = 0.0, edges: int = EDGES) -> dict:
     """The three lines as a case: each from its anchor (on the bed) to its fairlead,
     given straight and slack (its rest length the line's), the seabed z >= -DEPTH."""
     anchors, fairleads = _lines(move, d)
-    nodes, cables = [], []
+    nodes: list[list[float]] = []
+    cables: list[dict] = []
     t = np.linspace(0.0, 1.0, edges + 1)[:, None]
     for k, (a, f) in enumerate(zip(anchors, fairleads, strict=True)):
         a = a + [0.0, 0.0, 0.5 * BED]
@@ -93,7 +94,9 @@ def oc3_case(move: str = "", d: float = 0.0, edges: int = EDGES) -> dict:
     }
 
 
-def restoring(move: str = "", d: float = 0.0, edges: int = EDGES) -> tuple[np.ndarray, np.ndarray]:
+def restoring(
+    move: str = "", d: float = 0.0, edges: int = EDGES
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lines' total force on the platform [N] and moment about the still-water
     centreline [N m], and each fairlead's pull (3, 3) [N], the platform moved by ``d``."""
     from catenet.case import build, parse_case
