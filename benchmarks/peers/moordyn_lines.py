@@ -45,6 +45,7 @@ import numpy as np  # noqa: E402
 
 RHO_W, G = 1025.0, 9.81
 SETTLE = 1200.0  # s: MoorDyn held at rest after its initial-condition solve, at most
+BA = -1.0  # MoorDyn's internal axial damping: -zeta, a fraction of each segment's critical
 
 
 @dataclass(frozen=True)
@@ -234,7 +235,7 @@ def moordyn_input(line: Line, folder: Path, dtm: float) -> Path:
 ----------------------- LINE TYPES ------------------------------------------
 TypeName   Diam    Mass/m     EA         BA/-zeta    EI    Cd     Ca     CdAx    CaAx
 (name)     (m)     (kg/m)     (N)        (N-s/-)     (N-m^2) (-)  (-)    (-)     (-)
-line  {line.diameter}  {line.mass}  {line.EA}  -1.0  0  {line.cd_n}  {line.ca_n}  {hydro_t}
+line  {line.diameter}  {line.mass}  {line.EA}  {BA}  0  {line.cd_n}  {line.ca_n}  {hydro_t}
 ---------------------- POINTS --------------------------------
 ID    Attachment  X       Y       Z       Mass   Volume  CdA    Ca
 (#)   (-)         (m)     (m)     (m)     (kg)   (m^3)   (m^2)  (-)
@@ -320,21 +321,33 @@ def run_moordyn(line: Line, t_end: float, dt: float, dtm: float = 1e-3) -> dict:
             held = settle(moordyn, system, ml, list(x0))
             ic = time.process_time() - cpu
             cpu = time.process_time()
-            rows = [(0.0, moordyn.GetLineFairTen(ml))]
+            rows = [(0.0, moordyn.GetLineFairTen(ml), top_segment(moordyn, ml, line))]
             n = int(round(t_end / dt))
             for k in range(n):
                 t = (k + 1) * dt
                 d, v = sine(line, t)
                 moordyn.Step(system, list(x0 + d), list(v), held + k * dt, dt)
-                rows.append((t, moordyn.GetLineFairTen(ml)))
+                rows.append((t, moordyn.GetLineFairTen(ml), top_segment(moordyn, ml, line)))
             cpu = time.process_time() - cpu
             step = dtm
             moordyn.Close(system)
         finally:
             os.chdir(cwd)
-    t, ten = np.array(rows).T
+    t, node, ten = np.array(rows).T
     out = {"t": t, "tension": ten, "static": float(ten[0]), "cpu": cpu, "ic": ic, "dtM": step}
-    return out | {"ic_tension": first, "held": held}
+    return out | {"ic_tension": first, "held": held, "fairlead_node": node}
+
+
+def top_segment(moordyn, ml, line: Line) -> float:
+    """The elastic tension EA (l / l0 - 1) of MoorDyn's segment at the fairlead: the
+    quantity catenet's fairlead edge gives. (MoorDyn's own GetLineFairTen is the net
+    force on its fairlead node less that node's mass times g: it adds the node's half
+    segment of drag and buoyancy and the segment's internal damping, and takes the
+    added mass for mass in the weight.)"""
+    n = moordyn.GetLineN(ml)
+    a = np.asarray(moordyn.GetLineNodePos(ml, n - 1))
+    b = np.asarray(moordyn.GetLineNodePos(ml, n))
+    return line.EA * (float(np.linalg.norm(b - a)) / (line.length / n) - 1.0)
 
 
 # --------------------------------------------------------------------------- compare
@@ -360,6 +373,7 @@ def compare(line: Line, t_end: float, dt: float = 0.05) -> dict:
         "t": md["t"],
         "catenet": on,
         "moordyn": md["tension"],
+        "moordyn_fairlead_node": md["fairlead_node"],
     }
 
 
