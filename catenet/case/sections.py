@@ -304,8 +304,8 @@ class LoadConfig(Declared):
         doc="pressures over the area the net covers, on plan or normal to it",
     )
     history: tuple | None = history_key(
-        "dynamic: pressure and gravity times factor(t), and each point or line load "
-        "without its own history (none: constant)"
+        "dynamic: pressure and gravity (with buoyancy, the displaced water's weight) times "
+        "factor(t), and each point or line load without its own history (none: constant)"
     )
 
 

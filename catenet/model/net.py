@@ -428,6 +428,8 @@ class Loads:
         in a dynamic run [s] (0: at once); static runs reach the final place directly
     parts : ((N, 3) force, History) pairs: forces that follow a history in dynamic runs
     gravity_history : the history of gravity, or None (constant)
+    gravity_factor : the factor of gravity's history at the time frozen loads were taken
+        (``at``; 1 otherwise): what buoyancy, the displaced water's weight, scales by
     support_history : (node indices, History or Sine) pairs: supports whose displacement
         is factor(t) times ``support_displacement`` in dynamic runs (instead of a ramp); a
         static run takes a sine motion at t = 0
@@ -444,6 +446,7 @@ class Loads:
     ramp_time: np.ndarray | None = field(default=None)
     parts: tuple = ()
     gravity_history: Any = None
+    gravity_factor: float = 1.0
     support_history: tuple = ()
     vessels: tuple = ()  # (node indices, catenet.model.motions.Vessel) pairs
 
@@ -467,6 +470,12 @@ class Loads:
             f *= factor
         return f
 
+    def weight_scale(self, time: float | None = None) -> float:
+        """The factor gravity acts with at ``time`` (None: as built, its history aside):
+        what weight-like terms (water's buoyancy) scale by."""
+        g = 1.0 if time is None or self.gravity_history is None else self.gravity_history(time)
+        return self.gravity_factor * g
+
     @property
     def varies(self) -> bool:
         """Whether the external force follows a history (dynamic runs evaluate it at
@@ -486,7 +495,11 @@ class Loads:
         if self.support_displacement is not None:
             disp = np.zeros((net.n_nodes, 3))
             disp[net.fixed] = self.support_positions(net, time=time) - net.nodes[net.fixed]
-        return Loads(force=self.external_force(net, time=time), support_displacement=disp)
+        return Loads(
+            force=self.external_force(net, time=time),
+            support_displacement=disp,
+            gravity_factor=self.weight_scale(time),
+        )
 
     def settle_time(self) -> float:
         """Time after which nothing changes: every support has reached its final place

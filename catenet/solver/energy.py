@@ -16,7 +16,10 @@ friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force).
 
 In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
 drag's work against the motion relative to the water, -F_d . (dx - h U), and W the
-water's work on the net: the current's F_d . h U and the flow's inertia force's.
+water's work on the net: the current's F_d . h U and the flow's inertia force's, and
+buoyancy's change with gravity's history, (f_{n+1} - f_n) (u_b(x_n) + u_b(x_{n+1})) / 2
+with u_b its energy per unit factor f (its mechanical part then at the mean factor, as
+the trapezoidal work of a load that follows a history).
 
 Implicit Euler's remainder is never positive on a convex energy: the step adds
 -1/2 m |v_{n+1} - v_n|^2 to it (its numerical dissipation). An integrator whose
@@ -77,6 +80,8 @@ class Ledger:
         self.judged = not self._timed
         self._friction = [t for t in system.terms if t.lagged and not t.medium]
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
+        self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history
+        self._factors = [t.factor for t in self._weighs]
         self._force = self._applied(stepper).copy()
         k, u, c, reaction = self._state(stepper, stepper.x, stepper.v)
         self._reaction = reaction
@@ -116,6 +121,11 @@ class Ledger:
             for term in self._friction:
                 term.gradient(x_new, g)
             self._dissipated += float(np.sum(g[free] * dx[free]))
+        for i, term in enumerate(self._weighs):  # its energy's change with gravity, at
+            if term.factor != self._factors[i]:  # the step's mean (as gravity's work)
+                mean = 0.5 * (term.unit_energy(x_old) + term.unit_energy(x_new))
+                self._work += (term.factor - self._factors[i]) * mean
+                self._factors[i] = term.factor
         for term in self._media:
             mean = stepper.scheme.name != "implicit_euler"
             lost, put = term.losses(x_old, x_new, h, mean)

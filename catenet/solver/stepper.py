@@ -206,8 +206,7 @@ class TimeStepper:
             # being run over by a support.
             x_trial += self.follow(supports - x[net.fixed] - h_step * v[net.fixed])
         x_trial[net.fixed] = supports
-        if loads.varies:  # loads with a time history act with their value at t + h
-            potential.set_force(loads.external_force(net, time=t + h_step))
+        potential_at(potential, loads, net, t + h_step)  # loads with a history: at t + h
         potential.begin_step(x, t + h_step, t)
         if self.ws.refresh(potential) and self.kept is not None:
             self.kept.drop()  # the pattern grew (self-contact): a new matrix
@@ -429,9 +428,14 @@ def at_rest(
 
 
 def potential_at(potential: Potential, loads: Loads, net: Net, t: float) -> Potential:
-    """The potential with the loads' value at time t (a time history's, else as built)."""
+    """The potential with the loads' value at time t (a time history's, else as built),
+    weight-like terms (buoyancy) with gravity's factor then."""
     if loads.varies:
         potential.set_force(loads.external_force(net, time=t))
+        if loads.gravity_history is not None:
+            for term in potential.system.terms:
+                if term.weighs:
+                    term.set_factor(loads.weight_scale(t))
     return potential
 
 

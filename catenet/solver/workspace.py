@@ -82,7 +82,7 @@ class Workspace:
         force = loads.external_force(self.net, factor)
         for term in self.system.terms:
             if term.loadlike:  # load-like terms (water) follow the load factor
-                term.set_factor(factor)
+                term.set_factor(factor * (loads.weight_scale() if term.weighs else 1.0))
         return Potential(self.system, self.solver, force, steps)
 
     def stats(self) -> SolverStats:

@@ -34,7 +34,8 @@ Optional capabilities, declared so that solvers ask no term what it has:
   candidate pairs of self-contact); it sets ``grew`` then, and the time stepping
   rebuilds the system with the new pattern (``Workspace.refresh``), which clears it.
 - ``loadlike`` (with ``set_factor(factor)``): a load-like term (water's buoyancy and
-  drag) that a static run's load factor scales as it scales the applied loads.
+  drag) that a static run's load factor scales as it scales the applied loads; one that
+  ``weighs`` (buoyancy, with ``unit_energy``) follows gravity's history as well.
 - ``medium`` (with ``begin_run``, ``set_motion``, ``kinetic`` and ``losses``): a term of
   the step's velocity (water's drag and added mass, ``catenet.terms.water``): the
   stepper gives it the scheme's velocity and acceleration maps every step, the energy
@@ -99,6 +100,8 @@ class Term:
     horizon = False  # max_step(x, dx, upto) looks no farther than upto (its cost grows)
     moving = False  # has set_pose(t)
     loadlike = False  # has set_factor(factor): a static run's load factor scales it
+    weighs = False  # loadlike and a weight (buoyancy): gravity's history scales it too
+    factor = 1.0  # (loadlike terms) the factor set_factor gave
     medium = False  # has begin_run, set_motion, kinetic, losses (catenet.terms.water)
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
@@ -166,6 +169,11 @@ class Term:
     def set_factor(self, factor: float) -> None:
         """(``loadlike`` terms) The load factor of a static load step (1: in full)."""
         raise NotImplementedError(f"{type(self).__name__} is no load")
+
+    def unit_energy(self, x: np.ndarray) -> float:
+        """(``weighs`` terms) The energy at x per unit factor (the energy balance books a
+        change of the factor as work)."""
+        raise NotImplementedError(f"{type(self).__name__} is no weight")
 
     def begin_run(self, x: np.ndarray, t: float) -> None:
         """(``medium`` terms) A dynamic run's start state x at time t, at rest."""

@@ -63,6 +63,7 @@ class Buoyancy(Term):
     """The displaced water's weight on the wetted part of every edge (module docstring)."""
 
     loadlike = True  # a load: a static run's load factor scales it
+    weighs = True  # the displaced water's weight: it follows gravity's history
 
     def __init__(self, net: Net, water: Water, hydro: Hydro):
         self.edges = np.ascontiguousarray(net.edges, dtype=np.int64)
@@ -74,13 +75,21 @@ class Buoyancy(Term):
         # E counts from the reference positions (a constant: forces unchanged), so that
         # the energy balance compares energies of the motion's size, not of the depth
         scratch = np.zeros_like(net.nodes)
+        self._nodes = net.nodes
         self._zero = float(
             buoyancy_gradient(net.nodes, self.edges, self.weight, self.half, self.surface, scratch)
         )
+        self._zero_scaled = self._zero
 
     def set_factor(self, factor: float) -> None:
         self.factor = float(factor)
         self._scaled = self.weight * self.factor
+        scratch = np.zeros((len(self._nodes), 3))
+        self._zero_scaled = float(
+            buoyancy_gradient(
+                self._nodes, self.edges, self._scaled, self.half, self.surface, scratch
+            )
+        )  # (the same sum as the energy's: E is 0 at the reference at every factor)
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         zi, zj = 3 * self.edges[:, 0] + 2, 3 * self.edges[:, 1] + 2
@@ -90,7 +99,14 @@ class Buoyancy(Term):
 
     def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         e = buoyancy_gradient(x, self.edges, self._scaled, self.half, self.surface, grad)
-        return float(e) - self.factor * self._zero
+        return float(e) - self._zero_scaled
+
+    def unit_energy(self, x: np.ndarray) -> float:
+        """The energy at x per unit factor: what a change of the factor at x adds (the
+        energy balance books it as work)."""
+        scratch = np.zeros_like(x)
+        e = buoyancy_gradient(x, self.edges, self.weight, self.half, self.surface, scratch)
+        return float(e) - self._zero
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> bool:
         buoyancy_hessian(x, self.edges, self._scaled, self.half, self.surface, values)

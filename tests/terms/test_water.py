@@ -122,8 +122,9 @@ def test_every_scheme_gives_its_velocity_and_acceleration():
             y = y + 0.05 * rng.standard_normal(6)
 
 
-def sinking_scene(density_line, d=0.05, area=0.002, cd=1.2, nodes=5):
-    """A horizontal cable of 2 m, free, 10 m below the surface, under gravity."""
+def sinking_scene(density_line, d=0.05, area=0.002, cd=1.2, nodes=5, gravity_history=None):
+    """A horizontal cable of 2 m, free, 10 m below the surface, under gravity (scaled by
+    ``gravity_history`` if given)."""
     length = 2.0
     x = np.zeros((nodes, 3))
     x[:, 0] = np.linspace(0, length, nodes)
@@ -132,7 +133,7 @@ def sinking_scene(density_line, d=0.05, area=0.002, cd=1.2, nodes=5):
     net = Net.from_arrays(x, edges, EA=1e7, fixed=[], line_density=density_line, flies=True)
     water = Water(RHO_W, g=G)
     h = hydro(nodes - 1, cd_n=cd, cd_t=0.0, ca_n=1.0, ca_t=0.0, diameter=d, area=area)
-    loads = Loads(gravity=np.array([0.0, 0.0, -G]))
+    loads = Loads(gravity=np.array([0.0, 0.0, -G]), gravity_history=gravity_history)
     scene = Scene.of(net, loads).with_terms(Buoyancy(net, water, h), WaterForce(net, water, h))
     return scene, length
 
@@ -173,6 +174,39 @@ def test_neutrally_buoyant_line_stays_put():
     r = solve(scene, method="dynamic", dt=0.05, t_end=2.0, damping=0.0)
     assert np.abs(r.x - scene.net.nodes).max() < 1e-9
     assert np.abs(r.v).max() < 1e-9
+
+
+@pytest.mark.parametrize("integrator", ["implicit_euler", "bdf2"])
+def test_buoyancy_follows_a_gravity_history(integrator):
+    """Buoyancy is the displaced water's weight: under a gravity history (a soft start
+    from 0) it grows with gravity, so a neutrally buoyant line stays put at every
+    factor, and a sinking one sinks from rest at the rate of its submerged weight; the
+    energy balance books buoyancy's change with gravity as work and closes."""
+    from catenet.model.histories import History
+
+    area = 0.002
+    ramp = History([[0.0, 0.0], [1.0, 1.0]])
+    scene, _ = sinking_scene(RHO_W * area, area=area, gravity_history=ramp)
+    r = solve(scene, method="dynamic", dt=0.05, t_end=2.0, damping=0.0, integrator=integrator)
+    assert np.abs(r.x - scene.net.nodes).max() < 1e-9
+    assert np.abs(r.v).max() < 1e-9
+
+    line, d = 40.0, 0.05
+    scene, length = sinking_scene(line, d, area, gravity_history=ramp)
+    rows = []
+    r = solve(
+        scene,
+        method="dynamic",
+        dt=0.02,
+        t_end=1.0,
+        damping=0.0,
+        integrator=integrator,
+        on_step=lambda s: rows.append((s.time, s.energy, s.x[:, 2].mean())) and False,
+    )
+    t, energy, z = zip(*rows, strict=True)
+    assert np.all(np.diff(z) <= 1e-12)  # it sinks from the start: never rises
+    k, _, c, work, lost, left = energy[-1]
+    assert work > 0.0 and abs(left) < 3e-3 * work, energy[-1]
 
 
 def test_added_mass_lowers_a_taut_strings_frequency():
