@@ -20,6 +20,7 @@ from catenet.errors import (
     SingularSystemError,
     with_last_good,
 )
+from catenet.model.measures import strain, tension
 from catenet.model.net import Loads, Net
 from catenet.solver.relax import REST
 from catenet.solver.result import Outcome, Result, finish
@@ -51,6 +52,7 @@ class StepSettings(TypedDict):
 
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
 DR_MAX_ITER = 25  # the last rung's Newton iterations per time step (a dynamic run's own)
+SLACK = 1e-12  # a strain below -SLACK is slack; a tension below SLACK EA is none
 
 
 def continuation(
@@ -318,6 +320,12 @@ def _cut_back(
     spent = failure.iterations
     cuts, done = 1, 0
     transient = False
+    relax_first = _hangs_slack(net, good) and _can_relax(net, target, settings)
+    if relax_first:  # a slack cable from its slack start: the load's size is not what
+        relaxed = _relaxed(net, loads, target, good, settings)  # fails, its motion is
+        if relaxed is not None:
+            relaxed.iterations += spent
+            return relaxed
     while True:
         rest = target - f
         level = target if abs(increment) >= abs(rest) * (1.0 - 1e-12) else f + increment
@@ -336,12 +344,15 @@ def _cut_back(
                 continue
             if cuts >= CUTBACKS or not _worth_cutting(exc):
                 tried = f"load-step cut-back down to 1/{2**cuts} of the step"
-                if transient and _can_relax(net, target, settings):
+                if transient and _can_relax(net, target, settings) and not relax_first:
                     relaxed = _relaxed(net, loads, target, good, settings)
                     if relaxed is not None:
                         relaxed.iterations += spent
                         return relaxed
                     tried += ", a damped pseudo-transient solve and dynamic relaxation to rest"
+                elif transient and relax_first:
+                    tried = f"dynamic relaxation to rest, {tried}"
+                    tried += " and a damped pseudo-transient solve"
                 elif transient:
                     tried += " and a damped pseudo-transient solve"
                 exc.args = (
@@ -364,6 +375,19 @@ def _cut_back(
         if done >= 2 and cuts > 1:  # two in a row: the step grows back
             increment *= 2.0
             cuts, done = cuts - 1, 0
+
+
+def _hangs_slack(net: Net, good: LastGood) -> bool:
+    """Whether the failed step starts from the unloaded start (load factor 0) of a net
+    that carries no tension there and has slack edges (a cable given straight and longer
+    than its chord): its equilibrium hangs far from the start whatever the load's size,
+    so smaller load steps do not help where following its motion to rest does."""
+    if good.time != 0.0:
+        return False
+    strains = strain(net, good.x)
+    if not np.any(strains < -SLACK):
+        return False
+    return bool(np.all(np.abs(tension(net, good.x)) <= SLACK * np.max(net.EA, initial=0.0)))
 
 
 def _can_relax(net: Net, target: float, settings: StepSettings) -> bool:
