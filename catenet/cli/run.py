@@ -353,7 +353,7 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        *state_lines(numbers, _timing(case), len(result.tension), warn),
+        *state_lines(numbers, _timing(case), len(result.tension), warn, case.water is not None),
         _times(result),
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)

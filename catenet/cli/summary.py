@@ -34,10 +34,13 @@ def _more(peak: float, final: float) -> bool:
     return peak > final + 1e-12 * max(abs(peak), abs(final))
 
 
-def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False) -> list[str]:
+def state_lines(
+    s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False, water: bool = False
+) -> list[str]:
     """The summary's lines for the numbers ``s`` (``summarize_result`` plus
     ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors;
-    "rest": a run to rest, whose peaks are on the relaxation's pseudo-time path)."""
+    "rest": a run to rest, whose peaks are on the relaxation's pseudo-time path;
+    ``water``: a case in water, whose contact forces include its buoyancy and drag)."""
     probe = s["probe"]
     how = "the free node that moves most; " if s.get("probe_auto") else ""
     lines = [
@@ -103,11 +106,11 @@ def state_lines(s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = 
             f"{'reactions':<{W}} resultant {vector(s['reaction_resultant'])} N; largest "
             f"{s['max_reaction']:.6g} N at node {s['max_reaction_node']}"
         )
-    if s.get("contact_nodes", 0):
+    if s.get("contact_nodes", 0):  # in water: its buoyancy and drag act there too
         lines.append(
             f"{'contact':<{W}} resultant {vector(s['contact_resultant'])} N on "
             f"{s['contact_nodes']} nodes; largest {s['max_contact']:.6g} N at node "
-            f"{s['max_contact_node']}"
+            f"{s['max_contact_node']}" + (" (obstacles, bodies and the water)" if water else "")
         )
     for name, c in s.get("cables", {}).items():
         lines.append(cable_line(name, c, dynamic))
@@ -258,7 +261,9 @@ def line_lines(records) -> list[str]:
         if n:
             text += f" (first at t = {float(r.snaps[0]):.4g} s)"
         text += f", anchor uplift up to {r.uplift:.3g} deg"
-        if math.isfinite(r.touchdown[0]):
+        if math.isfinite(r.touchdown[0]) and r.touchdown[1] > 0.0:
             text += f", touchdown {r.touchdown[0]:.4g} m to {r.touchdown[1]:.4g} m from the anchor"
+        elif math.isfinite(r.touchdown[0]):
+            text += ", no touchdown (off the seabed from its anchor)"
         out.append(text)
     return out

@@ -118,6 +118,9 @@ gravity = [0.0, 0.0, -9.81]
 nodes = ["end"]
 sine = [{ amplitude = [0.0, 0.0, 0.3, 0.0, 0.0, 0.0], period = 1.0 }]
 ramp = 0.5
+[[obstacle]]
+kind = "plane"
+point = [0.0, 0.0, -21.0]   # the seabed, 1 m below the anchor: never reached
 [solver]
 method = "dynamic"
 initial_state = "equilibrium"
@@ -135,6 +138,9 @@ t_end = 3.0
     said = next(x for x in res.output.splitlines() if x.startswith("line "))
     assert f"to {high.max():.6g} N" in said and f", {events.size} snap events" in said, said
     assert f"(first at t = {events[0]:.4g} s)" in said, said
+    assert said.endswith("no touchdown (off the seabed from its anchor)"), said
+    touch = next(x for x in res.output.splitlines() if x.startswith("contact "))
+    assert touch.endswith("(obstacles, bodies and the water)"), touch  # buoyancy, drag
     assert (low == 0.0).any() and high.max() > 3 * 200.0  # the snap loads
     rep = CliRunner().invoke(main, ["report", str(out), "-o", "-"])
     lines = rep.output.split("Lines over time")[1].splitlines()
