@@ -149,9 +149,12 @@ def spectrum(time: np.ndarray, values: np.ndarray, segments: int = 4) -> tuple:
 
 def spectral_summary(f: np.ndarray, p: np.ndarray) -> tuple[float, float]:
     """(peak period [s], significant double amplitude 4 sqrt(m0)) of a spectrum (nan,
-    nan for an empty or flat one)."""
+    nan for an empty or flat one). The peak period is nan where the peak is in the
+    lowest bin above the mean's: its period is a segment's length or longer, which the
+    record is too short to tell (a 3 s record of a 9 s motion)."""
     if not f.size or not np.any(p[1:] > 0):
         return math.nan, math.nan
     k = 1 + int(np.argmax(p[1:]))  # not the mean's bin
     m0 = float(np.sum(p)) * float(f[1] - f[0])  # Welch's bins: the variance
-    return 1.0 / float(f[k]), 4.0 * math.sqrt(max(m0, 0.0))
+    period = 1.0 / float(f[k]) if k > 1 else math.nan
+    return period, 4.0 * math.sqrt(max(m0, 0.0))

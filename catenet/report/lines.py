@@ -127,7 +127,8 @@ def lines_table(history: History) -> Table:
         "uplift: the line's angle above the horizontal at its anchor (its lower end); "
         "touchdown: arc length from the anchor where the line leaves the seabed (runs "
         "with obstacles); fairlead: the spectrum of the tension at the upper end "
-        "(Welch, Hann): its peak period and 4 sqrt(m0)"
+        "(Welch, Hann): its peak period (n/a where the record is too short to tell it) "
+        "and 4 sqrt(m0)"
     )
     return Table("lines", "Lines over time", columns, rows, note)
 

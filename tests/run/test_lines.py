@@ -58,6 +58,9 @@ def test_snaps_and_spectrum_of_records():
     assert period == pytest.approx(12.0, rel=0.05)
     assert sig == pytest.approx(4 * 3e4 / math.sqrt(2), rel=0.02)
     assert spectrum(time[:10], time[:10])[0].size == 0
+    short = np.arange(0.0, 3.0, 0.05)  # a 3 s record of a 9 s motion: no peak to tell
+    period, sig = spectral_summary(*spectrum(short, np.sin(2 * math.pi * short / 9.0)))
+    assert math.isnan(period) and sig > 0.0
 
 
 def test_the_mooring_chain_records_its_touchdown_uplift_and_tension_range(tmp_path):
