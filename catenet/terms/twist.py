@@ -1,0 +1,180 @@
+"""Twist of isotropic rods: E = sum over twisted segments of (Theta(x) - Theta_0 + Phi)^2
+/ (2 C), the twist eliminated quasistatically (``catenet.kernels.twist`` derives it and
+its exact derivatives; ``catenet.model.twist`` says which chains twist).
+
+Guarantee: the energy, gradient and Hessian are exact (the gradient and Hessian of the
+total twist Theta by parallel transport, checked against finite differences) for every
+state where no two consecutive tangents of a segment (nor an end edge and its clamp)
+fold back on each other; there the twist is undefined and the energy is inf. The twist
+has no rotational inertia (it is uniform along a segment at every instant: torsional
+waves, far faster than bending ones in a slender rod, are not resolved). Theta is
+tracked continuously from the last accepted state (``begin_step``), so a rod twisted by
+many turns keeps its count; the term is not convex. A static run's load factor scales
+the imposed twist Phi (as it scales the supports' displacements); a dynamic run takes it
+along each end's history.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+
+import numpy as np
+
+from catenet.kernels.twist import twist_angles, twist_frames, twist_gradient, twist_hessian
+from catenet.model.histories import History
+from catenet.model.twist import Twists
+from catenet.terms.base import Term, register
+
+#: (segment, angle [rad], history or None) of each turned clamp.
+Imposed = tuple[int, float, History | None]
+
+
+def _mean_edge(x: np.ndarray, nodes: np.ndarray, closed: bool) -> float:
+    """The mean edge length of a chain of nodes (a ring's closing edge included)."""
+    chain = np.concatenate([nodes, nodes[:1]]) if closed else nodes
+    return float(np.mean(np.linalg.norm(np.diff(x[chain], axis=0), axis=1)))
+
+
+@register("twist")
+class Twist(Term):
+    """The rods' twist energy (module docstring)."""
+
+    role = "internal"
+    convex = False
+    structural = True
+    loadlike = True  # a static run's load factor scales the imposed twist
+
+    def __init__(
+        self, twists: Twists, n_nodes: int, x0: np.ndarray, imposed: Sequence[Imposed] = ()
+    ):
+        self.twists = twists
+        self.n_nodes = int(n_nodes)
+        self.imposed = tuple(imposed)
+        self._factor = 1.0
+        self._time: float | None = None
+        n_edges = len(twists.edges)
+        self._ref = np.zeros((n_edges, 3))
+        self._tau = np.zeros((n_edges, 3))
+        x0 = np.ascontiguousarray(x0, dtype=np.float64)
+        self._theta = np.zeros(len(twists))
+        self._lbar = np.array(
+            [_mean_edge(x0, twists.nodes[a:b], c) for a, b, c in zip(twists.start[:-1], twists.start[1:], twists.closed, strict=True)]
+        )
+        self._frames(x0, self._theta)
+        self.offset = self._angles(x0)  # untwisted as given (a ring: its holonomy)
+        self._theta = self.offset.copy()
+        self._frames(x0, self._theta)
+
+    def _geometry(self):
+        t = self.twists
+        return t.nodes, t.start, t.closed, t.head, t.tail
+
+    def _frames(self, x: np.ndarray, theta: np.ndarray) -> None:
+        t = self.twists
+        twist_frames(
+            x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first
+        )
+
+    def _angles(self, x: np.ndarray) -> np.ndarray:
+        t = self.twists
+        out = np.zeros(len(t))
+        twist_angles(
+            np.ascontiguousarray(x, dtype=np.float64),
+            *self._geometry(),
+            t.head_dir,
+            t.tail_dir,
+            self._ref,
+            self._tau,
+            t.first,
+            out,
+        )
+        return out
+
+    def imposed_twist(self) -> np.ndarray:
+        """Phi per segment [rad] now: each turned end's angle times the load factor
+        (static) or its history at the step's time (dynamic)."""
+        phi = np.zeros(len(self.twists))
+        for s, angle, history in self.imposed:
+            if self._time is None:
+                phi[s] += angle * self._factor
+            else:
+                phi[s] += angle * (1.0 if history is None else history(self._time))
+        return phi
+
+    def moments(self, x: np.ndarray) -> np.ndarray:
+        """The twisting moment M [N m] of every segment at x (> 0: right-handed)."""
+        twist = self._angles(x) - self.offset + self.imposed_twist()
+        return twist / self.twists.compliance
+
+    def set_factor(self, factor: float) -> None:
+        self._factor = float(factor)
+
+    def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
+        """The frames carried to the last accepted state x, keeping the twist's count."""
+        self._time = time
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        theta = self._angles(x)
+        if np.all(np.isfinite(theta)):
+            self._theta = theta
+            self._frames(x, theta)
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        t = self.twists
+        rows, cols = [], []
+        for s in range(len(t)):
+            dofs = (3 * t.nodes[t.start[s] : t.start[s + 1], None] + np.arange(3)).ravel()
+            rows.append(np.repeat(dofs, dofs.size))
+            cols.append(np.tile(dofs, dofs.size))
+        if not rows:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(rows), np.concatenate(cols)
+
+    def energy(self, x: np.ndarray) -> float:
+        m = self.moments(x)
+        return float(0.5 * np.sum(self.twists.compliance * m * m))
+
+    def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
+        m = self.moments(x)
+        twist_gradient(np.ascontiguousarray(x, dtype=np.float64), *self._geometry(), m, grad)
+        return float(0.5 * np.sum(self.twists.compliance * m * m))
+
+    def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
+        m = self.moments(x)
+        twist_hessian(
+            np.ascontiguousarray(x, dtype=np.float64),
+            *self._geometry(),
+            m,
+            self.twists.compliance,
+            values,
+        )
+
+    @cached_property
+    def _scale(self) -> np.ndarray:
+        """Per node, the scale of its Hessian diagonal [N/m]: the segment's mean GJ over
+        its mean edge length squared, count / (C lbar)."""
+        t = self.twists
+        out = np.zeros(self.n_nodes)
+        for s in range(len(t)):
+            nodes = t.nodes[t.start[s] : t.start[s + 1]]
+            count = len(nodes) - (0 if t.closed[s] else 1)
+            out[nodes] += count / (t.compliance[s] * self._lbar[s] ** 2)
+        return out
+
+    def stiffness(self) -> np.ndarray:
+        return self._scale
+
+    def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
+        """A coordinate error eps |x| moves a node's force by its stiffness times it;
+        Theta, a sum of V angles, carries V eps: the energy M V eps (levels in units of
+        eps)."""
+        size = float(np.max(np.abs(x)))
+        level = float(np.linalg.norm(self._scale)) * size
+        t = self.twists
+        vertices = np.diff(t.start) + 1 - 2 * t.closed
+        m = self.moments(x)
+        finite = np.isfinite(m)
+        return level, abs(energy) + float(np.sum(np.abs(m[finite]) * vertices[finite]))
+
+    def node_roundoff(self, x: np.ndarray, energy: float) -> np.ndarray:
+        return self._scale * float(np.max(np.abs(x)))
