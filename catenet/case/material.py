@@ -43,7 +43,8 @@ def _check_table(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 
 def _check_bending(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """EI [N m^2]: a number >= 0, or "section" (E times the round section's I)."""
+    """EI or GJ [N m^2]: a number >= 0, or "section" (E times the round section's I, G
+    times its polar J)."""
     if v == "section":
         return v
     if isinstance(v, str):
@@ -170,6 +171,18 @@ class MaterialConfig(Declared):
         doc="rods: bending stiffness (> 0: the cable's edges bend, see docs/howto/rods.md); "
         '"section": E pi (r^4 - ri^4) / 4 from E, radius and inner_radius',
     )
+    GJ: float | str = key(
+        _check_bending,
+        'a number >= 0 [N m^2], or "section"',
+        0.0,
+        write="changed",
+        unit="N m^2",
+        doc="rods: torsional stiffness (> 0: the rod twists between clamped ends, see "
+        'docs/howto/rods.md); "section": G pi (r^4 - ri^4) / 2 from G, radius and inner_radius',
+    )
+    G: float | None = real(
+        None, gt=0, write="given", unit="Pa", doc='shear modulus, for GJ = "section"'
+    )
     natural_curvature: str = choice(
         "straight",
         ("straight", "given"),
@@ -210,6 +223,15 @@ class MaterialConfig(Declared):
                 return 0.0  # refused by parse_material
             return self.E * math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 4.0
         return float(self.EI)
+
+    @property
+    def torsional_stiffness(self) -> float:
+        """GJ [N m^2]: as given, or from G and the round (or tube) section; 0: no twist."""
+        if self.GJ == "section":
+            if self.G is None or self.radius is None:
+                return 0.0  # refused by parse_material
+            return self.G * math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 2.0
+        return float(self.GJ)
 
     @property
     def axial_stiffness(self) -> float | None:
@@ -349,3 +371,24 @@ def _bending_rules(ck: Checker, m: dict, v: dict) -> None:
             v["inner_radius"] = BAD
     if v["EI"] not in (0.0, BAD) and "tension_only" not in m:
         v["tension_only"] = False  # a rod carries compression
+    _twist_rules(ck, m, v)
+
+
+def _twist_rules(ck: Checker, m: dict, v: dict) -> None:
+    """GJ = "section" needs G and radius, G is for it only, and a rod that twists bends."""
+    if v["GJ"] == "section" and ("G" not in m or "radius" not in m):
+        ck.add(
+            'material.GJ = "section": needs material.G (the shear modulus) and '
+            "material.radius (a tube: inner_radius too), or give GJ in N m^2"
+        )
+        v["GJ"] = BAD
+    if "G" in m and v["G"] is not BAD and v["GJ"] != "section":
+        ck.add(
+            f"material.G = {show(m['G'])}: the shear modulus is for GJ = \"section\" only "
+            f"(GJ is {show(m.get('GJ', 0.0))}): give GJ = \"section\" or leave G out"
+        )
+    if v["GJ"] not in (0.0, BAD) and v["EI"] in (0.0, None):
+        ck.add(
+            f"material.GJ = {show(m['GJ'])}: a rod that twists must bend: give material.EI "
+            '> 0 (or "section") too'
+        )

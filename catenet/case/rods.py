@@ -1,5 +1,6 @@
-"""A case's rods: which edges bend (``material.EI``, per cable in a graph), their natural
-curvature and the clamped rod ends (``supports.clamped``), as a ``Bending`` term.
+"""A case's rods: which edges bend (``material.EI``, per cable in a graph) and twist
+(``material.GJ``), their natural curvature, the clamped rod ends (``supports.clamped``)
+and the turned ones (``[[supports.twist]]``), as a ``Bending`` and a ``Twist`` term.
 
 Rods bend along lines: a graph's cables ([[geometry.cable]]: each its own line; the
 graph's own edges, geometry.edges, never bend), each cable of the square net, the
@@ -17,12 +18,14 @@ from catenet.case.kinds.base import expand
 from catenet.case.kinds.cables import cable_materials
 from catenet.case.kinds.warn import warn_once
 from catenet.errors import ConfigError
+from catenet.model.histories import History
 from catenet.model.net import Net
 from catenet.model.rods import Rods, build_rods
 
 if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.terms.bending import Bending
+    from catenet.terms.twist import Twist
 
 
 def clamped_nodes(case: Case, built: Any) -> np.ndarray:
@@ -41,16 +44,18 @@ def with_clamps(net: Net, clamped: np.ndarray) -> Net:
     return net.replace(fixed=fixed)
 
 
-def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """EI (M,), the natural-curvature switch (M,) and the line (M,) of every edge."""
+def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, ...]:
+    """EI (M,), GJ (M,), the natural-curvature switch (M,) and the line (M,) of every
+    edge."""
     m = net.n_edges
     cables = getattr(case.geometry, "cables", ())
     if built.cables is not None and cables:
         line = np.asarray(built.cables.edge, dtype=np.int64)
         mats = cable_materials(Checker(), case.material, cables)
         ei = np.array([mat.bending_stiffness for mat in mats] + [0.0])
+        gj = np.array([mat.torsional_stiffness for mat in mats] + [0.0])
         given = np.array([mat.natural_curvature == "given" for mat in mats] + [False])
-        return ei[line], given[line], line  # line -1 (the graph's own edges): the last
+        return ei[line], gj[line], given[line], line  # line -1 (the graph's own edges): the last
     material = case.material
     if case.geometry.kind == "graph":  # a graph without cables: no lines
         line = np.full(m, -1, dtype=np.int64)
@@ -59,13 +64,14 @@ def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, np.ndarray,
     else:
         line = np.zeros(m, dtype=np.int64)
     ei = np.full(m, material.bending_stiffness)
+    gj = np.full(m, material.torsional_stiffness)
     given = np.full(m, material.natural_curvature == "given")
-    return ei, given, line
+    return ei, gj, given, line
 
 
 def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | None:
     """The rods of a built case (None: nothing bends and nothing is clamped)."""
-    ei, given, line = _per_edge(case, built, net)
+    ei, _, given, line = _per_edge(case, built, net)
     if not (ei > 0.0).any():
         if clamped.size:
             raise ConfigError(
@@ -86,5 +92,45 @@ def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | N
 def bending_term(rods: Rods, n_nodes: int) -> Bending:
     """The rods' ``Bending`` term (its kernels load only for a case with rods)."""
     from catenet.terms.bending import Bending
+    from catenet.terms.twist import Twist
 
     return Bending(rods, n_nodes)
+
+
+def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int) -> Twist | None:
+    """The rods' ``Twist`` term (None: no rod twists): the chains of edges with GJ > 0
+    clamped at both ends and the rings, each clamp of [[supports.twist]] turned."""
+    twisted = case.supports.twists
+    _, gj, _, line = _per_edge(case, built, net)
+    if rods is None or not (gj > 0.0).any():
+        if twisted:
+            raise ConfigError(
+                "supports.twist[0].nodes: no rod twists: a twist turns a clamped end of a rod "
+                "with material.GJ > 0 (and EI > 0)"
+            )
+        return None
+    from catenet.model.twist import build_twists, check_twist_ends
+    from catenet.terms.twist import Twist
+
+    twists = build_twists(net, gj, line, rods.clamps, rods.tangent)
+    clamped = set(rods.clamps[:, 0].tolist())
+    imposed, seen = [], {}
+    for k, t in enumerate(twisted):
+        path = f"supports.twist[{k}].nodes"
+        nodes = [i for r in t.nodes for i in expand(r, built.names, built.sets or {})]
+        check_twist_ends(twists, np.asarray(nodes), path, clamped)
+        for node in dict.fromkeys(nodes):
+            if node in seen:
+                raise ConfigError(f"{path}: node {node} is turned by {seen[node]} already")
+            seen[node] = path
+            history = None if t.history is None else History(t.history)
+            imposed.append((twists.segment_of(node)[0], t.angle, history))
+    if not len(twists):
+        warn_once(
+            "material.GJ > 0, but no twisting rod is clamped at both ends (nor closed): "
+            "nothing twists (a rod with a free or pinned end untwists)"
+        )
+        return None
+    x0 = np.zeros((n_nodes, 3))
+    x0[: net.n_nodes] = net.nodes
+    return Twist(twists, n_nodes, x0, imposed)

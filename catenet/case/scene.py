@@ -22,7 +22,7 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.parse import Case
 from catenet.case.rigid import movers
-from catenet.case.rods import bending_term, case_rods, clamped_nodes, with_clamps
+from catenet.case.rods import bending_term, case_rods, case_twist, clamped_nodes, with_clamps
 from catenet.case.shapes import check_motion
 from catenet.case.supports import with_partial_supports
 from catenet.errors import ConfigError
@@ -95,6 +95,9 @@ def _build(case: Case) -> Scene:
     scene = scene.with_movers(*movers(case))  # balls and free bodies
     if rods is not None:
         scene = scene.with_terms(bending_term(rods, scene.net.n_nodes))
+    twist = case_twist(case, built, net, rods, scene.net.n_nodes)
+    if twist is not None:
+        scene = scene.with_terms(twist)
     scene = dataclasses.replace(
         scene,
         cases=_load_cases(case, scene.net, built),

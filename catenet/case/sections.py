@@ -32,12 +32,12 @@ from catenet.case.keys import (
 from catenet.case.kinds import KINDS
 from catenet.case.material import EDGE_CONTACT, MaterialConfig, parse_material  # noqa: F401
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
-from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, fixed_list
+from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, TwistConfig, fixed_list
+from catenet.case.supports import history_key
 from catenet.case.supports import node_list as _node_list
 from catenet.case.vessel import VesselConfig
 from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
-from catenet.model.histories import NEED, history_problem
 from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.relax import REST
 from catenet.solver.settings import INITIAL_STATES, METHODS, STARTS, Settings
@@ -46,29 +46,6 @@ LINEAR = ("auto", "pardiso", "scipy")
 
 Vec3 = tuple[float, float, float]
 NodeRef = int | str
-
-
-# --------------------------------------------------------------------------- histories
-
-
-def _check_history(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """A time history [[t, factor], ...] (catenet/model/histories.py) as a tuple of pairs."""
-    problem = history_problem(v)
-    if problem:
-        return ck.bad(path, v, problem)
-    duration = ctx.values.get("duration")
-    if duration not in (None, BAD, 0.0):
-        return ck.bad(
-            path,
-            v,
-            f"give duration (a linear ramp, here {duration!r} s) or history, not both",
-        )
-    return tuple((float(t), float(f)) for t, f in v)
-
-
-def history_key(doc: str) -> Any:
-    """The ``history`` key of a load or support motion."""
-    return key(_check_history, NEED, None, write="given", shown="none", unit="s, -", doc=doc)
 
 
 # --------------------------------------------------------------------------- supports
@@ -123,7 +100,8 @@ class SupportsConfig(Declared):
         (),
         write="given",
         shown="none",
-        doc="rod ends held in place with their given tangent (material.EI > 0)",
+        doc="rod ends held in place with their given tangent (material.EI > 0), and their "
+        "twist where material.GJ > 0",
     )
     rollers: tuple[RollerConfig, ...] = tables(
         RollerConfig, name="roller", doc="nodes held along a normal only (free in its plane)"
@@ -133,6 +111,9 @@ class SupportsConfig(Declared):
     )
     springs: tuple[SpringConfig, ...] = tables(
         SpringConfig, name="spring", doc="elastic supports toward the nodes' given positions"
+    )
+    twists: tuple[TwistConfig, ...] = tables(
+        TwistConfig, name="twist", doc="clamped rod ends turned about the rod's axis (GJ > 0)"
     )
 
     @property

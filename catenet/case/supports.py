@@ -1,6 +1,7 @@
 """The keys of supports that hold a node in some directions only: ``[[supports.roller]]``,
-``[[supports.slider]]`` and ``[[supports.spring]]`` (``catenet.model.guides``), and the
-node lists every support key takes."""
+``[[supports.slider]]`` and ``[[supports.spring]]`` (``catenet.model.guides``), the turned
+rod ends ``[[supports.twist]]`` (``catenet.model.twist``), the node lists every support
+key takes and the time histories of loads and support motions."""
 
 from __future__ import annotations
 
@@ -8,12 +9,33 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from catenet.case.keys import BAD, Checker, Context, Declared, key
+from catenet.case.keys import BAD, Checker, Context, Declared, key, real
 from catenet.errors import ConfigError
+from catenet.model.histories import NEED, history_problem
 from catenet.model.net import Net
 
 Vec3 = tuple[float, float, float]
 NodeRef = int | str
+
+
+def _check_history(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A time history [[t, factor], ...] (catenet/model/histories.py) as a tuple of pairs."""
+    problem = history_problem(v)
+    if problem:
+        return ck.bad(path, v, problem)
+    duration = ctx.values.get("duration")
+    if duration not in (None, BAD, 0.0):
+        return ck.bad(
+            path,
+            v,
+            f"give duration (a linear ramp, here {duration!r} s) or history, not both",
+        )
+    return tuple((float(t), float(f)) for t, f in v)
+
+
+def history_key(doc: str) -> Any:
+    """The ``history`` key of a load or support motion."""
+    return key(_check_history, NEED, None, write="given", shown="none", unit="s, -", doc=doc)
 
 
 def node_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
@@ -122,6 +144,24 @@ class SpringConfig(Declared):
         missing="[kx, ky, kz] [N/m]",
         unit="N/m",
         doc="per node: kx, ky, kz along x, y and z, or a 3x3 matrix of rows (kxx, kxy, kxz) ...",
+    )
+
+
+@dataclass(frozen=True)
+class TwistConfig(Declared):
+    """Clamped rod ends turned about the rod's axis: each by ``angle``, right-handed about
+    the tangent pointing out of the rod at that end (``catenet.model.twist``)."""
+
+    nodes: tuple[NodeRef, ...] = _guide_nodes("turned (each a clamped end of a twisting rod)")
+    angle: float = real(
+        missing="[rad]: the end's turn about the rod's axis",
+        unit="rad",
+        doc="the end's turn, right-handed about the outward tangent: a positive angle at "
+        "either end twists the rod right-handed; a rod's twist is the sum of its two ends'",
+    )
+    history: tuple | None = history_key(
+        "dynamic: angle times factor(t) (none: the whole angle from the start); static "
+        "runs: the whole angle"
     )
 
 

@@ -95,6 +95,11 @@ def state_lines(
             f"{'bending':<{W}} max moment {s['max_bending_moment']:.6g} N m at node "
             f"{s['max_bending_moment_node']} (curvature {s['max_curvature']:.6g} 1/m there)"
         )
+    if "max_twisting_moment" in s:
+        lines.append(
+            f"{'twist':<{W}} max moment {s['max_twisting_moment']:.6g} N m on edge "
+            f"{s['max_twisting_moment_edge']}"
+        )
     lines.append(
         f"{'slack':<{W}} {s['slack_edges']} of {n_edges} edges (tension-only, shorter than "
         "their rest length)"

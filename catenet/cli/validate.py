@@ -40,6 +40,10 @@ def command(output: Path | None, quiet: bool, verbose: int, debug: bool) -> None
          edges), a cantilever's tip under an end load against the elastica (1e-4 of L
          at 100 edges), first natural frequencies (simply supported, cantilever,
          clamped-clamped: 1e-3).
+    (vi) twisted rods (EI = 1, GJ = 0.8 N m^2): a straight rod's twisting moment
+         (exact), a helix under end force and moment (Love; 1e-3 at 200 edges),
+         Greenhill's critical twist of a clamped rod (1e-3 at 100 edges), Michell's
+         critical twist of a ring (1e-3 at 200 edges).
 
     Exit status 0 when every check passes, 1 when one fails, 2 on bad options.
     """

@@ -14,7 +14,8 @@ source of the run's printed summary, the /result attributes and the sweep table'
 - ``max_strain`` (|e|/l0 - 1, 0 when none is stretched) and ``max_strain_edge``;
 - ``slack_edges``: tension-only edges shorter than their rest length (slack);
 - with rods: ``max_bending_moment`` [N m], ``max_bending_moment_node`` and
-  ``max_curvature`` [1/m] there (``catenet.model.rods.bending_moment``);
+  ``max_curvature`` [1/m] there (``catenet.model.rods.bending_moment``); with twisted
+  rods ``max_twisting_moment`` [N m] (the largest |M|) and ``max_twisting_moment_edge``;
 - ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``;
 - ``contact_resultant`` (3,) [N], ``max_contact`` [N], ``contact_nodes`` (nodes touched);
 - with peaks: ``peak_tension`` [N], ``peak_tension_edge``, ``peak_tension_time`` (s, or
@@ -40,6 +41,7 @@ import numpy as np
 from catenet.model import measures
 from catenet.model.net import Loads, Net
 from catenet.model.rods import Rods, bending_moment
+from catenet.model.twist import Twists, twisting_moment
 
 if TYPE_CHECKING:  # a scene and its solved state, from the layers above
     from catenet.scene.scene import Scene
@@ -313,6 +315,7 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     )
     out["applied_resultant"] = _applied(scene, res, loads)
     out.update(_bending(scene, res.x))
+    out.update(_twisting(scene, res.x))
     chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
     if chain is not None:
         out["sag_normal"] = chain["normal"]
@@ -362,6 +365,26 @@ def _bending(scene: Scene, x: np.ndarray) -> dict:
         "max_bending_moment_node": node,
         "max_curvature": float(kappa[node]),
     }
+
+
+def twisting_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
+    """Per edge (M,), the signed twisting moment [N m] at x (> 0: a right-handed twist; 0
+    where no rod twists), from the scene's ``Twist`` term (None: no rod twists)."""
+    for term in scene.terms:
+        twists = getattr(term, "twists", None)
+        if isinstance(twists, Twists):
+            moment = term.moments(np.asarray(x, dtype=np.float64))  # type: ignore[attr-defined]
+            return twisting_moment(twists, moment, scene.net.n_edges)
+    return None
+
+
+def _twisting(scene: Scene, x: np.ndarray) -> dict:
+    """The largest twisting moment |M| and its edge (none without twisted rods)."""
+    moment = twisting_moments(scene, x)
+    if moment is None:
+        return {}
+    edge = int(np.argmax(np.abs(moment)))
+    return {"max_twisting_moment": float(abs(moment[edge])), "max_twisting_moment_edge": edge}
 
 
 def _utilisation(scene: Scene, use: np.ndarray, design, peaks) -> dict:

@@ -3,7 +3,7 @@ tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 ``cable_peak_tension`` and ``cable_peak_tension_time``), reactions and contact forces,
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
 ``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
-``bending_moment`` and ``curvature`` per node, velocities and the newmark scheme's
+``bending_moment`` and ``curvature`` per node, ``twisting_moment`` per edge, velocities and the newmark scheme's
 acceleration where the run keeps them, each edge's ``utilisation`` (and
 ``peak_utilisation`` from its peak tension; per cable ``cable_max_utilisation``; NaN where
 no breaking load is given: ``catenet.model.design``) and the attributes a user reads
@@ -80,6 +80,9 @@ def write_result_group(
         moment, kappa = bending_moment(rods, np.asarray(res.x, dtype=np.float64), len(res.x))
         g.create_dataset("bending_moment", data=moment)
         g.create_dataset("curvature", data=kappa)
+    twisting = summary.twisting_moments(scene, res.x)
+    if twisting is not None:  # per edge [N m], 0 where no rod twists
+        g.create_dataset("twisting_moment", data=twisting)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
     if scene.design is not None and scene.design.anchored:  # |R| / capacity per node

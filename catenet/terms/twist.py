@@ -9,9 +9,10 @@ fold back on each other; there the twist is undefined and the energy is inf. The
 has no rotational inertia (it is uniform along a segment at every instant: torsional
 waves, far faster than bending ones in a slender rod, are not resolved). Theta is
 tracked continuously from the last accepted state (``begin_step``), so a rod twisted by
-many turns keeps its count; the term is not convex. A static run's load factor scales
-the imposed twist Phi (as it scales the supports' displacements); a dynamic run takes it
-along each end's history.
+many turns keeps its count; the term is not convex. A static run imposes the twist Phi
+in full from its start (a straight rod is an equilibrium under any twist: where it
+buckles, that equilibrium turns unstable); a dynamic run takes it along each end's
+history.
 """
 
 from __future__ import annotations
@@ -43,7 +44,6 @@ class Twist(Term):
     role = "internal"
     convex = False
     structural = True
-    loadlike = True  # a static run's load factor scales the imposed twist
 
     def __init__(
         self, twists: Twists, n_nodes: int, x0: np.ndarray, imposed: Sequence[Imposed] = ()
@@ -51,7 +51,6 @@ class Twist(Term):
         self.twists = twists
         self.n_nodes = int(n_nodes)
         self.imposed = tuple(imposed)
-        self._factor = 1.0
         self._time: float | None = None
         n_edges = len(twists.edges)
         self._ref = np.zeros((n_edges, 3))
@@ -92,23 +91,20 @@ class Twist(Term):
         return out
 
     def imposed_twist(self) -> np.ndarray:
-        """Phi per segment [rad] now: each turned end's angle times the load factor
-        (static) or its history at the step's time (dynamic)."""
+        """Phi per segment [rad] now: each turned end's angle, in full (static) or times
+        its history at the step's time (dynamic)."""
         phi = np.zeros(len(self.twists))
         for s, angle, history in self.imposed:
-            if self._time is None:
-                phi[s] += angle * self._factor
+            if self._time is None or history is None:
+                phi[s] += angle
             else:
-                phi[s] += angle * (1.0 if history is None else history(self._time))
+                phi[s] += angle * history(self._time)
         return phi
 
     def moments(self, x: np.ndarray) -> np.ndarray:
         """The twisting moment M [N m] of every segment at x (> 0: right-handed)."""
         twist = self._angles(x) - self.offset + self.imposed_twist()
         return twist / self.twists.compliance
-
-    def set_factor(self, factor: float) -> None:
-        self._factor = float(factor)
 
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """The frames carried to the last accepted state x, keeping the twist's count."""

@@ -437,8 +437,8 @@ def law_rows() -> list[Row]:
 
 def run(progress: Callable[[str], None] | None = None) -> list[Row]:
     """Every row of the validation table: cases (i), (ii), (iii), the rods' (iv),
-    ``catenet.validate.rods``, and a published mooring system's (v),
-    ``catenet.validate.moorings``."""
+    ``catenet.validate.rods``, a published mooring system's (v),
+    ``catenet.validate.moorings``, and the twisted rods' (vi), ``catenet.validate.twist``."""
     if progress:
         progress("midpoint load (Eqs. 16-17)")
     rows = midpoint_load_rows()
@@ -456,6 +456,9 @@ def run(progress: Callable[[str], None] | None = None) -> list[Row]:
     from catenet.validate.moorings import oc3_rows
 
     rows += [Row(**row) for row in oc3_rows()]
+    from catenet.validate.twist import twist_rows
+
+    rows += [Row(**row) for row in twist_rows(progress)]
     return rows
 
 
