@@ -384,8 +384,8 @@ def _twist_rules(ck: Checker, m: dict, v: dict) -> None:
         v["GJ"] = BAD
     if "G" in m and v["G"] is not BAD and v["GJ"] != "section":
         ck.add(
-            f"material.G = {show(m['G'])}: the shear modulus is for GJ = \"section\" only "
-            f"(GJ is {show(m.get('GJ', 0.0))}): give GJ = \"section\" or leave G out"
+            f'material.G = {show(m["G"])}: the shear modulus is for GJ = "section" only '
+            f'(GJ is {show(m.get("GJ", 0.0))}): give GJ = "section" or leave G out'
         )
     if v["GJ"] not in (0.0, BAD) and v["EI"] in (0.0, None):
         ck.add(

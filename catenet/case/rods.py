@@ -92,7 +92,6 @@ def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | N
 def bending_term(rods: Rods, n_nodes: int) -> Bending:
     """The rods' ``Bending`` term (its kernels load only for a case with rods)."""
     from catenet.terms.bending import Bending
-    from catenet.terms.twist import Twist
 
     return Bending(rods, n_nodes)
 
@@ -114,7 +113,8 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
 
     twists = build_twists(net, gj, line, rods.clamps, rods.tangent)
     clamped = set(rods.clamps[:, 0].tolist())
-    imposed, seen = [], {}
+    imposed = []
+    seen: dict[int, str] = {}
     for k, t in enumerate(twisted):
         path = f"supports.twist[{k}].nodes"
         nodes = [i for r in t.nodes for i in expand(r, built.names, built.sets or {})]

@@ -32,8 +32,14 @@ from catenet.case.keys import (
 from catenet.case.kinds import KINDS
 from catenet.case.material import EDGE_CONTACT, MaterialConfig, parse_material  # noqa: F401
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
-from catenet.case.supports import RollerConfig, SliderConfig, SpringConfig, TwistConfig, fixed_list
-from catenet.case.supports import history_key
+from catenet.case.supports import (
+    RollerConfig,
+    SliderConfig,
+    SpringConfig,
+    TwistConfig,
+    fixed_list,
+    history_key,
+)
 from catenet.case.supports import node_list as _node_list
 from catenet.case.vessel import VesselConfig
 from catenet.errors import ConfigError

@@ -291,7 +291,7 @@ def twist_hessian(x, nodes, start, closed, head, tail, moment, compliance, value
         segment_hessian(x, nodes, lo, hi, closed, head, tail, s, h)
         for r in range(size):
             for c in range(size):
-                values[base + r * size + c] = (
-                    g[r] * g[c] / compliance[s] + 0.5 * moment[s] * (h[r, c] + h[c, r])
+                values[base + r * size + c] = g[r] * g[c] / compliance[s] + 0.5 * moment[s] * (
+                    h[r, c] + h[c, r]
                 )
         base += size * size

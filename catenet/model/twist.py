@@ -147,7 +147,8 @@ def _pack(parts: list[tuple]) -> Twists:
     first = np.cumsum([0] + [len(p[1]) for p in parts])[:-1].astype(np.int64)
 
     def rows(k: int) -> np.ndarray:
-        return np.ascontiguousarray(np.array([p[k] for p in parts], dtype=np.float64).reshape(-1, 3))
+        rows = np.array([p[k] for p in parts], dtype=np.float64)
+        return np.ascontiguousarray(rows.reshape(-1, 3))
 
     return Twists(
         nodes=np.asarray([n for p in parts for n in p[0]], dtype=np.int64),

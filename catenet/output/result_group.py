@@ -3,11 +3,11 @@ tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 ``cable_peak_tension`` and ``cable_peak_tension_time``), reactions and contact forces,
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
 ``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
-``bending_moment`` and ``curvature`` per node, ``twisting_moment`` per edge, velocities and the newmark scheme's
-acceleration where the run keeps them, each edge's ``utilisation`` (and
-``peak_utilisation`` from its peak tension; per cable ``cable_max_utilisation``; NaN where
-no breaking load is given: ``catenet.model.design``) and the attributes a user reads
-first (``catenet.model.summary``)."""
+``bending_moment`` and ``curvature`` per node (``twisting_moment`` per edge where they
+twist), velocities and the newmark scheme's acceleration where the run keeps them, each
+edge's ``utilisation`` (and ``peak_utilisation`` from its peak tension; per cable
+``cable_max_utilisation``; NaN where no breaking load is given: ``catenet.model.design``)
+and the attributes a user reads first (``catenet.model.summary``)."""
 
 from __future__ import annotations
 

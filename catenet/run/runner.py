@@ -267,7 +267,11 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
-        from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
+        from catenet.solver.diagnose import (
+            describe_unstable,
+            describe_unstable_bodies,
+            has_twist,
+        )
 
         result.diagnosis = describe_unstable_bodies(ws.system, result.x) or describe_unstable(
             ws.system.stretch,
@@ -275,6 +279,7 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
             ~scene.net.fixed,
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
+            twisted=has_twist(ws.system),
         )
     per_cable = None
     if cables is not None:  # per cable: the largest tension and the slack share

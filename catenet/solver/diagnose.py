@@ -27,6 +27,11 @@ if TYPE_CHECKING:
 NEGATIVE = 1e-9  # a block eigenvalue below -NEGATIVE x the block's largest is negative
 
 
+def has_twist(system: System) -> bool:
+    """Whether the system has twisted rods (a ``Twist`` term)."""
+    return any(t.name == "twist" for t in system.terms)
+
+
 def unstable_nodes(stretch: Stretch, x: np.ndarray, free: np.ndarray) -> np.ndarray:
     """Free nodes whose own block of the edges' tangent stiffness at x (N, 3) has a
     negative eigenvalue (``stretch``: the net's ``terms.Stretch``; ``free`` (N,) bool)."""
@@ -55,8 +60,11 @@ def describe_unstable(
     free: np.ndarray,
     cable_names: Sequence[str] | None = None,
     cable_of_edge: np.ndarray | None = None,
+    *,
+    twisted: bool = False,
 ) -> str:
-    """One sentence naming the nodes (and cables) of an unstable equilibrium and the fix."""
+    """One sentence naming the nodes (and cables) of an unstable equilibrium and the fix
+    (``twisted``: the system has twisted rods, which buckle beyond their critical twist)."""
     nodes = unstable_nodes(stretch, x, free)
     if nodes.size == 0:  # a global instability: name the compressed edges' free nodes
         compressed = np.flatnonzero(stretch.tension(x) < 0.0)
@@ -78,6 +86,12 @@ def describe_unstable(
         "pinned struts, a straight compressed strut): fix or brace those nodes (a support, "
         "an edge to a support, guys with prestress), make the strut one edge, or give it "
         "bending stiffness (material.EI: a rod; a rod beyond its Euler load buckles)"
+        + (
+            "; or a rod twisted beyond its critical twist (8.99 EI / GJ for a straight rod "
+            "between clamps held apart, less under compression): turn its ends less"
+            if twisted
+            else ""
+        )
     )
 
 

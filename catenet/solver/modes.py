@@ -308,12 +308,12 @@ def _check_count(count: int, n_free: int) -> None:
 
 def _unstable(how: str, workspace: Workspace, x: np.ndarray) -> NoReturn:
     """Raises ConvergenceError: the equilibrium is unstable (``how``), its nodes named."""
-    from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
+    from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies, has_twist
 
     system = workspace.system
     why = describe_unstable_bodies(system, x)
     if not why:
-        why = describe_unstable(system.stretch, x, ~system.net.fixed)
+        why = describe_unstable(system.stretch, x, ~system.net.fixed, twisted=has_twist(system))
     raise ConvergenceError(f"modes: the equilibrium is unstable ({how}): {why}")
 
 

@@ -288,10 +288,11 @@ class PathJudge:
         )
 
     def why_start(self) -> str:
-        from catenet.solver.diagnose import describe_unstable
+        from catenet.solver.diagnose import describe_unstable, has_twist
 
         start = self.start_x if self.start_x is not None else self.net.nodes
-        what = describe_unstable(self.ws.system.stretch, start, ~self.net.fixed)
+        system = self.ws.system
+        what = describe_unstable(system.stretch, start, ~self.net.fixed, twisted=has_twist(system))
         if not self.loaded:
             return f"the given geometry is an unstable equilibrium under its prestress: {what}"
         return f"the given geometry is unstable under its prestress, so any load folds it: {what}"

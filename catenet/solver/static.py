@@ -15,7 +15,7 @@ import numpy as np
 from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
-from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies
+from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies, has_twist
 from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
@@ -125,7 +125,7 @@ def _judge_stability(
         out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, potential, x)
         if out.stable is False:
             out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
-                ws.system.stretch, x, ~net.fixed
+                ws.system.stretch, x, ~net.fixed, twisted=has_twist(ws.system)
             )
             log.warning(
                 "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "

@@ -57,9 +57,8 @@ class Twist(Term):
         self._tau = np.zeros((n_edges, 3))
         x0 = np.ascontiguousarray(x0, dtype=np.float64)
         self._theta = np.zeros(len(twists))
-        self._lbar = np.array(
-            [_mean_edge(x0, twists.nodes[a:b], c) for a, b, c in zip(twists.start[:-1], twists.start[1:], twists.closed, strict=True)]
-        )
+        bounds = zip(twists.start[:-1], twists.start[1:], twists.closed, strict=True)
+        self._lbar = np.array([_mean_edge(x0, twists.nodes[a:b], c) for a, b, c in bounds])
         self._frames(x0, self._theta)
         self.offset = self._angles(x0)  # untwisted as given (a ring: its holonomy)
         self._theta = self.offset.copy()
@@ -71,9 +70,7 @@ class Twist(Term):
 
     def _frames(self, x: np.ndarray, theta: np.ndarray) -> None:
         t = self.twists
-        twist_frames(
-            x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first
-        )
+        twist_frames(x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first)
 
     def _angles(self, x: np.ndarray) -> np.ndarray:
         t = self.twists

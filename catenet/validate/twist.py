@@ -109,6 +109,8 @@ def straight_rows() -> list[dict]:
 
     scene, result = _solved(straight_case())
     moment = twisting_moments(scene, result.x)
+    if moment is None:
+        raise ArithmeticError("the straight rod does not twist")
     exact = GJ * sum(STRAIGHT_ANGLES) / 1.0
     worst = float(moment[np.argmax(np.abs(moment - exact))])
     return [
@@ -161,6 +163,8 @@ def helix(edges: int) -> tuple[float, float, float]:
     assert rods is not None  # the case's rod
     bend, _ = bending_moment(rods, result.x, scene.net.n_nodes)
     twist = twisting_moments(scene, result.x)
+    if twist is None:
+        raise ArithmeticError("the helix does not twist")
     mid = edges // 2
     psi = HELIX_ANGLE
     axial = float(bend[mid] * math.sin(psi) + twist[mid] * math.cos(psi))
