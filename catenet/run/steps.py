@@ -120,6 +120,9 @@ def _dynamic_start(scene, settings, ws, restart, frames: _Frames):
     else:
         start = sv.Start(restart.x, restart.v, restart.t, restart.a)
     x0 = scene.net.nodes.copy() if restart is None else restart.x.copy()
+    for term in ws.system.terms:  # a rod end turned along a history: where it is at t0
+        if term.driven:
+            term.begin_run(x0, start.t)
     if restart is None and settings.initial_state == "equilibrium":  # at rest, at t = 0
         x0 = sv.equilibrium_start(scene, settings, ws, 0.0)
         start = sv.Start(x0.copy(), start.v, start.t)

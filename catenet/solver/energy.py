@@ -9,7 +9,8 @@ stretching, the rods' bending: ``structural`` terms) and the elastic supports' s
 (``holds``); C every other conservative term's energy (barriers of obstacles, bodies and
 strands, a free body's rigidity); W the work of the applied forces, sum over steps of
 1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
-move); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
+move), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} - Phi_n)
+(``driven`` terms); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
 with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
 the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), and against
 friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force).
@@ -82,6 +83,7 @@ class Ledger:
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
         self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history
         self._factors = [t.factor for t in self._weighs]
+        self._driven = [t for t in system.terms if t.driven]  # a turned rod end's work
         self._force = self._applied(stepper).copy()
         k, u, c, reaction = self._state(stepper, stepper.x, stepper.v)
         self._reaction = reaction
@@ -126,6 +128,8 @@ class Ledger:
                 mean = 0.5 * (term.unit_energy(x_old) + term.unit_energy(x_new))
                 self._work += (term.factor - self._factors[i]) * mean
                 self._factors[i] = term.factor
+        for term in self._driven:
+            self._work += term.driven_work(x_old, x_new)
         for term in self._media:
             mean = stepper.scheme.name != "implicit_euler"
             lost, put = term.losses(x_old, x_new, h, mean)

@@ -110,8 +110,9 @@ class TimeStepper:
             raise ConfigError(f"a0: must have shape {net.nodes.shape}")
         a_free = None if a0 is None else np.asarray(a0, dtype=np.float64).reshape(-1)[self.free]
         potential = potential_at(self.potential, loads, net, t0)
-        for term in self.media:
-            term.begin_run(x, t0)
+        for term in self.system.terms:
+            if term.medium or term.driven:
+                term.begin_run(x, t0)
         self.scheme.begin(potential, x, v, self.m_free, self.damping, a_free)
         self.a_out = a_out
         store_acceleration(self.scheme, a_out, self.free)

@@ -40,6 +40,10 @@ Optional capabilities, declared so that solvers ask no term what it has:
   the step's velocity (water's drag and added mass, ``catenet.terms.water``): the
   stepper gives it the scheme's velocity and acceleration maps every step, the energy
   balance its kinetic energy and losses.
+- ``driven`` (with ``begin_run`` and ``driven_work(x_old, x_new)``): a term whose energy
+  a prescribed history of its own changes (a rod end turned along a history,
+  ``catenet.terms.twist``): a dynamic run starts it at its start time, and the energy
+  balance counts the work that history does in each accepted step.
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
@@ -103,6 +107,7 @@ class Term:
     weighs = False  # loadlike and a weight (buoyancy): gravity's history scales it too
     factor = 1.0  # (loadlike terms) the factor set_factor gave
     medium = False  # has begin_run, set_motion, kinetic, losses (catenet.terms.water)
+    driven = False  # has begin_run, driven_work (catenet.terms.twist)
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
@@ -176,8 +181,13 @@ class Term:
         raise NotImplementedError(f"{type(self).__name__} is no weight")
 
     def begin_run(self, x: np.ndarray, t: float) -> None:
-        """(``medium`` terms) A dynamic run's start state x at time t, at rest."""
+        """(``medium`` and ``driven`` terms) A dynamic run's start state x at time t."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
+        """(``driven`` terms) The work [J] its own history did in the accepted step from
+        x_old to x_new (the step of the last ``begin_step``)."""
+        raise NotImplementedError(f"{type(self).__name__} is not driven")
 
     def set_motion(self, kv: float, centre: np.ndarray, ka: float, centre_a: np.ndarray) -> None:
         """(``medium`` terms) The step's velocity kv (x - centre) and acceleration

@@ -44,6 +44,7 @@ class Twist(Term):
     role = "internal"
     convex = False
     structural = True
+    driven = True  # a turned end's history does work (the energy balance counts it)
 
     def __init__(
         self, twists: Twists, n_nodes: int, x0: np.ndarray, imposed: Sequence[Imposed] = ()
@@ -51,7 +52,9 @@ class Twist(Term):
         self.twists = twists
         self.n_nodes = int(n_nodes)
         self.imposed = tuple(imposed)
-        self._time: float | None = None
+        self._time: float | None = None  # a dynamic step's end (None: static, all of Phi)
+        self._start: float | None = None  # ... and its start
+        self._run: float | None = None  # a dynamic run's start time (static solves in it)
         n_edges = len(twists.edges)
         self._ref = np.zeros((n_edges, 3))
         self._tau = np.zeros((n_edges, 3))
@@ -87,25 +90,42 @@ class Twist(Term):
         )
         return out
 
-    def imposed_twist(self) -> np.ndarray:
-        """Phi per segment [rad] now: each turned end's angle, in full (static) or times
-        its history at the step's time (dynamic)."""
+    def imposed_twist(self, time: float | None = None) -> np.ndarray:
+        """Phi per segment [rad] at ``time`` (None: now): each turned end's angle, in full
+        (static) or times its history (dynamic; a static solve in a dynamic run, such as
+        its equilibrium start, at the run's start time)."""
+        if time is None:
+            time = self._time if self._time is not None else self._run
         phi = np.zeros(len(self.twists))
         for s, angle, history in self.imposed:
-            if self._time is None or history is None:
+            if time is None or history is None:
                 phi[s] += angle
             else:
-                phi[s] += angle * history(self._time)
+                phi[s] += angle * history(time)
         return phi
 
-    def moments(self, x: np.ndarray) -> np.ndarray:
-        """The twisting moment M [N m] of every segment at x (> 0: right-handed)."""
-        twist = self._angles(x) - self.offset + self.imposed_twist()
+    def moments(self, x: np.ndarray, time: float | None = None) -> np.ndarray:
+        """The twisting moment M [N m] of every segment at x (> 0: right-handed), at
+        ``time`` (None: now)."""
+        twist = self._angles(x) - self.offset + self.imposed_twist(time)
         return twist / self.twists.compliance
+
+    def begin_run(self, x: np.ndarray, t: float) -> None:
+        """A dynamic run's start at time t: the turned ends where their histories are."""
+        self._time = self._start = self._run = float(t)
+
+    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
+        """1/2 (M_n + M_n+1) (Phi_n+1 - Phi_n), summed over the segments, for the step of
+        the last ``begin_step``."""
+        if self._start is None or self._time is None:
+            return 0.0
+        before, after = self.imposed_twist(self._start), self.imposed_twist(self._time)
+        m = self.moments(x_old, self._start) + self.moments(x_new, self._time)
+        return float(0.5 * np.sum(m * (after - before)))
 
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """The frames carried to the last accepted state x, keeping the twist's count."""
-        self._time = time
+        self._time, self._start = time, start
         x = np.ascontiguousarray(x, dtype=np.float64)
         theta = self._angles(x)
         if np.all(np.isfinite(theta)):
