@@ -375,18 +375,13 @@ def _bending_rules(ck: Checker, m: dict, v: dict) -> None:
 
 
 def _twist_rules(ck: Checker, m: dict, v: dict) -> None:
-    """GJ = "section" needs G and radius, G is for it only, and a rod that twists bends."""
+    """GJ = "section" needs G and radius, and a rod that twists bends."""
     if v["GJ"] == "section" and ("G" not in m or "radius" not in m):
         ck.add(
             'material.GJ = "section": needs material.G (the shear modulus) and '
             "material.radius (a tube: inner_radius too), or give GJ in N m^2"
         )
         v["GJ"] = BAD
-    if "G" in m and v["G"] is not BAD and v["GJ"] != "section":
-        ck.add(
-            f'material.G = {show(m["G"])}: the shear modulus is for GJ = "section" only '
-            f'(GJ is {show(m.get("GJ", 0.0))}): give GJ = "section" or leave G out'
-        )
     if v["GJ"] not in (0.0, BAD) and v["EI"] in (0.0, None):
         ck.add(
             f"material.GJ = {show(m['GJ'])}: a rod that twists must bend: give material.EI "

@@ -98,7 +98,8 @@ class TimeStepper:
         if net.guides is not None:  # rollers and sliders: on their guides, moving along
             net.guides.place(x, net.nodes)
             _along_guides(net.guides, v)
-        self.settle = loads.settle_time()
+        driven = [term.settle_time() for term in self.system.terms if term.driven]
+        self.settle = max([loads.settle_time(), *driven])  # every history at its end
         # an obstacle on a prescribed motion, at its t0 pose
         self.moving = moves(self.potential, t0)
         moving_supports = loads.moves_supports and self.settle > t0

@@ -40,10 +40,11 @@ Optional capabilities, declared so that solvers ask no term what it has:
   the step's velocity (water's drag and added mass, ``catenet.terms.water``): the
   stepper gives it the scheme's velocity and acceleration maps every step, the energy
   balance its kinetic energy and losses.
-- ``driven`` (with ``begin_run`` and ``driven_work(x_old, x_new)``): a term whose energy
-  a prescribed history of its own changes (a rod end turned along a history,
-  ``catenet.terms.twist``): a dynamic run starts it at its start time, and the energy
-  balance counts the work that history does in each accepted step.
+- ``driven`` (with ``begin_run``, ``driven_work(x_old, x_new)`` and ``settle_time()``): a
+  term whose energy a prescribed history of its own changes (a rod end turned along a
+  history, ``catenet.terms.twist``): a dynamic run starts it at its start time, runs at
+  least to where its history ends before it stops at rest, and the energy balance counts
+  the work that history does in each accepted step.
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
@@ -183,6 +184,10 @@ class Term:
     def begin_run(self, x: np.ndarray, t: float) -> None:
         """(``medium`` and ``driven`` terms) A dynamic run's start state x at time t."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
+
+    def settle_time(self) -> float:
+        """(``driven`` terms) The time after which its history no longer changes."""
+        raise NotImplementedError(f"{type(self).__name__} is not driven")
 
     def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
         """(``driven`` terms) The work [J] its own history did in the accepted step from

@@ -114,6 +114,10 @@ class Twist(Term):
         """A dynamic run's start at time t: the turned ends where their histories are."""
         self._time = self._start = self._run = float(t)
 
+    def settle_time(self) -> float:
+        """The last point of the turned ends' histories (0: none)."""
+        return max([h.end for _, _, h in self.imposed if h is not None], default=0.0)
+
     def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
         """1/2 (M_n + M_n+1) (Phi_n+1 - Phi_n), summed over the segments, for the step of
         the last ``begin_step``."""
