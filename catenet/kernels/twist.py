@@ -239,12 +239,16 @@ def _vertex_blocks(t1, t2, l1, l2):
 
 
 @njit(cache=True)
-def segment_hessian(x, nodes, lo, hi, closed, head, tail, s, out):
-    """Adds Hess Theta of segment s into out (3 p, 3 p), local rows (not symmetrised)."""
+def segment_hessian(x, nodes, lo, hi, closed, head, tail, s, scale, out, base):
+    """Adds scale Hess Theta of segment s, symmetrised, into out[base:] (its dense
+    (3 p)^2 block, row-major over local DOFs): each vertex's blocks (not symmetric by
+    themselves) and their transposes, halved."""
     t, length, ends = _tangents(x, nodes, lo, hi, closed, head, tail, s)
     ends = ends - lo
+    size = 3 * (hi - lo)
     n = (hi - lo) if closed[s] else (hi - lo - 1)
     vertices = n if closed[s] else n + 1
+    half = 0.5 * scale
     for v in range(1, vertices + 1):
         blocks = _vertex_blocks(t[v - 1], t[v], length[v - 1], length[v])
         for p in range(2):
@@ -263,7 +267,9 @@ def segment_hessian(x, nodes, lo, hi, closed, head, tail, s, out):
                         sj = -1.0 if j_end == 0 else 1.0
                         for a in range(3):
                             for b in range(3):
-                                out[ri + a, cj + b] += si * sj * blocks[p, q, a, b]
+                                value = half * si * sj * blocks[p, q, a, b]
+                                out[base + (ri + a) * size + cj + b] += value
+                                out[base + (cj + b) * size + ri + a] += value
 
 
 @njit(cache=True)
@@ -281,17 +287,16 @@ def twist_gradient(x, nodes, start, closed, head, tail, moment, grad):
 @njit(cache=True)
 def twist_hessian(x, nodes, start, closed, head, tail, moment, compliance, values):
     """Writes every segment's dense block (3 p)^2, row-major over its local DOFs:
-    g g^T / C + M Hess Theta, symmetrised."""
+    g g^T / C + M Hess Theta (symmetrised)."""
     base = 0
     for s in range(len(start) - 1):
         lo, hi = start[s], start[s + 1]
         size = 3 * (hi - lo)
         g = segment_gradient(x, nodes, lo, hi, closed, head, tail, s)
-        h = np.zeros((size, size))
-        segment_hessian(x, nodes, lo, hi, closed, head, tail, s, h)
         for r in range(size):
+            gr = g[r] / compliance[s]
+            row = base + r * size
             for c in range(size):
-                values[base + r * size + c] = g[r] * g[c] / compliance[s] + 0.5 * moment[s] * (
-                    h[r, c] + h[c, r]
-                )
+                values[row + c] = gr * g[c]
+        segment_hessian(x, nodes, lo, hi, closed, head, tail, s, moment[s], values, base)
         base += size * size

@@ -137,6 +137,11 @@ class Twist(Term):
             self._frames(x, theta)
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._pattern
+
+    @cached_property
+    def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every segment's dense block of its nodes' DOFs, row-major."""
         t = self.twists
         rows, cols = [], []
         for s in range(len(t)):
