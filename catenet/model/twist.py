@@ -75,7 +75,7 @@ def _chains(edges: np.ndarray, line: np.ndarray, twists: np.ndarray) -> list[tup
             else:
                 runs.append([b])
         closed = len(runs) == 1 and len(chain) > 2 and edges[chain[-1], 1] == edges[chain[0], 0]
-        out += [(run, closed and len(runs) == 1) for run in runs]
+        out += [(run, closed) for run in runs]
     return out
 
 
