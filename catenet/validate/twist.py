@@ -12,13 +12,14 @@ quasistatically (``catenet.terms.twist``):
     the axis), one turn, its material twisted at the rate tau = 1 rad/m, is an
     equilibrium of a naturally straight Kirchhoff rod under an axial force F and an axial
     moment M (Love, *A Treatise on the Mathematical Theory of Elasticity*, 4th ed., 1927,
-    Art. 270-271; Chouaieb, Goriely and Maddocks, PNAS 103, 2006): with the curvature
-    kappa = sin^2 psi / R and the torsion sin psi cos psi / R of the helix,
+    the rod bent into a helix; Chouaieb, Goriely and Maddocks, PNAS 103, 2006): with the
+    curvature kappa = sin^2 psi / R and the torsion sin psi cos psi / R of the helix,
 
         F = (sin psi / R) (C tau - B sin psi cos psi / R),
         M = B kappa sin psi + C tau cos psi
 
-    (from m' + t x n = 0 with m = B kappa b + C tau t and n = F e_z). The case clamps
+    (from m' + t x n = 0 with m = B kappa b + C tau t, n = F e_z, e_z = cos psi t +
+    sin psi b; F > 0 pulls the ends apart). The case clamps
     both ends where the helix ends and turns one by tau L; a clamp holds its end edge's
     given direction, so the end edges are given along the helix's tangent there (the
     chord's direction would hold the end straight). The reaction at the far end is F
