@@ -28,6 +28,14 @@ if TYPE_CHECKING:
     from catenet.terms.twist import Twist
 
 
+#: Why a cable's twist is refused.
+NO_RING = (
+    "the cable is no twisting ring: a closed cable (its last node its first) of a rod with "
+    "GJ > 0 and EI > 0 is closed with a twist (a rod between clamps is turned by "
+    "[[supports.twist]])"
+)
+
+
 def clamped_nodes(case: Case, built: Any) -> np.ndarray:
     """The node indices of supports.clamped (each once)."""
     refs = case.supports.clamped
@@ -107,6 +115,9 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
                 "supports.twist[0].nodes: no rod twists: a twist turns a clamped end of a rod "
                 "with material.GJ > 0 (and EI > 0)"
             )
+        for k, cable in enumerate(getattr(case.geometry, "cables", ())):
+            if cable.twist is not None:
+                raise ConfigError(f"geometry.cable[{k}].twist = {cable.twist!r}: {NO_RING}")
         return None
     from catenet.model.twist import build_twists, check_twist_ends
     from catenet.terms.twist import Twist
@@ -125,6 +136,7 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
             seen[node] = path
             history = None if t.history is None else History(t.history)
             imposed.append((twists.segment_of(node)[0], t.angle, history))
+    imposed += _ring_twists(case, twists, line)
     if not len(twists):
         warn_once(
             "material.GJ > 0, but no twisting rod is clamped at both ends (nor closed): "
@@ -134,3 +146,21 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
     x0 = np.zeros((n_nodes, 3))
     x0[: net.n_nodes] = net.nodes
     return Twist(twists, n_nodes, x0, imposed)
+
+
+def _ring_twists(case: Case, twists: Any, line: np.ndarray) -> list:
+    """(segment, twist, None) of every closed cable given a ``twist``; a ConfigError
+    where such a cable is no twisting ring."""
+    cables = getattr(case.geometry, "cables", ())
+    rings = {int(line[twists.edges[twists.first[s]]]): s for s in np.flatnonzero(twists.closed)}
+    out, problems = [], []
+    for k, cable in enumerate(cables):
+        if cable.twist is None:
+            continue
+        if k in rings:
+            out.append((rings[k], cable.twist, None))
+        else:
+            problems.append(f"geometry.cable[{k}].twist = {cable.twist!r}: {NO_RING}")
+    if problems:
+        raise ConfigError(problems)
+    return out

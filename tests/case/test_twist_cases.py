@@ -177,3 +177,43 @@ def test_a_twist_whose_rod_has_a_free_end_is_refused(tmp_path):
     assert done.exit_code == 2, done.output
     assert "node 0 is a clamped end of a rod that does not twist" in done.output
     assert "clamp the rod's other end too" in done.output
+
+
+def _ring_case(twist=None, closed=True, gj=0.8) -> dict:
+    n = 24
+    a = 2.0 * np.pi * np.arange(n) / n
+    nodes = np.column_stack([np.cos(a), np.sin(a), np.zeros(n)]).tolist()
+    cable = {"name": "ring", "nodes": [*range(n), 0] if closed else list(range(n))}
+    if twist is not None:
+        cable["twist"] = twist
+    return {
+        "geometry": {"kind": "graph", "nodes": nodes, "cable": [cable]},
+        "material": {"EA": 1e6, "EI": 1.0, "GJ": gj, "tension_only": False},
+        "supports": {"fixed": [0, 8, 16]},
+    }
+
+
+def test_a_ring_closed_with_a_twist_carries_gj_tw_over_its_length(tmp_path):
+    """A closed cable's twist (Michell's ring, below its critical twist): the circle is
+    an equilibrium and its twisting moment GJ Tw / (2 pi R) on every edge."""
+    done = _invoke(tmp_path, _ring_case(twist=6.0))
+    assert done.exit_code == 0, done.output
+    with h5py.File(tmp_path / "r.h5") as f:
+        moment = f["result/twisting_moment"][:]
+    length = 24 * 2.0 * math.sin(math.pi / 24)  # the polygon's
+    assert moment == pytest.approx(np.full(24, 0.8 * 6.0 / length), rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (_ring_case(twist=1.0, closed=False), "geometry.cable[0].twist = 1.0: the cable is no "
+         "twisting ring"),
+        (_ring_case(twist=1.0, gj=0.0), "geometry.cable[0].twist = 1.0: the cable is no "
+         "twisting ring"),
+    ],
+)  # fmt: skip
+def test_a_twist_on_a_cable_that_is_no_ring_is_refused(tmp_path, data, message):
+    done = _invoke(tmp_path, data)
+    assert done.exit_code == 2, done.output
+    assert message in done.output and "Traceback" not in done.output, done.output

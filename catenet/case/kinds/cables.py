@@ -212,6 +212,14 @@ class CableConfig(Declared):
         shown="[material]",
         doc="[material] keys that differ for this cable (E, radius, area, EA, density, ...)",
     )
+    twist: float | None = real(
+        None,
+        write="given",
+        shown="none",
+        unit="rad",
+        doc="a closed cable of a twisting rod (GJ > 0, a ring): the twist it was closed with, "
+        "the turn of one end against the other where they were joined",
+    )
 
 
 # --------------------------------------------------------------------------- checks
