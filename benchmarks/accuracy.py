@@ -29,7 +29,7 @@ import tomllib
 from benchmarks.common import Study, no_progress, set_threads, write_csv
 
 NAME = "accuracy"
-TITLE = "Dynamic runs at default settings against fixed steps (a drop, a safety net)"
+TITLE = "Dynamic runs at default settings against fixed steps (a drop, three drop tests)"
 
 HERE = Path(__file__).resolve().parent
 # scene: (case, fixed steps, the reference's step: the finest, the answers' reference)
