@@ -216,21 +216,27 @@ class MaterialConfig(Declared):
         return None
 
     @property
+    def second_moment(self) -> float | None:
+        """I = pi (r^4 - ri^4) / 4 [m^4] of the round (or tube) section; None without a
+        radius. Its polar moment J is 2 I."""
+        if self.radius is None:
+            return None
+        return math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 4.0
+
+    @property
     def bending_stiffness(self) -> float:
-        """EI [N m^2]: as given, or from E and the round (or tube) section; 0: no bending."""
+        """EI [N m^2]: as given, or E I of the round (or tube) section; 0: no bending."""
         if self.EI == "section":
-            if self.E is None or self.radius is None:
-                return 0.0  # refused by parse_material
-            return self.E * math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 4.0
+            inertia = self.second_moment
+            return 0.0 if self.E is None or inertia is None else self.E * inertia  # else refused
         return float(self.EI)
 
     @property
     def torsional_stiffness(self) -> float:
-        """GJ [N m^2]: as given, or from G and the round (or tube) section; 0: no twist."""
+        """GJ [N m^2]: as given, or G J = 2 G I of the round (or tube) section; 0: no twist."""
         if self.GJ == "section":
-            if self.G is None or self.radius is None:
-                return 0.0  # refused by parse_material
-            return self.G * math.pi * (self.radius**4 - (self.inner_radius or 0.0) ** 4) / 2.0
+            inertia = self.second_moment
+            return 0.0 if self.G is None or inertia is None else 2.0 * self.G * inertia
         return float(self.GJ)
 
     @property
