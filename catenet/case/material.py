@@ -137,6 +137,15 @@ class MaterialConfig(Declared):
         doc="solver.edge_contact: every edge is a capsule of this radius where it meets "
         "obstacles, balls and free bodies (the [material] table's, for every cable)",
     )
+    axial_damping: float = real(
+        0.0,
+        ge=0,
+        write="changed",
+        unit="N s",
+        doc="dynamic runs: internal axial damping c, a tension c de/dt in parallel with the "
+        "stretch (MoorDyn's BA): it damps the axial waves along the cable, not its motion "
+        "as a whole (docs/howto/dynamic-runs.md)",
+    )
     tension_only: bool = boolean(True, doc="cables go slack in compression")
     law: str = choice(
         "linear", tuple(LAWS), write="changed", doc="material law (see catenet validate)"

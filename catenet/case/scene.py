@@ -15,7 +15,7 @@ import numpy as np
 from catenet.case.coarse import coarse_case
 from catenet.case.design import edge_design
 from catenet.case.guard import guard_material, guard_scales
-from catenet.case.keys import show
+from catenet.case.keys import Checker, show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
 from catenet.case.masses import point_masses
@@ -33,6 +33,7 @@ from catenet.model.net import Loads, Net
 from catenet.scene.scene import Scene
 
 if TYPE_CHECKING:  # the strands' kernels load only for a case with self-contact
+    from catenet.terms.base import Term
     from catenet.terms.strands import SelfContact
 
 
@@ -111,7 +112,30 @@ def _build(case: Case) -> Scene:
         from catenet.case.water import water_terms
 
         scene = scene.with_terms(*water_terms(case, scene))
+    damping = axial_damping(case, scene)
+    if damping is not None:
+        scene = scene.with_terms(damping)
     return scene
+
+
+def axial_damping(case: Case, scene: Scene) -> Term | None:
+    """The cables' internal axial damping (``material.axial_damping``, each cable's
+    own) in a dynamic run, or None (none given, or a static run: nothing moves)."""
+    from catenet.case.kinds.cables import cable_materials
+    from catenet.case.kinds.graph import GraphConfig
+    from catenet.terms.axial import AxialDamping
+
+    if case.solver.method != "dynamic":
+        return None
+    net = scene.net
+    c = np.full(net.n_edges, case.material.axial_damping)
+    listed = case.geometry.cables if isinstance(case.geometry, GraphConfig) else ()
+    if scene.cables is not None and listed:
+        mats = cable_materials(Checker(), case.material, listed)
+        own = np.array([m.axial_damping for m in mats])
+        on = scene.cables.edge >= 0
+        c[on] = own[scene.cables.edge[on]]
+    return AxialDamping(net, c) if np.any(c > 0.0) else None
 
 
 def _edge_radius(case: Case) -> float | None:

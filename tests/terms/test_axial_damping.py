@@ -1,0 +1,122 @@
+"""Internal axial damping (``catenet.terms.axial``, ``material.axial_damping``): its
+exact derivatives, the closed form of a damped axial oscillator (the logarithmic
+decrement of a mass on a cable with a dashpot in parallel), the energy balance booking
+its losses, a static equilibrium it does not change, and the key in a case."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from catenet.case import build, parse_case
+from catenet.model.builders import Material, cable
+from catenet.model.net import Loads, Net
+from catenet.scene import Scene
+from catenet.solver.path import Start, solve
+from catenet.terms import check_derivatives
+from catenet.terms.axial import AxialDamping
+
+
+def test_derivatives_against_finite_differences():
+    rng = np.random.default_rng(3)
+    nodes = rng.standard_normal((6, 3))
+    net = Net.from_arrays(nodes, [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [1, 4]], EA=1e5, fixed=[0])
+    term = AxialDamping(net, rng.uniform(0.5, 2.0, net.n_edges))
+    term.begin_step(nodes, 0.2, 0.1)
+    term.set_motion(50.0, nodes + 0.1 * rng.standard_normal(nodes.shape), 0.0, nodes)
+    grad_err, hess_err = check_derivatives(term, nodes + 0.01 * rng.standard_normal(nodes.shape))
+    assert grad_err < 1e-7 and hess_err < 1e-7
+
+
+def oscillator(zeta: float, integrator: str = "bdf2", periods: float = 6.0, per: int = 400):
+    """A mass m on a bilateral bar (k = EA / l0) with a dashpot c / l0 = 2 zeta sqrt(k m),
+    pulled 1 mm along the bar and let go: the mass's displacement over time."""
+    ea, l0, m = 1e6, 1.0, 10.0
+    k = ea / l0
+    c = 2.0 * zeta * math.sqrt(k * m) * l0
+    net = cable([0, 0, 0], [l0, 0, 0], 2, Material(EA=ea, line_density=2 * m / l0))
+    net = net.replace(fixed=np.array([True, False]), tension_only=np.array([False]))
+    scene = Scene.of(net, Loads()).with_terms(AxialDamping(net, np.array([c])))
+    x0 = net.nodes.copy()
+    x0[1, 0] += 1e-3
+    omega = math.sqrt(k / m)
+    period = 2 * math.pi / omega
+    rows = []
+    r = solve(
+        scene,
+        method="dynamic",
+        dt=period / per,
+        t_end=periods * period,
+        damping=0.0,
+        integrator=integrator,
+        start=Start(x=x0),
+        on_step=lambda s: rows.append((s.time, s.x[1, 0] - l0, s.energy.copy())) and False,
+    )
+    return r, rows, period
+
+
+def test_a_damped_oscillator_decays_at_its_logarithmic_decrement():
+    """Successive maxima of the displacement fall by exp(-2 pi zeta / sqrt(1 - zeta^2))
+    (bdf2 at 400 steps a period: its own damping is below 1e-5 of critical)."""
+    zeta = 0.05
+    _, rows, _ = oscillator(zeta)
+    t, u = np.array([(a, b) for a, b, _ in rows]).T
+    top = np.flatnonzero((u[1:-1] > u[:-2]) & (u[1:-1] >= u[2:])) + 1
+    peaks = u[top]
+    assert len(peaks) >= 5
+    decrement = float(np.mean(np.log(peaks[:-1] / peaks[1:])))
+    assert decrement == pytest.approx(2 * math.pi * zeta / math.sqrt(1 - zeta**2), rel=5e-3)
+
+
+def test_its_losses_close_the_energy_balance():
+    """The energy the oscillator loses is what the dashpot dissipated: the balance's
+    remainder is a loss (implicit Euler's own) or a small share of the start's energy
+    (bdf2)."""
+    for integrator in ("bdf2", "implicit_euler"):
+        _, rows, _ = oscillator(0.05, integrator, periods=3.0, per=200)
+        k, u, c, work, lost, left = rows[-1][2]
+        start = 0.5 * 1e6 * 1e-6  # 1/2 k u0^2
+        assert lost > 0.5 * start and work == 0.0
+        assert left < 1e-3 * start, (integrator, rows[-1][2])
+        if integrator == "bdf2":  # its own loss: (omega h)^3 / 4 of critical, and the
+            assert abs(left) < 3e-3 * start  # mean rule's error on the dashpot's work
+
+
+def test_a_static_equilibrium_is_the_same_with_it():
+    """A static step sees no damping (nothing moves): a hanging cable's equilibrium is the
+    same, bit for bit."""
+    net = cable([0, 0, 0], [10, 0, 0], 11, Material(EA=1e6, line_density=1.0), length=10.5)
+    loads = Loads(gravity=np.array([0.0, 0.0, -9.81]))
+    plain = solve(Scene.of(net, loads))
+    damped = solve(Scene.of(net, loads).with_terms(AxialDamping(net, np.full(10, 1e3))))
+    assert np.array_equal(plain.x, damped.x)
+
+
+CASE = {
+    "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [10, 0, 0], "nodes": 11},
+    "material": {"EA": 1e6, "density": 7850.0, "area": 1e-4, "axial_damping": 2e3},
+    "load": {"gravity": [0.0, 0.0, -9.81]},
+    "solver": {"method": "dynamic", "dt": 0.01, "t_end": 0.1},
+}
+
+
+def test_the_key_puts_the_dashpots_on_its_edges_and_bad_values_exit_2(tmp_path):
+    from click.testing import CliRunner
+
+    from catenet.case import dumps_toml
+    from catenet.cli import main
+
+    scene = build(parse_case(CASE))
+    (term,) = [t for t in scene.terms if isinstance(t, AxialDamping)]
+    assert np.allclose(term.rate * scene.net.rest_length, 2e3)
+    static = {**CASE, "solver": {"method": "static"}}
+    assert not any(isinstance(t, AxialDamping) for t in build(parse_case(static)).terms)
+    for bad in (-1.0, "a lot"):
+        case = {**CASE, "material": {**CASE["material"], "axial_damping": bad}}
+        path = tmp_path / "bad.toml"
+        path.write_text(dumps_toml(case))
+        r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+        assert r.exit_code == 2 and "material.axial_damping" in r.output, r.output
+        assert "Traceback" not in r.output
