@@ -22,7 +22,9 @@ from catenet.terms.axial import AxialDamping
 def test_derivatives_against_finite_differences():
     rng = np.random.default_rng(3)
     nodes = rng.standard_normal((6, 3))
-    net = Net.from_arrays(nodes, [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [1, 4]], EA=1e5, fixed=[0])
+    net = Net.from_arrays(
+        nodes, [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [1, 4]], EA=1e5, fixed=[0]
+    )
     term = AxialDamping(net, rng.uniform(0.5, 2.0, net.n_edges))
     term.begin_step(nodes, 0.2, 0.1)
     term.set_motion(50.0, nodes + 0.1 * rng.standard_normal(nodes.shape), 0.0, nodes)
