@@ -12,8 +12,9 @@ strands, a free body's rigidity); W the work of the applied forces, sum over ste
 move), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} - Phi_n)
 (``driven`` terms); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
 with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
-the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), and against
-friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force).
+the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), against
+friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force), and against the
+cables' axial dashpots (``catenet.terms.axial``, their ``losses``).
 
 In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
 drag's work against the motion relative to the water, -F_d . (dx - h U), and W the

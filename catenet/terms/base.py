@@ -37,7 +37,8 @@ Optional capabilities, declared so that solvers ask no term what it has:
   drag) that a static run's load factor scales as it scales the applied loads; one that
   ``weighs`` (buoyancy, with ``unit_energy``) follows gravity's history as well.
 - ``medium`` (with ``begin_run``, ``set_motion``, ``kinetic`` and ``losses``): a term of
-  the step's velocity (water's drag and added mass, ``catenet.terms.water``): the
+  the step's velocity (water's drag and added mass, ``catenet.terms.water``; the cables'
+  axial damping, ``catenet.terms.axial``): the
   stepper gives it the scheme's velocity and acceleration maps every step, the energy
   balance its kinetic energy and losses.
 - ``driven`` (with ``begin_run``, ``driven_work(x_old, x_new)`` and ``settle_time()``): a
@@ -107,7 +108,7 @@ class Term:
     loadlike = False  # has set_factor(factor): a static run's load factor scales it
     weighs = False  # loadlike and a weight (buoyancy): gravity's history scales it too
     factor = 1.0  # (loadlike terms) the factor set_factor gave
-    medium = False  # has begin_run, set_motion, kinetic, losses (catenet.terms.water)
+    medium = False  # has begin_run, set_motion, kinetic, losses (water, axial damping)
     driven = False  # has begin_run, driven_work (catenet.terms.twist)
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
