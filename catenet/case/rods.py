@@ -80,14 +80,20 @@ def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, ...]:
 def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | None:
     """The rods of a built case (None: nothing bends and nothing is clamped)."""
     ei, _, given, line = _per_edge(case, built, net)
+    springs = rotational_springs(case, built)
     if not (ei > 0.0).any():
         if clamped.size:
             raise ConfigError(
                 f"supports.clamped = {show(list(case.supports.clamped))}: no edge bends: "
                 "a clamp holds a rod's end: give material.EI > 0 (or a cable's)"
             )
+        if springs:
+            raise ConfigError(
+                "supports.rotational[0].nodes: no edge bends: a rotational spring holds a "
+                "rod's end: give material.EI > 0 (or a cable's)"
+            )
         return None
-    rods = build_rods(net, ei, line, natural=given, clamped=clamped)
+    rods = build_rods(net, ei, line, natural=given, clamped=clamped, springs=springs)
     if not len(rods):
         warn_once(
             "material.EI > 0, but no two bending edges of one cable meet and nothing is "
@@ -95,6 +101,21 @@ def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | N
             "not its geometry.edges; a cable of one edge bends only where clamped)"
         )
     return rods
+
+
+def rotational_springs(case: Case, built: Any) -> dict[int, float]:
+    """Node -> the stiffness [N m/rad] of its rotational spring (``supports.rotational``);
+    a ConfigError for a node on two."""
+    out: dict[int, float] = {}
+    for k, r in enumerate(case.supports.rotationals):
+        for node in [i for ref in r.nodes for i in expand(ref, built.names, built.sets or {})]:
+            if node in out:
+                raise ConfigError(
+                    f"supports.rotational[{k}].nodes: node {node} is on a rotational spring "
+                    "already: one spring per rod end"
+                )
+            out[node] = float(r.stiffness)
+    return out
 
 
 def bending_term(rods: Rods, n_nodes: int) -> Bending:
@@ -122,8 +143,9 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
     from catenet.model.twist import build_twists, check_twist_ends
     from catenet.terms.twist import Twist
 
-    twists = build_twists(net, gj, line, rods.clamps, rods.tangent)
-    clamped = set(rods.clamps[:, 0].tolist())
+    rigid = rods.rigid  # a rotational spring holds no twist: the rod untwists there
+    twists = build_twists(net, gj, line, rods.clamps[rigid], rods.tangent[rigid])
+    clamped = set(rods.clamps[rigid, 0].tolist())
     imposed = []
     seen: dict[int, str] = {}
     for k, t in enumerate(twisted):

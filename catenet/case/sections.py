@@ -34,6 +34,7 @@ from catenet.case.material import EDGE_CONTACT, MaterialConfig, parse_material  
 from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
 from catenet.case.supports import (
     RollerConfig,
+    RotationalConfig,
     SliderConfig,
     SpringConfig,
     TwistConfig,
@@ -120,6 +121,11 @@ class SupportsConfig(Declared):
     )
     twists: tuple[TwistConfig, ...] = tables(
         TwistConfig, name="twist", doc="clamped rod ends turned about the rod's axis (GJ > 0)"
+    )
+    rotationals: tuple[RotationalConfig, ...] = tables(
+        RotationalConfig,
+        name="rotational",
+        doc="rod ends held elastically in their direction: a rotational spring (EI > 0)",
     )
 
     @property

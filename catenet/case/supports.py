@@ -148,6 +148,21 @@ class SpringConfig(Declared):
 
 
 @dataclass(frozen=True)
+class RotationalConfig(Declared):
+    """Rod ends whose tangent a rotational spring holds toward its given direction: the
+    moment k sin(theta) for a turn theta (k theta while it is small); the node's position
+    and the rod's twist are held by whatever else holds them."""
+
+    nodes: tuple[NodeRef, ...] = _guide_nodes("on rotational springs (each the end of a rod)")
+    stiffness: float = real(
+        gt=0,
+        missing="[N m/rad]: the spring's moment per turn of the rod end",
+        unit="N m/rad",
+        doc="the moment per radian of the end tangent's turn from its given direction",
+    )
+
+
+@dataclass(frozen=True)
 class TwistConfig(Declared):
     """Clamped rod ends turned about the rod's axis: each by ``angle``, right-handed about
     the tangent pointing out of the rod at that end (``catenet.model.twist``)."""

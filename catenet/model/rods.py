@@ -33,6 +33,9 @@ class Rods:
     clamps : (C, 2) int64, the clamped node c and the other node o of its end edge
     tangent : (C, 3) the held unit tangent (from c to o, in the given geometry)
     clamp_EI : (C,) the end edge's EI [N m^2]; clamp_length : (C,) its rest length [m]
+    spring : (C,) a rotational spring's stiffness k [N m/rad] where the clamp is elastic
+        (``supports.rotational``: the moment k theta for the end's turn theta from its given
+        direction, while theta is small), NaN where it is rigid (``kc``)
     """
 
     hinges: np.ndarray
@@ -43,6 +46,7 @@ class Rods:
     tangent: np.ndarray
     clamp_EI: np.ndarray
     clamp_length: np.ndarray
+    spring: np.ndarray | None = None
 
     @property
     def k(self) -> np.ndarray:
@@ -51,8 +55,24 @@ class Rods:
 
     @property
     def kc(self) -> np.ndarray:
-        """Each clamp's kc = EI / l [N m]."""
-        return self.clamp_EI / self.clamp_length
+        """Each clamp's kc [N m] in kc |t - t0|^2 (about kc theta^2 for the end edge's turn
+        theta): EI / l where it is rigid (the end edge bent against its mirror image over
+        l: compliance l / (2 EI) per moment); a rotational spring k in series with that,
+        kc = 1 / (2 (1 / k + l / (2 EI))), so that the end edge turns by M / k at the
+        support plus its own bending, and the foot's turn is M / k to O(l^2)."""
+        rigid = self.clamp_EI / self.clamp_length
+        if self.spring is None:
+            return rigid
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sprung = 0.5 / (1.0 / self.spring + 0.5 / rigid)
+        return np.where(np.isnan(self.spring), rigid, sprung)
+
+    @property
+    def rigid(self) -> np.ndarray:
+        """(C,) bool: each clamp rigid (not a rotational spring): it holds the twist too."""
+        if self.spring is None:
+            return np.ones(len(self.clamps), dtype=bool)
+        return np.isnan(self.spring)
 
     def __len__(self) -> int:
         return len(self.hinges) + len(self.clamps)
@@ -85,10 +105,13 @@ def build_rods(
     natural: np.ndarray | None = None,
     clamped: np.ndarray | None = None,
     clamp_key: str = "supports.clamped",
+    springs: dict[int, float] | None = None,
+    spring_key: str = "supports.rotational",
 ) -> Rods:
     """The rods of ``net``: EI (M,) per edge [N m^2] (0: no bending), ``line`` (M,) the
     line of every edge (-1: none), ``natural`` (M,) bool: the edge's rod is naturally
-    curved as given (default straight), ``clamped`` node indices (each a rod end)."""
+    curved as given (default straight), ``clamped`` node indices (each a rod end),
+    ``springs`` node -> a rotational spring's stiffness [N m/rad] (each a rod end)."""
     EI = np.asarray(EI, dtype=np.float64)
     bends = EI > 0.0
     pairs = rod_hinges(net.edges, np.asarray(line), bends)
@@ -105,6 +128,23 @@ def build_rods(
         t2 /= np.linalg.norm(t2, axis=1)[:, None]
         s0 = np.where(curved[a], np.linalg.norm(t2 - t1, axis=1), 0.0)
     clamps, tangent, c_ei, c_len = _clamps(net, EI, hinges, clamped, clamp_key)
+    spring = None
+    if springs:
+        both = sorted(set(springs) & set(clamps[:, 0].tolist()))
+        if both:
+            raise ConfigError(
+                f"{spring_key}: node {both[0]} is in supports.clamped too: a rod end is "
+                "clamped (rigidly) or on a rotational spring, not both"
+            )
+        nodes = np.asarray(list(springs), dtype=np.int64)
+        more = _clamps(net, EI, hinges, nodes, spring_key)
+        clamps, tangent, c_ei, c_len = (
+            np.ascontiguousarray(np.concatenate([a, b]))
+            for a, b in zip((clamps, tangent, c_ei, c_len), more, strict=True)
+        )
+        spring = np.concatenate(
+            [np.full(len(clamps) - len(nodes), np.nan), [springs[int(n)] for n in nodes]]
+        )
     return Rods(
         hinges=hinges,
         EI=np.ascontiguousarray(0.5 * (EI[a] + EI[b])),
@@ -114,6 +154,7 @@ def build_rods(
         tangent=tangent,
         clamp_EI=c_ei,
         clamp_length=c_len,
+        spring=spring,
     )
 
 
@@ -176,6 +217,6 @@ def bending_moment(rods: Rods, x: np.ndarray, n_nodes: int) -> tuple[np.ndarray,
     np.maximum.at(moment, j, rods.EI * np.abs(s - rods.s0) / rods.voronoi)
     np.maximum.at(kappa, j, s / rods.voronoi)
     c = rods.clamps[:, 0]
-    np.maximum.at(moment, c, 2.0 * rods.clamp_EI * d / rods.clamp_length)
+    np.maximum.at(moment, c, 2.0 * rods.kc * d)
     np.maximum.at(kappa, c, 2.0 * d / rods.clamp_length)
     return moment, kappa
