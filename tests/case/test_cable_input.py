@@ -279,7 +279,7 @@ BAD = [
         "geometry.cable.0.colour",
         "red",
         "geometry.cable[0].colour: unknown key (accepted: name, nodes, edge_length, "
-        "prestress, rest_length, material)",
+        "prestress, rest_length, material, twist)",
     ),
     (
         "geometry.prestrain",
