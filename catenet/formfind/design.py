@@ -76,8 +76,10 @@ class _Search:
         m = shape.net.n_edges
         self.p = sp.csr_matrix((np.ones(m), (np.arange(m), groups)), shape=(m, n_var))
         self.key: bytes | None = None
+        self.groups = groups
         self.gradients = 0
         self.best: tuple | None = None
+        self.layout = None  # the damped step's pattern and solver, kept between states
 
     def state(self, s: np.ndarray):
         """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``
@@ -118,7 +120,9 @@ class _Search:
         dq_ds = sp.diags(q) @ self.p
         if min(d_x.shape[0], dq_ds.shape[1]) <= DENSE:
             return jacobian_dense(adj, d_x, d_q, dq_ds)
-        return jacobian_operator(adj, d_x, d_q, dq_ds)
+        op = jacobian_operator(adj, d_x, d_q, dq_ds, self.groups, self.layout)
+        self.layout = op.layout
+        return op
 
 
 def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) -> Design:
