@@ -22,7 +22,7 @@ did. Nothing is differenced and nothing more is factorised.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -72,9 +72,10 @@ class Adjoint:
             self.gx = sp.csr_matrix((gx_coo[0], (gx_coo[1], gx_coo[2])), shape=(n3, n3))
         self.bg_coo = (np.concatenate(vals), np.concatenate(rows), np.concatenate(cols))
         self.gx_coo = gx_coo
-        v, r, c = self.bg_coo
-        self.bg: sp.csr_matrix = sp.csr_matrix((v, (r, c)), shape=(n3, net.n_edges))
-        self._lu = None  # SuperLU of A: only where the fixed point fails
+        self.bg: sp.csr_matrix = sp.csr_matrix(
+            (self.bg_coo[0], (self.bg_coo[1], self.bg_coo[2])), shape=(n3, net.n_edges)
+        )
+        self._lu: Any = None  # SuperLU of A: only where the fixed point fails
 
     def a_coo(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A = I_3 (x) D - G_x as COO (values, rows, columns), always in the same order
@@ -128,7 +129,7 @@ class Adjoint:
                 self._lu = splu(a)
             except RuntimeError:
                 raise SingularSystemError("form finding: the adjoint system is singular") from None
-        out = self._lu.solve(w, trans="T" if trans else "N")
+        out: np.ndarray = self._lu.solve(w, trans="T" if trans else "N")
         if not np.all(np.isfinite(out)):
             raise SingularSystemError("form finding: the adjoint solve is not finite")
         return out

@@ -27,6 +27,7 @@ per search; each step only refills the values. A variable held at a bound keeps 
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 import numpy as np
 
@@ -136,7 +137,7 @@ class Layout:
         if shape.backend == "pardiso":
             from catenet.solver.linear import make_solver
 
-            solver = make_solver(
+            solver: Any = make_solver(
                 "pardiso", self.indptr, self.indices, upper=True, dof_node=dof_node, mtype=-2
             )
             solver.iparm[10] = 1  # scaling and weighted matching: a saddle point
