@@ -27,6 +27,7 @@ per search; each step only refills the values. A variable held at a bound keeps 
 from __future__ import annotations
 
 import logging
+import time
 from typing import Any
 
 import numpy as np
@@ -146,6 +147,8 @@ class Layout:
             self.solver = solver
         self._row = np.repeat(np.arange(n), np.diff(self.indptr)).astype(np.int32)
         self.factorizations = 0
+        self.fallbacks = 0  # steps SuperLU solved
+        self.seconds = 0.0  # in the steps' solves
 
     @staticmethod
     def _key(adj, d_x, d_q, groups) -> tuple:
@@ -192,7 +195,9 @@ class Layout:
         rhs[:nv] = -np.bincount(self.rq_var, rq * r[self.rq_row], nv)
         rhs[nv : nv + n3] = -(d_x.T @ r)
         self.factorizations += 1
+        start = time.perf_counter()
         sol = self._solve(data, rhs)
+        self.seconds += time.perf_counter() - start
         p = sol[:nv] * k
         if not np.all(np.isfinite(p)):
             raise SingularSystemError("the damped step is not finite")
@@ -212,6 +217,7 @@ class Layout:
             except SingularSystemError as exc:
                 log.debug("form finding: PARDISO on the damped step failed (%s)", exc)
             log.debug("form finding: the damped step by SuperLU")
+        self.fallbacks += 1
         return self._superlu(data, rhs)
 
     def _superlu(self, data: np.ndarray, rhs: np.ndarray) -> np.ndarray:

@@ -167,6 +167,14 @@ def test_the_guys_prestress_that_holds_the_mast_top_upright_under_its_load(tmp_p
     r, out = invoke(tmp_path, data)
     assert r.exit_code == 0, r.output
     assert "4 prestresses (one per cable): " in r.output and "met)" in r.output
+    with h5py.File(out) as h5:
+        g = h5["result/targets"].attrs
+        assert g["found_kind"] == "prestress" and list(g["names"])[0] == "guy_windward"
+        assert len(g["found"]) == 4
+        t = h5["result/targets/1"].attrs
+        assert t["kind"] == "reaction_z" and list(t["nodes"]) == [0] and bool(t["met"])
+        assert abs(float(t["achieved"][0]) - 9.0e4) <= 1e-6 * 9.0e4
+    assert "4 prestresses by cable" in out.with_suffix(".toml").read_text()
     f = formfind_scene(build(parse_case(data)))
     d = f.design
     assert d.all_met and d.variables == 4 and d.extra["names"][0] == "guy_windward"
