@@ -108,6 +108,7 @@ def main(out_dir: Path, quick: bool) -> None:
     from benchmarks.common import set_threads
 
     set_threads(1)
+    roof_row(4)  # (warm: Numba's caches, MKL, the imports)
     rows = []
     for n in QUICK_SIZES if quick else SIZES:
         rows.append(roof_row(n))

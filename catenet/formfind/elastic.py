@@ -219,8 +219,26 @@ def formfind_elastic(
     eq = _Equilibria(scene, settings, variables)
     s, message, gradients = _search(eq, goals, max_iter)
     found = _found(eq, goals, s, message, gradients, vary)
+    unmet = goals.hard & ~found.design.met
+    if unmet.any():  # (no second search here: the weights decide, hard ones must hold)
+        from catenet.formfind.design import _unmet_message
+
+        k = int(goals.of[np.argmax(unmet)])
+        raise ConfigError(
+            _unmet_message(found.design, k).replace(
+                "formfind.force_density_min/max", _bounds_named(vary)
+            )
+        )
     found.wall_time = time.perf_counter() - start
     return found
+
+
+def _bounds_named(vary: str) -> str:
+    return (
+        "formfind.prestress_min/max"
+        if vary == "prestress"
+        else ("formfind.rest_length_factor_min/max")
+    )
 
 
 class _Met(Exception):

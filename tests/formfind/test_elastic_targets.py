@@ -227,6 +227,11 @@ def test_bounds_hold_the_prestress_and_the_rest_length_factors():
         ),
         ({"node": "top", "x": 0.0}, {"prestress_min": 5.0}, "formfind.prestress_min = 5.0: bounds"),
         (
+            {"node": "top", "x": 0.0, "hard": True},
+            {"vary": "prestress", "prestress_min": 19e3, "prestress_max": 21e3},
+            "hard = true): cannot be met to formfind.tol",
+        ),
+        (
             {"node": "top", "x": 0.0},
             {"vary": "prestress", "rest_length_factor_max": 2.0},
             "formfind.rest_length_factor_max = 2.0: bounds rest-length factors",
