@@ -8,7 +8,7 @@ vertical distance of it) or a cable's tension
 (``cable`` with ``tension``: every edge of the cable, or of each cable a pattern matches;
 a number, or a range ``[low, high]``), or a support's reaction (``support``, a fixed node
 or a set of them, with ``reaction = [Rx, Ry, Rz]`` or any of ``reaction_x``, ``reaction_y``,
-``reaction_z``: the force the support exerts on the net; method "elastic"). Each weighs
+``reaction_z``: the force the support exerts on the net). Each weighs
 in the least squares with ``weight``; ``hard = true`` makes it a bound that must be met.
 The nodes and cables are resolved on
 the built net (``catenet.formfind.goals``), where a fixed node is refused.
@@ -153,8 +153,7 @@ class TargetConfig(Declared):
     support: Any = _node_key(
         None,
         write="given",
-        doc="the fixed node (index, name or node set) whose reaction is asked "
-        '(formfind.method = "elastic")',
+        doc="the fixed node (index, name or node set) whose reaction is asked",
     )
     reaction: Any = key(
         lambda ck, v, path, ctx: ck.vec3(v, path),

@@ -214,7 +214,7 @@ def formfind_elastic(
         )
     settings = dataclasses.replace(Settings.of(scene.case.solver), method="static", steps=1)
     size = float(np.linalg.norm(np.ptp(scene.net.nodes, axis=0))) or 1.0
-    goals = resolve_goals(targets, scene, size, tol, reactions=True)
+    goals = resolve_goals(targets, scene, size, tol)
     variables = Variables(scene, vary, bounds, prefix)
     eq = _Equilibria(scene, settings, variables)
     s, message, gradients = _search(eq, goals, max_iter)

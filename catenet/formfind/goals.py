@@ -4,8 +4,8 @@ derivatives.
 Each ``[[target]]`` becomes rows of one vector: a node's coordinate (a row per node and
 axis: the value a = x_i,c), an edge's tension (a row per edge of the cable: a = q_e L_e,
 the force density method's tension; N = q L with q = N / L in the elastic equilibrium)
-or a support's reaction (a row per fixed node and component, method "elastic" only:
-its partial derivatives are ``catenet.formfind.elastic``'s). A row asks a in [lo, hi]
+or a support's reaction (a row per fixed node and component: its partial derivatives
+are ``catenet.formfind.reactions``' and ``catenet.formfind.elastic``'s). A row asks a in [lo, hi]
 (lo = hi: a value); its miss is m = a - clip(a, lo, hi) and its residual r = w m / s,
 with the target's weight w and its scale s (the net's size for positions, the target
 tension for tensions, the largest component asked for a reaction), so that positions
@@ -174,15 +174,15 @@ class _Rows:
         cols["reacts"].append(np.full(n, reacts))
 
 
-def resolve_goals(targets, scene, size: float, tol: float, reactions: bool = False) -> Goals:
+def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
     """The targets of a case on its built ``scene``; ``size`` scales the positions.
     ConfigError (key path, value) for an unknown node, set or cable, a fixed node, or
-    values that do not match the nodes; a support's reaction unless ``reactions``."""
+    values that do not match the nodes, a support target on a free node."""
     rows = _Rows()
     surfaces: list = []
     for k, t in enumerate(targets):
         if t.support is not None:
-            _support_rows(rows, k, t, scene, reactions)
+            _support_rows(rows, k, t, scene)
             continue
         if t.cable is not None:
             edges = _cable_edges(k, t, scene)
@@ -221,15 +221,10 @@ def resolve_goals(targets, scene, size: float, tol: float, reactions: bool = Fal
     )
 
 
-def _support_rows(rows: _Rows, k: int, t, scene, reactions: bool) -> None:
+def _support_rows(rows: _Rows, k: int, t, scene) -> None:
     """A support's reaction: a row per fixed node and component, scaled by the largest
     component asked (or, all 0, the net's total load)."""
     path = f"target[{k}].support"
-    if not reactions:
-        raise ConfigError(
-            f"{path} = {show(t.support)}: a support's reaction is a target of "
-            "formfind.method = 'elastic' only"
-        )
     net = scene.net
     nodes = _node_set(path, t.support, scene)
     free = nodes[~net.fixed[nodes]]
