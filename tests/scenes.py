@@ -479,3 +479,54 @@ def random_graph(
     return eq_row(
         "static = dynamic" if dynamic else "equilibrium", diff, 1e-5, results, net, loads, note=note
     )
+
+
+def hypar_on_surface(folder, n: int, half=12.0, rise=1.5):
+    """Form finding's hypar roof (a case dict with one [[target]]: every free node on a
+    surface) and the surface z = f(x, y): an n x n grid net on [-half, half]^2 held on
+    z = rise (x^2 - y^2) / half^2 along its border, under self-weight, 2 n (n - 1) force
+    densities; the surface as ``folder``/surface.obj, 2n x 2n squares of two triangles
+    each. Its free nodes start flat (tests/formfind, benchmarks/targets.py)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    def f(x, y):
+        return rise * (x * x - y * y) / half**2
+
+    s = np.linspace(-half, half, n + 1)
+    gx, gy = np.meshgrid(s, s)
+    border = (np.abs(gx) == half) | (np.abs(gy) == half)
+    nodes = np.column_stack([gx.ravel(), gy.ravel(), np.where(border, f(gx, gy), 0.0).ravel()])
+    k = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    edges = np.vstack(
+        [
+            np.column_stack([k[1:-1, :-1].ravel(), k[1:-1, 1:].ravel()]),
+            np.column_stack([k[:-1, 1:-1].ravel(), k[1:, 1:-1].ravel()]),
+        ]
+    )
+    m = 2 * n
+    t = np.linspace(-half, half, m + 1)
+    vx, vy = np.meshgrid(t, t)
+    lines = [
+        f"v {x!r} {y!r} {f(x, y)!r}"
+        for x, y in zip(vx.ravel().tolist(), vy.ravel().tolist(), strict=True)
+    ]
+    a = (np.arange(m)[None, :] + (m + 1) * np.arange(m)[:, None]).ravel() + 1
+    for i in a:
+        lines += [f"f {i} {i + 1} {i + m + 2}", f"f {i} {i + m + 2} {i + m + 1}"]
+    (Path(folder) / "surface.obj").write_text("\n".join(lines) + "\n")
+    data = {
+        "title": "hypar roof on a surface",
+        "geometry": {
+            "kind": "graph",
+            "nodes": nodes.tolist(),
+            "edges": edges.tolist(),
+            "fixed": np.flatnonzero(border.ravel()).tolist(),
+        },
+        "material": {"E": 160e9, "radius": 0.006, "density": 7850.0},
+        "load": {"gravity": [0, 0, -9.81]},
+        "formfind": {"force_density": 1e4},
+        "target": [{"surface": "surface.obj"}],
+    }
+    return data, f

@@ -32,8 +32,17 @@ from catenet.case.keys import (
 
 FORMFIND_METHODS = ("linear", "forces", "lengths", "elastic")
 
-#: What the targets ([[target]]) vary: a force density per edge, or one per cable.
-VARY = ("edges", "cables")
+#: What the targets ([[target]]) vary: a force density (elastic: a rest-length factor) per
+#: edge, or one per cable; elastic also the prestress of the cables that have one.
+VARY = ("edges", "cables", "prestress")
+
+#: The bounds of each kind of design variable: force densities, the elastic method's
+#: rest-length factors and prestress.
+BOUNDS = {
+    "force_density": ("force_density_min", "force_density_max"),
+    "rest_length_factor": ("rest_length_factor_min", "rest_length_factor_max"),
+    "prestress": ("prestress_min", "prestress_max"),
+}
 
 #: What each method needs besides the force densities: its target key.
 TARGETS = {"forces": "force", "lengths": "length"}
@@ -122,13 +131,26 @@ class FormfindConfig(Declared):
         write="given",
         shown='"edges" (elastic: "cables")',
         doc="[[target]]: the design variables: a force density (elastic: a rest-length "
-        "factor) per edge, or one per cable (and per own edge of a graph)",
+        "factor) per edge, or one per cable (and per own edge of a graph); elastic: "
+        '"prestress", the prestress of each cable that has one',
     )
     force_density_min: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="[[target]]: the least force density"
     )
     force_density_max: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="[[target]]: the largest force density"
+    )
+    rest_length_factor_min: float | None = real(
+        None, gt=0, write="given", doc="elastic: the least factor on the case's rest lengths"
+    )
+    rest_length_factor_max: float | None = real(
+        None, gt=0, write="given", doc="elastic: the largest factor on the case's rest lengths"
+    )
+    prestress_min: float | None = real(
+        None, gt=0, write="given", unit="N", doc='elastic, vary = "prestress": the least'
+    )
+    prestress_max: float | None = real(
+        None, gt=0, write="given", unit="N", doc='elastic, vary = "prestress": the largest'
     )
 
 
@@ -156,14 +178,9 @@ def parse_formfind(
             f"formfind.method = {method!r}: [[target]] varies the force densities itself: "
             "remove formfind.method (or the targets)"
         )
-    lo, hi = v["force_density_min"], v["force_density_max"]
-    if lo not in (None, BAD) and hi not in (None, BAD) and not lo < hi:
-        ck.add(
-            f"formfind.force_density_max = {show(hi)}: must be > formfind.force_density_min "
-            f"({show(lo)})"
-        )
+    _bounds(ck, f, v, method)
     if not targets:
-        for k in ("vary", "force_density_min", "force_density_max"):
+        for k in ("vary", *(b for pair in BOUNDS.values() for b in pair)):
             if k in f:
                 ck.add(f"formfind.{k} = {show(f[k])}: only with [[target]] tables (none given)")
     if method == "linear" and "force_density" not in f and not targets:
@@ -184,6 +201,35 @@ def parse_formfind(
     if BAD in v.values():
         return BAD
     return FormfindConfig(**v)
+
+
+def _bounds(ck: Checker, f: dict, v: dict, method: Any) -> None:
+    """Each pair of bounds in order, and only with the variables they bound."""
+    for low, high in BOUNDS.values():
+        lo, hi = v[low], v[high]
+        if lo not in (None, BAD) and hi not in (None, BAD) and not lo < hi:
+            ck.add(f"formfind.{high} = {show(hi)}: must be > formfind.{low} ({show(lo)})")
+    if method is BAD or v["vary"] is BAD:
+        return
+    elastic = method == "elastic"
+    if not elastic and v["vary"] == "prestress":
+        ck.add(
+            "formfind.vary = 'prestress': only with method = 'elastic' (the force density "
+            "method varies the force densities)"
+        )
+    varies = "force_density"
+    if elastic:
+        varies = "prestress" if v["vary"] == "prestress" else "rest_length_factor"
+    for kind, pair in BOUNDS.items():
+        for k in pair:
+            if k in f and kind != varies and not (kind == "force_density" and elastic):
+                what = {
+                    "force_density": "the force densities (method = 'linear' with [[target]])",
+                    "rest_length_factor": "rest-length factors (method = 'elastic', vary = "
+                    "'cables' or 'edges')",
+                    "prestress": "prestress (method = 'elastic', vary = 'prestress')",
+                }[kind]
+                ck.add(f"formfind.{k} = {show(f[k])}: bounds {what}: not varied here")
 
 
 def check_formfind_case(ck: Checker, data: Any) -> None:
@@ -230,4 +276,4 @@ def check_formfind_case(ck: Checker, data: Any) -> None:
         )
 
 
-__all__ = ["FORMFIND_METHODS", "FormfindConfig", "check_formfind_case", "parse_formfind"]
+__all__ = ["BOUNDS", "FORMFIND_METHODS", "FormfindConfig", "check_formfind_case", "parse_formfind"]

@@ -6,8 +6,11 @@ set: each of its nodes, the value one for all or one per node), a surface the no
 on (``surface``, a triangle mesh file taken as a height field, optionally ``within`` a
 vertical distance of it) or a cable's tension
 (``cable`` with ``tension``: every edge of the cable, or of each cable a pattern matches;
-a number, or a range ``[low, high]``). Each weighs in the least squares with ``weight``;
-``hard = true`` makes it a bound that must be met. The nodes and cables are resolved on
+a number, or a range ``[low, high]``), or a support's reaction (``support``, a fixed node
+or a set of them, with ``reaction = [Rx, Ry, Rz]`` or any of ``reaction_x``, ``reaction_y``,
+``reaction_z``: the force the support exerts on the net). Each weighs
+in the least squares with ``weight``; ``hard = true`` makes it a bound that must be met.
+The nodes and cables are resolved on
 the built net (``catenet.formfind.goals``), where a fixed node is refused.
 """
 
@@ -36,6 +39,9 @@ from catenet.case.keys import (
 
 #: The coordinates a node target may give.
 AXES = ("x", "y", "z")
+
+#: The reaction components a support target may give one by one.
+REACTIONS = ("reaction_x", "reaction_y", "reaction_z")
 
 
 def _coordinate(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
@@ -74,6 +80,18 @@ def _tension(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     if f is None or not (carried(f) and f > 0):
         return ck.bad(path, v, need)
     return f
+
+
+_node_key = node  # (the class's own field ``node`` shadows the declaration's name there)
+
+
+def _reaction(axis: str) -> Any:
+    return real(
+        None,
+        write="given",
+        unit="N",
+        doc=f"support: the {axis} component of the force it exerts on the net",
+    )
 
 
 def _coord(axis: str) -> Any:
@@ -132,13 +150,30 @@ class TargetConfig(Declared):
         unit="N",
         doc="cable: the tension of each of its edges (or the range it stays in)",
     )
+    support: Any = _node_key(
+        None,
+        write="given",
+        doc="the fixed node (index, name or node set) whose reaction is asked",
+    )
+    reaction: Any = key(
+        lambda ck, v, path, ctx: ck.vec3(v, path),
+        "[Rx, Ry, Rz]",
+        None,
+        write="given",
+        unit="N",
+        doc="support: the force it exerts on the net (as /result/reaction)",
+    )
+    reaction_x: float | None = _reaction("x")
+    reaction_y: float | None = _reaction("y")
+    reaction_z: float | None = _reaction("z")
     weight: float = real(1.0, gt=0, doc="its weight in the least squares (misses scaled first)")
     hard: bool = boolean(False, doc="a bound: the force densities must meet it (to formfind.tol)")
 
     @property
     def kind(self) -> str:
-        """'x', 'y', 'z', 'point', 'surface' or 'tension' (the first given)."""
-        for k in (*AXES, "point", "surface", "tension"):
+        """'x', 'y', 'z', 'point', 'surface', 'tension', 'reaction' or 'reaction_x' ...
+        (the first given)."""
+        for k in (*AXES, "point", "surface", "tension", "reaction", *REACTIONS):
             if getattr(self, k) is not None:
                 return k
         return ""
@@ -148,8 +183,28 @@ class TargetConfig(Declared):
         """The coordinates a node target gives (x, y, z in order)."""
         return tuple(a for a in AXES if getattr(self, a) is not None)
 
+    @property
+    def components(self) -> tuple[int, ...]:
+        """A support target's reaction components (0, 1, 2 for x, y, z)."""
+        if self.reaction is not None:
+            return (0, 1, 2)
+        return tuple(c for c, k in enumerate(REACTIONS) if getattr(self, k) is not None)
+
+    def reaction_of(self, c: int) -> float:
+        """A support target's reaction component c [N]."""
+        if self.reaction is not None:
+            return float(self.reaction[c])
+        return float(getattr(self, REACTIONS[c]))
+
     def describe(self) -> str:
         """``node 'center' z`` or ``cable 'guy*' tension``: what the target is about."""
+        if self.support is not None:
+            what = (
+                "reaction"
+                if self.reaction is not None
+                else " ".join(REACTIONS[c] for c in self.components)
+            )
+            return f"support {self.support!r} {what}"
         if self.cable is not None:
             return f"cable {self.cable!r} tension"
         what = "point" if self.point is not None else " ".join(self.axes)
@@ -184,7 +239,10 @@ def parse_targets(ck: Checker, value: Any, ctx: Context, base_dir: Path) -> tupl
 
 
 def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
-    """The rules between a target's keys: a node or a cable; what each needs."""
+    """The rules between a target's keys: a node, a cable or a support; what each needs."""
+    given = [k for k in ("reaction", *REACTIONS) if getattr(tgt, k) is not None]
+    if tgt.support is not None or given:
+        return _support(ck, tgt, raw, path, given)
     node_keys = [k for k in (*AXES, "point", "surface") if getattr(tgt, k) is not None]
     if tgt.within is not None and tgt.surface is None:
         ck.add(f"{path}.within = {show(raw['within'])}: only with surface")
@@ -221,4 +279,28 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
     return True
 
 
-__all__ = ["AXES", "TargetConfig", "parse_targets"]
+def _support(ck: Checker, tgt: TargetConfig, raw: dict, path: str, given: list) -> bool:
+    """A support target: support with reaction or its components, nothing else."""
+    if tgt.support is None:
+        ck.add(f"{path}.{given[0]} = {show(raw[given[0]])}: a support's target: give support")
+        return False
+    other = [k for k in ("node", "cable", *AXES, "point", "surface", "tension") if k in raw]
+    if other:
+        ck.add(
+            f"{path}.{other[0]} = {show(raw[other[0]])}: support takes reaction (or "
+            "reaction_x, reaction_y, reaction_z) only: give it in a target of its own"
+        )
+        return False
+    if not given:
+        ck.add(
+            f"{path}: support = {show(tgt.support)} needs reaction = [Rx, Ry, Rz] or any of "
+            "reaction_x, reaction_y, reaction_z"
+        )
+        return False
+    if tgt.reaction is not None and len(given) > 1:
+        ck.add(f"{path}.{given[1]} = {show(raw[given[1]])}: give reaction or its components")
+        return False
+    return True
+
+
+__all__ = ["AXES", "REACTIONS", "TargetConfig", "parse_targets"]

@@ -108,18 +108,24 @@ def _targets(f) -> list[str]:
 
     d = f.design
     what = "edge" if d.vary == "edges" else "cable"
-    if f.method == "elastic":
+    bound = f", {d.at_bound} at a bound" if d.at_bound else ""
+    if f.method == "elastic" and d.extra.get("kind") == "prestress":
+        t = d.extra["values"]
+        design = (
+            f"{d.variables} prestresses (one per cable): {float(t.min()):.9g} .. "
+            f"{float(t.max()):.9g} N{bound}"
+        )
+    elif f.method == "elastic":
         rest = f.net.rest_length
         design = (
             f"{d.variables} rest-length factors (one per {what}): rest lengths "
             f"{float(rest.min()):.9g} .. {float(rest.max()):.9g} m, "
-            f"{float(rest.sum()):.12g} m in all"
+            f"{float(rest.sum()):.12g} m in all{bound}"
         )
     else:
         design = (
             f"{d.variables} force densities (one per {what}): "
-            f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m"
-            + (f", {d.at_bound} at a bound" if d.at_bound else "")
+            f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m{bound}"
         )
     out = [f"{'design':<12} {design}"]
     out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]

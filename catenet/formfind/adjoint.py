@@ -4,44 +4,52 @@ adjoint of the force-density equilibrium.
 The free nodes are in equilibrium, R(x, q) = C_f^T Q C x - P(x, q) = 0, with the loads P
 (constant, or the self-weight g rho l0 / 2 per edge end, which changes with the shape and
 with q). Differentiating, A dx + Bg dq = 0 with A = dR/dx = I_3 (x) D - G_x and
-Bg = dR/dq = B - G_q, where D = C_f^T Q C_f, B's column e holds -u_e at the edge's first
-free end and +u_e at its second, and G the weight's derivatives
-(``catenet.formfind.newton.weight_jacobian``). A target's residual r(x, q) then changes by
+Bg = dR/dq = B - G_q, where D = C_f^T Q C_f (the free nodes' matrix, the fixed ones
+eliminated), B's column e holds -u_e at the edge's first free end and +u_e at its second,
+and G the weight's derivatives (``catenet.formfind.newton.weight_jacobian``). A target's
+residual r(x, q) then changes by
 
     dr/dq = r_q - r_x A^-1 Bg,
 
 so J^T z (the gradient of 1/2 |r|^2 for z = r) costs one adjoint solve A^T y = r_x^T z,
-J v one solve A y = Bg v, and the whole Jacobian min(rows, variables) solves. Without
-self-weight A is I_3 (x) D, whose factorisation the shape was just solved with (each
-coordinate one solve); with it, A is unsymmetric and SuperLU factorises it once per
-state. Nothing is differenced.
+J v one solve A y = Bg v, and the whole Jacobian min(rows, variables) solves. Every solve
+is with the factors of D that the shape was just found with (each coordinate one
+back-substitution): without self-weight A is I_3 (x) D; with it, A y = w is the fixed
+point y = (I_3 (x) D)^-1 (w + G_x y), whose rate is that of the self-weight's own fixed
+point in finding the shape (``catenet.formfind.fdm``), so it converges where the shape
+did. Nothing is differenced and nothing more is factorised.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from catenet.errors import SingularSystemError
 
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
     from catenet.formfind.fdm import _Shape
 
+FIXED_POINT_ITER = 200  # the self-weight's share of an adjoint solve: iterations at most
+
 
 class Adjoint:
     """The linearised equilibrium at one state (q, x): ``solve`` (A^-1), ``solve_t``
-    (A^-T) and ``bg`` (dR/dq, sparse (3 n_f, M))."""
+    (A^-T), ``bg`` (dR/dq, sparse (3 n_f, M)) and the COO triplets of A and Bg that the
+    damped step (``catenet.formfind.damped``) assembles."""
 
     def __init__(self, shape: _Shape, q: np.ndarray, x: np.ndarray):
         import scipy.sparse as sp
 
         from catenet.formfind.newton import weight_jacobian
 
-        self.shape = shape
+        self.shape, self.q = shape, q
         p, net = shape.pattern, shape.net
         self.nf = nf = p.n_free
-        n3 = 3 * nf
+        self.n3 = n3 = 3 * nf
         u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
         rows, cols, vals = [], [], []
         for f, sign in ((p.a, -1.0), (p.b, 1.0)):
@@ -50,8 +58,8 @@ class Adjoint:
                 rows.append(3 * f[e] + c)
                 cols.append(e)
                 vals.append(sign * u[e, c])
-        self.lu = None
-        self.a = _matrix_a(p, q)
+        self.gx: sp.csr_matrix | None = None
+        gx_coo = (np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64))
         if shape.weighs:
             length = np.linalg.norm(u, axis=1)
             wv, (wr, wc) = weight_jacobian(shape, q, u, length, np.zeros(0, dtype=np.int64))
@@ -60,26 +68,71 @@ class Adjoint:
             cols.append(wc[on_q] - n3)
             vals.append(-wv[on_q])
             on_x = ~on_q
-            self.a = self.a - sp.csr_matrix((wv[on_x], (wr[on_x], wc[on_x])), shape=(n3, n3))
-            from scipy.sparse.linalg import splu
-
-            self.lu = splu(self.a.tocsc())
+            gx_coo = (wv[on_x], wr[on_x], wc[on_x])
+            self.gx = sp.csr_matrix((gx_coo[0], (gx_coo[1], gx_coo[2])), shape=(n3, n3))
+        self.bg_coo = (np.concatenate(vals), np.concatenate(rows), np.concatenate(cols))
+        self.gx_coo = gx_coo
         self.bg: sp.csr_matrix = sp.csr_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(n3, net.n_edges),
+            (self.bg_coo[0], (self.bg_coo[1], self.bg_coo[2])), shape=(n3, net.n_edges)
+        )
+        self._lu: Any = None  # SuperLU of A: only where the fixed point fails
+
+    def a_coo(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A = I_3 (x) D - G_x as COO (values, rows, columns), always in the same order
+        (D's pattern for each coordinate, both triangles, then G_x's entries)."""
+        p = self.shape.pattern
+        d = p.values(self.q)
+        rows = np.repeat(np.arange(p.n_free), np.diff(p.indptr))
+        cols = p.indices
+        off = rows != cols
+        r = np.concatenate([rows, cols[off]])
+        c = np.concatenate([cols, rows[off]])
+        dv = np.concatenate([d, d[off]])
+        gv, gr, gc = self.gx_coo
+        return (
+            np.concatenate([np.tile(dv, 3), -gv]),
+            np.concatenate([3 * r + k for k in range(3)] + [gr]),
+            np.concatenate([3 * c + k for k in range(3)] + [gc]),
         )
 
     def solve(self, w: np.ndarray) -> np.ndarray:
         """A^-1 w for w (3 n_f,) or (3 n_f, k)."""
-        if self.lu is not None:
-            return self.lu.solve(np.asarray(w, dtype=np.float64))
-        return self._by_coordinate(w)
+        return self._solve(w, None if self.gx is None else self.gx)
 
     def solve_t(self, w: np.ndarray) -> np.ndarray:
-        """A^-T w (A is symmetric without self-weight)."""
-        if self.lu is not None:
-            return self.lu.solve(np.asarray(w, dtype=np.float64), trans="T")
-        return self._by_coordinate(w)
+        """A^-T w."""
+        return self._solve(w, None if self.gx is None else self.gx.T.tocsr(), trans=True)
+
+    def _solve(self, w: np.ndarray, gx, trans: bool = False) -> np.ndarray:
+        w = np.asarray(w, dtype=np.float64)
+        y = self._by_coordinate(w)
+        if gx is None:
+            return y
+        scale = float(np.max(np.abs(y), initial=0.0))
+        for _ in range(FIXED_POINT_ITER):
+            new = self._by_coordinate(w + (gx @ y).reshape(w.shape))
+            change = float(np.max(np.abs(new - y), initial=0.0))
+            y = new
+            if change <= 1e-14 * max(scale, float(np.max(np.abs(y), initial=0.0)), 1e-300):
+                return y
+        return self._superlu(w, trans)
+
+    def _superlu(self, w: np.ndarray, trans: bool) -> np.ndarray:
+        """A^-1 w (or A^-T w) by SuperLU: where the self-weight's fixed point is slow."""
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        if self._lu is None:
+            v, r, c = self.a_coo()
+            a = sp.csc_matrix((v, (r, c)), shape=(self.n3, self.n3))
+            try:
+                self._lu = splu(a)
+            except RuntimeError:
+                raise SingularSystemError("form finding: the adjoint system is singular") from None
+        out: np.ndarray = self._lu.solve(w, trans="T" if trans else "N")
+        if not np.all(np.isfinite(out)):
+            raise SingularSystemError("form finding: the adjoint solve is not finite")
+        return out
 
     def _by_coordinate(self, w: np.ndarray) -> np.ndarray:
         """(I_3 (x) D)^-1 w: each coordinate (and column) one solve with D's factors."""
@@ -87,19 +140,8 @@ class Adjoint:
         flat = np.asarray(w, dtype=np.float64).reshape(self.nf, -1)  # (f, c [x k])
         out = self.shape.solve(flat)
         if not np.all(np.isfinite(out)):
-            from catenet.errors import SingularSystemError
-
             raise SingularSystemError("form finding: the adjoint solve is not finite")
         return out.reshape(shape)
-
-
-def _matrix_a(p, q):
-    """I_3 (x) D, the DOFs interleaved (3 f + c), as a sparse matrix."""
-    import scipy.sparse as sp
-
-    d = sp.csr_matrix((p.values(q), p.indices, p.indptr), shape=(p.n_free, p.n_free))
-    d = d + sp.triu(d, k=1).T
-    return sp.kron(d, sp.identity(3), format="csr")
 
 
 def jacobian_dense(
@@ -119,22 +161,21 @@ def jacobian_dense(
 class SparseJacobian:
     """J = dr/ds never formed: ``matvec`` (one forward solve), ``rmatvec`` (one adjoint
     solve), and ``damped``: the step p of min |J p + r|^2 + mu |p|^2 from one sparse
-    factorisation of the symmetric saddle-point system in (p, dx, lambda, e)
+    factorisation (``catenet.formfind.damped``)."""
 
-        [ mu I   0    Bs^T  Rq^T ] [p ]   [ 0 ]
-        [ 0      0    A^T   Rx^T ] [dx] = [ 0 ]
-        [ Bs     A    0     0    ] [l ]   [ 0 ]
-        [ Rq     Rx   0     -I   ] [e ]   [ -r]
+    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None):
+        from catenet.formfind.damped import Layout
 
-    (the linearised equilibrium A dx + Bs p = 0 as a constraint, e = Rx dx + Rq p + r the
-    residual after the step), whose size is that of the equilibrium's tangent plus the
-    variables and rows: a step costs about one factorisation of the net's size."""
-
-    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds):
-        self.adj, self.d_x = adj, d_x.tocsr()
+        self.adj, self.d_x, self.d_q = adj, d_x.tocsr(), d_q.tocsr()
         self.rq = (d_q @ dq_ds).tocsr()
         self.bs = (adj.bg @ dq_ds).tocsr()
         self.shape = (d_x.shape[0], dq_ds.shape[1])
+        if groups is None:  # (the variable of each edge, from dq_ds's one entry per row)
+            groups = dq_ds.tocsr().indices
+        self.groups = np.asarray(groups, dtype=np.int64)
+        if layout is None or not layout.fits(adj, self.d_x, self.d_q, self.groups):
+            layout = Layout(adj, self.d_x, self.d_q, self.groups, self.shape[1])
+        self.layout = layout
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         v = np.ravel(v)
@@ -146,39 +187,13 @@ class SparseJacobian:
 
     def damped(self, r: np.ndarray, mu: float, keep: np.ndarray) -> np.ndarray:
         """The damped step (0 where not ``keep``); SingularSystemError where it has none."""
-        import scipy.sparse as sp
-        from scipy.sparse.linalg import splu
-
-        from catenet.errors import SingularSystemError
-
-        nv, rows, n3 = self.shape[1], self.shape[0], self.adj.a.shape[0]
-        k = sp.diags(keep.astype(np.float64))
-        bs, rq = self.bs @ k, self.rq @ k
-        diag = sp.diags(np.where(keep, mu, 1.0))
-        kkt = sp.bmat(
-            [
-                [diag, None, bs.T, rq.T],
-                [None, sp.csr_matrix((n3, n3)), self.adj.a.T, self.d_x.T],
-                [bs, self.adj.a, None, None],
-                [rq, self.d_x, None, -sp.identity(rows)],
-            ],
-            format="csc",
-        )
-        rhs = np.zeros(kkt.shape[0])
-        rhs[nv + 2 * n3 :] = -r
-        try:
-            sol = splu(kkt).solve(rhs)
-        except RuntimeError as exc:  # exactly singular
-            raise SingularSystemError(f"SciPy: {exc}") from None
-        p = sol[:nv] * keep
-        if not np.all(np.isfinite(p)):
-            raise SingularSystemError("the damped step is not finite")
-        return p
+        return self.layout.step(self.adj, self.d_x, self.d_q, r, mu, keep)
 
 
-def jacobian_operator(adj: Adjoint, d_x, d_q, dq_ds) -> SparseJacobian:
-    """J = dr/ds as a SparseJacobian (see there)."""
-    return SparseJacobian(adj, d_x, d_q, dq_ds)
+def jacobian_operator(adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None) -> SparseJacobian:
+    """J = dr/ds as a SparseJacobian (see there); ``layout``: the damped step's from the
+    last state, kept where it fits (its symbolic analysis reused)."""
+    return SparseJacobian(adj, d_x, d_q, dq_ds, groups, layout)
 
 
 __all__ = ["Adjoint", "SparseJacobian", "jacobian_dense", "jacobian_operator"]

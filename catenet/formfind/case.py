@@ -55,10 +55,15 @@ def formfind_scene(scene) -> FormFound:
     if cfg.method == "elastic":
         from catenet.formfind.elastic import formfind_elastic
 
+        vary = cfg.vary or "cables"
+        bounds = (cfg.rest_length_factor_min, cfg.rest_length_factor_max)
+        if vary == "prestress":
+            bounds = (cfg.prestress_min, cfg.prestress_max)
         return formfind_elastic(
             scene,
             targets=scene.case.targets,
-            vary=cfg.vary or "cables",
+            vary=vary,
+            bounds=bounds,
             tol=cfg.tol,
             max_iter=cfg.max_iter,
             prefix=PREFIX,

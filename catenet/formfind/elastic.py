@@ -1,21 +1,28 @@
 """Rest lengths that reach form finding's targets under the elastic equilibrium
-(``formfind.method = "elastic"``): a stay whose sag under its own weight is given.
+(``formfind.method = "elastic"``): a stay whose sag under its own weight is given, a guy
+whose tension at rest is given, an anchor whose reaction is given.
 
-The design variables are s = log c, a factor c on the rest lengths l0 of each cable
-(``vary = "cables"``, the default here; a cable case is one cable) or of each edge; the
-start is the case's own rest lengths. Each evaluation is catenet's static equilibrium of
-the net with those rest lengths (the one solve path, from the last equilibrium), under
-its loads, its self-weight included (the mass rho A l0 / 2 per edge end follows l0).
+The design variables (``catenet.formfind.variables``) are rest-length factors per cable
+or per edge, or the prestress of named cables, within bounds; each s gives the rest
+lengths l0(s). Each evaluation is catenet's static equilibrium of the net with those rest
+lengths (the one solve path, from the last equilibrium), under its loads, its self-weight
+included (the mass rho A l0 / 2 per edge end follows l0).
 
 Derivatives by the adjoint of that equilibrium. The free DOFs satisfy R(x, l0) =
 grad U(x, l0) - F(l0) = 0, so K dx + (dR/dl0) dl0 = 0 with K the tangent stiffness (the
 Hessian of the energy at the equilibrium). Under the linear law an edge pulls its ends
 with N t, N = EA (L / l0 - 1) (0 when slack under tension_only), so dR/dl0_e is
 -EA L / l0^2 t at its second end and the opposite at its first, less the change of its
-weight, rho A g / 2 at each end. A target's row r then changes by dr/ds = -r_x K^-1
-(dR/dl0) diag(l0) P: one solve with K per variable or per row, whichever are fewer
-(the whole Jacobian; few variables here). Levenberg-Marquardt (``levenberg``) drives it.
-Targets here are nodes' positions (x, y, z, point, surface).
+weight, rho A g / 2 at each end. A target's row r(x, l0) then changes by
+
+    dr/ds = (r_l0 - r_x K^-1 dR/dl0) dl0/ds,
+
+one solve with K per variable or per row, whichever are fewer. The rows: nodes'
+positions and surfaces (r_l0 = 0); an edge's tension N (r_x: dN/dx_b = EA / l0 t,
+r_l0 = -EA L / l0^2); a support's reaction R_i = grad_i U - F_i at a fixed node (r_x:
+minus the edge's stiffness block K_e = N_L t t^T + N / L (I - t t^T) for each free
+neighbour; r_l0 = +-dN/dl0 t - rho A g / 2). Levenberg-Marquardt within the bounds
+(``levenberg``) drives it.
 """
 
 from __future__ import annotations
@@ -32,24 +39,22 @@ log = logging.getLogger(__name__)
 
 
 class _Equilibria:
-    """The elastic equilibrium for rest-length factors (one per group), warm-started."""
+    """The elastic equilibrium for the design variables s, warm-started."""
 
-    def __init__(self, scene, settings, groups: np.ndarray):
-        self.scene, self.settings, self.groups = scene, settings, groups
-        self.l0 = scene.net.rest_length.copy()
+    def __init__(self, scene, settings, variables):
+        self.scene, self.settings, self.variables = scene, settings, variables
         self.x = scene.net.nodes.copy()
         self.key: bytes | None = None
         self.solves = 0
 
     def __call__(self, s: np.ndarray):
-        """(net, x) of the factors exp(s); the state is kept for the Jacobian."""
+        """(net, scene, x) at s; the state is kept for the Jacobian."""
         from catenet.solver.path import Start, solve
 
         key = s.tobytes()
         if key != self.key:
             self.key = None
-            c = np.exp(np.clip(s, -50.0, 50.0))[self.groups]
-            net = self.scene.net.replace(rest_length=self.l0 * c)
+            net = self.scene.net.replace(rest_length=self.variables.rest(s))
             scene = dataclasses.replace(self.scene, net=net)
             result = solve(scene, self.settings, start=Start(x=self.x))
             self.solves += 1
@@ -60,9 +65,14 @@ class _Equilibria:
             self.key = key
         return self.now
 
+    def achieved(self, s: np.ndarray, goals) -> np.ndarray:
+        net, scene, x = self(s)
+        n, length = _forces(net, x)
+        return goals.achieved(x, n / length, length, _reaction(net, scene, x, n))
+
     def jacobian(self, s: np.ndarray, goals) -> np.ndarray:
         """dr/ds (rows, variables) at the equilibrium of s."""
-        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
 
         from catenet.solver.workspace import Workspace
 
@@ -74,24 +84,85 @@ class _Equilibria:
         index = np.full(net.n_nodes, -1, dtype=np.int64)
         free = np.flatnonzero(~net.fixed)
         index[free] = np.arange(len(free))
-        length = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
-        a = goals.achieved(x, np.zeros(net.n_edges), length)
-        d_x, _ = goals.partials(x, np.zeros(net.n_edges), a, index, net)
-        d_r = _dr_dl0(net, x, scene.loads.gravity, index)  # (3 n_f, M)
-        c = np.exp(s)[self.groups]
-        m = net.n_edges
-        dl0_ds = sp.csr_matrix((self.l0 * c, (np.arange(m), self.groups)), shape=(m, len(s)))
-        rhs = (d_r @ dl0_ds).toarray()
-        from scipy.sparse.linalg import splu
-
+        n, length = _forces(net, x)
+        taut = (length > net.rest_length) | ~np.asarray(net.law.tension_only, dtype=bool)
+        dn_dl = np.where(taut, net.EA / net.rest_length, 0.0)
+        dn_dl0 = np.where(taut, -net.EA * length / net.rest_length**2, 0.0)
+        a = goals.achieved(x, n / length, length, _reaction(net, scene, x, n))
+        d_x, d_l0 = goals.partials(x, n / length, a, index, net, dn=(dn_dl, dn_dl0))
+        if goals.reacts.any():
+            rx, rl = _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, index)
+            d_x, d_l0 = d_x + rx, d_l0 + rl
+        dl0_ds = self.variables.jacobian(s)
+        rhs = (_dr_dl0(net, x, scene.loads.gravity, index) @ dl0_ds).toarray()
         try:
             lu = splu(k)
         except RuntimeError:
             raise SingularSystemError("the tangent stiffness is singular") from None
+        direct = (d_l0 @ dl0_ds).toarray()
         if d_x.shape[0] <= rhs.shape[1]:
             y = lu.solve(d_x.T.toarray(), trans="T")
-            return -(rhs.T @ y).T
-        return np.asarray(-(d_x @ lu.solve(rhs)))
+            return direct - (rhs.T @ y).T
+        return np.asarray(direct - d_x @ lu.solve(rhs))
+
+
+def _forces(net, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, L) per edge: the tension under the linear law (0 where slack), the length."""
+    from catenet.model import measures
+
+    return measures.tension(net, x), _lengths(net, x)
+
+
+def _reaction(net, scene, x: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The force each support exerts on the net (N, 3): grad U - F at the fixed nodes."""
+    u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    pull = (n / np.linalg.norm(u, axis=1))[:, None] * u
+    grad = np.zeros_like(x)
+    for c in range(3):
+        grad[:, c] = np.bincount(net.edges[:, 1], pull[:, c], net.n_nodes)
+        grad[:, c] -= np.bincount(net.edges[:, 0], pull[:, c], net.n_nodes)
+    out = np.zeros_like(x)
+    force = scene.loads.external_force(net)
+    out[net.fixed] = grad[net.fixed] - force[net.fixed]
+    return out
+
+
+def _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, index):
+    """(dr/dx_f, dr/dl0) of the reaction rows (the others 0)."""
+    import scipy.sparse as sp
+
+    u = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    length = np.linalg.norm(u, axis=1)
+    t = u / length[:, None]
+    g = np.zeros(3) if scene.loads.gravity is None else np.asarray(scene.loads.gravity)
+    slope = goals.slope(a)
+    rows_x, cols_x, vals_x, rows_l, cols_l, vals_l = [], [], [], [], [], []
+    for j in np.flatnonzero(goals.reacts):
+        i, c = int(goals.node[j]), int(goals.axis[j])
+        for end, sign in ((0, -1.0), (1, 1.0)):
+            e = np.flatnonzero(net.edges[:, end] == i)
+            other = index[net.edges[e, 1 - end]]
+            # d(sign N t_c)/dl0 less the weight's share at i
+            rows_l.append(np.full(len(e), j))
+            cols_l.append(e)
+            vals_l.append(
+                slope[j] * (sign * dn_dl0[e] * t[e, c] - 0.5 * net.line_density[e] * g[c])
+            )
+            # d(grad_i)/dx_other = -K_e (row c), at the other end where it is free
+            k = other >= 0
+            e, f = e[k], other[k]
+            for d in range(3):
+                block = dn_dl[e] * t[e, c] * t[e, d] + n[e] / length[e] * (
+                    (c == d) - t[e, c] * t[e, d]
+                )
+                rows_x.append(np.full(len(e), j))
+                cols_x.append(3 * f + d)
+                vals_x.append(-slope[j] * block)
+    shape = (goals.rows, 3 * int(np.count_nonzero(index >= 0)))
+    cat = np.concatenate
+    d_x = sp.csr_matrix((cat(vals_x), (cat(rows_x), cat(cols_x))), shape=shape)
+    d_l = sp.csr_matrix((cat(vals_l), (cat(rows_l), cat(cols_l))), shape=(goals.rows, net.n_edges))
+    return d_x, d_l
 
 
 def _dr_dl0(net, x, gravity, index):
@@ -123,49 +194,68 @@ def _dr_dl0(net, x, gravity, index):
     )
 
 
-def formfind_elastic(scene, *, targets, vary, tol, max_iter, prefix="formfind."):
-    """The rest lengths (a factor per cable or per edge) whose elastic equilibrium reaches
-    ``targets``: a FormFound (method "elastic") at that equilibrium, its ``design``."""
-    from catenet.formfind.design import _groups
+def formfind_elastic(
+    scene, *, targets, vary, tol, max_iter, bounds=(None, None), prefix="formfind."
+):
+    """The rest lengths (factors per cable or edge, or cables' prestress, within
+    ``bounds``) whose elastic equilibrium reaches ``targets``: a FormFound (method
+    "elastic") at that equilibrium, its ``design``."""
     from catenet.formfind.goals import resolve_goals
+    from catenet.formfind.variables import Variables
     from catenet.solver.settings import Settings
 
     start = time.perf_counter()
-    bad = [k for k, t in enumerate(targets) if t.cable is not None]
-    if bad:
+    supports = [k for k, t in enumerate(targets) if t.support is not None]
+    if supports and scene.terms:
         raise ConfigError(
-            f"target[{bad[0]}].cable = {targets[bad[0]].cable!r}: method = 'elastic' takes "
-            "node targets (x, y, z, point, surface)"
+            f"target[{supports[0]}].support = {targets[supports[0]].support!r}: a reaction "
+            "target takes a net of cables under loads and gravity only (this case has "
+            "obstacles, rods or springs)"
         )
     settings = dataclasses.replace(Settings.of(scene.case.solver), method="static", steps=1)
     size = float(np.linalg.norm(np.ptp(scene.net.nodes, axis=0))) or 1.0
     goals = resolve_goals(targets, scene, size, tol)
-    groups = np.zeros(scene.net.n_edges, dtype=np.int64)
-    if vary == "edges" or (scene.cables is not None and scene.cables.names):
-        groups = _groups(scene, vary, prefix)
-    eq = _Equilibria(scene, settings, groups)
-    s, message, gradients = _search(eq, goals, int(groups.max()) + 1, max_iter)
+    variables = Variables(scene, vary, bounds, prefix)
+    eq = _Equilibria(scene, settings, variables)
+    s, message, gradients = _search(eq, goals, max_iter)
     found = _found(eq, goals, s, message, gradients, vary)
+    unmet = goals.hard & ~found.design.met
+    if unmet.any():  # (no second search here: the weights decide, hard ones must hold)
+        from catenet.formfind.design import _unmet_message
+
+        k = int(goals.of[np.argmax(unmet)])
+        raise ConfigError(
+            _unmet_message(found.design, k).replace(
+                "formfind.force_density_min/max", _bounds_named(vary)
+            )
+        )
     found.wall_time = time.perf_counter() - start
     return found
+
+
+def _bounds_named(vary: str) -> str:
+    return (
+        "formfind.prestress_min/max"
+        if vary == "prestress"
+        else ("formfind.rest_length_factor_min/max")
+    )
 
 
 class _Met(Exception):
     """Every target met."""
 
 
-def _search(eq: _Equilibria, goals, n_var: int, max_iter: int):
-    """(s, how it ended, gradients) of Levenberg-Marquardt on the factors' logs."""
+def _search(eq: _Equilibria, goals, max_iter: int):
+    """(s, how it ended, gradients) of Levenberg-Marquardt within the bounds."""
     from catenet.formfind.levenberg import levenberg
 
     gradients = [0]
 
     def residual(s):
         try:
-            net, _, x = eq(s)
+            a = eq.achieved(s, goals)
         except (ConvergenceError, SingularSystemError):
             return np.full(goals.rows, 1e150)  # no equilibrium there: the step is refused
-        a = goals.achieved(x, np.zeros(net.n_edges), _lengths(net, x))
         if goals.met(a).all():
             raise _Met
         return goals.w * goals.miss(a)
@@ -174,10 +264,9 @@ def _search(eq: _Equilibria, goals, n_var: int, max_iter: int):
         gradients[0] += 1
         return eq.jacobian(s, goals)
 
-    s = np.zeros(n_var)
-    free = (np.full(n_var, -np.inf), np.full(n_var, np.inf))
+    s = eq.variables.start.copy()
     try:
-        ended = levenberg(residual, jacobian, s, free, max_iter)
+        ended = levenberg(residual, jacobian, s, eq.variables.bounds, max_iter)
     except _Met:
         return np.frombuffer(eq.key or s.tobytes()).copy(), "met", gradients[0]
     if ended.why == "max_iter":
@@ -193,28 +282,30 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
     """The FormFound at the equilibrium of s: q = N / L, every edge taut."""
     from catenet.formfind.design import Design
     from catenet.formfind.fdm import FormFound
-    from catenet.model import measures
 
     net, scene, x = eq(s)
-    length = _lengths(net, x)
-    a = goals.achieved(x, np.zeros(net.n_edges), length)
-    tension = measures.tension(net, x)
-    slack = np.flatnonzero(~(tension > 0))
+    tension, length = _forces(net, x)
+    a = eq.achieved(s, goals)
+    only = np.asarray(net.law.tension_only, dtype=bool)
+    slack = np.flatnonzero(only & ~(tension > 0))
     if slack.size:
         raise ConfigError(
             f"formfind.method = 'elastic': edge {int(slack[0])} is slack in the state found "
             f"({slack.size} edges): form finding writes taut nets"
         )
+    v = eq.variables
     d = Design(
         goals=goals,
         achieved=a,
         met=goals.met(a),
-        variables=len(s),
+        variables=v.n,
         vary=vary,
         evaluations=eq.solves - 1,
         gradients=gradients,
         message=message,
+        at_bound=v.at_bound(s),
     )
+    d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind)
     return FormFound(
         net=net,
         x=x,

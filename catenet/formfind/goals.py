@@ -2,14 +2,18 @@
 derivatives.
 
 Each ``[[target]]`` becomes rows of one vector: a node's coordinate (a row per node and
-axis: the value a = x_i,c) or an edge's tension (a row per edge of the cable: a = q_e L_e,
-the force density method's tension). A row asks a in [lo, hi] (lo = hi: a value); its
-miss is m = a - clip(a, lo, hi) and its residual r = w m / s, with the target's weight w
-and its scale s (the net's size for positions, the target tension for tensions), so that
-positions and forces weigh alike. A row is met when |m| <= tol s.
+axis: the value a = x_i,c), an edge's tension (a row per edge of the cable: a = q_e L_e,
+the force density method's tension; N = q L with q = N / L in the elastic equilibrium)
+or a support's reaction (a row per fixed node and component: its partial derivatives
+are ``catenet.formfind.reactions``' and ``catenet.formfind.elastic``'s). A row asks a in [lo, hi]
+(lo = hi: a value); its miss is m = a - clip(a, lo, hi) and its residual r = w m / s,
+with the target's weight w and its scale s (the net's size for positions, the target
+tension for tensions, the largest component asked for a reaction), so that positions
+and forces weigh alike. A row is met when |m| <= tol s.
 
 The partial derivatives, with u_e = x_b - x_a and L = |u_e|: da/dx_i,c = 1 for a
-position; for a tension dN/dq_e = L_e and dN/dx_b = -dN/dx_a = q_e u_e / L_e. Inside its
+position; for a tension dN/dp_e = N_p (the edge's parameter: q, with N_p = L_e; or the
+rest length) and dN/dx_b = -dN/dx_a = N_L u_e / L_e (N_L = q_e; EA / l0 elastic). Inside its
 range a row's residual is flat (its derivative 0).
 """
 
@@ -47,17 +51,24 @@ class Goals:
     of: np.ndarray
     tol: float
     surface: np.ndarray  # per row: the index in ``surfaces`` (-1: none)
+    reacts: np.ndarray  # per row: a support's reaction (node, axis) (bool)
     surfaces: tuple = ()
 
     @property
     def rows(self) -> int:
         return len(self.lo)
 
-    def achieved(self, x: np.ndarray, q: np.ndarray, length: np.ndarray) -> np.ndarray:
-        """The value of every row at the shape x with force densities q."""
+    def achieved(
+        self, x: np.ndarray, q: np.ndarray, length: np.ndarray, reaction=None
+    ) -> np.ndarray:
+        """The value of every row at the shape x with force densities q (tension q L) and
+        the supports' ``reaction`` (N, 3) (reaction rows: NaN without)."""
         pos = self.edge < 0
         a = np.empty(self.rows)
         a[pos] = x[self.node[pos], self.axis[pos]]
+        if self.reacts.any():
+            r = self.reacts
+            a[r] = np.nan if reaction is None else reaction[self.node[r], self.axis[r]]
         e = self.edge[~pos]
         a[~pos] = q[e] * length[e]
         for k, field in enumerate(self.surfaces):
@@ -72,19 +83,24 @@ class Goals:
         """Per row: met to tol (relative to its scale)."""
         return np.abs(self.miss(a)) <= self.tol * self.scale
 
+    def slope(self, a: np.ndarray) -> np.ndarray:
+        """dr/da per row: the weight, 0 inside a range."""
+        out = (a < self.lo) | (a > self.hi) | (self.lo == self.hi)
+        return np.where(out, self.w, 0.0)
+
     def partials(
-        self, x: np.ndarray, q: np.ndarray, a: np.ndarray, index: np.ndarray, net
+        self, x: np.ndarray, q: np.ndarray, a: np.ndarray, index: np.ndarray, net, dn=None
     ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        """(dr/dx_f, dr/dq): the residual's partial derivatives, sparse, (R, 3 n_free)
+        """(dr/dx_f, dr/dp): the residual's partial derivatives, sparse, (R, 3 n_free)
         and (R, M), the DOFs of the free nodes interleaved (3 f + c); ``index`` gives a
-        node's free index (-1: fixed)."""
+        node's free index (-1: fixed). p is each edge's parameter: q (``dn`` None), or
+        what ``dn`` = (dN/dL, dN/dp) per edge says. Reaction rows are left 0."""
         import scipy.sparse as sp
 
         n3 = 3 * int(np.count_nonzero(index >= 0))
-        out = (a < self.lo) | (a > self.hi) | (self.lo == self.hi)
-        slope = np.where(out, self.w, 0.0)
+        slope = self.slope(a)
         rows_x, cols_x, vals_x = [], [], []
-        pos = np.flatnonzero(self.edge < 0)
+        pos = np.flatnonzero((self.edge < 0) & ~self.reacts)  # (a surface's dz too)
         rows_x.append(pos)
         cols_x.append(3 * index[self.node[pos]] + self.axis[pos])
         vals_x.append(slope[pos])
@@ -100,7 +116,8 @@ class Goals:
         ends = net.edges[e]
         u = x[ends[:, 1]] - x[ends[:, 0]]
         length = np.linalg.norm(u, axis=1)
-        g = (slope[ten] * q[e] / length)[:, None] * u  # dN/dx_b, weighted
+        n_l, n_p = (q[e], length) if dn is None else (dn[0][e], dn[1][e])
+        g = (slope[ten] * n_l / length)[:, None] * u  # dN/dx_b, weighted
         for end, sign in ((ends[:, 0], -1.0), (ends[:, 1], 1.0)):
             f = index[end]
             free = f >= 0
@@ -113,7 +130,7 @@ class Goals:
             (np.concatenate(vals_x), (np.concatenate(rows_x), np.concatenate(cols_x))),
             shape=(r, n3),
         )
-        d_q = sp.csr_matrix((slope[ten] * length, (ten, e)), shape=(r, net.n_edges))
+        d_q = sp.csr_matrix((slope[ten] * n_p, (ten, e)), shape=(r, net.n_edges))
         return d_x, d_q
 
     def outside(self, a: np.ndarray) -> str | None:
@@ -131,44 +148,54 @@ class Goals:
 
     def select(self, rows: np.ndarray) -> Goals:
         """The goals of these rows only (a mask)."""
-        per_row = ("node", "axis", "edge", "lo", "hi", "scale", "w", "hard", "of", "surface")
+        per_row = (
+            *("node", "axis", "edge", "lo", "hi", "scale", "w", "hard", "of", "surface"),
+            "reacts",
+        )
         return Goals(**{**self.__dict__, **{k: getattr(self, k)[rows] for k in per_row}})
+
+
+class _Rows:
+    """The columns of the rows being resolved."""
+
+    def __init__(self):
+        names = ("node", "axis", "edge", "lo", "hi", "sc", "w", "hard", "of", "surface")
+        self.cols: dict[str, list] = {k: [] for k in (*names, "reacts")}
+
+    def add(self, k, t, node, axis, edge, lo, hi, scale, surface=-1, reacts=False):
+        n, cols = len(lo), self.cols
+        for name, v in (("node", node), ("axis", axis), ("edge", edge)):
+            cols[name].append(np.broadcast_to(np.asarray(v, dtype=np.int64), (n,)))
+        for name, v in (("lo", lo), ("hi", hi)):
+            cols[name].append(np.asarray(v, dtype=np.float64))
+        for name, v in (("sc", scale), ("w", t.weight / scale), ("hard", t.hard), ("of", k)):
+            cols[name].append(np.full(n, v))
+        cols["surface"].append(np.full(n, surface))
+        cols["reacts"].append(np.full(n, reacts))
 
 
 def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
     """The targets of a case on its built ``scene``; ``size`` scales the positions.
     ConfigError (key path, value) for an unknown node, set or cable, a fixed node, or
-    values that do not match the nodes."""
-    net = scene.net
-    cols: dict[str, list] = {k: [] for k in ("node", "axis", "edge", "lo", "hi", "sc", "w")}
-    cols.update(hard=[], of=[], surface=[])
+    values that do not match the nodes, a support target on a free node."""
+    rows = _Rows()
     surfaces: list = []
-
-    def add(k, t, node, axis, edge, lo, hi, scale, surface=-1):
-        n = len(lo)
-        for name, v in (("node", node), ("axis", axis), ("edge", edge)):
-            cols[name].append(np.broadcast_to(np.asarray(v, dtype=np.int64), (n,)))
-        cols["lo"].append(lo)
-        cols["hi"].append(hi)
-        cols["sc"].append(np.full(n, scale))
-        cols["w"].append(np.full(n, t.weight / scale))
-        cols["hard"].append(np.full(n, t.hard))
-        cols["of"].append(np.full(n, k))
-        cols["surface"].append(np.full(n, surface))
-
     for k, t in enumerate(targets):
+        if t.support is not None:
+            _support_rows(rows, k, t, scene)
+            continue
         if t.cable is not None:
             edges = _cable_edges(k, t, scene)
             lo, hi = t.tension if isinstance(t.tension, tuple) else (t.tension, t.tension)
             n = len(edges)
-            add(k, t, -1, -1, edges, np.full(n, lo), np.full(n, hi), hi)
+            rows.add(k, t, -1, -1, edges, np.full(n, lo), np.full(n, hi), hi)
             continue
         nodes = _nodes(k, t, scene)
         if t.surface is not None:
             surfaces.append(_surface(k, t, scene.net, nodes))
             d = 0.0 if t.within is None else t.within
             n = len(nodes)
-            add(k, t, nodes, 2, -1, np.full(n, -d), np.full(n, d), size, len(surfaces) - 1)
+            rows.add(k, t, nodes, 2, -1, np.full(n, -d), np.full(n, d), size, len(surfaces) - 1)
             continue
         given = [(a, getattr(t, a)) for a in ("x", "y", "z")] if t.point is None else []
         if t.point is not None:
@@ -179,26 +206,50 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
                 continue
             what = "point" if t.point is not None else axis
             v = _per_node(k, what, t, value, nodes)
-            add(k, t, nodes, "xyz".index(axis), -1, v, v, size)
-    if not cols["lo"]:
+            rows.add(k, t, nodes, "xyz".index(axis), -1, v, v, size)
+    if not rows.cols["lo"]:
         raise ConfigError("target: no target")
-    arr = {k: np.concatenate(v) for k, v in cols.items()}
-    del net
+    arr = {k: np.concatenate(v) for k, v in rows.cols.items()}
     return Goals(
         targets=tuple(targets),
-        node=arr["node"],
-        axis=arr["axis"],
-        edge=arr["edge"],
-        lo=arr["lo"].astype(np.float64),
-        hi=arr["hi"].astype(np.float64),
+        **{k: arr[k] for k in ("node", "axis", "edge", "lo", "hi", "w", "of", "surface")},
         scale=arr["sc"],
-        w=arr["w"],
         hard=arr["hard"].astype(bool),
-        of=arr["of"],
+        reacts=arr["reacts"].astype(bool),
         tol=tol,
-        surface=arr["surface"],
         surfaces=tuple(surfaces),
     )
+
+
+def _support_rows(rows: _Rows, k: int, t, scene) -> None:
+    """A support's reaction: a row per fixed node and component, scaled by the largest
+    component asked (or, all 0, the net's total load)."""
+    path = f"target[{k}].support"
+    net = scene.net
+    nodes = _node_set(path, t.support, scene)
+    free = nodes[~net.fixed[nodes]]
+    if free.size:
+        raise ConfigError(
+            f"{path} = {show(t.support)}: node {int(free[0])} is free: a reaction is a fixed "
+            "node's (a support of geometry's fixed nodes)"
+        )
+    values = [t.reaction_of(c) for c in t.components]
+    scale = max(max(abs(v) for v in values), _load_scale(scene))
+    for c, v in zip(t.components, values, strict=True):
+        n = len(nodes)
+        rows.add(k, t, nodes, c, -1, np.full(n, v), np.full(n, v), scale, reacts=True)
+
+
+def _load_scale(scene) -> float:
+    """A force scale of the net: 1e-6 of its weight and loads (1e-6 N without)."""
+    net, loads = scene.net, scene.loads
+    total = 0.0
+    if loads is not None and loads.gravity is not None:
+        g = float(np.linalg.norm(loads.gravity))
+        total += g * float(np.sum(net.line_density * net.rest_length))
+    if loads is not None and loads.force is not None:
+        total += float(np.abs(loads.force).sum())
+    return 1e-6 * total if total > 0 else 1e-6
 
 
 def _surface(k: int, t, net, nodes: np.ndarray):
@@ -213,24 +264,32 @@ def _surface(k: int, t, net, nodes: np.ndarray):
     return field
 
 
+def _node_set(path: str, ref, scene) -> np.ndarray:
+    """The nodes of a reference (index, name or set); ConfigError where it is none."""
+    try:
+        nodes = np.asarray(expand(ref, scene.names or {}, scene.sets or {}), dtype=np.int64)
+    except KeyError:
+        known = [*(scene.names or {}), *(s for s in scene.sets or {} if ":" not in s)]
+        accepted = ", ".join(map(repr, known)) or "none: give a node index"
+        raise ConfigError(
+            f"{path} = {show(ref)}: is neither a node name nor a node set of the net "
+            f"(accepted: {accepted})"
+        ) from None
+    n = scene.net.n_net
+    bad = nodes[(nodes < 0) | (nodes >= n)]
+    if bad.size:
+        raise ConfigError(f"{path} = {show(ref)}: must be a node index in 0..{n - 1}")
+    if not nodes.size:
+        raise ConfigError(f"{path} = {show(ref)}: the node set is empty")
+    return nodes
+
+
 def _nodes(k: int, t, scene) -> np.ndarray:
     net = scene.net
     path = f"target[{k}].node"
     if t.node is None:  # (a surface: every free node of the net)
         return np.flatnonzero(~net.fixed[: net.n_net])
-    try:
-        nodes = np.asarray(expand(t.node, scene.names or {}, scene.sets or {}), dtype=np.int64)
-    except KeyError:
-        known = [*(scene.names or {}), *(s for s in scene.sets or {} if ":" not in s)]
-        accepted = ", ".join(map(repr, known)) or "none: give a node index"
-        raise ConfigError(
-            f"{path} = {show(t.node)}: is neither a node name nor a node set of the net "
-            f"(accepted: {accepted})"
-        ) from None
-    n = net.n_net
-    bad = nodes[(nodes < 0) | (nodes >= n)]
-    if bad.size:
-        raise ConfigError(f"{path} = {show(t.node)}: must be a node index in 0..{n - 1}")
+    nodes = _node_set(path, t.node, scene)
     fixed = nodes[net.fixed[nodes]]
     if fixed.size:
         which = f"node {int(fixed[0])} is" if nodes.size == 1 else f"nodes {fixed[:5].tolist()} are"
@@ -238,8 +297,6 @@ def _nodes(k: int, t, scene) -> np.ndarray:
             f"{path} = {show(t.node)}: {which} fixed (a support): form finding does not move "
             "it: target free nodes"
         )
-    if not nodes.size:
-        raise ConfigError(f"{path} = {show(t.node)}: the node set is empty")
     return nodes
 
 

@@ -305,14 +305,10 @@ class _Search:
         return step
 
 
-def weight_jacobian(shape, q, u, length, held):
-    """The self-weight's change with the unknowns, as COO (values, (rows, cols)) in the
-    first block row: dP_f = G_x dx + G_q dq. The load at a free end of edge e is
-    g rho_e l0_e / 2 with l0 = L / (1 + eps(N)), N = q L, so that dl0 = a dL + c dq with
-    a = (1 + eps - N eps') / (1 + eps)^2, c = -L^2 eps' / (1 + eps)^2 and dL = n . (dx_b -
-    dx_a), n = u / L."""
-    net, p = shape.net, shape.pattern
-    n3 = 3 * p.n_free
+def weight_coefficients(shape, q, length) -> tuple[np.ndarray, np.ndarray]:
+    """(a, c) per edge: the change of half its mass, rho l0 / 2 = a dL + c dq, with
+    l0 = L / (1 + eps(q L)) (see ``weight_jacobian``)."""
+    net = shape.net
     tension = q * length
     eps = net.law.strain_for_tension(tension, net.EA)
     h = 1e-6
@@ -322,8 +318,18 @@ def weight_jacobian(shape, q, u, length, held):
     ) / (2 * h * tension)
     den = (1.0 + eps) ** 2
     half = 0.5 * net.line_density
-    a = half * (1.0 + eps - tension * slope) / den
-    c = half * (-(length**2) * slope) / den
+    return half * (1.0 + eps - tension * slope) / den, half * (-(length**2) * slope) / den
+
+
+def weight_jacobian(shape, q, u, length, held):
+    """The self-weight's change with the unknowns, as COO (values, (rows, cols)) in the
+    first block row: dP_f = G_x dx + G_q dq. The load at a free end of edge e is
+    g rho_e l0_e / 2 with l0 = L / (1 + eps(N)), N = q L, so that dl0 = a dL + c dq with
+    a = (1 + eps - N eps') / (1 + eps)^2, c = -L^2 eps' / (1 + eps)^2 and dL = n . (dx_b -
+    dx_a), n = u / L."""
+    p = shape.pattern
+    n3 = 3 * p.n_free
+    a, c = weight_coefficients(shape, q, length)
     c[held] = 0.0
     n = u / length[:, None]
     g = np.asarray(shape.gravity, dtype=np.float64)

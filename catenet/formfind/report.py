@@ -3,12 +3,15 @@ result file's ``/result/targets/<k>`` groups and ``/result/force_density`` (``wr
 and the lines of the written case's header (``header_lines``).
 
 ``/result/targets/<k>`` (k: the target's index in [[target]]) has the attrs ``kind``
-("x", "y", "z", "point" or "tension"), ``about`` (what it is about, as the summary says),
-``nodes`` or ``edges`` (the nodes or edges it concerns), ``target`` (one value per node
+("x", "y", "z", "point", "surface", "tension", "reaction" or "reaction_x" ...), ``about``
+(what it is about, as the summary says), ``nodes`` or ``edges`` (the nodes, supports
+included, or edges it concerns), ``target`` (one value per node
 or edge; a range: ``low`` and ``high``), ``achieved`` (the same shape), ``miss`` (the
 largest |miss|, 0 within a range), ``weight``, ``hard`` and ``met`` (to formfind.tol);
 ``/result/targets`` itself: ``met`` (all), ``message``, ``variables``, ``vary``,
-``evaluations`` and ``gradients``.
+``evaluations`` and ``gradients``; method "elastic" adds ``found`` (the variables found:
+rest-length factors or prestresses [N]), ``found_kind`` ("factor" or "prestress") and,
+where the cables are named, ``names``.
 """
 
 from __future__ import annotations
@@ -71,6 +74,7 @@ def rows(design) -> list[Row]:
     for k, t in enumerate(g.targets):
         sel = np.flatnonzero(g.of == k)
         tension = t.cable is not None
+        force = tension or t.support is not None
         where = g.edge[sel] if tension else g.node[sel]
         where = where[: len(sel) // _axes(t)]  # (rows by axis: x of every node, y ...)
         out.append(
@@ -78,7 +82,7 @@ def rows(design) -> list[Row]:
                 k=k,
                 about=t.describe(),
                 kind=t.kind,
-                unit="N" if tension else "m",
+                unit="N" if force else "m",
                 where=where,
                 lo=_shaped(g.lo[sel], t),
                 hi=_shaped(g.hi[sel], t),
@@ -93,7 +97,10 @@ def rows(design) -> list[Row]:
 
 
 def _axes(t) -> int:
-    """The coordinates a target gives per node (1 for a tension)."""
+    """The coordinates (or reaction components) a target gives per node (1 for a
+    tension)."""
+    if t.support is not None:
+        return len(t.components)
     return 3 if t.point is not None else max(len(t.axes), 1)
 
 
@@ -128,6 +135,11 @@ def write(path: str | Path, found) -> None:
                 ("gradients", d.gradients),
             ):
                 group.attrs[key] = value
+            if "values" in d.extra:  # method "elastic": the variables found, by name
+                group.attrs["found"] = np.asarray(d.extra["values"], dtype=np.float64)
+                group.attrs["found_kind"] = d.extra["kind"]
+                if d.extra["names"]:
+                    group.attrs["names"] = [str(n) for n in d.extra["names"]]
             for row in rows(d):
                 _write_row(group.create_group(str(row.k)), row)
         os.replace(tmp, path)
@@ -139,7 +151,7 @@ def write(path: str | Path, found) -> None:
 def _write_row(g, row: Row) -> None:
     g.attrs["kind"] = row.kind
     g.attrs["about"] = row.about
-    g.attrs["edges" if row.unit == "N" else "nodes"] = row.where.astype(np.int64)
+    g.attrs["edges" if row.kind == "tension" else "nodes"] = row.where.astype(np.int64)
     if np.array_equal(row.lo, row.hi):
         g.attrs["target"] = row.lo
     else:
@@ -154,7 +166,11 @@ def _write_row(g, row: Row) -> None:
 def header_lines(found) -> list[str]:
     """The targets as the written case's header names them."""
     d = found.design
-    lines = [f"Targets ({d.message}; {d.variables} force densities by {d.vary[:-1]}):"]
+    what = "force densities"
+    if found.method == "elastic":
+        what = "prestresses" if d.extra.get("kind") == "prestress" else "rest-length factors"
+    by = "edge" if d.vary == "edges" else "cable"
+    lines = [f"Targets ({d.message}; {d.variables} {what} by {by}):"]
     lines += [f"  target[{r.k}] {r.line()}" for r in rows(d)]
     return lines
 

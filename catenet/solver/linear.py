@@ -250,6 +250,15 @@ class LinearSolver:
         self.stats["solve"] += 1
         return x
 
+    def solve_unchecked(self, b: np.ndarray) -> np.ndarray:
+        """A^-1 b with the factors as they are, unchecked: for a caller that refines the
+        result on a matrix of its own (the factors are of a scaled or nearby one)."""
+        start = time.perf_counter()
+        x = self._solve(b)
+        self.seconds["solve"] += time.perf_counter() - start
+        self.stats["solve"] += 1
+        return x
+
     def _refine(self, b: np.ndarray, x: np.ndarray, steps: int = 3) -> bool:
         """Iterative refinement in place: x += A^-1 (b - A x), a few times. False where
         the solution is not finite (nothing to refine)."""
@@ -331,6 +340,9 @@ class PardisoSolver(LinearSolver):
     obstacle costs what the same scene without it costs. ``kind`` is the type in use."""
 
     name = "pardiso"
+    #: Perturbed pivots accepted (a saddle point's: the solves' backward-error check, with
+    #: refinement, then decides); by default they mean a singular matrix.
+    perturbed_ok = False
 
     def __init__(
         self,
@@ -418,7 +430,7 @@ class PardisoSolver(LinearSolver):
 
     def _factorize(self, data: np.ndarray) -> None:
         self._pardiso(22, data, self._dummy, self._dummy)
-        if self.iparm[13] > 0:  # perturbed pivots: (nearly) singular
+        if self.iparm[13] > 0 and not self.perturbed_ok:  # perturbed: (nearly) singular
             raise SingularSystemError(
                 f"PARDISO perturbed {int(self.iparm[13])} pivots: the system is singular or "
                 "nearly so (a mechanism or an all-slack region)",

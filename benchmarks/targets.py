@@ -1,0 +1,130 @@
+"""Form finding by targets at scale: the hypar roof whose every free node must lie on a
+given surface, under its own weight, with one force density per edge as the design
+variables (about 1e3 and 1e4 of them), against the static solve of the same net.
+
+    python benchmarks/targets.py [-o DIR] [--quick]
+
+Per roof (``hypar_on_surface`` of tests/scenes.py, the roof of tests/formfind): the
+search's adjoint gradients and evaluations until every node is on the surface (to
+formfind.tol = 1e-9 of the roof's size), its wall time and so the time per gradient
+(everything of the search: shapes, adjoint solves, damped steps), the damped steps' own
+share (their sparse factorisations: ``catenet.formfind.damped``, and how many SciPy
+solved); then the static analysis of the net found (``catenet run`` on the case it
+writes: the rest lengths that carry the forces found, tension-only) under a snow load of
+SNOW [N/m^2] on its plan, and the wall time of one Newton iteration there (the solve's
+time over its iterations). The ratio of the two is measured in the same run. Writes
+DIR/targets.csv (default benchmarks/results) and prints the table.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+if __package__ in (None, ""):  # python benchmarks/targets.py: the repository root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import click
+
+from benchmarks.common import write_csv
+
+SIZES = (24, 72)  # grid side: 1104 and 10224 force densities
+QUICK_SIZES = (8, 24)
+SNOW = 500.0  # N/m^2 on the plan
+
+
+def roof_row(n: int) -> dict:
+    """One roof: the search, then one static solve of the net found."""
+    import numpy as np
+    from scenes import hypar_on_surface
+
+    from catenet.case import build, parse_case
+    from catenet.formfind.case import formfind_scene
+    from catenet.model.net import Loads, Net
+    from catenet.solver.static import Workspace, solve_static
+
+    with tempfile.TemporaryDirectory() as folder:
+        data, _ = hypar_on_surface(folder, n)
+        scene = build(parse_case(data, base_dir=Path(folder)))
+        start = time.perf_counter()
+        found = formfind_scene(scene)
+        search_s = time.perf_counter() - start
+    d = found.design
+    steps = d.extra.get("steps", {"factorizations": 0, "fallbacks": 0, "seconds": 0.0})
+    net = found.net
+    built = Net.from_arrays(
+        found.x,
+        net.edges,
+        EA=net.EA,
+        fixed=net.fixed,
+        rest_length=found.rest_length(),
+        line_density=net.line_density,
+        tension_only=True,
+    )
+    free = ~np.asarray(net.fixed)
+    snow = np.zeros((net.n_nodes, 3))
+    snow[free, 2] = -SNOW * (24.0 / n) ** 2
+    loads = Loads(force=snow, gravity=np.array([0.0, 0.0, -9.81]))
+    solve_static(built, loads, workspace=Workspace(built))  # (warm: Numba, PARDISO)
+    start = time.perf_counter()
+    static = solve_static(built, loads, workspace=Workspace(built))
+    static_s = time.perf_counter() - start
+    per_gradient = search_s / max(d.gradients, 1)
+    per_newton = static_s / max(static.iterations, 1)
+    return {
+        "force_densities": d.variables,
+        "free_nodes": int(np.count_nonzero(free)),
+        "met": d.all_met,
+        "gradients": d.gradients,
+        "evaluations": d.evaluations,
+        "search_s": search_s,
+        "per_gradient_s": per_gradient,
+        "steps": steps["factorizations"],
+        "steps_by_scipy": steps["fallbacks"],
+        "per_step_s": steps["seconds"] / max(steps["factorizations"], 1),
+        "static_iterations": static.iterations,
+        "static_converged": bool(static.converged),
+        "per_newton_s": per_newton,
+        "gradient_over_newton": per_gradient / per_newton,
+        "step_over_newton": steps["seconds"] / max(steps["factorizations"], 1) / per_newton,
+    }
+
+
+@click.command(name="python benchmarks/targets.py")
+@click.option(
+    "-o",
+    "--output",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=Path(__file__).resolve().parent / "results",
+    show_default="benchmarks/results",
+)
+@click.option("--quick", is_flag=True, help="Smaller roofs (1e2 and 1e3 force densities).")
+def main(out_dir: Path, quick: bool) -> None:
+    """The hypar on its surface: gradients and time per gradient against a Newton
+    iteration."""
+    from benchmarks.common import set_threads
+
+    set_threads(1)
+    roof_row(4)  # (warm: Numba's caches, MKL, the imports)
+    rows = []
+    for n in QUICK_SIZES if quick else SIZES:
+        rows.append(roof_row(n))
+        r = rows[-1]
+        click.echo(
+            f"{r['force_densities']:>6} force densities: {r['gradients']} gradients "
+            f"({'met' if r['met'] else 'NOT met'}), {r['search_s']:.2f} s, "
+            f"{r['per_gradient_s'] * 1e3:.0f} ms per gradient; damped step "
+            f"{r['per_step_s'] * 1e3:.0f} ms ({r['steps_by_scipy']} of {r['steps']} by "
+            f"SciPy); Newton iteration {r['per_newton_s'] * 1e3:.1f} ms: gradient / "
+            f"Newton {r['gradient_over_newton']:.1f}, step / Newton "
+            f"{r['step_over_newton']:.1f}"
+        )
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write_csv(rows, out_dir / "targets.csv")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,127 @@
+"""The design variables of form finding's elastic method (``formfind.method =
+"elastic"``): s -> the rest lengths l0 of the net, and dl0/ds.
+
+``vary = "cables"`` (the default) or ``"edges"``: a factor c on the case's rest lengths
+of each cable (a graph's own edges one each; a net without named cables one for all) or
+of each edge, s = log c, bounded by ``formfind.rest_length_factor_min`` / ``_max``.
+``vary = "prestress"``: the prestress T [N] of each named cable that has one > 0 in the
+case (its own ``prestress``, its material's, or [material] prestress; a net without named
+cables: [material] prestress for all; a strut's compression is kept), s = log T; each
+edge of the cable has the rest length l0 = L / (1 + T / EA) at which it carries T in the
+given geometry (L its length there: how the case derives it), bounded by
+``formfind.prestress_min`` / ``_max``. Other edges keep their rest lengths.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from catenet.errors import ConfigError
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+
+class Variables:
+    """s -> rest lengths; ``groups`` (M,) the variable of each edge (-1: none), ``start``
+    and ``bounds`` (lo, hi) in s, ``names`` (one per variable: the cable's, where named)."""
+
+    def __init__(self, scene, vary: str, bounds: tuple, prefix: str = "formfind."):
+        from catenet.formfind.design import _groups
+
+        net = scene.net
+        self.kind = "prestress" if vary == "prestress" else "factor"
+        self.base = net.rest_length.copy()
+        self.names: list[str] = []
+        if self.kind == "prestress":
+            self.groups, t0, self.names = _prestressed(scene, prefix)
+            ends = net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]]
+            self.length = np.linalg.norm(ends, axis=1)
+            self.EA = np.asarray(net.EA, dtype=np.float64)
+            start = np.log(t0)
+        else:
+            self.groups = np.zeros(net.n_edges, dtype=np.int64)
+            if vary == "edges" or (scene.cables is not None and scene.cables.names):
+                self.groups = _groups(scene, vary, prefix)
+            if vary == "cables" and scene.cables is not None and scene.cables.names:
+                self.names = list(scene.cables.names)
+            start = np.zeros(int(self.groups.max()) + 1)
+        self.n = len(start)
+        lo = -np.inf if bounds[0] is None else math.log(bounds[0])
+        hi = np.inf if bounds[1] is None else math.log(bounds[1])
+        self.bounds = (np.full(self.n, lo), np.full(self.n, hi))
+        self.start = np.clip(start, lo, hi)
+        self.on = self.groups >= 0
+
+    def rest(self, s: np.ndarray) -> np.ndarray:
+        """The rest lengths (M,) at s."""
+        l0 = self.base.copy()
+        g = self.groups[self.on]
+        v = np.exp(np.clip(s, -700.0, 700.0))[g]
+        if self.kind == "prestress":
+            l0[self.on] = self.length[self.on] / (1.0 + v / self.EA[self.on])
+        else:
+            l0[self.on] = self.base[self.on] * v
+        return l0
+
+    def jacobian(self, s: np.ndarray) -> sp.csr_matrix:
+        """dl0/ds (M, n), sparse."""
+        import scipy.sparse as sp
+
+        e = np.flatnonzero(self.on)
+        g = self.groups[e]
+        v = np.exp(s)[g]
+        if self.kind == "prestress":
+            ea, length = self.EA[e], self.length[e]
+            d = -length / ea / (1.0 + v / ea) ** 2 * v  # dl0/dT T
+        else:
+            d = self.base[e] * v
+        return sp.csr_matrix((d, (e, g)), shape=(len(self.groups), self.n))
+
+    def values(self, s: np.ndarray) -> np.ndarray:
+        """The variables themselves: the factors, or the prestresses [N]."""
+        return np.exp(s)
+
+    def at_bound(self, s: np.ndarray) -> int:
+        lo, hi = self.bounds
+        return int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+
+
+def _prestressed(scene, prefix: str) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(groups, T0, names) of the cables with a prestress in the case."""
+    from catenet.case.keys import Checker
+    from catenet.case.kinds.cables import cable_materials
+
+    case, net = scene.case, scene.net
+    cables = getattr(case.geometry, "cables", ()) or ()
+    groups = np.full(net.n_edges, -1, dtype=np.int64)
+    t0: list[float] = []
+    names: list[str] = []
+    if scene.cables is not None and scene.cables.names and cables:
+        mats = cable_materials(Checker(), case.material, cables)
+        edge = np.asarray(scene.cables.edge)
+        for c, (cable, mat) in enumerate(zip(cables, mats, strict=True)):
+            t = getattr(mat, "prestress", None)
+            sel = edge == c
+            if t is None or not t > 0 or not sel.any():  # (a strut's compression: kept)
+                continue
+            groups[sel] = len(t0)
+            t0.append(float(t))
+            names.append(cable.name)
+    elif (getattr(case.material, "prestress", None) or 0.0) > 0:
+        groups[:] = 0
+        t0.append(float(case.material.prestress))
+        names.append("material")
+    if not t0:
+        raise ConfigError(
+            f"{prefix}vary = 'prestress': no cable of this case has a prestress > 0 (a "
+            "graph's [[geometry.cable]] prestress, its material's, or [material] prestress): "
+            "give the cables to vary theirs, or vary = 'cables'"
+        )
+    return groups, np.asarray(t0), names
+
+
+__all__ = ["Variables"]

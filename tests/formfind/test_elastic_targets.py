@@ -1,0 +1,254 @@
+"""Form finding in the elastic equilibrium (formfind.method = "elastic") with cable
+tensions, support reactions, bounds on the rest-length factors and the prestress of
+named cables as design variables: the adjoint Jacobian of every target kind against
+finite differences, a stay whose horizontal tension is given (the elastic catenary's
+rest length), a guyed mast whose guys' prestress is found, bounds, and bad input.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import CONFIGS
+
+from catenet.case import build, dumps_toml, parse_case
+from catenet.cli import main
+from catenet.formfind.case import formfind_scene
+
+MAST = CONFIGS / "structures" / "guyed_mast.toml"
+W = 7850.0 * math.pi * 0.02**2 * 9.81  # the stay's weight per length [N/m]
+
+
+def stay(*targets, **formfind) -> dict:
+    """A level stay of 100 m span, EA = 1e8 N, 0.02 m steel, under its own weight."""
+    return {
+        "title": "stay",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [100, 0, 0], "nodes": 21},
+        "material": {"EA": 1e8, "density": 7850.0, "radius": 0.02},
+        "load": {"gravity": [0, 0, -9.81]},
+        "solver": {"rtol": 1e-12},
+        "formfind": {"method": "elastic", **formfind},
+        "target": list(targets),
+    }
+
+
+def mast(*targets, **formfind) -> dict:
+    """configs/structures/guyed_mast.toml under its own weight too, form-found."""
+    data = tomllib.loads(MAST.read_text())
+    data.pop("output", None)
+    data["material"].update(density=7850.0, radius=0.01)
+    data["load"]["gravity"] = [0.0, 0.0, -9.81]
+    data["solver"] = {"rtol": 1e-12}
+    data["formfind"] = {"method": "elastic", **formfind}
+    data["target"] = list(targets)
+    return data
+
+
+def invoke(tmp_path, data: dict, *more):
+    case = tmp_path / "case.toml"
+    case.write_text(dumps_toml(data))
+    out = tmp_path / "out.h5"
+    result = CliRunner().invoke(main, ["formfind", str(case), "-o", str(out), *more])
+    return result, out
+
+
+# ------------------------------------------------------------------- the adjoint
+
+
+def equilibria(data: dict, seed: int):
+    """The elastic search's equilibria and goals of a case, and a point s near its start."""
+    from catenet.formfind.elastic import _Equilibria
+    from catenet.formfind.goals import resolve_goals
+    from catenet.formfind.variables import Variables
+    from catenet.solver.settings import Settings
+
+    case = parse_case(data)
+    scene = build(case)
+    settings = Settings.of(case.solver)
+    goals = resolve_goals(case.targets, scene, 30.0, 1e-30)
+    variables = Variables(scene, case.formfind.vary or "cables", (None, None))
+    eq = _Equilibria(scene, settings, variables)
+    rng = np.random.default_rng(seed)
+    scale = 0.02 if variables.kind == "prestress" else 1e-4  # (the strut: 1e-4 is 2 MN)
+    return eq, goals, variables.start + scale * rng.standard_normal(variables.n)
+
+
+TARGETS = [
+    {"node": "top", "point": [0.05, 0.0, 20.0]},
+    {"cable": "guy_windward", "tension": 25.0e3},
+    {"cable": "guy_lee*", "tension": [0.0, 10.0e3]},  # above the range: its slope counts
+    {"support": 2, "reaction": [-1.0e3, 0.0, 9.0e3]},
+    {"support": 3, "reaction_z": -1.0e4, "weight": 2.0},
+]
+
+
+@pytest.mark.parametrize("vary", ["prestress", "cables", "edges"])
+def test_the_elastic_adjoint_jacobian_of_every_target_is_the_finite_differences_one(vary):
+    """dr/ds of positions, tensions (a value and a range) and reactions (a vector, one
+    component) by solves with the tangent stiffness, against central differences of the
+    equilibria, for the guys' prestress, a rest-length factor per cable and per edge."""
+    eq, goals, s = equilibria(mast(*TARGETS, vary=vary), seed=1)
+
+    def residual(s):
+        return goals.w * goals.miss(eq.achieved(s, goals))
+
+    j = eq.jacobian(s, goals)
+    h = 1e-6
+    cols = np.arange(len(s)) if len(s) < 12 else np.arange(0, len(s), 4)
+    fd = np.column_stack(
+        [(residual(s + h * e) - residual(s - h * e)) / (2 * h) for e in np.eye(len(s))[cols]]
+    )
+    for k in range(len(TARGETS)):  # every target moves with the variables
+        assert np.abs(fd[goals.of == k]).max() > 1e-4 * np.abs(fd).max()
+    assert np.abs(j[:, cols] - fd).max() <= 1e-6 * np.abs(fd).max()
+
+
+# ------------------------------------------------------------------- closed forms
+
+
+def test_a_stay_whose_horizontal_tension_is_given_has_the_elastic_catenary_rest_length(
+    tmp_path,
+):
+    """The support's horizontal reaction -H = -20 kN asked: the rest length found is the
+    exact discrete elastic chain's for that H (catenet's model of the catenary) to 1e-8;
+    `catenet run` on the case written gives that reaction."""
+    import h5py
+    from scipy.optimize import brentq
+
+    from catenet.validate.analytic import discrete_catenary
+
+    data = stay({"support": 0, "reaction_x": -20.0e3})
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    assert "support 0 reaction_x" in r.output and "met)" in r.output
+    f = formfind_scene(build(parse_case(data)))
+    exact = brentq(
+        lambda L0: discrete_catenary(L0, 1e8, W, 100.0, 20).H - 20.0e3, 100.0, 130.0, xtol=1e-14
+    )
+    assert abs(f.net.rest_length.sum() - exact) <= 1e-8 * exact
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/reaction"][0, 0] + 20.0e3) <= 1e-6 * 20.0e3
+
+
+def test_a_stay_whose_tension_is_bounded_meets_its_range():
+    """Every edge of the stay at most 15 kN (it starts taut at about 24 kN): the tension
+    found is at most 15 kN, and the edge at the supports (the largest) reaches it."""
+    data = stay({"cable": "*", "tension": [0.0, 15.0e3]})
+    data["geometry"] = {"kind": "graph", "nodes": [[0, 0, 0], [100, 0, 0]], "fixed": [0, 1]}
+    data["geometry"].update(edges=[], cable=[{"name": "stay", "nodes": [0, 1]}], edge_length=5.0)
+    data["material"]["prestress"] = 1.0e3
+    f = formfind_scene(build(parse_case(data)))
+    assert f.design.all_met
+    assert f.force.max() <= 15.0e3 * (1 + 1e-9)
+
+
+# ------------------------------------------------------------------- the mast's prestress
+
+
+def test_the_guys_prestress_that_holds_the_mast_top_upright_under_its_load(tmp_path):
+    """The top pushed 10 kN downwind: the four guys' prestress (one variable each) that
+    keep it at x = 0 with the mast's foot carrying 90 kN; found, reported, and the case
+    written keeps the top there and the foot's reaction."""
+    import h5py
+
+    data = mast(
+        {"node": "top", "x": 0.0},
+        {"support": "foot", "reaction_z": 9.0e4},
+        vary="prestress",
+    )
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    assert "4 prestresses (one per cable): " in r.output and "met)" in r.output
+    with h5py.File(out) as h5:
+        g = h5["result/targets"].attrs
+        assert g["found_kind"] == "prestress" and list(g["names"])[0] == "guy_windward"
+        assert len(g["found"]) == 4
+        t = h5["result/targets/1"].attrs
+        assert t["kind"] == "reaction_z" and list(t["nodes"]) == [0] and bool(t["met"])
+        assert abs(float(t["achieved"][0]) - 9.0e4) <= 1e-6 * 9.0e4
+    assert "4 prestresses by cable" in out.with_suffix(".toml").read_text()
+    f = formfind_scene(build(parse_case(data)))
+    d = f.design
+    assert d.all_met and d.variables == 4 and d.extra["names"][0] == "guy_windward"
+    wind, lee = d.extra["values"][:2]
+    assert wind > 20.0e3 > lee > 0  # the windward guy pulls the top back
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][1, 0]) <= 1e-6
+        assert abs(h5["result/reaction"][0, 2] - 9.0e4) <= 1e-6 * 9.0e4
+
+
+def test_bounds_hold_the_prestress_and_the_rest_length_factors():
+    """The top at x = 0 needs more windward prestress than 21 kN allows: every prestress
+    within [19, 21] kN, the target missed (the compromise), the bound reported; the
+    rest-length factors likewise within [0.9999, 1.0001]."""
+    data = mast({"node": "top", "x": 0.0}, vary="prestress", prestress_min=19e3, prestress_max=21e3)
+    f = formfind_scene(build(parse_case(data)))
+    v = f.design.extra["values"]
+    assert np.all((v >= 19e3 * (1 - 1e-12)) & (v <= 21e3 * (1 + 1e-12)))
+    assert not f.design.all_met and f.design.at_bound > 0
+    data = mast(
+        {"node": "top", "x": 0.0}, rest_length_factor_min=0.9999, rest_length_factor_max=1.0001
+    )
+    f = formfind_scene(build(parse_case(data)))
+    c = f.design.extra["values"]
+    assert np.all((c >= 0.9999 * (1 - 1e-12)) & (c <= 1.0001 * (1 + 1e-12)))
+    assert f.design.at_bound > 0
+
+
+# ------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize(
+    ("target", "extra", "message"),
+    [
+        ({"cable": "stay*", "tension": 1e3}, {}, "target[0].cable = 'stay*': matches no cable"),
+        ({"support": "top", "reaction_z": 1.0}, {}, "target[0].support = 'top': node 1 is free"),
+        ({"support": 0}, {}, "needs reaction = [Rx, Ry, Rz] or any of"),
+        ({"reaction_z": 1.0}, {}, "target[0].reaction_z = 1.0: a support's target: give support"),
+        ({"support": 0, "reaction": [1, 2, 3], "reaction_z": 1.0}, {}, "give reaction or its"),
+        ({"support": 0, "node": 1, "reaction_z": 1.0}, {}, "support takes reaction"),
+        ({"node": "top", "x": 0.0}, {"prestress_min": 5.0, "prestress_max": 1.0}, "must be >"),
+        (
+            {"node": "top", "x": 0.0},
+            {"rest_length_factor_min": 1.1, "rest_length_factor_max": 0.9},
+            "formfind.rest_length_factor_max = 0.9: must be > formfind.rest_length_factor_min",
+        ),
+        ({"node": "top", "x": 0.0}, {"prestress_min": 5.0}, "formfind.prestress_min = 5.0: bounds"),
+        (
+            {"node": "top", "x": 0.0, "hard": True},
+            {"vary": "prestress", "prestress_min": 19e3, "prestress_max": 21e3},
+            "hard = true): cannot be met to formfind.tol",
+        ),
+        (
+            {"node": "top", "x": 0.0},
+            {"vary": "prestress", "rest_length_factor_max": 2.0},
+            "formfind.rest_length_factor_max = 2.0: bounds rest-length factors",
+        ),
+    ],
+)
+def test_bad_elastic_targets_exit_2_with_one_message(tmp_path, target, extra, message):
+    r, out = invoke(tmp_path, mast(target, **extra))
+    assert r.exit_code == 2, r.output
+    assert message in r.output, r.output
+    assert "Traceback" not in r.output and not out.exists()
+
+
+def test_prestress_belongs_to_the_elastic_method(tmp_path):
+    data = mast({"node": "top", "x": 0.0}, vary="prestress")
+    data["formfind"]["method"] = "linear"
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "formfind.vary = 'prestress': only with method" in r.output
+    r, _ = invoke(tmp_path, stay({"node": "midpoint", "z": -2.0}, vary="prestress"))
+    assert r.exit_code == 2 and "no cable of this case has a prestress > 0" in r.output
