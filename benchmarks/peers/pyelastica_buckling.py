@@ -24,7 +24,7 @@ default).
   mid-span deflection at P = 0.8 P_e over that at P = 0 is the beam-column's
   amplification, 12 (2 sec u - 2 - u^2) / (5 u^4) with u = (pi / 2) sqrt(P / P_cr)
   (Timoshenko and Gere, Theory of Elastic Stability, 1.11): solved for P_cr. The runs
-  last 1 s (P = 0) and 2.5 s (P = 0.8 P_e: 3 s changes the deflection by 3e-5).
+  last 1 s (P = 0) and 2.5 s (P = 0.8 P_e: 3 s changes the deflection by under 3e-5).
   catenet's static solves of the same two loads give its P_cr by the same route.
 
 Usage: python benchmarks/peers/pyelastica_buckling.py [--edges 50,100]
