@@ -40,16 +40,24 @@ import contextlib
 import io
 import logging
 import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-L = 1.0
-RADIUS = 0.01
-EI = 1.0
-E = 4.0 * EI / (math.pi * RADIUS**4)
-DENSITY = 1000.0
-SHEAR_FACTOR = 1.0 / 3.0  # G = E / (2 (1 + nu)), nu = 0.5: PyElastica's default
+if __package__ in (None, ""):  # run as a script: the repository's root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
+from benchmarks.peers.pyelastica_cantilever import (  # noqa: E402 (the rod of all three)
+    DENSITY,
+    EI,
+    RADIUS,
+    E,
+    L,
+    elastica_rod,
+)
+
 EULER = math.pi**2 * EI / L**2
 LATERAL = 1e-2 * EULER  # N: the imperfection, q L
 RATIO = 0.8  # P / P_e of the loaded imperfect strut
@@ -146,17 +154,7 @@ def pyelastica_deflection(edges: int, load: float, dt: float, final_time: float)
         pass
 
     sim = Strut()
-    rod = ea.CosseratRod.straight_rod(
-        edges,
-        np.zeros(3),
-        np.array([1.0, 0.0, 0.0]),
-        np.array([0.0, 1.0, 0.0]),
-        L,
-        RADIUS,
-        DENSITY,
-        youngs_modulus=E,
-        shear_modulus=SHEAR_FACTOR * E,
-    )
+    rod = elastica_rod(ea, edges)
     sim.append(rod)
     held, across = np.array([True, True, True]), np.array([False, True, True])
     sim.constrain(rod).using(ea.GeneralConstraint, constrained_position_idx=(0,),

@@ -60,6 +60,22 @@ def catenet_tip(alpha: float, edges: int) -> tuple[np.ndarray, float]:
     return np.array([tip[0], -tip[2]]) / L, spent
 
 
+def elastica_rod(ea, edges: int, start=(0.0, 0.0, 0.0), normal=(0.0, 1.0, 0.0)):
+    """PyElastica's ``CosseratRod`` of this rod (the cantilever's, the buckling strut's and
+    the falling rod's): ``edges`` elements along +x from ``start``."""
+    return ea.CosseratRod.straight_rod(
+        edges,
+        np.asarray(start, dtype=np.float64),
+        np.array([1.0, 0.0, 0.0]),
+        np.asarray(normal, dtype=np.float64),
+        L,
+        RADIUS,
+        DENSITY,
+        youngs_modulus=E,
+        shear_modulus=SHEAR_FACTOR * E,
+    )
+
+
 def pyelastica_tip(alpha: float, edges: int, dt: float, final_time: float):
     """(tip (x, y) / L, CPU seconds, steps) of PyElastica's cantilever."""
     import elastica as ea
@@ -68,17 +84,7 @@ def pyelastica_tip(alpha: float, edges: int, dt: float, final_time: float):
         pass
 
     sim = Cantilever()
-    rod = ea.CosseratRod.straight_rod(
-        edges,
-        np.zeros(3),
-        np.array([1.0, 0.0, 0.0]),
-        np.array([0.0, 1.0, 0.0]),
-        L,
-        RADIUS,
-        DENSITY,
-        youngs_modulus=E,
-        shear_modulus=SHEAR_FACTOR * E,
-    )
+    rod = elastica_rod(ea, edges)
     sim.append(rod)
     sim.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,),
                              constrained_director_idx=(0,))  # fmt: skip

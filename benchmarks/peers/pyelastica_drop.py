@@ -45,16 +45,24 @@ import argparse
 import contextlib
 import io
 import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-L = 1.0
-RADIUS = 0.01
-EI = 1.0
-E = 4.0 * EI / (math.pi * RADIUS**4)
-DENSITY = 1000.0
-SHEAR_FACTOR = 1.0 / 3.0  # G = E / (2 (1 + nu)), nu = 0.5: PyElastica's default
+if __package__ in (None, ""):  # run as a script: the repository's root on the path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
+from benchmarks.peers.pyelastica_cantilever import (  # noqa: E402 (the rod of all three)
+    DENSITY,
+    EI,
+    RADIUS,
+    E,
+    L,
+    elastica_rod,
+)
+
 HEIGHT = 0.05  # m: the underside above the plane
 GRAVITY = 9.81
 EDGES = 50
@@ -167,17 +175,7 @@ def pyelastica_drop(
         pass
 
     sim = Drop()
-    rod = ea.CosseratRod.straight_rod(
-        EDGES,
-        np.array([0.0, 0.0, RADIUS + HEIGHT]),
-        np.array([1.0, 0.0, 0.0]),
-        np.array([0.0, 0.0, 1.0]),
-        L,
-        RADIUS,
-        DENSITY,
-        youngs_modulus=E,
-        shear_modulus=SHEAR_FACTOR * E,
-    )
+    rod = elastica_rod(ea, EDGES, start=(0.0, 0.0, RADIUS + HEIGHT), normal=(0.0, 0.0, 1.0))
     sim.append(rod)
     plane = ea.Plane(plane_origin=np.zeros(3), plane_normal=np.array([0.0, 0.0, 1.0]))
     sim.append(plane)
