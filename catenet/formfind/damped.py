@@ -222,18 +222,11 @@ class Layout:
 
     def _superlu(self, data: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         import scipy.sparse as sp
-        from scipy.sparse.linalg import splu
+
+        from catenet.formfind.newton import superlu_solve
 
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
-        a = (a + sp.triu(a, k=1).T).tocsc()
-        try:
-            lu = splu(a)
-        except RuntimeError as exc:  # exactly singular
-            raise SingularSystemError(f"SciPy: {exc}") from None
-        x = lu.solve(rhs)
-        for _ in range(2):  # refinement: the saddle point is often badly scaled
-            x += lu.solve(rhs - a @ x)
-        return x
+        return superlu_solve((a + sp.triu(a, k=1).T).tocsc(), rhs)
 
 
 __all__ = ["Layout"]

@@ -136,23 +136,30 @@ class Kkt:
 
     def _superlu(self, data, rhs, weight=None):
         import scipy.sparse as sp
-        from scipy.sparse.linalg import splu
 
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
         a = a + sp.triu(a, k=1).T
         if weight is not None:
             a = a - sp.coo_matrix(weight, shape=(self.n, self.n)).tocsr()
-        a = a.tocsc()
-        try:
-            lu = splu(a)
-        except RuntimeError as exc:  # exactly singular
-            raise SingularSystemError(f"SciPy: {exc}") from None
-        x = lu.solve(rhs)
-        for _ in range(2):  # refinement: the saddle point is often badly scaled
-            x += lu.solve(rhs - a @ x)
-        if not np.all(np.isfinite(x)):
-            raise SingularSystemError("the Newton system is singular")
-        return x
+        return superlu_solve(a.tocsc(), rhs)
+
+
+def superlu_solve(a, rhs: np.ndarray) -> np.ndarray:
+    """x of a x = rhs (a: SciPy CSC) by SciPy's SuperLU, refined twice on a (a saddle
+    point is often badly scaled); SingularSystemError where a is singular or x is not
+    finite."""
+    from scipy.sparse.linalg import splu
+
+    try:
+        lu = splu(a)
+    except RuntimeError as exc:  # exactly singular
+        raise SingularSystemError(f"SciPy: {exc}") from None
+    x = lu.solve(rhs)
+    for _ in range(2):
+        x += lu.solve(rhs - a @ x)
+    if not np.all(np.isfinite(x)):
+        raise SingularSystemError("the system is singular (its solution is not finite)")
+    return x
 
 
 def newton(
