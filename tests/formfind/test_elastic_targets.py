@@ -15,9 +15,10 @@ import pytest
 from click.testing import CliRunner
 from conftest import CONFIGS
 
-from catenet.case import build, dumps_toml, parse_case
+from catenet.case import build, parse_case
 from catenet.cli import main
 from catenet.formfind.case import formfind_scene
+from tests.formfind.test_targets import invoke
 
 MAST = CONFIGS / "structures" / "guyed_mast.toml"
 W = 7850.0 * math.pi * 0.02**2 * 9.81  # the stay's weight per length [N/m]
@@ -46,14 +47,6 @@ def mast(*targets, **formfind) -> dict:
     data["formfind"] = {"method": "elastic", **formfind}
     data["target"] = list(targets)
     return data
-
-
-def invoke(tmp_path, data: dict, *more):
-    case = tmp_path / "case.toml"
-    case.write_text(dumps_toml(data))
-    out = tmp_path / "out.h5"
-    result = CliRunner().invoke(main, ["formfind", str(case), "-o", str(out), *more])
-    return result, out
 
 
 # ------------------------------------------------------------------- the adjoint
