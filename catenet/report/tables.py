@@ -205,9 +205,9 @@ def cable_table(states: States, g: Groups, s: State, peaks: bool) -> Table:
         row = [name, int(idx.size), top, top_e, low, low_e, u, u_e, length, int(loose.size)]
         if peaks:
             p, p_e = _at(s.arrays["peak_tension"], idx, True)
-            when = s.arrays["peak_tension_time"][p_e] if p_e is not None else math.nan
+            row += [p, _when(s, "peak_tension_time", p_e)]
             pu = s.get("peak_utilisation")
-            row += [p, float(when), _at(pu, idx, True)[0] if pu is not None else math.nan]
+            row += [_at(pu, idx, True)[0] if pu is not None else math.nan]
         rows.append(row)
     note = (
         "tension: the axial force [N], negative in a strut in compression; utilisation: "
@@ -268,6 +268,13 @@ def _force(f: np.ndarray) -> list[float]:
     return [float(f[0]), float(f[1]), float(f[2]), float(np.linalg.norm(f))]
 
 
+def _when(s: State, name: str, k: int | None) -> float:
+    """The time of a peak at element ``k`` of the file's ``name`` (NaN where the file
+    keeps none)."""
+    times = s.get(name)
+    return float(times[k]) if times is not None and k is not None else math.nan
+
+
 def displacement_table(states: States, g: Groups, s: State, peaks: bool) -> Table:
     """The largest displacement |x - X| [m] of the free nodes and of each node set with
     a free node, where, and its components; with ``peaks`` the largest over the run."""
@@ -287,10 +294,10 @@ def displacement_table(states: States, g: Groups, s: State, peaks: bool) -> Tabl
             continue
         value, k = _at(size, idx, True)
         row = [name, value, k, *(float(c) for c in (u[k] if k is not None else np.full(3, np.nan)))]
-        if peaks and s.get("peak_displacement") is not None:
-            p, pk = _at(s.arrays["peak_displacement"], idx, True)
-            when = s.arrays["peak_displacement_time"][pk] if pk is not None else math.nan
-            row += [p, pk, float(when)]
+        if peaks:  # n/a where the file keeps no peak displacement
+            peak = s.get("peak_displacement")
+            p, pk = _at(peak, idx, True) if peak is not None else (math.nan, None)
+            row += [p, pk, _when(s, "peak_displacement_time", pk)]
         rows.append(row)
     return Table("displacements", "Displacements", tuple(columns), rows, "")
 

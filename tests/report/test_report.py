@@ -269,6 +269,20 @@ t_end = 0.6
     k = int(np.argmax(peak))
     assert row[1][0] == "cable" and row[1][-3:] == [g6(peak[k]), g6(when[k]), g6(pu.max())]
     assert pu.max() == pytest.approx(peak[k] * 1.5 / 4.0e3, rel=1e-12)
+    # a file that lost a peak's times (or its peak displacements) is reported with n/a
+    # there, the rest as before (a fuzzed file once gave a KeyError)
+    with h5py.File(out, "a") as h5:
+        del h5["result/peak_displacement_time"]
+        del h5["result/peak_tension_time"]
+    md = invoke("report", out, "-o", "-").output
+    row = table(sections(md)["base state"], "Cables")
+    assert row[1][-3:] == [g6(peak[k]), "n/a", g6(pu.max())]
+    shown = table(sections(md)["base state"], "Displacements")
+    assert shown[1][-1] == "n/a" and shown[1][-3] != "n/a"
+    with h5py.File(out, "a") as h5:
+        del h5["result/peak_displacement"]
+    shown = table(sections(invoke("report", out, "-o", "-").output)["base state"], "Displacements")
+    assert shown[1][-3:] == ["n/a", "n/a", "n/a"] and len(shown[1]) == len(shown[0])
 
 
 def test_square_net_cables_by_name(tmp_path):
