@@ -222,3 +222,23 @@ def test_the_rung_takes_the_loads_as_a_static_run_does():
         for t in (0.0, 1.0, 7.0):
             assert np.array_equal(held.external_force(net, time=t), static)
             assert np.array_equal(held.support_positions(net, time=t), loads.support_positions(net))
+
+
+@pytest.mark.parametrize("jitter", [0.0, 1e-12])
+def test_slack_is_decided_with_a_margin_over_round_off(jitter):
+    """A cable given at its rest length (a flat, unstressed start) is not slack, whatever
+    1e-12 m of round-off its nodes carry; one given 1 % longer than its chord is, with the
+    same jitter, and only from the unloaded start."""
+    from catenet.errors import LastGood
+
+    rng = np.random.default_rng(5)
+    for length, slack in ((None, False), (1.01, True)):
+        g = {"kind": "cable", "start": [0, 0, 0], "end": [10, 0, 0], "nodes": 21}
+        if length is not None:
+            g["length"] = 10.0 * length
+        material = {"EA": 1e6, "area": 1e-4, "density": 7850.0}
+        case = {"geometry": g, "material": material, "load": {"gravity": [0, 0, -9.81]}}
+        net = build(parse_case(case)).net
+        x = net.nodes + jitter * rng.standard_normal(net.nodes.shape)
+        assert loadsteps._hangs_slack(net, LastGood(x, 0.0)) is slack
+        assert loadsteps._hangs_slack(net, LastGood(x, 0.5)) is False
