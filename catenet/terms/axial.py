@@ -94,8 +94,10 @@ class AxialDamping(Term):
             return 0.0
         s = self._stretch(x)
         force = (self.kv * self.rate * s)[:, None] * self.tang
-        np.add.at(grad, self.edges[:, 1], force)
-        np.subtract.at(grad, self.edges[:, 0], force)
+        n = len(grad)
+        i, j = self.edges[:, 0], self.edges[:, 1]
+        for a in range(3):  # (bincount: the edges' sums per node, no np.add.at loop)
+            grad[:, a] += np.bincount(j, force[:, a], n) - np.bincount(i, force[:, a], n)
         return 0.5 * float(np.sum(self.kv * self.rate * s * s))
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> bool:
