@@ -156,7 +156,10 @@ def modes_case(
         )
     if result.stable is False:
         raise ConvergenceError(f"modes: the equilibrium found is unstable: {result.diagnosis}")
-    modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables, added=added)
+    try:
+        modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables, added=added)
+    except ConfigError as exc:  # the input was sound: the equilibrium found holds nothing
+        raise ConvergenceError(f"modes about the equilibrium found: {exc}") from None
     if path is not None:
         write_modes(path, scene, modes, about=load_case)
     return ModesRun(result, modes, path, scene, load_case)

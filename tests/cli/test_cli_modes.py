@@ -147,3 +147,19 @@ def test_dynamic_case_must_come_to_rest(tmp_path):
     assert done.returncode == 1, done.stderr
     assert "before the net came to rest" in done.stderr
     assert (tmp_path / "out" / "net.h5").exists()  # the run's own file, as catenet run's
+
+
+def test_an_equilibrium_without_stiffness_exits_1_and_keeps_it(tmp_path):
+    """A sound case whose equilibrium carries no tension to speak of (gravity 1e-300, a
+    fuzzed case): the equilibrium is solved and written, its modes do not exist: exit 1
+    (a result, not bad input), the file kept."""
+    from tests.conftest import CONFIGS
+
+    (tmp_path / "c.toml").write_text((CONFIGS / "catenary.toml").read_text())
+    done = run("modes", "c.toml", "-o", "c.h5", "--set", "load.gravity=[0, 0, 1e-300]",
+               cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "modes about the equilibrium found: " in done.stderr
+    assert "no free node has both mass and stiffness" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert (tmp_path / "c.h5").exists()
