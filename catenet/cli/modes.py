@@ -82,7 +82,8 @@ def command(
     Mass: material.density per unstressed volume (rho A l0 / 2 at each end of an
     edge) plus [[mass]] point masses. Zero-frequency modes (a node on slack edges
     only, a mechanism) are named, not listed.
-    Exit status: 0 done; 1 the equilibrium failed (or is unstable, or not at rest);
+    Exit status: 0 done; 1 the equilibrium failed (or is unstable, not at rest, or
+    holds no stiffness);
     2 bad input (case file, --set, --count, a net without mass).
     """
     setup_logging(quiet, verbose, debug)
