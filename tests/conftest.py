@@ -232,6 +232,14 @@ def pytest_configure(config):
         "CATENET_ROUNDOFF=1 (every built net's coordinates moved by 1e-12 of its size, and "
         "two threads), so that a verdict that hangs on round-off fails here",
     )
+    # One thread of MKL, OpenBLAS and Numba in each process, a run's default
+    # (solver.threads = 1): for what tests call below the CLI (path.solve, the validation
+    # cases). The libraries' own default, a thread per core in each of xdist's workers,
+    # makes their spinning threads wait on each other (a 300 x 300 eigenvalue problem of a
+    # stability verdict 8x slower). Tests of threading set their own counts.
+    from catenet.solver.threads import set_threads
+
+    set_threads(1)
     if os.environ.get("CATENET_ROUNDOFF"):
         _perturb_every_scene()
 

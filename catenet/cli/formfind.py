@@ -51,8 +51,10 @@ def command(
     with errors_to_exit_codes(debug):
         from catenet.case import load_case
         from catenet.formfind import write_formfind
+        from catenet.solver.threads import set_threads
 
         case = load_case(case_file, overrides)
+        set_threads(case.solver.threads)
         written = write_formfind(case, out)
         if not quiet:
             _summary(written)

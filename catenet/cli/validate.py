@@ -54,8 +54,10 @@ def command(output: Path | None, quiet: bool, verbose: int, debug: bool) -> None
         if output is not None and not output.resolve().parent.is_dir():
             raise ConfigError(f"--output = {str(output)!r}: its directory does not exist")
 
+        from catenet.solver.threads import set_threads
         from catenet.validate import table as validation
 
+        set_threads(1)  # a run's default (solver.threads): the checks' systems are small
         rows = validation.run()
         if not quiet:
             click.echo(validation.format_table(rows))
