@@ -75,7 +75,7 @@ class Law:
         return cls(
             kind=np.full(n_edges, LAWS[name].id, dtype=np.int64),
             params=np.ascontiguousarray(params),
-            tension_only=np.ascontiguousarray(only),
+            tension_only=np.array(only),  # a writable copy: one compiled kernel, not two
             table=np.ascontiguousarray(rows),
         )
 
@@ -109,7 +109,7 @@ class Law:
 
     def with_tension_only(self, tension_only) -> Law:
         only = np.broadcast_to(np.asarray(tension_only, dtype=np.bool_), self.kind.shape)
-        return dataclasses.replace(self, tension_only=np.ascontiguousarray(only))
+        return dataclasses.replace(self, tension_only=np.array(only))
 
     @cached_property
     def kernel_kind(self) -> np.ndarray | None:
@@ -155,8 +155,8 @@ class Law:
             self.params,
             self.table,
             self.tension_only,
-            np.ascontiguousarray(tension),
-            np.ascontiguousarray(EA),
+            np.array(tension),  # writable copies: one compiled kernel
+            np.array(EA),
         )
 
 
