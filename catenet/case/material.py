@@ -192,6 +192,15 @@ class MaterialConfig(Declared):
     G: float | None = real(
         None, gt=0, write="given", unit="Pa", doc='shear modulus, for GJ = "section"'
     )
+    polar_inertia: float | None = real(
+        None,
+        ge=0,
+        write="given",
+        unit="kg m",
+        shown="density pi (r^4 - ri^4) / 2 from radius",
+        doc="modes of rods that twist (GJ > 0): the mass polar moment of inertia per length "
+        "rho J_p, the twist's rotational inertia (0: none, the twist stays quasistatic)",
+    )
     natural_curvature: str = choice(
         "straight",
         ("straight", "given"),
@@ -247,6 +256,15 @@ class MaterialConfig(Declared):
             inertia = self.second_moment
             return 0.0 if self.G is None or inertia is None else 2.0 * self.G * inertia
         return float(self.GJ)
+
+    @property
+    def rotational_inertia(self) -> float | None:
+        """rho J_p [kg m]: the mass polar moment per length, as given, or the density times
+        the polar moment of the round (or tube) section, 2 I; None without either."""
+        if self.polar_inertia is not None:
+            return float(self.polar_inertia)
+        inertia = self.second_moment
+        return None if inertia is None else 2.0 * self.density * inertia
 
     @property
     def axial_stiffness(self) -> float | None:

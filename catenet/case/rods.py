@@ -9,6 +9,7 @@ single cable. Clamped nodes are pinned too (a clamp holds the node and its tange
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from catenet.model.rods import Rods, build_rods
 
 if TYPE_CHECKING:
     from catenet.case.parse import Case
+    from catenet.model.torsion import Torsion
     from catenet.terms.bending import Bending
     from catenet.terms.twist import Twist
 
@@ -52,9 +54,15 @@ def with_clamps(net: Net, clamped: np.ndarray) -> Net:
     return net.replace(fixed=fixed)
 
 
-def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, ...]:
+def _polar(mat: Any) -> float:
+    """rho J_p [kg m] of a material, NaN where neither given nor from a section."""
+    value = mat.rotational_inertia
+    return math.nan if value is None else value
+
+
+def _per_edge(case: Case, built: Any, net: Net, polar: bool = False) -> tuple[np.ndarray, ...]:
     """EI (M,), GJ (M,), the natural-curvature switch (M,) and the line (M,) of every
-    edge."""
+    edge (and with ``polar`` each edge's rho J_p (M,) [kg m], NaN where unknown)."""
     m = net.n_edges
     cables = getattr(case.geometry, "cables", ())
     if built.cables is not None and cables:
@@ -63,7 +71,10 @@ def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, ...]:
         ei = np.array([mat.bending_stiffness for mat in mats] + [0.0])
         gj = np.array([mat.torsional_stiffness for mat in mats] + [0.0])
         given = np.array([mat.natural_curvature == "given" for mat in mats] + [False])
-        return ei[line], gj[line], given[line], line  # line -1 (the graph's own edges): the last
+        if polar:  # line -1 (the graph's own edges): the last
+            rho_j = np.array([_polar(mat) for mat in mats] + [0.0])
+            return ei[line], gj[line], given[line], line, rho_j[line]
+        return ei[line], gj[line], given[line], line
     material = case.material
     if case.geometry.kind == "graph":  # a graph without cables: no lines
         line = np.full(m, -1, dtype=np.int64)
@@ -74,6 +85,8 @@ def _per_edge(case: Case, built: Any, net: Net) -> tuple[np.ndarray, ...]:
     ei = np.full(m, material.bending_stiffness)
     gj = np.full(m, material.torsional_stiffness)
     given = np.full(m, material.natural_curvature == "given")
+    if polar:
+        return ei, gj, given, line, np.full(m, _polar(material))
     return ei, gj, given, line
 
 
@@ -162,7 +175,8 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
     if not len(twists):
         warn_once(
             "material.GJ > 0, but no twisting rod is clamped at both ends (nor closed): "
-            "nothing twists (a rod with a free or pinned end untwists)"
+            "nothing twists at rest (a rod with a free or pinned end untwists); catenet "
+            "modes has its torsional modes"
         )
         return None
     x0 = np.zeros((n_nodes, 3))
@@ -186,3 +200,44 @@ def _ring_twists(case: Case, twists: Any, line: np.ndarray) -> list:
     if problems:
         raise ConfigError(problems)
     return out
+
+
+def case_torsion(
+    case: Case, built: Any, net: Net, rods: Rods | None, twist: Twist | None
+) -> Torsion | None:
+    """The twisting chains with their twist angles as DOFs for ``catenet modes``
+    (``catenet.model.torsion``; None: no rod twists). Where a twisting rod's rotational
+    inertia is unknown (no radius, no ``polar_inertia``), its chains are left out and
+    ``Torsion.missing`` says which key to give."""
+    if rods is None:
+        return None
+    _, gj, _, line, polar = _per_edge(case, built, net, polar=True)
+    if not (gj > 0.0).any():
+        return None
+    from dataclasses import replace
+
+    from catenet.model.torsion import build_torsion
+
+    rigid = rods.rigid
+    known = np.where(np.isnan(polar), 0.0, polar)
+    torsion = build_torsion(
+        net, gj, known, line, rods.clamps[rigid], rods.tangent[rigid],
+        None if twist is None else twist.twists,
+    )  # fmt: skip
+    unknown = (gj > 0.0) & np.isnan(polar)
+    if not unknown.any():
+        return torsion
+    cables = getattr(case.geometry, "cables", ())
+    where = sorted({int(c) for c in line[unknown] if c >= 0}) if cables else []
+    paths = [f"geometry.cable[{c}].material" for c in where] or ["material"]
+    missing = (
+        f"{paths[0]}.polar_inertia: a rod that twists (GJ > 0) needs its rotational "
+        "inertia for its modes: give the material a radius (rho J_p = density pi (r^4 - "
+        "ri^4) / 2 of a round section or tube) or polar_inertia [kg m], the mass polar "
+        "moment per length (0: no rotational inertia, the twist quasistatic)"
+    )
+    if torsion is None:
+        from catenet.model.torsion import no_torsion
+
+        torsion = no_torsion()
+    return replace(torsion, missing=missing)

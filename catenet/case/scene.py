@@ -22,7 +22,14 @@ from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.parse import Case
 from catenet.case.rigid import movers
-from catenet.case.rods import bending_term, case_rods, case_twist, clamped_nodes, with_clamps
+from catenet.case.rods import (
+    bending_term,
+    case_rods,
+    case_torsion,
+    case_twist,
+    clamped_nodes,
+    with_clamps,
+)
 from catenet.case.shapes import check_motion
 from catenet.case.supports import with_partial_supports
 from catenet.errors import ConfigError
@@ -104,6 +111,7 @@ def _build(case: Case) -> Scene:
         cases=_load_cases(case, scene.net, built),
         design=edge_design(case, scene.net, built),
         coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
+        torsion=case_torsion(case, built, net, rods, twist),
     )
     if case.solver.self_contact:
         strands = self_contact(case.solver, scene.net, scene.loads, scene.edge_radius)

@@ -135,17 +135,25 @@ def _summary(case, done) -> None:
             f"{'bodies':<12} {n} free bod{'y' if n == 1 else 'ies'}: 6 rigid motions each "
             "(the affine body's 6 strains, stiff and not physical, are left out)"
         )
+    twisting = modes.twist is not None
+    if twisting:
+        n = int((modes.inertia > 0).sum())
+        lines.append(
+            f"{'torsion':<12} the twist angles of {n} rod edges with their rotational "
+            "inertia: twist % is a mode's kinetic energy in them (dir tw: above 50 %)"
+        )
     if modes.zero_modes:
         lines.append(f"{'zero modes':<12} {modes.zero_message}")
     lines.append(
         f"{'':<12} {'mode':>4} {'f [Hz]':>12} {'T [s]':>12} {'dir':>4} "
-        f"{'m_eff x/y/z [% of free mass]':>30}   moves most"
+        f"{'m_eff x/y/z [% of free mass]':>30}{' twist %' if twisting else ''}   moves most"
     )
     for row in mode_rows(done.scene, modes):
         share = " ".join(f"{100 * v:9.2f}" for v in row.mass_share)
+        twist = f" {100 * row.twist_share:7.2f}" if twisting else ""
         lines.append(
             f"{'':<12} {row.k:>4} {row.frequency:>12.6g} {row.period:>12.6g} "
-            f"{row.direction:>4} {share:>30}   {row.moves}"
+            f"{row.direction:>4} {share:>30}{twist}   {row.moves}"
         )
     if path is not None:
         side = Path(path).with_suffix(".xdmf")

@@ -300,3 +300,53 @@ def twist_hessian(x, nodes, start, closed, head, tail, moment, compliance, value
                 values[row + c] = gr * g[c]
         segment_hessian(x, nodes, lo, hi, closed, head, tail, s, moment[s], values, base)
         base += size * size
+
+
+@njit(cache=True)
+def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c):
+    """Per vertex of every chain, the gradient of its reference twist m_v (the
+    un-eliminated twist, ``catenet.model.torsion``): (V,) the vertex's compliance c_v =
+    (c_a + c_b) / 2 of its two edge slots a, b (``slot_c``: each chain edge row's l0 / GJ,
+    a clamp's phantom slot 0); (V, 3) the nodes of its gradient (the first edge's first
+    node, the shared node, the second edge's last node; -1: a phantom edge's);
+    (V, 3, 3) dm_v / dx at those nodes (kb / (2 L) per edge, module docstring); (V, 2)
+    the chain edge rows of its slots a, b (-1: a clamp). An open chain has the vertex at
+    a clamped end (``held[s, 0]``, ``held[s, 1]``: head, tail) and none at a free end."""
+    count = 0
+    for s in range(len(start) - 1):
+        n = (start[s + 1] - start[s]) - (0 if closed[s] else 1)
+        count += n if closed[s] else n - 1 + int(held[s, 0]) + int(held[s, 1])
+    comp = np.zeros(count)
+    who = np.full((count, 3), -1, dtype=np.int64)
+    grad = np.zeros((count, 3, 3))
+    rows = np.full((count, 2), -1, dtype=np.int64)
+    out = 0
+    row0 = 0
+    for s in range(len(start) - 1):
+        lo, hi = start[s], start[s + 1]
+        t, length, ends = _tangents(x, nodes, lo, hi, closed, head, tail, s)
+        n = (hi - lo) if closed[s] else (hi - lo - 1)
+        first_v = 1 if closed[s] or held[s, 0] else 2
+        last_v = n if closed[s] else (n + 1 if held[s, 1] else n)
+        for v in range(first_v, last_v + 1):
+            kb = _cross(t[v - 1], t[v]) / (1.0 + _dot(t[v - 1], t[v]))  # kb / 2
+            c = 0.0
+            for side in range(2):
+                slot = v - 1 + side
+                if ends[slot, 0] < 0:
+                    continue  # a clamp's phantom edge
+                k = (slot - 1) % n if slot > 0 else n - 1
+                rows[out, side] = row0 + k
+                c += 0.5 * slot_c[row0 + k]
+                w = kb / length[slot]
+                a, b = nodes[ends[slot, 0]], nodes[ends[slot, 1]]
+                # the first edge's nodes are slots 0, 1 of the triple; the second's 1, 2
+                who[out, side] = a
+                who[out, side + 1] = b
+                for d in range(3):
+                    grad[out, side, d] -= w[d]
+                    grad[out, side + 1, d] += w[d]
+            comp[out] = c
+            out += 1
+        row0 += n
+    return comp, who, grad, rows

@@ -7,6 +7,10 @@ frames and their place in the XDMF sidecar.
     /modes/shape (K, N, 3)            mass-normalised (phi^T M phi = 1) [1/sqrt(kg)]
     /modes/effective_mass (K, 3) [kg], participation (K, 3) [sqrt(kg)]
     /modes/direction_share (K, 3)     each mode's kinetic energy share along x, y, z
+    /modes/twist_share (K,)           ... and in the rods' twist (> 0.5: torsional)
+    /modes/twist (K, M)               where rods' twist angles are DOFs: each edge's
+                                      twist angle [rad/sqrt(kg m^2)] (mass-normalised)
+    /modes/polar_inertia (M,)         ... and its rotational inertia rho J_p l0 [kg m^2]
     /modes                attrs: count, zero_modes, zero_message, total_mass (3,) [kg],
                           sigma, method, backend, seconds, residual, amplitude [m],
                           frames (per period), animated (modes with frames)
@@ -56,6 +60,7 @@ class StoredModes:
     direction_share: np.ndarray
     x: np.ndarray
     attrs: dict
+    twist_share: np.ndarray | None = None  # (K,); None: a file written before it
 
     @property
     def count(self) -> int:
@@ -114,6 +119,12 @@ def _write_group(h5, scene, modes, frames: int, animated: int, amplitude: float)
     g.create_dataset("effective_mass", data=modes.effective_mass)
     g.create_dataset("participation", data=modes.participation)
     g.create_dataset("direction_share", data=modes.direction_share())
+    g.create_dataset("twist_share", data=modes.twist_share())
+    if modes.twist is not None:
+        g.create_dataset("twist", data=modes.twist, compression="gzip", shuffle=True)
+        g["twist"].attrs["unit"] = "rad/sqrt(kg m^2) (mass-normalised)"
+        g.create_dataset("polar_inertia", data=modes.inertia)
+        g["polar_inertia"].attrs["unit"] = "kg m^2"
     g.create_dataset("x", data=modes.x)
     stats = modes.stats
     attrs = {
@@ -171,6 +182,7 @@ def read_modes(path: str | Path) -> StoredModes | None:
             array("frequency"), array("period"), array("shape"), array("effective_mass"),
             array("participation"), array("direction_share"), array("x"),
             attrs={k: _plain(v) for k, v in g.attrs.items()},
+            twist_share=array("twist_share") if "twist_share" in g else None,
         )  # fmt: skip
 
 

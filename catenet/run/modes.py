@@ -35,12 +35,17 @@ def check_modes_input(scene, count) -> None:
     n_free = 3 * int(np.count_nonzero(~scene.net.fixed)) - 6 * len(scene.rigid)
     if scene.net.guides is not None:
         n_free -= scene.net.guides.held_count  # rollers and sliders
+    torsion = scene.torsion
+    if torsion is not None:
+        if torsion.missing:
+            raise ConfigError(torsion.missing)
+        n_free += torsion.count  # the rods' twist angles
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ConfigError(f"--count = {count!r}: must be a positive integer")
     if count > n_free:
         raise ConfigError(
             f"--count = {count}: more than the net's {n_free} free DOFs (3 per free node, "
-            "6 per free body, fewer on rollers and sliders): "
+            "6 per free body, fewer on rollers and sliders, 1 per twisting edge): "
             f"ask for at most {n_free}"
         )
     if not float(np.sum(scene.net.mass[~scene.net.fixed])) > 0.0:
@@ -157,7 +162,9 @@ def modes_case(
     if result.stable is False:
         raise ConvergenceError(f"modes: the equilibrium found is unstable: {result.diagnosis}")
     try:
-        modes = natural_modes(kept["ws"], result.x, count, cables=scene.cables, added=added)
+        modes = natural_modes(
+            kept["ws"], result.x, count, cables=scene.cables, added=added, torsion=scene.torsion
+        )
     except ConfigError as exc:  # the input was sound: the equilibrium found holds nothing
         raise ConvergenceError(f"modes about the equilibrium found: {exc}") from None
     if path is not None:
@@ -175,6 +182,7 @@ class ModeRow:
     direction: str
     mass_share: np.ndarray  # (3,) effective mass / free mass per axis
     moves: str  # the cables (or the node) that move most
+    twist_share: float = 0.0  # the share of its kinetic energy in the rods' twist
 
 
 def mode_rows(scene, modes) -> list[ModeRow]:
@@ -186,19 +194,44 @@ def mode_rows(scene, modes) -> list[ModeRow]:
     cables = scene.cables
     dominant = modes.dominant()
     total = np.where(modes.total_mass > 0, modes.total_mass, 1.0)
+    twist = modes.twist_share()
     rows = []
     for k in range(modes.count):
+        torsional = twist[k] > 0.5
+        if torsional:
+            moves = _twists(net, modes, k, cables)
+        else:
+            moves = _body_moves(scene, modes.shape[k], modes.x) or _moves(
+                net, modes.shape[k], cables
+            )
         rows.append(
             ModeRow(
                 k + 1,
                 float(modes.frequency[k]),
                 float(modes.period[k]),
-                dominant[k],
+                "tw" if torsional else dominant[k],
                 modes.effective_mass[k] / total,
-                _body_moves(scene, modes.shape[k], modes.x) or _moves(net, modes.shape[k], cables),
+                moves,
+                float(twist[k]),
             )
         )
     return rows
+
+
+def _twists(net, modes, k: int, cables) -> str:
+    """A torsional mode's "moves most": the cables with the largest shares of its twist's
+    kinetic energy, else the edge that turns most, "(twist)" after them."""
+    energy = modes.inertia * modes.twist[k] ** 2
+    if cables is not None and len(cables.names):
+        on = cables.edge >= 0
+        per = np.bincount(cables.edge[on], energy[on], minlength=len(cables.names))
+        if per.max() > 0:
+            order = np.argsort(-per)[:MOST]
+            names = [str(cables.names[c]) for c in order if per[c] >= MOST_SHARE * energy.sum()]
+            if names:
+                return ", ".join(names) + " (twist)"
+    e = int(np.argmax(energy))
+    return f"edge {e} ({net.edges[e, 0]}-{net.edges[e, 1]}) (twist)"
 
 
 def _body_moves(scene, shape: np.ndarray, x: np.ndarray) -> str:

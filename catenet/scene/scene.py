@@ -65,7 +65,10 @@ class Scene:
       None (a nested start, ``catenet.solver.nested``; None: it cannot be coarsened);
     - ``edge_radius``: the contact radius [m] of every edge where obstacles, balls and
       free bodies meet the whole edge, a capsule (``catenet.scene.segments``; None: the
-      nodes alone); obstacles and bodies added later take it.
+      nodes alone); obstacles and bodies added later take it;
+    - ``torsion``: the rods' twist angles as DOFs with their rotational inertia, for the
+      modes (``catenet.model.torsion.Torsion``; None: no rod twists, the twist
+      eliminated).
     """
 
     net: Net
@@ -90,6 +93,7 @@ class Scene:
     own: Own | None = None
     shown: Shown = shown_as_is
     edge_radius: float | None = None
+    torsion: Any = None
 
     @classmethod
     def of(

@@ -53,6 +53,7 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from catenet.model.net import Net
+    from catenet.model.torsion import Torsion
     from catenet.solver.linear import LinearSolver
     from catenet.solver.system import System
     from catenet.solver.workspace import Workspace
@@ -236,7 +237,12 @@ class Operator:
     coordinate's node, and the DOFs taken out (``dead``: no stiffness)."""
 
     def __init__(
-        self, system: System, x: np.ndarray, mass: np.ndarray, blocks: np.ndarray | None = None
+        self,
+        system: System,
+        x: np.ndarray,
+        mass: np.ndarray,
+        blocks: np.ndarray | None = None,
+        torsion: Torsion | None = None,
     ):
         import scipy.sparse as sp
 
@@ -261,6 +267,15 @@ class Operator:
             self.mm = self.reduction.reduce(self.m_free)
             self.convex = self.convex and not rigid
             groups = self.reduction.groups
+        self.n_x = k.shape[0]  # the net's coordinates; then the twist angles
+        self.torsion = torsion if torsion is not None and torsion.count else None
+        if self.torsion is not None:
+            k, self.mm = with_twist(system, x, self.torsion, self.reduction, k, self.mm)
+            self.node = np.concatenate([self.node, self.torsion.edge_nodes(net)])
+            groups = np.concatenate([groups, groups.max(initial=-1) + 1 + np.arange(
+                self.torsion.count)])  # fmt: skip
+            self.convex = False
+        self.own = self.reduction is not None or self.torsion is not None  # own solver
         self.n = k.shape[0]
         self.m = self.mm.diagonal()
         rowsum = np.asarray(abs(k).sum(axis=1)).ravel()
@@ -284,7 +299,7 @@ class Operator:
         self.dummy = 2.0 * self.bound
         ref = np.where(self.m > 0, self.m, float(np.median(self.m[self.m > 0])))
         fix = np.where(self.dead, self.dummy * ref, 0.0)
-        if self.reduction is None:
+        if not self.own:
             self.k_data[system.diag_pos[self.dead]] = fix[self.dead]
         self.k = (k + sp.diags(fix)).tocsr()
 
@@ -296,7 +311,7 @@ class Operator:
 
         from catenet.solver.linear import make_solver
 
-        if self.reduction is None:
+        if not self.own:
             solver.factorize(self.k_data - sigma * self.m_data, definite=self.convex)
             return solver
         a = (self.k - sigma * self.mm).tocsr()
@@ -315,8 +330,39 @@ class Operator:
         return own
 
     def full(self, vec: np.ndarray) -> np.ndarray:
-        """Free-DOF vectors (columns) of modal coordinates."""
+        """Free-DOF vectors (columns) of modal coordinates (their twist angles left out)."""
+        vec = vec[: self.n_x]
         return vec if self.reduction is None else self.reduction.expand(vec)
+
+    def twist(self, vec: np.ndarray) -> np.ndarray:
+        """The twist angles (rows: ``Torsion``'s chain edges) of modal coordinates."""
+        return vec[self.n_x :]
+
+
+def with_twist(
+    system: System,
+    x: np.ndarray,
+    torsion: Torsion,
+    reduction: Reduction | None,
+    k: sp.csr_matrix,
+    mm: sp.csr_matrix,
+) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """K and M of the net's modal coordinates ``k``, ``mm`` with the rods' twist angles
+    after them (``catenet.model.torsion``): the twist term's eliminated Hessian replaced
+    by the un-eliminated blocks, and the angles' rotational inertia."""
+    import scipy.sparse as sp
+
+    twists = next((getattr(t, "twists") for t in system.terms if t.name == "twist"), None)
+    dk, kxt, ktt = torsion.blocks(x, twists)
+    free = system.free_dofs
+    dk, kxt = dk.tocsr()[free][:, free], kxt.tocsr()[free]
+    if reduction is not None:
+        dk, kxt = reduction.reduce(dk), (reduction.z.T @ kxt).tocsr()
+    else:
+        dk = ((dk + dk.T) * 0.5).tocsr()
+    full = sp.bmat([[k + dk, kxt], [kxt.T, ktt]], format="csr")
+    inertia = sp.diags(torsion.inertia)
+    return full, sp.block_diag([mm, inertia], format="csr")
 
 
 def _block_low(mm: sp.csr_matrix, m: np.ndarray, groups: np.ndarray) -> np.ndarray:

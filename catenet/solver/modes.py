@@ -55,6 +55,7 @@ from catenet.solver.modal import Operator
 
 if TYPE_CHECKING:
     from catenet.model.net import Loads, Net
+    from catenet.model.torsion import Torsion
     from catenet.solver.result import Result
     from catenet.solver.settings import Settings
     from catenet.solver.workspace import Workspace
@@ -97,6 +98,10 @@ class Modes:
     stats : method ("lanczos" or "dense"), backend, seconds, solves, factorisations,
         residual (the largest relative residual of a mode)
     mass : (N,) the lumped masses of the free nodes [kg], 0 at the supports
+    twist : (K, M) where the rods' twist angles are DOFs (``catenet.model.torsion``):
+        each edge's twist angle in the mass-normalised mode [rad/sqrt(kg m^2)], 0 where
+        no rod twists (None: no twist angles);  inertia : (M,) each edge's rotational
+        inertia rho J_p l0 [kg m^2] (0 where none)
     """
 
     frequency: np.ndarray
@@ -114,6 +119,17 @@ class Modes:
     equilibrium: Result | None = None  # the static Result the modes are about, if solved here
     mass: np.ndarray | None = None  # (N,) lumped masses of the free nodes [kg] (0: supports)
     added: np.ndarray | None = None  # (N, 3, 3) added mass of water of the free nodes [kg]
+    twist: np.ndarray | None = None  # (K, M) twist angles [rad/sqrt(kg m^2)]
+    inertia: np.ndarray | None = None  # (M,) rotational inertia of each edge [kg m^2]
+
+    def twist_share(self) -> np.ndarray:
+        """(K,) each mode's share of its kinetic energy in the rods' twist (sum J theta^2
+        of the mass-normalised mode; 0 without twist angles): above 1/2 a torsional
+        mode."""
+        if self.twist is None or self.inertia is None:
+            return np.zeros(self.count)
+        share: np.ndarray = np.einsum("e,ke->k", self.inertia, self.twist**2)
+        return share
 
     @property
     def period(self) -> np.ndarray:
@@ -159,10 +175,14 @@ def natural_modes(
     method: str = "auto",
     cables: Cables | None = None,
     added: ArrayLike | None = None,
+    torsion: Torsion | None = None,
 ) -> Modes:
     """The ``count`` lowest natural modes of the workspace's net about the equilibrium x
-    (see the module docstring). ``mass`` (N,) [kg] defaults to ``Net.mass``; ``method``:
-    "auto" (dense up to DENSE free DOFs, else Lanczos), "dense" or "lanczos";
+    (see the module docstring); ``torsion`` (``catenet.model.torsion.Torsion``, a
+    scene's): the rods' twist angles as DOFs with their rotational inertia, so that
+    torsional modes come out with the others (None: the twist eliminated). ``mass`` (N,)
+    [kg] defaults to ``Net.mass``; ``method``: "auto" (dense up to DENSE free DOFs,
+    else Lanczos), "dense" or "lanczos";
     ``cables`` (``names``, ``edge``: a case's cable index) names cables in messages;
     ``added`` (E,) [kg]: each edge's added mass of water Ca rho_w A l0, moving with its
     ends sideways only, or (E, 2): sideways and along the edge (ca_n and ca_t's)
@@ -175,7 +195,8 @@ def natural_modes(
 
     bodies = len(body_frames(system))
     held = 0 if net.guides is None else net.guides.held_count  # rollers and sliders
-    _check_count(count, system.n_free - 6 * bodies - held)
+    angles = 0 if torsion is None else torsion.count  # the rods' twist angles
+    _check_count(count, system.n_free - 6 * bodies - held + angles)
     if not float(np.sum(masses[~net.fixed])) > 0.0:
         raise ConfigError(
             "modes: the net has no mass (material.density = 0 and no [[mass]]): give "
@@ -183,7 +204,7 @@ def natural_modes(
         )
     at = np.asarray(x, dtype=np.float64)
     blocks = None if added is None else _added_blocks(net, at, added)
-    op = Operator(system, at, masses, blocks)
+    op = Operator(system, at, masses, blocks, torsion)
     lam, vec, stats = _solve(op, workspace, at, count, method)
     real = lam < op.bound * (1 + 1e-9)  # dummy modes of DOFs without stiffness: out
     lam, vec = lam[real], vec[:, real]
@@ -334,10 +355,13 @@ def _assemble(
     if k:
         vec = vec / np.sqrt(np.einsum("ik,ik->k", vec, op.mm @ vec))[None, :]
     u = op.full(vec)
+    turn = op.twist(vec).T.copy()  # (k, twist angles)
+    weight = np.sqrt(op.m_free.diagonal())  # the sign by the largest kinetic share
     for j in range(k):
         v = u[:, j]
-        if v[np.argmax(np.abs(v))] < 0:
-            v = -v
+        shares = np.concatenate([v * weight, turn[j] * np.sqrt(op.m[op.n_x :])])
+        if shares[np.argmax(np.abs(shares))] < 0:
+            v, turn[j] = -v, -turn[j]
         shape[j, free] = v.reshape(-1, 3)
     m_free = np.where(net.fixed, 0.0, mass)
     rigid = np.zeros((op.m_free.shape[0], 3))
@@ -356,6 +380,11 @@ def _assemble(
         sigma=float(sigma),
         mass=m_free,
     )
+    if op.torsion is not None:
+        out.twist = np.zeros((k, net.n_edges))
+        out.twist[:, op.torsion.edges] = turn
+        out.inertia = np.zeros(net.n_edges)
+        out.inertia[op.torsion.edges] = op.torsion.inertia
     return out
 
 
@@ -384,22 +413,43 @@ def _name_zero_modes(
     net = workspace.system.net
     dead_nodes = np.unique(op.node[op.dead & (op.m > 0)])
     moving = np.zeros(0, dtype=np.int64)
+    spins = _spins(op, zero_vec)  # rods turning about their own axes
+    zero_vec = zero_vec[:, ~spins]
     if zero_vec.shape[1]:
         energy = np.einsum("d,dk->d", op.m, zero_vec**2)
         per_node = np.bincount(op.node, energy, minlength=net.n_nodes)
         moving = np.flatnonzero(per_node > 1e-3 * per_node.max())
-    found.zero_modes = int(np.count_nonzero(op.dead & (op.m > 0))) + zero_vec.shape[1]
+    others = int(np.count_nonzero(op.dead & (op.m > 0))) + zero_vec.shape[1]
+    found.zero_modes = others + int(spins.sum())
     nodes = np.union1d(dead_nodes, moving).astype(np.int64)
     found.zero_nodes = nodes
-    if found.zero_modes:
+    if others:
         found.zero_message = describe_zero_modes(
             workspace.system,
             x,
             nodes,
-            found.zero_modes,
+            others,
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
         )
+    if spins.any():
+        n = int(spins.sum())
+        spin = (
+            f"{n} zero-frequency mode{'s' if n > 1 else ''} (left out): rods turning about "
+            "their own axes (a ring, or a rod whose twist no clamp holds, spins freely)"
+        )
+        found.zero_message = "; ".join(m for m in (found.zero_message, spin) if m)
+
+
+def _spins(op: Operator, vec: np.ndarray) -> np.ndarray:
+    """(k,) bool: which of the modes ``vec`` carry most of their kinetic energy in the
+    rods' twist."""
+    if op.torsion is None or not vec.shape[1]:
+        return np.zeros(vec.shape[1], dtype=bool)
+    total = np.einsum("d,dk->k", op.m, vec**2)
+    twist = np.einsum("d,dk->k", op.m[op.n_x :], op.twist(vec) ** 2)
+    spins: np.ndarray = twist > 0.5 * total
+    return spins
 
 
 def modes(
@@ -442,6 +492,9 @@ def modes(
                 f"modes: no equilibrium to take the modes about: {result.message or 'not at rest'}"
             )
         x = result.x
-    found = natural_modes(ws, x, k, mass=mass, method=method, cables=scene.cables, added=added)
+    found = natural_modes(
+        ws, x, k, mass=mass, method=method, cables=scene.cables, added=added,
+        torsion=scene.torsion,
+    )  # fmt: skip
     found.equilibrium = result
     return found
