@@ -352,7 +352,9 @@ def with_twist(
     by the un-eliminated blocks, and the angles' rotational inertia."""
     import scipy.sparse as sp
 
-    twists = next((getattr(t, "twists") for t in system.terms if t.name == "twist"), None)
+    from catenet.terms.twist import Twist
+
+    twists = next((t.twists for t in system.terms if isinstance(t, Twist)), None)
     dk, kxt, ktt = torsion.blocks(x, twists)
     free = system.free_dofs
     dk, kxt = dk.tocsr()[free][:, free], kxt.tocsr()[free]
