@@ -40,6 +40,16 @@ quasistatically (``catenet.terms.twist``):
     ones up to the first M where it is singular: the generalised eigenvalue problem on
     the complement of the rigid motions. Tolerance 1e-3 at 200 edges.
 
+(e) Torsional vibration (``catenet modes`` with the twist angles as DOFs,
+    ``catenet.model.torsion``): a straight shaft, L = 1 m, of rotational inertia rho J_p
+    = 0.01 kg m per length (``material.polar_inertia``; rho A = 1 kg/m), clamped at one
+    end and free at the other: f_n = (2 n - 1) / (4 L) sqrt(C / (rho J_p)); clamped at
+    both ends: f_n = n / (2 L) sqrt(C / (rho J_p)) (the wave equation of the twist angle,
+    Timoshenko's shaft). Each mode whose kinetic energy lies mostly in the twist is
+    torsional; the first against f_1. The angles live at the edges' midpoints, the
+    clamps at the nodes: the discrete shaft's error is -(k h)^2 / 24 (k = (2 n - 1) pi /
+    (2 L), n pi / L), second order; tolerance 1e-3 at 50 edges, order fitted over 25-100.
+
 Nothing here prints; the rows are plain dicts of ``catenet.validate.table.Row``'s
 fields.
 """
@@ -71,6 +81,10 @@ GREENHILL_EDGES = (50, 100)
 GREENHILL_TOL = 1e-3
 MICHELL_EDGES = (50, 100, 200)
 MICHELL_TOL = 1e-3
+SHAFT_POLAR = 0.01  # rho J_p [kg m]
+SHAFT_EDGES = (25, 50, 100)
+SHAFT_TOL = 1e-3  # at 50 edges
+SHAFT_ENDS = {"clamped-free": (["start"], 0.25), "clamped-clamped": (["start", "end"], 0.5)}
 
 
 def straight_case(edges: int = STRAIGHT_EDGES) -> dict:
@@ -304,8 +318,54 @@ def michell_rows() -> list[dict]:
     ]  # fmt: skip
 
 
+def shaft_case(edges: int, ends: str) -> dict:
+    """Case (e) as a case's tables: the shaft clamped at "start" (and "end")."""
+    held, _ = SHAFT_ENDS[ends]
+    return {
+        "title": f"a shaft, {ends}",
+        "geometry": {"kind": "cable", "start": [0.0, 0.0, 0.0], "end": [1.0, 0.0, 0.0],
+                     "nodes": edges + 1},
+        "material": {"EA": 1e5, "EI": EI, "GJ": GJ, "area": 1e-3, "density": 1000.0,
+                     "polar_inertia": SHAFT_POLAR, "tension_only": False},
+        "supports": {"fixed": held, "clamped": held},
+    }  # fmt: skip
+
+
+def shaft(edges: int, ends: str, count: int = 3) -> np.ndarray:
+    """The ``count`` lowest torsional frequencies [Hz] of case (e) (the modes whose
+    kinetic energy lies mostly in the twist)."""
+    from catenet.case import build, parse_case
+    from catenet.solver.modes import modes
+
+    scene = build(parse_case(shaft_case(edges, ends)))
+    found = modes(scene, k=4 * count + 6, x=scene.net.nodes)
+    torsional: np.ndarray = found.frequency[found.twist_share() > 0.5][:count]
+    if torsional.size < count:
+        raise ArithmeticError(f"the {ends} shaft has {torsional.size} torsional modes")
+    return torsional
+
+
+def shaft_rows() -> list[dict]:
+    """Case (e): the first torsional frequency of each shaft at each resolution."""
+    rows = []
+    for ends, (_, first) in SHAFT_ENDS.items():
+        exact = first * math.sqrt(GJ / SHAFT_POLAR)
+        found = [float(shaft(n, ends, 1)[0]) for n in SHAFT_EDGES]
+        errors = [abs(f - exact) / exact for f in found]
+        order = -float(np.polyfit(np.log(SHAFT_EDGES), np.log(errors), 1)[0])
+        rows += [
+            _row(f"twist: shaft {ends}", "f_1 [Hz]", n + 1, f, exact, order=order,
+                 tolerance=SHAFT_TOL if n == 50 else math.nan)
+            for n, f in zip(SHAFT_EDGES, found, strict=True)
+        ]  # fmt: skip
+    return rows
+
+
 def twist_rows(progress: Callable[[str], None] | None = None) -> list[dict]:
     """Every row of case (vi)."""
     if progress:
-        progress("twisted rods: a straight rod, a helix, Greenhill's rod, Michell's ring")
-    return straight_rows() + helix_rows() + greenhill_rows() + michell_rows()
+        progress(
+            "twisted rods: a straight rod, a helix, Greenhill's rod, Michell's ring, "
+            "torsional vibration"
+        )
+    return straight_rows() + helix_rows() + greenhill_rows() + michell_rows() + shaft_rows()

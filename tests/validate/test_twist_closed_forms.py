@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from catenet.validate import twist
@@ -40,3 +41,18 @@ def test_michells_ring_turns_unstable_at_2_pi_sqrt3_b_over_c():
     coarse, fine = twist.michell(100), twist.michell(200)
     assert coarse == pytest.approx(exact, rel=1e-3)
     assert abs(fine - exact) == pytest.approx(abs(coarse - exact) / 4, rel=0.05)
+
+
+@pytest.mark.parametrize("ends", ["clamped-free", "clamped-clamped"])
+def test_a_shafts_torsional_frequencies_are_the_discrete_waves(ends):
+    """The three lowest torsional frequencies at 25 edges: below the closed form by the
+    staggered grid's (k h)^2 / 24 (k = (2 n - 1) pi / 2L or n pi / L) to 2 % of it (its
+    next term), so that the error falls with h^2: 6.6e-4 at 25 edges for the first
+    clamped-clamped one, 1.6e-4 at 50."""
+    found = twist.shaft(25, ends, 3)
+    c = math.sqrt(twist.GJ / twist.SHAFT_POLAR)
+    n = np.arange(1, 4)
+    k = (2 * n - 1) * math.pi / 2 if ends == "clamped-free" else n * math.pi
+    exact = k * c / (2 * math.pi)
+    error = (exact - found) / exact
+    assert error == pytest.approx((k / 25) ** 2 / 24, rel=0.02)
