@@ -334,10 +334,17 @@ def shaft_case(edges: int, ends: str) -> dict:
 def shaft(edges: int, ends: str, count: int = 3) -> np.ndarray:
     """The ``count`` lowest torsional frequencies [Hz] of case (e) (the modes whose
     kinetic energy lies mostly in the twist)."""
+    import logging
+
     from catenet.case import build, parse_case
     from catenet.solver.modes import modes
 
-    scene = build(parse_case(shaft_case(edges, ends)))
+    quiet = logging.Filter("nothing")  # its warning: a free end untwists at rest
+    logging.getLogger("catenet.case").addFilter(quiet)
+    try:
+        scene = build(parse_case(shaft_case(edges, ends)))
+    finally:
+        logging.getLogger("catenet.case").removeFilter(quiet)
     found = modes(scene, k=4 * count + 6, x=scene.net.nodes)
     torsional: np.ndarray = found.frequency[found.twist_share() > 0.5][:count]
     if torsional.size < count:
