@@ -6,8 +6,9 @@ Guarantee: the energy, gradient and Hessian are exact (the gradient and Hessian 
 total twist Theta by parallel transport, checked against finite differences) for every
 state where no two consecutive tangents of a segment (nor an end edge and its clamp)
 fold back on each other; there the twist is undefined and the energy is inf. The twist
-has no rotational inertia (it is uniform along a segment at every instant: torsional
-waves, far faster than bending ones in a slender rod, are not resolved). Theta is
+has no rotational inertia here (it is uniform along a segment at every instant: torsional
+waves, far faster than bending ones in a slender rod, are not resolved); the modes keep
+the twist angles with their inertia (``catenet.model.torsion``). Theta is
 tracked continuously from the last accepted state (``begin_step``), so a rod twisted by
 many turns keeps its count; the term is not convex. A static run imposes the twist Phi
 in full from its start (a straight rod is an equilibrium under any twist: where it
