@@ -197,10 +197,11 @@ def obstacle_terms(
         )
     nodes = reach.nodes
     label = f"{path} (kind {shape.kind!r})"
-    if radius is not None and contact.moving:
+    if radius is not None and contact.moving and contact.friction > 0:
         raise ConfigError(
-            f"{path}: solver.edge_contact on an obstacle on a prescribed motion: not "
-            "supported (its edges would pass through it); drop its motion or edge_contact"
+            f"{path}.friction = {shown(contact.friction)}: friction along the edges "
+            "(solver.edge_contact) on an obstacle on a prescribed motion is not supported "
+            "(its barrier is): give friction = 0, or drop its motion or edge_contact"
         )
     grow = 0.0 if radius is None else radius  # the nodes against the shape grown by it
     term: Term
@@ -221,7 +222,15 @@ def obstacle_terms(
         edge = edge_barrier(shape, net, radius, kappa, dhat)
         if edge is not None:
             edge.stages = tuple(edge.narrowed(stiffness(w), w) for w in widths)
-            out.append(edge)
+            if contact.moving:  # on the obstacle's motion, as its nodes' barrier
+                from catenet.terms.moving import Moving
+                from catenet.terms.moving_edges import moving_edges
+
+                moved = moving_edges(edge, cast(Moving, term))
+                moved.stages = ()
+                out.append(moved)
+            else:
+                out.append(edge)
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
 

@@ -18,6 +18,14 @@ motion keeps a node's gap, so every step starts with every node outside. A node 
 carried by one obstacle at most, and the contacts of a carried rigid ball (or the ball
 resting on a carried node) come along (``catenet.terms.collide.spread``). A support the
 obstacle reaches stops the run (ConvergenceError naming obstacle and node).
+
+The obstacle's motion does work on the net (``driven_work``, booked by the energy
+balance as external work): over a step from t_n to t_n+1, the trapezoid of the barrier's
+forces f on the nodes times the rigid motion's displacement D of the obstacle's points
+where the nodes are, -1/2 (g(x_n; pose_n) . D_n + g(x_n+1; pose_n+1) . D_n+1), g the
+barrier's gradient (the work rate of a barrier E(x_b(x, t)) is -grad_x E . u(x), u the
+obstacle's velocity field). ``catenet.terms.moving_edges`` moves the edges' barrier
+(``solver.edge_contact``) the same way.
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ class Moving(Term):
 
     bounds_step = True
     moving = True
+    driven = True  # its motion's work on the net (``driven_work``)
 
     role = "internal"
     convex = False
@@ -84,6 +93,7 @@ class Moving(Term):
         self._x: np.ndarray | None = None
         self._dx: np.ndarray | None = None
         self._g: np.ndarray | None = None
+        self._span: tuple[float, float] | None = None  # the last step's (start, end)
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(c(t), R(t)): the origin's place and the body's rotation at time t."""
@@ -98,9 +108,43 @@ class Moving(Term):
         self.center, self.R = self.pose(t)
 
     def begin_step(self, x, time, start=None) -> None:
+        self._span = None
         if time is not None:
             self.set_pose(time)
+            if start is not None:
+                self._span = (float(start), float(time))
         self.shape.begin_step(self._body(x), time, start)
+
+    def begin_run(self, x, t: float) -> None:
+        self.set_pose(t)
+
+    def settle_time(self) -> float:
+        return 0.0  # a run with a moving obstacle goes to its t_end (not to rest)
+
+    def driven_work(self, x_old, x_new) -> float:
+        """The work [J] of the obstacle's motion on the net over the last step (module
+        docstring): the trapezoid of the barrier's forces times the displacement of the
+        obstacle's points where the nodes are, at the step's start and end."""
+        if self._span is None:
+            return 0.0
+        t0, t1 = self._span
+        keep = self.center, self.R
+        nodes = self.nodes
+        try:
+            ahead = self.rigid(x_old[nodes], t0, t1) - x_old[nodes]
+            behind = x_new[nodes] - self.rigid(x_new[nodes], t1, t0)
+            work = self._work(x_old, t0, ahead) + self._work(x_new, t1, behind)
+        finally:
+            self.center, self.R = keep
+        return 0.5 * work
+
+    def _work(self, x, t: float, shift: np.ndarray) -> float:
+        """f . shift at x with the obstacle at its pose at t (f = -grad: on the nodes)."""
+        self.set_pose(t)
+        g = np.zeros(np.shape(x))
+        if not np.isfinite(self.gradient(x, g)):
+            return 0.0
+        return -float(np.sum(g[self.nodes] * shift))
 
     def _body(self, x, center=None, R=None) -> np.ndarray:
         """Points x (N, 3) in the body frame (the shape's pose at t = 0)."""

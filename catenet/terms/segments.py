@@ -84,6 +84,7 @@ class EdgeContact(Term):
         if not (math.isfinite(r) and r >= 0):
             raise ValueError(f"edge_contact: contact radius {r!r}: must be >= 0")
         self.edges = np.ascontiguousarray(edges, dtype=np.int64).reshape(-1, 2)
+        self.nodes = np.unique(self.edges)  # the nodes it reads (an obstacle's motion)
         self.rest = np.ascontiguousarray(rest, dtype=np.float64).reshape(len(self.edges))
         self.points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         self.lines = np.ascontiguousarray(lines, dtype=np.int64).reshape(-1, 2)
