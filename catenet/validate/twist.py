@@ -345,7 +345,7 @@ def shaft(edges: int, ends: str, count: int = 3) -> np.ndarray:
         scene = build(parse_case(shaft_case(edges, ends)))
     finally:
         logging.getLogger("catenet.case").removeFilter(quiet)
-    found = modes(scene, k=4 * count + 6, x=scene.net.nodes)
+    found = modes(scene, k=4 * count + 6, x=scene.net.nodes, method="lanczos")
     torsional: np.ndarray = found.frequency[found.twist_share() > 0.5][:count]
     if torsional.size < count:
         raise ArithmeticError(f"the {ends} shaft has {torsional.size} torsional modes")
