@@ -22,6 +22,7 @@ did. Nothing is differenced and nothing more is factorised.
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -32,6 +33,8 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
     from catenet.formfind.fdm import _Shape
+
+log = logging.getLogger(__name__)
 
 FIXED_POINT_ITER = 200  # the self-weight's share of an adjoint solve: iterations at most
 
@@ -160,12 +163,13 @@ def jacobian_dense(
 
 class SparseJacobian:
     """J = dr/ds never formed: ``matvec`` (one forward solve), ``rmatvec`` (one adjoint
-    solve), and ``damped``: the step p of min |J p + r|^2 + mu |p|^2 from one sparse
-    factorisation (``catenet.formfind.damped``)."""
+    solve), both exact with D's factors (``catenet.formfind.krylov.Exact``), and
+    ``damped``: the step p of min |J p + r|^2 + mu |p|^2, by conjugate gradients to a
+    relative residual (``catenet.formfind.krylov``) or from one sparse factorisation
+    (``catenet.formfind.damped``), the fallback. ``steps``: counts shared between
+    states (how the steps went); ``layout``: the direct step's from the last state."""
 
-    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None):
-        from catenet.formfind.damped import Layout
-
+    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None):
         self.adj, self.d_x, self.d_q = adj, d_x.tocsr(), d_q.tocsr()
         self.rq = (d_q @ dq_ds).tocsr()
         self.bs = (adj.bg @ dq_ds).tocsr()
@@ -173,27 +177,82 @@ class SparseJacobian:
         if groups is None:  # (the variable of each edge, from dq_ds's one entry per row)
             groups = dq_ds.tocsr().indices
         self.groups = np.asarray(groups, dtype=np.int64)
-        if layout is None or not layout.fits(adj, self.d_x, self.d_q, self.groups):
-            layout = Layout(adj, self.d_x, self.d_q, self.groups, self.shape[1])
+        if layout is not None and not layout.fits(adj, self.d_x, self.d_q, self.groups):
+            layout = None
         self.layout = layout
+        self.steps = new_steps() if steps is None else steps
+        self._exact: Any = None
+        self._rows: Any = False  # (not looked at yet)
+        self._t: Any = None  # (the transposes, for rmatvec)
+
+    def exact(self):
+        """A's exact solves, with D's factors at this state (refactorised if needed)."""
+        from catenet.formfind.krylov import Exact
+
+        if self._exact is None:
+            self._exact = Exact(self.adj)
+        else:
+            self._exact.current()
+        return self._exact
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         v = np.ravel(v)
-        return self.rq @ v - self.d_x @ self.adj.solve(self.bs @ v)
+        return self.rq @ v - self.d_x @ self.exact().solve(self.bs @ v)
 
     def rmatvec(self, z: np.ndarray) -> np.ndarray:
         z = np.ravel(z)
-        return self.rq.T @ z - self.bs.T @ self.adj.solve_t(self.d_x.T @ z)
+        if self._t is None:
+            self._t = tuple(m.T.tocsr() for m in (self.rq, self.bs, self.d_x))
+        rq_t, bs_t, d_x_t = self._t
+        return rq_t @ z - bs_t @ self.exact().solve_t(d_x_t @ z)
 
-    def damped(self, r: np.ndarray, mu: float, keep: np.ndarray) -> np.ndarray:
-        """The damped step (0 where not ``keep``); SingularSystemError where it has none."""
+    def damped(self, r: np.ndarray, mu: float, keep: np.ndarray, eta=None) -> np.ndarray:
+        """The damped step (0 where not ``keep``): with ``eta`` by conjugate gradients to
+        that relative residual, the direct step where they do not get there (logged,
+        counted); without, the direct step. SingularSystemError where it has none."""
+        import time
+
+        from catenet.formfind import krylov
+
+        steps = self.steps
+        if eta is not None:
+            start = time.perf_counter()
+            try:
+                exact = self.exact()
+                if self._rows is False:
+                    self._rows = krylov.Rows.make(self)
+                p, it = krylov.step(self, exact, r, mu, keep, eta, self._rows)
+                steps["iterative"] += 1
+                steps["iterations"] += it
+                return p
+            except (krylov.NotConverged, SingularSystemError) as exc:
+                log.info("form finding: the iterative damped step failed (%s): direct step", exc)
+                steps["fallbacks"] += 1
+            finally:
+                steps["iterative_s"] += time.perf_counter() - start
+                if self._exact is not None:
+                    steps["refactorizations"] = self._exact.refactorizations
+        if self.layout is None:
+            from catenet.formfind.damped import Layout
+
+            self.layout = Layout(self.adj, self.d_x, self.d_q, self.groups, self.shape[1])
         return self.layout.step(self.adj, self.d_x, self.d_q, r, mu, keep)
 
 
-def jacobian_operator(adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None) -> SparseJacobian:
+def new_steps() -> dict:
+    """How the damped steps went: taken by conjugate gradients (``iterative``, their
+    ``iterations``, ``iterative_s`` seconds), ``fallbacks`` to the direct step, and D
+    refactorised for a step after a refused trial (``refactorizations``)."""
+    return {"iterative": 0, "iterations": 0, "iterative_s": 0.0, "fallbacks": 0, "refactorizations": 0}
+
+
+def jacobian_operator(
+    adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None
+) -> SparseJacobian:
     """J = dr/ds as a SparseJacobian (see there); ``layout``: the damped step's from the
-    last state, kept where it fits (its symbolic analysis reused)."""
-    return SparseJacobian(adj, d_x, d_q, dq_ds, groups, layout)
+    last state, kept where it fits (its symbolic analysis reused); ``steps``: the counts
+    of the search's damped steps."""
+    return SparseJacobian(adj, d_x, d_q, dq_ds, groups, layout, steps)
 
 
-__all__ = ["Adjoint", "SparseJacobian", "jacobian_dense", "jacobian_operator"]
+__all__ = ["Adjoint", "SparseJacobian", "jacobian_dense", "jacobian_operator", "new_steps"]

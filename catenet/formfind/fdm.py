@@ -218,6 +218,7 @@ class _Shape:
                 self.backend, p.indptr, p.indices, upper=True, dof_node=p.free_nodes, mtype=2
             )
         self.factorizations = 0
+        self.factored: np.ndarray | None = None  # the q whose D the solver holds
         self.kkt_factorizations = 0  # Newton's on the force densities (formfind/newton.py)
         self.solves = 0
         self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
@@ -237,8 +238,10 @@ class _Shape:
         load = self.force.copy()
         if self.solver is None:
             return x, load
+        self.factored = None
         self.solver.factorize(p.values(q))
         self.factorizations += 1
+        self.factored = q
         fixed_part = np.zeros((net.n_edges, 3))
         ends = net.edges
         fa, fb = net.fixed[ends[:, 0]], net.fixed[ends[:, 1]]

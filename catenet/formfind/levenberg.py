@@ -3,9 +3,12 @@
 Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
 its bound whose gradient pushes it out is held): where J is given whole, by Cholesky on
-J J^T + mu (or J^T J + mu, the smaller); else by one sparse factorisation of the
-saddle-point system that holds J without forming it
-(``catenet.formfind.adjoint.SparseJacobian``). With mu small the step is Gauss-Newton's
+J J^T + mu (or J^T J + mu, the smaller); else by conjugate gradients on the smaller of
+the two with J's products (``catenet.formfind.krylov``), to the relative residual eta of
+an inexact Levenberg-Marquardt (Eisenstat and Walker's second forcing term: eta =
+0.9 (|r| / |r_prev|)^2, safeguarded, within ``ETA_MIN`` .. ``ETA_MAX``), or, where they do
+not get there, by one sparse factorisation of the saddle-point system that holds J
+without forming it (``catenet.formfind.adjoint.SparseJacobian``). With mu small the step is Gauss-Newton's
 least-norm step, which meets a reachable target with more variables than rows (a
 spider's centre by its force densities) in a few steps: SciPy's trust region methods
 keep such steps on their trust radius, and so converge only linearly there. mu starts at
@@ -31,6 +34,7 @@ import numpy as np
 MAX_STEP = 1.0
 FTOL = 1e-12
 MU_FIRST, MU_MIN, MU_MAX = 1e-6, 1e-12, 1e8
+ETA_MAX, ETA_MIN = 1e-2, 1e-10  # the iterative step's relative residual
 
 
 @dataclass
@@ -54,6 +58,7 @@ def levenberg(
     r = residual(s)
     f = 0.5 * float(r @ r)
     evaluations, mu, scale = 1, 0.0, 0.0
+    eta = ETA_MAX
     while True:
         jac = jacobian(s)
         dense = isinstance(jac, np.ndarray)
@@ -67,7 +72,7 @@ def levenberg(
         while True:
             if evaluations >= budget:
                 return Ended("max_iter", s, evaluations)
-            p = _step(jac, r, mu, ~held, dense)
+            p = _step(jac, r, mu, ~held, dense, eta)
             if p is not None:
                 big = float(np.max(np.abs(p), initial=0.0))
                 if big > MAX_STEP:
@@ -82,20 +87,33 @@ def levenberg(
             if mu > MU_MAX * scale:
                 return Ended("stationary", s, evaluations)
         done = f - f_new <= FTOL * f
+        eta = _forcing(f_new, f, eta)
         s, r, f = trial, r_new, f_new
         if done:
             return Ended("stationary", s, evaluations)
         mu = max(mu / 3.0, MU_MIN * scale)
 
 
-def _step(jac, r: np.ndarray, mu: float, keep: np.ndarray, dense: bool) -> np.ndarray | None:
-    """The p of min |J p + r|^2 + mu |p|^2 with p = 0 where not ``keep``; None where the
-    system is singular."""
+def _forcing(f_new: float, f: float, eta: float) -> float:
+    """The next step's relative residual (Eisenstat and Walker's choice 2, gamma 0.9,
+    alpha 2, their safeguard) from the sums of squares after and before the step."""
+    new = 0.9 * (f_new / f)  # 0.9 (|r_new| / |r|)^2
+    floor = 0.9 * eta * eta
+    if floor > 0.1:
+        new = max(new, floor)
+    return min(max(new, ETA_MIN), ETA_MAX)
+
+
+def _step(
+    jac, r: np.ndarray, mu: float, keep: np.ndarray, dense: bool, eta: float = ETA_MIN
+) -> np.ndarray | None:
+    """The p of min |J p + r|^2 + mu |p|^2 with p = 0 where not ``keep`` (a sparse J's
+    to the relative residual ``eta``); None where the system is singular."""
     if not dense:
         from catenet.errors import SingularSystemError
 
         try:
-            return jac.damped(r, mu, keep)
+            return jac.damped(r, mu, keep, eta)
         except SingularSystemError:
             return None
     from scipy.linalg import LinAlgError, cho_factor, cho_solve

@@ -24,12 +24,19 @@ class HeightField:
         tri = Triangulation(vertices[:, 0], vertices[:, 1], triangles)
         tri.get_trifinder()  # (RuntimeError where triangles overlap in plan)
         self._f = LinearTriInterpolator(tri, vertices[:, 2])
+        self._last: tuple = (None, None)  # (the points' bytes, their offset): one kept
 
     def offset(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(z - f(x, y), (f_x, f_y)) at the points x (n, 3); NaN outside the plan."""
+        """(z - f(x, y), (f_x, f_y)) at the points x (n, 3); NaN outside the plan. The
+        last points' answer is kept (a search asks for the same shape's several times)."""
+        key = np.ascontiguousarray(x, dtype=np.float64).tobytes()
+        if self._last[0] == key:
+            return tuple(a.copy() for a in self._last[1])  # type: ignore[return-value]
         z = np.ma.filled(self._f(x[:, 0], x[:, 1]), np.nan)
         fx, fy = (np.ma.filled(g, np.nan) for g in self._f.gradient(x[:, 0], x[:, 1]))
-        return x[:, 2] - z, np.column_stack([fx, fy])
+        out = (x[:, 2] - z, np.column_stack([fx, fy]))
+        self._last = (key, out)
+        return out[0].copy(), out[1].copy()
 
 
 def read_height_field(file: str) -> HeightField:
