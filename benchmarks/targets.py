@@ -2,18 +2,21 @@
 given surface, under its own weight, with one force density per edge as the design
 variables (about 1e3 and 1e4 of them), against the static solve of the same net.
 
-    python benchmarks/targets.py [-o DIR] [--quick]
+    python benchmarks/targets.py [-o DIR] [--quick] [--direct]
 
 Per roof (``hypar_on_surface`` of tests/scenes.py, the roof of tests/formfind): the
 search's adjoint gradients and evaluations until every node is on the surface (to
 formfind.tol = 1e-9 of the roof's size), its wall time and so the time per gradient
-(everything of the search: shapes, adjoint solves, damped steps), the damped steps' own
-share (their sparse factorisations: ``catenet.formfind.damped``, and how many SciPy
-solved); then the static analysis of the net found (``catenet run`` on the case it
-writes: the rest lengths that carry the forces found, tension-only) under a snow load of
-SNOW [N/m^2] on its plan, and the wall time of one Newton iteration there (the solve's
-time over its iterations). The ratio of the two is measured in the same run. Writes
-DIR/targets.csv (default benchmarks/results) and prints the table.
+(everything of the search: reading the surface, shapes, adjoint solves, damped steps),
+the damped steps' own share (by conjugate gradients with D's factors:
+``catenet.formfind.krylov``, their iterations; the steps that fell back to the direct
+saddle-point factorisation, ``catenet.formfind.damped``); then the static analysis of
+the net found (``catenet run`` on the case it writes: the rest lengths that carry the
+forces found, tension-only) under a snow load of SNOW [N/m^2] on its plan, and the wall
+time of one Newton iteration there (the solve's time over its iterations). The ratio of
+the two is measured in the same run. Writes DIR/targets.csv (default benchmarks/results;
+with --direct, every damped step by the direct factorisation, DIR/targets-direct.csv)
+and prints the table.
 """
 
 from __future__ import annotations
@@ -52,7 +55,9 @@ def roof_row(n: int) -> dict:
         found = formfind_scene(scene)
         search_s = time.perf_counter() - start
     d = found.design
-    steps = d.extra.get("steps", {"factorizations": 0, "fallbacks": 0, "seconds": 0.0})
+    steps = d.extra.get("steps") or {}
+    taken = steps.get("iterative", 0) + steps.get("fallbacks", 0)
+    step_s = steps.get("iterative_s", 0.0) + steps.get("direct_s", 0.0)
     net = found.net
     built = Net.from_arrays(
         found.x,
@@ -77,18 +82,20 @@ def roof_row(n: int) -> dict:
         "force_densities": d.variables,
         "free_nodes": int(np.count_nonzero(free)),
         "met": d.all_met,
+        "largest_miss_m": float(np.abs(d.miss()).max()),
         "gradients": d.gradients,
         "evaluations": d.evaluations,
         "search_s": search_s,
         "per_gradient_s": per_gradient,
-        "steps": steps["factorizations"],
-        "steps_by_scipy": steps["fallbacks"],
-        "per_step_s": steps["seconds"] / max(steps["factorizations"], 1),
+        "steps": taken,
+        "cg_iterations": steps.get("iterations", 0),
+        "steps_direct": steps.get("fallbacks", 0),
+        "per_step_s": step_s / max(taken, 1),
         "static_iterations": static.iterations,
         "static_converged": bool(static.converged),
         "per_newton_s": per_newton,
         "gradient_over_newton": per_gradient / per_newton,
-        "step_over_newton": steps["seconds"] / max(steps["factorizations"], 1) / per_newton,
+        "step_over_newton": step_s / max(taken, 1) / per_newton,
     }
 
 
@@ -102,10 +109,19 @@ def roof_row(n: int) -> dict:
     show_default="benchmarks/results",
 )
 @click.option("--quick", is_flag=True, help="Smaller roofs (1e2 and 1e3 force densities).")
-def main(out_dir: Path, quick: bool) -> None:
+@click.option(
+    "--direct",
+    is_flag=True,
+    help="Every damped step by the direct saddle-point factorisation (no conjugate "
+    "gradients): the steps as they were before them.",
+)
+def main(out_dir: Path, quick: bool, direct: bool) -> None:
     """The hypar on its surface: gradients and time per gradient against a Newton
     iteration."""
     from benchmarks.common import set_threads
+    from catenet.formfind import krylov
+
+    krylov.ENABLED = not direct
 
     set_threads(1)
     roof_row(4)  # (warm: Numba's caches, MKL, the imports)
@@ -115,15 +131,17 @@ def main(out_dir: Path, quick: bool) -> None:
         r = rows[-1]
         click.echo(
             f"{r['force_densities']:>6} force densities: {r['gradients']} gradients "
-            f"({'met' if r['met'] else 'NOT met'}), {r['search_s']:.2f} s, "
+            f"({'met' if r['met'] else 'NOT met'}: largest miss {r['largest_miss_m']:.1e} m), "
+            f"{r['search_s']:.2f} s, "
             f"{r['per_gradient_s'] * 1e3:.0f} ms per gradient; damped step "
-            f"{r['per_step_s'] * 1e3:.0f} ms ({r['steps_by_scipy']} of {r['steps']} by "
-            f"SciPy); Newton iteration {r['per_newton_s'] * 1e3:.1f} ms: gradient / "
+            f"{r['per_step_s'] * 1e3:.0f} ms ({r['cg_iterations']} CG iterations in "
+            f"{r['steps']} steps, {r['steps_direct']} direct); Newton iteration "
+            f"{r['per_newton_s'] * 1e3:.1f} ms: gradient / "
             f"Newton {r['gradient_over_newton']:.1f}, step / Newton "
             f"{r['step_over_newton']:.1f}"
         )
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_csv(rows, out_dir / "targets.csv")
+    write_csv(rows, out_dir / ("targets-direct.csv" if direct else "targets.csv"))
 
 
 if __name__ == "__main__":

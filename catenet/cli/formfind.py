@@ -61,6 +61,18 @@ def command(
     sys.exit(EXIT_OK)
 
 
+def _steps(d) -> str:
+    """How a large search's damped steps went (conjugate gradients, or the direct
+    factorisation where they did not converge); '' for a small one."""
+    steps = d.extra.get("steps")
+    if not steps:
+        return ""
+    return (
+        f"; damped steps: {steps['iterative']} by conjugate gradients "
+        f"({steps['iterations']} iterations), {steps['fallbacks']} direct"
+    )
+
+
 def _summary(written) -> None:
     import numpy as np
 
@@ -77,7 +89,7 @@ def _summary(written) -> None:
         solves = "equilibria" if f.method == "elastic" else "factorisations"
         detail = (
             f"{d.message}: {d.evaluations} iterations, {d.gradients} adjoint gradients, "
-            f"{f.factorizations} {solves}"
+            f"{f.factorizations} {solves}{_steps(d)}"
         )
     lines = [
         f"{'case':<12} {written.case.title or written.case.source}",

@@ -215,7 +215,7 @@ class SparseJacobian:
         from catenet.formfind import krylov
 
         steps = self.steps
-        if eta is not None:
+        if eta is not None and krylov.ENABLED:
             start = time.perf_counter()
             try:
                 exact = self.exact()
@@ -243,7 +243,13 @@ def new_steps() -> dict:
     """How the damped steps went: taken by conjugate gradients (``iterative``, their
     ``iterations``, ``iterative_s`` seconds), ``fallbacks`` to the direct step, and D
     refactorised for a step after a refused trial (``refactorizations``)."""
-    return {"iterative": 0, "iterations": 0, "iterative_s": 0.0, "fallbacks": 0, "refactorizations": 0}
+    return {
+        "iterative": 0,
+        "iterations": 0,
+        "iterative_s": 0.0,
+        "fallbacks": 0,
+        "refactorizations": 0,
+    }
 
 
 def jacobian_operator(

@@ -87,7 +87,7 @@ class _Search:
         self.best: tuple | None = None
         self.layout = None  # the direct damped step's pattern and solver, kept between states
         self.steps = new_steps()  # how the damped steps went
-        self.last = None  # the last sparse Jacobian
+        self.last: SparseJacobian | None = None  # the last sparse Jacobian
 
     def state(self, s: np.ndarray):
         """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``

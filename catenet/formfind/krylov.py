@@ -35,6 +35,7 @@ from catenet.errors import SingularSystemError
 if TYPE_CHECKING:
     from catenet.formfind.adjoint import SparseJacobian
 
+ENABLED = True  # False: every damped step direct (benchmarks/targets.py --direct)
 MAX_ITER = 300  # conjugate-gradient iterations at most (then the direct step)
 MARGIN = 4.0  # CG aims at eta / MARGIN; the step is accepted within eta
 
@@ -91,7 +92,7 @@ class Exact:
         try:
             self.z_lu = splu(z, permc_spec="MMD_AT_PLUS_A")
         except RuntimeError:
-            raise SingularSystemError("form finding: the self-weight's system is singular") from None
+            raise SingularSystemError("form finding: the self-weight's Z is singular") from None
 
     def _d(self, w: np.ndarray) -> np.ndarray:
         out = self.shape.solve(w)
@@ -229,4 +230,4 @@ def step(jac: SparseJacobian, exact: Exact, r, mu, keep, eta, rows) -> tuple[np.
     return p, it
 
 
-__all__ = ["MAX_ITER", "Exact", "NotConverged", "Rows", "cg", "step"]
+__all__ = ["ENABLED", "MAX_ITER", "Exact", "NotConverged", "Rows", "cg", "step"]

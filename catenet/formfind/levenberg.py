@@ -4,19 +4,22 @@ Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped lea
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
 its bound whose gradient pushes it out is held): where J is given whole, by Cholesky on
 J J^T + mu (or J^T J + mu, the smaller); else by conjugate gradients on the smaller of
-the two with J's products (``catenet.formfind.krylov``), to the relative residual eta of
-an inexact Levenberg-Marquardt (Eisenstat and Walker's second forcing term: eta =
-0.9 (|r| / |r_prev|)^2, safeguarded, within ``ETA_MIN`` .. ``ETA_MAX``), or, where they do
-not get there, by one sparse factorisation of the saddle-point system that holds J
-without forming it (``catenet.formfind.adjoint.SparseJacobian``). With mu small the step is Gauss-Newton's
-least-norm step, which meets a reachable target with more variables than rows (a
-spider's centre by its force densities) in a few steps: SciPy's trust region methods
-keep such steps on their trust radius, and so converge only linearly there. mu starts at
-``MU_FIRST`` of the square of J's Frobenius norm (or of its largest singular value, by
-power iterations, for the sparse form), grows by 4 after a step that does not lower f and
-falls by 3 after one that does (never below ``MU_MIN`` of that scale). No variable moves
-by more than ``MAX_STEP`` in one step (log q: a factor e); the step is clipped to
-the bounds.
+the two with J's products (``catenet.formfind.krylov``) to a relative residual eta (an
+inexact Levenberg-Marquardt), or, where they do not get there, by one sparse
+factorisation of the saddle-point system that holds J without forming it
+(``catenet.formfind.adjoint.SparseJacobian``). The forcing term eta = ``ETA_PATH`` |r_0|
+/ |r| (within ``ETA_MIN`` .. ``ETA_MAX``) holds every step's residual to the same small
+fraction of the first misses: the first, large steps are the exact steps to about
+ETA_PATH (and so is the path, which decides which force densities are found where the
+targets leave them free), the last, small ones are not solved beyond what they change.
+With mu small the step is Gauss-Newton's least-norm step, which meets a reachable target
+with more variables than rows (a spider's centre by its force densities) in a few steps:
+SciPy's trust region methods keep such steps on their trust radius, and so converge only
+linearly there. mu starts at ``MU_FIRST`` of the square of J's Frobenius norm (or of its
+largest singular value, by power iterations, for the sparse form), grows by 4 after a
+step that does not lower f and falls by 3 after one that does (never below ``MU_MIN`` of
+that scale). No variable moves by more than ``MAX_STEP`` in one step (log q: a factor
+e); the step is clipped to the bounds.
 
 It ends when ``residual`` raises (the caller's test: every target met), when the
 evaluations reach ``budget``, or when no step lowers f by more than ``FTOL`` of it (or
@@ -34,7 +37,7 @@ import numpy as np
 MAX_STEP = 1.0
 FTOL = 1e-12
 MU_FIRST, MU_MIN, MU_MAX = 1e-6, 1e-12, 1e8
-ETA_MAX, ETA_MIN = 1e-2, 1e-10  # the iterative step's relative residual
+ETA_PATH, ETA_MIN, ETA_MAX = 1e-6, 1e-10, 1e-2  # the iterative step's forcing term
 
 
 @dataclass
@@ -58,7 +61,8 @@ def levenberg(
     r = residual(s)
     f = 0.5 * float(r @ r)
     evaluations, mu, scale = 1, 0.0, 0.0
-    eta = ETA_MAX
+    first = float(np.linalg.norm(r))
+    eta = ETA_PATH
     while True:
         jac = jacobian(s)
         dense = isinstance(jac, np.ndarray)
@@ -87,21 +91,13 @@ def levenberg(
             if mu > MU_MAX * scale:
                 return Ended("stationary", s, evaluations)
         done = f - f_new <= FTOL * f
-        eta = _forcing(f_new, f, eta)
+        eta = min(
+            max(ETA_PATH * first / max(float(np.linalg.norm(r_new)), 1e-300), ETA_MIN), ETA_MAX
+        )
         s, r, f = trial, r_new, f_new
         if done:
             return Ended("stationary", s, evaluations)
         mu = max(mu / 3.0, MU_MIN * scale)
-
-
-def _forcing(f_new: float, f: float, eta: float) -> float:
-    """The next step's relative residual (Eisenstat and Walker's choice 2, gamma 0.9,
-    alpha 2, their safeguard) from the sums of squares after and before the step."""
-    new = 0.9 * (f_new / f)  # 0.9 (|r_new| / |r|)^2
-    floor = 0.9 * eta * eta
-    if floor > 0.1:
-        new = max(new, floor)
-    return min(max(new, ETA_MIN), ETA_MAX)
 
 
 def _step(

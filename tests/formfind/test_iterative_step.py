@@ -1,0 +1,157 @@
+"""The damped step of form finding's targets by conjugate gradients with the factors of D
+(catenet/formfind/krylov.py) against the direct saddle-point step and the SVD's: the
+rows' system preconditioned (every free node on a surface, under self-weight), unpreconditioned
+(positions, tensions and a reaction), the variables' system (per cable); the fallback to
+the direct step where the iterations do not converge or the step is not finite, said in
+the log and the summary; and a search at the operator's size that meets its surface both
+ways.
+"""
+
+from __future__ import annotations
+
+import logging
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from click.testing import CliRunner
+from conftest import CONFIGS
+from scenes import hypar_on_surface
+
+from catenet.case import build, dumps_toml, parse_case
+from catenet.cli import main
+from catenet.formfind import krylov
+from catenet.formfind.case import formfind_scene
+
+MIXED = [
+    {"node": "centre", "z": -3.0},
+    {"node": 14, "point": [4.0, 2.0, -1.5], "weight": 2.0},
+    {"cable": "ring1", "tension": [0.0, 100.0]},
+    {"cable": "radial3", "tension": 900.0},
+    {"support": 40, "reaction": [100.0, -200.0, 900.0]},
+]
+
+
+def spider(vary: str) -> dict:
+    data = tomllib.loads((CONFIGS / "formfind" / "spider.toml").read_text())
+    data["geometry"]["file"] = str(CONFIGS / "formfind" / "spider.json")
+    data.update(target=MIXED, formfind={"vary": vary}, load={"gravity": [0, 0, -9.81]})
+    return data
+
+
+def operator(data: dict, base: Path | None = None, seed: int = 0):
+    """The sparse Jacobian of a case's targets at a point near its start, the residual
+    there, and J whole (from its products)."""
+    from catenet.formfind.adjoint import Adjoint, jacobian_operator
+    from catenet.formfind.design import _groups, _Search
+    from catenet.formfind.fdm import _Shape
+    from catenet.formfind.goals import resolve_goals
+
+    case = parse_case(data, base_dir=base)
+    scene = build(case)
+    net, loads = scene.net, scene.loads
+    force = np.zeros((net.n_nodes, 3)) if loads.force is None else np.array(loads.force)
+    shape = _Shape(net, force, loads.gravity, "auto", "q")
+    goals = resolve_goals(case.targets, scene, shape.size, 1e-30)
+    groups = _groups(scene, case.formfind.vary or "edges", "formfind.")
+    n = int(groups.max()) + 1
+    rng = np.random.default_rng(seed)
+    q0 = float(data["formfind"].get("force_density", 500.0))
+    search = _Search(shape, goals, groups, np.log(q0) + 0.1 * rng.standard_normal(n))
+    s = 0.1 * rng.standard_normal(n)
+    r = search.residual(s)
+    q, x, _, a = search.state(s)
+    d_x, d_q = search.partials(x, q, a)
+    op = jacobian_operator(Adjoint(shape, q, x), d_x, d_q, sp.diags(q) @ search.p)
+    whole = np.column_stack([op.matvec(e) for e in np.eye(n)])
+    return op, r, whole
+
+
+def svd_step(whole, r, mu, keep):
+    u, sv, vt = np.linalg.svd(whole[:, keep], full_matrices=False)
+    p = np.zeros(whole.shape[1])
+    p[keep] = -(vt.T @ (sv / (sv**2 + mu) * (u.T @ r)))
+    return p
+
+
+def hypar(tmp_path, n: int = 12) -> tuple[dict, Path]:
+    data, _ = hypar_on_surface(tmp_path, n)
+    return data, tmp_path
+
+
+@pytest.mark.parametrize("case", ["hypar", "spider edges", "spider cables"])
+def test_the_iterative_step_is_the_direct_one(case, tmp_path):
+    """To eta = 1e-10 the step by conjugate gradients is the direct (saddle-point) step
+    and the SVD's within 1e-7 of the step's size, every variable held at a bound kept at
+    0: the hypar on its surface under self-weight (rows' system, preconditioned), the
+    spider's mixed targets per edge (rows' system, no preconditioner) and per cable (the
+    variables' system). The damping is the search's first (1e-6 of |J|^2) and 1e-3 of it."""
+    if case == "hypar":
+        op, r, whole = operator(*hypar(tmp_path))
+    else:
+        op, r, whole = operator(spider(case.split()[1]))
+    rows, n = whole.shape
+    assert (rows <= n) == (case != "spider cables")
+    preconditioned = case == "hypar"
+    keep = np.ones(n, dtype=bool)
+    keep[::7] = False
+    scale = float(np.linalg.norm(whole, 2)) ** 2
+    for mu in (1e-6 * scale, 1e-3 * scale):
+        expected = svd_step(whole, r, mu, keep)
+        direct = op.damped(r, mu, keep)
+        iterative = op.damped(r, mu, keep, eta=1e-10)
+        size = np.abs(expected).max()
+        assert np.abs(direct - expected).max() <= 1e-7 * size
+        assert np.abs(iterative - expected).max() <= 1e-7 * size
+        assert np.all(iterative[~keep] == 0.0)
+    steps = op.steps
+    assert steps["iterative"] == 2 and steps["fallbacks"] == 0 and steps["iterations"] > 0
+    assert (op._rows is not None) == preconditioned
+
+
+@pytest.mark.parametrize("how", ["iterations", "not finite"])
+def test_the_direct_step_is_taken_and_said_where_the_iterations_fail(
+    how, tmp_path, monkeypatch, caplog
+):
+    """Conjugate gradients cut to 3 iterations (short of eta = 1e-10), or a solve that
+    gives NaN: the step is the direct one, counted as a fallback, and the log says why."""
+    op, r, whole = operator(*hypar(tmp_path))
+    keep = np.ones(whole.shape[1], dtype=bool)
+    mu = 1e-6 * float(np.linalg.norm(whole, 2)) ** 2
+    if how == "iterations":
+        monkeypatch.setattr(krylov, "MAX_ITER", 3)
+    else:
+        monkeypatch.setattr(krylov.Exact, "solve", lambda self, w: np.full_like(w, np.nan))
+    with caplog.at_level(logging.INFO, logger="catenet.formfind.adjoint"):
+        step = op.damped(r, mu, keep, eta=1e-10)
+    assert np.all(np.isfinite(step))
+    expected = svd_step(whole, r, mu, keep)
+    assert np.abs(step - expected).max() <= 1e-7 * np.abs(expected).max()
+    assert op.steps["fallbacks"] == 1 and op.steps["iterative"] == 0
+    said = [m for m in caplog.messages if "iterative damped step failed" in m]
+    assert len(said) == 1
+    assert ("after 3 iterations" in said[0]) == (how == "iterations")
+
+
+def test_a_search_by_conjugate_gradients_meets_the_surface_as_the_direct_one(tmp_path, monkeypatch):
+    """The hypar of 480 force densities (225 nodes on the surface: the sparse operator)
+    by `catenet formfind`: every node on the surface, the summary counting the steps by
+    conjugate gradients; the same search with every step direct (the iterations
+    refused) meets it too, and the force densities found agree to 1e-3 (the least-norm
+    steps' path, taken to different tolerances)."""
+    data, _ = hypar_on_surface(tmp_path, 16)
+    case = tmp_path / "roof.toml"
+    case.write_text(dumps_toml(data))
+    runner = CliRunner()
+    r = runner.invoke(main, ["formfind", str(case), "-o", str(tmp_path / "a.h5")])
+    assert r.exit_code == 0, r.output
+    assert "met:" in r.output and "by conjugate gradients" in r.output and ", 0 direct" in r.output
+    first = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
+    assert first.design.all_met and first.design.extra["steps"]["fallbacks"] == 0
+    monkeypatch.setattr(krylov, "MAX_ITER", 0)
+    direct = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
+    steps = direct.design.extra["steps"]
+    assert direct.design.all_met and steps["iterative"] == 0 and steps["fallbacks"] > 0
+    assert np.abs(np.log(first.q / direct.q)).max() < 1e-3
