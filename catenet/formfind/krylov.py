@@ -76,14 +76,16 @@ class Exact:
         norm = float(np.linalg.norm(g))
         hat = g / norm
         c = int(np.argmax(np.abs(g)))
-        gx = self.adj.gx
-        big = gx[c::3].tocsr() / g[c]  # G: the rows of one coordinate, g's factor out
+        val, row, col = self.adj.gx_coo  # rows 3 i + k of G_x: g_k times G's row i
+        on = row % 3 == c
+        val, i, j, axis = val[on] / g[c], row[on] // 3, col[on] // 3, col[on] % 3
         other = np.eye(3)[np.argsort(np.abs(hat))[:2]]
         e1 = other[0] - hat * (other[0] @ hat)
         e1 /= np.linalg.norm(e1)
         self.frame = np.vstack([e1, np.cross(hat, e1), hat])  # rows: e1, e2, g/|g|
         self.g = norm
-        part = [sum(f[d] * big[:, d::3] for d in range(3)).tocsr() for f in self.frame]
+        shape = (self.nf, self.nf)
+        part = [sp.csr_matrix((val * f[axis], (i, j)), shape=shape) for f in self.frame]
         self.g1, self.g2, gg = part
         self.g1t, self.g2t = self.g1.T.tocsr(), self.g2.T.tocsr()
         p = self.shape.pattern

@@ -34,10 +34,17 @@ MIXED = [
 ]
 
 
-def spider(vary: str) -> dict:
+LOADS = {
+    "": {"gravity": [0, 0, -9.81]},
+    "tilted": {"gravity": [2.0, -1.0, -9.5]},  # (the self-weight's frame turned)
+    "unweighted": {"point": [{"node": 0, "force": [0, 0, -3e3]}]},
+}
+
+
+def spider(vary: str, load: str = "") -> dict:
     data = tomllib.loads((CONFIGS / "formfind" / "spider.toml").read_text())
     data["geometry"]["file"] = str(CONFIGS / "formfind" / "spider.json")
-    data.update(target=MIXED, formfind={"vary": vary}, load={"gravity": [0, 0, -9.81]})
+    data.update(target=MIXED, formfind={"vary": vary}, load=LOADS[load])
     return data
 
 
@@ -66,6 +73,7 @@ def operator(data: dict, base: Path | None = None, seed: int = 0):
     d_x, d_q = search.partials(x, q, a)
     op = jacobian_operator(Adjoint(shape, q, x), d_x, d_q, sp.diags(q) @ search.p)
     whole = np.column_stack([op.matvec(e) for e in np.eye(n)])
+    op.search, op.s = search, s  # (for a trial elsewhere)
     return op, r, whole
 
 
@@ -81,17 +89,22 @@ def hypar(tmp_path, n: int = 12) -> tuple[dict, Path]:
     return data, tmp_path
 
 
-@pytest.mark.parametrize("case", ["hypar", "spider edges", "spider cables"])
+@pytest.mark.parametrize(
+    "case",
+    ["hypar", "spider edges", "spider cables", "spider edges tilted", "spider edges unweighted"],
+)
 def test_the_iterative_step_is_the_direct_one(case, tmp_path):
     """To eta = 1e-10 the step by conjugate gradients is the direct (saddle-point) step
     and the SVD's within 1e-7 of the step's size, every variable held at a bound kept at
     0: the hypar on its surface under self-weight (rows' system, preconditioned), the
     spider's mixed targets per edge (rows' system, no preconditioner) and per cable (the
-    variables' system). The damping is the search's first (1e-6 of |J|^2) and 1e-3 of it."""
+    variables' system); gravity off the z axis (the self-weight's system Z in a turned
+    frame) and no self-weight (A = I_3 (x) D). The damping is the search's first (1e-6 of
+    |J|^2) and 1e-3 of it."""
     if case == "hypar":
         op, r, whole = operator(*hypar(tmp_path))
     else:
-        op, r, whole = operator(spider(case.split()[1]))
+        op, r, whole = operator(spider(*case.split()[1:]))
     rows, n = whole.shape
     assert (rows <= n) == (case != "spider cables")
     preconditioned = case == "hypar"
@@ -109,6 +122,22 @@ def test_the_iterative_step_is_the_direct_one(case, tmp_path):
     steps = op.steps
     assert steps["iterative"] == 2 and steps["fallbacks"] == 0 and steps["iterations"] > 0
     assert (op._rows is not None) == preconditioned
+
+
+def test_a_step_after_a_refused_trial_refactorises_d_at_its_own_state():
+    """A trial shape solved between two steps (a refused one: the shape's solver then
+    holds the trial's D): the next iterative step refactorises D at its own state and
+    is still the SVD's step."""
+    op, r, whole = operator(spider("edges"))
+    keep = np.ones(whole.shape[1], dtype=bool)
+    mu = 1e-6 * float(np.linalg.norm(whole, 2)) ** 2
+    first = op.damped(r, mu, keep, eta=1e-10)
+    op.search.residual(op.s + 0.5)  # (a trial: D factorised at other force densities)
+    again = op.damped(r, 4.0 * mu, keep, eta=1e-10)
+    expected = svd_step(whole, r, 4.0 * mu, keep)
+    assert np.abs(again - expected).max() <= 1e-7 * np.abs(expected).max()
+    assert np.abs(first - again).max() > 0  # (another damping: another step)
+    assert op.steps["refactorizations"] == 1 and op.steps["fallbacks"] == 0
 
 
 @pytest.mark.parametrize("how", ["iterations", "not finite"])
