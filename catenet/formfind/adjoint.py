@@ -208,14 +208,15 @@ class SparseJacobian:
 
     def damped(self, r: np.ndarray, mu: float, keep: np.ndarray, eta=None) -> np.ndarray:
         """The damped step (0 where not ``keep``): with ``eta`` by conjugate gradients to
-        that relative residual, the direct step where they do not get there (logged,
-        counted); without, the direct step. SingularSystemError where it has none."""
+        that relative residual (from ``krylov.FROM_DOFS`` free DOFs), the direct step
+        where they do not get there (logged, counted); without, or on a smaller net, the
+        direct step. SingularSystemError where it has none."""
         import time
 
         from catenet.formfind import krylov
 
         steps = self.steps
-        if eta is not None and krylov.ENABLED:
+        if eta is not None and krylov.ENABLED and self.adj.n3 >= krylov.FROM_DOFS:
             start = time.perf_counter()
             try:
                 exact = self.exact()

@@ -17,6 +17,8 @@ directions N (N A^-1 ~ D^-1 N, exact where N is the same at neighbouring nodes a
 weight is light) gives J J^T ~ D^-1 E E^T D^-1 with E = N Bs, sparse (D's pattern), so
 M^-1 = D (E E^T + mu diag(D)^2)^-1 D: one sparse Cholesky of D's size per step.
 
+Below ``FROM_DOFS`` free DOFs the direct step is the faster (benchmarks/targets.py: the
+saddle point is small, the back-substitutions' fixed cost large) and is taken at once.
 The iterations stop at the relative residual ``eta`` the caller asks (the forcing term of
 an inexact Levenberg-Marquardt); the residual is then recomputed from the products and
 the step accepted only where it is finite and within ``eta`` (CG aims at ``eta`` /
@@ -36,6 +38,7 @@ if TYPE_CHECKING:
     from catenet.formfind.adjoint import SparseJacobian
 
 ENABLED = True  # False: every damped step direct (benchmarks/targets.py --direct)
+FROM_DOFS = 3000  # free DOFs from which the steps are iterative (below, direct: faster)
 MAX_ITER = 300  # conjugate-gradient iterations at most (then the direct step)
 MARGIN = 4.0  # CG aims at eta / MARGIN; the step is accepted within eta
 
@@ -232,4 +235,4 @@ def step(jac: SparseJacobian, exact: Exact, r, mu, keep, eta, rows) -> tuple[np.
     return p, it
 
 
-__all__ = ["ENABLED", "MAX_ITER", "Exact", "NotConverged", "Rows", "cg", "step"]
+__all__ = ["ENABLED", "FROM_DOFS", "MAX_ITER", "Exact", "NotConverged", "Rows", "cg", "step"]

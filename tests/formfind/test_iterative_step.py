@@ -3,8 +3,8 @@
 rows' system preconditioned (every free node on a surface, under self-weight), unpreconditioned
 (positions, tensions and a reaction), the variables' system (per cable); the fallback to
 the direct step where the iterations do not converge or the step is not finite, said in
-the log and the summary; and a search at the operator's size that meets its surface both
-ways.
+the log and the summary; the direct step at once below krylov.FROM_DOFS; and a search at
+the operator's size that meets its surface both ways.
 """
 
 from __future__ import annotations
@@ -24,6 +24,14 @@ from catenet.case import build, dumps_toml, parse_case
 from catenet.cli import main
 from catenet.formfind import krylov
 from catenet.formfind.case import formfind_scene
+
+
+@pytest.fixture(autouse=True)
+def iterative_on_small_nets(monkeypatch):
+    """The iterative step on these small nets too (by default it starts at
+    krylov.FROM_DOFS free DOFs: below, the direct one is faster)."""
+    monkeypatch.setattr(krylov, "FROM_DOFS", 0)
+
 
 MIXED = [
     {"node": "centre", "z": -3.0},
@@ -138,6 +146,19 @@ def test_a_step_after_a_refused_trial_refactorises_d_at_its_own_state():
     assert np.abs(again - expected).max() <= 1e-7 * np.abs(expected).max()
     assert np.abs(first - again).max() > 0  # (another damping: another step)
     assert op.steps["refactorizations"] == 1 and op.steps["fallbacks"] == 0
+
+
+def test_a_net_below_from_dofs_takes_the_direct_step_at_once(monkeypatch):
+    """Fewer free DOFs than krylov.FROM_DOFS: the direct step, no iterations tried."""
+    op, r, whole = operator(spider("edges"))
+    monkeypatch.setattr(krylov, "FROM_DOFS", 3 * op.adj.nf + 1)
+    keep = np.ones(whole.shape[1], dtype=bool)
+    mu = 1e-6 * float(np.linalg.norm(whole, 2)) ** 2
+    step = op.damped(r, mu, keep, eta=1e-10)
+    expected = svd_step(whole, r, mu, keep)
+    assert np.abs(step - expected).max() <= 1e-7 * np.abs(expected).max()
+    assert op.steps["iterative"] == 0 and op.steps["fallbacks"] == 0
+    assert op.layout is not None and op.layout.factorizations == 1
 
 
 @pytest.mark.parametrize("how", ["iterations", "not finite"])
