@@ -197,14 +197,16 @@ class SparseJacobian:
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         v = np.ravel(v)
-        return self.rq @ v - self.d_x @ self.exact().solve(self.bs @ v)
+        out = -(self.d_x @ self.exact().solve(self.bs @ v))
+        return out + self.rq @ v if self.rq.nnz else out
 
     def rmatvec(self, z: np.ndarray) -> np.ndarray:
         z = np.ravel(z)
         if self._t is None:
             self._t = tuple(m.T.tocsr() for m in (self.rq, self.bs, self.d_x))
         rq_t, bs_t, d_x_t = self._t
-        return rq_t @ z - bs_t @ self.exact().solve_t(d_x_t @ z)
+        out = -(bs_t @ self.exact().solve_t(d_x_t @ z))
+        return out + rq_t @ z if rq_t.nnz else out
 
     def damped(self, r: np.ndarray, mu: float, keep: np.ndarray, eta=None) -> np.ndarray:
         """The damped step (0 where not ``keep``): with ``eta`` by conjugate gradients to
