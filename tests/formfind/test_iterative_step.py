@@ -189,8 +189,9 @@ def test_a_search_by_conjugate_gradients_meets_the_surface_as_the_direct_one(tmp
     """The hypar of 480 force densities (225 nodes on the surface: the sparse operator)
     by `catenet formfind`: every node on the surface, the summary counting the steps by
     conjugate gradients; the same search with every step direct (the iterations
-    refused) meets it too, and the force densities found agree to 1e-3 (the least-norm
-    steps' path, taken to different tolerances)."""
+    refused) meets it too, and the force densities found agree to 1e-5 (more variables
+    than rows: they are the least-norm steps' path, each iterative step solved to 1e-6
+    of the first misses; measured 2.4e-7)."""
     data, _ = hypar_on_surface(tmp_path, 16)
     case = tmp_path / "roof.toml"
     case.write_text(dumps_toml(data))
@@ -204,4 +205,4 @@ def test_a_search_by_conjugate_gradients_meets_the_surface_as_the_direct_one(tmp
     direct = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
     steps = direct.design.extra["steps"]
     assert direct.design.all_met and steps["iterative"] == 0 and steps["fallbacks"] > 0
-    assert np.abs(np.log(first.q / direct.q)).max() < 1e-3
+    assert np.abs(np.log(first.q / direct.q)).max() < 1e-5
