@@ -220,6 +220,7 @@ class SparseJacobian:
         steps = self.steps
         if eta is not None and krylov.ENABLED and self.adj.n3 >= krylov.FROM_DOFS:
             start = time.perf_counter()
+            before = 0 if self._exact is None else self._exact.refactorizations
             try:
                 exact = self.exact()
                 if self._rows is False:
@@ -234,7 +235,7 @@ class SparseJacobian:
             finally:
                 steps["iterative_s"] += time.perf_counter() - start
                 if self._exact is not None:
-                    steps["refactorizations"] = self._exact.refactorizations
+                    steps["refactorizations"] += self._exact.refactorizations - before
         if self.layout is None:
             from catenet.formfind.damped import Layout
 

@@ -82,6 +82,7 @@ class _Search:
         m = shape.net.n_edges
         self.p = sp.csr_matrix((np.ones(m), (np.arange(m), groups)), shape=(m, n_var))
         self.key: bytes | None = None
+        self.now: tuple = (None, None, None, None)  # (q, x, load, lengths) of ``key``
         self.groups = groups
         self.gradients = 0
         self.best: tuple | None = None
@@ -93,8 +94,8 @@ class _Search:
         """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``
         each time: the goals may change between searches)."""
         key = s.tobytes()
-        if key != self.key:
-            self.key = None
+        if key != self.key or self.shape.factored is not self.now[0]:
+            self.key = None  # (also where a damped step refactorised D at another state)
             q = np.exp(np.clip(self.base + self.p @ s, -700.0, 700.0))
             x, load = self.shape(q)
             u = x[self.shape.net.edges[:, 1]] - x[self.shape.net.edges[:, 0]]
