@@ -210,21 +210,21 @@ class SparseJacobian:
 
     def damped(self, r: np.ndarray, mu: float, keep: np.ndarray, eta=None) -> np.ndarray:
         """The damped step (0 where not ``keep``): with ``eta`` by conjugate gradients to
-        that relative residual (from ``krylov.FROM_DOFS`` free DOFs), the direct step
-        where they do not get there (logged, counted); without, or on a smaller net, the
-        direct step. SingularSystemError where it has none."""
+        that relative residual where they are worth trying (``krylov.worth_trying``), the
+        direct step where they do not get there (logged, counted); without, or where they
+        are not tried, the direct step. SingularSystemError where it has none."""
         import time
 
         from catenet.formfind import krylov
 
         steps = self.steps
-        if eta is not None and krylov.ENABLED and self.adj.n3 >= krylov.FROM_DOFS:
+        if eta is not None and self._rows is False:
+            self._rows = krylov.Rows.make(self)
+        if eta is not None and krylov.worth_trying(self, self._rows):
             start = time.perf_counter()
             before = 0 if self._exact is None else self._exact.refactorizations
             try:
                 exact = self.exact()
-                if self._rows is False:
-                    self._rows = krylov.Rows.make(self)
                 p, it = krylov.step(self, exact, r, mu, keep, eta, self._rows)
                 steps["iterative"] += 1
                 steps["iterations"] += it

@@ -19,10 +19,13 @@ M^-1 = D (E E^T + mu diag(D)^2)^-1 D: one sparse Cholesky of D's size per step.
 
 Below ``FROM_DOFS`` free DOFs the direct step is the faster (benchmarks/targets.py: the
 saddle point is small, the back-substitutions' fixed cost large) and is taken at once.
-The iterations stop at the relative residual ``eta`` the caller asks (the forcing term of
-an inexact Levenberg-Marquardt); the residual is then recomputed from the products and
-the step accepted only where it is finite and within ``eta`` (CG aims at ``eta`` /
-``MARGIN``), else ``NotConverged`` says why and the caller takes the direct step
+Without that preconditioner the iterations are tried only on a system of at most
+``MAX_ITER`` unknowns (conjugate gradients then end within about that many); a larger one
+takes the direct step at once. The iterations stop at the relative residual ``eta`` the
+caller asks (the forcing term of an inexact Levenberg-Marquardt), at most ``MAX_ITER``;
+the residual is then recomputed from the products and the step accepted only where it is
+finite and within ``eta`` (CG aims at ``eta`` / ``MARGIN``), else ``NotConverged`` says
+why and the caller takes the direct step
 (``catenet.formfind.damped``).
 """
 
@@ -153,6 +156,8 @@ class Rows:
         rows, n3 = d_x.shape
         if rows != n3 // 3 or np.any(rq.data) or np.any(np.diff(d_x.indptr) == 0):
             return None
+        if np.any(np.add.reduceat(np.abs(d_x.data), d_x.indptr[:-1]) == 0):
+            return None  # (a row inside its range: D^-1 does not commute past a subset)
         node = d_x.indices // 3
         first = node[d_x.indptr[:-1]]
         if np.any(node != np.repeat(first, np.diff(d_x.indptr))):
@@ -202,7 +207,8 @@ def cg(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray,
         x += alpha * d
         res -= alpha * ad
         it += 1
-        if float(np.linalg.norm(res)) <= goal:
+        now = float(np.linalg.norm(res))
+        if now <= goal:
             break
         z = precondition(res) if precondition is not None else res
         rz, old = float(res @ z), rz
@@ -213,6 +219,14 @@ def cg(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray,
             f"relative residual {true / norm_b:.2e} after {it} iterations (tolerance {eta:.1e})"
         )
     return x, it
+
+
+def worth_trying(jac: SparseJacobian, rows: Rows | None) -> bool:
+    """Whether the iterative step is tried (module docstring): a net of ``FROM_DOFS``
+    free DOFs or more, preconditioned, or a system of at most MAX_ITER unknowns."""
+    if not ENABLED or jac.adj.n3 < FROM_DOFS:
+        return False
+    return rows is not None or min(jac.shape) <= MAX_ITER
 
 
 def step(jac: SparseJacobian, exact: Exact, r, mu, keep, eta, rows) -> tuple[np.ndarray, int]:
@@ -235,4 +249,14 @@ def step(jac: SparseJacobian, exact: Exact, r, mu, keep, eta, rows) -> tuple[np.
     return p, it
 
 
-__all__ = ["ENABLED", "FROM_DOFS", "MAX_ITER", "Exact", "NotConverged", "Rows", "cg", "step"]
+__all__ = [
+    "ENABLED",
+    "FROM_DOFS",
+    "MAX_ITER",
+    "Exact",
+    "NotConverged",
+    "Rows",
+    "cg",
+    "step",
+    "worth_trying",
+]

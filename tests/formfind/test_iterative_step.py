@@ -3,8 +3,8 @@
 rows' system preconditioned (every free node on a surface, under self-weight), unpreconditioned
 (positions, tensions and a reaction), the variables' system (per cable); the fallback to
 the direct step where the iterations do not converge or the step is not finite, said in
-the log and the summary; the direct step at once below krylov.FROM_DOFS; and a search at
-the operator's size that meets its surface both ways.
+the log and the summary; the direct step at once where the iterations do not pay; and a
+search at the operator's size that meets its surface both ways.
 """
 
 from __future__ import annotations
@@ -148,10 +148,15 @@ def test_a_step_after_a_refused_trial_refactorises_d_at_its_own_state():
     assert op.steps["refactorizations"] == 1 and op.steps["fallbacks"] == 0
 
 
-def test_a_net_below_from_dofs_takes_the_direct_step_at_once(monkeypatch):
-    """Fewer free DOFs than krylov.FROM_DOFS: the direct step, no iterations tried."""
+@pytest.mark.parametrize("why", ["small net", "no preconditioner"])
+def test_where_iterations_do_not_pay_the_direct_step_is_taken_at_once(why, monkeypatch):
+    """Fewer free DOFs than krylov.FROM_DOFS, or no preconditioner (the spider's mixed
+    rows) on more unknowns than krylov.MAX_ITER: the direct step, no iterations tried."""
     op, r, whole = operator(spider("edges"))
-    monkeypatch.setattr(krylov, "FROM_DOFS", 3 * op.adj.nf + 1)
+    if why == "small net":
+        monkeypatch.setattr(krylov, "FROM_DOFS", 3 * op.adj.nf + 1)
+    else:
+        monkeypatch.setattr(krylov, "MAX_ITER", min(whole.shape) - 1)
     keep = np.ones(whole.shape[1], dtype=bool)
     mu = 1e-6 * float(np.linalg.norm(whole, 2)) ** 2
     step = op.damped(r, mu, keep, eta=1e-10)
