@@ -8,16 +8,16 @@ Per roof (``hypar_on_surface`` of tests/scenes.py, the roof of tests/formfind): 
 search's adjoint gradients and evaluations until every node is on the surface (to
 formfind.tol = 1e-9 of the roof's size), its wall time and so the time per gradient
 (everything of the search: shapes, adjoint solves, damped steps; the surface file is
-read before, its time apart),
-the damped steps' own share (by conjugate gradients with D's factors:
-``catenet.formfind.krylov``, their iterations; the steps that fell back to the direct
-saddle-point factorisation, ``catenet.formfind.damped``); then the static analysis of
-the net found (``catenet run`` on the case it writes: the rest lengths that carry the
-forces found, tension-only) under a snow load of SNOW [N/m^2] on its plan, and the wall
-time of one Newton iteration there (the solve's time over its iterations). The ratio of
-the two is measured in the same run. Writes DIR/targets.csv (default benchmarks/results;
-with --direct, every damped step by the direct factorisation, DIR/targets-direct.csv)
-and prints the table.
+read before, its time apart), the damped steps' own share (by conjugate gradients with
+D's factors: ``catenet.formfind.krylov``, their iterations; the steps that fell back to
+the direct saddle-point factorisation, ``catenet.formfind.damped``); then the static
+analysis of the net found (``catenet run`` on the case it writes: the rest lengths that
+carry the forces found, tension-only) under a snow load of SNOW [N/m^2] on its plan, and
+the wall time of one Newton iteration there (the solve's time over its iterations), and
+that of one back-substitution with the factors of the net's D. The ratios are measured
+in the same run. Writes DIR/targets.csv (default benchmarks/results; with --direct,
+every damped step by the direct factorisation, DIR/targets-direct.csv) and prints the
+table.
 """
 
 from __future__ import annotations
@@ -82,6 +82,7 @@ def roof_row(n: int) -> dict:
     static = solve_static(built, loads, workspace=Workspace(built))
     static_s = time.perf_counter() - start
     per_gradient = search_s / max(d.gradients, 1)
+    back_s = back_substitution(found)
     per_newton = static_s / max(static.iterations, 1)
     return {
         "force_densities": d.variables,
@@ -97,12 +98,35 @@ def roof_row(n: int) -> dict:
         "cg_iterations": steps.get("iterations", 0),
         "steps_direct": steps.get("factorizations", 0),
         "per_step_s": step_s / max(taken, 1),
+        "back_substitution_s": back_s,
+        "newton_over_back_substitution": per_newton / back_s,
         "static_iterations": static.iterations,
         "static_converged": bool(static.converged),
         "per_newton_s": per_newton,
         "gradient_over_newton": per_gradient / per_newton,
         "step_over_newton": step_s / max(taken, 1) / per_newton,
     }
+
+
+def back_substitution(found, count: int = 50) -> float:
+    """The wall time of one back-substitution with the factors of the found net's D (the
+    free nodes' matrix; what each product of the iterative steps costs three of)."""
+    import numpy as np
+
+    from catenet.formfind.fdm import Pattern
+    from catenet.solver.linear import make_solver, resolve_backend
+
+    p = Pattern(found.net)
+    solver = make_solver(
+        resolve_backend("auto"), p.indptr, p.indices, upper=True, dof_node=p.free_nodes, mtype=2
+    )
+    solver.factorize(p.values(found.q))
+    b = np.random.default_rng(0).standard_normal(p.n_free)
+    solver.solve(b)  # (the first, checked)
+    start = time.perf_counter()
+    for _ in range(count):
+        solver.solve(b)
+    return (time.perf_counter() - start) / count
 
 
 @click.command(name="python benchmarks/targets.py")
@@ -144,7 +168,9 @@ def main(out_dir: Path, quick: bool, direct: bool) -> None:
             f"{r['steps']} steps, {r['steps_direct']} direct); Newton iteration "
             f"{r['per_newton_s'] * 1e3:.1f} ms: gradient / "
             f"Newton {r['gradient_over_newton']:.1f}, step / Newton "
-            f"{r['step_over_newton']:.1f}"
+            f"{r['step_over_newton']:.1f}; a back-substitution with D "
+            f"{r['back_substitution_s'] * 1e3:.2f} ms (Newton / it "
+            f"{r['newton_over_back_substitution']:.0f})"
         )
     out_dir.mkdir(parents=True, exist_ok=True)
     write_csv(rows, out_dir / ("targets-direct.csv" if direct else "targets.csv"))
