@@ -15,7 +15,8 @@ Where every row reads the position of its own free node (a surface, a coordinate
 free node) the rows' system is preconditioned: moving D^-1 past the rows' per-node
 directions N (N A^-1 ~ D^-1 N, exact where N is the same at neighbouring nodes and the
 weight is light) gives J J^T ~ D^-1 E E^T D^-1 with E = N Bs, sparse (D's pattern), so
-M^-1 = D (E E^T + mu diag(D)^2)^-1 D: one sparse Cholesky of D's size per step.
+M^-1 = D (E E^T + mu D^2)^-1 D (exact in its mu part): one sparse factorisation of D's
+size (D^2's pattern) per step.
 
 Below ``FROM_DOFS`` free DOFs the direct step is the faster (benchmarks/targets.py: the
 saddle point is small, the back-substitutions' fixed cost large) and is taken at once.
@@ -136,7 +137,7 @@ class Exact:
 
 
 class Rows:
-    """The rows' preconditioner M^-1 = D (E E^T + mu diag(D)^2)^-1 D (module docstring),
+    """The rows' preconditioner M^-1 = D (E E^T + mu D^2)^-1 D (module docstring),
     where every row reads one free node of its own and every free node has one; None
     from ``make`` elsewhere."""
 
@@ -149,6 +150,7 @@ class Rows:
         self.d_rows = d[node][:, node].tocsr()  # D in the rows' order
         self.e = (jac.d_x @ jac.bs).tocsr()
         self.lu: Any = None
+        self.dd: Any = None  # D^2 in the rows' order
 
     @staticmethod
     def make(jac: SparseJacobian) -> Rows | None:
@@ -172,9 +174,10 @@ class Rows:
 
         e = self.e @ sp.diags(keep.astype(np.float64))
         ee = (e @ e.T).tocsr()
-        diag = self.d_rows.diagonal()
         floor = 1e-12 * float(ee.diagonal().max(initial=0.0))  # (a node no edge moves)
-        s = (ee + sp.diags(mu * diag**2 + floor)).tocsc()
+        if self.dd is None:
+            self.dd = (self.d_rows @ self.d_rows).tocsr()
+        s = (ee + mu * self.dd + sp.identity(ee.shape[0]) * floor).tocsc()
         try:
             self.lu = splu(s, permc_spec="MMD_AT_PLUS_A")
         except RuntimeError:
