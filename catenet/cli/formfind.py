@@ -67,9 +67,11 @@ def _steps(d) -> str:
     steps = d.extra.get("steps")
     if not steps:
         return ""
+    failed = steps["fallbacks"]
+    why = f" ({failed} where they did not converge)" if failed else ""
     return (
         f"; damped steps: {steps['iterative']} by conjugate gradients "
-        f"({steps['iterations']} iterations), {steps['fallbacks']} direct"
+        f"({steps['iterations']} iterations), {steps['factorizations']} direct{why}"
     )
 
 

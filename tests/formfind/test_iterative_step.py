@@ -209,9 +209,9 @@ def test_a_search_by_conjugate_gradients_meets_the_surface_as_the_direct_one(tmp
     """The hypar of 480 force densities (225 nodes on the surface: the sparse operator)
     by `catenet formfind`: every node on the surface, the summary counting the steps by
     conjugate gradients; the same search with every step direct (the iterations
-    refused) meets it too, and the force densities found agree to 1e-5 (more variables
-    than rows: they are the least-norm steps' path, each iterative step solved to 1e-6
-    of the first misses; measured 3.5e-7)."""
+    refused, the summary says so) meets it too, and the force densities found agree to
+    1e-5 (more variables than rows: they are the least-norm steps' path, each iterative
+    step solved to 1e-6 of the first misses; measured 3.5e-7)."""
     data, _ = hypar_on_surface(tmp_path, 16)
     case = tmp_path / "roof.toml"
     case.write_text(dumps_toml(data))
@@ -222,6 +222,10 @@ def test_a_search_by_conjugate_gradients_meets_the_surface_as_the_direct_one(tmp
     first = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
     assert first.design.all_met and first.design.extra["steps"]["fallbacks"] == 0
     monkeypatch.setattr(krylov, "MAX_ITER", 0)
+    r = runner.invoke(main, ["formfind", str(case), "-o", str(tmp_path / "b.h5")])
+    assert r.exit_code == 0, r.output
+    assert "0 by conjugate gradients (0 iterations)" in r.output
+    assert "where they did not converge)" in r.output
     direct = formfind_scene(build(parse_case(data, base_dir=tmp_path)))
     steps = direct.design.extra["steps"]
     assert direct.design.all_met and steps["iterative"] == 0 and steps["fallbacks"] > 0
