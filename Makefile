@@ -28,12 +28,12 @@ run: $(VENV)/.installed
 # more with every node moved by 1e-12 of the net's size and two threads
 # (tests/conftest.py): a verdict that hangs on round-off fails here, not on a user's machine.
 test: $(VENV)/.installed-test
-	$(PY) -m pytest -n 2 --dist loadfile -q --durations=15
-	CATENET_ROUNDOFF=1 $(PY) -m pytest -n 2 --dist loadfile -q -m roundoff -p no:cacheprovider
+	$(PY) -m pytest -n 2 --dist loadfile --no-loadscope-reorder -q --durations=15
+	CATENET_ROUNDOFF=1 $(PY) -m pytest -n 2 --dist loadfile --no-loadscope-reorder -q -m roundoff -p no:cacheprovider
 
 # The development loop: the suite without the tests marked slow (large nets, long runs).
 test-fast: $(VENV)/.installed-test
-	$(PY) -m pytest -n 2 --dist loadfile -q -m "not slow"
+	$(PY) -m pytest -n 2 --dist loadfile --no-loadscope-reorder -q -m "not slow"
 
 # ruff, and mypy on the package's type hints ([tool.mypy] in pyproject.toml: the kernels
 # aside, whose types Numba checks).

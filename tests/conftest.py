@@ -244,6 +244,20 @@ def pytest_configure(config):
         _perturb_every_scene()
 
 
+SLOW_WEIGHT = 10  # a test marked slow counts as this many others
+
+
+def pytest_collection_modifyitems(config, items):
+    """Whole files in order of their weight, the heaviest first (a stable sort: a file's
+    tests keep their order): `make test` hands files to xdist's two workers in this order
+    (``--no-loadscope-reorder``), so that the long ones start early and the short ones
+    fill the end, where one long file started last would leave the other worker idle."""
+    weight: dict = {}
+    for item in items:
+        slow = item.get_closest_marker("slow") is not None
+        weight[item.path] = weight.get(item.path, 0) + (SLOW_WEIGHT if slow else 1)
+    items.sort(key=lambda item: -weight[item.path])
+
 ROUNDOFF = 1e-12  # CATENET_ROUNDOFF: the relative move of every node of every built net
 ROUNDOFF_THREADS = 2  # ... and the threads every solve uses
 
