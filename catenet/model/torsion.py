@@ -104,13 +104,17 @@ class Torsion:
         r = np.broadcast_to(dofs[:, :, None], pair.shape)[pair]
         c = np.broadcast_to(dofs[:, None, :], pair.shape)[pair]
         parts = [(r, c, outer[pair])]
-        for s in np.flatnonzero(self.segment >= 0):  # the twist term's g g^T / C, out
+        held = np.flatnonzero(self.segment >= 0)
+        if held.size and twists is None:
+            raise ValueError("the twist term's segments are missing (a chain holds its twist)")
+        for s in held:  # the twist term's g g^T / C, out
+            assert twists is not None
             seg = int(self.segment[s])
-            lo, hi = twists.start[seg], twists.start[seg + 1]  # type: ignore[union-attr]
-            args = (twists.nodes, lo, hi, twists.closed, twists.head, twists.tail, seg)  # type: ignore[union-attr]
+            lo, hi = twists.start[seg], twists.start[seg + 1]
+            args = (twists.nodes, lo, hi, twists.closed, twists.head, twists.tail, seg)
             g = segment_gradient(x, *args)
-            d = (3 * twists.nodes[lo:hi, None] + np.arange(3)).ravel()  # type: ignore[union-attr]
-            scale = -1.0 / float(twists.compliance[seg])  # type: ignore[union-attr]
+            d = (3 * twists.nodes[lo:hi, None] + np.arange(3)).ravel()
+            scale = -1.0 / float(twists.compliance[seg])
             parts.append((np.repeat(d, d.size), np.tile(d, d.size), scale * np.outer(g, g).ravel()))
         dk = sp.coo_matrix(
             (np.concatenate([p[2] for p in parts]),
