@@ -137,7 +137,9 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
         attrs["restart_time"] = float(state.t)
     if case.source:
         attrs["source"] = str(case.source)
-    settings = sv.Settings.of(solver, linear=backend)
+    # The settings keep what the case asked for: "auto" picks its solver per system (the
+    # band below a measured size, catenet.solver.banded), as a sweep or the API does.
+    settings = sv.Settings.of(solver)
     return Plan(case, scene, path, state, cases, settings, backend, trajectory, attrs)
 
 

@@ -31,11 +31,12 @@ from numpy.typing import ArrayLike
 from catenet.kernels.banded import band_cholesky, band_solve, cuthill_mckee
 from catenet.solver.linear import LinearSolver
 
-#: Whether solver.linear = "auto" takes the band below BAND_MAX_DOF. Off: with it, a
-#: sweep's rows and the single runs of the same cases differed at round-off (1e-13 of the
-#: largest displacement, tests/sweep/test_sweep_summary.py), where they must be the same
-#: numbers; PARDISO serves until that is found.
-AUTO = False
+#: Whether solver.linear = "auto" takes the band below BAND_MAX_DOF. Every path that
+#: solves a case (``catenet run``, a sweep's rows, the API) passes "auto" on to the
+#: Workspace, so the same case takes the same solver and gives the same numbers on each
+#: (tests/sweep/test_sweep_summary.py; ``catenet run`` once resolved "auto" to PARDISO
+#: before the Workspace saw it, and its numbers then differed from a sweep's at 1e-13).
+AUTO = True
 BAND_MAX_DOF = 700  # the band below this many unknowns (benchmarks/solvers_small.py: it
 # stops paying between 627 and 864 unknowns, with a box or without, on one thread)
 BORDER_DEGREE = 6.0  # a row with more entries than this many times the median: border

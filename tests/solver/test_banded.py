@@ -1,8 +1,8 @@
 """The small-system solver (catenet/solver/banded.py): the bordered band's Cholesky
 factorisation solves a step's matrix of a net with a free box as PARDISO does (to
 round-off), checked as every solve; a matrix that is not positive definite goes to
-PARDISO (its inertia, its singular-system error); "auto" picks it below BAND_MAX_DOF,
-"pardiso" never."""
+PARDISO (its inertia, its singular-system error); "auto" picks it below BAND_MAX_DOF
+(in ``catenet run`` as in a sweep and the API), "pardiso" never."""
 
 from __future__ import annotations
 
@@ -22,14 +22,6 @@ from catenet.terms import Inertia
 
 pytestmark = pytest.mark.skipif(not pardiso_available(), reason="MKL's PARDISO is missing")
 ROOT = Path(__file__).resolve().parents[2]
-
-
-@pytest.fixture(autouse=True)
-def band_in_auto(monkeypatch):
-    """The band as "auto" takes it when catenet.solver.banded.AUTO is on."""
-    import catenet.solver.banded as banded
-
-    monkeypatch.setattr(banded, "AUTO", True)
 
 
 def _step_matrix(shift: float = 0.0):
@@ -98,3 +90,18 @@ def test_pardiso_alone_above_the_threshold_or_when_asked():
     assert isinstance(
         Workspace(paper_net(6, edge=0.1)[0].net, linear="pardiso").solver, PardisoSolver
     )
+
+
+def test_catenet_run_takes_the_band_as_the_api_does(tmp_path):
+    """``catenet run`` passes "auto" on to its workspace: a small case takes the band (as
+    a sweep's row and ``catenet.solve`` do: the same solver, the same numbers), its
+    report names the backend that served."""
+    from catenet.case import load_case
+    from catenet.run.runner import run_case
+
+    seen = {}
+    case = load_case(ROOT / "configs" / "structures" / "guyed_mast.toml")
+    done = run_case(case, tmp_path / "mast.h5", on_done=lambda s, ws, r: seen.update(ws=ws))
+    solver = seen["ws"].solver
+    assert isinstance(solver, BandSolver) and solver.stats["band"] > 0
+    assert done.converged and done.report.backend == "pardiso"
