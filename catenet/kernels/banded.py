@@ -78,7 +78,9 @@ def cuthill_mckee(indptr, indices):
 @njit(cache=True)
 def band_cholesky(L, C, D):
     """Factorises the bordered band in place (module docstring); False where a pivot is
-    not positive (the matrix is not positive definite)."""
+    not positive (the matrix is not positive definite). Right-looking, the trailing
+    rows updated by each column in turn (contiguous rows of L); the border's rows below
+    its first non-zero row only (those above stay zero in Y)."""
     n1, w = L.shape
     p = w - 1
     for j in range(n1):
@@ -88,30 +90,42 @@ def band_cholesky(L, C, D):
         piv = np.sqrt(piv)
         L[j, 0] = piv
         m = min(p, n1 - 1 - j)
+        inv = 1.0 / piv
         for d in range(1, m + 1):
-            L[j, d] /= piv
+            L[j, d] *= inv
         for d in range(1, m + 1):
             v = L[j, d]
             if v != 0.0:
-                row = L[j + d]
+                jd = j + d
                 for e in range(d, m + 1):
-                    row[e - d] -= L[j, e] * v
+                    L[jd, e - d] -= L[j, e] * v
     nb = D.shape[0]
     if nb == 0:
         return True
-    for c in range(nb):  # Y = L^-1 C, column by column
-        for j in range(n1):
-            z = C[j, c] / L[j, 0]
-            C[j, c] = z
-            if z != 0.0:
-                for d in range(1, min(p, n1 - 1 - j) + 1):
-                    C[j + d, c] -= L[j, d] * z
-    for a in range(nb):  # S = D - Y^T Y (lower), then its Cholesky factor
-        for b in range(a + 1):
-            s = 0.0
-            for j in range(n1):
-                s += C[j, a] * C[j, b]
-            D[a, b] -= s
+    first = n1  # the first row of C with a non-zero entry
+    for j in range(n1):
+        for c in range(nb):
+            if C[j, c] != 0.0:
+                first = j
+                break
+        if first < n1:
+            break
+    for j in range(first, n1):  # Y = L^-1 C, row by row (all its columns at once)
+        inv = 1.0 / L[j, 0]
+        for c in range(nb):
+            C[j, c] *= inv
+        for d in range(1, min(p, n1 - 1 - j) + 1):
+            v = L[j, d]
+            if v != 0.0:
+                jd = j + d
+                for c in range(nb):
+                    C[jd, c] -= v * C[j, c]
+    for j in range(first, n1):  # S = D - Y^T Y (lower), then its Cholesky factor
+        for a in range(nb):
+            y = C[j, a]
+            if y != 0.0:
+                for b in range(a + 1):
+                    D[a, b] -= y * C[j, b]
     for j in range(nb):
         s = D[j, j]
         for k in range(j):
