@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from catenet.kernels.contact import barrier
-from catenet.kernels.shapes import shape_feature
+from catenet.kernels.shapes import _block, shape_feature
 
 
 @njit(cache=True, error_model="numpy")
@@ -215,3 +215,38 @@ def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad)
                 s += B[q, m] * gA[i, m]
             grad[body[q], i] += s
     return total
+
+
+@njit(cache=True, error_model="numpy")
+def frame_contact_hessian_shape(kind, geom, kappa, dhat, x, nodes, body, B, c0, chain, values):
+    """The Hessian of the barrier of a box or capsule riding on the body (``kind``,
+    ``geom``) into ``values`` (the term's: K blocks of 81, then the body's 144): the
+    nodes' body-frame points, each node's barrier block and gradient where it acts
+    (0 < gap < dhat, as ``shape_hessian`` and ``shape_gradient`` give them), then
+    ``frame_contact_hessian``; returns how many nodes act."""
+    _, A, U, X = frame_local(x, nodes, body, B, c0)
+    K = nodes.shape[0]
+    values[:] = 0.0
+    H = np.zeros((K, 3, 3))
+    g = np.zeros((K, 3))
+    hv = np.zeros(9)
+    n = np.empty(3)
+    P = np.empty((3, 3))
+    active = np.empty(K, dtype=np.int64)
+    count = 0
+    for k in range(K):
+        d = shape_feature(kind, X[k], geom, n, P)
+        if d >= dhat or d <= 0.0:
+            continue
+        _, db, ddb = barrier(d, dhat)
+        _block(hv, 0, kappa, db, ddb, d, n, P)
+        for a in range(3):
+            g[k, a] = kappa * db * n[a]
+            for c in range(3):
+                H[k, a, c] = hv[3 * a + c]
+        active[count] = k
+        count += 1
+    if count:
+        blocks = values[: 81 * K].reshape((K, 81))
+        frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :])
+    return count

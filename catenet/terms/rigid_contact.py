@@ -43,7 +43,12 @@ import math
 import numpy as np
 
 from catenet.kernels.bodycap import body_paths, body_step_cap
-from catenet.kernels.rigid import frame_contact_gradient, frame_contact_hessian, frame_local
+from catenet.kernels.rigid import (
+    frame_contact_gradient,
+    frame_contact_hessian,
+    frame_contact_hessian_shape,
+    frame_local,
+)
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
 from catenet.terms.shapes import BoxBarrier, CapsuleBarrier
@@ -129,6 +134,13 @@ class BodyContact(Term):
         return np.concatenate([rows, np.repeat(db, 12)]), np.concatenate([cols, np.tile(db, 12)])
 
     def hessian(self, x, values):
+        shape, frame = self.shape, self.frame
+        if isinstance(shape, (BoxBarrier, CapsuleBarrier)):  # a box or capsule: one kernel
+            return (
+                frame_contact_hessian_shape(shape.kind, shape.geom, self.kappa, self.dhat, x,
+                                            self.nodes, frame.nodes, frame.B, self.c0,
+                                            self._chain, values) > 0
+            )  # fmt: skip
         _, A, U = self._local(x)
         K = len(self.nodes)
         hv = np.zeros(9 * K)
