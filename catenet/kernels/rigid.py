@@ -121,6 +121,29 @@ def frame_local(x, nodes, body, B, c0):
 
 
 @njit(cache=True, error_model="numpy")
+def rigidity_levels(x, body, B):
+    """(max |x| over the body's nodes, max |A|, max |A^T A - 1|): what the round-off
+    levels of ``catenet.terms.rigid.Rigidity`` are made of."""
+    _, A = frame_state(x, body, B)
+    spread = 0.0
+    for k in range(4):
+        for i in range(3):
+            spread = max(spread, abs(x[body[k], i]))
+    a_max = 0.0
+    c_max = 0.0
+    for i in range(3):
+        for j in range(3):
+            a_max = max(a_max, abs(A[i, j]))
+            s = 0.0
+            for m in range(3):
+                s += A[m, i] * A[m, j]
+            if i == j:
+                s -= 1.0
+            c_max = max(c_max, abs(s))
+    return spread, a_max, c_max
+
+
+@njit(cache=True, error_model="numpy")
 def rigidity_gradient(x, body, B, k, grad):
     """Adds the gradient of E = k |A^T A - 1|_F^2 / 2 (``catenet.terms.rigid.Rigidity``)
     at the body's nodes into grad (N, 3); returns E."""

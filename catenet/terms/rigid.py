@@ -56,7 +56,13 @@ import math
 
 import numpy as np
 
-from catenet.kernels.rigid import frame_state, rigidity_gradient, rigidity_hessian, rigidity_turn
+from catenet.kernels.rigid import (
+    frame_state,
+    rigidity_gradient,
+    rigidity_hessian,
+    rigidity_levels,
+    rigidity_turn,
+)
 from catenet.terms.base import Term, register
 
 #: Unit vertices of a regular tetrahedron (sum 0, sum v v^T = 4/3 1).
@@ -183,6 +189,8 @@ class Rigidity(Term):
                 for k4 in range(4):
                     D[3 * row + m, 3 * k4 + row] = frame.B[k4, m]
         self._D = D
+        self._b_sum = float(np.abs(frame.B).sum(axis=0).max())  # (roundoff's constants)
+        self._b_norm = float(np.linalg.norm(frame.B))
 
     def pattern(self):
         d = self.frame.dofs()
@@ -210,12 +218,12 @@ class Rigidity(Term):
         """A carries an error of eps |p| sum|B| (positions of size |p| times B's
         weights), C twice that, and the gradient 2 k B A C turns it into forces: the
         levels without the factor eps that the solver applies."""
-        A, C = self._C(x)
-        spread = float(np.abs(np.asarray(x)[self.frame.nodes]).max())
-        spread *= float(np.abs(self.frame.B).sum(axis=0).max())
-        weights = float(np.linalg.norm(self.frame.B))
-        level = 8.0 * self.k * weights * spread * max(1.0, float(np.abs(A).max())) ** 2
-        return level, abs(energy) + 2.0 * self.k * float(np.abs(C).max()) * spread
+        spread, a_max, c_max = rigidity_levels(
+            np.asarray(x, dtype=np.float64), self.frame.nodes, self.frame.B
+        )
+        spread *= self._b_sum
+        level = 8.0 * self.k * self._b_norm * spread * max(1.0, a_max) ** 2
+        return level, abs(energy) + 2.0 * self.k * c_max * spread
 
     def stiffness(self):
         s = np.zeros(self.n_nodes)
