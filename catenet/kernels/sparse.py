@@ -43,6 +43,27 @@ def csr_matvec(indptr, indices, data, x, upper, out):
 
 
 @njit(cache=True)
+def backward_error(indptr, indices, data, anorm, x, b, upper, r):
+    """A solve's backward error max |A x - b| / (anorm max |x| + max |b|) (0 where that
+    scale is 0), the residual A x - b left in r; -1 where x has a non-finite value."""
+    x_max = 0.0
+    for k in range(x.shape[0]):
+        v = abs(x[k])
+        if not v < math.inf:  # inf or nan
+            return -1.0
+        x_max = max(x_max, v)
+    csr_matvec(indptr, indices, data, x, upper, r)
+    b_max = 0.0
+    r_max = 0.0
+    for k in range(b.shape[0]):
+        r[k] -= b[k]
+        b_max = max(b_max, abs(b[k]))
+        r_max = max(r_max, abs(r[k]))
+    scale = anorm * x_max + b_max
+    return r_max / scale if scale > 0 else 0.0
+
+
+@njit(cache=True)
 def dot(a, b):
     """a . b in one thread: BLAS would spawn threads for vectors this short, which costs
     more than it saves (much more on a loaded machine)."""

@@ -125,10 +125,12 @@ class Law:
     def all_tension_only(self) -> bool:
         return bool(self.tension_only.all())
 
-    @property
+    @cached_property
     def convex(self) -> bool:
         """Whether every edge's energy is convex in x (tension-only edges of laws whose
-        force does not fall with strain): the matrices are then positive semidefinite."""
+        force does not fall with strain): the matrices are then positive semidefinite.
+        (Once per law: its arrays are never changed in place; a changed law is a new one,
+        ``dataclasses.replace``.)"""
         if not self.all_tension_only:
             return False
         return not np.any(self.kind == HENCKY)

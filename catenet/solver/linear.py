@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from catenet.errors import ConfigError, SingularSystemError
-from catenet.kernels.sparse import csr_matvec
+from catenet.kernels.sparse import backward_error, csr_matvec
 
 if TYPE_CHECKING:
     from scipy.sparse.linalg import SuperLU
@@ -272,17 +272,16 @@ class LinearSolver:
 
     # --- checks --------------------------------------------------------------------------
     def _check(self, b: np.ndarray, x: np.ndarray) -> None:
-        if not np.all(np.isfinite(x)):
+        x = np.asarray(x, dtype=np.float64)
+        err = float(
+            backward_error(self.indptr, self.indices, self._data, self._anorm, x,
+                           np.asarray(b, dtype=np.float64), self.upper, self._r)
+        )  # fmt: skip
+        if err < 0.0:
             raise SingularSystemError(
                 "the linear solve gave non-finite values (a mechanism or an all-slack region)",
                 nodes=self._node_list(np.flatnonzero(~np.isfinite(x))),
             )
-        csr_matvec(self.indptr, self.indices, self._data, x, self.upper, self._r)
-        self._r -= b
-        scale = self._anorm * float(np.max(np.abs(x), initial=0.0)) + float(
-            np.max(np.abs(b), initial=0.0)
-        )
-        err = float(np.max(np.abs(self._r), initial=0.0)) / scale if scale > 0 else 0.0
         if err > BACKWARD_ERROR_TOL:
             worst = np.argsort(-np.abs(self._r))[:10]
             raise SingularSystemError(
