@@ -17,6 +17,7 @@ from catenet.terms import ExternalForce, Term
 
 EPS = np.finfo(float).eps
 FLOOR_SAFETY = 16.0  # a DOF's residual within this many eps of its forces is round-off
+_generation = 0  # counts what may change a term's state at a given x (``Potential.internal``)
 
 
 @dataclass(frozen=True)
@@ -66,10 +67,14 @@ class Potential:
         self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
+        # the internal terms' gradient and energies at the last evaluation (``internal``)
+        self._seen = (np.full_like(self.force, np.nan), np.zeros_like(self.force), [], -1)
+        _new_generation()
 
     def set_force(self, force: np.ndarray) -> None:
         """Replaces the external force (N, 3) in place: a time-varying load's value at a
         time step, without rebuilding the potential (the pattern and solver stay)."""
+        _new_generation()  # (its callers set the load-like terms' factor with it)
         external = ExternalForce(force)
         self.force = external.force
         self.f_free = self.system.restrict(external.flat)
@@ -81,6 +86,7 @@ class Potential:
     ) -> None:
         """Tells every term a new load step (``time`` None) or time step (from ``start``,
         the time of x, to ``time``) starts from the accepted state x (``Term.begin_step``)."""
+        _new_generation()
         for term in (*self.system.terms, *self.steps):
             term.begin_step(x, time, start)
 
@@ -125,6 +131,11 @@ class Potential:
         and the strains' (coordinates of size |x| carry an error eps |x|, which each edge
         turns into a force error EA eps |x| / l0 at both of its nodes)."""
         energy, grad = self.system.gradient(x)
+        seen_x, seen_grad, seen_energies, _ = self._seen
+        np.copyto(seen_x, x)
+        np.copyto(seen_grad, grad)
+        seen_energies[:] = self.system.energies
+        self._seen = (seen_x, seen_grad, seen_energies, _generation)
         internal = float(norm(grad.reshape(-1)))
         strains, phi_scale = self.system.roundoff(x)
         work = 0.0 if self.external is None else -self.external.energy(x)
@@ -146,6 +157,16 @@ class Potential:
         phi_scale *= 64.0 * EPS
         return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
 
+    def internal(self, x: np.ndarray) -> tuple[np.ndarray, list[float]]:
+        """The internal terms' gradient (N, 3) at x and their energies: the last
+        evaluation's where it was at this very x and no term has begun a step or been
+        given a factor since (the same numbers), else computed (arrays to read, not keep)."""
+        seen_x, seen_grad, seen_energies, generation = self._seen
+        if generation == _generation and np.array_equal(seen_x, x):
+            return seen_grad, seen_energies
+        _, grad = self.system.gradient(x)
+        return grad, self.system.energies
+
     def floor_levels(self, x: np.ndarray, steps: bool = True) -> np.ndarray:
         """Per free DOF, the round-off floor of the residual at x [N]: FLOOR_SAFETY eps of
         the forces that meet there: the edges' |N| + EA |x| / l0 (``Stretch.node_roundoff``),
@@ -154,9 +175,9 @@ class Potential:
         load. ``steps=False``: the static residual's floor (a time step's inertia left out)."""
         system = self.system
         free = system.free_dofs
-        _, grad = system.gradient(x)
+        grad, energies = self.internal(x)
         nodes = np.zeros(x.shape[0])
-        for term, e in zip(system.terms, system.energies, strict=True):
+        for term, e in zip(system.terms, energies, strict=True):
             if (level := term.node_roundoff(x, e)) is not None:
                 nodes += level
         forces = 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
@@ -204,3 +225,10 @@ class Potential:
         data = self.system.hessian(x, shift, self.steps)
         # Cholesky while no non-convex term (an obstacle out of reach) contributes.
         self.solver.factorize(data, definite=self.system.convex)
+
+
+def _new_generation() -> None:
+    """A term's state may change (a new step begins, a new potential sets the load-like
+    terms' factor): evaluations cached before it no longer stand (``Potential.internal``)."""
+    global _generation
+    _generation += 1

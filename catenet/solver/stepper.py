@@ -414,7 +414,7 @@ def at_rest(
     raised to its round-off floor where every DOF's residual is within it (as a static
     solve's: ``Potential.at_floor``; a long stiff chain's rtol is below that floor); the
     residual and the larger of the two over that tolerance (at most 1 at rest)."""
-    _, grad = system.gradient(x)
+    grad, _ = potential.internal(x)  # (the step's last evaluation's, where at this x)
     r = system.restrict(grad.reshape(-1)) - potential.f_free
     scale = max(potential.f_norm, float(norm(grad.reshape(-1))))
     tol = rtol * scale
