@@ -170,12 +170,15 @@ class Ledger:
         vel = v.reshape(-1)[stepper.free]
         kinetic = 0.5 * float(np.dot(stepper.m_free * vel, vel))
         kinetic += sum(t.kinetic(v) for t in stepper.media)
-        system = stepper.system
-        _, grad = system.gradient(x)
+        system, potential = stepper.system, stepper.potential
+        if potential.system is system:  # the step's last evaluation's, where at this x
+            grad, energies = potential.internal(x)
+        else:  # a run to rest on a stage's wider barrier: the run's own terms
+            grad, energies = system.gradient(x)[1], system.energies
         reaction = np.zeros_like(x)
         fixed = stepper.net.fixed
-        reaction[fixed] = grad[fixed] - stepper.potential.force[fixed]
-        return (kinetic, *_stored(system), reaction)
+        reaction[fixed] = grad[fixed] - potential.force[fixed]
+        return (kinetic, *_stored(system, energies), reaction)
 
 
 def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
@@ -188,15 +191,15 @@ def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarr
         kinetic = 0.5 * float(np.sum(net.mass[free] * np.sum(v[free] ** 2, axis=1)))
         kinetic += sum(t.kinetic(v) for t in system.terms if t.medium)
     system.gradient(x)
-    return np.array([kinetic, *_stored(system), 0.0, 0.0, 0.0])
+    return np.array([kinetic, *_stored(system, system.energies), 0.0, 0.0, 0.0])
 
 
-def _stored(system: System) -> tuple[float, float]:
-    """(elastic, contact) energy of the system's last ``gradient`` evaluation: the edges'
-    stretching and the rods' bending, and every other term's that is not lagged
+def _stored(system: System, energies: list[float]) -> tuple[float, float]:
+    """(elastic, contact) energy of the system's terms' ``energies`` (at one x): the
+    edges' stretching and the rods' bending, and every other term's that is not lagged
     (friction dissipates)."""
     elastic = contact = 0.0
-    for term, e in zip(system.terms, system.energies, strict=True):
+    for term, e in zip(system.terms, energies, strict=True):
         if term.lagged:
             continue
         if term is system.stretch or term.structural or term.holds:  # springs: elastic
