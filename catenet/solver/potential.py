@@ -68,7 +68,12 @@ class Potential:
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
         # the internal terms' gradient and energies at the last evaluation (``internal``)
-        self._seen = (np.full_like(self.force, np.nan), np.zeros_like(self.force), [], -1)
+        self._seen: tuple[np.ndarray, np.ndarray, list[float], int] = (
+            np.full_like(self.force, np.nan),
+            np.zeros_like(self.force),
+            [],
+            -1,
+        )
         _new_generation()
 
     def set_force(self, force: np.ndarray) -> None:
