@@ -424,7 +424,9 @@ class SolverConfig(Declared):
     )
     edge_contact: bool = boolean(False, write="changed", doc=EDGE_CONTACT)
     linear: str = choice(
-        Settings.linear, LINEAR, doc="linear solver (auto: PARDISO where available)"
+        Settings.linear,
+        LINEAR,
+        doc="linear solver (auto: PARDISO where available, below 700 unknowns a banded Cholesky)",
     )
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
     max_iter: int = integer(Settings.max_iter, ge=1, le=10**6, doc="static: Newton iterations")
