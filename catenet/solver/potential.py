@@ -67,10 +67,15 @@ class Potential:
         self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
-        # the internal terms' gradient and energies at the last evaluation (``internal``)
+        # A time step's potential keeps the internal terms' gradient and energies of its
+        # last evaluation (``internal``: its floor test, rest test and energy balance read
+        # them at the state Newton ended on); a static one, whose tests come rarely, does
+        # not copy them at every evaluation.
+        self._keeps = bool(self.steps)
+        size = self.force.shape if self._keeps else (0, 3)
         self._seen: tuple[np.ndarray, np.ndarray, list[float], int] = (
-            np.full_like(self.force, np.nan),
-            np.zeros_like(self.force),
+            np.full(size, np.nan),
+            np.zeros(size),
             [],
             -1,
         )
@@ -136,11 +141,12 @@ class Potential:
         and the strains' (coordinates of size |x| carry an error eps |x|, which each edge
         turns into a force error EA eps |x| / l0 at both of its nodes)."""
         energy, grad = self.system.gradient(x)
-        seen_x, seen_grad, seen_energies, _ = self._seen
-        np.copyto(seen_x, x)
-        np.copyto(seen_grad, grad)
-        seen_energies[:] = self.system.energies
-        self._seen = (seen_x, seen_grad, seen_energies, _generation)
+        if self._keeps:
+            seen_x, seen_grad, seen_energies, _ = self._seen
+            np.copyto(seen_x, x)
+            np.copyto(seen_grad, grad)
+            seen_energies[:] = self.system.energies
+            self._seen = (seen_x, seen_grad, seen_energies, _generation)
         internal = float(norm(grad.reshape(-1)))
         strains, phi_scale = self.system.roundoff(x)
         work = 0.0 if self.external is None else -self.external.energy(x)
@@ -163,11 +169,11 @@ class Potential:
         return Evaluation(phi, g, scale, floor, phi_scale, float(norm(g)))
 
     def internal(self, x: np.ndarray) -> tuple[np.ndarray, list[float]]:
-        """The internal terms' gradient (N, 3) at x and their energies: the last
-        evaluation's where it was at this very x and no term has begun a step or been
+        """The internal terms' gradient (N, 3) at x and their energies: a time step's
+        last evaluation's where it was at this very x and no term has begun a step or been
         given a factor since (the same numbers), else computed (arrays to read, not keep)."""
         seen_x, seen_grad, seen_energies, generation = self._seen
-        if generation == _generation and np.array_equal(seen_x, x):
+        if generation == _generation and seen_x.shape == x.shape and np.array_equal(seen_x, x):
             return seen_grad, seen_energies
         _, grad = self.system.gradient(x)
         return grad, self.system.energies

@@ -1,6 +1,6 @@
-"""Potential.internal: the internal terms' gradient and energies at x, read from the last
-evaluation only while it stands (the same x, no step begun, no force changed since),
-else computed: the same numbers either way."""
+"""Potential.internal: the internal terms' gradient and energies at x, read from a time
+step's last evaluation only while it stands (the same x, no step begun, no force changed
+since), else computed: the same numbers either way."""
 
 from __future__ import annotations
 
@@ -8,12 +8,17 @@ import numpy as np
 from scenes import paper_net
 
 from catenet.solver.workspace import Workspace
+from catenet.terms import Inertia
 
 
 def test_internal_reads_the_last_evaluation_only_while_it_stands():
     sq, loads = paper_net(6, edge=0.1)
     ws = Workspace(sq.net)
-    potential = ws.potential(loads)
+    free = ws.system.free_dofs
+    inertia = Inertia(free)  # a time step's potential
+    inertia.set_step(np.full(free.size, 1e3), sq.net.nodes.reshape(-1)[free])
+    potential = ws.potential(loads, steps=(inertia,))
+    static = ws.potential(loads)
     system = potential.system
     calls = []
     gradient = system.gradient
@@ -45,3 +50,7 @@ def test_internal_reads_the_last_evaluation_only_while_it_stands():
         calls.clear()
         potential.internal(x)
         assert calls  # no longer the evaluation's
+    static.evaluate(x)  # a static potential keeps nothing: computed
+    calls.clear()
+    grad, _ = static.internal(x)
+    assert calls and np.array_equal(grad, fresh(x)[0])
