@@ -120,7 +120,10 @@ def test_markdown_report_holds_the_files_numbers_for_every_state(mast, tmp_path)
         u = np.linalg.norm(s["x"] - f["nodes"], axis=1)
         u[f["fixed"]] = -1
         disp = table(body, "Displacements")[1]
-        assert disp[:3] == ["all free nodes", g6(u.max()), str(np.argmax(u))]
+        # the largest, its node the first within round-off of it (the mast's symmetric
+        # guys tie to 1e-14: which is larger by the last bits depends on the factorisation)
+        tied = np.flatnonzero(u >= u.max() * (1.0 - 1e-12))
+        assert disp[:3] == ["all free nodes", g6(u.max()), str(tied[0])]
         balance = {r[0]: r for r in table(body, "Loads against reactions and contact")[1:]}
         applied = [s["attrs"][f"applied_resultant_{c}"] for c in "xyz"]
         assert balance["applied loads"][1:] == [g6(c) for c in applied]
