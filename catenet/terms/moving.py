@@ -236,13 +236,19 @@ class Moving(Term):
         c0, R0 = self.pose(t0)
         gap = self.shape.gap(self._body(base, c0, R0))
         near = self.nodes[gap < SWEEP_SAFETY * move + self.dhat]
+        return int(self._carry_nodes(near, base, trial, t0, t1, moved, index).size)
+
+    def _carry_nodes(self, nodes, base, trial, t0: float, t1: float, moved, index: int):
+        """``nodes`` that no other obstacle carried this step (``moved``: -1, then marked
+        ``index``) moved rigidly with this one from t0 to t1 in ``base`` and ``trial``;
+        returns them."""
         if moved is not None:
-            near = near[moved[near] < 0]
-            moved[near] = index
-        if near.size:
-            base[near] = self.rigid(base[near], t0, t1)
-            trial[near] = self.rigid(trial[near], t0, t1)
-        return int(near.size)
+            nodes = nodes[moved[nodes] < 0]
+            moved[nodes] = index
+        if nodes.size:
+            base[nodes] = self.rigid(base[nodes], t0, t1)
+            trial[nodes] = self.rigid(trial[nodes], t0, t1)
+        return nodes
 
     def rigid(self, points, t0: float, t1: float) -> np.ndarray:
         """Points (K, 3) moved rigidly with the obstacle from pose(t0) to pose(t1)."""

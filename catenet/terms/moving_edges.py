@@ -67,13 +67,7 @@ class MovingEdges(Moving):
         if not near.any():
             return 0
         nodes = np.unique(edges[near])
-        nodes = nodes[~fixed[nodes]]
-        if moved is not None:
-            nodes = nodes[moved[nodes] < 0]
-            moved[nodes] = index
-        if nodes.size:
-            base[nodes] = self.rigid(base[nodes], t0, t1)
-            trial[nodes] = self.rigid(trial[nodes], t0, t1)
+        nodes = self._carry_nodes(nodes[~fixed[nodes]], base, trial, t0, t1, moved, index)
         held = near & (fixed[edges[:, 0]] | fixed[edges[:, 1]])
         if held.any():
             gap = self.shape.gap(self._body(base, c1, R1))
