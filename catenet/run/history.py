@@ -154,23 +154,30 @@ class Recorder:
             np.array_equal(old.reaction_nodes, lay.reaction_nodes)
             and list(old.obstacles) == list(lay.obstacles)
             and old.cable_names == list(lay.cable_names)
-            and old.cable_tension_range.shape[1:] == (len(lay.cable_names), 2)
         )
         if not same or old is None:
             log.info("--restart: %s has no history of the same columns: it begins anew", path)
             return
         keep = np.flatnonzero(old.time <= t * (1.0 + 1e-12) + 1e-300)
+        columns = {
+            "reaction": old.reaction,
+            "contact": old.contact,
+            "cable_end_tension": old.cable_end_tension,
+            "cable_tension_range": old.cable_tension_range,
+            "anchor_uplift": old.anchor_uplift,
+        }
+        if old.touchdown is not None:
+            columns["touchdown"] = old.touchdown
+        for name, shape in lay.shapes().items():  # a column missing, cut or not finite
+            column = columns.get(name)
+            if column is None or column.shape[1:] != shape or column.shape[0] < keep.size:
+                log.info("--restart: %s: its history's %s is not this run's", path, name)
+                return
+            if not np.all(np.isfinite(column[keep])):
+                log.info("--restart: %s: its history's %s is not finite", path, name)
+                return
         for i in keep:
-            row = {
-                "reaction": old.reaction[i],
-                "contact": old.contact[i],
-                "cable_end_tension": old.cable_end_tension[i],
-                "cable_tension_range": old.cable_tension_range[i],
-                "anchor_uplift": old.anchor_uplift[i],
-            }
-            if old.touchdown is not None:
-                row["touchdown"] = old.touchdown[i]
-            self.writer.record(float(old.time[i]), row)
+            self.writer.record(float(old.time[i]), {name: c[i] for name, c in columns.items()})
         if keep.size:
             self.last = float(old.time[keep[-1]])
             log.info("--restart: the history goes on from the %d rows of %s", keep.size, path)
