@@ -218,23 +218,28 @@ def _skew(v):
 
 @njit(cache=True)
 def _vertex_blocks(t1, t2, l1, l2):
-    """d(c / (chi L_p)) / de_q for p, q in 1, 2 (module docstring), as (2, 2, 3, 3)."""
-    chi = 1.0 + _dot(t1, t2)
+    """d(c / (chi L_p)) / de_q for p, q in 1, 2 (module docstring), as (2, 2, 3, 3).
+    Written out entry by entry (no small NumPy products: they compile slowly and call
+    BLAS for 3 x 3): with c = t1 x t2, skew(t2) (I - t1 t1^T) = skew(t2) + c t1^T and
+    skew(t1) (I - t2 t2^T) = skew(t1) - c t2^T."""
+    d = _dot(t1, t2)
+    chi = 1.0 + d
     c = _cross(t1, t2)
-    p1 = np.eye(3) - np.outer(t1, t1)
-    p2 = np.eye(3) - np.outer(t2, t2)
-    s1 = _skew(t2) @ p1
-    s2 = _skew(t1) @ p2
-    q1 = np.outer(c, p1 @ t2) / (chi * chi)
-    q2 = np.outer(c, p2 @ t1) / (chi * chi)
+    k1, k2 = _skew(t1), _skew(t2)
     out = np.zeros((2, 2, 3, 3))
-    if l1 > 0.0:
-        out[0, 0] = (-s1 / chi - q1 - np.outer(c, t1) / chi) / (l1 * l1)
-    if l2 > 0.0:
-        out[1, 1] = (s2 / chi - q2 - np.outer(c, t2) / chi) / (l2 * l2)
-    if l1 > 0.0 and l2 > 0.0:
-        out[0, 1] = (s2 / chi - q2) / (l1 * l2)
-        out[1, 0] = (-s1 / chi - q1) / (l1 * l2)
+    for a in range(3):
+        for b in range(3):
+            s1 = k2[a, b] + c[a] * t1[b]  # skew(t2) p1
+            s2 = k1[a, b] - c[a] * t2[b]  # skew(t1) p2
+            q1 = c[a] * (t2[b] - t1[b] * d) / (chi * chi)  # c (p1 t2)^T / chi^2
+            q2 = c[a] * (t1[b] - t2[b] * d) / (chi * chi)  # c (p2 t1)^T / chi^2
+            if l1 > 0.0:
+                out[0, 0, a, b] = (-s1 / chi - q1 - c[a] * t1[b] / chi) / (l1 * l1)
+            if l2 > 0.0:
+                out[1, 1, a, b] = (s2 / chi - q2 - c[a] * t2[b] / chi) / (l2 * l2)
+            if l1 > 0.0 and l2 > 0.0:
+                out[0, 1, a, b] = (s2 / chi - q2) / (l1 * l2)
+                out[1, 0, a, b] = (-s1 / chi - q1) / (l1 * l2)
     return out
 
 
@@ -288,7 +293,7 @@ def twist_gradient(x, nodes, start, closed, head, tail, moment, grad):
 def twist_hessian(x, nodes, start, closed, head, tail, moment, compliance, values):
     """Writes every segment's dense block (3 p)^2, row-major over its local DOFs:
     g g^T / C + M Hess Theta (symmetrised)."""
-    base = 0
+    base = np.int64(0)
     for s in range(len(start) - 1):
         lo, hi = start[s], start[s + 1]
         size = 3 * (hi - lo)
