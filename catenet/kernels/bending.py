@@ -113,7 +113,7 @@ def bend_gradient(x, hinges, k, s0, clamps, t0, kc, grad):
         i, j, m = hinges[h, 0], hinges[h, 1], hinges[h, 2]
         t1, l1 = _unit(x, i, j)
         t2, l2 = _unit(x, j, m)
-        energy, g1, g2, _, _, _ = _hinge(t1, l1, t2, l2, k[h], s0[h], False)
+        energy, g1, g2, _, _, _ = _hinge(t1, l1, t2, l2, k[h], s0[h], np.bool_(False))
         total += energy
         for a in range(3):
             grad[i, a] -= g1[a]
@@ -121,7 +121,7 @@ def bend_gradient(x, hinges, k, s0, clamps, t0, kc, grad):
             grad[m, a] += g2[a]
     for h in range(clamps.shape[0]):
         c, o = clamps[h, 0], clamps[h, 1]
-        energy, g, _ = _clamp(x, c, o, t0[h], kc[h], False)
+        energy, g, _ = _clamp(x, c, o, t0[h], kc[h], np.bool_(False))
         total += energy
         for a in range(3):
             grad[c, a] -= g[a]
@@ -144,7 +144,7 @@ def bend_hessian(x, hinges, k, s0, clamps, t0, kc, values):
         i, j, m = hinges[h, 0], hinges[h, 1], hinges[h, 2]
         t1, l1 = _unit(x, i, j)
         t2, l2 = _unit(x, j, m)
-        _, _, _, h11, h12, h22 = _hinge(t1, l1, t2, l2, k[h], s0[h], True)
+        _, _, _, h11, h12, h22 = _hinge(t1, l1, t2, l2, k[h], s0[h], np.bool_(True))
         base = 81 * h
         for p in range(3):
             for r in range(3):
@@ -160,7 +160,7 @@ def bend_hessian(x, hinges, k, s0, clamps, t0, kc, values):
                         )
     base = 81 * hinges.shape[0]
     for h in range(clamps.shape[0]):
-        _, _, hc = _clamp(x, clamps[h, 0], clamps[h, 1], t0[h], kc[h], True)
+        _, _, hc = _clamp(x, clamps[h, 0], clamps[h, 1], t0[h], kc[h], np.bool_(True))
         for p in range(2):
             for r in range(2):
                 sign = 1.0 if p == r else -1.0

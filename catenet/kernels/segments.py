@@ -88,13 +88,13 @@ def point_energy(P, reach2, r, dhat, kappa, g, H, want):
         H[:, :] = 0.0
     gd = np.empty(12)
     Hd = np.empty((12, 12))
-    D = sqdist(P, POINT, gd, Hd, False)
+    D = sqdist(P, np.int64(POINT), gd, Hd, np.bool_(False))
     if D >= reach2:
         return 0.0
     if D <= r * r:
         return np.inf
     if want:
-        sqdist(P, POINT, gd, Hd, True)
+        sqdist(P, np.int64(POINT), gd, Hd, np.bool_(True))
     b, db, ddb = _phi(D, reach2, r, dhat)
     for p in range(12):
         g[p] = kappa * db * gd[p]
@@ -249,7 +249,9 @@ def segment_gradient(x, edges, rest, Y, W, bnodes, F, flen, lone, pairs, r, dhat
     nb = bnodes.shape[0]
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
-        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, False)
+        energy = _pair(
+            x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(False)
+        )
         if energy == 0.0:
             continue
         total += energy
@@ -285,7 +287,7 @@ def segment_hessian(x, edges, rest, Y, W, nb, F, flen, lone, pairs, r, dhat, kap
     active = 0
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
-        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, True)
+        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(True))
         if energy == 0.0 or not np.isfinite(energy):
             continue
         active += 1
@@ -333,7 +335,7 @@ def segment_gaps(x, edges, Y, F, lone, r, out):
         best = np.inf
         for f in range(total):
             kind = _points(x, edges, e, Y, F, lone, f, P)
-            best = min(best, np.sqrt(sqdist(P, kind, g, H, False)) - r)
+            best = min(best, np.sqrt(sqdist(P, kind, g, H, np.bool_(False))) - r)
         out[e] = best
 
 
@@ -360,7 +362,9 @@ def pair_forces(x, edges, rest, Y, F, flen, lone, pairs, r, dhat, kappa, force, 
     H = np.empty((1, 1))
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
-        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, False)
+        energy = _pair(
+            x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(False)
+        )
         total = 0.0
         for a in range(3):
             force[k, a] = -(g[a] + g[3 + a]) if np.isfinite(energy) else 0.0

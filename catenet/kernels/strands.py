@@ -112,7 +112,9 @@ def closest(P, kind):
 @njit(cache=True)
 def sqdist(P, kind, g, H, want):
     """The squared distance ``kind`` of the points P (12,); its gradient into g (12,)
-    and, with ``want``, its Hessian into H (12, 12)."""
+    and, with ``want``, its Hessian into H (12, 12). Kernels pass ``kind`` and ``want``
+    as np.int64 / np.bool_ values, never as constants: Numba compiles a version of its
+    own for every literal constant (seven of this function, where one serves)."""
     s, t, fs, ft = closest(P, kind)
     al, be, ga = ALPHA[kind], BETA[kind], GAMMA[kind]
     c = al + be * s + ga * t
@@ -228,11 +230,11 @@ def edge_energy(P, eps, reach2, r, dhat, kappa, g, H, want):
         H[:, :] = 0.0
     gd = np.empty(12)
     Hd = np.empty((12, 12))
-    D = sqdist(P, 0, gd, Hd, False)
+    D = sqdist(P, np.int64(0), gd, Hd, np.bool_(False))
     if D >= reach2:
         return 0.0  # out of reach: no Hessian to compute
     if want:
-        sqdist(P, 0, gd, Hd, True)
+        sqdist(P, np.int64(0), gd, Hd, np.bool_(True))
     if D <= 0.0 or D <= r * abs(r):
         return np.inf  # touching (m b would be 0 inf for parallel edges)
     ge = np.empty(12)
@@ -301,7 +303,9 @@ def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad, r=-1.0):
         a, b = pairs[p, 0], pairs[p, 1]
         n = gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
-        total += edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, False)
+        total += edge_energy(
+            P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, np.bool_(False)
+        )
         for k in range(4):
             for i in range(3):
                 grad[n[k], i] += g[3 * k + i]
@@ -321,7 +325,7 @@ def strand_hessian(x, edges, rest, pairs, slots, dhat, kappa, values, r=-1.0):
         a, b = pairs[p, 0], pairs[p, 1]
         gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
-        edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, True)
+        edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, np.bool_(True))
         at = 144 * slots[p]
         nonzero = False
         for i in range(12):
@@ -446,7 +450,7 @@ def candidates(x, edges, grow, reach):
                     continue
                 gather(x, edges, a, b, P)
                 limit = reach + grow[a] + grow[b]
-                if sqdist(P, 0, g, H, False) > limit * limit:
+                if sqdist(P, np.int64(0), g, H, np.bool_(False)) > limit * limit:
                     continue
                 if count == out.shape[0]:
                     more = np.empty((2 * count, 2), dtype=np.int64)
@@ -494,7 +498,7 @@ def accd(P, dP, t_max, r=0.0, kind=0):
     if lp == 0.0:
         return np.inf
     g, H, X = np.empty(12), np.empty((1, 1)), np.empty(12)  # (no Hessian asked for)
-    d = np.sqrt(sqdist(P, kind, g, H, False)) - r
+    d = np.sqrt(sqdist(P, kind, g, H, np.bool_(False))) - r
     if not d > 0.0:
         return 0.0
     gap = CCD_SHARE * d
@@ -503,7 +507,7 @@ def accd(P, dP, t_max, r=0.0, kind=0):
     for _ in range(CCD_ITERATIONS):
         for p in range(12):
             X[p] = P[p] + (t + tl) * dP[p]
-        d = np.sqrt(sqdist(X, kind, g, H, False)) - r
+        d = np.sqrt(sqdist(X, kind, g, H, np.bool_(False))) - r
         if t > 0.0 and d < gap:
             return t
         t += tl
