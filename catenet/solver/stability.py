@@ -65,6 +65,7 @@ log = logging.getLogger(__name__)
 MARGIN = 1e-11  # eigenvalues of S K S below -MARGIN are unstable (S = D^(-1/2)) ...
 POSITIVE = 1e-13  # ... above +POSITIVE stable, between them neutral
 DENSE = 900  # free DOFs up to which the verdict takes the dense eigenvalues
+SUBSET_FROM = 300  # free DOFs from which it computes the least eigenpair alone
 RETURN = 0.05  # unloaded, a reversible step comes back within this share of its move
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
@@ -130,11 +131,14 @@ def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
     a = 0.5 * (a + a.T)
     if not np.all(np.isfinite(a)):
         return Tangent(NEUTRAL, math.nan, None)
-    # The least eigenpair alone (LAPACK's MRRR, dsyevr): a third of the full decomposition's
-    # time, the same pair to round-off.
-    from scipy.linalg import eigh
+    if len(a) >= SUBSET_FROM:
+        # The least eigenpair alone (LAPACK's MRRR, dsyevr): a third of the full
+        # decomposition's time, the same pair to round-off.
+        from scipy.linalg import eigh
 
-    lam, vec = eigh(a, subset_by_index=[0, 0], driver="evr", check_finite=False)
+        lam, vec = eigh(a, subset_by_index=[0, 0], driver="evr", check_finite=False)
+    else:  # (below, importing scipy.linalg costs more than it saves)
+        lam, vec = np.linalg.eigh(a)
     least = float(lam[0])
     verdict = STABLE if least > POSITIVE else UNSTABLE if least < -MARGIN else NEUTRAL
     mode = np.zeros(system.net.n_nodes * 3)
