@@ -111,10 +111,8 @@ def closest(P, kind):
 
 @njit(cache=True)
 def sqdist(P, kind, g, H, want):
-    """The squared distance ``kind`` of the points P (12,); its gradient into g (12,)
-    and, with ``want``, its Hessian into H (12, 12). Kernels pass ``kind`` and ``want``
-    as np.int64 / np.bool_ values, never as constants: Numba compiles a version of its
-    own for every literal constant (seven of this function, where one serves)."""
+    """The squared distance ``kind`` of P (12,), its gradient into g, with ``want`` its
+    Hessian into H (kind and want passed as values: Numba compiles each literal anew)."""
     s, t, fs, ft = closest(P, kind)
     al, be, ga = ALPHA[kind], BETA[kind], GAMMA[kind]
     c = al + be * s + ga * t
@@ -295,17 +293,13 @@ def gather(x, edges, a, b, P):
 def strand_gradient(x, edges, rest, pairs, dhat, kappa, grad, r=-1.0):
     """Adds the barrier's gradient of the edge ``pairs`` (K, 2) to grad (N, 3) (r >= 0:
     on the gap d - r, ``edge_energy``); returns the energy."""
-    P = np.empty(12)
-    g = np.empty(12)
-    H = np.empty((12, 12))
-    total = 0.0
+    P, g, H = np.empty(12), np.empty(12), np.empty((12, 12))
+    total, skip = 0.0, np.bool_(False)  # (no Hessian: a value, not a literal)
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]
         n = gather(x, edges, a, b, P)
         eps = EPS_PARALLEL * (rest[a] * rest[b]) ** 2
-        total += edge_energy(
-            P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, np.bool_(False)
-        )
+        total += edge_energy(P, eps, (max(r, 0.0) + dhat) ** 2, r, dhat, kappa, g, H, skip)
         for k in range(4):
             for i in range(3):
                 grad[n[k], i] += g[3 * k + i]
