@@ -258,6 +258,7 @@ def pytest_collection_modifyitems(config, items):
         weight[item.path] = weight.get(item.path, 0) + (SLOW_WEIGHT if slow else 1)
     items.sort(key=lambda item: -weight[item.path])
 
+
 ROUNDOFF = 1e-12  # CATENET_ROUNDOFF: the relative move of every node of every built net
 ROUNDOFF_THREADS = 2  # ... and the threads every solve uses
 
