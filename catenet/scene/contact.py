@@ -216,7 +216,7 @@ def obstacle_terms(
     out = [term]
     edge = None
     if radius is not None:
-        from catenet.scene.segments import check_edges_clear, edge_barrier
+        from catenet.scene.segments import check_edges_clear, edge_barrier, held_edges
 
         check_edges_clear(label, shape, radius, dhat, net, shown)
         edge = edge_barrier(shape, net, radius, kappa, dhat)
@@ -226,7 +226,9 @@ def obstacle_terms(
                 from catenet.terms.moving import Moving
                 from catenet.terms.moving_edges import moving_edges
 
-                moved = moving_edges(edge, cast(Moving, term))
+                fixed = held_edges(net)  # guarded: the obstacle must not run over them
+                guard = edge_barrier(shape, net, radius, kappa, dhat, edges=fixed)
+                moved = moving_edges(edge, cast(Moving, term), guard if len(fixed) else None)
                 moved.stages = ()
                 out.append(moved)
             else:

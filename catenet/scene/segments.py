@@ -30,6 +30,14 @@ def contact_edges(net: Net) -> np.ndarray:
     return np.ascontiguousarray(edges[free[edges[:, 0]] | free[edges[:, 1]]], dtype=np.int64)
 
 
+def held_edges(net: Net) -> np.ndarray:
+    """The net's edges (K, 2) with both nodes fixed: no barrier moves them, a moving
+    obstacle must not run over them."""
+    edges = net.edges[: net.n_edges]
+    held = net.fixed[edges[:, 0]] & net.fixed[edges[:, 1]]
+    return np.ascontiguousarray(edges[held], dtype=np.int64)
+
+
 def edge_barrier(
     shape: Shape,
     net: Net,
@@ -38,16 +46,18 @@ def edge_barrier(
     dhat: float,
     weights: ArrayLike | None = None,
     bnodes: ArrayLike | None = None,
+    edges: np.ndarray | None = None,
 ) -> EdgeContact | None:
     """The barrier of the net's capsules of radius r against ``shape``'s outline, its
     points riding on ``bnodes`` by ``weights`` (a ball's, a body's; None: fixed); None
-    for a plane (the nodes' barrier holds a segment off it)."""
+    for a plane (the nodes' barrier holds a segment off it). ``edges``: these (K, 2)
+    instead of ``contact_edges``."""
     from catenet.terms.segments import EdgeContact
 
     if shape.kind == "plane":
         return None
     points, lines, radius = shape.outline()
-    edges = contact_edges(net)
+    edges = contact_edges(net) if edges is None else edges
     rest = np.linalg.norm(net.nodes[edges[:, 1]] - net.nodes[edges[:, 0]], axis=1)
     return EdgeContact(
         edges, rest, points, lines, radius, r=r, kappa=kappa, dhat=dhat,

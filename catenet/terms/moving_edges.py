@@ -35,6 +35,7 @@ class MovingEdges(Moving):
 
     horizon = True
     guards_supports = False  # the nodes' barrier of the same obstacle guards them
+    guard = None  # the edges with both nodes fixed (an EdgeContact), only watched
 
     def hessian(self, x, values):
         active = self.shape.hessian(self._local(x), values)
@@ -62,6 +63,9 @@ class MovingEdges(Moving):
         if move == 0.0:
             return 0
         edges = self.shape.edges
+        if self.guard is not None:  # an edge with both nodes fixed cannot give way
+            gap = self.guard.gap(self._body(trial, c1, R1))
+            self._stop_at(self.guard.edges, np.flatnonzero(~(gap > 0.0)), t1)
         c0, R0 = self.pose(t0)
         near = self.shape.gap(self._body(base, c0, R0)) < SWEEP_SAFETY * move + self.dhat
         if not near.any():
@@ -71,20 +75,24 @@ class MovingEdges(Moving):
         held = near & (fixed[edges[:, 0]] | fixed[edges[:, 1]])
         if held.any():
             gap = self.shape.gap(self._body(base, c1, R1))
-            hit = np.flatnonzero(held & ~(gap > 0.0))
-            if hit.size:
-                i, j = edges[hit[0]]
-                raise ConvergenceError(
-                    f"{self.label} reaches the edge {i}-{j}, held at a support, at "
-                    f"t = {t1:.6g} s: a moving obstacle must not run over an edge at a "
-                    "support; change its motion or the supports"
-                )
+            self._stop_at(edges, np.flatnonzero(held & ~(gap > 0.0)), t1)
         return int(nodes.size)
 
+    def _stop_at(self, edges, hit: np.ndarray, t1: float) -> None:
+        """ConvergenceError naming the first of the edges ``hit``, held at a support."""
+        if hit.size:
+            i, j = edges[hit[0]]
+            raise ConvergenceError(
+                f"{self.label} reaches the edge {i}-{j}, held at a support, at "
+                f"t = {t1:.6g} s: a moving obstacle must not run over an edge at a "
+                "support; change its motion or the supports"
+            )
 
-def moving_edges(edge, term: Moving) -> MovingEdges:
+
+def moving_edges(edge, term: Moving, guard=None) -> MovingEdges:
     """The edges' barrier ``edge`` on the motion of the obstacle whose nodes' barrier
-    is ``term`` (a ``Moving``)."""
+    is ``term`` (a ``Moving``); ``guard``: the barrier of the edges with both nodes
+    fixed (not in ``edge``), only to stop the run where the obstacle reaches one."""
     out = MovingEdges(
         edge,
         term.origin,
@@ -94,4 +102,5 @@ def moving_edges(edge, term: Moving) -> MovingEdges:
         reach=term.reach,
         label=term.label,
     )
+    out.guard = guard
     return out

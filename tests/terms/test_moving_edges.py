@@ -177,6 +177,44 @@ def test_an_edge_at_a_support_in_the_obstacles_way_stops_the_run():
         sv.solve(scene, sv.Settings.of(scene.case.solver))
 
 
+HELD = """
+[geometry]
+kind = "cable"
+start = [0.0, 0.0, 0.0]
+end = [4.0, 0.0, 0.0]
+nodes = 2
+[material]
+E = 1e9
+radius = 0.005
+density = 1000.0
+[supports]
+fixed = ["start", "end"]
+[[obstacle]]
+kind = "capsule"
+start = [1.5, -1.0, 0.3]
+end = [1.5, 1.0, 0.3]
+radius = 0.05
+velocity = [0.0, 0.0, -0.5]
+[solver]
+method = "dynamic"
+dt = 0.01
+t_end = 1.0
+edge_contact = true
+"""
+
+
+def test_an_edge_with_both_nodes_fixed_in_the_obstacles_way_stops_the_run(tmp_path):
+    """A user's model from the edge-contact guide: a bar pushed down onto the middle of a
+    single edge between two supports (no free node, so no barrier of the edge) passed
+    through it and the run ended "converged". The obstacle reaches the edge's capsule at
+    0.3 - 0.5 t = 0.05 + 0.005: t = 0.49 s: the run stops there, naming it."""
+    case = tmp_path / "held.toml"
+    case.write_text(HELD)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+    assert done.exit_code == 1, done.output
+    assert "reaches the edge 0-1, held at a support, at t = 0.49 s" in done.output
+
+
 def test_friction_along_the_edges_of_a_moving_obstacle_is_refused(tmp_path):
     text = SWEEP.replace("EDGES", "true").replace("DT", "0.005").replace("SPIN", "[0.0, 0.0, 0.0]")
     case = tmp_path / "case.toml"
