@@ -63,3 +63,27 @@ def create_trajectory(h5, shapes: dict[str, tuple[int, ...]]):
         )
     g["time"].attrs["unit"] = "s (dynamic) or load factor (static)"
     return g
+
+
+def append_frames(g, batch, encoded: dict[str, list[bytes]], n0: int, held: list) -> None:
+    """Writes ``batch``'s frames as frames n0, n0 + 1, ... of /trajectory ``g``'s
+    datasets (``encoded``: their chunks, see ``encode``), over any already there;
+    ``held`` keeps the datasets open as long as the file (``files.detach``)."""
+    n1 = n0 + len(batch)
+    for name in batch[0][1]:
+        held.append(ds := g[name])
+        ds.resize(n1, axis=0)
+        if ds.chunks == (1, *ds.shape[1:]) and FILTERS == filters(ds):
+            zeros = (0,) * (ds.ndim - 1)
+            for k, chunk in enumerate(encoded[name], start=n0):
+                ds.id.write_direct_chunk((k, *zeros), chunk)
+        else:  # frames split into several chunks: HDF5 compresses them
+            ds[n0:n1] = np.stack([data[name] for _, data in batch])
+
+
+def append_times(g, times: list[float], n0: int, held: list) -> None:
+    """Writes ``times`` as /trajectory/time n0, n0 + 1, ...: a frame counts once its time
+    is there, so this comes last."""
+    held.append(ds := g["time"])
+    ds.resize((n0 + len(times),))
+    ds[n0 : n0 + len(times)] = times

@@ -22,6 +22,7 @@ the system's temporary directory, naming it in the ``OutputError`` it raises.
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import logging
 import math
@@ -36,7 +37,7 @@ import numpy as np
 from catenet.errors import ConfigError, OutputError
 from catenet.model import measures
 from catenet.output.bodies import write_bodies
-from catenet.output.chunks import FILTERS, create_trajectory, encode, filters
+from catenet.output.chunks import append_frames, append_times, create_trajectory, encode
 from catenet.output.files import (
     WriteLock,
     check_finite,
@@ -150,6 +151,7 @@ class ResultWriter:
         self._result_written = False
         self._next_flush = -math.inf
         self._copy_rate = 1e-9  # s per byte copied, measured (a first guess: 1 GB/s)
+        self._stale = False  # a write broken off: the spare is copied from the file first
         self.clock = time.monotonic  # the wall clock of the flush interval
 
     # --- context ---------------------------------------------------------------------------
@@ -331,6 +333,13 @@ class ResultWriter:
         rows = (self.history.pending, self.history.rows) if self.history else ([], 0)
         if not batch and not rows[0] and result is None:
             return True
+        try:
+            return self._flush(batch, rows, result)
+        except BaseException:  # e.g. Ctrl-C mid-write: the next write starts from the file
+            self._stale = True
+            raise
+
+    def _flush(self, batch, rows, result) -> bool:
         start = time.perf_counter()
         n0 = self.frames
         encoded = encode(batch)  # compressed once, written twice (or copied)
@@ -386,6 +395,9 @@ class ResultWriter:
         # HDF5 keep its identifier and crash at exit (see ``files.detach``).
         held: list = []
         try:
+            if self._stale:  # a write broken off left it half done
+                copy_atomically(self.path, self._spare)
+                self._stale = False
             h5 = h5py.File(self._spare, "r+", libver=LIBVER, rdcc_nbytes=0)
             if batch:
                 self._append(h5, batch, encoded, n0, held)
@@ -397,6 +409,12 @@ class ResultWriter:
             return True
         except (OSError, RuntimeError) as exc:
             failure = exc
+        except BaseException:  # broken off: closed here, not when the traceback goes
+            held.clear()
+            if h5 is not None:
+                with contextlib.suppress(Exception):
+                    h5.close()
+            raise
         if h5 is not None:
             detach(h5)
             held.clear()
@@ -415,22 +433,11 @@ class ResultWriter:
 
     def _append(self, h5, batch, encoded, n0: int, held: list) -> None:
         g = h5["trajectory"]
-        n1 = n0 + len(batch)
-        for name in batch[0][1]:
-            held.append(ds := g[name])
-            ds.resize(n1, axis=0)
-            if ds.chunks == (1, *ds.shape[1:]) and FILTERS == filters(ds):
-                zeros = (0,) * (ds.ndim - 1)
-                for k, chunk in enumerate(encoded[name], start=n0):
-                    ds.id.write_direct_chunk((k, *zeros), chunk)
-            else:  # frames split into several chunks: HDF5 compresses them
-                ds[n0:n1] = np.stack([data[name] for _, data in batch])
+        append_frames(g, batch, encoded, n0, held)
         self.obstacles.append(g, [t for t, _ in batch], n0, held, [d for _, d in batch])
-        held.append(ds := g["time"])
-        ds.resize((n1,))
-        ds[n0:n1] = [t for t, _ in batch]  # last: a frame counts once its time is there
+        append_times(g, [t for t, _ in batch], n0, held)  # last: then the frames count
         if self.xdmf:
-            write_views(h5, n0, n1)
+            write_views(h5, n0, n0 + len(batch))
 
     def _fail(self, exc: BaseException) -> None:
         self.error = exc

@@ -52,8 +52,8 @@ def view_sources(traj) -> list[str]:
 
 
 def write_views(h5, start: int, stop: int) -> None:
-    """Adds the views ``/xdmf/<name>/<k>`` of frames ``start <= k < stop`` (which have
-    none yet) of every per-frame dataset ``view_sources`` names to an open, writable
+    """Adds the views ``/xdmf/<name>/<k>`` of frames ``start <= k < stop`` (those it lacks)
+    of every per-frame dataset ``view_sources`` names to an open, writable
     file. A view maps one frame of its source (same file, named "."), so a trajectory
     that grows later keeps its views valid."""
     from h5py import h5d, h5p, h5s, h5t
@@ -71,6 +71,8 @@ def write_views(h5, start: int, stop: int) -> None:
         target = f"/trajectory/{name}".encode()
         zeros = (0,) * len(tail)
         for k in range(start, stop):
+            if str(k).encode() in group:  # made by a write broken off, then done again
+                continue
             dcpl = base.copy()
             whole.select_hyperslab((k, *zeros), (1, *tail))
             dcpl.set_virtual(view, b".", target, whole)
