@@ -206,6 +206,11 @@ def _exit_code(
     problems on stderr; ``signum``: the signal that stopped it, if one did."""
     if signum is not None:
         return _stopped(case, result, path, signum, quiet)
+    if result.report.implausible:  # solved, but no answer: summary and error
+        if not quiet:
+            _summary(case, result, path)
+        click.echo(f"catenet: error: the result is {result.report.implausible}", err=True)
+        return EXIT_FAILED
     if not result.converged:
         click.echo(f"catenet: did not converge: {result.message}", err=True)
         return EXIT_FAILED
@@ -337,6 +342,8 @@ def _summary(case, result, path: Path | None) -> None:
     detail = result.message or ""
     if result.stable is False:  # an unstable equilibrium is no answer: never "yes"
         state, detail = "no", "an unstable equilibrium"
+    elif s.implausible:  # nor a state no cable reaches
+        state, detail = "no", "implausible: see the error below"
     elif result.stability == "post-collapse":
         detail = f"{detail}; post-collapse: the path collapsed on its way here".lstrip("; ")
     if case.solver.method == "dynamic" and not result.equilibrium:

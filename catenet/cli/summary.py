@@ -75,7 +75,7 @@ def state_lines(
     lines.append(
         f"{'max tension':<{W}} {s['max_tension']:.6g} N{edge}   max strain "
         f"{s['max_strain']:.4g}{strain}"
-        + (" (beyond the material law's range: see the warning)" if warn_strain else "")
+        + (" (beyond the material law's range: see the warning or error)" if warn_strain else "")
     )
     peak = s.get("peak_tension")
     if peak is not None and _more(peak, s["max_tension"]):

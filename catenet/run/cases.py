@@ -345,9 +345,11 @@ def write_envelope(group, net, runs: list[CaseRun], design=None) -> None:
     group.attrs["converged"] = all(r.converged for r in runs)
 
 
-def write_warnings(path, messages: list[str]) -> None:
+def write_warnings(path, messages: list[str], failure: str = "") -> None:
     """The base state's warnings as /result's attribute ``warnings`` (one a line, ""
-    when none) of the closed result file ``path`` (OutputError when it cannot be)."""
+    when none) of the closed result file ``path`` (OutputError when it cannot be);
+    ``failure``: why the state the solve reached is no answer, /result then marked
+    failed (``converged`` false, ``outcome`` failed, ``message`` the failure)."""
     import h5py
 
     from catenet.errors import OutputError
@@ -356,7 +358,10 @@ def write_warnings(path, messages: list[str]) -> None:
     try:
         with h5py.File(path, "a") as h5:
             if "result" in h5:
-                h5["result"].attrs["warnings"] = "\n".join(dict.fromkeys(messages))
+                attrs = h5["result"].attrs
+                attrs["warnings"] = "\n".join(dict.fromkeys(messages))
+                if failure:
+                    attrs["converged"], attrs["outcome"], attrs["message"] = False, "failed", failure
     except OSError as exc:
         raise OutputError(f"{path}: writing /result's warnings failed: {describe(exc)}") from None
 
@@ -365,7 +370,8 @@ def solve_from_base(scene, settings, ws, result, cases, path, interrupt) -> tupl
     """The load cases from the base state ``result``, written to /cases and /envelope;
     their summary numbers by name and the envelope (``governing``)."""
     if not result.converged:
-        log.error("the base state did not converge: no load case is solved")
+        why = "is implausible" if result.message.startswith("implausible") else "did not converge"
+        log.error("the base state %s: no load case is solved", why)
         return {}, {}
     if result.stable is False:
         log.error("the base state is an unstable equilibrium: no load case is solved")

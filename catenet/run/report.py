@@ -23,7 +23,8 @@ class RunReport:
     """delta: the probe node's z-deflection [m] (positive down); size: the net's length
     scale L [m]; probe: the probe node; output: the file written (None: none);
     backend: the linear solver; strain_warning: the warning of a strain beyond the
-    material law's range ("" when none); trajectory_bytes: the trajectory's size as
+    material law's range ("" when none); implausible: why the base state, converged,
+    is no answer (``catenet.run.runner._implausible``; "" when it is one); trajectory_bytes: the trajectory's size as
     estimated before the run (0 without a file); cables: per cable of a graph case
     (None for other nets); bodies: per free rigid body (its obstacle index): kind,
     first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
@@ -40,6 +41,7 @@ class RunReport:
     output: str | None
     backend: str
     strain_warning: str = ""
+    implausible: str = ""
     trajectory_bytes: int = 0
     cables: dict[str, CableSummary] | None = None
     bodies: dict[int, dict] = field(default_factory=dict)

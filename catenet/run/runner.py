@@ -198,6 +198,7 @@ def run_case(
         hooks = Hooks(progress, stop, interrupt)
         solved = _solve(run, ws, hooks, start, clock)
     result = solved.result
+    unphysical = _implausible(run, result)  # the base state: a unit slip, a lost support
     case_numbers: dict = {}  # each load case's summary numbers, by name
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if run.cases:
@@ -205,9 +206,9 @@ def run_case(
             run.scene, run.settings, ws, result, run.cases, run.path, interrupt
         )
     with heard() as report_heard:
-        report = _report(run, ws, result, solved.bodies, case_numbers, envelope)
+        report = _report(run, ws, result, solved.bodies, case_numbers, envelope, unphysical)
     if run.path is not None:
-        write_warnings(run.path, base_heard.messages + report_heard.messages)
+        write_warnings(run.path, base_heard.messages + report_heard.messages, unphysical)
     done = RunResult.of(result, report)
     if on_done is not None:
         on_done(run.scene, ws, done)
@@ -248,16 +249,44 @@ def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
             raise
 
 
-def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: dict):
+def _implausible(run: Plan, result) -> str:
+    """The verdict on a converged base state that no cable structure reaches (strains
+    beyond 10x its law's range; in a static run, a node moved beyond 10x the structure's
+    size): the message, and the result marked failed (``converged`` false: the equations
+    were solved, the model is not what the user meant); "" when it is plausible."""
+    from catenet.run.advice import implausible, unit_slips
+    from catenet.solver.result import Outcome
+
+    if not result.converged or result.stable is False:
+        return ""
+    scene = run.scene
+    static = run.case.solver.method == "static"  # thrown nets and bodies fly far
+    what, extreme = implausible(scene.net, result.x, float(scene.size) if static else 0.0)
+    if not extreme:
+        return ""
+    slips = unit_slips(run.case, scene.net)
+    message = f"implausible (check units and supports): {what}"
+    if slips:  # the likely cause
+        message = f"{message}; {slips[0]}"
+    result.converged, result.outcome, result.message = False, Outcome.FAILED, message
+    return message
+
+
+def _report(
+    run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: dict, unphysical: str
+):
     """The RunReport of a solved run: the warnings its state earns (strain beyond the
     law, at the end or at a peak), the summary's numbers, a mechanism named, per cable
-    the largest tension and the slack share."""
+    the largest tension and the slack share; ``unphysical``: the base state's verdict
+    (``_implausible``)."""
     from catenet.model import measures, summary
     from catenet.run import advice, integrator_advice
 
     scene, case = run.scene, run.case
     beyond = advice.strain_beyond_law(scene.net, result.x)
-    if beyond:
+    if unphysical:  # the run's error says it all
+        pass
+    elif beyond:
         log.warning("%s", beyond)
     else:  # the peaks of the run: a rope strained beyond its law for an instant
         dynamic = case.solver.method == "dynamic"
@@ -299,6 +328,7 @@ def _report(run: Plan, ws, result, bodies: dict, case_numbers: dict, envelope: d
         output=None if run.path is None else str(run.path),
         backend=run.backend,
         strain_warning=beyond or "",
+        implausible=unphysical,
         trajectory_bytes=0 if run.trajectory is None else run.trajectory.bytes,
         cables=per_cable,
         bodies=bodies,

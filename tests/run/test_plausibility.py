@@ -2,9 +2,9 @@
 
 A cable truss written in SI with one number in the wrong unit (E = 160 for 160 GPa, an
 area in mm^2, a kN-m case given N): the run names the key, the value, the range of real
-cable materials and the value it most likely meant; every load case whose state is
-beyond the material law's range (or moved beyond the structure's size) warns, naming
-the case and the unit slip, and beyond ten times either the case fails (exit 1).
+cable materials and the value it most likely meant; a state beyond the material law's
+range (or moved beyond the structure's size) warns, a load case's naming the case and
+the unit slip, and beyond ten times either the run or the case fails (exit 1).
 The bundled cases give no such warning.
 """
 
@@ -47,15 +47,31 @@ def run(tmp_path, case: dict):
     return CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
 
 
-def test_a_modulus_in_the_wrong_unit_is_named_for_every_load_case(tmp_path):
+def test_a_modulus_in_the_wrong_unit_fails_the_base_state_naming_it(tmp_path):
+    """E = 160 for 160 GPa: the base state (self-weight, prestress) is strained beyond
+    10x the law's range already: the run fails there (exit 1) naming the slip, and no
+    load case is solved from a state no cable reaches."""
     r = run(tmp_path, truss(E=160.0))
-    assert r.exit_code == 1, r.output  # the cases' strains are beyond 10x the law's range
+    assert r.exit_code == 1, r.output
     head = "check units: material.E = 160 Pa (SI) is far below real cables"
     assert head in r.output and "did you mean 1.6e+11 (160 GPa)?" in r.output
-    for name in ("snow", "wind"):
-        assert f"load case {name}: strain" in r.output
-    assert r.output.count("check units: material.E") >= 3  # the run, and each case
-    assert "no: implausible" in r.output
+    assert "catenet: error: the result is implausible (check units and supports)" in r.output
+    assert "the base state is implausible: no load case is solved" in r.output
+    (error,) = [line for line in r.output.splitlines() if line.startswith("catenet: error")]
+    assert "did you mean 1.6e+11" in error  # the likely cause, in the error itself
+
+
+def test_a_load_case_in_the_wrong_unit_fails_naming_itself(tmp_path):
+    """A plausible base state and a snow load a million times too large (N-mm's N given
+    where the case is in MN, say): that case fails (exit 1) naming itself, the wind case
+    is solved and stays quiet."""
+    case = truss()
+    case["load_case"][0]["point"][0]["force"] = [0, 0, -5e8]
+    r = run(tmp_path, case)
+    assert r.exit_code == 1, r.output
+    assert "load case snow: strain" in r.output and "no: implausible" in r.output
+    assert "load case wind: strain" not in r.output
+    assert "load case snow failed" in r.output
 
 
 def test_the_same_truss_in_the_right_unit_says_nothing(tmp_path):

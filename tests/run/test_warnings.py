@@ -105,16 +105,42 @@ def test_the_cli_shows_the_angle_warning_on_stderr(tmp_path, write_case):
 
 
 def test_strain_beyond_the_linear_law_is_warned_about(tmp_path, write_case, caplog):
+    case = case_of(write_case, STATIC, "load.pressure=1e4", "solver.steps=3")
+    with caplog.at_level(logging.WARNING):
+        result = run_case(case, tmp_path / "big.h5")
+    assert result.converged and 0.05 < result.max_strain < 0.5  # within 10x its range
+    (msg,) = [m for m in messages(caplog) if "material law's range" in m]
+    assert "linear law (meant for strains <= 0.05)" in msg and "neo_hookean" in msg
+    assert result.report.strain_warning == msg and not result.report.implausible
+    r = invoke("run", write_case(STATIC), "-o", tmp_path / "c.h5", "--set", "load.pressure=1e4")
+    assert r.exit_code == 0
+    assert "beyond the material law's range" in r.stdout and "WARNING" in r.stderr
+
+
+def test_a_strain_no_cable_reaches_fails_the_run(tmp_path, write_case, caplog):
+    """Strains beyond 10x the law's range (a unit slip: E in MPa, loads in N/mm^2): the
+    equations were solved, the model is not what the user meant. The run fails (exit 1,
+    also with -q), its summary says "converged no", /result keeps the state marked
+    failed, and no load case is solved from it."""
+    import h5py
+
     case = case_of(write_case, STATIC, "load.pressure=1e9", "solver.steps=3")
     with caplog.at_level(logging.WARNING):
         result = run_case(case, tmp_path / "big.h5")
-    assert result.converged and result.max_strain > 1e3
-    (msg,) = [m for m in messages(caplog) if "material law's range" in m]
-    assert "linear law (meant for strains <= 0.05)" in msg and "neo_hookean" in msg
-    assert result.report.strain_warning == msg
-    r = invoke("run", write_case(STATIC), "-o", tmp_path / "c.h5", "--set", "load.pressure=1e9")
-    assert r.exit_code == 0
-    assert "beyond the material law's range" in r.stdout and "WARNING" in r.stderr
+    assert not result.converged and result.max_strain > 1e3
+    assert result.report.implausible.startswith("implausible (check units and supports)")
+    assert "linear law (meant for strains <= 0.05)" in result.report.implausible
+    assert not [m for m in messages(caplog) if m.startswith("strain")]  # said once: the error
+    with h5py.File(tmp_path / "big.h5") as h5:
+        attrs = h5["result"].attrs
+        assert not attrs["converged"] and attrs["outcome"] == "failed"
+        assert attrs["message"] == result.report.implausible
+    for quiet in ([], ["-q"]):
+        r = invoke("run", write_case(STATIC), "-o", tmp_path / "c.h5", "--set",
+                   "load.pressure=1e9", *quiet)  # fmt: skip
+        assert r.exit_code == 1, r.output
+        assert "catenet: error: the result is implausible" in r.stderr
+        assert ("converged    no (implausible" in r.stdout) is not bool(quiet)
 
 
 def test_small_strain_is_not_warned_about(tmp_path, write_case, caplog):
