@@ -69,6 +69,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         material.pop("prestress", None)
         out = {
             "title": case.title,
+            "units": case.units,  # the numbers below are the case's own
             "material": material,
             "solver": case.solver.to_dict(),
             "output": case.output.to_dict(),
@@ -82,7 +83,7 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
         out["output"]["probe"] = _ref(probe, scene)  # ("center" moves with the shape)
     if output_file is not None:
         out.setdefault("output", {})["file"] = output_file
-    order = ("title", "geometry", "material", "load", "solver", "output", *TABLES)
+    order = ("title", "units", "geometry", "material", "load", "solver", "output", *TABLES)
     return {k: out[k] for k in order if k in out}
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import tomllib
 
+import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -266,3 +267,44 @@ def test_tensions_given_to_cables_are_refused_with_one_message(tmp_path):
         "remove it (2 more cables give theirs) (target tensions by cable: formfind.method = "
         "'forces' with formfind.force = { NAME = N, ... })"
     ]
+
+
+@pytest.mark.parametrize("units", ["kN-m", "N-mm"])
+def test_the_written_case_keeps_the_units_it_was_found_in(tmp_path, units):
+    """A star of four cables in kN-m or N-mm, its centre to hang 300 mm (0.3 m) below
+    the supports under 10 kN: OUT.toml names the case's units (its numbers are the
+    case's own), and `catenet run` on it warns of no unit slip and reproduces the shape
+    and the tension (by hand: T = P / (4 sin a), sin a = 0.3 / sqrt(2^2 + 0.3^2))."""
+    mm = units == "N-mm"
+    length, force = (1000.0, 10e3) if mm else (1.0, 10.0)
+    data = {
+        "units": units,
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], *[[2 * length * c, 2 * length * s, 0]
+                                   for c, s in ((1, 0), (-1, 0), (0, 1), (0, -1))]],
+            "edge_length": 0.25 * length,
+            "sets": {"centre": [0], "supports": [1, 2, 3, 4]},
+            "cable": [{"name": n, "nodes": [0, k + 1]} for k, n in enumerate("ENWS")],
+        },
+        "supports": {"fixed": ["supports"]},
+        "material": {"E": 200e3 if mm else 200e6, "area": 78.5 if mm else 78.5e-6},
+        "load": {"point": [{"node": "centre", "force": [0, 0, -force]}]},
+        "formfind": {"force_density": 1.0, "vary": "cables"},
+        "target": [{"node": "centre", "z": -0.3 * length}],
+    }  # fmt: skip
+    path = tmp_path / "star.toml"
+    path.write_text(dumps_toml(data))
+    r = CliRunner().invoke(main, ["formfind", str(path), "-o", str(tmp_path / "f.h5")])
+    assert r.exit_code == 0, r.output
+    written = tomllib.loads((tmp_path / "f.toml").read_text())
+    assert written["units"] == units
+    r = CliRunner().invoke(main, ["run", str(tmp_path / "f.toml"), "-o", str(tmp_path / "r.h5")])
+    assert r.exit_code == 0, r.output
+    assert "check units" not in r.output and "WARNING" not in r.output
+    with h5py.File(tmp_path / "r.h5") as h5:
+        tension = h5["result/tension"][()]
+        z = h5["result/x"][0, 2]
+    sin_a = 0.3 / np.hypot(2.0, 0.3)
+    np.testing.assert_allclose(tension, force / (4 * sin_a), rtol=1e-6)
+    assert z == pytest.approx(-0.3 * length, rel=1e-6)
