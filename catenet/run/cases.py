@@ -361,7 +361,8 @@ def write_warnings(path, messages: list[str], failure: str = "") -> None:
                 attrs = h5["result"].attrs
                 attrs["warnings"] = "\n".join(dict.fromkeys(messages))
                 if failure:
-                    attrs["converged"], attrs["outcome"], attrs["message"] = False, "failed", failure
+                    attrs["converged"], attrs["outcome"] = False, "failed"
+                    attrs["message"] = failure
     except OSError as exc:
         raise OutputError(f"{path}: writing /result's warnings failed: {describe(exc)}") from None
 
