@@ -25,8 +25,8 @@ class RunReport:
     backend: the linear solver; strain_warning: the warning of a strain beyond the
     material law's range ("" when none); implausible: why the base state, converged,
     is no answer (``catenet.run.runner._implausible``; "" when it is one);
-    trajectory_bytes: the trajectory's size as estimated before the run (0 without a file); cables: per cable of a graph case
-    (None for other nets); bodies: per free rigid body (its obstacle index): kind,
+    trajectory_bytes: the trajectory's size as estimated before the run (0 without a
+    file); cables: per cable of a graph case (None for other nets); bodies: per free rigid body (its obstacle index): kind,
     first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
     (``catenet.run.bodies.BodyWatch.stats``); summary: the summary's numbers
     (``catenet.model.summary.summarize_result``: largest displacement, reactions, slack
