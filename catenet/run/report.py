@@ -20,20 +20,19 @@ class CableSummary:
 
 @dataclass(frozen=True)
 class RunReport:
-    """delta: the probe node's z-deflection [m] (positive down); size: the net's length
-    scale L [m]; probe: the probe node; output: the file written (None: none);
-    backend: the linear solver; strain_warning: the warning of a strain beyond the
-    material law's range ("" when none); implausible: why the base state, converged,
-    is no answer (``catenet.run.runner._implausible``; "" when it is one);
-    trajectory_bytes: the trajectory's size as estimated before the run (0 without a
-    file); cables: per cable of a graph case (None for other nets); bodies: per free rigid body (its obstacle index): kind,
-    first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
+    """delta: the probe node's z-deflection [m] (positive down); size: the net's length scale L
+    [m]; probe: the probe node; output: the file written (None: none); backend: the linear
+    solver; strain_warning: the warning of a strain beyond the material law's range ("" when
+    none); implausible: why the base state, converged, is no answer
+    (``catenet.run.runner._implausible``; "" when it is one); trajectory_bytes: the
+    trajectory's size as estimated before the run (0 without a file); cables: per cable of a
+    graph case (None for other nets); bodies: per free rigid body (its obstacle index):
+    kind, first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
     (``catenet.run.bodies.BodyWatch.stats``); summary: the summary's numbers
     (``catenet.model.summary.summarize_result``: largest displacement, reactions, slack
-    edges, peaks, per cable, ...: the /result attributes and the sweep columns); cases:
-    per load case and combination its numbers (with ``converged`` and ``error``);
-    envelope: the extremes over the cases and the cases that give them
-    (``catenet.run.cases.governing``)."""
+    edges, peaks, per cable, ...: the /result attributes and the sweep columns); cases: per
+    load case and combination its numbers (with ``converged`` and ``error``); envelope: the
+    extremes over the cases and the cases that give them (``catenet.run.cases.governing``)."""
 
     delta: float
     size: float
