@@ -258,18 +258,34 @@ def _chain(q: np.ndarray, stretch: list[int], scale: float) -> list[int]:
         return [a]
     chord = q[b] - q[a]
     length = float(np.hypot(*chord))
-    ids = np.unique(np.asarray(stretch[1:-1], dtype=np.int64))
+    inner = np.unique(np.asarray(stretch[1:-1], dtype=np.int64))
+    ids = inner
     if ids.size:
         rel = q[ids] - q[a]
         left = (chord[0] * rel[:, 1] - chord[1] * rel[:, 0]) / length
         ids = ids[left > TOL * scale]
     if not ids.size:
-        return [a, b]
+        return _through(q, [a, b], inner, scale)
     pts = np.concatenate([[a, b], ids])
     hull = _hull(q, pts)  # counterclockwise; a -> b is one of its sides
     k = hull.index(b)
     ring = hull[k:] + hull[:k]  # b, ..., a counterclockwise
-    return ring[::-1]
+    return _through(q, ring[::-1], inner, scale)
+
+
+def _through(q: np.ndarray, chain: list[int], nodes: np.ndarray, scale: float) -> list[int]:
+    """``chain`` through those of ``nodes`` that lie on its sides (a border straight
+    along a line of nodes: the outline follows its edges, never one edge over them)."""
+    out = [chain[0]]
+    for u, v in zip(chain[:-1], chain[1:], strict=True):
+        side = q[v] - q[u]
+        length = float(np.hypot(*side))
+        rel = q[nodes] - q[u]
+        t = (rel @ side) / length**2
+        off = np.abs(side[0] * rel[:, 1] - side[1] * rel[:, 0]) / length
+        on = (off <= TOL * scale) & (t > TOL) & (t < 1.0 - TOL)
+        out += nodes[on][np.argsort(t[on])].tolist() + [v]
+    return out
 
 
 def _hull(q: np.ndarray, pts: np.ndarray) -> list[int]:

@@ -118,6 +118,40 @@ def test_a_concave_outline_is_kept():
     assert np.all(load.force[~keep] == 0.0)
 
 
+def ringless_net(n: int = 3):
+    """n x n cables 1 apart crossing in [1, n] x [1, n], each ending one further out on
+    a support, no edge between the ends (a cable net without an edge ring)."""
+    inner = [[float(i), float(j), 0.0] for j in range(1, n + 1) for i in range(1, n + 1)]
+    ends, edges = [], []
+    at = lambda i, j: (j - 1) * n + (i - 1)  # noqa: E731
+    for k in range(1, n + 1):
+        for a, b, chain in (
+            ([0.0, k, 0.0], [n + 1.0, k, 0.0], [at(i, k) for i in range(1, n + 1)]),
+            ([k, 0.0, 0.0], [k, n + 1.0, 0.0], [at(k, j) for j in range(1, n + 1)]),
+        ):
+            first, last = len(inner) + len(ends), len(inner) + len(ends) + 1
+            ends += [a, b]
+            path = [first, *chain, last]
+            edges += [[u, v] for u, v in zip(path[:-1], path[1:], strict=True)]
+    return np.array(inner + ends), np.array(edges)
+
+
+@pytest.mark.parametrize("width", [1, 2, 3])
+def test_part_of_a_net_without_an_edge_ring_covers_its_outline(width):
+    """The western strip of a 3 x 3 ring-less net, x <= width: its border runs straight
+    along a cable (the nodes of the line x = width), beside the open cells closed
+    through the cable ends. Once refused as "edges cross": the closing edge was laid
+    over the straight border's edges. Covered: the strip's rectangle [0, width] x [0, 4]
+    less the two corner triangles of 1/2 cut by the ends' outline (a corner has no node)."""
+    xyz, edges = ringless_net(3)
+    keep = xyz[:, 0] <= width + 1e-9
+    load = area_load(xyz, edges, keep, 1000.0, "plan")
+    area = 4.0 * width - 2 * 0.5
+    assert load.area == pytest.approx(area, rel=1e-12)
+    assert load.force[:, 2].sum() == pytest.approx(-1000.0 * area, rel=1e-12)
+    assert np.all(load.force[keep, 2] <= 0.0) and np.all(load.force[~keep] == 0.0)
+
+
 def test_parallel_cables_without_cross_ties_share_the_strips_between_them():
     ends = []
     edges = []
