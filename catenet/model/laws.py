@@ -145,6 +145,11 @@ class Law:
             out[table] = self.table[last, 0]
         return out
 
+    def past_peak(self, strain: np.ndarray) -> np.ndarray:
+        """Per edge at ``strain``, whether its law's force has passed its peak and falls
+        (hencky: beyond eps = e - 1, where EA ln(lambda) / lambda peaks at EA / e)."""
+        return (self.kind == HENCKY) & (strain > math.e - 1.0)
+
     def strain_for_tension(self, tension: np.ndarray, EA: np.ndarray) -> np.ndarray:
         """Per edge, the strain at which it carries ``tension`` [N] (NaN where it cannot:
         compression in a tension-only edge, or beyond what the law reaches)."""

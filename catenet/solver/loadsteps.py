@@ -291,6 +291,8 @@ def _worth_cutting(exc: ConvergenceError) -> bool:
 def _advice(exc: ConvergenceError, max_iter: int, relaxed: bool = False) -> str:
     """The one setting most likely to help a static run that failed after cut-back
     (``relaxed``: and after dynamic relaxation to rest)."""
+    if "past the peak of its" in str(exc):  # no setting helps (catenet.solver.static)
+        return "the last equilibrium's load factor is about the most the structure carries"
     if f"no convergence in {max_iter} iterations" in str(exc):
         return f"most likely to help: a larger solver.max_iter (now {max_iter})"
     if relaxed:

@@ -8,6 +8,7 @@ a damped gradient flow and ends as pure Newton with quadratic convergence.
 from __future__ import annotations
 
 import logging
+import math
 import time
 
 import numpy as np
@@ -72,7 +73,7 @@ def solve_static(
     else:
         result = equilibrium(potential, x, rtol=rtol, max_iter=max_iter, transient=transient)
     result = _relag(potential, x, result, rtol=rtol, max_iter=max_iter)
-    _check_converged(result, potential, begin, raise_on_failure)
+    _check_converged(result, potential, begin, raise_on_failure, _past_peak(net, x))
     out = finish(
         ws.system,
         loads,
@@ -94,19 +95,43 @@ def solve_static(
     return out
 
 
+def _past_peak(net: Net, x: np.ndarray) -> str:
+    """Why a solve that failed with edges stretched past their law's peak force failed
+    ("" when none is): the loads ask more than those edges can carry."""
+    eps = strain(net, x)
+    past = net.law.past_peak(eps)
+    if not past.any():
+        return ""
+    k = int(np.flatnonzero(past)[np.argmax(eps[past])])
+    return (
+        f"edge {k} is stretched past the peak of its {net.law.name(k)} law (its force "
+        f"peaks at EA / e = {float(net.EA[k]) / math.e:.6g} N at strain e - 1 and falls "
+        f"beyond; strain {float(eps[k]):.4g} here): most likely the loads ask more than such "
+        "edges can carry, and no equilibrium holds them; lower the loads, or use a law "
+        "without a peak (material.law = 'neo_hookean')"
+    )
+
+
 def _check_converged(
-    result: NewtonResult, potential: Potential, begin: np.ndarray, raise_on_failure: bool
+    result: NewtonResult,
+    potential: Potential,
+    begin: np.ndarray,
+    raise_on_failure: bool,
+    past_peak: str = "",
 ) -> None:
     """A converged result held only to a round-off floor above the loads is not converged
     (no digit of the answer is sure); an unconverged one raises ConvergenceError (its
-    ``state`` the start ``begin``), unless not ``raise_on_failure``."""
+    ``state`` the start ``begin``), unless not ``raise_on_failure``. ``past_peak``: why
+    a failed one failed, where its edges passed their law's peak (``_past_peak``)."""
     if result.converged and result.tolerance > potential.f_norm > 0:
         # Held only to a round-off floor above the loads: no digit of the answer is sure.
         result.converged = False
         result.reason = "the forces' round-off floor exceeds the loads"
+    if not result.converged and past_peak:
+        result.reason = past_peak
     if not result.converged and raise_on_failure:
         hint = ""
-        if result.tolerance > ROUNDOFF_HINT * potential.f_norm:
+        if not past_peak and result.tolerance > ROUNDOFF_HINT * potential.f_norm:
             hint = (
                 ": the round-off level of this net's forces (EA eps_mach |x| / l0 per edge) "
                 "is comparable to its loads, more than double precision can resolve; use "

@@ -12,6 +12,7 @@ by 30 % and more, so a right answer is no accident.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -194,6 +195,35 @@ def test_prestress_beyond_what_the_law_carries_is_refused():
     data["geometry"]["length"] = 3.0
     with pytest.raises(ConfigError, match="give it or geometry.length, not both"):
         parse_case(data)
+
+
+@pytest.mark.parametrize("force", [380.0, 500.0])
+def test_a_load_beyond_the_laws_peak_fails_saying_so(tmp_path, force):
+    """A 1 m Hencky tether (EA 1000 N, ten edges) hung from a support, its end pulled by
+    more than the law's peak force EA/e = 367.88 N: no equilibrium exists. The run fails
+    (exit 1) naming the edge past the peak and the peak force, not the round-off that
+    its runaway iterate shows, and the last equilibrium it reports carries about the
+    peak (the cut-back's load factor, within its 1/32 steps)."""
+    from click.testing import CliRunner
+
+    from catenet.case import dumps_toml
+    from catenet.cli import main
+
+    data = {
+        "geometry": {"kind": "graph", "nodes": [[0, 0, 0], [0, 0, -1.0]], "fixed": [0],
+                     "edge_length": 0.1, "cable": [{"name": "tether", "nodes": [0, 1]}]},
+        "material": {"EA": 1000.0, "law": "hencky"},
+        "load": {"point": [{"node": 1, "force": [0, 0, -force]}]},
+        "solver": {"steps": 10},
+    }  # fmt: skip
+    path = tmp_path / "tether.toml"
+    path.write_text(dumps_toml(data))
+    r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "t.h5"), "-q"])
+    assert r.exit_code == 1, r.output
+    assert "past the peak of its hencky law" in r.output
+    assert "peaks at EA / e = 367.879 N" in r.output and "round-off" not in r.output
+    factor = float(re.search(r"last equilibrium: load factor ([0-9.]+)", r.output)[1])
+    assert 1000.0 / math.e * (1 - 1 / 16) < factor * force <= 1000.0 / math.e
 
 
 def test_prestress_then_load_gives_the_loaded_pretensioned_cable():
