@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from catenet.cli.common import (
+    EXIT_FAILED,
     EXIT_OK,
     HELP,
     case_options,
@@ -43,9 +44,10 @@ def command(
 
     \b
     Exit status: 0 found (targets not all met: the weighted least-squares compromise,
-    with a warning); 1 failed while running; 2 bad input (case file, --set values, paths,
-    force densities that make nodes coincide, targets that cannot be met, hard targets
-    unmet).
+    with a warning); 1 failed while running, or the target search did not converge
+    within formfind.max_iter (its last iterate written); 2 bad input (case file, --set
+    values, paths, force densities that make nodes coincide, targets that cannot be met,
+    hard targets unmet).
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):
@@ -58,7 +60,42 @@ def command(
         written = write_formfind(case, out)
         if not quiet:
             _summary(written)
+        if unconverged := _unconverged(written):
+            click.echo(f"catenet: error: {unconverged}", err=True)
+            sys.exit(EXIT_FAILED)
     sys.exit(EXIT_OK)
+
+
+def _unconverged(written) -> str:
+    """Why a target search that ended with targets unmet is no answer: it ran out of
+    iterations, or its force densities ran away ("" for any other end: met, or a
+    least-squares compromise, a stationary point at finite forces)."""
+    from catenet.formfind.design import RAN_AWAY, RUNAWAY
+
+    f = written.found
+    d = f.design
+    if d is None or d.all_met:
+        return ""
+    if d.message == RAN_AWAY:
+        why = f"the force densities ran away (beyond {RUNAWAY:.0e} times their start)"
+    elif d.message == "formfind.max_iter reached":
+        why = (
+            "the target search did not converge within formfind.max_iter = "
+            f"{written.scene.case.formfind.max_iter} iterations"
+        )
+    else:
+        return ""
+    bounds = (
+        "formfind.rest_length_factor_min / _max, or prestress_min / _max"
+        if f.method == "elastic"
+        else "formfind.force_density_min / _max"
+    )
+    return (
+        f"{why} (its last iterate written, its targets NOT met: tensions up to "
+        f"{float(f.force.max()):.3g} N): a target that only ever larger or smaller forces "
+        "approach (a node asked to lie where the loads cannot hold it) has no optimum; "
+        f"check the targets, or bound the search ({bounds})"
+    )
 
 
 def _steps(d) -> str:
@@ -108,7 +145,7 @@ def _summary(written) -> None:
         f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
     ]
     click.echo("\n".join(lines))
-    if f.design is not None and not f.design.all_met:
+    if f.design is not None and not f.design.all_met and not _unconverged(written):
         click.echo(
             "catenet: warning: the targets are not all met: the shape is the weighted "
             "least-squares compromise (misses above)",

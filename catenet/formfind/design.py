@@ -38,6 +38,11 @@ from catenet.formfind.levenberg import levenberg
 log = logging.getLogger(__name__)
 
 DENSE = 200  # whole Jacobians up to this many solves; beyond, a linear operator
+# Targets unmet with force densities this many times their start (or as many times below
+# it): the search ran towards forces without bound, where no optimum lies (a node asked
+# to lie where the loads cannot hold it); no least-squares compromise.
+RUNAWAY = 1e6
+RAN_AWAY = "the force densities ran away"
 
 
 class _Met(Exception):
@@ -263,6 +268,8 @@ def formfind_targets(
         q0 = np.full(net.n_edges, _default_start(shape))
     d = design(shape, goals, q0, groups, bounds, max_iter, vary)
     q, x, load = d.extra.pop("state")
+    if not d.all_met and float(np.max(np.abs(np.log(q / q0)))) > np.log(RUNAWAY):
+        d.message = RAN_AWAY
     _zero_lengths(net, x, shape.size, q_name)
     unmet = goals.hard & ~d.met
     if unmet.any():

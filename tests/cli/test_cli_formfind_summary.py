@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
@@ -46,3 +47,40 @@ def test_the_formfind_summary_gives_the_shape_and_forces(tmp_path):
     assert lines["set"].startswith("middle: z = -1 .. -1 m, sag 1 m")
     assert lines["density"].startswith("100 .. 100 N/m")
     assert lines["cable"] == f"chain: tension {t:.6g} .. {t:.6g} N, q 100 .. 100 N/m"
+
+
+@pytest.mark.parametrize("max_iter", [5, 100])
+def test_a_target_no_force_density_reaches_fails_with_its_last_iterate_written(tmp_path, max_iter):
+    """The chain's middle asked 1 m above its supports under a downward load: larger
+    force densities only bring it nearer z = 0, never above, so the search runs towards
+    tensions without bound (out of iterations at 5, away at 100). That is no compromise
+    (a stationary least-squares point): exit 1, its last iterate written (the result
+    file and OUT.toml), the error saying why and what bounds the search; with -q the
+    error alone."""
+    case = tmp_path / "chain.toml"
+    case.write_text(CHAIN + '\n[[target]]\nnode = "middle"\nz = 1.0\n')
+    out = ["-o", str(tmp_path / "c.h5"), "--set", f"formfind.max_iter={max_iter}"]
+    why = (
+        "did not converge within formfind.max_iter = 5 iterations"
+        if max_iter == 5
+        else "the force densities ran away (beyond 1e+06 times their start)"
+    )
+    for quiet in ([], ["-q"]):
+        res = CliRunner().invoke(main, ["formfind", str(case), *out, *quiet])
+        assert res.exit_code == 1, res.output
+        assert res.stderr.startswith("catenet: error: ") and why in res.stderr
+        assert "formfind.force_density_min / _max" in res.stderr
+        assert "compromise" not in res.stderr  # the warning of a stationary compromise
+        assert (tmp_path / "c.h5").is_file() and (tmp_path / "c.toml").is_file()
+        assert ("NOT met" in res.stdout) is not bool(quiet)
+
+
+def test_an_unreachable_target_within_bounds_is_a_compromise(tmp_path):
+    """The same target with the force densities bounded: the compromise at the bound is
+    a stationary point, said with a warning (exit 0)."""
+    case = tmp_path / "chain.toml"
+    case.write_text(CHAIN + '\n[[target]]\nnode = "middle"\nz = 1.0\n')
+    args = ["--set", "formfind.force_density_max=1e4", "-o", str(tmp_path / "c.h5")]
+    res = CliRunner().invoke(main, ["formfind", str(case), *args])
+    assert res.exit_code == 0, res.output
+    assert "catenet: warning: the targets are not all met" in res.stderr
