@@ -183,7 +183,7 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
 
     title_key, units_key = declared(Case)
     title = value(ck, data, title_key, "", Context())
-    units = value(ck, data, units_key, "SI", Context())
+    units = value(ck, data, units_key, "", Context())
 
     geometry, kind = _parse_geometry(ck, data, base_dir)
     ctx = Context(kind=kind)

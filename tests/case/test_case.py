@@ -167,6 +167,17 @@ def test_missing_file_and_directory(tmp_path):
     assert "directory" in str(pytest.raises(ConfigError, load_case, tmp_path).value)
 
 
+def test_a_bad_unit_system_is_named_by_its_own_key(tmp_path):
+    """``units`` is a top-level key: its message names ``units``, in the file and from
+    --set (never a made-up path such as SI.units)."""
+    path = tmp_path / "units.toml"
+    path.write_text(C.dumps_toml({**cable_dict(), "units": "kN-mm"}))
+    need = "units = 'kN-mm': must be one of 'SI', 'kN-m', 'N-mm'"
+    assert str(pytest.raises(ConfigError, load_case, path).value) == need
+    path.write_text(C.dumps_toml(cable_dict()))
+    assert str(pytest.raises(ConfigError, load_case, path, ["units=kN-mm"]).value) == need
+
+
 def test_not_utf8(tmp_path):
     path = tmp_path / "latin1.toml"
     path.write_bytes(b'title = "caf\xe9"\n')
@@ -261,7 +272,7 @@ BAD_VALUES = [
     (square_dict, "geometry.n", 3, "geometry.n = 3: must be an even integer >= 2"),
     (square_dict, "geometry.n", 0, "geometry.n = 0: must be an even integer >= 2"),
     (square_dict, "geometry.n", 2.5, "geometry.n = 2.5: must be an even integer"),
-    (square_dict, "geometry.n", True, "geometry.n = True: must be an even integer"),
+    (square_dict, "geometry.n", True, "geometry.n = true: must be an even integer"),
     (square_dict, "geometry.n", "34", "geometry.n = '34': must be an even integer"),
     (square_dict, "geometry.alpha", math.nan, "geometry.alpha = nan: must be finite"),
     (square_dict, "geometry.size", -1.0, "geometry.size = -1.0: must be finite and > 0"),
@@ -287,7 +298,7 @@ BAD_VALUES = [
     (cable_dict, "geometry.length", 0.0, "geometry.length = 0.0: must be finite and > 0"),
     (cable_dict, "geometry.prestrain", 0.1, "geometry.prestrain: unknown key for kind 'cable'"),
     (cable_dict, "material.E", -1.0, "material.E = -1.0: must be finite and > 0"),
-    (cable_dict, "material.E", False, "material.E = False: must be a number"),
+    (cable_dict, "material.E", False, "material.E = false: must be a number"),
     (cable_dict, "material.E", "10e6", "material.E = '10e6': must be a number"),
     (cable_dict, "material.radius", DELETE, "material.E = 1000000000.0: needs a cross-section"),
     (
