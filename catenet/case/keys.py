@@ -51,13 +51,16 @@ MISSING: Any = _Marker("missing")
 
 def show(value: Any, limit: int = 72) -> str:
     """A value as it reads in a message: as written in the case file or --set (see
-    catenet/case/written.py), else repr (TOML-like for dates, NumPy's values as Python's),
-    shortened."""
+    catenet/case/written.py), else as TOML writes it (arrays in brackets, also where the
+    checks made them tuples; true and false; dates), else repr (NumPy's values as
+    Python's), shortened."""
     text = _text(value, limit)
     return text if len(text) <= limit else text[: limit - 4] + " ..."
 
 
 def _text(value: Any, limit: int) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"  # as TOML writes them
     if isinstance(value, (datetime.date, datetime.time)):
         return value.isoformat()
     if isinstance(value, np.generic):
@@ -71,9 +74,7 @@ def _text(value: Any, limit: int) -> str:
             if sum(map(len, inner)) > limit:
                 break
         text = ", ".join(inner) + ("" if len(inner) == len(value) else ", ...")
-        if isinstance(value, list):
-            return f"[{text}]"
-        return f"({text},)" if len(value) == 1 else f"({text})"
+        return f"[{text}]"  # a TOML array, also where the checks made it a tuple
     try:
         return repr(value)
     except Exception:  # a repr that fails must not hide the real problem

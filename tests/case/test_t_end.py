@@ -79,7 +79,7 @@ def test_an_explicit_t_end_is_kept_and_written_back():
     [
         ("fast", "solver.t_end = 'fast': must be a number > 0 or 'rest'"),
         (-1.0, "solver.t_end = -1.0: must be finite and > 0, or 'rest'"),
-        (True, "solver.t_end = True: must be a number, finite and > 0, or 'rest'"),
+        (True, "solver.t_end = true: must be a number, finite and > 0, or 'rest'"),
     ],
 )
 def test_bad_t_end_names_the_key_the_value_and_what_is_accepted(value, message):

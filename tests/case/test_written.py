@@ -131,7 +131,29 @@ def test_show_never_prints_numpy_reprs():
 
     assert show([np.float64(1.5), np.int64(2), WrittenFloat("1e12")]) == "[1.5, 2, 1e12]"
     assert show(np.array([1.0, np.inf])) == "[1.0, inf]" and show(np.float64("nan")) == "nan"
-    assert show((WrittenInt(16, "0x10"),)) == "(0x10,)" and show((1, 2)) == "(1, 2)"
+    assert show((WrittenInt(16, "0x10"),)) == "[0x10]" and show((1, 2)) == "[1, 2]"
     long = show(np.arange(10_000.0))
     assert len(long) <= 72 and long.endswith(" ...") and "np." not in long
     assert show([[1, 2], [3]]) == "[[1, 2], [3]]" and show("ab") == "'ab'"
+    assert show(True) == "true" and show([np.bool_(False), None]) == "[false, None]"
+
+
+def test_messages_echo_arrays_and_booleans_as_toml_writes_them(tmp_path):
+    """An area load's node array is kept as a tuple once checked, and a boolean is
+    Python's True: the message still quotes them as the case file wrote them, a TOML
+    array in brackets and true (never the Python tuple (0, 2, ...) or True)."""
+    from catenet.case import build
+
+    net = (
+        '[geometry]\nkind = "graph"\n'
+        "nodes = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 0]]\n"
+        "edges = [[0, 1], [1, 2], [2, 3], [3, 0], [0, 4], [1, 4], [2, 4], [3, 4]]\n"
+        "fixed = [0, 1, 2, 3]\n[material]\nEA = 1e6\n"
+    )
+    (tmp_path / "a.toml").write_text(net + "[[load.area]]\npressure = 100.0\nnodes = [0, 1]\n")
+    with pytest.raises(ConfigError) as bad:
+        build(load_case(tmp_path / "a.toml"))
+    assert "load.area[0].nodes = [0, 1]: " in str(bad.value)
+    with pytest.raises(ConfigError) as bad:
+        load_case(tmp_path / "a.toml", ["material.EA=true"])
+    assert "material.EA = true: must be a number" in str(bad.value)
