@@ -161,9 +161,9 @@ def check_method(ck: Checker, cases: Any, combos: Any, solver: Any, density: Any
             "analyses from the base state: set solver.method = 'static'"
         )
     for k, lc in enumerate(cases if isinstance(cases, tuple) else ()):
-        if lc.gravity is not None and density == 0:
-            ck.add(
-                f"load_case[{k}].gravity = {list(lc.gravity)}: gravity needs mass: set "
+        if lc.gravity is not None and any(g != 0.0 for g in lc.gravity) and density == 0:
+            ck.add(  # ([0, 0, 0] is no load: it needs no mass)
+                f"load_case[{k}].gravity = {show(lc.gravity)}: gravity needs mass: set "
                 "material.density > 0 (with material.radius or material.area)"
             )
 

@@ -295,11 +295,17 @@ def _check_mass(
             f"material.density = {dens!r}: solver.method = 'dynamic' needs mass: "
             "must be > 0 (with material.radius or material.area)"
         )
-    if isinstance(load, LoadConfig) and load.gravity is not None and dens == 0:
+    if isinstance(load, LoadConfig) and _pulls(load.gravity) and dens == 0:
         ck.add(
             f"load.gravity = {show(data['load']['gravity'])}: gravity needs mass: "
             "set material.density > 0 (with material.radius or material.area)"
         )
+
+
+def _pulls(gravity: Any) -> bool:
+    """Whether a gravity vector (None: not given) is a load: [0, 0, 0] is none, and
+    needs no mass."""
+    return gravity is not None and any(float(g) != 0.0 for g in gravity)
 
 
 def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:

@@ -130,8 +130,12 @@ def _summary(written) -> None:
             f"{d.message}: {d.evaluations} iterations, {d.gradients} adjoint gradients, "
             f"{f.factorizations} {solves}{_steps(d)}"
         )
+    from catenet.model.units import relabel
+
+    source = getattr(written.scene, "case", None)  # the case as given: its units
+    case = written.case
+    units = (source or case).units or "SI"
     lines = [
-        f"{'case':<12} {written.case.title or written.case.source}",
         f"{'method':<12} {f.method} ({detail})",
         f"{'net':<12} {f.net.n_net} nodes, {f.net.n_edges} edges, "
         f"{int(np.count_nonzero(f.net.fixed[: f.net.n_net]))} fixed",
@@ -141,6 +145,10 @@ def _summary(written) -> None:
         *shape_lines(f, written.scene),
         *_targets(f),
         f"{'wall time':<12} {f.wall_time:.3g} s ({f.backend})",
+    ]
+    lines = [  # labelled in the case's units (numbers as it wrote them), not the title
+        f"{'case':<12} {case.title or case.source}",
+        *relabel(lines, units),
         f"{'output':<12} {written.result_file}",
         f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
     ]

@@ -111,6 +111,7 @@ def command(
 
 
 def _summary(case, done) -> None:
+    from catenet.model.units import relabel
     from catenet.run.modes import mode_rows
 
     result, modes, path = done.result, done.modes, done.path
@@ -155,6 +156,7 @@ def _summary(case, done) -> None:
             f"{'':<12} {row.k:>4} {row.frequency:>12.6g} {row.period:>12.6g} "
             f"{row.direction:>4} {share:>30}{twist}   {row.moves}"
         )
+    lines[1:] = relabel(lines[1:], case.units or "SI")  # the title as written
     if path is not None:
         side = Path(path).with_suffix(".xdmf")
         extra = f" (ParaView: {side}, a collection per mode)" if case.output.xdmf else ""

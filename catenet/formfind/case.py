@@ -226,8 +226,10 @@ def _header(case: Case, found: FormFound, out: Path) -> str:
     targets = ""
     if found.design is not None:
         from catenet.formfind import report
+        from catenet.model.units import relabel
 
-        targets = "".join(f"# {line}\n" for line in report.header_lines(found))
+        lines = relabel(report.header_lines(found), case.units or "SI")
+        targets = "".join(f"# {line}\n" for line in lines)
     return (
         f"# Form found by `catenet formfind {src}` (method = {found.method!r}; result file "
         f"{out}).\n# `catenet run` on this case, without further load, reproduces the shape "

@@ -49,10 +49,17 @@ def check_modes_input(scene, count) -> None:
             f"ask for at most {n_free}"
         )
     if not float(np.sum(scene.net.mass[~scene.net.fixed])) > 0.0:
+        from catenet.case.keys import show
+
+        density = getattr(getattr(scene.case, "material", None), "density", 0)
+        head = "the net's free nodes have no mass"  # (a density on fixed nodes only)
+        if not density:
+            head = f"material.density = {show(density)} and no [[mass]]"
         raise ConfigError(
-            "material.density = 0 and no [[mass]]: the net has no mass, so no natural "
-            "frequency: give material.density [kg/m^3] (per unstressed volume) or point "
-            "masses"
+            f"{head}: modes need mass, and the net has none where it moves (so no natural "
+            "frequency): give material.density > 0 (per unstressed volume, "
+            "with material.radius or material.area) or point masses ([[mass]] with node "
+            "and mass)"
         )
 
 

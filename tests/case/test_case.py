@@ -521,6 +521,13 @@ def test_mass_is_needed_for_dynamics_and_gravity():
         p.startswith("material.density = 0.0: solver.method = 'dynamic' needs mass") for p in found
     )
     assert any(p.startswith("load.gravity = [0, 0, -9.81]: gravity needs mass") for p in found)
+    # no gravity, [0, 0, 0], is no load: it needs no mass (a static case, a load case)
+    data = mutate(mutate(data, "load.gravity", [0, 0, 0]), "solver.method", "static")
+    assert parse_case(data).material.density == 0.0
+    data["load_case"] = [{"name": "none", "gravity": [0.0, 0, 0]}]
+    assert parse_case(data).load_cases[0].name == "none"
+    data["load_case"] = [{"name": "g", "gravity": [0, 0, -9.81]}]
+    one_problem(data, "load_case[0].gravity = [0, 0, -9.81]: gravity needs mass")
 
 
 def test_pressure_zero_is_accepted_for_every_kind():

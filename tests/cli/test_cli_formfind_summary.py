@@ -84,3 +84,28 @@ def test_an_unreachable_target_within_bounds_is_a_compromise(tmp_path):
     res = CliRunner().invoke(main, ["formfind", str(case), *args])
     assert res.exit_code == 0, res.output
     assert "catenet: warning: the targets are not all met" in res.stderr
+
+
+def test_the_formfind_summary_names_the_cases_units(tmp_path):
+    """The same chain in kN-m and in N-mm: the numbers are the case's, every label names
+    its units (kN, kN/m; mm, N/mm), the summary's and the written case's header's (a
+    target's line), never N and m for numbers that are not in them."""
+    t = 100.0 * math.sqrt(1.04)
+    found = {}
+    for units, target in (("kN-m", ""), ("N-mm", '[[target]]\nnode = "middle"\nz = -1.0\n')):
+        case = tmp_path / f"in-{units}.toml"
+        case.write_text(f'units = "{units}"\n' + CHAIN + target)
+        out = tmp_path / f"{units}.h5"
+        res = CliRunner().invoke(main, ["formfind", str(case), "-o", str(out)])
+        assert res.exit_code == 0, res.output
+        found[units] = {line[:12].strip(): line[12:].strip() for line in res.output.splitlines()}
+    kn = found["kN-m"]
+    assert kn["tension"] == f"{t:.6g} .. {t:.6g} kN" and kn["span"].startswith("10 m (")
+    assert kn["cable"] == f"chain: tension {t:.6g} .. {t:.6g} kN, q 100 .. 100 kN/m"
+    mm = found["N-mm"]
+    assert mm["span"].startswith("10 mm (") and mm["density"].startswith("100 .. 100 N/mm")
+    assert mm["height"].startswith("lowest node 1 at z = -1 mm") and mm["height"].endswith("mm")
+    assert mm["set"].startswith("middle: z = -1 .. -1 mm, sag 1 mm")
+    assert mm["target[0]"].startswith("node 'middle' z: -1 mm (target -1 mm,")
+    header = (tmp_path / "N-mm.toml").read_text().split("\n\n")[0]
+    assert "#   target[0] node 'middle' z: -1 mm (target -1 mm, miss" in header

@@ -118,7 +118,11 @@ def test_modes_names_the_cables_that_move(tmp_path):
         (("--count", "two"), "--count = 'two': must be a positive integer"),
         (("--count", "1.5"), "--count = '1.5': must be a positive integer"),
         (("--count", "100000"), "more than the net's 615 free DOFs"),
-        (("--set", "material.density=0"), "the net has no mass"),
+        (("--set", "material.density=0"), "the net has none where it moves"),
+        (  # no gravity is no load: the cause is the modes' need of mass, not gravity's
+            ("--set", "material.density=0", "--set", "load.gravity=[0, 0, 0]"),
+            "error: material.density = 0 and no [[mass]]: modes need mass",
+        ),
     ],
 )
 def test_bad_input_exits_2_with_one_message(tmp_path, args, message):
@@ -128,6 +132,21 @@ def test_bad_input_exits_2_with_one_message(tmp_path, args, message):
     assert message in done.stderr
     assert "Traceback" not in done.stderr
     assert not (tmp_path / "out" / "net.h5").exists()  # found before anything was solved
+
+
+def test_the_modes_summary_names_the_cases_units(tmp_path):
+    """A kN-m case's tension is in kN: the summary says kN (as catenet run does), the
+    numbers as the case wrote them."""
+    from click.testing import CliRunner
+
+    from catenet.cli import main
+
+    (tmp_path / "c.toml").write_text('units = "kN-m"\n' + CABLES)
+    res = CliRunner().invoke(main, ["modes", str(tmp_path / "c.toml"), "-k", "2",
+                                    "-o", str(tmp_path / "c.h5")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    line = next(t for t in res.output.splitlines() if t.startswith("equilibrium"))
+    assert line.endswith(" kN") and "max tension 4" in line
 
 
 def test_failed_equilibrium_exits_1_with_the_static_message(tmp_path):
