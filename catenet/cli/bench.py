@@ -7,7 +7,13 @@ from pathlib import Path
 
 import click
 
-from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbosity_options
+from catenet.cli.common import (
+    HELP,
+    PathParam,
+    errors_to_exit_codes,
+    setup_logging,
+    verbosity_options,
+)
 
 
 @click.command(name="bench", context_settings=HELP)
@@ -15,7 +21,7 @@ from catenet.cli.common import HELP, errors_to_exit_codes, setup_logging, verbos
     "-o",
     "--output",
     "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
+    type=PathParam(file_okay=False),
     required=True,
     help="Directory for bench.csv and bench.json (nothing is written elsewhere).",
 )

@@ -5,6 +5,9 @@ from __future__ import annotations
 import contextlib
 import gc
 import logging
+import os
+import re
+import stat
 import sys
 import time
 from pathlib import Path
@@ -30,6 +33,62 @@ def verbosity_options(f):
     return f
 
 
+class PathParam(click.Path):
+    """A path argument or option (click.Path's ``exists``, ``file_okay``, ``dir_okay``)
+    whose refusal is catenet's one line on stderr with exit 2, the option and the value
+    named (``catenet: error: --output = 'out': is a directory: give a file path such as
+    out/run.h5``), never click's usage text; ``give``: what to give instead of a
+    directory (a file path) or of a file (a directory)."""
+
+    def __init__(self, *, give: str = "", **kwargs):
+        super().__init__(path_type=Path, **kwargs)
+        self.give = give
+
+    def convert(self, value, param, ctx):
+        why = self.refusal(value)
+        if why and not (ctx is not None and ctx.resilient_parsing):  # (not while completing)
+            fail(f"{param_name(param)} = {os.fsdecode(value)!r}: {why}", EXIT_BAD_INPUT)
+        try:
+            return super().convert(value, param, ctx)
+        except click.BadParameter as exc:  # a refusal of click's own: its reason, one line
+            if ctx is not None and ctx.resilient_parsing:
+                raise
+            reason = re.sub(r"^\w+ '.*' ", "", exc.message).rstrip(".")
+            fail(f"{param_name(param)} = {os.fsdecode(value)!r}: {reason}", EXIT_BAD_INPUT)
+
+    def refusal(self, value) -> str:
+        """Why ``value`` is refused ("" when it is not)."""
+        path = Path(os.fsdecode(value))
+        kind = "file" if not self.dir_okay else "directory" if not self.file_okay else "path"
+        try:
+            st = path.stat()
+        except (OSError, ValueError):  # missing, a parent that is a file, a NUL byte
+            if not self.exists:
+                return ""
+            return (
+                f"no such {kind}"
+                if path.parent.is_dir() or not path.parent.exists()
+                else (f"no such {kind} ({path.parent} is not a directory)")
+            )
+        if not self.dir_okay and stat.S_ISDIR(st.st_mode):
+            return f"is a directory: give {self.give or 'a file'}"
+        if not self.file_okay and not stat.S_ISDIR(st.st_mode):
+            return f"is not a directory: give {self.give or 'a directory'}"
+        if self.exists and self.readable and not os.access(path, os.R_OK):
+            return f"the {kind} cannot be read (permission denied)"
+        return ""
+
+
+def param_name(param: click.Parameter | None) -> str:
+    """How a message names a parameter: an option by its long name (``--output``), an
+    argument by its metavar (``CASE.toml``)."""
+    if isinstance(param, click.Option):
+        return max(param.opts, key=len)
+    if param is not None and param.metavar:
+        return param.metavar.strip("[]")
+    return (param.name or "PATH").upper() if param is not None else "PATH"
+
+
 def case_options(output_help: str, example: str):
     """The -o/--output and --set options of the commands that read a case file."""
 
@@ -46,7 +105,7 @@ def case_options(output_help: str, example: str):
             "--output",
             "out",
             metavar="OUT.h5",
-            type=click.Path(dir_okay=False, path_type=Path),
+            type=PathParam(dir_okay=False, give="a file path such as out/run.h5"),
             default=None,
             help=output_help,
         )(f)

@@ -11,6 +11,7 @@ from catenet.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
     HELP,
+    PathParam,
     case_options,
     errors_to_exit_codes,
     setup_logging,
@@ -20,7 +21,9 @@ from catenet.cli.common import (
 
 @click.command(name="formfind", context_settings=HELP)
 @click.argument(
-    "case_file", metavar="CASE.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path)
+    "case_file",
+    metavar="CASE.toml",
+    type=PathParam(exists=True, dir_okay=False, give="a case file"),
 )
 @case_options(
     "Result file (default: the case's output.file); the case OUT.toml goes beside it.",

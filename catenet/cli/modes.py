@@ -11,6 +11,7 @@ from catenet.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
     HELP,
+    PathParam,
     Progress,
     case_options,
     errors_to_exit_codes,
@@ -35,7 +36,9 @@ def _count(ctx, param, value):
 
 @click.command(name="modes", context_settings=HELP)
 @click.argument(
-    "case_file", metavar="CASE.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path)
+    "case_file",
+    metavar="CASE.toml",
+    type=PathParam(exists=True, dir_okay=False, give="a case file"),
 )
 @case_options(
     "Result file (default: the case's output.file). Missing directories are created.",

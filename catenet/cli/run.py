@@ -15,6 +15,7 @@ from catenet.cli.common import (
     EXIT_FAILED,
     EXIT_OK,
     HELP,
+    PathParam,
     Progress,
     case_options,
     collecting_later,
@@ -75,7 +76,7 @@ class StopFlag:
     "case_file",
     metavar="[CASE.toml]",
     required=False,
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    type=PathParam(exists=True, dir_okay=False, give="a case file"),
 )
 @case_options(
     "Result file (default: the case's output.file). Missing directories are created.",
@@ -84,7 +85,7 @@ class StopFlag:
 @click.option(
     "--restart",
     metavar="OLD.h5",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    type=PathParam(exists=True, dir_okay=False, give="a result file"),
     default=None,
     help="Continue a dynamic run from the last frame stored in OLD.h5 (time, positions, "
     "velocities), writing a new file.",

@@ -13,6 +13,7 @@ import click
 from catenet.cli.common import (
     EXIT_FAILED,
     HELP,
+    PathParam,
     Progress,
     errors_to_exit_codes,
     fail,
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
     "-o",
     "--output",
     "output",
-    type=click.Path(file_okay=False, path_type=Path),
+    type=PathParam(file_okay=False, give="a sweep directory"),
     default=None,
     help="Sweep directory (default: out/<case name>). Re-running into it resumes.",
 )

@@ -10,6 +10,7 @@ import click
 from catenet.cli.common import (
     EXIT_FAILED,
     HELP,
+    PathParam,
     errors_to_exit_codes,
     setup_logging,
     verbosity_options,
@@ -21,7 +22,7 @@ from catenet.cli.common import (
     "-o",
     "--output",
     "output",
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=PathParam(dir_okay=False, give="a file path such as out/validation.csv"),
     default=None,
     help="Also write the table as CSV to this file.",
 )

@@ -177,6 +177,11 @@ def write_formfind(case: Case, out: str | Path | None = None) -> Written:
     start = time.perf_counter()
     out = Path(case.output.file if out is None else out)
     toml_path = case_file_for(out)
+    if toml_path == out:  # the case file would replace the result file
+        raise ConfigError(
+            f"output file {str(out)!r}: is the name of the case file written beside the "
+            "result file (OUT.toml beside OUT.h5): give the result file, such as out/net.h5"
+        )
     check_output_path(out)
     check_output_path(toml_path, what="case file")
     source = Path(case.source or "")
