@@ -299,6 +299,7 @@ def _report(
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
         from catenet.solver.diagnose import (
+            bending_nodes,
             describe_unstable,
             describe_unstable_bodies,
             has_twist,
@@ -311,6 +312,8 @@ def _report(
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
             twisted=has_twist(ws.system),
+            bent=bending_nodes(ws.system),
+            factor=result.time if case.solver.method == "static" else None,
         )
     per_cable = None
     if cables is not None:  # per cable: the largest tension and the slack share

@@ -32,6 +32,19 @@ def has_twist(system: System) -> bool:
     return any(t.name == "twist" for t in system.terms)
 
 
+def bending_nodes(system: System) -> np.ndarray | None:
+    """(N,) bool: the nodes where a rod's bending stiffness holds the net sideways (a
+    hinge's interior node, the far node of a clamped end edge); None without rods."""
+    rods = [t.rods for t in system.terms if t.name == "bending"]
+    if not rods:
+        return None
+    held = np.zeros(system.net.n_nodes, bool)
+    for r in rods:
+        held[np.asarray(r.hinges[:, 1], dtype=np.int64)] = True
+        held[np.asarray(r.clamps[:, 1], dtype=np.int64)] = True
+    return held
+
+
 def unstable_nodes(stretch: Stretch, x: np.ndarray, free: np.ndarray) -> np.ndarray:
     """Free nodes whose own block of the edges' tangent stiffness at x (N, 3) has a
     negative eigenvalue (``stretch``: the net's ``terms.Stretch``; ``free`` (N,) bool)."""
@@ -62,9 +75,14 @@ def describe_unstable(
     cable_of_edge: np.ndarray | None = None,
     *,
     twisted: bool = False,
+    bent: np.ndarray | None = None,
+    factor: float | None = None,
 ) -> str:
     """One sentence naming the nodes (and cables) of an unstable equilibrium and the fix
-    (``twisted``: the system has twisted rods, which buckle beyond their critical twist)."""
+    (``twisted``: the system has twisted rods, which buckle beyond their critical twist).
+    ``bent`` (N,) bool: the nodes a rod's bending stiffness holds (``bending_nodes``):
+    where every node named has it, the structure is no mechanism but loaded beyond a
+    buckling load, at the load factor ``factor`` where that is known."""
     nodes = unstable_nodes(stretch, x, free)
     if nodes.size == 0:  # a global instability: name the compressed edges' free nodes
         compressed = np.flatnonzero(stretch.tension(x) < 0.0)
@@ -80,18 +98,33 @@ def describe_unstable(
         names = sorted({str(cable_names[c]) for c in cable_of_edge[edges] if c >= 0})
         if names:
             cables = f" (cables {', '.join(names)})"
+    twist = (
+        "; or a rod twisted beyond its critical twist (8.99 EI / GJ for a straight rod "
+        "between clamps held apart, less under compression): turn its ends less"
+        if twisted
+        else ""
+    )
+    if bent is not None and nodes.size and bool(np.all(bent[nodes])):
+        return _buckled(where, cables, factor) + twist
     return (
         f"a mechanism: the stiffness is negative at {where}, where compressed bilateral "
         f"edges{cables} push the net sideways more than anything holds it (a chain of "
         "pinned struts, a straight compressed strut): fix or brace those nodes (a support, "
         "an edge to a support, guys with prestress), make the strut one edge, or give it "
-        "bending stiffness (material.EI: a rod; a rod beyond its Euler load buckles)"
-        + (
-            "; or a rod twisted beyond its critical twist (8.99 EI / GJ for a straight rod "
-            "between clamps held apart, less under compression): turn its ends less"
-            if twisted
-            else ""
-        )
+        "bending stiffness (material.EI: a rod; a rod beyond its Euler load buckles)" + twist
+    )
+
+
+def _buckled(where: str, cables: str, factor: float | None) -> str:
+    """The message of an unstable equilibrium whose compressed edges all have bending
+    stiffness: no mechanism, a buckling load exceeded (at load ``factor``, if known)."""
+    at = "" if factor is None else f" (at load factor {factor:.6g})"
+    return (
+        f"the loads exceed a buckling (limit) load of the structure as modelled{at}: the "
+        f"stiffness is negative at {where}, where compressed rods{cables} bend sideways "
+        "although they have bending stiffness (material.EI): their compression is beyond "
+        "what it holds (an Euler load); lower the loads or the compression (prestress), "
+        "or stiffen or brace the rods there (a larger EI, a brace or guy at those nodes)"
     )
 
 

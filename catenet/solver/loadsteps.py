@@ -36,7 +36,7 @@ from catenet.solver.stability import (
     describe_collapse,
 )
 from catenet.solver.start import start_state
-from catenet.solver.static import solve_static
+from catenet.solver.static import solve_static, warn_state
 from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
@@ -48,6 +48,7 @@ class StepSettings(TypedDict):
     rtol: float
     max_iter: int
     workspace: Workspace
+    warn: bool  # False: the path, not each of its solves, warns about its end state
 
 
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
@@ -86,7 +87,9 @@ def continuation(
     The path's stability is followed (``catenet.solver.stability.PathJudge``): a path that
     collapses raises CollapseError with ``last_good`` its last stable state, unless
     ``post_collapse``, where it goes on and its results' ``stability`` says
-    "post-collapse"."""
+    "post-collapse". What the end state is (unstable, nodes on slack edges only) is
+    logged once, at the end; the solves on the way (steps, cut-backs, the halved steps
+    that judge the path) log none of it."""
     if len(factors) == 0:
         raise ConfigError("continuation: factors is empty: give at least one load factor")
     ws = workspace or Workspace(net, linear=linear)
@@ -96,7 +99,7 @@ def continuation(
     judge = PathJudge(ws, loads, post_collapse=post_collapse)
     loaded = bool(np.any(loads.external_force(net, 1.0))) or loads.moves_supports
     judge.begin(good.x, loaded)
-    settings = StepSettings(rtol=rtol, max_iter=max_iter, workspace=ws)
+    settings = StepSettings(rtol=rtol, max_iter=max_iter, workspace=ws, warn=False)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
@@ -125,6 +128,7 @@ def continuation(
         x = r.x
         if on_step is not None:
             on_step(float(factor), r)
+    warn_state(ws, net, results[-1])  # once, on where the path ends (not on each solve)
     return results
 
 

@@ -296,11 +296,17 @@ class PathJudge:
         )
 
     def why_start(self) -> str:
-        from catenet.solver.diagnose import describe_unstable, has_twist
+        from catenet.solver.diagnose import bending_nodes, describe_unstable, has_twist
 
         start = self.start_x if self.start_x is not None else self.net.nodes
         system = self.ws.system
-        what = describe_unstable(system.stretch, start, ~self.net.fixed, twisted=has_twist(system))
+        what = describe_unstable(
+            system.stretch,
+            start,
+            ~self.net.fixed,
+            twisted=has_twist(system),
+            bent=bending_nodes(system),
+        )
         if not self.loaded:
             return f"the given geometry is an unstable equilibrium under its prestress: {what}"
         return f"the given geometry is unstable under its prestress, so any load folds it: {what}"
@@ -364,15 +370,24 @@ def _shown(items: ArrayLike) -> str:
 
 def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarray) -> str:
     """The collapse's message: where, what, which nodes, and the fix."""
+    from catenet.solver.diagnose import bending_nodes
+
     where = f"nodes {_shown(nodes)}" if nodes.size else "the net"
+    bent = bending_nodes(judge.ws.system)
     fix = (
-        ""
-        if judge.start_unstable
-        else f"; {where} move most. The structure is a mechanism or loses its stability "
+        f"; {where} move most. The structure is a mechanism or loses its stability "
         "under these loads (a chain of pinned struts, an unbraced joint, a snap-through, "
         "guys going slack): brace or fix those nodes, prestress the guys, make a strut one "
         "edge, or lower the load"
     )
+    if bent is not None and nodes.size and bool(np.all(bent[nodes])):  # rods that bend
+        fix = (
+            f"; {where} move most. The loads exceed a buckling (limit) load of the "
+            "structure as modelled, its rods' bending stiffness (material.EI) included "
+            "(a rod beyond its Euler load, guys going slack, a snap-through): lower the "
+            "load, or brace those nodes, stiffen the rods or prestress the guys"
+        )
+    fix = "" if judge.start_unstable else fix
     kept = "The start" if judge.start_unstable else "The last stable state"
     if not judge.loaded:
         return f"{why}. {kept} is kept as the result"

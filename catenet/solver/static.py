@@ -16,7 +16,12 @@ import numpy as np
 from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
-from catenet.solver.diagnose import describe_unstable, describe_unstable_bodies, has_twist
+from catenet.solver.diagnose import (
+    bending_nodes,
+    describe_unstable,
+    describe_unstable_bodies,
+    has_twist,
+)
 from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
@@ -43,6 +48,7 @@ def solve_static(
     accepted: np.ndarray | None = None,
     transient: bool = False,
     relaxed: bool = False,
+    warn: bool = True,
 ) -> Result:
     """Static equilibrium of ``net`` under ``loads`` scaled by ``factor``.
 
@@ -55,7 +61,9 @@ def solve_static(
     equilibrium by a damped pseudo-transient solve (``_pseudo_transient``; the last rung
     of the cut-back's ladder) instead of Newton directly. ``relaxed``: x0 is at rest
     already (dynamic relaxation's, the ladder's last rung): Newton on the exact potential
-    from it, without the continuation stages (they would move it away).
+    from it, without the continuation stages (they would move it away). ``warn``: log
+    what the equilibrium found is (unstable, nodes on slack edges only; ``warn_state``);
+    False: only the result says it (a load path's solves: the path says it once).
     """
     check_rtol(rtol)
     ws = workspace or Workspace(net, linear=linear)
@@ -91,7 +99,8 @@ def solve_static(
     )
     if result.converged:
         _judge_stability(ws, net, potential, x, out)
-    _warn_loose(ws, net, out)
+    if warn:
+        warn_state(ws, net, out)
     return out
 
 
@@ -143,20 +152,32 @@ def _check_converged(
 def _judge_stability(
     ws: Workspace, net: Net, potential: Potential, x: np.ndarray, out: Result
 ) -> None:
-    """The equilibrium's stability into ``out`` (``stable``, ``diagnosis``; a warning
-    where it is unstable), where it can be lost: free bodies, or bilateral edges."""
+    """The equilibrium's stability into ``out`` (``stable``, ``diagnosis``), where it can
+    be lost: free bodies, or bilateral edges."""
     bodies = body_frames(ws.system)  # a free body may rest unstably on any net
     if bodies or not net.law.all_tension_only:
         out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, potential, x)
         if out.stable is False:
             out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
-                ws.system.stretch, x, ~net.fixed, twisted=has_twist(ws.system)
+                ws.system.stretch,
+                x,
+                ~net.fixed,
+                twisted=has_twist(ws.system),
+                bent=bending_nodes(ws.system),
+                factor=out.time,
             )
-            log.warning(
-                "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
-                "(any disturbance makes the net or a body move away): %s",
-                out.diagnosis,
-            )
+
+
+def warn_state(ws: Workspace, net: Net, out: Result) -> None:
+    """Warnings on the equilibrium ``out``: unstable (its ``diagnosis``), or free nodes
+    hanging on slack edges only."""
+    if out.stable is False:
+        log.warning(
+            "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
+            "(any disturbance makes the net or a body move away): %s",
+            out.diagnosis,
+        )
+    _warn_loose(ws, net, out)
 
 
 def _warn_loose(ws: Workspace, net: Net, out: Result) -> None:

@@ -368,3 +368,63 @@ def test_a_failed_post_collapse_resolve_keeps_the_last_equilibrium(monkeypatch):
     good = failed.value.last_good
     assert good is not None and good.time == 0.5, good
     assert np.array_equal(good.x, first[0])
+
+
+def test_a_mechanism_is_said_once(tmp_path):
+    """Three pinned struts in a row between two supports, a joint pushed along them: a
+    mechanism, which the load path's many solves (its step, the halved steps that judge
+    it) each find unstable. It is said once, by the error (exit 1): no warning on the
+    way, none repeated; a path that ends unstable says so once, at its end."""
+    case = {
+        "title": "three pinned struts in a row",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]],
+            "edges": [[0, 1], [1, 2], [2, 3]],
+            "fixed": [0, 3],
+        },
+        "material": {"EA": 1e6, "tension_only": False},
+        "load": {"point": [{"node": 1, "force": [1000.0, 0.0, 0.0]}]},
+    }
+    r = invoke("run", write(tmp_path, case), "-o", tmp_path / "s.h5")
+    assert r.exit_code == 1, r.output
+    assert "WARNING" not in r.output and r.output.count("catenet: error:") == 1, r.output
+    assert "collapses beyond load factor 0" in r.output
+    # unloaded, the given geometry is the unstable end of the path: said once there
+    r = invoke("run", write(tmp_path, chain(3, 0.0), "chain"), "-o", tmp_path / "c.h5")
+    assert r.exit_code == 1 and r.output.count("negative eigenvalues") == 1, r.output
+
+
+@pytest.mark.parametrize("units", list(UNITS))
+def test_a_rod_beyond_its_euler_load_is_no_mechanism(tmp_path, units):
+    """A pinned rod (EI = 1 N m^2, L = 1 m) precompressed by P: below its Euler load
+    pi^2 EI / L^2 = 9.87 N it stands; beyond it (20 N) the equilibrium is unstable, and
+    the message says the load exceeds a buckling load of the structure as modelled (the
+    load factor reached), never that the rod needs the bending stiffness it has. Without
+    EI, the same strut is a mechanism, and adding EI is the advice."""
+    m, n = UNITS[units]
+
+    def rod(prestress: float, EI: float) -> dict:
+        return {
+            "title": "a pinned rod",
+            "units": units,
+            "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [m, 0, 0], "nodes": 11},
+            "material": {
+                "EA": 1e5 * n,
+                "EI": EI * n * m * m,
+                "prestress": prestress * n,
+                "tension_only": False,
+            },
+        }
+
+    r = invoke("run", write(tmp_path, rod(-5.0, 1.0)), "-o", tmp_path / "a.h5", "-q")
+    assert r.exit_code == 0, r.output
+    r = invoke("run", write(tmp_path, rod(-20.0, 1.0)), "-o", tmp_path / "b.h5", "-q")
+    assert r.exit_code == 1, r.output
+    assert "exceed a buckling (limit) load of the structure as modelled (at load factor 1)" in (
+        r.output
+    )
+    assert "mechanism" not in r.output and "give it bending stiffness" not in r.output
+    r = invoke("run", write(tmp_path, rod(-20.0, 0.0)), "-o", tmp_path / "c.h5", "-q")
+    assert r.exit_code == 1, r.output
+    assert "a mechanism" in r.output and "give it bending stiffness (material.EI" in r.output
