@@ -29,7 +29,9 @@ def verbosity_options(f):
         count=True,
         help="More output (-v: catenet's log, Newton iterations; -vv: the libraries' too).",
     )(f)
-    f = click.option("-q", "--quiet", is_flag=True, help="Only errors.")(f)
+    f = click.option(
+        "-q", "--quiet", is_flag=True, help="Only errors: no summary, no progress, no warnings."
+    )(f)
     return f
 
 
