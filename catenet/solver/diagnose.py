@@ -35,7 +35,11 @@ def has_twist(system: System) -> bool:
 def bending_nodes(system: System) -> np.ndarray | None:
     """(N,) bool: the nodes where a rod's bending stiffness holds the net sideways (a
     hinge's interior node, the far node of a clamped end edge); None without rods."""
-    rods = [t.rods for t in system.terms if t.name == "bending"]
+    if "catenet.terms.bending" not in sys.modules:
+        return None  # none exists before its module loads: not loaded to look
+    from catenet.terms.bending import Bending
+
+    rods = [t.rods for t in system.terms if isinstance(t, Bending)]
     if not rods:
         return None
     held = np.zeros(system.net.n_nodes, bool)
