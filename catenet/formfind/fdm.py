@@ -219,17 +219,27 @@ class _Shape:
             )
         self.factorizations = 0
         self.factored: np.ndarray | None = None  # the q whose D the solver holds
+        self.checked = False  # a solve with these factors passed its check
+        self.weight: np.ndarray | None = None  # the last shape's self-weight (the next start)
         self.kkt_factorizations = 0  # Newton's on the force densities (formfind/newton.py)
         self.solves = 0
         self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
         self.weighs = gravity is not None and bool(np.any(net.line_density > 0))
 
     def solve(self, b: np.ndarray) -> np.ndarray:
+        """D^-1 b for b (n_f, k): the first solve after a factorisation checked (its
+        backward error), the later ones in one call, their values checked finite."""
         self.solves += b.shape[1]
         solver = self.solver
         if solver is None:  # (a net without free nodes has nothing to solve)
             raise RuntimeError("no free nodes: nothing to solve")
-        return np.column_stack([solver.solve(np.ascontiguousarray(c)) for c in b.T])
+        if not self.checked:
+            self.checked = True
+            return np.column_stack([solver.solve(np.ascontiguousarray(c)) for c in b.T])
+        out = solver.solve_many(b)
+        if not np.all(np.isfinite(out)):  # (the checked solve names the nodes)
+            return np.column_stack([solver.solve(np.ascontiguousarray(c)) for c in b.T])
+        return out
 
     def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions (N, 3) and the loads (N, 3) at them, for force densities q."""
@@ -241,22 +251,26 @@ class _Shape:
         self.factored = None
         self.solver.factorize(p.values(q))
         self.factorizations += 1
-        self.factored = q
+        self.factored, self.checked = q, False
         fixed_part = np.zeros((net.n_edges, 3))
         ends = net.edges
         fa, fb = net.fixed[ends[:, 0]], net.fixed[ends[:, 1]]
         fixed_part[fa] -= q[fa, None] * x[ends[fa, 0]]  # -C_x x_x, weighted
         fixed_part[fb] += q[fb, None] * x[ends[fb, 1]]
         rhs_fixed = -p.spread(fixed_part)
+        if self.weighs and self.weight is not None:  # (from the last shape's weight)
+            load = self.force + self.weight
         for _ in range(GRAVITY_ITER):
             x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
             if not self.weighs:
                 return x, load
-            new = self.force + self._weight(x, q)
+            weight = self._weight(x, q)
+            new = self.force + weight
             change = float(np.max(np.abs(new - load)))
             load = new
             if change <= 1e-14 * max(float(np.max(np.abs(new))), 1e-300):
                 x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
+                self.weight = weight
                 return x, load
         raise ConvergenceError(
             f"form finding: the self-weight did not settle after {GRAVITY_ITER} load "

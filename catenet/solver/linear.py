@@ -44,15 +44,8 @@ BACKENDS = ("auto", "pardiso", "scipy")
 MKL_ENV = "CATENET_MKL_RT"  # path of MKL's runtime library (libmkl_rt), overrides the search
 _MKL_ENVS = (MKL_ENV, "PYPARDISO_MKL_RT")
 # The runtime's names: Linux (the mkl wheel ships .so.2 or .so.3), macOS, Windows.
-_MKL_NAMES = (
-    "libmkl_rt.so.3",
-    "libmkl_rt.so.2",
-    "libmkl_rt.so",
-    "libmkl_rt.2.dylib",
-    "libmkl_rt.dylib",
-    "mkl_rt.2.dll",
-    "mkl_rt.dll",
-)
+_MKL_NAMES = ("libmkl_rt.so.3", "libmkl_rt.so.2", "libmkl_rt.so", "libmkl_rt.2.dylib",
+              "libmkl_rt.dylib", "mkl_rt.2.dll", "mkl_rt.dll")  # fmt: skip
 
 
 class MklNotFound(ImportError):
@@ -141,20 +134,15 @@ def mkl_runtime() -> MklRuntime:
 
 def mkl_problem() -> str:
     """Why MKL's runtime cannot be used ('' where it can)."""
-    try:
-        mkl_runtime()
-    except MklNotFound as exc:
-        return str(exc)
-    return ""
+    found = _find_mkl(tuple(os.environ.get(v, "") for v in _MKL_ENVS))
+    return str(found) if isinstance(found, MklNotFound) else ""
 
 
 def pardiso_available() -> bool:
     return not mkl_problem()
 
 
-def _load_pardiso() -> MklRuntime:
-    """MKL's runtime with its ``pardiso`` routine (kept for callers of the old name)."""
-    return mkl_runtime()
+_load_pardiso = mkl_runtime  # (the old name)
 
 
 _warned: set[str] = set()
@@ -249,6 +237,10 @@ class LinearSolver:
         self.seconds["solve"] += time.perf_counter() - start
         self.stats["solve"] += 1
         return x
+
+    def solve_many(self, b: np.ndarray) -> np.ndarray:
+        """A^-1 b for the columns of b (n, k), unchecked (as solve_unchecked)."""
+        return np.column_stack([self._solve(np.ascontiguousarray(c)) for c in b.T])
 
     def solve_unchecked(self, b: np.ndarray) -> np.ndarray:
         """A^-1 b with the factors as they are, unchecked: for a caller that refines the
