@@ -111,7 +111,8 @@ def _steps(d) -> str:
     why = f" ({failed} where they did not converge)" if failed else ""
     return (
         f"; damped steps: {steps['iterative']} by conjugate gradients "
-        f"({steps['iterations']} iterations), {steps['factorizations']} direct{why}"
+        f"({steps['iterations']} iterations), {steps['factorizations']} direct{why}; "
+        f"{steps['products']} products with the Jacobians (a solve each)"
     )
 
 

@@ -169,7 +169,9 @@ class SparseJacobian:
     (``catenet.formfind.damped``), the fallback. ``steps``: counts shared between
     states (how the steps went); ``layout``: the direct step's from the last state."""
 
-    def __init__(self, adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None):
+    def __init__(
+        self, adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None, kept=None
+    ):
         self.adj, self.d_x, self.d_q = adj, d_x.tocsr(), d_q.tocsr()
         self.rq = (d_q @ dq_ds).tocsr()
         self.bs = (adj.bg @ dq_ds).tocsr()
@@ -181,6 +183,7 @@ class SparseJacobian:
             layout = None
         self.layout = layout
         self.steps = new_steps() if steps is None else steps
+        self.kept = {} if kept is None else kept  # (the search's: factors kept between states)
         self._exact: Any = None
         self._rows: Any = False  # (not looked at yet)
         self._t: Any = None  # (the transposes, for rmatvec)
@@ -196,11 +199,13 @@ class SparseJacobian:
         return self._exact
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
+        self.steps["products"] += 1
         v = np.ravel(v)
         out = -(self.d_x @ self.exact().solve(self.bs @ v))
         return out + self.rq @ v if self.rq.nnz else out
 
     def rmatvec(self, z: np.ndarray) -> np.ndarray:
+        self.steps["products"] += 1
         z = np.ravel(z)
         if self._t is None:
             self._t = tuple(m.T.tocsr() for m in (self.rq, self.bs, self.d_x))
@@ -245,11 +250,13 @@ class SparseJacobian:
 
 def new_steps() -> dict:
     """How the damped steps went: taken by conjugate gradients (``iterative``, their
-    ``iterations``, ``iterative_s`` seconds), ``fallbacks`` to the direct step, and D
-    refactorised for a step after a refused trial (``refactorizations``)."""
+    ``iterations``, ``iterative_s`` seconds), ``fallbacks`` to the direct step, D
+    refactorised for a step after a refused trial (``refactorizations``), and the
+    products with J or J^T (``products``: a forward or an adjoint solve each)."""
     return {
         "iterative": 0,
         "iterations": 0,
+        "products": 0,
         "iterative_s": 0.0,
         "fallbacks": 0,
         "refactorizations": 0,
@@ -257,12 +264,13 @@ def new_steps() -> dict:
 
 
 def jacobian_operator(
-    adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None
+    adj: Adjoint, d_x, d_q, dq_ds, groups=None, layout=None, steps=None, kept=None
 ) -> SparseJacobian:
     """J = dr/ds as a SparseJacobian (see there); ``layout``: the damped step's from the
     last state, kept where it fits (its symbolic analysis reused); ``steps``: the counts
-    of the search's damped steps."""
-    return SparseJacobian(adj, d_x, d_q, dq_ds, groups, layout, steps)
+    of the search's damped steps; ``kept``: the search's dict of factors kept between
+    states (the preconditioner's, ``catenet.formfind.krylov.Fixed``)."""
+    return SparseJacobian(adj, d_x, d_q, dq_ds, groups, layout, steps, kept)
 
 
 __all__ = ["Adjoint", "SparseJacobian", "jacobian_dense", "jacobian_operator", "new_steps"]

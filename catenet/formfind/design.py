@@ -93,6 +93,7 @@ class _Search:
         self.best: tuple | None = None
         self.layout = None  # the direct damped step's pattern and solver, kept between states
         self.steps = new_steps()  # how the damped steps went
+        self.kept: dict = {}  # factors kept between states (the iterative step's)
         self.last: SparseJacobian | None = None  # the last sparse Jacobian
 
     def state(self, s: np.ndarray):
@@ -156,7 +157,9 @@ class _Search:
             return jacobian_dense(adj, d_x, d_q, dq_ds)
         if isinstance(self.last, SparseJacobian):  # (its direct step's layout, if made)
             self.layout = self.last.layout or self.layout
-        op = jacobian_operator(adj, d_x, d_q, dq_ds, self.groups, self.layout, self.steps)
+        op = jacobian_operator(
+            adj, d_x, d_q, dq_ds, self.groups, self.layout, self.steps, self.kept
+        )
         self.last = op
         return op
 

@@ -72,7 +72,7 @@ class Exact:
         if now is q or (now is not None and np.array_equal(now, q)):
             return
         shape.solver.factorize(shape.pattern.values(q))  # (a refused trial's factors)
-        shape.factored = q
+        shape.factored, shape.checked = q, False
         self.refactorizations += 1
 
     def _weight(self) -> None:
@@ -149,8 +149,11 @@ class Rows:
         d = (d + sp.triu(d, k=1).T).tocsr()
         self.d_rows = d[node][:, node].tocsr()  # D in the rows' order
         self.e = (jac.d_x @ jac.bs).tocsr()
-        self.lu: Any = None
         self.dd: Any = None  # D^2 in the rows' order
+        kept = jac.kept.get("rows")  # (the factors of the last state's: its analysis)
+        if kept is None or not np.array_equal(kept.node, node):
+            kept = jac.kept["rows"] = Fixed(self.d_rows, node, jac.adj.shape)
+        self.factors = kept
 
     @staticmethod
     def make(jac: SparseJacobian) -> Rows | None:
@@ -170,21 +173,57 @@ class Rows:
 
     def factorize(self, mu: float, keep: np.ndarray) -> None:
         import scipy.sparse as sp
-        from scipy.sparse.linalg import splu
 
         e = self.e @ sp.diags(keep.astype(np.float64))
         ee = (e @ e.T).tocsr()
         floor = 1e-12 * float(ee.diagonal().max(initial=0.0))  # (a node no edge moves)
         if self.dd is None:
             self.dd = (self.d_rows @ self.d_rows).tocsr()
-        s = (ee + mu * self.dd + sp.identity(ee.shape[0]) * floor).tocsc()
+        s = ee + mu * self.dd + sp.identity(ee.shape[0]) * floor
         try:
-            self.lu = splu(s, permc_spec="MMD_AT_PLUS_A")
-        except RuntimeError:
+            self.factors.factorize(s)
+        except SingularSystemError:
             raise NotConverged("its preconditioner is singular") from None
 
     def __call__(self, z: np.ndarray) -> np.ndarray:
-        return self.d_rows @ self.lu.solve(self.d_rows @ z)
+        return self.d_rows @ self.factors.solve(self.d_rows @ z)
+
+
+class Fixed:
+    """The rows' preconditioner's matrix (symmetric positive definite) on a pattern made
+    once per search (D^2's: every pair of nodes two edges apart), factorised by the linear
+    solver layer (PARDISO: its analysis once), refilled per step."""
+
+    def __init__(self, d_rows, node: np.ndarray, shape):
+        import scipy.sparse as sp
+
+        from catenet.solver.linear import make_solver
+
+        ones = d_rows.copy()
+        ones.data[:] = 1.0
+        upper = sp.triu(ones @ ones).tocsr()  # (positive: no entry cancels)
+        upper.sort_indices()
+        n = self.n = upper.shape[0]
+        self.node = node
+        rows = np.repeat(np.arange(n), np.diff(upper.indptr))
+        self.keys = rows * n + upper.indices  # (sorted: CSR by rows, columns sorted)
+        net_node = shape.pattern.free_nodes[node]  # (errors name the net's nodes)
+        self.solver = make_solver(
+            shape.backend, upper.indptr, upper.indices, upper=True, dof_node=net_node, mtype=2
+        )
+
+    def factorize(self, m) -> None:
+        """Factorises the symmetric m (its upper triangle on the pattern)."""
+        m = m.tocoo()
+        up = m.row <= m.col
+        key = m.row[up].astype(np.int64) * self.n + m.col[up]
+        pos = np.minimum(np.searchsorted(self.keys, key), len(self.keys) - 1)
+        if np.any(self.keys[pos] != key):
+            raise SingularSystemError("form finding: the preconditioner left its pattern")
+        self.solver.factorize(np.bincount(pos, m.data[up], len(self.keys)))
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self.solver.solve(b)
 
 
 def cg(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray, int]:

@@ -37,7 +37,7 @@ import numpy as np
 MAX_STEP = 1.0
 FTOL = 1e-12
 MU_FIRST, MU_MIN, MU_MAX = 1e-6, 1e-12, 1e8
-ETA_PATH, ETA_MIN, ETA_MAX = 1e-6, 1e-10, 1e-1  # the iterative step's forcing term
+ETA_PATH, ETA_MIN, ETA_MAX = 1e-6, 1e-10, 0.3  # the iterative step's forcing term
 
 
 @dataclass
