@@ -142,6 +142,12 @@ class TargetConfig(Declared):
         unit="m",
         doc="surface: how far above or below it the nodes may lie (default: on it)",
     )
+    smooth: bool = boolean(
+        False,
+        write="given",
+        doc="surface: a smooth height field through the mesh's vertices (C1: cubic on each "
+        "triangle, its slopes continuous) instead of its flat triangles",
+    )
     tension: Any = key(
         _tension,
         "a number > 0 or a range [low, high]",
@@ -209,7 +215,7 @@ class TargetConfig(Declared):
             return f"cable {self.cable!r} tension"
         what = "point" if self.point is not None else " ".join(self.axes)
         if self.surface is not None:
-            what = f"on {Path(self.surface).name}"
+            what = f"on {Path(self.surface).name}{' (smooth)' if self.smooth else ''}"
             if self.node is None:
                 return f"free nodes {what}"
         return f"node {self.node!r} {what}"
@@ -246,6 +252,9 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
     node_keys = [k for k in (*AXES, "point", "surface") if getattr(tgt, k) is not None]
     if tgt.within is not None and tgt.surface is None:
         ck.add(f"{path}.within = {show(raw['within'])}: only with surface")
+        return False
+    if "smooth" in raw and tgt.surface is None:
+        ck.add(f"{path}.smooth = {str(bool(tgt.smooth)).lower()}: only with surface")
         return False
     if tgt.node is None and tgt.cable is None and tgt.surface is not None:
         return True  # (every free node)

@@ -258,7 +258,7 @@ def _surface(k: int, t, net, nodes: np.ndarray):
 
     path = f"target[{k}].surface"
     try:
-        field = read_height_field(t.surface)
+        field = read_height_field(t.surface, t.smooth)
     except ValueError as exc:
         raise ConfigError(f"{path} = {t.surface!r}: {exc}") from None
     return field

@@ -1,6 +1,9 @@
 """A surface that form finding's targets put nodes on: a triangle mesh read from a file
 (meshio: .stl, .obj, .ply, .vtu, ...), taken as a height field z = f(x, y) over its plan,
-linear on each triangle (an architect's roof surface).
+linear on each triangle (an architect's roof surface), or, ``smooth``, the C1 height
+field through its vertices (matplotlib's Clough-Tocher cubic on each triangle, the
+slopes at the vertices estimated from the neighbouring triangles: continuous slopes, so
+a node crossing from one triangle to the next sees no crease).
 
 A node's offset from it is z - f(x, y), with the derivatives (-f_x, -f_y, 1); a node
 outside the surface's plan has none (``offset`` gives NaN there).
@@ -10,20 +13,25 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 
 class HeightField:
-    """The triangle mesh (``vertices``, ``triangles``) as z = f(x, y)."""
+    """The triangle mesh (``vertices``, ``triangles``) as z = f(x, y): linear on each
+    triangle, or ``smooth`` (C1)."""
 
-    def __init__(self, vertices: np.ndarray, triangles: np.ndarray):
-        from matplotlib.tri import LinearTriInterpolator, Triangulation
+    def __init__(self, vertices: np.ndarray, triangles: np.ndarray, smooth: bool = False):
+        from matplotlib.tri import CubicTriInterpolator, LinearTriInterpolator, Triangulation
 
-        self.vertices, self.triangles = vertices, triangles
+        self.vertices, self.triangles, self.smooth = vertices, triangles, smooth
         tri = Triangulation(vertices[:, 0], vertices[:, 1], triangles)
         tri.get_trifinder()  # (RuntimeError where triangles overlap in plan)
-        self._f = LinearTriInterpolator(tri, vertices[:, 2])
+        if smooth:
+            self._f: Any = CubicTriInterpolator(tri, vertices[:, 2], kind="geom")
+        else:
+            self._f = LinearTriInterpolator(tri, vertices[:, 2])
         self._last: tuple = (None, None)  # (the points' bytes, their offset): one kept
 
     def offset(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -39,17 +47,17 @@ class HeightField:
         return out[0].copy(), out[1].copy()
 
 
-def read_height_field(file: str) -> HeightField:
-    """The height field of a mesh file; ValueError with the reason."""
+def read_height_field(file: str, smooth: bool = False) -> HeightField:
+    """The height field of a mesh file (``smooth``: C1); ValueError with the reason."""
     path = Path(file)
     if not path.is_file():
         raise ValueError(f"{'is a directory' if path.is_dir() else 'no such file'} ({path})")
     stat = path.stat()
-    return _read(str(path), stat.st_mtime_ns, stat.st_size)
+    return _read(str(path), stat.st_mtime_ns, stat.st_size, smooth)
 
 
 @functools.lru_cache(maxsize=4)
-def _read(file: str, mtime: int, size: int) -> HeightField:
+def _read(file: str, mtime: int, size: int, smooth: bool = False) -> HeightField:
     from catenet.scene.meshfiles import read_triangles
 
     v, t = read_triangles(file, "a surface")
@@ -65,7 +73,7 @@ def _read(file: str, mtime: int, size: int) -> HeightField:
             "target surface is a height field z = f(x, y)"
         )
     try:
-        return HeightField(v, t)
+        return HeightField(v, t, smooth)
     except (ValueError, RuntimeError) as exc:
         raise ValueError(f"is not a height field over its plan ({exc})") from None
 

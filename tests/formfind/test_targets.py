@@ -329,6 +329,7 @@ def test_a_roof_of_a_thousand_force_densities_lies_on_its_surface(tmp_path):
         ({"cable": "ring1", "tension": [5.0, 1.0]}, {}, "target[0].tension = [5.0, 1.0]"),
         ({"node": 0, "surface": "nowhere.obj"}, {}, "target[0].surface = 'nowhere.obj': no such"),
         ({"node": 0, "z": 1.0, "within": 0.1}, {}, "target[0].within = 0.1: only with surface"),
+        ({"node": 0, "z": 1.0, "smooth": True}, {}, "target[0].smooth = true: only with surface"),
         ({"node": 0, "z": -3.0}, {"method": "forces", "force": 1.0}, "formfind.method = 'forces'"),
         ({"node": 0, "z": -3.0}, {"force_density_min": 5.0, "force_density_max": 1.0}, "must be >"),
     ],
