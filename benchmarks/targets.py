@@ -15,13 +15,18 @@ analysis of the net found (``catenet run`` on the case it writes: the rest lengt
 carry the forces found, tension-only) under a snow load of SNOW [N/m^2] on its plan, and
 the wall time of one Newton iteration there (the solve's time over its iterations), and
 that of one back-substitution with the factors of the net's D. The ratios are measured
-in the same run. Writes DIR/targets.csv (default benchmarks/results; with --direct,
-every damped step by the direct factorisation, DIR/targets-direct.csv) and prints the
-table.
+in the same run, from CPU times (one thread: a loaded machine's waits left out); the whole
+search is given in Newton iterations too, with its products with J or J^T (one forward or
+adjoint solve each) and its solves with D (back-substitutions: counts the machine does
+not change). Each roof twice: on the surface mesh's flat triangles, and ``smooth`` (the
+C1 height field through its vertices). Writes DIR/targets.csv (default
+benchmarks/results; with --direct, every damped step by the direct factorisation,
+DIR/targets-direct.csv) and prints the table.
 """
 
 from __future__ import annotations
 
+import itertools
 import sys
 import tempfile
 import time
@@ -39,8 +44,9 @@ QUICK_SIZES = (8, 24)
 SNOW = 500.0  # N/m^2 on the plan
 
 
-def roof_row(n: int) -> dict:
-    """One roof: the search, then one static solve of the net found."""
+def roof_row(n: int, smooth: bool = False) -> dict:
+    """One roof (``smooth``: on the C1 height field through the surface mesh's vertices,
+    else on its flat triangles): the search, then one static solve of the net found."""
     import numpy as np
     from scenes import hypar_on_surface
 
@@ -52,13 +58,14 @@ def roof_row(n: int) -> dict:
 
     with tempfile.TemporaryDirectory() as folder:
         data, _ = hypar_on_surface(folder, n)
+        data["target"][0]["smooth"] = smooth
         scene = build(parse_case(data, base_dir=Path(folder)))
         start = time.perf_counter()
-        read_height_field(scene.case.targets[0].surface)  # (read once, then kept)
+        read_height_field(scene.case.targets[0].surface, smooth)  # (read once, then kept)
         read_s = time.perf_counter() - start
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         found = formfind_scene(scene)
-        search_s = time.perf_counter() - start
+        search_s, search_cpu = time.perf_counter() - start, time.process_time() - cpu
     d = found.design
     steps = d.extra.get("steps") or {}
     taken = steps.get("iterative", 0) + steps.get("factorizations", 0)  # (direct: one each)
@@ -78,14 +85,16 @@ def roof_row(n: int) -> dict:
     snow[free, 2] = -SNOW * (24.0 / n) ** 2
     loads = Loads(force=snow, gravity=np.array([0.0, 0.0, -9.81]))
     solve_static(built, loads, workspace=Workspace(built))  # (warm: Numba, PARDISO)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     static = solve_static(built, loads, workspace=Workspace(built))
-    static_s = time.perf_counter() - start
+    static_s, static_cpu = time.perf_counter() - start, time.process_time() - cpu
     per_gradient = search_s / max(d.gradients, 1)
     back_s = back_substitution(found)
     per_newton = static_s / max(static.iterations, 1)
+    newton_cpu = static_cpu / max(static.iterations, 1)  # (the ratios: CPU times, one thread)
     return {
         "force_densities": d.variables,
+        "surface": "smooth" if smooth else "flat triangles",
         "free_nodes": int(np.count_nonzero(free)),
         "met": d.all_met,
         "largest_miss_m": float(np.abs(d.miss()).max()),
@@ -103,7 +112,12 @@ def roof_row(n: int) -> dict:
         "static_iterations": static.iterations,
         "static_converged": bool(static.converged),
         "per_newton_s": per_newton,
-        "gradient_over_newton": per_gradient / per_newton,
+        "search_cpu_s": search_cpu,
+        "per_newton_cpu_s": newton_cpu,
+        "gradient_over_newton": search_cpu / max(d.gradients, 1) / newton_cpu,
+        "search_over_newton": search_cpu / newton_cpu,
+        "products": steps.get("products", 0),
+        "d_solves": found.stats["solves"],
         "step_over_newton": step_s / max(taken, 1) / per_newton,
     }
 
@@ -156,18 +170,21 @@ def main(out_dir: Path, quick: bool, direct: bool) -> None:
     set_threads(1)
     roof_row(16)  # (warm: Numba's caches, MKL, the imports of the sparse steps)
     rows = []
-    for n in QUICK_SIZES if quick else SIZES:
-        rows.append(roof_row(n))
+    for n, smooth in itertools.product(QUICK_SIZES if quick else SIZES, (False, True)):
+        rows.append(roof_row(n, smooth))
         r = rows[-1]
         click.echo(
-            f"{r['force_densities']:>6} force densities: {r['gradients']} gradients "
+            f"{r['force_densities']:>6} force densities ({r['surface']}): "
+            f"{r['gradients']} gradients "
             f"({'met' if r['met'] else 'NOT met'}: largest miss {r['largest_miss_m']:.1e} m), "
             f"{r['search_s']:.2f} s, "
             f"{r['per_gradient_s'] * 1e3:.0f} ms per gradient; damped step "
             f"{r['per_step_s'] * 1e3:.0f} ms ({r['cg_iterations']} CG iterations in "
             f"{r['steps']} steps, {r['steps_direct']} direct); Newton iteration "
             f"{r['per_newton_s'] * 1e3:.1f} ms: gradient / "
-            f"Newton {r['gradient_over_newton']:.1f}, step / Newton "
+            f"Newton {r['gradient_over_newton']:.1f} (CPU; the search "
+            f"{r['search_over_newton']:.0f} Newton iterations, {r['products']} products with "
+            f"J or J^T, {r['d_solves']} solves with D), step / Newton "
             f"{r['step_over_newton']:.1f}; a back-substitution with D "
             f"{r['back_substitution_s'] * 1e3:.2f} ms (Newton / it "
             f"{r['newton_over_back_substitution']:.0f})"
