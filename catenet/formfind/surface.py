@@ -23,16 +23,41 @@ class HeightField:
     triangle, or ``smooth`` (C1)."""
 
     def __init__(self, vertices: np.ndarray, triangles: np.ndarray, smooth: bool = False):
-        from matplotlib.tri import CubicTriInterpolator, LinearTriInterpolator, Triangulation
+        from matplotlib.tri import CubicTriInterpolator, Triangulation
 
         self.vertices, self.triangles, self.smooth = vertices, triangles, smooth
         tri = Triangulation(vertices[:, 0], vertices[:, 1], triangles)
-        tri.get_trifinder()  # (RuntimeError where triangles overlap in plan)
+        self._finder = tri.get_trifinder()  # (RuntimeError where triangles overlap in plan)
+        self._f: Any = None
         if smooth:
-            self._f: Any = CubicTriInterpolator(tri, vertices[:, 2], kind="geom")
-        else:
-            self._f = LinearTriInterpolator(tri, vertices[:, 2])
+            self._f = CubicTriInterpolator(tri, vertices[:, 2], kind="geom")
+        a, b, c = (vertices[triangles[:, k]] for k in range(3))
+        # Each triangle's plane z = p0 x + p1 y + p2, and its barycentric map (the test of
+        # whether a point is still in the triangle it was last found in).
+        m = np.stack([np.column_stack([v[:, 0], v[:, 1], np.ones(len(v))]) for v in (a, b, c)], 1)
+        rhs = np.column_stack([a[:, 2], b[:, 2], c[:, 2]])[:, :, None]
+        self._plane = np.linalg.solve(m, rhs)[:, :, 0]
+        self._bary = np.linalg.inv(m)  # (barycentric weights: (x, y, 1) @ inv)
         self._last: tuple = (None, None)  # (the points' bytes, their offset): one kept
+        self._found = np.zeros(0, dtype=np.int64)  # the last points' triangles
+
+    def _triangles(self, x: np.ndarray) -> np.ndarray:
+        """The triangle under each point (-1: none): a point still inside the one it was
+        last found in keeps it; the others are sought anew."""
+        n = len(x)
+        tri = np.full(n, -1, dtype=np.int64)
+        last = self._found if len(self._found) == n else np.full(n, -1, dtype=np.int64)
+        had = np.flatnonzero(last >= 0)
+        if had.size:
+            h = np.column_stack([x[had, 0], x[had, 1], np.ones(had.size)])
+            w = np.einsum("ij,ijk->ik", h, self._bary[last[had]])
+            inside = np.all(w >= 0.0, axis=1)
+            tri[had[inside]] = last[had[inside]]
+        seek = np.flatnonzero(tri < 0)
+        if seek.size:
+            tri[seek] = self._finder(x[seek, 0], x[seek, 1])
+        self._found = tri
+        return tri
 
     def offset(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(z - f(x, y), (f_x, f_y)) at the points x (n, 3); NaN outside the plan. The
@@ -40,9 +65,22 @@ class HeightField:
         key = np.ascontiguousarray(x, dtype=np.float64).tobytes()
         if self._last[0] == key:
             return self._last[1][0].copy(), self._last[1][1].copy()
-        z = np.ma.filled(self._f(x[:, 0], x[:, 1]), np.nan)
-        fx, fy = (np.ma.filled(g, np.nan) for g in self._f.gradient(x[:, 0], x[:, 1]))
-        out = (x[:, 2] - z, np.column_stack([fx, fy]))
+        tri = self._triangles(x)
+        on = tri >= 0
+        z = np.full(len(x), np.nan)
+        grad = np.full((len(x), 2), np.nan)
+        if self._f is None:
+            p = self._plane[tri[on]]
+            z[on] = p[:, 0] * x[on, 0] + p[:, 1] * x[on, 1] + p[:, 2]
+            grad[on] = p[:, :2]
+        elif on.any():
+            keys = ("z", "dzdx", "dzdy")
+            # (matplotlib's one evaluation of all three at known triangles)
+            got = self._f._interpolate_multikeys(
+                x[on, 0], x[on, 1], tri_index=tri[on], return_keys=keys
+            )
+            z[on], grad[on, 0], grad[on, 1] = (np.ma.filled(g, np.nan) for g in got)
+        out = (x[:, 2] - z, grad)
         self._last = (key, out)
         return out[0].copy(), out[1].copy()
 

@@ -165,3 +165,36 @@ def test_a_shape_after_another_is_the_shape_found_afresh(tmp_path, weighs):
     x_fresh, load_fresh = fresh(q2)
     assert np.abs(x_after - x_fresh).max() <= 1e-12 * np.abs(x_fresh).max()
     assert np.abs(load_after - load_fresh).max() <= 1e-12 * max(np.abs(load_fresh).max(), 1.0)
+
+
+@pytest.mark.parametrize("smooth", [False, True])
+def test_offsets_follow_points_from_triangle_to_triangle(tmp_path, smooth):
+    """The field keeps each point's last triangle and seeks anew only those that left it:
+    points moved across many triangles, some onto the mesh's vertices, some off its plan,
+    give matplotlib's interpolants' values and slopes (NaN off the plan)."""
+    from matplotlib.tri import CubicTriInterpolator, LinearTriInterpolator, Triangulation
+
+    hypar_on_surface(tmp_path, 6)
+    field = read_height_field(str(tmp_path / "surface.obj"), smooth)
+    v, t = field.vertices, field.triangles
+    tri = Triangulation(v[:, 0], v[:, 1], t)
+    f = (
+        CubicTriInterpolator(tri, v[:, 2], kind="geom")
+        if smooth
+        else LinearTriInterpolator(tri, v[:, 2])
+    )
+    rng = np.random.default_rng(4)
+    p = np.column_stack([rng.uniform(-11.9, 11.9, (60, 2)), rng.uniform(-1.0, 1.0, 60)])
+    for step in range(4):
+        if step:
+            p[:, :2] += rng.uniform(-3.0, 3.0, (60, 2))
+            p[:5, :2] = v[rng.integers(len(v), size=5), :2]
+        got, grad = field.offset(p)
+        z = np.ma.filled(f(p[:, 0], p[:, 1]), np.nan)
+        off = np.isnan(z)
+        assert np.array_equal(np.isnan(got), off)
+        assert np.abs(got[~off] - (p[~off, 2] - z[~off])).max() <= 1e-12
+        inner = ~off
+        inner[:5] = False  # (on a vertex the slope is one of its triangles')
+        slopes = np.column_stack([np.ma.filled(g, np.nan) for g in f.gradient(p[:, 0], p[:, 1])])
+        assert np.abs(grad[inner] - slopes[inner]).max() <= 1e-12
