@@ -42,8 +42,9 @@ class HeightField:
         self._found = np.zeros(0, dtype=np.int64)  # the last points' triangles
 
     def _triangles(self, x: np.ndarray) -> np.ndarray:
-        """The triangle under each point (-1: none): a point still inside the one it was
-        last found in keeps it; the others are sought anew."""
+        """The triangle under each point (-1: none): a point still strictly inside the
+        one it was last found in keeps it (the only one under it: the same as the trifinder
+        gives, whatever came before); the others are sought anew."""
         n = len(x)
         tri = np.full(n, -1, dtype=np.int64)
         last = self._found if len(self._found) == n else np.full(n, -1, dtype=np.int64)
@@ -51,7 +52,7 @@ class HeightField:
         if had.size:
             h = np.column_stack([x[had, 0], x[had, 1], np.ones(had.size)])
             w = np.einsum("ij,ijk->ik", h, self._bary[last[had]])
-            inside = np.all(w >= 0.0, axis=1)
+            inside = np.all(w > 1e-12, axis=1)  # (on an edge or a vertex: sought anew)
             tri[had[inside]] = last[had[inside]]
         seek = np.flatnonzero(tri < 0)
         if seek.size:
