@@ -15,8 +15,8 @@ Where every row reads the position of its own free node (a surface, a coordinate
 free node) the rows' system is preconditioned: moving D^-1 past the rows' per-node
 directions N (N A^-1 ~ D^-1 N, exact where N is the same at neighbouring nodes and the
 weight is light) gives J J^T ~ D^-1 E E^T D^-1 with E = N Bs, sparse (D's pattern), so
-M^-1 = D (E E^T + mu D^2)^-1 D (exact in its mu part): one sparse factorisation of D's
-size (D^2's pattern) per step.
+M^-1 = D (E E^T + mu D^2)^-1 D (exact in its mu part): one sparse Cholesky factorisation
+of D's size per step (``Fixed``: D^2's pattern, made and analysed once per search).
 
 Below ``FROM_DOFS`` free DOFs the direct step is the faster (benchmarks/targets.py: the
 saddle point is small, the back-substitutions' fixed cost large) and is taken at once.
