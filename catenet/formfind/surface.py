@@ -76,10 +76,11 @@ class HeightField:
             grad[on] = p[:, :2]
         elif on.any():
             keys = ("z", "dzdx", "dzdy")
-            # (matplotlib's one evaluation of all three at known triangles)
-            got = self._f._interpolate_multikeys(
-                x[on, 0], x[on, 1], tri_index=tri[on], return_keys=keys
-            )
+            multikeys = getattr(self._f, "_interpolate_multikeys", None)
+            if multikeys is not None:  # matplotlib's one evaluation of all three
+                got = multikeys(x[on, 0], x[on, 1], tri_index=tri[on], return_keys=keys)
+            else:  # (its public calls, should a version drop that one)
+                got = (self._f(x[on, 0], x[on, 1]), *self._f.gradient(x[on, 0], x[on, 1]))
             z[on], grad[on, 0], grad[on, 1] = (np.ma.filled(g, np.nan) for g in got)
         out = (x[:, 2] - z, grad)
         self._last = (key, out)

@@ -167,15 +167,31 @@ def test_a_shape_after_another_is_the_shape_found_afresh(tmp_path, weighs):
     assert np.abs(load_after - load_fresh).max() <= 1e-12 * max(np.abs(load_fresh).max(), 1.0)
 
 
-@pytest.mark.parametrize("smooth", [False, True])
-def test_offsets_follow_points_from_triangle_to_triangle(tmp_path, smooth):
+class PublicCalls:
+    """An interpolant seen through its public calls alone."""
+
+    def __init__(self, f):
+        self._f = f
+
+    def __call__(self, x, y):
+        return self._f(x, y)
+
+    def gradient(self, x, y):
+        return self._f.gradient(x, y)
+
+
+@pytest.mark.parametrize("smooth, public", [(False, False), (True, False), (True, True)])
+def test_offsets_follow_points_from_triangle_to_triangle(tmp_path, monkeypatch, smooth, public):
     """The field keeps each point's last triangle and seeks anew only those that left it:
     points moved across many triangles, some onto the mesh's vertices, some off its plan,
-    give matplotlib's interpolants' values and slopes (NaN off the plan)."""
+    give matplotlib's interpolants' values and slopes (NaN off the plan). ``public``:
+    also with matplotlib's public calls alone (should a version drop its private one)."""
     from matplotlib.tri import CubicTriInterpolator, LinearTriInterpolator, Triangulation
 
     hypar_on_surface(tmp_path, 6)
     field = read_height_field(str(tmp_path / "surface.obj"), smooth)
+    if public:
+        monkeypatch.setattr(field, "_f", PublicCalls(field._f))
     v, t = field.vertices, field.triangles
     tri = Triangulation(v[:, 0], v[:, 1], t)
     f = (
