@@ -131,6 +131,65 @@ def rotational_springs(case: Case, built: Any) -> dict[int, float]:
     return out
 
 
+def rod_end_springs(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Any:
+    """The rod ends on 6x6 springs (``[[supports.spring]]`` with a 6x6 stiffness) as an
+    ``Elastic`` of ``catenet.model.rodends.RodEnds`` (None: none); a ConfigError for a
+    node that is no rod end, clamped or on a rotational spring too, or a twist held on a
+    rod that twists."""
+    from catenet.case.supports import is_six
+    from catenet.model.guides import Elastic
+    from catenet.model.rodends import RodEnds, end_stiffness, spring6_matrix, twist_held
+    from catenet.model.rods import rod_ends, rod_hinges
+
+    given = [(k, s) for k, s in enumerate(case.supports.springs) if is_six(s.stiffness)]
+    if not given:
+        return None
+    ei, gj, _, line = _per_edge(case, built, net)
+    hinges = rod_hinges(net.edges, line, ei > 0.0)[:, 2:]
+    total: dict[int, np.ndarray] = {}
+    where: dict[int, str] = {}
+    sprung = rotational_springs(case, built)
+    for k, spring in given:
+        path = f"supports.spring[{k}]"
+        k6 = spring6_matrix([list(r) if isinstance(r, tuple) else r for r in spring.stiffness])
+        if k6 is None:  # checked when the case was read
+            raise ConfigError(f"{path}.stiffness: not a 6x6")
+        for node in [i for r in spring.nodes for i in expand(r, built.names, built.sets or {})]:
+            other = "supports.clamped" if node in clamped else None
+            other = "supports.rotational" if node in sprung else other
+            if other is not None:
+                raise ConfigError(
+                    f"{path}.nodes: node {node} is in {other} too: a rod end on a 6x6 "
+                    "spring is held by it alone (its position and direction)"
+                )
+            total[node] = total.get(node, np.zeros((6, 6))) + k6
+            where.setdefault(node, path)
+    nodes = np.asarray(list(total), dtype=np.int64)
+    found = [
+        rod_ends(net, ei, hinges, nodes[i : i + 1], f"{where[int(n)]}.nodes", "a 6x6 spring's node")
+        for i, n in enumerate(nodes)
+    ]
+    pairs, tangent, edge = (np.concatenate(part) for part in zip(*found, strict=True))
+    stiffness = np.stack([total[int(n)] for n in nodes])
+    for n, t, e, k6 in zip(nodes, tangent, edge, stiffness, strict=True):
+        if gj[e] > 0.0 and twist_held(k6, t) > 0.0:
+            raise ConfigError(
+                f"{where[int(n)]}.stiffness: node {int(n)} is the end of a rod that twists "
+                "(GJ > 0) and the 6x6 holds its twist about the rod's axis "
+                f"({twist_held(k6, t):.6g} N m/rad): a rod untwists at a spring (only a clamp "
+                "holds its twist): give that rod GJ = 0 or the 6x6 no stiffness about the "
+                "rod's axis"
+            )
+    series = np.stack(
+        [
+            end_stiffness(k6, t, ei[e], net.rest_length[e])
+            for k6, t, e in zip(stiffness, tangent, edge, strict=True)
+        ]
+    )
+    ends = RodEnds(pairs[:, 0].copy(), pairs[:, 1].copy(), tangent, stiffness, series)
+    return Elastic.rod_ends(ends)
+
+
 def bending_term(rods: Rods, n_nodes: int) -> Bending:
     """The rods' ``Bending`` term (its kernels load only for a case with rods)."""
     from catenet.terms.bending import Bending

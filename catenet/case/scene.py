@@ -28,6 +28,7 @@ from catenet.case.rods import (
     case_torsion,
     case_twist,
     clamped_nodes,
+    rod_end_springs,
     with_clamps,
 )
 from catenet.case.shapes import check_motion
@@ -74,7 +75,8 @@ def _build(case: Case) -> Scene:
     clamped = clamped_nodes(case, built)
     flies = built.net.flies and case.solver.method == "dynamic"
     net = with_clamps(built.net, clamped)
-    net = with_partial_supports(case.supports, net, built.names, built.sets or {}, flies)
+    ends = rod_end_springs(case, built, net, clamped)
+    net = with_partial_supports(case.supports, net, built.names, built.sets or {}, flies, ends)
     rods = case_rods(case, built, net, clamped)
     point_mass, velocity = point_masses(case.masses, net, built.names, built.sets)
     if point_mass is not None:

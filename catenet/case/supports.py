@@ -86,11 +86,14 @@ def _direction(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 
 def _stiffness(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
-    """[kx, ky, kz] >= 0 (not all 0), or a symmetric positive semidefinite 3x3 [N/m]."""
+    """[kx, ky, kz] >= 0 (not all 0), or a symmetric positive semidefinite 3x3 [N/m]; at
+    a rod end also a 6x6 or [kx, ky, kz, krx, kry, krz] (``catenet.model.rodends``)."""
     from catenet.model.guides import spring_matrix
+    from catenet.model.rodends import spring6_matrix
 
     try:
-        spring_matrix(v, path)
+        if spring6_matrix(v, path) is None:
+            spring_matrix(v, path)
     except ConfigError as exc:
         ck.problems.extend(exc.problems)
         return BAD
@@ -140,10 +143,13 @@ class SpringConfig(Declared):
     nodes: tuple[NodeRef, ...] = _guide_nodes("on springs")
     stiffness: Any = key(
         _stiffness,
-        "[kx, ky, kz] >= 0, not all 0, or a symmetric positive semidefinite 3x3",
+        "[kx, ky, kz] >= 0, not all 0, or a symmetric positive semidefinite 3x3; at a rod "
+        "end also a 6x6 or [kx, ky, kz, krx, kry, krz]",
         missing="[kx, ky, kz] [N/m]",
         unit="N/m",
-        doc="per node: kx, ky, kz along x, y and z, or a 3x3 matrix of rows (kxx, kxy, kxz) ...",
+        doc="per node: kx, ky, kz along x, y and z, or a 3x3 matrix of rows (kxx, kxy, kxz) "
+        "...; at a rod end (EI > 0) a 6x6 of rows for x, y, z, rx, ry, rz (N/m, N/rad, "
+        "N m/rad: translation and rotation coupled) or its diagonal",
     )
 
 
@@ -180,12 +186,23 @@ class TwistConfig(Declared):
     )
 
 
+def is_six(stiffness: Any) -> bool:
+    """Whether a sound ``supports.spring`` stiffness is a rod end's 6x6 (or its diagonal)."""
+    return len(stiffness) == 6
+
+
 def with_partial_supports(
-    supports: Any, net: Net, names: Mapping, sets: Mapping, flies: bool = False
+    supports: Any,
+    net: Net,
+    names: Mapping,
+    sets: Mapping,
+    flies: bool = False,
+    ends: Any = None,
 ) -> Net:
     """The net with the case's rollers, sliders and springs (``supports``, a sound
-    ``SupportsConfig``; node references resolved by ``names`` and ``sets``), every part
-    of it supported (``flies``: a dynamic run, where none need be)."""
+    ``SupportsConfig``; node references resolved by ``names`` and ``sets``; ``ends`` the
+    rod ends on 6x6 springs, an ``Elastic``, ``catenet.case.rods.rod_end_springs``),
+    every part of it supported (``flies``: a dynamic run, where none need be)."""
     from catenet.case.kinds.base import expand
     from catenet.model.guides import Elastic, Guides
 
@@ -203,7 +220,10 @@ def with_partial_supports(
     springs = [
         Elastic.of(nodes(t.nodes), t.stiffness, f"supports.spring[{k}].stiffness")
         for k, t in enumerate(supports.springs)
+        if not is_six(t.stiffness)
     ]
+    if ends is not None:
+        springs.append(ends)
     if guides:
         net = net.with_guides(*guides)
     if springs:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.rodends import RodEnds
 
 #: A normal or direction shorter than this (relative to its largest component's scale)
 #: names no direction.
@@ -160,10 +161,12 @@ class Guides:
 class Elastic:
     """Elastic supports: ``nodes`` (K,) each held toward its given position by a linear
     spring of stiffness ``stiffness`` (K, 3, 3) [N/m], symmetric positive semidefinite
-    (diagonal: kx, ky, kz). A node may have several (they add)."""
+    (diagonal: kx, ky, kz). A node may have several (they add). ``ends``: rod ends on
+    coupled 6 x 6 supports (``catenet.model.rodends``), None where there are none."""
 
     nodes: np.ndarray
     stiffness: np.ndarray
+    ends: RodEnds | None = None
 
     @classmethod
     def of(cls, nodes, stiffness, what: str = "stiffness") -> Elastic:
@@ -174,16 +177,29 @@ class Elastic:
 
     @classmethod
     def join(cls, parts) -> Elastic | None:
-        parts = [p for p in parts if p is not None and p.nodes.size]
+        parts = [p for p in parts if p is not None and len(p)]
         if not parts:
             return None
         return cls(
             np.concatenate([p.nodes for p in parts]),
             np.concatenate([p.stiffness for p in parts]),
+            RodEnds.join([p.ends for p in parts]),
         )
 
+    @classmethod
+    def rod_ends(cls, ends: RodEnds) -> Elastic:
+        """Rod ends on 6 x 6 supports alone (no translational spring)."""
+        return cls(np.zeros(0, np.int64), np.zeros((0, 3, 3)), ends)
+
     def __len__(self) -> int:
-        return int(self.nodes.size)
+        return int(self.nodes.size) + (0 if self.ends is None else len(self.ends))
+
+    @property
+    def held(self) -> np.ndarray:
+        """Every node these springs hold (the rod ends' included)."""
+        if self.ends is None:
+            return self.nodes
+        return np.concatenate([self.nodes, self.ends.nodes])
 
     def check(self, n: int) -> list[str]:
         """Problems of these springs on a net of ``n`` nodes."""
@@ -193,13 +209,15 @@ class Elastic:
         bad = nodes[(nodes < 0) | (nodes >= n)]
         if bad.size:
             return [f"springs: node {int(bad[0])}: node indices must be in 0..{n - 1}"]
-        return []
+        return [] if self.ends is None else self.ends.check(n)
 
     def same_as(self, other: Elastic | None) -> bool:
         return (
             other is not None
             and np.array_equal(self.nodes, other.nodes)
             and np.array_equal(self.stiffness, other.stiffness)
+            and (self.ends is None) == (other.ends is None)
+            and (self.ends is None or self.ends.same_as(other.ends))
         )
 
 

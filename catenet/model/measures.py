@@ -90,8 +90,8 @@ def support_force(system, x: np.ndarray) -> np.ndarray | None:
         return None
     out = np.zeros_like(x)
     for term in held:
-        term.gradient(x, out)
-    return np.negative(out, out=out)
+        term.held_force(x, out)
+    return out
 
 
 def contact_force(system, x: np.ndarray) -> np.ndarray:

@@ -304,9 +304,10 @@ class Net:
         """(N,) bool: the nodes a support holds in some direction (fixed, guided or on
         a spring)."""
         mask = self.fixed.copy()
-        for part in (self.guides, self.springs):
-            if part is not None:
-                mask[part.nodes] = True
+        if self.guides is not None:
+            mask[self.guides.nodes] = True
+        if self.springs is not None:
+            mask[self.springs.held] = True
         return mask
 
     def components(self) -> np.ndarray:

@@ -162,9 +162,25 @@ def _clamps(net: Net, EI: np.ndarray, hinges: np.ndarray, clamped, key: str):
     """The clamps' (node, other node) pairs, held tangents, EI and rest lengths; a
     ConfigError naming each clamped node that is no rod end."""
     nodes = np.zeros(0, np.int64) if clamped is None else np.asarray(clamped, np.int64)
+    pairs, tangent, edge = rod_ends(net, EI, hinges, nodes, key)
+    return (
+        pairs,
+        tangent,
+        np.ascontiguousarray(EI[edge]),
+        np.ascontiguousarray(net.rest_length[edge]),
+    )
+
+
+def rod_ends(
+    net: Net, EI: np.ndarray, hinges: np.ndarray, nodes: np.ndarray, key: str,
+    role: str = "a clamped node",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Each rod end of ``nodes``: (K, 2) its node and the other node of its end edge, (K,
+    3) the edge's given unit direction from the end, (K,) the edge; a ConfigError naming
+    ``key`` for each node that is no rod end (``role`` says what it is meant to be)."""
     interior = set(hinges[:, 1].tolist())
     pairs, problems = [], []
-    for c in nodes.tolist():
+    for c in np.asarray(nodes, np.int64).tolist():
         ends = [e for e in np.flatnonzero(EI > 0.0) if c in net.edges[e]]
         if c in interior or len(ends) != 1:
             why = (
@@ -175,8 +191,8 @@ def _clamps(net: Net, EI: np.ndarray, hinges: np.ndarray, clamped, key: str):
                 else f"the end of {len(ends)} rods (a joint)"
             )
             problems.append(
-                f"{key}: node {c} is {why}: a clamped node must be the end of exactly one "
-                "rod (an edge with EI > 0, the first or last of its line)"
+                f"{key}: node {c} is {why}: {role} must be the end of exactly one rod (an "
+                "edge with EI > 0, the first or last of its line)"
             )
             continue
         e = int(ends[0])
@@ -190,8 +206,7 @@ def _clamps(net: Net, EI: np.ndarray, hinges: np.ndarray, clamped, key: str):
     return (
         np.ascontiguousarray(arr[:, :2]),
         np.ascontiguousarray(t, dtype=np.float64),
-        np.ascontiguousarray(EI[arr[:, 2]]),
-        np.ascontiguousarray(net.rest_length[arr[:, 2]]),
+        np.ascontiguousarray(arr[:, 2]),
     )
 
 

@@ -4,7 +4,9 @@ tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
 ``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
 ``bending_moment`` and ``curvature`` per node (``twisting_moment`` per edge where they
-twist), velocities and the newmark scheme's acceleration where the run keeps them, each
+twist; ``reaction_moment`` per node where a support holds a rod end's direction: a
+clamp, a rotational or a 6x6 spring), velocities and the newmark scheme's acceleration
+where the run keeps them, each
 edge's ``utilisation`` (and ``peak_utilisation`` from its peak tension; per cable
 ``cable_max_utilisation``; NaN where no breaking load is given: ``catenet.model.design``)
 and the attributes a user reads first (``catenet.model.summary``)."""
@@ -85,6 +87,9 @@ def write_result_group(
         g.create_dataset("twisting_moment", data=twisting)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
+    moments = _support_moments(scene, res.x, rods)
+    if moments is not None:  # at rod ends held in direction, 0 elsewhere [N m]
+        g.create_dataset("reaction_moment", data=moments)
     if scene.design is not None and scene.design.anchored:  # |R| / capacity per node
         g.create_dataset("support_utilisation", data=scene.design.support_utilisation(reaction))
     contact = res.contact_force
@@ -100,6 +105,15 @@ def write_result_group(
     for key, value in {**result_attrs(res, scene, tension), **attrs}.items():
         g.attrs[key] = value
     return g
+
+
+def _support_moments(scene: Scene, x, rods) -> np.ndarray | None:
+    """(N, 3) the supports' moments on the rod ends (None: no support holds one)."""
+    if rods is None and (scene.net.springs is None or scene.net.springs.ends is None):
+        return None
+    from catenet.terms.rodends import support_moments
+
+    return support_moments(scene.net, rods, x)
 
 
 def utilisation(scene: Scene, tension: np.ndarray) -> np.ndarray:

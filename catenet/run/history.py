@@ -113,7 +113,12 @@ class Recorder:
         grad += springs
         force = self.scene.loads.external_force(net, time=t)
         support = self.layout.reaction_nodes
-        held = np.negative(springs) if self.held else None  # the springs' force on the net
+        held = None
+        if self.held:  # the springs' force on the net, as the reactions count it
+            held = np.zeros_like(springs)
+            for term, j in self.terms:
+                if j == -2:
+                    term.held_force(x, held)
         out = {"reaction": measures.reaction(net, grad, force, held)[support]}
         out["contact"] = -owned[:, : self.n_net].sum(axis=1)  # on the net's own nodes
         if self.cables:

@@ -105,12 +105,21 @@ class Workspace:
 
 
 def support_terms(net: Net) -> tuple[Term, ...]:
-    """The terms of a net's elastic supports (``Net.springs``), every solve's."""
-    if net.springs is None:
+    """The terms of a net's elastic supports (``Net.springs``: translational springs, rod
+    ends on 6x6 springs), every solve's."""
+    springs = net.springs
+    if springs is None:
         return ()
-    from catenet.terms.supports import ElasticSupport
+    out: list[Term] = []
+    if springs.nodes.size:
+        from catenet.terms.supports import ElasticSupport
 
-    return (ElasticSupport(net),)
+        out.append(ElasticSupport(net))
+    if springs.ends is not None:
+        from catenet.terms.rodends import RodEndSupport
+
+        out.append(RodEndSupport(springs.ends, net.nodes, net.n_nodes))
+    return tuple(out)
 
 
 def check_rtol(rtol: float) -> None:

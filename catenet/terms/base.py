@@ -214,6 +214,14 @@ class Term:
         """(``medium`` terms) (dissipated, work) of the accepted step x_old -> x_new."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
 
+    def held_force(self, x: np.ndarray, out: np.ndarray) -> None:
+        """(``holds`` terms) Adds to ``out`` (N, 3) the force the support exerts on the
+        net as the reactions count it: minus its gradient (a rod end's 6x6 spring: the
+        wrench's force at its node, ``catenet.terms.rodends``)."""
+        grad = np.zeros_like(out)
+        self.gradient(x, grad)
+        out -= grad
+
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time
         step (``time``: the step's end, ``start``: its start, the time of x) with the

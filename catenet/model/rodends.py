@@ -1,0 +1,158 @@
+"""Rod ends on a coupled 6 x 6 elastic support (``[[supports.spring]]`` with a 6x6
+``stiffness``): a foundation that holds a rod's end node and its direction at once,
+translation and rotation coupled, in any orientation.
+
+The support's stiffness K (6 x 6, world axes, symmetric positive semidefinite) acts on
+q = (u, theta): u = x - X the end node's displacement [m] and theta its rotation [rad],
+K = [[K_uu, K_ut], [K_tu, K_tt]] with K_uu [N/m], K_ut [N/rad] and K_tt [N m/rad]: the
+support's force on the rod is -(K q)_u, its moment -(K q)_t.
+
+The rod's end is a node c and its end edge (c, o) of given direction t0. The rotation of
+the foot, theta_f, is not a DOF: the end edge's direction t turns from t0 by the foot's
+turn plus the rod's own bending over the half edge next to the foot, whose rotational
+stiffness is 2 EI / l (the clamp of ``catenet.model.rods``: EI / l |t - t0|^2). The foot
+is eliminated exactly (a Schur complement, once) from
+
+    U = 1/2 q_f^T K q_f + 1/2 (2 EI / l) |w - P theta_f|^2,   q_f = (u, theta_f),
+
+w the end edge's turn (``catenet.terms.rodends``: (t0 x t) / cos(theta / 2), of length
+|t - t0| = 2 sin(theta / 2)), P = 1 - t0 t0^T: U = 1/2 (u, w)^T S (u, w). A rigid K gives
+the clamp (the end edge's own bending only), a zero one a free end, and so the foot
+turns (K^-1 wrench)_t to O(l^2) under a small load. The rod's twist about t0 is not
+held: the foot's twist is the free direction of theta_f (the rod untwists there, as at
+``supports.rotational``), which eliminates K's twist row and column by the same Schur
+complement; a rod that twists (GJ > 0) is refused a twist stiffness (``twist_held``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from catenet.errors import ConfigError
+
+#: Eigenvalues of a 6x6 below -SYMMETRY x its largest entry are not round-off.
+SYMMETRY = 1e-12
+
+
+def spring6_matrix(stiffness, what: str = "stiffness") -> np.ndarray | None:
+    """The 6 x 6 of ``stiffness`` if it is one (None: not an array of six), a 6x6 or
+    [kx, ky, kz, krx, kry, krz] (uncoupled, along x, y, z), checked:
+    finite, symmetric, positive semidefinite and not zero; a ConfigError naming
+    ``what`` otherwise."""
+    from catenet.model.limits import MAGNITUDE
+
+    rows = stiffness if isinstance(stiffness, (list, tuple)) else None
+    if rows is None or len(rows) != 6:
+        return None
+    shown = np.asarray(stiffness, dtype=object).tolist()
+    accepted = (
+        "a 6x6 [[k_uu, k_ut], [k_tu, k_tt]] (rows for x, y, z, rx, ry, rz: N/m, N/rad and "
+        "N m/rad) must be symmetric, positive semidefinite, finite and not zero"
+    )
+    try:
+        k = np.asarray(stiffness, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{what} = {shown!r}: six rows of six numbers: {accepted}") from None
+    if k.shape == (6,):  # [kx, ky, kz, krx, kry, krz]: uncoupled, along the world axes
+        if not np.all(k >= 0.0):
+            raise ConfigError(f"{what} = {shown!r}: [kx, ky, kz, krx, kry, krz] must be >= 0")
+        k = np.diag(k)
+    if k.shape != (6, 6):
+        raise ConfigError(f"{what}: shape {k.shape}, not (6, 6): {accepted}")
+    if not np.all(np.isfinite(k)) or np.abs(k).max() > MAGNITUDE:
+        raise ConfigError(f"{what} = {shown!r}: {accepted}")
+    scale = float(np.abs(k).max())
+    if scale == 0.0:
+        raise ConfigError(f"{what}: all zero: {accepted}")
+    asym = np.abs(k - k.T)
+    if asym.max() > SYMMETRY * scale:
+        i, j = np.unravel_index(int(np.argmax(asym)), k.shape)
+        raise ConfigError(
+            f"{what}: not symmetric: row {i} column {j} is {k[i, j]!r}, row {j} column {i} "
+            f"{k[j, i]!r}: {accepted}"
+        )
+    k = 0.5 * (k + k.T)
+    # the diagonal's scale per row: units differ between the translation and the turn
+    d = np.sqrt(np.maximum(np.diag(k), 0.0))
+    d[d == 0.0] = 1.0
+    least = float(np.linalg.eigvalsh(k / np.outer(d, d))[0])
+    if least < -1e-9:
+        raise ConfigError(
+            f"{what}: not positive semidefinite (a scaled eigenvalue {least:.3g} < 0: some "
+            f"motion of the rod end would release energy): {accepted}"
+        )
+    return k
+
+
+def twist_held(k6: np.ndarray, tangent: np.ndarray) -> float:
+    """The twist stiffness t0^T K_tt t0 [N m/rad] of a 6x6 about a rod's axis t0."""
+    t = np.asarray(tangent, dtype=np.float64)
+    return float(t @ k6[3:, 3:] @ t)
+
+
+def end_stiffness(k6: np.ndarray, tangent: np.ndarray, EI: float, length: float) -> np.ndarray:
+    """S (6 x 6): the support K (6 x 6) in series with the end edge's half-edge bending
+    2 EI / l, in (u, w), the foot's rotation and twist eliminated (module docstring)."""
+    t = np.asarray(tangent, dtype=np.float64)
+    c = 2.0 * EI / length
+    p = c * (np.eye(3) - np.outer(t, t))
+    q = np.zeros((9, 9))  # (u, w, theta_f)
+    q[:3, :3] = k6[:3, :3]
+    q[:3, 6:] = k6[:3, 3:]
+    q[6:, :3] = k6[3:, :3]
+    q[3:6, 3:6] = p
+    q[3:6, 6:] = -p
+    q[6:, 3:6] = -p
+    q[6:, 6:] = k6[3:, 3:] + p
+    f = q[6:, 6:]
+    vals, vecs = np.linalg.eigh(f)
+    keep = vals > 1e-12 * max(float(vals.max()), c)
+    inv = (vecs[:, keep] / vals[keep]) @ vecs[:, keep].T
+    s = q[:6, :6] - q[:6, 6:] @ inv @ q[6:, :6]
+    return 0.5 * (s + s.T)
+
+
+@dataclass(frozen=True, eq=False)
+class RodEnds:
+    """Rod ends on 6 x 6 supports: ``nodes`` (K,) each a rod end c, ``other`` (K,) the
+    other node o of its end edge, ``tangent`` (K, 3) the edge's given unit direction from
+    c to o, ``stiffness`` (K, 6, 6) the support K as given (world axes) and ``series``
+    (K, 6, 6) the energy's S in (u, w) (``end_stiffness``)."""
+
+    nodes: np.ndarray
+    other: np.ndarray
+    tangent: np.ndarray
+    stiffness: np.ndarray
+    series: np.ndarray
+
+    @classmethod
+    def join(cls, parts) -> RodEnds | None:
+        parts = [p for p in parts if p is not None and p.nodes.size]
+        if not parts:
+            return None
+        return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in cls._fields()))
+
+    @staticmethod
+    def _fields() -> tuple[str, ...]:
+        return ("nodes", "other", "tangent", "stiffness", "series")
+
+    def __len__(self) -> int:
+        return int(self.nodes.size)
+
+    def check(self, n: int) -> list[str]:
+        """Problems of these supports on a net of ``n`` nodes."""
+        k = self.nodes.size
+        if self.series.shape != (k, 6, 6) or self.tangent.shape != (k, 3):
+            return [f"rod ends: stiffness of shape {self.series.shape}: must be (K, 6, 6)"]
+        both = np.concatenate([self.nodes, self.other])
+        bad = both[(both < 0) | (both >= n)]
+        if bad.size:
+            return [f"rod ends: node {int(bad[0])}: node indices must be in 0..{n - 1}"]
+        return []
+
+    def same_as(self, other: RodEnds | None) -> bool:
+        return other is not None and all(
+            np.array_equal(getattr(self, f), getattr(other, f)) for f in self._fields()
+        )
