@@ -26,9 +26,11 @@ the trapezoidal work of a load that follows a history).
 Implicit Euler's remainder is never positive on a convex energy: the step adds
 -1/2 m |v_{n+1} - v_n|^2 to it (its numerical dissipation). An integrator whose
 remainder grows beyond ``tolerance`` x the largest energy seen creates energy: the run
-stops with EnergyError (exit 1), never ending as an answer. Where a term's energy
-depends on time by itself (an obstacle or a ball on a prescribed path) the balance is
-kept but not judged (``judged`` False): its work on the net is not counted.
+stops with EnergyError (exit 1), never ending as an answer. An obstacle on a prescribed
+motion (``catenet.terms.moving``) is ``driven``: its work on the net is booked in W, and
+such runs are judged like any other. Where a ball follows a prescribed path
+(``catenet.terms.body.Guide``) the balance is kept but not judged (``judged`` False):
+its work on the net is not counted.
 """
 
 from __future__ import annotations
@@ -78,8 +80,7 @@ class Ledger:
     def begin(self, stepper: TimeStepper) -> None:
         """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
         system = stepper.system
-        self._timed = bool(stepper.moving) or any(type(t).__name__ == "Guide" for t in system.terms)
-        self.judged = not self._timed
+        self.judged = not any(type(t).__name__ == "Guide" for t in system.terms)
         self._friction = [t for t in system.terms if t.lagged and not t.medium]
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
         self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history
