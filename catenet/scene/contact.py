@@ -34,6 +34,8 @@ from catenet.model.net import Loads, Net
 if TYPE_CHECKING:
     from catenet.scene.shapes import Shape
     from catenet.terms.base import Term
+    from catenet.terms.moving import Moving
+    from catenet.terms.segments import EdgeContact
 
 DISTANCE_SHARE = 1e-3  # the static continuation's widest barrier, of the scene's length scale
 STAGE_SHRINK = 10.0  # each continuation stage's barrier is this much narrower
@@ -197,12 +199,6 @@ def obstacle_terms(
         )
     nodes = reach.nodes
     label = f"{path} (kind {shape.kind!r})"
-    if radius is not None and contact.moving and contact.friction > 0:
-        raise ConfigError(
-            f"{path}.friction = {shown(contact.friction)}: friction along the edges "
-            "(solver.edge_contact) on an obstacle on a prescribed motion is not supported "
-            "(its barrier is): give friction = 0, or drop its motion or edge_contact"
-        )
     grow = 0.0 if radius is None else radius  # the nodes against the shape grown by it
     term: Term
     if widths:
@@ -215,6 +211,7 @@ def obstacle_terms(
     check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
     edge = None
+    rubs: EdgeContact | Moving | None = None  # the edges' barrier friction rides on
     if radius is not None:
         from catenet.scene.segments import check_edges_clear, edge_barrier, held_edges
 
@@ -231,8 +228,10 @@ def obstacle_terms(
                 moved = moving_edges(edge, cast(Moving, term), guard if len(fixed) else None)
                 moved.stages = ()
                 out.append(moved)
+                rubs = moved
             else:
                 out.append(edge)
+                rubs = edge
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
 
@@ -243,10 +242,10 @@ def obstacle_terms(
                 f"times the barrier's activation distance ({dhat:.3g})"
             )
         out.append(Friction(term, mu=contact.friction, slip=slip))
-        if radius is not None and edge is not None:  # and where the edges touch
+        if rubs is not None:  # and where the edges touch
             from catenet.terms.segments import EdgeFriction
 
-            out.append(EdgeFriction(edge, mu=contact.friction, slip=slip))
+            out.append(EdgeFriction(rubs, mu=contact.friction, slip=slip))
     return out
 
 

@@ -13,7 +13,9 @@ move), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} -
 (``driven`` terms); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
 with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
 the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), against
-friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force), and against the
+friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force; on an obstacle on a
+prescribed motion, g_f . (dx - D) with D its surface's displacement where the nodes
+are, ``Moving.drive``, and its work through friction -g_f . D booked in W), and against the
 cables' axial dashpots (``catenet.terms.axial``, their ``losses``).
 
 In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
@@ -120,11 +122,16 @@ class Ledger:
             vel = 0.5 * (vel + stepper.v.reshape(-1)[stepper.free])
         damping = stepper.damping * stepper.m_free * vel
         self._dissipated += float(np.dot(damping, flat))
-        if self._friction:
+        for term in self._friction:
             g = np.zeros_like(x_new)
-            for term in self._friction:
-                term.gradient(x_new, g)
-            self._dissipated += float(np.sum(g[free] * dx[free]))
+            term.gradient(x_new, g)
+            on = term.rides_on
+            drive = on.drive(x_old, x_new) if on is not None and on.moving else None
+            if drive is None:
+                self._dissipated += float(np.sum(g[free] * dx[free]))
+            else:  # on a moving obstacle: its work through friction, the rest the slip's
+                self._dissipated += float(np.sum(g[free] * (dx - drive)[free]))
+                self._work -= float(np.sum(g[free] * drive[free]))
         for i, term in enumerate(self._weighs):  # its energy's change with gravity, at
             if term.factor != self._factors[i]:  # the step's mean (as gravity's work)
                 mean = 0.5 * (term.unit_energy(x_old) + term.unit_energy(x_new))

@@ -195,6 +195,11 @@ class Term:
         x_old to x_new (the step of the last ``begin_step``)."""
         raise NotImplementedError(f"{type(self).__name__} is not driven")
 
+    def drive(self, x_old: np.ndarray, x_new: np.ndarray) -> np.ndarray | None:
+        """(``moving`` terms) (N, 3) the displacement of the obstacle's surface where the
+        nodes are over the last step (None: none): its friction's work is f . drive."""
+        return None
+
     def set_motion(self, kv: float, centre: np.ndarray, ka: float, centre_a: np.ndarray) -> None:
         """(``medium`` terms) The step's velocity kv (x - centre) and acceleration
         ka (x - centre_a) as maps of its positions x (N, 3) (``Scheme.motion``)."""

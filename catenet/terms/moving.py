@@ -138,6 +138,18 @@ class Moving(Term):
             self.center, self.R = keep
         return 0.5 * work
 
+    def drive(self, x_old, x_new) -> np.ndarray | None:
+        """(N, 3) the displacement of the obstacle's points where the nodes are over the
+        last step (the mean of the rigid motion's at x_old and at x_new, as in
+        ``driven_work``): its friction's work on the net is f . drive, the rest of the
+        friction's f . dx is dissipated (None: no step yet)."""
+        if self._span is None:
+            return None
+        t0, t1 = self._span
+        ahead = self.rigid(x_old, t0, t1) - x_old
+        behind = x_new - self.rigid(x_new, t1, t0)
+        return 0.5 * (ahead + behind)
+
     def _work(self, x, t: float, shift: np.ndarray) -> float:
         """f . shift at x with the obstacle at its pose at t (f = -grad: on the nodes)."""
         self.set_pose(t)

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import copy
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -59,6 +60,9 @@ from catenet.kernels.segments import (
     segment_hessian,
 )
 from catenet.terms.base import Term, register
+
+if TYPE_CHECKING:
+    from catenet.terms.moving import Moving
 
 T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS = 12)
 
@@ -201,21 +205,30 @@ def pushes(contact: EdgeContact, x) -> tuple[np.ndarray, np.ndarray, np.ndarray,
 @register("edge_friction")
 class EdgeFriction(Term):
     """Coulomb friction ``mu`` with slip distance ``slip`` [m] where the outline of
-    ``contact`` (a fixed obstacle's ``EdgeContact``) pushes the net's edges (module
+    ``contact`` (a fixed obstacle's ``EdgeContact``, or one on a prescribed motion: a
+    ``catenet.terms.moving_edges.MovingEdges``) pushes the net's edges (module
     docstring): per pushing pair, lagged at the step's start, its normal force, normal
     and the edge's material point s; anchors kept per pair from step to step (a pair
-    that sticks stays within ``slip`` of where it stuck)."""
+    that sticks stays within ``slip`` of where it stuck). On a moving obstacle they are
+    taken with the obstacle at its pose at the step's start and ride with it to its pose
+    at the step's end (as ``catenet.terms.friction.Friction``'s): friction acts against
+    the edge's slip over the obstacle's surface, and a pair that sticks is carried."""
 
     lagged = True
     role = "internal"
     convex = True
 
-    def __init__(self, contact: EdgeContact, *, mu: float, slip: float):
+    def __init__(self, contact: EdgeContact | Moving, *, mu: float, slip: float):
         if not (math.isfinite(mu) and mu >= 0 and math.isfinite(slip) and slip > 0):
             raise ValueError(f"edge_friction: mu = {mu!r}, slip = {slip!r}: must be >= 0, > 0")
-        if len(contact.bnodes):
-            raise ValueError("edge_friction: on a fixed obstacle only")
-        self.contact = self.rides_on = contact
+        self.obstacle: Moving | None = None
+        edge = contact
+        if not isinstance(edge, EdgeContact):  # the outline in its body frame
+            self.obstacle, edge = edge, edge.shape
+        if len(edge.bnodes):
+            raise ValueError("edge_friction: on a fixed or moving obstacle only, not a body")
+        self.contact: EdgeContact = edge
+        self.rides_on = contact
         self.mu, self.slip = float(mu), float(slip)
         self.pairs = np.zeros((0, 2), dtype=np.int64)
         self.share = np.zeros(0)
@@ -229,7 +242,11 @@ class EdgeFriction(Term):
         return np.repeat(de, 6, axis=1).ravel(), np.tile(de, (1, 6)).ravel()
 
     def _pushes(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        return pushes(self.contact, x)
+        obs = self.obstacle
+        if obs is None:
+            return pushes(self.contact, x)
+        pairs, lam, normal, share = pushes(self.contact, obs._body(x))
+        return pairs, lam, np.asarray(normal @ obs.R.T), share  # the normals in the world
 
     def _points(self, x) -> np.ndarray:
         e = self.contact.edges[self.pairs[:, 0]]
@@ -242,7 +259,11 @@ class EdgeFriction(Term):
         point s and anchor (a rope sliding lengthwise moves its material over the
         contact, which stays where it is in space); one whose material point slid
         farther than ``slip`` takes the contact's point now and drags its anchor to
-        ``slip`` behind it; a new pair anchors where it touches."""
+        ``slip`` behind it; a new pair anchors where it touches. On a moving obstacle,
+        at its pose at ``start``, then carried with it to its pose at ``time``."""
+        obs = self.obstacle if time is not None and start is not None else None
+        if obs is not None:
+            obs.set_pose(start)  # the pose of the accepted state
         pairs, lam, normal, share = self._pushes(x)
         keys = [(int(e), int(f)) for e, f in pairs.tolist()]
         held = [self._anchors.get(k) for k in keys]
@@ -265,6 +286,13 @@ class EdgeFriction(Term):
         behind = self.slip / np.where(moved, slid, 1.0)
         anchor[moved] = y[moved] - behind[moved, None] * u[moved]
         self.anchor = np.ascontiguousarray(anchor)
+        if obs is not None:  # the obstacle's rigid motion over the step
+            c0, R0 = obs.pose(start)
+            c1, R1 = obs.pose(time)
+            turn = R1 @ R0.T
+            self.anchor = np.ascontiguousarray(c1 + (self.anchor - c0) @ turn.T)
+            self.normal = np.ascontiguousarray(self.normal @ turn.T)
+            obs.set_pose(time)  # where the step is solved
         self._remember(keys)
 
     def _remember(self, keys: list) -> None:

@@ -5,7 +5,7 @@ a plate swept into the middle of a long edge whose nodes are far from it, every 
 checked at 41 points along every edge (none ever inside; with the nodes alone the plate
 cuts through the edge), the obstacle's work in the energy balance, turning and moving;
 an edge held at a support that the obstacle runs over stops the run; friction along the
-edges of a moving obstacle is refused."""
+edges rides on the obstacle's motion."""
 
 from __future__ import annotations
 
@@ -215,10 +215,13 @@ def test_an_edge_with_both_nodes_fixed_in_the_obstacles_way_stops_the_run(tmp_pa
     assert "reaches the edge 0-1, held at a support, at t = 0.49 s" in done.output
 
 
-def test_friction_along_the_edges_of_a_moving_obstacle_is_refused(tmp_path):
+def test_friction_along_the_edges_of_a_moving_obstacle_rides_on_its_motion():
+    """(Refused before.) The friction along the edges rides on the moving barrier; the
+    bar dragged by a plate in test_moving_edge_friction.py checks it against Coulomb."""
+    from catenet.terms.segments import EdgeFriction
+
     text = SWEEP.replace("EDGES", "true").replace("DT", "0.005").replace("SPIN", "[0.0, 0.0, 0.0]")
-    case = tmp_path / "case.toml"
-    case.write_text(text.replace("distance = 0.005", "distance = 0.005\nfriction = 0.3"))
-    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
-    assert done.exit_code == 2
-    assert "obstacle[0].friction = 0.3: friction along the edges" in done.output
+    data = tomllib.loads(text.replace("distance = 0.005", "distance = 0.005\nfriction = 0.3"))
+    scene = build(parse_case(data))
+    rubs = [t for t in scene.terms if isinstance(t, EdgeFriction)]
+    assert len(rubs) == 1 and isinstance(rubs[0].rides_on, MovingEdges)
