@@ -268,11 +268,18 @@ class Moving(Term):
         c1, R1 = self.pose(t1)
         return c1 + (points - c0) @ (R1 @ R0.T).T
 
-    def _reaches(self, x, supports, t0: float, t1: float, max_iter: int = 200):
+    def _reaches(self, x, supports, t0: float, t1: float):
         """(node, time) of the first support (at its place in x) the obstacle reaches
-        between t0 and t1, else None: conservative advancement, the obstacle's points
-        moving at most ``sweep`` over the step, so it advances by gap / rate at a time."""
-        probe = _Probe(self.shape, supports)
+        between t0 and t1, else None (``first_touch``)."""
+        hit = self.first_touch(_Probe(self.shape, supports), x, t0, t1)
+        return None if hit is None else (int(supports[hit[0]]), hit[1])
+
+    def first_touch(self, probe, x, t0: float, t1: float, max_iter: int = 200):
+        """(k, time) of the first of ``probe``'s items (its ``gap`` per item of body-frame
+        points, x held where it is) that the obstacle reaches between t0 and t1, else
+        None: conservative advancement, the obstacle's points moving at most ``sweep``
+        over the step, so it advances by gap / rate at a time: an item thinner than the
+        obstacle's travel in the step is not passed over."""
         f0, f1 = self.path.distance(t0), self.path.distance(t1)
         rate = self.sweep(t0, t1)  # per unit of the step's fraction s
         s = 1.0 if rate == 0.0 else 0.0
@@ -281,14 +288,14 @@ class Moving(Term):
             gap = probe.gap(self._body(x, c, R))
             k = int(np.argmin(gap))
             if not gap[k] > 1e-9 * max(self.reach, self.dhat):
-                return int(supports[k]), t0 + s * (t1 - t0)
+                return k, t0 + s * (t1 - t0)
             if s >= 1.0:
                 return None
             s = min(1.0, s + float(gap[k]) / rate)
         c, R = self._pose(f1)  # grazing for max_iter advances: the end pose decides
         gap = probe.gap(self._body(x, c, R))
         k = int(np.argmin(gap))
-        return (int(supports[k]), t1) if not gap[k] > 0.0 else None
+        return (k, t1) if not gap[k] > 0.0 else None
 
 
 class _Probe:

@@ -14,7 +14,10 @@ the obstacle may reach in the step (its gap at pose(t_n) below SWEEP_SAFETY time
 obstacle's sweep plus the activation distance) rigidly with it, in the predictor and in
 the point the step's cut-back starts from: a rigid motion keeps the edge's distance to
 the obstacle, so every step starts with every edge outside. An edge held at a support
-that the obstacle reaches stops the run (ConvergenceError naming the edge). The energy
+that the obstacle reaches stops the run (ConvergenceError naming the edge); an edge
+with both nodes fixed (no barrier moves it: ``guard``) is swept over the step by
+conservative advancement (``Moving.first_touch``, as the supports are), so an obstacle
+thinner than its travel in one step does not pass it unseen. The energy
 balance books the obstacle's work on the edges as on the nodes (``Moving.driven_work``).
 """
 
@@ -63,9 +66,10 @@ class MovingEdges(Moving):
         if move == 0.0:
             return 0
         edges = self.shape.edges
-        if self.guard is not None:  # an edge with both nodes fixed cannot give way
-            gap = self.guard.gap(self._body(trial, c1, R1))
-            self._stop_at(self.guard.edges, np.flatnonzero(~(gap > 0.0)), t1)
+        if self.guard is not None and len(self.guard.edges):  # cannot give way: swept
+            hit = self.first_touch(self.guard, trial, t0, t1)
+            if hit is not None:
+                self._stop_at(self.guard.edges, np.array([hit[0]]), hit[1])
         c0, R0 = self.pose(t0)
         near = self.shape.gap(self._body(base, c0, R0)) < SWEEP_SAFETY * move + self.dhat
         if not near.any():

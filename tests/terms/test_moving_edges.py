@@ -225,3 +225,30 @@ def test_friction_along_the_edges_of_a_moving_obstacle_rides_on_its_motion():
     scene = build(parse_case(data))
     rubs = [t for t in scene.terms if isinstance(t, EdgeFriction)]
     assert len(rubs) == 1 and isinstance(rubs[0].rides_on, MovingEdges)
+
+
+THIN = HELD.replace(
+    """kind = "capsule"
+start = [1.5, -1.0, 0.3]
+end = [1.5, 1.0, 0.3]
+radius = 0.05
+velocity = [0.0, 0.0, -0.5]""",
+    """kind = "box"
+center = [1.5, 0.0, 0.31]
+half_size = [0.2, 0.5, 0.002]
+velocity = [0.0, 0.0, -1.0]""",
+).replace("dt = 0.01", "dt = 0.02")
+
+
+def test_a_plate_thinner_than_its_travel_per_step_does_not_pass_a_held_edge(tmp_path):
+    """A plate 4 mm thick (14 mm with the edge's contact radius on both sides) moving
+    20 mm per step: its step ends are at z = 10 mm above and 10 mm below the edge, so a
+    check at the steps' ends alone saw it pass. Swept over the step, the plate's lower
+    edges reach the edge's capsule at z_c - 2 mm = 5 mm: t = (0.31 - 0.007) / 1 m/s =
+    0.303 s, inside the step from 0.3 to 0.32 s."""
+    assert "dt = 0.02" in THIN and "half_size = [0.2, 0.5, 0.002]" in THIN
+    case = tmp_path / "thin.toml"
+    case.write_text(THIN)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+    assert done.exit_code == 1, done.output
+    assert "reaches the edge 0-1, held at a support, at t = 0.303 s" in done.output
