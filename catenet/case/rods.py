@@ -172,7 +172,7 @@ def rod_end_springs(case: Case, built: Any, net: Net, clamped: np.ndarray) -> An
     pairs, tangent, edge = (np.concatenate(part) for part in zip(*found, strict=True))
     stiffness = np.stack([total[int(n)] for n in nodes])
     for n, t, e, k6 in zip(nodes, tangent, edge, stiffness, strict=True):
-        if gj[e] > 0.0 and twist_held(k6, t) > 0.0:
+        if gj[e] > 0.0 and twist_held(k6, t) > 1e-9 * np.abs(k6[3:, 3:]).max():
             raise ConfigError(
                 f"{where[int(n)]}.stiffness: node {int(n)} is the end of a rod that twists "
                 "(GJ > 0) and the 6x6 holds its twist about the rod's axis "
