@@ -111,6 +111,11 @@ def state_lines(
             f"{'reactions':<{W}} resultant {vector(s['reaction_resultant'])} N; largest "
             f"{s['max_reaction']:.6g} N at node {s['max_reaction_node']}"
         )
+    if s.get("max_reaction_moment", 0.0) > 0.0:
+        lines.append(
+            f"{'':<{W}} moment largest {s['max_reaction_moment']:.6g} N m at node "
+            f"{s['max_reaction_moment_node']} (a rod end's support)"
+        )
     if s.get("contact_nodes", 0):  # in water: its buoyancy and drag act there too
         lines.append(
             f"{'contact':<{W}} resultant {vector(s['contact_resultant'])} N on "

@@ -156,3 +156,66 @@ class RodEnds:
         return other is not None and all(
             np.array_equal(getattr(self, f), getattr(other, f)) for f in self._fields()
         )
+
+
+def cross_matrix(t: np.ndarray) -> np.ndarray:
+    """(K, 3, 3) [t]x of (K, 3): [t]x v = t x v."""
+    out = np.zeros((len(t), 3, 3))
+    out[:, 0, 1], out[:, 0, 2] = -t[:, 2], t[:, 1]
+    out[:, 1, 0], out[:, 1, 2] = t[:, 2], -t[:, 0]
+    out[:, 2, 0], out[:, 2, 1] = -t[:, 1], t[:, 0]
+    return out
+
+
+def outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(K, 3, 3) a b^T per row."""
+    return a[:, :, None] * b[:, None, :]
+
+
+def end_state(c, o, t0, S, anchor, x: np.ndarray) -> dict:
+    """Per support (end node c, other node o, given direction t0, series stiffness S,
+    anchor X) at x: u, d, |d|, t, t0 . t, s, a = t0 x t, w = s a, q = (u, w), S q, s',
+    dw/dt, dt/dd and W = dw/dd (``catenet.terms.rodends``)."""
+    u = x[c] - anchor
+    d = x[o] - x[c]
+    r = np.linalg.norm(d, axis=1)
+    t = d / r[:, None]
+    cos = np.einsum("ki,ki->k", t0, t)
+    s = np.sqrt(2.0 / (1.0 + cos))
+    a = np.cross(t0, t)
+    q = np.concatenate([u, s[:, None] * a], axis=1)
+    sq = np.einsum("kij,kj->ki", S, q)
+    ds = -s / (2.0 * (1.0 + cos))
+    dwdt = s[:, None, None] * cross_matrix(t0) + ds[:, None, None] * outer(a, t0)
+    proj = (np.eye(3) - outer(t, t)) / r[:, None, None]
+    return {"d": d, "r": r, "t": t, "c": cos, "s": s, "a": a, "q": q, "sq": sq,
+            "ds": ds, "dwdt": dwdt, "proj": proj, "W": dwdt @ proj}  # fmt: skip
+
+
+def end_moments(ends: RodEnds, nodes: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(K, 3) the moment [N m] each 6x6 support exerts on its rod about the end node:
+    the couple d x f_o of its force f_o = -W^T (S q)_w on the end edge's other node
+    (``nodes`` the net's given positions: the anchors)."""
+    st = end_state(ends.nodes, ends.other, ends.tangent, ends.series, nodes[ends.nodes], x)
+    f_o = -np.einsum("kji,kj->ki", st["W"], st["sq"][:, 3:])
+    return np.cross(st["d"], f_o)
+
+
+def support_moments(net, rods, x: np.ndarray) -> np.ndarray | None:
+    """(N, 3) the moment [N m] each support exerts on its rod at the rod's end node: a
+    6x6 spring's (``end_moments``), a clamp's or a rotational spring's 2 kc (t x t0)
+    (the couple of its energy kc |t - t0|^2, ``catenet.model.rods``); None where no
+    support holds a rod end's direction. ``rods`` the scene's ``Rods`` or None."""
+    x = np.asarray(x, dtype=np.float64)
+    ends = None if net.springs is None else net.springs.ends
+    clamps = None if rods is None or not len(rods.clamps) else rods.clamps
+    if ends is None and clamps is None:
+        return None
+    out = np.zeros((len(x), 3))
+    if ends is not None:
+        np.add.at(out, ends.nodes, end_moments(ends, net.nodes, x))
+    if clamps is not None:
+        d = x[clamps[:, 1]] - x[clamps[:, 0]]
+        t = d / np.linalg.norm(d, axis=1)[:, None]
+        np.add.at(out, clamps[:, 0], 2.0 * rods.kc[:, None] * np.cross(t, rods.tangent))
+    return out

@@ -16,7 +16,9 @@ source of the run's printed summary, the /result attributes and the sweep table'
 - with rods: ``max_bending_moment`` [N m], ``max_bending_moment_node`` and
   ``max_curvature`` [1/m] there (``catenet.model.rods.bending_moment``); with twisted
   rods ``max_twisting_moment`` [N m] (the largest |M|) and ``max_twisting_moment_edge``;
-- ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``;
+- ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``; where
+  a support holds a rod end's direction ``max_reaction_moment`` [N m] (the largest |M| of
+  ``/result/reaction_moment``) and ``max_reaction_moment_node``;
 - ``contact_resultant`` (3,) [N], ``max_contact`` [N], ``contact_nodes`` (nodes touched);
 - with peaks: ``peak_tension`` [N], ``peak_tension_edge``, ``peak_tension_time`` (s, or
   the load factor of a static run), ``peak_displacement`` [m], ``peak_displacement_node``,
@@ -316,6 +318,7 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     out["applied_resultant"] = _applied(scene, res, loads)
     out.update(_bending(scene, res.x))
     out.update(_twisting(scene, res.x))
+    out.update(_support_moment(scene, res.x))
     chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
     if chain is not None:
         out["sag_normal"] = chain["normal"]
@@ -365,6 +368,19 @@ def _bending(scene: Scene, x: np.ndarray) -> dict:
         "max_bending_moment_node": node,
         "max_curvature": float(kappa[node]),
     }
+
+
+def _support_moment(scene: Scene, x: np.ndarray) -> dict:
+    """The largest moment a support exerts on a rod end and its node (none where no
+    support holds a rod end's direction: ``catenet.model.rodends.support_moments``)."""
+    from catenet.model.rodends import support_moments
+
+    moments = support_moments(scene.net, scene_rods(scene), np.asarray(x, dtype=np.float64))
+    if moments is None:
+        return {}
+    size = np.linalg.norm(moments, axis=1)
+    node = int(np.argmax(size))
+    return {"max_reaction_moment": float(size[node]), "max_reaction_moment_node": node}
 
 
 def twisting_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:

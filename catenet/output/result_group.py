@@ -111,7 +111,7 @@ def _support_moments(scene: Scene, x, rods) -> np.ndarray | None:
     """(N, 3) the supports' moments on the rod ends (None: no support holds one)."""
     if rods is None and (scene.net.springs is None or scene.net.springs.ends is None):
         return None
-    from catenet.terms.rodends import support_moments
+    from catenet.model.rodends import support_moments
 
     return support_moments(scene.net, rods, x)
 

@@ -23,21 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from catenet.model.rodends import RodEnds
+from catenet.model.rodends import RodEnds, end_state, outer
 from catenet.terms.base import Term, register
-
-
-def _cross(t: np.ndarray) -> np.ndarray:
-    """(K, 3, 3) [t]x: [t]x v = t x v."""
-    out = np.zeros((len(t), 3, 3))
-    out[:, 0, 1], out[:, 0, 2] = -t[:, 2], t[:, 1]
-    out[:, 1, 0], out[:, 1, 2] = t[:, 2], -t[:, 0]
-    out[:, 2, 0], out[:, 2, 1] = -t[:, 1], t[:, 0]
-    return out
-
-
-def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[:, :, None] * b[:, None, :]
 
 
 @register("rod_end_support")
@@ -66,26 +53,10 @@ class RodEndSupport(Term):
                 np.abs(self.S[:, 3:, 3:]).max(axis=(1, 2)) / length**2,
             ]
         )
-        self._t0x = _cross(self.t0)
 
     def _state(self, x: np.ndarray) -> dict:
-        """u, d, |d|, t, c, s, a, w, q, S q and dw/dt per support at x."""
-        u = x[self.c] - self.anchor
-        d = x[self.o] - x[self.c]
-        r = np.linalg.norm(d, axis=1)
-        t = d / r[:, None]
-        c = np.einsum("ki,ki->k", self.t0, t)
-        s = np.sqrt(2.0 / (1.0 + c))
-        a = np.cross(self.t0, t)
-        w = s[:, None] * a
-        q = np.concatenate([u, w], axis=1)
-        sq = np.einsum("kij,kj->ki", self.S, q)
-        ds = -s / (2.0 * (1.0 + c))
-        dwdt = s[:, None, None] * self._t0x + ds[:, None, None] * _outer(a, self.t0)
-        proj = (np.eye(3) - _outer(t, t)) / r[:, None, None]
-        big_w = dwdt @ proj  # dw/dd
-        return {"d": d, "r": r, "t": t, "c": c, "s": s, "a": a, "q": q, "sq": sq,
-                "ds": ds, "dwdt": dwdt, "proj": proj, "W": big_w}  # fmt: skip
+        """The turn's quantities per support at x (``catenet.model.rodends.end_state``)."""
+        return end_state(self.c, self.o, self.t0, self.S, self.anchor, x)
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         nodes = np.stack([self.c, self.o], axis=1)
@@ -118,8 +89,8 @@ class RodEndSupport(Term):
         s2 = 3.0 * st["s"] / (4.0 * c1**2)
         v = np.cross(m, self.t0)
         mw = np.einsum("ki,ki->k", m, st["a"])
-        h_t = (s2 * mw)[:, None, None] * _outer(self.t0, self.t0) + st["ds"][:, None, None] * (
-            _outer(self.t0, v) + _outer(v, self.t0)
+        h_t = (s2 * mw)[:, None, None] * outer(self.t0, self.t0) + st["ds"][:, None, None] * (
+            outer(self.t0, v) + outer(v, self.t0)
         )
         proj = st["proj"]
         # sum_k g_k d2 t_k / dd2, g = (dw/dt)^T m
@@ -127,8 +98,8 @@ class RodEndSupport(Term):
         gt = np.einsum("ki,ki->k", g, t)
         eye = np.eye(3)[None]
         h_d = (
-            -(_outer(t, g) + _outer(g, t)) - gt[:, None, None] * eye
-            + 3.0 * gt[:, None, None] * _outer(t, t)
+            -(outer(t, g) + outer(g, t)) - gt[:, None, None] * eye
+            + 3.0 * gt[:, None, None] * outer(t, t)
         ) / (r**2)[:, None, None]  # fmt: skip
         dd = np.swapaxes(big_w, 1, 2) @ s_ww @ big_w + proj @ h_t @ proj + h_d
         ud = s_uw @ big_w
@@ -147,7 +118,8 @@ class RodEndSupport(Term):
 
     def moments(self, x: np.ndarray) -> np.ndarray:
         """(K, 3) the moment [N m] each support exerts on its rod about the end node: the
-        couple d x f_o of its force f_o = -dU/dx_o on the edge's other node."""
+        couple d x f_o of its force f_o = -dU/dx_o on the edge's other node
+        (``catenet.model.rodends.end_moments``)."""
         _, _, g_o, st = self._parts(x)
         return np.cross(st["d"], -g_o)
 
@@ -167,23 +139,3 @@ class RodEndSupport(Term):
             np.max(np.abs(self.anchor), initial=0.0)
         )
         return k * size, abs(energy)
-
-
-def support_moments(net, rods, x: np.ndarray) -> np.ndarray | None:
-    """(N, 3) the moment [N m] each support exerts on its rod at the rod's end node: a
-    6x6 spring's (``RodEndSupport.moments``), a clamp's or a rotational spring's
-    2 kc (t x t0) (the couple of its energy kc |t - t0|^2, ``catenet.model.rods``); None
-    where no support holds a rod end's direction. ``rods`` the scene's ``Rods`` or None."""
-    x = np.asarray(x, dtype=np.float64)
-    ends = None if net.springs is None else net.springs.ends
-    clamps = None if rods is None or not len(rods.clamps) else rods.clamps
-    if ends is None and clamps is None:
-        return None
-    out = np.zeros((len(x), 3))
-    if ends is not None:
-        np.add.at(out, ends.nodes, RodEndSupport(ends, net.nodes, len(x)).moments(x))
-    if clamps is not None:
-        d = x[clamps[:, 1]] - x[clamps[:, 0]]
-        t = d / np.linalg.norm(d, axis=1)[:, None]
-        np.add.at(out, clamps[:, 0], 2.0 * rods.kc[:, None] * np.cross(t, rods.tangent))
-    return out
