@@ -178,3 +178,23 @@ def test_a_twisting_rod_on_a_base_without_twist_stiffness(tmp_path):
     data["material"] = {**data["material"], "GJ": 1.0}
     x = run(tmp_path, data)["result/x"]
     assert x[-1, 0] > 0.0
+
+
+def test_modes_see_the_base(tmp_path):
+    """``catenet modes`` takes the 6x6 into its stiffness: a soft base lowers the first
+    bending frequency below the clamped cantilever's, a stiff one gives the clamp's."""
+    from catenet import modes
+    from catenet.case import build, parse_case
+
+    def first(supports) -> float:
+        data = _case(np.eye(3), LOCAL, np.array([P, 0.0, 0.0]), nodes=21)
+        data["material"] = {**data["material"], "area": 1e-4, "density": 7850.0}
+        data["supports"] = supports
+        return float(modes(build(parse_case(data)), 2).frequency[0])
+
+    spring = {"nodes": ["start"]}
+    soft = first({"fixed": [], "spring": [{**spring, "stiffness": LOCAL.tolist()}]})
+    stiff = first({"fixed": [], "spring": [{**spring, "stiffness": (1e9 * np.eye(6)).tolist()}]})
+    clamped = first({"fixed": ["start"], "clamped": ["start"]})
+    assert soft < 0.9 * clamped
+    assert stiff == pytest.approx(clamped, rel=1e-4)

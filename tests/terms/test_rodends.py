@@ -95,3 +95,16 @@ def test_bad_6x6_is_refused_naming_the_key(stiffness, says):
     with pytest.raises(ConfigError, match=says) as err:
         spring6_matrix(stiffness, "supports.spring[0].stiffness")
     assert "supports.spring[0].stiffness" in str(err.value)
+
+
+def test_a_singular_but_semidefinite_6x6_is_accepted():
+    """A base that holds some motions rigidly coupled and others not at all (rank 2:
+    sway and rocking tied, k_uu k_tt = k_ut^2; nothing else held), turned into skew axes:
+    its zero eigenvalues are round-off, not a release of energy."""
+    rng = np.random.default_rng(5)
+    v = np.array([[2e6, 0, 0, 0, 1e6, 0], [0, 3e3, 0, -1e3, 0, 0]], dtype=float)
+    local = v.T @ v
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    r6 = np.kron(np.eye(2), q)
+    k = spring6_matrix((r6 @ local @ r6.T).tolist(), "supports.spring[0].stiffness")
+    assert k is not None and np.allclose(k, r6 @ local @ r6.T)
