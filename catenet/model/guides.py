@@ -195,7 +195,7 @@ class Elastic:
         return int(self.nodes.size) + (0 if self.ends is None else len(self.ends))
 
     @property
-    def held(self) -> np.ndarray:
+    def held_nodes(self) -> np.ndarray:
         """Every node these springs hold (the rod ends' included)."""
         if self.ends is None:
             return self.nodes

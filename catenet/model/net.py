@@ -307,7 +307,7 @@ class Net:
         if self.guides is not None:
             mask[self.guides.nodes] = True
         if self.springs is not None:
-            mask[self.springs.held] = True
+            mask[self.springs.held_nodes] = True
         return mask
 
     def components(self) -> np.ndarray:
