@@ -248,5 +248,6 @@ def spring_matrix(stiffness, what: str = "stiffness") -> np.ndarray:
                 return k
     raise ConfigError(
         f"{what} = {shown!r}: must be [kx, ky, kz] [N/m] or a symmetric positive "
-        "semidefinite 3x3 matrix [[kxx, kxy, kxz], ...], finite and not zero"
+        "semidefinite 3x3 matrix [[kxx, kxy, kxz], ...], finite and not zero (at a rod end "
+        "also a 6x6 or [kx, ky, kz, krx, kry, krz])"
     )

@@ -41,7 +41,7 @@ def spring6_matrix(stiffness, what: str = "stiffness") -> np.ndarray | None:
     [kx, ky, kz, krx, kry, krz] (uncoupled, along x, y, z), checked:
     finite, symmetric, positive semidefinite and not zero; a ConfigError naming
     ``what`` otherwise."""
-    from catenet.model.limits import MAGNITUDE
+    from catenet.model.limits import MAGNITUDE, too_large
 
     rows = stiffness if isinstance(stiffness, (list, tuple)) else None
     if rows is None or len(rows) != 6:
@@ -49,15 +49,18 @@ def spring6_matrix(stiffness, what: str = "stiffness") -> np.ndarray | None:
     shown = np.asarray(stiffness, dtype=object).tolist()
     accepted = (
         "a 6x6 [[k_uu, k_ut], [k_tu, k_tt]] (rows for x, y, z, rx, ry, rz: N/m, N/rad and "
-        "N m/rad) must be symmetric, positive semidefinite, finite and not zero"
+        f"N m/rad) must be symmetric, positive semidefinite, finite (within {too_large()}) "
+        "and not zero"
     )
     try:
         k = np.asarray(stiffness, dtype=np.float64)
     except (TypeError, ValueError):
         raise ConfigError(f"{what} = {shown!r}: six rows of six numbers: {accepted}") from None
     if k.shape == (6,):  # [kx, ky, kz, krx, kry, krz]: uncoupled, along the world axes
-        if not np.all(k >= 0.0):
-            raise ConfigError(f"{what} = {shown!r}: [kx, ky, kz, krx, kry, krz] must be >= 0")
+        if not np.all(np.isfinite(k) & (k >= 0.0)):
+            raise ConfigError(
+                f"{what} = {shown!r}: [kx, ky, kz, krx, kry, krz] must each be finite and >= 0"
+            )
         k = np.diag(k)
     if k.shape != (6, 6):
         raise ConfigError(f"{what}: shape {k.shape}, not (6, 6): {accepted}")

@@ -86,7 +86,7 @@ def test_the_wrench_balances_the_gradient():
         ([[1.0, 2.0] + [0.0] * 4] + [[0.0] * 6] * 5, "not symmetric"),
         (np.diag([1.0, 1.0, 1.0, 1.0, 1.0, -1.0]).tolist(), "not positive semidefinite"),
         ([[0.0] * 6] * 6, "all zero"),
-        ([1.0, 1.0, 1.0, -1.0, 1.0, 1.0], "must be >= 0"),
+        ([1.0, 1.0, 1.0, -1.0, 1.0, 1.0], "must each be finite and >= 0"),
     ],
 )
 def test_bad_6x6_is_refused_naming_the_key(stiffness, says):
