@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 COLUMNS = ("kinetic", "elastic", "contact", "external_work", "dissipated", "numerical")
 TOLERANCE = 1e-2  # solver.energy_tolerance's default: a share of the largest energy
 ROUNDOFF = 1e-9  # ... never below this share (the energies' own round-off, summed over steps)
+FLOOR_EPS = 16.0  # ... nor below the energy of a state known to 16 eps of its size (``_floor``)
 
 
 #: What an EnergyError advises, by integrator (steps chosen by accuracy: ADAPTIVE_REMEDY).
@@ -77,6 +78,7 @@ class Ledger:
         self._start = 0.0
         self._work = 0.0
         self._dissipated = 0.0
+        self.floor = 0.0  # the energy a state known to round-off holds (``_floor``)
 
     # --- what the stepper calls ------------------------------------------------------
     def begin(self, stepper: TimeStepper) -> None:
@@ -93,6 +95,7 @@ class Ledger:
         self._reaction = reaction
         self._start = k + u + c
         self._work = self._dissipated = 0.0
+        self.floor = 0.0
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
         self.largest = max(abs(k), abs(u), abs(c))
         self.remedy = REMEDIES.get(stepper.scheme.name, REMEDIES[""])
@@ -146,6 +149,7 @@ class Ledger:
             self._work += put
         remainder = k + u + c - self._start - self._work + self._dissipated
         self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
+        self.floor = max(self.floor, _floor(stepper, x_new, h))
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
 
     def check(self, t: float) -> None:
@@ -153,7 +157,7 @@ class Ledger:
         if not self.judged:
             return
         remainder = float(self.row[-1])
-        allowed = max(self.tolerance, ROUNDOFF) * self.largest
+        allowed = max(max(self.tolerance, ROUNDOFF) * self.largest, self.floor)
         if remainder > allowed and remainder > 0.0:
             k, u, c, w, d, _ = self.row
             raise EnergyError(
@@ -187,6 +191,19 @@ class Ledger:
         fixed = stepper.net.fixed
         reaction[fixed] = grad[fixed] - potential.force[fixed]
         return (kinetic, *_stored(system, energies), reaction)
+
+
+def _floor(stepper: TimeStepper, x: np.ndarray, h: float) -> float:
+    """The energy [J] of a state known to FLOOR_EPS round-offs of its size, d = FLOOR_EPS
+    eps max |x|: the edges' 1/2 EA / l0 d^2 and 1/2 m (d / h)^2 of the free DOFs. A
+    remainder below it is no energy created (a net at rest, nothing yet touched, whose
+    nodes move by round-off: 1e-46 J appeared "from nothing" against a largest energy of
+    the same size)."""
+    net = stepper.net
+    d = FLOOR_EPS * float(np.finfo(np.float64).eps) * max(float(np.max(np.abs(x))), 1e-300)
+    stiffness = float(np.sum(net.EA / net.rest_length))
+    mass = float(np.sum(stepper.m_free))
+    return 0.5 * stiffness * d**2 + 0.5 * mass * (d / h) ** 2 if h > 0.0 else 0.0
 
 
 def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:

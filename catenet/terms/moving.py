@@ -276,16 +276,17 @@ class Moving(Term):
 
     def first_touch(self, probe, x, t0: float, t1: float, max_iter: int = 200):
         """(k, time) of the first of ``probe``'s items (its ``gap`` per item of body-frame
-        points, x held where it is) that the obstacle reaches between t0 and t1, else
-        None: conservative advancement, the obstacle's points moving at most ``sweep``
-        over the step, so it advances by gap / rate at a time: an item thinner than the
-        obstacle's travel in the step is not passed over."""
+        points, x held where it is, or ``x(c, R)`` the points with the obstacle at the
+        pose c, R: some riding with it) that the obstacle reaches between t0 and t1, else
+        None: conservative advancement, every point moving at most ``sweep`` over the step
+        relative to the obstacle, so it advances by gap / rate at a time: an item thinner
+        than the obstacle's travel in the step is not passed over."""
         f0, f1 = self.path.distance(t0), self.path.distance(t1)
         rate = self.sweep(t0, t1)  # per unit of the step's fraction s
         s = 1.0 if rate == 0.0 else 0.0
         for _ in range(max_iter):
             c, R = self._pose(f0 + s * (f1 - f0))
-            gap = probe.gap(self._body(x, c, R))
+            gap = probe.gap(self._body(x(c, R) if callable(x) else x, c, R))
             k = int(np.argmin(gap))
             if not gap[k] > 1e-9 * max(self.reach, self.dhat):
                 return k, t0 + s * (t1 - t0)
@@ -293,7 +294,7 @@ class Moving(Term):
                 return None
             s = min(1.0, s + float(gap[k]) / rate)
         c, R = self._pose(f1)  # grazing for max_iter advances: the end pose decides
-        gap = probe.gap(self._body(x, c, R))
+        gap = probe.gap(self._body(x(c, R) if callable(x) else x, c, R))
         k = int(np.argmin(gap))
         return (k, t1) if not gap[k] > 0.0 else None
 

@@ -14,10 +14,11 @@ the obstacle may reach in the step (its gap at pose(t_n) below SWEEP_SAFETY time
 obstacle's sweep plus the activation distance) rigidly with it, in the predictor and in
 the point the step's cut-back starts from: a rigid motion keeps the edge's distance to
 the obstacle, so every step starts with every edge outside. An edge held at a support
-that the obstacle reaches stops the run (ConvergenceError naming the edge); an edge
-with both nodes fixed (no barrier moves it: ``guard``) is swept over the step by
-conservative advancement (``Moving.first_touch``, as the supports are), so an obstacle
-thinner than its travel in one step does not pass it unseen. The energy
+that the obstacle reaches stops the run (ConvergenceError naming the edge): an edge
+with both nodes fixed (no barrier moves it: ``guard``), and one with a node fixed and
+the other riding with the obstacle, is swept over the step by conservative advancement
+(``Moving.first_touch``, as the supports are), so an obstacle thinner than its travel
+in one step does not pass it unseen. The energy
 balance books the obstacle's work on the edges as on the nodes (``Moving.driven_work``).
 """
 
@@ -74,12 +75,20 @@ class MovingEdges(Moving):
         near = self.shape.gap(self._body(base, c0, R0)) < SWEEP_SAFETY * move + self.dhat
         if not near.any():
             return 0
+        start = base.copy()
         nodes = np.unique(edges[near])
         nodes = self._carry_nodes(nodes[~fixed[nodes]], base, trial, t0, t1, moved, index)
-        held = near & (fixed[edges[:, 0]] | fixed[edges[:, 1]])
-        if held.any():
-            gap = self.shape.gap(self._body(base, c1, R1))
-            self._stop_at(edges, np.flatnonzero(held & ~(gap > 0.0)), t1)
+        held = np.flatnonzero(near & (fixed[edges[:, 0]] | fixed[edges[:, 1]]))
+        if held.size:  # its free node rides with the obstacle, its fixed one stays: swept
+
+            def riding(c, R):
+                out = start.copy()
+                out[nodes] = c + (start[nodes] - c0) @ (R @ R0.T).T
+                return out
+
+            hit = self.first_touch(_Edges(self.shape, held), riding, t0, t1)
+            if hit is not None:
+                self._stop_at(edges, held[hit[0] : hit[0] + 1], hit[1])
         return int(nodes.size)
 
     def _stop_at(self, edges, hit: np.ndarray, t1: float) -> None:
@@ -91,6 +100,16 @@ class MovingEdges(Moving):
                 f"t = {t1:.6g} s: a moving obstacle must not run over an edge at a "
                 "support; change its motion or the supports"
             )
+
+
+class _Edges:
+    """The gaps of some of an ``EdgeContact``'s edges (their indices ``which``)."""
+
+    def __init__(self, contact, which: np.ndarray):
+        self.contact, self.which = contact, which
+
+    def gap(self, x) -> np.ndarray:
+        return self.contact.gap(x)[self.which]
 
 
 def moving_edges(edge, term: Moving, guard=None) -> MovingEdges:

@@ -252,3 +252,22 @@ def test_a_plate_thinner_than_its_travel_per_step_does_not_pass_a_held_edge(tmp_
     done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
     assert done.exit_code == 1, done.output
     assert "reaches the edge 0-1, held at a support, at t = 0.303 s" in done.output
+
+
+ONE_HELD = THIN.replace("nodes = 2", "nodes = 3").replace(
+    "center = [1.5, 0.0, 0.31]", "center = [0.3, 0.0, 0.3075]"
+)
+
+
+def test_a_thin_plate_does_not_pass_an_edge_at_a_support_within_a_step(tmp_path):
+    """The same plate over the edge 0-1 of a cable of two edges (node 0 fixed, node 1
+    free, 2 m away), 0.5 mm above the edge's capsule at t = 0.3 s. Its free node rides
+    with the plate through the step, its fixed node stays, so the edge turns about node
+    0 and the plate moves through it by 15-19 mm, more than its 14 mm: at the step's
+    end the edge was clear on the far side and the run went on with the edge through
+    the plate. Swept, the plate reaches it at once: t = 0.3005 s."""
+    case = tmp_path / "one.toml"
+    case.write_text(ONE_HELD)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+    assert done.exit_code == 1, done.output
+    assert "reaches the edge 0-1, held at a support, at t = 0.3005" in done.output
