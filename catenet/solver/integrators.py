@@ -169,6 +169,7 @@ class ImplicitEuler:
         damping: float | np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
         """w and a of the step's inertia term (Eq. 10a as a gradient)."""
+        self.b = h
         w = m_free * (1.0 / h**2 + damping / h)
         a = (m_free / h**2 * (y_k + h * v_k) + damping * m_free / h * y_k) / w
         return w, a
@@ -183,6 +184,7 @@ class ImplicitEuler:
 
     keep = False  # keep the last state for ``estimate`` (steps chosen by accuracy)
     _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
+    b = 0.0  # the step's b: v_{n+1} = (x_{n+1} - x_n) / b (``weights``)
 
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
@@ -350,6 +352,7 @@ class BDF2:
         self._older: tuple[np.ndarray, np.ndarray, float] | None = None  # ... of step n-2
         self._bar: tuple[np.ndarray, np.ndarray, float] | None = None  # this step's x, v, b
         self._bdf = False  # this step is a BDF2 step (not implicit Euler's)
+        self.b = 0.0  # the step's b: v_{n+1} = (x_{n+1} - x_bar) / b (``weights``)
 
     def begin(
         self,
@@ -396,6 +399,7 @@ class BDF2:
         """w and a of the step's inertia term: implicit Euler's with (b, x_bar, v_bar)."""
         y_bar, v_bar, b = self._coefficients(y_k, v_k, h)
         self._bar = (y_bar, v_bar, b)
+        self.b = b
         w = m_free * (1.0 / b**2 + damping / b)
         a = (m_free / b**2 * (y_bar + b * v_bar) + damping * m_free / b * y_bar) / w
         return w, a
