@@ -12,6 +12,8 @@ capture without its tether meeting the free 8 t box, frictionless, 2 s). For eac
   same step in plain Numba and LAPACK) at the step ``DT`` and, where that is not within
   ``TOLERANCE``, at the first of its halvings that is: the same answer, so the
   difference of their times per step is catenet's overhead over the hardware's floor;
+- catenet as a user runs the scene, without its dt (``catenet (default steps)``: bdf2
+  with steps chosen by the default ``solver.tolerance``), its mean step in ``dt``;
 - MuJoCo 4 (``mujoco_net.py``, set up as ``benchmarks/peers/README.md`` section 4 says:
   tendons with catenet's edge law, Newton solver, contacts ``solref = 0.001 1``) with
   ``implicitfast`` and ``discrete``, each at the largest step of ``MJ_STEPS`` whose
@@ -59,18 +61,28 @@ MJ_REFERENCE = 5e-5
 RESULTS = HERE.parent / "results" / "peers-floor.csv"
 
 
-def _case(path: Path, dt: float):
-    from catenet.case.parse import load_case
+def _case(path: Path, dt: float | None):
+    """The scene at bdf2 steps of dt; None: as a user runs it without dt (steps chosen
+    by the default solver.tolerance, catenet/solver/adaptive.py)."""
+    import tomllib
+
+    from catenet.case.parse import load_case, parse_case
     from catenet.case.scene import build
 
-    case = load_case(path, [f"solver.dt={dt!r}", 'solver.integrator="bdf2"'])
+    if dt is not None:
+        case = load_case(path, [f"solver.dt={dt!r}", 'solver.integrator="bdf2"'])
+        return case, build(case)
+    raw = tomllib.loads(path.read_text())
+    raw["solver"].pop("dt", None)
+    case = parse_case(raw, source=str(path), base_dir=path.parent)
     return case, build(case)
 
 
-def catenet_run(name: str, dt: float, watch: bool = True) -> dict:
-    """catenet (bdf2) at dt: the box's momentum at the end, counts and CPU seconds of
-    the solve; ``watch``: also its largest and the closest approach of a node to the
-    box, at every step (then the CPU seconds include that watching)."""
+def catenet_run(name: str, dt: float | None, watch: bool = True) -> dict:
+    """catenet (bdf2) at dt (None: its default steps, no dt given): the box's momentum
+    at the end, counts and CPU seconds of the solve; ``watch``: also its largest and the
+    closest approach of a node to the box, at every step (then the CPU seconds include
+    that watching)."""
     import catenet
     from catenet.terms.rigid_contact import BodyContact
 
@@ -91,7 +103,7 @@ def catenet_run(name: str, dt: float, watch: bool = True) -> dict:
     cpu = time.process_time() - start
     p = body.mass * result.v[body.frame.nodes].mean(axis=0)
     return {"momentum": p, "steps": result.steps, "iterations": result.iterations,
-            "cpu": cpu, **seen}  # fmt: skip
+            "cpu": cpu, "t_end": float(case.solver.t_end), **seen}  # fmt: skip
 
 
 def floor_run(name: str, dt: float) -> dict:
@@ -149,6 +161,17 @@ def scene_rows(name: str, repeats: int, integrators=("implicitfast", "discrete")
                 "deepest penetration [m]": 0.0 if r["closest"] > 0 else -r["closest"],
                 "closest approach [m]": r["closest"],
             })  # fmt: skip
+    default = best(lambda: catenet_run(name, None, watch=False), repeats)
+    default["closest"] = catenet_run(name, None)["closest"]
+    rows.append({
+        "scene": name, "tool": "catenet (default steps)",
+        "dt": float(default["t_end"]) / default["steps"], "steps": default["steps"],
+        "iterations per step": default["iterations"] / default["steps"],
+        "error vs catenet's reference": err(default["momentum"]), "error vs own reference": "",
+        "CPU [s]": default["cpu"], "ms per step": 1e3 * default["cpu"] / default["steps"],
+        "deepest penetration [m]": 0.0 if default["closest"] > 0 else -default["closest"],
+        "closest approach [m]": default["closest"],
+    })  # fmt: skip
     for integrator in integrators:
         own = mujoco_run(name, integrator, MJ_REFERENCE, watch=False)["momentum"]
         found = None
