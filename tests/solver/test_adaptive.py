@@ -187,3 +187,45 @@ def test_a_tolerance_dt_min_cannot_meet_is_warned_about_once(caplog):
     said = [r.getMessage() for r in caplog.records if "solver.dt_min" in r.getMessage()]
     assert len(said) == 1 and "times solver.tolerance = 1e-08: taken" in said[0]
     assert min(lengths[:-1]) >= 5e-3 * (1 - 1e-12)
+
+
+def test_a_body_at_rest_measures_its_momentum_error_against_the_runs_momentum():
+    """A 1 t ball at rest beside a cable whose free nodes move at 2 m/s: the ball's
+    momentum scale is 1 % of the momentum the parts carry (sum of |m v|), not 1 % of its
+    own mass at the scene's speed; once it moves, its own largest momentum."""
+    from catenet.case import build
+    from catenet.solver.adaptive import FLOOR, ErrorControl
+    from catenet.solver.integrators import make
+    from catenet.solver.path import workspace
+    from catenet.solver.stepper import TimeStepper
+
+    case = parse_case({
+        "geometry": {"kind": "cable", "start": [5.0, 0.0, 0.0], "end": [6.0, 0.0, 0.0],
+                     "nodes": 5},
+        "material": {"E": 1e6, "radius": 0.01, "density": 1000.0},
+        "supports": {"fixed": ["start", "end"]},
+        "obstacle": [{"kind": "sphere", "center": [0.0, 0.0, 1.0], "radius": 0.5,
+                      "mass": 1000.0, "angular_velocity": [0.0, 0.0, 0.0]}],
+        "solver": {"method": "dynamic", "damping": 0.0, "t_end": 1.0},
+    })  # fmt: skip
+    scene = build(case)
+    stepper = TimeStepper(scene.net, scene.loads, workspace(scene, cn.Settings.of(case.solver)),
+                          make("bdf2"), 0.0, rtol=1e-8, max_iter=25, reuse=False)  # fmt: skip
+    stepper.begin(None, None, 0.0, None, None)
+    control = ErrorControl.of(stepper, 1e-3, 0.0, 1.0, 5e-3, None, None)
+    bodies = control.bodies
+    assert bodies is not None and len(bodies.dofs) == 1
+    at_rest = bodies.largest[0]
+    v = np.zeros(len(stepper.free))
+    ball = bodies.dofs[0].reshape(-1)
+    cable = np.setdiff1d(np.arange(len(v)), ball)
+    v[cable[cable % 3 == 0]] = 2.0  # the cable's free nodes along x
+    bodies.saw(v)
+    flow = 2.0 * float(stepper.m_free[cable[cable % 3 == 0]].sum())
+    assert bodies.largest[0] == pytest.approx(FLOOR * flow) and bodies.largest[0] < at_rest
+    v[ball.reshape(-1, 3)[:, 2]] = 0.1  # the ball moving at 0.1 m/s: its own momentum
+    bodies.saw(v)
+    assert bodies.largest[0] == pytest.approx(100.0)
+    assert bodies.error(np.where(np.isin(np.arange(len(v)), ball), 1e-3, 0.0)) == pytest.approx(
+        1000.0 * 1e-3 * math.sqrt(3.0) / 100.0
+    )
