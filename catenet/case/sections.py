@@ -340,7 +340,7 @@ class SolverConfig(Declared):
         gt=0,
         lt=1,
         write="given",
-        shown="none: fixed steps; `5e-3` with contact and no dt",
+        shown="none: fixed steps; `3e-3` with contact and no dt",
         doc="dynamic, a number for t_end: steps chosen by accuracy: each step's local error "
         "in positions, strains and bodies' momenta, as a share of how far the motion goes, "
         "the largest strain and momentum (docs/howto/dynamic-runs.md)",
