@@ -33,10 +33,10 @@ on 10 %; at a tenth, the ball's bounce keeps its period to 0.02 %, the boxes the
 within 5 %). So the default tolerance, 3e-3, asks every step to keep its positions
 within 0.3 % of how far the motion has gone, the strains (the tensions) within 0.3 % of
 the largest and each body's momentum within 3e-4 of its largest. (At 5e-3 the drop
-below took 122 steps for 1.4 %, but the ball of tests/solver/test_accuracy.py lost 4.3 %
-of its bounce's period, against 0.9 % at 3e-3: the steps through a 0.4 ms bounce on a
-stiff barrier were too long for its stiffness at the deepest point, where the estimate,
-which looks back over three steps, lags.)
+below took about 120 steps for 1.4 %, but the ball of tests/solver/test_accuracy.py
+lost 4.3 % of its bounce's period, against under 1 % at 3e-3: the steps through a
+0.4 ms bounce on a stiff barrier were too long for its stiffness at the deepest point,
+where the estimate, which looks back over three steps, lags.)
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
@@ -49,23 +49,21 @@ estimate its error from, are taken at that length. Steps stay within
 length, as with fixed steps, and the run fails where that is below ``dt_min``; a step at
 ``dt_min`` whose error is still beyond the tolerance is accepted (the run warns once). A
 run that takes more than MAX_TRIES steps fails (a tolerance too tight for it).
-The estimate (positions and velocities) is filtered through the step's own matrix as a
-first-order system, (I - b J)^-1 (``filtered``; Hairer & Wanner II, IV.8; Shampine's
-filter of stiff ODE codes): a mode the step resolves keeps its error, a stiff one it
-cannot (a free body's rigidity, a rope's axial ringing, a node chattering on a barrier)
-is damped as bdf2 and implicit Euler damp it on the next steps, so it does not set the
-steps. A ball's bounce on a barrier is no such mode to the filter: its velocity error
-there is the position's error over b, which the filter keeps (the ball of
-tests/solver/test_accuracy.py keeps its period). Before (positions alone filtered, the
-momenta raw, tolerance 1e-3), the drop below took 607 steps: a box's momentum error
-raw is the chatter of the net's light nodes on it, 0.5 to 2 % of its largest momentum
-per 10 ms step measured from a fine run's states, and does not fall with the step
-until every node's bounce is resolved, where the run's own answer at 10 ms is within
-1 %: the chatter's errors do not add up, they pass to the net and back.
+The positions' estimate is filtered through the step's own matrix as a first-order
+system, (I - b J)^-1 applied to the estimate in positions and velocities (``filtered``;
+Hairer & Wanner II, IV.8; Shampine's filter of stiff ODE codes): a mode the step resolves
+keeps its error, a stiff one it cannot (a free body's rigidity, a rope's axial ringing,
+a node chattering on a barrier) is damped as bdf2 and implicit Euler damp it on the
+next steps, so it does not set the steps. (Before, the positions' estimate alone went
+through W^-1 w, without the velocities' share b ev; with the default at 1e-3 the drop
+below took 607 steps.) The bodies' momenta are not filtered: a barrier's stiffness is
+the bounce itself (filtered, two boxes colliding head on at the default lost 6.4 % of
+their speed, 4.2 % raw; a ball's bounce on the ground 0.9 % of its period, 0.8 % raw),
+and a body's rigidity does not change its momentum.
 
 Measured (``python -m benchmarks accuracy``; docs/howto/dynamic-runs.md) on the drop of
 benchmarks/peers/mujoco_drop.toml without its dt (the box's momentum at 0.4 s; bdf2 at
-fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 170 steps, 16.29 kg m/s; on the
+fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 182 steps, 16.22 kg m/s; on the
 safety net of benchmarks/safety_net.toml and two other drop tests.
 """
 
@@ -316,8 +314,8 @@ class ErrorControl:
         if estimate is not None:
             if newton.iterations == 0:  # no step matrix factorised yet: the filter's
                 stepper.potential.factorize(stepper.x_trial, 0.0)
-            ex, ev = filtered(stepper, scheme.b, *estimate)
-            error = self.error(ex, ev, stepper.m_free, stepper.x_trial)
+            ex, _ = filtered(stepper, scheme.b, *estimate)  # the momenta raw (docstring)
+            error = self.error(ex, estimate[1], stepper.m_free, stepper.x_trial)
         if self.judge(h_step, error):
             return True
         log.info("t = %.6g: step %.3g beyond the tolerance (%.3g); retrying with %.3g",
