@@ -55,8 +55,8 @@ Hairer & Wanner II, IV.8; Shampine's filter of stiff ODE codes): a mode the step
 keeps its error, a stiff one it cannot (a free body's rigidity, a rope's axial ringing,
 a node chattering on a barrier) is damped as bdf2 and implicit Euler damp it on the
 next steps, so it does not set the steps. (Before, the positions' estimate alone went
-through W^-1 w, without the velocities' share b ev; with the default at 1e-3 the drop
-below took 607 steps.) The bodies' momenta are not filtered: a barrier's stiffness is
+through W^-1 w, without the velocities' share b ev: the drop below took 607 steps at
+1e-3, where it takes 522 now.) The bodies' momenta are not filtered: a barrier's stiffness is
 the bounce itself (filtered, two boxes colliding head on at the default lost 6.4 % of
 their speed, 4.2 % raw; a ball's bounce on the ground 0.9 % of its period, 0.8 % raw),
 and a body's rigidity does not change its momentum.
