@@ -38,25 +38,17 @@ import scipy.linalg.lapack as lapack  # noqa: E402
 from scipy.sparse import coo_matrix  # noqa: E402
 from scipy.sparse.csgraph import reverse_cuthill_mckee  # noqa: E402
 
-if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from floor_kernels import (  # type: ignore
-        box_distance,
-        closest,
-        hessian,
-        pose,
-        potential,
-        step_cap,
-    )
-else:
-    from benchmarks.peers.floor_kernels import (
-        box_distance,
-        closest,
-        hessian,
-        pose,
-        potential,
-        step_cap,
-    )
+if __package__ in (None, ""):  # run as a script: the package's name all the same, so
+    # that Numba's cache of the kernels is the one the package's imports read
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from benchmarks.peers.floor_kernels import (  # noqa: E402
+    box_distance,
+    closest,
+    hessian,
+    pose,
+    potential,
+    step_cap,
+)
 
 ARMIJO = 1e-4
 WOLFE = 0.9  # a step whose slope is still steeper than this share of the start's is lengthened
