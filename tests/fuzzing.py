@@ -26,6 +26,7 @@ taking steps when its time was up: slow, not stuck) or a bad class: "traceback",
 from __future__ import annotations
 
 import contextlib
+import copy
 import datetime
 import math
 import os
@@ -122,13 +123,21 @@ def _deep(depth: int):
     return value
 
 
+def hostile(rng: random.Random):
+    """A copy of one of HOSTILE's values: later mutations change the case in place, and
+    one that changed a shared list or table would change HOSTILE itself for every later
+    draw (hypothesis then finds its data generation inconsistent on a replay, and the
+    failure it replays is lost)."""
+    return copy.deepcopy(rng.choice(HOSTILE))
+
+
 def mutate_case(data: dict, rng: random.Random) -> list[str]:
     """Changes ``data`` in place (one to three mutations); returns what was done."""
     notes = []
     for _ in range(rng.choice((1, 1, 1, 2, 3))):
         where = paths(data)
         if not where:
-            data["geometry"] = rng.choice(HOSTILE)
+            data["geometry"] = hostile(rng)
             notes.append("geometry replaced")
             continue
         path = rng.choice(where)
@@ -137,7 +146,7 @@ def mutate_case(data: dict, rng: random.Random) -> list[str]:
         op = rng.randrange(10)
         shown = ".".join(map(str, path))
         if op <= 3:
-            parent[key] = rng.choice(HOSTILE)
+            parent[key] = hostile(rng)
             notes.append(f"{shown} = {parent[key]!r:.40}")
         elif op == 4:
             del parent[key]
@@ -150,7 +159,7 @@ def mutate_case(data: dict, rng: random.Random) -> list[str]:
             parent[typo] = parent.pop(key)
             notes.append(f"{shown} renamed {typo!r}")
         elif op == 7 and isinstance(parent, dict):
-            parent[f"unknown_{rng.randrange(100)}"] = rng.choice(HOSTILE)
+            parent[f"unknown_{rng.randrange(100)}"] = hostile(rng)
             notes.append(f"unknown key beside {shown}")
         elif op == 8:
             parent[key] = _deep(rng.choice((3, 40, 200)))

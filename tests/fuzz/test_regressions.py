@@ -647,3 +647,22 @@ def test_a_free_body_beyond_the_resolution_of_its_coordinates_is_bad_input(tmp_p
     path.write_text(near)
     result = invoke(["run", path, "-o", out, "-q"])
     assert result.exit_code == 0, result.output
+
+
+def test_mutations_never_change_the_hostile_values_they_draw_from():
+    """A mutation that put one of HOSTILE's lists or tables into a case and a later one
+    that changed it in place changed HOSTILE for every later draw; hypothesis then found
+    its data generation inconsistent on a replay (FlakyStrategyDefinition in a fresh
+    clone's run) and lost what it replayed. Each draw is a copy now."""
+    import copy
+    import random
+
+    import fuzzing
+
+    before = copy.deepcopy(fuzzing.HOSTILE)
+    rng = random.Random(0)
+    for _ in range(2000):
+        data = {"geometry": {"kind": "cable", "nodes": 5}, "solver": {"dt": 0.1}}
+        for _ in range(3):
+            fuzzing.mutate_case(data, rng)
+    assert repr(fuzzing.HOSTILE) == repr(before)
