@@ -249,14 +249,26 @@ class BodyFriction(BodyContact):
     def __init__(self, friction, contact: BodyContact):
         super().__init__(friction, contact.frame, n_nodes=contact.n_nodes, label=contact.label)
         self.rides_on = contact
+        self.touching = False  # a node pressed on the body at the lagged state
 
     def begin_step(self, x, time, start=None) -> None:
         self._local(x)
         self.shape.begin_step(self._buf, None)
+        self.touching = bool(np.any(self.shape.weight > 0.0))
 
     def relag(self, x) -> float:
         self._local(x)
-        return self.shape.relag(self._buf)
+        change = self.shape.relag(self._buf)
+        self.touching = bool(np.any(self.shape.weight > 0.0))
+        return float(change)
+
+    # With no node pressed on the body (every lagged normal force 0: a net in flight
+    # towards it) the friction's energy, gradient and Hessian are zero: not evaluated.
+    def gradient(self, x, grad):
+        return super().gradient(x, grad) if self.touching else 0.0
+
+    def hessian(self, x, values):
+        return super().hessian(x, values) if self.touching else False
 
     def gap(self, x):
         return self.rides_on.gap(x)

@@ -392,6 +392,40 @@ def test_body_friction_passes_finite_differences_and_balances_force_and_torque()
     assert term.energy(z) < 1e-12 * term.energy(y)
 
 
+def test_body_friction_with_no_node_pressed_on_the_body_is_not_evaluated():
+    """A net in flight towards the body (every lagged normal force 0): the friction's
+    gradient is 0 and its Hessian skipped without evaluating either; once a node is
+    pressed on the body at a step's start, both are what the friction kernel gives."""
+    from catenet.terms.friction import Friction
+    from catenet.terms.rigid_contact import BodyFriction
+
+    rng = np.random.default_rng(3)
+    K = 6
+    c0 = np.array([0.0, 0.0, 0.0])
+    frame = BodyFrame(K, 5.0, INERTIA, c0)
+    box = BoxBarrier(np.arange(K), c0, [0.5, 0.4, 0.3], kappa=3.0, dhat=0.2)
+    x = np.zeros((K + 4, 3))
+    x[K:] = posed(frame, rng, c0, np.eye(3))
+    x[:K] = [0.0, 0.0, 2.0] + 0.1 * rng.standard_normal((K, 3))  # far above the box
+    term = BodyFriction(Friction(box, mu=0.4, slip=0.01), BodyContact(box, frame, n_nodes=K + 4))
+    term.begin_step(x, 0.1, 0.0)
+    assert not term.touching
+    called = []
+    real = term.shape.gradient
+    term.shape.gradient = lambda *a: called.append(a) or real(*a)
+    grad = np.zeros_like(x)
+    assert term.gradient(x, grad) == 0.0 and not grad.any()
+    assert term.hessian(x, np.zeros(81 * K + 144)) is False
+    assert not called
+    x[0] = [0.0, 0.0, 0.35]  # 5 cm above the top face: within the barrier's 0.2 m
+    term.begin_step(x, 0.2, 0.1)
+    assert term.touching
+    y = x.copy()
+    y[0, 0] += 0.05  # slid past the slip distance
+    assert term.gradient(y, grad) > 0.0 and np.abs(grad).max() > 0.0 and called
+    assert term.hessian(y, np.zeros(81 * K + 144)) is True
+
+
 def test_friction_slows_a_ball_spinning_on_a_net():
     """A sphere body spinning about the vertical, resting on the net: frictionless, no
     torque reaches it and it keeps its spin (but for implicit Euler's own small
