@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from catenet.kernels.contact import barrier
+from catenet.kernels.friction import friction_gradient, friction_hessian
 from catenet.kernels.shapes import _block, shape_feature
 
 
@@ -269,6 +270,69 @@ def frame_contact_hessian_shape(kind, geom, kappa, dhat, x, nodes, body, B, c0, 
                 H[k, a, c] = hv[3 * a + c]
         active[count] = k
         count += 1
+    if count:
+        blocks = values[: 81 * K].reshape((K, 81))
+        frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :])
+    return count
+
+
+@njit(cache=True, error_model="numpy")
+def frame_friction_gradient(x, nodes, body, B, c0, anchor, normal, weight, eps, grad):
+    """Adds the gradient of the lagged friction riding on the body (``anchor``,
+    ``normal``, ``weight`` per contact node, slip ``eps``: ``catenet.kernels.friction``,
+    at the nodes' body-frame points) at the contact ``nodes`` and the body's four nodes
+    into grad (N, 3), as ``frame_contact_gradient`` does the barrier's. Returns the
+    energy."""
+    _, A, U, X = frame_local(x, nodes, body, B, c0)
+    K = nodes.shape[0]
+    g = np.zeros((K, 3))
+    energy = friction_gradient(X, np.arange(K), anchor, normal, weight, eps, g)
+    if not np.isfinite(energy):
+        return energy
+    fsum = np.zeros(3)
+    gA = np.zeros((3, 3))
+    for k in range(K):
+        i = nodes[k]
+        for a in range(3):
+            f = A[a, 0] * g[k, 0] + A[a, 1] * g[k, 1] + A[a, 2] * g[k, 2]
+            grad[i, a] += f
+            fsum[a] += f
+            for m in range(3):
+                gA[a, m] += U[k, a] * g[k, m]
+    for q in range(4):
+        for a in range(3):
+            s = -0.25 * fsum[a]
+            for m in range(3):
+                s += B[q, m] * gA[a, m]
+            grad[body[q], a] += s
+    return energy
+
+
+@njit(cache=True, error_model="numpy")
+def frame_friction_hessian(x, nodes, body, B, c0, anchor, normal, weight, eps, chain, values):
+    """The Hessian of the lagged friction riding on the body into ``values`` (K blocks
+    of 81, then the body's 144), as ``frame_contact_hessian_shape`` does the barrier's;
+    returns how many nodes act."""
+    _, A, U, X = frame_local(x, nodes, body, B, c0)
+    K = nodes.shape[0]
+    local = np.arange(K)
+    hv = np.zeros(9 * K)
+    friction_hessian(X, local, anchor, normal, weight, eps, hv)
+    g = np.zeros((K, 3))
+    friction_gradient(X, local, anchor, normal, weight, eps, g)
+    values[:] = 0.0
+    H = hv.reshape((K, 3, 3))
+    active = np.empty(K, dtype=np.int64)
+    count = 0
+    for k in range(K):
+        acts = False
+        for a in range(9):
+            acts = acts or hv[9 * k + a] != 0.0
+        for m in range(3):
+            acts = acts or g[k, m] != 0.0
+        if acts:
+            active[count] = k
+            count += 1
     if count:
         blocks = values[: 81 * K].reshape((K, 81))
         frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :])

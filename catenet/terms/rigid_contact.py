@@ -47,6 +47,8 @@ from catenet.kernels.rigid import (
     frame_contact_gradient,
     frame_contact_hessian,
     frame_contact_hessian_shape,
+    frame_friction_gradient,
+    frame_friction_hessian,
     frame_local,
 )
 from catenet.terms.base import Term, register
@@ -264,11 +266,24 @@ class BodyFriction(BodyContact):
 
     # With no node pressed on the body (every lagged normal force 0: a net in flight
     # towards it) the friction's energy, gradient and Hessian are zero: not evaluated.
+    # Else one kernel each, on the nodes' body-frame points (as a box's barrier).
     def gradient(self, x, grad):
-        return super().gradient(x, grad) if self.touching else 0.0
+        if not self.touching:
+            return 0.0
+        f, frame = self.shape, self.frame
+        return float(
+            frame_friction_gradient(x, self.nodes, frame.nodes, frame.B, self.c0, f.anchor,
+                                    f.normal, f.weight, f.slip, grad)
+        )  # fmt: skip
 
     def hessian(self, x, values):
-        return super().hessian(x, values) if self.touching else False
+        if not self.touching:
+            return False
+        f, frame = self.shape, self.frame
+        return (
+            frame_friction_hessian(x, self.nodes, frame.nodes, frame.B, self.c0, f.anchor,
+                                   f.normal, f.weight, f.slip, self._chain, values) > 0
+        )  # fmt: skip
 
     def gap(self, x):
         return self.rides_on.gap(x)

@@ -392,10 +392,11 @@ def test_body_friction_passes_finite_differences_and_balances_force_and_torque()
     assert term.energy(z) < 1e-12 * term.energy(y)
 
 
-def test_body_friction_with_no_node_pressed_on_the_body_is_not_evaluated():
+def test_body_friction_with_no_node_pressed_on_the_body_is_not_evaluated(monkeypatch):
     """A net in flight towards the body (every lagged normal force 0): the friction's
     gradient is 0 and its Hessian skipped without evaluating either; once a node is
-    pressed on the body at a step's start, both are what the friction kernel gives."""
+    pressed on the body at a step's start, both are what the friction kernels give."""
+    from catenet.terms import rigid_contact
     from catenet.terms.friction import Friction
     from catenet.terms.rigid_contact import BodyFriction
 
@@ -411,8 +412,13 @@ def test_body_friction_with_no_node_pressed_on_the_body_is_not_evaluated():
     term.begin_step(x, 0.1, 0.0)
     assert not term.touching
     called = []
-    real = term.shape.gradient
-    term.shape.gradient = lambda *a: called.append(a) or real(*a)
+
+    def counted(name):
+        real = getattr(rigid_contact, name)
+        return lambda *a: called.append(name) or real(*a)
+
+    for name in ("frame_friction_gradient", "frame_friction_hessian"):
+        monkeypatch.setattr(rigid_contact, name, counted(name))
     grad = np.zeros_like(x)
     assert term.gradient(x, grad) == 0.0 and not grad.any()
     assert term.hessian(x, np.zeros(81 * K + 144)) is False
@@ -422,8 +428,9 @@ def test_body_friction_with_no_node_pressed_on_the_body_is_not_evaluated():
     assert term.touching
     y = x.copy()
     y[0, 0] += 0.05  # slid past the slip distance
-    assert term.gradient(y, grad) > 0.0 and np.abs(grad).max() > 0.0 and called
+    assert term.gradient(y, grad) > 0.0 and np.abs(grad).max() > 0.0
     assert term.hessian(y, np.zeros(81 * K + 144)) is True
+    assert called == ["frame_friction_gradient", "frame_friction_hessian"]
 
 
 def test_friction_slows_a_ball_spinning_on_a_net():
