@@ -28,6 +28,7 @@ from catenet.solver.stepping import StepControl
 from catenet.solver.workspace import Workspace
 from catenet.terms import Inertia
 from catenet.terms.moving import carry, moves
+from catenet.terms.pinch import Pinched, pinch_note
 
 if TYPE_CHECKING:
     from catenet.model.guides import Guides
@@ -214,6 +215,8 @@ class TimeStepper:
             self.kept.drop()  # the pattern grew (self-contact): a new matrix
         try:  # nodes a moving obstacle may reach ride with it (catenet/terms/moving.py)
             base = carry(potential, x, x_trial, t, t + h_step, net.fixed)
+        except Pinched:
+            raise  # too long a step for two obstacles closing on the net: a shorter one
         except ConvergenceError as exc:
             raise ConvergenceError(str(exc), iterations=self.iterations, state=x.copy()) from None
         x_trial[:] = potential.toward(base, x_trial)  # a predictor inside an obstacle is cut
@@ -224,7 +227,10 @@ class TimeStepper:
     def solve_step(self, h_step: float) -> tuple[NewtonResult | None, str]:
         """Newton for the step of ``h_step`` from the predictor: its result (None when the
         system was singular) and why it failed."""
-        x_trial = self.predict(h_step)
+        try:
+            x_trial = self.predict(h_step)
+        except Pinched as exc:
+            return None, str(exc)
         y_k = self.x.reshape(-1)[self.free]
         v_k = self.v.reshape(-1)[self.free]
         self.inertia.set_step(*self.scheme.weights(self.m_free, y_k, v_k, h_step, self.damping))
@@ -300,6 +306,8 @@ class TimeStepper:
         )
         if not again:
             message = f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s"
+            if self.moving:  # two obstacles closing on the net: catenet/terms/pinch.py
+                why += pinch_note(self.potential.system.terms, self.x, self.t)
         elif control.spent():
             assert not isinstance(control, RestControl)  # a run to rest ends by max_steps
             message = control.spent_message(self.t)

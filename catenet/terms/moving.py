@@ -16,8 +16,10 @@ the first contact) moves every free node that the obstacle may reach in the step
 rigidly with it, in the predictor and in the point the cut-back starts from: rigid
 motion keeps a node's gap, so every step starts with every node outside. A node is
 carried by one obstacle at most, and the contacts of a carried rigid ball (or the ball
-resting on a carried node) come along (``catenet.terms.collide.spread``). A support the
-obstacle reaches stops the run (ConvergenceError naming obstacle and node).
+resting on a carried node) come along (``catenet.terms.collide.spread``). A node or edge
+that a second moving obstacle reaches in the same step is watched over it and carried
+by a blend of the two motions (``catenet.terms.pinch``). A support the obstacle reaches
+stops the run (ConvergenceError naming obstacle and node).
 
 The obstacle's motion does work on the net (``driven_work``, booked by the energy
 balance as external work): over a step from t_n to t_n+1, the trapezoid of the barrier's
@@ -323,9 +325,14 @@ def carry(potential, base, trial, t0: float, t1: float, fixed) -> np.ndarray:
     if not movers:
         return base
     start, base = base, base.copy()
+    before = trial.copy() if len(movers) > 1 else trial
     moved = np.full(len(base), -1, dtype=np.int64)
     for k, term in enumerate(movers):
         term.carry(base, trial, t0, t1, fixed, moved, k)
+    if len(movers) > 1:  # a node or edge two obstacles reach: catenet/terms/pinch.py
+        from catenet.terms.pinch import share
+
+        share(movers, start, base, trial, before, moved, t0, t1)
     spread(potential.system.terms, movers, start, base, trial, moved, t0, t1)
     return base
 

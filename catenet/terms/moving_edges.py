@@ -40,6 +40,7 @@ class MovingEdges(Moving):
     horizon = True
     guards_supports = False  # the nodes' barrier of the same obstacle guards them
     guard = None  # the edges with both nodes fixed (an EdgeContact), only watched
+    twin: Moving | None = None  # the nodes' barrier of the same obstacle
 
     def hessian(self, x, values):
         active = self.shape.hessian(self._local(x), values)
@@ -126,4 +127,5 @@ def moving_edges(edge, term: Moving, guard=None) -> MovingEdges:
         label=term.label,
     )
     out.guard = guard
+    out.twin = term  # the same obstacle's motion (catenet/terms/pinch.py)
     return out

@@ -1,0 +1,241 @@
+"""Nodes and edges within reach of two obstacles on prescribed motions in one step (a
+rope between two closing plates, a rope on a moving belt crossed by a blade).
+
+``catenet.terms.moving.Moving.carry`` moves the nodes an obstacle may reach in a step
+rigidly with it, and a node is carried by one obstacle at most (the first that claims
+it). Where a second obstacle reaches the same node or edge in that step, that rigid
+motion keeps the node's gap to the first obstacle only: the second may close on it
+faster than the gap it has (two jaws), or sweep over it within the step (a blade
+thinner than its travel crossing a rope carried by a slow belt). ``share`` watches
+every such node and edge over the step: its points follow their carry (per node a
+blend of the obstacles' rigid motions, weights W summing to 1) while each obstacle
+follows its own motion, and conservative advancement (every point moves relative to
+the obstacle by at most the sum of the two largest sweeps over the step) finds the
+first contact of any of them with an obstacle other than its carrier. Where there is
+one, the blends (1 - l) e_j + l e_k of the carrier j and the obstacle k that reached it
+are tried in turn (l = 1/2 first: two jaws closing at the same speed keep a pinched
+node in the middle); the first that no obstacle reaches over the step is kept, in the
+step's start ``base`` and its predictor ``trial``. Where none does, ``Pinched``: the
+step is too long for the room the obstacles leave (the time stepping halves it). Two
+obstacles that close to less than the room the net's capsule needs (their gaps' sum at
+the node below zero) make every step fail: the run stops at the last good state, the
+message naming the obstacles, the node or edge and the time.
+
+The guarantee is the moving obstacles': every step starts with every node and every
+point of every edge outside every obstacle, and no obstacle passes over one within it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from catenet.errors import ConvergenceError
+from catenet.terms.collide import SWEEP_SAFETY
+
+#: The blends tried for a node that an obstacle other than its carrier reaches, as the
+#: share l of that obstacle's motion (0: the carrier's alone, the first tried).
+BLENDS = (0.5, 1.0, 0.25, 0.75, 0.1, 0.9)
+MAX_ADVANCES = 400  # conservative advancement's steps per obstacle and check
+
+
+class Pinched(ConvergenceError):
+    """No carry of the nodes keeps them out of every obstacle over the step (the time
+    stepping tries a shorter one)."""
+
+
+def share(movers, start, base, trial, trial0, moved, t0: float, t1: float) -> int:
+    """Re-carries the nodes that an obstacle other than their carrier reaches from t0 to
+    t1 (module docstring), in ``base`` and ``trial`` in place (``start`` and ``trial0``:
+    both before any carrying; ``moved``: per node the index in ``movers`` of its carrier,
+    -1: none). Returns how many nodes were re-carried; raises ``Pinched``."""
+    roots = [getattr(m, "twin", None) or m for m in movers]
+    groups = {id(r): g for g, r in reversed(list(enumerate(roots)))}
+    group = np.array([groups[id(r)] for r in roots])
+    if len(set(group.tolist())) < 2:
+        return 0
+    sweeps = np.array([m.sweep(t0, t1) for m in movers])
+    weights = np.zeros((len(base), len(movers)))
+    carried = np.flatnonzero(moved >= 0)
+    weights[carried, group[moved[carried]]] = 1.0
+    watch = _watched(movers, group, sweeps, start, weights, t0)
+    if not watch:
+        return 0
+    changed: set[int] = set()
+    for _ in range(4 * len(movers)):
+        hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
+        if hit is None:
+            break
+        k, nodes = hit
+        nodes = [n for n in nodes if weights[n].any() and weights[n, group[k]] < 1.0]
+        if not _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1):
+            raise Pinched(_message(movers[k], movers, nodes, moved, start, t1))
+        changed.update(nodes)
+    else:
+        raise Pinched(_message(movers[hit[0]], movers, hit[1], moved, start, t1))
+    if changed:
+        idx = np.array(sorted(changed))
+        base[idx] = _carried(movers, weights, start, idx, t0, t1)
+        trial[idx] = _carried(movers, weights, trial0, idx, t0, t1)
+    return len(changed)
+
+
+def _items(mover):
+    """(per item its nodes (K, m), the item's gaps at body-frame points): a node
+    barrier's nodes, an edge barrier's edges."""
+    edges = getattr(mover.shape, "edges", None)
+    if edges is not None and getattr(mover, "horizon", False):
+        return np.asarray(edges), mover.shape.gap
+    return np.asarray(mover.nodes)[:, None], mover.shape.gap
+
+
+def _watched(movers, group, sweeps, start, weights, t0: float) -> dict[int, np.ndarray]:
+    """Per mover k, the items (indices) within its reach over the step that have a node
+    carried by another obstacle's motion."""
+    out = {}
+    for k, mover in enumerate(movers):
+        nodes, gap = _items(mover)
+        others = np.delete(sweeps, np.flatnonzero(group == group[k]))
+        if not others.size or not len(nodes):
+            continue
+        other = weights[nodes].sum(axis=-1) - weights[nodes][..., group[k]]  # (K, m)
+        mixed = (other > 0.0).any(axis=1)
+        if not mixed.any():
+            continue
+        c0, R0 = mover.pose(t0)
+        g = gap(mover._body(start, c0, R0))
+        reach = SWEEP_SAFETY * (sweeps[k] + others.max()) + mover.dhat
+        items = np.flatnonzero(mixed & (g < reach))
+        if items.size:
+            out[k] = items
+    return out
+
+
+def _carried(movers, weights, points, idx, t0: float, t1: float, s: float = 1.0):
+    """The points ``idx`` of ``points`` moved by their blends of the obstacles' rigid
+    motions over the fraction s of the step."""
+    p = points[idx]
+    out = p.copy()
+    for g in np.flatnonzero(weights[idx].any(axis=0)):
+        out += weights[idx, g][:, None] * (_rigid(movers[g], p, t0, t1, s) - p)
+    return out
+
+
+def _rigid(mover, p, t0: float, t1: float, s: float):
+    """Points p moved rigidly with ``mover`` over the fraction s of the step."""
+    f0, f1 = mover.path.distance(t0), mover.path.distance(t1)
+    c0, R0 = mover._pose(f0)
+    c, R = mover._pose(f0 + s * (f1 - f0))
+    return c + (p - c0) @ (R @ R0.T).T
+
+
+def _first_hit(movers, group, sweeps, watch, start, weights, t0, t1):
+    """(k, the nodes of the first of k's watched items it reaches) for the first mover k
+    that reaches one over the step, else None (conservative advancement)."""
+    for k, items in watch.items():
+        mover = movers[k]
+        nodes, gap = _items(mover)
+        idx = np.unique(nodes[items])
+        rate = sweeps[k] + np.delete(sweeps, np.flatnonzero(group == group[k])).max()
+        f0, f1 = mover.path.distance(t0), mover.path.distance(t1)
+        floor = 1e-9 * max(mover.reach, mover.dhat)
+        x = start.copy()
+        s = 0.0
+        for _ in range(MAX_ADVANCES):
+            x[idx] = _carried(movers, weights, start, idx, t0, t1, s)
+            c, R = mover._pose(f0 + s * (f1 - f0))
+            g = gap(mover._body(x, c, R))[items]
+            j = int(np.argmin(g))
+            if not g[j] > floor:
+                return k, [int(n) for n in nodes[items[j]]]
+            if s >= 1.0 or rate == 0.0:
+                break
+            s = min(1.0, s + float(g[j]) / rate)
+        else:
+            return k, [int(n) for n in nodes[items[int(np.argmin(g))]]]
+    return None
+
+
+def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1) -> bool:
+    """Gives ``nodes`` the first blend of their carrier's motion and k's (BLENDS) that
+    no obstacle reaches over the step; False (weights as they were) where none does."""
+    if not nodes:
+        return False
+    idx = np.array(nodes)
+    keep = weights[idx].copy()
+    carrier = np.argmax(keep, axis=1)
+    for share_k in BLENDS:
+        weights[idx] = 0.0
+        weights[idx, carrier] = 1.0 - share_k
+        weights[idx, group[k]] += share_k
+        hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
+        if hit is None or not set(hit[1]) & set(nodes):
+            return True
+    weights[idx] = keep
+    return False
+
+
+def _message(mover, movers, nodes, moved, start, t1: float) -> str:
+    """What a step no carry keeps clear says: the obstacles, the node or edge, the time."""
+    carriers = {int(moved[n]) for n in nodes if moved[n] >= 0}
+    other = ", ".join(sorted({movers[c].label for c in carriers} - {mover.label}))
+    what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
+    where = ", ".join(f"{v:.6g}" for v in start[nodes[0]])
+    return (
+        f"{mover.label} and {other or 'another moving obstacle'} close on the {what} "
+        f"(at [{where}]) by t = {t1:.6g} s: no motion keeps it out of both; where they "
+        "leave less room than twice the contact radius (or, without edge contact, no "
+        "room) the net cannot pass; change their motions"
+    )
+
+
+def pinch_note(terms, x, t: float) -> str:
+    """Where two obstacles on prescribed motions hold a node or edge of state x at time
+    t with less than PINCH_ROOM of their activation distance between them (the sum of
+    its two gaps): what a run that stops there says of it ("" when none does)."""
+    from catenet.terms.moving import Moving
+
+    movers = [m for m in terms if isinstance(m, Moving)]
+    roots = [getattr(m, "twin", None) or m for m in movers]
+    worst = None
+    for a, ma in enumerate(movers):
+        for b in range(a + 1, len(movers)):
+            mb = movers[b]
+            if roots[a] is roots[b] or _items(ma)[0].shape[1] != _items(mb)[0].shape[1]:
+                continue
+            both = _common(ma, mb, x, t)
+            if both is not None and (worst is None or both[0] < worst[0]):
+                worst = (*both, ma, mb)
+    if worst is None:
+        return ""
+    room, nodes, ma, mb = worst
+    what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
+    return (
+        f"; {ma.label} and {mb.label} pinch the {what} at t = {t:.6g} s, leaving it "
+        f"{max(room, 0.0):.3g} m of room beyond its contact radius: two moving obstacles "
+        "must not close on the net to less than twice its contact radius (without edge "
+        "contact: on a node); change their motions"
+    )
+
+
+PINCH_ROOM = 1e-3  # a node or edge is pinched below this share of dhat of room
+
+
+def _common(ma, mb, x, t: float):
+    """(room, nodes) of the item of the same nodes that both movers hold tightest, where
+    the sum of its gaps to both is below PINCH_ROOM times the larger dhat, else None."""
+    na, gap_a = _items(ma)
+    nb, gap_b = _items(mb)
+    index = {tuple(row): i for i, row in enumerate(nb.tolist())}
+    pairs = [(i, index[tuple(row)]) for i, row in enumerate(na.tolist()) if tuple(row) in index]
+    if not pairs:
+        return None
+    ia, ib = np.array(pairs).T
+    out = []
+    for m, gap in ((ma, gap_a), (mb, gap_b)):
+        c, R = m.pose(t)
+        out.append(gap(m._body(x, c, R)))
+    room = out[0][ia] + out[1][ib]
+    k = int(np.argmin(room))
+    if not room[k] < PINCH_ROOM * max(ma.dhat, mb.dhat):
+        return None
+    return float(room[k]), [int(n) for n in na[ia[k]]]
