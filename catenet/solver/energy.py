@@ -30,9 +30,10 @@ Implicit Euler's remainder is never positive on a convex energy: the step adds
 remainder grows beyond ``tolerance`` x the largest energy seen creates energy: the run
 stops with EnergyError (exit 1), never ending as an answer. An obstacle on a prescribed
 motion (``catenet.terms.moving``) is ``driven``: its work on the net is booked in W, and
-such runs are judged like any other. Where a ball follows a prescribed path
-(``catenet.terms.body.Guide``) the balance is kept but not judged (``judged`` False):
-its work on the net is not counted.
+such runs are judged like any other; so is a ball on a prescribed path
+(``catenet.terms.body.Guide``, ``driven``): its path's work through the spring that
+holds it there, the trapezoid of the spring's force times the path's displacement, is
+booked in W.
 """
 
 from __future__ import annotations
@@ -84,7 +85,7 @@ class Ledger:
     def begin(self, stepper: TimeStepper) -> None:
         """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
         system = stepper.system
-        self.judged = not any(type(t).__name__ == "Guide" for t in system.terms)
+        self.judged = True
         self._friction = [t for t in system.terms if t.lagged and not t.medium]
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
         self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history

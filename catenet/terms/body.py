@@ -15,7 +15,9 @@ node, held on its path c(t) by ``Guide``, a stiff spring k |x_c - c(t)|^2 / 2 wh
 anchor moves at every time step (``begin_step``). The ball is never teleported: each
 step moves it within the same Newton solve as the net, capped at the first contact, so
 nodes cannot be swallowed; where the net resists, the ball lags its path by
-force / k (``Guide.lag``).
+force / k (``Guide.lag``). The path does work on the net through that spring, which
+the energy balance books as external work (``Guide.driven_work``), so a run with a
+ball on a path is judged by its balance like any other.
 """
 
 from __future__ import annotations
@@ -120,6 +122,7 @@ class Guide(Term):
 
     role = "internal"
     convex = True
+    driven = True  # the path's work on the net (``driven_work``)
 
     def __init__(self, center: int, path: Path, stiffness: float, *, n_nodes: int):
         if not (math.isfinite(stiffness) and stiffness > 0):
@@ -129,10 +132,33 @@ class Guide(Term):
         self.k = float(stiffness)
         self.anchor = path(0.0).copy()
         self.n_nodes = int(n_nodes)
+        self._span: tuple[float, float] | None = None  # the last step's (start, end)
+
+    def begin_run(self, x, t: float) -> None:
+        self.anchor = self.path(t)
+        self._span = None
+
+    def settle_time(self) -> float:
+        return 0.0  # as before: the path's end decides nothing of a run to rest
 
     def begin_step(self, x, time, start=None) -> None:
+        self._span = None
         if time is not None:
             self.anchor = self.path(time)
+            if start is not None:
+                self._span = (float(start), float(time))
+
+    def driven_work(self, x_old, x_new) -> float:
+        """The path's work [J] on the net over the last step: the spring's force on the
+        ball times the anchor's displacement, the trapezoid of the step's start and end
+        (the work rate of k |x_c - c(t)|^2 / 2 is -k (x_c - c) . c'(t)), as an obstacle
+        on a prescribed motion books its own (``catenet.terms.moving``)."""
+        if self._span is None:
+            return 0.0
+        a0, a1 = self.path(self._span[0]), self.path(self._span[1])
+        f0 = -self.k * (x_old[self.center] - a0)
+        f1 = -self.k * (x_new[self.center] - a1)
+        return 0.5 * float((f0 + f1) @ (a1 - a0))
 
     def pattern(self):
         return node_block_pattern(np.array([self.center]))
