@@ -133,10 +133,12 @@ class Guide(Term):
         self.anchor = path(0.0).copy()
         self.n_nodes = int(n_nodes)
         self._span: tuple[float, float] | None = None  # the last step's (start, end)
+        self._loaded = True  # a step of the run booked (``begin_run``: not yet)
 
     def begin_run(self, x, t: float) -> None:
         self.anchor = self.path(t)
         self._span = None
+        self._loaded = False  # the spring at the run's start holds nothing yet
 
     def settle_time(self) -> float:
         return 0.0  # as before: the path's end decides nothing of a run to rest
@@ -152,12 +154,18 @@ class Guide(Term):
         """The path's work [J] on the net over the last step: the spring's force on the
         ball times the anchor's displacement, the trapezoid of the step's start and end
         (the work rate of k |x_c - c(t)|^2 / 2 is -k (x_c - c) . c'(t)), as an obstacle
-        on a prescribed motion books its own (``catenet.terms.moving``)."""
+        on a prescribed motion books its own (``catenet.terms.moving``). In a run's first
+        step the end's force alone: at the start the spring holds nothing (the ball sits
+        on its anchor), and within a step's first instants it takes up the ball's
+        weight and the net's push, so the trapezoid would count half of them."""
         if self._span is None:
             return 0.0
         a0, a1 = self.path(self._span[0]), self.path(self._span[1])
-        f0 = -self.k * (x_old[self.center] - a0)
         f1 = -self.k * (x_new[self.center] - a1)
+        if not self._loaded:  # the first step: its end's force throughout
+            self._loaded = True
+            return float(f1 @ (a1 - a0))
+        f0 = -self.k * (x_old[self.center] - a0)
         return 0.5 * float((f0 + f1) @ (a1 - a0))
 
     def pattern(self):

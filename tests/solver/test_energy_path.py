@@ -13,7 +13,7 @@ import pytest
 import catenet as cn
 from catenet.case import build, parse_case
 from catenet.solver.energy import EnergyError
-from catenet.terms.body import Guide
+from catenet.terms.body import Guide, Path
 
 #: A square net of 1 m (10 cables, prestrain 1e-2) and a ball of 0.15 m brought down
 #: 0.15 m along a path into its middle, its speed ramped up and down, then held there.
@@ -63,24 +63,23 @@ def test_a_ball_pressed_into_a_net_along_a_path_balances(integrator):
 
 
 def test_the_paths_work_is_the_force_on_the_ball_times_the_paths_displacement():
-    """A single step's booking by hand: the trapezoid of the spring's force on the ball
-    times the anchor's displacement."""
-    path = cn_path()
+    """The booking of two steps by hand: the first the end's force on the ball times the
+    anchor's displacement (the spring holds nothing at the start: the ball's weight and
+    the net's push come within the step's first instants), then the trapezoid of the
+    spring's force at the step's start and end; a static load step books nothing."""
+    path = Path(np.zeros(3), np.array([0.0, 0.0, -1.0]))
     guide = Guide(0, path, 1e3, n_nodes=1)
-    x0, x1 = np.array([[0.0, 0.0, 0.01]]), np.array([[0.0, 0.0, -0.05]])
+    x0, x1, x2 = (np.array([[0.0, 0.0, z]]) for z in (0.0, -0.09, -0.19))
     guide.begin_run(x0, 0.0)
     guide.begin_step(x0, 0.1, 0.0)
-    a1 = path(0.1)
-    f0, f1 = -1e3 * (x0[0] - path(0.0)), -1e3 * (x1[0] - a1)
-    assert guide.driven_work(x0, x1) == pytest.approx(0.5 * (f0 + f1) @ (a1 - path(0.0)))
-    guide.begin_step(x1, None)  # a static load step: no time, no work
-    assert guide.driven_work(x0, x1) == 0.0
-
-
-def cn_path():
-    from catenet.terms.body import Path
-
-    return Path(np.zeros(3), np.array([0.0, 0.0, -1.0]))
+    f1 = -1e3 * (x1[0] - path(0.1))
+    assert guide.driven_work(x0, x1) == pytest.approx(f1 @ (path(0.1) - path(0.0)))
+    guide.begin_step(x1, 0.2, 0.1)
+    f2 = -1e3 * (x2[0] - path(0.2))
+    assert guide.driven_work(x1, x2) == pytest.approx(0.5 * (f1 + f2) @ (path(0.2) - path(0.1)))
+    assert guide.driven_work(x1, x2) == pytest.approx(1.0)  # 10 N against 0.1 m
+    guide.begin_step(x2, None)  # a static load step: no time, no work
+    assert guide.driven_work(x1, x2) == 0.0
 
 
 @pytest.mark.parametrize("speed", [2.0, 3.0])
