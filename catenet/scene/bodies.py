@@ -191,9 +191,9 @@ def _ball_terms(
         )
     radius = ball.shape.reach
     grow = 0.0 if r is None else r
-    terms: list[Term] = [
-        Ball(scale.free, node, radius + grow, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
-    ]
+    sphere = Ball(scale.free, node, radius + grow, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
+    sphere.label = f"{ball.path} (kind 'sphere')"
+    terms: list[Term] = [sphere]
     if r is not None:
         terms.append(_ball_edges(ball, node, net, r, kappa, dhat, shown))
     if prescribed:

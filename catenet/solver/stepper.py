@@ -311,6 +311,8 @@ class TimeStepper:
         elif control.spent():
             assert not isinstance(control, RestControl)  # a run to rest ends by max_steps
             message = control.spent_message(self.t)
+            if self.moving:
+                why += pinch_note(self.potential.system.terms, self.x, self.t)
         else:
             return
         raise ConvergenceError(

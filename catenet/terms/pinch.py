@@ -189,28 +189,25 @@ def _message(mover, movers, nodes, moved, start, t1: float) -> str:
 
 
 def pinch_note(terms, x, t: float) -> str:
-    """Where two obstacles on prescribed motions hold a node or edge of state x at time
-    t with less than PINCH_ROOM of their activation distance between them (the sum of
-    its two gaps): what a run that stops there says of it ("" when none does)."""
-    from catenet.terms.moving import Moving
-
-    movers = [m for m in terms if isinstance(m, Moving)]
-    roots = [getattr(m, "twin", None) or m for m in movers]
+    """Where two obstacles on prescribed motions (or one and a ball) hold a node or edge
+    of state x at time t with less than PINCH_ROOM of their activation distance between
+    them (the sum of its two gaps): what a run that stops there says of it ("" when none
+    does)."""
+    holders = _holders(terms, x, t)
     worst = None
-    for a, ma in enumerate(movers):
-        for b in range(a + 1, len(movers)):
-            mb = movers[b]
-            if roots[a] is roots[b] or _items(ma)[0].shape[1] != _items(mb)[0].shape[1]:
+    for a, (ka, na, ga, da, root_a) in enumerate(holders):
+        for kb, nb, gb, db, root_b in holders[a + 1 :]:
+            if root_a is root_b or na.shape[1] != nb.shape[1]:
                 continue
-            both = _common(ma, mb, x, t)
+            both = _common(na, ga, nb, gb, PINCH_ROOM * max(da, db))
             if both is not None and (worst is None or both[0] < worst[0]):
-                worst = (*both, ma, mb)
+                worst = (*both, ka, kb)
     if worst is None:
         return ""
-    room, nodes, ma, mb = worst
+    room, nodes, la, lb = worst
     what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
     return (
-        f"; {ma.label} and {mb.label} pinch the {what} at t = {t:.6g} s, leaving it "
+        f"; {la} and {lb} pinch the {what} at t = {t:.6g} s, leaving it "
         f"{max(room, 0.0):.3g} m of room beyond its contact radius: two moving obstacles "
         "must not close on the net to less than twice its contact radius (without edge "
         "contact: on a node); change their motions"
@@ -220,22 +217,34 @@ def pinch_note(terms, x, t: float) -> str:
 PINCH_ROOM = 1e-3  # a node or edge is pinched below this share of dhat of room
 
 
-def _common(ma, mb, x, t: float):
-    """(room, nodes) of the item of the same nodes that both movers hold tightest, where
-    the sum of its gaps to both is below PINCH_ROOM times the larger dhat, else None."""
-    na, gap_a = _items(ma)
-    nb, gap_b = _items(mb)
+def _holders(terms, x, t: float) -> list:
+    """(label, items (K, m) of nodes, their gaps at x and t, dhat, the motion's root) of
+    every obstacle on a prescribed motion and every ball."""
+    from catenet.terms.body import Ball
+    from catenet.terms.moving import Moving
+
+    out = []
+    for term in terms:
+        if isinstance(term, Moving):
+            items, gap = _items(term)
+            c, R = term.pose(t)
+            root = getattr(term, "twin", None) or term
+            out.append((term.label, items, gap(term._body(x, c, R)), term.dhat, root))
+        elif isinstance(term, Ball):
+            out.append((term.label, term.nodes[:, None], term.gap(x), term.dhat, term))
+    return out
+
+
+def _common(na, ga, nb, gb, floor: float):
+    """(room, nodes) of the item of the same nodes that both hold tightest (items na, nb
+    and their gaps ga, gb), where the sum of its two gaps is below ``floor``, else None."""
     index = {tuple(row): i for i, row in enumerate(nb.tolist())}
     pairs = [(i, index[tuple(row)]) for i, row in enumerate(na.tolist()) if tuple(row) in index]
     if not pairs:
         return None
     ia, ib = np.array(pairs).T
-    out = []
-    for m, gap in ((ma, gap_a), (mb, gap_b)):
-        c, R = m.pose(t)
-        out.append(gap(m._body(x, c, R)))
-    room = out[0][ia] + out[1][ib]
+    room = ga[ia] + gb[ib]
     k = int(np.argmin(room))
-    if not room[k] < PINCH_ROOM * max(ma.dhat, mb.dhat):
+    if not room[k] < floor:
         return None
     return float(room[k]), [int(n) for n in na[ia[k]]]
