@@ -211,3 +211,45 @@ def test_jaws_closing_on_less_than_the_ropes_diameter_stop_the_run(tmp_path):
     assert "obstacle[0] (kind 'capsule') and obstacle[1] (kind 'capsule') pinch" in done.output
     assert "less than twice its contact radius" in done.output
     assert "Traceback" not in done.output and out.exists()
+
+
+PLATE_AND_BALL = (
+    ROPE
+    + """
+[[obstacle]]
+kind = "box"                        # a plate lifting the rope, 1 mm under it
+center = [1.0, 0.0, -0.056]
+half_size = [0.2, 0.1, 0.05]
+velocity = [0.0, 0.0, 0.5]
+distance = 0.0005
+
+[[obstacle]]
+kind = "sphere"                     # a ball on a path coming down onto it, 1 mm above
+center = [1.0, 0.0, 0.106]
+radius = 0.1
+velocity = [0.0, 0.0, -0.5]
+distance = 0.0005
+
+[solver]
+method = "dynamic"
+dt = 0.005
+t_end = 0.05
+edge_contact = true
+"""
+)
+
+
+def test_a_rope_pinched_between_a_moving_plate_and_a_ball_on_a_path_stops_the_run(tmp_path):
+    """The plate's top and the ball's bottom, 1 mm off the rope's capsule, close at 1 m/s
+    (the ball gives way only by its path spring's lag): the run stops,
+    naming the plate, the ball and the pinched node (before: only that its steps stayed
+    too short)."""
+    case = tmp_path / "pinch.toml"
+    case.write_text(PLATE_AND_BALL)
+    out = tmp_path / "r.h5"
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(out)])
+    assert done.exit_code == 1, done.output
+    assert "obstacle[0] (kind 'box') and obstacle[1] (kind 'sphere') pinch the node 5" in (
+        " ".join(done.output.split())
+    )
+    assert "Traceback" not in done.output and out.exists()
