@@ -1,0 +1,32 @@
+"""The dismech-newton comparison of a cantilever (benchmarks/peers/dismech_cantilever.py),
+short: where dismech-newton is installed (``pip install dismech-newton==0.1.0.post2``;
+its 0.1.0.post4 does not import on Python 3.11), its tip converges to the elastica at
+first order in the edge length (its clamp holds the first edge, half an edge out),
+catenet's many times closer at the same edges."""
+
+from __future__ import annotations
+
+import pytest
+
+from benchmarks.peers import dismech_cantilever as dc
+from catenet.validate.rods import elastica_tip
+
+try:  # 0.1.0.post4 fails at import on Python < 3.14 with a TypeError, not an ImportError
+    import dismech_newton  # noqa: F401
+except (ImportError, TypeError) as exc:  # pragma: no cover - the peer is optional
+    pytest.skip(f"dismech-newton: {exc}", allow_module_level=True)
+
+
+def test_dismech_newtons_cantilever_converges_to_the_elastica_at_first_order():
+    """P L^2 / EI = 1 at 20 and 40 edges: dismech-newton's tip error 0.4 L / n (halving
+    with the edge), catenet's below a tenth of it at 20 edges."""
+    _, x, y = elastica_tip(1.0)
+    errors = []
+    for edges in (20, 40):
+        tip, _, steps = dc.dismech_tip(1.0, edges, 0.2 * 50 / edges)
+        assert steps < 500
+        errors.append(max(abs(tip[0] - x), abs(tip[1] - y)))
+    assert 0.2 / 20 < errors[0] < 0.6 / 20, errors
+    assert 0.4 < errors[1] / errors[0] < 0.6, errors
+    tip, _ = dc.catenet_tip(1.0, 20)
+    assert max(abs(tip[0] - x), abs(tip[1] - y)) < 0.1 * errors[0]
