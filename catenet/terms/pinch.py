@@ -221,11 +221,10 @@ def _holders(terms, x, t: float) -> list:
     """(label, items (K, m) of nodes, their gaps at x and t, dhat, the motion's root) of
     every obstacle on a prescribed motion and every ball."""
     from catenet.terms.body import Ball
-    from catenet.terms.moving import Moving
 
     out = []
     for term in terms:
-        if isinstance(term, Moving):
+        if term.moving:  # a ``catenet.terms.moving.Moving``
             items, gap = _items(term)
             c, R = term.pose(t)
             root = getattr(term, "twin", None) or term
