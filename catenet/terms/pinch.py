@@ -131,9 +131,13 @@ def _rigid(mover, p, t0: float, t1: float, s: float):
 def _first_hit(movers, group, sweeps, watch, start, weights, t0, t1):
     """(k, the nodes of the first of k's watched items it reaches) for the first mover k
     that reaches one over the step, else None (conservative advancement)."""
-    for k, items in watch.items():
+    for k, every in watch.items():
         mover = movers[k]
         nodes, gap = _items(mover)
+        # an item whose nodes all ride on k's own motion keeps its gap to k: not watched
+        items = every[~(weights[nodes[every], group[k]] >= 1.0).all(axis=1)]
+        if not items.size:
+            continue
         idx = np.unique(nodes[items])
         rate = sweeps[k] + np.delete(sweeps, np.flatnonzero(group == group[k])).max()
         f0, f1 = mover.path.distance(t0), mover.path.distance(t1)
@@ -178,6 +182,8 @@ def _message(mover, movers, nodes, moved, start, t1: float) -> str:
     """What a step no carry keeps clear says: the obstacles, the node or edge, the time."""
     carriers = {int(moved[n]) for n in nodes if moved[n] >= 0}
     other = ", ".join(sorted({movers[c].label for c in carriers} - {mover.label}))
+    if not len(nodes):
+        return f"{mover.label} and another moving obstacle close on the net by t = {t1:.6g} s"
     what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
     where = ", ".join(f"{v:.6g}" for v in start[nodes[0]])
     return (
