@@ -369,7 +369,8 @@ class SolverConfig(Declared):
         write="given",
         shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance (or contact and no dt)',
         doc="dynamic: the paper's implicit Euler (first order, damps numerically), "
-        "newmark (second order) or bdf2 (second order, L-stable: right in contact)",
+        "newmark (second order; refused with contact) or bdf2 (second order, L-stable: right in "
+        "contact)",
     )
     rho_inf: float = key(
         _check_unit_interval,

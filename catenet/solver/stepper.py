@@ -306,15 +306,15 @@ class TimeStepper:
         )
         if not again:
             message = f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s"
-            if self.moving:  # two obstacles closing on the net: catenet/terms/pinch.py
-                why += pinch_note(self.potential.system.terms, self.x, self.t)
         elif control.spent():
             assert not isinstance(control, RestControl)  # a run to rest ends by max_steps
             message = control.spent_message(self.t)
-            if self.moving:
-                why += pinch_note(self.potential.system.terms, self.x, self.t)
         else:
             return
+        if self.moving:  # two obstacles closing on the net (catenet/terms/pinch.py): first
+            note = pinch_note(self.potential.system.terms, self.x, self.t)
+            if note:
+                why = f"{note.removeprefix('; ')} (the last failed step: {why})"
         raise ConvergenceError(
             f"{message}: {why}",
             iterations=self.iterations,
