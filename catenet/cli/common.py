@@ -207,7 +207,8 @@ def errors_to_exit_codes(debug: bool = False):
             raise
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         fail(
-            f"{INTERNAL}: {type(exc).__name__}: {reason} (run again with --debug for the "
+            f"{INTERNAL}: {type(exc).__name__}: {reason} (run the same command again with "
+            "--debug after the command's name, e.g. 'catenet run --debug ...', for the "
             "traceback, and please report it)",
             EXIT_FAILED,
         )

@@ -57,3 +57,23 @@ def test_a_bad_path_is_one_line_and_exit_2(command, message, tmp_path, monkeypat
     ), res.output
     assert "Usage:" not in res.output and "Traceback" not in res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "afile", "case.toml"]
+
+
+def test_an_internal_error_names_where_debug_goes(tmp_path, monkeypatch):
+    """A bug's one line tells how to see its traceback in a form the command line takes
+    (``catenet --debug run`` is refused: --debug belongs to the command), and the
+    command so written shows it."""
+    import catenet.run.runner as runner
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a planted bug")
+
+    monkeypatch.setattr(runner, "run_case", broken)
+    case = tmp_path / "case.toml"
+    case.write_text(CASE)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "o.h5")])
+    assert done.exit_code == 1
+    assert "internal error: RuntimeError: a planted bug" in done.output
+    assert "'catenet run --debug ...'" in done.output
+    debug = CliRunner().invoke(main, ["run", "--debug", str(case), "-o", str(tmp_path / "o.h5")])
+    assert isinstance(debug.exception, RuntimeError)
