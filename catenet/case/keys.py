@@ -228,6 +228,13 @@ class Checker:
             return self.bad(path, v, f"{need}, each within {too_large()}")
         return tuple(values)
 
+    def sizes3(self, v: Any, path: str) -> Any:
+        """[a, b, c]: 3 finite numbers > 0 (a box's half sizes)."""
+        out = self.vec3(v, path)
+        if out is BAD or all(c > 0 for c in out):
+            return out
+        return self.bad(path, v, "must be 3 numbers > 0")
+
     def node_ref(self, v: Any, path: str, kind: type[GeometryConfig] | None) -> Any:
         """A node index (checked against the node count later) or a node name of the
         geometry kind (its config class; None when the geometry is broken)."""
@@ -354,6 +361,13 @@ def text(default: Any = REQUIRED, *, nonempty: bool = False, **kw) -> Any:
 def vec3(default: Any = REQUIRED, **kw) -> Any:
     check = lambda ck, v, path, ctx: ck.vec3(v, path)  # noqa: E731
     return key(check, "[x, y, z]: 3 finite numbers", default, **kw)
+
+
+def sizes3(default: Any = REQUIRED, **kw) -> Any:
+    """[a, b, c]: 3 finite numbers > 0, checked with the table's other keys (so that a
+    problem elsewhere in the table does not hide it)."""
+    check = lambda ck, v, path, ctx: ck.sizes3(v, path)  # noqa: E731
+    return key(check, "[a, b, c]: 3 numbers > 0", default, **kw)
 
 
 def node(default: Any = REQUIRED, **kw) -> Any:

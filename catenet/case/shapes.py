@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from catenet.case.keys import Checker, Declared, choice, real, text, vec3
+from catenet.case.keys import Checker, Declared, choice, real, sizes3, text, vec3
 from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
@@ -144,7 +144,7 @@ class BoxObstacle(_Motion, Declared):
 
     kind: str = choice("box", ("box",), doc="a box")
     center: tuple = vec3(missing="[x, y, z] of the centre [m]", unit="m", doc="box: centre")
-    half_size: tuple = vec3(
+    half_size: tuple = sizes3(
         missing="[hx, hy, hz]: half the box's size along its axes [m] (> 0)",
         unit="m",
         doc="box: half sizes along its own axes (> 0)",
@@ -164,8 +164,6 @@ class BoxObstacle(_Motion, Declared):
     inertia: tuple | None = inertia_key()
 
     def check(self, ck: Checker, path: str) -> None:
-        if not all(h > 0 for h in self.half_size):
-            ck.add(f"{path}.half_size = {list(self.half_size)}: must be 3 numbers > 0")
         if not any(self.axis):
             ck.add(f"{path}.axis = {list(self.axis)}: must not be zero")
         self._check_motion(ck, path)

@@ -324,6 +324,16 @@ def test_no_node_ever_enters_a_shape_a_net_falls_on(kind, dt, tmp_path):
             "obstacle[0].half_size = [0.2, -0.1, 0.2]: must be 3 numbers > 0",
         ),
         ({"kind": "box", "center": [0, 0, -1]}, "obstacle[0].half_size: missing"),
+        (  # every problem of the table at once: the bad history hid the half size
+            {
+                "kind": "box",
+                "center": [0, 0, -1],
+                "half_size": [0.2, -0.1, 0.2],
+                "velocity": [0, 0, 1],
+                "history": [[0.0, 0.0], [0.5, 1.0], [0.3, 1.0]],
+            },
+            "obstacle[0].half_size = [0.2, -0.1, 0.2]: must be 3 numbers > 0",
+        ),
         (
             {"kind": "box", "center": [0, 0, -1], "half_size": [1, 1, 1], "axis": [0, 0, 0]},
             "obstacle[0].axis = [0, 0, 0]: must not be zero",
