@@ -295,6 +295,12 @@ def _report(
             log.warning("%s", passed)
     if lost := integrator_advice.integrator_loss(case, result):
         log.warning("%s", lost)
+    if any(t.moving for t in ws.system.terms):  # two obstacles squeezing the net's end state
+        from catenet.terms.pinch import squeeze_note
+
+        top = float(abs(result.tension).max(initial=0.0))
+        if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
+            log.warning("%s", squeezed)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables

@@ -253,3 +253,55 @@ def _common(na, ga, nb, gb, floor: float):
     if not room[k] < floor:
         return None
     return float(room[k]), [int(n) for n in na[ia[k]]]
+
+
+def squeeze_note(terms, x, t: float, tension: float) -> str:
+    """Where two obstacles on prescribed motions (or one and a ball) both hold a node or
+    edge of state x within their barriers' reach (each gap below its ``distance``) and
+    press on it from both sides with more than SQUEEZE of the net's largest ``tension``:
+    the warning a run that ends so earns ("" when none does). Both barriers then push on
+    it, a squeeze that no gap of that size gives in the world: the contact forces there,
+    and the tensions where the squeeze bends the net, are the barriers', not the
+    structure's."""
+    from catenet.terms.body import Ball
+
+    holders = _holders(terms, x, t)
+    forces = []
+    for term in terms:  # in _holders' order: each one's force on the net's nodes
+        if term.moving or isinstance(term, Ball):
+            grad = np.zeros_like(x)
+            term.gradient(x, grad)
+            forces.append(np.linalg.norm(grad, axis=1))
+    worst = None
+    for a, (ka, na, ga, da, root_a) in enumerate(holders):
+        for b, (kb, nb, gb, db, root_b) in enumerate(holders[a + 1 :], start=a + 1):
+            if root_a is root_b or na.shape[1] != nb.shape[1]:
+                continue
+            index = {tuple(row): i for i, row in enumerate(nb.tolist())}
+            pairs = [(i, index[tuple(r)]) for i, r in enumerate(na.tolist()) if tuple(r) in index]
+            if not pairs:
+                continue
+            ia, ib = np.array(pairs).T
+            held = (ga[ia] < da) & (gb[ib] < db)
+            if not held.any():
+                continue
+            squeeze = np.minimum(forces[a], forces[b])  # per node, what the two cancel
+            per_item = np.where(held, squeeze[na[ia]].max(axis=1), 0.0)
+            j = int(np.argmax(per_item))
+            if worst is None or per_item[j] > worst[0]:
+                worst = (float(per_item[j]), [int(n) for n in na[ia[j]]], ka, kb, da + db)
+    if worst is None or not worst[0] > SQUEEZE * tension:
+        return ""
+    force, nodes, la, lb, reach = worst
+    what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
+    return (
+        f"{la} and {lb} both hold the net within their barriers' distance at t = {t:.6g} s "
+        f"and press the {what} from both sides with {force:.4g} N ({force / tension:.3g} "
+        "times the net's largest tension): that squeeze is the barriers' (their distances "
+        f"sum to {reach:.3g} m), not the structure's, and so are the contact forces there "
+        "and the tensions where it bends the net; leave the net more room than the two "
+        "distances, or give the obstacles a smaller distance"
+    )
+
+
+SQUEEZE = 0.5  # a squeeze above this share of the net's largest tension warns

@@ -318,3 +318,23 @@ def test_a_blade_pushing_a_rope_that_a_gripping_belt_carries_runs_on(tmp_path):
     with h5py.File(out) as f:
         x = f["result/x"][()]
     assert np.ptp(x[:, 1]) > 0.02  # the blade has pushed the rope along the belt
+
+
+def test_jaws_holding_the_rope_within_both_barriers_distance_warn_of_the_squeeze(tmp_path):
+    """Jaws that stop with GAP = 0.225 mm each side of the rope, less than their barriers'
+    0.5 mm distance, press it from both sides (a squeeze the barriers make, several times
+    the rope's tension): the run warns, naming both and the edge; with 1 mm each side,
+    beyond both distances, it does not."""
+    said = {}
+    for gap in (GAP, 0.001):
+        case = tmp_path / f"jaws{gap}.toml"
+        case.write_text(_jaws(gap=gap))
+        done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+        assert done.exit_code == 0, done.output
+        said[gap] = " ".join(done.output.split())
+    assert (
+        "obstacle[0] (kind 'capsule') and obstacle[1] (kind 'capsule') both hold the net "
+        "within their barriers' distance" in said[GAP]
+    )
+    assert "press the edge" in said[GAP] and "times the net's largest tension" in said[GAP]
+    assert "barriers' distance" not in said[0.001]
