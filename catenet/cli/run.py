@@ -351,6 +351,8 @@ def _summary(case, result, path: Path | None) -> None:
         advice = "raise solver.t_end"
         if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
             advice = "an undamped run never rests: give solver.t_end or damping"
+        elif _prescribed(case):  # the rest test is off while anything is driven
+            advice = "obstacles on prescribed motions: the run ends at solver.t_end, not at rest"
         detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
     spent = f"{result.iterations} Newton iterations"
     if result.nested is not None:  # a nested start: the coarse net's too
@@ -402,6 +404,20 @@ def _summary(case, result, path: Path | None) -> None:
             )
         lines.append(f"{'output':<12} {path}{extra}")
     click.echo("\n".join(lines))
+
+
+def _prescribed(case) -> bool:
+    """Whether an obstacle of the case moves on a prescribed motion (a velocity or spin
+    and no mass: not a free body), a ball on a path included."""
+    return any(
+        (
+            getattr(o, "velocity", None) is not None
+            or getattr(o, "angular_velocity", None) is not None
+        )
+        and not getattr(o, "free", False)
+        and getattr(o, "mass", None) is None
+        for o in case.obstacles
+    )
 
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_OK", "EXIT_SIGINT", "command"]

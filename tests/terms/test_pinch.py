@@ -338,3 +338,5 @@ def test_jaws_holding_the_rope_within_both_barriers_distance_warn_of_the_squeeze
     )
     assert "press the edge" in said[GAP] and "times the net's largest tension" in said[GAP]
     assert "barriers' distance" not in said[0.001]
+    # damped, but driven: the rest test is off, and the summary says why it never rests
+    assert "obstacles on prescribed motions: the run ends at solver.t_end" in said[0.001]
