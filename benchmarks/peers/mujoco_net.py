@@ -58,6 +58,9 @@ TINY_INERTIA = 1e-12
 BLOW_UP = 1e3
 
 
+BIG_MODEL = 2000  # nodes: a model this large is given an arena of 0.1 MB per node
+
+
 def _f(v) -> str:
     return " ".join(f"{float(x):.17g}" for x in np.ravel(v))
 
@@ -89,6 +92,8 @@ def mjcf(
         f'gravity="{_f(scene["gravity"])}" noslip_iterations="{int(noslip)}"/>',
         "  <worldbody>",
     ]
+    if len(nodes) > BIG_MODEL:  # MuJoCo's default arena (its size/memory) is too small
+        out.insert(3, f'  <size memory="{len(nodes) // 10}M"/>')
     for i, p in enumerate(nodes):
         if fixed[i]:
             out.append(f'    <site name="s{i}" pos="{_f(p)}"/>')

@@ -24,10 +24,30 @@ from catenet.kernels.shapes import _block, shape_feature
 
 
 @njit(cache=True, error_model="numpy")
-def frame_contact_hessian(A, U, H, g, chain, active, blocks, body):
+def _project(K):
+    """K (symmetric, in place) with its negative eigenvalues set to 0."""
+    w, Q = np.linalg.eigh(K)
+    if w[0] >= 0.0:
+        return
+    n = K.shape[0]
+    for a in range(n):
+        for b in range(a, n):
+            s = 0.0
+            for q in range(n):
+                if w[q] > 0.0:
+                    s += Q[a, q] * w[q] * Q[b, q]
+            K[a, b] = s
+            K[b, a] = s
+
+
+@njit(cache=True, error_model="numpy")
+def frame_contact_hessian(A, U, H, g, chain, active, blocks, body, project=False):
     """Writes the blocks of the ``active`` contact nodes (indices into U, H, g: (K, 3),
     (K, 3, 3), (K, 3)) into ``blocks`` (K, 81) and the body's (p, p) block into ``body``
-    (144,); the other nodes' blocks are left as they are (the caller zeroes them)."""
+    (144,); the other nodes' blocks are left as they are (the caller zeroes them).
+    ``project``: each contact's 15 x 15 block in (x, c, A) with its negative eigenvalues
+    set to 0 (``_project``: a positive semidefinite matrix, Newton's direction a descent
+    one whatever the barrier's curvature and the frame's second derivative S)."""
     L = np.zeros((3, 15))
     HL = np.empty((3, 15))
     Kq = np.empty((15, 15))
@@ -61,6 +81,8 @@ def frame_contact_hessian(A, U, H, g, chain, active, blocks, body):
                 Kq[i, a] += g[k, m]
                 Kq[a, 3 + i] -= g[k, m]
                 Kq[3 + i, a] -= g[k, m]
+        if project:
+            _project(Kq)
         for r in range(3):
             for i in range(3):
                 blocks[k, 3 * r + i] = Kq[r, i]
@@ -242,7 +264,9 @@ def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad)
 
 
 @njit(cache=True, error_model="numpy")
-def frame_contact_hessian_shape(kind, geom, kappa, dhat, x, nodes, body, B, c0, chain, values):
+def frame_contact_hessian_shape(
+    kind, geom, kappa, dhat, x, nodes, body, B, c0, chain, values, project=False
+):
     """The Hessian of the barrier of a box or capsule riding on the body (``kind``,
     ``geom``) into ``values`` (the term's: K blocks of 81, then the body's 144): the
     nodes' body-frame points, each node's barrier block and gradient where it acts
@@ -272,7 +296,7 @@ def frame_contact_hessian_shape(kind, geom, kappa, dhat, x, nodes, body, B, c0, 
         count += 1
     if count:
         blocks = values[: 81 * K].reshape((K, 81))
-        frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :])
+        frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :], project)
     return count
 
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.laws import strain_energy
+from catenet.kernels.laws import edge_density, strain_energy
 
 
 @njit(cache=True, error_model="numpy")
@@ -156,3 +156,87 @@ def stretch_node_roundoff(x, edges, l0, ea, law, params, table, tension_only, sm
         f = abs(ea[k] * force) + ea[k] * size / l0[k]
         level[i] += f
         level[j] += f
+
+
+@njit(cache=True, error_model="numpy")
+def stretch_held(x, edges, l0, ea, law, params, table, held, values, grad):
+    """The held edges (``held`` (M,) true) that are slack at x enter Newton's model as if
+    taut: their axial stiffness (EA/l0) w''(0) t(x)t added to the Hessian ``values``
+    (where ``stretch_hessian`` wrote zeros for them) and their pull toward the rest
+    length, EA w'(eps)-like (EA/l0) w''(0) (|e| - l0) t, added to ``grad`` (N, 3), the
+    model's gradient (skipped when ``grad`` has no rows). Returns how many it held."""
+    count = 0
+    for k in range(edges.shape[0]):
+        if not held[k]:
+            continue
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        if length >= l0[k] or length == 0.0:
+            continue
+        count += 1
+        _, _, stiffness = edge_density(law, params, table, k, 0.0)
+        k_axial = ea[k] / l0[k] * stiffness
+        if grad.shape[0] > 0:
+            f = k_axial * (length - l0[k]) / length
+            grad[j, 0] += f * e0
+            grad[j, 1] += f * e1
+            grad[j, 2] += f * e2
+            grad[i, 0] -= f * e0
+            grad[i, 1] -= f * e1
+            grad[i, 2] -= f * e2
+        if values.shape[0] > 0:
+            axial = k_axial / (length * length)
+            base = 36 * k
+            for a in range(3):
+                da = x[j, a] - x[i, a]
+                for b in range(3):
+                    h = axial * da * (x[j, b] - x[i, b])
+                    values[base + 6 * a + b] = h
+                    values[base + 6 * (a + 3) + b + 3] = h
+                    values[base + 6 * a + b + 3] = -h
+                    values[base + 6 * (a + 3) + b] = -h
+    return count
+
+
+@njit(cache=True, error_model="numpy")
+def stretch_near_taut(x, edges, l0, tension_only, reach, out):
+    """out[k]: whether edge k is tension-only and longer than (1 - reach) of its rest
+    length."""
+    for k in range(edges.shape[0]):
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        out[k] = tension_only[k] and length > (1.0 - reach) * l0[k]
+
+
+@njit(cache=True, error_model="numpy")
+def stretch_release(x, dx, edges, l0, held, released):
+    """Releases (``released`` true, ``held`` false) the held slack edges that Newton's
+    model step dx (N, 3) leaves shorter than their rest length (to first order): the
+    model's spring that held them pushes there, a tension-only edge cannot. Returns how
+    many it released."""
+    count = 0
+    for k in range(edges.shape[0]):
+        if not held[k]:
+            continue
+        i = edges[k, 0]
+        j = edges[k, 1]
+        e0 = x[j, 0] - x[i, 0]
+        e1 = x[j, 1] - x[i, 1]
+        e2 = x[j, 2] - x[i, 2]
+        length = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        if length >= l0[k] or length == 0.0:
+            continue
+        d = e0 * (dx[j, 0] - dx[i, 0]) + e1 * (dx[j, 1] - dx[i, 1]) + e2 * (dx[j, 2] - dx[i, 2])
+        if length + d / length < l0[k]:
+            released[k] = True
+            held[k] = False
+            count += 1
+    return count

@@ -39,6 +39,20 @@ new factorisation); else the next iteration factorises afresh (a rejected step i
 with a fresh matrix before c grows). Kept steps leave c alone. The convergence test is on
 the true residual, so the solution is the same; the first solve with each factorisation
 checks its backward error, later ones (``LinearSolver.solve``) that they are finite.
+
+Safeguards (``solve_newton(safeguard=True)``, every time step's solve): once a line search
+has cut a step below SAFEGUARD_ALPHA of its length, the rest of the solve takes its steps
+from a safer model (``Potential.safeguard``): the tension-only edges slack by less than
+``HOLD_REACH`` are held in it as if taut (their axial stiffness, their pull to the rest
+length: ``Stretch.hold``), released for the rest of the solve where the model's step
+leaves them slack (``Stretch.release``), and a free body's contact blocks enter the
+matrix projected to positive semidefinite (``BodyContact.safeguard``). A light net of
+stiff cords at a step far above its axial period (a 41 x 41 Dyneema net meeting a box
+at 10 ms: inertia 1e-5 of the axial stiffness) otherwise moves the nodes of its slack
+edges as if free, far past the edges' lengths, and the line search cuts every such step
+to a few percent: one ring of edges taken up per iteration. Phi, its gradient, the line
+search and the convergence test stay exact, so the solve reaches the same state (a
+model's step that does not descend on Phi is replaced by Phi's own Newton step).
 """
 
 from __future__ import annotations
@@ -66,6 +80,7 @@ STAGNATION = 20  # iterations in which neither |grad Phi| nor Phi fell beyond ro
 PROGRESS = 1e-3  # the least relative decrease of the residual that counts as progress
 REUSE_RATE = 0.03  # a kept factorisation whose step cuts the residual less is refreshed
 REUSE_AHEAD = 2  # ... unless this many more steps at its rate reach the tolerance
+SAFEGUARD_ALPHA = 0.5  # a line search cutting a step below this share: safeguards on
 
 _stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
 
@@ -94,6 +109,7 @@ class NewtonResult:
     reason: str = ""
     factorizations: int = 0
     reused: int = 0  # iterations that solved with a kept factorisation (modified Newton)
+    safeguarded: bool = False  # whether the safeguards came on (``solve_newton``)
 
 
 class Reuse:
@@ -140,6 +156,7 @@ def solve_newton(
     reuse: Reuse | None = None,
     shifted: bool = False,
     polish: bool = True,
+    safeguard: bool = False,
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
@@ -150,15 +167,32 @@ def solve_newton(
     (SHRINK x ``_c_start``), for a start known to be stiff in some directions only.
     ``polish``: where the round-off floor ended the solve, one more Newton step (its
     factorisation) to land below it; a time step that no rest test reads (its
-    truncation error far above the floor) goes without (``TimeStepper.run``)."""
+    truncation error far above the floor) goes without (``TimeStepper.run``).
+    ``safeguard``: once a line search has cut a step below SAFEGUARD_ALPHA of its
+    length, the rest of the solve is safeguarded (``Potential.safeguard``; the module
+    docstring; the result's ``safeguarded`` says whether it was)."""
     run = _Newton(potential, x, rtol=rtol, atol=atol, max_iter=max_iter, label=label, reuse=reuse)
+    try:
+        _iterate(run, shifted, safeguard)
+    finally:
+        if potential.safeguarded:
+            run.safeguarded = True
+            potential.safeguard(False)
+    if polish:
+        run.polish()
+    return run.result()
+
+
+def _iterate(run: _Newton, shifted: bool, safeguard: bool) -> None:
+    """Newton's iterations of ``solve_newton`` until a verdict (``run.reason``)."""
+    potential, x = run.potential, run.x
     if shifted:
         run.c = SHRINK * _c_start(potential, run.ev.g)
     while (reason := run.verdict()) is None:
         run.it += 1
         step = run.direction()
         if step is None:  # no regularisation made the matrix regular and the step descend
-            return run.result()
+            return
         dy, slope, kept = step
         # Decrease of Phi that the quadratic model predicts for the full step (the model's
         # Hessian excludes c D): with (J + c D) dy = -g, dy.J.dy = -g.dy - c dy.D.dy.
@@ -173,14 +207,13 @@ def solve_newton(
             predicted=predicted,
             y_trial=run.y_trial,
         ).run()
+        if safeguard and search.alpha < SAFEGUARD_ALPHA and not potential.safeguarded:
+            potential.safeguard(True)
         if search.accepted:
             run.accept(search, kept)
         elif (reason := run.reject(kept)) is not None:
             break
     run.reason = reason
-    if polish:
-        run.polish()
-    return run.result()
 
 
 class _Newton:
@@ -217,6 +250,7 @@ class _Newton:
         self.it = 0
         self.reason = ""
         self.y_trial = np.empty_like(self.ev.g)
+        self.safeguarded = False
 
     def target(self) -> float:
         """The tolerance the loads ask for [N] (the floor aside)."""
@@ -284,8 +318,13 @@ class _Newton:
             try:
                 potential.factorize(self.x, self.c)
                 self.factorizations += 1
-                dy = potential.solve(-g)
+                dy = potential.solve(potential.model_rhs(self.x, g))
                 slope = float(dot(g, dy))
+                if potential.safeguarded:
+                    if not slope < 0.0:  # the held edges' pull turned it: Phi's own step
+                        dy = potential.solve(-g)
+                        slope = float(dot(g, dy))
+                    potential.release(self.x, dy)
                 if slope < 0.0:
                     if reuse is not None:
                         reuse.mark(potential, self.c)
@@ -386,6 +425,7 @@ class _Newton:
             self.reason,
             self.factorizations,
             self.reused,
+            self.safeguarded,
         )
 
 

@@ -62,6 +62,7 @@ class Potential:
         self.external = external if self.f_norm > 0 else None  # no loads: nothing to compute
         self.steps = tuple(steps)
         self.D = system.stiffness()  # diagonal scale of the regularisation (free DOFs)
+        self.safeguarded = False  # Newton's safeguarded mode (``safeguard``)
         # Terms that bound a step (obstacles: the first contact along it).
         self._limits = [t for t in system.terms if t.bounds_step]
         self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
@@ -221,6 +222,32 @@ class Potential:
             return None
         return target + float(np.linalg.norm(floor))
 
+    # --- Newton's safeguarded mode (catenet.solver.newton) ---------------------------------
+    def safeguard(self, on: bool) -> None:
+        """Turns the terms' safeguarded mode on or off (``Term.safeguard``: the stretching holds
+        near-slack edges in Newton's model, a free body's contact projects its blocks)."""
+        self.safeguarded = on
+        for term in self.system.terms:
+            term.safeguard(on)
+
+    def model_rhs(self, x: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """The right-hand side of Newton's model at x, whose gradient is g: -g, and while
+        safeguarded the held edges' pull (``Stretch.model_gradient``)."""
+        if not self.safeguarded:
+            return -g
+        pull = np.zeros_like(x)
+        if self.system.stretch.model_gradient(x, pull) == 0:
+            return -g
+        rhs: np.ndarray = -(g + self.system.restrict(pull.reshape(-1)))
+        return rhs
+
+    def release(self, x: np.ndarray, dy: np.ndarray) -> int:
+        """While safeguarded: releases the held edges Newton's step dy shortens."""
+        if not self.safeguarded:
+            return 0
+        self._dx.reshape(-1)[self.system.free_dofs] = dy
+        return self.system.stretch.release(x, self._dx)
+
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """The factorised matrix's solution for ``rhs`` (free DOFs), a guided node's in
         its free directions (``catenet.solver.guided``: the held part is zero but for
@@ -231,7 +258,9 @@ class Potential:
         return dy
 
     def factorize(self, x: np.ndarray, c: float) -> None:
-        """Fills J + c D at x and factorises it."""
+        """Fills J + c D at x and factorises it (safeguarded: with the edges held at x)."""
+        if self.safeguarded:
+            self.system.stretch.hold(x)
         shift = np.multiply(c, self.D, out=self._shift) if c > 0 else None
         data = self.system.hessian(x, shift, self.steps)
         # Cholesky while no non-convex term (an obstacle out of reach) contributes.

@@ -249,6 +249,7 @@ class TimeStepper:
                 label="step",
                 reuse=None if self.fresh else self.kept,
                 polish=self.polish,
+                safeguard=True,
             )
         except SingularSystemError as exc:
             return None, str(exc)

@@ -227,6 +227,11 @@ class Term:
         self.gradient(x, grad)
         out -= grad
 
+    def safeguard(self, on: bool) -> None:
+        """Newton's safeguarded mode (``catenet.solver.newton``: after a line search cut a step
+        short): a term whose exact Hessian lets Newton overshoot gives a safer matrix while
+        on (a free body's contact: projected blocks). Gradient and energy never change."""
+
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time
         step (``time``: the step's end, ``start``: its start, the time of x) with the

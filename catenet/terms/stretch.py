@@ -11,13 +11,20 @@ import numpy as np
 from catenet.kernels.stretch import (
     stretch_energy,
     stretch_gradient_work,
+    stretch_held,
     stretch_hessian,
+    stretch_near_taut,
     stretch_node_roundoff,
+    stretch_release,
     stretch_tension,
 )
 from catenet.model.laws import Law
 from catenet.model.net import Net
 from catenet.terms.base import Term, register
+
+HOLD_REACH = 1e-4  # safeguarded Newton holds edges slack by less than this strain (``hold``)
+_NO_ROWS = np.zeros((0, 3))
+_NO_VALUES = np.zeros(0)
 
 
 @register("stretch")
@@ -82,6 +89,63 @@ class Stretch(Term):
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
         stretch_hessian(x, *self._args(), self.law.smooth, values)
+        if self._holding[0]:
+            stretch_held(x, *self._args()[:6], self.held, values, _NO_ROWS)
+
+    # --- Newton's safeguarded mode: near-slack edges held as if taut --------------------------
+    @cached_property
+    def held(self) -> np.ndarray:
+        """Per edge: held in Newton's model as if taut while slack (``hold``)."""
+        return np.zeros(self.net.n_edges, dtype=np.bool_)
+
+    @cached_property
+    def _released(self) -> np.ndarray:
+        return np.zeros(self.net.n_edges, dtype=np.bool_)
+
+    @cached_property
+    def _holding(self) -> np.ndarray:
+        return np.zeros(1, dtype=np.bool_)
+
+    def safeguard(self, on: bool) -> None:
+        """Newton's safeguarded mode (``catenet.solver.newton``): while on, ``hold`` picks the
+        edges the model holds; off, none is held and every release is forgotten."""
+        on = on and self.law.smooth == 0.0 and self.law.any_tension_only
+        self._holding[0] = on
+        self.held[:] = False
+        if not on:
+            self._released[:] = False
+
+    def hold(self, x: np.ndarray) -> None:
+        """While safeguarded: Newton's model at x holds the tension-only edges slack by a
+        strain below HOLD_REACH as if taut (their axial stiffness in the Hessian, their
+        pull toward the rest length in the model's gradient: ``model_gradient``), but
+        those released in this solve (``release``). A net just at its rest lengths (a
+        flat net thrown, a net meeting a body) has thousands of such edges; the exact
+        Hessian, zero for each, lets Newton move their nodes as if free, far past the
+        edges' lengths, and the line search then cuts the whole step: one ring of edges
+        taken up per iteration. Held, they are taken up together."""
+        if not self._holding[0]:
+            return
+        net = self.net
+        stretch_near_taut(x, net.edges, net.rest_length, self.law.tension_only, HOLD_REACH,
+                          self.held)  # fmt: skip
+        np.logical_and(self.held, ~self._released, out=self.held)
+
+    def release(self, x: np.ndarray, dx: np.ndarray) -> int:
+        """Releases for the rest of the solve the held slack edges that the model's step
+        dx (N, 3) from x leaves below their rest length (the model pushes on them there;
+        a cable cannot): how many."""
+        if not self._holding[0]:
+            return 0
+        net = self.net
+        return int(stretch_release(x, dx, net.edges, net.rest_length, self.held, self._released))
+
+    def model_gradient(self, x: np.ndarray, grad: np.ndarray) -> int:
+        """Adds the held slack edges' pull toward their rest length to grad (N, 3): the
+        model's gradient, not Phi's; how many edges pulled."""
+        if not self._holding[0]:
+            return 0
+        return int(stretch_held(x, *self._args()[:6], self.held, _NO_VALUES, grad))
 
     def tension(self, x: np.ndarray) -> np.ndarray:
         """Axial force of every edge [N] under the exact (unsmoothed) law."""
