@@ -224,6 +224,8 @@ class Run:
             rec["time"].append(step * self.dt)
         seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
         finite = finite and all(np.isfinite(rec["momentum"][-1]))
+        # MuJoCo resets a run that blew up (its bad-acceleration warning) and goes on
+        finite = finite and self.data.warning[self.mj.mjtWarning.mjWARN_BADQACC].number == 0
         return {
             **rec,
             "finite": bool(finite),

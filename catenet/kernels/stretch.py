@@ -217,11 +217,11 @@ def stretch_near_taut(x, edges, l0, tension_only, reach, out):
 
 
 @njit(cache=True, error_model="numpy")
-def stretch_release(x, dx, edges, l0, held, released):
-    """Releases (``released`` true, ``held`` false) the held slack edges that Newton's
-    model step dx (N, 3) leaves shorter than their rest length (to first order): the
-    model's spring that held them pushes there, a tension-only edge cannot. Returns how
-    many it released."""
+def stretch_release(x, dx, edges, l0, held, times, recent):
+    """Releases the held slack edges that Newton's model step dx (N, 3) leaves shorter
+    than their rest length (to first order: the model's spring that held them pushes
+    there, a tension-only edge cannot): ``held`` false, ``recent`` true (not held at the
+    next factorisation), ``times`` counts it. Returns how many it released."""
     count = 0
     for k in range(edges.shape[0]):
         if not held[k]:
@@ -236,7 +236,8 @@ def stretch_release(x, dx, edges, l0, held, released):
             continue
         d = e0 * (dx[j, 0] - dx[i, 0]) + e1 * (dx[j, 1] - dx[i, 1]) + e2 * (dx[j, 2] - dx[i, 2])
         if length + d / length < l0[k]:
-            released[k] = True
             held[k] = False
+            recent[k] = True
+            times[k] += 1
             count += 1
     return count

@@ -22,6 +22,7 @@ from catenet.model.laws import Law
 from catenet.model.net import Net
 from catenet.terms.base import Term, register
 
+RELEASES = 3  # an edge released this often in one solve stays released (no cycling)
 HOLD_REACH = 1e-4  # safeguarded Newton holds edges slack by less than this strain (``hold``)
 _NO_ROWS = np.zeros((0, 3))
 _NO_VALUES = np.zeros(0)
@@ -100,6 +101,12 @@ class Stretch(Term):
 
     @cached_property
     def _released(self) -> np.ndarray:
+        """Per edge: how often released in this solve (RELEASES: for good)."""
+        return np.zeros(self.net.n_edges, dtype=np.int64)
+
+    @cached_property
+    def _recent(self) -> np.ndarray:
+        """Per edge: released by the last step (not held at the next factorisation)."""
         return np.zeros(self.net.n_edges, dtype=np.bool_)
 
     @cached_property
@@ -113,13 +120,15 @@ class Stretch(Term):
         self._holding[0] = on
         self.held[:] = False
         if not on:
-            self._released[:] = False
+            self._released[:] = 0
+            self._recent[:] = False
 
     def hold(self, x: np.ndarray) -> None:
         """While safeguarded: Newton's model at x holds the tension-only edges slack by a
         strain below HOLD_REACH as if taut (their axial stiffness in the Hessian, their
         pull toward the rest length in the model's gradient: ``model_gradient``), but
-        those released in this solve (``release``). A net just at its rest lengths (a
+        those the last step released and those released RELEASES times in this solve
+        (``release``: held again once taut and slack anew). A net just at its rest lengths (a
         flat net thrown, a net meeting a body) has thousands of such edges; the exact
         Hessian, zero for each, lets Newton move their nodes as if free, far past the
         edges' lengths, and the line search then cuts the whole step: one ring of edges
@@ -129,16 +138,21 @@ class Stretch(Term):
         net = self.net
         stretch_near_taut(x, net.edges, net.rest_length, self.law.tension_only, HOLD_REACH,
                           self.held)  # fmt: skip
-        np.logical_and(self.held, ~self._released, out=self.held)
+        np.logical_and(self.held, ~self._recent, out=self.held)
+        np.logical_and(self.held, self._released < RELEASES, out=self.held)
+        self._recent[:] = False
 
     def release(self, x: np.ndarray, dx: np.ndarray) -> int:
-        """Releases for the rest of the solve the held slack edges that the model's step
-        dx (N, 3) from x leaves below their rest length (the model pushes on them there;
-        a cable cannot): how many."""
+        """Releases the held slack edges that the model's step dx (N, 3) from x leaves
+        below their rest length (the model pushes on them there; a cable cannot) for the
+        next factorisation, for good at their RELEASES-th release: how many."""
         if not self._holding[0]:
             return 0
         net = self.net
-        return int(stretch_release(x, dx, net.edges, net.rest_length, self.held, self._released))
+        return int(
+            stretch_release(x, dx, net.edges, net.rest_length, self.held, self._released,
+                            self._recent)
+        )  # fmt: skip
 
     def model_gradient(self, x: np.ndarray, grad: np.ndarray) -> int:
         """Adds the held slack edges' pull toward their rest length to grad (N, 3): the

@@ -153,15 +153,17 @@ def test_a_held_slack_edge_is_the_taut_branch_at_its_kink():
 
 def test_a_held_edge_the_models_step_leaves_slack_is_released():
     """Released where the model's step leaves it below its rest length (its spring would
-    push), kept where it ends taut."""
+    push), kept where it ends taut; each release counted (``Stretch.hold`` holds it again
+    at the next factorisation but one, and never after RELEASES of them)."""
     x, edges, l0, _ = _edge(0.999)
     t = np.array([0.6, 0.8, 0.0])
     for move, released in ((+2e-3, False), (+1e-4, True), (-1e-4, True)):
-        held, out = np.array([True]), np.array([False])
+        held, times, recent = np.array([True]), np.array([1]), np.array([False])
         dx = np.zeros((2, 3))
         dx[1] = move * t
-        assert stretch_release(x, dx, edges, l0, held, out) == int(released)
-        assert out[0] == released and held[0] != released
+        assert stretch_release(x, dx, edges, l0, held, times, recent) == int(released)
+        assert recent[0] == released and held[0] != released
+        assert times[0] == 1 + int(released)
 
 
 def test_projected_contact_blocks_are_semidefinite_and_exact_where_they_were():
@@ -204,3 +206,36 @@ def test_the_frame_contact_hessian_projects_only_when_asked(project):
         assert low >= -1e-9 * np.abs(full).max()
     else:
         assert low < 0.0  # the exact blocks are indefinite here
+
+
+def test_the_stretchings_held_set_follows_its_releases():
+    """``Stretch.hold``: the tension-only edges slack by less than HOLD_REACH, not the
+    last step's releases nor edges released RELEASES times; off, nothing is held."""
+    from catenet.model.builders import cable
+    from catenet.model.builders import Material
+    from catenet.terms.stretch import HOLD_REACH, RELEASES, Stretch
+
+    net = cable([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], 5, Material(EA=1e6))  # 4 edges of 1 m
+    term = Stretch(net)
+    x = net.nodes.copy()
+    x[1:, 0] *= 1.0 - 0.5 * HOLD_REACH  # every edge slack by half the reach
+    x[4, 0] = x[3, 0] + 1.0 - 2.0 * HOLD_REACH  # the last one by twice it
+    term.hold(x)
+    assert not term.held.any()  # not safeguarded
+    term.safeguard(True)
+    term.hold(x)
+    assert term.held.tolist() == [True, True, True, False]
+    shorten = np.zeros_like(x)
+    shorten[1:, 0] = [-1e-3, 2e-3, 4e-3, 6e-3]  # edge 0 shortened, the others taut
+    for k in range(RELEASES):
+        term.hold(x)
+        assert term.held[0]
+        assert term.release(x, shorten) == 1 and not term.held[0]
+        term.hold(x)
+        assert not term.held[0]  # the release's next factorisation
+    term.hold(x)
+    assert not term.held[0] and term.held[1]  # released for good
+    term.safeguard(False)
+    term.safeguard(True)
+    term.hold(x)
+    assert term.held[0]  # a new solve forgets
