@@ -76,7 +76,7 @@ def run(scene):
 
 
 def test_a_light_stiff_net_meeting_a_box_at_10_ms_steps_takes_no_cut_and_few_iterations():
-    """Guarded: every one of the 10 steps of 10 ms converges (84 Newton iterations on the
+    """Safeguarded: every one of the 10 steps of 10 ms converges (91 Newton iterations on the
     machine that measured it; unguarded 218 in 16 steps, 6 of them failed and cut)."""
     result, momentum = run(thrown())
     assert result.converged and result.steps == 10
