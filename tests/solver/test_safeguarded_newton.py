@@ -211,8 +211,7 @@ def test_the_frame_contact_hessian_projects_only_when_asked(project):
 def test_the_stretchings_held_set_follows_its_releases():
     """``Stretch.hold``: the tension-only edges slack by less than HOLD_REACH, not the
     last step's releases nor edges released RELEASES times; off, nothing is held."""
-    from catenet.model.builders import cable
-    from catenet.model.builders import Material
+    from catenet.model.builders import Material, cable
     from catenet.terms.stretch import HOLD_REACH, RELEASES, Stretch
 
     net = cable([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], 5, Material(EA=1e6))  # 4 edges of 1 m
@@ -227,7 +226,7 @@ def test_the_stretchings_held_set_follows_its_releases():
     assert term.held.tolist() == [True, True, True, False]
     shorten = np.zeros_like(x)
     shorten[1:, 0] = [-1e-3, 2e-3, 4e-3, 6e-3]  # edge 0 shortened, the others taut
-    for k in range(RELEASES):
+    for _ in range(RELEASES):
         term.hold(x)
         assert term.held[0]
         assert term.release(x, shorten) == 1 and not term.held[0]
