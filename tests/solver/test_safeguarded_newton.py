@@ -8,7 +8,7 @@ only the path to the same state changes.
 The scene: a light 21 x 21 net of stiff cords (1 m mesh, Dyneema: EA = 1.26 MN on nodes
 of 0.01 to 0.06 kg) thrown at 2 m/s, its corners diverging, 5 cm above a free 8 t box,
 at fixed 10 ms bdf2 steps: the slack-taut switching of thousands of edges per Newton
-step. Unguarded it took 218 Newton iterations and 16 steps (6 failed, cut) to 0.1 s; a
+step. Unsafeguarded it took 218 Newton iterations and 16 steps (10 planned, some cut) to 0.1 s; a
 41 x 41 net 670 iterations in 39 steps (benchmarks/peers/big_net.py)."""
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def run(scene):
 
 def test_a_light_stiff_net_meeting_a_box_at_10_ms_steps_takes_no_cut_and_few_iterations():
     """Safeguarded: every one of the 10 steps of 10 ms converges (91 Newton iterations on the
-    machine that measured it; unguarded 218 in 16 steps, 6 of them failed and cut)."""
+    machine that measured it; without the safeguards 218 in 16 steps, its steps cut)."""
     result, momentum = run(thrown())
     assert result.converged and result.steps == 10
     assert result.iterations <= 130
