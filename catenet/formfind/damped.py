@@ -63,6 +63,8 @@ def _refined(solver, indptr, indices, a_data, b, steps: int = 12) -> np.ndarray 
     x = solver.solve_unchecked(b)
     ax = np.empty_like(b)
     last = np.inf
+    # int32 indices, as the linear solver's: the product then compiles for one signature
+    indptr, indices = (np.ascontiguousarray(a, dtype=np.int32) for a in (indptr, indices))
     for _ in range(steps):
         csr_matvec(indptr, indices, a_data, x, True, ax)
         dx = solver.solve_unchecked(b - ax)

@@ -21,7 +21,9 @@ def cuthill_mckee(indptr, indices):
     each component from a node of least degree at the end of a breadth-first search
     (a pseudo-peripheral start), neighbours visited by increasing degree."""
     n = indptr.shape[0] - 1
-    degree = np.diff(indptr)
+    degree = np.empty(n, dtype=np.int64)
+    for i in range(n):  # np.diff(indptr), without its costly compile
+        degree[i] = indptr[i + 1] - indptr[i]
     order = np.empty(n, dtype=np.int64)
     seen = np.zeros(n, dtype=np.bool_)
     level = np.empty(n, dtype=np.int64)

@@ -132,7 +132,7 @@ def _nearest(x, V, T, fn, en, vn, lo, h, dims, start, items, p):
         d2 = (x[0] - q[0]) ** 2 + (x[1] - q[1]) ** 2 + (x[2] - q[2]) ** 2
         if d2 < best:
             best, best_t, best_code = d2, t, code
-            p[:] = q
+            p[0], p[1], p[2] = q[0], q[1], q[2]
     if best_t < 0:
         return np.inf, -1, -1
     return _signed(x, V, T, fn, en, vn, best_t, best_code, p), best_t, best_code
@@ -222,7 +222,7 @@ def mesh_gap(x, nodes, V, T, fn, en, vn, box_lo, box_hi, off, out):
             d2 = (xi[0] - q[0]) ** 2 + (xi[1] - q[1]) ** 2 + (xi[2] - q[2]) ** 2
             if d2 < best:
                 best, best_t, best_code = d2, t, code
-                p[:] = q
+                p[0], p[1], p[2] = q[0], q[1], q[2]
         out[k] = _signed(xi, V, T, fn, en, vn, best_t, best_code, p) - off
 
 

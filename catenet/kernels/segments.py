@@ -231,7 +231,8 @@ def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
                             continue
                         if count == out.shape[0]:
                             more = np.empty((2 * count, 2), dtype=np.int64)
-                            more[:count] = out
+                            for r in range(count):  # by hand: a slice assignment compiles slowly
+                                more[r, 0], more[r, 1] = out[r, 0], out[r, 1]
                             out = more
                         out[count, 0] = e
                         out[count, 1] = f

@@ -448,7 +448,8 @@ def candidates(x, edges, grow, reach):
                     continue
                 if count == out.shape[0]:
                     more = np.empty((2 * count, 2), dtype=np.int64)
-                    more[:count] = out
+                    for r in range(count):  # by hand: a slice assignment compiles slowly
+                        more[r, 0], more[r, 1] = out[r, 0], out[r, 1]
                     out = more
                 out[count, 0], out[count, 1] = a, b
                 count += 1
@@ -544,5 +545,5 @@ def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max, r=0.0):
     for p in range(pairs.shape[0]):
         gather(x, edges, pairs[p, 0], pairs[p, 1], P)
         gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
-        t = min(t, accd(P, dP, t, r))
+        t = min(t, accd(P, dP, t, r, np.int64(0)))
     return t, moved

@@ -75,5 +75,5 @@ def touch_ccd(Y, dY, edges, pairs, r, t_max):
         a, b = pairs[p, 0], pairs[p, 1]
         gather(Y, edges, a, b, P)
         gather(dY, edges, a, b, dP)
-        t = min(t, accd(P, dP, min(t, t_max), r))
+        t = min(t, accd(P, dP, min(t, t_max), r, np.int64(0)))
     return t

@@ -91,6 +91,13 @@ def _angle(a, b, t):
 
 
 @njit(cache=True)
+def _set_row(A, i, v):
+    """A[i] = v for a 3-vector v (an array assigned to a row compiles slowly)."""
+    for a in range(3):
+        A[i, a] = v[a]
+
+
+@njit(cache=True)
 def _tangents(x, nodes, lo, hi, closed, head, tail, s):
     """The segment's tangent slots (V + 1, 3) and current lengths (0: a phantom edge)
     and each slot's edge nodes (V + 1, 2), -1 for a phantom: an open segment's slots are
@@ -106,16 +113,16 @@ def _tangents(x, nodes, lo, hi, closed, head, tail, s):
         e = x[b] - x[a]
         ln = np.sqrt(_dot(e, e))
         r = k + 1
-        t[r] = e / ln
+        _set_row(t, r, e / ln)
         length[r] = ln
         ends[r, 0], ends[r, 1] = lo + k, lo + (k + 1) % p
     if closed[s]:
-        t[0] = t[n]
+        _set_row(t, 0, t[n])
         length[0] = length[n]
         ends[0, 0], ends[0, 1] = ends[n, 0], ends[n, 1]
     else:
-        t[0] = head[s]
-        t[n + 1] = tail[s]
+        _set_row(t, 0, head[s])
+        _set_row(t, n + 1, tail[s])
     return t, length, ends
 
 
@@ -140,8 +147,8 @@ def twist_frames(x, nodes, start, closed, head, tail, director, theta, ref, tau,
             if k > 0:
                 u = transport(t[k], t[k + 1], u)
             turns = k if closed[s] else k + 1
-            ref[first[s] + k] = _turn(t[k + 1], u, turns * share)
-            tau[first[s] + k] = t[k + 1]
+            _set_row(ref, first[s] + k, _turn(t[k + 1], u, turns * share))
+            _set_row(tau, first[s] + k, t[k + 1])
 
 
 @njit(cache=True)

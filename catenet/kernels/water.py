@@ -94,15 +94,21 @@ def wetted(a, b, hw, out):
     G(a, b) = int_0^1 Psi(a + s (b - a)) ds (exact, piecewise 2-point Gauss)."""
     for k in range(6):
         out[k] = 0.0
-    cuts = [0.0, 1.0]
+    cuts = np.empty(4)  # 0, 1 and where a + s d crosses -hw and hw, sorted
+    cuts[0], cuts[1] = 0.0, 1.0
+    m = 2
     d = b - a
     if d != 0.0:
         for level in (-hw, hw):
             s = (level - a) / d
             if 0.0 < s < 1.0:
-                cuts.append(s)
-    cuts.sort()
-    for c in range(len(cuts) - 1):
+                j = m  # insertion (a list's sort compiles slowly)
+                while cuts[j - 1] > s:
+                    cuts[j] = cuts[j - 1]
+                    j -= 1
+                cuts[j] = s
+                m += 1
+    for c in range(m - 1):
         mid = 0.5 * (cuts[c] + cuts[c + 1])
         half = 0.5 * (cuts[c + 1] - cuts[c])
         if half <= 0.0:
