@@ -118,14 +118,14 @@ def test_the_collision_check_stops_before_two_strands_meet():
     # b drops through a: they would meet at t = 0.5 of the step
     P = np.array([0, 0, 0, 1, 0, 0, 0.5, -0.5, 1.0, 0.5, 0.5, 1.0], dtype=float)
     dP = np.array([0, 0, 0, 0, 0, 0, 0, 0, -2.0, 0, 0, -2.0])
-    t = accd(P, dP, 4.0)
+    t = accd(P, dP, 4.0, 0.0, 0)  # r and kind given: the signature the kernels compile
     assert 0.4 < t < 0.5
     g, H = np.empty(12), np.empty((12, 12))
     assert sqdist(P + t * dP, 0, g, H, False) > 0.0
-    assert accd(P, -dP, 4.0) == np.inf  # moving apart
+    assert accd(P, -dP, 4.0, 0.0, 0) == np.inf  # moving apart
     # sliding along each other never meets: the check lets the whole step through
     slide = np.array([0, 0, 0, 0, 0, 0, 1.0, 0, 0, 1.0, 0, 0])
-    assert accd(P, slide, 1.0) == np.inf
+    assert accd(P, slide, 1.0, 0.0, 0) == np.inf
 
 
 def _strands(scale, n=11):
