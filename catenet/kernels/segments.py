@@ -136,6 +136,41 @@ def _feature_boxes(Y, dY, F, lone, reach, upto):
 
 
 @njit(cache=True, error_model="numpy")
+def _median(values):
+    """np.median of a 1D array, exactly (the middle order statistic, or the mean of the
+    two): a quickselect on a copy, which compiles in a fraction of np.median's time."""
+    a = values.copy()
+    n = a.shape[0]
+    half = n >> 1
+    left, right = 0, n - 1
+    while left < right:  # Hoare's partition until a[half] is the half-th smallest
+        pivot = a[(left + right) >> 1]
+        i, j = left, right
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if half <= j:
+            right = j
+        elif half >= i:
+            left = i
+        else:
+            break
+    upper = a[half]
+    if n & 1:
+        return upper
+    lower = a[0]  # the largest of a[:half], all at most a[half]
+    for k in range(1, half):
+        lower = max(lower, a[k])
+    return (lower + upper) / 2
+
+
+@njit(cache=True, error_model="numpy")
 def _grid(lo, hi):
     """A uniform grid of the feature boxes: (origin, cell, dims, start, items), each
     cell listing the boxes that overlap it (cells about the median box's size, at most
@@ -149,7 +184,7 @@ def _grid(lo, hi):
         top[a] = hi[:, a].max()
     for f in range(total):
         sizes[f] = max(hi[f, 0] - lo[f, 0], max(hi[f, 1] - lo[f, 1], hi[f, 2] - lo[f, 2]))
-    cell = max(np.median(sizes), 1e-300)
+    cell = max(_median(sizes), 1e-300)
     dims = np.empty(3, dtype=np.int64)
     while True:
         for a in range(3):
