@@ -35,10 +35,18 @@ import time
 import warnings
 from pathlib import Path
 
-import numpy as np
+if __name__ == "__main__":  # one thread for every tool (benchmarks/peers/README.md), set
+    # before NumPy, MKL and Numba start their threads; never on import: a test process's
+    # threads are set already, and catenet's own setting then fails
+    for _name in (
+        "MKL_NUM_THREADS",
+        "OMP_NUM_THREADS",
+        "OPENBLAS_NUM_THREADS",
+        "NUMBA_NUM_THREADS",
+    ):
+        os.environ.setdefault(_name, "1")
 
-for _name in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # one thread for every tool (benchmarks/peers/README.md)
+import numpy as np  # noqa: E402
 
 if __package__ in (None, ""):  # run as a script: the repository's root on the path
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
