@@ -175,7 +175,7 @@ def solve_newton(
     try:
         _iterate(run, shifted, safeguard)
     finally:
-        if potential.safeguarded:
+        if safeguard and potential.safeguarded:
             run.safeguarded = True
             potential.safeguard(False)
     if polish:
