@@ -240,14 +240,24 @@ def _holders(terms, x, t: float) -> list:
     return out
 
 
-def _common(na, ga, nb, gb, floor: float):
-    """(room, nodes) of the item of the same nodes that both hold tightest (items na, nb
-    and their gaps ga, gb), where the sum of its two gaps is below ``floor``, else None."""
+def _pairs(na, nb):
+    """(ia, ib): the items of na and nb (K, m) of the same nodes, as index arrays into
+    each; None where they share none."""
     index = {tuple(row): i for i, row in enumerate(nb.tolist())}
     pairs = [(i, index[tuple(row)]) for i, row in enumerate(na.tolist()) if tuple(row) in index]
     if not pairs:
         return None
     ia, ib = np.array(pairs).T
+    return ia, ib
+
+
+def _common(na, ga, nb, gb, floor: float):
+    """(room, nodes) of the item of the same nodes that both hold tightest (items na, nb
+    and their gaps ga, gb), where the sum of its two gaps is below ``floor``, else None."""
+    both = _pairs(na, nb)
+    if both is None:
+        return None
+    ia, ib = both
     room = ga[ia] + gb[ib]
     k = int(np.argmin(room))
     if not room[k] < floor:
@@ -277,11 +287,10 @@ def squeeze_note(terms, x, t: float, tension: float) -> str:
         for b, (kb, nb, gb, db, root_b) in enumerate(holders[a + 1 :], start=a + 1):
             if root_a is root_b or na.shape[1] != nb.shape[1]:
                 continue
-            index = {tuple(row): i for i, row in enumerate(nb.tolist())}
-            pairs = [(i, index[tuple(r)]) for i, r in enumerate(na.tolist()) if tuple(r) in index]
-            if not pairs:
+            both = _pairs(na, nb)
+            if both is None:
                 continue
-            ia, ib = np.array(pairs).T
+            ia, ib = both
             held = (ga[ia] < da) & (gb[ib] < db)
             if not held.any():
                 continue
