@@ -184,3 +184,64 @@ def ball_root(u, du, radius):
     if disc < 0.0:
         return np.inf
     return max((-b - np.sqrt(disc)) / (2.0 * a), 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def damped_start(d, dhat, gamma):
+    """(b'_n, d*) of a node at gap d at a step's start, for the contact damping of
+    factor gamma (``damped_excess``): the barrier's slope there (0 out of reach) and the
+    gap d* > d at which the damped force (1 + gamma) b'(d*) - gamma b'_n falls to 0
+    (dhat where b'_n = 0), by bisection (b' rises monotonically to 0 at dhat)."""
+    if d >= dhat or not d > 0.0 or gamma <= 0.0:
+        return 0.0, dhat
+    bn = barrier(d, dhat)[1]
+    target = gamma / (1.0 + gamma) * bn  # in (b'_n, 0): between d and dhat
+    lo, hi = d, dhat
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi:
+            break
+        if barrier(mid, dhat)[1] < target:
+            lo = mid
+        else:
+            hi = mid
+    return bn, hi
+
+
+@njit(cache=True, error_model="numpy")
+def damped_excess(d, dhat, gamma, bn, ds):
+    """psi, psi', psi'' at gap d of the contact damping's share over the barrier b
+    (``catenet.terms.contact_damping``): with it the node's force is
+    min(0, (1 + gamma) b'(d) - gamma b'_n), the barrier's plus a dashpot's, never
+    pulling; psi' = gamma (b'(d) - b'_n) below d*, -b'(d) from d* to dhat."""
+    if d >= dhat:
+        return 0.0, 0.0, 0.0
+    b, db, ddb = barrier(d, dhat)
+    if d >= ds:
+        return -b, -db, -ddb
+    bs = barrier(ds, dhat)[0] if ds < dhat else 0.0
+    return (
+        gamma * b - (1.0 + gamma) * bs - gamma * bn * (d - ds),
+        gamma * (db - bn),
+        gamma * ddb,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def damped_factors(gap, dhat, gamma, lag, dstar, energy, ratio, extra):
+    """Per node k at its gap: the contact damping's energy share psi (``damped_excess``),
+    ratio = psi' / b' and extra = (psi'' - ratio b'') / b'^2, so that with the barrier's
+    gradient g = kappa b' n and Hessian H (a shape's, per node) the damping's are
+    ratio g and ratio H + extra g g^T / kappa (0 where the barrier does not act)."""
+    for k in range(gap.shape[0]):
+        d = gap[k]
+        energy[k] = ratio[k] = extra[k] = 0.0
+        if not (0.0 < d < dhat):
+            continue
+        _, db, ddb = barrier(d, dhat)
+        e, de, dde = damped_excess(d, dhat, gamma, lag[k], dstar[k])
+        energy[k] = e
+        if db == 0.0:
+            continue
+        ratio[k] = de / db
+        extra[k] = (dde - ratio[k] * ddb) / (db * db)
