@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_rigid import INERTIA, _shapes, near_surface, posed
+from test_rigid import near_surface, posed, posed_body
 
 from catenet.case import build, parse_case
 from catenet.errors import ConfigError
@@ -18,7 +18,6 @@ from catenet.kernels.contact import barrier, damped_excess, damped_start
 from catenet.solver.integrators import BDF2
 from catenet.solver.path import Settings, solve
 from catenet.terms import check_derivatives
-from catenet.terms.rigid import BodyFrame
 from catenet.terms.rigid_contact import BodyContact, BodyDamping
 from catenet.terms.shapes import rotation
 
@@ -32,16 +31,7 @@ def test_body_damping_passes_finite_differences_and_balances_force_and_torque(ki
     rng = np.random.default_rng(5)
     K = 10
     c0 = np.array([0.1, 0.2, 0.3])
-    frame = BodyFrame(K, 5.0, INERTIA, c0)
-    shape = _shapes(tmp_path, np.arange(K), 3.0, 0.2, c0)[kind]
-    x = np.zeros((K + 4, 3))
-    x[K:] = posed(frame, rng, c0 + [0.05, -0.02, 0.01], rotation([1, 2, 3], 0.3))
-
-    def gap(X):
-        buf = np.zeros((K + 4, 3))
-        buf[0] = X
-        return shape.gap(buf)[0]
-
+    frame, shape, x, gap = posed_body(kind, tmp_path, K, rng)
     x[: K // 2] = near_surface(gap, frame, x, rng, K // 2, lo=0.03, hi=0.2)  # in reach
     x[K // 2 : K] = near_surface(gap, frame, x, rng, K - K // 2, lo=0.201, hi=0.3)  # not
     contact = BodyContact(shape, frame, n_nodes=K + 4)
