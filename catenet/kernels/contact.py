@@ -211,7 +211,7 @@ def damped_start(d, dhat, gamma):
 @njit(cache=True, error_model="numpy")
 def damped_excess(d, dhat, gamma, bn, ds):
     """psi, psi', psi'' at gap d of the contact damping's share over the barrier b
-    (``catenet.terms.contact_damping``): with it the node's force is
+    (``catenet.terms.rigid_contact.BodyDamping``): with it the node's force is
     min(0, (1 + gamma) b'(d) - gamma b'_n), the barrier's plus a dashpot's, never
     pulling; psi' = gamma (b'(d) - b'_n) below d*, -b'(d) from d* to dhat."""
     if d >= dhat:

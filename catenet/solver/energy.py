@@ -20,8 +20,9 @@ cables' axial dashpots (``catenet.terms.axial``, their ``losses``), and against 
 contact's dashpots (``rebased`` terms, ``catenet.terms.rigid_contact.BodyDamping``): the
 rise of their energy over the step, Psi_n(x_{n+1}) - Psi_n(x_n) >= 0, which the step's
 potential held and the next step's, built afresh from x_{n+1}, no longer does; and in a
-step in which such a contact stopped a node (an inelastic impact, taken as an implicit
-Euler step: ``TimeStepper.impact``) whatever else the step lost, which is the impact's.
+step in which a node came in on such a contact (slowed, or stopped: an inelastic impact,
+taken as an implicit Euler step, ``TimeStepper.impact``) whatever else the step lost,
+which is the impact's.
 
 In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
 drag's work against the motion relative to the water, -F_d . (dx - h U), and W the

@@ -79,7 +79,7 @@ class TimeStepper:
         self.ledger: Ledger | None = None  # the energy balance (catenet.solver.energy)
         self.media = [t for t in self.system.terms if t.medium]  # water (terms/water.py)
         self.strikes = [t for t in self.system.terms if t.rebased]  # damped contacts
-        self.impacted = False  # the last step tried stopped a node on one (``impact``)
+        self.impacted = False  # in the last step tried a node came in on one (``impact``)
 
     def begin(
         self,
@@ -259,8 +259,9 @@ class TimeStepper:
         except SingularSystemError as exc:
             return None, str(exc)
         self.iterations += newton.iterations
-        if newton.converged and self.impact(x_trial, h_step):
-            self.impacted = True  # the energy balance books its loss as the contact's
+        met = self.impact(x_trial, h_step) if newton.converged else 0
+        self.impacted = self.impacted or met > 0  # the energy balance: the contact's loss
+        if met == 2:
             if self.scheme.remembers:  # the step again, as implicit Euler's
                 self.scheme.restart = True
                 try:
@@ -270,15 +271,15 @@ class TimeStepper:
             self.scheme.forget()  # no past before the impact for the next steps
         return newton, newton.reason
 
-    def impact(self, x_new: np.ndarray, h_step: float) -> bool:
-        """Whether the step of ``h_step`` to x_new stopped a node on a damped contact
-        (``BodyDamping.struck``, against the free flight x + h v): a BDF2 step is then
-        taken again as implicit Euler's, and BDF2 starts afresh after it
-        (``catenet.solver.integrators.BDF2``)."""
+    def impact(self, x_new: np.ndarray, h_step: float) -> int:
+        """How the step of ``h_step`` to x_new met a damped contact (``BodyDamping.struck``,
+        against the free flight x + h v): 2 where it stopped a node (an impact: a BDF2
+        step is then taken again as implicit Euler's, and BDF2 starts afresh after it,
+        ``catenet.solver.integrators.BDF2``), 1 where it slowed one, else 0."""
         if not self.strikes:
-            return False
+            return 0
         free = self.x + h_step * self.v
-        return any(term.struck(free, x_new) for term in self.strikes)
+        return max(term.struck(free, x_new) for term in self.strikes)
 
     def set_motion(self, y_k: np.ndarray, v_k: np.ndarray, h_step: float) -> None:
         """Gives the water's terms the step's velocity and acceleration as affine maps of

@@ -49,10 +49,10 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
-- ``rebased`` (with ``struck(x)``): a contact's dashpot (``catenet.terms.rigid_contact.
-  BodyDamping``), whose energy is built afresh from each step's start: the energy
-  balance books its rise over a step as dissipated, and a BDF2 step in which a node
-  strikes it (``struck``) is taken again as an implicit Euler step.
+- ``rebased`` (with ``struck(free, x)``): a contact's dashpot (``catenet.terms.
+  rigid_contact.BodyDamping``), whose energy is built afresh from each step's start: the
+  energy balance books its rise over a step as dissipated, and a BDF2 step that stops a
+  node on it (``struck``) is taken again as an implicit Euler step.
 - ``holds``: a support's term (the elastic supports' springs,
   ``catenet.terms.supports``): its force counts in the reactions, not the contact forces.
 
@@ -178,9 +178,10 @@ class Term:
         their relative change."""
         raise NotImplementedError(f"{type(self).__name__} lags nothing")
 
-    def struck(self, free: np.ndarray, x: np.ndarray) -> bool:
-        """(``rebased`` terms) Whether the step to x stopped a node that the free flight
-        ``free`` would have carried on into the contact (an impact)."""
+    def struck(self, free: np.ndarray, x: np.ndarray) -> int:
+        """(``rebased`` terms) 2 where the step to x stopped a node that the free flight
+        ``free`` would have carried on into the contact (an impact), 1 where it slowed
+        one there, else 0."""
         raise NotImplementedError(f"{type(self).__name__} is no dashpot")
 
     def set_factor(self, factor: float) -> None:

@@ -61,7 +61,8 @@ T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS =
 FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
 ROUNDOFF = 1e4  # ... nor than this many round-offs of its body-frame coordinates
 SLACK = 1e-4  # a node at the floor may come this share of its gap nearer (docstring)
-STRIKE = 0.01  # a node held this share of dhat short of its free flight is struck
+STRIKE = 0.5  # a node held this share of its free flight's approach short of it is struck
+APPROACH = 1e-3  # ... where that approach is more than this share of dhat
 #: The dashpot's time constant [s] of an ``inelastic`` body's contact (``BodyDamping``):
 #: far longer than any node's contact with a body, so that a struck node stays on it.
 INELASTIC_TIME = 1.0
@@ -317,10 +318,24 @@ class BodyFriction(BodyContact):
 
 @register("body_damping")
 class BodyDamping(BodyContact):
-    """The contact damping of a free body's barrier (``catenet.terms.contact_damping``):
-    a dashpot of time constant ``time`` [s] beside the barrier's spring, riding on the
-    body's frame as the barrier does, so that a node that strikes the body gives up its
-    normal velocity instead of bouncing off, and never pulls on it."""
+    """The dashpot of an inelastic free body's contact (``inelastic = true``): beside the
+    barrier's spring kappa b(d), a dashpot of time constant ``time`` [s] whose force is
+    -time d/dt (kappa b'(d)) (stiffness-proportional: it acts only within dhat), taken
+    implicitly over a step of h from the gap d_n at its start. With gamma = time / h and
+    b'_n = b'(d_n) a node's normal force is then
+
+        -kappa min(0, (1 + gamma) b'(d) - gamma b'_n),
+
+    the barrier's and the dashpot's, never pulling (it is 0 from the gap d* where it
+    would turn, ``damped_start``); this term is its share over the barrier, psi(d)
+    (``catenet.kernels.contact.damped_excess``), riding on the body's frame as the
+    barrier does (the box's and capsule's kernels, a shape's own gradient and Hessian
+    scaled per node for the others: ``damped_factors``). A node resting at d_n feels the
+    barrier alone; one that comes in is held by a barrier 1 + gamma times stiffer and
+    gives up the energy it stored there when the next step starts from where it is
+    (psi rises over every step: the energy balance books that rise as dissipated). What
+    keeps a struck node from leaving again is the implicit Euler step the stepper takes
+    where a node is stopped (``struck``, ``catenet.solver.stepper.TimeStepper.impact``)."""
 
     bounds_step = False
     lagged = True  # set at each step's start; none in a static step
@@ -333,12 +348,14 @@ class BodyDamping(BodyContact):
         K = len(self.nodes)
         self.lag = np.zeros(K)
         self.dstar = np.full(K, self.dhat)
+        self.start = np.full(K, np.inf)  # the gaps at the step's start
 
     def begin_step(self, x, time, start=None) -> None:
         """gamma = time / h for a time step of h (0, none, for a static step), and each
         node's barrier slope and zero-force gap at the step's start."""
         h = 0.0 if time is None or start is None else float(time) - float(start)
         self.gamma = self.time / h if h > 0.0 else 0.0
+        self.start = self.contact.gap(x).copy()  # (``struck``)
         shape, frame = self.shape, self.frame
         if isinstance(shape, (BoxBarrier, CapsuleBarrier)):
             frame_damping_start(shape.kind, shape.geom, self.dhat, self.gamma, x, self.nodes,
@@ -372,14 +389,20 @@ class BodyDamping(BodyContact):
             g[:, :, None] * g[:, None, :]
         )
 
-    def struck(self, free, x) -> bool:
-        """Whether the step to x stopped a node's approach: a node within dhat at x that
-        the free flight ``free`` (x_n + h v_n) would have carried more than STRIKE of
-        dhat nearer the body (an impact; a node resting on the body, or moving with it,
-        is not struck: ``catenet.solver.stepper.TimeStepper.impact``)."""
+    def struck(self, free, x) -> int:
+        """How the step to x met the body: 2 where it stopped a node's approach (a node
+        within dhat at x that the free flight ``free``, x_n + h v_n, would have carried
+        nearer the body by a = gap(x_n) - gap(free) > APPROACH dhat and that ended more
+        than STRIKE a short of it: an impact), 1 where such a node was only slowed (its
+        step's loss is the contact's too), 0 where none came in (a node resting on the
+        body, or moving with it: ``catenet.solver.stepper.TimeStepper.impact``)."""
         gap = self.contact.gap(x).copy()
-        held = self.contact.gap(free) < gap - STRIKE * self.dhat
-        return bool(np.any((gap < self.dhat) & held))
+        flight = self.contact.gap(free)
+        approach = self.start - flight
+        came = (gap < self.dhat) & (approach > APPROACH * self.dhat)
+        if not np.any(came):
+            return 0
+        return 2 if np.any(came & (gap - flight > STRIKE * approach)) else 1
 
     def relag(self, x) -> float:
         return 0.0  # nothing lagged in a static step (gamma = 0)

@@ -166,7 +166,7 @@ def test_after_an_impact_bdf2_starts_afresh_with_implicit_euler_steps():
 def test_the_thrown_net_on_an_inelastic_box_gives_the_same_momentum_at_every_step():
     """The thrown 11 x 11 net of benchmarks/peers/thrown_net.toml onto the free 8 t box
     (the elastic contact's answer moves by 5-14 % between 10 and 0.3 ms steps): the box's
-    momentum at 2 s at 10 ms steps and at default steps within 1 % of 2.5 ms steps'."""
+    momentum at 2 s at 10 ms steps and at default steps within 2 % of 2.5 ms steps'."""
     import tomllib
 
     momenta = {}
@@ -185,8 +185,8 @@ def test_the_thrown_net_on_an_inelastic_box_gives_the_same_momentum_at_every_ste
         momenta[dt] = body.mass * np.linalg.norm(result.v[body.frame.nodes].mean(axis=0))
     ref = momenta[0.0025]
     assert 3.0 < ref < 3.4
-    assert abs(momenta[0.01] - ref) < 0.01 * ref
-    assert abs(momenta[None] - ref) < 0.01 * ref
+    assert abs(momenta[0.01] - ref) < 0.02 * ref
+    assert abs(momenta[None] - ref) < 0.02 * ref
 
 
 @pytest.mark.parametrize(
