@@ -26,9 +26,7 @@ friction 0.3; the floor has neither, so it has no rows there). For each:
   that is both accurate and no deeper (catenet's nodes never enter it).
 
 ``python benchmarks/peers/floor_compare.py [--scenes drop thrown]`` prints the Markdown
-table of docs/performance.md and writes ``results/peers-floor.csv``; with ``--inelastic``
-catenet's box has ``inelastic = true`` (MuJoCo's contacts are inelastic by design), no
-floor rows, and ``results/peers-floor-inelastic.csv``. CPU seconds of the
+table of docs/performance.md and writes ``results/peers-floor.csv``. CPU seconds of the
 stepping alone (a warm process, one thread), the best of ``--repeats`` runs.
 """
 
@@ -60,11 +58,6 @@ SCENES = {
     "thrown": HERE / "thrown_net.toml",
     "capture": HERE.parents[1] / "configs" / "contact" / "envisat_capture.toml",
 }
-#: ``--inelastic``: catenet's box with ``inelastic = true`` (docs/guide/bodies.md), its
-#: reference at INELASTIC_REFERENCE (0.625 and 0.3125 ms agree to 6e-4 there); the floor
-#: has no such contact, so it has no rows then.
-OPTIONS = {"inelastic": False}
-INELASTIC_REFERENCE = 3.125e-4
 SOLVER = {"capture": {"t_end": 2.0}}  # [solver] keys set over the case's (first contact 1.39 s)
 FLOOR = ("drop", "thrown")  # the scenes the floor has (no friction, no fixed tether)
 DT = {"drop": 0.01, "thrown": 0.01, "capture": 0.01}
@@ -89,17 +82,17 @@ def _case(path: Path, dt: float | None):
     by the default solver.tolerance, catenet/solver/adaptive.py)."""
     import tomllib
 
-    from catenet.case.parse import parse_case
+    from catenet.case.parse import load_case, parse_case
     from catenet.case.scene import build
 
     extra = SOLVER.get(next(k for k, v in SCENES.items() if v == path), {})
+    if dt is not None:
+        sets = [f"solver.{k}={v!r}" for k, v in extra.items()]
+        case = load_case(path, [*sets, f"solver.dt={dt!r}", 'solver.integrator="bdf2"'])
+        return case, build(case)
     raw = tomllib.loads(path.read_text())
     raw["solver"].pop("dt", None)
     raw["solver"].update(extra)
-    if dt is not None:
-        raw["solver"].update(dt=dt, integrator="bdf2")
-    if OPTIONS["inelastic"]:
-        raw["obstacle"][0]["inelastic"] = True
     case = parse_case(raw, source=str(path), base_dir=path.parent)
     return case, build(case)
 
@@ -190,7 +183,7 @@ def catenet_rows(name: str, repeats: int, err) -> list[dict]:
         cat = best(lambda: catenet_run(name, h, watch=False), repeats)  # noqa: B023
         cat["closest"] = catenet_run(name, h)["closest"]  # the same run, watched
         rows.append(_row(name, "catenet (bdf2)", h, cat, err(cat["momentum"])))
-        if name in FLOOR and not OPTIONS["inelastic"]:
+        if name in FLOOR:
             flo = best(lambda: floor_run(name, h), repeats)  # noqa: B023
             rows.append(_row(name, "floor (bdf2)", h, flo, err(flo["momentum"])))
     default = best(lambda: catenet_run(name, None, watch=False), repeats)
@@ -231,7 +224,7 @@ def mujoco_rows(name: str, repeats: int, err, scale: float, integrator: str) -> 
 
 
 def scene_rows(name: str, repeats: int, integrators=("implicitfast", "discrete")) -> list[dict]:
-    ref = catenet_run(name, INELASTIC_REFERENCE if OPTIONS["inelastic"] else REFERENCE[name])
+    ref = catenet_run(name, REFERENCE[name])
     scale = ref["largest"]
 
     def err(p) -> float:
@@ -260,14 +253,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--out", type=Path, default=None)
-    ap.add_argument("--inelastic", action="store_true", help="catenet's box inelastic")
+    ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
-    OPTIONS["inelastic"] = args.inelastic
-    if args.out is None:
-        args.out = RESULTS.with_stem(RESULTS.stem + "-inelastic") if args.inelastic else RESULTS
-    if not args.inelastic:
-        floor_run("drop", 0.1)  # the floor's kernels compiled (or loaded) before any timing
+    floor_run("drop", 0.1)  # the floor's kernels compiled (or loaded) before any timing
     rows = []
     for name in args.scenes:
         rows += scene_rows(name, args.repeats)

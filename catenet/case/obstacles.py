@@ -31,7 +31,7 @@ from catenet.case.keys import (
     real,
     vec3,
 )
-from catenet.case.rigid_keys import FreeKeys, density_key, inelastic_key, inertia_key
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
     SHAPED,
@@ -107,7 +107,6 @@ class SphereObstacle(Shaped, FreeKeys, Declared):
         unit="rad/s",
         doc="free body: initial angular velocity (world frame, about its centre of mass)",
     )
-    inelastic: bool = inelastic_key()
 
     @property
     def free(self) -> bool:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from catenet.case.keys import Checker, Context, boolean, key, real
+from catenet.case.keys import Checker, Context, key, real
 
 
 def _check_inertia(ck: Checker, v, path: str, ctx: Context):
@@ -52,15 +52,6 @@ def inertia_key():
     )
 
 
-def inelastic_key():
-    return boolean(
-        False,
-        write="given",
-        doc="free body: a node that strikes it stays on it (no bounce: a dashpot beside "
-        "the barrier; steps with an impact are implicit Euler's)",
-    )
-
-
 class FreeKeys:
     """What the free-body keys (``mass``, ``density``, ``inertia``) mean on a table."""
 
@@ -68,7 +59,6 @@ class FreeKeys:
     density: float | None
     inertia: tuple | None
     history: tuple | None  # the prescribed motion's factor, which a free body refuses
-    inelastic: bool  # the contact's dashpot (``catenet.terms.rigid_contact.BodyDamping``)
 
     @property
     def free(self) -> bool:
@@ -80,17 +70,6 @@ class FreeKeys:
             ck.add(f"{path}.density = {self.density!r}: give mass or density, not both")
         if self.inertia is not None and not self.free:
             ck.add(f"{path}.inertia: belongs to a free body: give mass or density with it")
-        if self.inelastic and not self.free:
-            ball = getattr(self, "moves", False)  # a sphere with mass alone: a ball
-            ck.add(
-                f"{path}.inelastic = true: acts between the net and a free body; "
-                + (
-                    "a sphere with mass alone is a ball: give it inertia (or "
-                    "angular_velocity = [0, 0, 0]) to make it a free body"
-                    if ball
-                    else "give mass or density with it"
-                )
-            )
         if self.free and self.history is not None:
             ck.add(
                 f"{path}.history: a free body moves as the forces on it say; history "

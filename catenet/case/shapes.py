@@ -16,13 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from catenet.case.keys import Checker, Declared, choice, real, sizes3, text, vec3
-from catenet.case.rigid_keys import (
-    FreeKeys,
-    density_key,
-    inelastic_key,
-    inertia_key,
-    mass_key,
-)
+from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key, mass_key
 from catenet.case.sections import history_key
 from catenet.errors import ConfigError
 from catenet.scene.contact import Contact
@@ -118,8 +112,7 @@ class Shaped:
         table = vars(self)
         motion = ("velocity", "angular_velocity", "history") if self.rigid_motion else ()
         keys = ("distance", "accuracy", "stiffness", "friction", "slip", *motion)
-        inelastic = ("inelastic",) if "inelastic" in table else ()  # free bodies' kinds
-        return Contact(**{k: table[k] for k in (*keys, *inelastic)})
+        return Contact(**{k: table[k] for k in keys})
 
 
 class _Motion(Shaped, FreeKeys):
@@ -169,7 +162,6 @@ class BoxObstacle(_Motion, Declared):
     mass: float | None = mass_key()
     density: float | None = density_key()
     inertia: tuple | None = inertia_key()
-    inelastic: bool = inelastic_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if not any(self.axis):
@@ -198,7 +190,6 @@ class CapsuleObstacle(_Motion, Declared):
     mass: float | None = mass_key()
     density: float | None = density_key()
     inertia: tuple | None = inertia_key()
-    inelastic: bool = inelastic_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if self.start == self.end:
@@ -229,7 +220,6 @@ class CylinderObstacle(_Motion, Declared):
     mass: float | None = mass_key()
     density: float | None = density_key()
     inertia: tuple | None = inertia_key()
-    inelastic: bool = inelastic_key()
 
     def check(self, ck: Checker, path: str) -> None:
         if self.start == self.end:
@@ -260,7 +250,6 @@ class MeshObstacle(_Motion, Declared):
     mass: float | None = mass_key()
     density: float | None = density_key()
     inertia: tuple | None = inertia_key()
-    inelastic: bool = inelastic_key()
 
     def check(self, ck: Checker, path: str) -> None:
         self._check_motion(ck, path)

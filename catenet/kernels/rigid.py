@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.contact import barrier, damped_excess, damped_start
+from catenet.kernels.contact import barrier
 from catenet.kernels.friction import friction_gradient, friction_hessian
 from catenet.kernels.shapes import _block, shape_feature
 
@@ -226,12 +226,11 @@ def rigidity_turn(dx, body, B):
 
 
 @njit(cache=True, error_model="numpy")
-def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad, gamma, lag, dstar):
+def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad):
     """Adds the gradient of the barrier of a box or capsule riding on the body (``kind``,
     ``geom``: ``catenet.kernels.shapes``) at the contact ``nodes`` and the body's four
     nodes into grad (N, 3): A g at a node, -A g at the centre, U g^T on A
-    (``catenet.terms.rigid_contact``); returns the energy. With gamma > 0 the contact
-    damping's share instead (``damped_excess`` of each node's ``lag`` and ``dstar``)."""
+    (``catenet.terms.rigid_contact``); returns the energy."""
     _, A, U, X = frame_local(x, nodes, body, B, c0)
     n = np.empty(3)
     P = np.empty((3, 3))
@@ -242,10 +241,7 @@ def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad,
         d = shape_feature(kind, X[k], geom, n, P)
         if d >= dhat:
             continue
-        if gamma > 0.0:
-            b, db, _ = damped_excess(d, dhat, gamma, lag[k], dstar[k])
-        else:
-            b, db, _ = barrier(d, dhat)
+        b, db, _ = barrier(d, dhat)
         total += kappa * b
         if not d > 0.0:
             continue
@@ -269,14 +265,13 @@ def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad,
 
 @njit(cache=True, error_model="numpy")
 def frame_contact_hessian_shape(
-    kind, geom, kappa, dhat, x, nodes, body, B, c0, chain, values, project, gamma, lag, dstar
+    kind, geom, kappa, dhat, x, nodes, body, B, c0, chain, values, project=False
 ):
     """The Hessian of the barrier of a box or capsule riding on the body (``kind``,
     ``geom``) into ``values`` (the term's: K blocks of 81, then the body's 144): the
     nodes' body-frame points, each node's barrier block and gradient where it acts
     (0 < gap < dhat, as ``shape_hessian`` and ``shape_gradient`` give them), then
-    ``frame_contact_hessian``; returns how many nodes act. ``gamma``, ``lag``,
-    ``dstar``: as ``frame_contact_gradient``'s."""
+    ``frame_contact_hessian``; returns how many nodes act."""
     _, A, U, X = frame_local(x, nodes, body, B, c0)
     K = nodes.shape[0]
     values[:] = 0.0
@@ -291,10 +286,7 @@ def frame_contact_hessian_shape(
         d = shape_feature(kind, X[k], geom, n, P)
         if d >= dhat or d <= 0.0:
             continue
-        if gamma > 0.0:
-            _, db, ddb = damped_excess(d, dhat, gamma, lag[k], dstar[k])
-        else:
-            _, db, ddb = barrier(d, dhat)
+        _, db, ddb = barrier(d, dhat)
         _block(hv, 0, kappa, db, ddb, d, n, P)
         for a in range(3):
             g[k, a] = kappa * db * n[a]
@@ -305,22 +297,6 @@ def frame_contact_hessian_shape(
     if count:
         blocks = values[: 81 * K].reshape((K, 81))
         frame_contact_hessian(A, U, H, g, chain, active[:count], blocks, values[81 * K :], project)
-    return count
-
-
-@njit(cache=True, error_model="numpy")
-def frame_damping_start(kind, geom, dhat, gamma, x, nodes, body, B, c0, lag, dstar):
-    """Each contact node's barrier slope ``lag`` and zero-force gap ``dstar`` at the
-    step's start x (``damped_start``); returns how many nodes are within dhat."""
-    _, _, _, X = frame_local(x, nodes, body, B, c0)
-    n = np.empty(3)
-    P = np.empty((3, 3))
-    count = 0
-    for k in range(nodes.shape[0]):
-        d = shape_feature(kind, X[k], geom, n, P)
-        lag[k], dstar[k] = damped_start(d, dhat, gamma)
-        if d < dhat:
-            count += 1
     return count
 
 

@@ -12,8 +12,6 @@ net, for a scene read from a case file and one built in Python alike.
   as ``stages``: static solves go through them first, each from the last.
 - Coulomb friction (``friction`` > 0) rides on the barrier with the slip distance
   ``slip``, else dhat, at least MIN_SLIP of dhat.
-- A free body's contact may be ``inelastic``: a dashpot beside its barrier, so that a
-  node that strikes the body stays on it (``catenet.terms.rigid_contact.BodyDamping``).
 - On a prescribed motion (``velocity``, ``angular_velocity``, ``history``) the barrier
   moves rigidly about the shape's origin (``catenet.terms.moving.Moving``).
 - No node of the net may start inside or on an obstacle (``check_clear``).
@@ -87,7 +85,6 @@ class Contact:
     velocity: tuple[float, ...] | None = None
     angular_velocity: tuple[float, ...] | None = None
     history: tuple[tuple[float, float], ...] | None = None
-    inelastic: bool = False  # a free body's: struck nodes stay on it (``BodyDamping``)
 
     def __post_init__(self) -> None:
         """ConfigError for a value a case file's keys would refuse (a scene built in

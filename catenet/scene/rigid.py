@@ -193,10 +193,6 @@ def _terms(
     if edges is not None:
         terms.append(edges)
     terms += _planes(body, record, fixed, net, dhat, load, shown)
-    if contact.inelastic:  # a dashpot beside the barrier: struck nodes stay on the body
-        from catenet.terms.rigid_contact import INELASTIC_TIME, BodyDamping
-
-        terms.append(BodyDamping(touch, INELASTIC_TIME))
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
         from catenet.terms.rigid_contact import BodyFriction

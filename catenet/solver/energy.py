@@ -15,14 +15,8 @@ with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identit
 the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), against
 friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force; on an obstacle on a
 prescribed motion, g_f . (dx - D) with D its surface's displacement where the nodes
-are, ``Moving.drive``, and its work through friction -g_f . D booked in W), against the
-cables' axial dashpots (``catenet.terms.axial``, their ``losses``), and against the
-contact's dashpots (``rebased`` terms, ``catenet.terms.rigid_contact.BodyDamping``): the
-rise of their energy over the step, Psi_n(x_{n+1}) - Psi_n(x_n) >= 0, which the step's
-potential held and the next step's, built afresh from x_{n+1}, no longer does; and in a
-step in which a node came in on such a contact (slowed, or stopped: an inelastic impact,
-taken as an implicit Euler step, ``TimeStepper.impact``) whatever else the step lost,
-which is the impact's.
+are, ``Moving.drive``, and its work through friction -g_f . D booked in W), and against the
+cables' axial dashpots (``catenet.terms.axial``, their ``losses``).
 
 In water (``catenet.terms.water``) K also holds the added mass's 1/2 v^T M_a v, D the
 drag's work against the motion relative to the water, -F_d . (dx - h U), and W the
@@ -92,8 +86,7 @@ class Ledger:
         """The run's start state (``stepper``: a ``TimeStepper`` after ``begin``)."""
         system = stepper.system
         self.judged = True
-        self._friction = [t for t in system.terms if t.lagged and not (t.medium or t.rebased)]
-        self._rebased = [t for t in system.terms if t.rebased]  # contact damping
+        self._friction = [t for t in system.terms if t.lagged and not t.medium]
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
         self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history
         self._factors = [t.factor for t in self._weighs]
@@ -143,8 +136,6 @@ class Ledger:
             else:  # on a moving obstacle: its work through friction, the rest the slip's
                 self._dissipated += float(np.sum(g[free] * (dx - drive)[free]))
                 self._work -= float(np.sum(g[free] * drive[free]))
-        for term in self._rebased:  # the energy it took up over the step: its dashpots'
-            self._dissipated += term.energy(x_new) - term.energy(x_old)  # work, lost
         for i, term in enumerate(self._weighs):  # its energy's change with gravity, at
             if term.factor != self._factors[i]:  # the step's mean (as gravity's work)
                 mean = 0.5 * (term.unit_energy(x_old) + term.unit_energy(x_new))
@@ -158,9 +149,6 @@ class Ledger:
             self._dissipated += lost
             self._work += put
         remainder = k + u + c - self._start - self._work + self._dissipated
-        if stepper.impacted and remainder < self.row[-1]:  # an inelastic impact's loss
-            self._dissipated += self.row[-1] - remainder  # is the contact's, not the
-            remainder = float(self.row[-1])  # integrator's (``BodyDamping``)
         self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
         self.floor = max(self.floor, _floor(stepper, x_new, h))
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))

@@ -40,9 +40,8 @@ LATE = 0.95  # ... in its last 5 %: at its end already
 
 def contact_terms(terms: Sequence[Term]) -> tuple[Term, ...]:
     """The terms with a barrier (an activation distance dhat > 0): obstacles, balls,
-    free bodies' contact with the net and with each other, self-contact (not the dashpot
-    of an inelastic body's contact, ``rebased``, whose energy is no contact state)."""
-    return tuple(t for t in terms if float(getattr(t, "dhat", 0.0) or 0.0) > 0.0 and not t.rebased)
+    free bodies' contact with the net and with each other, self-contact."""
+    return tuple(t for t in terms if float(getattr(t, "dhat", 0.0) or 0.0) > 0.0)
 
 
 class Events:

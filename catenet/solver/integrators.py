@@ -102,19 +102,9 @@ class Scheme(Protocol):
     name: str
     order: int
     step_rtol: float
-    restart: bool  # the next try is an implicit Euler step (BDF2: an impact, ``Stepper``)
 
     @property
     def a(self) -> np.ndarray | None: ...
-
-    @property
-    def remembers(self) -> bool:
-        """Whether the last step tried used the states before its start (BDF2's)."""
-        ...
-
-    def forget(self) -> None:
-        """The step just tried (if accepted) starts the scheme afresh: no state before
-        it is the next step's past (an impact within it)."""
 
     def begin(
         self,
@@ -153,11 +143,6 @@ class ImplicitEuler:
     order = 1
     step_rtol = 1.0  # Newton's tolerance per step, in units of the run's rtol
     a = None  # no acceleration state
-    restart = False  # one-step schemes: nothing to restart
-    remembers = False
-
-    def forget(self) -> None:
-        pass
 
     def begin(
         self,
@@ -234,12 +219,6 @@ class Newmark:
 
     name = "newmark"
     order = 2
-    restart = False
-    remembers = False  # (it is refused in contact: no impact restarts it)
-
-    def forget(self) -> None:
-        pass
-
     # Each step's Newton leaves a force error up to its tolerance times the load scale. A
     # scheme that damps nothing itself lets these errors add up where the physical
     # damping is light (mu h = 1e-3 per step): at rtol they hold the inertial force of a
@@ -359,13 +338,7 @@ class BDF2:
     removed within a few steps, as implicit Euler removes them, and nothing rings on in a
     state the next step carries (newmark's acceleration). Zero-stable for step ratios
     omega < 1 + sqrt 2; a step after a longer ratio (or the first of a run, or of a
-    restart: the state is (x_n, v_n, x_{n-1}, v_{n-1})) is an implicit Euler step, and so
-    is a step in which a node strikes a damped contact (``restart``): a node stopped
-    within one step leaves a BDF2 step at half its speed the other way (x_{n+1} = x_n
-    gives v_{n+1} = (x_{n-1} - x_n) / 2h), a bounce from the formula's memory, where
-    implicit Euler leaves it at rest, as the contact's dashpot would; the step after it
-    is implicit Euler's too (the states before the impact are no past to extrapolate:
-    BDF2's v_bar = (4 v_n - v_{n-1}) / 3 would throw the node off again)."""
+    restart: the state is (x_n, v_n, x_{n-1}, v_{n-1})) is an implicit Euler step."""
 
     name = "bdf2"
     order = 2
@@ -379,16 +352,7 @@ class BDF2:
         self._older: tuple[np.ndarray, np.ndarray, float] | None = None  # ... of step n-2
         self._bar: tuple[np.ndarray, np.ndarray, float] | None = None  # this step's x, v, b
         self._bdf = False  # this step is a BDF2 step (not implicit Euler's)
-        self.restart = False  # the next try is an implicit Euler step (an impact: ``Stepper``)
-        self._restarted = False  # this step is one: its start's state is not the next's past
         self.b = 0.0  # the step's b: v_{n+1} = (x_{n+1} - x_bar) / b (``weights``)
-
-    @property
-    def remembers(self) -> bool:
-        return self._bdf
-
-    def forget(self) -> None:
-        self._restarted = True
 
     def begin(
         self,
@@ -407,8 +371,7 @@ class BDF2:
     ) -> tuple[np.ndarray, np.ndarray, float]:
         """(c1 x_n - c2 x_{n-1}, c1 v_n - c2 v_{n-1}, b) of a step h from (y_k, v_k)."""
         prev = self._prev
-        self._restarted = self.restart
-        self._bdf = prev is not None and h / prev[2] <= self.MAX_RATIO and not self.restart
+        self._bdf = prev is not None and h / prev[2] <= self.MAX_RATIO
         if prev is None or not self._bdf:
             return y_k, v_k, h  # implicit Euler
         y_p, v_p, h_p = prev
@@ -460,8 +423,6 @@ class BDF2:
         out.reshape(-1)[free] = (x_new.reshape(-1)[free] - y_bar) / b
         self._older = self._prev
         self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
-        if self._restarted:  # before the impact: the next step starts afresh (Euler's)
-            self._prev = self._older = None
         return out
 
     def estimate(

@@ -78,8 +78,6 @@ class TimeStepper:
         self.pseudo = False  # a run to rest through its stages: the path is only a path
         self.ledger: Ledger | None = None  # the energy balance (catenet.solver.energy)
         self.media = [t for t in self.system.terms if t.medium]  # water (terms/water.py)
-        self.strikes = [t for t in self.system.terms if t.rebased]  # damped contacts
-        self.impacted = False  # in the last step tried a node came in on one (``impact``)
 
     def begin(
         self,
@@ -226,12 +224,9 @@ class TimeStepper:
             net.guides.place(x_trial, net.nodes)
         return x_trial
 
-    def solve_step(self, h_step: float, again: bool = False) -> tuple[NewtonResult | None, str]:
+    def solve_step(self, h_step: float) -> tuple[NewtonResult | None, str]:
         """Newton for the step of ``h_step`` from the predictor: its result (None when the
-        system was singular) and why it failed. ``again``: the same step tried again as
-        implicit Euler's after an impact (``impact``; ``impacted`` says so)."""
-        if not again:
-            self.impacted = False
+        system was singular) and why it failed."""
         try:
             x_trial = self.predict(h_step)
         except Pinched as exc:
@@ -259,27 +254,7 @@ class TimeStepper:
         except SingularSystemError as exc:
             return None, str(exc)
         self.iterations += newton.iterations
-        met = self.impact(x_trial, h_step) if newton.converged else 0
-        self.impacted = self.impacted or met > 0  # the energy balance: the contact's loss
-        if met == 2:
-            if self.scheme.remembers:  # the step again, as implicit Euler's
-                self.scheme.restart = True
-                try:
-                    return self.solve_step(h_step, again=True)
-                finally:
-                    self.scheme.restart = False
-            self.scheme.forget()  # no past before the impact for the next steps
         return newton, newton.reason
-
-    def impact(self, x_new: np.ndarray, h_step: float) -> int:
-        """How the step of ``h_step`` to x_new met a damped contact (``BodyDamping.struck``,
-        against the free flight x + h v): 2 where it stopped a node (an impact: a BDF2
-        step is then taken again as implicit Euler's, and BDF2 starts afresh after it,
-        ``catenet.solver.integrators.BDF2``), 1 where it slowed one, else 0."""
-        if not self.strikes:
-            return 0
-        free = self.x + h_step * self.v
-        return max(term.struck(free, x_new) for term in self.strikes)
 
     def set_motion(self, y_k: np.ndarray, v_k: np.ndarray, h_step: float) -> None:
         """Gives the water's terms the step's velocity and acceleration as affine maps of

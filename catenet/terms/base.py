@@ -49,10 +49,6 @@ Optional capabilities, declared so that solvers ask no term what it has:
 - ``edge_net``: a net whose edges' row-major 6x6 blocks are the term's Hessian values, edge
   by edge (the stretching, the stretched start's springs): the system shares one map
   into its pattern between all such terms of a net.
-- ``rebased`` (with ``struck(free, x)``): a contact's dashpot (``catenet.terms.
-  rigid_contact.BodyDamping``), whose energy is built afresh from each step's start: the
-  energy balance books its rise over a step as dissipated, and a BDF2 step that stops a
-  node on it (``struck``) is taken again as an implicit Euler step.
 - ``holds``: a support's term (the elastic supports' springs,
   ``catenet.terms.supports``): its force counts in the reactions, not the contact forces.
 
@@ -107,7 +103,6 @@ class Term:
     role = "internal"
     bounds_step = False  # has max_step(x, dx)
     lagged = False  # has relag(x)
-    rebased = False  # a dashpot's energy, built afresh at each step's start (energy balance)
     horizon = False  # max_step(x, dx, upto) looks no farther than upto (its cost grows)
     moving = False  # has set_pose(t)
     loadlike = False  # has set_factor(factor): a static run's load factor scales it
@@ -177,12 +172,6 @@ class Term:
         """(``lagged`` terms) Updates the lagged quantities at the equilibrium x; returns
         their relative change."""
         raise NotImplementedError(f"{type(self).__name__} lags nothing")
-
-    def struck(self, free: np.ndarray, x: np.ndarray) -> int:
-        """(``rebased`` terms) 2 where the step to x stopped a node that the free flight
-        ``free`` would have carried on into the contact (an impact), 1 where it slowed
-        one there, else 0."""
-        raise NotImplementedError(f"{type(self).__name__} is no dashpot")
 
     def set_factor(self, factor: float) -> None:
         """(``loadlike`` terms) The load factor of a static load step (1: in full)."""

@@ -43,12 +43,10 @@ import math
 import numpy as np
 
 from catenet.kernels.bodycap import body_paths, body_step_cap
-from catenet.kernels.contact import damped_factors, damped_start
 from catenet.kernels.rigid import (
     frame_contact_gradient,
     frame_contact_hessian,
     frame_contact_hessian_shape,
-    frame_damping_start,
     frame_friction_gradient,
     frame_friction_hessian,
     frame_local,
@@ -61,11 +59,6 @@ T_FAR = 4.0**13  # beyond the longest step a line search tries (MAX_EXPANSIONS =
 FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
 ROUNDOFF = 1e4  # ... nor than this many round-offs of its body-frame coordinates
 SLACK = 1e-4  # a node at the floor may come this share of its gap nearer (docstring)
-STRIKE = 0.5  # a node held this share of its free flight's approach short of it is struck
-APPROACH = 1e-3  # ... where that approach is more than this share of dhat
-#: The dashpot's time constant [s] of an ``inelastic`` body's contact (``BodyDamping``):
-#: far longer than any node's contact with a body, so that a struck node stays on it.
-INELASTIC_TIME = 1.0
 EPS = np.finfo(np.float64).eps
 
 
@@ -89,8 +82,6 @@ class BodyContact(Term):
         self._g = np.zeros((n_nodes, 3))
         self._chain = np.ascontiguousarray(frame.chain())
         self.project = False  # safeguarded: each contact's block projected (``safeguard``)
-        self.gamma = 0.0  # the contact damping's factor (``BodyDamping``; 0: the barrier)
-        self.lag = self.dstar = np.zeros(0)
 
     def safeguard(self, on: bool) -> None:
         """While on, each contact node's 15 x 15 block (the node, the body's centre and
@@ -123,16 +114,12 @@ class BodyContact(Term):
         self._local(x)
         return self.shape.energy(self._buf)
 
-    def _shape_hessian(self, H):
-        return H  # the barrier's own (``BodyDamping`` scales it)
-
     def gradient(self, x, grad):
         shape, frame = self.shape, self.frame
         if isinstance(shape, (BoxBarrier, CapsuleBarrier)):  # a box or capsule: one kernel
             return float(
                 frame_contact_gradient(shape.kind, shape.geom, self.kappa, self.dhat, x,
-                                       self.nodes, frame.nodes, frame.B, self.c0, grad,
-                                       self.gamma, self.lag, self.dstar)
+                                       self.nodes, frame.nodes, frame.B, self.c0, grad)
             )  # fmt: skip
         _, A, U = self._local(x)
         energy, g = self._shape_gradient()
@@ -164,14 +151,13 @@ class BodyContact(Term):
             return (
                 frame_contact_hessian_shape(shape.kind, shape.geom, self.kappa, self.dhat, x,
                                             self.nodes, frame.nodes, frame.B, self.c0,
-                                            self._chain, values, self.project, self.gamma,
-                                            self.lag, self.dstar) > 0
+                                            self._chain, values, self.project) > 0
             )  # fmt: skip
         _, A, U = self._local(x)
         K = len(self.nodes)
         hv = np.zeros(9 * K)
         self.shape.hessian(self._buf, hv)
-        H = self._shape_hessian(hv.reshape(K, 3, 3))
+        H = hv.reshape(K, 3, 3)
         _, g = self._shape_gradient()
         values[:] = 0.0
         act = np.flatnonzero(np.any(H.reshape(K, 9) != 0.0, axis=1) | np.any(g != 0.0, axis=1))
@@ -308,116 +294,6 @@ class BodyFriction(BodyContact):
             frame_friction_hessian(x, self.nodes, frame.nodes, frame.B, self.c0, f.anchor,
                                    f.normal, f.weight, f.slip, self._chain, values) > 0
         )  # fmt: skip
-
-    def gap(self, x):
-        return self.rides_on.gap(x)
-
-    def stiffness(self):
-        return None
-
-
-@register("body_damping")
-class BodyDamping(BodyContact):
-    """The dashpot of an inelastic free body's contact (``inelastic = true``): beside the
-    barrier's spring kappa b(d), a dashpot of time constant ``time`` [s] whose force is
-    -time d/dt (kappa b'(d)) (stiffness-proportional: it acts only within dhat), taken
-    implicitly over a step of h from the gap d_n at its start. With gamma = time / h and
-    b'_n = b'(d_n) a node's normal force is then
-
-        -kappa min(0, (1 + gamma) b'(d) - gamma b'_n),
-
-    the barrier's and the dashpot's, never pulling (it is 0 from the gap d* where it
-    would turn, ``damped_start``); this term is its share over the barrier, psi(d)
-    (``catenet.kernels.contact.damped_excess``), riding on the body's frame as the
-    barrier does (the box's and capsule's kernels, a shape's own gradient and Hessian
-    scaled per node for the others: ``damped_factors``). A node resting at d_n feels the
-    barrier alone; one that comes in is held by a barrier 1 + gamma times stiffer and
-    gives up the energy it stored there when the next step starts from where it is
-    (psi rises over every step: the energy balance books that rise as dissipated). What
-    keeps a struck node from leaving again is the implicit Euler step the stepper takes
-    where a node is stopped (``struck``, ``catenet.solver.stepper.TimeStepper.impact``)."""
-
-    bounds_step = False
-    lagged = True  # set at each step's start; none in a static step
-    rebased = True  # the energy balance books its rise over a step as dissipated
-
-    def __init__(self, contact: BodyContact, time: float):
-        super().__init__(contact.shape, contact.frame, n_nodes=contact.n_nodes, label=contact.label)
-        self.rides_on = self.contact = contact
-        self.time = float(time)
-        K = len(self.nodes)
-        self.lag = np.zeros(K)
-        self.dstar = np.full(K, self.dhat)
-        self.start = np.full(K, np.inf)  # the gaps at the step's start
-
-    def begin_step(self, x, time, start=None) -> None:
-        """gamma = time / h for a time step of h (0, none, for a static step), and each
-        node's barrier slope and zero-force gap at the step's start."""
-        h = 0.0 if time is None or start is None else float(time) - float(start)
-        self.gamma = self.time / h if h > 0.0 else 0.0
-        self.start = self.contact.gap(x).copy()  # (``struck``)
-        shape, frame = self.shape, self.frame
-        if isinstance(shape, (BoxBarrier, CapsuleBarrier)):
-            frame_damping_start(shape.kind, shape.geom, self.dhat, self.gamma, x, self.nodes,
-                                frame.nodes, frame.B, self.c0, self.lag, self.dstar)  # fmt: skip
-            return
-        for k, d in enumerate(self.contact.gap(x)):
-            self.lag[k], self.dstar[k] = damped_start(float(d), self.dhat, self.gamma)
-
-    def _factors(self):
-        """Per contact node (K,): the damping's energy share, ratio and extra
-        (``damped_factors``) at the nodes' body-frame points in ``_buf``."""
-        K = len(self.nodes)
-        energy, ratio, extra = np.zeros(K), np.zeros(K), np.zeros(K)
-        gap = np.ascontiguousarray(self.shape.gap(self._buf), dtype=np.float64)
-        damped_factors(gap, self.dhat, self.gamma, self.lag, self.dstar, energy, ratio, extra)
-        return energy, ratio, extra
-
-    def _shape_gradient(self):
-        """The damping's energy and gradient per contact node in the body frame: the
-        barrier's scaled (``_factors``), for shapes without a kernel of their own."""
-        energy, g = super()._shape_gradient()
-        if not math.isfinite(energy):
-            return energy, g
-        e, ratio, _ = self._factors()
-        return self.kappa * float(e.sum()), ratio[:, None] * g
-
-    def _shape_hessian(self, H):
-        _, g = super()._shape_gradient()
-        _, ratio, extra = self._factors()
-        return ratio[:, None, None] * H + (extra / self.kappa)[:, None, None] * (
-            g[:, :, None] * g[:, None, :]
-        )
-
-    def struck(self, free, x) -> int:
-        """How the step to x met the body: 2 where it stopped a node's approach (a node
-        within dhat at x that the free flight ``free``, x_n + h v_n, would have carried
-        nearer the body by a = gap(x_n) - gap(free) > APPROACH dhat and that ended more
-        than STRIKE a short of it: an impact), 1 where such a node was only slowed (its
-        step's loss is the contact's too), 0 where none came in (a node resting on the
-        body, or moving with it: ``catenet.solver.stepper.TimeStepper.impact``)."""
-        gap = self.contact.gap(x).copy()
-        flight = self.contact.gap(free)
-        approach = self.start - flight
-        came = (gap < self.dhat) & (approach > APPROACH * self.dhat)
-        if not np.any(came):
-            return 0
-        return 2 if np.any(came & (gap - flight > STRIKE * approach)) else 1
-
-    def relag(self, x) -> float:
-        return 0.0  # nothing lagged in a static step (gamma = 0)
-
-    def energy(self, x):
-        return self.gradient(x, np.zeros((self.n_nodes, 3)))
-
-    def gradient(self, x, grad):
-        return super().gradient(x, grad) if self.gamma > 0.0 else 0.0
-
-    def hessian(self, x, values):
-        if self.gamma > 0.0:
-            return super().hessian(x, values)
-        values[:] = 0.0
-        return False
 
     def gap(self, x):
         return self.rides_on.gap(x)

@@ -112,9 +112,10 @@ def _shapes(tmp_path, nodes, kappa, dhat, c0):
     }
 
 
-def posed_body(kind, tmp_path, K, rng):
-    """(frame, shape, x, gap): a body of ``kind`` (``_shapes``: kappa 3, dhat 0.2) posed
-    near its start with K contact nodes still at 0 in x, and the gap of a point to it."""
+@pytest.mark.parametrize("kind", ["box", "capsule", "sphere", "mesh"])
+def test_body_contact_passes_finite_differences_and_balances_force_and_torque(kind, tmp_path):
+    rng = np.random.default_rng(11)
+    K = 8
     c0 = np.array([0.1, 0.2, 0.3])
     frame = BodyFrame(K, 5.0, INERTIA, c0)
     shape = _shapes(tmp_path, np.arange(K), 3.0, 0.2, c0)[kind]
@@ -126,14 +127,6 @@ def posed_body(kind, tmp_path, K, rng):
         buf[0] = X
         return shape.gap(buf)[0]
 
-    return frame, shape, x, gap
-
-
-@pytest.mark.parametrize("kind", ["box", "capsule", "sphere", "mesh"])
-def test_body_contact_passes_finite_differences_and_balances_force_and_torque(kind, tmp_path):
-    rng = np.random.default_rng(11)
-    K = 8
-    frame, shape, x, gap = posed_body(kind, tmp_path, K, rng)
     x[:K] = near_surface(gap, frame, x, rng, K)
     term = BodyContact(shape, frame, n_nodes=K + 4)
     g = term.gap(x)
