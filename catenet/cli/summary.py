@@ -116,15 +116,35 @@ def state_lines(
             f"{'':<{W}} moment largest {s['max_reaction_moment']:.6g} N m at node "
             f"{s['max_reaction_moment_node']} (a rod end's support)"
         )
-    if s.get("contact_nodes", 0):  # in water: its buoyancy and drag act there too
-        lines.append(
-            f"{'contact':<{W}} resultant {vector(s['contact_resultant'])} N on "
-            f"{s['contact_nodes']} nodes; largest {s['max_contact']:.6g} N at node "
-            f"{s['max_contact_node']}" + (" (obstacles, bodies and the water)" if water else "")
-        )
+    contact = _contact_line(s, water)
+    if contact:
+        lines.append(f"{'contact':<{W}} {contact}")
     for name, c in s.get("cables", {}).items():
         lines.append(cable_line(name, c, dynamic))
     return lines
+
+
+def _contact_line(s: dict, water: bool) -> str:
+    """The summary's contact line ("" for none): the resultant of the contact forces, the
+    nodes of the net they touch and the largest. With balls or free bodies (their
+    contact with the net cancels over all nodes) the resultant over all nodes is what
+    the fixed obstacles hold (the ground under a crate), shown where it is not 0, and
+    the resultant on the net's own nodes is shown beside the nodes touched."""
+    total = s.get("contact_resultant", [0.0, 0.0, 0.0])
+    touched = s.get("contact_nodes", 0)
+    on_net = s.get("contact_on_net")
+    where = (
+        f" on {touched} nodes; largest {s['max_contact']:.6g} N at node {s['max_contact_node']}"
+        + (" (obstacles, bodies and the water)" if water else "")
+    )
+    if on_net is None:
+        return f"resultant {vector(total)} N{where}" if touched else ""
+    scale = max(math.hypot(*on_net), s.get("max_contact", 0.0))
+    held = math.hypot(*total) > 1e-6 * scale
+    parts = [f"resultant {vector(total)} N held by the fixed obstacles"] if held else []
+    if touched:
+        parts.append(f"on the net {vector(on_net)} N{where}")
+    return "; ".join(parts)
 
 
 def _cable_peak(c: dict, dynamic: bool | str) -> str:

@@ -19,7 +19,11 @@ source of the run's printed summary, the /result attributes and the sweep table'
 - ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``; where
   a support holds a rod end's direction ``max_reaction_moment`` [N m] (the largest |M| of
   ``/result/reaction_moment``) and ``max_reaction_moment_node``;
-- ``contact_resultant`` (3,) [N], ``max_contact`` [N], ``contact_nodes`` (nodes touched);
+- ``contact_resultant`` (3,) [N] (over every node: a free body's or a ball's contact
+  with the net cancels there, what is left is the fixed obstacles'), ``max_contact`` [N]
+  and ``max_contact_node``, ``contact_nodes`` (the net's nodes touched: not a body's);
+  with balls or free bodies ``contact_on_net`` (3,) [N], the resultant on the net's own
+  nodes (a body resting on the net: its weight);
 - with peaks: ``peak_tension`` [N], ``peak_tension_edge``, ``peak_tension_time`` (s, or
   the load factor of a static run), ``peak_displacement`` [m], ``peak_displacement_node``,
   ``peak_displacement_time``.
@@ -183,7 +187,10 @@ def summarize(
     out["max_strain_edge"] = e
     out["slack_edges"] = int(np.count_nonzero(only & (eps < 0)))
     out.update(_forces("reaction", reaction, x, net.supported))
-    out.update(_forces("contact", contact, x, None))
+    own = np.arange(net.n_nodes) < net.n_net  # not a ball's or a free body's own nodes
+    out.update(_forces("contact", contact, x, own))
+    if net.bodies and contact is not None:  # what bodies and obstacles put on the net
+        out["contact_on_net"] = _vector(np.asarray(contact, dtype=np.float64)[own].sum(axis=0))
     if peaks is not None:
         out.update(_peaks(peaks if isinstance(peaks, dict) else peaks.arrays(), free))
     return out
@@ -199,8 +206,8 @@ def _forces(name: str, force, x, where) -> dict:
         f"max_{name}": largest,
         f"max_{name}_node": k,
     }
-    if name == "contact":
-        out["contact_nodes"] = int(np.count_nonzero(size > 0))
+    if name == "contact":  # the net's nodes a contact touches
+        out["contact_nodes"] = int(np.count_nonzero((size > 0) & np.asarray(where)))
     return out
 
 

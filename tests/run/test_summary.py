@@ -123,3 +123,51 @@ def test_contact_totals_close_the_equilibrium(tmp_path):
     size = np.linalg.norm(result.contact_force, axis=1)
     assert s["max_contact"] == size.max() and s["max_contact_node"] == int(np.argmax(size))
     assert s["probe_auto"] is False  # a square net keeps the paper's centre node
+
+
+REST = """
+title = "a box resting on a net"
+[geometry]
+kind = "square_net"
+n = 10
+alpha = 0.7853981633974483
+size = 1.0
+edge_length = 0.05
+[material]
+E = 10e6
+radius = 0.01
+density = 1000.0
+[load]
+gravity = [0.0, 0.0, -9.81]
+[[obstacle]]
+kind = "box"
+center = [0.0, 0.0, 0.052]
+half_size = [0.15, 0.15, 0.05]
+mass = 10.0
+distance = 0.005
+friction = 0.5
+[solver]
+method = "static"
+"""
+
+
+def test_a_body_resting_on_the_net_shows_its_weight_as_the_contact_on_the_net(tmp_path):
+    """docs/guide/bodies.md's box at rest: the contact on the net's own nodes carries
+    its 98.1 N (over every node, the body's and the net's, it cancels), and the largest
+    contact is at a node of the net, not at one of the four that carry the body."""
+    import tomllib
+
+    case = parse_case(tomllib.loads(REST))
+    result = run_case(case, tmp_path / "rest.h5")
+    s = result.report.summary
+    net = build(case).net
+    assert np.allclose(s["contact_on_net"], [0.0, 0.0, -98.1], atol=1e-3)
+    assert np.abs(s["contact_resultant"]).max() < 1e-6 * 98.1
+    assert 0 <= s["max_contact_node"] < net.n_net and 0 < s["contact_nodes"] <= net.n_net
+    (tmp_path / "rest.toml").write_text(REST)
+    out = CliRunner().invoke(
+        main, ["run", str(tmp_path / "rest.toml"), "-o", str(tmp_path / "r.h5")]
+    )
+    assert out.exit_code == 0, out.output
+    line = next(ln for ln in out.output.splitlines() if ln.startswith("contact"))
+    assert line.split(None, 1)[1].startswith("on the net [0, 0, -98.1"), line
