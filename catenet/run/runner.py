@@ -246,7 +246,17 @@ def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
             exc.output = run.path if writer.has_result else None
             if isinstance(exc, ConfigError):
                 _remove(writer)  # bad input found late (exit 2): leave nothing behind
+            elif exc.args and isinstance(exc.args[0], str):  # a failed run's lengths and
+                exc.args = (_in_units(exc.args[0], run.case),)  # forces as the case's
             raise
+
+
+def _in_units(message: str, case: Case) -> str:
+    """A message whose numbers carry SI unit names (``2.5 m``, ``[N]``) as the case's
+    ``units`` name them (``catenet.model.units.relabel``: 2.5 mm in an N-mm case)."""
+    from catenet.model.units import relabel
+
+    return relabel([message], case.units or "SI")[0]
 
 
 def _implausible(run: Plan, result) -> str:
@@ -300,7 +310,7 @@ def _report(
 
         top = float(abs(result.tension).max(initial=0.0))
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
-            log.warning("%s", squeezed)
+            log.warning("%s", _in_units(squeezed, case))
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables

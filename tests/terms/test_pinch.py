@@ -8,6 +8,7 @@ step), and jaws closing to less than the rope's diameter (the run stops, naming 
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 
 import numpy as np
@@ -340,3 +341,18 @@ def test_jaws_holding_the_rope_within_both_barriers_distance_warn_of_the_squeeze
     assert "barriers' distance" not in said[0.001]
     # damped, but driven: the rest test is off, and the summary says why it never rests
     assert "obstacles on prescribed motions: the run ends at solver.t_end" in said[0.001]
+
+
+def test_the_pinch_and_the_squeeze_name_lengths_in_the_case_units(tmp_path):
+    """The same jaws in an N-mm case (units label only): the pinch's room and the
+    squeeze's distances read mm, not m."""
+    said = {}
+    for gap in (-0.0001, GAP):  # a pinch (exit 1), a squeeze (a warning)
+        case = tmp_path / f"mm{gap}.toml"
+        case.write_text('units = "N-mm"\n' + _jaws(gap=gap))
+        done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+        said[gap] = " ".join(done.output.split())
+    assert " mm of room beyond its contact radius" in said[-0.0001], said[-0.0001]
+    assert " m of room" not in said[-0.0001]
+    assert "within their barriers' distance" in said[GAP]
+    assert re.search(r"sum to [0-9.e-]+ mm\)", said[GAP]), said[GAP]
