@@ -30,3 +30,19 @@ def test_dismech_newtons_cantilever_converges_to_the_elastica_at_first_order():
     assert 0.4 < errors[1] / errors[0] < 0.6, errors
     tip, _ = dc.catenet_tip(1.0, 20)
     assert max(abs(tip[0] - x), abs(tip[1] - y)) < 0.1 * errors[0]
+
+
+def test_dismech_newtons_buckled_column_converges_to_the_elastica_at_first_order():
+    """The column of benchmarks/peers/dismech_column.py at 1.5 P_cr, 50 and 100 edges
+    (on 20, at its 0.5 s steps, it comes to rest before it has buckled): dismech-newton's
+    tip error halves with the edge, catenet's at 50 edges is below a tenth of its."""
+    from benchmarks.peers import dismech_column as dcol
+
+    exact = dcol.elastica_column(1.5)
+    errors = []
+    for edges in (50, 100):
+        tip, _, _ = dcol.dismech_column_tip(1.5, edges, 0.2 * 50 / edges)
+        errors.append(max(abs(tip[0] - exact[0]), abs(tip[1] - exact[1])))
+    assert 0.4 < errors[1] / errors[0] < 0.6, errors
+    tip, _ = dcol.column_tip(1.5, 50)
+    assert max(abs(tip[0] - exact[0]), abs(tip[1] - exact[1])) < 0.1 * errors[0]
