@@ -69,6 +69,13 @@ def dismech_tip(
 ) -> tuple[np.ndarray, float, int]:
     """(tip (x, y) / L, CPU seconds, steps) of dismech-newton's cantilever at
     P L^2 / EI = alpha, run to rest (module docstring)."""
+    return dismech_end_load([0.0, 0.0, -alpha * EI / L**2], edges, dt, max_steps)
+
+
+def dismech_end_load(force, edges: int, dt: float, max_steps: int) -> tuple[np.ndarray, float, int]:
+    """(tip (x, -z) / L, CPU seconds, steps) of dismech-newton's rod along +x, its first
+    edge held (``fix_segment``), under ``force`` [N] at its tip particle, stepped without
+    damping until the tip moves less than SETTLE L in a step (module docstring)."""
     import newton
     import warp as wp
     from dismech_newton import DiSMechSolver, add_rod, fix_segment
@@ -94,12 +101,12 @@ def dismech_tip(
     model = builder.finalize(device="cpu")
     solver = DiSMechSolver(model)
     now, after = model.state(), model.state()
-    force = np.zeros((edges + 1, 3), dtype=np.float32)
-    force[-1, 2] = -alpha * EI / L**2
+    loads = np.zeros((edges + 1, 3), dtype=np.float32)
+    loads[-1] = force
     last, steps = None, 0
     while True:
         assert now.particle_f is not None
-        now.particle_f.assign(force)
+        now.particle_f.assign(loads)
         solver.step(now, after, None, None, dt)
         now, after = after, now
         steps += 1

@@ -26,8 +26,6 @@ import argparse
 import math
 import os
 import sys
-import time
-import warnings
 from pathlib import Path
 
 if __name__ == "__main__":  # one thread for every tool, set before NumPy, MKL and Numba
@@ -45,17 +43,10 @@ import numpy as np  # noqa: E402
 if __package__ in (None, ""):  # run as a script: the repository's root on the path
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from benchmarks.peers.pyelastica_cantilever import (  # noqa: E402 (the rod of both)
-    DENSITY,
-    EI,
-    RADIUS,
-    SHEAR_FACTOR,
-    E,
-    L,
-)
+from benchmarks.peers.dismech_cantilever import dismech_end_load  # noqa: E402
+from benchmarks.peers.pyelastica_cantilever import EI, L, catenet_end_load  # noqa: E402
 
 NUDGE = 1e-4  # the lateral load at the tip, a share of P
-SETTLE = 1e-7  # dismech-newton's tip at rest: it moves less than this times L in a step
 P_CR = math.pi**2 * EI / (4.0 * L**2)
 
 
@@ -77,75 +68,17 @@ def _load(ratio: float) -> np.ndarray:
 
 
 def column_tip(ratio: float, edges: int) -> tuple[np.ndarray, float]:
-    """(tip (axial, lateral) / L, CPU seconds) of catenet's column at P = ratio P_cr."""
-    from catenet.case import build, parse_case
-    from catenet.solver import path
-
-    case = {
-        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [L, 0, 0], "nodes": edges + 1},
-        "material": {"E": E, "radius": RADIUS, "EI": EI, "density": DENSITY},
-        "supports": {"fixed": [0], "clamped": [0]},
-        "load": {"point": [{"node": edges, "force": _load(ratio).tolist()}]},
-        "solver": {"rtol": 1e-10, "steps": 20},
-    }
-    start = time.process_time()
-    scene = build(parse_case(case))
-    result = path.solve(scene, path.Settings.of(scene.case.solver))
-    spent = time.process_time() - start
-    if not result.converged:
-        raise RuntimeError(result.message)
-    tip = result.x[edges]
-    return np.array([tip[0], -tip[2]]) / L, spent
+    """(tip (axial, lateral) / L, CPU seconds) of catenet's column at P = ratio P_cr: one
+    static solve in 20 load steps (``pyelastica_cantilever.catenet_end_load``)."""
+    return catenet_end_load(_load(ratio), edges, 20)
 
 
 def dismech_column_tip(
     ratio: float, edges: int, dt: float = 0.2, max_steps: int = 20000
 ) -> tuple[np.ndarray, float, int]:
     """(tip (axial, lateral) / L, CPU seconds, steps) of dismech-newton's column at
-    P = ratio P_cr, run to rest (``dismech_cantilever.dismech_tip``'s set-up)."""
-    import newton
-    import warp as wp
-    from dismech_newton import DiSMechSolver, add_rod, fix_segment
-
-    wp.config.quiet = True  # type: ignore[attr-defined]
-    area, inertia = math.pi * RADIUS**2, math.pi * RADIUS**4 / 4.0
-    points = np.column_stack([np.linspace(0.0, L, edges + 1), np.zeros((edges + 1, 2))])
-    rod = newton.Rod(
-        points,
-        radius=RADIUS,
-        stretch_rigidity=E * area,
-        shear_rigidity=1e6 * E * area,  # not a discrete elastic rod's: held stiff
-        bend_rigidity=E * inertia,
-        twist_rigidity=SHEAR_FACTOR * E * 2.0 * inertia,
-    )
-    with warnings.catch_warnings():  # Newton's scalar gravity is deprecated: none here
-        warnings.simplefilter("ignore", DeprecationWarning)
-        builder = newton.ModelBuilder(gravity=0.0)
-    builder.default_shape_cfg.density = DENSITY
-    segments = add_rod(builder, rod, proxies=False)
-    fix_segment(builder, edge=segments[0])
-    start = time.process_time()
-    model = builder.finalize(device="cpu")
-    solver = DiSMechSolver(model)
-    now, after = model.state(), model.state()
-    force = np.zeros((edges + 1, 3), dtype=np.float32)
-    force[-1] = _load(ratio)
-    last, steps = None, 0
-    while True:
-        assert now.particle_f is not None
-        now.particle_f.assign(force)
-        solver.step(now, after, None, None, dt)
-        now, after = after, now
-        steps += 1
-        assert now.particle_q is not None
-        tip = now.particle_q.numpy()[-1].astype(np.float64)
-        if last is not None and np.abs(tip - last).max() < SETTLE * L:
-            break
-        if steps >= max_steps:
-            raise RuntimeError(f"dismech-newton: not at rest after {max_steps} steps")
-        last = tip
-    spent = time.process_time() - start
-    return np.array([tip[0], -tip[2]]) / L, spent, steps
+    P = ratio P_cr, run to rest (``dismech_cantilever.dismech_end_load``)."""
+    return dismech_end_load(_load(ratio), edges, dt, max_steps)
 
 
 def main() -> None:

@@ -40,6 +40,12 @@ SHEAR_FACTOR = 1.0 / 3.0  # G = E / (2 (1 + nu)), nu = 0.5: PyElastica's default
 
 def catenet_tip(alpha: float, edges: int) -> tuple[np.ndarray, float]:
     """(tip (x, y) / L, CPU seconds) of catenet's cantilever at P L^2 / EI = alpha."""
+    return catenet_end_load([0.0, 0.0, -alpha * EI / L**2], edges, max(1, int(alpha) // 2))
+
+
+def catenet_end_load(force, edges: int, steps: int) -> tuple[np.ndarray, float]:
+    """(tip (x, -z) / L, CPU seconds) of catenet's rod along +x, clamped at x = 0, under
+    ``force`` [N] at its tip: one static solve in ``steps`` load steps."""
     from catenet.case import build, parse_case
     from catenet.solver import path
 
@@ -47,8 +53,8 @@ def catenet_tip(alpha: float, edges: int) -> tuple[np.ndarray, float]:
         "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [L, 0, 0], "nodes": edges + 1},
         "material": {"E": E, "radius": RADIUS, "EI": EI, "density": DENSITY},
         "supports": {"fixed": [0], "clamped": [0]},
-        "load": {"point": [{"node": edges, "force": [0.0, 0.0, -alpha * EI / L**2]}]},
-        "solver": {"rtol": 1e-10, "steps": max(1, int(alpha) // 2)},
+        "load": {"point": [{"node": edges, "force": [float(f) for f in force]}]},
+        "solver": {"rtol": 1e-10, "steps": steps},
     }
     start = time.process_time()
     scene = build(parse_case(case))
