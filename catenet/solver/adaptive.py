@@ -40,7 +40,11 @@ where the estimate, which looks back over three steps, lags.)
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
-that the impact is resolved from its first instant.
+that the impact is resolved from its first instant. Nodes that strike a free body or a
+ball bringing momentum of their own are resolved through their bounce on its barrier
+(catenet/solver/strikes.py): the step is taken again to end just before the strike and
+the steps through the bounce are constant, a sixteenth of its length, where the error
+estimate, filtered, would let the bounce be damped and the body take too little.
 
 A run starts with ``first`` (``solver.dt`` where given, else FIRST_SHARE of the run's span,
 at most ``dt_max``): the scheme's first steps, before it has the states to
@@ -79,6 +83,7 @@ from catenet.errors import ConfigError, ConvergenceError
 from catenet.solver.events import Events
 from catenet.solver.integrators import BDF2, ImplicitEuler
 from catenet.solver.stepping import ALLOWANCE
+from catenet.solver.strikes import Strikes, Watch
 
 if TYPE_CHECKING:
     from catenet.model.net import Net
@@ -156,10 +161,12 @@ class Bodies:
         framed = set(int(k) for nodes in frames for k in nodes)
         balls = [np.array([k]) for k in range(net.n_net, len(net.nodes)) if k not in framed]
         self.dofs = []
+        self.heads: list[int] = []  # each one's first node (a frame's centre, a ball's)
         for nodes in frames + balls:
             dofs = where[3 * nodes[:, None] + np.arange(3)]
             if np.all(dofs >= 0):
                 self.dofs.append(dofs)
+                self.heads.append(int(nodes[0]))
         m = stepper.m_free
         self.mass = [m[d] for d in self.dofs]
         self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
@@ -206,6 +213,27 @@ def filtered(
     return fx, (fx - ex) / b
 
 
+def _scene(stepper: TimeStepper) -> tuple[float, float]:
+    """A run's size L (its nodes' bounding box's diagonal) and |g|."""
+    nodes, gravity = stepper.net.nodes, stepper.loads.gravity
+    size = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    return size, 0.0 if gravity is None else float(np.linalg.norm(gravity))
+
+
+def _speed(size: float, gravity: float, span: float) -> float:
+    """V's floor: FLOOR of sqrt(|g| L) or L / span, the larger (L = 1 for no size)."""
+    size = size if size > 0 else 1.0
+    return FLOOR * max(math.sqrt(gravity * size), size / span)
+
+
+def watch(stepper: TimeStepper, t0: float, t_end: float) -> Watch | None:
+    """The strikes on free bodies and balls that fixed steps step over, said once
+    (catenet/solver/strikes.py); None for a run without a body or ball."""
+    bodies = Bodies(stepper, _speed(*_scene(stepper), t_end - t0))
+    strikes = Strikes.of(stepper.system.terms, bodies, stepper.net.mass)
+    return None if strikes is None else Watch(strikes, bodies, stepper.free)
+
+
 def _rms(a: np.ndarray, mass: np.ndarray) -> float:
     """sqrt(sum m a^2 / sum m): a mass-weighted RMS over the free DOFs."""
     total = float(np.sum(mass))
@@ -236,11 +264,12 @@ class ErrorControl:
         span = t_end - t0
         self.size = float(size) if size > 0 else 1.0  # L
         self.reach = FLOOR * self.size  # X: grows with the motion's displacements
-        self.speed = FLOOR * max(math.sqrt(gravity * self.size), self.size / span)  # V, grows
+        self.speed = _speed(self.size, gravity, span)  # V, grows
         self.strain = STRAIN_FLOOR  # S: grows with the largest strain
         self.edges: Edges | None = None  # the net's (``of``): no strain error without
         self.bodies: Bodies | None = None  # the free bodies and balls (``of``)
         self.events: Events | None = None  # contact events landed on (``of``)
+        self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
         self.dt_max = span if dt_max is None else float(dt_max)
@@ -283,17 +312,17 @@ class ErrorControl:
 
             stepper.ledger.remedy = ADAPTIVE_REMEDY
         scheme.keep = True
-        net, gravity = stepper.net, stepper.loads.gravity
-        nodes = net.nodes
+        net = stepper.net
+        size, gravity = _scene(stepper)
         out = cls(
             t0, t_end, order=scheme.order, tolerance=tolerance, first=first, dt_max=dt_max,
-            dt_min=dt_min, size=float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0))),
-            gravity=0.0 if gravity is None else float(np.linalg.norm(gravity)),
+            dt_min=dt_min, size=size, gravity=gravity,
         )  # fmt: skip
         out.edges = Edges(net, stepper.free)
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
         out.events = Events(stepper.system.terms, stepper.x)
+        out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass)
         return out
 
     def within(self, stepper: TimeStepper, h_step: float, newton: NewtonResult) -> bool:
@@ -301,9 +330,14 @@ class ErrorControl:
         within the tolerance, its estimate filtered through the step's matrix (module
         docstring): else the next try is shorter, and ConvergenceError where the run's
         tries are spent."""
-        if self.lands(stepper, h_step):
+        if self.lands(stepper, h_step) or self.strikes_short(stepper, h_step):
             self.tries += 1
             return False
+        held = math.inf if self.strikes is None else self.strikes.cap(stepper.t)
+        if h_step >= held * (1.0 - 1e-9):  # a bounce's steps: constant, resolving it
+            self.tries += 1
+            self.h = held
+            return True
         free = stepper.free
         y_k, v_k = stepper.x.reshape(-1)[free], stepper.v.reshape(-1)[free]
         y_new = stepper.x_trial.reshape(-1)[free]
@@ -337,6 +371,26 @@ class ErrorControl:
             return False
         self.h = share * h_step
         self.landed += 1
+        return True
+
+    def strikes_short(self, stepper: TimeStepper, h_step: float) -> bool:
+        """Whether the converged step of ``h_step`` holds strikes on a body that it is too
+        long to resolve (catenet/solver/strikes.py): then the next try, and the steps for
+        one bounce after it, are that short."""
+        if self.strikes is None or self.bodies is None:
+            return False
+        strike = self.strikes.step(stepper.x, stepper.v, stepper.x_trial, h_step,
+                                   self.bodies.largest, self.tolerance)  # fmt: skip
+        if strike is None:
+            return False
+        longest = max(strike.longest, self.least)
+        entry = strike.at * h_step  # the first strike, from the step's start
+        since = stepper.t + entry - longest  # one resolving step before the strike
+        self.strikes.hold(since, stepper.t + entry + strike.tau, longest)
+        if h_step <= longest * (1.0 + 1e-9):
+            return False
+        self.h = entry - longest if entry > 2.0 * longest else longest  # to ``since``
+        self.strikes.resolved += 1
         return True
 
     def saw(self, x: np.ndarray, u: np.ndarray, v: np.ndarray, mass: np.ndarray) -> None:
@@ -373,6 +427,8 @@ class ErrorControl:
         """The next step from t: h, cut short at t_end, or half what is left where h would
         leave a sliver shorter than itself."""
         left = self.t_end - t
+        if self.strikes is not None:  # a bounce goes on: its steps resolve it
+            self.h = min(self.h, self.strikes.cap(t))
         self.least = self.dt_min  # the shortest this step may be (judge)
         if 2.0 * self.h > left and 0.5 * left < self.dt_min:
             self.least = left  # what is left, in one step: no shorter one fits

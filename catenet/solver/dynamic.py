@@ -26,7 +26,7 @@ import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
 from catenet.model.net import Loads, Net
-from catenet.solver.adaptive import ErrorControl
+from catenet.solver.adaptive import ErrorControl, watch
 from catenet.solver.energy import Ledger
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.relax import MAX_STEPS, REST, RestControl
@@ -125,6 +125,8 @@ def solve_dynamic(
     stepper.begin(x0, v0, t0, a0, a_out)
     control = _control(stepper, dt, t0, t_end, max_steps, (tolerance, dt_max, dt_min))
     run = stepper.run(control, rest=stop_at_equilibrium, on_step=on_step, on_rest=on_rest)
+    if stepper.watch is not None:
+        stepper.watch.report()
     return _result(stepper, balance, run, start)
 
 
@@ -155,6 +157,7 @@ def _control(
         return RestControl(dt, t0, MAX_CUTS, max_steps, stepper.rest_stages())
     tolerance, dt_max, dt_min = accuracy
     if tolerance is None:
+        stepper.watch = watch(stepper, t0, float(t_end))
         return StepControl(dt, t0, float(t_end))
     return ErrorControl.of(stepper, dt, t0, float(t_end), tolerance, dt_max, dt_min)
 

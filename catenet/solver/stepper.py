@@ -33,6 +33,7 @@ from catenet.terms.pinch import Pinched, pinch_note
 if TYPE_CHECKING:
     from catenet.model.guides import Guides
     from catenet.solver.potential import Potential
+    from catenet.solver.strikes import Watch
     from catenet.solver.system import System
 
 log = logging.getLogger("catenet.solver.dynamic")  # the dynamic run's messages, as ever
@@ -78,6 +79,7 @@ class TimeStepper:
         self.pseudo = False  # a run to rest through its stages: the path is only a path
         self.ledger: Ledger | None = None  # the energy balance (catenet.solver.energy)
         self.media = [t for t in self.system.terms if t.medium]  # water (terms/water.py)
+        self.watch: Watch | None = None  # strikes fixed steps step over (solver/strikes.py)
 
     def begin(
         self,
@@ -378,6 +380,8 @@ class TimeStepper:
                 exc.iterations = self.iterations
                 exc.state = self.x.copy()
                 raise
+        if self.watch is not None:  # strikes on a body that fixed steps step over
+            self.watch.step(self.x, self.v, self.x_trial, v, h_step, self.t)
         self.v = v
         store_acceleration(self.scheme, self.a_out, self.free)
         self.x[:] = self.x_trial

@@ -1,0 +1,242 @@
+"""Strikes of the net's nodes on free bodies and balls, resolved by the steps chosen by
+accuracy (catenet/solver/adaptive.py).
+
+A node that comes within a body's barrier distance dhat at a normal speed v bounces off
+it: the barrier is elastic, the node of mass m is stopped where kappa b(d_min) = m v^2 / 2
+and sent back in the bounce's time
+
+    tau = 2 int_{d_min}^{dhat} dd / sqrt(v^2 - 2 kappa b(d) / m)      (``bounce_time``)
+
+(the node alone against the body: the body is heavy, the node's cords slack as it
+strikes). A step longer than a fraction of tau damps that bounce, as bdf2 damps every
+mode it does not resolve, and the body receives less momentum from the strike than the
+converged motion gives it: a light net thrown at a free box left the box 14-15 % slow at
+the default tolerance, whose error estimate is filtered so that nodes chattering on a
+body do not set the steps (docs/howto/dynamic-runs.md).
+
+The momentum a strike exchanges lies between m v (the node stopped) and 2 m v (bounced
+off). Whether that matters depends on whose momentum it is: a node that flies at a body
+brings its own, m u (u its speed toward the body with the body held still), and flies
+off with what the bounce leaves it; a node that a body runs into brings none, is pushed
+ahead and struck again until it moves with the body, whatever its bounce (a box dropped
+on a net converges at every step). Where the nodes striking a body in a step bring more
+than SHARE of the tolerance times the body's momentum scale (catenet/solver/adaptive.py's
+Bodies), the step is taken again to end one resolving step before the first of them, and
+the steps from there to the end of the bounce are tau / PER_BOUNCE (its shortest among
+the step's strikes), constant and taken without the error estimate (``Strikes.cap``):
+steps that vary through a stiff bounce let bdf2 gain energy (two nodes thrown at a free
+box gained 1 % of their energy at the default tolerance, and the run stopped).
+
+``Strikes.step`` finds a step's strikes: nodes outside dhat at its start and within it at
+its end, their normal speed the rate of their gap along the predictor x + s h v at s = 0
+(the step's start, before the barrier acts). With fixed steps (``solver.dt``) ``Watch``
+adds up what the strikes it steps over bring and warns at the end of the run where that
+comes to more than SAY of a body's largest momentum.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.solver.adaptive import Bodies
+    from catenet.terms import Term
+    from catenet.terms.body import Ball
+    from catenet.terms.rigid_contact import BodyContact
+
+log = logging.getLogger(__name__)
+
+PER_BOUNCE = 16  # steps through a bounce: a strike's step at most tau / PER_BOUNCE
+SAY = 0.1  # strikes stepped over that carry more than SAY of a body's largest momentum
+SHARE = 1.0  # strikes carrying more than SHARE x tolerance x the body's momentum scale
+PROBE = 1e-6  # the predictor's share of the step at which the gap's rate is taken
+_U, _W = np.polynomial.legendre.leggauss(24)  # Gauss-Legendre on [-1, 1]
+
+
+def _barrier(d: np.ndarray, dhat: float) -> np.ndarray:
+    """b(d) = -(d - dhat)^2 ln(d / dhat) of catenet/kernels/contact.py (0 < d <= dhat)."""
+    r = d - dhat
+    return -r * r * np.log(d / dhat)
+
+
+def bounce_time(mass: float, speed: float, kappa: float, dhat: float) -> float:
+    """The time a node of ``mass`` spends within the barrier (``kappa``, ``dhat``) of a
+    fixed body it meets at normal ``speed`` (module docstring); inf for no speed."""
+    if not (mass > 0 and speed > 0 and kappa > 0 and dhat > 0):
+        return math.inf
+    energy = 0.5 * mass * speed * speed / kappa  # b(d_min)
+    low, high = 0.0, dhat  # b(low) > energy >= b(high): bisection on the gap
+    for _ in range(200):
+        mid = 0.5 * (low + high) if low > 0.0 else 0.5 * high
+        if mid <= low or mid >= high:
+            break
+        if _barrier(np.array([mid]), dhat)[0] > energy:
+            low = mid
+        else:
+            high = mid
+    d_min = high
+    # d = d_min + u^2: the integrand 2 u / sqrt(f(d)) is finite at the turning point u = 0
+    top = math.sqrt(max(dhat - d_min, 0.0))
+    u = 0.5 * top * (_U + 1.0)
+    f = speed * speed - 2.0 * kappa * _barrier(d_min + u * u, dhat) / mass
+    f = np.maximum(f, 1e-300)
+    return float(2.0 * 0.5 * top * np.sum(_W * 2.0 * u / np.sqrt(f)))
+
+
+@dataclass(frozen=True)
+class Strike:
+    """The strikes of a step that matter, by the shortest bounce among them: the body's
+    label, that node's normal speed [m/s] and bounce [s], the momentum the step's strikes
+    bring over the body's momentum scale, how many nodes struck."""
+
+    label: str
+    speed: float
+    tau: float
+    share: float
+    nodes: int
+    owner: int  # the body's index in the momentum scales (-1: none)
+    carried: float  # the momentum the step's strikes bring (sum of m u: module docstring)
+    at: float  # the share of the step at which the first of them comes within dhat
+
+    @property
+    def longest(self) -> float:
+        """The longest step that resolves the bounce."""
+        return self.tau / PER_BOUNCE
+
+
+class Strikes:
+    """The strikes on a run's free bodies and balls (module docstring). ``terms``: the
+    barrier terms of bodies and balls (``of``), each with its body's index in ``scales``
+    (the bodies' momentum scales of catenet/solver/adaptive.py's Bodies) and the nodes
+    that carry its body (a free body's frame, a ball's centre)."""
+
+    def __init__(
+        self,
+        terms: Sequence[BodyContact | Ball],
+        owners: Sequence[int],
+        carriers: Sequence[np.ndarray],
+        node_mass: np.ndarray,
+    ):
+        self.terms = list(terms)
+        self.owners = list(owners)
+        self.carriers = list(carriers)
+        self.node_mass = node_mass  # each node's mass (N)
+        self.holds: list[tuple[float, float, float]] = []  # bounces: (since, until, step)
+        self.resolved = 0  # steps taken again to resolve a strike
+
+    @classmethod
+    def of(
+        cls, terms: Sequence[Term], bodies: Bodies | None, node_mass: np.ndarray
+    ) -> Strikes | None:
+        """The strikes of the body and ball barriers among ``terms`` (None: none)."""
+        from catenet.terms.body import Ball
+        from catenet.terms.rigid_contact import BodyContact
+
+        heads = list(bodies.heads) if bodies is not None else []
+        picked: list[BodyContact | Ball] = []
+        owners: list[int] = []
+        carriers: list[np.ndarray] = []
+        for t in terms:
+            if isinstance(t, BodyContact) and t.kappa > 0 and t.dhat > 0:
+                carry = np.asarray(t.frame.nodes)
+            elif isinstance(t, Ball):
+                carry = np.array([t.center])
+            else:
+                continue
+            picked.append(t)
+            owners.append(heads.index(int(carry[0])) if int(carry[0]) in heads else -1)
+            carriers.append(carry)
+        return cls(picked, owners, carriers, node_mass) if picked else None
+
+    def cap(self, t: float) -> float:
+        """The longest step from t while a bounce goes on (inf: none)."""
+        self.holds = [(since, until, h) for since, until, h in self.holds if until > t]
+        return min((h for since, _, h in self.holds if since <= t), default=math.inf)
+
+    def step(
+        self, x: np.ndarray, v: np.ndarray, x_new: np.ndarray, h: float,
+        scales: Sequence[float], tolerance: float,
+    ) -> Strike | None:  # fmt: skip
+        """The shortest bounce among the strikes that matter (module docstring) of the step
+        of ``h`` from (x, v) to ``x_new`` (N, 3); None where none does."""
+        out = None
+        for term, owner, carry in zip(self.terms, self.owners, self.carriers, strict=True):
+            new = term.gap(x_new)
+            old = term.gap(x)
+            hit = (old >= term.dhat) & (new < term.dhat)
+            if not np.any(hit):
+                continue
+            probe = term.gap(x + (PROBE * h) * v)
+            speed = np.maximum((old - probe) / (PROBE * h), 0.0)[hit]
+            still = v.copy()  # the body held still: the nodes' own approach
+            still[carry] = 0.0
+            own = term.gap(x + (PROBE * h) * still)
+            brought = np.maximum((old - own) / (PROBE * h), 0.0)[hit]
+            mass = self.node_mass[np.asarray(term.nodes)[hit]]
+            carried = float(np.dot(mass, brought))
+            scale = scales[owner] if owner >= 0 else math.inf
+            if not carried > SHARE * tolerance * scale:
+                continue
+            with np.errstate(divide="ignore", invalid="ignore"):  # (no speed: at 0)
+                at = np.clip((old[hit] - term.dhat) / (speed * h), 0.0, 1.0)
+            first = float(np.min(np.nan_to_num(at, nan=0.0, posinf=0.0)))
+            for m, s in zip(mass, speed, strict=True):
+                tau = bounce_time(float(m), float(s), term.kappa, term.dhat)
+                if out is None or tau < out.tau:
+                    out = Strike(term.label, float(s), tau, carried / scale, int(hit.sum()),
+                                 owner, carried, first)  # fmt: skip
+            if out is not None and out.at > first:
+                out = replace(out, at=first)
+        return out
+
+    def hold(self, since: float, until: float, longest: float) -> None:
+        """Steps from ``since`` to ``until`` (a bounce) at most ``longest``."""
+        self.holds.append((since, until, longest))
+
+
+class Watch:
+    """Strikes that fixed steps (``solver.dt``) step over: their momentum (sum of m v)
+    added up per body, and said at the end of the run (``report``) where it comes to
+    more than SAY of the body's largest momentum: the body's momentum after them depends
+    on the step. ``bodies``: the run's momentum scales (catenet/solver/adaptive.py's
+    Bodies), grown here as the run goes."""
+
+    def __init__(self, strikes: Strikes, bodies: Bodies, free: np.ndarray):
+        self.strikes, self.bodies, self.free = strikes, bodies, free
+        self.missed: dict[int, float] = {}  # each body's momentum in strikes stepped over
+        self.first: dict[int, tuple[float, float, Strike]] = {}  # (t, h, strike)
+
+    def step(
+        self, x: np.ndarray, v: np.ndarray, x_new: np.ndarray, v_new: np.ndarray, h: float,
+        t: float,
+    ) -> None:  # fmt: skip
+        """An accepted step of ``h`` from (x, v) at time t to (x_new, v_new), all (N, 3)."""
+        strike = self.strikes.step(x, v, x_new, h, self.bodies.largest, 0.0)
+        self.bodies.saw(v_new.reshape(-1)[self.free])
+        if strike is None or strike.owner < 0 or h <= strike.longest * (1.0 + 1e-9):
+            return
+        self.missed[strike.owner] = self.missed.get(strike.owner, 0.0) + strike.carried
+        self.first.setdefault(strike.owner, (t + h, h, strike))
+
+    def report(self) -> None:
+        """The warning of each body whose strikes stepped over matter (class docstring)."""
+        for owner, carried in self.missed.items():
+            largest = max(self.bodies.own[owner], self.bodies.largest[owner])
+            if not carried > SAY * largest:
+                continue
+            t, h, strike = self.first[owner]
+            log.warning(
+                "nodes struck %s in steps of %.3g s from t = %.6g s, bringing %.3g times its "
+                "largest momentum; a node's bounce on its barrier lasts %.3g s (at %.3g m/s), "
+                "and a step longer than %.3g s (1/%d of it) damps the bounce: the body's "
+                "momentum after such strikes depends on the step (give solver.dt <= %.3g s, "
+                "or leave solver.dt out: steps chosen by accuracy resolve them)",
+                strike.label, h, t, carried / largest, strike.tau, strike.speed,
+                strike.longest, PER_BOUNCE, strike.longest,
+            )  # fmt: skip
