@@ -194,6 +194,37 @@ def heard(what: str = ""):
             logging.setLogRecordFactory(make)
 
 
+@contextlib.contextmanager
+def spoken_in(units: str):
+    """Inside the block, the warnings and errors catenet logs name lengths, forces and
+    masses as the case's ``units`` do (``catenet.model.units.relabel``: 2.5 mm in an N-mm
+    case, where the solver writes 2.5 m), in every output: the terminal, the log file and
+    the result file's warnings. SI (or no system): nothing changes."""
+    from catenet.model.units import TOKENS, relabel
+
+    if units not in TOKENS:
+        yield
+        return
+    make = logging.getLogRecordFactory()
+
+    def factory(*args, **kwargs):
+        record = make(*args, **kwargs)
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        if own and record.levelno >= logging.WARNING:
+            try:
+                text = record.getMessage()
+            except (TypeError, ValueError):
+                return record
+            record.msg, record.args = relabel([text], units)[0], ()
+        return record
+
+    logging.setLogRecordFactory(factory)
+    try:
+        yield
+    finally:
+        logging.setLogRecordFactory(make)
+
+
 class _Below(logging.Filter):
     """Drops catenet's records below ``level`` (the level the log showed)."""
 

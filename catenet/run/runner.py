@@ -185,17 +185,30 @@ def run_case(
     ``on_done(scene, workspace, result)`` is called after a solve that ended (not one
     that raised), with the workspace it used (``catenet modes`` goes on from there).
     """
-    from catenet.run.cases import heard, solve_from_base, write_warnings
+    from catenet.run.cases import spoken_in
     from catenet.run.clock import Clock
-    from catenet.solver import path as sv
 
     start = time.perf_counter()
     clock = Clock()  # start-up against solve time (/result startup_time, solve_time)
+    with spoken_in(getattr(case, "units", None) or "SI"):  # warnings in the case's units
+        run, ws, solved, report = _run(case, out, restart, scene, load_case,
+                                       Hooks(progress, stop, interrupt), start, clock)  # fmt: skip
+    done = RunResult.of(solved.result, report)
+    if on_done is not None:
+        on_done(run.scene, ws, done)
+    return done
+
+
+def _run(case, out, restart, scene, load_case, hooks: Hooks, start: float, clock):
+    """``run_case``'s plan, solve (the base state, then its load cases) and report, with
+    the warnings kept in the result file: (plan, workspace, Solved, RunReport)."""
+    from catenet.run.cases import heard, solve_from_base, write_warnings
+    from catenet.solver import path as sv
+
     with heard() as base_heard:  # the base state's warnings, kept in /result
         run = plan(case, out, restart=restart, scene=scene, load_case=load_case)
         with clock.solving():
             ws = sv.workspace(run.scene, run.settings)
-        hooks = Hooks(progress, stop, interrupt)
         solved = _solve(run, ws, hooks, start, clock)
     result = solved.result
     unphysical = _implausible(run, result)  # the base state: a unit slip, a lost support
@@ -203,16 +216,13 @@ def run_case(
     envelope: dict = {}  # the governing cases (catenet.run.cases.governing)
     if run.cases:
         case_numbers, envelope = solve_from_base(
-            run.scene, run.settings, ws, result, run.cases, run.path, interrupt
+            run.scene, run.settings, ws, result, run.cases, run.path, hooks.interrupt
         )
     with heard() as report_heard:
         report = _report(run, ws, result, solved.bodies, case_numbers, envelope, unphysical)
     if run.path is not None:
         write_warnings(run.path, base_heard.messages + report_heard.messages, unphysical)
-    done = RunResult.of(result, report)
-    if on_done is not None:
-        on_done(run.scene, ws, done)
-    return done
+    return run, ws, solved, report
 
 
 def _solve(run: Plan, ws, hooks: Hooks, start: float, clock) -> Solved:
@@ -310,7 +320,7 @@ def _report(
 
         top = float(abs(result.tension).max(initial=0.0))
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
-            log.warning("%s", _in_units(squeezed, case))
+            log.warning("%s", squeezed)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables

@@ -468,3 +468,49 @@ def test_sigterm_stops_a_single_long_newton_solve(tmp_path, write_case):
     with h5py.File(out) as h5:
         a = h5["result"].attrs
         assert a["message"] == "interrupted" and not a["converged"]
+
+
+# --- warnings in the case's units -------------------------------------------------------
+
+MM_NET = """units = "N-mm"
+
+[geometry]
+kind = "square_net"
+n = 6
+alpha = 0.0
+size = 1000.0
+edge_length = 200.0
+
+[material]
+E = 2e5
+radius = 2.0
+density = 7.85e-9
+
+[load]
+gravity = [0.0, 0.0, -9810.0]
+
+[[obstacle]]
+kind = "sphere"
+center = [10.0, 10.0, -60.0]
+radius = 20.0
+
+[solver]
+method = "static"
+"""
+
+
+def test_a_warning_names_lengths_in_the_case_units_on_the_terminal_and_in_the_file(tmp_path):
+    """A 40 mm sphere under a net of 125 mm edges in an N-mm case: the warning that it
+    is narrower than the edges read "40 m across" and "125 m" before (the solver's SI
+    names); now mm, on the terminal and in /result's warnings alike."""
+    case = tmp_path / "mm.toml"
+    case.write_text(MM_NET)
+    out = tmp_path / "mm.h5"
+    done = invoke("run", case, "-o", out)
+    assert done.exit_code == 0, done.output
+    said = " ".join(done.output.split())
+    assert "(sphere, 40 mm across) is narrower than the net's edges (125 mm," in said, said
+    with h5py.File(out) as f:
+        kept = str(f["/result"].attrs["warnings"])
+    assert "40 mm across" in kept and "(125 mm, the median)" in kept, kept
+    assert " m across" not in said + kept
