@@ -73,10 +73,11 @@ def bounce_time(mass: float, speed: float, kappa: float, dhat: float) -> float:
     energy = 0.5 * mass * speed * speed / kappa  # b(d_min)
     low, high = 0.0, dhat  # b(low) > energy >= b(high): bisection on the gap
     for _ in range(200):
-        mid = 0.5 * (low + high) if low > 0.0 else 0.5 * high
+        mid = 0.5 * (low + high)
         if mid <= low or mid >= high:
             break
-        if _barrier(np.array([mid]), dhat)[0] > energy:
+        r = mid - dhat
+        if -r * r * math.log(mid / dhat) > energy:
             low = mid
         else:
             high = mid
@@ -129,6 +130,7 @@ class Strikes:
         self.node_mass = node_mass  # each node's mass (N)
         self.holds: list[tuple[float, float, float]] = []  # bounces: (since, until, step)
         self.resolved = 0  # steps taken again to resolve a strike
+        self._last: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.terms)
 
     @classmethod
     def of(
@@ -166,9 +168,13 @@ class Strikes:
         """The shortest bounce among the strikes that matter (module docstring) of the step
         of ``h`` from (x, v) to ``x_new`` (N, 3); None where none does."""
         out = None
-        for term, owner, carry in zip(self.terms, self.owners, self.carriers, strict=True):
+        for i, (term, owner, carry) in enumerate(
+            zip(self.terms, self.owners, self.carriers, strict=True)
+        ):
             new = term.gap(x_new)
-            old = term.gap(x)
+            last = self._last[i]  # the gaps at the last step's end: this one's start?
+            old = last[1] if last is not None and np.array_equal(last[0], x) else term.gap(x)
+            self._last[i] = (x_new.copy(), new)
             hit = (old >= term.dhat) & (new < term.dhat)
             if not np.any(hit):
                 continue
