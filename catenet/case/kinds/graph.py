@@ -111,7 +111,7 @@ class GraphConfig(GeometryConfig):
         gk.index_list,
         "an array of node indices",
         (),
-        doc="default supports (required unless supports.fixed)",
+        doc="the nodes held fixed (supports.fixed, where given, replaces them; none: a free net)",
     )
     prestrain: float = real(
         0.0, gt=-1, doc="rest lengths = initial / (1 + prestrain); not with rest_length"
