@@ -28,8 +28,9 @@ from catenet.case.keys import (
     value,
 )
 from catenet.case.kinds import KINDS, GeometryConfig
+from catenet.case.kinds.warn import warn_once
 from catenet.case.loadcases import check_method, parse_combinations, parse_load_cases
-from catenet.case.masses import parse_masses
+from catenet.case.masses import damped_flight, parse_masses
 from catenet.case.nodes import check_nodes
 from catenet.case.obstacles import parse_obstacles
 from catenet.case.sections import (
@@ -238,6 +239,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             ck.add(newmark_refused(obstacles))
     if dynamic:
         _check_time_steps(ck, solver)
+        if "damping" not in (given or {}) and isinstance(solver.t_end, (int, float)):
+            if thrown := damped_flight(masses, solver.damping, float(solver.t_end)):
+                warn_once(thrown)
 
     # Node references need the node count (and, for square nets, the built topology):
     # only once the geometry itself is sound.

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import tomllib
 
 import h5py
 import numpy as np
@@ -514,3 +515,24 @@ def test_a_warning_names_lengths_in_the_case_units_on_the_terminal_and_in_the_fi
         kept = str(f["/result"].attrs["warnings"])
     assert "40 mm across" in kept and "(125 mm, the median)" in kept, kept
     assert " m across" not in said + kept
+
+
+def test_a_thrown_net_without_damping_given_is_told_that_the_default_damps_its_flight(caplog):
+    """A net given a velocity by [[mass]] and no solver.damping: the default 1 1/s slows
+    its free flight (e^-t, 0.14 of the speed left at 2 s), said once at parsing; with
+    damping given (0 or not), or nothing thrown, nothing is said."""
+    from catenet.case.kinds import warn as warned
+
+    base = small_net(method="dynamic", dt=0.01, t_end=2.0)
+    base = "\n".join(line for line in base.splitlines() if not line.startswith("damping ="))
+    thrown = base + '\n[[mass]]\nnode = "center"\nvelocity = [0.0, 0.0, 2.0]\n'
+    said = []
+    for text in (thrown, thrown.replace("[solver]", "[solver]\ndamping = 0.5"), base):
+        warned._WARNED.clear()
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="catenet"):
+            parse_case(tomllib.loads(text))
+        said.append([r.getMessage() for r in caplog.records if "damps the net" in r.getMessage()])
+    (first,) = said[0]
+    assert "mass[0].velocity" in first and "0.14 of it at t_end = 2 s" in first, first
+    assert said[1] == [] and said[2] == []
