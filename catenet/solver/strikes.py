@@ -194,7 +194,7 @@ class Strikes:
             first = float(np.min(np.nan_to_num(at, nan=0.0, posinf=0.0)))
             for m, s in zip(mass, speed, strict=True):
                 tau = bounce_time(float(m), float(s), term.kappa, term.dhat)
-                if out is None or tau < out.tau:
+                if math.isfinite(tau) and (out is None or tau < out.tau):  # (inf: no strike)
                     out = Strike(term.label, float(s), tau, carried / scale, int(hit.sum()),
                                  owner, carried, first)  # fmt: skip
             if out is not None and out.at > first:
@@ -207,7 +207,7 @@ class Strikes:
 
 
 class Watch:
-    """Strikes that fixed steps (``solver.dt``) step over: their momentum (sum of m v)
+    """Strikes that fixed steps (``solver.dt``) step over: what they bring (sum of m u)
     added up per body, and said at the end of the run (``report``) where it comes to
     more than SAY of the body's largest momentum: the body's momentum after them depends
     on the step. ``bodies``: the run's momentum scales (catenet/solver/adaptive.py's
