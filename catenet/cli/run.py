@@ -368,7 +368,7 @@ def _summary(case, result, path: Path | None) -> None:
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
         lines.insert(-1, _balance(result.energy, result.energy_scale))
-    for k, b in s.bodies.items():  # free rigid bodies, one line each
+    for k, b in sorted(s.bodies.items()):  # free rigid bodies and balls, one line each
         first = b["first_contact"]
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "
         if case.solver.method != "dynamic":  # at rest: where it is is the answer
@@ -376,6 +376,9 @@ def _summary(case, result, path: Path | None) -> None:
             lines.insert(-1, head + touch)
             continue
         touch = "never touched the net" if first is None else f"first contact at t = {first:.6g} s"
+        if b.get("ball"):  # a ball: a point, no spin
+            lines.insert(-1, head + f"speed {b['speed']:.4g} m/s at the end; {touch}")
+            continue
         axis = ", ".join(f"{c:.3g}" for c in b["axis"])
         lines.insert(
             -1,

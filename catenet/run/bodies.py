@@ -1,6 +1,7 @@
-"""What a run's summary says of its free rigid bodies (``catenet.scene.rigid``): the time
-each first came within its barrier's reach of the net (the first contact), and its final
-speed and spin, from the states the runner sees."""
+"""What a run's summary says of its free rigid bodies (``catenet.scene.rigid``) and balls
+(``catenet.scene.bodies``): the time each first came within its barrier's reach of the
+net (the first contact), and its final speed and (a free body's) spin, from the states
+the runner sees."""
 
 from __future__ import annotations
 
@@ -27,15 +28,19 @@ class BodyWatch:
             for b in rigid if scene.edge_radius is not None else ():  # and the edges'
                 contacts.setdefault(id(b.frame), []).extend(_edges(scene, b.frame.nodes))
         self.bodies = [(b, contacts.get(id(b.frame), [])) for b in rigid]
-        self.kinds = {b.obstacle: scene.case.obstacles[b.obstacle].kind for b, _ in self.bodies}
-        self.first = {b.obstacle: None for b, _ in self.bodies}
+        self.balls = [(b, _ball_contacts(scene, b.node)) for b in scene.bodies]
+        self.kinds = {
+            b.obstacle: scene.case.obstacles[b.obstacle].kind
+            for b, _ in [*self.bodies, *self.balls]
+        }
+        self.first = {b.obstacle: None for b, _ in [*self.bodies, *self.balls]}
 
     def __bool__(self) -> bool:
-        return bool(self.bodies)
+        return bool(self.bodies or self.balls)
 
     def see(self, t: float, x) -> None:
         """A state x (N, 3) at time t."""
-        for body, contacts in self.bodies:
+        for body, contacts in [*self.bodies, *self.balls]:
             if self.first[body.obstacle] is not None:
                 continue
             for contact in contacts:
@@ -58,7 +63,24 @@ class BodyWatch:
                 "spin": math.degrees(w),
                 "axis": (spin / w).tolist() if w > 0 else [0.0, 0.0, 0.0],
             }
+        for ball, _ in self.balls:  # a point: its speed, no spin
+            speed = 0.0 if v is None else float(np.linalg.norm(v[ball.node]))
+            out[ball.obstacle] = {
+                "kind": self.kinds[ball.obstacle],
+                "first_contact": self.first[ball.obstacle],
+                "speed": speed,
+                "ball": True,
+            }
         return out
+
+
+def _ball_contacts(scene, node: int) -> list:
+    """The barriers of the ball centred at ``node`` (its ``Ball`` term, and its edge
+    barrier where every edge is a capsule)."""
+    from catenet.terms.body import Ball
+
+    own = [t for t in scene.terms if isinstance(t, Ball) and t.center == node]
+    return own + (_edges(scene, np.array([node])) if scene.edge_radius is not None else [])
 
 
 def _edges(scene, nodes) -> list:

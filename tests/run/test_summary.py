@@ -171,3 +171,23 @@ def test_a_body_resting_on_the_net_shows_its_weight_as_the_contact_on_the_net(tm
     assert out.exit_code == 0, out.output
     line = next(ln for ln in out.output.splitlines() if ln.startswith("contact"))
     assert line.split(None, 1)[1].startswith("on the net [0, 0, -98.1"), line
+
+
+def test_a_ball_gets_its_line_in_the_summary_as_a_free_body_does(tmp_path):
+    """configs/contact/sphere_catch.toml to 0.4 s: the ball's line gives its first contact
+    with the net (0.34 s) and its speed at the end, the centre node's (no spin: a ball is
+    a point); before, only free bodies had a line."""
+    out = CliRunner().invoke(
+        main,
+        ["run", str(CONFIGS / "contact" / "sphere_catch.toml"), "-o", str(tmp_path / "s.h5"),
+         "--set", "solver.t_end=0.4"],
+    )  # fmt: skip
+    assert out.exit_code == 0, out.output
+    (line,) = [ln for ln in out.output.splitlines() if ln.startswith("body")]
+    assert "obstacle[0] (sphere): speed " in line and "first contact at t = 0.34 s" in line
+    assert "spin" not in line
+    with h5py.File(tmp_path / "s.h5") as f:
+        node = int(f["/mesh/bodies/node"][0])  # the ball's centre
+        v = f["/result/v"][node]
+    speed = float(line.split("speed ")[1].split(" m/s")[0])
+    assert speed == pytest.approx(float(np.linalg.norm(v)), rel=1e-3)
