@@ -440,34 +440,6 @@ def test_bundled_paper_case_runs_from_the_command_line(tmp_path):
     assert "Fig. 7 skipped" in report and "Fig. 8 skipped" in report
 
 
-@pytest.mark.slow
-@pytest.mark.slow
-def test_the_paper_study_as_documented(tmp_path):
-    """`catenet sweep configs/sweeps/paper.toml -o out/paper --plot` (the README):
-    390 rows on 2 workers, the figures, and the numbers the README reports: the collapse
-    onto delta_bar = C f(alpha) (F_bar/n)^beta holds to 1 % RMS with beta = 1/3 and
-    D = 1.21 (the paper: 1.31)."""
-    from catenet.study import fit_scaling, load_data
-
-    out = tmp_path / "paper"
-    result = CliRunner().invoke(sweep_command, [str(PAPER), "-o", str(out), "-j", "2", "--plot"])
-    assert result.exit_code == 0, result.output
-    d = load_data(out)
-    assert d.rows == 390 and d.failed == 0
-    fit = fit_scaling(d.F_bar, d.n, d.alpha, d.delta_bar)
-    assert fit.D == pytest.approx(1.206, abs=0.01)
-    assert fit.beta == pytest.approx(1 / 3, abs=0.005)
-    assert fit.rms_log < 0.01
-    for name in (
-        "fig5_force_displacement_n",
-        "fig6_force_displacement_alpha",
-        "fig7_n_alpha",
-        "fig8_scaling",
-    ):
-        assert (out / f"{name}.png").stat().st_size > 10_000
-    assert "Does not agree" in (out / "report.md").read_text()  # D = 1.21, not 1.31
-
-
 def test_a_sweep_with_an_obstacle_gives_the_single_runs(tmp_path):
     """Levels of a sweep share a workspace only where the scene has no terms besides
     the net's: an obstacle's barrier depends on the loads (its default stiffness) and on
