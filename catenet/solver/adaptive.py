@@ -390,7 +390,6 @@ class ErrorControl:
         if h_step <= longest * (1.0 + 1e-9):
             return False
         self.h = entry - longest if entry > 2.0 * longest else longest  # to ``since``
-        self.strikes.resolved += 1
         return True
 
     def saw(self, x: np.ndarray, u: np.ndarray, v: np.ndarray, mass: np.ndarray) -> None:

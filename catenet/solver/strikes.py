@@ -93,14 +93,11 @@ def bounce_time(mass: float, speed: float, kappa: float, dhat: float) -> float:
 @dataclass(frozen=True)
 class Strike:
     """The strikes of a step that matter, by the shortest bounce among them: the body's
-    label, that node's normal speed [m/s] and bounce [s], the momentum the step's strikes
-    bring over the body's momentum scale, how many nodes struck."""
+    label, that node's normal speed [m/s] and bounce [s]."""
 
     label: str
     speed: float
     tau: float
-    share: float
-    nodes: int
     owner: int  # the body's index in the momentum scales (-1: none)
     carried: float  # the momentum the step's strikes bring (sum of m u: module docstring)
     at: float  # the share of the step at which the first of them comes within dhat
@@ -129,7 +126,6 @@ class Strikes:
         self.carriers = list(carriers)
         self.node_mass = node_mass  # each node's mass (N)
         self.holds: list[tuple[float, float, float]] = []  # bounces: (since, until, step)
-        self.resolved = 0  # steps taken again to resolve a strike
         self._last: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.terms)
 
     @classmethod
@@ -195,8 +191,7 @@ class Strikes:
             for m, s in zip(mass, speed, strict=True):
                 tau = bounce_time(float(m), float(s), term.kappa, term.dhat)
                 if math.isfinite(tau) and (out is None or tau < out.tau):  # (inf: no strike)
-                    out = Strike(term.label, float(s), tau, carried / scale, int(hit.sum()),
-                                 owner, carried, first)  # fmt: skip
+                    out = Strike(term.label, float(s), tau, owner, carried, first)
             if out is not None and out.at > first:
                 out = replace(out, at=first)
         return out
