@@ -111,6 +111,7 @@ def _dumbbell(**solver):
     return result, -body.mass * float(result.v[body.frame.nodes, 2].mean()), exact
 
 
+@pytest.mark.roundoff
 def test_two_nodes_thrown_at_a_free_box_leave_it_the_elastic_momentum_at_default_settings():
     result, p, exact = _dumbbell()
     assert result.converged, result.message
@@ -118,6 +119,7 @@ def test_two_nodes_thrown_at_a_free_box_leave_it_the_elastic_momentum_at_default
     assert p < exact  # no energy gained through the bounce
 
 
+@pytest.mark.roundoff
 def test_fixed_steps_over_the_strike_say_so(caplog):
     with caplog.at_level(logging.WARNING, logger="catenet"):
         result, p, exact = _dumbbell(dt=0.01, integrator="bdf2")
@@ -139,6 +141,7 @@ def _box(path: Path, **solver):
     return body.mass * result.v[body.frame.nodes].mean(axis=0)
 
 
+@pytest.mark.roundoff
 def test_a_box_dropped_on_a_net_is_not_a_strike(caplog):
     """The box runs into the net's nodes (they bring nothing): fixed 10 ms steps, which
     give its momentum within 1 % of the fine steps' (docs/howto/dynamic-runs.md's table),
@@ -151,6 +154,7 @@ def test_a_box_dropped_on_a_net_is_not_a_strike(caplog):
 
 
 @pytest.mark.slow
+@pytest.mark.roundoff
 def test_the_thrown_net_reaches_its_converged_momentum_at_default_settings(caplog):
     """The net of benchmarks/peers/thrown_net.toml meeting the free 8 t box: at the
     default tolerance within 2 % of the box's momentum at fixed bdf2 steps of 78 us
