@@ -9,12 +9,17 @@ faster than the gap it has (two jaws), or sweep over it within the step (a blade
 thinner than its travel crossing a rope carried by a slow belt). ``share`` watches
 every such node and edge over the step: its points follow their carry (per node a
 blend of the obstacles' rigid motions, weights W summing to 1) while each obstacle
-follows its own motion, and conservative advancement (every point moves relative to
-the obstacle by at most the sum of the two largest sweeps over the step) finds the
-first contact of any of them with an obstacle other than its carrier. Where there is
-one, the blends (1 - l) e_j + l e_k of the carrier j and the obstacle k that reached it
-are tried in turn (l = 1/2 first: two jaws closing at the same speed keep a pinched
-node in the middle); the first that no obstacle reaches over the step is kept, in the
+follows its own motion, and the first contact of any of them with an obstacle other
+than its carrier is found: where every motion involved translates, each point moves on
+a straight line relative to the obstacle and the shape's own first contact along it
+decides (exact for nodes, the edges' continuous collision detection); else conservative
+advancement (every point moves relative to the obstacle by at most the sum of the two
+largest sweeps over the step), which creeps where a node slides along the obstacle at a
+small gap. Where there is a contact, the blends (1 - l) e_j + l e_k of the carrier j and
+the obstacle k that reached it are tried in turn (l = 1/2 first: two jaws closing at the
+same speed keep a pinched node in the middle), for the node or edge reached and, where
+each blend bends an edge of it into k, for that edge's other node with it; the first
+blend that no obstacle reaches over the step is kept, in the
 step's start ``base`` and its predictor ``trial``. Where none does, ``Pinched``: the
 step is too long for the room the obstacles leave (the time stepping halves it). Two
 obstacles that close to less than the room the net's capsule needs (their gaps' sum at
@@ -66,7 +71,7 @@ def share(movers, start, base, trial, trial0, moved, t0: float, t1: float) -> in
         if hit is None:
             break
         k, nodes = hit
-        nodes = [n for n in nodes if weights[n].any() and weights[n, group[k]] < 1.0]
+        nodes = [n for n in nodes if keep_carried(weights, n, group[k])]
         if not _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1):
             raise Pinched(_message(movers[k], movers, nodes, moved, start, t1))
         changed.update(nodes)
@@ -130,7 +135,8 @@ def _rigid(mover, p, t0: float, t1: float, s: float):
 
 def _first_hit(movers, group, sweeps, watch, start, weights, t0, t1):
     """(k, the nodes of the first of k's watched items it reaches) for the first mover k
-    that reaches one over the step, else None (conservative advancement)."""
+    that reaches one over the step, else None: by the exact first contact where every
+    motion involved translates (``_straight_hit``), else by conservative advancement."""
     for k, every in watch.items():
         mover = movers[k]
         nodes, gap = _items(mover)
@@ -139,9 +145,14 @@ def _first_hit(movers, group, sweeps, watch, start, weights, t0, t1):
         if not items.size:
             continue
         idx = np.unique(nodes[items])
+        floor = 1e-9 * max(mover.reach, mover.dhat)
+        if _translating(movers, weights, idx, k):
+            hit = _straight_hit(mover, movers, weights, start, nodes, items, idx, t0, t1, floor)
+            if hit is not None:
+                return k, hit
+            continue
         rate = sweeps[k] + np.delete(sweeps, np.flatnonzero(group == group[k])).max()
         f0, f1 = mover.path.distance(t0), mover.path.distance(t1)
-        floor = 1e-9 * max(mover.reach, mover.dhat)
         x = start.copy()
         s = 0.0
         for _ in range(MAX_ADVANCES):
@@ -159,23 +170,113 @@ def _first_hit(movers, group, sweeps, watch, start, weights, t0, t1):
     return None
 
 
+def _translating(movers, weights, idx, k: int) -> bool:
+    """Whether obstacle k and every motion that carries the nodes ``idx`` translate
+    without turning (then each node moves on a straight line relative to k)."""
+    groups = np.flatnonzero(weights[idx].any(axis=0))
+    return not any(np.any(movers[g].omega) for g in (k, *groups.tolist()))
+
+
+def _straight_hit(mover, movers, weights, start, nodes, items, idx, t0, t1, floor):
+    """The nodes of the first of ``items`` that ``mover`` reaches over the step, else
+    None, where every motion translates: relative to the obstacle each node then moves
+    on a straight line, and the shape's own first contact along it (``max_step``: exact
+    for a node, the edges' conservative continuous collision detection) is taken from
+    where the last one stopped until an item is within ``floor`` of contact. A node
+    sliding along the obstacle at a constant small gap (a rope pushed along a belt by a
+    blade) is so seen never to reach it, where conservative advancement creeps on by
+    that gap over the motion's largest speed."""
+    f0, f1 = mover.path.distance(t0), mover.path.distance(t1)
+    c0, R0 = mover._pose(f0)
+    moved = np.zeros((len(idx), 3))
+    for g in np.flatnonzero(weights[idx].any(axis=0)):
+        other = movers[g]
+        shift = other.velocity * (other.path.distance(t1) - other.path.distance(t0))
+        moved += weights[idx, g][:, None] * shift
+    x = mover._body(start, c0, R0)
+    dx = np.zeros_like(x)
+    dx[idx] = (moved - mover.velocity * (f1 - f0)) @ R0
+    probe = _Only(mover.shape, nodes[items])
+    s = 0.0
+    for _ in range(MAX_RESTARTS):
+        t = probe.max_step(x + s * dx, (1.0 - s) * dx)
+        if not t < 1.0:
+            return None
+        s += t * (1.0 - s)
+        g = probe.gap(x + s * dx)
+        if not g.min() > floor:
+            break
+    return [int(n) for n in nodes[items[int(np.argmin(probe.gap(x + s * dx)))]]]
+
+
+MAX_RESTARTS = 20  # continuous collision detection restarted from its last time
+
+
+class _Only:
+    """A shape's gap and first contact for some of its items only: node rows (K, 1) of a
+    node barrier or edges (K, 2) of an edge barrier (its ``edges``, for the call)."""
+
+    def __init__(self, shape, items):
+        self.shape = shape
+        self.edges = items.shape[1] == 2
+        self.items = np.ascontiguousarray(items if self.edges else items[:, 0], dtype=np.int64)
+
+    def _call(self, name, *args):
+        attr = "edges" if self.edges else "nodes"
+        keep = getattr(self.shape, attr)
+        try:
+            setattr(self.shape, attr, self.items)
+            return getattr(self.shape, name)(*args)
+        finally:
+            setattr(self.shape, attr, keep)
+
+    def gap(self, x) -> np.ndarray:
+        return self._call("gap", x)
+
+    def max_step(self, x, dx) -> float:
+        if self.edges:
+            return float(self._call("max_step_within", x, dx, 1.0))
+        return float(self._call("max_step", x, dx))
+
+
 def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1) -> bool:
     """Gives ``nodes`` the first blend of their carrier's motion and k's (BLENDS) that
-    no obstacle reaches over the step; False (weights as they were) where none does."""
-    if not nodes:
-        return False
-    idx = np.array(nodes)
-    keep = weights[idx].copy()
-    carrier = np.argmax(keep, axis=1)
-    for share_k in BLENDS:
-        weights[idx] = 0.0
-        weights[idx, carrier] = 1.0 - share_k
-        weights[idx, group[k]] += share_k
-        hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
-        if hit is None or not set(hit[1]) & set(nodes):
-            return True
-    weights[idx] = keep
+    no obstacle reaches over the step; False (weights as they were) where none does.
+    Where every blend fails because k then reaches an item that shares a node with
+    ``nodes`` (a rope in front of a blade: the node at its corner riding with it bends
+    the edge to the next node, which moves more slowly), that item's carried nodes join
+    ``nodes`` and the blends are tried again for them all."""
+    nodes = list(nodes)
+    for _ in range(MAX_GROWTH):
+        if not nodes:
+            return False
+        idx = np.array(nodes)
+        keep = weights[idx].copy()
+        carrier = np.argmax(keep, axis=1)
+        joined: set[int] = set()
+        for share_k in BLENDS:
+            weights[idx] = 0.0
+            weights[idx, carrier] = 1.0 - share_k
+            weights[idx, group[k]] += share_k
+            hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
+            if hit is None or not set(hit[1]) & set(nodes):
+                return True
+            if group[hit[0]] == group[k]:
+                joined.update(n for n in hit[1] if keep_carried(weights, n, group[k]))
+        weights[idx] = keep
+        more = sorted(joined - set(nodes))
+        if not more:
+            return False
+        nodes += more
     return False
+
+
+MAX_GROWTH = 8  # times the nodes re-carried together grow by the items they bend
+
+
+def keep_carried(weights, n: int, g: int) -> bool:
+    """Whether node n is carried and not wholly by the motion of group g."""
+    return bool(weights[n].any()) and weights[n, g] < 1.0
 
 
 def _message(mover, movers, nodes, moved, start, t1: float) -> str:
