@@ -72,9 +72,10 @@ def share(movers, start, base, trial, trial0, moved, t0: float, t1: float) -> in
             break
         k, nodes = hit
         nodes = [n for n in nodes if keep_carried(weights, n, group[k])]
-        if not _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1):
+        blended = _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1)
+        if blended is None:
             raise Pinched(_message(movers[k], movers, nodes, moved, start, t1))
-        changed.update(nodes)
+        changed.update(blended)
     else:
         raise Pinched(_message(movers[hit[0]], movers, hit[1], moved, start, t1))
     if changed:
@@ -239,9 +240,10 @@ class _Only:
         return float(self._call("max_step", x, dx))
 
 
-def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1) -> bool:
+def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1):
     """Gives ``nodes`` the first blend of their carrier's motion and k's (BLENDS) that
-    no obstacle reaches over the step; False (weights as they were) where none does.
+    no obstacle reaches over the step and returns the nodes so re-blended; None (weights
+    as they were) where none does.
     Where every blend fails because k then reaches an item that shares a node with
     ``nodes`` (a rope in front of a blade: the node at its corner riding with it bends
     the edge to the next node, which moves more slowly), that item's carried nodes join
@@ -249,7 +251,7 @@ def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1) -> 
     nodes = list(nodes)
     for _ in range(MAX_GROWTH):
         if not nodes:
-            return False
+            return None
         idx = np.array(nodes)
         keep = weights[idx].copy()
         carrier = np.argmax(keep, axis=1)
@@ -260,15 +262,15 @@ def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1) -> 
             weights[idx, group[k]] += share_k
             hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
             if hit is None or not set(hit[1]) & set(nodes):
-                return True
+                return nodes
             if group[hit[0]] == group[k]:
                 joined.update(n for n in hit[1] if keep_carried(weights, n, group[k]))
         weights[idx] = keep
         more = sorted(joined - set(nodes))
         if not more:
-            return False
+            return None
         nodes += more
-    return False
+    return None
 
 
 MAX_GROWTH = 8  # times the nodes re-carried together grow by the items they bend

@@ -189,3 +189,30 @@ def test_the_rope_at_the_blades_corner_is_re_carried_with_its_neighbour(tmp_path
     done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
     assert done.exit_code == 0, done.output
     assert "converged    yes" in done.output
+
+
+def test_a_blade_meeting_a_rope_between_its_nodes_keeps_every_edge_out(tmp_path):
+    """The rope with 0.1 m edges: the blade (0.1 m wide) meets the edges at its middle node
+    and its corners between nodes. Re-carried alone, the middle node rode with the blade
+    and bent both edges beside it into the blade's corners (2 mm deep at the step's end;
+    the run then stalled at t = 0.085 s); with its neighbours carried by the same blend
+    the run goes on, and no point of any edge comes within the rope's radius of the blade
+    at any step."""
+    case = tmp_path / "belt.toml"
+    history = "[[0.0, 0.0], [0.05, 1.0], [0.2, 1.0]]"
+    text = BELT_AND_BLADE.replace("HISTORY", history).replace("T_END", "0.12")
+    case.write_text(text.replace("edge_length = 0.05", "edge_length = 0.1"))
+    out = tmp_path / "r.h5"
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    with h5py.File(out) as f:
+        frames, times = f["trajectory/x"][()], f["trajectory/time"][()]
+        edges = f["mesh/edges"][()]
+    assert times[-1] == pytest.approx(0.12)
+    travel = np.where(times < 0.05, times**2 / 0.1, 0.025 + (times - 0.05))  # the history's
+    centre = np.stack([0 * times, 0.05 - 0.75 * travel, 0 * times + 0.053], axis=1)
+    u = np.linspace(0.0, 1.0, 41)[None, None, :, None]  # 41 points along every edge
+    a, b = frames[:, edges[:, 0], None], frames[:, edges[:, 1], None]
+    local = np.abs(a + u * (b - a) - centre[:, None, None, :]) - [0.05, 0.001, 0.05]
+    distance = np.linalg.norm(np.maximum(local, 0.0), axis=-1) + np.minimum(local.max(axis=-1), 0.0)
+    assert distance.min() > 0.005  # the rope's radius, at every step
