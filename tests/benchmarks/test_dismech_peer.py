@@ -1,10 +1,13 @@
-"""The dismech-newton comparison of a cantilever (benchmarks/peers/dismech_cantilever.py),
-short: where dismech-newton is installed (``pip install dismech-newton==0.1.0.post2``;
-its 0.1.0.post4 does not import on Python 3.11), its tip converges to the elastica at
-first order in the edge length (its clamp holds the first edge, half an edge out),
-catenet's many times closer at the same edges."""
+"""The dismech-newton comparisons (benchmarks/peers/dismech_cantilever.py, dismech_column.py
+and dismech_drop.py), short: where dismech-newton is installed (``pip install
+dismech-newton==0.1.0.post2``; its 0.1.0.post4 does not import on Python 3.11), its tip
+converges to the elastica at first order in the edge length (its clamp holds the first
+edge, half an edge out), catenet's many times closer at the same edges; its falling rod
+meets the plane when free fall does and stops on it."""
 
 from __future__ import annotations
+
+import math
 
 import pytest
 
@@ -46,3 +49,18 @@ def test_dismech_newtons_buckled_column_converges_to_the_elastica_at_first_order
     assert 0.4 < errors[1] / errors[0] < 0.6, errors
     tip, _ = dcol.column_tip(1.5, 50)
     assert max(abs(tip[0] - exact[0]), abs(tip[1] - exact[1])) < 0.1 * errors[0]
+
+
+def test_dismech_newtons_falling_rod_meets_the_plane_with_free_fall_and_stops_on_it():
+    """The rod of benchmarks/peers/dismech_drop.py at dismech-newton's 1 ms steps to 0.15 s:
+    its first step in contact is the one free fall meets the plane in (0.10096 s), its
+    underside never more than 1e-5 m into the plane, and its contact (a projection within
+    implicit Euler) keeps no energy: the rod lies on the plane, straight, by 0.15 s."""
+    from benchmarks.peers import dismech_drop as dd
+
+    free = math.sqrt(2.0 * dd.HEIGHT / dd.GRAVITY)
+    r = dd.dismech_drop(1e-3, final_time=0.15, t_after=0.14)
+    assert r["before"] < free <= r["contact"] + 1e-12 and r["contact"] - r["before"] < 1.5e-3
+    assert r["gap"] > -1e-5
+    assert r["kept"] < 0.01
+    assert abs(r["height"]) < 1e-5 and r["sag"] < 1e-5
