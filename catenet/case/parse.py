@@ -52,6 +52,7 @@ from catenet.case.vessel import check_vessel
 from catenet.case.water import parse_water
 from catenet.case.written import plain
 from catenet.errors import ConfigError
+from catenet.solver.settings import STATIC_MAX_ITER
 
 #: The unit systems a case may name (top-level ``units``).
 UNITS = ("SI", "kN-m", "N-mm")
@@ -229,6 +230,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     given = data.get("solver")
     if water not in (None, BAD) and dynamic and "damping" not in (given or {}):
         solver = dataclasses.replace(solver, damping=0.0)  # the water damps, not mu M
+    if isinstance(solver, SolverConfig) and not dynamic and solver.max_iter is None:
+        solver = dataclasses.replace(solver, max_iter=STATIC_MAX_ITER)  # a time step's: None
     if dynamic and solver.t_end is None:  # not given (a static case's stays None)
         t_end = default_t_end(load, supports, solver, obstacles, masses)
         solver = dataclasses.replace(solver, t_end=t_end)

@@ -47,9 +47,10 @@ from catenet.errors import ConfigError
 from catenet.model.areas import DIRECTIONS as AREA_DIRECTIONS
 from catenet.solver.integrators import INTEGRATORS
 from catenet.solver.relax import REST
-from catenet.solver.settings import INITIAL_STATES, METHODS, STARTS, Settings
+from catenet.solver.settings import INITIAL_STATES, MAX_ITER_SHOWN, METHODS, STARTS, Settings
 
 LINEAR = ("auto", "pardiso", "scipy")
+MAX_ITER = "Newton iterations of one solve: a static equilibrium (a load step) or one time step"
 
 Vec3 = tuple[float, float, float]
 NodeRef = int | str
@@ -430,7 +431,9 @@ class SolverConfig(Declared):
         doc="linear solver (auto: PARDISO where available, below 700 unknowns a banded Cholesky)",
     )
     threads: int = integer(1, ge=1, doc="threads of MKL, OpenBLAS and Numba")
-    max_iter: int = integer(Settings.max_iter, ge=1, le=10**6, doc="static: Newton iterations")
+    max_iter: int | None = integer(
+        None, ge=1, le=10**6, write="given", shown=MAX_ITER_SHOWN, doc=MAX_ITER
+    )
     start: str = choice(
         Settings.start,
         STARTS,

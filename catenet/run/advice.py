@@ -32,9 +32,6 @@ TARGET_BYTES = 256 << 20
 #: The trajectory estimate of a run to rest (solver.t_end = "rest"): its steps as a rule.
 TYPICAL_REST_STEPS = 300
 
-#: Newton iterations of one dynamic time step (``catenet.solver.dynamic.solve_dynamic``).
-DYNAMIC_MAX_ITER = 25
-
 
 def _dynamic_only(solver: SolverConfig) -> dict[str, object]:
     """The [solver] keys only dynamic runs read, with their values in ``solver``."""
@@ -80,12 +77,6 @@ def ignored_solver_keys(solver: SolverConfig) -> list[str]:
             out.append(
                 f"solver.steps = {solver.steps}: ignored with solver.method = 'dynamic' (load "
                 "steps are for static runs; a dynamic run applies the full load from t = 0)"
-            )
-        if solver.max_iter != default.max_iter:
-            out.append(
-                f"solver.max_iter = {solver.max_iter}: ignored with solver.method = 'dynamic' "
-                f"(each time step takes at most {DYNAMIC_MAX_ITER} Newton iterations and is "
-                "halved when they do not suffice)"
             )
     else:
         defaults = _dynamic_only(default)

@@ -31,6 +31,7 @@ from catenet.solver.energy import Ledger
 from catenet.solver.integrators import RHO_INF, Newmark, make
 from catenet.solver.relax import MAX_STEPS, REST, RestControl
 from catenet.solver.result import Outcome, Result, finish
+from catenet.solver.settings import STEP_MAX_ITER
 from catenet.solver.stepper import (  # noqa: F401  (TimeStepper, at_rest: here too)
     OnStep,
     TimeStepper,
@@ -62,7 +63,7 @@ def solve_dynamic(
     x0: np.ndarray | None = None,
     v0: np.ndarray | None = None,
     t0: float = 0.0,
-    max_iter: int = 25,
+    max_iter: int = STEP_MAX_ITER,
     stop_at_equilibrium: bool = True,
     linear: str = "auto",
     on_step: OnStep | None = None,

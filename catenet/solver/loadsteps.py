@@ -52,7 +52,7 @@ class StepSettings(TypedDict):
 
 
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
-DR_MAX_ITER = 25  # the last rung's Newton iterations per time step (a dynamic run's own)
+DR_MAX_ITER = 25  # the last rung's Newton iterations per time step
 #: A strain below -SLACK is slack, a tension below SLACK EA none: far above the strains
 #: a start's round-off gives (a flat net perturbed by 1e-12 m stays "unstressed", not
 #: slack), far below any cable given longer than its chord.

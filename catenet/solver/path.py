@@ -180,7 +180,7 @@ def _static(
             factors,
             x0=x0,
             rtol=settings.rtol,
-            max_iter=settings.max_iter,
+            max_iter=settings.static_iterations,
             on_step=seen,
             workspace=ws,
             post_collapse=settings.post_collapse,
@@ -273,6 +273,7 @@ def _dynamic(
             damping=settings.damping,
             t_end=settings.t_end,
             rtol=settings.rtol,
+            max_iter=settings.step_iterations,
             x0=x0,
             v0=v0,
             t0=start.t,
@@ -316,7 +317,7 @@ def equilibrium_start(scene: Scene, settings: Settings, ws: Workspace, t0: float
         frozen,
         factors,
         rtol=settings.rtol,
-        max_iter=settings.max_iter,
+        max_iter=settings.static_iterations,
         workspace=ws,
     )
     return np.array(found[-1].x, dtype=np.float64)

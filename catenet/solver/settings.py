@@ -20,6 +20,9 @@ METHODS = ("static", "dynamic")
 DT = 1e-2  # solver.dt's default with fixed steps
 STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
 INITIAL_STATES = ("given", "equilibrium")  # dynamic: where a run starts (solver.initial_state)
+STATIC_MAX_ITER = 200  # solver.max_iter not given: Newton iterations of a static solve
+STEP_MAX_ITER = 25  # ... and of one time step of a dynamic run
+MAX_ITER_SHOWN = f"`{STATIC_MAX_ITER}` (static), `{STEP_MAX_ITER}` (a time step)"  # case keys
 
 
 class Steps(Protocol):
@@ -54,7 +57,7 @@ class Settings:
     t_end: float | str = 10.0  # or "rest" (a case's default when nothing depends on time)
     max_steps: int = MAX_STEPS  # t_end = "rest": the most time steps
     rtol: float = 1e-8
-    max_iter: int = 200
+    max_iter: int | None = None  # not given: STATIC_MAX_ITER, or STEP_MAX_ITER a time step
     steps: int = 1
     linear: str = "auto"
     integrator: str = ""  # not given: "implicit_euler", or with a tolerance "bdf2"
@@ -67,6 +70,16 @@ class Settings:
     tolerance: float | None = None  # dynamic: steps chosen by accuracy (catenet.solver.adaptive)
     dt_max: float | None = None  # ... the longest step (None: t_end - t0)
     dt_min: float | None = None  # ... the shortest
+
+    @property
+    def static_iterations(self) -> int:
+        """Newton iterations of one static solve: ``max_iter``, else STATIC_MAX_ITER."""
+        return STATIC_MAX_ITER if self.max_iter is None else self.max_iter
+
+    @property
+    def step_iterations(self) -> int:
+        """Newton iterations of one time step: ``max_iter``, else STEP_MAX_ITER."""
+        return STEP_MAX_ITER if self.max_iter is None else self.max_iter
 
     def _resolve_steps(self) -> None:
         """dt and integrator where not given (``steps_given``)."""
