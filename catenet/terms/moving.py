@@ -40,6 +40,7 @@ from catenet.errors import ConvergenceError
 from catenet.terms.base import Term
 from catenet.terms.body import Path
 from catenet.terms.collide import SWEEP_SAFETY, spread
+from catenet.terms.probe import Only
 
 
 def rotation_vector(w, angle: float) -> np.ndarray:
@@ -250,7 +251,30 @@ class Moving(Term):
         c0, R0 = self.pose(t0)
         gap = self.shape.gap(self._body(base, c0, R0))
         near = self.nodes[gap < SWEEP_SAFETY * move + self.dhat]
+        near = near[~self.stays(near[:, None], base, t0, t1)]
         return int(self._carry_nodes(near, base, trial, t0, t1, moved, index).size)
+
+    def stays(self, items, base, t0: float, t1: float) -> np.ndarray:
+        """Per item (its nodes: rows of ``items``, (K, m), as the shape's gap takes them)
+        whether it may stay where it is over the step rather than ride with the obstacle:
+        the obstacle translates (no spin), so relative to it each item moves on a straight
+        line, along which no item meets it (the shape's own first contact) and each keeps
+        at the end at least half of the smaller of its gap at the start and dhat (a belt
+        running along its face under a rope: carried, the rope was pulled along the belt
+        and its end edges strained at every step's start). None stays where the obstacle
+        turns or where a path that would keep its gap at the end meets the obstacle."""
+        stay = np.zeros(len(items), dtype=bool)
+        if np.any(self.omega) or not len(items):
+            return stay
+        c0, R0 = self.pose(t0)
+        c1, _ = self.pose(t1)
+        x = self._body(base, c0, R0)
+        dx = np.broadcast_to((c0 - c1) @ R0, x.shape).copy()
+        probe = Only(self.shape, items)
+        stay = probe.gap(x + dx) >= 0.5 * np.minimum(probe.gap(x), self.dhat)
+        if stay.any() and not Only(self.shape, items[stay]).max_step(x, dx) >= 1.0:
+            stay[:] = False
+        return stay
 
     def _carry_nodes(self, nodes, base, trial, t0: float, t1: float, moved, index: int):
         """``nodes`` that no other obstacle carried this step (``moved``: -1, then marked

@@ -74,6 +74,8 @@ class MovingEdges(Moving):
                 self._stop_at(self.guard.edges, np.array([hit[0]]), hit[1])
         c0, R0 = self.pose(t0)
         near = self.shape.gap(self._body(base, c0, R0)) < SWEEP_SAFETY * move + self.dhat
+        reach = np.flatnonzero(near)
+        near[reach[self.stays(edges[reach], base, t0, t1)]] = False
         if not near.any():
             return 0
         start = base.copy()

@@ -36,6 +36,7 @@ import numpy as np
 
 from catenet.errors import ConvergenceError
 from catenet.terms.collide import SWEEP_SAFETY
+from catenet.terms.probe import Only
 
 #: The blends tried for a node that an obstacle other than its carrier reaches, as the
 #: share l of that obstacle's motion (0: the carrier's alone, the first tried).
@@ -66,7 +67,10 @@ def share(movers, start, base, trial, trial0, moved, t0: float, t1: float) -> in
     if not watch:
         return 0
     changed: set[int] = set()
-    for _ in range(4 * len(movers)):
+    # each round re-carries at least one node of a watched item: a rope along a paddle
+    # has one per node and edge in front of it
+    rounds = 4 * len(movers) + 2 * sum(len(items) for items in watch.values())
+    for _ in range(rounds):
         hit = _first_hit(movers, group, sweeps, watch, start, weights, t0, t1)
         if hit is None:
             break
@@ -197,7 +201,7 @@ def _straight_hit(mover, movers, weights, start, nodes, items, idx, t0, t1, floo
     x = mover._body(start, c0, R0)
     dx = np.zeros_like(x)
     dx[idx] = (moved - mover.velocity * (f1 - f0)) @ R0
-    probe = _Only(mover.shape, nodes[items])
+    probe = Only(mover.shape, nodes[items])
     s = 0.0
     for _ in range(MAX_RESTARTS):
         t = probe.max_step(x + s * dx, (1.0 - s) * dx)
@@ -211,33 +215,6 @@ def _straight_hit(mover, movers, weights, start, nodes, items, idx, t0, t1, floo
 
 
 MAX_RESTARTS = 20  # continuous collision detection restarted from its last time
-
-
-class _Only:
-    """A shape's gap and first contact for some of its items only: node rows (K, 1) of a
-    node barrier or edges (K, 2) of an edge barrier (its ``edges``, for the call)."""
-
-    def __init__(self, shape, items):
-        self.shape = shape
-        self.edges = items.shape[1] == 2
-        self.items = np.ascontiguousarray(items if self.edges else items[:, 0], dtype=np.int64)
-
-    def _call(self, name, *args):
-        attr = "edges" if self.edges else "nodes"
-        keep = getattr(self.shape, attr)
-        try:
-            setattr(self.shape, attr, self.items)
-            return getattr(self.shape, name)(*args)
-        finally:
-            setattr(self.shape, attr, keep)
-
-    def gap(self, x) -> np.ndarray:
-        return self._call("gap", x)
-
-    def max_step(self, x, dx) -> float:
-        if self.edges:
-            return float(self._call("max_step_within", x, dx, 1.0))
-        return float(self._call("max_step", x, dx))
 
 
 def _reblend(movers, group, sweeps, watch, start, weights, nodes, k, t0, t1):

@@ -20,6 +20,8 @@ from catenet.cli import main
 from catenet.terms import pinch
 from catenet.terms.moving import Moving
 from catenet.terms.shapes import BoxBarrier
+from tests.terms import test_moving_stays as belt_cases
+from tests.terms import test_pinch as pinch_cases
 
 DT = 0.01
 
@@ -85,52 +87,12 @@ def test_the_straight_paths_find_what_advancement_finds(monkeypatch):
         cases += 1
 
 
-BELT_AND_BLADE = """
-title = "a rope on a belt, pushed by a blade that then stops"
-
-[geometry]
-kind = "graph"
-nodes = [[-0.3, 0.0, 0.0053], [0.3, 0.0, 0.0053]]
-fixed = [0, 1]
-edge_length = 0.05
-
-[[geometry.cable]]
-name = "rope"
-nodes = [0, 1]
-
-[material]
-E = 1e9
-radius = 0.005
-density = 1150.0
-prestress = 100.0
-
-[load]
-gravity = [0.0, 0.0, -9.81]
-
-[[obstacle]]
-kind = "box"                        # a belt under the rope, running +y, gripping it
-center = [0.0, 0.0, -0.05]
-half_size = [0.4, 1.0, 0.05]
-velocity = [0.0, 0.1, 0.0]
-friction = 0.3
-distance = 0.0005
-
-[[obstacle]]
-kind = "box"                        # a 2 mm blade, its bottom 3 mm above the belt
-center = [0.0, 0.05, 0.053]
-half_size = [0.05, 0.001, 0.05]
-velocity = [0.0, -0.75, 0.0]
-history = HISTORY
-distance = 0.0005
-
-[solver]
-method = "dynamic"
-integrator = "bdf2"
-dt = 0.005
-t_end = T_END
-damping = 5.0
-edge_contact = true
-"""
+# the rope, belt and blade of tests/terms/test_pinch.py, the blade's history and the
+# run's end left to each test
+BELT_AND_BLADE = pinch_cases.BELT_AND_BLADE.replace(
+    "history = [[0.0, 0.0], [0.05, 1.0], [0.2, 1.0]]", "history = HISTORY"
+).replace("t_end = 0.12", "t_end = T_END")
+assert "HISTORY" in BELT_AND_BLADE and "T_END" in BELT_AND_BLADE
 
 STOPS = "[[0.0, 0.0], [0.05, 1.0], [0.12, 1.0], [0.15, 0.0], [0.6, 0.0]]"
 
@@ -216,3 +178,44 @@ def test_a_blade_meeting_a_rope_between_its_nodes_keeps_every_edge_out(tmp_path)
     local = np.abs(a + u * (b - a) - centre[:, None, None, :]) - [0.05, 0.001, 0.05]
     distance = np.linalg.norm(np.maximum(local, 0.0), axis=-1) + np.minimum(local.max(axis=-1), 0.0)
     assert distance.min() > 0.005  # the rope's radius, at every step
+
+
+# the wire rope on the belt of tests/terms/test_moving_stays.py, and a paddle 20 mm thick,
+# 0.3 m wide, 1 mm above the belt, pushing it across
+PADDLE = belt_cases.BELT.replace(
+    "[solver]",
+    """[[obstacle]]
+kind = "box"
+center = [0.0, 0.03, 0.051]
+half_size = [0.15, 0.01, 0.05]
+velocity = [0.0, -0.2, 0.0]
+
+[solver]""",
+).replace("t_end = 0.2", "t_end = 0.15")
+
+
+def test_a_paddle_pushing_a_rope_across_a_belt_re_carries_every_node_in_front_of_it(
+    tmp_path,
+):
+    """A wire rope on a belt running along it, pushed sideways by a paddle 0.3 m wide.
+    Before, the belt carried every node along at each step's start, so some eight nodes
+    and edges in front of the paddle needed re-carrying in one step, beyond the check's 16
+    rounds: a pinch that was none, the step halved until the run gave up at t = 0.21 s.
+    Now the belt leaves the rope in place (its path along the belt's face is clear:
+    ``Moving.stays``) and the check's rounds grow with the items it watches. It runs on,
+    no point of an edge inside the paddle."""
+    case = tmp_path / "paddle.toml"
+    case.write_text(PADDLE)
+    out = tmp_path / "r.h5"
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    with h5py.File(out) as f:
+        frames, times = f["trajectory/x"][()], f["trajectory/time"][()]
+        edges = f["mesh/edges"][()]
+    centre = np.stack([0 * times, 0.03 - 0.2 * times, 0 * times + 0.051], axis=1)
+    u = np.linspace(0.0, 1.0, 41)[None, None, :, None]
+    a, b = frames[:, edges[:, 0], None], frames[:, edges[:, 1], None]
+    local = np.abs(a + u * (b - a) - centre[:, None, None, :]) - [0.15, 0.01, 0.05]
+    distance = np.linalg.norm(np.maximum(local, 0.0), axis=-1) + np.minimum(local.max(axis=-1), 0.0)
+    assert distance.min() > 0.003  # the rope's radius, at every step
+    assert frames[-1][:, 1].min() < -0.012  # pushed a rope radius beyond the face at -0.01
