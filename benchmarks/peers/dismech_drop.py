@@ -64,8 +64,8 @@ from benchmarks.peers.pyelastica_drop import (  # noqa: E402 (the scene of both)
     T_AFTER,
     T_END,
     catenet_drop,
-    catenet_rest,
     energy,
+    print_rows,
 )
 
 TOUCH = 1e-5  # m: dismech-newton's underside this near the plane counts as contact
@@ -154,16 +154,7 @@ def main() -> None:
         r = dismech_drop(dt)
         runs.append((f"dismech-newton ADMM, dt {dt:g}", r))
         rests.append((dt, r))
-    for name, r in runs:
-        if "failed" in r:
-            print(f"{name:<34} failed after {r['steps']} steps: {r['failed']}")
-            continue
-        per = r["cpu"] / T_END
-        print(f"{name:<34} {r['before']:9.5f}-{r['contact']:.5f} {r['kept']:7.4f} "
-              f"{r['gap']:14.3e} {r['cpu']:7.2f} {per:9.2f} {r['steps']:6d}")  # fmt: skip
-    rest = catenet_rest()
-    print(f"at rest: catenet (t_end = rest, damping 1 /s): underside {rest['height']:.3e} m "
-          f"above the plane, sag {rest['sag']:.2e} m ({rest['cpu']:.2f} s CPU)")  # fmt: skip
+    print_rows(runs)
     for dt, r in rests:
         print(f"at {T_END} s: dismech-newton dt {dt:g}: underside {r['height']:.3e} m above "
               f"the plane, sag {r['sag']:.2e} m")  # fmt: skip

@@ -213,6 +213,20 @@ def pyelastica_drop(
     )
 
 
+def print_rows(runs: list[tuple[str, dict]]) -> None:
+    """The table's rows (a run that failed says where), then catenet's rod at rest."""
+    for name, r in runs:
+        if "failed" in r:
+            print(f"{name:<34} failed after {r['steps']} steps: {r['failed']}")
+            continue
+        per = r["cpu"] / T_END
+        print(f"{name:<34} {r['before']:9.5f}-{r['contact']:.5f} {r['kept']:7.4f} "
+              f"{r['gap']:14.3e} {r['cpu']:7.2f} {per:9.2f} {r['steps']:6d}")  # fmt: skip
+    rest = catenet_rest()
+    print(f"at rest: catenet (t_end = rest, damping 1 /s): underside {rest['height']:.3e} m "
+          f"above the plane, sag {rest['sag']:.2e} m ({rest['cpu']:.2f} s CPU)")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tolerances", default="3e-3,1e-3,1e-4,1e-5", help="catenet's, adaptive")
@@ -234,16 +248,7 @@ def main() -> None:
         runs.append((f"catenet bdf2, dt {dt:g}", catenet_drop({"dt": dt, "integrator": "bdf2"})))
     for nu in (CONTACT_NU, 0.0):
         runs.append((f"PyElastica k = {CONTACT_K:g}, nu = {nu:g}", pyelastica_drop(nu)))
-    for name, r in runs:
-        if "failed" in r:
-            print(f"{name:<34} failed after {r['steps']} steps: {r['failed']}")
-            continue
-        per = r["cpu"] / T_END
-        print(f"{name:<34} {r['before']:9.5f}-{r['contact']:.5f} {r['kept']:7.4f} "
-              f"{r['gap']:14.3e} {r['cpu']:7.2f} {per:9.2f} {r['steps']:6d}")  # fmt: skip
-    rest = catenet_rest()
-    print(f"at rest: catenet (t_end = rest, damping 1 /s): underside {rest['height']:.3e} m "
-          f"above the plane, sag {rest['sag']:.2e} m ({rest['cpu']:.2f} s CPU)")  # fmt: skip
+    print_rows(runs)
     settled = pyelastica_drop(CONTACT_NU, args.rest_time)
     print(f"at rest: PyElastica nu = {CONTACT_NU:g} at {args.rest_time:g} s: underside "
           f"{settled['height']:.3e} m above the plane, sag {settled['sag']:.2e} m "
