@@ -205,12 +205,11 @@ def _straight_hit(mover, movers, weights, start, nodes, items, idx, t0, t1, floo
     s = 0.0
     for _ in range(MAX_RESTARTS):
         t = probe.max_step(x + s * dx, (1.0 - s) * dx)
-        if not t < 1.0:
+        s = 1.0 if not t < 1.0 else s + t * (1.0 - s)
+        if not probe.gap(x + s * dx).min() > floor:
+            break  # reached, at the step's end too (jaws that close on the rope just then)
+        if s >= 1.0:
             return None
-        s += t * (1.0 - s)
-        g = probe.gap(x + s * dx)
-        if not g.min() > floor:
-            break
     return [int(n) for n in nodes[items[int(np.argmin(probe.gap(x + s * dx)))]]]
 
 

@@ -219,3 +219,51 @@ def test_a_paddle_pushing_a_rope_across_a_belt_re_carries_every_node_in_front_of
     distance = np.linalg.norm(np.maximum(local, 0.0), axis=-1) + np.minimum(local.max(axis=-1), 0.0)
     assert distance.min() > 0.003  # the rope's radius, at every step
     assert frames[-1][:, 1].min() < -0.012  # pushed a rope radius beyond the face at -0.01
+
+
+JAWS_AT_A_STEPS_END = """
+[geometry]
+kind = "cable"
+start = [-0.5, 0.0, 0.0]
+end = [0.5, 0.0, 0.0]
+nodes = 51
+
+[material]
+EA = 5.0e4
+radius = 0.003
+density = 1140.0
+prestress = 30.0
+
+[[obstacle]]
+kind = "box"
+center = [0.0, 0.0, -0.03]
+half_size = [0.05, 0.1, 0.02]
+velocity = [0.0, 0.0, 0.1]
+
+[[obstacle]]
+kind = "box"
+center = [0.0, 0.0, 0.03]
+half_size = [0.05, 0.1, 0.02]
+velocity = [0.0, 0.0, -0.1]
+
+[solver]
+method = "dynamic"
+integrator = "bdf2"
+dt = 0.005
+t_end = 0.1
+edge_contact = true
+"""
+
+
+def test_jaws_that_close_on_the_rope_exactly_at_a_steps_end_stop_with_the_pinch(tmp_path):
+    """Two jaws closing at 0.1 m/s each on a 6 mm cord meet its surface at t = 0.07 s, a
+    step's end at 5 ms steps: the straight paths' first contact is then at the step's end,
+    which counts as reached. Taken as clear, the step was accepted with the cord at zero
+    gap (its barrier energy infinite) and the run ended "refusing to write a non-finite
+    state"; it stops with the pinch, naming both jaws and the node."""
+    case = tmp_path / "jaws.toml"
+    case.write_text(JAWS_AT_A_STEPS_END)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+    assert done.exit_code == 1, done.output
+    assert "pinch the node" in done.output and "non-finite" not in done.output
+    assert "obstacle[0]" in done.output and "obstacle[1]" in done.output
