@@ -309,6 +309,11 @@ class TimeStepper:
         )
         if not again:
             message = f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s"
+            if why.startswith("no convergence in"):
+                why += (
+                    f" (solver.max_iter = {self.max_iter} bounds each time step's Newton "
+                    "iterations: a larger one may let it converge)"
+                )
         elif control.spent():
             assert not isinstance(control, RestControl)  # a run to rest ends by max_steps
             message = control.spent_message(self.t)

@@ -53,3 +53,19 @@ def test_a_larger_budget_lets_a_relaxation_take_longer_steps(tmp_path):
             seen[budget] = (len(f["trajectory/time"]), f["result/tension"][()])
     assert seen[100][0] < seen[None][0]
     assert np.allclose(seen[100][1], seen[None][1], rtol=1e-6)
+
+
+def test_a_step_that_its_budget_cannot_solve_names_the_budget(tmp_path):
+    """A wire rope on a running belt with 2 Newton iterations a step: the step fails down
+    to the smallest step, and the message names solver.max_iter as what bounds it."""
+    from tests.terms.test_moving_stays import BELT
+
+    case = tmp_path / "belt.toml"
+    case.write_text(BELT)
+    done = CliRunner().invoke(
+        main, ["run", str(case), "-o", str(tmp_path / "r.h5"), "--set", "solver.max_iter=2"]
+    )
+    assert done.exit_code == 1, done.output
+    assert "no convergence in 2 iterations (solver.max_iter = 2 bounds each time step" in (
+        done.output
+    )
