@@ -297,7 +297,7 @@ class Moving(Term):
     def _reaches(self, x, supports, t0: float, t1: float):
         """(node, time) of the first support (at its place in x) the obstacle reaches
         between t0 and t1, else None (``first_touch``)."""
-        hit = self.first_touch(_Probe(self.shape, supports), x, t0, t1)
+        hit = self.first_touch(Only(self.shape, supports[:, None]), x, t0, t1)
         return None if hit is None else (int(supports[hit[0]]), hit[1])
 
     def first_touch(self, probe, x, t0: float, t1: float, max_iter: int = 200):
@@ -323,21 +323,6 @@ class Moving(Term):
         gap = probe.gap(self._body(x(c, R) if callable(x) else x, c, R))
         k = int(np.argmin(gap))
         return (k, t1) if not gap[k] > 0.0 else None
-
-
-class _Probe:
-    """The shape's gap at other nodes (the supports)."""
-
-    def __init__(self, shape, nodes):
-        self.shape, self.nodes = shape, np.ascontiguousarray(nodes, dtype=np.int64)
-
-    def gap(self, x):
-        keep = self.shape.nodes
-        try:
-            self.shape.nodes = self.nodes
-            return self.shape.gap(x)
-        finally:
-            self.shape.nodes = keep
 
 
 def carry(potential, base, trial, t0: float, t1: float, fixed) -> np.ndarray:

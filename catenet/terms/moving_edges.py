@@ -31,6 +31,7 @@ import numpy as np
 from catenet.errors import ConvergenceError
 from catenet.terms.collide import SWEEP_SAFETY
 from catenet.terms.moving import Moving
+from catenet.terms.probe import Only
 
 
 class MovingEdges(Moving):
@@ -89,7 +90,7 @@ class MovingEdges(Moving):
                 out[nodes] = c + (start[nodes] - c0) @ (R @ R0.T).T
                 return out
 
-            hit = self.first_touch(_Edges(self.shape, held), riding, t0, t1)
+            hit = self.first_touch(Only(self.shape, edges[held]), riding, t0, t1)
             if hit is not None:
                 self._stop_at(edges, held[hit[0] : hit[0] + 1], hit[1])
         return int(nodes.size)
@@ -103,16 +104,6 @@ class MovingEdges(Moving):
                 f"t = {t1:.6g} s: a moving obstacle must not run over an edge at a "
                 "support; change its motion or the supports"
             )
-
-
-class _Edges:
-    """The gaps of some of an ``EdgeContact``'s edges (their indices ``which``)."""
-
-    def __init__(self, contact, which: np.ndarray):
-        self.contact, self.which = contact, which
-
-    def gap(self, x) -> np.ndarray:
-        return self.contact.gap(x)[self.which]
 
 
 def moving_edges(edge, term: Moving, guard=None) -> MovingEdges:

@@ -1,6 +1,7 @@
 """A shape's gap and first contact for some of its items only (``Only``): the moving
-obstacles' checks over a step (``catenet.terms.moving``, ``catenet.terms.pinch``) ask them
-of the nodes or edges near them, not of the whole net."""
+obstacles' checks over a step (``catenet.terms.moving``: which nodes ride, the supports
+an obstacle would run over; ``catenet.terms.moving_edges``: the edges held at a support;
+``catenet.terms.pinch``) ask them of the nodes or edges concerned, not of the whole net."""
 
 from __future__ import annotations
 
