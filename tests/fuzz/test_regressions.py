@@ -550,7 +550,9 @@ def test_a_run_still_taking_steps_at_its_checkpoint_is_long_and_a_stuck_one_a_ha
     minutes of a capture) once ran past the 60 s limit and was called a hang. A run that
     has taken a time step within the last quarter of its checkpoint is long, not hung, and
     is stopped there; a command computing without taking steps goes on to its limit and is
-    a hang."""
+    a hang. The run here is given 1000 s, which no machine ends within the limit (a fast
+    one ended the 10 s capture in it), and its kernels are compiled first by a run of a few
+    steps (on a clean checkout, compiling filled the checkpoint's last quarter)."""
     import time
     import tomllib
 
@@ -561,9 +563,12 @@ def test_a_run_still_taking_steps_at_its_checkpoint_is_long_and_a_stuck_one_a_ha
     source = CONFIGS / "contact" / "tether_capture.toml"
     copy_beside(source, tmp_path)
     data = small(tomllib.loads(source.read_text()))
-    del data["solver"]["t_end"]
+    data["solver"]["t_end"] = 0.02
     (tmp_path / "case.toml").write_text(tomli_w.dumps(data))
     args = ["run", tmp_path / "case.toml", "-o", tmp_path / "o.h5", "-q"]
+    assert judge(invoke(args, seconds=120, cwd=tmp_path), tmp_path).kind == "ok"
+    data["solver"]["t_end"] = 1000.0
+    (tmp_path / "case.toml").write_text(tomli_w.dumps(data))
     outcome = judge(invoke(args, seconds=60, cwd=tmp_path, long_after=4.0), tmp_path)
     assert outcome.kind == "long" and outcome.good, outcome
     assert re.search(r"t = [0-9.e+-]+ s after [1-9][0-9]* steps", outcome.detail), outcome
