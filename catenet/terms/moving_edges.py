@@ -11,9 +11,10 @@ within the contact radius of the obstacle. Gradients turn back as R g_b and each
 Between steps the obstacle jumps from pose(t_n) to pose(t_n+1), which could swallow the
 middle of an edge whose nodes are far from it. ``carry`` moves both nodes of every edge
 the obstacle may reach in the step (its gap at pose(t_n) below SWEEP_SAFETY times the
-obstacle's sweep plus the activation distance) rigidly with it, in the predictor and in
-the point the step's cut-back starts from: a rigid motion keeps the edge's distance to
-the obstacle, so every step starts with every edge outside. An edge held at a support
+obstacle's sweep plus the activation distance) rigidly with it from the point the
+step's cut-back starts from (Newton's start as ``Moving._predicted`` chooses it, by the
+nodes' barrier of the same obstacle): a rigid motion keeps the edge's distance to the
+obstacle, so every step starts with every edge outside. An edge held at a support
 that the obstacle reaches stops the run (ConvergenceError naming the edge): an edge
 with both nodes fixed (no barrier moves it: ``guard``), and one with a node fixed and
 the other riding with the obstacle, is swept over the step by conservative advancement
@@ -48,6 +49,10 @@ class MovingEdges(Moving):
         H = values.reshape(-1, 2, 3, 2, 3)  # each edge's row-major 6 x 6 block
         H[:] = np.einsum("ac,kicjd,bd->kiajb", self.R, H, self.R)
         return active
+
+    def node_shape(self):
+        """The nodes' barrier of the same obstacle (None: none)."""
+        return None if self.twin is None else self.twin.shape
 
     def max_step(self, x, dx):
         return self.max_step_within(x, dx, math.inf)
