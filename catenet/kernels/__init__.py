@@ -5,7 +5,7 @@ One module per physical term (``stretch``) plus the sparse scatter used by assem
 
 Numba keys a kernel's cached machine code on its own module's source only, while a
 kernel that calls one of another module (``segments.segment_ccd`` calls
-``strands.accd``) has that callee compiled into it: a changed callee module (an upgrade,
+``ccd.accd``) has that callee compiled into it: a changed callee module (an upgrade,
 an edit) left its callers running the old code from the cache. So on import the cache
 of this package is checked against a stamp of every kernel module's source and numba's
 version (``STAMP`` in the cache's directory), and cleared where it differs

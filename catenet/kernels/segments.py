@@ -39,13 +39,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.strands import (
-    EPS_PARALLEL,
-    _phi,
-    accd,
-    edge_energy,
-    sqdist,
-)
+from catenet.kernels.ccd import accd
+from catenet.kernels.strands import EPS_PARALLEL, _phi, edge_energy, sqdist
 
 POINT = 3  # the strands' distance kind of point b0 against edge a
 GRID_CELLS = 1 << 18  # the features' grid never has more cells
@@ -385,7 +380,7 @@ def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, r, t_max):
         e, f = pairs[k, 0], pairs[k, 1]
         kind = _points(x, edges, e, Y, F, lone, f, P)
         _points(dx, edges, e, dY, F, lone, f, dP)
-        t = min(t, accd(P, dP, min(t, t_max), r, kind))
+        t = min(t, accd(P, dP, min(t, t_max), r, kind, True))
     return t
 
 

@@ -34,9 +34,8 @@ distances, activation D_hat = dhat^2.
 
 ``candidates`` lists the pairs within a distance by a uniform grid (edges' boxes, each
 pair tested once, in the cell of its boxes' overlap corner): its cost grows with the
-number of close pairs. ``strand_max_step`` caps a step by additive continuous collision
-detection (Li, Kaufman and Jiang 2021) of every candidate pair and by each node's
-motion relative to the mean motion within its radius (see ``catenet.terms.strands``).
+number of close pairs. ``catenet.kernels.ccd`` caps a step by continuous collision
+detection of the pairs (``strand_max_step``).
 """
 
 from __future__ import annotations
@@ -466,84 +465,3 @@ def _owned(lo, hi, span, a, b, cx, cy, cz):
             return False
     corner = (max(span[a, 0], span[b, 0]), max(span[a, 1], span[b, 1]), max(span[a, 2], span[b, 2]))
     return corner[0] == cx and corner[1] == cy and corner[2] == cz
-
-
-#: Additive CCD: a pair's step stops where its distance falls below this share of its
-#: distance at the step's start; at most so many advances per pair (then the step so far).
-CCD_SHARE = 0.1
-CCD_ITERATIONS = 1000
-
-
-@njit(cache=True, error_model="numpy")
-def relative_speed(dP):
-    """Additive CCD's l_p for four points moving with dP (12,): the largest speed of the
-    first two plus that of the last two, relative to their mean motion."""
-    q = dP.reshape(4, 3) - 0.25 * (dP[0:3] + dP[3:6] + dP[6:9] + dP[9:12])
-    speed = np.sqrt(q[:, 0] ** 2 + q[:, 1] ** 2 + q[:, 2] ** 2)
-    return max(speed[0], speed[1]) + max(speed[2], speed[3])
-
-
-@njit(cache=True, error_model="numpy")
-def accd(P, dP, t_max, r=0.0, kind=0):
-    """The first time t in (0, t_max] of additive CCD for the edge pair P (12,) moving
-    with dP (12,): the distance ``kind`` (``sqdist``'s) stays above r on [0, t] (it falls
-    by at most l_p per unit of t, l_p the largest relative speeds of the two edges'
-    ends); inf when none comes before t_max."""
-    lp = relative_speed(dP)
-    if lp == 0.0:
-        return np.inf
-    g, H, X = np.empty(12), np.empty((1, 1)), np.empty(12)  # (no Hessian asked for)
-    d = np.sqrt(sqdist(P, kind, g, H, np.bool_(False))) - r
-    if not d > 0.0:
-        return 0.0
-    gap = CCD_SHARE * d
-    t = 0.0
-    tl = (1.0 - CCD_SHARE) * d / lp
-    for _ in range(CCD_ITERATIONS):
-        for p in range(12):
-            X[p] = P[p] + (t + tl) * dP[p]
-        d = np.sqrt(sqdist(X, kind, g, H, np.bool_(False))) - r
-        if t > 0.0 and d < gap:
-            return t
-        t += tl
-        if t > t_max:
-            return np.inf
-        tl = 0.9 * d / lp
-    return t
-
-
-@njit(cache=True, error_model="numpy")
-def strand_max_step(x, dx, base, nodes, radius, edges, pairs, t_max, r=0.0):
-    """(t, t1): the largest multiple t (at most t_max: longer steps are never checked)
-    of the step dx from x that keeps (1) every node's motion from ``base`` relative to
-    the mean motion of ``nodes`` within its ``radius`` and (2) every candidate pair apart
-    (``accd``); t1 the limit of (1) alone."""
-    k = nodes.shape[0]
-    m0, m1 = np.zeros(3), np.zeros(3)
-    for j in range(k):
-        n = nodes[j]
-        for i in range(3):
-            m0[i] += (x[n, i] - base[n, i]) / k
-            m1[i] += dx[n, i] / k
-    t = t_max
-    for j in range(k):
-        n = nodes[j]
-        ww = wz = zz = 0.0
-        for i in range(3):
-            w = x[n, i] - base[n, i] - m0[i]
-            z = dx[n, i] - m1[i]
-            ww += w * w
-            wz += w * z
-            zz += z * z
-        c = ww - radius[n] * radius[n]
-        if c >= 0.0:
-            return 0.0, 0.0
-        if zz > 0.0:
-            t = min(t, (-wz + np.sqrt(wz * wz - zz * c)) / zz)
-    moved = t
-    P, dP = np.empty(12), np.empty(12)
-    for p in range(pairs.shape[0]):
-        gather(x, edges, pairs[p, 0], pairs[p, 1], P)
-        gather(dx, edges, pairs[p, 0], pairs[p, 1], dP)
-        t = min(t, accd(P, dP, t, r, np.int64(0)))
-    return t, moved

@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from catenet.kernels.strands import EPS_PARALLEL, accd, edge_energy, gather
+from catenet.kernels.ccd import accd
+from catenet.kernels.strands import EPS_PARALLEL, edge_energy, gather
 
 
 @njit(cache=True, error_model="numpy")

@@ -17,6 +17,12 @@ from catenet.terms import ExternalForce, Term
 
 EPS = np.finfo(float).eps
 FLOOR_SAFETY = 16.0  # a DOF's residual within this many eps of its forces is round-off
+#: A contact barrier's share of a DOF's floor (its stiffness times the positions'
+#: round-off, ``Term.stiff_roundoff``) is at most this share of the structure's largest
+#: force: a cord held round a paddle's corners at 0.36 nm (its floor there 1e-7 to 1e-6 N
+#: of 486 N) is at its round-off; a rope squeezed between a plate and a ball with 6 MN
+#: (floors of 10 N of the rope's 600 N) is pinched.
+STIFF_SHARE = 1e-6
 _generation = 0  # counts what may change a term's state at a given x (``Potential.internal``)
 
 
@@ -189,9 +195,15 @@ class Potential:
         free = system.free_dofs
         grad, energies = self.internal(x)
         nodes = np.zeros(x.shape[0])
+        stiff = np.zeros(x.shape[0])
         for term, e in zip(system.terms, energies, strict=True):
             if (level := term.node_roundoff(x, e)) is not None:
                 nodes += level
+            if term.barrier and (level := term.stiff_roundoff(x)) is not None:
+                stiff += level
+        if stiff.any():  # within STIFF_SHARE of the structure's largest force
+            cap = STIFF_SHARE / (FLOOR_SAFETY * EPS) * self._structure_force(x)
+            nodes += np.minimum(stiff, cap)
         forces = 2.0 * np.abs(grad.reshape(-1)[free]) + np.abs(self.f_free)
         for term in self.steps if steps else ():  # a time step's inertia
             force = np.zeros_like(x)
@@ -202,6 +214,14 @@ class Potential:
         floor: np.ndarray = np.repeat(nodes, 3)[free] + forces
         floor *= FLOOR_SAFETY * EPS
         return floor
+
+    def _structure_force(self, x: np.ndarray) -> float:
+        """The largest force the structure itself carries [N]: an edge's axial force or
+        a node's applied load."""
+        load = float(np.max(np.abs(self.f_free), initial=0.0))
+        if not self.system.net.n_edges:
+            return load
+        return max(load, float(np.max(np.abs(self.system.stretch.tension(x)))))
 
     def at_floor(
         self,

@@ -16,7 +16,8 @@ function of the node positions x (N, 3):
   None: none); convergence at round-off is decided DOF by DOF with it, so that a stiff
   term's round-off (a free body's) counts on its own nodes only. Default: the gradient's
   level of ``roundoff`` on every node where ``stiffness()`` is positive (on every node
-  for a term without stiffness).
+  for a term without stiffness). A contact ``barrier`` adds what its stiffness makes of
+  the positions' round-off (``stiff_roundoff``).
 - ``stiffness()``: per node (N,), the scale of its Hessian diagonal (the regularisation of
   a singular start scales with it), or None.
 
@@ -96,6 +97,11 @@ def register(name: str) -> Callable[[type[Term]], type[Term]]:
     return add
 
 
+#: The attributes (points, (3,) or (K, 3)) a barrier computes its gaps from besides the
+#: nodes (``Term.frame_scale``).
+FRAME_POINTS = ("center", "origin", "c0", "point", "points", "vertices")
+
+
 class Term:
     """Base class of energy terms (see the module docstring)."""
 
@@ -118,6 +124,7 @@ class Term:
     structural = False  # the structure's own energy (rods' bending, a body's rigidity): no contact
     holds = False  # a support's term (springs): its force is a reaction, not a contact
     owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
+    barrier = False  # a contact barrier: its stiffness turns positions' round-off into force's
 
     @property
     def convex(self) -> bool:
@@ -146,13 +153,47 @@ class Term:
         """Per node (N,), the round-off level of the term's forces there, in the units of
         ``roundoff`` (without eps); None where it has none."""
         level, _ = self.roundoff(x, energy)
-        if level == 0.0:
-            return None
-        out = np.full(x.shape[0], level)
-        stiffness = self.stiffness()
-        if stiffness is not None:
-            out[stiffness <= 0.0] = 0.0
+        out = None
+        if level != 0.0:
+            out = np.full(x.shape[0], level)
+            stiffness = self.stiffness()
+            if stiffness is not None:
+                out[stiffness <= 0.0] = 0.0
         return out
+
+    def stiff_roundoff(self, x: np.ndarray) -> np.ndarray | None:
+        """Per node (N,), the round-off its positions' round-off brings to the term's
+        forces: sum_j |H_ij| (|x_j| + s) over the node's rows (the largest of its
+        three), s the size of the obstacle's own coordinates (``frame_scale``), in the
+        units of ``roundoff``; None where the Hessian is zero (the convergence test
+        adds it for a ``barrier``, within a share of the structure's forces:
+        ``Potential.floor_levels``). A barrier's stiffness,
+        its force over its gap, grows without bound as the gap closes: a cord pressed on
+        a paddle's corner at a gap of nanometres has forces uncertain to 1e-6 N where
+        eps times the forces meeting there is 2e-9 N, and Newton's residual cannot go
+        below that (the step was called stagnated, then the run failed)."""
+        pattern = self.pattern()
+        if pattern is None:
+            return None
+        rows, cols = pattern
+        values = np.zeros(len(rows))
+        if not self.hessian(x, values):
+            return None
+        scale = np.abs(np.asarray(x, dtype=np.float64)).reshape(-1) + self.frame_scale()
+        weights = np.abs(values) * scale[cols]
+        per_dof = np.bincount(rows, weights=weights, minlength=x.size)
+        out: np.ndarray = per_dof.reshape(-1, 3).max(axis=1)
+        return out
+
+    def frame_scale(self) -> float:
+        """The size of the coordinates the term computes its gaps in besides the nodes'
+        (an obstacle's centre, a moving obstacle's reference point) [m]."""
+        sizes = [0.0]
+        for name in FRAME_POINTS:
+            value = getattr(self, name, None)
+            if isinstance(value, np.ndarray) and value.shape[-1:] == (3,):
+                sizes.append(float(np.max(np.abs(value), initial=0.0)))
+        return max(sizes)
 
     def stiffness(self) -> np.ndarray | None:
         return None

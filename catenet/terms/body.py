@@ -36,6 +36,7 @@ class Ball(Term):
     (kappa [N/m], activation distance dhat [m]); ``n_nodes`` of the net with the ball."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     label = "a ball"  # the ball in messages (its obstacle's key path)
 
     role = "internal"

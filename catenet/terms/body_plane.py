@@ -36,6 +36,7 @@ class BodyPlane(Term):
     ``dhat`` [m]; ``label`` names the pair in messages."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     role = "internal"
     convex = True
 

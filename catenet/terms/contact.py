@@ -46,6 +46,7 @@ class Obstacle(Term):
     each stage's equilibrium, a gap below its dhat, starts the next."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
 
     role = "internal"
 

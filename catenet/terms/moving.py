@@ -60,6 +60,7 @@ class Moving(Term):
     origin to a point of the obstacle [m]."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     moving = True
     driven = True  # its motion's work on the net (``driven_work``)
 
@@ -212,8 +213,9 @@ class Moving(Term):
 
     def hessian(self, x, values):
         active = self.shape.hessian(self._local(x), values)
-        H = values.reshape(-1, 3, 3)
-        H[:] = np.einsum("ij,kjl,ml->kim", self.R, H, self.R)
+        if np.any(self.omega):  # R H_b R^T per node (R = 1 where it only translates)
+            H = values.reshape(-1, 3, 3)
+            H[:] = self.R @ H @ self.R.T
         return active
 
     def max_step(self, x, dx):

@@ -46,8 +46,10 @@ class MovingEdges(Moving):
 
     def hessian(self, x, values):
         active = self.shape.hessian(self._local(x), values)
-        H = values.reshape(-1, 2, 3, 2, 3)  # each edge's row-major 6 x 6 block
-        H[:] = np.einsum("ac,kicjd,bd->kiajb", self.R, H, self.R)
+        if np.any(self.omega):  # diag(R, R) H_b diag(R, R)^T (R = 1 where it only translates)
+            H = values.reshape(-1, 2, 3, 2, 3)  # each edge's row-major 6 x 6 block
+            blocks = H.transpose(0, 1, 3, 2, 4)  # (K, 2, 2, 3, 3): its 3 x 3 blocks
+            H[:] = (self.R @ blocks @ self.R.T).transpose(0, 1, 3, 2, 4)
         return active
 
     def node_shape(self):

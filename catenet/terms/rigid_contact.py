@@ -68,6 +68,7 @@ class BodyContact(Term):
     at the body's pose at t = 0) riding on the body ``frame``."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     role = "internal"
     convex = False
 

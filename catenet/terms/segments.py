@@ -77,6 +77,7 @@ class EdgeContact(Term):
     docstring); stiffness ``kappa`` [N/m], activation distance ``dhat`` [m]."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     horizon = True
     convex = False
     role = "internal"

@@ -38,14 +38,9 @@ import math
 
 import numpy as np
 
+from catenet.kernels.ccd import strand_max_step
 from catenet.kernels.contact import barrier
-from catenet.kernels.strands import (
-    candidates,
-    sqdist,
-    strand_gradient,
-    strand_hessian,
-    strand_max_step,
-)
+from catenet.kernels.strands import candidates, sqdist, strand_gradient, strand_hessian
 from catenet.terms.base import Term, register
 
 #: The largest multiple of a Newton step the cap checks (longer ones are refused).
@@ -73,6 +68,7 @@ class SelfContact(Term):
     acts on the gap d - 2 r (kappa then in N/m, ``default_stiffness``)."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     grows = True
     convex = False
     role = "internal"

@@ -177,6 +177,7 @@ class BodyTouch(Term):
     stiffness ``kappa`` [N/m], activation distance ``dhat`` [m]."""
 
     bounds_step = True
+    barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     role = "internal"
     convex = False
 

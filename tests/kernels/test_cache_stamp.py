@@ -1,9 +1,9 @@
 """The kernels' cache is cleared where it was compiled from other sources
 (``catenet.kernels.fresh_cache``). Numba keys a kernel's cached machine code on its own
-module's source only; ``segments.segment_ccd`` has ``strands.accd`` compiled into it, and
-with ``strands.py`` changed (an iteration limit raised from 1 000 to 100 000) the cached
-``segment_ccd`` still stopped at the old limit: 0.673 of the step, where the Python
-function found no contact."""
+module's source only; ``segments.segment_ccd`` has ``accd`` (then in ``strands.py``)
+compiled into it, and with ``strands.py`` changed (an iteration limit raised from 1 000
+to 100 000) the cached ``segment_ccd`` still stopped at the old limit: 0.673 of the
+step, where the Python function found no contact."""
 
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def test_the_real_cache_is_stamped_on_import_where_numba_keeps_the_kernels():
     """In a fresh process, importing the kernels leaves the stamp of these sources in the
     directory where numba caches them (beside their cached files)."""
     code = (
-        "import catenet.kernels as k, catenet.kernels.strands as s\n"
+        "import catenet.kernels as k, catenet.kernels.ccd as s\n"
         "print(k._cache_dir()); print(s.accd._cache._cache_path)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

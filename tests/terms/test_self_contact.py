@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from meshes import segment_distance
 
-from catenet.kernels.strands import EPS_PARALLEL, accd, candidates, closest, sqdist
+from catenet.kernels.ccd import accd
+from catenet.kernels.strands import EPS_PARALLEL, candidates, closest, sqdist
 from catenet.model.net import Loads, Net
 from catenet.solver.dynamic import solve_dynamic
 from catenet.solver.workspace import Workspace
