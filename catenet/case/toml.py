@@ -93,11 +93,16 @@ def _line_col(text: str) -> tuple[int, int]:
     return len(lines), len(lines[-1]) + 1
 
 
+#: An index written in brackets after a key (``obstacle[1]``) in a --set key path.
+_INDEX = re.compile(r"\[\s*(\d+)\s*\](?=\.|$)")
+
+
 def apply_overrides(data: dict, overrides: Sequence[str], *, written: bool = False) -> dict:
     """A copy of ``data`` with every ``key.path=value`` set. The value is read as a TOML
     value (``3``, ``0.5``, ``[1, 2, 3]``, ``true``, ``"text"``), else taken as a plain
     string. A number as a path part indexes an array of tables (the next free index
-    appends a table). ``written``: numbers print as the text gave them (``1e12``)."""
+    appends a table), as ``name.1`` or ``name[1]``. ``written``: numbers print as the
+    text gave them (``1e12``)."""
     out = copy.deepcopy(dict(data))
     problems: list[str] = []
     for ov in overrides:
@@ -105,7 +110,8 @@ def apply_overrides(data: dict, overrides: Sequence[str], *, written: bool = Fal
             problems.append(f"override {ov!r}: must be key.path=value (e.g. solver.method=dynamic)")
             continue
         key, _, text = ov.partition("=")
-        parts = [p.strip() for p in key.strip().split(".")]
+        key = _INDEX.sub(r".\1", key.strip())  # obstacle[1].friction: obstacle.1.friction
+        parts = [p.strip() for p in key.split(".")]
         if len(parts) > MAX_DEPTH:
             problems.append(
                 f"override {show(ov, 60)}: key path of {len(parts)} parts: a case nests at "

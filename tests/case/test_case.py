@@ -232,6 +232,17 @@ def test_overrides_create_arrays_of_tables():
     assert parse_case(data).load.points[0].node == "center"
 
 
+def test_an_override_may_index_an_array_of_tables_in_brackets():
+    """``obstacle[1].friction`` as ``obstacle.1.friction`` (a newcomer wrote the first and
+    was told the key was unknown); a bracket that is not an index stays part of the key."""
+    base = {"obstacle": [{"kind": "plane"}, {"kind": "box"}]}
+    data = apply_overrides(base, ["obstacle[1].friction=0.3", "obstacle[ 0 ].distance=0.01"])
+    assert data["obstacle"] == [{"kind": "plane", "distance": 0.01}, {"kind": "box", "friction": 0.3}]
+    assert apply_overrides({}, ["a[x].b=1"]) == {"a[x]": {"b": 1}}
+    with pytest.raises(ConfigError, match="needs an index 0..2"):
+        apply_overrides(base, ["obstacle[5].friction=0.3"])
+
+
 def test_overrides_leave_the_input_alone():
     data = cable_dict()
     apply_overrides(data, ["geometry.nodes=3"])
