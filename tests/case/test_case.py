@@ -237,7 +237,10 @@ def test_an_override_may_index_an_array_of_tables_in_brackets():
     was told the key was unknown); a bracket that is not an index stays part of the key."""
     base = {"obstacle": [{"kind": "plane"}, {"kind": "box"}]}
     data = apply_overrides(base, ["obstacle[1].friction=0.3", "obstacle[ 0 ].distance=0.01"])
-    assert data["obstacle"] == [{"kind": "plane", "distance": 0.01}, {"kind": "box", "friction": 0.3}]
+    assert data["obstacle"] == [
+        {"kind": "plane", "distance": 0.01},
+        {"kind": "box", "friction": 0.3},
+    ]
     assert apply_overrides({}, ["a[x].b=1"]) == {"a[x]": {"b": 1}}
     with pytest.raises(ConfigError, match="needs an index 0..2"):
         apply_overrides(base, ["obstacle[5].friction=0.3"])
