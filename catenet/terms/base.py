@@ -172,9 +172,12 @@ class Term:
         a paddle's corner at a gap of nanometres has forces uncertain to 1e-6 N where
         eps times the forces meeting there is 2e-9 N, and Newton's residual cannot go
         below that (the step was called stagnated, then the run failed)."""
-        pattern = self.pattern()
-        if pattern is None:
-            return None
+        pattern = None if self.grows else self.__dict__.get("_stiff_pattern")
+        if pattern is None:  # kept where it cannot change (a growing one asked each time)
+            pattern = self.pattern()
+            if pattern is None:
+                return None
+            self._stiff_pattern = pattern
         rows, cols = pattern
         values = np.zeros(len(rows))
         if not self.hessian(x, values):
