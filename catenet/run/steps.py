@@ -124,7 +124,8 @@ def _dynamic_start(scene, settings, ws, restart, frames: _Frames):
         if term.driven:
             term.begin_run(x0, start.t)
     if restart is None and settings.initial_state == "equilibrium":  # at rest, at t = 0
-        x0 = sv.equilibrium_start(scene, settings, ws, 0.0)
+        with frames.clock.solving():  # the summary's solve time counts it
+            x0 = sv.equilibrium_start(scene, settings, ws, 0.0)
         start = sv.Start(x0.copy(), start.v, start.t)
     x0[scene.net.fixed] = scene.loads.support_positions(scene.net, time=start.t)
     v0 = start.v if start.v is not None else np.zeros_like(x0)
