@@ -99,6 +99,8 @@ def accd(P, dP, t_max, r=0.0, kind=0, plane=False):
     if plane:
         tl = max(tl, plane_time(P, dP, d, r, kind, 1.0 - CCD_SHARE))
     for _ in range(CCD_ITERATIONS):
+        if tl == np.inf:  # the plane: no end of the pair ever approaches the other
+            return np.inf
         for p in range(12):
             X[p] = P[p] + (t + tl) * dP[p]
         d = np.sqrt(sqdist(X, kind, g, H, np.bool_(False))) - r

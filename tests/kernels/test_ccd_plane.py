@@ -69,6 +69,7 @@ def test_a_pair_sliding_along_itself_at_a_tiny_gap_covers_the_step_at_once():
     slide[0:6:3] = 1.5e-6  # along itself (x)
     assert plane_time(P, slide, gap, r, 0, 0.9) == np.inf
     assert accd(P, slide, 4.0, r, 0, True) == np.inf
+    assert accd(P, slide, np.inf, r, 0, True) == np.inf  # no span given: still none
     assert accd(P, slide, 4.0, r, 0) < 0.5  # l_p's bound alone: a quarter in 1 000 advances
     close = slide.copy()
     close[2::3][:2] = 2.0 * gap  # and towards the solid's edge: meets it at t = 0.5
