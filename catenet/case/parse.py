@@ -165,9 +165,20 @@ def load_case(path: str | Path | None, overrides: Sequence[str] = ()) -> Case:
         raise ConfigError(
             f"sweep = {sweep!r}: must be a table of key.path = [values] (read by catenet sweep)"
         )
+    added: list = []  # tables --set appended to the case's arrays of tables
     if overrides:
-        data = apply_overrides(data, overrides, written=True)
-    return parse_case(data, source=source, base_dir=base_dir)
+        data = apply_overrides(data, overrides, written=True, added=added)
+    try:
+        return parse_case(data, source=source, base_dir=base_dir)
+    except ConfigError as exc:
+        if not added:
+            raise
+        hints = [
+            f"{name}[{n}]: a new table that --set added (the case has {n}, {name}[0] to "
+            f"{name}[{n - 1}]): give all its keys, or index an existing one"
+            for name, n in added
+        ]
+        raise ConfigError(exc.problems + hints) from None
 
 
 def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = None) -> Case:

@@ -97,12 +97,15 @@ def _line_col(text: str) -> tuple[int, int]:
 _INDEX = re.compile(r"\[\s*(\d+)\s*\](?=\.|$)")
 
 
-def apply_overrides(data: dict, overrides: Sequence[str], *, written: bool = False) -> dict:
+def apply_overrides(
+    data: dict, overrides: Sequence[str], *, written: bool = False, added: list | None = None
+) -> dict:
     """A copy of ``data`` with every ``key.path=value`` set. The value is read as a TOML
     value (``3``, ``0.5``, ``[1, 2, 3]``, ``true``, ``"text"``), else taken as a plain
     string. A number as a path part indexes an array of tables (the next free index
     appends a table), as ``name.1`` or ``name[1]``. ``written``: numbers print as the
-    text gave them (``1e12``)."""
+    text gave them (``1e12``). ``added`` collects (path, tables before) of every table an
+    override appended to an array of tables (``obstacle[2]`` where the case has two)."""
     out = copy.deepcopy(dict(data))
     problems: list[str] = []
     for ov in overrides:
@@ -124,7 +127,7 @@ def apply_overrides(data: dict, overrides: Sequence[str], *, written: bool = Fal
             )
             continue
         value = _override_value(text.strip(), written)
-        problem = _set_path(out, parts, value)
+        problem = _set_path(out, parts, value, added)
         if problem:
             problems.append(f"override {ov!r}: {problem}")
     if problems:
@@ -142,7 +145,7 @@ def _override_value(text: str, written: bool = False) -> Any:
     return written_value(text, parsed["v"]) if written else parsed["v"]
 
 
-def _set_path(root: dict, parts: list[str], value: Any) -> str | None:
+def _set_path(root: dict, parts: list[str], value: Any, added: list | None = None) -> str | None:
     cur: Any = root
     for depth, part in enumerate(parts):
         last = depth == len(parts) - 1
@@ -155,6 +158,8 @@ def _set_path(root: dict, parts: list[str], value: Any) -> str | None:
                 )
             i = int(part)
             if i == len(cur):
+                if added is not None and i > 0:  # a case's own array: one more table
+                    added.append((".".join(parts[:depth]), i))
                 cur.append({})
             if last:
                 cur[i] = value

@@ -246,6 +246,28 @@ def test_an_override_may_index_an_array_of_tables_in_brackets():
         apply_overrides(base, ["obstacle[5].friction=0.3"])
 
 
+def test_an_override_past_the_last_table_says_it_added_one(tmp_path):
+    """``--set 'obstacle[2].friction=0.2'`` on a case with two obstacles adds a third,
+    which has no kind: the error says so and names the two the case has (a newcomer read
+    only "obstacle[2].kind: missing")."""
+    data = cable_dict()
+    data["obstacle"] = [
+        {"kind": "plane", "point": [0, 0, -1], "normal": [0, 0, 1]},
+        {"kind": "plane", "point": [0, 0, -2], "normal": [0, 0, 1]},
+    ]
+    path = tmp_path / "c.toml"
+    path.write_text(C.dumps_toml(data))
+    with pytest.raises(ConfigError) as info:
+        load_case(path, ["obstacle[2].friction=0.2"])
+    text = str(info.value)
+    assert "obstacle[2].kind" in text
+    assert (
+        "obstacle[2]: a new table that --set added (the case has 2, obstacle[0] to obstacle[1])"
+        in text
+    )
+    load_case(path, ["obstacle[1].friction=0.2"])  # an existing one: no problem
+
+
 def test_overrides_leave_the_input_alone():
     data = cable_dict()
     apply_overrides(data, ["geometry.nodes=3"])
