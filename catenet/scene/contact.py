@@ -208,6 +208,7 @@ def obstacle_terms(
     else:
         term = moving(shape.barrier(nodes, kappa, dhat, grow), shape, contact, label=label)
         term.stages = ()
+    term.label = label
     check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
     edge = None
@@ -218,6 +219,7 @@ def obstacle_terms(
         check_edges_clear(label, shape, radius, dhat, net, shown)
         edge = edge_barrier(shape, net, radius, kappa, dhat)
         if edge is not None:
+            edge.label = label
             edge.stages = tuple(edge.narrowed(stiffness(w), w) for w in widths)
             if contact.moving:  # on the obstacle's motion, as its nodes' barrier
                 from catenet.terms.moving import Moving

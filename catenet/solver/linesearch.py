@@ -14,6 +14,7 @@ from catenet.kernels.sparse import dot
 
 if TYPE_CHECKING:
     from catenet.solver.potential import Evaluation, Potential
+    from catenet.terms import Term
 
 ARMIJO = 1e-4
 MAX_HALVINGS = 30
@@ -40,13 +41,15 @@ class Trial:
 @dataclass(frozen=True)
 class Searched:
     """What a line search found: the step length alpha, whether a step was taken (x then
-    holds y0 + alpha dy), rho (actual over predicted decrease of Phi at the full step) and
-    the evaluation at alpha (its gradient a copy, the caller's to keep)."""
+    holds y0 + alpha dy), rho (actual over predicted decrease of Phi at the full step),
+    the evaluation at alpha (its gradient a copy, the caller's to keep) and the term whose
+    contact the full step would have reached (None: it reached none)."""
 
     alpha: float
     accepted: bool
     rho: float
     trial: Evaluation | None
+    capped_by: Term | None = None
 
 
 class LineSearch:
@@ -90,6 +93,7 @@ class LineSearch:
         # lengthening takes beyond it asks again: the search grows with the distance)
         self.reach = REACH
         self.cap = potential.max_step(x, dy, self.reach)
+        self.capped_by = potential.capped_by if self.cap <= 1.0 else None
         self._x0: np.ndarray | None = None
 
     def at(self, alpha: float) -> Trial:
@@ -136,7 +140,7 @@ class LineSearch:
         full = self.at(1.0)
         rho = self.rho(full)
         if full.ok and full.slope >= WOLFE * self.slope:
-            return Searched(1.0, True, rho, full.evaluation)
+            return Searched(1.0, True, rho, full.evaluation, self.capped_by)
         if full.ok:  # still steep at the full step: lengthen it
             best, lo, hi = self._lengthen(full)
         else:
@@ -145,10 +149,10 @@ class LineSearch:
             best = self._bracket(best, lo, hi)
         if best is None:
             self.x.reshape(-1)[self.free] = self.y0
-            return Searched(0.0, False, rho, None)
+            return Searched(0.0, False, rho, None, self.capped_by)
         np.add(self.y0, best.alpha * self.dy, out=self.y_trial)
         self.x.reshape(-1)[self.free] = self.y_trial
-        return Searched(best.alpha, True, rho, best.evaluation)
+        return Searched(best.alpha, True, rho, best.evaluation, self.capped_by)
 
     def _lengthen(self, full: Trial) -> tuple[Trial, Trial, Trial | None]:
         """Steps 4, 16, ... times as long while Phi falls and the slope stays steep:

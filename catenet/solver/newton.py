@@ -69,6 +69,7 @@ from catenet.errors import ConvergenceError, Interrupted, SingularSystemError
 from catenet.kernels.sparse import dot
 from catenet.solver.linesearch import LineSearch, Searched
 from catenet.solver.potential import Potential
+from catenet.terms import Term
 
 log = logging.getLogger(__name__)
 
@@ -110,6 +111,29 @@ class NewtonResult:
     factorizations: int = 0
     reused: int = 0  # iterations that solved with a kept factorisation (modified Newton)
     safeguarded: bool = False  # whether the safeguards came on (``solve_newton``)
+    #: per term, the iterations whose full step would have reached its contact (cut short)
+    capped: dict[Term, int] = field(default_factory=dict)
+
+    def contact_note(self) -> str:
+        """Where most iterations of an unconverged solve were cut short at one obstacle's
+        contact: a sentence naming it and its activation distance (a barrier narrower
+        than the motion Newton's steps want is approached a share of the way per
+        iteration), else ''."""
+        if self.converged or not self.capped:
+            return ""
+        term, count = max(self.capped.items(), key=lambda item: item[1])
+        dhat = getattr(term, "dhat", None)
+        if 2 * count < self.iterations or not term.label or dhat is None:
+            return ""
+        path = term.label.split(" (kind")[0]
+        return (
+            f"; {count} of its {self.iterations} Newton iterations were cut short where a full "
+            f"step would have reached {term.label}, whose barrier acts within {dhat:.3g} m "
+            f"({path}.distance; by default {path}.accuracy times the median edge): Newton's "
+            "steps then approach it a share of the way at a time. A longer distance lets them "
+            f"converge (e.g. {path}.distance = {100.0 * dhat:.3g}, 100x; it is also the "
+            "largest gap the contact leaves)"
+        )
 
 
 class Reuse:
@@ -209,6 +233,8 @@ def _iterate(run: _Newton, shifted: bool, safeguard: bool) -> None:
         ).run()
         if safeguard and search.alpha < SAFEGUARD_ALPHA and not potential.safeguarded:
             potential.safeguard(True)
+        if search.capped_by is not None:
+            run.capped[search.capped_by] = run.capped.get(search.capped_by, 0) + 1
         if search.accepted:
             run.accept(search, kept)
         elif (reason := run.reject(kept)) is not None:
@@ -251,6 +277,7 @@ class _Newton:
         self.reason = ""
         self.y_trial = np.empty_like(self.ev.g)
         self.safeguarded = False
+        self.capped: dict[Term, int] = {}  # iterations cut short at a term's contact
 
     def target(self) -> float:
         """The tolerance the loads ask for [N] (the floor aside)."""
@@ -426,6 +453,7 @@ class _Newton:
             self.factorizations,
             self.reused,
             self.safeguarded,
+            self.capped,
         )
 
 

@@ -71,6 +71,7 @@ class Potential:
         self.safeguarded = False  # Newton's safeguarded mode (``safeguard``)
         # Terms that bound a step (obstacles: the first contact along it).
         self._limits = [t for t in system.terms if t.bounds_step]
+        self.capped_by: Term | None = None  # the term whose first contact ended max_step's
         self._dx = np.zeros_like(self.force)  # a step of the free DOFs as (N, 3)
         self._g = np.empty(system.n_free)
         self._shift = np.empty(system.n_free)
@@ -118,11 +119,17 @@ class Potential:
         """The largest multiple of the step dy (free DOFs) from x that keeps every node
         outside every obstacle (inf when there are none); ``upto``: no multiple beyond it
         is asked for, so terms whose search grows with the distance (``horizon``) stop
-        there (inf: no contact up to ``upto``)."""
+        there (inf: no contact up to ``upto``). ``capped_by``: the term that gave it."""
+        self.capped_by = None
         if not self._limits:
             return math.inf
         self._dx.reshape(-1)[self.system.free_dofs] = dy
-        return min(t.max_step_within(x, self._dx, upto) for t in self._limits)
+        cap = math.inf
+        for term in self._limits:
+            step = term.max_step_within(x, self._dx, upto)
+            if step < cap:
+                cap, self.capped_by = step, term
+        return cap
 
     def toward(self, x: np.ndarray, target: np.ndarray, share: float = 0.9) -> np.ndarray:
         """``target`` if the straight path of the free nodes from x to it keeps every node

@@ -319,6 +319,8 @@ class TimeStepper:
             message = control.spent_message(self.t)
         else:
             return
+        if newton is not None:  # most of its iterations cut short at one contact: which
+            why += newton.contact_note()
         if self.moving:  # two obstacles closing on the net (catenet/terms/pinch.py): first
             note = pinch_note(self.potential.system.terms, self.x, self.t)
             if note:

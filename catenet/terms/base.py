@@ -125,6 +125,7 @@ class Term:
     holds = False  # a support's term (springs): its force is a reaction, not a contact
     owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
     barrier = False  # a contact barrier: its stiffness turns positions' round-off into force's
+    label = ""  # the obstacle, ball or body it is, in messages ("obstacle[0] (kind 'box')")
 
     @property
     def convex(self) -> bool:
