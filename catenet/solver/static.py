@@ -289,6 +289,11 @@ def equilibrium(
     stages = _Stages(potential, x, _Barriers(others), atol=atol, max_iter=max_iter)
     if first is not None:
         stages.count(first)
+    if factors and not transient and _prestressed(potential, x):
+        direct = _direct(potential, x, rtol=rtol, max_iter=max_iter)
+        if direct.converged:
+            return direct
+        stages.count(direct)
     stages.continue_stiffness(factors, mu)
     stages.narrow_barriers()
     if transient:
@@ -327,6 +332,34 @@ def _taut_first(
         rtol=rtol,
         max_iter=max_iter,
     )
+
+
+DIRECT_ITER = 50  # a prestressed net with obstacles is first solved directly, this long
+
+
+def _prestressed(potential: Potential, x: np.ndarray) -> bool:
+    """Whether, with obstacles, every edge at x is stretched by more than the loads'
+    strain scale (a prestressed net): its tension, not its axial stiffness, holds its rotations, so
+    Newton's model holds without the stiffness continuation, whose soft stages would
+    let it sag (the prestress scaled with EA) onto obstacles it never reaches."""
+    system = potential.system
+    if not any(t.bounds_step for t in system.terms):
+        return False
+    strains = strain(system.net, x)
+    return bool(strains.size) and float(np.min(strains)) > _strain_scale(system.net, potential)
+
+
+def _direct(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int) -> NewtonResult:
+    """Newton from x to the full tolerance in at most DIRECT_ITER iterations; x moves
+    there only where it converged."""
+    y = x.copy()
+    limit = min(max_iter, DIRECT_ITER)
+    result = solve_newton(potential, y, rtol=rtol, max_iter=limit, label="static (direct)")
+    if result.converged:
+        x[:] = y
+    else:
+        log.info("a direct solve of the prestressed net did not converge: continuation")
+    return result
 
 
 class _Stages:
