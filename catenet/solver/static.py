@@ -285,23 +285,23 @@ def equilibrium(
     atol = SMOOTH_RTOL * max(potential.f_norm, float(np.linalg.norm(system.gradient(x)[1])))
     factors = stiffness_factors(potential)
     mu = slack_strain(net, x) if stretch.law.any_tension_only else 0.0
-
     stages = _Stages(potential, x, _Barriers(others), atol=atol, max_iter=max_iter)
     if first is not None:
         stages.count(first)
-    if factors and not transient and _prestressed(potential, x):
-        direct = _direct(potential, x, rtol=rtol, max_iter=max_iter)
-        if direct.converged:
-            return direct
-        stages.count(direct)
-    stages.continue_stiffness(factors, mu)
-    stages.narrow_barriers()
-    if transient:
-        result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
-    else:
-        result = solve_newton(
-            potential, x, rtol=rtol, max_iter=max_iter, label="static", shifted=stretched
-        )
+    result = (
+        _direct(potential, x, rtol=rtol, max_iter=max_iter) if factors and not transient else None
+    )
+    if result is None or not result.converged:
+        if result is not None:
+            stages.count(result)
+        stages.continue_stiffness(factors, mu)
+        stages.narrow_barriers()
+        if transient:
+            result = _pseudo_transient(potential, x, rtol=rtol, max_iter=max_iter)
+        else:
+            result = solve_newton(
+                potential, x, rtol=rtol, max_iter=max_iter, label="static", shifted=stretched
+            )
     result.iterations += stages.iterations
     result.history = stages.history + result.history
     return result
@@ -337,21 +337,21 @@ def _taut_first(
 DIRECT_ITER = 50  # a prestressed net with obstacles is first solved directly, this long
 
 
-def _prestressed(potential: Potential, x: np.ndarray) -> bool:
-    """Whether, with obstacles, every edge at x is stretched by more than the loads'
-    strain scale (a prestressed net): its tension, not its axial stiffness, holds its rotations, so
-    Newton's model holds without the stiffness continuation, whose soft stages would
-    let it sag (the prestress scaled with EA) onto obstacles it never reaches."""
+def _direct(
+    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
+) -> NewtonResult | None:
+    """A prestressed net among obstacles (every edge at x stretched by more than the loads'
+    strain scale) solved by Newton from x to the full tolerance in at most DIRECT_ITER
+    iterations (x moves there only where it converged); None for other nets. Its tension,
+    not its axial stiffness, holds its rotations, so Newton's model holds without the
+    stiffness continuation, whose soft stages would let it sag (the prestress scaled with
+    EA) onto obstacles it never reaches."""
     system = potential.system
-    if not any(t.bounds_step for t in system.terms):
-        return False
     strains = strain(system.net, x)
-    return bool(strains.size) and float(np.min(strains)) > _strain_scale(system.net, potential)
-
-
-def _direct(potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int) -> NewtonResult:
-    """Newton from x to the full tolerance in at most DIRECT_ITER iterations; x moves
-    there only where it converged."""
+    if not any(t.bounds_step for t in system.terms) or not (
+        strains.size and float(np.min(strains)) > _strain_scale(system.net, potential)
+    ):
+        return None
     y = x.copy()
     limit = min(max_iter, DIRECT_ITER)
     result = solve_newton(potential, y, rtol=rtol, max_iter=limit, label="static (direct)")
