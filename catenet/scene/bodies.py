@@ -192,7 +192,7 @@ def _ball_terms(
     radius = ball.shape.reach
     grow = 0.0 if r is None else r
     sphere = Ball(scale.free, node, radius + grow, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
-    sphere.label = f"{ball.path} (kind 'sphere')"
+    sphere.label, sphere.key = f"{ball.path} (kind 'sphere')", f"{ball.path}.distance"
     terms: list[Term] = [sphere]
     if r is not None:
         terms.append(_ball_edges(ball, node, net, r, kappa, dhat, shown))

@@ -208,7 +208,7 @@ def obstacle_terms(
     else:
         term = moving(shape.barrier(nodes, kappa, dhat, grow), shape, contact, label=label)
         term.stages = ()
-    term.label = label
+    term.label, term.key = label, f"{path}.distance"  # (its stages keep neither)
     check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
     out = [term]
     edge = None
@@ -219,8 +219,8 @@ def obstacle_terms(
         check_edges_clear(label, shape, radius, dhat, net, shown)
         edge = edge_barrier(shape, net, radius, kappa, dhat)
         if edge is not None:
-            edge.label = label
             edge.stages = tuple(edge.narrowed(stiffness(w), w) for w in widths)
+            edge.label, edge.key = label, term.key
             if contact.moving:  # on the obstacle's motion, as its nodes' barrier
                 from catenet.terms.moving import Moving
                 from catenet.terms.moving_edges import moving_edges
@@ -228,7 +228,7 @@ def obstacle_terms(
                 fixed = held_edges(net)  # guarded: the obstacle must not run over them
                 guard = edge_barrier(shape, net, radius, kappa, dhat, edges=fixed)
                 moved = moving_edges(edge, cast(Moving, term), guard if len(fixed) else None)
-                moved.stages = ()
+                moved.stages, moved.key = (), term.key
                 out.append(moved)
                 rubs = moved
             else:

@@ -179,6 +179,7 @@ def _terms(
     kappa = contact.stiffness if contact.stiffness is not None else default_stiffness(load, dhat)
     shape = body.shape.barrier(nodes, kappa, dhat, 0.0 if radius is None else radius)
     touch = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{body.path} (kind {kind!r})")
+    touch.key = f"{body.path}.distance"
     label = f"{body.path} (kind {kind!r}, a free body)"
     check_clear(label, "a body", shape, nodes, net, shown)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]

@@ -116,23 +116,29 @@ class NewtonResult:
 
     def contact_note(self) -> str:
         """Where most iterations of an unconverged solve were cut short at one obstacle's
-        contact: a sentence naming it and its activation distance (a barrier narrower
-        than the motion Newton's steps want is approached a share of the way per
-        iteration), else ''."""
-        if self.converged or not self.capped:
+        contact (its barriers of nodes and of edges together): a sentence naming it, its
+        activation distance and the key that sets it (a barrier far narrower than the
+        motion Newton's steps want is approached a share of the way per iteration), else
+        ''. Terms without a key (a continuation's stages, self-contact) give none."""
+        if self.converged:
             return ""
-        term, count = max(self.capped.items(), key=lambda item: item[1])
-        dhat = getattr(term, "dhat", None)
-        if 2 * count < self.iterations or not term.label or dhat is None:
+        counts: dict[str, tuple[int, float, str]] = {}  # key: (count, dhat, label)
+        for term, count in self.capped.items():
+            dhat = getattr(term, "dhat", None)
+            if term.key and dhat is not None:
+                before = counts.get(term.key, (0, 0.0, term.label))
+                counts[term.key] = (before[0] + count, max(before[1], dhat), before[2])
+        if not counts:
             return ""
-        path = term.label.split(" (kind")[0]
+        key, (count, dhat, label) = max(counts.items(), key=lambda item: item[1][0])
+        if 2 * count < self.iterations:
+            return ""
         return (
             f"; {count} of its {self.iterations} Newton iterations were cut short where a full "
-            f"step would have reached {term.label}, whose barrier acts within {dhat:.3g} m "
-            f"({path}.distance; by default {path}.accuracy times the median edge): Newton's "
-            "steps then approach it a share of the way at a time. A longer distance lets them "
-            f"converge (e.g. {path}.distance = {100.0 * dhat:.3g}, 100x; it is also the "
-            "largest gap the contact leaves)"
+            f"step would have reached {label}, whose barrier acts within {dhat:.3g} m "
+            f"({key}): Newton's steps then approach it a share of the way at a time. A "
+            f"longer distance may let them converge (e.g. {key} = {100.0 * dhat:.3g}, 100x; "
+            "it is also the largest gap the contact leaves)"
         )
 
 

@@ -1,6 +1,8 @@
 """Where a static solve starts: the given or reference positions with the supports in
-place (the free nodes carried along by moved supports: ``HarmonicExtension``), and, for
-an unstressed net under loads, the stretched start (``stretched_start``)."""
+place (the free nodes carried along by moved supports: ``HarmonicExtension``), for
+an unstressed net under loads, the stretched start (``stretched_start``), and for a
+prestressed net among obstacles, a direct solve before any continuation
+(``direct_solve``)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from numpy.typing import ArrayLike
 from catenet.errors import ConfigError, SingularSystemError
 from catenet.model.measures import strain
 from catenet.model.net import Loads, Net
+from catenet.solver.newton import NewtonResult, solve_newton
 from catenet.solver.potential import Potential
 from catenet.terms.stretch import Springs
 
@@ -140,3 +143,39 @@ def stretched_start(potential: Potential, x: np.ndarray) -> None:
         if hi - lo <= STRETCH_RTOL * hi:
             break
     np.add(x0, hi * u, out=x)
+
+
+def strain_scale(net: Net, potential: Potential) -> float:
+    """The strain the loads can cause at most, |f|_1 / min EA (0 without loads): an
+    estimate of how stiff the net is against what acts on it."""
+    return float(np.abs(potential.force).sum() / np.min(net.EA))
+
+
+DIRECT_ITER = 50  # a prestressed net among obstacles is first solved directly, this long
+
+
+def direct_solve(
+    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
+) -> NewtonResult | None:
+    """A prestressed net among obstacles (every edge at x stretched by more than the loads'
+    strain scale) solved by Newton from x to the full tolerance in at most DIRECT_ITER
+    iterations (x moves there only where it converged); None for other nets, or where
+    the system turned singular. Its tension, not its axial stiffness, holds its
+    rotations, so Newton's model holds without the stiffness continuation
+    (``catenet.solver.static.equilibrium``), whose soft stages would let it sag (the
+    prestress scaled with EA) onto obstacles it never reaches."""
+    system = potential.system
+    strains = strain(system.net, x)
+    if not any(t.bounds_step for t in system.terms) or not (
+        strains.size and float(np.min(strains)) > strain_scale(system.net, potential)
+    ):
+        return None
+    y = x.copy()
+    limit = min(max_iter, DIRECT_ITER)
+    try:
+        result = solve_newton(potential, y, rtol=rtol, max_iter=limit, label="static (direct)")
+    except SingularSystemError:
+        return None
+    if result.converged:
+        x[:] = y
+    return result

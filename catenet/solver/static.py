@@ -27,7 +27,13 @@ from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, sol
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.stability import STABLE, UNSTABLE, tangent
-from catenet.solver.start import start_state, stretched_start, unstressed
+from catenet.solver.start import (
+    direct_solve,
+    start_state,
+    strain_scale,
+    stretched_start,
+    unstressed,
+)
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia, Stretch, Term
 
@@ -269,6 +275,8 @@ def equilibrium(
     - Obstacles whose barrier is narrower than the scene calls for at the start (the
       default: accurate to 1e-4 of an edge) are met first with wider barriers, tenfold
       narrower per stage (``Obstacle.stages``), down to their own.
+    - A prestressed net among obstacles is first solved directly (``direct_solve``), the
+      continuations only where that does not converge.
 
     Intermediate stages are solved loosely (SMOOTH_RTOL of the load scale). ``max_iter``
     bounds each Newton solve (every stage and the last), not their sum.
@@ -289,7 +297,9 @@ def equilibrium(
     if first is not None:
         stages.count(first)
     result = (
-        _direct(potential, x, rtol=rtol, max_iter=max_iter) if factors and not transient else None
+        direct_solve(potential, x, rtol=rtol, max_iter=max_iter)
+        if factors and not transient
+        else None
     )
     if result is None or not result.converged:
         if result is not None:
@@ -332,34 +342,6 @@ def _taut_first(
         rtol=rtol,
         max_iter=max_iter,
     )
-
-
-DIRECT_ITER = 50  # a prestressed net with obstacles is first solved directly, this long
-
-
-def _direct(
-    potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
-) -> NewtonResult | None:
-    """A prestressed net among obstacles (every edge at x stretched by more than the loads'
-    strain scale) solved by Newton from x to the full tolerance in at most DIRECT_ITER
-    iterations (x moves there only where it converged); None for other nets. Its tension,
-    not its axial stiffness, holds its rotations, so Newton's model holds without the
-    stiffness continuation, whose soft stages would let it sag (the prestress scaled with
-    EA) onto obstacles it never reaches."""
-    system = potential.system
-    strains = strain(system.net, x)
-    if not any(t.bounds_step for t in system.terms) or not (
-        strains.size and float(np.min(strains)) > _strain_scale(system.net, potential)
-    ):
-        return None
-    y = x.copy()
-    limit = min(max_iter, DIRECT_ITER)
-    result = solve_newton(potential, y, rtol=rtol, max_iter=limit, label="static (direct)")
-    if result.converged:
-        x[:] = y
-    else:
-        log.info("a direct solve of the prestressed net did not converge: continuation")
-    return result
 
 
 class _Stages:
@@ -441,7 +423,7 @@ def stiffness_factors(potential: Potential) -> list[float]:
     """The factors (each below 1, rising STIFF_STEP-fold) of the stiffness continuation
     of ``equilibrium`` for a nearly inextensible net; [] for the others."""
     system = potential.system
-    scale = _strain_scale(system.net, potential)
+    scale = strain_scale(system.net, potential)
     factors = []
     # With contact the soft start matters more: a stiff chain pressed onto an obstacle
     # takes Newton steps its barrier cannot follow; it starts at strains of CONTACT_STRAIN.
@@ -542,9 +524,3 @@ def _compressed_bilateral(stretch: Stretch, x: np.ndarray) -> bool:
     if law.all_tension_only:
         return False
     return bool(np.any((strain(stretch.net, x) < 0.0) & ~law.tension_only))
-
-
-def _strain_scale(net: Net, potential: Potential) -> float:
-    """The strain the loads can cause at most, |f|_1 / min EA (0 without loads): an
-    estimate of how stiff the net is against what acts on it."""
-    return float(np.abs(potential.force).sum() / np.min(net.EA))

@@ -126,6 +126,7 @@ class Term:
     owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
     barrier = False  # a contact barrier: its stiffness turns positions' round-off into force's
     label = ""  # the obstacle, ball or body it is, in messages ("obstacle[0] (kind 'box')")
+    key = ""  # the case key of its activation distance ("obstacle[0].distance"), if it has one
 
     @property
     def convex(self) -> bool:

@@ -95,16 +95,25 @@ def test_steps_cut_short_at_an_obstacle_name_it_and_its_distance_and_the_advice_
 
 class _Obstacle(Term):
     label = "obstacle[2] (kind 'plane')"
+    key = "obstacle[2].distance"
     dhat = 1e-4
 
 
-def test_the_note_needs_most_iterations_cut_short_at_one_labelled_obstacle():
-    """Half the iterations or more, at one obstacle with a label and a distance: the note;
-    fewer, a converged solve, or a term without a label (self-contact): none."""
-    plane, unnamed = _Obstacle(), Term()
-    note = NewtonResult(False, 10, 1.0, 1e-6, capped={plane: 5, unnamed: 5}).contact_note()
-    assert note.startswith("; 5 of its 10 Newton iterations were cut short"), note
-    assert "obstacle[2].distance = 0.01, 100x" in note
-    assert NewtonResult(False, 10, 1.0, 1e-6, capped={plane: 4}).contact_note() == ""
-    assert NewtonResult(True, 10, 1e-7, 1e-6, capped={plane: 9}).contact_note() == ""
-    assert NewtonResult(False, 10, 1.0, 1e-6, capped={unnamed: 9}).contact_note() == ""
+class _Unkeyed(Term):
+    label = "obstacle[2] (kind 'plane')"  # a continuation's stage: a label, no key
+    dhat = 1e-2
+
+
+def test_the_note_needs_most_iterations_cut_short_at_one_obstacle_with_a_distance_key():
+    """Half the iterations or more at one obstacle, its nodes' and edges' barriers counted
+    together: the note, with its key; fewer, a converged solve, or terms without a key (a
+    continuation's wider stages, self-contact): none."""
+    nodes, edges, unkeyed = _Obstacle(), _Obstacle(), _Unkeyed()
+    note = NewtonResult(False, 10, 1.0, 1e-6, capped={unkeyed: 5, nodes: 3, edges: 2})
+    text = note.contact_note()
+    assert text.startswith("; 5 of its 10 Newton iterations were cut short"), text
+    assert "reached obstacle[2] (kind 'plane'), whose barrier acts within 0.0001 m" in text
+    assert "(e.g. obstacle[2].distance = 0.01, 100x;" in text, text
+    assert NewtonResult(False, 10, 1.0, 1e-6, capped={nodes: 4}).contact_note() == ""
+    assert NewtonResult(True, 10, 1e-7, 1e-6, capped={nodes: 9}).contact_note() == ""
+    assert NewtonResult(False, 10, 1.0, 1e-6, capped={unkeyed: 9}).contact_note() == ""

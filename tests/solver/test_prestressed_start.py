@@ -1,6 +1,6 @@
-"""A prestressed net with obstacles is solved directly first (``static._prestressed``,
-``_direct``): its tension holds its rotations, so Newton's model holds without the
-stiffness continuation, whose soft stages scale the prestress with EA and let the net sag
+"""A prestressed net with obstacles is solved directly first (``start.direct_solve``):
+its tension holds its rotations, so Newton's model holds without the stiffness
+continuation, whose soft stages scale the prestress with EA and let the net sag
 onto obstacles it never reaches. Found on a newcomer's model: a 12 mm nylon rope (200 N
 prestress) lifted by a bar 20 mm below it, from its static equilibrium at t = 0: at
 EA x 3.7e-4 the rope sagged about 0.3 m onto the bar, and the start took 35 703 Newton
@@ -67,3 +67,32 @@ def test_a_prestressed_rope_over_a_bar_starts_from_its_equilibrium_solved_direct
     sag = -float(x0[30, 2])
     assert abs(sag / (w * 3.0**2 / (8.0 * tension)) - 1.0) < 5e-3, (sag, tension)
     assert float(np.min(x0[:, 2])) > -0.02 + 0.006  # the bar's top, less the rope's radius
+
+
+def test_a_direct_solve_that_does_not_converge_falls_back_to_the_continuation(
+    tmp_path, monkeypatch
+):
+    """The rope over a fixed bar, a static run: with the direct solve held to one Newton
+    iteration it cannot converge, and the solve goes on from the given state through the
+    continuation (its stages in the log, the direct iteration counted with them) to the
+    same equilibrium (the sag to 1e-9 m of the direct one's)."""
+    from catenet.solver import start
+
+    static = ROPE.split("velocity")[0] + "\n[solver]\nedge_contact = true\n"
+    case = tmp_path / "rope.toml"
+    case.write_text(static)
+    sags = []
+    for limit in (50, 1):
+        monkeypatch.setattr(start, "DIRECT_ITER", limit)
+        out = tmp_path / f"r{limit}.h5"
+        done = CliRunner().invoke(main, ["run", str(case), "-o", str(out), "-v"])
+        assert done.exit_code == 0, done.output[-2000:]
+        lines = [line for line in done.output.splitlines() if "solver.newton: static" in line]
+        direct = [line for line in lines if "static (direct)" in line]
+        assert len(direct) == (len(lines) if limit == 50 else 1), (limit, len(direct))
+        with h5py.File(out) as f:
+            sags.append(-float(f["result/x"][30, 2]))
+            iterations = int(f["result"].attrs["iterations"])
+        assert iterations == len(lines), (iterations, len(lines))
+    assert len(lines) > 1  # the continuation's stages after the one direct iteration
+    assert abs(sags[1] - sags[0]) < 1e-9, sags
