@@ -319,12 +319,14 @@ class TimeStepper:
             message = control.spent_message(self.t)
         else:
             return
-        if newton is not None:  # most of its iterations cut short at one contact: which
-            why += newton.contact_note()
+        note = ""
         if self.moving:  # two obstacles closing on the net (catenet/terms/pinch.py): first
-            note = pinch_note(self.potential.system.terms, self.x, self.t)
-            if note:
-                why = f"{note.removeprefix('; ')} (the last failed step: {why})"
+            ahead = self.t + max(h_step, control.dt)  # the step it plans, not the cut one
+            note = pinch_note(self.potential.system.terms, self.x, self.t, ahead)
+        if note:
+            why = f"{note.removeprefix('; ')} (the last failed step: {why})"
+        elif newton is not None:  # most of its iterations cut short at one contact: which
+            why += newton.contact_note()
         raise ConvergenceError(
             f"{message}: {why}",
             iterations=self.iterations,

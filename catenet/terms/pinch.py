@@ -24,7 +24,9 @@ step's start ``base`` and its predictor ``trial``. Where none does, ``Pinched``:
 step is too long for the room the obstacles leave (the time stepping halves it). Two
 obstacles that close to less than the room the net's capsule needs (their gaps' sum at
 the node below zero) make every step fail: the run stops at the last good state, the
-message naming the obstacles, the node or edge and the time.
+message naming the obstacles, the node or edge and the time; so does a moving obstacle
+that carries a node or edge, moved on by the step the run plans, into a fixed one
+(``pinch_note``: a blade driving a cord against a post).
 
 The guarantee is the moving obstacles': every step starts with every node and every
 point of every edge outside every obstacle, and no obstacle passes over one within it.
@@ -273,18 +275,25 @@ def _message(mover, movers, nodes, moved, start, t1: float) -> str:
     )
 
 
-def pinch_note(terms, x, t: float) -> str:
-    """Where two obstacles on prescribed motions (or one and a ball) hold a node or edge
-    of state x at time t with less than PINCH_ROOM of their activation distance between
-    them (the sum of its two gaps): what a run that stops there says of it ("" when none
-    does)."""
-    holders = _holders(terms, x, t)
+def pinch_note(terms, x, t: float, until: float | None = None) -> str:
+    """Where two obstacles, one at least on a prescribed motion (or a ball), hold a node or
+    edge of state x at time t with less than PINCH_ROOM of their activation distance
+    between them (the sum of its two gaps), or where a moving obstacle carrying it
+    rigidly on to its pose at ``until`` leaves it no room against a fixed one: what a
+    run that stops there says of it ("" when none does). A blade driven against a fixed
+    post pinches the rope between them as two jaws do."""
+    holders = _holders(terms, x, t, fixed=True)
     worst = None
-    for a, (ka, na, ga, da, root_a) in enumerate(holders):
-        for kb, nb, gb, db, root_b in holders[a + 1 :]:
+    for a, (ka, na, ga, da, root_a, still_a) in enumerate(holders):
+        for kb, nb, gb, db, root_b, still_b in holders[a + 1 :]:
             if root_a is root_b or na.shape[1] != nb.shape[1]:
                 continue
             both = _common(na, ga, nb, gb, PINCH_ROOM * max(da, db))
+            if both is None and until is not None:  # a mover carrying it onto a fixed one
+                if still_b is not None and hasattr(root_a, "rigid"):
+                    both = _closing(root_a, (na, ga, da), (nb, gb), still_b, x, t, until)
+                elif still_a is not None and hasattr(root_b, "rigid"):
+                    both = _closing(root_b, (nb, gb, db), (na, ga), still_a, x, t, until)
             if both is not None and (worst is None or both[0] < worst[0]):
                 worst = (*both, ka, kb)
     if worst is None:
@@ -293,18 +302,47 @@ def pinch_note(terms, x, t: float) -> str:
     what = f"edge {nodes[0]}-{nodes[1]}" if len(nodes) == 2 else f"node {nodes[0]}"
     return (
         f"; {la} and {lb} pinch the {what} at t = {t:.6g} s, leaving it "
-        f"{max(room, 0.0):.3g} m of room beyond its contact radius: two moving obstacles "
-        "must not close on the net to less than twice its contact radius (without edge "
-        "contact: on a node); change their motions"
+        f"{max(room, 0.0):.3g} m of room beyond its contact radius: a moving obstacle "
+        "must not close on the net against another to less than twice its contact radius "
+        "(without edge contact: on a node); change their motions"
     )
+
+
+def _closing(mover, held, other, still, x, t: float, until: float):
+    """(room, nodes) of the item with the least room now among those ``mover`` carries
+    (``held``: its items, gaps and dhat; within its sweep to ``until`` of it) that,
+    moved on with it to its pose at ``until``, enter the fixed obstacle ``still``
+    (``other``: its items and gaps), else None."""
+    (na, ga, dhat), (nb, gb) = held, other
+    both = _pairs(na, nb)
+    if both is None:
+        return None
+    ia, ib = both
+    carried = ga[ia] < SWEEP_SAFETY * mover.sweep(t, until) + dhat
+    if not carried.any():
+        return None
+    ia, ib = ia[carried], ib[carried]
+    closed = np.flatnonzero(still.gap(mover.rigid(x, t, until))[ib] < 0.0)
+    if not closed.size:
+        return None
+    room = ga[ia[closed]] + gb[ib[closed]]
+    k = int(np.argmin(room))
+    return float(room[k]), [int(n) for n in na[ia[closed[k]]]]
+
+
+def _fixed_items(term) -> np.ndarray:
+    """A fixed obstacle's barrier's items: its edges (K, 2) or its nodes (K, 1)."""
+    edges = getattr(term, "edges", None)
+    return np.asarray(edges) if edges is not None else np.asarray(term.nodes)[:, None]
 
 
 PINCH_ROOM = 1e-3  # a node or edge is pinched below this share of dhat of room
 
 
-def _holders(terms, x, t: float) -> list:
-    """(label, items (K, m) of nodes, their gaps at x and t, dhat, the motion's root) of
-    every obstacle on a prescribed motion and every ball."""
+def _holders(terms, x, t: float, fixed: bool = False) -> list:
+    """(label, items (K, m) of nodes, their gaps at x and t, dhat, the motion's root, the
+    term where it is fixed) of every obstacle on a prescribed motion and every ball;
+    ``fixed``: and every fixed obstacle's barrier of nodes or of edges (its root None)."""
     from catenet.terms.body import Ball
 
     out = []
@@ -313,9 +351,11 @@ def _holders(terms, x, t: float) -> list:
             items, gap = _items(term)
             c, R = term.pose(t)
             root = getattr(term, "twin", None) or term
-            out.append((term.label, items, gap(term._body(x, c, R)), term.dhat, root))
+            out.append((term.label, items, gap(term._body(x, c, R)), term.dhat, root, None))
         elif isinstance(term, Ball):
-            out.append((term.label, term.nodes[:, None], term.gap(x), term.dhat, term))
+            out.append((term.label, term.nodes[:, None], term.gap(x), term.dhat, term, None))
+        elif fixed and term.key and term.barrier and not hasattr(term, "frame"):  # fixed
+            out.append((term.label, _fixed_items(term), term.gap(x), term.dhat, None, term))
     return out
 
 
@@ -362,8 +402,8 @@ def squeeze_note(terms, x, t: float, tension: float) -> str:
             term.gradient(x, grad)
             forces.append(np.linalg.norm(grad, axis=1))
     worst = None
-    for a, (ka, na, ga, da, root_a) in enumerate(holders):
-        for b, (kb, nb, gb, db, root_b) in enumerate(holders[a + 1 :], start=a + 1):
+    for a, (ka, na, ga, da, root_a, _) in enumerate(holders):
+        for b, (kb, nb, gb, db, root_b, _) in enumerate(holders[a + 1 :], start=a + 1):
             if root_a is root_b or na.shape[1] != nb.shape[1]:
                 continue
             both = _pairs(na, nb)
