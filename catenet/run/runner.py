@@ -321,6 +321,12 @@ def _report(
         top = float(abs(result.tension).max(initial=0.0))
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
             log.warning("%s", squeezed)
+    from catenet.run.contact_advice import wrap_warning
+
+    if wrapped := wrap_warning(
+        scene.net, ws.system.terms, result.x, result.tension, result.contact_force
+    ):
+        log.warning("%s", wrapped)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
