@@ -323,8 +323,11 @@ class TimeStepper:
         if self.moving:  # two obstacles closing on the net (catenet/terms/pinch.py): first
             ahead = self.t + max(h_step, control.dt)  # the step it plans, not the cut one
             note = pinch_note(self.potential.system.terms, self.x, self.t, ahead)
-        if note:
-            why = f"{note.removeprefix('; ')} (the last failed step: {why})"
+        if note:  # (the budget's message already ends "the last failed step")
+            step = (
+                why if message.endswith("the last failed step") else f"the last failed step: {why}"
+            )
+            why = f"{note.removeprefix('; ')} ({step})"
         elif newton is not None:  # most of its iterations cut short at one contact: which
             why += newton.contact_note()
         raise ConvergenceError(
