@@ -49,8 +49,11 @@ def state_lines(
         f"{'probe':<{W}} node {probe} moves {vector(s['probe_displacement'])} m",
     ]
     if "sag_normal" in s:  # a net that is one cable: its sag, as engineers measure it
-        vertical = s["sag_vertical"]
+        vertical, rise = s["sag_vertical"], s.get("sag_rise", 0.0)
         plumb = "" if vertical != vertical else f", {vertical:.6g} m vertical"
+        if rise > 0.0:  # (nan: no plan) a cable lifted over its chord: how far above
+            above = f", {rise:.6g} m above it"
+            plumb = f"{plumb}{above}" if vertical > 0.0 else above
         lines.append(
             f"{'sag':<{W}} {s['sag_normal']:.6g} m normal to the chord{plumb} (largest at "
             f"node {s['sag_node']}; the chord between the cable's ends in this state)"

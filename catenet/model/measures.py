@@ -147,7 +147,8 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
     form one chain between two end nodes. ``normal``: the largest distance of its nodes
     from the chord between its ends (the sag normal to the chord); ``vertical``: the
     largest drop of a node below the chord, measured vertically at the node's position
-    along the chord's plan (nan for a vertical chord); ``node`` where the normal sag is,
+    along the chord's plan (nan for a vertical chord), ``rise`` the largest height of one
+    above it (a cable lifted over its chord; nan likewise); ``node`` where the normal sag is,
     ``ends`` the chord's end nodes. None where the edges are not one chain."""
     e = net.edges if edges is None else net.edges[np.asarray(edges, dtype=np.int64)]
     if len(e) == 0:
@@ -166,13 +167,18 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
     normal = np.linalg.norm(p - np.outer(along, chord / length), axis=1)
     k = int(np.argmax(normal))
     plan = chord[:2]
-    vertical = math.nan
+    vertical = rise = math.nan
     if float(np.linalg.norm(plan)) > 1e-9 * length:
         s = (p[:, :2] @ plan) / float(plan @ plan)
-        vertical = float(np.max(s * chord[2] - p[:, 2]))
+        drop = s * chord[2] - p[:, 2]
+        floor = 1e-12 * length  # the ends' round-off: neither below nor above
+        vertical, rise = (
+            v if v > floor else 0.0 for v in (float(np.max(drop)), float(np.max(-drop)))
+        )
     return {
         "normal": float(normal[k]),
         "vertical": vertical,
+        "rise": rise,
         "node": int(nodes[k]),
         "ends": (int(ends[0]), int(ends[1])),
     }

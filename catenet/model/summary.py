@@ -310,7 +310,8 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     per cable under ``cables`` when the scene has cables. Also ``applied_resultant`` (3,)
     [N]: the resultant of the loads acting in the state (``loads``, default the
     scene's, at the result's load factor or time), and for a net that is one cable its
-    ``sag_normal``, ``sag_vertical`` [m] and ``sag_node`` (``catenet.model.measures.sag``)."""
+    ``sag_normal``, ``sag_vertical``, ``sag_rise`` [m] and ``sag_node``
+    (``catenet.model.measures.sag``)."""
     probe, auto = probe_of(scene, res.x)
     out = summarize(
         scene.net,
@@ -330,6 +331,7 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     if chain is not None:
         out["sag_normal"] = chain["normal"]
         out["sag_vertical"] = chain["vertical"]
+        out["sag_rise"] = chain["rise"]
         out["sag_node"] = chain["node"]
     cables = scene.cables
     design = scene.design if scene.design is not None and scene.design.given else None

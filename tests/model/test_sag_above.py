@@ -1,0 +1,75 @@
+"""The summary's sag of a cable that lies above its chord (lifted by a bar, pushed up by a
+load): how far above, not "0 m vertical" beside a normal sag of 0.5 m, which read as a
+contradiction to a newcomer (``catenet.model.measures.sag``'s ``rise``)."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+from click.testing import CliRunner
+
+from catenet.cli import main
+from catenet.model.measures import sag
+
+CABLE = """
+[geometry]
+kind = "cable"
+start = [-1.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.0]
+nodes = 21
+
+[material]
+EA = 1.0e5
+prestress = 100.0
+
+[load]
+point = [{ node = 10, force = [0.0, 0.0, FZ] }]
+"""
+
+
+def _chain(z):
+    x = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, z], [1.0, 0.0, 0.0]])
+    net = SimpleNamespace(edges=np.array([[0, 1], [1, 2]]))  # only the edges are read
+    return sag(net, x)
+
+
+def test_a_cable_above_its_chord_has_a_rise_and_no_drop():
+    """The middle node 0.5 above the chord: normal 0.5, vertical 0, rise 0.5; below it:
+    the other way round; straight: neither (the ends' round-off is not a rise)."""
+    up, down, flat = _chain(0.5), _chain(-0.5), _chain(0.0)
+    assert (up["normal"], up["vertical"], up["rise"]) == (0.5, 0.0, 0.5)
+    assert (down["normal"], down["vertical"], down["rise"]) == (0.5, 0.5, 0.0)
+    assert (flat["vertical"], flat["rise"]) == (0.0, 0.0)
+    assert not math.isnan(up["rise"])
+
+
+def test_the_summary_says_how_far_above_its_chord_a_cable_is_pushed(tmp_path):
+    """A 2 m cable (EA 100 kN, 100 N prestress) pushed up by 20 N at its middle: it
+    rises f where 20 N = 2 T f / sqrt(1 + f^2), T = EA (sqrt(1 + f^2) / l0 - 1), l0 the
+    1 m half's rest length (f = 0.0473 m: its tension grows to about 211 N); the summary's
+    sag line gives it as above the chord, and one pushed down as vertical sag."""
+    for fz, word in ((20.0, "above it"), (-20.0, "m vertical")):
+        case = tmp_path / "c.toml"
+        case.write_text(CABLE.replace("FZ", repr(fz)))
+        done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
+        assert done.exit_code == 0, done.output
+        line = next(row for row in done.output.splitlines() if row.startswith("sag"))
+        assert word in line, line
+        value = float(line.split(", ")[1].split(" m")[0])
+        assert abs(value / _rise(20.0) - 1.0) < 2e-3, (line, _rise(20.0))
+
+
+def _rise(force: float) -> float:
+    """The middle's rise of the pinned 2 m cable under ``force`` there (bisection)."""
+    l0 = 1.0 / (1.0 + 100.0 / 1.0e5)
+    lo, hi = 0.0, 1.0
+    for _ in range(100):
+        f = 0.5 * (lo + hi)
+        length = math.hypot(1.0, f)
+        if 2.0 * 1.0e5 * (length / l0 - 1.0) * f / length < force:
+            lo = f
+        else:
+            hi = f
+    return 0.5 * (lo + hi)
