@@ -152,9 +152,11 @@ def _set_path(root: dict, parts: list[str], value: Any, added: list | None = Non
         here = ".".join(parts[:depth]) or "<top>"
         if isinstance(cur, list):
             if not part.isdigit() or int(part) > len(cur):
+                last_one = f"{here}[{len(cur) - 1}]" if cur else "none"
                 return (
-                    f"{here} is an array of {len(cur)} tables: "
-                    f"{'.'.join(parts[: depth + 1])} needs an index 0..{len(cur)}"
+                    f"{here} is an array of {len(cur)} table{'s' if len(cur) != 1 else ''}: "
+                    f"{'.'.join(parts[: depth + 1])} needs an index 0..{len(cur)} (the case's "
+                    f"last is {last_one}; {here}[{len(cur)}] adds a new one)"
                 )
             i = int(part)
             if i == len(cur):

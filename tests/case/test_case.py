@@ -242,8 +242,11 @@ def test_an_override_may_index_an_array_of_tables_in_brackets():
         {"kind": "box", "friction": 0.3},
     ]
     assert apply_overrides({}, ["a[x].b=1"]) == {"a[x]": {"b": 1}}
-    with pytest.raises(ConfigError, match="needs an index 0..2"):
+    with pytest.raises(ConfigError, match="needs an index 0..2") as caught:
         apply_overrides(base, ["obstacle[5].friction=0.3"])
+    assert "(the case's last is obstacle[1]; obstacle[2] adds a new one)" in str(caught.value)
+    with pytest.raises(ConfigError, match=r"an array of 1 table: obstacle.2 needs an index 0..1"):
+        apply_overrides({"obstacle": [{"kind": "plane"}]}, ["obstacle[2].friction=0.3"])
 
 
 def test_an_override_past_the_last_table_says_it_added_one(tmp_path):
