@@ -32,30 +32,25 @@ def wrap_share(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray
     pushed = np.flatnonzero((degree == 2) & (np.linalg.norm(contact, axis=1) > 0.0))
     if not pushed.size:
         return None
-    best = None
-    at: dict[int, list[int]] = {int(n): [] for n in pushed}  # each pushed node's two edges
-    for e, (i, j) in enumerate(edges.tolist()):
-        for n in (i, j):
-            if n in at:
-                at[n].append(e)
-    for n, (e1, e2) in at.items():
-        top = max(abs(float(tension[e1])), abs(float(tension[e2])))
-        if not top > 0.0:
-            continue
-        a = edges[e1, 0] if edges[e1, 1] == n else edges[e1, 1]
-        b = edges[e2, 0] if edges[e2, 1] == n else edges[e2, 1]
-        u1, u2 = x[n] - x[a], x[b] - x[n]
-        n1, n2 = float(np.linalg.norm(u1)), float(np.linalg.norm(u2))
-        if not (n1 > 0.0 and n2 > 0.0):
-            continue
-        t = u1 / n1 + u2 / n2
-        size = float(np.linalg.norm(t))
-        if not size > 0.0:
-            continue
-        along = abs(float(np.dot(contact[n], t / size)))
-        if best is None or along / top > best[0]:
-            best = (along / top, n, along)
-    return best
+    ends = np.concatenate([edges[:, 0], edges[:, 1]])  # each node's incidences
+    order = np.argsort(ends, kind="stable")
+    first = np.searchsorted(ends[order], pushed)
+    e1, e2 = order[first] % len(edges), order[first + 1] % len(edges)  # its two edges
+    a = np.where(edges[e1, 1] == pushed, edges[e1, 0], edges[e1, 1])  # their far ends
+    b = np.where(edges[e2, 0] == pushed, edges[e2, 1], edges[e2, 0])
+    u1, u2 = x[pushed] - x[a], x[b] - x[pushed]
+    n1, n2 = np.linalg.norm(u1, axis=1), np.linalg.norm(u2, axis=1)
+    top = np.maximum(np.abs(tension[e1]), np.abs(tension[e2]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = u1 / n1[:, None] + u2 / n2[:, None]
+        t /= np.linalg.norm(t, axis=1)[:, None]
+        along = np.abs(np.einsum("ij,ij->i", contact[pushed], t))
+        share = along / top
+    share[~np.isfinite(share)] = -1.0  # a zero edge, a straight reversal or no tension
+    k = int(np.argmax(share))
+    if not share[k] >= 0.0:
+        return None
+    return float(share[k]), int(pushed[k]), float(along[k])
 
 
 def wrap_warning(net: Net, terms, x, tension, contact) -> str | None:
