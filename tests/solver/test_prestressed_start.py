@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import h5py
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
@@ -47,6 +48,7 @@ initial_state = "equilibrium"
 """
 
 
+@pytest.mark.roundoff
 def test_a_prestressed_rope_over_a_bar_starts_from_its_equilibrium_solved_directly(tmp_path):
     """The start's static solve takes a handful of Newton iterations (the direct solve,
     no stiffness stage) and gives the hand sag w L^2 / (8 H) of the rope under its

@@ -6,6 +6,7 @@ max_iter and the post's activation distance; following either changed nothing.""
 
 from __future__ import annotations
 
+import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
@@ -50,6 +51,7 @@ def _run(tmp_path, history: str):
     return CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
 
 
+@pytest.mark.roundoff
 def test_a_blade_driven_against_a_fixed_post_pinches_the_cord_and_says_so(tmp_path):
     """The blade's face stops 2 mm from the post: the run stops naming both obstacles and
     the edge between them, not the distance or the step. Stopped 10 mm from it, the cord
