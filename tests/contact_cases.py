@@ -162,3 +162,46 @@ def catch_case(coarse: bool = False, **solver) -> dict:
         ],
         "solver": {"method": "dynamic", "dt": 0.005, "damping": 0.0, "t_end": 0.4, **solver},
     }
+
+
+# --- a nylon cord dragged by a box blade round a fixed post (edge contact) ----------------
+
+
+def dragged_cord(*, nodes, box, half, history, post, t_end, gravity=False, post_half=0.2) -> str:
+    """A case: a 2 m nylon cord of 6 mm (EA 70.7 kN, 50 N prestress, pinned ends on x)
+    dragged along +y at 0.5 m/s by a box at ``box`` (half sizes ``half``, the speed
+    times ``history``) round a fixed capsule post of 20 mm radius whose axis along z
+    passes through ``post`` (x, y), with edge contact, at dt = 2 ms."""
+    load = "\n[load]\ngravity = [0.0, 0.0, -9.81]\n" if gravity else ""
+    return f"""
+[geometry]
+kind = "cable"
+start = [-1.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.0]
+nodes = {nodes}
+
+[material]
+E = 2.5e9
+radius = 0.003
+density = 1140.0
+prestress = 50.0
+
+[[obstacle]]
+kind = "box"
+center = [{box[0]}, {box[1]}, 0.0]
+half_size = [{half[0]}, {half[1]}, {half[2]}]
+velocity = [0.0, 0.5, 0.0]
+history = {history}
+
+[[obstacle]]
+kind = "capsule"
+start = [{post[0]}, {post[1]}, {-post_half}]
+end = [{post[0]}, {post[1]}, {post_half}]
+radius = 0.02
+{load}
+[solver]
+method = "dynamic"
+dt = 0.002
+t_end = {t_end}
+edge_contact = true
+"""

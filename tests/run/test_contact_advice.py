@@ -11,6 +11,7 @@ from types import SimpleNamespace
 
 import numpy as np
 from click.testing import CliRunner
+from contact_cases import dragged_cord
 
 from catenet.cli import main
 from catenet.run.contact_advice import WRAP_SHARE, wrap_share
@@ -41,38 +42,15 @@ def test_the_share_is_the_contact_force_along_the_bisector_over_the_tension():
     assert WRAP_SHARE == 0.02
 
 
-CORD = """
-[geometry]
-kind = "cable"
-start = [-1.0, 0.0, 0.0]
-end = [1.0, 0.0, 0.0]
-nodes = 41
-
-[material]
-E = 2.5e9
-radius = 0.003
-density = 1140.0
-prestress = 50.0
-
-[[obstacle]]
-kind = "box"
-center = [-0.2, -0.03, 0.0]
-half_size = [0.01, 0.02, 0.3]
-velocity = [0.0, 0.5, 0.0]
-history = [[0.0, 0.0], [0.05, 1.0], [0.4, 1.0], [0.45, 0.0]]
-
-[[obstacle]]
-kind = "capsule"
-start = [0.3, 0.15, -0.3]
-end = [0.3, 0.15, 0.3]
-radius = 0.02
-
-[solver]
-method = "dynamic"
-dt = 0.002
-t_end = 0.5
-edge_contact = true
-"""
+CORD = dragged_cord(
+    nodes=41,
+    box=(-0.2, -0.03),
+    half=(0.01, 0.02, 0.3),
+    history=[[0.0, 0.0], [0.05, 1.0], [0.4, 1.0], [0.45, 0.0]],
+    post=(0.3, 0.15),
+    t_end=0.5,
+    post_half=0.3,
+)
 
 
 def test_a_cord_dragged_round_a_box_blades_corners_is_warned(tmp_path):

@@ -11,46 +11,21 @@ tension 1986.59 N, as with 40x)."""
 from __future__ import annotations
 
 from click.testing import CliRunner
+from contact_cases import dragged_cord
 
 from catenet.cli import main
 from catenet.solver.newton import NewtonResult
 from catenet.terms import Term
 
-CORD = """
-[geometry]
-kind = "cable"
-start = [-1.0, 0.0, 0.0]
-end = [1.0, 0.0, 0.0]
-nodes = 21
-
-[material]
-E = 2.5e9
-radius = 0.003
-density = 1140.0
-prestress = 50.0
-
-[[obstacle]]
-kind = "box"
-center = [0.6, -0.045, 0.0]
-half_size = [0.03, 0.015, 0.1]
-velocity = [0.0, 0.5, 0.0]
-history = [[0.0, 1.0], [0.3, 1.0], [0.35, 0.0], [0.5, 0.0]]
-
-[[obstacle]]
-kind = "capsule"
-start = [0.3, 0.035, -0.2]
-end = [0.3, 0.035, 0.2]
-radius = 0.02
-
-[load]
-gravity = [0.0, 0.0, -9.81]
-
-[solver]
-method = "dynamic"
-dt = 0.002
-t_end = 0.1
-edge_contact = true
-"""
+CORD = dragged_cord(
+    nodes=21,
+    box=(0.6, -0.045),
+    half=(0.03, 0.015, 0.1),
+    history=[[0.0, 1.0], [0.3, 1.0], [0.35, 0.0], [0.5, 0.0]],
+    post=(0.3, 0.035),
+    t_end=0.1,
+    gravity=True,
+)
 
 
 def _run(tmp_path, *sets):

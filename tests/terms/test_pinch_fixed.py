@@ -8,46 +8,23 @@ from __future__ import annotations
 
 import pytest
 from click.testing import CliRunner
+from contact_cases import dragged_cord
 
 from catenet.cli import main
-
-CORD = """
-[geometry]
-kind = "cable"
-start = [-1.0, 0.0, 0.0]
-end = [1.0, 0.0, 0.0]
-nodes = 41
-
-[material]
-E = 2.5e9
-radius = 0.003
-density = 1140.0
-prestress = 50.0
-
-[[obstacle]]
-kind = "box"
-center = [0.0, -0.03, 0.0]
-half_size = [0.01, 0.02, 0.3]
-velocity = [0.0, 0.5, 0.0]
-history = HISTORY
-
-[[obstacle]]
-kind = "capsule"
-start = [0.0, 0.15, -0.3]
-end = [0.0, 0.15, 0.3]
-radius = 0.02
-
-[solver]
-method = "dynamic"
-dt = 0.002
-t_end = 0.4
-edge_contact = true
-"""
 
 
 def _run(tmp_path, history: str):
     case = tmp_path / "cord.toml"
-    case.write_text(CORD.replace("HISTORY", history))
+    text = dragged_cord(
+        nodes=41,
+        box=(0.0, -0.03),
+        half=(0.01, 0.02, 0.3),
+        history=history,
+        post=(0.0, 0.15),
+        t_end=0.4,
+        post_half=0.3,
+    )
+    case.write_text(text)
     return CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
 
 
