@@ -322,6 +322,17 @@ def check_finite(name: str, value, t: float) -> None:
         )
 
 
+def read_text(value) -> str:
+    """A string attribute as read back: bytes decoded and bytes that are not UTF-8 (h5py
+    hands them back as lone surrogates, which no font or file can take) shown as
+    replacement characters."""
+    if isinstance(value, str):
+        value = value.encode("utf-8", "replace")
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    return str(value)
+
+
 def utf8(value):
     """A string attribute as UTF-8 text: the bytes of a path that are not UTF-8 (the
     surrogates of os.fsdecode) written as \\xNN escapes; other values as they are."""

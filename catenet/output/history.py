@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
-from catenet.output.files import check_finite
+from catenet.output.files import check_finite, read_text
 
 GROUP = "history"
 ROWS_PER_CHUNK = 256  # rows of a chunk (fewer where a row is large)
@@ -188,7 +188,7 @@ def read_history(path: str | Path) -> History | None:
             def names(name: str, attr: str) -> list[str]:
                 if name not in g:
                     return []
-                return [v.decode() if isinstance(v, bytes) else str(v) for v in g[name].attrs[attr]]
+                return [read_text(v) for v in g[name].attrs[attr]]
 
             contact = g["contact"] if "contact" in g else None
             return History(

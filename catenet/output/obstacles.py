@@ -59,6 +59,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from catenet.output.files import read_text
 from catenet.output.reader import open_result, trajectory_length
 
 if TYPE_CHECKING:
@@ -344,8 +345,7 @@ def grids(h5) -> list[ObstacleGrid]:
         moving = bool(g.attrs.get("moving", False))
         traj = h5.get(f"trajectory/{GROUP}/{key}/vertices")
         nv = traj.shape[1] if moving and traj is not None else len(g["vertices"])
-        kind = g.attrs.get("kind", "")
-        kind = kind.decode() if isinstance(kind, bytes) else str(kind)
+        kind = read_text(g.attrs.get("kind", ""))
         out.append(ObstacleGrid(int(key), kind, moving, nv, len(tri), simplified))
     return out
 

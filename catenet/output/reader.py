@@ -29,6 +29,7 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.model import measures
 from catenet.model.limits import MAGNITUDE
+from catenet.output.files import read_text
 from catenet.output.heaps import check_heaps
 
 log = logging.getLogger(__name__)
@@ -536,10 +537,8 @@ def _series(traj, time, n_frames: int, nodes, probe: int) -> tuple:
 def _case(text, path: Path) -> dict:
     if text is None:
         return {}
-    if isinstance(text, bytes):
-        text = text.decode("utf-8", "replace")
     try:
-        return tomllib.loads(str(text))
+        return tomllib.loads(read_text(text))
     except tomllib.TOMLDecodeError as exc:
         log.warning("%s: the case attribute is not valid TOML (%s); plotting without it", path, exc)
         return {}

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.output.files import read_text
 from catenet.output.netsets import read_sets
 from catenet.output.reader import DAMAGED, NetMesh, damaged, is_dataset, open_result, read_result
 
@@ -180,8 +181,8 @@ def _cables(mesh, n_edges: int) -> tuple[np.ndarray | None, tuple[str, ...]]:
 
 def _plain(v):
     """An attribute as a plain Python value (bytes decoded, NumPy scalars unwrapped)."""
-    if isinstance(v, bytes):
-        return v.decode("utf-8", "replace")
+    if isinstance(v, bytes | str):
+        return read_text(v)
     if isinstance(v, np.generic):
         return v.item()
     return v

@@ -105,13 +105,13 @@ def _relaxed(path: Path) -> bool:
     its time is pseudo-time, its peaks those of a relaxation, not of a physical motion."""
     import tomllib
 
+    from catenet.output.files import read_text
     from catenet.output.reader import open_result
 
     try:
         with open_result(path) as h5:
             text = h5.attrs.get("case", "")
-        text = text.decode() if isinstance(text, bytes) else str(text)
-        solver = tomllib.loads(text).get("solver", {})
+        solver = tomllib.loads(read_text(text)).get("solver", {})
     except (OSError, ValueError, tomllib.TOMLDecodeError):
         return False
     return isinstance(solver, dict) and solver.get("t_end") == "rest"

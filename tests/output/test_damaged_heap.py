@@ -15,6 +15,7 @@ import pytest
 from catenet.output.heaps import GCOL, check_heaps
 
 CASE = """
+title = "sag test"
 [geometry]
 kind = "cable"
 start = [0.0, 0.0, 0.0]
@@ -68,3 +69,21 @@ def test_every_reader_refuses_the_file_at_once(files, command, tmp_path):
     done = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2, done.stderr
     assert "damaged" in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("command", [["plot", "-o", "x.png"], ["report", "--format", "md"]])
+def test_a_title_whose_bytes_are_not_utf8_is_drawn_with_a_replacement(files, command, tmp_path):
+    """A flipped byte in the case text's title (h5py hands such bytes back as lone
+    surrogates, which matplotlib's font cannot lay out): the figure and the report are
+    written, the byte shown as a replacement character."""
+    good, _ = files
+    data = bytearray(good.read_bytes())
+    at = data.find(b'title = "sag test"')
+    assert at > 0
+    data[at + 9] = 0xF3  # "sag test" -> "\xf3ag test": not UTF-8
+    flipped = tmp_path / "flipped.h5"
+    flipped.write_bytes(bytes(data))
+    args = [sys.executable, "-m", "catenet", command[0], str(flipped), *command[1:]]
+    done = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert "internal error" not in done.stderr and "Traceback" not in done.stderr
+    assert done.returncode == 0, done.stderr
