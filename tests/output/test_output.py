@@ -229,7 +229,7 @@ from catenet.case import build, parse_case
 from catenet.output import ResultWriter
 scene = build(parse_case(tomllib.loads(small_net())))
 x0 = scene.net.nodes
-with ResultWriter({path!r}, scene, every=1) as w:
+with ResultWriter({path!r}, scene, every=1, flush_frames=50) as w:
     k = 0
     while True:
         w.frame(0.5 * k, x0 + k, np.full_like(x0, k))
@@ -239,7 +239,8 @@ with ResultWriter({path!r}, scene, every=1) as w:
 
 @pytest.mark.parametrize("delay", [0.0, 0.137, 0.31])
 def test_sigkill_leaves_a_readable_file(tmp_path, delay):
-    """A writer killed at an arbitrary moment leaves every flushed frame readable."""
+    """A writer killed at an arbitrary moment leaves every flushed frame readable (it
+    flushes every 50 frames, so that the kill meets a flush as often as a frame)."""
     path = tmp_path / "killed.h5"
     script = WRITER_SCRIPT.format(tests=str(Path(__file__).parents[1]), path=str(path))
     proc = subprocess.Popen(
