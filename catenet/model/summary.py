@@ -381,10 +381,8 @@ def _bending(scene: Scene, x: np.ndarray) -> dict:
 
 def _support_moment(scene: Scene, x: np.ndarray) -> dict:
     """The largest moment a support exerts on a rod end and its node (none where no
-    support holds a rod end's direction: ``catenet.model.rodends.support_moments``)."""
-    from catenet.model.rodends import support_moments
-
-    moments = support_moments(scene.net, scene_rods(scene), np.asarray(x, dtype=np.float64))
+    support holds a rod end's direction: ``support_moments``)."""
+    moments = support_moments(scene, x)
     if moments is None:
         return {}
     size = np.linalg.norm(moments, axis=1)
@@ -392,15 +390,45 @@ def _support_moment(scene: Scene, x: np.ndarray) -> dict:
     return {"max_reaction_moment": float(size[node]), "max_reaction_moment_node": node}
 
 
+def _twist_term(scene: Scene):
+    """The scene's ``Twist`` term (None: no rod twists)."""
+    for term in scene.terms:
+        if isinstance(getattr(term, "twists", None), Twists):
+            return term
+    return None
+
+
 def twisting_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
     """Per edge (M,), the signed twisting moment [N m] at x (> 0: a right-handed twist; 0
     where no rod twists), from the scene's ``Twist`` term (None: no rod twists)."""
-    for term in scene.terms:
-        twists = getattr(term, "twists", None)
-        if isinstance(twists, Twists):
-            moment = term.moments(np.asarray(x, dtype=np.float64))  # type: ignore[attr-defined]
-            return twisting_moment(twists, moment, scene.net.n_edges)
-    return None
+    term = _twist_term(scene)
+    if term is None:
+        return None
+    moment = term.moments(np.asarray(x, dtype=np.float64))
+    return twisting_moment(term.twists, moment, scene.net.n_edges)
+
+
+def support_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
+    """(N, 3) the moment [N m] each support exerts on its rod at the rod's end node: a
+    clamp's, a rotational spring's or a 6x6 spring's turn of the end's direction
+    (``catenet.model.rodends.support_moments``) and a clamp's torque about the rod's axis
+    where it holds a twisted rod (``Twist.end_moments``); None where no support holds a
+    rod end's direction."""
+    from catenet.model import rodends
+
+    x = np.asarray(x, dtype=np.float64)
+    out = rodends.support_moments(scene.net, scene_rods(scene), x)
+    term = _twist_term(scene)
+    if term is None:
+        return out
+    twists = term.twists
+    torque = np.zeros_like(x)
+    np.add.at(
+        torque,
+        twists.ends[~twists.closed].ravel(),
+        term.end_moments(x)[~twists.closed].reshape(-1, 3),
+    )
+    return torque if out is None else out + torque
 
 
 def _twisting(scene: Scene, x: np.ndarray) -> dict:

@@ -87,7 +87,7 @@ def write_result_group(
         g.create_dataset("twisting_moment", data=twisting)
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
-    moments = _support_moments(scene, res.x, rods)
+    moments = summary.support_moments(scene, res.x)
     if moments is not None:  # at rod ends held in direction, 0 elsewhere [N m]
         g.create_dataset("reaction_moment", data=moments)
     if scene.design is not None and scene.design.anchored:  # |R| / capacity per node
@@ -105,15 +105,6 @@ def write_result_group(
     for key, value in {**result_attrs(res, scene, tension), **attrs}.items():
         g.attrs[key] = value
     return g
-
-
-def _support_moments(scene: Scene, x, rods) -> np.ndarray | None:
-    """(N, 3) the supports' moments on the rod ends (None: no support holds one)."""
-    if rods is None and (scene.net.springs is None or scene.net.springs.ends is None):
-        return None
-    from catenet.model.rodends import support_moments
-
-    return support_moments(scene.net, rods, x)
 
 
 def utilisation(scene: Scene, tension: np.ndarray) -> np.ndarray:

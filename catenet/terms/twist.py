@@ -28,6 +28,8 @@ from catenet.model.histories import History
 from catenet.model.twist import Twists
 from catenet.terms.base import Term, register
 
+#: The clamps' turn [rad] of ``Twist.end_moments``' central differences.
+TURN = 1e-5
 #: (segment, angle [rad], history or None) of each turned clamp.
 Imposed = tuple[int, float, History | None]
 
@@ -36,6 +38,12 @@ def _mean_edge(x: np.ndarray, nodes: np.ndarray, closed: bool) -> float:
     """The mean edge length of a chain of nodes (a ring's closing edge included)."""
     chain = np.concatenate([nodes, nodes[:1]]) if closed else nodes
     return float(np.mean(np.linalg.norm(np.diff(x[chain], axis=0), axis=1)))
+
+
+def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation matrix of ``angle`` about the unit ``axis`` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
 
 
 @register("twist")
@@ -76,19 +84,51 @@ class Twist(Term):
         t = self.twists
         twist_frames(x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first)
 
-    def _angles(self, x: np.ndarray) -> np.ndarray:
+    def _angles(self, x: np.ndarray, **turned: np.ndarray) -> np.ndarray:
+        """Theta per segment at x; ``turned``: head, tail, head_dir or tail_dir in place
+        of the clamps' own (``end_moments``)."""
         t = self.twists
         out = np.zeros(len(t))
+        frames = {"head": t.head, "tail": t.tail, "head_dir": t.head_dir, "tail_dir": t.tail_dir}
+        frames.update(turned)
         twist_angles(
             np.ascontiguousarray(x, dtype=np.float64),
-            *self._geometry(),
-            t.head_dir,
-            t.tail_dir,
+            t.nodes,
+            t.start,
+            t.closed,
+            frames["head"],
+            frames["tail"],
+            frames["head_dir"],
+            frames["tail_dir"],
             self._ref,
             self._tau,
             t.first,
             out,
         )
+        return out
+
+    def end_moments(self, x: np.ndarray) -> np.ndarray:
+        """(S, 2, 3) the moment [N m] each open segment's clamps exert on it at x, its first
+        end's and its last's: dE/dphi for a turn phi of the clamp (its tangent and director
+        together), M dTheta/dphi, with dTheta/dphi by central differences of Theta over
+        turns of TURN rad (to about 1e-9 of M). About the rod's axis it is the twisting
+        moment, -M at the first end and +M at the last (the end's tangent along the
+        chain); across it, what the clamp adds where the end edge leaves its held
+        direction. A ring's rows are 0 (no support holds it)."""
+        t = self.twists
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        m = self.moments(x)
+        out = np.zeros((len(t), 2, 3))
+        for end, (tangent, director) in enumerate(((t.head, t.head_dir), (t.tail, t.tail_dir))):
+            for axis in range(3):
+                theta = []
+                for sign in (1.0, -1.0):
+                    turn = _turn(np.eye(3)[axis], sign * TURN)
+                    turned = {"head" if end == 0 else "tail": tangent @ turn.T}
+                    turned["head_dir" if end == 0 else "tail_dir"] = director @ turn.T
+                    theta.append(self._angles(x, **turned))
+                out[:, end, axis] = m * (theta[0] - theta[1]) / (2.0 * TURN)
+        out[t.closed] = 0.0
         return out
 
     def imposed_twist(self, time: float | None = None) -> np.ndarray:
