@@ -6,8 +6,8 @@ commands, in this process, each bounded in time, counted by outcome class.
 
 The inputs are those of tests/fuzz (tests/fuzzing.py): mutated example cases of configs/
 and case files from the declared keys, net files (JSON, CSV, OBJ), mesh files (STL),
-sweep values and damaged result files given to plot, export, repair and --restart. The
-classes: ok, bad input (exit 2), failed (exit 1), and the bad ones (traceback, hang,
+sweep values and damaged result files given to plot, export, repair, report and
+--restart. The classes: ok, bad input (exit 2), failed (exit 1), and the bad ones (traceback, hang,
 exit code, unclear message, numpy repr, non-finite result, leftover), each bad case
 printed with its input so that it can be turned into a test. Exit status 1 when there
 is any bad outcome.
@@ -90,13 +90,16 @@ def result_input(rng, work: Path, files):
     case, src = files[method]
     damaged = work / "damaged.h5"
     how = fz.mutate_result(src, damaged, rng)
-    command = rng.choice(["plot", "export", "repair", "restart"])
+    command = rng.choice(["plot", "export", "repair", "report", "restart"])
     if command == "plot":
         args = ["plot", damaged, "-o", work / "fig.png"]
     elif command == "export":
         args = ["export", damaged, "--to", rng.choice(["vtu", "xdmf"]), "-o", work / "ex"]
     elif command == "repair":
         args = ["repair", damaged]
+    elif command == "report":
+        args = ["report", damaged, "--format", rng.choice(["md", "csv", "html"])]
+        args += ["-o", work / "report"]
     else:
         args = ["run", case, "--restart", damaged, "-o", work / "again.h5", "-q"]
         args += ["--set", "solver.t_end=0.6", "--set", "solver.method=dynamic"]
