@@ -30,7 +30,7 @@ def _needs_topology(g: GeometryConfig, supports: Any, load: Any, probe: Any = No
     if isinstance(supports, SupportsConfig):
         refs += list(supports.fixed or ()) + [m.node for m in supports.moves]
         refs += [r for v in supports.vessels for r in v.nodes]
-        refs += list(supports.clamped)
+        refs += list(supports.clamped) + list(supports.rigid_joints)
         refs += [r for t in supports.twists for r in t.nodes]
         refs += [r for _, _, part in partial_supports(supports) for r in part.nodes]
     if isinstance(load, LoadConfig):
@@ -80,6 +80,8 @@ def check_nodes(
         _check_moves(refs, _moved(supports), fixed, fixed_key, held)
         for k, r in enumerate(supports.clamped):
             refs.known(r, f"supports.clamped[{k}]")
+        for k, r in enumerate(supports.rigid_joints):
+            refs.known(r, f"supports.rigid_joints[{k}]")
         for k, t in enumerate(supports.twists):
             for j, r in enumerate(t.nodes):
                 refs.known(r, f"supports.twist[{k}].nodes[{j}]")

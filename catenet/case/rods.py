@@ -21,12 +21,13 @@ from catenet.case.kinds.warn import warn_once
 from catenet.errors import ConfigError
 from catenet.model.histories import History
 from catenet.model.net import Net
-from catenet.model.rods import Rods, build_rods
+from catenet.model.rods import Rods, build_rods, without_hinges
 
 if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.model.torsion import Torsion
     from catenet.terms.bending import Bending
+    from catenet.terms.joints import RigidJoints
     from catenet.terms.twist import Twist
 
 
@@ -91,9 +92,16 @@ def _per_edge(case: Case, built: Any, net: Net, polar: bool = False) -> tuple[np
 
 
 def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | None:
-    """The rods of a built case (None: nothing bends and nothing is clamped)."""
+    """The rods of a built case (None: nothing bends and nothing is clamped); a line's
+    hinge at a rigid joint is the joint's (``case_joints``)."""
     ei, _, given, line = _per_edge(case, built, net)
     springs = rotational_springs(case, built)
+    joints = _joint_nodes(case, built)
+    if joints.size and not (ei > 0.0).any():
+        raise ConfigError(
+            f"supports.rigid_joints = {show(list(case.supports.rigid_joints))}: no edge "
+            "bends: a rigid joint joins rods: give material.EI > 0 (or a cable's)"
+        )
     if not (ei > 0.0).any():
         if clamped.size:
             raise ConfigError(
@@ -107,13 +115,35 @@ def case_rods(case: Case, built: Any, net: Net, clamped: np.ndarray) -> Rods | N
             )
         return None
     rods = build_rods(net, ei, line, natural=given, clamped=clamped, springs=springs)
-    if not len(rods):
+    if joints.size:
+        rods = without_hinges(rods, joints)
+    if not len(rods) and not joints.size:
         warn_once(
             "material.EI > 0, but no two bending edges of one cable meet and nothing is "
             "clamped: nothing bends (rods bend along cables: a graph's [[geometry.cable]], "
             "not its geometry.edges; a cable of one edge bends only where clamped)"
         )
     return rods
+
+
+def _joint_nodes(case: Case, built: Any) -> np.ndarray:
+    """The node indices of supports.rigid_joints (each once)."""
+    refs = case.supports.rigid_joints
+    nodes = [i for r in refs for i in expand(r, built.names, built.sets or {})]
+    return np.unique(np.asarray(nodes, dtype=np.int64))
+
+
+def case_joints(case: Case, built: Any, net: Net, n_nodes: int) -> RigidJoints | None:
+    """The rods' rigid joints (``supports.rigid_joints``) as a ``RigidJoints`` term (None:
+    none); a ConfigError for a node where fewer than two lines' rods meet."""
+    nodes = _joint_nodes(case, built)
+    if not nodes.size:
+        return None
+    from catenet.model.joints import build_joints
+    from catenet.terms.joints import RigidJoints
+
+    ei, _, _, line = _per_edge(case, built, net)
+    return RigidJoints(build_joints(net, ei, line, nodes, "supports.rigid_joints"), n_nodes)
 
 
 def rotational_springs(case: Case, built: Any) -> dict[int, float]:

@@ -24,6 +24,7 @@ from catenet.case.parse import Case
 from catenet.case.rigid import movers
 from catenet.case.rods import (
     bending_term,
+    case_joints,
     case_rods,
     case_torsion,
     case_twist,
@@ -105,6 +106,9 @@ def _build(case: Case) -> Scene:
     scene = scene.with_movers(*movers(case))  # balls and free bodies
     if rods is not None:
         scene = scene.with_terms(bending_term(rods, scene.net.n_nodes))
+    joints = case_joints(case, built, net, scene.net.n_nodes)
+    if joints is not None:
+        scene = scene.with_terms(joints)
     twist = case_twist(case, built, net, rods, scene.net.n_nodes)
     if twist is not None:
         scene = scene.with_terms(twist)

@@ -111,6 +111,15 @@ class SupportsConfig(Declared):
         doc="rod ends held in place with their given tangent (material.EI > 0), and their "
         "twist where material.GJ > 0",
     )
+    rigid_joints: tuple[NodeRef, ...] = key(
+        _node_list,
+        "a non-empty array of nodes (indices or names), each where rods of two lines meet",
+        (),
+        write="given",
+        shown="none",
+        doc="nodes where rods of two or more lines meet rigidly: their ends turn together, "
+        "the angles between them kept (default: pinned to each other)",
+    )
     rollers: tuple[RollerConfig, ...] = tables(
         RollerConfig, name="roller", doc="nodes held along a normal only (free in its plane)"
     )

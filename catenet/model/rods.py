@@ -11,7 +11,7 @@ rod's end edge at its given direction.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -95,6 +95,19 @@ def rod_hinges(edges: np.ndarray, line: np.ndarray, bends: np.ndarray) -> np.nda
             if j == j2 and i != k:
                 out.append((a, b, i, j, k))
     return np.asarray(out, dtype=np.int64).reshape(-1, 5)
+
+
+def without_hinges(rods: Rods, nodes: np.ndarray) -> Rods:
+    """``rods`` without the hinges at ``nodes`` (there a rigid joint holds the lines'
+    edges, ``catenet.model.joints``)."""
+    keep = ~np.isin(rods.hinges[:, 1], nodes)
+    return replace(
+        rods,
+        hinges=np.ascontiguousarray(rods.hinges[keep]),
+        EI=np.ascontiguousarray(rods.EI[keep]),
+        voronoi=np.ascontiguousarray(rods.voronoi[keep]),
+        s0=np.ascontiguousarray(rods.s0[keep]),
+    )
 
 
 def build_rods(

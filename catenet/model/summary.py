@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.model import measures
+from catenet.model.joints import Joints, joint_bending
 from catenet.model.net import Loads, Net
 from catenet.model.rods import Rods, bending_moment
 from catenet.model.twist import Twists, twisting_moment
@@ -311,7 +312,8 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     [N]: the resultant of the loads acting in the state (``loads``, default the
     scene's, at the result's load factor or time), and for a net that is one cable its
     ``sag_normal``, ``sag_vertical``, ``sag_rise`` [m] and ``sag_node``
-    (``catenet.model.measures.sag``)."""
+    (``catenet.model.measures.sag``; not for a frame whose rods meet at rigid joints: its
+    chord runs across the corners it is drawn with)."""
     probe, auto = probe_of(scene, res.x)
     out = summarize(
         scene.net,
@@ -327,7 +329,8 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
     out.update(_bending(scene, res.x))
     out.update(_twisting(scene, res.x))
     out.update(_support_moment(scene, res.x))
-    chain = measures.sag(scene.net, res.x) if scene.net.bodies == 0 else None
+    framed = any(isinstance(getattr(t, "joints", None), Joints) for t in scene.terms)
+    chain = None if scene.net.bodies or framed else measures.sag(scene.net, res.x)
     if chain is not None:
         out["sag_normal"] = chain["normal"]
         out["sag_vertical"] = chain["vertical"]
@@ -365,12 +368,28 @@ def scene_rods(scene: Scene) -> Rods | None:
     return None
 
 
-def _bending(scene: Scene, x: np.ndarray) -> dict:
-    """The largest bending moment, its node and the curvature there (none without rods)."""
+def bending_moments(scene: Scene, x: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per node (N,), the bending moment |M| [N m] and the curvature |kappa| [1/m] of the
+    scene's rods (``catenet.model.rods.bending_moment``), at a rigid joint its members'
+    largest (``catenet.model.joints.joint_bending``); None: nothing bends."""
     rods = scene_rods(scene)
     if rods is None:
-        return {}
+        return None
+    x = np.asarray(x, dtype=np.float64)
     moment, kappa = bending_moment(rods, x, scene.net.n_nodes)
+    for term in scene.terms:
+        joints = getattr(term, "joints", None)
+        if isinstance(joints, Joints):
+            joint_bending(joints, x, moment, kappa)
+    return moment, kappa
+
+
+def _bending(scene: Scene, x: np.ndarray) -> dict:
+    """The largest bending moment, its node and the curvature there (none without rods)."""
+    found = bending_moments(scene, x)
+    if found is None:
+        return {}
+    moment, kappa = found
     node = int(np.argmax(moment))
     return {
         "max_bending_moment": float(moment[node]),

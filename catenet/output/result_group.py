@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.model import summary
-from catenet.model.rods import bending_moment
 from catenet.output.metadata import result_attrs
 
 if TYPE_CHECKING:
@@ -77,9 +76,9 @@ def write_result_group(
     if peaks is not None:
         for key, value in peaks.arrays().items():
             g.create_dataset(key, data=value)
-    rods = summary.scene_rods(scene)
-    if rods is not None:  # per node [N m] and [1/m], 0 where nothing bends
-        moment, kappa = bending_moment(rods, np.asarray(res.x, dtype=np.float64), len(res.x))
+    bent = summary.bending_moments(scene, res.x)
+    if bent is not None:  # per node [N m] and [1/m], 0 where nothing bends
+        moment, kappa = bent
         g.create_dataset("bending_moment", data=moment)
         g.create_dataset("curvature", data=kappa)
     twisting = summary.twisting_moments(scene, res.x)

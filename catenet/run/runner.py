@@ -321,12 +321,19 @@ def _report(
         top = float(abs(result.tension).max(initial=0.0))
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
             log.warning("%s", squeezed)
+    from catenet.model.joints import turn_warning
     from catenet.run.contact_advice import wrap_warning
 
     if wrapped := wrap_warning(
         scene.net, ws.system.terms, result.x, result.tension, result.contact_force
     ):
         log.warning("%s", wrapped)
+    for term in ws.system.terms:
+        turned = term.name == "joints" and turn_warning(
+            term.joints, result.x, scene.net, scene.cables
+        )
+        if turned:
+            log.warning("%s", turned)
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
