@@ -59,6 +59,10 @@ UNITS = ("SI", "kN-m", "N-mm")
 
 #: The most time steps a dynamic run may be asked for (t_end / dt).
 MAX_TIME_STEPS = 1e8
+#: The shortest time step [s] a case may give (dt, dt_min, dt_max): the step's inertia m /
+#: dt^2 and the squares of its forces must stay finite numbers (they overflow from about
+#: 1e-80 s; a run to rest has no t_end to bound its step count).
+MIN_DT = 1e-50
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -330,6 +334,14 @@ def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:
     """A problem when a dynamic run's dt exceeds its end time or makes too many steps, or
     adaptive steps' bounds contradict each other."""
     t_end = solver.t_end  # a number, or "rest"
+    for key in ("dt", "dt_min", "dt_max"):
+        value = getattr(solver, key)
+        if value is not None and 0.0 < value < MIN_DT:
+            ck.add(
+                f"solver.{key} = {value!r}: too short to step with (the step's inertia m / "
+                f"dt^2 would overflow): give at least {MIN_DT:g} s"
+            )
+            return
     adaptive = solver.tolerance is not None and isinstance(t_end, (int, float))
     if adaptive:
         low = 0.0 if solver.dt_min is None else solver.dt_min

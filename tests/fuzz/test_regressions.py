@@ -671,3 +671,24 @@ def test_mutations_never_change_the_hostile_values_they_draw_from():
         for _ in range(3):
             fuzzing.mutate_case(data, rng)
     assert repr(fuzzing.HOSTILE) == repr(before)
+
+
+# --- a time step too short to step with ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("key, value", [("dt", "1e-300"), ("dt_min", "1e-200")])
+def test_a_time_step_too_short_to_step_with_is_bad_input(tmp_path, key, value):
+    """The long run of seed 90210: tests/fuzz/cases/drop_to_rest.toml with solver.dt =
+    1e-300 (a run to rest: no t_end bounds its steps) stopped with an internal error
+    (1 / dt^2 overflows to a division by zero); from about 1e-80 s the step's forces
+    overflow. A dt, dt_min or dt_max below 1e-50 s is bad input naming the key; 1e-30 s
+    steps on (its run to rest grows its steps from there)."""
+    from fuzzing import SEEDS
+
+    case = (SEEDS / "drop_to_rest.toml").read_text()
+    extra = [] if key == "dt" else ["--set", "solver.tolerance=1e-3", "--set", "solver.t_end=0.1"]
+    args = ["-o", tmp_path / "o.h5", "--set", f"solver.{key}={value}", *extra]
+    result, text = run(tmp_path, *args, case=case)
+    assert result.exit_code == 2, text
+    assert f"solver.{key} = {float(value)!r}: too short to step with" in text, text
+    assert "give at least 1e-50 s" in text and judge(result, tmp_path).good
