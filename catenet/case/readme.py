@@ -19,7 +19,8 @@ from catenet.case.loadcases import CombinationConfig, LoadCaseConfig
 from catenet.case.masses import MassConfig
 from catenet.case.obstacles import OBSTACLES
 from catenet.case.parse import Case
-from catenet.case.sections import SECTIONS, SineConfig
+from catenet.case.sections import SECTIONS
+from catenet.case.sine import SineConfig
 from catenet.case.targets import TargetConfig
 from catenet.case.water import WaterConfig
 

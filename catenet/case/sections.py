@@ -31,8 +31,8 @@ from catenet.case.keys import (
 )
 from catenet.case.kinds import KINDS
 from catenet.case.material import EDGE_CONTACT, MaterialConfig, parse_material  # noqa: F401
-from catenet.case.sine import SINE, SineConfig, check_sine  # noqa: F401 (supports.move.sine)
 from catenet.case.supports import (
+    MoveConfig,
     RollerConfig,
     RotationalConfig,
     SliderConfig,
@@ -57,32 +57,6 @@ NodeRef = int | str
 
 
 # --------------------------------------------------------------------------- supports
-
-
-@dataclass(frozen=True)
-class MoveConfig(Declared):
-    """A support that moves by ``displacement`` over ``duration`` seconds, or by
-    factor(t) times it along a ``history``, or along a ``sine`` (dynamic runs)."""
-
-    node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
-    displacement: Vec3 | None = vec3(
-        None, write="given", unit="m", doc="its displacement (dx, dy, dz) (or sine)"
-    )
-    duration: float = real(
-        0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
-    )
-    history: tuple | None = history_key(
-        "dynamic: displacement times factor(t), instead of a ramp over duration"
-    )
-    sine: SineConfig | None = key(
-        check_sine,
-        SINE,
-        None,
-        write="given",
-        doc="dynamic: amplitude r(t) sin(2 pi t / period + phase), r a smooth start from 0 "
-        "to 1 over ramp (default one period; 0: none), instead of displacement; static "
-        "runs and an equilibrium start take it at t = 0",
-    )
 
 
 @dataclass(frozen=True)

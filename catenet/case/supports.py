@@ -1,7 +1,8 @@
 """The keys of supports that hold a node in some directions only: ``[[supports.roller]]``,
 ``[[supports.slider]]`` and ``[[supports.spring]]`` (``catenet.model.guides``), the turned
-rod ends ``[[supports.twist]]`` (``catenet.model.twist``), the node lists every support
-key takes and the time histories of loads and support motions."""
+rod ends ``[[supports.twist]]`` (``catenet.model.twist``), the moving supports
+``[[supports.move]]``, the node lists every support key takes and the time histories of
+loads and support motions."""
 
 from __future__ import annotations
 
@@ -9,7 +10,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from catenet.case.keys import BAD, Checker, Context, Declared, key, real
+from catenet.case.keys import BAD, Checker, Context, Declared, key, node, real, vec3
+from catenet.case.sine import SINE, SineConfig, check_sine
 from catenet.errors import ConfigError
 from catenet.model.histories import NEED, history_problem
 from catenet.model.net import Net
@@ -36,6 +38,32 @@ def _check_history(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 def history_key(doc: str) -> Any:
     """The ``history`` key of a load or support motion."""
     return key(_check_history, NEED, None, write="given", shown="none", unit="s, -", doc=doc)
+
+
+@dataclass(frozen=True)
+class MoveConfig(Declared):
+    """A support that moves by ``displacement`` over ``duration`` seconds, or by
+    factor(t) times it along a ``history``, or along a ``sine`` (dynamic runs)."""
+
+    node: NodeRef = node(missing="the fixed node to move", doc="the fixed node that moves")
+    displacement: Vec3 | None = vec3(
+        None, write="given", unit="m", doc="its displacement (dx, dy, dz) (or sine)"
+    )
+    duration: float = real(
+        0.0, ge=0, unit="s", doc="ramp time in dynamic runs (static runs: reached at once)"
+    )
+    history: tuple | None = history_key(
+        "dynamic: displacement times factor(t), instead of a ramp over duration"
+    )
+    sine: SineConfig | None = key(
+        check_sine,
+        SINE,
+        None,
+        write="given",
+        doc="dynamic: amplitude r(t) sin(2 pi t / period + phase), r a smooth start from 0 "
+        "to 1 over ramp (default one period; 0: none), instead of displacement; static "
+        "runs and an equilibrium start take it at t = 0",
+    )
 
 
 def node_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
