@@ -8,7 +8,7 @@ import difflib
 from dataclasses import dataclass
 from typing import Any
 
-from catenet.case.keys import Checker, duplicates, show
+from catenet.case.keys import BAD, Checker, duplicates, show
 from catenet.case.kinds.base import GeometryConfig, Topology, expand, resolve, with_prefix
 from catenet.case.kinds.graph import GraphConfig
 from catenet.case.kinds.netfile import flag_note
@@ -90,7 +90,8 @@ def check_nodes(
         _check_loads(refs, load, g, prefix)
     if probe is not None:
         _check_probe(refs, probe)
-    if len(ck.problems) == before and prefix == "load":
+    failed = supports is BAD  # its own problems are said; what it holds is unknown
+    if len(ck.problems) == before and prefix == "load" and not failed:
         g.check_supports(ck, fixed, fixed_key, flies)
 
 

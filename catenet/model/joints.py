@@ -116,16 +116,20 @@ def joint_bending(joints: Joints, x: np.ndarray, moment: np.ndarray, kappa: np.n
             kappa[node] = max(kappa[node], 2.0 * d / joints.length[p])
 
 
-#: A rigid joint turned about one of its members' axes by more than this [rad] is warned:
-#: a rod there would twist, and the joint holds no twist.
-TURN_WARN = 1e-2
+#: A rigid joint whose turn has a component about one of its members' axes beyond this
+#: share of the turn (a turn a rod there would resist by twisting, which the joint does not
+#: hold) is warned; in-plane loads on a plane frame give shares of 1e-10 and below, loads
+#: out of its plane shares near 1.
+TURN_SHARE = 0.1
+#: ... where that component also exceeds this [rad] (below it the turn's axis is round-off).
+TURN_FLOOR = 1e-9
 
 
-def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, int, int] | None:
-    """(angle [rad], joint node, member's other node) of the joint turned most about one
-    of its members' axes at x (the joint's rotation R's axis-angle vector along the
-    member's tangent): a turn the rod would resist by twisting, which the joint does not
-    hold (module docstring); None without joints."""
+def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, float, int, int] | None:
+    """(share, angle [rad], joint node, member's other node) of the joint whose turn at x
+    (its rotation R's axis-angle vector) has the largest component about one of its
+    members' axes, over the whole turn (share) and as an angle; components below
+    TURN_FLOOR do not count (None: none, or no joints)."""
     from catenet.kernels.joints import joint_rotations
 
     if not len(joints):
@@ -133,36 +137,36 @@ def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, int, int
     x = np.ascontiguousarray(x, dtype=np.float64)
     rot = np.zeros((len(joints), 3, 3))
     joint_rotations(x, joints.node, joints.start, joints.other, joints.rest, joints.k, rot)
-    best = (0.0, int(joints.node[0]), int(joints.other[0]))
+    best = None
     for j in range(len(joints)):
         r = rot[j]
         angle = float(np.arccos(np.clip(0.5 * (np.trace(r) - 1.0), -1.0, 1.0)))
         axis = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
         size = float(np.linalg.norm(axis))
-        if size > 1e-12 * max(angle, 1e-300):
-            axis /= size
-        elif angle > 0.5 * np.pi:  # a half turn: the axis from R + I
+        if angle > 0.5 * np.pi and size < 1e-6:  # a half turn: the axis from R + I
             col = r + np.eye(3)
             axis = col[:, int(np.argmax(np.linalg.norm(col, axis=0)))]
             axis /= np.linalg.norm(axis)
+        elif size > 0.0:
+            axis /= size
         else:
             continue
         for p in range(joints.start[j], joints.start[j + 1]):
             t = x[joints.other[p]] - x[joints.node[j]]
-            about = abs(angle * float(axis @ t) / float(np.linalg.norm(t)))
-            if about > best[0]:
-                best = (about, int(joints.node[j]), int(joints.other[p]))
+            share = abs(float(axis @ t)) / float(np.linalg.norm(t))
+            if angle * share > TURN_FLOOR and (best is None or share > best[0]):
+                best = (share, angle * share, int(joints.node[j]), int(joints.other[p]))
     return best
 
 
 def turn_warning(joints: Joints, x: np.ndarray, net: Net, cables=None) -> str | None:
-    """The warning where a rigid joint ends turned about a member's axis by more than
-    TURN_WARN (``turned_about_members``), else None; ``cables`` (a scene's: ``names``,
-    ``edge``) names the member's cable."""
+    """The warning where a rigid joint's turn is about a member's axis by more than
+    TURN_SHARE of it (``turned_about_members``), else None; ``cables`` (a scene's:
+    ``names``, ``edge``) names the member's cable."""
     found = turned_about_members(joints, x)
-    if found is None or not found[0] > TURN_WARN:
+    if found is None or not found[0] > TURN_SHARE:
         return None
-    angle, node, other = found
+    share, angle, node, other = found
     member = f"its member toward node {other}"
     edges = net.edges[: net.n_edges]
     at = np.flatnonzero(
@@ -173,9 +177,10 @@ def turn_warning(joints: Joints, x: np.ndarray, net: Net, cables=None) -> str | 
         member += f" (cable {cables.names[int(cables.edge[at[0]])]!r})"
     return (
         f"the rigid joint at node {node} turned by {np.degrees(angle):.3g} deg about the "
-        f"axis of {member}: a rigid joint holds the angles between its rods but "
-        "no twist (each rod's end turns about its own axis freely there), so a frame "
-        "loaded out of its plane turns there as a mechanism would; hold the frame against "
-        "that turn (a support, a bracing cable) or read the result as a pinned frame's "
-        "(docs/howto/rods.md#rigid-joints)"
+        f"axis of {member}, {100.0 * share:.3g} % of its turn: a rigid joint holds the "
+        "angles between its rods but no twist, so where a rod would twist (a frame loaded "
+        "out of its plane) it turns freely about its axis: the frame carries that load as "
+        "if its rods had no torsional stiffness (less shared between its members, or "
+        "turning as a mechanism); hold the frame against those turns (supports, bracing) "
+        "or read the result so (docs/howto/rods.md#rigid-joints)"
     )

@@ -221,17 +221,63 @@ def test_the_frames_modes_include_the_joint(tmp_path):
     assert "zero-frequency mode" in done.output
 
 
+PORTAL = """
+[geometry]
+kind = "graph"
+nodes = [[0.0, 0.0, 0.0], [0.0, 0.0, 3.0], [6.0, 0.0, 3.0], [6.0, 0.0, 0.0]]
+edge_length = 0.25
+
+[geometry.sets]
+feet = [0, 3]
+tops = [1, 2]
+
+[[geometry.cable]]
+name = "left"
+nodes = [0, 1]
+
+[[geometry.cable]]
+name = "beam"
+nodes = [1, 2]
+
+[[geometry.cable]]
+name = "right"
+nodes = [3, 2]
+
+[material]
+EA = 2.0e9
+EI = 1.0e6
+tension_only = false
+
+[supports]
+fixed = ["feet"]
+clamped = ["feet"]
+rigid_joints = ["tops"]
+
+[[load.point]]
+node = 1
+force = FORCE
+"""
+
+
 def test_a_joint_turned_about_a_member_is_warned(tmp_path):
     """Loaded out of its plane, the L-frame's beam swings round the column (the joint
-    holds no twist): the run warns naming the joint and the column; in its plane not."""
+    holds no twist) and a portal frame's beam turns round a column by a small angle (its
+    load no longer shared): both runs warn, naming the joint and the column, whatever the
+    angle; loaded in their plane (the turn's share about a member 1e-10 and below) not."""
     text = L_FRAME.replace("EDGE", "0.2")
     done, _ = _run(tmp_path, text.replace("FORCE", "[0.0, 10.0, 0.0]"))
     assert done.exit_code == 0, done.output
     said = " ".join(done.output.split())
     assert "the rigid joint at node 1 turned by 90 deg about the axis of its member" in said
-    assert "(cable 'column'): a rigid joint holds the angles between its rods" in said
-    done, _ = _run(tmp_path, text.replace("FORCE", "[0.0, 0.0, -10.0]"))
-    assert done.exit_code == 0 and "rigid joint" not in done.output, done.output
+    assert "(cable 'column'), 100 % of its turn: a rigid joint holds the angles" in said
+    done, _ = _run(tmp_path, PORTAL.replace("FORCE", "[0.0, 1.0, 0.0]"))
+    said = " ".join(done.output.split())
+    assert done.exit_code == 0 and "(cable 'right'), 100 % of its turn" in said, said
+    angle = float(said.split("turned by ")[1].split(" deg")[0])
+    assert 1e-5 < angle < 1e-3  # a small turn, warned all the same
+    for case, force in ((text, "[0.0, 0.0, -10.0]"), (PORTAL, "[1000.0, 0.0, -500.0]")):
+        done, _ = _run(tmp_path, case.replace("FORCE", force))
+        assert done.exit_code == 0 and "rigid joint" not in done.output, done.output
 
 
 @pytest.mark.parametrize(
@@ -246,6 +292,7 @@ def test_a_joint_turned_about_a_member_is_warned(tmp_path):
             "supports.rigid_joints[0]",
         ),
         (("EI = 1.0e6", "EI = 0.0"), "supports.rigid_joints = ['corner']: no edge bends"),
+        (('rigid_joints = ["corner"]', "rigid_joints = []"), "must be a non-empty array"),
         (
             ("[2.0, 0.0, 3.0]]", "[0.0, 0.0, 5.0]]"),
             "node 1: its rods all lie on one straight line",
@@ -261,3 +308,4 @@ def test_bad_joints_exit_2_with_one_clear_message(tmp_path, change, message):
     assert done.exit_code == 2, done.output
     assert message in done.output, done.output
     assert "Traceback" not in done.output and not out.exists()
+    assert "geometry.fixed: missing" not in done.output  # the supports are given
