@@ -132,4 +132,4 @@ def test_no_twisted_rod_no_torque():
     text = text.split("[x]")[0]
     scene = build(parse_case(tomllib.loads(text)))
     moments = support_moments(scene, scene.net.nodes)
-    assert moments is not None and not np.any(moments)
+    assert moments is not None and np.max(np.abs(moments)) < 1e-6  # round-off of the start
