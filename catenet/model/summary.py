@@ -438,7 +438,7 @@ def support_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
     x = np.asarray(x, dtype=np.float64)
     out = rodends.support_moments(scene.net, scene_rods(scene), x)
     term = _twist_term(scene)
-    if term is None:
+    if term is None or term.twists.closed.all():  # rings: no support holds them
         return out
     twists = term.twists
     torque = np.zeros_like(x)
