@@ -31,6 +31,19 @@ def _dense_pattern(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rows, cols
 
 
+def dense_blocks(groups) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of a dense Hessian block over each of ``groups`` (arrays of node
+    indices, of any lengths), row-major over its DOFs, one after another."""
+    rows, cols = [], []
+    for nodes in groups:
+        dofs = (3 * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(3)).ravel()
+        rows.append(np.repeat(dofs, dofs.size))
+        cols.append(np.tile(dofs, dofs.size))
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(rows), np.concatenate(cols)
+
+
 @register("bending")
 class Bending(Term):
     """The rods' bending energy (module docstring)."""

@@ -18,6 +18,7 @@ import numpy as np
 from catenet.kernels.joints import joint_energy, joint_gradient, joint_hessian
 from catenet.model.joints import Joints
 from catenet.terms.base import Term, register
+from catenet.terms.bending import dense_blocks
 
 
 @register("joints")
@@ -43,15 +44,10 @@ class RigidJoints(Term):
     def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Every joint's dense block over its node and its members' others, row-major."""
         j = self.joints
-        rows, cols = [], []
-        for jj in range(len(j)):
-            nodes = np.concatenate([[j.node[jj]], j.other[j.start[jj] : j.start[jj + 1]]])
-            dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
-            rows.append(np.repeat(dofs, dofs.size))
-            cols.append(np.tile(dofs, dofs.size))
-        if not rows:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+        return dense_blocks(
+            np.concatenate([[j.node[k]], j.other[j.start[k] : j.start[k + 1]]])
+            for k in range(len(j))
+        )
 
     def energy(self, x: np.ndarray) -> float:
         return float(joint_energy(np.ascontiguousarray(x, dtype=np.float64), *self._args()))

@@ -27,6 +27,7 @@ from catenet.kernels.twist import twist_angles, twist_frames, twist_gradient, tw
 from catenet.model.histories import History
 from catenet.model.twist import Twists
 from catenet.terms.base import Term, register
+from catenet.terms.bending import dense_blocks
 
 #: The clamps' turn [rad] of ``Twist.end_moments``' central differences.
 TURN = 1e-5
@@ -184,14 +185,7 @@ class Twist(Term):
     def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Every segment's dense block of its nodes' DOFs, row-major."""
         t = self.twists
-        rows, cols = [], []
-        for s in range(len(t)):
-            dofs = (3 * t.nodes[t.start[s] : t.start[s + 1], None] + np.arange(3)).ravel()
-            rows.append(np.repeat(dofs, dofs.size))
-            cols.append(np.tile(dofs, dofs.size))
-        if not rows:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(rows), np.concatenate(cols)
+        return dense_blocks(t.nodes[t.start[s] : t.start[s + 1]] for s in range(len(t)))
 
     def energy(self, x: np.ndarray) -> float:
         m = self.moments(x)
