@@ -13,6 +13,11 @@
    to 200^2 cells, every node's radius 0.6 of a cell (each edge pairs with its parallel
    neighbours one cell away): time per edge should stay flat (linear cost), where all
    pairs would grow with the square.
+4. The folded net to its default end: configs/contact/folded_net.toml without
+   ``solver.t_end`` (10 s, 1 000 steps of a net landing on itself), as ``catenet run``
+   (the fuzz harness's ``invoke``): it must end "ok" within the fuzz run's limit of 120 s
+   of processor time (the long fuzz run once judged it a hang); its CPU seconds. (A test
+   until it took a sixth of the suite's time: tests check answers, not time.)
 
 Usage: ``python benchmarks/self_contact.py [--repeat K] [--quick]``.
 """
@@ -103,6 +108,28 @@ def grid_scaling(quick: bool) -> None:
         )
 
 
+def folded_to_its_end() -> None:
+    import sys
+    import tempfile
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from fuzzing import CONFIGS, copy_beside, invoke, judge
+
+    print("\n4. the folded net to its default end (10 s), as catenet run")
+    source = CONFIGS / "contact" / "folded_net.toml"
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        copy_beside(source, work)
+        text = source.read_text()
+        case = work / "case.toml"
+        case.write_text("\n".join(x for x in text.splitlines() if not x.startswith("t_end")))
+        start = time.process_time()
+        result = invoke(["run", case, "-o", work / "o.h5", "-q"], seconds=120, cwd=work)
+        cpu = time.process_time() - start
+        outcome = judge(result, work)
+    print(f"outcome {outcome.kind!r} (must be 'ok'), {cpu:.1f} s of CPU (limit 120)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
@@ -111,6 +138,8 @@ def main() -> None:
     wrapped(args.repeat, args.quick)
     off_is_free(args.repeat)
     grid_scaling(args.quick)
+    if not args.quick:
+        folded_to_its_end()
 
 
 if __name__ == "__main__":

@@ -584,22 +584,6 @@ def test_a_run_still_taking_steps_at_its_checkpoint_is_long_and_a_stuck_one_a_ha
     assert 0.5 <= time.process_time() - start < 3.0
 
 
-@pytest.mark.slow
-def test_the_folded_net_run_to_its_default_end_is_ok(tmp_path):
-    """The case itself: ``configs/contact/folded_net.toml`` without ``solver.t_end`` (10 s,
-    1 000 steps of a net landing on itself) ends with exit 0 within the fuzz run's limit
-    of 120 s of processor time."""
-    from fuzzing import CONFIGS, copy_beside
-
-    copy_beside(CONFIGS / "contact" / "folded_net.toml", tmp_path)
-    text = (CONFIGS / "contact" / "folded_net.toml").read_text()
-    case = "\n".join(line for line in text.splitlines() if not line.startswith("t_end"))
-    path = tmp_path / "case.toml"
-    path.write_text(case)
-    result = invoke(["run", path, "-o", tmp_path / "o.h5", "-q"], seconds=120, cwd=tmp_path)
-    assert judge(result, tmp_path).kind == "ok", judge(result, tmp_path)
-
-
 # --- a node that starts on an obstacle within round-off -----------------------------------------
 
 
