@@ -14,8 +14,9 @@ orthogonal Procrustes problem), so that E = 2 sum_i k_i - 2 tr(R^T B). Each memb
 term is a clamp's (``catenet.kernels.bending``: the rod's end mirrored at the clamp), so
 that two members in line are the hinge of a straight rod, EI / (l1 + l2) |t2 - t1|^2 to
 second order, at any angle between them (a joint drawn at 90 degrees is as stiff as a
-straight rod's hinge). The joint holds no twist (as a pinned end: a twisting rod's chain
-ends there) and turning one member about another's axis is free where no member twists.
+straight rod's hinge). The joint holds no twist: a twisting rod that ends there untwists
+(as at a pinned end; a line passing through keeps its twist along itself), and turning one
+member about another's axis costs nothing where it bends no member (``turn_warning``).
 ``catenet.kernels.joints`` derives E and its exact derivatives.
 """
 
