@@ -339,7 +339,7 @@ def _check_time_steps(ck: Checker, solver: SolverConfig) -> None:
         if value is not None and 0.0 < value < MIN_DT:
             ck.add(
                 f"solver.{key} = {value!r}: too short to step with (the step's inertia m / "
-                f"dt^2 would overflow): give at least {MIN_DT:g} s"
+                f"dt^2 and its forces overflow below about 1e-80 s): give at least {MIN_DT:g} s"
             )
             return
     adaptive = solver.tolerance is not None and isinstance(t_end, (int, float))
