@@ -220,7 +220,12 @@ def describe_zero_modes(
         (
             nodes[~loose[nodes] & ~floating[nodes] & ~body[nodes]],
             "are a mechanism of the taut edges (untensioned straight edges or a chain "
-            "that turns freely)",
+            "that turns freely"
+            + (
+                ", or rods turning about each other's axes at a rigid joint, which holds no twist)"
+                if any(t.name == "joints" for t in system.terms)
+                else ")"
+            ),
         ),
     ]
     parts = []

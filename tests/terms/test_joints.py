@@ -196,7 +196,8 @@ def test_the_l_frame_meets_its_closed_form_to_second_order(tmp_path):
 def test_without_the_joint_the_corner_is_a_pin(tmp_path):
     """The unloaded L-frame's modes: with the rigid joint none is free; with the corner
     pinned (no rigid_joints), the beam turning about the pin is a zero-frequency mode,
-    named."""
+    named; rigid but without the roller, the beam turning round the column is one, said
+    to be the joint's."""
     text = L_FRAME.replace("EDGE", "0.25").replace("FORCE", "[0.0, 0.0, 0.0]")
     text = text.replace("EA = 2.0e9", "EA = 2.0e9\ndensity = 7850.0\narea = 1e-3")
     done, _ = _run(tmp_path, text, "--count", "1", command="modes")
@@ -205,6 +206,11 @@ def test_without_the_joint_the_corner_is_a_pin(tmp_path):
     done, _ = _run(tmp_path, pinned, "--count", "1", command="modes")
     assert done.exit_code == 0, done.output
     assert "1 zero-frequency mode" in done.output and "cables beam" in done.output
+    assert "rigid joint" not in done.output
+    done, _ = _run(tmp_path, text.replace(*FREE), "--count", "1", command="modes")
+    said = " ".join(done.output.split())  # rigid, but nothing holds the beam's turn
+    assert done.exit_code == 0 and "1 zero-frequency mode" in said, said
+    assert "rods turning about each other's axes at a rigid joint" in said
 
 
 @pytest.mark.roundoff
