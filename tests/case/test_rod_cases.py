@@ -219,9 +219,9 @@ def test_a_released_cantilever_keeps_its_energy_balance(tmp_path):
     assert z2 == pytest.approx(z1, rel=0.03)  # the tip's lowest point, to the step's error
 
 
-def _mast_bow(edges: int) -> tuple[float, float]:
-    """The guyed mast of configs/ as a rod in ``edges`` edges under wind along it: the
-    bow at mid-height from the chord, and the beam-column's (see below)."""
+def _guyed_mast(edges: int, guy_EA: float = 2.0e7) -> dict:
+    """The guyed mast of configs/ (docs/howto/guyed-mast.md) as a rod in ``edges`` edges
+    under a uniform wind w along it, with its guys' EA: what the tests below compare."""
     import tomllib
 
     from conftest import CONFIGS
@@ -234,16 +234,32 @@ def _mast_bow(edges: int) -> tuple[float, float]:
     mast = data["geometry"]["cable"][0]
     mast["edge_length"] = L / edges
     mast["material"]["EI"] = EI
+    data["material"]["EA"] = guy_EA
     data["load"] = {"line": [{"cable": "mast", "force": [w, 0.0, 0.0]}]}
     scene = build(parse_case(data))
     result = solve(scene)
     assert result.converged and result.stability == "stable"
     net = scene.net
     on = np.flatnonzero(scene.cables.edge == 0)
+    guys = [float(np.mean(result.tension[scene.cables.edge == c])) for c in range(1, 5)]
+    assert min(guys) > 0.0  # every guy taut: the linear hand calculation holds
     chain = [int(net.edges[on[0], 0])] + [int(e) for e in net.edges[on, 1]]
-    d = result.x - net.nodes
+    return {
+        "EI": EI,
+        "w": w,
+        "L": L,
+        "d": result.x - net.nodes,
+        "chain": chain,
+        "P": -float(np.mean(result.tension[on])),
+        "guys": guys,
+    }
+
+
+def _mast_bow(edges: int) -> tuple[float, float]:
+    """The mast's bow at mid-height from the chord, and the beam-column's (see below)."""
+    mast = _guyed_mast(edges)
+    EI, w, L, d, chain, P = (mast[k] for k in ("EI", "w", "L", "d", "chain", "P"))
     bow = d[chain[edges // 2], 0] - 0.5 * (d[chain[0], 0] + d[chain[-1], 0])
-    P = -float(np.mean(result.tension[on]))
     assert 0.1 < P / (math.pi**2 * EI / L**2) < 0.3  # the P-delta amplification shows
     u = 0.5 * L * math.sqrt(P / EI)
     return bow, 5 * w * L**4 / (384 * EI) * 12 * (2 / math.cos(u) - 2 - u * u) / (5 * u**4)
@@ -261,3 +277,31 @@ def test_guyed_mast_as_a_rod_meets_the_beam_column_under_wind():
     err_coarse, err_fine = abs(coarse / exact - 1), abs(fine / same - 1)
     assert err_fine < 1e-2
     assert 1.8 < math.log2(err_coarse / err_fine) < 2.2
+
+
+@pytest.mark.parametrize("guy_EA", [2.0e7, 2.0e6])
+def test_guyed_mast_as_a_rod_top_displacement_by_hand(guy_EA):
+    """The same mast under wind: the top moves by the half of the wind that the top carries,
+    w L / 2 (a pinned member's end reaction), over the guys' horizontal stiffness less the
+    mast's P-delta, u = (w L / 2) / (K - P / L). K is the guys' tangent: EA / l0 cos^2 along
+    each guy in the wind's plane (0.6 of its unit vector horizontal) plus T / l_g across it
+    (all four), at the tensions and the compression P as solved (the bow shortens the chord
+    and the guys relax). Within 1 % (7e-4 and 8e-4: the top's 11 mm drop turns the guys),
+    with the docs' steel strand and with guys ten times softer, where the P-delta and the
+    guys' geometric stiffness are 5 % and 4 % of K (so the check sees both). Split into 10 or
+    20 edges, the top moves the same to 1e-4 (8e-6 and 1.5e-5)."""
+    tops = []
+    for edges in (10, 20):
+        mast = _guyed_mast(edges, guy_EA)
+        w, L, P, guys = mast["w"], mast["L"], mast["P"], mast["guys"]
+        l_g, T0 = 25.0, 20.0e3  # each guy's length, its prestress in the drawn geometry
+        axial = guy_EA / (l_g / (1.0 + T0 / guy_EA))  # EA over the rest length
+        K = 2 * 0.36 * axial + 0.64 * (guys[0] + guys[1]) / l_g + (guys[2] + guys[3]) / l_g
+        by_hand = 0.5 * w * L / (K - P / L)
+        top = mast["d"][mast["chain"][-1]]
+        assert abs(top[0] / by_hand - 1.0) < 1e-2
+        assert abs(top[1]) < 1e-9 * abs(top[0])
+        tops.append(top[0])
+    assert tops[1] == pytest.approx(tops[0], rel=1e-4)
+    if guy_EA < 1e7:
+        assert P / L > 0.03 * K  # the mast's P-delta is larger than the tolerance
