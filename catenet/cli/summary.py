@@ -89,9 +89,10 @@ def state_lines(
         )
     if s.get("compressed_edges", 0):
         n = s["compressed_edges"]
+        what = "edge" if "max_bending_moment" in s else "strut"  # rods: not all struts
         lines.append(
             f"{'compression':<{W}} {s['max_compression']:.6g} N (edge "
-            f"{s['max_compression_edge']}; {n} strut{'' if n == 1 else 's'} in compression)"
+            f"{s['max_compression_edge']}; {n} {what}{'' if n == 1 else 's'} in compression)"
         )
     if "max_bending_moment" in s:
         lines.append(
@@ -163,12 +164,17 @@ def _cable_peak(c: dict, dynamic: bool | str) -> str:
 def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
     """One cable's line: a tie's largest tension (and its peak over the run when that is
     higher) and slack share, a strut's compression."""
+    bent = ""
+    if c.get("rod"):  # edges that bend: the largest bending moment along it
+        bent = f", largest bending moment {c['max_bending_moment']:.6g} N m"
     if c.get("strut"):
+        kind = "a rod" if c.get("rod") else "a strut"
         if c["max_compression"] > 0:
-            return f"{'cable':<{W}} {name}: a strut, compression {c['max_compression']:.6g} N"
+            return f"{'cable':<{W}} {name}: {kind}, compression {c['max_compression']:.6g} N" + bent
         return (
-            f"{'cable':<{W}} {name}: a strut, max tension {c['max_tension']:.6g} N"
+            f"{'cable':<{W}} {name}: {kind}, max tension {c['max_tension']:.6g} N"
             + _cable_peak(c, dynamic)
+            + bent
         )
     line = (
         f"{'cable':<{W}} {name}: max tension {c['max_tension']:.6g} N"
@@ -180,7 +186,7 @@ def cable_line(name: str, c: dict, dynamic: bool | str = True) -> str:
         line += f" ({c['slack_edges']} slack edges)"
     if c.get("max_compression", 0) > 0:
         line += f", compression {c['max_compression']:.6g} N in its struts"
-    return line
+    return line + bent
 
 
 def utilisation_line(base: dict, cases: dict) -> str:

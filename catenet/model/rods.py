@@ -248,3 +248,24 @@ def bending_moment(rods: Rods, x: np.ndarray, n_nodes: int) -> tuple[np.ndarray,
     np.maximum.at(moment, c, 2.0 * rods.kc * d)
     np.maximum.at(kappa, c, 2.0 * d / rods.clamp_length)
     return moment, kappa
+
+
+def bending_edges(rods: Rods, edges: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
+    """(M,) bool: the ``edges`` (M, 2) that bend: an edge of a hinge or a clamp's end edge,
+    and those of the node ``pairs`` (P, 2) given (a rigid joint's members)."""
+    m = len(edges)
+    n = int(edges.max()) + 1 if m else 0
+    key = np.sort(edges, axis=1) @ np.array([n, 1], dtype=np.int64)
+    order = np.argsort(key)
+    found = [rods.hinges[:, :2], rods.hinges[:, 1:], rods.clamps]
+    if pairs is not None:
+        found.append(pairs)
+    ends = np.concatenate([np.asarray(p, dtype=np.int64).reshape(-1, 2) for p in found])
+    out = np.zeros(m, dtype=bool)
+    if not m or not len(ends):
+        return out
+    want = np.sort(ends, axis=1) @ np.array([n, 1], dtype=np.int64)
+    at = np.minimum(np.searchsorted(key, want, sorter=order), m - 1)
+    hit = key[order[at]] == want
+    out[order[at[hit]]] = True
+    return out

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from catenet.case import build, load_case, parse_case
+from catenet.case import build, dumps_toml, load_case, parse_case
 from catenet.cli import main
 from catenet.run.runner import run_case
 from tests.conftest import CONFIGS
@@ -191,3 +191,45 @@ def test_a_ball_gets_its_line_in_the_summary_as_a_free_body_does(tmp_path):
         v = f["/result/v"][node]
     speed = float(line.split("speed ")[1].split(" m/s")[0])
     assert speed == pytest.approx(float(np.linalg.norm(v)), rel=1e-3)
+
+
+def test_rods_are_named_rods_with_their_largest_bending_moment(tmp_path):
+    """The L-frame of docs/howto/rods.md (a column clamped at its foot, a 2 m beam at a
+    rigid corner, 100 N down at the beam's tip): each member's line says it is a rod and
+    gives its largest bending moment, P b = 200 N m at the foot and at the corner (the
+    beam's; to the tip's small sway), where the beam carries no axial force and was called
+    "a strut, max tension 0.2 N"; the compression line counts edges, not struts."""
+    frame = {
+        "title": "L-frame",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, 3.0], [2.0, 0.0, 3.0]],
+            "edge_length": 0.25,
+            "sets": {"foot": [0], "corner": [1], "tip": [2]},
+            "cable": [
+                {"name": "column", "nodes": ["foot", "corner"]},
+                {"name": "beam", "nodes": ["corner", "tip"]},
+            ],
+        },
+        "material": {"E": 210e9, "radius": 0.05, "inner_radius": 0.045, "EI": "section"},
+        "supports": {
+            "fixed": ["foot"],
+            "clamped": ["foot"],
+            "rigid_joints": ["corner"],
+            "roller": [{"nodes": ["tip"], "normal": [0.0, 1.0, 0.0]}],
+        },
+        "load": {"point": [{"node": "tip", "force": [0.0, 0.0, -100.0]}]},
+    }
+    case = tmp_path / "frame.toml"
+    case.write_text(dumps_toml(frame))
+    r = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "f.h5")])
+    assert r.exit_code == 0, r.output
+    lines = {ln.split(":")[0].split()[-1]: ln for ln in r.output.splitlines() if "cable  " in ln}
+    assert "column: a rod, compression 100 N, largest bending moment 200." in lines["column"]
+    assert "beam: a rod, max tension " in lines["beam"] and "strut" not in lines["beam"]
+    assert "largest bending moment 200" in lines["beam"]
+    assert "edges in compression)" in r.output and "struts in compression" not in r.output
+    s = run_case(parse_case(frame), tmp_path / "g.h5").report.summary
+    for name in ("column", "beam"):
+        row = s["cables"][name]
+        assert row["rod"] and row["max_bending_moment"] == pytest.approx(200.0, rel=2e-3)
