@@ -227,9 +227,12 @@ def bending_term(rods: Rods, n_nodes: int) -> Bending:
     return Bending(rods, n_nodes)
 
 
-def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int) -> Twist | None:
+def case_twist(
+    case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int, joints: Any = None
+) -> Twist | None:
     """The rods' ``Twist`` term (None: no rod twists): the chains of edges with GJ > 0
-    clamped at both ends and the rings, each clamp of [[supports.twist]] turned."""
+    held at both ends (clamped, or on a rigid joint of ``joints``) and the rings, each
+    clamp of [[supports.twist]] turned."""
     twisted = case.supports.twists
     _, gj, _, line = _per_edge(case, built, net)
     if rods is None or not (gj > 0.0).any():
@@ -246,7 +249,7 @@ def case_twist(case: Case, built: Any, net: Net, rods: Rods | None, n_nodes: int
     from catenet.terms.twist import Twist
 
     rigid = rods.rigid  # a rotational spring holds no twist: the rod untwists there
-    twists = build_twists(net, gj, line, rods.clamps[rigid], rods.tangent[rigid])
+    twists = build_twists(net, gj, line, rods.clamps[rigid], rods.tangent[rigid], joints)
     clamped = set(rods.clamps[rigid, 0].tolist())
     imposed = []
     seen: dict[int, str] = {}
@@ -292,7 +295,7 @@ def _ring_twists(case: Case, twists: Any, line: np.ndarray) -> list:
 
 
 def case_torsion(
-    case: Case, built: Any, net: Net, rods: Rods | None, twist: Twist | None
+    case: Case, built: Any, net: Net, rods: Rods | None, twist: Twist | None, joints: Any = None
 ) -> Torsion | None:
     """The twisting chains with their twist angles as DOFs for ``catenet modes``
     (``catenet.model.torsion``; None: no rod twists). Where a twisting rod's rotational
@@ -311,7 +314,7 @@ def case_torsion(
     known = np.where(np.isnan(polar), 0.0, polar)
     torsion = build_torsion(
         net, gj, known, line, rods.clamps[rigid], rods.tangent[rigid],
-        None if twist is None else twist.twists,
+        None if twist is None else twist.twists, joints,
     )  # fmt: skip
     unknown = (gj > 0.0) & np.isnan(polar)
     if not unknown.any():

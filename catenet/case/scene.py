@@ -109,7 +109,8 @@ def _build(case: Case) -> Scene:
     joints = case_joints(case, built, net, scene.net.n_nodes)
     if joints is not None:
         scene = scene.with_terms(joints)
-    twist = case_twist(case, built, net, rods, scene.net.n_nodes)
+    held = None if joints is None else joints.joints  # rigid joints hold the twist too
+    twist = case_twist(case, built, net, rods, scene.net.n_nodes, held)
     if twist is not None:
         scene = scene.with_terms(twist)
     scene = dataclasses.replace(
@@ -117,7 +118,7 @@ def _build(case: Case) -> Scene:
         cases=_load_cases(case, scene.net, built),
         design=edge_design(case, scene.net, built),
         coarsen=functools.partial(_coarser, case, scene.net.n_nodes),
-        torsion=case_torsion(case, built, net, rods, twist),
+        torsion=case_torsion(case, built, net, rods, twist, held),
     )
     if case.solver.self_contact:
         strands = self_contact(case.solver, scene.net, scene.loads, scene.edge_radius)

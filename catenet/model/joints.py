@@ -14,9 +14,11 @@ orthogonal Procrustes problem), so that E = 2 sum_i k_i - 2 tr(R^T B). Each memb
 term is a clamp's (``catenet.kernels.bending``: the rod's end mirrored at the clamp), so
 that two members in line are the hinge of a straight rod, EI / (l1 + l2) |t2 - t1|^2 to
 second order, at any angle between them (a joint drawn at 90 degrees is as stiff as a
-straight rod's hinge). The joint holds no twist: a twisting rod that ends there untwists
-(as at a pinned end; a line passing through keeps its twist along itself), and turning one
-member about another's axis costs nothing where it bends no member (``turn_warning``).
+straight rod's hinge). The joint holds the twist of a rod that twists (GJ > 0) and ends
+there (``catenet.model.twist``: its twist measured against a partner member's direction;
+a line passing through is split at the joint); a rod that does not twist turns freely
+about its own axis there, and turning one member about such a rod's axis costs nothing
+where it bends no member (``turn_warning``).
 ``catenet.kernels.joints`` derives E and its exact derivatives.
 """
 
@@ -126,11 +128,41 @@ TURN_SHARE = 0.1
 TURN_FLOOR = 1e-9
 
 
-def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, float, int, int] | None:
+def would_twist(joints: Joints, hinges: np.ndarray, holding: set[int]) -> frozenset:
+    """(joint node, member's other node) of every member whose rod, followed along its
+    hinges (``hinges`` (H, 3): a ``Rods``'), ends at a node in ``holding`` (a rigid clamp
+    or a rigid joint) or closes on itself: a rod whose twist the joint's turn about it
+    would change. A rod with a free or pinned far end turns with the joint at no cost."""
+    step: dict[tuple[int, int], int] = {}
+    for i, j, k in np.asarray(hinges, dtype=np.int64).tolist():
+        step[(i, j)] = k
+        step[(k, j)] = i
+    out = set()
+    for jj in range(len(joints)):
+        node = int(joints.node[jj])
+        for other in joints.other[joints.start[jj] : joints.start[jj + 1]].tolist():
+            prev, cur = node, int(other)
+            for _ in range(len(step) + 1):
+                if (prev, cur) not in step:
+                    break
+                prev, cur = cur, step[(prev, cur)]
+            else:
+                out.add((node, int(other)))  # a ring
+                continue
+            if cur in holding:
+                out.add((node, int(other)))
+    return frozenset(out)
+
+
+def turned_about_members(
+    joints: Joints, x: np.ndarray, held: frozenset = frozenset(), watch: frozenset | None = None
+) -> tuple[float, float, int, int] | None:
     """(share, angle [rad], joint node, member's other node) of the joint whose turn at x
     (its rotation R's axis-angle vector) has the largest component about one of its
     members' axes, over the whole turn (share) and as an angle; components below
-    TURN_FLOOR do not count (None: none, or no joints)."""
+    TURN_FLOOR do not count, nor members whose twist the joint holds (``held``: pairs of
+    joint node and member's other node; ``catenet.terms.twist.Twist.joint_members``), nor
+    where ``watch`` is given members not in it (None: none, or no joints)."""
     from catenet.kernels.joints import joint_rotations
 
     if not len(joints):
@@ -153,6 +185,9 @@ def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, float, i
         else:
             continue
         for p in range(joints.start[j], joints.start[j + 1]):
+            pair = (int(joints.node[j]), int(joints.other[p]))
+            if pair in held or (watch is not None and pair not in watch):
+                continue  # a rod that twists, or one whose far end lets it turn
             t = x[joints.other[p]] - x[joints.node[j]]
             share = abs(float(axis @ t)) / float(np.linalg.norm(t))
             if angle * share > TURN_FLOOR and (best is None or share > best[0]):
@@ -160,11 +195,19 @@ def turned_about_members(joints: Joints, x: np.ndarray) -> tuple[float, float, i
     return best
 
 
-def turn_warning(joints: Joints, x: np.ndarray, net: Net, cables=None) -> str | None:
-    """The warning where a rigid joint's turn is about a member's axis by more than
-    TURN_SHARE of it (``turned_about_members``), else None; ``cables`` (a scene's:
-    ``names``, ``edge``) names the member's cable."""
-    found = turned_about_members(joints, x)
+def turn_warning(
+    joints: Joints,
+    x: np.ndarray,
+    net: Net,
+    cables=None,
+    held: frozenset = frozenset(),
+    watch: frozenset | None = None,
+) -> str | None:
+    """The warning where a rigid joint's turn is about the axis of a member that does not
+    twist (``held``: those that do) but would (``watch``: ``would_twist``; None: any) by
+    more than TURN_SHARE of it (``turned_about_members``), else None; ``cables`` (a
+    scene's: ``names``, ``edge``) names the member's cable."""
+    found = turned_about_members(joints, x, held, watch)
     if found is None or not found[0] > TURN_SHARE:
         return None
     share, angle, node, other = found
@@ -178,10 +221,10 @@ def turn_warning(joints: Joints, x: np.ndarray, net: Net, cables=None) -> str | 
         member += f" (cable {cables.names[int(cables.edge[at[0]])]!r})"
     return (
         f"the rigid joint at node {node} turned by {np.degrees(angle):.3g} deg about the "
-        f"axis of {member}, {100.0 * share:.3g} % of its turn: a rigid joint holds the "
-        "angles between its rods but no twist, so where a rod would twist (a frame loaded "
-        "out of its plane) it turns freely about its axis: the frame carries that load as "
-        "if its rods had no torsional stiffness (less shared between its members, or "
-        "turning as a mechanism); hold the frame against those turns (supports, bracing) "
-        "or read the result so (docs/howto/rods.md#rigid-joints)"
+        f"axis of {member}, {100.0 * share:.3g} % of its turn, and that rod does not "
+        "twist: it turns freely about its axis there (a frame loaded out of its plane "
+        "carries that load as if the rod had no torsional stiffness: less shared between "
+        "its members, or turning as a mechanism); give the rod GJ > 0 and hold its twist "
+        "at its other end too (a clamp or another rigid joint), or hold the frame against "
+        "those turns (supports, bracing) (docs/howto/rods.md#rigid-joints)"
     )

@@ -465,15 +465,14 @@ def support_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
     x = np.asarray(x, dtype=np.float64)
     out = rodends.support_moments(scene.net, scene_rods(scene), x)
     term = _twist_term(scene)
-    if term is None or term.twists.closed.all():  # rings: no support holds them
+    if term is None:
         return out
-    twists = term.twists
+    twists = term.twists  # clamped ends (rings and rigid joints: no support holds them)
+    clamped = ~twists.closed[:, None] & (twists.partner < 0)
+    if not clamped.any():
+        return out
     torque = np.zeros_like(x)
-    np.add.at(
-        torque,
-        twists.ends[~twists.closed].ravel(),
-        term.end_moments(x)[~twists.closed].reshape(-1, 3),
-    )
+    np.add.at(torque, twists.ends[clamped], term.end_moments(x)[clamped])
     return torque if out is None else out + torque
 
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.model.net import Net
-from catenet.model.twist import Twists, _chains
+from catenet.model.twist import Twists, _chains, joint_partner
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,7 +45,10 @@ class Torsion:
 
     nodes, start, edges, first, closed : as ``catenet.model.twist.Twists`` (every chain
         with GJ > 0 and a rotational inertia, whatever holds its ends)
-    held : (S, 2) bool, an open chain's head and tail clamped (their twist held)
+    held : (S, 2) bool, an open chain's head and tail clamped or on a rigid joint (their
+        twist held)
+    partner : (S, 2) int64, at an end on a rigid joint its partner's node
+        (``catenet.model.twist``; -1: none)
     head, tail : (S, 3) the clamps' held tangents along the chain (0 where free)
     compliance : (E,) each chain edge row's l0 / GJ [1/(N m)]
     inertia : (E,) its rotational inertia rho J_p l0 [kg m^2]
@@ -61,6 +64,7 @@ class Torsion:
     first: np.ndarray
     closed: np.ndarray
     held: np.ndarray
+    partner: np.ndarray
     head: np.ndarray
     tail: np.ndarray
     compliance: np.ndarray
@@ -94,7 +98,7 @@ class Torsion:
         n = 3 * x.shape[0]
         comp, who, grad, rows = vertex_gradients(
             x, self.nodes, self.start, self.closed, self.head, self.tail, self.held,
-            self.compliance,
+            self.compliance, self.partner,
         )  # fmt: skip
         dofs = np.where(who[:, :, None] >= 0, 3 * who[:, :, None] + np.arange(3), -1)
         dofs, grad = dofs.reshape(len(comp), 9), grad.reshape(len(comp), 9)
@@ -112,8 +116,11 @@ class Torsion:
             seg = int(self.segment[s])
             lo, hi = twists.start[seg], twists.start[seg + 1]
             args = (twists.nodes, lo, hi, twists.closed, twists.head, twists.tail, seg)
-            g = segment_gradient(x, *args)
-            d = (3 * twists.nodes[lo:hi, None] + np.arange(3)).ravel()
+            g = segment_gradient(x, *args, twists.partner)
+            local = np.concatenate(
+                [twists.nodes[lo:hi], twists.partner[seg][twists.partner[seg] >= 0]]
+            )
+            d = (3 * local[:, None] + np.arange(3)).ravel()
             scale = -1.0 / float(twists.compliance[seg])
             parts.append((np.repeat(d, d.size), np.tile(d, d.size), scale * np.outer(g, g).ravel()))
         dk = sp.coo_matrix(
@@ -154,36 +161,50 @@ def build_torsion(
     clamps: np.ndarray,
     tangent: np.ndarray,
     twists: Twists | None,
+    joints=None,
 ) -> Torsion | None:
     """The twisting chains of ``net`` with twist angles as DOFs (None: none): GJ (M,) per
     edge [N m^2], ``polar`` (M,) the mass polar moment per length rho J_p [kg m] (a chain
     with an edge of 0 keeps its twist eliminated), ``line`` (M,), the rigid clamps (C, 2)
-    and their held tangents (C, 3) (``catenet.model.twist.build_twists``'s), and the twist
-    term's segments (None: no chain is held at both ends)."""
+    and their held tangents (C, 3) and the rigid joints (``catenet.model.twist.build_twists``'s),
+    and the twist term's segments (None: no chain is held at both ends)."""
     GJ = np.asarray(GJ, dtype=np.float64)
     polar = np.asarray(polar, dtype=np.float64)
     held = {int(c): (int(o), tangent[k]) for k, (c, o) in enumerate(clamps)}
     seg_of = {}
     if twists is not None:
         seg_of = {int(twists.edges[twists.first[s]]): s for s in range(len(twists))}
-    edges = net.edges
+    edges, x = net.edges, net.nodes
+    cuts = frozenset() if joints is None else frozenset(joints.node.tolist())
     parts = []
-    for run, closed in _chains(edges, np.asarray(line), GJ > 0.0):
+    for run, closed in _chains(edges, np.asarray(line), GJ > 0.0, cuts):
         if not np.all(polar[run] > 0.0):
             continue
         chain = [int(edges[e, 0]) for e in run]
         head = tail = np.zeros(3)
         ends = [False, False]
+        partner = [-1, -1]
         if not closed:
             chain.append(int(edges[run[-1], 1]))
-            a, b = chain[0], chain[-1]
-            if held.get(a, (-1,))[0] == chain[1]:
-                ends[0], head = True, np.asarray(held[a][1], dtype=np.float64)
-            if held.get(b, (-1,))[0] == chain[-2]:
-                ends[1], tail = True, -np.asarray(held[b][1], dtype=np.float64)
+            for end, (node, near, sign) in enumerate(
+                ((chain[0], chain[1], 1.0), (chain[-1], chain[-2], -1.0))
+            ):
+                if held.get(node, (-1,))[0] == near:
+                    ends[end] = True
+                    along = sign * np.asarray(held[node][1], dtype=np.float64)
+                elif (found := joint_partner(joints, node, near, x)) is not None:
+                    ends[end], partner[end] = True, found[0]
+                    along = sign * (x[near] - x[node]) / np.linalg.norm(x[near] - x[node])
+                else:
+                    continue
+                if end == 0:
+                    head = along
+                else:
+                    tail = along
         comp = net.rest_length[run] / GJ[run]
         inertia = polar[run] * net.rest_length[run]
-        parts.append((chain, run, closed, ends, head, tail, comp, inertia, seg_of.get(run[0], -1)))
+        segment = seg_of.get(run[0], -1)
+        parts.append((chain, run, closed, ends, head, tail, comp, inertia, segment, partner))
     if not parts:
         return None
     return Torsion(
@@ -193,6 +214,7 @@ def build_torsion(
         first=np.cumsum([0] + [len(p[1]) for p in parts])[:-1].astype(np.int64),
         closed=np.asarray([p[2] for p in parts], dtype=np.bool_),
         held=np.asarray([p[3] for p in parts], dtype=np.bool_).reshape(-1, 2),
+        partner=np.asarray([p[9] for p in parts], dtype=np.int64).reshape(-1, 2),
         head=np.ascontiguousarray(np.array([p[4] for p in parts]).reshape(-1, 3)),
         tail=np.ascontiguousarray(np.array([p[5] for p in parts]).reshape(-1, 3)),
         compliance=np.concatenate([p[6] for p in parts]).astype(np.float64),
@@ -207,6 +229,7 @@ def no_torsion() -> Torsion:
     return Torsion(
         nodes=empty, start=np.zeros(1, dtype=np.int64), edges=empty, first=empty,
         closed=np.zeros(0, dtype=np.bool_), held=np.zeros((0, 2), dtype=np.bool_),
+        partner=np.zeros((0, 2), dtype=np.int64),
         head=np.zeros((0, 3)), tail=np.zeros((0, 3)), compliance=np.zeros(0),
         inertia=np.zeros(0), segment=empty,
     )  # fmt: skip

@@ -8,6 +8,15 @@ both ends carry twist: an open chain whose two ends are clamped (``supports.clam
 holds the tangent and the twist) and a closed ring (its twist, the link of its two
 edges, is conserved). A chain with a free or pinned end untwists at no cost.
 
+A rigid joint (``catenet.model.joints``) holds the twist of the rods that meet there:
+a chain ends at a joint node (a line passing through one is split there), and its
+twist at that end is measured against the joint's director, D = cos(phi0) n +
+sin(phi0) t x n, n the unit part of another member's direction (the joint's member most
+normal to the chain's end edge, its ``partner``) normal to the end tangent t, phi0 such
+that the rod is untwisted as given. Turning the partner about the rod's axis twists the
+rod; where the joint's members keep their angles (its bending, EI / l, stiff against
+the twist) that is the joint's own turn.
+
 Each clamp may turn its end about the rod's axis (``[[supports.twist]]``): by an angle
 right-handed about the outward tangent (pointing out of the rod there), so that turning
 either end by a positive angle twists the rod right-handed and the segment's imposed
@@ -23,6 +32,9 @@ import numpy as np
 from catenet.errors import ConfigError
 from catenet.model.net import Net
 
+#: A joint's partner member must be at least this far from the rod's axis (the sine).
+PARTNER = 0.1
+
 
 @dataclass(frozen=True, eq=False)
 class Twists:
@@ -37,6 +49,9 @@ class Twists:
         is head_dir carried along the given geometry, so that it is untwisted
     compliance : (S,) sum over its edges of l0 / GJ [1/(N m)]
     ends : (S, 2) int64, an open segment's first and last node (-1: a ring)
+    partner : (S, 2) int64, at an end on a rigid joint, the other node of the joint's
+        partner member (-1: a clamp, or a ring)
+    phase : (S, 2) there, phi0: the director's angle from the partner's normal part
     """
 
     nodes: np.ndarray
@@ -50,6 +65,8 @@ class Twists:
     tail_dir: np.ndarray
     compliance: np.ndarray
     ends: np.ndarray
+    partner: np.ndarray
+    phase: np.ndarray
 
     def __len__(self) -> int:
         return len(self.closed)
@@ -61,8 +78,11 @@ class Twists:
         return (int(hit[0, 0]), int(hit[0, 1])) if len(hit) else (-1, -1)
 
 
-def _chains(edges: np.ndarray, line: np.ndarray, twists: np.ndarray) -> list[tuple[list, bool]]:
-    """The runs of consecutive twisting edges of each line (edge lists, closed)."""
+def _chains(
+    edges: np.ndarray, line: np.ndarray, twists: np.ndarray, cuts: frozenset = frozenset()
+) -> list[tuple[list, bool]]:
+    """The runs of consecutive twisting edges of each line (edge lists, closed), split at
+    the nodes ``cuts`` (rigid joints: each side's twist ends there)."""
     by_line: dict[int, list[int]] = {}
     for e in np.flatnonzero(twists & (line >= 0)):
         by_line.setdefault(int(line[e]), []).append(int(e))
@@ -70,13 +90,49 @@ def _chains(edges: np.ndarray, line: np.ndarray, twists: np.ndarray) -> list[tup
     for chain in by_line.values():
         runs = [[chain[0]]]
         for a, b in zip(chain[:-1], chain[1:], strict=True):
-            if edges[a, 1] == edges[b, 0]:
+            if edges[a, 1] == edges[b, 0] and int(edges[b, 0]) not in cuts:
                 runs[-1].append(b)
             else:
                 runs.append([b])
-        closed = len(runs) == 1 and len(chain) > 2 and edges[chain[-1], 1] == edges[chain[0], 0]
+        loop = len(chain) > 2 and edges[chain[-1], 1] == edges[chain[0], 0]
+        closed = loop and len(runs) == 1 and int(edges[chain[0], 0]) not in cuts
+        if loop and len(runs) > 1 and int(edges[chain[0], 0]) not in cuts:
+            runs[0] = runs.pop() + runs[0]  # a ring cut at a joint: one run round it
         out += [(run, closed) for run in runs]
     return out
+
+
+def joint_partner(joints, node: int, other: int, x: np.ndarray) -> tuple[int, float] | None:
+    """At the rigid joint ``node`` (``joints``: a ``catenet.model.joints.Joints``, None:
+    none), the partner of the member towards ``other`` for its twist, whose direction's
+    part normal to it is the twist's reference there: (the other node of the joint's
+    member most normal to it, the sine of their angle); None where no joint is there or
+    every other member lies within asin(PARTNER) of its axis (the rod untwists there)."""
+    if joints is None:
+        return None
+    hit = np.flatnonzero(joints.node == node)
+    if not hit.size:
+        return None
+    k = int(hit[0])
+    others = joints.other[joints.start[k] : joints.start[k + 1]]
+    t = (x[other] - x[node]) / np.linalg.norm(x[other] - x[node])
+    best, sine = -1, PARTNER
+    for o in others.tolist():
+        if o == other:
+            continue
+        s = (x[o] - x[node]) / np.linalg.norm(x[o] - x[node])
+        size = float(np.linalg.norm(np.cross(t, s)))
+        if size > sine:
+            best, sine = int(o), size
+    return None if best < 0 else (best, sine)
+
+
+def _phase(x: np.ndarray, node: int, partner: int, t: np.ndarray, d: np.ndarray) -> float:
+    """phi0: the angle about t from the partner's unit normal part n to the director d."""
+    b = x[partner] - x[node]
+    n = b - (b @ t) * t
+    n = n / np.linalg.norm(n)
+    return float(np.arctan2(np.cross(n, d) @ t, n @ d))
 
 
 def _normal(t: np.ndarray) -> np.ndarray:
@@ -101,35 +157,60 @@ def _carried(x: np.ndarray, chain: list[int], head: np.ndarray, d: np.ndarray) -
 
 
 def build_twists(
-    net: Net, GJ: np.ndarray, line: np.ndarray, clamps: np.ndarray, tangent: np.ndarray
+    net: Net,
+    GJ: np.ndarray,
+    line: np.ndarray,
+    clamps: np.ndarray,
+    tangent: np.ndarray,
+    joints=None,
 ) -> Twists:
     """The twisted segments of ``net``: GJ (M,) per edge [N m^2] (0: no twist), ``line``
     (M,) every edge's line (-1: none), the rods' clamps (C, 2) (clamped node, the other
     node of its end edge) and their held tangents (C, 3) (from the clamped node into the
-    rod)."""
+    rod), and its rigid joints (a ``catenet.model.joints.Joints``; None: none)."""
     GJ = np.asarray(GJ, dtype=np.float64)
     held = {int(c): (int(o), tangent[k]) for k, (c, o) in enumerate(clamps)}
     x, edges = net.nodes, net.edges
+    cuts = frozenset() if joints is None else frozenset(joints.node.tolist())
     parts: list[tuple] = []
-    for run, closed in _chains(edges, np.asarray(line), GJ > 0.0):
+    for run, closed in _chains(edges, np.asarray(line), GJ > 0.0, cuts):
         chain = [int(edges[e, 0]) for e in run]
         if not closed:
             chain.append(int(edges[run[-1], 1]))
             a, b = chain[0], chain[-1]
-            if held.get(a, (-1,))[0] != chain[1] or held.get(b, (-1,))[0] != chain[-2]:
+            first = (x[chain[1]] - x[a]) / np.linalg.norm(x[chain[1]] - x[a])
+            last = (x[b] - x[chain[-2]]) / np.linalg.norm(x[b] - x[chain[-2]])
+            at: list = [None, None]  # a joint's partner at the head, the tail
+            if held.get(a, (-1,))[0] == chain[1]:
+                head = held[a][1]
+            elif (found := joint_partner(joints, a, chain[1], x)) is not None:
+                head, at[0] = first, found
+            else:
                 continue  # a free or pinned end: the chain untwists
-            head, tail = held[a][1], -held[b][1]
+            if held.get(b, (-1,))[0] == chain[-2]:
+                tail = -held[b][1]
+            elif (found := joint_partner(joints, b, chain[-2], x)) is not None:
+                tail, at[1] = last, found
+            else:
+                continue
             head_dir = _normal(head)
             tail_dir = _transported(chain, x, head_dir, head, tail)
             ends = (a, b)
+            partner = tuple(-1 if p is None else p[0] for p in at)
+            phase = (
+                0.0 if at[0] is None else _phase(x, a, partner[0], first, head_dir),
+                0.0 if at[1] is None else _phase(x, b, partner[1], last, tail_dir),
+            )
         else:
             t = x[chain[1]] - x[chain[0]]
             head = tail = np.zeros(3)
             head_dir = _normal(t / np.linalg.norm(t))
             tail_dir = np.zeros(3)
-            ends = (-1, -1)
+            ends, partner, phase = (-1, -1), (-1, -1), (0.0, 0.0)
         compliance = float(np.sum(net.rest_length[run] / GJ[run]))
-        parts.append((chain, run, closed, head, tail, head_dir, tail_dir, compliance, ends))
+        parts.append(
+            (chain, run, closed, head, tail, head_dir, tail_dir, compliance, ends, partner, phase)
+        )
     return _pack(parts)
 
 
@@ -162,6 +243,8 @@ def _pack(parts: list[tuple]) -> Twists:
         tail_dir=rows(6),
         compliance=np.asarray([p[7] for p in parts], dtype=np.float64),
         ends=np.asarray([p[8] for p in parts], dtype=np.int64).reshape(-1, 2),
+        partner=np.asarray([p[9] for p in parts], dtype=np.int64).reshape(-1, 2),
+        phase=np.asarray([p[10] for p in parts], dtype=np.float64).reshape(-1, 2),
     )
 
 

@@ -222,7 +222,7 @@ def describe_zero_modes(
             "are a mechanism of the taut edges (untensioned straight edges or a chain "
             "that turns freely"
             + (
-                ", or rods turning about each other's axes at a rigid joint, which holds no twist)"
+                ", or rods turning at a rigid joint about the axis of a rod that does not twist)"
                 if any(t.name == "joints" for t in system.terms)
                 else ")"
             ),

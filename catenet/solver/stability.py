@@ -387,6 +387,13 @@ def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarr
             "(a rod beyond its Euler load, guys going slack, a snap-through): lower the "
             "load, or brace those nodes, stiffen the rods or prestress the guys"
         )
+    if any(t.name == "joints" for t in judge.ws.system.terms):  # rigid joints
+        fix += (
+            "; or a frame turning at a rigid joint about the axis of a rod that does not "
+            "twist (no GJ, or its other end free to turn: a frame on pinned feet, or on "
+            "one clamped foot, swings out of its plane): hold it across its plane "
+            "([[supports.roller]]), clamp its feet or give its rods GJ"
+        )
     fix = "" if judge.start_unstable else fix
     kept = "The start" if judge.start_unstable else "The last stable state"
     if not judge.loaded:

@@ -5,7 +5,8 @@ its exact derivatives; ``catenet.model.twist`` says which chains twist).
 Guarantee: the energy, gradient and Hessian are exact (the gradient and Hessian of the
 total twist Theta by parallel transport, checked against finite differences) for every
 state where no two consecutive tangents of a segment (nor an end edge and its clamp)
-fold back on each other; there the twist is undefined and the energy is inf. The twist
+fold back on each other, and where a segment ending at a rigid joint does not have its
+partner member turned onto its axis; there the twist is undefined and the energy is inf. The twist
 has no rotational inertia here (it is uniform along a segment at every instant: torsional
 waves, far faster than bending ones in a slender rod, are not resolved); the modes keep
 the twist angles with their inertia (``catenet.model.torsion``). Theta is
@@ -83,7 +84,10 @@ class Twist(Term):
 
     def _frames(self, x: np.ndarray, theta: np.ndarray) -> None:
         t = self.twists
-        twist_frames(x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first)
+        twist_frames(
+            x, *self._geometry(), t.head_dir, theta, self._ref, self._tau, t.first,
+            t.partner, t.phase,
+        )  # fmt: skip
 
     def _angles(self, x: np.ndarray, **turned: np.ndarray) -> np.ndarray:
         """Theta per segment at x; ``turned``: head, tail, head_dir or tail_dir in place
@@ -104,6 +108,8 @@ class Twist(Term):
             self._ref,
             self._tau,
             t.first,
+            t.partner,
+            t.phase,
             out,
         )
         return out
@@ -130,7 +136,21 @@ class Twist(Term):
                     theta.append(self._angles(x, **turned))
                 out[:, end, axis] = m * (theta[0] - theta[1]) / (2.0 * TURN)
         out[t.closed] = 0.0
+        out[t.partner >= 0] = 0.0  # an end on a rigid joint: no support
         return out
+
+    def joint_members(self) -> frozenset:
+        """(joint node, member's other node) of every segment end on a rigid joint: the
+        members whose twist their joint holds."""
+        t = self.twists
+        out = set()
+        for s in np.flatnonzero((t.partner >= 0).any(axis=1) & ~t.closed):
+            lo, hi = int(t.start[s]), int(t.start[s + 1])
+            if t.partner[s, 0] >= 0:
+                out.add((int(t.nodes[lo]), int(t.nodes[lo + 1])))
+            if t.partner[s, 1] >= 0:
+                out.add((int(t.nodes[hi - 1]), int(t.nodes[hi - 2])))
+        return frozenset(out)
 
     def imposed_twist(self, time: float | None = None) -> np.ndarray:
         """Phi per segment [rad] at ``time`` (None: now): each turned end's angle, in full
@@ -183,9 +203,16 @@ class Twist(Term):
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Every segment's dense block of its nodes' DOFs, row-major."""
+        """Every segment's dense block of its nodes' DOFs, row-major: its chain's, then
+        the partners of its ends on rigid joints."""
+        return dense_blocks(self.local_nodes(s) for s in range(len(self.twists)))
+
+    def local_nodes(self, s: int) -> np.ndarray:
+        """Segment s's nodes as its kernels order them: its chain's, then the partners
+        of its ends on rigid joints (``catenet.kernels.twist.segment_gradient``)."""
         t = self.twists
-        return dense_blocks(t.nodes[t.start[s] : t.start[s + 1]] for s in range(len(t)))
+        chain = t.nodes[t.start[s] : t.start[s + 1]]
+        return np.concatenate([chain, t.partner[s][t.partner[s] >= 0]])
 
     def energy(self, x: np.ndarray) -> float:
         m = self.moments(x)
@@ -193,7 +220,8 @@ class Twist(Term):
 
     def gradient(self, x: np.ndarray, grad: np.ndarray) -> float:
         m = self.moments(x)
-        twist_gradient(np.ascontiguousarray(x, dtype=np.float64), *self._geometry(), m, grad)
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        twist_gradient(x, *self._geometry(), self.twists.partner, m, grad)
         return float(0.5 * np.sum(self.twists.compliance * m * m))
 
     def hessian(self, x: np.ndarray, values: np.ndarray) -> None:
@@ -201,6 +229,7 @@ class Twist(Term):
         twist_hessian(
             np.ascontiguousarray(x, dtype=np.float64),
             *self._geometry(),
+            self.twists.partner,
             m,
             self.twists.compliance,
             values,

@@ -4,10 +4,11 @@ space, a flat crossing), zero energy as drawn and under rigid motions, and the f
 closed forms: an L-frame (a column clamped at its foot, a beam joined at its top) under
 a tip load, and a T (a beam pinned at both ends, a column joined at its middle) under a
 sideways load, both second order in the edge length, each held across its plane at its
-free end (the joint holds no twist: a rod could turn round another's axis there, and
+free end (their rods have no GJ, so a rod could turn round another's axis there, and
 from a start moved by round-off an L-frame's beam swung out of its plane); the joint's
-moment; the frame's modes; the warning where a joint turns about a member's axis (it
-holds no twist); bad input."""
+moment; the frame's modes; the warning where a joint turns about the axis of a rod that
+does not twist; the collapse's message; bad input (twist through joints:
+test_joint_twist.py)."""
 
 from __future__ import annotations
 
@@ -210,7 +211,7 @@ def test_without_the_joint_the_corner_is_a_pin(tmp_path):
     done, _ = _run(tmp_path, text.replace(*FREE), "--count", "1", command="modes")
     said = " ".join(done.output.split())  # rigid, but nothing holds the beam's turn
     assert done.exit_code == 0 and "1 zero-frequency mode" in said, said
-    assert "rods turning about each other's axes at a rigid joint" in said
+    assert "rods turning at a rigid joint about the axis of a rod that does not twist" in said
 
 
 @pytest.mark.roundoff
@@ -296,7 +297,7 @@ def test_a_joint_turned_about_a_member_is_warned(tmp_path):
     assert done.exit_code == 0, done.output
     said = " ".join(done.output.split())
     assert "the rigid joint at node 1 turned by 90 deg about the axis of its member" in said
-    assert "(cable 'column'), 100 % of its turn: a rigid joint holds the angles" in said
+    assert "(cable 'column'), 100 % of its turn, and that rod does not twist" in said
     done, _ = _run(tmp_path, PORTAL.replace("FORCE", "[0.0, 1.0, 0.0]"))
     said = " ".join(done.output.split())
     assert done.exit_code == 0 and "(cable 'right'), 100 % of its turn" in said, said
@@ -305,6 +306,28 @@ def test_a_joint_turned_about_a_member_is_warned(tmp_path):
     for case, force in ((text, "[0.0, 0.0, -10.0]"), (PORTAL, "[1000.0, 0.0, -500.0]")):
         done, _ = _run(tmp_path, case.replace("FORCE", force))
         assert done.exit_code == 0 and "rigid joint" not in done.output, done.output
+
+
+def test_a_collapse_with_rigid_joints_names_their_twist():
+    """Where a path with rigid joints collapses, the message adds that a rod that does not
+    twist turns freely about its axis at a joint, and how to hold the frame (it spoke of
+    guys and prestress only); without joints it does not."""
+    from types import SimpleNamespace
+
+    from catenet.solver.stability import describe_collapse
+
+    def message(names):
+        terms = [SimpleNamespace(name=n) for n in names]
+        system = SimpleNamespace(terms=terms, net=SimpleNamespace(n_nodes=4))
+        judge = SimpleNamespace(
+            ws=SimpleNamespace(system=system), start_unstable=False, loaded=True
+        )
+        return describe_collapse(judge, "the equilibrium is unstable", 0.5, np.array([1, 2]))
+
+    said = message(["stretch", "joints"])
+    assert "at a rigid joint about the axis of a rod that does not twist" in said
+    assert "hold it across its plane ([[supports.roller]]), clamp its feet or give" in said
+    assert "rigid joint" not in message(["stretch"])
 
 
 @pytest.mark.parametrize(
