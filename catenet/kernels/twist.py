@@ -413,7 +413,7 @@ def twist_hessian(x, nodes, start, closed, head, tail, partner, moment, complian
 
 
 @njit(cache=True)
-def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner):
+def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner, end_c):
     """Per vertex of every chain, the gradient of its reference twist m_v (the
     un-eliminated twist, ``catenet.model.torsion``): (V,) the vertex's compliance c_v =
     (c_a + c_b) / 2 of its two edge slots a, b (``slot_c``: each chain edge row's l0 / GJ,
@@ -423,7 +423,8 @@ def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner)
     the chain edge rows of its slots a, b (-1: a clamp). An open chain has the vertex at
     a clamped end (``held[s, 0]``, ``held[s, 1]``: head, tail) and none at a free end.
     At an end on a rigid joint (``partner`` >= 0) the phantom edge's node is the
-    partner's and the joint's director turns the vertex (``psi_gradient``)."""
+    partner's, the joint's director turns the vertex (``psi_gradient``) and the
+    partner's half edge adds its compliance ``end_c`` (S, 2) to the vertex's."""
     count = 0
     for s in range(len(start) - 1):
         n = (start[s + 1] - start[s]) - (0 if closed[s] else 1)
@@ -460,6 +461,7 @@ def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner)
                     grad[out, side + 1, d] += w[d]
             end = 0 if v == 1 else 1
             if not closed[s] and (v == 1 or v == n + 1) and partner[s, end] >= 0:
+                c += end_c[s, end]
                 if end == 0:  # the triple: partner, joint node, the end edge's other
                     a = x[nodes[lo + 1]] - x[nodes[lo]]
                     b = x[partner[s, 0]] - x[nodes[lo]]

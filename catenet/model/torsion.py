@@ -49,6 +49,8 @@ class Torsion:
         twist held)
     partner : (S, 2) int64, at an end on a rigid joint its partner's node
         (``catenet.model.twist``; -1: none)
+    end_compliance : (S, 2) there, the partner's half edge's compliance
+        (``catenet.model.twist.joint_partner``; 0 elsewhere)
     head, tail : (S, 3) the clamps' held tangents along the chain (0 where free)
     compliance : (E,) each chain edge row's l0 / GJ [1/(N m)]
     inertia : (E,) its rotational inertia rho J_p l0 [kg m^2]
@@ -65,6 +67,7 @@ class Torsion:
     closed: np.ndarray
     held: np.ndarray
     partner: np.ndarray
+    end_compliance: np.ndarray
     head: np.ndarray
     tail: np.ndarray
     compliance: np.ndarray
@@ -98,7 +101,7 @@ class Torsion:
         n = 3 * x.shape[0]
         comp, who, grad, rows = vertex_gradients(
             x, self.nodes, self.start, self.closed, self.head, self.tail, self.held,
-            self.compliance, self.partner,
+            self.compliance, self.partner, self.end_compliance,
         )  # fmt: skip
         dofs = np.where(who[:, :, None] >= 0, 3 * who[:, :, None] + np.arange(3), -1)
         dofs, grad = dofs.reshape(len(comp), 9), grad.reshape(len(comp), 9)
@@ -184,6 +187,7 @@ def build_torsion(
         head = tail = np.zeros(3)
         ends = [False, False]
         partner = [-1, -1]
+        end_c = [0.0, 0.0]
         if not closed:
             chain.append(int(edges[run[-1], 1]))
             for end, (node, near, sign) in enumerate(
@@ -193,7 +197,7 @@ def build_torsion(
                     ends[end] = True
                     along = sign * np.asarray(held[node][1], dtype=np.float64)
                 elif (found := joint_partner(joints, node, near, x)) is not None:
-                    ends[end], partner[end] = True, found[0]
+                    ends[end], partner[end], end_c[end] = True, found[0], found[1]
                     along = sign * (x[near] - x[node]) / np.linalg.norm(x[near] - x[node])
                 else:
                     continue
@@ -204,7 +208,7 @@ def build_torsion(
         comp = net.rest_length[run] / GJ[run]
         inertia = polar[run] * net.rest_length[run]
         segment = seg_of.get(run[0], -1)
-        parts.append((chain, run, closed, ends, head, tail, comp, inertia, segment, partner))
+        parts.append((chain, run, closed, ends, head, tail, comp, inertia, segment, partner, end_c))
     if not parts:
         return None
     return Torsion(
@@ -215,6 +219,7 @@ def build_torsion(
         closed=np.asarray([p[2] for p in parts], dtype=np.bool_),
         held=np.asarray([p[3] for p in parts], dtype=np.bool_).reshape(-1, 2),
         partner=np.asarray([p[9] for p in parts], dtype=np.int64).reshape(-1, 2),
+        end_compliance=np.asarray([p[10] for p in parts], dtype=np.float64).reshape(-1, 2),
         head=np.ascontiguousarray(np.array([p[4] for p in parts]).reshape(-1, 3)),
         tail=np.ascontiguousarray(np.array([p[5] for p in parts]).reshape(-1, 3)),
         compliance=np.concatenate([p[6] for p in parts]).astype(np.float64),
@@ -229,7 +234,7 @@ def no_torsion() -> Torsion:
     return Torsion(
         nodes=empty, start=np.zeros(1, dtype=np.int64), edges=empty, first=empty,
         closed=np.zeros(0, dtype=np.bool_), held=np.zeros((0, 2), dtype=np.bool_),
-        partner=np.zeros((0, 2), dtype=np.int64),
+        partner=np.zeros((0, 2), dtype=np.int64), end_compliance=np.zeros((0, 2)),
         head=np.zeros((0, 3)), tail=np.zeros((0, 3)), compliance=np.zeros(0),
         inertia=np.zeros(0), segment=empty,
     )  # fmt: skip

@@ -47,7 +47,8 @@ class Twists:
     head, tail : (S, 3) an open segment's clamped tangents at its ends, along the chain
     head_dir, tail_dir : (S, 3) the clamps' directors (normal to head, tail): tail_dir
         is head_dir carried along the given geometry, so that it is untwisted
-    compliance : (S,) sum over its edges of l0 / GJ [1/(N m)]
+    compliance : (S,) sum over its edges of l0 / GJ [1/(N m)], and at an end on a rigid
+        joint its partner's half edge's (``joint_partner``)
     ends : (S, 2) int64, an open segment's first and last node (-1: a ring)
     partner : (S, 2) int64, at an end on a rigid joint, the other node of the joint's
         partner member (-1: a clamp, or a ring)
@@ -106,25 +107,28 @@ def joint_partner(joints, node: int, other: int, x: np.ndarray) -> tuple[int, fl
     """At the rigid joint ``node`` (``joints``: a ``catenet.model.joints.Joints``, None:
     none), the partner of the member towards ``other`` for its twist, whose direction's
     part normal to it is the twist's reference there: (the other node of the joint's
-    member most normal to it, the sine of their angle); None where no joint is there or
-    every other member lies within asin(PARTNER) of its axis (the rod untwists there)."""
+    member most normal to it, the compliance [1/(N m)] its end edge adds to the rod's
+    twist there: sin^2 of their angle / (2 k), k = EI / l of its edge, the half edge's
+    bending between the joint and that edge's direction, as at a clamp); None where no
+    joint is there or every other member lies within asin(PARTNER) of its axis (the rod
+    untwists there)."""
     if joints is None:
         return None
     hit = np.flatnonzero(joints.node == node)
     if not hit.size:
         return None
-    k = int(hit[0])
-    others = joints.other[joints.start[k] : joints.start[k + 1]]
+    lo, hi = int(joints.start[hit[0]]), int(joints.start[hit[0] + 1])
     t = (x[other] - x[node]) / np.linalg.norm(x[other] - x[node])
-    best, sine = -1, PARTNER
-    for o in others.tolist():
+    best, sine, stiff = -1, PARTNER, 0.0
+    for p in range(lo, hi):
+        o = int(joints.other[p])
         if o == other:
             continue
         s = (x[o] - x[node]) / np.linalg.norm(x[o] - x[node])
         size = float(np.linalg.norm(np.cross(t, s)))
         if size > sine:
-            best, sine = int(o), size
-    return None if best < 0 else (best, sine)
+            best, sine, stiff = o, size, float(joints.k[p])
+    return None if best < 0 else (best, sine * sine / (2.0 * stiff))
 
 
 def _phase(x: np.ndarray, node: int, partner: int, t: np.ndarray, d: np.ndarray) -> float:
@@ -197,6 +201,7 @@ def build_twists(
             tail_dir = _transported(chain, x, head_dir, head, tail)
             ends = (a, b)
             partner = tuple(-1 if p is None else p[0] for p in at)
+            added = sum(0.0 if p is None else p[1] for p in at)
             phase = (
                 0.0 if at[0] is None else _phase(x, a, partner[0], first, head_dir),
                 0.0 if at[1] is None else _phase(x, b, partner[1], last, tail_dir),
@@ -206,8 +211,8 @@ def build_twists(
             head = tail = np.zeros(3)
             head_dir = _normal(t / np.linalg.norm(t))
             tail_dir = np.zeros(3)
-            ends, partner, phase = (-1, -1), (-1, -1), (0.0, 0.0)
-        compliance = float(np.sum(net.rest_length[run] / GJ[run]))
+            ends, partner, phase, added = (-1, -1), (-1, -1), (0.0, 0.0), 0.0
+        compliance = float(np.sum(net.rest_length[run] / GJ[run])) + added
         parts.append(
             (chain, run, closed, head, tail, head_dir, tail_dir, compliance, ends, partner, phase)
         )

@@ -101,7 +101,17 @@ def _energy_function(torsion, x0, moment):
 
     def gradient(x, theta):
         t = torsion
-        args = (t.nodes, t.start, t.closed, t.head, t.tail, t.held, t.compliance, t.partner)
+        args = (
+            t.nodes,
+            t.start,
+            t.closed,
+            t.head,
+            t.tail,
+            t.held,
+            t.compliance,
+            t.partner,
+            t.end_compliance,
+        )
         comp, who, grad, _ = vertex_gradients(np.ascontiguousarray(x), *args)
         g = np.zeros_like(x)
         for v, (m, c) in enumerate(moments(x, theta)):
