@@ -14,8 +14,12 @@ twist at that end is measured against the joint's director, D = cos(phi0) n +
 sin(phi0) t x n, n the unit part of another member's direction (the joint's member most
 normal to the chain's end edge, its ``partner``) normal to the end tangent t, phi0 such
 that the rod is untwisted as given. Turning the partner about the rod's axis twists the
-rod; where the joint's members keep their angles (its bending, EI / l, stiff against
-the twist) that is the joint's own turn.
+rod. The partner's direction is its first edge's, which leaves the joint's turn by the
+bending of its half edge (as a rod's end edge leaves a clamp's direction): that half
+edge's compliance about the rod's axis, sin^2 l / (2 EI) (sin: of the angle between
+them), is in series with the rod's twist and is added to the segment's compliance, so
+that the twist a joint carries is second order in the edge length, as a rotational
+spring at a clamp is (``catenet.model.rods``).
 
 Each clamp may turn its end about the rod's axis (``[[supports.twist]]``): by an angle
 right-handed about the outward tangent (pointing out of the rod there), so that turning
