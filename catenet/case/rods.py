@@ -168,7 +168,13 @@ def rod_end_springs(case: Case, built: Any, net: Net, clamped: np.ndarray) -> An
     rod that twists."""
     from catenet.case.supports import is_six
     from catenet.model.guides import Elastic
-    from catenet.model.rodends import RodEnds, end_stiffness, spring6_matrix, twist_held
+    from catenet.model.rodends import (
+        RodEnds,
+        end_stiffness,
+        spring6_matrix,
+        twist_coupled,
+        twist_held,
+    )
     from catenet.model.rods import rod_ends, rod_hinges
 
     given = [(k, s) for k, s in enumerate(case.supports.springs) if is_six(s.stiffness)]
@@ -202,13 +208,14 @@ def rod_end_springs(case: Case, built: Any, net: Net, clamped: np.ndarray) -> An
     pairs, tangent, edge = (np.concatenate(part) for part in zip(*found, strict=True))
     stiffness = np.stack([total[int(n)] for n in nodes])
     for n, t, e, k6 in zip(nodes, tangent, edge, stiffness, strict=True):
-        if gj[e] > 0.0 and twist_held(k6, t) > 1e-9 * np.abs(k6[3:, 3:]).max():
+        if gj[e] > 0.0 and twist_coupled(k6, t):
             raise ConfigError(
                 f"{where[int(n)]}.stiffness: node {int(n)} is the end of a rod that twists "
-                "(GJ > 0) and the 6x6 holds its twist about the rod's axis "
-                f"({twist_held(k6, t):.6g} N m/rad): a rod untwists at a spring (only a clamp "
-                "holds its twist): give that rod GJ = 0 or the 6x6 no stiffness about the "
-                "rod's axis"
+                "(GJ > 0) and the 6x6 couples the twist about the rod's axis "
+                f"({twist_held(k6, t):.6g} N m/rad) with its other rows: a spring holds a "
+                "twisting rod's twist in series with it only where its row and column about "
+                "the rod's axis hold nothing else (e.g. [kx, ky, kz, krx, kry, krz] with the "
+                "rod along an axis): give that rod GJ = 0, or the 6x6 such a row"
             )
     series = np.stack(
         [
@@ -245,11 +252,13 @@ def case_twist(
             if cable.twist is not None:
                 raise ConfigError(f"geometry.cable[{k}].twist = {cable.twist!r}: {NO_RING}")
         return None
+    from catenet.model.rodends import twist_ends
     from catenet.model.twist import build_twists, check_twist_ends
     from catenet.terms.twist import Twist
 
     rigid = rods.rigid  # a rotational spring holds no twist: the rod untwists there
-    twists = build_twists(net, gj, line, rods.clamps[rigid], rods.tangent[rigid], joints)
+    springs = twist_ends(None if net.springs is None else net.springs.ends)
+    twists = build_twists(net, gj, line, rods.clamps[rigid], rods.tangent[rigid], joints, springs)
     clamped = set(rods.clamps[rigid, 0].tolist())
     imposed = []
     seen: dict[int, str] = {}
@@ -308,6 +317,7 @@ def case_torsion(
         return None
     from dataclasses import replace
 
+    from catenet.model.rodends import twist_ends
     from catenet.model.torsion import build_torsion
 
     rigid = rods.rigid
@@ -315,6 +325,7 @@ def case_torsion(
     torsion = build_torsion(
         net, gj, known, line, rods.clamps[rigid], rods.tangent[rigid],
         None if twist is None else twist.twists, joints,
+        twist_ends(None if net.springs is None else net.springs.ends),
     )  # fmt: skip
     unknown = (gj > 0.0) & np.isnan(polar)
     if not unknown.any():

@@ -423,8 +423,9 @@ def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner,
     the chain edge rows of its slots a, b (-1: a clamp). An open chain has the vertex at
     a clamped end (``held[s, 0]``, ``held[s, 1]``: head, tail) and none at a free end.
     At an end on a rigid joint (``partner`` >= 0) the phantom edge's node is the
-    partner's, the joint's director turns the vertex (``psi_gradient``) and the
-    partner's half edge adds its compliance ``end_c`` (S, 2) to the vertex's."""
+    partner's and the joint's director turns the vertex (``psi_gradient``); ``end_c``
+    (S, 2) adds to an end vertex's compliance (a joint partner's half edge, a 6x6
+    spring's twist, in series)."""
     count = 0
     for s in range(len(start) - 1):
         n = (start[s + 1] - start[s]) - (0 if closed[s] else 1)
@@ -460,8 +461,9 @@ def vertex_gradients(x, nodes, start, closed, head, tail, held, slot_c, partner,
                     grad[out, side, d] -= w[d]
                     grad[out, side + 1, d] += w[d]
             end = 0 if v == 1 else 1
+            if not closed[s] and (v == 1 or v == n + 1):
+                c += end_c[s, end]  # a joint's partner's half edge, a spring's twist
             if not closed[s] and (v == 1 or v == n + 1) and partner[s, end] >= 0:
-                c += end_c[s, end]
                 if end == 0:  # the triple: partner, joint node, the end edge's other
                     a = x[nodes[lo + 1]] - x[nodes[lo]]
                     b = x[partner[s, 0]] - x[nodes[lo]]

@@ -18,10 +18,13 @@ is eliminated exactly (a Schur complement, once) from
 w the end edge's turn (``catenet.terms.rodends``: (t0 x t) / cos(theta / 2), of length
 |t - t0| = 2 sin(theta / 2)), P = 1 - t0 t0^T: U = 1/2 (u, w)^T S (u, w). A rigid K gives
 the clamp (the end edge's own bending only), a zero one a free end, and so the foot
-turns (K^-1 wrench)_t to O(l^2) under a small load. The rod's twist about t0 is not
-held: the foot's twist is the free direction of theta_f (the rod untwists there, as at
-``supports.rotational``), which eliminates K's twist row and column by the same Schur
-complement; a rod that twists (GJ > 0) is refused a twist stiffness (``twist_held``).
+turns (K^-1 wrench)_t to O(l^2) under a small load. The foot's twist is the free
+direction of theta_f here, which eliminates K's twist row and column by the same Schur
+complement. A rod that twists (GJ > 0) has its twist held by the spring's twist
+stiffness k_t = t0^T K_tt t0 in series with it (``twist_ends``: the twist term adds 1 /
+k_t to the segment's compliance) where K's row about the axis holds nothing else; a
+6x6 that couples it with the other rows is refused at a twisting rod's end
+(``twist_coupled``).
 """
 
 from __future__ import annotations
@@ -93,6 +96,29 @@ def twist_held(k6: np.ndarray, tangent: np.ndarray) -> float:
     """The twist stiffness t0^T K_tt t0 [N m/rad] of a 6x6 about a rod's axis t0."""
     t = np.asarray(tangent, dtype=np.float64)
     return float(t @ k6[3:, 3:] @ t)
+
+
+def twist_coupled(k6: np.ndarray, tangent: np.ndarray) -> bool:
+    """Whether a 6x6's row about a rod's axis t0 holds more than its twist: K (0, t0) is
+    not k_t (0, t0), k_t = t0^T K_tt t0 (beyond 1e-9 of K's rotational scale)."""
+    t = np.asarray(tangent, dtype=np.float64)
+    column = k6[:, 3:] @ t
+    column[3:] -= twist_held(k6, t) * t
+    return bool(np.abs(column).max() > 1e-9 * max(float(np.abs(k6[3:, 3:]).max()), 1e-300))
+
+
+def twist_ends(ends: RodEnds | None) -> dict[int, tuple[int, np.ndarray, float]]:
+    """Node -> (the end edge's other node, its given direction, the compliance 1 / k_t
+    [1/(N m)]) of every rod end whose 6x6 holds its twist (``twist_held`` > 0; its row
+    about the axis uncoupled, ``twist_coupled``): held as by a clamp, in series with it."""
+    out: dict[int, tuple[int, np.ndarray, float]] = {}
+    if ends is None:
+        return out
+    for c, o, t, k6 in zip(ends.nodes, ends.other, ends.tangent, ends.stiffness, strict=True):
+        k_t = twist_held(k6, t)
+        if k_t > 0.0 and not twist_coupled(k6, t):
+            out[int(c)] = (int(o), np.asarray(t, dtype=np.float64), 1.0 / k_t)
+    return out
 
 
 def end_stiffness(k6: np.ndarray, tangent: np.ndarray, EI: float, length: float) -> np.ndarray:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from catenet.model.net import Net
-from catenet.model.twist import Twists, _chains, joint_partner
+from catenet.model.twist import Twists, _chains, _held_ends, joint_partner
 
 
 @dataclass(frozen=True, eq=False)
@@ -165,15 +165,17 @@ def build_torsion(
     tangent: np.ndarray,
     twists: Twists | None,
     joints=None,
+    springs: dict | None = None,
 ) -> Torsion | None:
     """The twisting chains of ``net`` with twist angles as DOFs (None: none): GJ (M,) per
     edge [N m^2], ``polar`` (M,) the mass polar moment per length rho J_p [kg m] (a chain
     with an edge of 0 keeps its twist eliminated), ``line`` (M,), the rigid clamps (C, 2)
-    and their held tangents (C, 3) and the rigid joints (``catenet.model.twist.build_twists``'s),
+    and their held tangents (C, 3), the rigid joints and the rod ends on 6x6 springs
+    that hold their twist (``catenet.model.twist.build_twists``'s),
     and the twist term's segments (None: no chain is held at both ends)."""
     GJ = np.asarray(GJ, dtype=np.float64)
     polar = np.asarray(polar, dtype=np.float64)
-    held = {int(c): (int(o), tangent[k]) for k, (c, o) in enumerate(clamps)}
+    held, soft = _held_ends(clamps, tangent, springs)
     seg_of = {}
     if twists is not None:
         seg_of = {int(twists.edges[twists.first[s]]): s for s in range(len(twists))}
@@ -194,7 +196,7 @@ def build_torsion(
                 ((chain[0], chain[1], 1.0), (chain[-1], chain[-2], -1.0))
             ):
                 if held.get(node, (-1,))[0] == near:
-                    ends[end] = True
+                    ends[end], end_c[end] = True, soft.get(node, 0.0)
                     along = sign * np.asarray(held[node][1], dtype=np.float64)
                 elif (found := joint_partner(joints, node, near, x)) is not None:
                     ends[end], partner[end], end_c[end] = True, found[0], found[1]

@@ -171,13 +171,16 @@ def build_twists(
     clamps: np.ndarray,
     tangent: np.ndarray,
     joints=None,
+    springs: dict | None = None,
 ) -> Twists:
     """The twisted segments of ``net``: GJ (M,) per edge [N m^2] (0: no twist), ``line``
     (M,) every edge's line (-1: none), the rods' clamps (C, 2) (clamped node, the other
     node of its end edge) and their held tangents (C, 3) (from the clamped node into the
-    rod), and its rigid joints (a ``catenet.model.joints.Joints``; None: none)."""
+    rod), its rigid joints (a ``catenet.model.joints.Joints``; None: none) and the rod
+    ends whose 6x6 spring holds their twist (``catenet.model.rodends.twist_ends``: held
+    as by a clamp, its compliance added)."""
     GJ = np.asarray(GJ, dtype=np.float64)
-    held = {int(c): (int(o), tangent[k]) for k, (c, o) in enumerate(clamps)}
+    held, soft = _held_ends(clamps, tangent, springs)
     x, edges = net.nodes, net.edges
     cuts = frozenset() if joints is None else frozenset(joints.node.tolist())
     parts: list[tuple] = []
@@ -189,6 +192,7 @@ def build_twists(
             first = (x[chain[1]] - x[a]) / np.linalg.norm(x[chain[1]] - x[a])
             last = (x[b] - x[chain[-2]]) / np.linalg.norm(x[b] - x[chain[-2]])
             at: list = [None, None]  # a joint's partner at the head, the tail
+            added = soft.get(a, 0.0) + soft.get(b, 0.0)  # a spring's twist in series
             if held.get(a, (-1,))[0] == chain[1]:
                 head = held[a][1]
             elif (found := joint_partner(joints, a, chain[1], x)) is not None:
@@ -205,7 +209,7 @@ def build_twists(
             tail_dir = _transported(chain, x, head_dir, head, tail)
             ends = (a, b)
             partner = tuple(-1 if p is None else p[0] for p in at)
-            added = sum(0.0 if p is None else p[1] for p in at)
+            added += sum(0.0 if p is None else p[1] for p in at)
             phase = (
                 0.0 if at[0] is None else _phase(x, a, partner[0], first, head_dir),
                 0.0 if at[1] is None else _phase(x, b, partner[1], last, tail_dir),
@@ -221,6 +225,18 @@ def build_twists(
             (chain, run, closed, head, tail, head_dir, tail_dir, compliance, ends, partner, phase)
         )
     return _pack(parts)
+
+
+def _held_ends(clamps, tangent, springs) -> tuple[dict, dict[int, float]]:
+    """Node -> (the end edge's other node, its held direction) of every end that holds
+    its rod's twist (the clamps, the 6x6 springs of ``springs``), and node -> the
+    compliance a spring adds."""
+    held = {int(c): (int(o), tangent[k]) for k, (c, o) in enumerate(clamps)}
+    soft: dict[int, float] = {}
+    for node, (other, t, compliance) in (springs or {}).items():
+        held[node] = (other, t)
+        soft[node] = compliance
+    return held, soft
 
 
 def _transported(chain: list[int], x: np.ndarray, d: np.ndarray, head, tail) -> np.ndarray:
