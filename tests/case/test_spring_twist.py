@@ -24,7 +24,8 @@ RHO_J = 0.02  # kg m, the mass polar moment per length
 
 def _shaft(nodes: int, stiffness, turned: bool = True) -> dict:
     data = {
-        "geometry": {"kind": "cable", "start": [0.0, 0.0, 0.0], "end": [L, 0.0, 0.0], "nodes": nodes},
+        "geometry": {"kind": "cable", "start": [0.0, 0.0, 0.0], "end": [L, 0.0, 0.0],
+                     "nodes": nodes},
         "material": {"EA": 1e7, "EI": EI, "GJ": GJ, "tension_only": False,
                      "area": 1e-4, "density": 7850.0, "polar_inertia": RHO_J},
         "supports": {"fixed": ["start"], "clamped": ["start"],
