@@ -19,7 +19,10 @@ bending of its half edge (as a rod's end edge leaves a clamp's direction): that 
 edge's compliance about the rod's axis, sin^2 l / (2 EI) (sin: of the angle between
 them), is in series with the rod's twist and is added to the segment's compliance, so
 that the twist a joint carries is second order in the edge length, as a rotational
-spring at a clamp is (``catenet.model.rods``).
+spring at a clamp is (``catenet.model.rods``), where one rod meets its partner at a right
+angle. Where two rods' twists share a partner, each adds only its own share of that half
+edge (the shared spring would couple their segments), and at oblique joints the partner's
+bending across the plane also turns the reference: first order there.
 
 Each clamp may turn its end about the rod's axis (``[[supports.twist]]``): by an angle
 right-handed about the outward tangent (pointing out of the rod there), so that turning
