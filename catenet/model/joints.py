@@ -100,22 +100,38 @@ def build_joints(net: Net, EI: np.ndarray, line: np.ndarray, nodes: np.ndarray, 
     )
 
 
-def joint_bending(joints: Joints, x: np.ndarray, moment: np.ndarray, kappa: np.ndarray) -> None:
+def joint_bending(
+    joints: Joints,
+    x: np.ndarray,
+    moment: np.ndarray,
+    kappa: np.ndarray,
+    carried: np.ndarray | None = None,
+) -> None:
     """Raises moment (N,) [N m] and kappa (N,) [1/m] at each joint's node to its members'
-    largest, 2 k_i |t_i - R t_i0| and 2 |t_i - R t_i0| / l_i (each member's end held by a
-    clamp turning with the joint: ``catenet.model.rods.bending_moment``'s clamps)."""
-    from catenet.kernels.joints import joint_rotations
+    largest: a member's end moment is r x f at its first edge (r from the joint node to
+    its other node, f the force there of the joint's term, 2 k |t - R t0| for its clamp
+    turning with the joint, plus ``carried`` (N, 3), the force there of the rods' twist:
+    the torque a twisting rod passes into it as its partner, ``catenet.model.twist``),
+    its part across the member; kappa 2 |t - R t0| / l (``catenet.model.rods``'s clamps)."""
+    from catenet.kernels.joints import joint_gradient, joint_rotations
 
     x = np.ascontiguousarray(x, dtype=np.float64)
     rot = np.zeros((len(joints), 3, 3))
     joint_rotations(x, joints.node, joints.start, joints.other, joints.rest, joints.k, rot)
+    force = np.zeros_like(x)
+    joint_gradient(x, joints.node, joints.start, joints.other, joints.rest, joints.k, force)
+    if carried is not None:
+        force += carried
     for j in range(len(joints)):
         node = joints.node[j]
         for p in range(joints.start[j], joints.start[j + 1]):
-            t = x[joints.other[p]] - x[node]
-            t /= np.linalg.norm(t)
+            o = joints.other[p]
+            r = x[o] - x[node]
+            t = r / np.linalg.norm(r)
+            m = np.cross(r, force[o])
+            across = float(np.linalg.norm(m - (m @ t) * t))
             d = float(np.linalg.norm(t - rot[j] @ joints.rest[p]))
-            moment[node] = max(moment[node], 2.0 * joints.k[p] * d)
+            moment[node] = max(moment[node], across)
             kappa[node] = max(kappa[node], 2.0 * d / joints.length[p])
 
 

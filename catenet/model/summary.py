@@ -404,10 +404,15 @@ def bending_moments(scene: Scene, x: np.ndarray) -> tuple[np.ndarray, np.ndarray
         return None
     x = np.asarray(x, dtype=np.float64)
     moment, kappa = bending_moment(rods, x, scene.net.n_nodes)
+    twist = _twist_term(scene)
+    carried = None
     for term in scene.terms:
         joints = getattr(term, "joints", None)
         if isinstance(joints, Joints):
-            joint_bending(joints, x, moment, kappa)
+            if carried is None and twist is not None and twist.twists.partner.max() >= 0:
+                carried = np.zeros_like(x)  # the twist's forces: torques into partners
+                twist.gradient(x, carried)
+            joint_bending(joints, x, moment, kappa, carried)
     return moment, kappa
 
 

@@ -191,3 +191,29 @@ def test_the_l_frames_modes_carry_the_joints_twist(tmp_path):
             found.append(f["modes/frequency"][()])
     (turning, quasistatic) = found
     assert 1.0 < turning[0] <= quasistatic[0] < (1 + 1e-3) * turning[0], found
+
+
+def test_a_joints_bending_moment_counts_what_passes_into_twist(tmp_path):
+    """The L-frame loaded across its plane: the beam's moment at the corner, P b, passes
+    into the column's twist; /result/bending_moment at the corner is that P b (it read
+    about 3e-5 N m: only the beam's turn against the joint's was counted), and the T's
+    joint carries the column's end moment into both halves of the beam it twists."""
+    from catenet.case import dumps_toml
+
+    case = tmp_path / "frame.toml"
+    case.write_text(dumps_toml(_l_frame(0.1)))
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "f.h5"), "-q"])
+    assert done.exit_code == 0, done.output
+    with h5py.File(tmp_path / "f.h5") as f:
+        corner = f["result/bending_moment"][1]
+    assert corner == pytest.approx(P * B, rel=1e-3)
+    nodes = [[0.0, 0.0, 0.0], [0.0, 0.0, H], [0.0, 0.0, 2 * H], [B, 0.0, H]]
+    lines = [("post", [0, 1, 2]), ("arm", [1, 3])]
+    tee = _frame(nodes, lines, [1], [0, 2], 0.1, 3, [0.0, P, 0.0])
+    case.write_text(dumps_toml(tee))
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "t.h5"), "-q"])
+    assert done.exit_code == 0, done.output
+    with h5py.File(tmp_path / "t.h5") as f:
+        joint, torque = f["result/bending_moment"][1], f["result/twisting_moment"][()]
+    assert joint == pytest.approx(P * B, rel=1e-3)  # the arm's root: P b
+    assert np.max(np.abs(torque)) == pytest.approx(0.5 * P * B, rel=1e-3)  # each half
