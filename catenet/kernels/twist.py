@@ -135,7 +135,7 @@ def _tangents(x, nodes, lo, hi, closed, head, tail, s, partner):
 @njit(cache=True)
 def _end_directors(x, nodes, lo, hi, s, t, n, head_dir, tail_dir, partner, phase):
     """An open segment's directors at its head and tail: a clamp's fixed one, a rigid
-    joint's at x (``_director``)."""
+    joint's at x (``catenet.kernels.joint_twist.joint_director``)."""
     hd = head_dir[s]
     td = tail_dir[s]
     if partner[s, 0] >= 0:

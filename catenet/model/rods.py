@@ -269,3 +269,18 @@ def bending_edges(rods: Rods, edges: np.ndarray, pairs: np.ndarray | None = None
     hit = key[order[at]] == want
     out[order[at[hit]]] = True
     return out
+
+
+def cable_bending(
+    rods: Rods, edges: np.ndarray, cable: np.ndarray, moment: np.ndarray, n: int, pairs=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per cable of ``n`` (``cable`` (M,): each edge's, -1: none): whether any of its
+    edges bends (``bending_edges``, ``pairs`` a rigid joint's members) and the largest
+    bending moment ``moment`` (N,) over its edges' nodes."""
+    cable = np.asarray(cable)
+    on = cable >= 0
+    top = np.zeros(n)
+    for end in (0, 1):
+        np.maximum.at(top, cable[on], moment[edges[on, end]])
+    bends = bending_edges(rods, edges, pairs)
+    return np.bincount(cable[on & bends], minlength=n) > 0, top

@@ -47,7 +47,7 @@ import numpy as np
 from catenet.model import measures
 from catenet.model.joints import Joints, joint_bending
 from catenet.model.net import Loads, Net
-from catenet.model.rods import Rods, bending_edges, bending_moment
+from catenet.model.rods import Rods, bending_moment, cable_bending
 from catenet.model.twist import Twists, twisting_moment
 
 if TYPE_CHECKING:  # a scene and its solved state, from the layers above
@@ -362,24 +362,19 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
 
 def _rod_cables(scene: Scene, x: np.ndarray, rows: dict) -> None:
     """Marks each cable whose edges bend (``rod``) in its summary ``rows`` and gives it
-    ``max_bending_moment`` [N m], the largest over its nodes (a rigid joint's members')
-    (``bending_moments``); nothing without rods."""
+    ``max_bending_moment`` [N m] (``catenet.model.rods.cable_bending``); none without
+    rods."""
     rods, found = scene_rods(scene), bending_moments(scene, x)
     if rods is None or found is None:
         return
-    edges = scene.net.edges
     pairs = [
         np.column_stack([np.repeat(j.node, np.diff(j.start)), j.other])
         for t in scene.terms
         if isinstance(j := getattr(t, "joints", None), Joints)
     ]
-    bends = bending_edges(rods, edges, np.concatenate(pairs) if pairs else None)
-    cable = np.asarray(scene.cables.edge)
-    top = np.zeros(len(rows))
-    on = cable >= 0
-    for end in (0, 1):
-        np.maximum.at(top, cable[on], found[0][edges[on, end]])
-    rod = np.bincount(cable[on & bends], minlength=len(rows)) > 0
+    joined = np.concatenate(pairs) if pairs else None
+    edges, cable = scene.net.edges, scene.cables.edge
+    rod, top = cable_bending(rods, edges, cable, found[0], len(rows), joined)
     for k, row in enumerate(rows.values()):
         row["rod"] = bool(rod[k])
         if rod[k]:
