@@ -326,7 +326,8 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
         peaks=res.peaks,
     )
     out["applied_resultant"] = _applied(scene, res, loads)
-    out.update(_bending(scene, res.x))
+    bent = bending_moments(scene, res.x)  # once: the summary's largest and each cable's
+    out.update(_bending(bent))
     out.update(_twisting(scene, res.x))
     out.update(_support_moment(scene, res.x))
     framed = any(isinstance(getattr(t, "joints", None), Joints) for t in scene.terms)
@@ -356,15 +357,15 @@ def summarize_result(scene: Scene, res: Result, loads: Loads | None = None) -> d
             peaks=res.peaks,
             utilisation=use,
         )
-        _rod_cables(scene, res.x, out["cables"])
+        _rod_cables(scene, bent, out["cables"])
     return out
 
 
-def _rod_cables(scene: Scene, x: np.ndarray, rows: dict) -> None:
+def _rod_cables(scene: Scene, found, rows: dict) -> None:
     """Marks each cable whose edges bend (``rod``) in its summary ``rows`` and gives it
-    ``max_bending_moment`` [N m] (``catenet.model.rods.cable_bending``); none without
-    rods."""
-    rods, found = scene_rods(scene), bending_moments(scene, x)
+    ``max_bending_moment`` [N m] (``catenet.model.rods.cable_bending``, from ``found``:
+    ``bending_moments``' moment and curvature per node); none without rods."""
+    rods = scene_rods(scene)
     if rods is None or found is None:
         return
     pairs = [
@@ -411,9 +412,9 @@ def bending_moments(scene: Scene, x: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return moment, kappa
 
 
-def _bending(scene: Scene, x: np.ndarray) -> dict:
-    """The largest bending moment, its node and the curvature there (none without rods)."""
-    found = bending_moments(scene, x)
+def _bending(found) -> dict:
+    """The largest bending moment, its node and the curvature there, of ``found``
+    (``bending_moments``'; none without rods)."""
     if found is None:
         return {}
     moment, kappa = found
