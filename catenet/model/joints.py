@@ -244,3 +244,18 @@ def turn_warning(
         "at its other end too (a clamp or another rigid joint), or hold the frame against "
         "those turns (supports, bracing) (docs/howto/rods.md#rigid-joints)"
     )
+
+
+def twisting_members(terms) -> tuple[frozenset, frozenset | None]:
+    """For a rigid joint's warning: the members whose twist their joint holds (the twist
+    term's), and those whose rods would twist (``catenet.model.joints.would_twist``: their
+    far end a rigid clamp or another joint); None: no rods."""
+    held = frozenset().union(*[t.joint_members() for t in terms if t.name == "twist"])
+    rods = next((t.rods for t in terms if t.name == "bending"), None)
+    if rods is None:
+        return held, None
+    holding = set(rods.clamps[rods.rigid, 0].tolist())
+    joints = [t.joints for t in terms if t.name == "joints"]
+    for j in joints:
+        holding |= set(j.node.tolist())
+    return held, frozenset().union(*[would_twist(j, rods.hinges, holding) for j in joints])

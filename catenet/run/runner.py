@@ -321,7 +321,7 @@ def _report(
         top = float(abs(result.tension).max(initial=0.0))
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
             log.warning("%s", squeezed)
-    from catenet.model.joints import turn_warning
+    from catenet.model.joints import turn_warning, twisting_members
     from catenet.run.contact_advice import wrap_warning
 
     if wrapped := wrap_warning(
@@ -330,7 +330,7 @@ def _report(
         log.warning("%s", wrapped)
     for term in ws.system.terms:
         turned = term.name == "joints" and turn_warning(
-            term.joints, result.x, scene.net, scene.cables, *_twist_held(ws.system.terms)
+            term.joints, result.x, scene.net, scene.cables, *twisting_members(ws.system.terms)
         )
         if turned:
             log.warning("%s", turned)
@@ -417,20 +417,3 @@ def _remove(writer: ResultWriter | NoFile) -> None:
             p.unlink(missing_ok=True)
         except OSError:
             pass
-
-
-def _twist_held(terms) -> tuple[frozenset, frozenset | None]:
-    """For a rigid joint's warning: the members whose twist their joint holds (the twist
-    term's), and those whose rods would twist (``catenet.model.joints.would_twist``: their
-    far end a rigid clamp or another joint); None: no rods."""
-    from catenet.model.joints import would_twist
-
-    held = frozenset().union(*[t.joint_members() for t in terms if t.name == "twist"])
-    rods = next((t.rods for t in terms if t.name == "bending"), None)
-    if rods is None:
-        return held, None
-    holding = set(rods.clamps[rods.rigid, 0].tolist())
-    joints = [t.joints for t in terms if t.name == "joints"]
-    for j in joints:
-        holding |= set(j.node.tolist())
-    return held, frozenset().union(*[would_twist(j, rods.hinges, holding) for j in joints])

@@ -96,13 +96,15 @@ def continuation(
     results: list[Result] = []
     x = x0
     good = LastGood(start_state(net, loads, x0, 0.0), 0.0)
-    judge = PathJudge(ws, loads, post_collapse=post_collapse)
+    judge = PathJudge(ws, loads, post_collapse=post_collapse, rtol=rtol)
     loaded = bool(np.any(loads.external_force(net, 1.0))) or loads.moves_supports
     judge.begin(good.x, loaded)
     settings = StepSettings(rtol=rtol, max_iter=max_iter, workspace=ws, warn=False)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
+        before = LastGood(good.x, good.time)  # the path's last judged equilibrium
+        trail: list[tuple[float, Result]] = []  # a cut-back's sub-steps, each judged
         try:
             step: Result | ConvergenceError = solve_static(
                 net,
@@ -116,11 +118,14 @@ def continuation(
             if judge.start_unstable and not isinstance(exc, Interrupted):
                 # from an unstable start, a failure is the collapse (no cut-back helps)
                 _collapse(judge, judge.why_start(), 0.0, LastGood(judge.start_x, 0.0), x, exc)
-            step = _cut_back(net, loads, float(factor), exc, good, settings)
+            step = _cut_back(net, loads, float(factor), exc, good, settings, trail)
         if isinstance(step, ConvergenceError):  # it fails: the last equilibrium found is kept
             raise with_last_good(step, LastGood(good.x, good.time))
         last = k == len(factors) - 1
-        r = _judged(judge, net, loads, good, float(factor), step, last, settings)
+        for level, sub in trail[:-1]:  # the path to the step's end, as it was found
+            sub = _judged(judge, net, loads, before, level, sub, False, settings)
+            before = LastGood(sub.x, level)
+        r = _judged(judge, net, loads, before, float(factor), step, last, settings)
         r.steps = k + 1
         r.stability = _verdict(judge, r)
         results.append(r)
@@ -217,15 +222,21 @@ def _follow(
     last: bool,
     settings: StepSettings,
     depth: int,
+    unload: bool | None = None,
 ) -> tuple[str, float, np.ndarray | None, Result]:
     """(why, load factor, last stable state, result) of the step from x0 at f0 to r at
-    f1, halving a step that loses stability (an unstable end, a member that fell, no way
-    back when unloaded) to bracket where (see ``_judged``); why is "" where the path
-    holds."""
+    f1, halving a step that loses stability (an unstable end, a member that fell, a
+    mechanism driven, no way back when unloaded) to bracket where (see ``_judged``);
+    why is "" where the path holds. ``unload``: whether the step is unloaded to test
+    it (decided at its start, ``reversible_from``, for the step and the halves it is cut
+    into: those of a step from a neutral start, which has no state to come back to,
+    are judged as it is)."""
     why = judge.step(x0, f0, f1, r.x, last)
     if why and judge.start_unstable:
         return why, 0.0, judge.start_x, r
-    if not why and judge.reversible_from(x0):
+    if unload is None:
+        unload = judge.reversible_from(x0)
+    if not why and unload:
         try:
             back = solve_static(net, loads, x0=r.x, factor=f0, accepted=r.x, **settings).x
         except ConvergenceError:
@@ -241,7 +252,8 @@ def _follow(
         return why, f0, x0, r  # no equilibrium halfway: the step stands as judged
     half.iterations += r.iterations
     deeper = depth + 1
-    why, at, before, half = _follow(judge, net, loads, x0, f0, mid, half, False, settings, deeper)
+    args = (settings, deeper, unload)
+    why, at, before, half = _follow(judge, net, loads, x0, f0, mid, half, False, *args)
     if why:
         return why, at, before, half
     try:
@@ -249,7 +261,7 @@ def _follow(
     except ConvergenceError:
         return judge.why_jump(mid, f1, half.x, r.x), mid, half.x, r
     rest.iterations += half.iterations
-    return _follow(judge, net, loads, half.x, mid, f1, rest, last, settings, deeper)
+    return _follow(judge, net, loads, half.x, mid, f1, rest, last, *args)
 
 
 def _collapse(
@@ -268,7 +280,7 @@ def _collapse(
         nodes = judge.moving_nodes(good.x, x1)
         if nodes.size == 0:
             nodes = judge.unstable_nodes(good.x)
-    message = describe_collapse(judge, why, at, nodes)
+    message = describe_collapse(judge, why, at, nodes, x1)
     if judge.post_collapse and judge.loaded:
         judge.collapsed = message
         log.warning("%s", message.split(". ")[0] + ": followed through (solver.post_collapse)")
@@ -314,14 +326,17 @@ def _cut_back(
     failure: ConvergenceError,
     good: LastGood,
     settings: StepSettings,
+    trail: list[tuple[float, Result]],
 ) -> Result | ConvergenceError:
     """The load step from the equilibrium ``good`` (updated: it holds the last one) to
     load factor ``target`` in sub-steps (see ``continuation``), in either direction of
-    the load, after its ``failure``: the step's result, or the failure for the caller to
-    raise: ``failure`` itself where sub-steps cannot help (an interrupt, a mechanism,
-    loads below round-off), a sub-step's interrupt at once, else the last failure, its
-    message saying what was tried, when sub-steps of 1/2**CUTBACKS, the pseudo-transient
-    solve and dynamic relaxation to rest (where ``_can_relax``) still fail."""
+    the load, after its ``failure``; each equilibrium found on the way, with its load
+    factor, is appended to ``trail`` (for the path's judge). The step's result, or the
+    failure for the caller to raise: ``failure`` itself where sub-steps cannot help (an
+    interrupt, a mechanism, loads below round-off), a sub-step's interrupt at once, else
+    the last failure, its message saying what was tried, when sub-steps of 1/2**CUTBACKS,
+    the pseudo-transient solve and dynamic relaxation to rest (where ``_can_relax``)
+    still fail."""
     if isinstance(failure, Interrupted) or not _worth_cutting(failure):
         return failure
     x, f = good.x, good.time
@@ -334,6 +349,7 @@ def _cut_back(
         relaxed = _relaxed(net, loads, target, good, settings)  # fails, its motion is
         if relaxed is not None:
             relaxed.iterations += spent
+            trail.append((target, relaxed))
             return relaxed
     while True:
         rest = target - f
@@ -357,6 +373,7 @@ def _cut_back(
                     relaxed = _relaxed(net, loads, target, good, settings)
                     if relaxed is not None:
                         relaxed.iterations += spent
+                        trail.append((target, relaxed))
                         return relaxed
                     tried += ", a damped pseudo-transient solve and dynamic relaxation to rest"
                 elif transient and relax_first:
@@ -377,6 +394,7 @@ def _cut_back(
         spent += r.iterations
         x, f = r.x, float(level)
         good.x, good.time = x, f
+        trail.append((f, r))
         if level == target:
             r.iterations = spent
             return r

@@ -36,10 +36,19 @@ not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continu
    is reversible; each judged step costs one more solve, on nets with bilateral edges
    only;
 4. a bilateral edge that carries no tension at the end of a step has turned through more
-   than ``ROTATION`` in it: a member that fell.
+   than ``ROTATION`` in it: a member that fell;
+5. a load step from a neutral state (a mode without stiffness) turns bilateral edges
+   through more than ``ROTATION``: the loads drive a mechanism (a frame on pinned feet
+   swung about them), when the step halved down to 1/2**``REFINE`` of itself still
+   does. A bilateral cable or net given straight at its rest length sags from such a
+   state too, but its sag shrinks with the load (as its cube root) and its edges turn
+   far less than ROTATION at a sixty-fourth of any load it carries; a mechanism's swing
+   does not shrink.
 
-The first three are decided with the margins above; the fourth by angles far from any
-threshold in the models that trigger it.
+The first three are decided with the margins above; the last two by angles far from any
+threshold in the models that trigger them, and by tensions read against the solve's own
+accuracy (``_slack``): an edge that carries nothing in the exact answer carries round-off
+either way after Newton, never a share of the load.
 """
 
 from __future__ import annotations
@@ -70,7 +79,9 @@ RETURN = 0.05  # unloaded, a reversible step comes back within this share of its
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
 ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than this fell
-TAUT = 1e-9  # a bilateral edge is in tension above this share of the largest |tension|
+TAUT = 100.0  # a bilateral edge is in tension above this many times the solve's accuracy
+NOISE = 64.0  # ... and above this many round-offs of its axial force, EA eps |x| / l0
+EPS = float(np.finfo(np.float64).eps)
 
 STABLE, UNSTABLE, NEUTRAL = "stable", "unstable", "neutral"
 COLLAPSED, POST_COLLAPSE = "collapsed", "post-collapse"
@@ -171,6 +182,29 @@ def _sparse(system: System, solver: LinearSolver, x: np.ndarray, d: np.ndarray) 
     return Tangent(STABLE, math.nan, None)
 
 
+NEUTRAL_SHARE = 0.3  # a neutral mode names the nodes it moves by this share of its most
+
+
+def describe_neutral(mode: np.ndarray, loose: np.ndarray) -> str:
+    """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
+    what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
+    their own warning says it)."""
+    amp = np.linalg.norm(mode, axis=1)
+    top = float(amp.max(initial=0.0))
+    nodes = np.flatnonzero(amp >= NEUTRAL_SHARE * top) if top > 0.0 else amp[:0]
+    nodes = nodes[np.argsort(-amp[nodes])]
+    if not np.setdiff1d(nodes, loose).size:
+        return ""
+    return (
+        f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most in "
+        "it), which the loads do not drive: where the structure rests along it is not "
+        "determined (round-off chooses it): a part that turns freely (a frame on pinned "
+        "feet, a joint about a rod that does not twist) or that has no stiffness across it "
+        "(straight unstressed edges); hold those nodes (a support, bracing, a clamp, a "
+        "roller), prestress them, or give the rods that turn there GJ"
+    )
+
+
 def _bilateral(net: Net) -> np.ndarray:
     return ~np.asarray(net.law.tension_only, dtype=bool) & np.ones(net.n_edges, bool)
 
@@ -187,10 +221,13 @@ class PathJudge:
     (every call a no-op) for nets whose edges are all tension-only or that carry free
     bodies (``catenet.solver.modal.stable_with_bodies`` judges those)."""
 
-    def __init__(self, ws: Workspace, loads: Loads, *, post_collapse: bool = False):
+    def __init__(
+        self, ws: Workspace, loads: Loads, *, post_collapse: bool = False, rtol: float = 1e-8
+    ):
         from catenet.solver.modal import body_frames
 
         self.ws = ws
+        self.rtol = rtol  # the solves' relative accuracy: what a tension is known to
         self.net = ws.system.net
         self.loads = loads
         self.post_collapse = post_collapse
@@ -200,6 +237,7 @@ class PathJudge:
         self.reversible = not any(t.lagged for t in ws.system.terms)
         # the nodes a collapse moves: those of bilateral edges (struts); a tension-only
         # edge's nodes may hang anywhere once it is slack
+        self.bilateral = bilateral
         self.struts = np.zeros(self.net.n_nodes, bool)
         self.struts[self.net.edges[bilateral].ravel()] = True
         self.struts &= ~self.net.fixed
@@ -252,9 +290,20 @@ class PathJudge:
         t1 = self.tangent(x1)
         if t1.verdict == UNSTABLE:  # from a stable start: it lost its stability on the way
             return f"the equilibrium at load factor {f1:.6g} is unstable"
-        turned = self._turned(prev, x1)
+        angles = self._angles(prev, x1)
+        slack = self._slack(x1)
+        swung = np.flatnonzero(self.bilateral & (angles > ROTATION))
+        if swung.size and self.tangent(prev).verdict == NEUTRAL:
+            deg = math.degrees(angles[swung].max())
+            return (
+                f"the structure is a mechanism under these loads: at load factor {f0:.6g} "
+                f"it has a mode without stiffness, and the loads drive it: bilateral edges "
+                f"{_shown(swung)} turned through up to {deg:.0f} degrees by load factor "
+                f"{f1:.6g}"
+            )
+        turned = np.flatnonzero(slack & (angles > ROTATION))
         if turned.size:
-            deg = math.degrees(self._angles(prev, x1)[turned].max())
+            deg = math.degrees(angles[turned].max())
             return (
                 f"bilateral edges {_shown(turned)} turned through up to {deg:.0f} degrees "
                 f"between load factors {f0:.6g} and {f1:.6g} and carry no tension: a member "
@@ -315,25 +364,26 @@ class PathJudge:
         """Whether x is stable with every bilateral edge in tension, from a start that was
         only a guess (``guessed``: compression alone, nothing in tension balancing it). A
         prestressed system (struts against guys) folded into tension is a collapse."""
-        if not self.guessed:
-            return False
-        tension = self.ws.system.tension(x)
-        top = float(np.max(np.abs(tension))) if tension.size else 0.0
-        bilateral = _bilateral(self.net)
-        if np.any(tension[bilateral] <= TAUT * top):
+        if not self.guessed or np.any(self._slack(x)):
             return False
         return self.tangent(x).verdict != UNSTABLE
+
+    def _slack(self, x: np.ndarray) -> np.ndarray:
+        """The bilateral edges that carry no tension at x that counts: at most TAUT times
+        the solves' accuracy (rtol of the largest |tension|) or NOISE round-offs of their
+        axial force (EA eps |x| / l0), what an edge that carries nothing in the exact
+        answer carries after Newton, of either sign, on any processor."""
+        tension = self.ws.system.tension(x)
+        top = float(np.max(np.abs(tension), initial=0.0))
+        size = float(np.max(np.abs(x), initial=0.0))
+        noise = NOISE * EPS * size * np.asarray(self.net.EA) / self.net.rest_length
+        slack: np.ndarray = self.bilateral & (tension <= np.maximum(TAUT * self.rtol * top, noise))
+        return slack
 
     def _angles(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         cos = np.einsum("ij,ij->i", _directions(self.net, a), _directions(self.net, b))
         angles: np.ndarray = np.arccos(np.clip(cos, -1.0, 1.0))
         return angles
-
-    def _turned(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        tension = self.ws.system.tension(b)
-        top = float(np.max(np.abs(tension))) if tension.size else 0.0
-        slack = tension <= TAUT * top
-        return np.flatnonzero(_bilateral(self.net) & slack & (self._angles(a, b) > ROTATION))
 
     def moving_nodes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """The free nodes that move most from a to b (within half of the largest move)."""
@@ -368,8 +418,12 @@ def _shown(items: ArrayLike) -> str:
     return head + (f" and {items.size - 10} more" if items.size > 10 else "")
 
 
-def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarray) -> str:
-    """The collapse's message: where, what, which nodes, and the fix."""
+def describe_collapse(
+    judge: PathJudge, why: str, factor: float, nodes: np.ndarray, far: np.ndarray | None = None
+) -> str:
+    """The collapse's message: where, what, which nodes, and the fix; ``far``: the state
+    the collapse moved toward, where a rigid joint's turn about a rod that does not twist
+    is named."""
     from catenet.solver.diagnose import bending_nodes
 
     where = f"nodes {_shown(nodes)}" if nodes.size else "the net"
@@ -387,14 +441,15 @@ def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarr
             "(a rod beyond its Euler load, guys going slack, a snap-through): lower the "
             "load, or brace those nodes, stiffen the rods or prestress the guys"
         )
-    if any(t.name == "joints" for t in judge.ws.system.terms):  # rigid joints
+    terms = judge.ws.system.terms
+    if any(t.name == "joints" for t in terms):  # rigid joints
         fix += (
             "; or a frame turning at a rigid joint about the axis of a rod that does not "
             "twist (no GJ, or its other end free to turn: a frame on pinned feet, or on "
             "one clamped foot, swings out of its plane): hold it across its plane "
             "([[supports.roller]]), clamp its feet or give its rods GJ"
         )
-    fix = "" if judge.start_unstable else fix
+    fix = "" if judge.start_unstable else _joint_turn(terms, far) + fix
     kept = "The start" if judge.start_unstable else "The last stable state"
     if not judge.loaded:
         return f"{why}. {kept} is kept as the result"
@@ -403,3 +458,26 @@ def describe_collapse(judge: PathJudge, why: str, factor: float, nodes: np.ndarr
         "kept as the result; solver.post_collapse = true follows the path through to the "
         "far equilibrium and labels it post-collapse"
     )
+
+
+def _joint_turn(terms: Any, far: np.ndarray | None) -> str:
+    """Where the state a collapse moved toward (``far``) turned a rigid joint about the
+    axis of a rod that does not twist there: which joint, how far, about which member;
+    else ""."""
+    from catenet.model.joints import TURN_SHARE, turned_about_members, twisting_members
+
+    if far is None:
+        return ""
+    held, watch = twisting_members(terms)
+    for term in terms:
+        if term.name != "joints":
+            continue
+        found = turned_about_members(term.joints, far, held, watch)
+        if found is not None and found[0] > TURN_SHARE:
+            _, angle, node, other = found
+            return (
+                f"; the rigid joint at node {node} turned by {math.degrees(angle):.3g} deg "
+                f"about the axis of its member toward node {other}, a rod that does not "
+                "twist there"
+            )
+    return ""

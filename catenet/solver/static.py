@@ -26,7 +26,7 @@ from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
-from catenet.solver.stability import STABLE, UNSTABLE, tangent
+from catenet.solver.stability import NEUTRAL, STABLE, UNSTABLE, describe_neutral, tangent
 from catenet.solver.start import (
     direct_solve,
     start_state,
@@ -162,7 +162,7 @@ def _judge_stability(
     be lost: free bodies, or bilateral edges."""
     bodies = body_frames(ws.system)  # a free body may rest unstably on any net
     if bodies or not net.law.all_tension_only:
-        out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, potential, x)
+        out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, x, out)
         if out.stable is False:
             out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
                 ws.system.stretch,
@@ -183,6 +183,8 @@ def warn_state(ws: Workspace, net: Net, out: Result) -> None:
             "(any disturbance makes the net or a body move away): %s",
             out.diagnosis,
         )
+    elif out.stable is None and out.diagnosis:
+        log.warning("the equilibrium is neutral: %s", out.diagnosis)
     _warn_loose(ws, net, out)
 
 
@@ -237,12 +239,16 @@ def _relag(
     return result
 
 
-def _stable(ws: Workspace, potential: Potential, x: np.ndarray) -> bool | None:
+def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
     """Whether the stiffness at x is positive definite, decided with the margins of
     ``catenet.solver.stability`` (None: neutral within them, or cannot tell here). Only
-    bilateral nets can lose stability: tension-only stiffness is never negative."""
-    verdict = tangent(ws.system, ws.solver, x).verdict
-    return True if verdict == STABLE else False if verdict == UNSTABLE else None
+    bilateral nets can lose stability: tension-only stiffness is never negative. A
+    neutral state's mode without stiffness (dense systems) is named in ``out.diagnosis``
+    where it moves nodes that do not merely hang on slack edges (``_warn_loose``)."""
+    t = tangent(ws.system, ws.solver, x)
+    if t.verdict == NEUTRAL and t.mode is not None:
+        out.diagnosis = describe_neutral(t.mode, loose_nodes(ws.system.net, out.tension))
+    return True if t.verdict == STABLE else False if t.verdict == UNSTABLE else None
 
 
 ROUNDOFF_HINT = 1e-2  # a failure held to a tolerance above this share of |f| is round-off

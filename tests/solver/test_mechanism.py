@@ -1,0 +1,173 @@
+"""A frame that is a mechanism under its loads never ends converged
+(``catenet.solver.stability.PathJudge``, rule 5).
+
+A portal of steel tubes (4 m wide, 3 m high, 0.25 m edges, rigid joints at its corners,
+GJ from the section) on pinned feet turns freely about the line through its feet: a mode
+without stiffness, which a push across its plane drives. Newton finds the far equilibrium,
+the frame swung flat along the push, at any load; which way it gets there, and whether
+a member carries round-off tension at the end, hangs on round-off. The verdict must not:
+pushed at a corner or at the beam's middle, in three unit systems, from starts moved by
+1e-9 of its size, and when the first load step fails and is cut back (its sub-steps and
+the dynamic relaxation rung judged as the path they are), it collapses at load factor 0
+(exit 1, /result the start). Clamped feet hold it (exit 0, stable); a bilateral cable
+given straight at its rest length and loaded until its edges turn 60 degrees sags into
+tension from the same kind of start (exit 0, stable): its sag shrinks with the load,
+a mechanism's swing does not.
+
+Marked ``roundoff``: `make test` runs these again with every node moved by 1e-12 of the
+net's size and two threads.
+"""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+import tomli_w
+from click.testing import CliRunner
+
+from catenet.cli import main
+
+pytestmark = pytest.mark.roundoff
+
+UNITS = {"SI": (1.0, 1.0), "kN-m": (1.0, 1e-3), "N-mm": (1e3, 1.0)}  # length, force
+WIDTH, HEIGHT = 4.0, 3.0
+MECHANISM = "the structure is a mechanism under these loads: at load factor 0"
+
+
+def portal(units: str = "SI", *, at: str = "corner", feet: str = "pinned", shift=None) -> dict:
+    """The portal (nodes 0, 1 its feet, 2, 3 its corners, 4 the beam's middle), pushed
+    with 1 kN across its plane (y) ``at`` its corner 3 or its beam's middle; ``shift``
+    (5, 3) moves its given nodes [m]."""
+    m, n = UNITS[units]
+    nodes = np.array(
+        [[0, 0, 0], [WIDTH, 0, 0], [0, 0, HEIGHT], [WIDTH, 0, HEIGHT], [WIDTH / 2, 0, HEIGHT]],
+        dtype=float,
+    )
+    if shift is not None:
+        nodes += shift
+    supports: dict = {"fixed": [0, 1], "rigid_joints": [2, 3]}
+    if feet == "clamped":
+        supports["clamped"] = [0, 1]
+    return {
+        "title": f"portal on {feet} feet",
+        "units": units,
+        "geometry": {
+            "kind": "graph",
+            "nodes": (m * nodes).tolist(),
+            "edge_length": 0.25 * m,
+            "cable": [
+                {"name": "left", "nodes": [0, 2]},
+                {"name": "right", "nodes": [1, 3]},
+                {"name": "beam", "nodes": [2, 4, 3]},
+            ],
+        },
+        "material": {
+            "E": 2.1e11 * n / m**2,
+            "G": 8.1e10 * n / m**2,
+            "radius": 0.05 * m,
+            "inner_radius": 0.045 * m,
+            "EI": "section",
+            "GJ": "section",
+        },
+        "supports": supports,
+        "load": {"point": [{"node": 3 if at == "corner" else 4, "force": [0, 1e3 * n, 0]}]},
+    }
+
+
+def run(tmp_path, case: dict, name: str = "case", *args):
+    path = tmp_path / f"{name}.toml"
+    path.write_bytes(tomli_w.dumps(case).encode())
+    out = tmp_path / f"{name}.h5"
+    result = CliRunner().invoke(main, ["run", str(path), "-o", str(out), "-q", *args])
+    return result, out
+
+
+def assert_collapsed_at_the_start(result, out, units: str) -> None:
+    assert result.exit_code == 1, result.output
+    assert MECHANISM in result.output, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "collapsed"
+        assert not f["result"].attrs["converged"]
+        moved = np.linalg.norm(f["result/x"][:] - f["mesh/nodes"][:], axis=1)
+    assert moved.max() < 1e-4 * HEIGHT * UNITS[units][0]  # the start kept, not the fallen frame
+
+
+@pytest.mark.parametrize("units", list(UNITS))
+@pytest.mark.parametrize("at", ["corner", "middle"])
+def test_a_portal_on_pinned_feet_pushed_across_its_plane_collapses(tmp_path, units, at):
+    result, out = run(tmp_path, portal(units, at=at))
+    assert_collapsed_at_the_start(result, out, units)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_verdict_holds_from_starts_moved_by_round_off(tmp_path, seed):
+    shift = 1e-9 * HEIGHT * np.random.default_rng(seed).uniform(-1.0, 1.0, (5, 3))
+    result, out = run(tmp_path, portal(shift=shift))
+    assert_collapsed_at_the_start(result, out, "SI")
+
+
+def test_a_cut_back_path_is_judged_through_its_sub_steps(monkeypatch):
+    """Newton given too few iterations for the swing: the load step fails, is cut back,
+    and the frame reaches the fallen state by the ladder's rungs; the path they took is
+    judged, not only the last sub-step (which starts where the frame has fallen)."""
+    import catenet.solver.loadsteps as loadsteps
+    from catenet.case import build, parse_case
+    from catenet.solver.stability import CollapseError
+
+    cut_back = loadsteps._cut_back
+    trails: list = []
+
+    def watched(*args):
+        trails.append(args[-1])
+        return cut_back(*args)
+
+    monkeypatch.setattr(loadsteps, "_cut_back", watched)
+    from catenet.solver.workspace import Workspace
+
+    scene = build(parse_case(portal()))
+    ws = Workspace(scene.net, terms=scene.terms)
+    with pytest.raises(CollapseError, match=MECHANISM) as caught:
+        loadsteps.continuation(scene.net, scene.loads, [1.0], max_iter=30, workspace=ws)
+    assert trails and trails[0], "the load step was not cut back"
+    moved = np.linalg.norm(caught.value.last_good.x - scene.net.nodes, axis=1)
+    assert moved.max() < 1e-4 * HEIGHT
+
+
+def test_clamped_feet_hold_the_portal(tmp_path):
+    result, out = run(tmp_path, portal(feet="clamped"))
+    assert result.exit_code == 0, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "stable"
+        sway = f["result/x"][3] - f["mesh/nodes"][3]
+    assert 0.0 < sway[1] < 0.1 * HEIGHT  # it sways along the push, a little
+
+
+def test_a_bilateral_cable_given_straight_sags_from_its_neutral_start(tmp_path):
+    """Two bilateral neo-Hookean edges of rest length 1 m on a 2 m chord, pulled down at
+    their joint by P = 2 N sin(t), N = EA (s - s^-2) / 3 at the stretch s = 1 / cos(t),
+    t = 60 degrees: the first load step turns
+    them by 60 degrees from a start without transverse stiffness, but halved it turns
+    them less and less (at 1/64 of the load by 17 degrees): a sag, not a mechanism. It
+    ends there, every edge in tension, stable."""
+    ea = 1e5
+    t = np.radians(60.0)
+    stretch = 1.0 / np.cos(t)
+    load = 2.0 * ea * (stretch - stretch**-2) / 3.0 * np.sin(t)
+    case = {
+        "title": "a rubber rope pulled down",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            "edges": [[0, 1], [1, 2]],
+            "fixed": [0, 2],
+        },
+        "material": {"EA": ea, "tension_only": False, "law": "neo_hookean"},
+        "load": {"point": [{"node": 1, "force": [0.0, 0.0, -load]}]},
+    }
+    result, out = run(tmp_path, case)
+    assert result.exit_code == 0, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "stable"
+        sag = -f["result/x"][1, 2]
+    assert sag == pytest.approx(np.tan(t), rel=1e-6)
