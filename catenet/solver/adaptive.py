@@ -60,14 +60,18 @@ keeps its error, a stiff one it cannot (a free body's rigidity, a rope's axial r
 a node chattering on a barrier) is damped as bdf2 and implicit Euler damp it on the
 next steps, so it does not set the steps. (Before, the positions' estimate alone went
 through W^-1 w, without the velocities' share b ev: the drop below took 607 steps at
-1e-3, where it takes 522 now.) The bodies' momenta are not filtered: a barrier's stiffness is
-the bounce itself (filtered, two boxes colliding head on at the default lost 6.4 % of
+1e-3, where it took 522 then.) The bodies' momenta are not filtered: a barrier's stiffness
+is the bounce itself (filtered, two boxes colliding head on at the default lost 6.4 % of
 their speed, 4.2 % raw; a ball's bounce on the ground 0.9 % of its period, 0.8 % raw),
-and a body's rigidity does not change its momentum.
+and a body's rigidity does not change its momentum. A body's momentum error counts the
+momentum of the net's nodes in its barrier with its own (``Bodies.hold``): a box's held
+nodes chattering on it pass momentum to and fro, no error of the motion, which set the
+steps of the drop below through its contact when counted on the box alone.
 
 Measured (``python -m benchmarks accuracy``; docs/howto/dynamic-runs.md) on the drop of
 benchmarks/peers/mujoco_drop.toml without its dt (the box's momentum at 0.4 s; bdf2 at
-fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 182 steps, 16.22 kg m/s; on the
+fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 148 steps, 16.33 kg m/s (182 steps,
+16.22, with the body's momentum error counted without the nodes it holds); on the
 safety net of benchmarks/safety_net.toml and two other drop tests.
 """
 
@@ -75,7 +79,7 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -147,10 +151,14 @@ class Bodies:
     nodes, a ball's node), its masses, and its momentum scale ``largest``: the largest
     momentum |sum m v| it has had, at least FLOOR of the run's largest ``flow`` (the sum
     of every free node's |m v|: the momentum its parts carry), and before anything moves
-    ``floor`` times its mass."""
+    ``floor`` times its mass. A body's momentum error counts with it the net's nodes
+    inside its barrier (``hold``): momentum passing to and fro between a body and the
+    nodes it holds (a box's net chattering on its barrier) is no error of the motion."""
 
     def __init__(self, stepper: TimeStepper, floor: float):
+        from catenet.terms.body import Ball
         from catenet.terms.rigid import Rigidity
+        from catenet.terms.rigid_contact import BodyContact
 
         net, free = stepper.net, stepper.free
         where = np.full(3 * len(net.nodes), -1)
@@ -169,6 +177,17 @@ class Bodies:
                 self.heads.append(int(nodes[0]))
         m = stepper.m_free
         self.mass = [m[d] for d in self.dofs]
+        self.m_free, self.where = m, where
+        self.barriers: list[list[Any]] = [[] for _ in self.dofs]  # each one's, with the net
+        for t in stepper.system.terms:
+            head = -1
+            if isinstance(t, BodyContact) and t.dhat > 0:
+                head = int(np.asarray(t.frame.nodes)[0])
+            elif isinstance(t, Ball):
+                head = int(t.center)
+            if head in self.heads:
+                self.barriers[self.heads.index(head)].append(t)
+        self.held = [np.zeros(0, dtype=np.int64) for _ in self.dofs]  # (``hold``)
         self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
         self.own = [0.0] * len(self.dofs)  # each one's largest |sum m v| so far
         self.flow = 0.0  # the largest sum of the free nodes' |m v| so far
@@ -189,9 +208,22 @@ class Bodies:
         if self.flow > 0.0:
             self.largest = [max(p, FLOOR * self.flow) for p in self.own]
 
+    def hold(self, x0: np.ndarray, x1: np.ndarray) -> None:
+        """The free DOFs (k, 3) of the net's nodes within each body's barrier (dhat) at
+        a step's start x0 or end x1 (N, 3): the nodes it holds (``error``)."""
+        for k, terms in enumerate(self.barriers):
+            near = [np.asarray(t.nodes)[(t.gap(x0) < t.dhat) | (t.gap(x1) < t.dhat)] for t in terms]
+            nodes = np.unique(np.concatenate(near)) if near else np.zeros(0, dtype=np.int64)
+            dofs = self.where[3 * nodes[:, None] + np.arange(3)]
+            self.held[k] = dofs[np.all(dofs >= 0, axis=1)]
+
     def error(self, ev: np.ndarray) -> float:
-        """The largest error in a body's momentum over its largest momentum so far."""
-        errors = self.momenta(ev)
+        """The largest error in a body's momentum, with the nodes it holds (``hold``),
+        over its largest momentum so far."""
+        errors = []
+        for d, ms, held in zip(self.dofs, self.mass, self.held, strict=True):
+            error = np.sum(ms * ev[d], axis=0) + np.sum(self.m_free[held] * ev[held], axis=0)
+            errors.append(float(np.linalg.norm(error)))
         return max((e / p for e, p in zip(errors, self.largest, strict=True)), default=0.0)
 
 
@@ -348,6 +380,8 @@ class ErrorControl:
         if estimate is not None:
             if newton.iterations == 0:  # no step matrix factorised yet: the filter's
                 stepper.potential.factorize(stepper.x_trial, 0.0)
+            if self.bodies is not None:
+                self.bodies.hold(stepper.x, stepper.x_trial)
             ex, _ = filtered(stepper, scheme.b, *estimate)  # the momenta raw (docstring)
             error = self.error(ex, estimate[1], stepper.m_free, stepper.x_trial)
         if self.judge(h_step, error):

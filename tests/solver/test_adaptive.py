@@ -145,7 +145,7 @@ def test_the_drop_at_default_settings_and_its_result_file(tmp_path):
         velocity = f["result/obstacles/0/velocity"][()]
         mass = float(f["mesh/obstacles/0"].attrs["mass"])
     assert abs(mass * velocity[2] / 16.17 - 1) < 0.02
-    assert len(t) < 250  # a frame a step: 182 (607 before the filter, at 1e-3)
+    assert len(t) < 250  # a frame a step: 148 (182 before the held nodes, 607 before the filter)
 
 
 def test_settings_refuse_newmark_with_a_tolerance():
