@@ -83,6 +83,7 @@ TAUT = 100.0  # a bilateral edge is in tension above this many times the solve's
 NOISE = 64.0  # ... and above this many round-offs of its axial force, EA eps |x| / l0
 EPS = float(np.finfo(np.float64).eps)
 
+DRIVEN = "the structure is a mechanism under these loads"  # rule 5's verdict
 STABLE, UNSTABLE, NEUTRAL = "stable", "unstable", "neutral"
 COLLAPSED, POST_COLLAPSE = "collapsed", "post-collapse"
 
@@ -296,7 +297,7 @@ class PathJudge:
         if swung.size and self.tangent(prev).verdict == NEUTRAL:
             deg = math.degrees(angles[swung].max())
             return (
-                f"the structure is a mechanism under these loads: at load factor {f0:.6g} "
+                f"{DRIVEN}: at load factor {f0:.6g} "
                 f"it has a mode without stiffness, and the loads drive it: bilateral edges "
                 f"{_shown(swung)} turned through up to {deg:.0f} degrees by load factor "
                 f"{f1:.6g}"
@@ -434,7 +435,13 @@ def describe_collapse(
         "guys going slack): brace or fix those nodes, prestress the guys, make a strut one "
         "edge, or lower the load"
     )
-    if bent is not None and nodes.size and bool(np.all(bent[nodes])):  # rods that bend
+    if why.startswith(DRIVEN):  # no load is small enough: hold the mechanism
+        fix = (
+            f"; {where} move most. Any load that drives a mechanism moves it until it "
+            "lines up with the load: brace or fix those nodes, or hold the mode (clamp "
+            "the feet of a frame, add a support or an edge across it)"
+        )
+    elif bent is not None and nodes.size and bool(np.all(bent[nodes])):  # rods that bend
         fix = (
             f"; {where} move most. The loads exceed a buckling (limit) load of the "
             "structure as modelled, its rods' bending stiffness (material.EI) included "
