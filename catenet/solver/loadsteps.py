@@ -234,13 +234,14 @@ def _follow(
     why = judge.step(x0, f0, f1, r.x, last)
     if why and judge.start_unstable:
         return why, 0.0, judge.start_x, r
-    if unload is None:
+    if unload is None:  # the step as taken (not one of its halves)
         unload = judge.reversible_from(x0)
     if not why and unload:
         try:
             back = solve_static(net, loads, x0=r.x, factor=f0, accepted=r.x, **settings).x
-        except ConvergenceError:
-            back = r.x  # no way back found: judged as not coming back
+        except ConvergenceError:  # no way back found: this test cannot tell
+            log.info("load step to %.6g: not unloaded (no equilibrium found)", f1)
+            back = x0
         if not judge.returns(x0, back, r.x):
             why = judge.why_jump(f0, f1, x0, back)
     if not why or depth >= REFINE:  # held, or bracketed to 1/2**REFINE of the step

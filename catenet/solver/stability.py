@@ -34,7 +34,7 @@ not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continu
    halved, down to 1/2**``REFINE``, and a step that stays irreversible as it shrinks
    passes a limit point or a bifurcation (a snap-through, a fold). A stable elastic path
    is reversible; each judged step costs one more solve, on nets with bilateral edges
-   only;
+   only (a step whose unloading finds no equilibrium is not judged by this test);
 4. a bilateral edge that carries no tension at the end of a step has turned through more
    than ``ROTATION`` in it: a member that fell;
 5. a load step from a neutral state (a mode without stiffness) turns bilateral edges
