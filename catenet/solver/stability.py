@@ -79,6 +79,7 @@ RETURN = 0.05  # unloaded, a reversible step comes back within this share of its
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
 ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than this fell
+GUESS = 1e-3  # a start whose tensions are all below this share of a node's load is a guess
 TAUT = 100.0  # a bilateral edge is in tension above this many times the solve's accuracy
 NOISE = 64.0  # ... and above this many round-offs of its axial force, EA eps |x| / l0
 EPS = float(np.finfo(np.float64).eps)
@@ -270,9 +271,13 @@ class PathJudge:
         self.start_unstable = t.verdict == UNSTABLE
         self.loaded = loaded
         # a start stressed in compression only (no edge in tension to balance it: a
-        # bilateral cable given on its chord with slack) is a guess, not a structure
+        # bilateral cable given on its chord with slack, or straight at its rest length
+        # with its nodes moved by round-off) is a guess, not a structure: no tension
+        # above GUESS of the largest load on a node
         tension = self.ws.system.tension(x)
-        self.guessed = not bool(np.any(tension > 0.0))
+        load = self.ws.potential(self.loads, 1.0).f_free
+        top = float(np.max(np.abs(load), initial=0.0))
+        self.guessed = not bool(np.any(tension > GUESS * top))
         self.start_x = x.copy()
 
     def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:

@@ -35,10 +35,19 @@ WIDTH, HEIGHT = 4.0, 3.0
 MECHANISM = "the structure is a mechanism under these loads: at load factor 0"
 
 
-def portal(units: str = "SI", *, at: str = "corner", feet: str = "pinned", shift=None) -> dict:
+def portal(
+    units: str = "SI",
+    *,
+    at: str = "corner",
+    feet: str = "pinned",
+    shift=None,
+    push=(0.0, 1e3, 0.0),
+    gj: bool = True,
+) -> dict:
     """The portal (nodes 0, 1 its feet, 2, 3 its corners, 4 the beam's middle), pushed
-    with 1 kN across its plane (y) ``at`` its corner 3 or its beam's middle; ``shift``
-    (5, 3) moves its given nodes [m]."""
+    with ``push`` [N] (1 kN across its plane, y) ``at`` its corner 3 ("corner"), its
+    corner 2 ("left") or its beam's middle; ``shift`` (5, 3) moves its given nodes [m];
+    ``gj``: its tubes twist."""
     m, n = UNITS[units]
     nodes = np.array(
         [[0, 0, 0], [WIDTH, 0, 0], [0, 0, HEIGHT], [WIDTH, 0, HEIGHT], [WIDTH / 2, 0, HEIGHT]],
@@ -68,10 +77,12 @@ def portal(units: str = "SI", *, at: str = "corner", feet: str = "pinned", shift
             "radius": 0.05 * m,
             "inner_radius": 0.045 * m,
             "EI": "section",
-            "GJ": "section",
+            "GJ": "section" if gj else 0.0,
         },
         "supports": supports,
-        "load": {"point": [{"node": 3 if at == "corner" else 4, "force": [0, 1e3 * n, 0]}]},
+        "load": {
+            "point": [{"node": {"corner": 3, "left": 2}.get(at, 4), "force": [n * f for f in push]}]
+        },
     }
 
 
@@ -105,6 +116,27 @@ def test_the_verdict_holds_from_starts_moved_by_round_off(tmp_path, seed):
     shift = 1e-9 * HEIGHT * np.random.default_rng(seed).uniform(-1.0, 1.0, (5, 3))
     result, out = run(tmp_path, portal(shift=shift))
     assert_collapsed_at_the_start(result, out, "SI")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_pushed_in_its_plane_with_gj_it_stands_neutral(tmp_path, seed):
+    """With GJ the same push is carried in the plane; the portal still turns freely
+    about the line through its feet (its columns' tension and compression give that
+    mode nothing): converged, "stable" (no negative stiffness), with a warning that the
+    equilibrium is neutral, from every start."""
+    rng = np.random.default_rng(seed)
+    shift = None if seed == 0 else 1e-9 * HEIGHT * rng.uniform(-1.0, 1.0, (5, 3))
+    path = tmp_path / "gj.toml"
+    case = portal(at="left", shift=shift, push=(1e3, 0.0, 0.0))
+    path.write_bytes(tomli_w.dumps(case).encode())
+    out = tmp_path / "gj.h5"
+    result = CliRunner().invoke(main, ["run", str(path), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "the equilibrium is neutral" in result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "stable"
+        sway = f["result/x"][2] - f["mesh/nodes"][2]
+    assert 0.0 < sway[0] < 0.05 * HEIGHT
 
 
 def test_the_verdict_of_a_large_system_is_the_same(tmp_path, monkeypatch):
