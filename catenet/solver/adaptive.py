@@ -238,8 +238,9 @@ def filtered(
     with W = w + K the step's Newton matrix, w = M (1/b^2 + mu/b) its inertia (the
     filter of stiff ODE codes: Hairer & Wanner, Solving ODEs II, IV.8; Shampine 1984).
     A mode the step resolves (omega b << 1) keeps its error, a stiff one (a rope's
-    axial ringing, a free body's rigidity, a node chattering on a barrier) is damped
-    by 1 / (1 + (omega b)^2), as the scheme itself damps it on the next steps."""
+    axial ringing, a free body's rigidity, a node chattering on a barrier) is damped:
+    an oscillating one by 1 / sqrt(1 + (omega b)^2) (the eigenvalues of I - b J are
+    1 -+ i omega b), as the scheme itself damps it on the next steps."""
     w, m = stepper.inertia.w, stepper.m_free
     fx = stepper.potential.solver.solve(w * ex + (m / b) * ev)
     return fx, (fx - ex) / b
