@@ -10,9 +10,11 @@ pushed at a corner or at the beam's middle, in three unit systems, from starts m
 1e-9 of its size, judged by the sparse inertia as by the eigenvalues, and when the first
 load step fails and is cut back (its sub-steps and the dynamic relaxation rung judged as
 the path they are), it collapses at load factor 0 (exit 1, /result the start). Clamped
-feet hold it (exit 0, stable); a bilateral cable given straight at its rest length and
-loaded until its edges turn 60 degrees sags into tension from the same kind of start
-(exit 0, stable): its sag shrinks with the load, a mechanism's swing does not.
+feet hold it (exit 0, stable); pushed in its plane with GJ it stands, its mode about
+the feet neutral and warned (exit 0, from every start); a bilateral cable given
+straight at its rest length and loaded until its edges turn 60 degrees sags into
+tension from the same kind of start (exit 0, stable): its sag shrinks with the load, a
+mechanism's swing does not. A step whose unloading finds no equilibrium is no collapse.
 
 Marked ``roundoff``: `make test` runs these again with every node moved by 1e-12 of the
 net's size and two threads.
