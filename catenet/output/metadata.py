@@ -102,7 +102,8 @@ def result_attrs(res: Result, scene: Scene, tension: np.ndarray | None = None) -
         # bilateral nets: 1 stable, 0 unstable equilibrium; -1 not checked (tension-only)
         "stable": -1 if res.stable is None else int(bool(res.stable)),
         # stable | unstable | collapsed | post-collapse (catenet.solver.stability); a
-        # transient (a dynamic run that ran its time) is "not judged"
+        # transient (a dynamic run that ran its time) or a static run that failed to
+        # converge is "not judged"
         "stability": _stability(res),
         # a dynamic run's energy balance at its end [J] (catenet.solver.energy.COLUMNS)
         **_energy(res),
