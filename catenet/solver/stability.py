@@ -184,17 +184,25 @@ def _sparse(system: System, solver: LinearSolver, x: np.ndarray, d: np.ndarray) 
     return Tangent(STABLE, math.nan, None)
 
 
-NEUTRAL_SHARE = 0.3  # a neutral mode names the nodes it moves by this share of its most
+MODE_SHARE = 0.3  # a mode names the nodes it moves by this share of its most
+
+
+def mode_nodes(mode: np.ndarray) -> np.ndarray:
+    """The nodes a ``mode`` (N, 3) moves by MODE_SHARE of its largest move or more, the
+    farthest first (none for a zero mode)."""
+    amp = np.linalg.norm(mode, axis=1)
+    top = float(amp.max(initial=0.0))
+    if not top > 0.0:
+        return np.zeros(0, np.int64)
+    nodes = np.flatnonzero(amp >= MODE_SHARE * top)
+    return nodes[np.argsort(-amp[nodes])]
 
 
 def describe_neutral(mode: np.ndarray, loose: np.ndarray) -> str:
     """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
     what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
     their own warning says it)."""
-    amp = np.linalg.norm(mode, axis=1)
-    top = float(amp.max(initial=0.0))
-    nodes = np.flatnonzero(amp >= NEUTRAL_SHARE * top) if top > 0.0 else amp[:0]
-    nodes = nodes[np.argsort(-amp[nodes])]
+    nodes = mode_nodes(mode)
     if not np.setdiff1d(nodes, loose).size:
         return ""
     return (
@@ -409,13 +417,7 @@ class PathJudge:
         if own.size:
             return own
         t = self.tangent(x)
-        if t.mode is not None:
-            amp = np.linalg.norm(t.mode, axis=1)
-            top = float(amp.max())
-            if top > 0.0:
-                nodes = np.flatnonzero(amp >= 0.3 * top)
-                return nodes[np.argsort(-amp[nodes])]
-        return own
+        return own if t.mode is None else mode_nodes(t.mode)
 
 
 def _shown(items: ArrayLike) -> str:
