@@ -43,12 +43,15 @@ not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continu
    does. A bilateral cable or net given straight at its rest length sags from such a
    state too, but its sag shrinks with the load (as its cube root) and its edges turn
    far less than ROTATION at a sixty-fourth of any load it carries; a mechanism's swing
-   does not shrink.
+   does not shrink;
+6. a load step from a neutral state moves along its zero modes, and the members' forces
+   at its end push that move on (a negative geometric stiffness along it): a mechanism
+   that compression drives, wherever Newton ends (``catenet.solver.mechanism``).
 
-The first three are decided with the margins above; the last two by angles far from any
-threshold in the models that trigger them, and by tensions read against the solve's own
-accuracy (``_slack``): an edge that carries nothing in the exact answer carries round-off
-either way after Newton, never a share of the load.
+The first three are decided with the margins above; the last three by angles and forces
+far from any threshold in the models that trigger them, and by tensions read against the
+solve's own accuracy (``_slack``): an edge that carries nothing in the exact answer
+carries round-off either way after Newton, never a share of the load.
 """
 
 from __future__ import annotations
@@ -257,6 +260,8 @@ class PathJudge:
         self.guessed = False
         self.loaded = True
         self.start_x: np.ndarray | None = None
+        self.top = 0.0  # the largest nodal load at load factor 1
+        self._modes: tuple[np.ndarray, np.ndarray] | None = None  # a state's zero modes
         self._seen: list[tuple[np.ndarray, Tangent]] = []  # the last two states judged
         self.collapsed: str = ""  # what happened, once a collapse was followed through
 
@@ -286,6 +291,7 @@ class PathJudge:
         load = self.ws.potential(self.loads, 1.0).f_free
         top = float(np.max(np.abs(load), initial=0.0))
         self.guessed = not bool(np.any(tension > GUESS * top))
+        self.top = top
         self.start_x = x.copy()
 
     def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:
@@ -315,6 +321,9 @@ class PathJudge:
                 f"{_shown(swung)} turned through up to {deg:.0f} degrees by load factor "
                 f"{f1:.6g}"
             )
+        pushed = self._pushed(prev, f0, f1, x1)
+        if pushed:
+            return pushed
         turned = np.flatnonzero(slack & (angles > ROTATION))
         if turned.size:
             deg = math.degrees(angles[turned].max())
@@ -324,6 +333,27 @@ class PathJudge:
                 "fell"
             )
         return ""
+
+    def _pushed(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray) -> str:
+        """Rule 6 (``catenet.solver.mechanism``): from a neutral start, a step along its
+        zero modes that the compressed members push on."""
+        from catenet.solver.mechanism import PUSH, pushed_along, zero_modes
+
+        system = self.ws.system
+        if system.n_free > DENSE or self.tangent(prev).verdict != NEUTRAL:
+            return ""
+        if self._modes is None or not np.array_equal(self._modes[0], prev):
+            modes = zero_modes(system, prev, _scale(system), POSITIVE)
+            self._modes = (np.array(prev, copy=True), modes)
+        load = abs(f1) * self.top
+        move, push = pushed_along(system, self._modes[1], prev, x1, size=self.size, load=load)
+        if not push < -PUSH:
+            return ""
+        return (
+            f"{DRIVEN}: at load factor {f0:.6g} it has a mode without stiffness, and the "
+            f"loads drive it: its compressed members push its nodes {move:.3g} m along "
+            f"that mode by load factor {f1:.6g}"
+        )
 
     def balanced(self, x: np.ndarray, rtol: float) -> bool:
         """Whether x is an equilibrium at load factor 0 (the given geometry under its

@@ -1,5 +1,5 @@
 """A frame that is a mechanism under its loads never ends converged
-(``catenet.solver.stability.PathJudge``, rule 5).
+(``catenet.solver.stability.PathJudge``, rules 5 and 6).
 
 A portal of steel tubes (4 m wide, 3 m high, 0.25 m edges, rigid joints at its corners,
 GJ from the section) on pinned feet turns freely about the line through its feet: a mode
@@ -11,7 +11,8 @@ pushed at a corner or at the beam's middle, in three unit systems, from starts m
 load step fails and is cut back (its sub-steps and the dynamic relaxation rung judged as
 the path they are), it collapses at load factor 0 (exit 1, /result the start). Clamped
 feet hold it (exit 0, stable); pushed in its plane with GJ it stands, its mode about
-the feet neutral and warned (exit 0, from every start); a bilateral cable given
+the feet neutral and warned (exit 0, from every start); without GJ the same push
+collapses it from every start (rule 6); a bilateral cable given
 straight at its rest length and loaded until its edges turn 60 degrees sags into
 tension from the same kind of start (exit 0, stable): its sag shrinks with the load, a
 mechanism's swing does not. A step whose unloading finds no equilibrium is no collapse.
@@ -139,6 +140,50 @@ def test_pushed_in_its_plane_with_gj_it_stands_neutral(tmp_path, seed):
         assert str(f["result"].attrs["stability"]) == "stable"
         sway = f["result/x"][2] - f["mesh/nodes"][2]
     assert 0.0 < sway[0] < 0.05 * HEIGHT
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_without_gj_pushed_in_its_plane_it_collapses_from_every_start(tmp_path, seed):
+    """Without GJ the same push compresses the beam, which turns about the pushed
+    column's axis like a pinned strut: the path in the plane is unstable at any load.
+    From the exact start Newton stays in the plane and its tangent says so (rule 2);
+    from starts moved by 1e-9 it stepped round that state onto one where the frame
+    leans 0.4 m out of its plane with a neutral tangent, and ended converged. Rule 6
+    (its compressed members push it along its zero modes) makes both a collapse at load
+    factor 0, the start kept."""
+    rng = np.random.default_rng(seed)
+    shift = None if seed == 0 else 1e-9 * HEIGHT * rng.uniform(-1.0, 1.0, (5, 3))
+    case = portal(at="left", shift=shift, push=(1e3, 0.0, 0.0), gj=False)
+    result, out = run(tmp_path, case)
+    assert result.exit_code == 1, result.output
+    assert "collapses beyond load factor 0:" in result.output, result.output
+    if seed:
+        assert "its compressed members push its nodes" in result.output, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "collapsed"
+        moved = np.linalg.norm(f["result/x"][:] - f["mesh/nodes"][:], axis=1)
+    assert moved.max() < 1e-4 * HEIGHT
+
+
+def test_a_bilateral_rope_hung_off_the_vertical_swings_to_it(tmp_path):
+    """A bilateral steel rope (10 m, 20 edges) between supports 10 mm off the vertical,
+    given straight at its rest length: its weight moves it across its chord (along its
+    zero modes, 1.6e-3 of its length) as far as rule 6's threshold, but its tension holds
+    that move: converged, stable, the horizontal reactions equal and opposite."""
+    case = {
+        "title": "a rope hung off the vertical",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [0.01, 0, 10], "nodes": 21},
+        "material": {"E": 2.1e11, "radius": 0.005, "density": 7850.0, "tension_only": False},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+    }
+    result, out = run(tmp_path, case)
+    assert result.exit_code == 0, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "stable"
+        reaction = f["result/reaction"][[0, 20]]
+        across = f["result/x"][10, 0] - f["mesh/nodes"][10, 0]
+    assert reaction[0, 0] == pytest.approx(-reaction[1, 0], rel=1e-6)
+    assert 1e-3 < across < 1e-2  # it moved across its chord, toward the lower support
 
 
 def test_the_verdict_of_a_large_system_is_the_same(tmp_path, monkeypatch):

@@ -1,0 +1,97 @@
+"""Rule 6 of the static path's stability (``catenet.solver.stability``): a mechanism that
+its compressed members push along.
+
+A structure whose start is neutral (its tangent has modes without stiffness: a frame on
+pinned feet whose rigid joints turn about rods that do not twist) may carry a load in a
+state that leaves those modes alone (the portal swaying in its plane) when the loads are
+symmetric about them, and that state is unstable as soon as a member along the mode is
+compressed (the beam of such a portal turns about its column's axis like a pinned strut).
+From the exact geometry Newton stays on the symmetric state and its tangent says so (rule
+2); from geometry moved by round-off it may step round that state onto the branch where
+the mechanism has turned as far as the load makes it (a lean that grows as the load's
+cube root), an equilibrium whose tangent is neutral again. Both are the same structure,
+so both must be a collapse.
+
+The step is such a turn when, from a neutral start, it moves the nodes along the start's
+zero modes by more than ``ALONG`` of the structure's size, and the members' forces at its
+end give one of those modes a negative geometric stiffness (the sum over edges of N / l
+times the square of the mode's move across the edge) below -``PUSH`` of the step's
+largest nodal load per median edge length. The least over the modes, not the one along
+the move: Newton may also turn such a frame about the line through its feet, a mode that
+no force resists or pushes. A cable or net that sags from a straight start moves far
+along its zero modes too, but its tension holds them (a positive geometric stiffness); a
+mechanism that the loads move without stressing it (a two-bar chain whose joint swings
+to leave both bars unstressed) has no forces to push it. The thresholds sit far from
+both: the portal's push is about -1e-2 of its load scale, a cable's positive, an
+unstressed mechanism's at the solve's accuracy (1e-8).
+
+Dense systems only (``stability.DENSE`` free DOFs), where the start's zero modes are
+computed whole.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.solver.system import System
+
+ALONG = 1e-3  # the step moves along the start's zero modes by this share of the size ...
+PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edge length
+
+
+def zero_modes(system: System, x: np.ndarray, scale: np.ndarray, top: float) -> np.ndarray:
+    """(free DOFs, k) an orthonormal basis of the displacements that the tangent at x
+    does not resist: the eigenvectors of S K S (S = scale^(-1/2)) at or below ``top``,
+    mapped back to displacements."""
+    from scipy.linalg import eigh
+
+    k = system.matrix(system.hessian(x).copy()).toarray()
+    s = 1.0 / np.sqrt(scale)
+    a = k * s[:, None] * s[None, :]
+    a = 0.5 * (a + a.T)
+    if not np.all(np.isfinite(a)):
+        return np.zeros((len(a), 0))
+    lam, vec = eigh(a, subset_by_value=(-np.inf, top), check_finite=False)
+    if lam.size == 0:
+        return np.zeros((len(a), 0))
+    basis: np.ndarray = np.linalg.qr(s[:, None] * vec)[0]
+    return basis
+
+
+def pushed_along(
+    system: System,
+    modes: np.ndarray,
+    prev: np.ndarray,
+    x1: np.ndarray,
+    *,
+    size: float,
+    load: float,
+) -> tuple[float, float]:
+    """(move, push) of the step from ``prev`` to ``x1`` along ``modes`` (the start's zero
+    modes, ``zero_modes``): how far it moved the nodes along them [length], and the
+    least geometric stiffness that the members' forces at x1 give a unit move along them
+    (the sum over edges of N / l times its move across the edge squared), as a share of
+    ``load`` per median rest length (negative: the forces push along a mode). (0, 0)
+    where it did not move along them."""
+    free = system.free_dofs
+    step = (x1 - prev).reshape(-1)[free]
+    along = modes @ (modes.T @ step)
+    move = float(np.linalg.norm(along))
+    if not move > ALONG * size or not load > 0.0:
+        return 0.0, 0.0
+    net = system.net
+    v = np.zeros((modes.shape[1], net.n_nodes * 3))
+    v[:, free] = modes.T
+    v = v.reshape(len(v), -1, 3)
+    e = x1[net.edges[:, 1]] - x1[net.edges[:, 0]]
+    length = np.linalg.norm(e, axis=1)
+    t = e / np.where(length > 0.0, length, 1.0)[:, None]
+    dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
+    across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
+    stiffness = system.tension(x1) / np.where(length > 0.0, length, np.inf)
+    geometric = np.einsum("kij,mij,i->km", across, across, stiffness)
+    unit = load / float(np.median(net.rest_length))
+    return move, float(np.linalg.eigvalsh(geometric)[0]) / unit
