@@ -78,6 +78,9 @@ class ConvergenceError(CatenetError):
         self.history = list(history or [])
         self.state = state
         self.last_good = last_good
+        # a static load step's cut-back ladder was tried and failed (True: dynamic
+        # relaxation to rest too; the load path then adds its advice): else None
+        self.ladder: bool | None = None
 
 
 class Interrupted(ConvergenceError):

@@ -120,6 +120,11 @@ def continuation(
                 _collapse(judge, judge.why_start(), 0.0, LastGood(judge.start_x, 0.0), x, exc)
             step = _cut_back(net, loads, float(factor), exc, good, settings, trail)
         if isinstance(step, ConvergenceError):  # it fails: the last equilibrium found is kept
+            for level, sub in trail:  # unless the sub-steps found on the way collapsed
+                sub = _judged(judge, net, loads, before, level, sub, False, settings)
+                before = LastGood(sub.x, level)
+            if step.ladder is not None:  # what was tried is said: the advice follows
+                step.args = (f"{step}; {_advice(step, max_iter, step.ladder, judge, good)}",)
             raise with_last_good(step, LastGood(good.x, good.time))
         last = k == len(factors) - 1
         for level, sub in trail[:-1]:  # the path to the step's end, as it was found
@@ -305,11 +310,18 @@ def _worth_cutting(exc: ConvergenceError) -> bool:
     return "round-off floor exceeds" not in str(exc)
 
 
-def _advice(exc: ConvergenceError, max_iter: int, relaxed: bool = False) -> str:
+def _advice(
+    exc: ConvergenceError, max_iter: int, relaxed: bool, judge: PathJudge, good: LastGood
+) -> str:
     """The one setting most likely to help a static run that failed after cut-back
-    (``relaxed``: and after dynamic relaxation to rest)."""
+    (``relaxed``: and after dynamic relaxation to rest) from the equilibrium ``good``:
+    none where that equilibrium is neutral (Newton does not settle along a mode without
+    stiffness: hold it)."""
     if "past the peak of its" in str(exc):  # no setting helps (catenet.solver.static)
         return "the last equilibrium's load factor is about the most the structure carries"
+    neutral = judge.neutral_mode(good.x)
+    if neutral:
+        return f"the last equilibrium is neutral: {neutral}"
     if f"no convergence in {max_iter} iterations" in str(exc):
         return f"most likely to help: a larger solver.max_iter (now {max_iter})"
     if relaxed:
@@ -384,9 +396,9 @@ def _cut_back(
                     tried += " and a damped pseudo-transient solve"
                 exc.args = (
                     f"{exc}; tried: line search, a Levenberg-Marquardt shift, {tried} (the "
-                    f"last equilibrium: load factor {good.time:.6g}); "
-                    f"{_advice(exc, settings['max_iter'], 'dynamic relaxation' in tried)}",
+                    f"last equilibrium: load factor {good.time:.6g})",
                 )
+                exc.ladder = "dynamic relaxation" in tried  # for the advice (``_advice``)
                 exc.iterations = spent
                 return exc
             increment *= 0.5

@@ -83,9 +83,9 @@ def pushed_along(
     if not move > ALONG * size or not load > 0.0:
         return 0.0, 0.0
     net = system.net
-    v = np.zeros((modes.shape[1], net.n_nodes * 3))
-    v[:, free] = modes.T
-    v = v.reshape(len(v), -1, 3)
+    flat = np.zeros((modes.shape[1], net.n_nodes * 3))
+    flat[:, free] = modes.T
+    v = flat.reshape(len(flat), -1, 3)
     e = x1[net.edges[:, 1]] - x1[net.edges[:, 0]]
     length = np.linalg.norm(e, axis=1)
     t = e / np.where(length > 0.0, length, 1.0)[:, None]

@@ -201,17 +201,23 @@ def mode_nodes(mode: np.ndarray) -> np.ndarray:
     return nodes[np.argsort(-amp[nodes])]
 
 
-def describe_neutral(mode: np.ndarray, loose: np.ndarray) -> str:
+def describe_neutral(mode: np.ndarray, loose: np.ndarray, failed: bool = False) -> str:
     """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
     what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
-    their own warning says it)."""
+    their own warning says it). ``failed``: the last equilibrium of a path that Newton
+    could not take further."""
     nodes = mode_nodes(mode)
     if not np.setdiff1d(nodes, loose).size:
         return ""
+    what = (
+        "along which Newton found no equilibrium further on"
+        if failed
+        else "which the loads do not drive: where the structure rests along it is not "
+        "determined (round-off chooses it)"
+    )
     return (
         f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most in "
-        "it), which the loads do not drive: where the structure rests along it is not "
-        "determined (round-off chooses it): a part that turns freely (a frame on pinned "
+        f"it), {what}: a part that turns freely (a frame on pinned "
         "feet, a joint about a rod that does not twist) or that has no stiffness across it "
         "(straight unstressed edges); hold those nodes (a support, bracing, a clamp, a "
         "roller), prestress them, or give the rods that turn there GJ"
@@ -333,6 +339,16 @@ class PathJudge:
                 "fell"
             )
         return ""
+
+    def neutral_mode(self, x: np.ndarray) -> str:
+        """What the mode without stiffness at x is (``describe_neutral``), where x is
+        neutral and its mode known (dense systems), else ""."""
+        if not self.active:
+            return ""
+        t = self.tangent(x)
+        if t.verdict != NEUTRAL or t.mode is None:
+            return ""
+        return describe_neutral(t.mode, np.zeros(self.net.n_nodes, bool), failed=True)
 
     def _pushed(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray) -> str:
         """Rule 6 (``catenet.solver.mechanism``): from a neutral start, a step along its

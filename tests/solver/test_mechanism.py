@@ -283,3 +283,72 @@ def test_a_step_that_cannot_be_unloaded_is_no_collapse(tmp_path):
             assert str(f["result"].attrs["stability"]) == "stable"
             sags.append(-float(f["result/x"][10, 2]))
     assert sags[1] == pytest.approx(sags[0], rel=1e-6)
+
+
+def test_a_step_that_fails_after_its_sub_steps_fell_is_a_collapse(monkeypatch):
+    """The portal pushed across its plane, its load step failing above load factor 0.7
+    however it is cut back (Newton made to fail there): the sub-steps found below it
+    swung the frame flat, and they are judged before the failure is said, so the run
+    is the collapse they show, not a failure to converge."""
+    import catenet.solver.loadsteps as loadsteps
+    from catenet.case import build, parse_case
+    from catenet.errors import ConvergenceError
+    from catenet.solver.stability import CollapseError
+    from catenet.solver.workspace import Workspace
+
+    solve = loadsteps.solve_static
+
+    def failing_above(*args, **kwargs):
+        if kwargs.get("factor", 1.0) > 0.7:
+            raise ConvergenceError("static equilibrium: no convergence in 200 iterations")
+        return solve(*args, **kwargs)
+
+    monkeypatch.setattr(loadsteps, "solve_static", failing_above)
+    monkeypatch.setattr(loadsteps, "_can_relax", lambda *args: False)
+    scene = build(parse_case(portal()))
+    ws = Workspace(scene.net, terms=scene.terms)
+    with pytest.raises(CollapseError, match=MECHANISM) as caught:
+        loadsteps.continuation(scene.net, scene.loads, [1.0], workspace=ws)
+    moved = np.linalg.norm(caught.value.last_good.x - scene.net.nodes, axis=1)
+    assert moved.max() < 1e-4 * HEIGHT
+
+
+@pytest.mark.parametrize("roller", [True, False])
+def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller):
+    """Newton out of iterations after the cut-back ladder, from the last equilibrium: an
+    L-frame on a clamped foot without GJ, whose beam turns freely about its column
+    unless a roller holds its tip across the plane. Held, the advice is the iteration
+    budget; free, the last equilibrium is neutral, which no budget mends (2000
+    iterations did not): the advice names the mode's nodes and how to hold them."""
+    from catenet.case import build, parse_case
+    from catenet.errors import ConvergenceError, LastGood
+    from catenet.solver.loadsteps import _advice
+    from catenet.solver.stability import PathJudge
+    from catenet.solver.workspace import Workspace
+
+    case = {
+        "title": "an L-frame",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, HEIGHT], [2.0, 0.0, HEIGHT]],
+            "edge_length": 0.25,
+            "cable": [{"name": "column", "nodes": [0, 1]}, {"name": "beam", "nodes": [1, 2]}],
+        },
+        "material": {"E": 2.1e11, "radius": 0.05, "inner_radius": 0.045, "EI": "section"},
+        "supports": {"fixed": [0], "clamped": [0], "rigid_joints": [1]},
+        "load": {"point": [{"node": 2, "force": [0.0, 0.0, -100.0]}]},
+    }
+    if roller:
+        case["supports"]["roller"] = [{"nodes": [2], "normal": [0.0, 1.0, 0.0]}]
+    scene = build(parse_case(case))
+    judge = PathJudge(Workspace(scene.net, terms=scene.terms), scene.loads)
+    judge.begin(scene.net.nodes, True)
+    failure = ConvergenceError("static equilibrium: no convergence in 200 iterations")
+    said = _advice(failure, 200, True, judge, LastGood(scene.net.nodes, 0.0))
+    if roller:
+        assert said == "most likely to help: a larger solver.max_iter (now 200)"
+    else:
+        assert said.startswith("the last equilibrium is neutral: its stiffness has a mode")
+        assert "along which Newton found no equilibrium further on" in said
+        assert "hold those nodes (a support, bracing, a clamp, a roller)" in said
+        assert "(nodes 2, 20, 19" in said  # the tip first, then the beam toward it
