@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 G_STANDARD = 9.80665  # m/s^2, where a case has no gravity to take it from
+CHUNK = 200_000  # wave components x points evaluated at once (memory: a few such arrays)
 
 
 @dataclass(frozen=True)
@@ -95,10 +96,24 @@ class Water:
     depth: float | None = None
     ramp: float = 0.0
     _k: tuple[float, ...] = field(default=(), repr=False)
+    # the components as arrays (W,): k, omega, amplitude x omega, cos and sin of the
+    # direction, phase
+    _table: tuple[np.ndarray, ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
         ks = tuple(wave_number(w.omega, self.g, self.depth) for w in self.waves)
         object.__setattr__(self, "_k", ks)
+        omega = np.array([w.omega for w in self.waves], dtype=np.float64)
+        direction = np.array([w.direction for w in self.waves], dtype=np.float64)
+        table = (
+            np.array(ks, dtype=np.float64),
+            omega,
+            np.array([w.amplitude for w in self.waves], dtype=np.float64) * omega,
+            np.cos(direction),
+            np.sin(direction),
+            np.array([w.phase for w in self.waves], dtype=np.float64),
+        )
+        object.__setattr__(self, "_table", table)
 
     @property
     def moves(self) -> bool:
@@ -139,32 +154,39 @@ class Water:
         zp = np.minimum(x[:, 2] - self.surface, 0.0)
         if self.depth is not None:
             zp = np.maximum(zp, -self.depth)
-        for wave, k in zip(self.waves, self._k, strict=True):
-            cb, sb = math.cos(wave.direction), math.sin(wave.direction)
-            theta = k * (x[:, 0] * cb + x[:, 1] * sb) - wave.omega * t + wave.phase
-            c, s = _profiles(k, zp, self.depth)
-            aw = wave.amplitude * wave.omega
+        k, omega, aw, cb, sb, phase = self._table
+        chunk = max(1, CHUNK // len(k))  # (components x points at a time)
+        for a in range(0, len(x), chunk):
+            at = slice(a, a + chunk)
+            theta = (
+                np.outer(k * cb, x[at, 0])
+                + np.outer(k * sb, x[at, 1])
+                + (phase - omega * t)[:, None]
+            )
+            c, s = _profiles(k[:, None], zp[None, at], self.depth)
             cos, sin = np.cos(theta), np.sin(theta)
-            uh, w = aw * c * cos, aw * s * sin
-            duh = aw * wave.omega * c * sin  # d/dt at fixed r
-            dw = -aw * wave.omega * s * cos
-            vel[:, 0] += r * uh * cb
-            vel[:, 1] += r * uh * sb
-            vel[:, 2] += r * w
-            acc[:, 0] += (r * duh + dr * uh) * cb
-            acc[:, 1] += (r * duh + dr * uh) * sb
-            acc[:, 2] += r * dw + dr * w
+            uh, w = aw[:, None] * c * cos, aw[:, None] * s * sin  # (W, n) each
+            duh = (aw * omega)[:, None] * c * sin  # d/dt at fixed r
+            dw = -(aw * omega)[:, None] * s * cos
+            horizontal = r * duh + dr * uh
+            vel[at, 0] += r * (cb @ uh)
+            vel[at, 1] += r * (sb @ uh)
+            vel[at, 2] += r * w.sum(axis=0)
+            acc[at, 0] += cb @ horizontal
+            acc[at, 1] += sb @ horizontal
+            acc[at, 2] += (r * dw + dr * w).sum(axis=0)
         return vel, acc
 
 
-def _profiles(k: float, zp: np.ndarray, depth: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """cosh(k (z' + h)) / sinh(k h) and sinh(k (z' + h)) / sinh(k h) at depths z' <= 0,
-    written with decaying exponentials only (no overflow at any k h); deep: exp(k z')."""
+def _profiles(k: np.ndarray, zp: np.ndarray, depth: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """cosh(k (z' + h)) / sinh(k h) and sinh(k (z' + h)) / sinh(k h) at depths z' <= 0
+    (k and zp broadcast: components x points), written with decaying exponentials only
+    (no overflow at any k h); deep: exp(k z')."""
     top = np.exp(k * zp)
     if depth is None:
         return top, top
     bottom = np.exp(-k * (zp + 2.0 * depth))
-    scale = 1.0 / (1.0 - math.exp(-2.0 * k * depth))
+    scale = 1.0 / (1.0 - np.exp(-2.0 * k * depth))
     return (top + bottom) * scale, (top - bottom) * scale
 
 

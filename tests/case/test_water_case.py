@@ -187,6 +187,29 @@ def test_airy_kinematics():
     assert jonswap(4.0, 10.0, 3.3, seed=7) == sea
 
 
+@pytest.mark.parametrize("depth", [None, 30.0])
+def test_a_sea_is_the_sum_of_its_components(monkeypatch, depth):
+    """A JONSWAP sea (100 components, turned 0.3 rad) and a regular wave across it, at
+    points above the surface, in the water and at the seabed: its velocity and
+    acceleration are those of each component alone, summed (the components are
+    evaluated together, a block of points at a time: the same with blocks of 7)."""
+    import catenet.model.water as water_model
+
+    waves = (*jonswap(6.0, 10.0, 3.3, seed=7, direction=0.3), Wave(1.0, 0.7, 1.0, 0.2))
+    sea = Water(1025.0, g=9.81, waves=waves, depth=depth, ramp=10.0)
+    x = np.random.default_rng(1).uniform(-300.0, 300.0, (45, 3))
+    x[:, 2] = np.linspace(-30.0, 2.0, 45)
+    for t in (3.0, 25.0):
+        parts = [Water(1025.0, g=9.81, waves=(w,), depth=depth, ramp=10.0) for w in waves]
+        v = sum(p.flow(x, t)[0] for p in parts)
+        a = sum(p.flow(x, t)[1] for p in parts)
+        for chunk in (water_model.CHUNK, 7):
+            monkeypatch.setattr(water_model, "CHUNK", chunk)
+            vel, acc = sea.flow(x, t)
+            assert np.abs(vel - v).max() < 1e-13 * np.abs(v).max()
+            assert np.abs(acc - a).max() < 1e-13 * np.abs(a).max()
+
+
 BASE = """
 [geometry]
 kind = "cable"
