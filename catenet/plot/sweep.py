@@ -23,6 +23,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -254,7 +255,8 @@ def _figure(table: Table, x_name: str, panels: list[str], title: str, dpi: int, 
     groups = _groups(table, x_name)
     cols = 2 if len(panels) == 4 else min(3, len(panels))
     rows = math.ceil(len(panels) / cols)
-    fig = Figure(figsize=(4.6 * cols, 3.6 * rows), layout="constrained")
+    fig = Figure(figsize=(4.6 * cols, 3.6 * rows))
+    _margins(fig, cols, rows)
     FigureCanvasAgg(fig)
     for j, name in enumerate(panels):
         y = table.values(name)
@@ -276,6 +278,27 @@ def _figure(table: Table, x_name: str, panels: list[str], title: str, dpi: int, 
     fig.savefig(path, dpi=dpi)
     log.info("wrote %s", path)
     return path
+
+
+# A panel grid's margins [in]: left of the first column and between columns (a panel's
+# tick labels and y label), right, top (the title), bottom and between rows (x label).
+# Fixed, not matplotlib's constrained layout, which measured every label again and took
+# more than half of the time of a figure of many panels.
+LEFT, BETWEEN_COLUMNS, RIGHT, TOP, BOTTOM, BETWEEN_ROWS = 0.85, 0.95, 0.2, 0.45, 0.55, 0.75
+
+
+def _margins(fig: Any, cols: int, rows: int) -> None:
+    width, height = fig.get_size_inches()
+    panel_w = (width - LEFT - RIGHT - (cols - 1) * BETWEEN_COLUMNS) / cols
+    panel_h = (height - TOP - BOTTOM - (rows - 1) * BETWEEN_ROWS) / rows
+    fig.subplots_adjust(
+        left=LEFT / width,
+        right=1.0 - RIGHT / width,
+        top=1.0 - TOP / height,
+        bottom=BOTTOM / height,
+        wspace=BETWEEN_COLUMNS / panel_w,
+        hspace=BETWEEN_ROWS / panel_h,
+    )
 
 
 def _varies(table: Table, name: str) -> bool:
