@@ -201,20 +201,27 @@ def mode_nodes(mode: np.ndarray) -> np.ndarray:
     return nodes[np.argsort(-amp[nodes])]
 
 
-def describe_neutral(mode: np.ndarray, loose: np.ndarray, failed: bool = False) -> str:
+NEUTRAL_SAYS = {
+    "rest": "which the loads do not drive: where the structure rests along it is not "
+    "determined (round-off chooses it)",
+    "failed": "along which Newton found no equilibrium further on",
+    "driven": "which the loads drive, and along which Newton found no equilibrium "
+    "further on: a mechanism under these loads, unless bilateral edges given straight "
+    "must sag into their shape",
+}
+DRIVES = 1e-3  # a load whose share along a mode without stiffness is above this drives it
+
+
+def describe_neutral(mode: np.ndarray, loose: np.ndarray, where: str = "rest") -> str:
     """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
     what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
-    their own warning says it). ``failed``: the last equilibrium of a path that Newton
-    could not take further."""
+    their own warning says it). ``where`` (``NEUTRAL_SAYS``): an end state ("rest"), or
+    the last equilibrium of a path that Newton could not take further ("failed"), whose
+    mode the loads drive ("driven")."""
     nodes = mode_nodes(mode)
     if not np.setdiff1d(nodes, loose).size:
         return ""
-    what = (
-        "along which Newton found no equilibrium further on"
-        if failed
-        else "which the loads do not drive: where the structure rests along it is not "
-        "determined (round-off chooses it)"
-    )
+    what = NEUTRAL_SAYS[where]
     return (
         f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most in "
         f"it), {what}: a part that turns freely (a frame on pinned "
@@ -348,7 +355,13 @@ class PathJudge:
         t = self.tangent(x)
         if t.verdict != NEUTRAL or t.mode is None:
             return ""
-        return describe_neutral(t.mode, np.zeros(self.net.n_nodes, bool), failed=True)
+        mode = t.mode.reshape(-1)[self.ws.system.free_dofs]
+        load = self.ws.potential(self.loads, 1.0).f_free
+        share = abs(float(mode @ load)) / max(
+            float(np.linalg.norm(mode) * np.linalg.norm(load)), 1e-300
+        )
+        where = "driven" if share > DRIVES else "failed"
+        return describe_neutral(t.mode, np.zeros(self.net.n_nodes, bool), where)
 
     def _pushed(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray) -> str:
         """Rule 6 (``catenet.solver.mechanism``): from a neutral start, a step along its

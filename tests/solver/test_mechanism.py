@@ -313,13 +313,14 @@ def test_a_step_that_fails_after_its_sub_steps_fell_is_a_collapse(monkeypatch):
     assert moved.max() < 1e-4 * HEIGHT
 
 
-@pytest.mark.parametrize("roller", [True, False])
-def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller):
+@pytest.mark.parametrize("roller, push", [(True, "z"), (False, "z"), (False, "y")])
+def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller, push):
     """Newton out of iterations after the cut-back ladder, from the last equilibrium: an
     L-frame on a clamped foot without GJ, whose beam turns freely about its column
     unless a roller holds its tip across the plane. Held, the advice is the iteration
     budget; free, the last equilibrium is neutral, which no budget mends (2000
-    iterations did not): the advice names the mode's nodes and how to hold them."""
+    iterations did not): the advice names the mode's nodes and how to hold them, and
+    says that the loads drive that mode where they push the tip across the plane."""
     from catenet.case import build, parse_case
     from catenet.errors import ConvergenceError, LastGood
     from catenet.solver.loadsteps import _advice
@@ -336,7 +337,7 @@ def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller):
         },
         "material": {"E": 2.1e11, "radius": 0.05, "inner_radius": 0.045, "EI": "section"},
         "supports": {"fixed": [0], "clamped": [0], "rigid_joints": [1]},
-        "load": {"point": [{"node": 2, "force": [0.0, 0.0, -100.0]}]},
+        "load": {"point": [{"node": 2, "force": [0.0, 100.0 * (push == "y"), -100.0]}]},
     }
     if roller:
         case["supports"]["roller"] = [{"nodes": [2], "normal": [0.0, 1.0, 0.0]}]
@@ -350,5 +351,6 @@ def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller):
     else:
         assert said.startswith("the last equilibrium is neutral: its stiffness has a mode")
         assert "along which Newton found no equilibrium further on" in said
+        assert ("which the loads drive" in said) == (push == "y"), said
         assert "hold those nodes (a support, bracing, a clamp, a roller)" in said
         assert "(nodes 2, 20, 19" in said  # the tip first, then the beam toward it
