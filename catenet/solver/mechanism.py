@@ -42,12 +42,17 @@ ALONG = 1e-3  # the step moves along the start's zero modes by this share of the
 PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edge length
 
 
-def zero_modes(system: System, x: np.ndarray, scale: np.ndarray, top: float) -> np.ndarray:
+def zero_modes(
+    system: System, x: np.ndarray, scale: np.ndarray, top: float, known: np.ndarray | None
+) -> np.ndarray:
     """(free DOFs, k) an orthonormal basis of the displacements that the tangent at x
     does not resist: the eigenvectors of S K S (S = scale^(-1/2)) at or below ``top``,
-    mapped back to displacements."""
+    mapped back to displacements (``known``: those displacements, where the tangent's
+    verdict found them all)."""
     from scipy.linalg import eigh
 
+    if known is not None:
+        return np.linalg.qr(known)[0] if known.shape[1] else known
     k = system.matrix(system.hessian(x).copy()).toarray()
     s = 1.0 / np.sqrt(scale)
     a = k * s[:, None] * s[None, :]

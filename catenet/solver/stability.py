@@ -77,7 +77,8 @@ log = logging.getLogger(__name__)
 MARGIN = 1e-11  # eigenvalues of S K S below -MARGIN are unstable (S = D^(-1/2)) ...
 POSITIVE = 1e-13  # ... above +POSITIVE stable, between them neutral
 DENSE = 900  # free DOFs up to which the verdict takes the dense eigenvalues
-SUBSET_FROM = 300  # free DOFs from which it computes the least eigenpair alone
+SUBSET_FROM = 300  # free DOFs from which it computes the least eigenpairs alone ...
+ZERO_MODES = 8  # ... this many (the zero modes of a neutral state among them)
 RETURN = 0.05  # unloaded, a reversible step comes back within this share of its move
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
@@ -118,6 +119,10 @@ class Tangent:
     verdict: str  # STABLE, UNSTABLE or NEUTRAL
     least: float  # the least eigenvalue of S K S (nan where the inertia decided)
     mode: np.ndarray | None  # (N, 3) the least mode (dense only), else None
+    # (free DOFs, k) the displacements of the eigenvalues of S K S at or below POSITIVE
+    # (dense only), and whether they are all of them (else only the ZERO_MODES least)
+    zero: np.ndarray | None = None
+    all_zero: bool = True
 
 
 def _scale(system: System) -> np.ndarray:
@@ -147,19 +152,23 @@ def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
     a = 0.5 * (a + a.T)
     if not np.all(np.isfinite(a)):
         return Tangent(NEUTRAL, math.nan, None)
-    if len(a) >= SUBSET_FROM:
-        # The least eigenpair alone (LAPACK's MRRR, dsyevr): a third of the full
-        # decomposition's time, the same pair to round-off.
+    subset = len(a) >= SUBSET_FROM
+    if subset:
+        # The least eigenpairs alone (LAPACK's MRRR, dsyevr): a third of the full
+        # decomposition's time, the same pairs to round-off.
         from scipy.linalg import eigh
 
-        lam, vec = eigh(a, subset_by_index=[0, 0], driver="evr", check_finite=False)
+        last = min(ZERO_MODES, len(a)) - 1
+        lam, vec = eigh(a, subset_by_index=[0, last], driver="evr", check_finite=False)
     else:  # (below, importing scipy.linalg costs more than it saves)
         lam, vec = np.linalg.eigh(a)
     least = float(lam[0])
     verdict = STABLE if least > POSITIVE else UNSTABLE if least < -MARGIN else NEUTRAL
     mode = np.zeros(system.net.n_nodes * 3)
     mode[system.free_dofs] = s * vec[:, 0]
-    return Tangent(verdict, least, mode.reshape(-1, 3))
+    zero = lam <= POSITIVE
+    every = not (subset and bool(zero.all()) and len(a) > len(lam))
+    return Tangent(verdict, least, mode.reshape(-1, 3), s[:, None] * vec[:, zero], every)
 
 
 def _sparse(system: System, solver: LinearSolver, x: np.ndarray, d: np.ndarray) -> Tangent:
@@ -369,10 +378,12 @@ class PathJudge:
         from catenet.solver.mechanism import PUSH, pushed_along, zero_modes
 
         system = self.ws.system
-        if system.n_free > DENSE or self.tangent(prev).verdict != NEUTRAL:
-            return ""
+        start = self.tangent(prev)
+        if start.verdict != NEUTRAL or start.zero is None:
+            return ""  # (dense systems only: their zero modes are known)
         if self._modes is None or not np.array_equal(self._modes[0], prev):
-            modes = zero_modes(system, prev, _scale(system), POSITIVE)
+            zero = start.zero if start.all_zero else None
+            modes = zero_modes(system, prev, _scale(system), POSITIVE, zero)
             self._modes = (np.array(prev, copy=True), modes)
         load = abs(f1) * self.top
         move, push = pushed_along(system, self._modes[1], prev, x1, size=self.size, load=load)

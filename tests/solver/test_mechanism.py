@@ -354,3 +354,31 @@ def test_a_failure_from_a_neutral_equilibrium_says_to_hold_its_mode(roller, push
         assert ("which the loads drive" in said) == (push == "y"), said
         assert "hold those nodes (a support, bracing, a clamp, a roller)" in said
         assert "(nodes 2, 20, 19" in said  # the tip first, then the beam toward it
+
+
+@pytest.mark.parametrize("n", [6, 12])
+def test_the_zero_modes_of_a_neutral_state_are_all_found(n):
+    """Rule 6 reads every zero mode of its step's start (``mechanism.zero_modes``): a flat
+    bilateral net at rest, whose nodes all move freely across its plane. Below 300 free
+    DOFs the tangent's verdict has them all (the whole eigendecomposition); above, it
+    finds the eight least only, and they are computed again whole: the same number
+    either way, orthonormal, the stiffness nothing along them."""
+    import catenet as cn
+    from catenet.solver.mechanism import zero_modes
+    from catenet.solver.stability import POSITIVE, _scale, tangent
+    from catenet.solver.workspace import Workspace
+
+    material = cn.Material(EA=1e4, line_density=0.1, tension_only=False)
+    net = cn.square_net(n, 0.0, 1.0, 0.1, material).net
+    ws = Workspace(net)
+    t = tangent(ws.system, ws.solver, net.nodes)
+    assert t.verdict == "neutral" and t.zero is not None
+    assert t.all_zero == (ws.system.n_free < 300), ws.system.n_free
+    modes = zero_modes(ws.system, net.nodes, _scale(ws.system), POSITIVE, None)
+    across = int(np.count_nonzero(~net.fixed))  # one across the plane per free node
+    assert modes.shape[1] >= across
+    if t.all_zero:
+        assert t.zero.shape[1] == modes.shape[1]
+    assert np.allclose(modes.T @ modes, np.eye(modes.shape[1]), atol=1e-10)
+    k = ws.system.matrix(ws.system.hessian(net.nodes).copy()).toarray()
+    assert np.abs(k @ modes).max() < 1e-9 * np.abs(k).max()
