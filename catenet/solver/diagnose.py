@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 if TYPE_CHECKING:
     from catenet.model.net import Net
@@ -264,9 +265,54 @@ def _body_contacts(system: System) -> list[BodyContact]:
     return [t for t in system.terms if type(t) is BodyContact]
 
 
-def _shown(nodes: np.ndarray) -> str:
+def _shown(items: ArrayLike) -> str:
+    nodes = np.asarray(items)
     head = ", ".join(map(str, nodes[:10]))
     return head + (f" and {nodes.size - 10} more" if nodes.size > 10 else "")
+
+
+MODE_SHARE = 0.3  # a mode names the nodes it moves by this share of its most
+
+
+def mode_nodes(mode: np.ndarray) -> np.ndarray:
+    """The nodes a ``mode`` (N, 3) moves by MODE_SHARE of its largest move or more, the
+    farthest first (none for a zero mode)."""
+    amp = np.linalg.norm(mode, axis=1)
+    top = float(amp.max(initial=0.0))
+    if not top > 0.0:
+        return np.zeros(0, np.int64)
+    nodes = np.flatnonzero(amp >= MODE_SHARE * top)
+    return nodes[np.argsort(-amp[nodes])]
+
+
+NEUTRAL_SAYS = {
+    "rest": "which the loads do not drive: where the structure rests along it is not "
+    "determined (round-off chooses it)",
+    "failed": "along which Newton found no equilibrium further on",
+    "driven": "which the loads drive, and along which Newton found no equilibrium "
+    "further on: a mechanism under these loads, unless bilateral edges given straight "
+    "must sag into their shape",
+}
+DRIVES = 1e-3  # a load whose share along a mode without stiffness is above this drives it
+
+
+def describe_neutral(mode: np.ndarray, loose: np.ndarray, where: str = "rest") -> str:
+    """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
+    what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
+    their own warning says it). ``where`` (``NEUTRAL_SAYS``): an end state ("rest"), or
+    the last equilibrium of a path that Newton could not take further ("failed"), whose
+    mode the loads drive ("driven")."""
+    nodes = mode_nodes(mode)
+    if not np.setdiff1d(nodes, loose).size:
+        return ""
+    what = NEUTRAL_SAYS[where]
+    return (
+        f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most in "
+        f"it), {what}: a part that turns freely (a frame on pinned "
+        "feet, a joint about a rod that does not twist) or that has no stiffness across it "
+        "(straight unstressed edges); hold those nodes (a support, bracing, a clamp, a "
+        "roller), prestress them, or give the rods that turn there GJ"
+    )
 
 
 def _cables(

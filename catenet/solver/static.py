@@ -18,6 +18,7 @@ from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import (
     bending_nodes,
+    describe_neutral,
     describe_unstable,
     describe_unstable_bodies,
     has_twist,
@@ -26,7 +27,7 @@ from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
-from catenet.solver.stability import NEUTRAL, STABLE, UNSTABLE, describe_neutral, tangent
+from catenet.solver.stability import NEUTRAL, STABLE, UNSTABLE, tangent
 from catenet.solver.start import (
     direct_solve,
     start_state,
