@@ -12,9 +12,10 @@ unstable equilibrium, with the edges (and cables) in compression that meet there
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -326,3 +327,26 @@ def _cables(
     at = np.isin(net.edges, nodes).any(axis=1)
     names = sorted({str(cable_names[c]) for c in cable_of_edge[at] if c >= 0})
     return f" (cables {', '.join(names)})" if names else ""
+
+
+def joint_turn(terms: Any, far: np.ndarray | None) -> str:
+    """Where the state a collapse moved toward (``far``) turned a rigid joint about the
+    axis of a rod that does not twist there: which joint, how far, about which member;
+    else ""."""
+    from catenet.model.joints import TURN_SHARE, turned_about_members, twisting_members
+
+    if far is None:
+        return ""
+    held, watch = twisting_members(terms)
+    for term in terms:
+        if term.name != "joints":
+            continue
+        found = turned_about_members(term.joints, far, held, watch)
+        if found is not None and found[0] > TURN_SHARE:
+            _, angle, node, other = found
+            return (
+                f"; the rigid joint at node {node} turned by {math.degrees(angle):.3g} deg "
+                f"about the axis of its member toward node {other}, a rod that does not "
+                "twist there"
+            )
+    return ""

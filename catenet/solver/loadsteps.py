@@ -27,6 +27,7 @@ from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.settings import Settings
 from catenet.solver.stability import (
     COLLAPSED,
+    DRIVEN,
     POST_COLLAPSE,
     REFINE,
     STABLE,
@@ -173,6 +174,7 @@ def _judged(
             start = solve_static(net, loads, x0=start, factor=0.0, accepted=start, **settings).x
         except ConvergenceError:
             return r  # no unloaded equilibrium to judge the first step from
+        judge.start_tangent(start)
     why, at, before, r = _follow(judge, net, loads, start, f0, target, r, last, settings, 0)
     if why and judge.start_unstable and not judge.loaded:
         return _unstable_start(judge, loads, r, why)
@@ -239,6 +241,11 @@ def _follow(
     why = judge.step(x0, f0, f1, r.x, last)
     if why and judge.start_unstable:
         return why, 0.0, judge.start_x, r
+    if (why.startswith(DRIVEN) or why.endswith("a member fell")) and depth == 0:
+        moved = _by_motion(judge, net, loads, x0, f0, f1, last, settings)
+        if moved is not None:  # the motion stays near: Newton's jump, not the structure's
+            moved.iterations += r.iterations
+            return "", f0, x0, moved
     if unload is None:  # the step as taken (not one of its halves)
         unload = judge.reversible_from(x0)
     if not why and unload:
@@ -270,6 +277,30 @@ def _follow(
     return _follow(judge, net, loads, half.x, mid, f1, rest, last, *args)
 
 
+def _by_motion(
+    judge: PathJudge,
+    net: Net,
+    loads: Loads,
+    x0: np.ndarray,
+    f0: float,
+    f1: float,
+    last: bool,
+    settings: StepSettings,
+) -> Result | None:
+    """The step from x0 whose Newton end drove a mechanism (rules 4-6), taken again
+    by the net's motion: dynamic relaxation to rest under the step's full loads
+    (``_can_relax``). From a neutral state Newton can jump where the motion never goes (a
+    mast on guys given straight found mirrored through its pinned foot); where the
+    motion's rest passes the judge, it is the step's end, else None (the collapse stands)."""
+    if not _can_relax(net, f1, settings):
+        return None
+    rest = _relaxed(net, loads, f1, LastGood(x0, f0), settings)
+    if rest is None or judge.step(x0, f0, f1, rest.x, last):
+        return None
+    log.info("load step to %.6g: Newton's far equilibrium left for the motion's rest", f1)
+    return rest
+
+
 def _collapse(
     judge: PathJudge,
     why: str,
@@ -282,10 +313,12 @@ def _collapse(
     where the judge follows it through)."""
     if judge.start_unstable or x1 is None:
         nodes = judge.unstable_nodes(good.x)
+    elif why.endswith(" is unstable"):  # (rule 2) what its unstable end's mode moves
+        nodes = judge.unstable_nodes(x1)
     else:
         nodes = judge.moving_nodes(good.x, x1)
-        if nodes.size == 0:
-            nodes = judge.unstable_nodes(good.x)
+    if nodes.size == 0:
+        nodes = judge.unstable_nodes(good.x)
     message = describe_collapse(judge, why, at, nodes, x1)
     if judge.post_collapse and judge.loaded:
         judge.collapsed = message

@@ -13,7 +13,8 @@ cube root), an equilibrium whose tangent is neutral again. Both are the same str
 so both must be a collapse.
 
 The step is such a turn when, from a neutral start, it moves the nodes along the start's
-zero modes by more than ``ALONG`` of the structure's size, and the members' forces at its
+zero modes by more than ``ALONG`` of the structure's size, its end is not stable (a
+hammock's compressed spreaders beside its taut cables), and the members' forces at its
 end give one of those modes a negative geometric stiffness (the sum over edges of N / l
 times the square of the mode's move across the edge) below -``PUSH`` of the step's
 largest nodal load per median edge length. The least over the modes, not the one along
@@ -25,13 +26,20 @@ to leave both bars unstressed) has no forces to push it. The thresholds sit far 
 both: the portal's push is about -1e-2 of its load scale, a cable's positive, an
 unstressed mechanism's at the solve's accuracy (1e-8).
 
+A step along those modes that leaves its members unstressed (|push| along the move
+itself below ``PUSH``) is
+such a collapse too where it moved more than ``FAR`` times the structure's elastic
+response with the modes held (``elastic``): a strut split in two folds aside until it
+carries nothing, 0.2 m where the elastic move is 2e-6 m, while the two-bar joint swings
+only as far as its neighbours move (a fiftieth of the elastic move).
+
 Dense systems only (``stability.DENSE`` free DOFs), where the start's zero modes are
 computed whole.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +48,7 @@ if TYPE_CHECKING:
 
 ALONG = 1e-3  # the step moves along the start's zero modes by this share of the size ...
 PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edge length
+FAR = 100.0  # ... or nothing holds it (|push| < PUSH) and it is this many elastic moves
 
 
 def zero_modes(
@@ -74,19 +83,19 @@ def pushed_along(
     *,
     size: float,
     load: float,
-) -> tuple[float, float]:
-    """(move, push) of the step from ``prev`` to ``x1`` along ``modes`` (the start's zero
-    modes, ``zero_modes``): how far it moved the nodes along them [length], and the
-    least geometric stiffness that the members' forces at x1 give a unit move along them
-    (the sum over edges of N / l times its move across the edge squared), as a share of
-    ``load`` per median rest length (negative: the forces push along a mode). (0, 0)
-    where it did not move along them."""
+) -> tuple[float, float, float]:
+    """(move, push, held) of the step from ``prev`` to ``x1`` along ``modes`` (the
+    start's zero modes, ``zero_modes``): how far it moved the nodes along them [length],
+    and the geometric stiffness that the members' forces at x1 give a unit move along
+    them (the sum over edges of N / l times its move across the edge squared), as a share
+    of ``load`` per median rest length: the least over the modes (negative: the forces
+    push along a mode), and along the move itself. (0, 0, 0) where it did not move."""
     free = system.free_dofs
     step = (x1 - prev).reshape(-1)[free]
     along = modes @ (modes.T @ step)
     move = float(np.linalg.norm(along))
     if not move > ALONG * size or not load > 0.0:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     net = system.net
     flat = np.zeros((modes.shape[1], net.n_nodes * 3))
     flat[:, free] = modes.T
@@ -99,4 +108,18 @@ def pushed_along(
     stiffness = system.tension(x1) / np.where(length > 0.0, length, np.inf)
     geometric = np.einsum("kij,mij,i->km", across, across, stiffness)
     unit = load / float(np.median(net.rest_length))
-    return move, float(np.linalg.eigvalsh(geometric)[0]) / unit
+    w = modes.T @ along / move  # the move in the modes' basis, unit length
+    return move, float(np.linalg.eigvalsh(geometric)[0]) / unit, float(w @ geometric @ w) / unit
+
+
+def elastic(system: System, modes: np.ndarray, prev: np.ndarray, g: Any) -> float:
+    """The size of the step's linear response from ``prev`` with its zero ``modes`` held
+    (springs as stiff as the stiffest DOF across them): the move an elastic structure
+    makes under the step's load. ``g(x)``: the potential's gradient at the step's load."""
+    k = system.matrix(system.hessian(prev).copy()).toarray()
+    held = float(np.max(np.abs(np.diag(k)), initial=1.0)) * (modes @ modes.T)
+    try:
+        u = np.linalg.solve(k + held, -g(prev))
+    except np.linalg.LinAlgError:
+        return np.inf
+    return float(np.linalg.norm(u)) if np.all(np.isfinite(u)) else np.inf

@@ -58,14 +58,14 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from catenet.errors import ConvergenceError, SingularSystemError
-from catenet.solver.diagnose import DRIVES, _shown, describe_neutral, mode_nodes
+from catenet.solver.diagnose import DRIVES, _shown, describe_neutral, joint_turn, mode_nodes
 
 if TYPE_CHECKING:
     from catenet.model.net import Loads, Net
@@ -85,6 +85,8 @@ RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
 ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than this fell
 GUESS = 1e-3  # a start whose tensions are all below this share of a node's load is a guess
+ROUNDOFF_STRAIN = 1e-6  # a start strained less than this is at its rest length (round-off)
+FLIP = 0.75 * math.pi  # a guessed start's edge turned more than this folded over, no sag
 TAUT = 100.0  # a bilateral edge is in tension above this many times the solve's accuracy
 NOISE = 64.0  # ... and above this many round-offs of its axial force, EA eps |x| / l0
 EPS = float(np.finfo(np.float64).eps)
@@ -120,10 +122,26 @@ class Tangent:
     verdict: str  # STABLE, UNSTABLE or NEUTRAL
     least: float  # the least eigenvalue of S K S (nan where the inertia decided)
     mode: np.ndarray | None  # (N, 3) the least mode (dense only), else None
-    # (free DOFs, k) the displacements of the eigenvalues of S K S at or below POSITIVE
-    # (dense only), and whether they are all of them (else only the ZERO_MODES least)
-    zero: np.ndarray | None = None
-    all_zero: bool = True
+    # the least eigenvalues of S K S (dense only: all, or the ZERO_MODES least) and their
+    # displacements (free DOFs, k)
+    lam: np.ndarray | None = None
+    vecs: np.ndarray | None = None
+
+    def low(self, cut: float) -> tuple[np.ndarray | None, bool]:
+        """The displacements of the eigenvalues at or below ``cut`` (None: not known),
+        and whether they are all of them (else only those among the least computed)."""
+        if self.lam is None or self.vecs is None:
+            return None, True
+        below = self.lam <= cut
+        return self.vecs[:, below], not (below.all() and len(self.lam) < self.vecs.shape[0])
+
+    @property
+    def zero(self) -> np.ndarray | None:
+        return self.low(POSITIVE)[0]
+
+    @property
+    def all_zero(self) -> bool:
+        return self.low(POSITIVE)[1]
 
 
 def _scale(system: System) -> np.ndarray:
@@ -153,8 +171,7 @@ def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
     a = 0.5 * (a + a.T)
     if not np.all(np.isfinite(a)):
         return Tangent(NEUTRAL, math.nan, None)
-    subset = len(a) >= SUBSET_FROM
-    if subset:
+    if len(a) >= SUBSET_FROM:
         # The least eigenpairs alone (LAPACK's MRRR, dsyevr): a third of the full
         # decomposition's time, the same pairs to round-off.
         from scipy.linalg import eigh
@@ -167,9 +184,7 @@ def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
     verdict = STABLE if least > POSITIVE else UNSTABLE if least < -MARGIN else NEUTRAL
     mode = np.zeros(system.net.n_nodes * 3)
     mode[system.free_dofs] = s * vec[:, 0]
-    zero = lam <= POSITIVE
-    every = not (subset and bool(zero.all()) and len(a) > len(lam))
-    return Tangent(verdict, least, mode.reshape(-1, 3), s[:, None] * vec[:, zero], every)
+    return Tangent(verdict, least, mode.reshape(-1, 3), lam, s[:, None] * vec)
 
 
 def _sparse(system: System, solver: LinearSolver, x: np.ndarray, d: np.ndarray) -> Tangent:
@@ -259,9 +274,9 @@ class PathJudge:
         """The path's start (supports in place, load factor 0)."""
         if not self.active:
             return
-        t = self.tangent(x)
-        self.start_unstable = t.verdict == UNSTABLE
         self.loaded = loaded
+        t = self.start_tangent(x)
+        self.start_unstable = t.verdict == UNSTABLE
         # a start stressed in compression only (no edge in tension to balance it: a
         # bilateral cable given on its chord with slack, or straight at its rest length
         # with its nodes moved by round-off) is a guess, not a structure: no tension
@@ -272,6 +287,15 @@ class PathJudge:
         self.guessed = not bool(np.any(tension > GUESS * top))
         self.top = top
         self.start_x = x.copy()
+
+    def start_tangent(self, x: np.ndarray) -> Tangent:
+        """The tangent at a loaded path's start x, neutral where its verdict is round-off's
+        (``_at_rest_length``; unloaded, the given geometry is the verdict's subject)."""
+        t = self.tangent(x)
+        if self.loaded and self._at_rest_length(x, t):
+            t = replace(t, verdict=NEUTRAL)
+            self._seen[0] = (self._seen[0][0], t)
+        return t
 
     def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:
         """The load step from the equilibrium ``prev`` at ``f0`` to ``x1`` at ``f1``:
@@ -316,10 +340,7 @@ class PathJudge:
     def neutral_mode(self, x: np.ndarray) -> str:
         """What the mode without stiffness at x is (``describe_neutral``), where x is
         neutral and its mode known (dense systems), else ""."""
-        if not self.active:
-            return ""
-        t = self.tangent(x)
-        if t.verdict != NEUTRAL or t.mode is None:
+        if not self.active or (t := self.tangent(x)).verdict != NEUTRAL or t.mode is None:
             return ""
         mode = t.mode.reshape(-1)[self.ws.system.free_dofs]
         load = self.ws.potential(self.loads, 1.0).f_free
@@ -332,7 +353,7 @@ class PathJudge:
     def _pushed(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray) -> str:
         """Rule 6 (``catenet.solver.mechanism``): from a neutral start, a step along its
         zero modes that the compressed members push on."""
-        from catenet.solver.mechanism import PUSH, pushed_along, zero_modes
+        from catenet.solver.mechanism import FAR, PUSH, elastic, pushed_along, zero_modes
 
         system = self.ws.system
         start = self.tangent(prev)
@@ -343,14 +364,21 @@ class PathJudge:
             modes = zero_modes(system, prev, _scale(system), POSITIVE, zero)
             self._modes = (np.array(prev, copy=True), modes)
         load = abs(f1) * self.top
-        move, push = pushed_along(system, self._modes[1], prev, x1, size=self.size, load=load)
-        if not push < -PUSH:
+        modes = self._modes[1]
+        move, push, held = pushed_along(system, modes, prev, x1, size=self.size, load=load)
+        if push < -PUSH and self.tangent(x1).verdict != STABLE:  # (a stable end holds it)
+            what = "its compressed members push its nodes"
+        elif move and abs(held) < PUSH and move > FAR * elastic(system, modes, prev, self._g(f1)):
+            what = "nothing holds its nodes, which moved"  # (a strut folded unstressed)
+        else:
             return ""
         return (
             f"{DRIVEN}: at load factor {f0:.6g} it has a mode without stiffness, and the "
-            f"loads drive it: its compressed members push its nodes {move:.3g} m along "
-            f"that mode by load factor {f1:.6g}"
+            f"loads drive it: {what} {move:.3g} m along that mode by load factor {f1:.6g}"
         )
+
+    def _g(self, factor: float) -> Any:
+        return lambda x: self.ws.potential(self.loads, factor).evaluate(x).g.copy()
 
     def balanced(self, x: np.ndarray, rtol: float) -> bool:
         """Whether x is an equilibrium at load factor 0 (the given geometry under its
@@ -401,12 +429,27 @@ class PathJudge:
             return f"the given geometry is an unstable equilibrium under its prestress: {what}"
         return f"the given geometry is unstable under its prestress, so any load folds it: {what}"
 
+    def _at_rest_length(self, x: np.ndarray, t: Tangent) -> bool:
+        """Whether the unstable verdict ``t`` at x is round-off's: every bilateral edge
+        within ROUNDOFF_STRAIN of its rest length (nine digits of given coordinates strain
+        a short edge by 1e-8 to 1e-7; unstressed, K has no negative eigenvalue). It is
+        then judged as its exact, neutral geometry would be (rules 5 and 6). (A start
+        stable by round-off tension stays stable: its steps are judged as steps from a
+        stable state, a member that fell taken again by the motion.)"""
+        net = self.net
+        e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+        strain = np.abs(np.linalg.norm(e, axis=1) / np.asarray(net.rest_length) - 1.0)
+        return t.verdict == UNSTABLE and bool(np.all(strain[self.bilateral] <= ROUNDOFF_STRAIN))
+
     def _ends_taut(self, x: np.ndarray) -> bool:
         """Whether x is stable with every bilateral edge in tension, from a start that was
         only a guess (``guessed``: compression alone, nothing in tension balancing it). A
         prestressed system (struts against guys) folded into tension is a collapse."""
         if not self.guessed or np.any(self._slack(x)):
             return False
+        start = self.start_x if self.start_x is not None else self.net.nodes
+        if np.any(self._angles(start, x)[self.bilateral] > FLIP):
+            return False  # a strut or an arch turned over its pins, no sag
         return self.tangent(x).verdict != UNSTABLE
 
     def _slack(self, x: np.ndarray) -> np.ndarray:
@@ -484,7 +527,7 @@ def describe_collapse(
             "one clamped foot, swings out of its plane): hold it across its plane "
             "([[supports.roller]]), clamp its feet or give its rods GJ"
         )
-    fix = "" if judge.start_unstable else _joint_turn(terms, far) + fix
+    fix = "" if judge.start_unstable else joint_turn(terms, far) + fix
     kept = "The start" if judge.start_unstable else "The last stable state"
     if not judge.loaded:
         return f"{why}. {kept} is kept as the result"
@@ -493,26 +536,3 @@ def describe_collapse(
         "kept as the result; solver.post_collapse = true follows the path through to the "
         "far equilibrium and labels it post-collapse"
     )
-
-
-def _joint_turn(terms: Any, far: np.ndarray | None) -> str:
-    """Where the state a collapse moved toward (``far``) turned a rigid joint about the
-    axis of a rod that does not twist there: which joint, how far, about which member;
-    else ""."""
-    from catenet.model.joints import TURN_SHARE, turned_about_members, twisting_members
-
-    if far is None:
-        return ""
-    held, watch = twisting_members(terms)
-    for term in terms:
-        if term.name != "joints":
-            continue
-        found = turned_about_members(term.joints, far, held, watch)
-        if found is not None and found[0] > TURN_SHARE:
-            _, angle, node, other = found
-            return (
-                f"; the rigid joint at node {node} turned by {math.degrees(angle):.3g} deg "
-                f"about the axis of its member toward node {other}, a rod that does not "
-                "twist there"
-            )
-    return ""
