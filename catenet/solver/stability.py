@@ -294,7 +294,7 @@ class PathJudge:
         t = self.tangent(x)
         if self.loaded and self._at_rest_length(x, t):
             t = replace(t, verdict=NEUTRAL)
-            self._seen[0] = (self._seen[0][0], t)
+            self._seen = [(s, t if np.array_equal(s, x) else v) for s, v in self._seen]
         return t
 
     def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:
