@@ -27,11 +27,10 @@ both: the portal's push is about -1e-2 of its load scale, a cable's positive, an
 unstressed mechanism's at the solve's accuracy (1e-8).
 
 A step along those modes that leaves its members unstressed (|push| along the move
-itself below ``PUSH``) is
-such a collapse too where it moved more than ``FAR`` times the structure's elastic
-response with the modes held (``elastic``): a strut split in two folds aside until it
-carries nothing, 0.2 m where the elastic move is 2e-6 m, while the two-bar joint swings
-only as far as its neighbours move (a fiftieth of the elastic move).
+itself below ``PUSH``) is such a collapse too where it moved more than ``FAR`` times the
+structure's elastic response with the modes held (``elastic``): a strut split in two
+folds aside until it carries nothing, 0.2 m where the elastic move is 2e-6 m, while the
+two-bar joint swings only as far as its neighbours move (a fiftieth of the elastic move).
 
 Dense systems only (``stability.DENSE`` free DOFs), where the start's zero modes are
 computed whole.
