@@ -38,7 +38,7 @@ computed whole.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -111,14 +111,14 @@ def pushed_along(
     return move, float(np.linalg.eigvalsh(geometric)[0]) / unit, float(w @ geometric @ w) / unit
 
 
-def elastic(system: System, modes: np.ndarray, prev: np.ndarray, g: Any) -> float:
+def elastic(system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray) -> float:
     """The size of the step's linear response from ``prev`` with its zero ``modes`` held
     (springs as stiff as the stiffest DOF across them): the move an elastic structure
-    makes under the step's load. ``g(x)``: the potential's gradient at the step's load."""
+    makes under the step's load. ``g``: the potential's gradient at prev at that load."""
     k = system.matrix(system.hessian(prev).copy()).toarray()
     held = float(np.max(np.abs(np.diag(k)), initial=1.0)) * (modes @ modes.T)
     try:
-        u = np.linalg.solve(k + held, -g(prev))
+        u = np.linalg.solve(k + held, -g)
     except np.linalg.LinAlgError:
         return np.inf
     return float(np.linalg.norm(u)) if np.all(np.isfinite(u)) else np.inf

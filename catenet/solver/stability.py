@@ -368,7 +368,11 @@ class PathJudge:
         move, push, held = pushed_along(system, modes, prev, x1, size=self.size, load=load)
         if push < -PUSH and self.tangent(x1).verdict != STABLE:  # (a stable end holds it)
             what = "its compressed members push its nodes"
-        elif move and abs(held) < PUSH and move > FAR * elastic(system, modes, prev, self._g(f1)):
+        elif (
+            move
+            and abs(held) < PUSH
+            and move > FAR * elastic(system, modes, prev, self._g(f1, prev))
+        ):
             what = "nothing holds its nodes, which moved"  # (a strut folded unstressed)
         else:
             return ""
@@ -377,8 +381,10 @@ class PathJudge:
             f"loads drive it: {what} {move:.3g} m along that mode by load factor {f1:.6g}"
         )
 
-    def _g(self, factor: float) -> Any:
-        return lambda x: self.ws.potential(self.loads, factor).evaluate(x).g.copy()
+    def _g(self, factor: float, x: np.ndarray) -> np.ndarray:
+        """The out-of-balance force at x under the loads at ``factor`` (free DOFs)."""
+        g: np.ndarray = self.ws.potential(self.loads, factor).evaluate(x).g.copy()
+        return g
 
     def balanced(self, x: np.ndarray, rtol: float) -> bool:
         """Whether x is an equilibrium at load factor 0 (the given geometry under its
