@@ -453,3 +453,36 @@ def test_massless_cables_with_point_masses():
     lanczos = natural_modes(ws, x, 6, method="lanczos")
     assert lanczos.stats["method"] == "lanczos"
     np.testing.assert_allclose(lanczos.frequency, dense.frequency, rtol=1e-9)
+
+
+def test_modes_at_the_eigensolver_s_round_off_pass_and_inaccurate_ones_do_not():
+    """The accuracy check (``modes._residual``, ``_check_found``): a pencil whose low
+    mode sits beside a stiffness 1e12 times its own has a relative residual of order
+    n eps times that ratio however it is computed, and passes while within
+    ROUNDOFF_SAFETY of that round-off; the same mode off by 1e-4 is refused."""
+    from types import SimpleNamespace
+
+    import scipy.sparse as sp
+
+    from catenet.errors import ConvergenceError
+    from catenet.solver import modes
+
+    n = 40
+    k = np.full(n, 1.0)
+    k[::2] = 1e12  # stiff springs beside soft ones, in a chain
+    main = np.append(k[:-1] + k[1:], k[-1])
+    K = sp.diags([main, -k[1:], -k[1:]], [0, 1, -1], format="csr")
+    M = sp.identity(n, format="csr")
+    lam, vec = np.linalg.eigh(K.toarray())
+    op = SimpleNamespace(k=K, mm=M, n=n)
+    exact = modes._residual(op, lam[:3], vec[:, :3])
+    assert exact["residual"] > 1e3 * modes.RESIDUAL_TOL  # far above the relative bound ...
+    assert exact["roundoff_ratio"] < 1.0  # ... and at LAPACK's own round-off
+    found = SimpleNamespace(stats=exact, count=3)
+    modes._check_found(found, 3)  # passes, whatever its relative residual
+    rng = np.random.default_rng(1)
+    off = vec[:, :3] + 1e-4 * rng.normal(size=(n, 3))
+    wrong = modes._residual(op, lam[:3], off)
+    assert wrong["residual"] > modes.RESIDUAL_TOL and wrong["roundoff_ratio"] > 1e3
+    with pytest.raises(ConvergenceError, match="inaccurate"):
+        modes._check_found(SimpleNamespace(stats=wrong, count=3), 3)
