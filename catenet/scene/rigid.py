@@ -178,7 +178,9 @@ def _terms(
         load = stiff * dhat
     kappa = contact.stiffness if contact.stiffness is not None else default_stiffness(load, dhat)
     shape = body.shape.barrier(nodes, kappa, dhat, 0.0 if radius is None else radius)
-    touch = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{body.path} (kind {kind!r})")
+    edge = float(np.min(net.rest_length)) if net.n_edges else 0.0
+    touch = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{body.path} (kind {kind!r})",
+                        candidates=True, edge=edge)  # fmt: skip
     touch.key = f"{body.path}.distance"
     label = f"{body.path} (kind {kind!r}, a free body)"
     check_clear(label, "a body", shape, nodes, net, shown)

@@ -111,7 +111,7 @@ def solve(
     start = start or Start()
     if peaks is None:
         peaks = Peaks(scene.net.nodes, scene.net.n_edges)
-    if settings.method != "dynamic" and any(t.grows for t in ws.system.terms):
+    if settings.method != "dynamic" and any(t.dynamic_only for t in ws.system.terms):
         raise ConfigError(
             "solver.self_contact = true: is for dynamic runs: set solver.method = "
             '"dynamic" (or self_contact = false)'

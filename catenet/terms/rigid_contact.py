@@ -34,6 +34,20 @@ a failed run's kept state, with a node on the body. A node at the floor (or near
 start placed so) keeps room to move: the floor stays SLACK of its gap below it, so each
 iteration that ends at the cap brings it at most that share nearer (10^4 such iterations
 per e-fold; a run fails long before, and a run the barrier holds never gets there).
+
+Candidates (``candidates=True``: a box or capsule on a net, in time steps): only the nodes
+that may come within dhat in a step enter the gradient, the Hessian and the pattern, so
+the work and the factorisation's border of the body's 12 unknowns follow the nodes near
+the body, not the whole net. At each step's start x, a node's radius is REACH_SHARE of
+the net's shortest edge (at least dhat) plus twice its body-frame motion in the last step
+(doubled when the same step is tried again after a radius held it back), and it is a
+candidate where its gap is below dhat plus its radius. The others keep their body-frame
+point within gap - dhat of where it was (their step cap: |X0 - Xb| + t |V| + t^2 |W|
+<= gap - dhat): the gap is 1-Lipschitz in X, so they stay beyond dhat, where the barrier
+is exactly zero, and leaving them out changes no energy, force or stiffness. The pattern
+keeps every candidate it has had (no rebuild when one comes back) until they outnumber
+PATTERN_SLACK times the present ones. A static solve (``begin_step`` without a time)
+leaves the set as it is; every node is a candidate until the first time step.
 """
 
 from __future__ import annotations
@@ -51,6 +65,7 @@ from catenet.kernels.rigid import (
     frame_friction_hessian,
     frame_local,
 )
+from catenet.kernels.shapes import shape_gap
 from catenet.terms.base import Term, register
 from catenet.terms.rigid import CA_ITER, CA_SHARE, BodyFrame
 from catenet.terms.shapes import BoxBarrier, CapsuleBarrier
@@ -60,6 +75,8 @@ FLOOR_SHARE = 1e-6  # no node comes nearer the body than this share of dhat ...
 ROUNDOFF = 1e4  # ... nor than this many round-offs of its body-frame coordinates
 SLACK = 1e-4  # a node at the floor may come this share of its gap nearer (docstring)
 EPS = np.finfo(np.float64).eps
+REACH_SHARE = 0.1  # a candidate's radius: this share of the shortest edge (>= dhat) ...
+PATTERN_SLACK = 4  # ... the pattern's nodes, at most this many times the candidates
 
 
 @register("body_contact")
@@ -72,9 +89,18 @@ class BodyContact(Term):
     role = "internal"
     convex = False
 
-    def __init__(self, shape, frame: BodyFrame, *, n_nodes: int, label: str = "a free body"):
+    def __init__(
+        self,
+        shape,
+        frame: BodyFrame,
+        *,
+        n_nodes: int,
+        label: str = "a free body",
+        candidates: bool = False,
+        edge: float = 0.0,
+    ):
         self.shape, self.frame = shape, frame
-        self.nodes = shape.nodes
+        self.nodes = shape.nodes  # every contact node (``gap`` is in their order)
         self.kappa, self.dhat = getattr(shape, "kappa", 0.0), getattr(shape, "dhat", 0.0)
         self.n_nodes = int(n_nodes)
         self.label = label
@@ -83,6 +109,18 @@ class BodyContact(Term):
         self._g = np.zeros((n_nodes, 3))
         self._chain = np.ascontiguousarray(frame.chain())
         self.project = False  # safeguarded: each contact's block projected (``safeguard``)
+        # Candidates (module docstring): a box's or capsule's kernels on the nodes near it.
+        self.grows = bool(candidates) and _kernel(shape) and self.dhat > 0.0
+        self.reach = max(REACH_SHARE * float(edge), self.dhat)
+        self.known = self.nodes  # the pattern's nodes: every one until the first time step
+        self._pattern: tuple[np.ndarray, np.ndarray] | None = None
+        self._far = np.zeros(0, dtype=np.int64)  # the others, and the room each has
+        self._far_X = np.zeros((0, 3))
+        self._room = np.zeros(0)
+        self._radius: np.ndarray | None = None  # per contact node, from the last step
+        self._base: np.ndarray | None = None  # x at the last step's start
+        self._base_X = np.zeros((0, 3))  # every contact node's body-frame point there
+        self.held = False  # a radius cut a step of this time step short
 
     def safeguard(self, on: bool) -> None:
         """While on, each contact node's 15 x 15 block (the node, the body's centre and
@@ -117,10 +155,10 @@ class BodyContact(Term):
 
     def gradient(self, x, grad):
         shape, frame = self.shape, self.frame
-        if isinstance(shape, (BoxBarrier, CapsuleBarrier)):  # a box or capsule: one kernel
+        if _kernel(shape):  # a box or capsule: one kernel, on the candidates
             return float(
                 frame_contact_gradient(shape.kind, shape.geom, self.kappa, self.dhat, x,
-                                       self.nodes, frame.nodes, frame.B, self.c0, grad)
+                                       self.known, frame.nodes, frame.B, self.c0, grad)
             )  # fmt: skip
         _, A, U = self._local(x)
         energy, g = self._shape_gradient()
@@ -133,9 +171,14 @@ class BodyContact(Term):
         return energy
 
     def pattern(self):
-        dn = 3 * self.nodes[:, None] + np.arange(3)  # (K, 3)
+        if self._pattern is None:  # kept until the candidates change
+            self._pattern = self._entries()
+        return self._pattern
+
+    def _entries(self):
+        dn = 3 * self.known[:, None] + np.arange(3)  # (K, 3)
         db = self.frame.dofs()  # (12,)
-        K = len(self.nodes)
+        K = len(self.known)
         ii_r = np.repeat(dn, 3, axis=1)
         ii_c = np.tile(dn, (1, 3))
         ip_r = np.repeat(dn, 12, axis=1)
@@ -148,10 +191,15 @@ class BodyContact(Term):
 
     def hessian(self, x, values):
         shape, frame = self.shape, self.frame
-        if isinstance(shape, (BoxBarrier, CapsuleBarrier)):  # a box or capsule: one kernel
+        if _kernel(shape):  # a box or capsule: one kernel, on the candidates
+            if values.size != 81 * len(self.known) + 144:
+                raise RuntimeError(
+                    f"{self.label}: the contact's candidates changed since the system was "
+                    "built: Workspace.refresh() rebuilds it"
+                )
             return (
                 frame_contact_hessian_shape(shape.kind, shape.geom, self.kappa, self.dhat, x,
-                                            self.nodes, frame.nodes, frame.B, self.c0,
+                                            self.known, frame.nodes, frame.B, self.c0,
                                             self._chain, values, self.project) > 0
             )  # fmt: skip
         _, A, U = self._local(x)
@@ -173,6 +221,63 @@ class BodyContact(Term):
         s[self.frame.nodes] = self.kappa
         return s
 
+    # ---- candidates (module docstring) ------------------------------------------------
+    def begin_step(self, x, time, start=None) -> None:
+        """The candidates of the time step from x (none changed in a static solve)."""
+        if not self.grows or time is None:
+            return
+        frame = self.frame
+        X = frame_local(x, self.nodes, frame.nodes, frame.B, self.c0)[3]
+        if self._base is not None and np.array_equal(x, self._base):
+            if self.held:  # the same step again, after a radius held it back: wider
+                assert self._radius is not None
+                self._radius *= 2.0
+        elif self._base is not None:
+            moved = np.sqrt(np.einsum("ij,ij->i", X - self._base_X, X - self._base_X))
+            self._radius = self.reach + 2.0 * moved
+        self.held = False
+        self._base = np.array(x, dtype=np.float64, copy=True)
+        self._base_X = X
+        if self._radius is None:  # the first time step: every node
+            return
+        gap = np.empty(len(self.nodes))
+        self._buf[self.nodes] = X
+        shape_gap(self.shape.kind, self._buf, self.nodes, self.shape.geom, gap)
+        near = gap < self.dhat + self._radius
+        count = int(np.count_nonzero(near))
+        known = self.known
+        if len(known) > PATTERN_SLACK * max(count, 32):  # mostly stale: start anew
+            known = self.nodes[near]
+        elif count:
+            known = np.union1d(known, self.nodes[near])
+        if len(known) != len(self.known):
+            self.known, self._pattern, self.grew = known, None, True
+        out = ~np.isin(self.nodes, self.known, assume_unique=True)
+        self._far = np.ascontiguousarray(self.nodes[out])
+        self._far_X = X[out]
+        self._room = gap[out] - self.dhat  # > the radius: no candidate
+
+    def _roomy(self, x, dx) -> float:
+        """The largest multiple of dx that keeps every node that is no candidate within
+        its room of its body-frame point at the step's start (module docstring); a share
+        below 1 means a radius held the step back (``held``)."""
+        frame = self.frame
+        X0, V, W, _ = body_paths(x, dx, self._far, frame.nodes, frame.B, self.c0)
+        c = np.sqrt(np.einsum("ij,ij->i", X0 - self._far_X, X0 - self._far_X))
+        b = np.sqrt(np.einsum("ij,ij->i", V, V))
+        a = np.sqrt(np.einsum("ij,ij->i", W, W))
+        room = self._room - c
+        if np.any(room <= 0.0):
+            self.held = True
+            return 0.0
+        # the least t > 0 with a t^2 + b t = room (the stable root's form; none: inf)
+        below = b + np.sqrt(b * b + 4.0 * a * room)
+        t = np.divide(2.0 * room, below, out=np.full(len(room), math.inf), where=below > 0.0)
+        out = float(t.min(initial=math.inf))
+        if out < 1.0:
+            self.held = True
+        return out
+
     # ---- the step cap -----------------------------------------------------------------
     horizon = True  # its search walks the step in pieces: as far as asked, no farther
 
@@ -181,13 +286,14 @@ class BodyContact(Term):
 
     def max_step_within(self, x, dx, upto: float) -> float:
         far = min(float(upto), T_FAR)
-        if isinstance(self.shape, (BoxBarrier, CapsuleBarrier)):  # one kernel
+        if _kernel(self.shape):  # one kernel, on the candidates; the others by their room
             frame = self.frame
-            X0, V, W, scale = body_paths(x, dx, self.nodes, frame.nodes, frame.B, self.c0)
-            return float(
+            X0, V, W, scale = body_paths(x, dx, self.known, frame.nodes, frame.B, self.c0)
+            t = float(
                 body_step_cap(self.shape.kind, self.shape.geom, X0, V, W, scale, self.dhat,
                               CA_SHARE, CA_ITER, FLOOR_SHARE, ROUNDOFF, SLACK, far)
             )  # fmt: skip
+            return min(t, self._roomy(x, dx)) if len(self._far) else t
         c, A, U = self._local(x)
         X0 = self._buf[self.nodes].copy()
         dc, dA = self.frame.state(dx)
@@ -301,3 +407,8 @@ class BodyFriction(BodyContact):
 
     def stiffness(self):
         return None
+
+
+def _kernel(shape) -> bool:
+    """Whether ``shape`` has the body kernels (a box or a capsule)."""
+    return isinstance(shape, (BoxBarrier, CapsuleBarrier))

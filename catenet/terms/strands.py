@@ -70,6 +70,7 @@ class SelfContact(Term):
     bounds_step = True
     barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     grows = True
+    dynamic_only = True
     convex = False
     role = "internal"
 

@@ -1,0 +1,157 @@
+"""A free body's contact on the nodes near it (``BodyContact`` candidates,
+catenet/terms/rigid_contact.py): in time steps only the nodes that may come within dhat
+enter the gradient, the Hessian and the pattern; the others are held within their room
+by the step cap. Checked: the same energy, gradient and Hessian as over every node; the
+cap that keeps a far node beyond dhat, and the wider radius after it held a step back;
+a whole drop with the same answer as over every node and no node in the box; a static
+solve leaves the set alone."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from catenet import Settings, solve
+from catenet.case import build, parse_case
+from catenet.solver import system as system_module
+from catenet.terms.rigid_contact import BodyContact
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _drop(**solver):
+    case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
+    case["solver"].update(solver)
+    if case["solver"]["method"] != "dynamic":  # the box placed, not thrown
+        del case["obstacle"][0]["velocity"], case["obstacle"][0]["angular_velocity"]
+    scene = build(parse_case(case))
+    (touch,) = [t for t in scene.terms if type(t) is BodyContact]
+    return scene, touch
+
+
+def _everything(touch: BodyContact) -> BodyContact:
+    """The same contact over every node (no candidates)."""
+    return BodyContact(touch.shape, touch.frame, n_nodes=touch.n_nodes, label=touch.label)
+
+
+def _pressed(scene, touch):
+    """The net with its middle pushed up into the box's barrier (some nodes within dhat,
+    most far from it), the box held where it was built."""
+    x = scene.net.nodes.copy()
+    net = np.arange(scene.net.n_net)
+    r = np.linalg.norm(x[net, :2], axis=1)
+    bottom = touch.frame.center[2] - 0.05  # the box's lower face (half height 0.05)
+    x[net, 2] += np.maximum(0.0, bottom - 0.4 * touch.dhat - 0.02 * r**2)
+    return x
+
+
+def _stepped(scene, touch):
+    """The pressed net after two time steps' starts, the last step having moved every
+    node by 0.1 mm: the candidates are the nodes within dhat + reach + 0.2 mm."""
+    x = _pressed(scene, touch)
+    before = x.copy()
+    before[:, 2] -= 1e-4
+    touch.begin_step(before, 0.01, 0.0)  # the first step: every node
+    assert len(touch.known) == len(touch.nodes)
+    touch.begin_step(x, 0.02, 0.01)
+    return x
+
+
+def test_the_candidates_give_every_node_s_energy_gradient_and_hessian():
+    scene, touch = _drop()
+    x = _stepped(scene, touch)
+    assert 0 < len(touch.known) < len(touch.nodes) / 2 and touch.grew
+    full = _everything(touch)
+    near = full.gap(x) < touch.dhat
+    assert near.sum() > 4  # the barrier acts
+    assert set(touch.nodes[near]) <= set(touch.known)
+    g1, g2 = np.zeros_like(x), np.zeros_like(x)
+    e1, e2 = touch.gradient(x, g1), full.gradient(x, g2)
+    assert e1 == pytest.approx(e2, rel=1e-14) and e1 > 0.0
+    assert np.abs(g1 - g2).max() <= 1e-13 * np.abs(g2).max()
+    h = []
+    for term in (touch, full):
+        rows, cols = term.pattern()
+        values = np.zeros(len(rows))
+        assert term.hessian(x, values)
+        n = 3 * len(x)
+        h.append(np.zeros((n, n)))
+        np.add.at(h[-1], (rows, cols), values)
+    assert len(touch.pattern()[0]) < len(full.pattern()[0]) / 2
+    assert np.abs(h[0] - h[1]).max() <= 1e-13 * np.abs(h[1]).max()
+
+
+def test_a_node_that_is_no_candidate_stays_beyond_dhat_and_widens_its_radius():
+    scene, touch = _drop()
+    x = _stepped(scene, touch)
+    far = touch._far
+    gap = _everything(touch).gap(x)
+    k = int(np.argmin(np.where(np.isin(touch.nodes, far), gap, np.inf)))
+    node = int(touch.nodes[k])
+    assert node in far
+    dx = np.zeros_like(x)
+    dx[node] = [0.0, 0.0, 2.0 * gap[k]]  # straight up into the box
+    cap = touch.max_step_within(x, dx, 4.0)
+    assert touch.held and 0.0 < cap < 1.0
+    moved = x.copy()
+    moved[node] += cap * dx[node]
+    assert _everything(touch).gap(moved)[k] >= touch.dhat * (1.0 - 1e-12)  # within its room
+    before = len(touch.known)
+    for _ in range(12):  # the same step again, each time held: the radii double
+        touch.begin_step(x, 0.02, 0.01)
+        if node in touch.known:
+            break
+        touch.max_step_within(x, dx, 4.0)
+    assert node in touch.known and len(touch.known) > before and touch.grew
+    assert touch.max_step_within(x, dx, 4.0) > cap  # now by the box itself
+
+
+def _dropped(candidates: bool) -> tuple[np.ndarray, float, int, int]:
+    """The box's momentum at the end of the drop at 10 ms steps (bdf2), the closest
+    approach of a node to it over the run, the contact's candidates at the end and its
+    nodes; ``candidates=False``: the contact over every node."""
+    scene, touch = _drop(dt=0.01, integrator="bdf2")
+    if not candidates:
+        touch.grows = False
+    every = _everything(touch)
+    closest = [np.inf]
+
+    def watched(state) -> None:
+        closest[0] = min(closest[0], float(every.gap(state.x).min()))
+
+    result = solve(scene, Settings.of(scene.case.solver), on_step=watched)
+    assert result.converged
+    momentum = 12.0 * result.v[scene.rigid[0].frame.nodes].mean(axis=0)
+    return momentum, closest[0], len(touch.known), len(touch.nodes)
+
+
+def test_a_drop_with_candidates_is_the_drop_over_every_node(monkeypatch):
+    """The box dropped on the net at 10 ms steps: the same momentum and the same closest
+    approach as the contact over every node, no node in the box at any step, the pattern
+    rebuilt a few times and far smaller than the net at the end."""
+    rebuilt = [0]
+    refresh = system_module.System.refresh
+
+    def counted(self):
+        done = refresh(self)
+        rebuilt[0] += done
+        return done
+
+    monkeypatch.setattr(system_module.System, "refresh", counted)
+    p1, c1, known, nodes = _dropped(True)
+    assert 1 <= rebuilt[0] <= 10
+    rebuilt[0] = 0
+    p2, c2, every, _ = _dropped(False)
+    assert rebuilt[0] == 0 and every == nodes
+    assert np.abs(p1 - p2).max() <= 1e-7 * np.linalg.norm(p2) and p2[2] > 10.0
+    assert c1 > 0.0 and c1 == pytest.approx(c2, rel=1e-6)
+    assert known < nodes / 2
+
+
+def test_a_static_solve_leaves_every_node_a_candidate():
+    scene, touch = _drop(method="static")
+    solve(scene, Settings.of(scene.case.solver))
+    assert len(touch.known) == len(touch.nodes) and not len(touch._far)
