@@ -46,8 +46,10 @@ point within gap - dhat of where it was (their step cap: |X0 - Xb| + t |V| + t^2
 <= gap - dhat): the gap is 1-Lipschitz in X, so they stay beyond dhat, where the barrier
 is exactly zero, and leaving them out changes no energy, force or stiffness. The pattern
 keeps every candidate it has had (no rebuild when one comes back) until they outnumber
-PATTERN_SLACK times the present ones. A static solve (``begin_step`` without a time)
-leaves the set as it is; every node is a candidate until the first time step.
+PATTERN_SLACK times the present ones (at least FEWEST): a net of no more than
+PATTERN_SLACK x FEWEST contact nodes keeps them all, without candidates. A static solve
+(``begin_step`` without a time) leaves the set as it is; every node is a candidate until
+the first time step.
 """
 
 from __future__ import annotations
@@ -77,6 +79,8 @@ SLACK = 1e-4  # a node at the floor may come this share of its gap nearer (docst
 EPS = np.finfo(np.float64).eps
 REACH_SHARE = 0.1  # a candidate's radius: this share of the shortest edge (>= dhat) ...
 PATTERN_SLACK = 4  # ... the pattern's nodes, at most this many times the candidates
+FEWEST = 32  # ... or than this many: a net of at most PATTERN_SLACK x FEWEST contact
+#              nodes keeps them all (no candidates: the set could never shrink)
 
 
 @register("body_contact")
@@ -110,9 +114,11 @@ class BodyContact(Term):
         self._chain = np.ascontiguousarray(frame.chain())
         self.project = False  # safeguarded: each contact's block projected (``safeguard``)
         # Candidates (module docstring): a box's or capsule's kernels on the nodes near it.
-        self.grows = bool(candidates) and _kernel(shape) and self.dhat > 0.0
+        many = len(self.nodes) > PATTERN_SLACK * FEWEST
+        self.grows = bool(candidates) and _kernel(shape) and self.dhat > 0.0 and many
         self.reach = max(REACH_SHARE * float(edge), self.dhat)
         self.known = self.nodes  # the pattern's nodes: every one until the first time step
+        self._inside = np.ones(len(self.nodes), dtype=bool)  # which contact nodes they are
         self._pattern: tuple[np.ndarray, np.ndarray] | None = None
         self._far = np.zeros(0, dtype=np.int64)  # the others, and the room each has
         self._far_X = np.zeros((0, 3))
@@ -245,14 +251,15 @@ class BodyContact(Term):
         shape_gap(self.shape.kind, self._buf, self.nodes, self.shape.geom, gap)
         near = gap < self.dhat + self._radius
         count = int(np.count_nonzero(near))
-        known = self.known
-        if len(known) > PATTERN_SLACK * max(count, 32):  # mostly stale: start anew
-            known = self.nodes[near]
-        elif count:
-            known = np.union1d(known, self.nodes[near])
-        if len(known) != len(self.known):
-            self.known, self._pattern, self.grew = known, None, True
-        out = ~np.isin(self.nodes, self.known, assume_unique=True)
+        inside = self._inside
+        if int(np.count_nonzero(inside)) > PATTERN_SLACK * max(count, FEWEST):  # stale
+            inside = near
+        elif np.any(near & ~inside):
+            inside = inside | near
+        if inside is not self._inside:
+            self._inside = inside
+            self.known, self._pattern, self.grew = self.nodes[inside], None, True
+        out = ~inside
         self._far = np.ascontiguousarray(self.nodes[out])
         self._far_X = X[out]
         self._room = gap[out] - self.dhat  # > the radius: no candidate
