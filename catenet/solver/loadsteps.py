@@ -36,7 +36,7 @@ from catenet.solver.stability import (
     PathJudge,
     describe_collapse,
 )
-from catenet.solver.start import start_state
+from catenet.solver.start import predict, start_state
 from catenet.solver.static import solve_static, warn_state
 from catenet.solver.workspace import Workspace
 
@@ -288,11 +288,12 @@ def _by_motion(
     settings: StepSettings,
 ) -> Result | None:
     """The step from x0 whose Newton end drove a mechanism (rules 4-6), taken again
-    by the net's motion: dynamic relaxation to rest under the step's full loads
-    (``_can_relax``). From a neutral state Newton can jump where the motion never goes (a
-    mast on guys given straight found mirrored through its pinned foot); where the
-    motion's rest passes the judge, it is the step's end, else None (the collapse stands)."""
-    if not _can_relax(net, f1, settings):
+    by the net's motion: dynamic relaxation to rest under the step's loads, at its load
+    factor f1 (``_can_relax`` but for the factor: the first of several load steps too).
+    From a neutral state Newton can jump where the motion never goes (a mast on guys
+    given straight found mirrored through its pinned foot); where the motion's rest
+    passes the judge, it is the step's end, else None (the collapse stands)."""
+    if not _can_relax(net, 1.0, settings):
         return None
     rest = _relaxed(net, loads, f1, LastGood(x0, f0), settings)
     if rest is None or judge.step(x0, f0, f1, rest.x, last):
@@ -475,8 +476,9 @@ def _can_relax(net: Net, target: float, settings: StepSettings) -> bool:
 def _relaxed(
     net: Net, loads: Loads, target: float, good: LastGood, settings: StepSettings
 ) -> Result | None:
-    """The ladder's last rung: the equilibrium under the full loads (``target`` 1) by
-    dynamic relaxation to rest from the last equilibrium ``good`` (the paper's method,
+    """The ladder's last rung: the equilibrium under the loads at load factor ``target``
+    (the full loads, 1, but for ``_by_motion``) by dynamic relaxation to rest from the
+    last equilibrium ``good`` (the paper's method,
     ``solver.t_end = "rest"`` at the default dt and damping: it follows the net's motion,
     which needs no continuation stage), then Newton on the exact potential from its rest
     state to the static tolerance (``solve_static(relaxed=True)``). The result, its
@@ -489,7 +491,7 @@ def _relaxed(
     try:
         rest = solve_dynamic(
             net,
-            _held(loads),
+            _held(loads, net, target),
             dt=default.dt,
             damping=default.damping,
             t_end=REST,
@@ -511,9 +513,24 @@ def _relaxed(
     return r
 
 
-def _held(loads: Loads) -> Loads:
-    """``loads`` as a static run takes them, for a run to rest: every load and support
-    displacement at its full value from the start (no history, no ramp)."""
+def _held(loads: Loads, net: Net | None = None, factor: float = 1.0) -> Loads:
+    """``loads`` as a static run takes them at load ``factor`` (the net's, where not 1),
+    for a run to rest: every load and support displacement at its value from the start
+    (no history, no ramp)."""
+    if factor != 1.0:  # the full loads, scaled: forces, gravity, the supports' moves
+        assert net is not None
+        full = _held(loads)
+        move = None
+        if full.support_displacement is not None:
+            move = np.zeros((net.n_nodes, 3))
+            move[net.fixed] = full.support_positions(net, factor=factor) - net.nodes[net.fixed]
+        return dataclasses.replace(
+            full,
+            force=None if full.force is None else factor * full.force,
+            gravity=None if full.gravity is None else factor * np.asarray(full.gravity),
+            gravity_factor=factor * full.gravity_factor,
+            support_displacement=move,
+        )
     if not (loads.parts or loads.gravity_history or loads.support_history or loads.vessels):
         if loads.ramp_time is None:
             return loads
@@ -530,21 +547,3 @@ def _held(loads: Loads) -> Loads:
         support_history=(),
         vessels=vessels,
     )
-
-
-def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:
-    """The equilibrium at load level ``level`` extrapolated by the Lagrange polynomial
-    through the given equilibria (two: a secant, three: a parabola) at their levels.
-    Levels must be distinct; with one state it is returned as it is."""
-    if len(states) != len(levels):
-        raise ValueError("predict: one level per state")
-    if len(set(levels)) != len(levels):
-        return np.array(states[-1], copy=True)
-    x = np.zeros_like(states[-1])
-    for i, (xi, si) in enumerate(zip(states, levels, strict=True)):
-        w = 1.0
-        for j, sj in enumerate(levels):
-            if j != i:
-                w *= (level - sj) / (si - sj)
-        x += w * xi
-    return x

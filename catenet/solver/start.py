@@ -7,6 +7,7 @@ prestressed net among obstacles, a direct solve before any continuation
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -179,3 +180,21 @@ def direct_solve(
     if result.converged:
         x[:] = y
     return result
+
+
+def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float) -> np.ndarray:
+    """The equilibrium at load level ``level`` extrapolated by the Lagrange polynomial
+    through the given equilibria (two: a secant, three: a parabola) at their levels.
+    Levels must be distinct; with one state it is returned as it is."""
+    if len(states) != len(levels):
+        raise ValueError("predict: one level per state")
+    if len(set(levels)) != len(levels):
+        return np.array(states[-1], copy=True)
+    x = np.zeros_like(states[-1])
+    for i, (xi, si) in enumerate(zip(states, levels, strict=True)):
+        w = 1.0
+        for j, sj in enumerate(levels):
+            if j != i:
+                w *= (level - sj) / (si - sj)
+        x += w * xi
+    return x

@@ -175,7 +175,7 @@ def _solve_levels(task: dict) -> list[dict]:
             level_of = _load_level(force, reference)
             x0 = x_prev
             if parsed.solver.method == "static" and level_of is not None and len(path) >= 2:
-                from catenet.solver.loadsteps import predict
+                from catenet.solver.start import predict
 
                 x0 = predict([x for _, x in path[-2:]], [s for s, _ in path[-2:]], level_of)
             result = _solve(parsed, scene, ws_net, ws, x0)

@@ -435,6 +435,46 @@ def test_a_strut_on_guys_given_straight_stands_while_they_sag(tmp_path, seed):
     assert 0.1 < np.linalg.norm(moved, axis=1).max() < 0.3  # the guys sag
 
 
+@pytest.mark.parametrize("steps", [2, 4])
+def test_the_strut_on_guys_stands_in_any_number_of_load_steps(tmp_path, steps):
+    """The guyed strut above with ``solver.steps``: its first load step (to 1/2 or 1/4
+    of the loads) drove the mirrored state as the single step did, and was a collapse
+    ("the structure is a mechanism under these loads") because only a step to the full
+    loads was taken again by the motion. Now every step is, at its own load factor: the
+    same equilibrium as in one step (to 1e-6 m), stable."""
+    one, out_one = run(tmp_path, guyed_strut(), "one")
+    case = guyed_strut()
+    case["solver"] = {"steps": steps}
+    result, out = run(tmp_path, case)
+    assert one.exit_code == 0 and result.exit_code == 0, result.output
+    with h5py.File(out, "r") as f, h5py.File(out_one, "r") as g:
+        assert str(f["result"].attrs["stability"]) == "stable"
+        assert np.abs(f["result/x"][:] - g["result/x"][:]).max() < 1e-6
+
+
+def test_a_mechanism_still_collapses_in_several_load_steps(tmp_path):
+    """The inverted pendulum below in four load steps: the motion's rest at the first
+    step's load hangs it upside down too, so the collapse stands, at load factor 0."""
+    case = {
+        "title": "an inverted pendulum",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, 3.0]],
+            "edges": [[0, 1]],
+            "rest_length": [3.0],
+            "fixed": [0],
+        },
+        "material": {"E": 1.6e11, "radius": 0.01, "density": 7850.0, "tension_only": False},
+        "load": {"point": [{"node": 1, "force": [1.0, 0.0, -1e3]}]},
+        "solver": {"steps": 4},
+    }
+    result, out = run(tmp_path, case)
+    assert result.exit_code == 1, result.output
+    with h5py.File(out, "r") as f:
+        assert str(f["result"].attrs["stability"]) == "collapsed"
+        assert f["result"].attrs["time"] == 0.0  # the load factor of the last stable state
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_pinned_strut_pushed_down_collapses_from_a_start_at_round_off(tmp_path, seed):
     """One bilateral edge upright on a pinned foot, 1 kN down on its top: an inverted

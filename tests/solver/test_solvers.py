@@ -256,7 +256,7 @@ def test_unconverged_static_raises_with_history():
 
 
 def test_predictor_is_exact_for_linear_paths_and_cheapens_load_curves():
-    from catenet.solver.loadsteps import predict
+    from catenet.solver.start import predict
 
     a, b = np.array([[0.0, 1.0, 2.0]]), np.array([[1.0, 3.0, 2.0]])
     assert np.allclose(predict([a, b], [1.0, 2.0], 4.0), a + 3 * (b - a))
