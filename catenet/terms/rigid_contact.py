@@ -49,7 +49,8 @@ keeps every candidate it has had (no rebuild when one comes back) until they out
 PATTERN_SLACK times the present ones (at least FEWEST): a net of no more than
 PATTERN_SLACK x FEWEST contact nodes keeps them all, without candidates. A static solve
 (``begin_step`` without a time) leaves the set as it is; every node is a candidate until
-the first time step.
+the first time step. The body's friction (``BodyFriction``) follows the same set: a node
+pressed on the body at the lagged state is within the barrier, so a candidate.
 """
 
 from __future__ import annotations
@@ -375,18 +376,37 @@ class BodyFriction(BodyContact):
     def __init__(self, friction, contact: BodyContact):
         super().__init__(friction, contact.frame, n_nodes=contact.n_nodes, label=contact.label)
         self.rides_on = contact
+        self.contact = contact
+        self.grows = contact.grows  # on the contact's candidates (``_follow``)
         self.touching = False  # a node pressed on the body at the lagged state
+        self._lag = (friction.anchor, friction.normal, friction.weight)  # on ``known``
 
     def begin_step(self, x, time, start=None) -> None:
         self._local(x)
         self.shape.begin_step(self._buf, None)
-        self.touching = bool(np.any(self.shape.weight > 0.0))
+        self._follow()
 
     def relag(self, x) -> float:
         self._local(x)
         change = self.shape.relag(self._buf)
-        self.touching = bool(np.any(self.shape.weight > 0.0))
+        self._follow()
         return float(change)
+
+    def _follow(self) -> None:
+        """The lagged state on the contact's candidates (after its ``begin_step``): a
+        node pressed on the body is within its barrier, so a candidate; one that is not
+        carries no friction (and is taken in, should its weight say otherwise)."""
+        f = self.shape
+        if self.grows:
+            inside = self.contact._inside | (f.weight > 0.0)
+            if not np.array_equal(inside, self._inside):
+                self._inside = inside
+                self.known, self._pattern, self.grew = self.nodes[inside], None, True
+            sub = self._inside
+            self._lag = (f.anchor[sub], f.normal[sub], f.weight[sub])
+        else:
+            self._lag = (f.anchor, f.normal, f.weight)
+        self.touching = bool(np.any(self._lag[2] > 0.0))
 
     # With no node pressed on the body (every lagged normal force 0: a net in flight
     # towards it) the friction's energy, gradient and Hessian are zero: not evaluated.
@@ -394,19 +414,19 @@ class BodyFriction(BodyContact):
     def gradient(self, x, grad):
         if not self.touching:
             return 0.0
-        f, frame = self.shape, self.frame
+        frame, (anchor, normal, weight) = self.frame, self._lag
         return float(
-            frame_friction_gradient(x, self.nodes, frame.nodes, frame.B, self.c0, f.anchor,
-                                    f.normal, f.weight, f.slip, grad)
+            frame_friction_gradient(x, self.known, frame.nodes, frame.B, self.c0, anchor,
+                                    normal, weight, self.shape.slip, grad)
         )  # fmt: skip
 
     def hessian(self, x, values):
         if not self.touching:
             return False
-        f, frame = self.shape, self.frame
+        frame, (anchor, normal, weight) = self.frame, self._lag
         return (
-            frame_friction_hessian(x, self.nodes, frame.nodes, frame.B, self.c0, f.anchor,
-                                   f.normal, f.weight, f.slip, self._chain, values) > 0
+            frame_friction_hessian(x, self.known, frame.nodes, frame.B, self.c0, anchor,
+                                   normal, weight, self.shape.slip, self._chain, values) > 0
         )  # fmt: skip
 
     def gap(self, x):

@@ -17,14 +17,16 @@ import pytest
 from catenet import Settings, solve
 from catenet.case import build, parse_case
 from catenet.solver import system as system_module
-from catenet.terms.rigid_contact import BodyContact
+from catenet.terms.rigid_contact import BodyContact, BodyFriction
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _drop(**solver):
+def _drop(friction: float = 0.0, **solver):
     case = tomllib.loads((ROOT / "benchmarks" / "peers" / "mujoco_drop.toml").read_text())
     case["solver"].update(solver)
+    if friction:
+        case["obstacle"][0]["friction"] = friction
     if case["solver"]["method"] != "dynamic":  # the box placed, not thrown
         del case["obstacle"][0]["velocity"], case["obstacle"][0]["angular_velocity"]
     scene = build(parse_case(case))
@@ -109,29 +111,39 @@ def test_a_node_that_is_no_candidate_stays_beyond_dhat_and_widens_its_radius():
     assert touch.max_step_within(x, dx, 4.0) > cap  # now by the box itself
 
 
-def _dropped(candidates: bool) -> tuple[np.ndarray, float, int, int]:
+def _dropped(candidates: bool, friction: float = 0.0) -> tuple[np.ndarray, float, int, int]:
     """The box's momentum at the end of the drop at 10 ms steps (bdf2), the closest
-    approach of a node to it over the run, the contact's candidates at the end and its
-    nodes; ``candidates=False``: the contact over every node."""
-    scene, touch = _drop(dt=0.01, integrator="bdf2")
+    approach of a node to it over the run, the contact's candidates at the end (the
+    friction's too: the larger) and its nodes; ``candidates=False``: the contact (and the
+    friction) over every node."""
+    scene, touch = _drop(friction, dt=0.01, integrator="bdf2")
+    rubs = [t for t in scene.terms if type(t) is BodyFriction]
+    assert len(rubs) == bool(friction)
     if not candidates:
-        touch.grows = False
+        for term in (touch, *rubs):
+            term.grows = False
     every = _everything(touch)
     closest = [np.inf]
+    rubbed = [False]
 
     def watched(state) -> None:
         closest[0] = min(closest[0], float(every.gap(state.x).min()))
+        rubbed[0] = rubbed[0] or any(t.touching for t in rubs)
 
     result = solve(scene, Settings.of(scene.case.solver), on_step=watched)
     assert result.converged
     momentum = 12.0 * result.v[scene.rigid[0].frame.nodes].mean(axis=0)
-    return momentum, closest[0], len(touch.known), len(touch.nodes)
+    known = max(len(t.known) for t in (touch, *rubs))
+    assert rubbed[0] == bool(rubs)  # the friction acted (on the candidates)
+    return momentum, closest[0], known, len(touch.nodes)
 
 
-def test_a_drop_with_candidates_is_the_drop_over_every_node(monkeypatch):
-    """The box dropped on the net at 10 ms steps: the same momentum and the same closest
-    approach as the contact over every node, no node in the box at any step, the pattern
-    rebuilt a few times and far smaller than the net at the end."""
+@pytest.mark.parametrize("friction", [0.0, 0.3])
+def test_a_drop_with_candidates_is_the_drop_over_every_node(monkeypatch, friction):
+    """The box dropped on the net at 10 ms steps, frictionless and with friction: the
+    same momentum and the same closest approach as the contact over every node, no node
+    in the box at any step, the pattern rebuilt a few times and far smaller than the net
+    at the end."""
     rebuilt = [0]
     refresh = system_module.System.refresh
 
@@ -141,10 +153,10 @@ def test_a_drop_with_candidates_is_the_drop_over_every_node(monkeypatch):
         return done
 
     monkeypatch.setattr(system_module.System, "refresh", counted)
-    p1, c1, known, nodes = _dropped(True)
+    p1, c1, known, nodes = _dropped(True, friction)
     assert 1 <= rebuilt[0] <= 10
     rebuilt[0] = 0
-    p2, c2, every, _ = _dropped(False)
+    p2, c2, every, _ = _dropped(False, friction)
     assert rebuilt[0] == 0 and every == nodes
     assert np.abs(p1 - p2).max() <= 1e-7 * np.linalg.norm(p2) and p2[2] > 10.0
     assert c1 > 0.0 and c1 == pytest.approx(c2, rel=1e-6)
