@@ -294,6 +294,12 @@ class Potential:
         self.solver.factorize(data, definite=self.system.convex)
 
 
+def generation() -> int:
+    """The present generation (``_new_generation``): results at a given x computed in it
+    stand while it lasts."""
+    return _generation
+
+
 def _new_generation() -> None:
     """A term's state may change (a new step begins, a new potential sets the load-like
     terms' factor): evaluations cached before it no longer stand (``Potential.internal``)."""

@@ -190,9 +190,9 @@ def test_the_verdict_of_a_large_system_is_the_same(tmp_path, monkeypatch):
     """Above 900 free DOFs the tangent's verdict comes from the inertia of two shifted
     factorisations, not from the eigenvalues: the same collapse (here forced for the
     portal's 117 free DOFs)."""
-    import catenet.solver.stability as stability
+    import catenet.solver.tangent as tangent
 
-    monkeypatch.setattr(stability, "DENSE", 10)
+    monkeypatch.setattr(tangent, "DENSE", 10)
     result, out = run(tmp_path, portal())
     assert_collapsed_at_the_start(result, out, "SI")
 
