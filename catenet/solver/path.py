@@ -383,7 +383,7 @@ def _judge_rest(ws: Workspace, result: Result) -> None:
     if net.law.all_tension_only:
         result.stability = "stable"  # tension-only stiffness is never negative
         return
-    from catenet.solver.stability import STABLE, UNSTABLE, tangent
+    from catenet.solver.tangent import STABLE, UNSTABLE, tangent
 
     verdict = tangent(ws.system, ws.solver, result.x).verdict
     result.stable = True if verdict == STABLE else False if verdict == UNSTABLE else None

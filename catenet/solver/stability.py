@@ -73,7 +73,7 @@ from catenet.solver.tangent import (  # (the verdicts and margins, with ``tangen
     UNSTABLE,
     Tangent,
     _scale,
-    tangent,
+    kept_tangent,
 )
 
 if TYPE_CHECKING:
@@ -170,7 +170,7 @@ class PathJudge:
         for seen, verdict in self._seen:
             if np.array_equal(seen, x):
                 return verdict
-        verdict = tangent(self.ws.system, self.ws.solver, x)
+        verdict = kept_tangent(self.ws.system, self.ws.solver, x)
         self._seen = [(np.array(x, copy=True), verdict), *self._seen[:1]]
         return verdict
 

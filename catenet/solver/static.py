@@ -27,7 +27,6 @@ from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
-from catenet.solver.stability import NEUTRAL, STABLE, UNSTABLE, tangent
 from catenet.solver.start import (
     direct_solve,
     start_state,
@@ -35,6 +34,7 @@ from catenet.solver.start import (
     stretched_start,
     unstressed,
 )
+from catenet.solver.tangent import NEUTRAL, STABLE, UNSTABLE, kept_tangent
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia, Stretch, Term
 
@@ -246,7 +246,7 @@ def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
     bilateral nets can lose stability: tension-only stiffness is never negative. A
     neutral state's mode without stiffness (dense systems) is named in ``out.diagnosis``
     where it moves nodes that do not merely hang on slack edges (``_warn_loose``)."""
-    t = tangent(ws.system, ws.solver, x)
+    t = kept_tangent(ws.system, ws.solver, x)
     if t.verdict == NEUTRAL and t.mode is not None:
         out.diagnosis = describe_neutral(t.mode, loose_nodes(ws.system.net, out.tension))
     return True if t.verdict == STABLE else False if t.verdict == UNSTABLE else None

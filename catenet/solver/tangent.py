@@ -4,7 +4,7 @@ every machine (``catenet.solver.stability``'s module docstring says how): "stabl
 S K S (S = D^(-1/2), D the diagonal's scale), dense up to DENSE free DOFs, else by the
 inertia of the symmetric-indefinite factorisation.
 
-A state's tangent is kept for the last two states asked while no term's state changed
+``kept_tangent`` keeps it for the last two states asked while no term's state changed
 (``catenet.solver.potential.generation``): a load step's end is judged by its static
 solve (``static._stable``) and again by the load path (``PathJudge``), and one dense
 eigen-decomposition serves both.
@@ -72,26 +72,32 @@ def _scale(system: System) -> np.ndarray:
 
 def tangent(system: System, solver: LinearSolver, x: np.ndarray) -> Tangent:
     """The tangent of ``system`` at x (``solver``: the workspace's linear solver, for the
-    inertia of large systems); the same one for the same state while no term's state
-    changed (module docstring)."""
+    inertia of large systems)."""
+    x = np.asarray(x, dtype=np.float64)
+    d = _scale(system)
+    n = system.n_free
+    if n == 0:
+        return Tangent(STABLE, math.inf, None)
+    if n <= DENSE:
+        return _dense(system, x, d)
+    return _sparse(system, solver, x, d)
+
+
+def kept_tangent(system: System, solver: LinearSolver, x: np.ndarray) -> Tangent:
+    """``tangent``, the same one for the same state while no term's state changed through
+    a potential (module docstring); for the load path's solves, whose terms change only
+    so (a caller that sets a term's state itself asks ``tangent``)."""
     x = np.asarray(x, dtype=np.float64)
     key = (id(system), generation())
     for seen, at, found in _KEPT:
         if seen == key and np.array_equal(at, x):
             return found
-    d = _scale(system)
-    n = system.n_free
-    if n == 0:
-        found = Tangent(STABLE, math.inf, None)
-    elif n <= DENSE:
-        found = _dense(system, x, d)
-    else:
-        found = _sparse(system, solver, x, d)
+    found = tangent(system, solver, x)
     _KEPT[:] = [(key, x.copy(), found), *_KEPT[:1]]
     return found
 
 
-_KEPT: list[tuple[tuple[int, int], np.ndarray, Tangent]] = []  # the last two (``tangent``)
+_KEPT: list[tuple[tuple[int, int], np.ndarray, Tangent]] = []  # the last two (``kept_tangent``)
 
 
 def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:

@@ -7,7 +7,7 @@ share), in n equal edges (``catenet.terms.bending``):
 (a) Euler buckling of a pinned strut. Both ends pinned, the far one moved towards the
     other, so the straight strut carries the compression P = EA (l / l0 - 1). The
     straight state is an equilibrium at every shortening; catenet's stability verdict
-    (``catenet.solver.stability.tangent``: the least eigenvalue of its scaled tangent)
+    (``catenet.solver.tangent.tangent``: the least eigenvalue of its scaled tangent)
     turns from stable to unstable at the critical load, found by root finding on that
     eigenvalue, against pi^2 EI / L^2. The discrete strut's exact critical load is
     pi^2 EI / L^2 (sin(h') / h')^2, h' = pi / (2 n): the error is -(pi / 2n)^2 / 3,
@@ -162,7 +162,7 @@ def critical_load(edges: int) -> float:
     ``edges`` edges turns unstable (module docstring, (a))."""
     from scipy.optimize import brentq
 
-    from catenet.solver import stability
+    from catenet.solver.tangent import tangent
     from catenet.solver.workspace import Workspace
 
     scene = _rod(edges)
@@ -173,7 +173,7 @@ def critical_load(edges: int) -> float:
         _, grad = ws.system.gradient(x)  # the straight state: an equilibrium, every shortening
         if not np.max(np.abs(grad[~scene.net.fixed])) <= 1e-6 * EA * shortening / LENGTH:
             raise ArithmeticError("the straight strut is not in equilibrium")
-        found = stability.tangent(ws.system, ws.solver, x)
+        found = tangent(ws.system, ws.solver, x)
         return found.least, -float(np.mean(ws.system.tension(x)))
 
     euler = math.pi**2 * EI / LENGTH**2

@@ -228,7 +228,7 @@ def greenhill(edges: int) -> float:
     unstable."""
     from scipy.optimize import brentq
 
-    from catenet.solver import stability
+    from catenet.solver.tangent import tangent
     from catenet.solver.workspace import Workspace
 
     scene, twist = _straight_scene(edges)
@@ -237,7 +237,7 @@ def greenhill(edges: int) -> float:
 
     def least(phi: float) -> float:
         twist.imposed = ((0, phi, None),)
-        return stability.tangent(ws.system, ws.solver, x).least
+        return tangent(ws.system, ws.solver, x).least
 
     exact = GREENHILL * EI / GJ
     return float(brentq(least, 0.8 * exact, 1.2 * exact, xtol=1e-13, rtol=1e-13))

@@ -365,7 +365,7 @@ def test_the_zero_modes_of_a_neutral_state_are_all_found(n):
     either way, orthonormal, the stiffness nothing along them."""
     import catenet as cn
     from catenet.solver.mechanism import zero_modes
-    from catenet.solver.stability import POSITIVE, _scale, tangent
+    from catenet.solver.tangent import POSITIVE, _scale, tangent
     from catenet.solver.workspace import Workspace
 
     material = cn.Material(EA=1e4, line_density=0.1, tension_only=False)

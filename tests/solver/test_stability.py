@@ -243,7 +243,6 @@ def test_the_verdict_of_small_and_large_systems_agrees(monkeypatch):
         x = scene.net.nodes.copy()
         dense = st.tangent(ws.system, ws.solver, x).verdict
         monkeypatch.setattr(st, "DENSE", 0)
-        st._KEPT.clear()  # (the same state's tangent is kept: computed again, sparse)
         sparse = st.tangent(ws.system, ws.solver, x).verdict
         monkeypatch.setattr(st, "DENSE", 900)
         assert dense == verdict
