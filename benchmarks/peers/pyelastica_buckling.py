@@ -10,7 +10,7 @@ P (1 - P / EA) = P_e, 2.5e-4 above P_e) and PyElastica also by its shear (G = E 
 default).
 
 - catenet: its stability verdict. The straight strut is an equilibrium under every load
-  (its edges shortened by P / EA); ``catenet.solver.stability.tangent``, the verdict a
+  (its edges shortened by P / EA); ``catenet.solver.tangent.tangent``, the verdict a
   static run gives its equilibrium (``result.stable``; ``catenet run`` exits 1 where it
   is unstable), says whether it is stable. P_cr is found by bisection on that verdict to
   1e-7 of P_e, as ``catenet validate``'s Euler strut is.
@@ -113,7 +113,7 @@ def catenet_verdict(edges: int, rtol: float = 1e-7) -> tuple[float, float, int]:
     """(P_cr [N], CPU seconds, verdicts): bisection on the stability verdict of the
     straight strut, the equilibrium under every load (its nodes moved in by P / EA)."""
     from catenet.case import build, parse_case
-    from catenet.solver import stability
+    from catenet.solver.tangent import STABLE, tangent
     from catenet.solver.workspace import Workspace
 
     start = time.process_time()
@@ -126,7 +126,7 @@ def catenet_verdict(edges: int, rtol: float = 1e-7) -> tuple[float, float, int]:
         tension = ws.system.tension(x)
         if not np.allclose(tension, -load, rtol=1e-9):
             raise ArithmeticError("the straight strut does not carry the load")
-        return stability.tangent(ws.system, ws.solver, x).verdict == stability.STABLE
+        return tangent(ws.system, ws.solver, x).verdict == STABLE
 
     low, high, runs = 0.9 * EULER, 1.1 * EULER, 0
     while high - low > rtol * EULER:

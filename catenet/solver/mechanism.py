@@ -32,7 +32,7 @@ structure's elastic response with the modes held (``elastic``): a strut split in
 folds aside until it carries nothing, 0.2 m where the elastic move is 2e-6 m, while the
 two-bar joint swings only as far as its neighbours move (a fiftieth of the elastic move).
 
-Dense systems only (``stability.DENSE`` free DOFs), where the start's zero modes are
+Dense systems only (``tangent.DENSE`` free DOFs), where the start's zero modes are
 computed whole.
 """
 
