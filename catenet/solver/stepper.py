@@ -38,6 +38,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("catenet.solver.dynamic")  # the dynamic run's messages, as ever
 
+WIDEN = 4  # a step candidate radii held back is tried again at its length this many times
+
 #: ``on_step(step, t, x, v)``: sees every accepted step; True stops the run there.
 OnStep = Callable[[int, float, np.ndarray, np.ndarray], bool | None]
 
@@ -72,6 +74,7 @@ class TimeStepper:
         self.polish = True  # Newton polishes below its floor (``run``: only toward rest)
         self.kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
         self.fresh = False  # this step's retry with fresh factorisations (its kept one failed)
+        self.widens = 0  # this step's retries with wider candidate radii (``widened``)
         self.iterations = 0
         self.steps = 0
         self.residual = 0.0  # the last step's Newton residual; at rest the static one
@@ -155,7 +158,7 @@ class TimeStepper:
             h_step = control.step(self.t)
             newton, why = self.solve_step(h_step)
             if newton is None or not newton.converged:
-                if not self.refresh(h_step, why):
+                if not (self.widened(h_step, why) or self.refresh(h_step, why)):
                     self.cut(control, h_step, why, newton)
                 continue
             if isinstance(control, ErrorControl) and not control.within(self, h_step, newton):
@@ -278,6 +281,21 @@ class TimeStepper:
         if self.potential.evaluate(still).phi < self.potential.evaluate(x_trial).phi:
             x_trial[:] = still
 
+    def widened(self, h_step: float, why: str) -> bool:
+        """After a failed step: whether to retry it at the same h because a contact's
+        candidate radii held it back (``Term.widens``: a free body's contact, whose
+        radii from the last step's motion missed a sudden one, another body striking it);
+        its ``begin_step`` widens them for the retry. At most WIDEN times a step."""
+        terms = self.potential.system.terms
+        held = any(t.widens and t.grows and getattr(t, "held", False) for t in terms)
+        if not held or self.widens >= WIDEN:
+            self.widens = 0
+            return False
+        self.widens += 1
+        log.info("t = %.6g: step %.3g failed (%s) with nodes held near a body by their "
+                 "candidate radii; retrying with wider radii", self.t, h_step, why)  # fmt: skip
+        return True
+
     def refresh(self, h_step: float, why: str) -> bool:
         """After a failed step: whether to retry it at the same h with fresh
         factorisations (it failed with a kept one)."""
@@ -370,6 +388,7 @@ class TimeStepper:
     ) -> None:
         """The converged step becomes the state (Eq. 10c for implicit Euler)."""
         self.fresh = False
+        self.widens = 0
         loads = self.potential.f_norm
         if 0.0 < loads < newton.residual:  # what the step leaves is its forces' round-off
             raise ConvergenceError(

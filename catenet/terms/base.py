@@ -119,6 +119,8 @@ class Term:
     grows = False  # its pattern may grow at begin_step (then ``grew`` is True)
     grew = False
     dynamic_only = False  # only in time steps (self-contact: its candidates need them)
+    widens = False  # a failed step its candidate radii held back (its ``held``) is tried
+    #                 again at its length, the radii widened (``TimeStepper.widened``)
     stages: tuple = ()  # wider barriers of the same obstacle (static continuation)
     rides_on: Term | None = None  # the term whose barrier it rides on (friction's)
     edge_net: Net | None = None  # the Hessian is its edges' 6x6 blocks, edge by edge

@@ -40,7 +40,8 @@ that may come within dhat in a step enter the gradient, the Hessian and the patt
 the work and the factorisation's border of the body's 12 unknowns follow the nodes near
 the body, not the whole net. At each step's start x, a node's radius is REACH_SHARE of
 the net's shortest edge (at least dhat) plus twice its body-frame motion in the last step
-(doubled when the same step is tried again after a radius held it back), and it is a
+(doubled, until a node joins, when the same step is tried again after a radius held it
+back: ``TimeStepper.widened`` retries such a step at its length), and it is a
 candidate where its gap is below dhat plus its radius. The others keep their body-frame
 point within gap - dhat of where it was (their step cap: |X0 - Xb| + t |V| + t^2 |W|
 <= gap - dhat): the gap is 1-Lipschitz in X, so they stay beyond dhat, where the barrier
@@ -93,6 +94,7 @@ class BodyContact(Term):
     barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
     role = "internal"
     convex = False
+    widens = True  # a step its radii held back is tried again, wider (``begin_step``)
 
     def __init__(
         self,
@@ -236,9 +238,8 @@ class BodyContact(Term):
         frame = self.frame
         X = frame_local(x, self.nodes, frame.nodes, frame.B, self.c0)[3]
         if self._base is not None and np.array_equal(x, self._base):
-            if self.held:  # the same step again, after a radius held it back: wider
-                assert self._radius is not None
-                self._radius *= 2.0
+            if self.held and self._radius is not None:  # the same step again: wider
+                self._radius = self._wider(X, self._radius)
         elif self._base is not None:
             moved = np.sqrt(np.einsum("ij,ij->i", X - self._base_X, X - self._base_X))
             self._radius = self.reach + 2.0 * moved
@@ -264,6 +265,19 @@ class BodyContact(Term):
         self._far = np.ascontiguousarray(self.nodes[out])
         self._far_X = X[out]
         self._room = gap[out] - self.dhat  # > the radius: no candidate
+
+    def _wider(self, X: np.ndarray, radius: np.ndarray) -> np.ndarray:
+        """The radii doubled until a node that is no candidate becomes one (a radius held
+        a step back: the retry must take in more), at most 2^20 times."""
+        gap = np.empty(len(self.nodes))
+        self._buf[self.nodes] = X
+        shape_gap(self.shape.kind, self._buf, self.nodes, self.shape.geom, gap)
+        out = ~self._inside
+        for _ in range(20):
+            radius = 2.0 * radius
+            if np.any(gap[out] < self.dhat + radius[out]):
+                break
+        return radius
 
     def _roomy(self, x, dx) -> float:
         """The largest multiple of dx that keeps every node that is no candidate within
