@@ -43,10 +43,12 @@ class HarmonicExtension:
     """Displacements of the free nodes that follow given support displacements: at every
     free node the average of its neighbours' (weights 1/l0), the solution of a graph-
     Laplacian system factorised once per net. Moved supports carry the net with them
-    instead of running over their neighbours."""
+    instead of running over their neighbours. A free node that no chain of edges joins
+    to a support (a free body's frame, a ball, a loose piece of net) does not follow."""
 
     def __init__(self, net: Net):
         import scipy.sparse as sp
+        from scipy.sparse.csgraph import connected_components
         from scipy.sparse.linalg import splu
 
         n = net.n_nodes
@@ -60,15 +62,18 @@ class HarmonicExtension:
             shape=(n, n),
         ).tocsr()
         self.net = net
-        self.free = ~net.fixed
+        _, part = connected_components(lap, directed=False)
+        held = np.zeros(part.max(initial=-1) + 1, dtype=bool)
+        held[part[net.fixed]] = True
+        self.free = ~net.fixed & held[part]  # the free nodes a support's chain reaches
         self._coupling = lap[self.free][:, net.fixed].tocsr()
-        self._lu = splu(lap[self.free][:, self.free].tocsc())
+        self._lu = splu(lap[self.free][:, self.free].tocsc()) if self.free.any() else None
 
     def __call__(self, support_shift: np.ndarray) -> np.ndarray:
         """Displacement (N, 3): ``support_shift`` (K, 3) at the fixed nodes."""
         u = np.zeros((self.net.n_nodes, 3))
         u[self.net.fixed] = support_shift
-        if np.any(support_shift):
+        if self._lu is not None and np.any(support_shift):
             u[self.free] = self._lu.solve(-(self._coupling @ support_shift))
         return u
 
