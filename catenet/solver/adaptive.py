@@ -105,6 +105,7 @@ ADAPTIVE = ("implicit_euler", "bdf2")  # the schemes that estimate their error
 FLOOR = 1e-2  # X and V at least this share of L and of sqrt(|g| L), L / (t_end - t0)
 STRAIN_FLOOR = 1e-4  # S at least this strain (0.01 %)
 MOMENTUM = 0.1  # a body's momentum error against this share of the tolerance
+STILL = 1e-6  # ... and its momentum scale at least this share of its mass times V's floor
 MAX_TRIES = 100_000  # a run that needs more steps fails (a tolerance too tight for it)
 
 
@@ -151,7 +152,9 @@ class Bodies:
     nodes, a ball's node), its masses, and its momentum scale ``largest``: the largest
     momentum |sum m v| it has had, at least FLOOR of the run's largest ``flow`` (the sum
     of every free node's |m v|: the momentum its parts carry), and before anything moves
-    ``floor`` times its mass. A body's momentum error counts with it the net's nodes
+    ``floor`` times its mass; never below STILL of that (a body resting on a net from its
+    static equilibrium: round-off's motion alone, whose momentum error no step length
+    can bring below round-off's). A body's momentum error counts with it the net's nodes
     inside its barrier (``hold``): momentum passing to and fro between a body and the
     nodes it holds (a box's net chattering on its barrier) is no error of the motion."""
 
@@ -189,6 +192,7 @@ class Bodies:
                 self.barriers[self.heads.index(head)].append(t)
         self.held = [np.zeros(0, dtype=np.int64) for _ in self.dofs]  # (``hold``)
         self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
+        self.least = [STILL * p for p in self.largest]
         self.own = [0.0] * len(self.dofs)  # each one's largest |sum m v| so far
         self.flow = 0.0  # the largest sum of the free nodes' |m v| so far
         self.node_mass = m[::3]  # (the free DOFs come in threes, a node's x, y, z)
@@ -206,7 +210,9 @@ class Bodies:
         speeds = np.sqrt(np.einsum("ij,ij->i", v.reshape(-1, 3), v.reshape(-1, 3)))
         self.flow = max(self.flow, float(np.dot(self.node_mass, speeds)))
         if self.flow > 0.0:
-            self.largest = [max(p, FLOOR * self.flow) for p in self.own]
+            self.largest = [
+                max(p, FLOOR * self.flow, q) for p, q in zip(self.own, self.least, strict=True)
+            ]
 
     def hold(self, x0: np.ndarray, x1: np.ndarray) -> None:
         """The free DOFs (k, 3) of the net's nodes within each body's barrier (dhat) at

@@ -229,3 +229,31 @@ def test_a_body_at_rest_measures_its_momentum_error_against_the_runs_momentum():
     assert bodies.error(np.where(np.isin(np.arange(len(v)), ball), 1e-3, 0.0)) == pytest.approx(
         1000.0 * 1e-3 * math.sqrt(3.0) / 100.0
     )
+
+
+def test_a_box_resting_on_a_net_from_its_equilibrium_stays_at_default_settings():
+    """A 8 kg box with friction resting on a net, started from the static equilibrium
+    (``solver.initial_state = "equilibrium"``), steps chosen by accuracy: nothing moves
+    but round-off, and the box's momentum error was measured against the largest
+    momentum seen, round-off's (2.5e-11 kg m/s), so every step was too long down to
+    3e-10 s and the run stopped with "a force imbalance ... above the loads". The scale
+    keeps 1e-6 of the body's mass times the speed floor: the run rests at once."""
+    from catenet.case import build
+
+    case = {
+        "title": "a box resting on a net",
+        "geometry": {"kind": "square_net", "n": 16, "alpha": 0.0, "size": 1.5,
+                     "edge_length": 0.05},
+        "material": {"E": 50.0e6, "radius": 0.004, "density": 1150.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [{"kind": "box", "center": [0.0, 0.0, 0.064],
+                      "half_size": [0.2, 0.15, 0.06], "mass": 8.0, "distance": 0.005,
+                      "friction": 0.5}],
+        "solver": {"method": "dynamic", "initial_state": "equilibrium", "damping": 0.0,
+                   "t_end": 1.0},
+    }  # fmt: skip
+    scene = build(parse_case(case))
+    result = cn.solve(scene, cn.Settings.of(scene.case.solver))
+    assert result.converged
+    box = scene.rigid[0].frame.nodes
+    assert np.linalg.norm(result.v[box].mean(axis=0)) < 1e-6
