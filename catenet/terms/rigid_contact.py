@@ -437,6 +437,11 @@ class BodyFriction(BodyContact):
     def hessian(self, x, values):
         if not self.touching:
             return False
+        if values.size != 81 * len(self.known) + 144:
+            raise RuntimeError(
+                f"{self.label}: the friction's nodes changed since the system was built: "
+                "Workspace.refresh() rebuilds it"
+            )
         frame, (anchor, normal, weight) = self.frame, self._lag
         return (
             frame_friction_hessian(x, self.known, frame.nodes, frame.B, self.c0, anchor,
