@@ -81,6 +81,7 @@ def solve_static(
     if accepted is None:
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
     potential.begin_step(accepted)
+    ws.refresh(potential)  # a free body's contact takes every node again (after a dynamic run)
     if relaxed:
         result = solve_newton(
             potential, x, rtol=rtol, max_iter=max_iter, label="static (from rest)"

@@ -48,10 +48,12 @@ point within gap - dhat of where it was (their step cap: |X0 - Xb| + t |V| + t^2
 is exactly zero, and leaving them out changes no energy, force or stiffness. The pattern
 keeps every candidate it has had (no rebuild when one comes back) until they outnumber
 PATTERN_SLACK times the present ones (at least FEWEST): a net of no more than
-PATTERN_SLACK x FEWEST contact nodes keeps them all, without candidates. A static solve
-(``begin_step`` without a time) leaves the set as it is; every node is a candidate until
-the first time step. The body's friction (``BodyFriction``) follows the same set: a node
-pressed on the body at the lagged state is within the barrier, so a candidate.
+PATTERN_SLACK x FEWEST contact nodes keeps them all, without candidates. Every node is a
+candidate until the first time step, and again in a static solve (``begin_step`` without
+a time: a load path's dynamic relaxation rung narrows the set, the static solves after it
+take every node, ``static.solve_static`` rebuilding the pattern). The body's friction
+(``BodyFriction``) follows the same set: a node pressed on the body at the lagged state
+is within the barrier, so a candidate.
 """
 
 from __future__ import annotations
@@ -232,8 +234,12 @@ class BodyContact(Term):
 
     # ---- candidates (module docstring) ------------------------------------------------
     def begin_step(self, x, time, start=None) -> None:
-        """The candidates of the time step from x (none changed in a static solve)."""
-        if not self.grows or time is None:
+        """The candidates of the time step from x; a static solve takes every node again
+        (its pattern rebuilt once, where a dynamic run had narrowed it)."""
+        if not self.grows:
+            return
+        if time is None:
+            self._everyone()
             return
         frame = self.frame
         X = frame_local(x, self.nodes, frame.nodes, frame.B, self.c0)[3]
@@ -265,6 +271,15 @@ class BodyContact(Term):
         self._far = np.ascontiguousarray(self.nodes[out])
         self._far_X = X[out]
         self._room = gap[out] - self.dhat  # > the radius: no candidate
+
+    def _everyone(self) -> None:
+        """Every contact node a candidate again, as before the first time step."""
+        if not self._inside.all():
+            self._inside = np.ones(len(self.nodes), dtype=bool)
+            self.known, self._pattern, self.grew = self.nodes, None, True
+        self._far = np.zeros(0, dtype=np.int64)
+        self._far_X, self._room = np.zeros((0, 3)), np.zeros(0)
+        self._radius = self._base = None
 
     def _wider(self, X: np.ndarray, radius: np.ndarray) -> np.ndarray:
         """The radii doubled until a node that is no candidate becomes one (a radius held

@@ -268,3 +268,16 @@ def test_a_net_tossed_by_its_moving_rim_carries_a_free_box():
     assert result.converged and closest[0] > 0.0
     box = scene.rigid[0].frame.nodes
     assert result.v[box].mean(axis=0)[2] > 0.5  # thrown up with the rim
+
+
+def test_a_static_solve_after_time_steps_takes_every_node_again():
+    """A load path's dynamic relaxation rung narrows the candidates; the static solves
+    after it take every node again (the pattern rebuilt by ``solve_static``), so no node
+    is held to the room of a time step that is over."""
+    scene, touch = _drop()
+    x = _stepped(scene, touch)
+    assert len(touch.known) < len(touch.nodes) and len(touch._far)
+    touch.grew = False  # (as the system's rebuild leaves it)
+    touch.begin_step(x, None)
+    assert len(touch.known) == len(touch.nodes) and touch.grew and not len(touch._far)
+    assert touch.max_step_within(x, np.ones_like(x), 4.0) > 0.0  # no room held
