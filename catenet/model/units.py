@@ -16,7 +16,7 @@ TOKENS: dict[str, dict[str, str]] = {
     "N-mm": {"m": "mm", "Pa": "MPa", "kg": "t", "J": "mJ"},
 }
 
-_UNIT = "N m|N/m|m/s\\^2|m/s|m\\^2|m|N|kg|Pa|J"
+_UNIT = "N m|N/m|1/m|m/s\\^2|m/s|m\\^2|m|N|kg|Pa|J"
 _AFTER_NUMBER = re.compile(rf"(?<=[\d\])]) ({_UNIT})(?=$|[\s,;:)(])")
 _BRACKETED = re.compile(r"\[([A-Za-z][A-Za-z0-9/^ ]*)\]")
 _NAME = re.compile(r"[A-Za-z]+")

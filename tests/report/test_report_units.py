@@ -54,6 +54,10 @@ def test_unit_names_follow_the_system_part_by_part():
         "tension 12.5 kN at [1, 2, 3] m; Rx [kN], slack length [m], [design] factors"
     ]
     assert relabel([line], "SI") == [line]
+    rods = "rods         largest moment 2.5 N m at node 4 (curvature 0.00332 1/m there)"
+    assert relabel([rods], "N-mm") == [
+        "rods         largest moment 2.5 N mm at node 4 (curvature 0.00332 1/mm there)"
+    ]
 
 
 def test_a_kn_m_case_is_reported_in_kn(cross, tmp_path):
