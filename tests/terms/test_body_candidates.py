@@ -3,8 +3,9 @@ catenet/terms/rigid_contact.py): in time steps only the nodes that may come with
 enter the gradient, the Hessian and the pattern; the others are held within their room
 by the step cap. Checked: the same energy, gradient and Hessian as over every node; the
 cap that keeps a far node beyond dhat, and the wider radius after it held a step back;
-a whole drop with the same answer as over every node and no node in the box; a static
-solve leaves the set alone."""
+a whole drop with the same answer as over every node and no node in the box, with and
+without friction; a step held back by the radii taken again at its length; static
+solves on every node; moving supports beside a free body."""
 
 from __future__ import annotations
 
