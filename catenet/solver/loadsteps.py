@@ -171,9 +171,10 @@ def _judged(
         # the given geometry is no equilibrium at load factor 0 (a strut given unstressed
         # beside prestressed guys): the path starts at the one Newton finds from it
         try:
-            start = solve_static(net, loads, x0=start, factor=0.0, accepted=start, **settings).x
+            found = solve_static(net, loads, x0=start, factor=0.0, accepted=start, **settings).x
         except ConvergenceError:
             return r  # no unloaded equilibrium to judge the first step from
+        start = start if judge.drifts(start, found) else found  # (a mechanism's drift)
         judge.start_tangent(start)
     why, at, before, r = _follow(judge, net, loads, start, f0, target, r, last, settings, 0)
     if why and judge.start_unstable and not judge.loaded:

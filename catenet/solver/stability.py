@@ -82,6 +82,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+SOFT = 1e-9  # a given geometry's modes this soft (100 MARGIN) carry a drift (``drifts``)
 RETURN = 0.05  # unloaded, a reversible step comes back within this share of its move
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
@@ -289,6 +290,20 @@ class PathJudge:
         """The out-of-balance force at x under the loads at ``factor`` (free DOFs)."""
         g: np.ndarray = self.ws.potential(self.loads, factor).evaluate(x).g.copy()
         return g
+
+    def drifts(self, x0: np.ndarray, x1: np.ndarray) -> bool:
+        """Whether the unloaded equilibrium x1 that Newton found from the given geometry
+        x0 lies along x0's zero modes farther than ALONG of the size: Newton drifted
+        along a mechanism (a frame on pinned feet turned 160 degrees about them from a
+        start moved by round-off), and the path is judged from x0 instead."""
+        from catenet.solver.mechanism import ALONG
+
+        t = self.tangent(x0)  # its modes below SOFT: round-off can call such a state stable
+        if t.lam is None or t.vecs is None or not np.any(t.lam <= SOFT):
+            return False
+        modes = np.linalg.qr(t.vecs[:, t.lam <= SOFT])[0]
+        step = (x1 - x0).reshape(-1)[self.ws.system.free_dofs]
+        return bool(np.linalg.norm(modes @ (modes.T @ step)) > ALONG * self.size)
 
     def balanced(self, x: np.ndarray, rtol: float) -> bool:
         """Whether x is an equilibrium at load factor 0 (the given geometry under its

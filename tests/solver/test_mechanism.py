@@ -502,3 +502,50 @@ def test_a_pinned_strut_pushed_down_collapses_from_a_start_at_round_off(tmp_path
     assert "the load path collapses beyond load factor 0:" in result.output, result.output
     with h5py.File(out, "r") as f:
         assert str(f["result"].attrs["stability"]) == "collapsed"
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 20240607])
+def test_a_portal_loaded_down_collapses_when_its_unloaded_start_drifts(seed):
+    """The portal on pinned feet with GJ, 2 kN down at its beam's middle: an inverted
+    pendulum about the line through its feet (docs/howto/rods.md). Its nodes moved by
+    1e-9 of its size after the scene is built (as the round-off pass moves them), the
+    given geometry is no equilibrium at load factor 0, and Newton's unloaded solve from
+    it drifted 160 degrees along the frame's free turn (round-off called that turn's
+    stiffness, 1.1e-13 of the scale, stable); judged from there the path ended hanging
+    upside down, "converged". A drift along the given geometry's modes softer than
+    1e-9 is now no start: the path is judged from the given geometry and fails, a
+    collapse at load factor 0 (or, from some starts, a failure whose last equilibrium
+    is the neutral start: exit 1 either way, never "converged")."""
+    import catenet
+    from catenet.case import build, parse_case
+    from catenet.errors import ConvergenceError
+    from catenet.solver.stability import CollapseError
+
+    case = {
+        "title": "a portal on pinned feet, loaded down",
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0.0, 0.0, 0.0], [0.0, 0.0, 3.0], [4.0, 0.0, 3.0], [4.0, 0.0, 0.0]],
+            "edge_length": 0.25,
+            "sets": {"feet": [0, 3], "corners": [1, 2]},
+            "cable": [
+                {"name": "left", "nodes": [0, 1]},
+                {"name": "beam", "nodes": [1, 2]},
+                {"name": "right", "nodes": [2, 3]},
+            ],
+        },
+        "material": {
+            "E": 2.1e11, "radius": 0.05, "inner_radius": 0.045, "density": 7850.0,
+            "EI": "section", "G": 8.1e10, "GJ": "section",
+        },
+        "supports": {"fixed": ["feet"], "rigid_joints": ["corners"]},
+        "load": {"point": [{"cable": "beam", "at": 0.5, "force": [0.0, 0.0, -2000.0]}]},
+    }  # fmt: skip
+    scene = build(parse_case(case))
+    nodes = scene.net.nodes
+    size = float(np.max(np.ptp(nodes, axis=0)))
+    nodes += 1e-9 * size * np.random.default_rng(seed).uniform(-1.0, 1.0, nodes.shape)
+    with pytest.raises(ConvergenceError) as failed:
+        catenet.solve(scene, catenet.Settings.of(scene.case.solver))
+    if isinstance(failed.value, CollapseError):
+        assert failed.value.factor == 0.0
