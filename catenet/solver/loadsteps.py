@@ -172,8 +172,8 @@ def _judged(
         # beside prestressed guys): the path starts at the one Newton finds from it
         try:
             found = solve_static(net, loads, x0=start, factor=0.0, accepted=start, **settings).x
-        except ConvergenceError:
-            return r  # no unloaded equilibrium to judge the first step from
+        except ConvergenceError:  # none found: the path is judged from the geometry given
+            found = start
         start = start if judge.drifts(start, found) else found  # (a mechanism's drift)
         judge.start_tangent(start)
     why, at, before, r = _follow(judge, net, loads, start, f0, target, r, last, settings, 0)

@@ -512,8 +512,9 @@ def test_a_portal_loaded_down_collapses_when_its_unloaded_start_drifts(seed):
     given geometry is no equilibrium at load factor 0, and Newton's unloaded solve from
     it drifted 160 degrees along the frame's free turn (round-off called that turn's
     stiffness, 1.1e-13 of the scale, stable); judged from there the path ended hanging
-    upside down, "converged". A drift along the given geometry's modes softer than
-    1e-9 is now no start: the path is judged from the given geometry and fails, a
+    upside down, "converged" (from other starts that solve failed, and the first step
+    went unjudged). A drift along the given geometry's modes softer than 1e-9 is now no
+    start, nor is a failed unloaded solve: the path is judged from the given geometry and fails, a
     collapse at load factor 0 (or, from some starts, a failure whose last equilibrium
     is the neutral start: exit 1 either way, never "converged")."""
     import catenet
