@@ -259,7 +259,8 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for name in args.scenes:
         rows += scene_rows(name, args.repeats)
-        print(table(rows), flush=True)
+        print(f"{name}: done", flush=True)
+    print(table(rows), flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
