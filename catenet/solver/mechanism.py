@@ -32,6 +32,17 @@ structure's elastic response with the modes held (``elastic``): a strut split in
 folds aside until it carries nothing, 0.2 m where the elastic move is 2e-6 m, while the
 two-bar joint swings only as far as its neighbours move (a fiftieth of the elastic move).
 
+A step whose loads leave the start's zero modes alone (their share along them at most
+``diagnose.DRIVES``) but compress members across them (``compressed_across``: the same
+geometric stiffness from the members' forces of the linear response with the modes
+held, below -``PUSH``) has no state near the start that carries them: a three-hinged
+arch whose crown nothing holds across its plane, which Newton found hanging below its
+feet as a V, each bar turned 43.6 degrees. Where it goes is read from the equilibrium
+under 1/``PROBE`` of the step's load (``PathJudge._first_share``): a mechanism gets
+there with the loads' work more than ``WORK`` times the strain energy stored
+(``worked``: 4e3 to 1e7 for such arches), an elastic structure with 2 to 4 times (a
+bilateral rope hung off the vertical, whose compressed lower part bulges into tension).
+
 Dense systems only (``tangent.DENSE`` free DOFs), where the start's zero modes are
 computed whole.
 """
@@ -43,11 +54,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from catenet.solver.potential import Potential
     from catenet.solver.system import System
 
 ALONG = 1e-3  # the step moves along the start's zero modes by this share of the size ...
 PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edge length
 FAR = 100.0  # ... or nothing holds it (|push| < PUSH) and it is this many elastic moves
+PROBE = 4096.0  # ... or, where the loads compress members across them, at 1/PROBE of them
+WORK = 100.0  # ... the loads' work is this many times the strain energy it stored
 
 
 def zero_modes(
@@ -95,30 +109,94 @@ def pushed_along(
     move = float(np.linalg.norm(along))
     if not move > ALONG * size or not load > 0.0:
         return 0.0, 0.0, 0.0
-    net = system.net
-    flat = np.zeros((modes.shape[1], net.n_nodes * 3))
-    flat[:, free] = modes.T
-    v = flat.reshape(len(flat), -1, 3)
-    e = x1[net.edges[:, 1]] - x1[net.edges[:, 0]]
-    length = np.linalg.norm(e, axis=1)
-    t = e / np.where(length > 0.0, length, 1.0)[:, None]
-    dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
-    across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
-    stiffness = system.tension(x1) / np.where(length > 0.0, length, np.inf)
-    geometric = np.einsum("kij,mij,i->km", across, across, stiffness)
-    unit = load / float(np.median(net.rest_length))
+    geometric = _geometric(system, modes, x1, system.tension(x1))
+    unit = load / float(np.median(system.net.rest_length))
     w = modes.T @ along / move  # the move in the modes' basis, unit length
     return move, float(np.linalg.eigvalsh(geometric)[0]) / unit, float(w @ geometric @ w) / unit
 
 
+def compressed_across(
+    system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray, *, load: float
+) -> float:
+    """The least geometric stiffness along ``modes`` (the zero modes at ``prev``) that the
+    members' forces of the step's first-order response give, as a share of ``load`` per
+    median rest length, where the step's loads do not drive those modes (their share
+    along them at most ``DRIVES``; else 0). That response leaves the modes alone (the
+    linear response with them held, ``_response``): a negative value says that the state
+    that carries the loads is unstable at once, however far Newton then goes (a
+    three-hinged arch whose crown nothing holds across its plane: its compressed bars
+    turn it over sideways). ``g``: the potential's gradient at prev under the step's end
+    load."""
+    from catenet.solver.diagnose import DRIVES
+
+    gnorm = float(np.linalg.norm(g))
+    if not modes.shape[1] or not gnorm > 0.0 or not load > 0.0:
+        return 0.0
+    if float(np.linalg.norm(modes.T @ g)) > DRIVES * gnorm:
+        return 0.0  # the loads move the modes: their own tension holds them (a sag)
+    u = _response(system, modes, prev, g)
+    if u is None:
+        return 0.0
+    x = prev.copy()  # the members' forces to first order in the load (a linear response
+    x.reshape(-1)[system.free_dofs] += u / PROBE  # may pass through a flat arch's chord)
+    start = system.tension(prev)
+    tension = start + PROBE * (system.tension(x) - start)
+    geometric = _geometric(system, modes, prev, tension)
+    unit = load / float(np.median(system.net.rest_length))
+    return float(np.linalg.eigvalsh(geometric)[0]) / unit
+
+
+def worked(system: System, potential: Potential, prev: np.ndarray, x1: np.ndarray) -> float:
+    """The loads' work on the step from ``prev`` to ``x1`` (``potential``: the step's end
+    load) over the strain energy it stored, read against the potential's round-off (a
+    share it cannot resolve counts as that round-off: the ratio is a lower bound; 0
+    where the work itself is round-off). An elastic step stores a fixed share of that
+    work (half on a linear structure, a quarter where a cable's sag stiffens it: a ratio
+    of 2 to 4, down to 1 near a limit point); a mechanism moved by its loads stores
+    almost none (the three-hinged arch turned over at a small load: 1e3 to 1e7)."""
+    terms = [t for t in system.terms if not t.loadlike]
+    stored = sum(t.energy(x1) - t.energy(prev) for t in terms)
+    start, end = potential.evaluate(prev), potential.evaluate(x1)
+    work = stored - (end.phi - start.phi)
+    tol = max(start.phi_tol, end.phi_tol)
+    return work / max(stored, tol) if work > tol else 0.0
+
+
+def _geometric(system: System, modes: np.ndarray, x: np.ndarray, tension: np.ndarray) -> np.ndarray:
+    """(k, k) the geometric stiffness that the edges' ``tension`` gives the ``modes`` at
+    x: the sum over edges of N / l times the modes' moves across the edge."""
+    net = system.net
+    flat = np.zeros((modes.shape[1], net.n_nodes * 3))
+    flat[:, system.free_dofs] = modes.T
+    v = flat.reshape(len(flat), -1, 3)
+    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    length = np.linalg.norm(e, axis=1)
+    t = e / np.where(length > 0.0, length, 1.0)[:, None]
+    dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
+    across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
+    stiffness = tension / np.where(length > 0.0, length, np.inf)
+    geometric: np.ndarray = np.einsum("kij,mij,i->km", across, across, stiffness)
+    return geometric
+
+
 def elastic(system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray) -> float:
     """The size of the step's linear response from ``prev`` with its zero ``modes`` held
-    (springs as stiff as the stiffest DOF across them): the move an elastic structure
-    makes under the step's load. ``g``: the potential's gradient at prev at that load."""
+    (``_response``): the move an elastic structure makes under the step's load. ``g``:
+    the potential's gradient at prev at that load."""
+    u = _response(system, modes, prev, g)
+    return np.inf if u is None else float(np.linalg.norm(u))
+
+
+def _response(
+    system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray
+) -> np.ndarray | None:
+    """The linear response (free DOFs) from ``prev`` to the out-of-balance force -g with
+    the zero ``modes`` held by springs as stiff as the stiffest DOF across them; None
+    where that solve fails."""
     k = system.matrix(system.hessian(prev).copy()).toarray()
     held = float(np.max(np.abs(np.diag(k)), initial=1.0)) * (modes @ modes.T)
     try:
         u = np.linalg.solve(k + held, -g)
     except np.linalg.LinAlgError:
-        return np.inf
-    return float(np.linalg.norm(u)) if np.all(np.isfinite(u)) else np.inf
+        return None
+    return u if np.all(np.isfinite(u)) else None
