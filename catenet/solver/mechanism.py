@@ -32,16 +32,17 @@ structure's elastic response with the modes held (``elastic``): a strut split in
 folds aside until it carries nothing, 0.2 m where the elastic move is 2e-6 m, while the
 two-bar joint swings only as far as its neighbours move (a fiftieth of the elastic move).
 
-A step whose loads leave the start's zero modes alone (their share along them at most
-``diagnose.DRIVES``) but compress members across them (``compressed_across``: the same
-geometric stiffness from the members' forces of the linear response with the modes
-held, below -``PUSH``) has no state near the start that carries them: a three-hinged
-arch whose crown nothing holds across its plane, which Newton found hanging below its
-feet as a V, each bar turned 43.6 degrees. Where it goes is read from the equilibrium
-under 1/``PROBE`` of the step's load (``PathJudge._first_share``): a mechanism gets
-there with the loads' work more than ``WORK`` times the strain energy stored
-(``worked``: 4e3 to 1e7 for such arches), an elastic structure with 2 to 4 times (a
-bilateral rope hung off the vertical, whose compressed lower part bulges into tension).
+The members that a step's loads compress push along such modes at once where the
+modes move as a mechanism (``finite``: no self-stress of the edges resists them at
+second order), whatever Newton then does: the linear response with the modes held gives
+the members' forces to first order (``compressed_across``), and the same geometric
+stiffness below -``PUSH`` on the mechanism's part of the modes says that the state that
+carries the loads is unstable from their first share. A three-hinged arch whose crown
+nothing holds across its plane: Newton found it hanging below its feet as a V, each bar
+turned 43.6 degrees, at any load, pushed across its plane or not, "converged". A
+bilateral rope given straight, whose weight compresses its lower part across its sway,
+is no mechanism: every sway stretches its edges against its uniform self-stress, and it
+bulges into tension close by.
 
 Dense systems only (``tangent.DENSE`` free DOFs), where the start's zero modes are
 computed whole.
@@ -54,14 +55,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from catenet.solver.potential import Potential
     from catenet.solver.system import System
 
 ALONG = 1e-3  # the step moves along the start's zero modes by this share of the size ...
 PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edge length
 FAR = 100.0  # ... or nothing holds it (|push| < PUSH) and it is this many elastic moves
-PROBE = 4096.0  # ... or, where the loads compress members across them, at 1/PROBE of them
-WORK = 100.0  # ... the loads' work is this many times the strain energy it stored
+FIRST = 1e-6  # the first-order forces of a linear response: read on a move this share
+#              of the median edge along it
+STRAIGHT = 1e-3  # edges that kink by less than this [rad] carry a self-stress (``finite``)
+HOLDS = 1e-6  # a self-stress holds a move whose stretching is above this share of the largest
 
 
 def zero_modes(
@@ -118,48 +120,85 @@ def pushed_along(
 def compressed_across(
     system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray, *, load: float
 ) -> float:
-    """The least geometric stiffness along ``modes`` (the zero modes at ``prev``) that the
-    members' forces of the step's first-order response give, as a share of ``load`` per
-    median rest length, where the step's loads do not drive those modes (their share
-    along them at most ``DRIVES``; else 0). That response leaves the modes alone (the
-    linear response with them held, ``_response``): a negative value says that the state
-    that carries the loads is unstable at once, however far Newton then goes (a
+    """The least geometric stiffness that the members' forces of the step's first-order
+    response give the part of ``modes`` (the zero modes at ``prev``) that moves as a
+    mechanism (``finite``), as a share of ``load`` per median rest length; 0 where no
+    part does. The response is the linear one with the modes held (``_response``), its
+    forces to first order in the load: a negative value says that the state that carries
+    the loads is unstable from their first share, wherever Newton then goes (a
     three-hinged arch whose crown nothing holds across its plane: its compressed bars
-    turn it over sideways). ``g``: the potential's gradient at prev under the step's end
-    load."""
-    from catenet.solver.diagnose import DRIVES
-
-    gnorm = float(np.linalg.norm(g))
-    if not modes.shape[1] or not gnorm > 0.0 or not load > 0.0:
+    turn it over sideways). A mode that the edges' second-order stretching resists (a
+    rope's sway, a flat net's sag) is left out: its own tension holds it as it moves.
+    ``g``: the potential's gradient at prev under the step's end load."""
+    if not modes.shape[1] or not float(np.linalg.norm(g)) > 0.0 or not load > 0.0:
         return 0.0
-    if float(np.linalg.norm(modes.T @ g)) > DRIVES * gnorm:
-        return 0.0  # the loads move the modes: their own tension holds them (a sag)
     u = _response(system, modes, prev, g)
     if u is None:
         return 0.0
-    x = prev.copy()  # the members' forces to first order in the load (a linear response
-    x.reshape(-1)[system.free_dofs] += u / PROBE  # may pass through a flat arch's chord)
+    median = float(np.median(system.net.rest_length))
+    top = float(np.max(np.abs(u), initial=0.0))
+    if not top > 0.0:
+        return 0.0
+    # the members' forces to first order in the load, from a move FIRST of the median
+    # edge (a linear response may pass through a flat arch's chord; a tiny one is
+    # round-off's)
+    share = FIRST * median / top
+    x = prev.copy()
+    x.reshape(-1)[system.free_dofs] += share * u
     start = system.tension(prev)
-    tension = start + PROBE * (system.tension(x) - start)
+    tension = start + (system.tension(x) - start) / share
+    unit = load / median
     geometric = _geometric(system, modes, prev, tension)
-    unit = load / float(np.median(system.net.rest_length))
-    return float(np.linalg.eigvalsh(geometric)[0]) / unit
+    if not float(np.linalg.eigvalsh(geometric)[0]) / unit < -PUSH:
+        return 0.0  # (the common case: the cheap test first)
+    moving = finite(system, modes, prev)
+    if not moving.shape[1]:
+        return 0.0
+    return float(np.linalg.eigvalsh(moving.T @ geometric @ moving)[0]) / unit
 
 
-def worked(system: System, potential: Potential, prev: np.ndarray, x1: np.ndarray) -> float:
-    """The loads' work on the step from ``prev`` to ``x1`` (``potential``: the step's end
-    load) over the strain energy it stored, read against the potential's round-off (a
-    share it cannot resolve counts as that round-off: the ratio is a lower bound; 0
-    where the work itself is round-off). An elastic step stores a fixed share of that
-    work (half on a linear structure, a quarter where a cable's sag stiffens it: a ratio
-    of 2 to 4, down to 1 near a limit point); a mechanism moved by its loads stores
-    almost none (the three-hinged arch turned over at a small load: 1e3 to 1e7)."""
-    terms = [t for t in system.terms if not t.loadlike]
-    stored = sum(t.energy(x1) - t.energy(prev) for t in terms)
-    start, end = potential.evaluate(prev), potential.evaluate(x1)
-    work = stored - (end.phi - start.phi)
-    tol = max(start.phi_tol, end.phi_tol)
-    return work / max(stored, tol) if work > tol else 0.0
+def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(k, p) an orthonormal basis, in the coefficients of ``modes`` (k zero modes at x),
+    of the moves that no self-stress of the edges resists at second order: a move z
+    stretches each edge by |z across it|^2 / (2 l) to second order, and a self-stress s
+    (edge forces in balance with no load) resists it where the sum of s / l times that
+    square is not zero. No edge network holds a three-hinged arch's crown (no
+    self-stress: the whole mode moves, a mechanism); a straight rope's uniform tension
+    holds every sway of its nodes (none moves). Self-stresses are the null space of the
+    edges' compatibility matrix (rows: the edges' directions at their nodes), its
+    singular values below ``STRAIGHT`` of its largest counted as zero: a line kinked by
+    less than a milliradian (a rope given straight, its nodes moved by round-off) has
+    no room to move as a mechanism that its stretch would notice, and is held as a
+    straight one is; a move is held where some self-stress stretches it by more than
+    ``HOLDS`` of the largest such stretching."""
+    from scipy.linalg import null_space
+
+    net = system.net
+    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
+    length = np.linalg.norm(e, axis=1)
+    t = e / np.where(length > 0.0, length, 1.0)[:, None]
+    rows = np.arange(net.n_edges)
+    b = np.zeros((net.n_edges, net.n_nodes, 3))
+    b[rows, net.edges[:, 1]] += t
+    b[rows, net.edges[:, 0]] -= t
+    b = b.reshape(net.n_edges, -1)[:, system.free_dofs]
+    stresses = null_space(b.T, rcond=STRAIGHT)  # (edges, r)
+    k = modes.shape[1]
+    if not stresses.shape[1]:
+        return np.eye(k)
+    flat = np.zeros((k, net.n_nodes * 3))
+    flat[:, system.free_dofs] = modes.T
+    v = flat.reshape(k, -1, 3)
+    dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
+    across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
+    inverse = 1.0 / np.where(length > 0.0, length, np.inf)
+    omegas = np.einsum("kij,mij,ir,i->rkm", across, across, stresses, inverse)
+    stacked = omegas.reshape(-1, k)
+    scale = float(np.max(np.abs(stacked), initial=0.0))
+    if not scale > 0.0:
+        return np.eye(k)
+    basis: np.ndarray = null_space(stacked / scale, rcond=HOLDS)
+    return basis
 
 
 def _geometric(system: System, modes: np.ndarray, x: np.ndarray, tension: np.ndarray) -> np.ndarray:

@@ -46,10 +46,9 @@ not). ``PathJudge`` follows the load steps of ``catenet.solver.loadsteps.continu
    does not shrink;
 6. a load step from a neutral state moves along its zero modes, and the members' forces
    at its end push that move on (a negative geometric stiffness along it): a mechanism
-   that compression drives, wherever Newton ends (``catenet.solver.mechanism``); or its
-   loads leave those modes alone but compress members across them to first order, and
-   the equilibrium under a small share of them is unstable, not found, or reached as a
-   mechanism (the loads' work far above the strain energy stored: ``_first_share``).
+   that compression drives, wherever Newton ends (``catenet.solver.mechanism``); or the
+   members its loads compress to first order push along a part of those modes that the
+   members follow without stretching (a finite mechanism, ``compressed_across``).
 
 The first three are decided with the margins above; the last three by angles and forces
 far from any threshold in the models that trigger them, and by tensions read against the
@@ -164,7 +163,6 @@ class PathJudge:
         self.start_x: np.ndarray | None = None
         self.top = 0.0  # the largest nodal load at load factor 1
         self._modes: tuple[np.ndarray, np.ndarray] | None = None  # a state's zero modes
-        self._probed: tuple[np.ndarray, str] | None = None  # a state's ``_first_share``
         self._seen: list[tuple[np.ndarray, Tangent]] = []  # the last two states judged
         self.collapsed: str = ""  # what happened, once a collapse was followed through
 
@@ -288,51 +286,17 @@ class PathJudge:
         elif move and abs(held) < PUSH and move > FAR * elastic(system, modes, prev, g):
             what = "nothing holds its nodes, which moved"  # (a strut folded unstressed)
         elif compressed_across(system, modes, prev, g, load=load) < -PUSH:
-            return self._first_share(prev, f0, f1)
+            return (
+                f"{DRIVEN}: at load factor {f0:.6g} it has a mode without stiffness along "
+                "which its members turn without stretching, and the members the loads "
+                "compress push along it: the state that carries them is unstable from "
+                "their first share on"
+            )
         else:
             return ""
         return (
             f"{DRIVEN}: at load factor {f0:.6g} it has a mode without stiffness, and the "
             f"loads drive it: {what} {move:.3g} m along that mode by load factor {f1:.6g}"
-        )
-
-    def _first_share(self, prev: np.ndarray, f0: float, f1: float) -> str:
-        """Rule 6's first-order case: the loads of the step from the neutral ``prev`` do not
-        move its zero modes but compress members across them, so the state that carries
-        them leaves the start. Where it goes is read from the equilibrium under a
-        1/``PROBE`` share of the step's load (Newton from prev): a mechanism that turns
-        over gets there unstable, or with the loads' work ``WORK`` times the strain energy
-        it stored (a three-hinged arch whose crown nothing holds across its plane, its
-        bars turned over); a bilateral rope whose compressed part bulges into tension
-        stores what an elastic step stores (``worked``: 2 to 4). "" where it holds."""
-        from catenet.solver.mechanism import PROBE, WORK, worked
-        from catenet.solver.static import solve_static
-
-        if self._probed is None or not np.array_equal(self._probed[0], prev):
-            fp = f0 + (f1 - f0) / PROBE
-            probe = solve_static(
-                self.net, self.loads, x0=prev, factor=fp, accepted=prev, rtol=self.rtol,
-                workspace=self.ws, raise_on_failure=False, warn=False,
-            )  # fmt: skip
-            ratio = worked(self.ws.system, self.ws.potential(self.loads, fp), prev, probe.x)
-            if not probe.converged:
-                what = "no equilibrium near it carries them"
-            elif self.tangent(probe.x).verdict == UNSTABLE:
-                what = "the state that carries them is unstable"
-            elif ratio > WORK:
-                what = (
-                    f"they move it as a mechanism (at 1/{PROBE:.0f} of the step's load "
-                    f"their work is {ratio:.3g} times the strain energy it stores)"
-                )
-            else:
-                what = ""
-            self._probed = (np.array(prev, copy=True), what)
-        what = self._probed[1]
-        if not what:
-            return ""
-        return (
-            f"{DRIVEN}: at load factor {f0:.6g} it has a mode without stiffness that the "
-            f"loads do not move, and the members they compress push along it: {what}"
         )
 
     def _g(self, factor: float, x: np.ndarray) -> np.ndarray:
