@@ -63,7 +63,7 @@ def solve_dynamic(
     x0: np.ndarray | None = None,
     v0: np.ndarray | None = None,
     t0: float = 0.0,
-    max_iter: int = STEP_MAX_ITER,
+    max_iter: int | None = None,
     stop_at_equilibrium: bool = True,
     linear: str = "auto",
     on_step: OnStep | None = None,
@@ -88,6 +88,11 @@ def solve_dynamic(
     last accepted state in ``state``, when even the smallest step fails. ``on_rest(ratio)``
     follows dynamic relaxation (before ``on_step``, once the supports have settled):
     max(static residual, inertial force) / tolerance, at most 1 at rest.
+
+    ``max_iter``: Newton iterations of one time step; None: STEP_MAX_ITER, and in a run
+    to a time at fixed steps (no ``tolerance``: steps chosen by accuracy are planned anew
+    after a cut) a step's solve still converging there goes on
+    (``solve_newton(extend=)``).
 
     ``reuse=True``: modified Newton, the factorisation kept across iterations and steps
     (about 2x faster on the paper's relaxation; off by default: its path differs within
@@ -119,8 +124,10 @@ def solve_dynamic(
     _check_mass(net)
     ws = workspace or Workspace(net, linear=linear)
     stepper = TimeStepper(
-        net, loads, ws, scheme, damping, rtol=rtol, max_iter=max_iter, reuse=reuse
-    )
+        net, loads, ws, scheme, damping, rtol=rtol, reuse=reuse,
+        max_iter=STEP_MAX_ITER if max_iter is None else max_iter,
+        extend=max_iter is None and not isinstance(t_end, str) and tolerance is None,
+    )  # fmt: skip
     start = time.perf_counter()
     stepper.ledger = balance = Ledger() if ledger is None else ledger
     stepper.begin(x0, v0, t0, a0, a_out)

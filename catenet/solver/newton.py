@@ -82,6 +82,8 @@ PROGRESS = 1e-3  # the least relative decrease of the residual that counts as pr
 REUSE_RATE = 0.03  # a kept factorisation whose step cuts the residual less is refreshed
 REUSE_AHEAD = 2  # ... unless this many more steps at its rate reach the tolerance
 SAFEGUARD_ALPHA = 0.5  # a line search cutting a step below this share: safeguards on
+EXTEND = 4  # a solve still converging at its budget goes on up to this many times it ...
+COURSE = 5  # ... while its residual fell over this many last accepted steps
 
 _stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
 
@@ -187,6 +189,7 @@ def solve_newton(
     shifted: bool = False,
     polish: bool = True,
     safeguard: bool = False,
+    extend: bool = False,
 ) -> NewtonResult:
     """Minimises ``potential`` from x (N, 3), updated in place. Never raises for slow
     convergence: the result says whether it converged; a singular system with c > 0 is
@@ -200,8 +203,11 @@ def solve_newton(
     truncation error far above the floor) goes without (``TimeStepper.run``).
     ``safeguard``: once a line search has cut a step below SAFEGUARD_ALPHA of its
     length, the rest of the solve is safeguarded (``Potential.safeguard``; the module
-    docstring; the result's ``safeguarded`` says whether it was)."""
+    docstring; the result's ``safeguarded`` says whether it was).
+    ``extend``: at ``max_iter`` iterations a solve still converging goes on
+    (``_Newton.on_course``), as a fixed time step of a run to a time does by default."""
     run = _Newton(potential, x, rtol=rtol, atol=atol, max_iter=max_iter, label=label, reuse=reuse)
+    run.extend = extend
     try:
         _iterate(run, shifted, safeguard)
     finally:
@@ -277,6 +283,7 @@ class _Newton:
         self.reused = 0
         self.stall = 0
         self.good = 0  # consecutive well-predicted full steps
+        self.extend = False  # on course at max_iter: go on (``on_course``)
         # the iteration of the last progress (stagnation)
         self.best, self.best_phi, self.moved = self.gnorm, self.ev.phi, 0
         self.it = 0
@@ -315,8 +322,8 @@ class _Newton:
         if gnorm <= floor or stuck:
             if (reason := self.at_floor(None, STALL_FLOOR if stuck else 1.0)) is not None:
                 return reason
-        if self.it >= self.max_iter:
-            return self.at_floor(f"no convergence in {self.max_iter} iterations")
+        if self.it >= self.max_iter and not (self.extend and self.on_course()):
+            return self.at_floor(f"no convergence in {self.it} iterations")
         if _stop is not None and _stop():
             raise Interrupted(
                 f"{self.label}: interrupted after {self.it} Newton iterations",
@@ -330,6 +337,15 @@ class _Newton:
                 f"{floor:.1e} N)"
             )
         return None
+
+    def on_course(self) -> bool:
+        """Whether, past its budget (and below EXTEND times it), the solve's residual fell
+        over its last COURSE accepted steps: a light net's stiff cords taken up at an
+        impact, 3 % a step, that a cut would only start again in a shorter step."""
+        h = self.history
+        if self.it >= EXTEND * self.max_iter or len(h) <= COURSE:
+            return False
+        return h[-1] < h[-1 - COURSE]
 
     def direction(self) -> tuple[np.ndarray, float, bool] | None:
         """The step dy, the slope g.dy < 0 and whether it came from a kept factorisation;

@@ -273,7 +273,7 @@ def _dynamic(
             damping=settings.damping,
             t_end=settings.t_end,
             rtol=settings.rtol,
-            max_iter=settings.step_iterations,
+            max_iter=settings.max_iter,  # (None: a time step's default budget)
             x0=x0,
             v0=v0,
             t0=start.t,

@@ -21,8 +21,12 @@ DT = 1e-2  # solver.dt's default with fixed steps
 STARTS = ("auto", "stretched", "nested")  # static: where Newton starts (solver.nested)
 INITIAL_STATES = ("given", "equilibrium")  # dynamic: where a run starts (solver.initial_state)
 STATIC_MAX_ITER = 200  # solver.max_iter not given: Newton iterations of a static solve
-STEP_MAX_ITER = 25  # ... and of one time step of a dynamic run
-MAX_ITER_SHOWN = f"`{STATIC_MAX_ITER}` (static), `{STEP_MAX_ITER}` (a time step)"  # case keys
+STEP_MAX_ITER = 25  # ... and of one time step of a dynamic run (at fixed steps to a time,
+#                    a step still converging there goes on: ``newton.EXTEND``)
+MAX_ITER_SHOWN = (  # (case keys)
+    f"`{STATIC_MAX_ITER}` (static), `{STEP_MAX_ITER}` (a time step; at fixed steps to a "
+    "time, one still converging goes on, up to 4 times that)"
+)
 
 
 class Steps(Protocol):

@@ -62,6 +62,7 @@ class TimeStepper:
         rtol: float,
         max_iter: int,
         reuse: bool,
+        extend: bool = False,
     ):
         self.net, self.loads, self.scheme = net, loads, scheme
         self.ws = ws
@@ -70,7 +71,7 @@ class TimeStepper:
         self.m_free, self.damping = mass_and_damping(net, damping)
         self.inertia = Inertia(self.free)  # the step's inertia and damping, refilled every step
         self.potential = ws.potential(loads, steps=(self.inertia,))
-        self.rtol, self.max_iter = rtol, max_iter
+        self.rtol, self.max_iter, self.extend = rtol, max_iter, extend
         self.polish = True  # Newton polishes below its floor (``run``: only toward rest)
         self.kept = Reuse() if reuse else None  # the factorisation modified Newton keeps
         self.fresh = False  # this step's retry with fresh factorisations (its kept one failed)
@@ -255,6 +256,7 @@ class TimeStepper:
                 reuse=None if self.fresh else self.kept,
                 polish=self.polish,
                 safeguard=True,
+                extend=self.extend,
             )
         except SingularSystemError as exc:
             return None, str(exc)

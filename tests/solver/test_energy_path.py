@@ -86,10 +86,13 @@ def test_the_paths_work_is_the_force_on_the_ball_times_the_paths_displacement():
 def test_newmark_gaining_energy_where_a_path_ball_hits_the_net_is_stopped(speed):
     """Newmark (rho_inf 0.95, undamped), refused in contact by a case file, through
     Python's solve: the ball comes down at constant speed onto the net and the
-    integrator creates energy; the verdict stops it (before: not judged, an answer)."""
+    integrator creates energy; the verdict stops it (before: not judged, an answer).
+    Each step's Newton held to 25 iterations: with more, at 3 m/s, its steps converge
+    where they were cut, and newmark loses energy there instead (which the verdict lets
+    pass, as numerical damping)."""
     data = {**NET, "obstacle": [{k: v for k, v in NET["obstacle"][0].items() if k != "history"}]}
     data["obstacle"][0]["velocity"] = [0.0, 0.0, -speed]
     scene = build(parse_case(data))
-    settings = cn.Settings.of(scene.case.solver, integrator="newmark", rho_inf=0.95)
+    settings = cn.Settings.of(scene.case.solver, integrator="newmark", rho_inf=0.95, max_iter=25)
     with pytest.raises(EnergyError, match="the integrator creates energy"):
         cn.solve(scene, settings)

@@ -85,9 +85,13 @@ def test_a_light_stiff_net_meeting_a_box_at_10_ms_steps_takes_no_cut_and_few_ite
 
 
 def test_unguarded_the_same_scene_needed_cuts(monkeypatch):
-    """The measure of the test above: without the guards the same run cuts steps."""
+    """The measure of the test above: without the guards the same run cuts steps (each
+    step's Newton held to 25 iterations, as it was when this was measured: a run to a
+    time now lets a step still converging there go on, which takes the unguarded steps
+    too, in more iterations)."""
     monkeypatch.setattr(newton, "SAFEGUARD_ALPHA", 0.0)  # never safeguarded
-    result, _ = run(thrown())
+    scene = thrown()
+    result = solve(scene, Settings.of(scene.case.solver, max_iter=25))
     assert result.converged and result.steps > 10 and result.iterations > 180
 
 

@@ -1,6 +1,7 @@
 """``solver.max_iter`` in a dynamic run: the Newton iterations of one time step (25 when
-not given; a static solve's 200), a step they do not solve halved. Before, a dynamic run
-warned that the key was ignored, while its failure message advised a larger one."""
+not given; a static solve's 200), a step they do not solve halved; not given, at fixed
+steps to a time, a step still converging at 25 goes on, up to 100. Before, a dynamic run warned
+that the key was ignored, while its failure message advised a larger one."""
 
 from __future__ import annotations
 
@@ -69,3 +70,68 @@ def test_a_step_that_its_budget_cannot_solve_names_the_budget(tmp_path):
     assert "no convergence in 2 iterations (solver.max_iter = 2 bounds each time step" in (
         done.output
     )
+
+
+def test_a_step_still_converging_at_its_budget_goes_on(monkeypatch):
+    """A light stiff net thrown onto a box at 10 ms steps, unguarded (its Newton takes up
+    the slack cords a ring per iteration, its residual falling slowly): held to 25
+    iterations a step, its steps are cut (16 steps, 243 iterations when measured); with
+    the budget not given, a step still converging at 25 goes on (12 steps, 158), no
+    solve beyond 100 iterations. A 101 x 101 net of the same kind at 10 ms to 0.03 s:
+    1303 iterations in 58 steps, cut to 39 us, and 331 in 8."""
+    from catenet.solver import newton
+    from catenet.solver.path import solve
+    from tests.solver.test_safeguarded_newton import thrown
+
+    monkeypatch.setattr(newton, "SAFEGUARD_ALPHA", 0.0)  # never safeguarded
+    counts = []
+    original = newton._Newton.verdict
+
+    def verdict(run):
+        reason = original(run)
+        if reason is not None:
+            counts.append(run.it)
+        return reason
+
+    monkeypatch.setattr(newton._Newton, "verdict", verdict)
+    scene = thrown()
+    goes_on = solve(scene, Settings.of(scene.case.solver))
+    assert max(counts) > STEP_MAX_ITER and max(counts) <= 4 * STEP_MAX_ITER
+    counts.clear()
+    held = solve(scene, Settings.of(scene.case.solver, max_iter=STEP_MAX_ITER))
+    assert max(counts) == STEP_MAX_ITER  # given: a hard budget
+    assert goes_on.converged and held.converged
+    assert goes_on.steps < held.steps and goes_on.iterations < held.iterations
+
+
+def test_a_run_to_rest_keeps_its_budget(monkeypatch):
+    """Dynamic relaxation to rest (its steps a way to the equilibrium), steps chosen by
+    accuracy (planned anew after a cut) and a given max_iter keep the budget as it is;
+    only fixed steps to a time with the default go on."""
+    import tomllib
+
+    from catenet.case import build, parse_case
+    from catenet.solver import stepper
+    from catenet.solver.path import solve
+
+    seen = []
+    original = stepper.solve_newton
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("extend", False))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(stepper, "solve_newton", spy)
+    raw = tomllib.loads(WIRE)
+    runs = [("rest", None, None, False), (2.0, None, None, True), (2.0, 25, None, False)]
+    runs.append((2.0, None, 1e-3, False))
+    for t_end, budget, tolerance, extends in runs:
+        seen.clear()
+        raw["solver"] = {"method": "dynamic", "t_end": t_end, "dt": 0.05, "damping": 2.0}
+        if budget is not None:
+            raw["solver"]["max_iter"] = budget
+        if tolerance is not None:
+            raw["solver"]["tolerance"] = tolerance
+        scene = build(parse_case(raw))
+        solve(scene, Settings.of(scene.case.solver))
+        assert seen and set(seen) == {extends}

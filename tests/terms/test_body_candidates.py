@@ -211,7 +211,12 @@ def _kicked(candidates: bool) -> tuple[np.ndarray, int]:
     """The lying box's momentum at the end and the steps taken."""
     import tomllib
 
-    scene = build(parse_case(tomllib.loads(KICKED)))
+    raw = tomllib.loads(KICKED)
+    # each step's Newton held to 25 iterations: the candidates' room slows some solves
+    # near the second strike, and a step still converging past 25 went on in one run and
+    # was cut in the other (both ways right; the test compares the same steps)
+    raw["solver"]["max_iter"] = 25
+    scene = build(parse_case(raw))
     if not candidates:
         for term in scene.terms:
             term.grows = False if isinstance(term, BodyContact) else term.grows
