@@ -62,8 +62,8 @@ PUSH = 1e-3  # ... and its compressed members push that move: -PUSH x load / edg
 FAR = 100.0  # ... or nothing holds it (|push| < PUSH) and it is this many elastic moves
 FIRST = 1e-6  # the first-order forces of a linear response: read on a move this share
 #              of the median edge along it
-STRAIGHT = 1e-3  # edges that kink by less than this [rad] carry a self-stress (``finite``)
-HOLDS = 1e-6  # a self-stress holds a move whose stretching is above this share of the largest
+STRAIGHT = 1e-3  # a compatibility matrix's singular values up to this are zero (``finite``)
+HOLDS = 1e-6  # a self-stress holds a move above this share of its uncancelled stretching
 
 
 def zero_modes(
@@ -124,12 +124,13 @@ def compressed_across(
     response give the part of ``modes`` (the zero modes at ``prev``) that moves as a
     mechanism (``finite``), as a share of ``load`` per median rest length; 0 where no
     part does. The response is the linear one with the modes held (``_response``), its
-    forces to first order in the load: a negative value says that the state that carries
-    the loads is unstable from their first share, wherever Newton then goes (a
-    three-hinged arch whose crown nothing holds across its plane: its compressed bars
-    turn it over sideways). A mode that the edges' second-order stretching resists (a
-    rope's sway, a flat net's sag) is left out: its own tension holds it as it moves.
-    ``g``: the potential's gradient at prev under the step's end load."""
+    forces to first order in the load (a tension-only edge's at least 0): a negative
+    value says that the state that carries the loads is unstable from their first share,
+    wherever Newton then goes (a three-hinged arch whose crown nothing holds across its
+    plane: its compressed bars turn it over sideways). A mode that the edges'
+    second-order stretching resists (a rope's sway, a flat net's sag) is left out: its
+    own tension holds it as it moves. ``g``: the potential's gradient at prev under the
+    step's end load."""
     if not modes.shape[1] or not float(np.linalg.norm(g)) > 0.0 or not load > 0.0:
         return 0.0
     u = _response(system, modes, prev, g)
@@ -147,6 +148,8 @@ def compressed_across(
     x.reshape(-1)[system.free_dofs] += share * u
     start = system.tension(prev)
     tension = start + (system.tension(x) - start) / share
+    only = _tension_only(system)
+    tension[only] = np.maximum(tension[only], 0.0)
     unit = load / median
     geometric = _geometric(system, modes, prev, tension)
     if not float(np.linalg.eigvalsh(geometric)[0]) / unit < -PUSH:
@@ -159,46 +162,76 @@ def compressed_across(
 
 def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
     """(k, p) an orthonormal basis, in the coefficients of ``modes`` (k zero modes at x),
-    of the moves that no self-stress of the edges resists at second order: a move z
+    of the moves that no self-stress of the edges holds at second order: a move z
     stretches each edge by |z across it|^2 / (2 l) to second order, and a self-stress s
-    (edge forces in balance with no load) resists it where the sum of s / l times that
-    square is not zero. No edge network holds a three-hinged arch's crown (no
-    self-stress: the whole mode moves, a mechanism); a straight rope's uniform tension
-    holds every sway of its nodes (none moves). Self-stresses are the null space of the
-    edges' compatibility matrix (rows: the edges' directions at their nodes), its
-    singular values below ``STRAIGHT`` of its largest counted as zero: a line kinked by
-    less than a milliradian (a rope given straight, its nodes moved by round-off) has
-    no room to move as a mechanism that its stretch would notice, and is held as a
-    straight one is; a move is held where some self-stress stretches it by more than
-    ``HOLDS`` of the largest such stretching."""
-    from scipy.linalg import null_space
+    (edge forces in balance with no load, the supports' and rollers' reactions aside)
+    holds a move where the matrix Omega(s) of the sum of s / l times those squares does
+    not vanish on it (the moves with Omega(s) z = 0 for every s: a subspace of those
+    with z Omega(s) z = 0, so a mechanism among several modes may be missed, never a
+    held move called one). No edge network holds a three-hinged arch's crown (no
+    self-stress: the whole mode moves); a straight rope's uniform tension holds every
+    sway of its nodes (none moves). The edges are the bilateral ones and the taut
+    tension-only ones (a slack cable holds nothing; a self-stress may need compression).
 
+    Self-stresses are the null space of the edges' compatibility matrix (rows: the
+    edges' unit directions at their nodes), its singular values up to ``STRAIGHT``
+    counted as zero: a line whose edges kink by less than about 2e-3 rad (a rope given
+    straight, its nodes moved by round-off) has no room to move that its stretch would
+    notice, and is held as a straight one is. A move is held where some Omega(s) is
+    above ``HOLDS`` of the sum of |s| / l times the same squares (Omega without its
+    cancellations: round-off in a sum that vanishes is no hold)."""
     net = system.net
     e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
     length = np.linalg.norm(e, axis=1)
-    t = e / np.where(length > 0.0, length, 1.0)[:, None]
-    rows = np.arange(net.n_edges)
-    b = np.zeros((net.n_edges, net.n_nodes, 3))
-    b[rows, net.edges[:, 1]] += t
-    b[rows, net.edges[:, 0]] -= t
-    b = b.reshape(net.n_edges, -1)[:, system.free_dofs]
-    stresses = null_space(b.T, rcond=STRAIGHT)  # (edges, r)
-    k = modes.shape[1]
+    used = ~_tension_only(system) | (system.tension(x) > 0.0)
+    edges, t, length = (
+        net.edges[used],
+        (e / np.where(length > 0.0, length, 1.0)[:, None])[used],
+        length[used],
+    )
+    m, k = len(edges), modes.shape[1]
+    rows = np.arange(m)
+    b = np.zeros((m, net.n_nodes, 3))
+    b[rows, edges[:, 1]] += t
+    b[rows, edges[:, 0]] -= t
+    b = b.reshape(m, -1)[:, system.free_dofs]
+    if system.guided is not None:  # a roller's held direction is its reaction's
+        guided = system.guided
+        y = b[:, guided.dofs]
+        b[:, guided.dofs] = y - np.einsum("kij,mkj->mki", guided.held, y)
+    stresses = _null(b.T, STRAIGHT)  # (edges, r)
     if not stresses.shape[1]:
         return np.eye(k)
     flat = np.zeros((k, net.n_nodes * 3))
     flat[:, system.free_dofs] = modes.T
     v = flat.reshape(k, -1, 3)
-    dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
+    dv = v[:, edges[:, 1]] - v[:, edges[:, 0]]
     across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
-    inverse = 1.0 / np.where(length > 0.0, length, np.inf)
-    omegas = np.einsum("kij,mij,ir,i->rkm", across, across, stresses, inverse)
-    stacked = omegas.reshape(-1, k)
-    scale = float(np.max(np.abs(stacked), initial=0.0))
-    if not scale > 0.0:
+    a = across.transpose(1, 2, 0).reshape(3 * m, k)  # rows: an edge's three components
+    inverse = np.repeat(1.0 / np.where(length > 0.0, length, np.inf), 3)[:, None]
+    omegas, reference = [], 0.0
+    for s in stresses.T:
+        w = np.repeat(s, 3)[:, None] * inverse
+        omegas.append(a.T @ (w * a))
+        reference = max(reference, float(np.trace(a.T @ (np.abs(w) * a))))
+    if not reference > 0.0:
         return np.eye(k)
-    basis: np.ndarray = null_space(stacked / scale, rcond=HOLDS)
+    return _null(np.vstack(omegas), HOLDS * reference)
+
+
+def _null(a: np.ndarray, below: float) -> np.ndarray:
+    """(columns, p) an orthonormal basis of the vectors that ``a`` maps to within
+    ``below`` (its singular values up to it counted as zero)."""
+    _, sigma, vt = np.linalg.svd(a, full_matrices=True)
+    rank = int(np.count_nonzero(sigma > below))
+    basis: np.ndarray = vt[rank:].T
     return basis
+
+
+def _tension_only(system: System) -> np.ndarray:
+    """Per edge: tension-only."""
+    net = system.net
+    return np.asarray(net.law.tension_only, dtype=bool) & np.ones(net.n_edges, dtype=bool)
 
 
 def _geometric(system: System, modes: np.ndarray, x: np.ndarray, tension: np.ndarray) -> np.ndarray:

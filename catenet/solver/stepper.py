@@ -20,7 +20,7 @@ from catenet.model.net import Loads, Net
 from catenet.solver.adaptive import ErrorControl
 from catenet.solver.energy import Ledger
 from catenet.solver.integrators import Scheme
-from catenet.solver.newton import NewtonResult, Reuse, solve_newton
+from catenet.solver.newton import EXTEND, NewtonResult, Reuse, solve_newton
 from catenet.solver.relax import RestControl, rest_stages
 from catenet.solver.result import Outcome
 from catenet.solver.start import HarmonicExtension
@@ -329,7 +329,14 @@ class TimeStepper:
         )
         if not again:
             message = f"dynamic step at t = {self.t:.6g} s failed even with h = {h_step:.3g} s"
-            if why.startswith("no convergence in"):
+            if why.startswith("no convergence in") and self.extend:
+                why += (
+                    f" (a time step's Newton takes {self.max_iter} iterations, at fixed "
+                    f"steps up to {EXTEND * self.max_iter} while its residual falls; a "
+                    "solver.max_iter you give is a hard budget: a larger one may let it "
+                    "converge)"
+                )
+            elif why.startswith("no convergence in"):
                 why += (
                     f" (solver.max_iter = {self.max_iter} bounds each time step's Newton "
                     "iterations: a larger one may let it converge)"

@@ -31,7 +31,11 @@ method = "dynamic"
 
 
 def test_the_budgets_of_a_static_solve_and_a_time_step():
+    from catenet.solver.newton import EXTEND
+    from catenet.solver.settings import MAX_ITER_SHOWN
+
     assert Settings().static_iterations == STATIC_MAX_ITER == 200
+    assert f"up to {EXTEND} times that" in MAX_ITER_SHOWN  # (the case keys' table)
     assert Settings(method="dynamic").step_iterations == STEP_MAX_ITER == 25
     given = Settings(method="dynamic", max_iter=60)
     assert given.step_iterations == given.static_iterations == 60
