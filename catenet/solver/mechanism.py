@@ -64,6 +64,8 @@ FIRST = 1e-6  # the first-order forces of a linear response: read on a move this
 #              of the median edge along it
 STRAIGHT = 1e-3  # a compatibility matrix's singular values up to this are zero (``finite``)
 HOLDS = 1e-6  # a self-stress holds a move above this share of its uncancelled stretching
+NOISE = 64.0  # a tension-only edge is taut above this many round-offs of its axial force
+EPS = float(np.finfo(np.float64).eps)
 
 
 def zero_modes(
@@ -171,7 +173,8 @@ def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
     held move called one). No edge network holds a three-hinged arch's crown (no
     self-stress: the whole mode moves); a straight rope's uniform tension holds every
     sway of its nodes (none moves). The edges are the bilateral ones and the taut
-    tension-only ones (a slack cable holds nothing; a self-stress may need compression).
+    tension-only ones (a slack cable holds nothing; a self-stress may need compression;
+    taut is above NOISE round-offs of the edge's axial force).
 
     Self-stresses are the null space of the edges' compatibility matrix (rows: the
     edges' unit directions at their nodes), its singular values up to ``STRAIGHT``
@@ -183,7 +186,10 @@ def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
     net = system.net
     e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
     length = np.linalg.norm(e, axis=1)
-    used = ~_tension_only(system) | (system.tension(x) > 0.0)
+    # taut: above NOISE round-offs of its axial force, EA eps |x| / l0 (a cable given at
+    # its rest length carries that much either way)
+    noise = NOISE * EPS * float(np.max(np.abs(x), initial=0.0)) * net.EA / net.rest_length
+    used = ~_tension_only(system) | (system.tension(x) > noise)
     edges, t, length = (
         net.edges[used],
         (e / np.where(length > 0.0, length, 1.0)[:, None])[used],
