@@ -184,17 +184,12 @@ def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
     above ``HOLDS`` of the sum of |s| / l times the same squares (Omega without its
     cancellations: round-off in a sum that vanishes is no hold)."""
     net = system.net
-    e = x[net.edges[:, 1]] - x[net.edges[:, 0]]
-    length = np.linalg.norm(e, axis=1)
     # taut: above NOISE round-offs of its axial force, EA eps |x| / l0 (a cable given at
     # its rest length carries that much either way)
     noise = NOISE * EPS * float(np.max(np.abs(x), initial=0.0)) * net.EA / net.rest_length
     used = ~_tension_only(system) | (system.tension(x) > noise)
-    edges, t, length = (
-        net.edges[used],
-        (e / np.where(length > 0.0, length, 1.0)[:, None])[used],
-        length[used],
-    )
+    across, t, length = _across(system, modes, x)
+    edges, across, t, length = net.edges[used], across[:, used], t[used], length[used]
     m, k = len(edges), modes.shape[1]
     rows = np.arange(m)
     b = np.zeros((m, net.n_nodes, 3))
@@ -208,11 +203,6 @@ def finite(system: System, modes: np.ndarray, x: np.ndarray) -> np.ndarray:
     stresses = _null(b.T, STRAIGHT)  # (edges, r)
     if not stresses.shape[1]:
         return np.eye(k)
-    flat = np.zeros((k, net.n_nodes * 3))
-    flat[:, system.free_dofs] = modes.T
-    v = flat.reshape(k, -1, 3)
-    dv = v[:, edges[:, 1]] - v[:, edges[:, 0]]
-    across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
     a = across.transpose(1, 2, 0).reshape(3 * m, k)  # rows: an edge's three components
     inverse = np.repeat(1.0 / np.where(length > 0.0, length, np.inf), 3)[:, None]
     omegas, reference = [], 0.0
@@ -243,6 +233,18 @@ def _tension_only(system: System) -> np.ndarray:
 def _geometric(system: System, modes: np.ndarray, x: np.ndarray, tension: np.ndarray) -> np.ndarray:
     """(k, k) the geometric stiffness that the edges' ``tension`` gives the ``modes`` at
     x: the sum over edges of N / l times the modes' moves across the edge."""
+    across, _, length = _across(system, modes, x)
+    stiffness = tension / np.where(length > 0.0, length, np.inf)
+    geometric: np.ndarray = np.einsum("kij,mij,i->km", across, across, stiffness)
+    return geometric
+
+
+def _across(
+    system: System, modes: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(across (k, edges, 3), t (edges, 3), length (edges,)): each mode's move of an edge's
+    far node against its near one across the edge at x, the edges' unit directions and
+    lengths."""
     net = system.net
     flat = np.zeros((modes.shape[1], net.n_nodes * 3))
     flat[:, system.free_dofs] = modes.T
@@ -252,9 +254,7 @@ def _geometric(system: System, modes: np.ndarray, x: np.ndarray, tension: np.nda
     t = e / np.where(length > 0.0, length, 1.0)[:, None]
     dv = v[:, net.edges[:, 1]] - v[:, net.edges[:, 0]]
     across = dv - np.einsum("kij,ij->ki", dv, t)[:, :, None] * t
-    stiffness = tension / np.where(length > 0.0, length, np.inf)
-    geometric: np.ndarray = np.einsum("kij,mij,i->km", across, across, stiffness)
-    return geometric
+    return across, t, length
 
 
 def elastic(system: System, modes: np.ndarray, prev: np.ndarray, g: np.ndarray) -> float:
