@@ -499,7 +499,7 @@ def between_nodes(scene: Scene) -> list[str]:
     for k, shape, what in sorted(solids, key=lambda s: s[0]):
         if shape.kind == "plane":
             continue
-        width = _width(shape)
+        width = solid_width(shape)
         if width < NARROW_SHARE * edge:
             out.append(
                 f"obstacle[{k}] ({what}{shape.kind}, {width:.3g} m across) is narrower than "
@@ -511,7 +511,7 @@ def between_nodes(scene: Scene) -> list[str]:
     return out
 
 
-def _width(shape: Shape) -> float:
+def solid_width(shape: Shape) -> float:
     """The smallest extent of a shape across its principal directions [m]: its
     outline's points' extent there plus its radius on both sides."""
     points, _, radius = shape.outline()

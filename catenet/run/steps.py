@@ -73,6 +73,7 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
     from catenet.errors import Interrupted
     from catenet.model.peaks import Peaks
     from catenet.run.bodies import BodyWatch
+    from catenet.run.crossings import EdgeWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
 
@@ -80,7 +81,10 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
     frames = _Frames(writer, ws, clock, _recorder(scene, ws, writer, restart) if dynamic else None)
     start = _dynamic_start(scene, settings, ws, restart, frames) if dynamic else None
     watch = BodyWatch(scene)  # free bodies: first contact, final spin (the summary's)
-    on_step = _stepping(settings, frames, watch, hooks)
+    crossed = EdgeWatch(scene, ws.system.terms, dynamic)  # edges into solids (node contact)
+    first = start.x if start is not None and start.x is not None else None
+    crossed.see(start.t if start is not None else 0.0, scene.net.nodes if first is None else first)
+    on_step = _stepping(settings, frames, watch, hooks, crossed)
     peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
     if restart is not None and restart.peaks is not None and peaks.seed(restart.peaks):
         log.info("--restart: the peaks go on from those of %s", restart.path)
@@ -91,6 +95,7 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
         if isinstance(exc, ConfigError) or exc.last_good is None:
             raise
         res = _kept(exc, scene, settings, ws, frames, peaks, begin, clock)
+        _tell(crossed, res)
         if isinstance(exc, Interrupted):  # within a step: like a stop between steps
             log.info("interrupted during %s", "a time step" if dynamic else "a load step")
             _write_result(writer, res)
@@ -101,6 +106,7 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
         frames.keep(res.steps, res.time, res.x, res.v, force=True, a=res.a)
     if res.outcome is Outcome.INTERRUPTED:
         log.info("interrupted at %s %.6g", "t =" if dynamic else "load factor", res.time)
+    _tell(crossed, res)
     res.wall_time = time.perf_counter() - begin
     res.timing = _timing(clock)
     bodies = watch.stats(res.x, res.v) if watch else {}
@@ -154,14 +160,25 @@ def _recorder(scene, ws, writer, restart):
     return recorder
 
 
-def _stepping(settings, frames: _Frames, watch, hooks: Hooks):
-    """The solve path's ``on_step``: each step's frame kept, the bodies watched, progress
-    told, and True where ``hooks.stop()`` ends the run (its frame kept)."""
+def _tell(crossed, res) -> None:
+    """The end state seen by the edges' watch, and its warnings logged."""
+    if crossed:
+        crossed.see(res.time, res.x)
+        for message in crossed.warnings():
+            log.warning("%s", message)
+
+
+def _stepping(settings, frames: _Frames, watch, hooks: Hooks, crossed):
+    """The solve path's ``on_step``: each step's frame kept, the bodies and the edges
+    watched, progress told, and True where ``hooks.stop()`` ends the run (its frame
+    kept)."""
     dynamic = settings.method == "dynamic"
     total = 1.0 if not dynamic else math.inf if isinstance(settings.t_end, str) else settings.t_end
 
     def on_step(step) -> bool:
         watch.see(step.time, step.x)  # free bodies: their first contact
+        with frames.clock.aside():  # edges into solids: the runner's check, not the solve
+            crossed.see(step.time, step.x)
         last = step.index == settings.steps and not dynamic
         tension = step.result.tension if step.result is not None else None
 

@@ -1,0 +1,248 @@
+"""Strands inside solids: where the net meets obstacles, balls and free bodies at its nodes
+only (no ``solver.edge_contact``), the barriers keep every node out, but the straight edge
+between two nodes may cut into a solid, or the solid may pass between the nodes: a 0.24 m
+ball dropped on a net of 0.22 m cells pushed the cell's nodes aside and fell on through
+it at nearly free-fall speed, "converged", and nothing said so.
+
+``EdgeWatch`` follows a run's states (every time step, every load step and the end) and
+measures, at SAMPLES points inside every edge, how deep the edge lies in each solid (the
+solid's own signed distance, at its pose then: a free body's from its nodes, a ball's
+centre node, a moving obstacle's pose at the step's time). An edge deeper than DEEP of its
+length, or than DEEP_WIDTH of the solid's width (a thin plate cut through), is a crossing:
+the run warns once per solid, with the deepest point, when, and in how many states. A
+chord of a net draped on a sphere of radius R lies l^2 / (8 R) inside it between its
+nodes, below DEEP for R above 2.5 edge lengths: the polyhedral net's own shape, not
+warned. Planes need nothing (a segment whose ends are outside a half-space is outside).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Points inside each edge at which its depth in a solid is measured.
+SAMPLES = 7
+#: An edge deeper in a solid than this share of its own length is a crossing.
+DEEP = 0.05
+#: ... or deeper than this share of the solid's width (a thin solid cut through).
+DEEP_WIDTH = 0.25
+#: Points farther from a solid's origin than its reach times this are not measured.
+MARGIN = 1.01
+#: Between two states, a node moves at most this share of a solid's width (or of the
+#: median edge) relative to it from one measured state to the next ...
+SUBSTEP = 0.25
+#: ... in at most this many states between two.
+MAX_SUBSTEPS = 64
+
+ALONG = (np.arange(1, SAMPLES + 1) / (SAMPLES + 1.0))[None, :, None]
+
+
+class _Solid:
+    """One solid of the scene as the watch measures it: its label, width, a barrier of
+    its shape (its signed distance, at its pose at t = 0 or its own), how to bring world
+    points into that barrier's frame, and the deepest crossing seen."""
+
+    def __init__(self, label: str, shape, width: float, local, origin):
+        self.label, self.width = label, width
+        self.barrier = shape.barrier(np.zeros(0, dtype=np.int64), kappa=1.0, dhat=1e-3 * width)
+        self.reach = MARGIN * shape.reach + 1e-12
+        self.origin = origin  # x -> the solid's origin in the world at the state x
+        self.local = local  # (points, x) -> the points in the barrier's frame
+        self.depth, self.edge, self.when, self.steps = 0.0, -1, 0.0, 0
+
+    def near(
+        self, x0: np.ndarray, x1: np.ndarray, edges: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The edges that may come within the solid's reach between the states x0 and
+        x1 (each node's distance from the solid's origin, moving linearly, is at least
+        the smaller of its two less its move; an edge's points at least that less its
+        length), and the largest move of their nodes relative to the solid."""
+        o0, o1 = self.origin(x0), self.origin(x1)
+        r0, r1 = x0 - o0, x1 - o1
+        move = np.linalg.norm(r1 - r0, axis=1)
+        low = np.minimum(np.linalg.norm(r0, axis=1), np.linalg.norm(r1, axis=1)) - move
+        long = np.maximum(
+            np.linalg.norm(x0[edges[:, 1]] - x0[edges[:, 0]], axis=1),
+            np.linalg.norm(x1[edges[:, 1]] - x1[edges[:, 0]], axis=1),
+        )
+        ends = np.minimum(low[edges[:, 0]], low[edges[:, 1]])
+        return np.flatnonzero(ends - long <= self.reach), move
+
+    def see(
+        self, t: float, x: np.ndarray, edges: np.ndarray, which: np.ndarray, between: bool
+    ) -> bool:
+        """The state x at time t: the depth of the points inside the edges ``which``;
+        whether one is a crossing. A state ``between`` two that the run reached is the
+        straight way from one to the other: an edge whose end nodes it takes into the
+        solid (a node sliding round its corner, cut short) is not measured there."""
+        if between:
+            ends = np.concatenate([x[edges[which, 0]], x[edges[which, 1]]])
+            held = self._depth(ends, x).reshape(2, -1).max(axis=0) <= 0.0
+            which = which[held]
+            if not which.size:
+                return False
+        a, b = x[edges[which, 0]], x[edges[which, 1]]
+        depth = self._depth((a[:, None, :] + ALONG * (b - a)[:, None, :]).reshape(-1, 3), x)
+        edge = which[np.arange(len(depth)) // SAMPLES]
+        lengths = np.linalg.norm(b - a, axis=1)
+        limit = np.minimum(DEEP * np.repeat(lengths, SAMPLES), DEEP_WIDTH * self.width)
+        over = depth > limit
+        if not over.any():
+            return False
+        k = int(np.argmax(np.where(over, depth, -np.inf)))
+        if depth[k] > self.depth:
+            self.depth, self.edge, self.when = float(depth[k]), int(edge[k]), float(t)
+        return True
+
+    def _depth(self, points: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """How deep each world point lies in the solid at the state x (< 0: outside)."""
+        self.barrier.nodes = np.arange(len(points), dtype=np.int64)
+        return -self.barrier.gap(np.ascontiguousarray(self.local(points, x)))
+
+
+class EdgeWatch:
+    """Follows a run's states (``see``) and says where edges went into solids
+    (``warnings``; module docstring). Empty where every edge meets them (edge contact)
+    or the scene has no solid but planes."""
+
+    def __init__(self, scene, terms=(), dynamic: bool = False):
+        from catenet.run.advice import solid_width
+
+        self.dynamic = dynamic
+        self.edges = np.asarray(scene.net.edges)[: scene.net.n_edges]
+        self.solids: list[_Solid] = []
+        self.last: tuple[np.ndarray, float] | None = None
+        if scene.edge_radius is not None or not len(self.edges):
+            return
+        ends = scene.net.nodes[self.edges]
+        self.median = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
+        moving = {getattr(t, "owner", None): t for t in terms if type(t).__name__ == "Moving"}
+        for k, shape, _ in scene.obstacles:
+            if shape.kind == "plane":
+                continue
+            label = f"obstacle[{k}] (a {shape.kind})"
+            term = moving.get(k)
+            if term is None:
+                solid = _Solid(label, shape, solid_width(shape), _as_is, _fixed(shape.origin))
+            else:
+                label = f"obstacle[{k}] (a moving {shape.kind})"
+                solid = _Solid(label, shape, solid_width(shape), _moved(term), _moving(term))
+            self.solids.append(solid)
+        self._bodies(scene)
+
+    def _bodies(self, scene) -> None:
+        from catenet.run.advice import solid_width
+        from catenet.scene.shapes.sphere import Sphere
+
+        for ball in scene.bodies:
+            sphere = Sphere(center=np.zeros(3), radius=ball.radius)
+            label = f"obstacle[{ball.obstacle}] (a ball)"
+            node = ball.node
+            self.solids.append(
+                _Solid(label, sphere, 2.0 * ball.radius, _ball(node), lambda x, n=node: x[n])
+            )
+        shapes = {m.index: m.shape for m in scene.movers if m.free}
+        for body in scene.rigid:
+            shape = shapes.get(body.obstacle)
+            if shape is None or shape.kind == "plane":
+                continue
+            label = f"obstacle[{body.obstacle}] (a free {shape.kind})"
+            frame = body.frame
+            self.solids.append(
+                _Solid(label, shape, solid_width(shape), _body(frame), _body_origin(frame, shape))
+            )
+
+    def __bool__(self) -> bool:
+        return bool(self.solids)
+
+    def see(self, t: float, x) -> None:
+        """A state x (N, 3) at time (or load factor) t; in a dynamic run, also the way to
+        it from the last one seen: straight, at as many states between as keep each
+        node's move relative to a solid below SUBSTEP of the solid's width or of the
+        median edge (a ball that passes between the nodes within one step is inside the
+        edges on its way)."""
+        if not self.solids:
+            return
+        x = np.array(x, dtype=np.float64)
+        x0, t0 = (x, t) if self.last is None else self.last
+        self.last = (x, t)
+        for solid in self.solids:
+            which, move = solid.near(x0, x, self.edges)
+            if not which.size:
+                continue
+            n = 1
+            if self.dynamic:  # the way between two time steps (load steps are no motion)
+                size = SUBSTEP * min(solid.width, self.median)
+                farthest = float(move[self.edges[which].ravel()].max())
+                n = int(min(MAX_SUBSTEPS, max(1, math.ceil(farthest / size))))
+            crossed = False
+            for k in range(1, n + 1):
+                s = k / n
+                xs = x if k == n else (1.0 - s) * x0 + s * x
+                crossed |= solid.see(t0 + s * (t - t0), xs, self.edges, which, k < n)
+            solid.steps += crossed
+
+    def warnings(self) -> list[str]:
+        """One warning per solid that an edge went into (none: none did)."""
+        out = []
+        for s in self.solids:
+            if s.edge < 0:
+                continue
+            at = f"t = {s.when:.6g} s" if self.dynamic else f"load factor {s.when:.6g}"
+            many = f", in {s.steps} steps" if self.dynamic else ""
+            out.append(
+                f"edges cut {s.depth:.3g} m deep into {s.label} between the nodes it holds "
+                f"off (edge {s.edge} at {at}{many}): the net meets solids at its nodes "
+                "only, so the strands between them can cut into a solid or let it pass "
+                "between the nodes; set solver.edge_contact = true "
+                "(docs/guide/edge-contact.md), or refine the net well below the solid's width"
+            )
+        return out
+
+
+def _as_is(points, x):
+    return points
+
+
+def _fixed(origin):
+    o = np.asarray(origin, dtype=np.float64)
+    return lambda x: o
+
+
+def _ball(node: int):
+    return lambda points, x: points - x[node]
+
+
+def _moved(term):
+    """World points in a moving obstacle's body frame (its pose at the step's time)."""
+    return lambda points, x: term._body(points)
+
+
+def _moving(term):
+    """Where a moving obstacle's origin is at the step's time."""
+    return lambda x: term.center
+
+
+def _body(frame):
+    """World points in a free body's frame at t = 0: X = c0 + A^T (p - c)."""
+    from catenet.kernels.rigid import frame_state
+
+    def local(points, x):
+        c, A = frame_state(x, frame.nodes, frame.B)
+        return frame.center + (points - c) @ A
+
+    return local
+
+
+def _body_origin(frame, shape):
+    """Where a free body's shape origin is now (its pose from its nodes)."""
+    from catenet.kernels.rigid import frame_state
+
+    offset = np.asarray(shape.origin, dtype=np.float64) - frame.center
+
+    def origin(x):
+        c, A = frame_state(x, frame.nodes, frame.B)
+        return c + A @ offset
+
+    return origin

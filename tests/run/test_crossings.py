@@ -1,0 +1,225 @@
+"""Strands inside solids (``catenet.run.crossings``): with contact at the nodes only, the
+run warns where the edges between the nodes cut into an obstacle, a ball or a free body,
+how deep (never deeper than they are: measured at points of the edges), when, and in how
+many steps; also where a solid passes between the nodes within one step. No warning where
+every edge meets the solids (``solver.edge_contact``), nor for a net draped on a sphere
+whose chords dip by the polyhedron's own sagitta."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from catenet.case import build, load_case
+from catenet.cli import main
+from catenet.run.crossings import DEEP, EdgeWatch
+
+CONFIGS = Path(__file__).parents[2] / "configs" / "contact"
+ALONG = np.linspace(0.0, 1.0, 41)[:, None, None]
+CUT = re.compile(r"edges cut ([0-9.e+-]+) m deep into (obstacle\[\d+\] \([^)]*\))")
+
+
+def run(path, tmp_path, *sets):
+    out = tmp_path / "o.h5"
+    args = ["run", str(path), "-o", str(out)]
+    for s in sets:
+        args += ["--set", s]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    with h5py.File(out, "r") as f:
+        kept = str(f["/result"].attrs["warnings"])
+    return res.output, kept, out
+
+
+def points(edges, x):
+    """(41, M, 3) points along every edge."""
+    return (1.0 - ALONG) * x[edges[:, 0]] + ALONG * x[edges[:, 1]]
+
+
+def box_depth(points_, center, axes, half) -> np.ndarray:
+    """How deep each point lies in a box (its centre, axes as columns, half sizes)."""
+    X = (points_ - center) @ axes
+    e = np.abs(X) - half
+    outside = np.linalg.norm(np.maximum(e, 0.0), axis=-1)
+    return -np.where(outside > 0.0, outside, e.max(axis=-1))
+
+
+CAPTURE = [
+    "solver.dt=0.01", "solver.t_end=0.4", "obstacle.0.center=[0.0, 0.0, 2.97]",
+]  # fmt: skip
+
+
+def test_a_capture_with_node_contact_warns_how_deep_its_strands_cut_the_box(tmp_path):
+    """The capture of configs/contact/ (its tumbling box moved under the net): the
+    strands cut into the box between the nodes it holds off. The warning's depth is
+    that of points of the edges (so never more than the deepest of 41 points along
+    every edge in the written steps, with the box's pose from its nodes) and close to
+    it; with edge contact nothing is warned."""
+    case = CONFIGS / "envisat_capture.toml"
+    printed, kept, out = run(case, tmp_path, *CAPTURE, "solver.edge_contact=false")
+    ((depth, label),) = CUT.findall(printed)
+    assert label == "obstacle[0] (a free box)"
+    assert "solver.edge_contact = true" in printed and "edges cut" in kept
+    scene = build(load_case(case, CAPTURE))
+    (body,) = scene.rigid
+    shape = scene.movers[0].shape
+    edges = scene.net.edges[: scene.net.n_edges]
+    with h5py.File(out, "r") as f:
+        frames = f["trajectory/x"][:]
+    deepest = 0.0
+    for x in frames:
+        c, A = body.frame.state(x)
+        seen = box_depth(points(edges, x), c, A @ shape.axes, shape.half_size)
+        deepest = max(deepest, float(seen.max()))
+    assert deepest > 0.1  # the strands cut through the box's edges
+    assert 0.8 * deepest < float(depth) <= deepest * (1 + 1e-3) + 1e-3
+    printed, kept, _ = run(case, tmp_path, *CAPTURE, "solver.edge_contact=true")
+    assert "edges cut" not in printed and "edges cut" not in kept
+
+
+CORNER = """
+title = "a cord sagging over a block between its nodes"
+
+[geometry]
+kind = "cable"
+start = [-1.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.0]
+nodes = 5
+length = 2.2
+
+[material]
+EA = 1e5
+density = 1000.0
+area = 1e-4
+
+[load]
+gravity = [0.0, 0.0, -9.81]
+
+[[obstacle]]
+kind = "box"
+center = [0.25, 0.0, -0.45]
+half_size = [0.1, 0.1, 0.2]
+"""
+
+
+def test_a_static_cord_sagging_through_a_block_between_its_nodes_is_warned(write_case, tmp_path):
+    """A cord of four 0.55 m edges sags 0.4 m; a block stands under the middle of its
+    third edge, between two nodes that it never touches: the edge passes through it.
+    The warning names the block, the edge and its depth (that of points of the edge:
+    at most the deepest of 41); with edge contact the cord rests on the block."""
+    path = write_case(CORNER)
+    printed, _, out = run(path, tmp_path)
+    ((depth, label),) = CUT.findall(printed)
+    assert label == "obstacle[0] (a box)" and "(edge 2 at load factor 1)" in printed
+    with h5py.File(out, "r") as f:
+        x = f["result/x"][:]
+    edges = build(load_case(path)).net.edges
+    seen = box_depth(points(edges, x), np.array([0.25, 0.0, -0.45]), np.eye(3), [0.1, 0.1, 0.2])
+    assert 0.8 * seen.max() < float(depth) <= seen.max() + 1e-9
+    printed, _, out = run(path, tmp_path, "solver.edge_contact=true")
+    assert "edges cut" not in printed
+
+
+BALL = """
+title = "a small fast ball through an edge of a net in one step"
+
+[geometry]
+kind = "square_net"
+n = 4
+alpha = 0.0
+size = 1.0
+edge_length = 0.2
+
+[material]
+EA = 1e6
+density = 1000.0
+area = 1e-5
+
+[[obstacle]]
+kind = "sphere"
+center = [CX, CY, 0.14]
+radius = 0.03
+mass = 1.0
+velocity = [0.0, 0.0, -25.0]
+
+[solver]
+method = "dynamic"
+dt = 0.01
+t_end = 0.02
+damping = 0.0
+"""
+
+
+def test_a_ball_that_passes_an_edge_within_one_step_is_warned(write_case, tmp_path):
+    """A 6 cm ball at 25 m/s over the middle of an edge of 0.2 m: it touches no node,
+    and within one step of 10 ms (25 cm) it goes from 0.14 m above the net to 0.11 m below,
+    so that no step's state has the edge inside it; between them it went through it,
+    to its centre (0.03 m deep)."""
+    net = build(load_case(write_case(BALL.replace("CX", "0").replace("CY", "0")))).net
+    i, j = net.edges[0]
+    mid = 0.5 * (net.nodes[i] + net.nodes[j])
+    path = write_case(BALL.replace("CX", str(mid[0])).replace("CY", str(mid[1])))
+    printed, _, out = run(path, tmp_path)
+    ((depth, label),) = CUT.findall(printed)
+    assert label == "obstacle[0] (a ball)"
+    assert 0.02 < float(depth) <= 0.03 + 1e-9
+    with h5py.File(out, "r") as f:  # no written state has an edge inside the ball
+        frames, ball = f["trajectory/x"][:], build(load_case(path)).bodies[0]
+    for x in frames:
+        inside = np.linalg.norm(points(net.edges, x) - x[ball.node], axis=-1) < 0.03
+        assert not inside.any()
+
+
+def test_a_net_on_a_sphere_and_a_caught_ball_are_not_warned(tmp_path):
+    """configs/contact/net_on_sphere.toml (a net draped on a sphere at rest) and the ball
+    caught by a net (sphere_catch): their chords dip into the sphere by less than DEEP
+    of their edges."""
+    for name in ("net_on_sphere.toml", "sphere_catch.toml"):
+        printed, kept, _ = run(CONFIGS / name, tmp_path)
+        assert "edges cut" not in printed and "edges cut" not in kept, name
+
+
+def test_the_watch_sees_nothing_with_edge_contact_or_only_planes():
+    scene = build(load_case(CONFIGS / "net_on_sphere.toml", ["solver.edge_contact=true"]))
+    assert not EdgeWatch(scene)
+    assert EdgeWatch(build(load_case(CONFIGS / "net_on_sphere.toml")))
+
+
+ONE = """
+[geometry]
+kind = "cable"
+start = [-0.1, 0.0, 2.0]
+end = [0.1, 0.0, 2.0]
+nodes = 2
+
+[material]
+EA = 1e5
+
+[[obstacle]]
+kind = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+"""
+
+
+@pytest.mark.parametrize("share", [0.5 * DEEP, 2.0 * DEEP])
+def test_a_chord_is_a_crossing_beyond_its_share_of_the_edge(write_case, share):
+    """A sphere of radius 1 and one edge of 0.2 m moved across it, its middle ``share``
+    of its length deep: a crossing beyond DEEP only, at the time it got there."""
+    watch = EdgeWatch(build(load_case(write_case(ONE))), dynamic=True)
+    x = np.array([[-0.1, 0.0, 2.0], [0.1, 0.0, 2.0]])
+    watch.see(0.0, x)
+    x[:, 2] = 1.0 - share * 0.2
+    watch.see(1.0, x)
+    (message,) = watch.warnings() or [""]
+    assert bool(message) == (share > DEEP)
+    if message:
+        ((depth, label),) = CUT.findall(message)
+        assert label == "obstacle[0] (a sphere)" and "edge 0 at t = 1 s, in 1 steps" in message
+        sagitta = 1.0 - np.hypot(1.0 - share * 0.2, 0.1 / 8 * 3)  # the samples off the middle
+        assert float(depth) == pytest.approx(share * 0.2, abs=abs(sagitta) + 1e-3)
