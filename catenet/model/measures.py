@@ -142,14 +142,20 @@ def cable_stats(net: Net, x: np.ndarray, tension: np.ndarray, edge_cable: np.nda
     return top, slack / np.where(total > 0, total, 1.0)
 
 
+#: A node's position along the chord's plan within [0, 1] to this: its vertical meets it.
+PLAN_TOL = 1e-9
+
+
 def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None:
     """The sag of a cable at x: the edges ``edges`` (indices; default every edge) must
     form one chain between two end nodes. ``normal``: the largest distance of its nodes
     from the chord between its ends (the sag normal to the chord); ``vertical``: the
     largest drop of a node below the chord, measured vertically at the node's position
-    along the chord's plan (nan for a vertical chord), ``rise`` the largest height of one
-    above it (a cable lifted over its chord; nan likewise); ``node`` where the normal sag is,
-    ``ends`` the chord's end nodes. None where the edges are not one chain."""
+    along the chord's plan, ``rise`` the largest height of one above it (a cable lifted
+    over its chord); both nan where the vertical through a node meets the chord's plan
+    outside its ends (a vertical chord; a rope hung 0.1 mm off the vertical that sways
+    5.6 mm read 557 m of vertical sag); ``node`` where the normal sag is, ``ends`` the
+    chord's end nodes. None where the edges are not one chain."""
     e = net.edges if edges is None else net.edges[np.asarray(edges, dtype=np.int64)]
     if len(e) == 0:
         return None
@@ -168,8 +174,9 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
     k = int(np.argmax(normal))
     plan = chord[:2]
     vertical = rise = math.nan
-    if float(np.linalg.norm(plan)) > 1e-9 * length:
-        s = (p[:, :2] @ plan) / float(plan @ plan)
+    steep = float(np.linalg.norm(plan)) <= 1e-9 * length  # a vertical chord, to round-off
+    s = None if steep else (p[:, :2] @ plan) / float(plan @ plan)
+    if s is not None and np.all((s >= -PLAN_TOL) & (s <= 1.0 + PLAN_TOL)):
         drop = s * chord[2] - p[:, 2]
         floor = 1e-12 * length  # the ends' round-off: neither below nor above
         vertical, rise = (

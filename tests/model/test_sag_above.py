@@ -8,6 +8,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from catenet.cli import main
@@ -73,3 +74,28 @@ def _rise(force: float) -> float:
         else:
             hi = f
     return 0.5 * (lo + hi)
+
+
+def _steep(off: float, sway: float):
+    """A chain of three nodes from the origin to (off, 0, 10) (a rope ``off`` from the
+    vertical), its middle node ``sway`` to the side of the chord, along x."""
+    x = np.array([[0.0, 0.0, 0.0], [0.5 * off + sway, 0.0, 5.0], [off, 0.0, 10.0]])
+    net = SimpleNamespace(edges=np.array([[0, 1], [1, 2]]))
+    return sag(net, x)
+
+
+def test_a_steep_chord_has_no_vertical_sag_where_the_vertical_misses_it():
+    """A rope hung 0.1 mm off the vertical, its middle 5.6 mm to the side: the vertical
+    through the middle meets the chord's plane nowhere between its ends (the plan of the
+    chord is 0.1 mm long), so there is no vertical sag (the summary read 557 m); the normal
+    sag is the sway. A stay at 45 degrees sagging 0.1 m normal to its chord has a vertical
+    sag of 0.1 sqrt(2): its middle's vertical meets the chord between the ends."""
+    steep = _steep(1e-4, -5.6e-3)
+    assert steep["normal"] == pytest.approx(5.6e-3, rel=1e-6)
+    assert math.isnan(steep["vertical"]) and math.isnan(steep["rise"])
+    x = np.array([[0.0, 0.0, 0.0], [5.0 + 0.1 / math.sqrt(2), 0.0, 5.0 - 0.1 / math.sqrt(2)],
+                  [10.0, 0.0, 10.0]])  # fmt: skip
+    stay = sag(SimpleNamespace(edges=np.array([[0, 1], [1, 2]])), x)
+    assert stay["normal"] == pytest.approx(0.1, rel=1e-12)
+    assert stay["vertical"] == pytest.approx(0.1 * math.sqrt(2.0), rel=1e-12)
+    assert stay["rise"] == 0.0
