@@ -226,7 +226,7 @@ method = "dynamic"
 # --------------------------------------------------------------------------- static runs
 
 
-def test_static_runs_warn_that_histories_and_velocities_are_ignored(caplog):
+def test_static_runs_warn_that_histories_and_velocities_are_ignored(caplog, tmp_path):
     data = cable(method="static", history=[[0.0, 0.0], [1.0, 1.0]])
     data["mass"] = [{"node": 3, "mass": 0.1, "velocity": [0, 0, 1]}]
     case = parse_case(data)
@@ -237,7 +237,7 @@ def test_static_runs_warn_that_histories_and_velocities_are_ignored(caplog):
     from catenet.run.runner import run_case
 
     with caplog.at_level(logging.WARNING, logger="catenet"):
-        result = run_case(case, None)
+        result = run_case(case, tmp_path / "static.h5")
     assert any("load.point[0].history: ignored" in r.getMessage() for r in caplog.records)
     # ... and the load acts in full.
     _, plain, _ = run(cable(method="static"))

@@ -18,10 +18,10 @@ DROP = Path(__file__).parents[2] / "benchmarks" / "peers" / "mujoco_drop.toml"
 
 
 @pytest.mark.parametrize("integrator, warned", [("implicit_euler", True), ("bdf2", False)])
-def test_the_integrators_own_loss_is_named(integrator, warned, caplog):
+def test_the_integrators_own_loss_is_named(integrator, warned, caplog, tmp_path):
     case = load_case(DROP, [f"solver.integrator={integrator}", "solver.t_end=0.3"])
     with caplog.at_level(logging.WARNING):
-        result = run_case(case, None)
+        result = run_case(case, tmp_path / "drop.h5")  # not the case's own out/ file
     lost = -float(result.energy[-1]) / result.energy_scale
     said = [r.getMessage() for r in caplog.records if "on its own" in r.getMessage()]
     assert (lost > advice.LOSS_WARN) == warned
@@ -30,8 +30,8 @@ def test_the_integrators_own_loss_is_named(integrator, warned, caplog):
         assert f"{lost:.0%}" in said[0] and "'bdf2'" in said[0] and "solver.dt = 0.01" in said[0]
 
 
-def test_a_run_to_rest_is_not_warned():
+def test_a_run_to_rest_is_not_warned(tmp_path):
     """Dynamic relaxation removes the energy on purpose: no warning."""
     case = load_case(DROP, ["solver.t_end=rest", "solver.damping=5.0"])
     assert case.solver.t_end == "rest"
-    assert advice.integrator_loss(case, run_case(case, None)) is None
+    assert advice.integrator_loss(case, run_case(case, tmp_path / "rest.h5")) is None
