@@ -1,14 +1,12 @@
 """Static runs in load steps: equilibria at increasing load factors, each from the last
 (``continuation``), a failing step cut back, then solved by a damped pseudo-transient
-solve and, as the ladder's last rung, by dynamic relaxation to rest (``_relaxed``);
+solve and, as the ladder's last rung, by dynamic relaxation to rest (``rung.relax_to_rest``);
 ``predict`` extrapolates a step's start."""
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Callable, Sequence
-from typing import TypedDict
 
 import numpy as np
 
@@ -20,11 +18,9 @@ from catenet.errors import (
     SingularSystemError,
     with_last_good,
 )
-from catenet.model.measures import strain, tension
 from catenet.model.net import Loads, Net
-from catenet.solver.relax import REST
-from catenet.solver.result import Outcome, Result, finish
-from catenet.solver.settings import Settings
+from catenet.solver.result import Result, finish
+from catenet.solver.rung import StepSettings, can_relax, hangs_slack, relax_to_rest
 from catenet.solver.stability import (
     COLLAPSED,
     DRIVEN,
@@ -42,22 +38,7 @@ from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
 
-
-class StepSettings(TypedDict):
-    """What every static solve of a load path shares (``solve_static``'s keywords)."""
-
-    rtol: float
-    max_iter: int
-    workspace: Workspace
-    warn: bool  # False: the path, not each of its solves, warns about its end state
-
-
 CUTBACKS = 5  # a failing load step is re-solved in sub-steps down to 1/2**CUTBACKS of it
-DR_MAX_ITER = 25  # the last rung's Newton iterations per time step
-#: A strain below -SLACK is slack, a tension below SLACK EA none: far above the strains
-#: a start's round-off gives (a flat net perturbed by 1e-12 m stays "unstressed", not
-#: slack), far below any cable given longer than its chord.
-SLACK = 1e-8
 
 
 def continuation(
@@ -79,7 +60,7 @@ def continuation(
     A load step that fails is cut back: re-solved from the last equilibrium in sub-steps
     of half its load increment, halved again while one fails (``CUTBACKS`` times at most,
     doubled again after two that succeed), then a damped pseudo-transient solve, the last
-    rung dynamic relaxation to rest (``_relaxed``; a step to the full loads); the
+    rung dynamic relaxation to rest (``rung.relax_to_rest``; a step to the full loads); the
     sub-steps' equilibria are not reported, their iterations count. A step that
     still fails (or is interrupted) raises its ConvergenceError with ``last_good`` the
     last equilibrium found (a step's or a sub-step's, with its load factor; the start,
@@ -184,12 +165,33 @@ def _judged(
         # followed through (solver.post_collapse): on from where the bracket ended
         # (Newton on the exact potential from there: no continuation stage moves it off)
         try:
-            r = solve_static(
-                net, loads, x0=r.x, factor=target, accepted=r.x, relaxed=True, **settings
-            )
+            r = _beyond(judge, net, loads, r, target, at, settings)
         except ConvergenceError as exc:  # the last equilibrium before this step is kept
             raise with_last_good(exc, LastGood(good.x, good.time)) from None
     return r
+
+
+def _beyond(
+    judge: PathJudge,
+    net: Net,
+    loads: Loads,
+    r: Result,
+    target: float,
+    at: float,
+    settings: StepSettings,
+) -> Result:
+    """A collapse followed through: the equilibrium at ``target`` on from the bracket's
+    end r; from an unstable one (straight by symmetry, which neither Newton nor the
+    motion leaves) moved along its unstable mode (``PathJudge.beyond``), by the motion
+    where the nodes have mass, else by the pseudo-transient solve."""
+    x0 = judge.beyond(r.x)
+    if x0 is r.x:
+        return solve_static(net, loads, x0=x0, factor=target, accepted=x0, relaxed=True, **settings)
+    if can_relax(net, 1.0, settings):
+        fell = relax_to_rest(net, loads, target, LastGood(x0, at), settings)
+        if fell is not None:
+            return fell
+    return solve_static(net, loads, x0=x0, factor=target, accepted=x0, transient=True, **settings)
 
 
 def _unstable_start(judge: PathJudge, loads: Loads, r: Result, why: str) -> Result:
@@ -290,13 +292,13 @@ def _by_motion(
 ) -> Result | None:
     """The step from x0 whose Newton end drove a mechanism (rules 4-6), taken again
     by the net's motion: dynamic relaxation to rest under the step's loads, at its load
-    factor f1 (``_can_relax`` but for the factor: the first of several load steps too).
+    factor f1 (``can_relax`` but for the factor: the first of several load steps too).
     From a neutral state Newton can jump where the motion never goes (a mast on guys
     given straight found mirrored through its pinned foot); where the motion's rest
     passes the judge, it is the step's end, else None (the collapse stands)."""
-    if not _can_relax(net, 1.0, settings):
+    if not can_relax(net, 1.0, settings):
         return None
-    rest = _relaxed(net, loads, f1, LastGood(x0, f0), settings)
+    rest = relax_to_rest(net, loads, f1, LastGood(x0, f0), settings)
     if rest is None or judge.step(x0, f0, f1, rest.x, last):
         return None
     log.info("load step to %.6g: Newton's far equilibrium left for the motion's rest", f1)
@@ -383,7 +385,7 @@ def _cut_back(
     failure for the caller to raise: ``failure`` itself where sub-steps cannot help (an
     interrupt, a mechanism, loads below round-off), a sub-step's interrupt at once, else
     the last failure, its message saying what was tried, when sub-steps of 1/2**CUTBACKS,
-    the pseudo-transient solve and dynamic relaxation to rest (where ``_can_relax``)
+    the pseudo-transient solve and dynamic relaxation to rest (where ``can_relax``)
     still fail."""
     if isinstance(failure, Interrupted) or not _worth_cutting(failure):
         return failure
@@ -392,9 +394,9 @@ def _cut_back(
     spent = failure.iterations
     cuts, done = 1, 0
     transient = False
-    relax_first = _hangs_slack(net, good) and _can_relax(net, target, settings)
+    relax_first = hangs_slack(net, good) and can_relax(net, target, settings)
     if relax_first:  # a slack cable from its slack start: the load's size is not what
-        relaxed = _relaxed(net, loads, target, good, settings)  # fails, its motion is
+        relaxed = relax_to_rest(net, loads, target, good, settings)  # fails, its motion is
         if relaxed is not None:
             relaxed.iterations += spent
             trail.append((target, relaxed))
@@ -417,8 +419,8 @@ def _cut_back(
                 continue
             if cuts >= CUTBACKS or not _worth_cutting(exc):
                 tried = f"load-step cut-back down to 1/{2**cuts} of the step"
-                if transient and _can_relax(net, target, settings) and not relax_first:
-                    relaxed = _relaxed(net, loads, target, good, settings)
+                if transient and can_relax(net, target, settings) and not relax_first:
+                    relaxed = relax_to_rest(net, loads, target, good, settings)
                     if relaxed is not None:
                         relaxed.iterations += spent
                         trail.append((target, relaxed))
@@ -450,101 +452,3 @@ def _cut_back(
         if done >= 2 and cuts > 1:  # two in a row: the step grows back
             increment *= 2.0
             cuts, done = cuts - 1, 0
-
-
-def _hangs_slack(net: Net, good: LastGood) -> bool:
-    """Whether the failed step starts from the unloaded start (load factor 0) of a net
-    that carries no tension there and has slack edges (a cable given straight and longer
-    than its chord): its equilibrium hangs far from the start whatever the load's size,
-    so smaller load steps do not help where following its motion to rest does."""
-    if good.time != 0.0:
-        return False
-    strains = strain(net, good.x)
-    if not np.any(strains < -SLACK):
-        return False
-    return bool(np.all(np.abs(tension(net, good.x)) <= SLACK * np.max(net.EA, initial=0.0)))
-
-
-def _can_relax(net: Net, target: float, settings: StepSettings) -> bool:
-    """Whether the last rung applies: a step to the full loads (``target`` 1) of a net
-    whose free nodes have mass, with a Newton budget ``max_iter`` of at least a time
-    step's DR_MAX_ITER (the rung would not keep a smaller one)."""
-    if target != 1.0 or settings["max_iter"] < DR_MAX_ITER:
-        return False
-    return bool(np.all(net.mass[~net.fixed] > 0.0))
-
-
-def _relaxed(
-    net: Net, loads: Loads, target: float, good: LastGood, settings: StepSettings
-) -> Result | None:
-    """The ladder's last rung: the equilibrium under the loads at load factor ``target``
-    (the full loads, 1, but for ``_by_motion``) by dynamic relaxation to rest from the
-    last equilibrium ``good`` (the paper's method,
-    ``solver.t_end = "rest"`` at the default dt and damping: it follows the net's motion,
-    which needs no continuation stage), then Newton on the exact potential from its rest
-    state to the static tolerance (``solve_static(relaxed=True)``). The result, its
-    iterations those of both (``good`` updated), or None when either fails."""
-    # (imported here, as in path.py: a plain static run loads no dynamic module)
-    from catenet.solver.dynamic import solve_dynamic
-
-    default = Settings()
-    log.info("load step from load factor %.6g: dynamic relaxation to rest", good.time)
-    try:
-        rest = solve_dynamic(
-            net,
-            _held(loads, net, target),
-            dt=default.dt,
-            damping=default.damping,
-            t_end=REST,
-            rtol=settings["rtol"],
-            max_iter=DR_MAX_ITER,
-            x0=good.x,
-            workspace=settings["workspace"],
-        )
-        if rest.outcome not in (Outcome.EQUILIBRIUM, Outcome.AT_FLOOR):
-            return None
-        r = solve_static(net, loads, x0=rest.x, factor=target, relaxed=True, **settings)
-    except ConvergenceError as exc:
-        if isinstance(exc, Interrupted):  # the last equilibrium is kept, not the motion's
-            raise with_last_good(exc, LastGood(good.x, good.time)) from None
-        log.info("dynamic relaxation to rest did not help: %s", exc)
-        return None
-    r.iterations += rest.iterations
-    good.x, good.time = r.x, target
-    return r
-
-
-def _held(loads: Loads, net: Net | None = None, factor: float = 1.0) -> Loads:
-    """``loads`` as a static run takes them at load ``factor`` (the net's, where not 1),
-    for a run to rest: every load and support displacement at its value from the start
-    (no history, no ramp)."""
-    if factor != 1.0:  # the full loads, scaled: forces, gravity, the supports' moves
-        assert net is not None
-        full = _held(loads)
-        move = None
-        if full.support_displacement is not None:
-            move = np.zeros((net.n_nodes, 3))
-            move[net.fixed] = full.support_positions(net, factor=factor) - net.nodes[net.fixed]
-        return dataclasses.replace(
-            full,
-            force=None if full.force is None else factor * full.force,
-            gravity=None if full.gravity is None else factor * np.asarray(full.gravity),
-            gravity_factor=factor * full.gravity_factor,
-            support_displacement=move,
-        )
-    if not (loads.parts or loads.gravity_history or loads.support_history or loads.vessels):
-        if loads.ramp_time is None:
-            return loads
-    force = None if loads.force is None else loads.force.copy()
-    for f, _ in loads.parts:
-        force = np.array(f, dtype=np.float64) if force is None else force + f
-    vessels = tuple((nodes, vessel.frozen()) for nodes, vessel in loads.vessels)
-    return dataclasses.replace(
-        loads,
-        force=force,
-        parts=(),
-        gravity_history=None,
-        ramp_time=None,
-        support_history=(),
-        vessels=vessels,
-    )

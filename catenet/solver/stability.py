@@ -92,6 +92,7 @@ ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than 
 GUESS = 1e-3  # a start whose tensions are all below this share of a node's load is a guess
 ROUNDOFF_STRAIN = 1e-6  # a start strained less than this is at its rest length (round-off)
 FLIP = 0.75 * math.pi  # a guessed start's edge turned more than this folded over, no sag
+IMPERFECTION = 1e-3  # a collapse followed through leaves an unstable state this far
 TAUT = 100.0  # a bilateral edge is in tension above this many times the solve's accuracy
 NOISE = 64.0  # ... and above this many round-offs of its axial force, EA eps |x| / l0
 EPS = float(np.finfo(np.float64).eps)
@@ -243,6 +244,18 @@ class PathJudge:
                 "fell"
             )
         return ""
+
+    def beyond(self, x: np.ndarray) -> np.ndarray:
+        """Where a path followed through its collapse (solver.post_collapse) goes on
+        from x: an unstable x moved along its unstable mode by IMPERFECTION of the
+        structure's size (an equilibrium that is unstable only by symmetry, a straight
+        strut split in two, stays put under Newton and under the motion alike), else x
+        itself (where the mode is not known: large systems)."""
+        t = self.tangent(x)
+        if t.verdict != UNSTABLE or t.mode is None:
+            return x
+        top = float(np.max(np.abs(t.mode)))
+        return x if top == 0.0 else x + (IMPERFECTION * self.size / top) * t.mode
 
     def neutral_mode(self, x: np.ndarray) -> str:
         """What the mode without stiffness at x is (``describe_neutral``), where x is

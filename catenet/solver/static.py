@@ -342,14 +342,23 @@ def _taut_first(
     # continuation handles the compressed edges as slack), then the exact law from
     # there (converged at once where no edge ends in compression). A compressed strut
     # that other edges hold (a guyed mast: the Hessian at the start is positive
-    # definite) is solved directly: the detour would let it fall over.
+    # definite) is solved directly: the detour would let it fall over. It is a start only:
+    # where its end holds more of the exact potential than the start by more than the
+    # loads' work over the structure's size, a strut folded through its slack (a wall
+    # bracket's, hung 80 % short beside its tie), and the start is solved directly (a
+    # rope's lower part, slack in it, holds a little more). Unloaded, no load folds one.
+    start, before = x.copy(), potential.evaluate(x)
     taut = stretch.with_law(stretch.law.with_tension_only(True))
-    return equilibrium(
-        potential.with_system(system.with_terms((taut, *others))),
-        x,
-        rtol=rtol,
-        max_iter=max_iter,
+    detour = equilibrium(
+        potential.with_system(system.with_terms((taut, *others))), x, rtol=rtol, max_iter=max_iter
     )
+    after = potential.evaluate(x)
+    work = potential.f_norm * float(np.max(np.ptp(start, axis=0)))
+    if work > 0.0 and after.phi > before.phi + max(before.phi_tol, after.phi_tol, work):
+        log.info("static: the tension-only detour folded a strut: solved from the start")
+        x[:] = start
+        return None
+    return detour
 
 
 class _Stages:

@@ -167,10 +167,16 @@ def test_per_edge_tension_only_makes_struts():
     assert scene.net.law.tension_only.tolist() == [True, False]
     # The straight bar is an unstable equilibrium: node 1's sideways stiffness is
     # N0 / l0 + N1 / l1 = -2 N d < 0 (its compressed half is the longer push), so the
-    # loaded path is a collapse; followed through, Newton stays on the straight state.
-    straight = exact(scene, post_collapse=True)
-    assert straight.stability == "post-collapse"
-    assert np.allclose(straight.tension, [F / 2, -F / 2], rtol=1e-10)
+    # loaded path is a collapse. Followed through, the path leaves the straight state
+    # along its unstable mode (Newton alone stayed on it) for the bent equilibrium: node
+    # 1 aside, where both edges' N / l are F / 2 (sideways N0 / l0 = -N1 / l1, along the
+    # bar their sum F / 2 + F / 2), the tension-only half stretched more than the strut
+    # is shortened.
+    bent = exact(scene, post_collapse=True)
+    assert bent.stability == "post-collapse"
+    lengths = np.linalg.norm(np.diff(bent.x, axis=0), axis=1)
+    assert np.allclose(bent.tension / lengths * [1, -1], F / 2, rtol=1e-8)
+    assert abs(bent.x[1, 1]) + abs(bent.x[1, 2]) > 1e-3  # aside, not straight
     data["geometry"]["tension_only"] = [False, True]  # now 1-2 is the cable, compressed
     assert np.allclose(exact(build(parse_case(data))).tension, [F, 0.0], rtol=1e-10)
 

@@ -304,7 +304,7 @@ def test_a_step_that_fails_after_its_sub_steps_fell_is_a_collapse(monkeypatch):
         return solve(*args, **kwargs)
 
     monkeypatch.setattr(loadsteps, "solve_static", failing_above)
-    monkeypatch.setattr(loadsteps, "_can_relax", lambda *args: False)
+    monkeypatch.setattr(loadsteps, "can_relax", lambda *args: False)
     scene = build(parse_case(portal()))
     ws = Workspace(scene.net, terms=scene.terms)
     with pytest.raises(CollapseError, match=MECHANISM) as caught:

@@ -1,4 +1,4 @@
-"""The static ladder's last rung, dynamic relaxation to rest (``loadsteps._relaxed``).
+"""The static ladder's last rung, dynamic relaxation to rest (``rung.relax_to_rest``).
 
 The untuned corpus's wire mooring line, seed 6 (756 m in 397 m of water, EA 1.2e8 N,
 about 195 N/m submerged; the corpus writes it with 50-400 nodes), refined to 2000 edges:
@@ -7,7 +7,7 @@ at mu / 10 oscillates between two states, and the stages after it start from the
 load-step cut-back and the damped pseudo-transient solve fail the same way), while
 dynamic relaxation to rest follows the line's motion to its equilibrium. A line given
 slack (longer than its chord) is relaxed right after its first failure
-(``loadsteps._hangs_slack``): smaller load steps cannot help it. That last rung
+(``rung.hangs_slack``): smaller load steps cannot help it. That last rung
 is checked here against the elastic catenary with seabed (``seabed_catenary``): fairlead
 and horizontal tension to 1e-4, the touchdown within one edge, as
 tests/validate/test_seabed_catenary.py holds the chain of the issue. docs/validation.md
@@ -24,6 +24,7 @@ import pytest
 
 import catenet.solver.dynamic as dynamic
 import catenet.solver.loadsteps as loadsteps
+import catenet.solver.rung as rung
 from catenet.case import build, parse_case
 from catenet.errors import ConvergenceError
 from catenet.solver.path import Settings, solve
@@ -109,6 +110,7 @@ def _failing_unless_relaxed(monkeypatch):
         return real(*args, relaxed=True, **kwargs)
 
     monkeypatch.setattr(loadsteps, "solve_static", static)
+    monkeypatch.setattr(rung, "solve_static", static)  # the rung's polish
     return calls
 
 
@@ -216,7 +218,7 @@ def test_the_rung_takes_the_loads_as_a_static_run_does():
     line = build(parse_case(tables))
     for net, loads in ((scene.net, scene.loads), (line.net, line.loads)):
         assert loads.varies or loads.support_history
-        held = loadsteps._held(loads)
+        held = rung.held(loads)
         assert not (held.varies or held.support_history) and held.ramp_time is None
         static = loads.external_force(net)
         for t in (0.0, 1.0, 7.0):
@@ -240,5 +242,5 @@ def test_slack_is_decided_with_a_margin_over_round_off(jitter):
         case = {"geometry": g, "material": material, "load": {"gravity": [0, 0, -9.81]}}
         net = build(parse_case(case)).net
         x = net.nodes + jitter * rng.standard_normal(net.nodes.shape)
-        assert loadsteps._hangs_slack(net, LastGood(x, 0.0)) is slack
-        assert loadsteps._hangs_slack(net, LastGood(x, 0.5)) is False
+        assert rung.hangs_slack(net, LastGood(x, 0.0)) is slack
+        assert rung.hangs_slack(net, LastGood(x, 0.5)) is False
