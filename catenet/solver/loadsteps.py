@@ -257,7 +257,7 @@ def _follow(
         except ConvergenceError:  # no way back found: this test cannot tell
             log.info("load step to %.6g: not unloaded (no equilibrium found)", f1)
             back = x0
-        if not judge.returns(x0, back, r.x):
+        if not judge.returns(x0, back, r.x) and not judge.flat(x0, back, r.x, f0, f1):
             why = judge.why_jump(f0, f1, x0, back)
     if not why or depth >= REFINE:  # held, or bracketed to 1/2**REFINE of the step
         return why, f0, x0, r

@@ -87,6 +87,8 @@ log = logging.getLogger(__name__)
 SOFT = 1e-9  # a given geometry's modes this soft (100 MARGIN) carry a drift (``drifts``)
 RETURN = 0.05  # unloaded, a reversible step comes back within this share of its move
 RETURN_FLOOR = 1e-6  # ... or within this share of the structure's size
+FLAT = 1e-3  # ... or on one flat set with it: the potential within this share of the
+FLAT_POINTS = 9  # step's change of potential at these points of the way between them
 REFINE = 6  # a jumping step is halved down to 1/2**REFINE of itself before it is a collapse
 ROTATION = math.pi / 4  # a bilateral edge without tension that turns more than this fell
 GUESS = 1e-3  # a start whose tensions are all below this share of a node's load is a guess
@@ -355,6 +357,24 @@ class PathJudge:
         moved = float(np.max(np.linalg.norm((x1 - prev)[on], axis=1), initial=0.0))
         away = float(np.max(np.linalg.norm((back - prev)[on], axis=1), initial=0.0))
         return away <= max(RETURN * moved, RETURN_FLOOR * self.size)
+
+    def flat(
+        self, prev: np.ndarray, back: np.ndarray, x1: np.ndarray, f0: float, f1: float
+    ) -> bool:
+        """Whether the unloaded state ``back`` that did not come back to ``prev`` lies on
+        one flat set of equilibria with it: along the straight way between them (back
+        itself included) the potential at the start factor f0 stays within FLAT of the
+        step's own change of potential (from prev to x1 at f1), or its round-off, of
+        prev's. Tension-only members at their rest length leave such a set (a roof truss
+        whose tie is at rest length when unloaded came back 0.1 mm aside, its tie slack
+        all the way); a snapped state lies below it, beyond a barrier (a shallow truss
+        inverted)."""
+        at_f0, at_f1 = self.ws.potential(self.loads, f0), self.ws.potential(self.loads, f1)
+        start = at_f0.evaluate(prev)
+        step = abs(at_f1.evaluate(x1).phi - at_f1.evaluate(prev).phi)
+        level = max(start.phi_tol, FLAT * step)
+        way = (prev + s * (back - prev) for s in np.linspace(0.0, 1.0, FLAT_POINTS)[1:])
+        return all(abs(at_f0.evaluate(x).phi - start.phi) <= level for x in way)
 
     def why_jump(self, f0: float, f1: float, prev: np.ndarray, back: np.ndarray) -> str:
         away = float(np.max(np.linalg.norm((back - prev)[self.struts], axis=1), initial=0.0))

@@ -1,8 +1,9 @@
 """Where a static solve starts: the given or reference positions with the supports in
 place (the free nodes carried along by moved supports: ``HarmonicExtension``), for
-an unstressed net under loads, the stretched start (``stretched_start``), and for a
+an unstressed net under loads, the stretched start (``stretched_start``), for a
 prestressed net among obstacles, a direct solve before any continuation
-(``direct_solve``)."""
+(``direct_solve``), and what the tension-only detour of a compressed start asks
+(``compressed_bilateral``, ``definite``, ``turned_over``)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ from catenet.model.measures import strain
 from catenet.model.net import Loads, Net
 from catenet.solver.newton import NewtonResult, solve_newton
 from catenet.solver.potential import Potential
-from catenet.terms.stretch import Springs
+from catenet.solver.stability import FLIP
+from catenet.terms.stretch import Springs, Stretch
 
 
 def start_state(net: Net, loads: Loads, x0: ArrayLike | None, factor: float) -> np.ndarray:
@@ -203,3 +205,33 @@ def predict(states: Sequence[np.ndarray], levels: Sequence[float], level: float)
                 w *= (level - sj) / (si - sj)
         x += w * xi
     return x
+
+
+def definite(potential: Potential, x: np.ndarray) -> bool:
+    """Whether the stiffness at x is positive definite (False where the solver cannot
+    tell: then the caller takes the safe path)."""
+    if potential.solver.mtype not in (-2, None):  # PARDISO's Cholesky or LU: cannot tell
+        return False
+    try:
+        potential.factorize(x, 0.0)
+    except SingularSystemError:
+        return False
+    return potential.solver.negative_eigenvalues() == 0
+
+
+def turned_over(stretch: Stretch, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether some bilateral edge turned beyond FLIP from a to b (over its pin)."""
+    edges, bilateral = stretch.net.edges, ~stretch.law.tension_only
+    da, db = (np.diff(x[edges[bilateral]], axis=1)[:, 0] for x in (a, b))
+    cos = np.einsum("ij,ij->i", da, db) / np.maximum(
+        np.linalg.norm(da, axis=1) * np.linalg.norm(db, axis=1), 1e-300
+    )
+    return bool(np.any(cos < math.cos(FLIP)))
+
+
+def compressed_bilateral(stretch: Stretch, x: np.ndarray) -> bool:
+    """Whether some bilateral edge (not tension-only) is compressed at x."""
+    law = stretch.law
+    if law.all_tension_only:
+        return False
+    return bool(np.any((strain(stretch.net, x) < 0.0) & ~law.tension_only))

@@ -13,7 +13,6 @@ import time
 
 import numpy as np
 
-from catenet.errors import SingularSystemError
 from catenet.model.measures import loose_nodes, slack_strain, strain
 from catenet.model.net import Loads, Net
 from catenet.solver.diagnose import (
@@ -28,10 +27,13 @@ from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, sol
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
 from catenet.solver.start import (
+    compressed_bilateral,
+    definite,
     direct_solve,
     start_state,
     strain_scale,
     stretched_start,
+    turned_over,
     unstressed,
 )
 from catenet.solver.tangent import NEUTRAL, STABLE, UNSTABLE, kept_tangent
@@ -333,7 +335,7 @@ def _taut_first(
     system = potential.system
     stretch = system.stretch
     others = tuple(t for t in system.terms if t is not stretch)
-    if not (_compressed_bilateral(stretch, x) and not _definite(potential, x)):
+    if not (compressed_bilateral(stretch, x) and not definite(potential, x)):
         return None
     # Bilateral edges in compression: the straight compressed state is an unstable
     # equilibrium beside the sagging one, and the Hessian is indefinite around it, so
@@ -347,6 +349,8 @@ def _taut_first(
     # loads' work over the structure's size, a strut folded through its slack (a wall
     # bracket's, hung 80 % short beside its tie), and the start is solved directly (a
     # rope's lower part, slack in it, holds a little more). Unloaded, no load folds one.
+    # Where a bilateral edge turned beyond FLIP, a strut turned over its pin into tension
+    # (a braced panel's posts hung upside down under their slack braces): no sag either.
     start, before = x.copy(), potential.evaluate(x)
     taut = stretch.with_law(stretch.law.with_tension_only(True))
     detour = equilibrium(
@@ -354,7 +358,8 @@ def _taut_first(
     )
     after = potential.evaluate(x)
     work = potential.f_norm * float(np.max(np.ptp(start, axis=0)))
-    if work > 0.0 and after.phi > before.phi + max(before.phi_tol, after.phi_tol, work):
+    higher = after.phi > before.phi + max(before.phi_tol, after.phi_tol, work)
+    if work > 0.0 and (higher or turned_over(stretch, start, x)):
         log.info("static: the tension-only detour folded a strut: solved from the start")
         x[:] = start
         return None
@@ -521,23 +526,3 @@ class _Barriers:
             elif term.rides_on is None or not term.rides_on.stages:
                 out.append(term)  # friction on a staged barrier waits for the exact one
         return tuple(out)
-
-
-def _definite(potential: Potential, x: np.ndarray) -> bool:
-    """Whether the stiffness at x is positive definite (False where the solver cannot
-    tell: then the caller takes the safe path)."""
-    if potential.solver.mtype not in (-2, None):  # PARDISO's Cholesky or LU: cannot tell
-        return False
-    try:
-        potential.factorize(x, 0.0)
-    except SingularSystemError:
-        return False
-    return potential.solver.negative_eigenvalues() == 0
-
-
-def _compressed_bilateral(stretch: Stretch, x: np.ndarray) -> bool:
-    """Whether some bilateral edge (not tension-only) is compressed at x."""
-    law = stretch.law
-    if law.all_tension_only:
-        return False
-    return bool(np.any((strain(stretch.net, x) < 0.0) & ~law.tension_only))
