@@ -331,7 +331,8 @@ def _taut_first(
     potential: Potential, x: np.ndarray, *, rtol: float, max_iter: int
 ) -> NewtonResult | None:
     """The tension-only equilibrium first (x updated), for bilateral edges compressed at
-    x where the stiffness there is not positive definite: its result, else None."""
+    x where the stiffness there is not positive definite: its result (its iterations
+    count; x back at the start where it folded a strut), else None."""
     system = potential.system
     stretch = system.stretch
     others = tuple(t for t in system.terms if t is not stretch)
@@ -362,7 +363,6 @@ def _taut_first(
     if work > 0.0 and (higher or turned_over(stretch, start, x)):
         log.info("static: the tension-only detour folded a strut: solved from the start")
         x[:] = start
-        return None
     return detour
 
 
