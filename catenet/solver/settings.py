@@ -80,11 +80,6 @@ class Settings:
         """Newton iterations of one static solve: ``max_iter``, else STATIC_MAX_ITER."""
         return STATIC_MAX_ITER if self.max_iter is None else self.max_iter
 
-    @property
-    def step_iterations(self) -> int:
-        """Newton iterations of one time step: ``max_iter``, else STEP_MAX_ITER."""
-        return STEP_MAX_ITER if self.max_iter is None else self.max_iter
-
     def _resolve_steps(self) -> None:
         """dt and integrator where not given (``steps_given``)."""
         dt = None if math.isnan(self.dt) else self.dt

@@ -36,9 +36,9 @@ def test_the_budgets_of_a_static_solve_and_a_time_step():
 
     assert Settings().static_iterations == STATIC_MAX_ITER == 200
     assert f"up to {EXTEND} times that" in MAX_ITER_SHOWN  # (the case keys' table)
-    assert Settings(method="dynamic").step_iterations == STEP_MAX_ITER == 25
+    assert STEP_MAX_ITER == 25  # a time step's (``solve_dynamic``, max_iter not given)
     given = Settings(method="dynamic", max_iter=60)
-    assert given.step_iterations == given.static_iterations == 60
+    assert given.max_iter == given.static_iterations == 60  # given: every solve's
 
 
 def test_a_larger_budget_lets_a_relaxation_take_longer_steps(tmp_path):
