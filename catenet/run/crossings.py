@@ -192,6 +192,8 @@ class EdgeWatch:
         if not self.solids:
             return
         x = np.array(x, dtype=np.float64)
+        if self.last is not None and self.last[1] == t and np.array_equal(self.last[0], x):
+            return  # (the end, seen as the last step already: counted once)
         x0, t0 = (x, t) if self.last is None else self.last
         self.last = (x, t)
         for solid in self.solids:
