@@ -62,9 +62,13 @@ def solve_static(
     """Static equilibrium of ``net`` under ``loads`` scaled by ``factor``.
 
     ``x0`` (N, 3) is the starting guess (default: the reference positions); supports are
-    put at their prescribed places. ``accepted``: the last accepted state this load step
-    starts from, which the terms' ``begin_step`` sees (lagged friction measures slip
-    from it; default: x0, else the reference positions). Raises ConvergenceError when
+    put at their prescribed places, the free nodes following moved supports
+    (``start_state``). ``accepted``: the last accepted state this load step starts from,
+    which the terms' ``begin_step`` sees (lagged friction measures slip from it;
+    default: x0, else the reference positions); where the straight way from it to the
+    start meets an obstacle, the free nodes start 0.9 of the way to the first contact
+    (``Potential.toward``): a cord whose supports move down past a block starts above
+    it, not in it or beyond. Raises ConvergenceError when
     Newton fails (with the residual history and, as ``state``, the start: never an
     unconverged iterate), unless ``raise_on_failure`` is False. ``transient``: reach the
     equilibrium by a damped pseudo-transient solve (``_pseudo_transient``; the last rung
@@ -78,12 +82,15 @@ def solve_static(
     ws = workspace or Workspace(net, linear=linear)
     start = time.perf_counter()
     x = start_state(net, loads, x0, factor)
-    begin = x.copy()  # what a failure reports: the start, never an unconverged iterate
     potential = ws.potential(loads, factor)
     if accepted is None:
         accepted = net.nodes if x0 is None else np.asarray(x0, dtype=np.float64)
     potential.begin_step(accepted)
     ws.refresh(potential)  # a free body's contact takes every node again (after a dynamic run)
+    # a start that moved supports or a predictor carry into an obstacle (or through it)
+    # is cut short on its straight way from the accepted state
+    x = potential.toward(np.asarray(accepted, dtype=np.float64), x)
+    begin = x.copy()  # what a failure reports: the start, never an unconverged iterate
     if relaxed:
         result = solve_newton(
             potential, x, rtol=rtol, max_iter=max_iter, label="static (from rest)"
