@@ -15,6 +15,18 @@ chord of a net draped on a sphere of radius R lies l^2 / (8 R) inside it between
 nodes, below DEEP for edges shorter than 0.4 R: the polyhedral net's own shape, not
 warned. Planes need nothing (a segment whose ends are outside a half-space is
 outside). Load cases solved from the base state are not watched.
+
+A step can also carry the net through a solid, whatever meets it: each state keeps them
+apart, but the step's solution lies on the solid's far side (a 4 cm ball at 2 m/s given
+2 cm steps ended below the strand it should bounce off, with ``solver.edge_contact``; a
+slack cord loaded in one load step came to hang under a sphere it should lie on). The
+watch looks at the straight way between two states (time steps or load steps) at the
+points the contact holds off (along every edge with edge contact, the nodes without): a
+point outside the solid at both states that goes deeper than PASS of the solid's width
+on the way, and comes out on its other side (the solid's outward directions at the point
+at the two states more than 90 degrees apart), is a pass, warned once per solid where no
+edge cut into it. A node carried round a box's corner or a sphere's quarter in one step
+turns by 90 degrees at most: not a pass.
 """
 
 from __future__ import annotations
@@ -40,8 +52,27 @@ MARGIN = 1.01
 SUBSTEP = 0.25
 #: ... in at most this many states between two.
 MAX_SUBSTEPS = 64
+#: A point deeper in a solid than this share of its width on the straight way between
+#: two states, and outside it on its other side at both, is a pass.
+PASS = 0.05
+#: The points along each edge, its ends included, at which passes are looked for where
+#: the whole edge meets the solids; where its nodes only do, at its ends.
+PASS_ALONG = np.linspace(0.0, 1.0, SAMPLES + 2)[None, :, None]
+PASS_ENDS = np.array([0.0, 1.0])[None, :, None]
 
 ALONG = (np.arange(1, SAMPLES + 1) / (SAMPLES + 1.0))[None, :, None]
+
+
+class _Worst:
+    """The deepest of a kind of event seen: how deep, which edge, when; in how many
+    steps."""
+
+    def __init__(self):
+        self.depth, self.edge, self.when, self.steps = 0.0, -1, 0.0, 0
+
+    def keep(self, depth: float, edge: int, when: float) -> None:
+        if depth > self.depth:
+            self.depth, self.edge, self.when = depth, edge, when
 
 
 class _Solid:
@@ -56,6 +87,7 @@ class _Solid:
         self.origin = origin  # (x, t) -> the solid's origin in the world at the state x
         self.local = local  # (points, x, t) -> the points in the barrier's frame
         self.depth, self.edge, self.when, self.steps = 0.0, -1, 0.0, 0
+        self.passed = _Worst()  # the deepest pass (module docstring)
 
     def near(
         self, x0: np.ndarray, x1: np.ndarray, edges: np.ndarray, t0: float, t1: float
@@ -121,6 +153,54 @@ class _Solid:
             half /= REFINE
         return best
 
+    def passes(
+        self, x0: np.ndarray, x1: np.ndarray, t0: float, t1: float, n: int,
+        edges: np.ndarray, which: np.ndarray, along: np.ndarray, between: bool,
+    ) -> bool:  # fmt: skip
+        """Whether the straight way from x0 (at t0) to x1 (at t1), measured at the ``n``
+        - 1 states between them, carries a point of the edges ``which`` (at ``along``
+        their length) through the solid (module docstring); the deepest such point kept,
+        at its time on the way (``between``: a motion) or at t1 (load steps)."""
+        if n < 2:
+            return False
+        ends = edges[which]
+        p0 = x0[ends[:, 0]][:, None, :] + along * (x0[ends[:, 1]] - x0[ends[:, 0]])[:, None, :]
+        p1 = x1[ends[:, 0]][:, None, :] + along * (x1[ends[:, 1]] - x1[ends[:, 0]])[:, None, :]
+        p0, p1 = p0.reshape(-1, 3), p1.reshape(-1, 3)
+        out = (self._depth(p0, x0, t0) < 0.0) & (self._depth(p1, x1, t1) < 0.0)
+        if not out.any():
+            return False
+        p0, p1, index = p0[out], p1[out], np.flatnonzero(out)
+        deepest, when = np.full(len(p0), -np.inf), np.zeros(len(p0))
+        for k in range(1, n):
+            s = k / n
+            t = t0 + s * (t1 - t0)
+            depth = self._depth((1.0 - s) * p0 + s * p1, (1.0 - s) * x0 + s * x1, t)
+            deeper = depth > deepest
+            deepest[deeper], when[deeper] = depth[deeper], t if between else t1
+        deep = np.flatnonzero(deepest > PASS * self.width)
+        if not deep.size:
+            return False
+        turned = np.sum(self._outward(p0[deep], x0, t0) * self._outward(p1[deep], x1, t1), axis=1)
+        through = deep[turned < 0.0]
+        if not through.size:
+            return False
+        k = through[np.argmax(deepest[through])]
+        self.passed.keep(float(deepest[k]), int(which[index[k] // along.shape[1]]), when[k])
+        return True
+
+    def _outward(self, points: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
+        """The solid's outward direction at each world point outside it (the gradient of
+        its distance, by central differences)."""
+        h = 1e-5 * self.width
+        grad = np.empty_like(points)
+        for i in range(3):
+            step = np.zeros(3)
+            step[i] = h
+            grad[:, i] = self._depth(points - step, x, t) - self._depth(points + step, x, t)
+        norm = np.linalg.norm(grad, axis=1, keepdims=True)
+        return grad / np.where(norm > 0.0, norm, 1.0)
+
     def _depth(self, points: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
         """How deep each world point lies in the solid at the state x at time t (< 0:
         outside)."""
@@ -129,18 +209,20 @@ class _Solid:
 
 
 class EdgeWatch:
-    """Follows a run's states (``see``) and says where edges went into solids
-    (``warnings``; module docstring). Empty where every edge meets them (edge contact)
-    or the scene has no solid but planes."""
+    """Follows a run's states (``see``) and says where edges went into solids or a step
+    carried the net through one (``warnings``; module docstring). Where every edge meets
+    the solids (edge contact: ``apart``), only the way between two states is looked at.
+    Empty where the scene has no solid but planes."""
 
     def __init__(self, scene, terms=(), dynamic: bool = False):
         from catenet.run.advice import solid_width
 
         self.dynamic = dynamic
+        self.apart = scene.edge_radius is not None  # every state keeps the edges out
         self.edges = np.asarray(scene.net.edges)[: scene.net.n_edges]
         self.solids: list[_Solid] = []
         self.last: tuple[np.ndarray, float] | None = None
-        if scene.edge_radius is not None or not len(self.edges):
+        if not len(self.edges):
             return
         ends = scene.net.nodes[self.edges]
         self.median = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
@@ -200,23 +282,31 @@ class EdgeWatch:
             which, move = solid.near(x0, x, self.edges, t0, t)
             if not which.size:
                 continue
-            n = 1
-            if self.dynamic:  # the way between two time steps (load steps are no motion)
-                size = SUBSTEP * min(solid.width, self.median)
-                farthest = float(move[self.edges[which].ravel()].max())
-                n = int(min(MAX_SUBSTEPS, max(1, math.ceil(farthest / size))))
+            size = SUBSTEP * min(solid.width, self.median)
+            farthest = float(move[self.edges[which].ravel()].max())
+            n = int(min(MAX_SUBSTEPS, max(1, math.ceil(farthest / size))))
+            held = PASS_ALONG if self.apart else PASS_ENDS  # the points the contact holds off
+            solid.passed.steps += solid.passes(
+                x0, x, t0, t, n, self.edges, which, held, self.dynamic
+            )
+            if self.apart:
+                continue
             crossed = False
-            for k in range(1, n + 1):
+            for k in range(1, n if self.dynamic else 1):  # (load steps are no motion)
                 s = k / n
-                xs = x if k == n else (1.0 - s) * x0 + s * x
-                crossed |= solid.see(t0 + s * (t - t0), xs, self.edges, which, k < n)
+                xs = (1.0 - s) * x0 + s * x
+                crossed |= solid.see(t0 + s * (t - t0), xs, self.edges, which, True)
+            crossed |= solid.see(t, x, self.edges, which, False)
             solid.steps += crossed
 
     def warnings(self) -> list[str]:
-        """One warning per solid that an edge went into (none: none did)."""
+        """One warning per solid that an edge went into, or else that a step carried
+        the net through (none: neither)."""
         out = []
         for s in self.solids:
             if s.edge < 0:
+                if s.passed.edge >= 0:
+                    out.append(self._passed(s))
                 continue
             at = f"t = {s.when:.6g} s" if self.dynamic else f"load factor {s.when:.6g}"
             many = f", in {s.steps} step{'s' if s.steps != 1 else ''}" if self.dynamic else ""
@@ -229,6 +319,29 @@ class EdgeWatch:
                 "(docs/guide/edge-contact.md), or refine the net well below the solid's width"
             )
         return out
+
+    def _passed(self, s: _Solid) -> str:
+        """The warning of a solid that a step carried the net through."""
+        p = s.passed
+        many = f"{p.steps} step{'s' if p.steps != 1 else ''}"
+        if self.dynamic:
+            return (
+                f"edge {p.edge} and {s.label} went through each other between two time "
+                f"steps (t = {p.when:.6g} s, {_down(p.depth):.3g} m deep on the straight "
+                f"way from one step to the next, in {many}): every state keeps them apart, "
+                "but the step is longer than the contact and its solution lies on the "
+                "solid's far side; shorten the steps (a smaller solver.dt, or leave it "
+                "out for steps chosen by accuracy; solver.dt_max bounds those) "
+                "(docs/guide/edge-contact.md)"
+            )
+        return (
+            f"the equilibrium at load factor {p.when:.6g} lies on the far side of "
+            f"{s.label} from the load step before it (the straight way between them "
+            f"takes edge {p.edge} {_down(p.depth):.3g} m deep through it, in {many}): "
+            "load steps are no motion, and the net may not get there round the solid; "
+            "check with a damped run to rest (solver.method = 'dynamic', solver.t_end = "
+            "'rest') or more load steps (solver.steps) (docs/guide/edge-contact.md)"
+        )
 
 
 def _down(value: float) -> float:
