@@ -1,7 +1,9 @@
 """Load cases and combinations of a case (``[[load_case]]``, ``[[combination]]``): each
 solved from the base state (the equilibrium under ``[load]``: prestress, self-weight)
 under the base loads plus its own, in ``solver.steps`` load steps of its own part, on the
-base run's workspace (one sparsity pattern, one symbolic analysis); not superposed.
+base run's workspace (one sparsity pattern, one symbolic analysis); not superposed. Each
+is watched for edges in solids and steps through them as the base run is
+(``catenet.run.crossings``).
 
 Results go to ``/cases/<name>/`` with the layout of ``/result`` (its attributes: the
 summary's numbers, ``kind`` "load_case" or "combination", a combination's ``factors``),
@@ -93,6 +95,7 @@ def _solve_one(scene, settings, ws, base, c, interrupt, slips) -> CaseRun:
     from catenet.model import summary
     from catenet.model.cases import Increment
     from catenet.run.advice import implausible
+    from catenet.run.crossings import EdgeWatch
     from catenet.solver import path as sv
     from catenet.solver.newton import interruptible
     from catenet.solver.result import Outcome, finish
@@ -101,9 +104,16 @@ def _solve_one(scene, settings, ws, base, c, interrupt, slips) -> CaseRun:
     loads = Increment(base=scene.loads, added=c.force)
     problem = Scene(scene.net, loads, scene.terms)
     start = sv.Start(x=base.x)
+    crossed = EdgeWatch(scene, ws.system.terms)  # edges into solids, steps through them
+    crossed.see(0.0, base.x)
+
+    def on_step(step) -> bool:
+        crossed.see(step.time, step.x)
+        return False
+
     try:
         with interruptible(interrupt):
-            r = sv.solve(problem, settings, workspace=ws, start=start)
+            r = sv.solve(problem, settings, workspace=ws, start=start, on_step=on_step)
         error = "" if r.converged else r.message
     except CatenetError as exc:
         if isinstance(exc, ConfigError):
@@ -125,6 +135,9 @@ def _solve_one(scene, settings, ws, base, c, interrupt, slips) -> CaseRun:
         )
         error = str(exc)
         log.error("%s", exc)
+    crossed.see(r.time, r.x)
+    for message in crossed.warnings():
+        log.warning("%s", message)
     if r.converged and not error:  # strains and displacements a cable can have
         what, extreme = implausible(scene.net, r.x, float(scene.size))
         if what and slips:  # the likely cause, named with each case

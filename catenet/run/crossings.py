@@ -14,7 +14,7 @@ the run warns once per solid, with the deepest point, when, and in how many stat
 chord of a net draped on a sphere of radius R lies l^2 / (8 R) inside it between its
 nodes, below DEEP for edges shorter than 0.4 R: the polyhedral net's own shape, not
 warned. Planes need nothing (a segment whose ends are outside a half-space is
-outside). Load cases solved from the base state are not watched.
+outside). Load cases are watched from the base state on (``catenet.run.cases``).
 
 A step can also carry the net through a solid, whatever meets it: each state keeps them
 apart, but the step's solution lies on the solid's far side (a 4 cm ball at 2 m/s given

@@ -433,6 +433,19 @@ def test_a_slack_cord_loaded_past_a_sphere_in_one_load_step_is_warned(write_case
     assert np.abs(rest - static).max() < 1e-3
 
 
+def test_a_load_case_is_watched_from_the_base_state(write_case, tmp_path):
+    """The slack cord of SLACK unloaded in its base state, its line load a load case:
+    the case's first load step finds it under the sphere, and the warning is said with
+    the case's name and kept with its results (``/cases/<name>``)."""
+    case = SLACK.replace("[[load.line]]", '[[load_case]]\nname = "snow"\n[[load_case.line]]')
+    printed, _, out = run(write_case(case), tmp_path)
+    ((when, label, edge, depth),) = FAR.findall(printed)
+    assert (when, label) == ("0.25", "obstacle[0] (a sphere)") and float(depth) > 1.0
+    with h5py.File(out, "r") as f:
+        assert "far side of obstacle[0] (a sphere)" in str(f["cases/snow"].attrs["warnings"])
+        assert "far side" not in str(f["result"].attrs["warnings"])  # not the base state's
+
+
 def test_a_pass_turns_the_point_round_beyond_a_right_angle(write_case):
     """A node carried round a box's corner in one step (from over its top to beside
     its side: 90 degrees) is no pass, however deep the straight way cuts the corner; one
