@@ -24,20 +24,123 @@ from catenet.kernels.shapes import _block, shape_feature
 
 
 @njit(cache=True, error_model="numpy")
-def _project(K):
-    """K (symmetric, in place) with its negative eigenvalues set to 0."""
-    w, Q = np.linalg.eigh(K)
-    if w[0] >= 0.0:
+def _jacobi(M):
+    """The eigenvalues and eigenvectors (columns) of a small symmetric matrix M (r x r,
+    overwritten) by cyclic Jacobi rotations, to round-off (LAPACK's call costs more than
+    the work at this size)."""
+    r = M.shape[0]
+    Z = np.eye(r)
+    total = 0.0
+    for p in range(r):
+        for q in range(r):
+            total += M[p, q] * M[p, q]
+    for _ in range(50):
+        off = 0.0
+        for p in range(r):
+            for q in range(p + 1, r):
+                off += M[p, q] * M[p, q]
+        if off <= 1e-32 * total:
+            break
+        for p in range(r - 1):
+            for q in range(p + 1, r):
+                apq = M[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (M[q, q] - M[p, p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(r):  # columns p, q
+                    mkp, mkq = M[k, p], M[k, q]
+                    M[k, p] = c * mkp - s * mkq
+                    M[k, q] = s * mkp + c * mkq
+                for k in range(r):  # rows p, q
+                    mpk, mqk = M[p, k], M[q, k]
+                    M[p, k] = c * mpk - s * mqk
+                    M[q, k] = s * mpk + c * mqk
+                for k in range(r):
+                    zkp, zkq = Z[k, p], Z[k, q]
+                    Z[k, p] = c * zkp - s * zkq
+                    Z[k, q] = s * zkp + c * zkq
+    w = np.empty(r)
+    for p in range(r):
+        w[p] = M[p, p]
+    return w, Z
+
+
+@njit(cache=True, error_model="numpy")
+def _project_contact(K, u, g, Q, M, W):
+    """One contact's K_q (15 x 15, symmetric, in place) with its negative eigenvalues
+    set to 0, computed on the at most nine directions its range lies in (the module
+    docstring's L and S): (e_i, -e_i, 0) of x - c, and in a, e_m u^T and g e_j^T. On an
+    orthonormal basis Q of them (Gram-Schmidt, twice) K_q = Q^T (Q K_q Q^T) Q exactly,
+    and the middle (9 x 9 at most) is projected by Jacobi rotations: the same matrix
+    as the 15 x 15 eigendecomposition's, several times cheaper. ``Q`` (9, 15), ``M``
+    (9, 9) and ``W`` (15, 9): scratch."""
+    r = 0
+    for j in range(9):
+        for b in range(15):
+            Q[r, b] = 0.0
+        if j < 3:  # (e_j, -e_j, 0)
+            Q[r, j], Q[r, 3 + j] = 1.0, -1.0
+        elif j < 6:  # e_m u^T in a_m
+            for i in range(3):
+                Q[r, 6 + 3 * (j - 3) + i] = u[i]
+        else:  # g e_i^T: g_m in a_m's component i
+            for m in range(3):
+                Q[r, 6 + 3 * m + (j - 6)] = g[m]
+        scale = 0.0
+        for b in range(15):
+            scale += Q[r, b] * Q[r, b]
+        if scale == 0.0:
+            continue
+        for _ in range(2):
+            for q in range(r):
+                d = 0.0
+                for b in range(15):
+                    d += Q[q, b] * Q[r, b]
+                for b in range(15):
+                    Q[r, b] -= d * Q[q, b]
+        norm = 0.0
+        for b in range(15):
+            norm += Q[r, b] * Q[r, b]
+        if norm > 1e-20 * scale:
+            norm = np.sqrt(norm)
+            for b in range(15):
+                Q[r, b] /= norm
+            r += 1
+    if r == 0:
         return
-    n = K.shape[0]
-    for a in range(n):
-        for b in range(a, n):
-            s = 0.0
-            for q in range(n):
-                if w[q] > 0.0:
-                    s += Q[a, q] * w[q] * Q[b, q]
-            K[a, b] = s
-            K[b, a] = s
+    for a in range(15):  # W = K Q^T, then M = Q W
+        for q in range(r):
+            t = 0.0
+            for b in range(15):
+                t += K[a, b] * Q[q, b]
+            W[a, q] = t
+    for p in range(r):
+        for q in range(p, r):
+            t = 0.0
+            for a in range(15):
+                t += Q[p, a] * W[a, q]
+            M[p, q] = t
+            M[q, p] = t
+    w, Z = _jacobi(M[:r, :r])
+    if w.min() >= 0.0:
+        return
+    for q in range(r):  # the eigenvectors in (x, c, a), scaled: W^T[q] = sqrt(w_q) Z^T Q
+        root = np.sqrt(w[q]) if w[q] > 0.0 else 0.0
+        for a in range(15):
+            t = 0.0
+            for p in range(r):
+                t += Z[p, q] * Q[p, a]
+            W[a, q] = root * t
+    for a in range(15):
+        for b in range(a, 15):
+            t = 0.0
+            for q in range(r):
+                t += W[a, q] * W[b, q]
+            K[a, b] = t
+            K[b, a] = t
 
 
 @njit(cache=True, error_model="numpy")
@@ -46,12 +149,15 @@ def frame_contact_hessian(A, U, H, g, chain, active, blocks, body, project=False
     (K, 3, 3), (K, 3)) into ``blocks`` (K, 81) and the body's (p, p) block into ``body``
     (144,); the other nodes' blocks are left as they are (the caller zeroes them).
     ``project``: each contact's 15 x 15 block in (x, c, A) with its negative eigenvalues
-    set to 0 (``_project``: a positive semidefinite matrix, Newton's direction a descent
+    set to 0 (``_project_contact``: a positive semidefinite matrix, Newton's direction a descent
     one whatever the barrier's curvature and the frame's second derivative S)."""
     L = np.zeros((3, 15))
     HL = np.empty((3, 15))
     Kq = np.empty((15, 15))
     bb = np.zeros((12, 12))
+    Q = np.empty((9, 15))  # the projection's scratch
+    M = np.empty((9, 9))
+    W = np.empty((15, 9))
     for r in range(3):
         for m in range(3):
             L[r, m] = A[m, r]  # A^T
@@ -82,7 +188,7 @@ def frame_contact_hessian(A, U, H, g, chain, active, blocks, body, project=False
                 Kq[a, 3 + i] -= g[k, m]
                 Kq[3 + i, a] -= g[k, m]
         if project:
-            _project(Kq)
+            _project_contact(Kq, U[k], g[k], Q, M, W)
         for r in range(3):
             for i in range(3):
                 blocks[k, 3 * r + i] = Kq[r, i]

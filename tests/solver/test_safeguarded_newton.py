@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from catenet.case import build, parse_case
-from catenet.kernels.rigid import _project, frame_contact_hessian
+from catenet.kernels.rigid import _project_contact, frame_contact_hessian
 from catenet.kernels.stretch import stretch_held, stretch_release
 from catenet.solver import newton
 from catenet.solver.path import solve
@@ -170,21 +170,50 @@ def test_a_held_edge_the_models_step_leaves_slack_is_released():
         assert times[0] == 1 + int(released)
 
 
+def _contact_block(A, u, H, g):
+    """One contact's K_q = L^T H L + S (catenet/kernels/rigid.py's docstring)."""
+    L = np.zeros((3, 15))
+    L[:, :3], L[:, 3:6] = A.T, -A.T
+    for m in range(3):
+        L[m, 6 + 3 * m : 9 + 3 * m] = u
+    k = L.T @ H @ L
+    for m in range(3):
+        for i in range(3):
+            a = 6 + 3 * m + i
+            k[a, i] += g[m]
+            k[i, a] += g[m]
+            k[a, 3 + i] -= g[m]
+            k[3 + i, a] -= g[m]
+    return k
+
+
 def test_projected_contact_blocks_are_semidefinite_and_exact_where_they_were():
+    """Contact blocks of random frames, points, barrier Hessians and gradients (and the
+    degenerate ones: the point at the centre, no gradient, the gradient along the
+    point): their positive part, exactly as the 15 x 15 eigendecomposition gives it;
+    a semidefinite block unchanged."""
     rng = np.random.default_rng(7)
-    for _ in range(50):
-        k = rng.normal(size=(15, 15))
-        k = k + k.T
+    Q, M, W = np.empty((9, 15)), np.empty((9, 9)), np.empty((15, 9))
+    for trial in range(60):
+        A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        u = rng.normal(size=3) * [1.0, 0.0, rng.uniform()][trial % 3]
+        h = rng.normal(size=(3, 3))
+        H = (h + h.T) * 10.0 ** rng.uniform(-3, 3)
+        g = rng.normal(size=3) * 10.0 ** rng.uniform(-3, 3) * (trial % 5 != 0)
+        if trial % 7 == 0:
+            g = 2.0 * u
+        k = _contact_block(A, u, H, g)
         kept = k.copy()
-        _project(k)
+        _project_contact(k, u, g, Q, M, W)
         w = np.linalg.eigvalsh(kept)
-        assert np.linalg.eigvalsh(k).min() >= -1e-12 * abs(w).max()
+        scale = abs(w).max() or 1.0
+        assert np.linalg.eigvalsh(k).min() >= -1e-12 * scale
         assert np.allclose(k, k.T)
         v, q = np.linalg.eigh(kept)  # the positive part, exactly
-        assert np.allclose(k, (q * np.maximum(v, 0.0)) @ q.T, atol=1e-12 * abs(w).max())
-        s = kept @ kept.T  # semidefinite already: unchanged
+        assert np.allclose(k, (q * np.maximum(v, 0.0)) @ q.T, atol=1e-12 * scale)
+        s = _contact_block(A, u, H @ H.T, np.zeros(3))  # semidefinite already: unchanged
         p = s.copy()
-        _project(p)
+        _project_contact(p, u, np.zeros(3), Q, M, W)
         assert np.array_equal(p, s) or np.allclose(p, s, rtol=1e-12)
 
 
