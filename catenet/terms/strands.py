@@ -20,7 +20,7 @@ distance, and every Newton line search (and the predictor of a time step) is cap
 
 The radii follow the motion: a node's radius is ``reach`` (a tenth of the shortest
 edge, at least dhat) plus twice its relative motion in the last step; a step that is
-tried again (it failed) after they held a Newton step back doubles them. The cost grows
+tried again (it failed) after they held its last Newton step back doubles them. The cost grows
 with the close pairs, not with the square of the edges.
 
 The Hessian's sparsity pattern holds the 12x12 blocks of the pairs that were
@@ -96,7 +96,7 @@ class SelfContact(Term):
         self.slots = np.zeros(0, dtype=np.int64)
         self.base: np.ndarray | None = None  # the positions the candidates were found at
         self.grew = False
-        self.held = False  # a step of this time step was cut short by the radii
+        self.held = False  # the radii cut the last step asked about short
         self._gather(net.nodes if x is None else np.asarray(x, dtype=np.float64))
         self.base = None
 
@@ -162,7 +162,7 @@ class SelfContact(Term):
         base = x if self.base is None else self.base
         args = (x, dx, base, self.nodes, self.radius, self.edges, self.pairs, STEP_CHECKED)
         t, moved = strand_max_step(*args, self.gap_r)
-        self.held = self.held or moved < 1.0
+        self.held = moved < 1.0  # the last step asked about (as a free body's contact)
         return t
 
     def distances(self, x: np.ndarray, reach: float | None = None) -> np.ndarray:

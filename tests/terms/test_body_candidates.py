@@ -112,6 +112,23 @@ def test_a_node_that_is_no_candidate_stays_beyond_dhat_and_widens_its_radius():
     assert touch.max_step_within(x, dx, 4.0) > cap  # now by the box itself
 
 
+def test_the_radii_held_the_step_only_where_they_cut_the_last_one_asked_about():
+    """A solve whose first, wild Newton step a radius cut short, and whose later steps
+    it did not, failed for another reason: retried at its length with wider radii it
+    fails the same way (the 101 x 101 net's first contact: four tries of 27
+    iterations). ``held`` says whether the radii cut the last step asked about."""
+    scene, touch = _drop()
+    x = _stepped(scene, touch)
+    gap = _everything(touch).gap(x)
+    k = int(np.argmin(np.where(np.isin(touch.nodes, touch._far), gap, np.inf)))
+    wild = np.zeros_like(x)
+    wild[int(touch.nodes[k])] = [0.0, 0.0, 2.0 * gap[k]]
+    assert touch.max_step_within(x, wild, 4.0) < 1.0 and touch.held
+    small = 1e-3 * wild
+    assert touch.max_step_within(x, small, 4.0) >= 1.0 and not touch.held
+    assert touch.max_step_within(x, wild, 4.0) < 1.0 and touch.held
+
+
 def _dropped(candidates: bool, friction: float = 0.0) -> tuple[np.ndarray, float, int, int]:
     """The box's momentum at the end of the drop at 10 ms steps (bdf2), the closest
     approach of a node to it over the run, the contact's candidates at the end (the

@@ -182,3 +182,17 @@ def test_the_pattern_grows_with_new_pairs_and_only_then_is_rebuilt():
     assert not term.grew and ws.system.nnz > nnz and potential.solver is ws.solver is not solver
     values = np.empty(144 * len(term.known))
     assert term.hessian(x, values) and len(term.pairs) >= 1
+
+
+def test_the_radii_held_the_step_only_where_they_cut_the_last_one_asked_about():
+    """As a free body's contact: a solve's wild first step that runs a node past its
+    radius holds it, a later modest one does not (``held`` of the last step asked)."""
+    net, n = _strands(1.0)
+    term = SelfContact(net, kappa=1.0, dhat=1e-3)
+    term.begin_step(net.nodes, 0.01, 0.0)
+    wild = np.zeros_like(net.nodes)
+    wild[n, 1] = 10.0  # far past the node's radius (a tenth of the shortest edge)
+    term.max_step(net.nodes, wild)
+    assert term.held
+    term.max_step(net.nodes, 1e-4 * wild)
+    assert not term.held
