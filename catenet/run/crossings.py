@@ -86,8 +86,8 @@ class _Solid:
         self.reach = MARGIN * shape.reach + 1e-12
         self.origin = origin  # (x, t) -> the solid's origin in the world at the state x
         self.local = local  # (points, x, t) -> the points in the barrier's frame
-        self.depth, self.edge, self.when, self.steps = 0.0, -1, 0.0, 0
-        self.passed = _Worst()  # the deepest pass (module docstring)
+        self.cut = _Worst()  # the deepest crossing: an edge inside it (module docstring)
+        self.passed = _Worst()  # the deepest pass
 
     def near(
         self, x0: np.ndarray, x1: np.ndarray, edges: np.ndarray, t0: float, t1: float
@@ -132,8 +132,7 @@ class _Solid:
         if not over.any():
             return False
         k = int(np.argmax(np.where(over, best, -np.inf)))
-        if best[k] > self.depth:
-            self.depth, self.edge, self.when = float(best[k]), int(which[close[k]]), float(t)
+        self.cut.keep(float(best[k]), int(which[close[k]]), float(t))
         return True
 
     def _refined(self, a, b, depth, x, t: float) -> np.ndarray:
@@ -297,23 +296,24 @@ class EdgeWatch:
                 xs = (1.0 - s) * x0 + s * x
                 crossed |= solid.see(t0 + s * (t - t0), xs, self.edges, which, True)
             crossed |= solid.see(t, x, self.edges, which, False)
-            solid.steps += crossed
+            solid.cut.steps += crossed
 
     def warnings(self) -> list[str]:
         """One warning per solid that an edge went into, or else that a step carried
         the net through (none: neither)."""
         out = []
         for s in self.solids:
-            if s.edge < 0:
+            c = s.cut
+            if c.edge < 0:
                 if s.passed.edge >= 0:
                     out.append(self._passed(s))
                 continue
-            at = f"t = {s.when:.6g} s" if self.dynamic else f"load factor {s.when:.6g}"
-            many = f", in {s.steps} step{'s' if s.steps != 1 else ''}" if self.dynamic else ""
-            deep = _down(s.depth)  # (never shown deeper than it was)
+            at = f"t = {c.when:.6g} s" if self.dynamic else f"load factor {c.when:.6g}"
+            many = f", in {c.steps} step{'s' if c.steps != 1 else ''}" if self.dynamic else ""
+            deep = _down(c.depth)  # (never shown deeper than it was)
             out.append(
                 f"edges cut {deep:.3g} m deep into {s.label} between the nodes it holds "
-                f"off (edge {s.edge} at {at}{many}): the net meets solids at its nodes "
+                f"off (edge {c.edge} at {at}{many}): the net meets solids at its nodes "
                 "only, so the strands between them can cut into a solid or let it pass "
                 "between the nodes; set solver.edge_contact = true "
                 "(docs/guide/edge-contact.md), or refine the net well below the solid's width"
