@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.case.sections import SolverConfig
     from catenet.scene.scene import Scene
-    from catenet.scene.shapes import Shape
 
 #: A trajectory estimated above this many bytes is warned about before the run.
 WARN_BYTES = 1 << 30
@@ -488,6 +487,8 @@ def between_nodes(scene: Scene) -> list[str]:
     net's median edge: the net touches solids at its nodes only (the barriers act on
     nodes), so such a solid can pass between them, or sit across a strand, and no check
     sees it. None where every edge meets them (``solver.edge_contact``)."""
+    from catenet.scene.shapes import solid_width
+
     net = scene.net
     if not net.n_edges or scene.edge_radius is not None:
         return []
@@ -509,16 +510,3 @@ def between_nodes(scene: Scene) -> list[str]:
                 "solver.edge_contact = true (docs/guide/edge-contact.md)"
             )
     return out
-
-
-def solid_width(shape: Shape) -> float:
-    """The smallest extent of a shape across its principal directions [m]: its
-    outline's points' extent there plus its radius on both sides."""
-    points, _, radius = shape.outline()
-    centred = points - points.mean(axis=0)
-    if len(points) < 2:
-        return 2.0 * float(radius)
-    _, _, axes = np.linalg.svd(centred, full_matrices=False)
-    spans = [float(np.ptp(centred @ axis)) for axis in axes]
-    spans += [0.0] * (3 - len(spans))  # a flat or straight outline: none across the rest
-    return min(spans) + 2.0 * float(radius)

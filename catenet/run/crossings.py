@@ -24,9 +24,9 @@ watch looks at the straight way between two states (time steps or load steps) at
 points the contact holds off (along every edge with edge contact, the nodes without): a
 point outside the solid at both states that goes deeper than PASS of the solid's width
 on the way, and comes out on its other side (the solid's outward directions at the point
-at the two states more than 90 degrees apart), is a pass, warned once per solid where no
-edge cut into it. A node carried round a box's corner or a sphere's quarter in one step
-turns by 90 degrees at most: not a pass.
+at the two states more than 90 degrees apart), is a pass, warned once per solid (with
+contact at the nodes, where a node went through). A node carried round a box's corner
+or a sphere's quarter in one step turns by 90 degrees at most: not a pass.
 """
 
 from __future__ import annotations
@@ -69,10 +69,15 @@ class _Worst:
 
     def __init__(self):
         self.depth, self.edge, self.when, self.steps = 0.0, -1, 0.0, 0
+        self.node = -1  # the node of the edge that went deepest (-1: a point inside it)
 
-    def keep(self, depth: float, edge: int, when: float) -> None:
+    def keep(self, depth: float, edge: int, when: float, node: int = -1) -> None:
         if depth > self.depth:
-            self.depth, self.edge, self.when = depth, edge, when
+            self.depth, self.edge, self.when, self.node = depth, edge, when, node
+
+    @property
+    def what(self) -> str:
+        return f"node {self.node}" if self.node >= 0 else f"edge {self.edge}"
 
 
 class _Solid:
@@ -185,7 +190,10 @@ class _Solid:
         if not through.size:
             return False
         k = through[np.argmax(deepest[through])]
-        self.passed.keep(float(deepest[k]), int(which[index[k] // along.shape[1]]), when[k])
+        edge, point = divmod(int(index[k]), along.shape[1])
+        u = float(along[0, point, 0])
+        node = int(ends[edge, 0]) if u == 0.0 else int(ends[edge, 1]) if u == 1.0 else -1
+        self.passed.keep(float(deepest[k]), int(which[edge]), when[k], node)
         return True
 
     def _outward(self, points: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
@@ -214,7 +222,7 @@ class EdgeWatch:
     Empty where the scene has no solid but planes."""
 
     def __init__(self, scene, terms=(), dynamic: bool = False):
-        from catenet.run.advice import solid_width
+        from catenet.scene.shapes import solid_width
 
         self.dynamic = dynamic
         self.apart = scene.edge_radius is not None  # every state keeps the edges out
@@ -240,7 +248,7 @@ class EdgeWatch:
         self._bodies(scene)
 
     def _bodies(self, scene) -> None:
-        from catenet.run.advice import solid_width
+        from catenet.scene.shapes import solid_width
         from catenet.scene.shapes.sphere import Sphere
 
         for ball in scene.bodies:
@@ -299,14 +307,14 @@ class EdgeWatch:
             solid.cut.steps += crossed
 
     def warnings(self) -> list[str]:
-        """One warning per solid that an edge went into, or else that a step carried
-        the net through (none: neither)."""
+        """Per solid, one warning where a step carried the net through it and one where
+        an edge went into it (none: neither)."""
         out = []
         for s in self.solids:
             c = s.cut
+            if s.passed.edge >= 0:
+                out.append(self._passed(s))
             if c.edge < 0:
-                if s.passed.edge >= 0:
-                    out.append(self._passed(s))
                 continue
             at = f"t = {c.when:.6g} s" if self.dynamic else f"load factor {c.when:.6g}"
             many = f", in {c.steps} step{'s' if c.steps != 1 else ''}" if self.dynamic else ""
@@ -326,21 +334,21 @@ class EdgeWatch:
         many = f"{p.steps} step{'s' if p.steps != 1 else ''}"
         if self.dynamic:
             return (
-                f"edge {p.edge} and {s.label} went through each other between two time "
-                f"steps (t = {p.when:.6g} s, {_down(p.depth):.3g} m deep on the straight "
-                f"way from one step to the next, in {many}): every state keeps them apart, "
-                "but the step is longer than the contact and its solution lies on the "
-                "solid's far side; shorten the steps (a smaller solver.dt, or leave it "
-                "out for steps chosen by accuracy; solver.dt_max bounds those) "
-                "(docs/guide/edge-contact.md)"
+                f"{p.what} and {s.label} went through each other between two time "
+                f"steps (near t = {p.when:.6g} s, {_down(p.depth):.3g} m deep on the "
+                f"straight way from one to the next, in {many}): each state keeps them "
+                "apart, but the step is too long to follow the motion there, and its "
+                "solution lies on the solid's far side; give a shorter solver.dt, or leave "
+                "it out (steps chosen by accuracy move a solid near the net by at most a "
+                "quarter of its width) (docs/guide/edge-contact.md)"
             )
         return (
             f"the equilibrium at load factor {p.when:.6g} lies on the far side of "
-            f"{s.label} from the load step before it (the straight way between them "
-            f"takes edge {p.edge} {_down(p.depth):.3g} m deep through it, in {many}): "
-            "load steps are no motion, and the net may not get there round the solid; "
-            "check with a damped run to rest (solver.method = 'dynamic', solver.t_end = "
-            "'rest') or more load steps (solver.steps) (docs/guide/edge-contact.md)"
+            f"{s.label} from the state before it (the straight way between them takes "
+            f"{p.what} {_down(p.depth):.3g} m deep through it, in {many}): load "
+            "steps are no motion, and the net may not get there round the solid; check "
+            "with a damped run to rest (solver.method = 'dynamic', solver.t_end = 'rest') "
+            "or more load steps (solver.steps) (docs/guide/edge-contact.md)"
         )
 
 

@@ -160,6 +160,7 @@ def _terms(
     shape grown by it, and its barrier with every edge, ``catenet.scene.segments``), its
     planes' barriers and its friction."""
     from catenet.scene.contact import check_clear
+    from catenet.scene.shapes import solid_width
     from catenet.terms.contact import default_stiffness
     from catenet.terms.rigid import Rigidity
     from catenet.terms.rigid_contact import BodyContact
@@ -182,6 +183,7 @@ def _terms(
     touch = BodyContact(shape, frame, n_nodes=net.n_nodes, label=f"{body.path} (kind {kind!r})",
                         candidates=True, edge=edge)  # fmt: skip
     touch.key = f"{body.path}.distance"
+    touch.width = solid_width(body.shape)  # how far it may move in a step near the net
     label = f"{body.path} (kind {kind!r}, a free body)"
     check_clear(label, "a body", shape, nodes, net, shown)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]

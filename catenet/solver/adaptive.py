@@ -44,29 +44,29 @@ that the impact is resolved from its first instant. Nodes that strike a free bod
 ball bringing momentum of their own are resolved through their bounce on its barrier
 (catenet/solver/strikes.py): the step is taken again to end just before the strike and
 the steps through the bounce are constant, a sixteenth of its length, where the error
-estimate, filtered, would let the bounce be damped and the body take too little.
+estimate, filtered, would let the bounce be damped and the body take too little. No ball
+or body near the net moves a quarter of its width in a step (``Strikes.crossing``).
 
 A run starts with ``first`` (``solver.dt`` where given, else FIRST_SHARE of the run's span,
-at most ``dt_max``): the scheme's first steps, before it has the states to
-estimate its error from, are taken at that length. Steps stay within
+at most ``dt_max``): the scheme's first steps, before it has the states to estimate its
+error from, are taken at that length. Steps stay within
 [``dt_min``, ``dt_max``]; a step that fails to converge (Newton) is retried at half its
 length, as with fixed steps, and the run fails where that is below ``dt_min``; a step at
 ``dt_min`` whose error is still beyond the tolerance is accepted (the run warns once). A
 run that takes more than MAX_TRIES steps fails (a tolerance too tight for it).
 The positions' estimate is filtered through the step's own matrix as a first-order
 system, (I - b J)^-1 applied to the estimate in positions and velocities (``filtered``;
-Hairer & Wanner II, IV.8; Shampine's filter of stiff ODE codes): a mode the step resolves
-keeps its error, a stiff one it cannot (a free body's rigidity, a rope's axial ringing,
-a node chattering on a barrier) is damped as bdf2 and implicit Euler damp it on the
-next steps, so it does not set the steps. (Before, the positions' estimate alone went
-through W^-1 w, without the velocities' share b ev: the drop below took 607 steps at
-1e-3, where it took 522 then.) The bodies' momenta are not filtered: a barrier's stiffness
-is the bounce itself (filtered, two boxes colliding head on at the default lost 6.4 % of
-their speed, 4.2 % raw; a ball's bounce on the ground 0.9 % of its period, 0.8 % raw),
-and a body's rigidity does not change its momentum. A body's momentum error counts the
-momentum of the net's nodes in its barrier with its own (``Bodies.hold``): a box's held
-nodes chattering on it pass momentum to and fro, no error of the motion, which set the
-steps of the drop below through its contact when counted on the box alone.
+Hairer & Wanner II, IV.8; Shampine's filter of stiff ODE codes): a mode the step
+resolves keeps its error, a stiff one it cannot (a free body's rigidity, a rope's axial
+ringing, a node chattering on a barrier) is damped as bdf2 and implicit Euler damp it on
+the next steps, so it does not set the steps. The bodies' momenta are not filtered: a
+barrier's stiffness is the bounce itself (filtered, two boxes colliding head on at the
+default lost 6.4 % of their speed, 4.2 % raw; a ball's bounce on the ground 0.9 % of its
+period, 0.8 % raw), and a body's rigidity does not change its momentum. A body's
+momentum error counts the momentum of the net's nodes in its barrier with its own
+(``Bodies.hold``): a box's held nodes chattering on it pass momentum to and fro, no
+error of the motion, which set the steps of the drop below through its contact when
+counted on the box alone.
 
 Measured (``python -m benchmarks accuracy``; docs/howto/dynamic-runs.md) on the drop of
 benchmarks/peers/mujoco_drop.toml without its dt (the box's momentum at 0.4 s; bdf2 at
@@ -309,6 +309,7 @@ class ErrorControl:
         self.bodies: Bodies | None = None  # the free bodies and balls (``of``)
         self.events: Events | None = None  # contact events landed on (``of``)
         self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
+        self.crossing = math.inf  # the longest step no solid passes a strand in (``ahead``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
         self.dt_max = span if dt_max is None else float(dt_max)
@@ -361,7 +362,9 @@ class ErrorControl:
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
         out.events = Events(stepper.system.terms, stepper.x)
-        out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass)
+        spacing = float(np.median(net.rest_length)) if net.n_edges else 0.0
+        out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass, spacing)
+        out.ahead(stepper.x, stepper.v)
         return out
 
     def within(self, stepper: TimeStepper, h_step: float, newton: NewtonResult) -> bool:
@@ -463,10 +466,17 @@ class ErrorControl:
             ratio = max(ratio, self.bodies.error(ev) / (MOMENTUM * self.tolerance))
         return ratio
 
+    def ahead(self, x: np.ndarray, v: np.ndarray) -> None:
+        """The next step's start (x, v) (N, 3): how long it may be before a ball or body
+        could pass a strand within it (catenet/solver/strikes.py's ``crossing``)."""
+        if self.strikes is not None:
+            self.crossing = max(self.dt_min, self.strikes.crossing(x, v, self.h))
+
     def step(self, t: float) -> float:
         """The next step from t: h, cut short at t_end, or half what is left where h would
         leave a sliver shorter than itself."""
         left = self.t_end - t
+        self.h = min(self.h, self.crossing)  # no solid past a strand within the step
         if self.strikes is not None:  # a bounce goes on: its steps resolve it
             self.h = min(self.h, self.strikes.cap(t))
         self.least = self.dt_min  # the shortest this step may be (judge)

@@ -432,6 +432,7 @@ class TimeStepper:
         if isinstance(control, ErrorControl):
             moved = self.x.reshape(-1)[self.free] - self.x0_free
             control.saw(self.x, moved, self.v.reshape(-1)[self.free], self.m_free)
+            control.ahead(self.x, self.v)
 
 
 def mass_and_damping(net: Net, damping: float) -> tuple[np.ndarray, float | np.ndarray]:

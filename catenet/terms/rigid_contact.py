@@ -97,6 +97,7 @@ class BodyContact(Term):
     role = "internal"
     convex = False
     widens = True  # a step its radii held back is tried again, wider (``begin_step``)
+    width = math.inf  # the body's smallest extent [m], where the scene gives it
 
     def __init__(
         self,

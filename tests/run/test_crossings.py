@@ -277,13 +277,13 @@ def test_an_obstacle_on_a_motion_through_an_edge_within_one_step_is_warned(write
 
 
 THROUGH = re.compile(
-    r"edge (\d+) and (obstacle\[\d+\] \([^)]*\)) went through each other between two "
-    r"time steps \(t = [0-9.e+-]+ s, ([0-9.e+-]+) m deep"
+    r"((?:edge|node) \d+) and (obstacle\[\d+\] \([^)]*\)) went through each other between two "
+    r"time steps \(near t = [0-9.e+-]+ s, ([0-9.e+-]+) m deep"
 )
 FAR = re.compile(
     r"the equilibrium at load factor ([0-9.e+-]+) lies on the far side of (obstacle\[\d+\] "
-    r"\([^)]*\)) from the load step before it \(the straight way between them takes edge "
-    r"(\d+) ([0-9.e+-]+) m deep through it"
+    r"\([^)]*\)) from the state before it \(the straight way between them takes "
+    r"((?:edge|node) \d+) ([0-9.e+-]+) m deep through it"
 )
 
 STRAND = """
@@ -339,7 +339,7 @@ def test_a_ball_stepped_through_a_strand_with_edge_contact_is_warned(write_case,
     printed, kept, out = run(path, tmp_path, "solver.dt=0.02")
     ((edge, label, depth),) = THROUGH.findall(printed)
     assert label == "obstacle[0] (a moving sphere)"
-    assert "went through each other" in kept and "shorten the steps" in printed
+    assert "went through each other" in kept and "give a shorter solver.dt" in printed
     assert 0.0 < float(depth) <= 0.02
     assert _ball_at_end(out, path)[2] < -0.1  # through the net, falling on
     for sets in (["solver.dt=0.005"], []):
@@ -360,9 +360,9 @@ def test_an_obstacle_swept_through_a_strand_in_one_step_is_warned(write_case, tm
         .replace('integrator = "bdf2"\n', "")
     )
     printed, _, out = run(case, tmp_path, "solver.dt=0.01")
-    ((edge, label, depth),) = THROUGH.findall(printed)
-    assert label == "obstacle[0] (a moving sphere)"
-    i, j = build(load_case(case)).net.edges[int(edge)]
+    ((what, label, depth),) = THROUGH.findall(printed)
+    assert label == "obstacle[0] (a moving sphere)" and what.startswith("edge ")
+    i, j = build(load_case(case)).net.edges[int(what.split()[1])]
     with h5py.File(out, "r") as f:
         frames = f["trajectory/x"][:]
     assert np.abs(frames[:, [i, j], 2]).max() < 1e-3  # the strand never moved
@@ -444,6 +444,62 @@ def test_a_load_case_is_watched_from_the_base_state(write_case, tmp_path):
     with h5py.File(out, "r") as f:
         assert "far side of obstacle[0] (a sphere)" in str(f["cases/snow"].attrs["warnings"])
         assert "far side" not in str(f["result"].attrs["warnings"])  # not the base state's
+
+
+BOOM = """
+title = "a crane boom on a prescribed path at 4 m/s up through a 6 m debris net (kN, m)"
+units = "kN-m"
+
+[geometry]
+kind = "square_net"
+n = 10
+alpha = 0.0
+size = 6.0
+edge_length = 0.25
+
+[material]
+E = 5.0e6
+radius = 0.006
+density = 1.14
+prestress = 2.0
+
+[[obstacle]]
+kind = "capsule"
+start = [0.2, -4.0, -0.3]
+end = [0.2, 4.0, -0.3]
+radius = 0.15
+velocity = [0.0, 0.0, 4.0]
+distance = 0.01
+
+[solver]
+method = "dynamic"
+dt = 0.1
+t_end = 0.3
+damping = 1.0
+"""
+
+
+def test_nodes_a_step_carried_through_a_solid_are_warned_beside_the_edges_cut(write_case, tmp_path):
+    """With contact at the nodes, a boom swept up through the net in steps of 0.4 m
+    (1.3 times its width) both cuts the strands between the nodes it holds off and
+    carries some nodes through itself: each is warned, the node by name. That node
+    starts above the boom's axis and ends below it, within the boom's radius of the
+    axis across it when it went through."""
+    path = write_case(BOOM)
+    printed, kept, out = run(path, tmp_path)
+    ((what, label, depth),) = THROUGH.findall(printed)
+    assert label == "obstacle[0] (a moving capsule)" and what.startswith("node ")
+    assert "edges cut" in printed and "went through" in kept
+    node = int(what.split()[1])
+    with h5py.File(out, "r") as f:
+        x, t = f["trajectory/x"][:], f["trajectory/time"][:]
+    axis = -0.3 + 4.0 * t  # the boom's axis height at each frame
+    below = x[:, node, 2] < axis
+    assert not below[0] and below[-1]  # it began above the boom and ended below it
+    k = int(np.argmax(below))  # the step that took it across
+    across = np.abs(x[k - 1 : k + 1, node, 0] - 0.2).max()
+    assert across < 0.15  # through the boom, not round its side
+    assert float(depth) > 0.05 * 0.3
 
 
 def test_a_pass_turns_the_point_round_beyond_a_right_angle(write_case):

@@ -16,9 +16,17 @@ from collections.abc import Mapping
 from functools import cache
 from typing import Any
 
-from catenet.scene.shapes.base import MassProperties, Outline, Shape
+from catenet.scene.shapes.base import MassProperties, Outline, Shape, solid_width
 
-__all__ = ["MassProperties", "Outline", "Shape", "kinds", "shape_class", "shape_of"]
+__all__ = [
+    "MassProperties",
+    "Outline",
+    "Shape",
+    "kinds",
+    "shape_class",
+    "shape_of",
+    "solid_width",
+]
 
 
 @cache

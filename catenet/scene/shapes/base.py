@@ -181,3 +181,16 @@ class AboutSegment:
         """The midpoint of its axis."""
         mid: np.ndarray = 0.5 * (self.start + self.end)
         return mid
+
+
+def solid_width(shape: Shape) -> float:
+    """The smallest extent of a shape across its principal directions [m]: its
+    outline's points' extent there plus its radius on both sides."""
+    points, _, radius = shape.outline()
+    centred = points - points.mean(axis=0)
+    if len(points) < 2:
+        return 2.0 * float(radius)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    spans = [float(np.ptp(centred @ axis)) for axis in axes]
+    spans += [0.0] * (3 - len(spans))  # a flat or straight outline: none across the rest
+    return min(spans) + 2.0 * float(radius)
