@@ -70,7 +70,7 @@ counted on the box alone.
 
 Measured (``python -m benchmarks accuracy``; docs/howto/dynamic-runs.md) on the drop of
 benchmarks/peers/mujoco_drop.toml without its dt (the box's momentum at 0.4 s; bdf2 at
-fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 148 steps, 16.33 kg m/s (182 steps,
+fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 150 steps, 16.27 kg m/s (182 steps,
 16.22, with the body's momentum error counted without the nodes it holds); on the
 safety net of benchmarks/safety_net.toml and two other drop tests.
 """
