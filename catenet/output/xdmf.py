@@ -127,7 +127,7 @@ def _surface(parent, name: str, h5name: str, grid, geometry: str):
     return out
 
 
-def _obstacles(domain, h5name: str, obstacles: Sequence, times) -> None:
+def _obstacles(domain, h5name: str, obstacles: Sequence, times: Stamps) -> None:
     """The obstacles' grids (see ``write_xdmf``)."""
     still = [g for g in obstacles if not g.moving or not len(times)]
     if still:
@@ -141,9 +141,9 @@ def _obstacles(domain, h5name: str, obstacles: Sequence, times) -> None:
             series = ET.SubElement(
                 domain, "Grid", Name=g.name, GridType="Collection", CollectionType="Temporal"
             )
-            for k, t in enumerate(times):
+            for k, t in times:
                 grid = _surface(series, f"{g.name} {k}", h5name, g, g.frame(k))
-                ET.SubElement(grid, "Time", Value=repr(float(t)))
+                ET.SubElement(grid, "Time", Value=t)
 
 
 def write_xdmf(
@@ -173,28 +173,62 @@ def write_xdmf(
     time when there are no frames), then a Temporal collection per moving obstacle with
     a Triangle grid per frame.
     """
+    stamps = [(str(k), repr(float(t))) for k, t in enumerate(times)]
+    many = len(stamps) > len(_TOKENS)  # the frames' grids from two, as text (``_expand``)
     root = ET.Element("Xdmf", Version="3.0")
     domain = ET.SubElement(root, "Domain")
-    _obstacles(domain, h5name, obstacles, times)
-    if len(times) and bodies:
-        _bodies(domain, h5name, times, bodies, n_nodes)
-    if len(times):
-        _trajectory(domain, h5name, times, n_nodes, n_edges, velocities)
+    shown = _TOKENS if many else stamps
+    _obstacles(domain, h5name, obstacles, shown)
+    if len(shown) and bodies:
+        _bodies(domain, h5name, shown, bodies, n_nodes)
+    if len(shown):
+        _trajectory(domain, h5name, shown, n_nodes, n_edges, velocities)
     else:
         _result(domain, h5name, n_nodes, n_edges, contact)
     ET.indent(root, space=" ")
+    text = ET.tostring(root, encoding="unicode")
     _write_atomically(
-        Path(path), '<?xml version="1.0" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+        Path(path), '<?xml version="1.0" ?>\n' + (_expand(text, stamps) if many else text) + "\n"
     )
 
 
-def _bodies(domain, h5name: str, times: list[float], bodies: int, n_nodes: int) -> None:
+Stamps = Sequence[tuple[str, str]]  # per frame: its index and its time, as written
+#: Two frames whose grids stand for all of them: their index and time, as tokens no
+#: name or path holds (a grid's text differs from frame to frame in those alone, but
+#: for the last one's trailing indentation).
+_TOKENS = (("@@k0@@", "@@t0@@"), ("@@k1@@", "@@t1@@"))
+
+
+def _expand(text: str, stamps: Stamps) -> str:
+    """The sidecar ``text``, built with the two token frames of ``_TOKENS`` in each
+    Temporal collection, with every frame of ``stamps`` in their place: the first token
+    frame's text (its grid and the indentation after it) for every frame but the last,
+    the second's for the last. A frame's grid holds no grid. ElementTree takes about
+    0.1 ms a frame: a run of 9300 frames spent 15 s of its 27 s rewriting the sidecar at
+    its flushes."""
+    (k0, t0), (k1, t1) = _TOKENS
+    out, at = [], 0
+    while (first := text.find(k0, at)) >= 0:
+        begin = text.rfind("<Grid ", at, first)  # the first token frame's grid
+        second = text.rfind("<Grid ", first, text.find(k1, first))  # the second's
+        end = text.index("</Grid>", second) + len("</Grid>")
+        head, last = text[begin:second], text[second:end]
+        out.append(text[at:begin])
+        out.extend(head.replace(k0, k).replace(t0, t) for k, t in stamps[:-1])
+        k, t = stamps[-1]
+        out.append(last.replace(k1, k).replace(t1, t))
+        at = end
+    out.append(text[at:])
+    return "".join(out)
+
+
+def _bodies(domain, h5name: str, times: Stamps, bodies: int, n_nodes: int) -> None:
     """The Temporal collection "bodies": per frame, a Polyvertex grid of the moving
     spheres' centres with their radii (see ``write_xdmf``)."""
     series = ET.SubElement(
         domain, "Grid", Name="bodies", GridType="Collection", CollectionType="Temporal"
     )
-    for k, t in enumerate(times):
+    for k, t in times:
         grid = ET.SubElement(series, "Grid", Name=f"bodies {k}", GridType="Uniform")
         topo = ET.SubElement(
             grid,
@@ -206,24 +240,24 @@ def _bodies(domain, h5name: str, times: list[float], bodies: int, n_nodes: int) 
         _hdf_item(topo, h5name, "/mesh/bodies/node", (bodies,), number="Int")
         geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
         _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
-        ET.SubElement(grid, "Time", Value=repr(float(t)))
+        ET.SubElement(grid, "Time", Value=t)
         att = _attribute(grid, "radius", "Cell", "Scalar")
         _hdf_item(att, h5name, "/mesh/bodies/radius", (bodies,))
 
 
 def _trajectory(
-    domain, h5name: str, times: list[float], n_nodes: int, n_edges: int, velocities: bool
+    domain, h5name: str, times: Stamps, n_nodes: int, n_edges: int, velocities: bool
 ) -> None:
     """The net's Temporal collection "trajectory": a Polyline grid per frame on its views
     (see ``write_xdmf``)."""
     series = ET.SubElement(
         domain, "Grid", Name="trajectory", GridType="Collection", CollectionType="Temporal"
     )
-    for k, t in enumerate(times):
+    for k, t in times:
         grid = _grid(series, f"frame {k}", h5name, n_edges)
         geom = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
         _hdf_item(geom, h5name, f"/{VIEWS}/x/{k}", (n_nodes, 3))
-        ET.SubElement(grid, "Time", Value=repr(float(t)))
+        ET.SubElement(grid, "Time", Value=t)
         att = _attribute(grid, "tension", "Cell", "Scalar")
         _hdf_item(att, h5name, f"/{VIEWS}/tension/{k}", (n_edges,))
         att = _attribute(grid, "position", "Node", "Vector")
