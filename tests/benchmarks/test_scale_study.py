@@ -94,11 +94,18 @@ def test_memory_estimate_is_within_30_percent_of_a_small_solves_peak(n, edge):
     """The guard's formula against the peak resident memory of a fresh process that
     builds and solves the net (small sizes only: the study checks the totals up to 1e7
     DOF): the memory the net and its solve add to the process after its imports and
-    warm-up, which neither the installation nor a Numba cache being rebuilt changes."""
+    warm-up, which neither the installation nor a Numba cache being rebuilt changes,
+    within 30 % and the allocator's own spread, NOISE: the same solve of the n = 34 net
+    (12 MiB) added 12.2 to 14.0 MiB from one fresh installation to another, the same
+    packages in each."""
     from benchmarks.scale import guard_estimate_mib, measure
 
     row = measure(n, edge, threads=1)
     assert row["converged"], row
     own = estimate_memory(0.0, 0.0, 0.0) / 2**20
     above = row["peak_rss_mib"] - row["rss_after_import_mib"]
-    assert 0.7 <= (guard_estimate_mib(n, edge) - own) / above <= 1.3, row
+    estimate = guard_estimate_mib(n, edge) - own
+    assert 0.7 * above - NOISE <= estimate <= 1.3 * above + NOISE, row
+
+
+NOISE = 2.0  # MiB: the spread of a small solve's measured peak between installations
