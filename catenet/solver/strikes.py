@@ -119,8 +119,9 @@ class Strike:
 class Strikes:
     """The strikes on a run's free bodies and balls (module docstring). ``terms``: the
     barrier terms of bodies and balls (``of``), each with its body's index in ``scales``
-    (the bodies' momentum scales of catenet/solver/adaptive.py's Bodies) and the nodes
-    that carry its body (a free body's frame, a ball's centre)."""
+    (the bodies' momentum scales of catenet/solver/adaptive.py's Bodies), the nodes
+    that carry its body (a free body's frame, a ball's centre) and its width; the net's
+    median edge ``spacing`` (``crossing``)."""
 
     def __init__(
         self,
@@ -128,14 +129,14 @@ class Strikes:
         owners: Sequence[int],
         carriers: Sequence[np.ndarray],
         node_mass: np.ndarray,
-        widths: Sequence[float] = (),
-        spacing: float = 0.0,
+        widths: Sequence[float],
+        spacing: float,
     ):
         self.terms = list(terms)
         self.owners = list(owners)
         self.carriers = list(carriers)
         self.node_mass = node_mass  # each node's mass (N)
-        self.widths = list(widths) or [math.inf] * len(self.terms)  # each solid's width [m]
+        self.widths = list(widths)  # each solid's smallest extent [m] (inf: not known)
         self.spacing = spacing  # the net's median edge [m]: how far a strand is from a node
         self.holds: list[tuple[float, float, float]] = []  # bounces: (since, until, step)
         self._last: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.terms)
