@@ -83,8 +83,8 @@ REUSE_RATE = 0.03  # a kept factorisation whose step cuts the residual less is r
 REUSE_AHEAD = 2  # ... unless this many more steps at its rate reach the tolerance
 SAFEGUARD_ALPHA = 0.5  # a line search cutting a step below this share: safeguards on
 EXTEND = 4  # a solve still converging at its budget goes on up to this many times it ...
-COURSE = 5  # ... while its residual fell over this many last accepted steps ...
-FALL = 0.03  # ... by this share at least
+COURSE = 5  # ... while its best residual of this many last accepted steps is below ...
+FALL = 0.03  # ... its best before them by this share at least
 
 _stop: Callable[[], bool] | None = None  # asked before every iteration (see interruptible)
 
@@ -340,14 +340,16 @@ class _Newton:
         return None
 
     def on_course(self) -> bool:
-        """Whether, past its budget (and below EXTEND times it), the solve's residual fell
-        over its last COURSE accepted steps by FALL at least: a light net's stiff cords
-        taken up at an impact, 3 % a step, that a cut would only start again in a
-        shorter step; not a solve that creeps (a cut may serve it better)."""
+        """Whether, past its budget (and below EXTEND times it), the solve's best residual
+        of its last COURSE accepted steps is FALL below its best before them: a light
+        net's stiff cords taken up at an impact, 3 % a step, that a cut would only start
+        again in a shorter step; not a solve that creeps (a cut may serve it better). The
+        best, not the last: a minimiser of Phi need not lower |grad Phi| at every step,
+        and one step's rise is no stall."""
         h = self.history
         if self.it >= EXTEND * self.max_iter or len(h) <= COURSE:
             return False
-        return h[-1] < (1.0 - FALL) * h[-1 - COURSE]
+        return min(h[-COURSE:]) < (1.0 - FALL) * min(h[:-COURSE])
 
     def direction(self) -> tuple[np.ndarray, float, bool] | None:
         """The step dy, the slope g.dy < 0 and whether it came from a kept factorisation;
