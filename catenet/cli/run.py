@@ -30,6 +30,14 @@ if TYPE_CHECKING:
     from catenet.run.report import RunResult
 
 EXIT_SIGINT = 130  # interrupted by Ctrl-C (SIGINT), as shells report it
+#: A body's summary line where no barrier saw it meet the net but the edges' watch did
+#: (``catenet.run.crossings.EdgeWatch.met``).
+UNSEEN = {
+    "through": "no node of the net came within its reach, but it and the net went "
+    "through each other between two time steps (see the warning)",
+    "cut": "no node of the net came within its reach, but strands between the nodes cut "
+    "into it (see the warning)",
+}
 
 
 class StopFlag:
@@ -376,6 +384,8 @@ def _summary(case, result, path: Path | None) -> None:
             lines.insert(-1, head + touch)
             continue
         touch = "never touched the net" if first is None else f"first contact at t = {first:.6g} s"
+        if first is None and b.get("unseen"):  # met between the nodes or the states
+            touch = UNSEEN[b["unseen"]]
         if b.get("ball"):  # a ball: a point, no spin
             lines.insert(-1, head + f"speed {b['speed']:.4g} m/s at the end; {touch}")
             continue

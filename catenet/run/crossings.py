@@ -85,7 +85,8 @@ class _Solid:
     its shape (its signed distance, at its pose at t = 0 or its own), how to bring world
     points into that barrier's frame, and the deepest crossing seen."""
 
-    def __init__(self, label: str, shape, width: float, local, origin):
+    def __init__(self, index: int, label: str, shape, width: float, local, origin):
+        self.index = index  # its obstacle[k]
         self.label, self.width = label, width
         self.barrier = shape.barrier(np.zeros(0, dtype=np.int64), kappa=1.0, dhat=1e-3 * width)
         self.reach = MARGIN * shape.reach + 1e-12
@@ -240,10 +241,10 @@ class EdgeWatch:
             label = f"obstacle[{k}] (a {shape.kind})"
             term = moving.get(k)
             if term is None:
-                solid = _Solid(label, shape, solid_width(shape), _as_is, _fixed(shape.origin))
+                solid = _Solid(k, label, shape, solid_width(shape), _as_is, _fixed(shape.origin))
             else:
                 label = f"obstacle[{k}] (a moving {shape.kind})"
-                solid = _Solid(label, shape, solid_width(shape), _moved(term), _moving(term))
+                solid = _Solid(k, label, shape, solid_width(shape), _moved(term), _moving(term))
             self.solids.append(solid)
         self._bodies(scene)
 
@@ -256,7 +257,14 @@ class EdgeWatch:
             label = f"obstacle[{ball.obstacle}] (a moving sphere)"  # (as before the run)
             node = ball.node
             self.solids.append(
-                _Solid(label, sphere, 2.0 * ball.radius, _ball(node), lambda x, t, n=node: x[n])
+                _Solid(
+                    ball.obstacle,
+                    label,
+                    sphere,
+                    2.0 * ball.radius,
+                    _ball(node),
+                    lambda x, t, n=node: x[n],
+                )
             )
         shapes = {m.index: m.shape for m in scene.movers if m.free}
         for body in scene.rigid:
@@ -266,7 +274,14 @@ class EdgeWatch:
             label = f"obstacle[{body.obstacle}] (a free {shape.kind})"
             frame = body.frame
             self.solids.append(
-                _Solid(label, shape, solid_width(shape), _body(frame), _body_origin(frame, shape))
+                _Solid(
+                    body.obstacle,
+                    label,
+                    shape,
+                    solid_width(shape),
+                    _body(frame),
+                    _body_origin(frame, shape),
+                )
             )
 
     def __bool__(self) -> bool:
@@ -305,6 +320,18 @@ class EdgeWatch:
                 crossed |= solid.see(t0 + s * (t - t0), xs, self.edges, which, True)
             crossed |= solid.see(t, x, self.edges, which, False)
             solid.cut.steps += crossed
+
+    def met(self) -> dict[int, str]:
+        """Per obstacle index, how the net met the solid where no barrier saw it:
+        "through" (a step carried them through each other) or "cut" (edges went into
+        it); obstacles with neither are left out."""
+        out = {}
+        for s in self.solids:
+            if s.passed.edge >= 0:
+                out[s.index] = "through"
+            elif s.cut.edge >= 0:
+                out[s.index] = "cut"
+        return out
 
     def warnings(self) -> list[str]:
         """Per solid, one warning where a step carried the net through it and one where

@@ -110,6 +110,9 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
     res.wall_time = time.perf_counter() - begin
     res.timing = _timing(clock)
     bodies = watch.stats(res.x, res.v) if watch else {}
+    for k, how in crossed.met().items():  # no barrier saw these: the summary says so
+        if k in bodies:
+            bodies[k]["unseen"] = how
     _write_result(writer, res)
     return Solved(res, bodies)
 

@@ -177,6 +177,9 @@ def test_a_ball_that_passes_an_edge_within_one_step_is_warned(write_case, tmp_pa
     ((depth, label),) = CUT.findall(printed)
     assert label == "obstacle[0] (a moving sphere)"
     assert 0.02 < float(depth) <= 0.03 + 1e-9
+    (body,) = [line for line in printed.splitlines() if line.startswith("body")]
+    assert "never touched" not in body  # (no node came near: the strands it cut did)
+    assert "strands between the nodes cut into it (see the warning)" in body
     with h5py.File(out, "r") as f:  # no written state has an edge inside the ball
         frames, ball = f["trajectory/x"][:], build(load_case(path)).bodies[0]
     for x in frames:
@@ -342,6 +345,8 @@ def test_a_ball_stepped_through_a_strand_with_edge_contact_is_warned(write_case,
     assert "went through each other" in kept and "give a shorter solver.dt" in printed
     assert 0.0 < float(depth) <= 0.02
     assert _ball_at_end(out, path)[2] < -0.1  # through the net, falling on
+    (body,) = [line for line in printed.splitlines() if line.startswith("body")]
+    assert "never touched" not in body, body
     for sets in (["solver.dt=0.005"], []):
         printed, kept, out = run(path, tmp_path, *sets)
         assert "went through" not in printed and "went through" not in kept, sets
@@ -366,8 +371,12 @@ def test_an_obstacle_swept_through_a_strand_in_one_step_is_warned(write_case, tm
     with h5py.File(out, "r") as f:
         frames = f["trajectory/x"][:]
     assert np.abs(frames[:, [i, j], 2]).max() < 1e-3  # the strand never moved
+    (body,) = [line for line in printed.splitlines() if line.startswith("body")]
+    assert "went through each other between two time steps (see the warning)" in body
     printed, _, out = run(case, tmp_path, "solver.dt=0.001")
     assert "went through" not in printed
+    (body,) = [line for line in printed.splitlines() if line.startswith("body")]
+    assert "first contact at t = " in body
     with h5py.File(out, "r") as f:
         frames = f["trajectory/x"][:]
     assert frames[:, [i, j], 2].min() < -0.1  # pushed down ahead of it
