@@ -341,11 +341,9 @@ class _Newton:
 
     def on_course(self) -> bool:
         """Whether, past its budget (and below EXTEND times it), the solve's best residual
-        of its last COURSE accepted steps is FALL below its best before them: a light
-        net's stiff cords taken up at an impact, 3 % a step, that a cut would only start
-        again in a shorter step; not a solve that creeps (a cut may serve it better). The
-        best, not the last: a minimiser of Phi need not lower |grad Phi| at every step,
-        and one step's rise is no stall."""
+        of its last COURSE accepted steps is FALL below its best before them (the best: a
+        minimiser of Phi may raise |grad Phi| on one step): a light net's stiff cords taken
+        up at an impact, that a cut would only start again; not a solve that creeps."""
         h = self.history
         if self.it >= EXTEND * self.max_iter or len(h) <= COURSE:
             return False
