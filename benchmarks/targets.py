@@ -8,7 +8,7 @@ Per roof (``hypar_on_surface`` of tests/scenes.py, the roof of tests/formfind): 
 search's adjoint gradients and evaluations until every node is on the surface (to
 formfind.tol = 1e-9 of the roof's size), its wall time and so the time per gradient
 (everything of the search: shapes, adjoint solves, damped steps; the surface file is
-read before, its time apart), the damped steps' own share (by conjugate gradients with
+read before, its time apart), the damped steps' own share (by conjugate residuals with
 D's factors: ``catenet.formfind.krylov``, their iterations; the steps that fell back to
 the direct saddle-point factorisation, ``catenet.formfind.damped``); then the static
 analysis of the net found (``catenet run`` on the case it writes: the rest lengths that
@@ -104,7 +104,7 @@ def roof_row(n: int, smooth: bool = False) -> dict:
         "search_s": search_s,
         "per_gradient_s": per_gradient,
         "steps": taken,
-        "cg_iterations": steps.get("iterations", 0),
+        "cr_iterations": steps.get("iterations", 0),
         "steps_direct": steps.get("factorizations", 0),
         "per_step_s": step_s / max(taken, 1),
         "back_substitution_s": back_s,
@@ -179,7 +179,7 @@ def main(out_dir: Path, quick: bool, direct: bool) -> None:
             f"({'met' if r['met'] else 'NOT met'}: largest miss {r['largest_miss_m']:.1e} m), "
             f"{r['search_s']:.2f} s, "
             f"{r['per_gradient_s'] * 1e3:.0f} ms per gradient; damped step "
-            f"{r['per_step_s'] * 1e3:.0f} ms ({r['cg_iterations']} CG iterations in "
+            f"{r['per_step_s'] * 1e3:.0f} ms ({r['cr_iterations']} CR iterations in "
             f"{r['steps']} steps, {r['steps_direct']} direct); Newton iteration "
             f"{r['per_newton_s'] * 1e3:.1f} ms: gradient / "
             f"Newton {r['gradient_over_newton']:.1f} (CPU; the search "

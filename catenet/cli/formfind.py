@@ -102,15 +102,16 @@ def _unconverged(written) -> str:
 
 
 def _steps(d) -> str:
-    """How a large search's damped steps went (conjugate gradients, or the direct
-    factorisation where they did not converge); '' for a small one."""
+    """How a large search's damped steps went (conjugate residuals,
+    ``catenet.formfind.krylov``, or the direct factorisation where they did not
+    converge); '' for a small one."""
     steps = d.extra.get("steps")
     if not steps:
         return ""
     failed = steps["fallbacks"]
     why = f" ({failed} where they did not converge)" if failed else ""
     return (
-        f"; damped steps: {steps['iterative']} by conjugate gradients "
+        f"; damped steps: {steps['iterative']} by conjugate residuals "
         f"({steps['iterations']} iterations), {steps['factorizations']} direct{why}; "
         f"{steps['products']} products with the Jacobians (a solve each)"
     )

@@ -164,7 +164,7 @@ def jacobian_dense(
 class SparseJacobian:
     """J = dr/ds never formed: ``matvec`` (one forward solve), ``rmatvec`` (one adjoint
     solve), both exact with D's factors (``catenet.formfind.krylov.Exact``), and
-    ``damped``: the step p of min |J p + r|^2 + mu |p|^2, by conjugate gradients to a
+    ``damped``: the step p of min |J p + r|^2 + mu |p|^2, by conjugate residuals to a
     relative residual (``catenet.formfind.krylov``) or from one sparse factorisation
     (``catenet.formfind.damped``), the fallback. ``steps``: counts shared between
     states (how the steps went); ``layout``: the direct step's from the last state."""
@@ -214,7 +214,7 @@ class SparseJacobian:
         return out + rq_t @ z if rq_t.nnz else out
 
     def damped(self, r: np.ndarray, mu: float, keep: np.ndarray, eta=None) -> np.ndarray:
-        """The damped step (0 where not ``keep``): with ``eta`` by conjugate gradients to
+        """The damped step (0 where not ``keep``): with ``eta`` by conjugate residuals to
         that relative residual where they are worth trying (``krylov.worth_trying``), the
         direct step where they do not get there (logged, counted); without, or where they
         are not tried, the direct step. SingularSystemError where it has none."""
@@ -249,7 +249,7 @@ class SparseJacobian:
 
 
 def new_steps() -> dict:
-    """How the damped steps went: taken by conjugate gradients (``iterative``, their
+    """How the damped steps went: taken by conjugate residuals (``iterative``, their
     ``iterations``, ``iterative_s`` seconds), ``fallbacks`` to the direct step, D
     refactorised for a step after a refused trial (``refactorizations``), and the
     products with J or J^T (``products``: a forward or an adjoint solve each)."""

@@ -3,7 +3,7 @@
 Minimises f(s) = 1/2 |r(s)|^2 for lo <= s <= hi. Each step solves the damped least
 squares min |J p + r|^2 + mu |p|^2 over the variables not held at a bound (a variable at
 its bound whose gradient pushes it out is held): where J is given whole, by Cholesky on
-J J^T + mu (or J^T J + mu, the smaller); else by conjugate gradients on the smaller of
+J J^T + mu (or J^T J + mu, the smaller); else by conjugate residuals on the smaller of
 the two with J's products (``catenet.formfind.krylov``) to a relative residual eta (an
 inexact Levenberg-Marquardt), or, where they do not get there, by one sparse
 factorisation of the saddle-point system that holds J without forming it

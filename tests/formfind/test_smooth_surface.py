@@ -77,8 +77,8 @@ def test_the_adjoint_jacobian_on_a_smooth_surface_is_the_finite_differences_one(
     assert np.abs(whole - fd).max() <= 1e-6 * scale
 
 
-def test_a_roof_meets_its_smooth_surface_by_conjugate_gradients(tmp_path, monkeypatch):
-    """480 force densities (the steps by conjugate gradients, as at 10^4) put the 225
+def test_a_roof_meets_its_smooth_surface_by_conjugate_residuals(tmp_path, monkeypatch):
+    """480 force densities (the steps by conjugate residuals, as at 10^4) put the 225
     free nodes on the smooth field, checked against matplotlib's own C1 interpolant of the
     mesh; the summary names the smooth surface and counts the products with the
     Jacobians; the rows' preconditioner was analysed once for the whole search."""
