@@ -30,14 +30,33 @@ if TYPE_CHECKING:
     from catenet.run.report import RunResult
 
 EXIT_SIGINT = 130  # interrupted by Ctrl-C (SIGINT), as shells report it
-#: A body's summary line where no barrier saw it meet the net but the edges' watch did
-#: (``catenet.run.crossings.EdgeWatch.met``).
+#: How the edges' watch saw a body meet the net where no barrier did, in its summary
+#: line (``catenet.run.crossings.EdgeWatch.met``).
 UNSEEN = {
-    "through": "no node of the net came within its reach, but it and the net went "
-    "through each other between two time steps (see the warning)",
-    "cut": "no node of the net came within its reach, but strands between the nodes cut "
-    "into it (see the warning)",
+    "cut": "strands between the nodes cut into it",
+    "through": "it and the net went through each other between two {steps}",
 }
+
+
+def _touch(body: dict, case) -> str:
+    """How a body met the net, for its summary line: a static run's state at rest, a
+    dynamic run's first contact, or how the edges' watch saw them meet unseen."""
+    first, dynamic = body["first_contact"], case.solver.method == "dynamic"
+    if first is None and body.get("unseen"):  # met between the nodes or the states
+        return _unseen(body["unseen"], case.solver.edge_contact, dynamic)
+    if not dynamic:
+        return "not touching the net" if first is None else "resting on the net"
+    return "never touched the net" if first is None else f"first contact at t = {first:.6g} s"
+
+
+def _unseen(kinds: list[str], edge_contact: bool, dynamic: bool) -> str:
+    """A body's summary line where no node (nor, with edge contact, strand) came within
+    its barrier's reach but the edges' watch saw the net meet it."""
+    steps = "time steps" if dynamic else "load steps"
+    met = " and ".join(UNSEEN[k].format(steps=steps) for k in kinds)
+    what = "node or strand" if edge_contact else "node"
+    many = "s" if len(kinds) > 1 else ""
+    return f"no {what} of the net came within its reach, but {met} (see the warning{many})"
 
 
 class StopFlag:
@@ -377,15 +396,11 @@ def _summary(case, result, path: Path | None) -> None:
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
         lines.insert(-1, _balance(result.energy, result.energy_scale))
     for k, b in sorted(s.bodies.items()):  # free rigid bodies and balls, one line each
-        first = b["first_contact"]
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "
+        touch = _touch(b, case)
         if case.solver.method != "dynamic":  # at rest: where it is is the answer
-            touch = "not touching the net" if first is None else "resting on the net"
             lines.insert(-1, head + touch)
             continue
-        touch = "never touched the net" if first is None else f"first contact at t = {first:.6g} s"
-        if first is None and b.get("unseen"):  # met between the nodes or the states
-            touch = UNSEEN[b["unseen"]]
         if b.get("ball"):  # a ball: a point, no spin
             lines.insert(-1, head + f"speed {b['speed']:.4g} m/s at the end; {touch}")
             continue

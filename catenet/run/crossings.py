@@ -321,16 +321,15 @@ class EdgeWatch:
             crossed |= solid.see(t, x, self.edges, which, False)
             solid.cut.steps += crossed
 
-    def met(self) -> dict[int, str]:
-        """Per obstacle index, how the net met the solid where no barrier saw it:
-        "through" (a step carried them through each other) or "cut" (edges went into
-        it); obstacles with neither are left out."""
+    def met(self) -> dict[int, list[str]]:
+        """Per obstacle index, how the net met the solid where no barrier saw it: "cut"
+        (edges went into it), "through" (a step carried them through each other), or
+        both; obstacles with neither are left out."""
         out = {}
         for s in self.solids:
-            if s.passed.edge >= 0:
-                out[s.index] = "through"
-            elif s.cut.edge >= 0:
-                out[s.index] = "cut"
+            kinds = [k for k, w in (("cut", s.cut), ("through", s.passed)) if w.edge >= 0]
+            if kinds:
+                out[s.index] = kinds
         return out
 
     def warnings(self) -> list[str]:
