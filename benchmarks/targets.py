@@ -157,7 +157,7 @@ def back_substitution(found, count: int = 50) -> float:
     "--direct",
     is_flag=True,
     help="Every damped step by the direct saddle-point factorisation (no conjugate "
-    "gradients): the steps as they were before them.",
+    "residuals): the steps as they were before the iterations.",
 )
 def main(out_dir: Path, quick: bool, direct: bool) -> None:
     """The hypar on its surface: gradients and time per gradient against a Newton

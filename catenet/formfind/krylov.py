@@ -24,7 +24,7 @@ Without that preconditioner the iterations are tried only on a system of at most
 ``MAX_ITER`` unknowns (the iterations then end within about that many); a larger one
 takes the direct step at once. The iterations stop at the relative residual ``eta`` the
 caller asks (the forcing term of an inexact Levenberg-Marquardt), at most ``MAX_ITER``
-(conjugate residuals: they minimise the residual that the tolerance reads, ``cr``);
+(conjugate residuals, ``cr``: each iteration minimises the preconditioned residual);
 the residual is then recomputed from the products and the step accepted only where it is
 finite and within ``eta`` (they aim at ``eta`` / ``MARGIN``), else ``NotConverged`` says
 why and the caller takes the direct step
@@ -233,8 +233,9 @@ def cr(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray,
     each iteration minimises the residual's P-norm over its Krylov space, where
     conjugate gradients minimise the error's A-norm and let the residual wander, so a
     loose tolerance on the residual (an inexact step's ``eta``) is met in fewer
-    iterations: the hypar of 10224 force densities on its surface takes 422 where
-    conjugate gradients took 545, and 221 where they took 287 on the smooth surface (the
+    iterations (measured, not guaranteed where P is not the identity: the residual's
+    2-norm may then rise): the hypar of 10224 force densities on its surface takes 422 where
+    conjugate gradients took 554, and 221 where they took 287 on the smooth surface (the
     same steps and gradients; Saad, Iterative Methods for Sparse Linear Systems, 6.8).
     One product with A and one with P per iteration, as CG. To the relative residual
     eta / MARGIN, then recomputed (within eta, finite); the iterations taken.
@@ -256,7 +257,10 @@ def cr(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray,
         q = apply_p(ad)  # P A d
         dapad = float(ad @ q)
         if not (np.isfinite(dapad) and dapad > 0.0 and np.isfinite(zaz) and zaz > 0.0):
-            raise NotConverged(f"the operator is not positive definite ({dapad:.3g})")
+            raise NotConverged(
+                f"the operator or its preconditioner is not positive definite "
+                f"(d.A.P.A.d = {dapad:.3g}, z.A.z = {zaz:.3g})"
+            )
         alpha = zaz / dapad
         x += alpha * d
         res -= alpha * ad

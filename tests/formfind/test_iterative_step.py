@@ -185,7 +185,7 @@ def test_where_iterations_do_not_pay_the_direct_step_is_taken_at_once(why, monke
 def test_the_direct_step_is_taken_and_said_where_the_iterations_fail(
     how, tmp_path, monkeypatch, caplog
 ):
-    """Conjugate gradients cut to 3 iterations (short of eta = 1e-10), or a solve that
+    """Conjugate residuals cut to 3 iterations (short of eta = 1e-10), or a solve that
     gives NaN: the step is the direct one, counted as a fallback, and the log says why."""
     op, r, whole = operator(*hypar(tmp_path))
     keep = np.ones(whole.shape[1], dtype=bool)
@@ -232,15 +232,30 @@ def test_a_search_by_conjugate_residuals_meets_the_surface_as_the_direct_one(tmp
     assert np.abs(np.log(first.q / direct.q)).max() < 1e-5
 
 
-def test_conjugate_residuals_meet_a_loose_tolerance_in_no_more_iterations_than_gradients():
-    """``krylov.cr`` minimises the residual over the same Krylov space in which
-    conjugate gradients minimise the error's A-norm: to a relative residual it takes no
-    more iterations than SciPy's CG to the same one (a system of 300 unknowns,
-    eigenvalues from 1 to 1e3), its true residual within the tolerance; with a
-    preconditioner it meets the tolerance too. The preconditioner may be the identity
-    (it returns its argument: the residual is not updated twice)."""
-    from scipy.sparse.linalg import cg
 
+def _cg(a, b, tol):
+    """Textbook conjugate gradients to the relative residual tol: the iterations."""
+    x, r = np.zeros_like(b), b.copy()
+    d, rr, it = r.copy(), float(r @ r), 0
+    while np.sqrt(rr) > tol * np.linalg.norm(b):
+        ad = a @ d
+        alpha = rr / float(d @ ad)
+        x += alpha * d
+        r -= alpha * ad
+        rr, old = float(r @ r), rr
+        d = r + (rr / old) * d
+        it += 1
+    return it
+
+
+def test_conjugate_residuals_meet_a_loose_tolerance_in_fewer_iterations_than_gradients():
+    """``krylov.cr`` minimises the residual over the same Krylov space in which
+    conjugate gradients minimise the error's A-norm: to a loose relative residual it
+    takes fewer iterations than conjugate gradients to the same one (a system of 300
+    unknowns, eigenvalues from 1 to 1e3: 38 against 52 at 0.3 when measured), no more to
+    a tight one, its true residual within the tolerance; with a preconditioner it meets
+    the tolerance too. The preconditioner may be the identity (it returns its argument:
+    the residual is not updated twice)."""
     rng = np.random.default_rng(7)
     n = 300
     q, _ = np.linalg.qr(rng.standard_normal((n, n)))
@@ -250,9 +265,10 @@ def test_conjugate_residuals_meet_a_loose_tolerance_in_no_more_iterations_than_g
     for eta in (0.3, 0.1, 1e-2, 1e-4):
         x, it = krylov.cr(lambda v: a @ v, b, eta)
         assert np.linalg.norm(b - a @ x) <= eta * np.linalg.norm(b)
-        seen = []
-        _, info = cg(a, b, rtol=eta / krylov.MARGIN, maxiter=1000, callback=seen.append)
-        assert info == 0 and 0 < it <= len(seen), (eta, it, len(seen))
+        gradients = _cg(a, b, eta / krylov.MARGIN)
+        assert 0 < it <= gradients, (eta, it, gradients)
+        if eta >= 0.1:
+            assert it < gradients, (eta, it, gradients)
         x, _ = krylov.cr(lambda v: a @ v, b, eta, lambda v: v)  # (P = I, the same array)
         assert np.linalg.norm(b - a @ x) <= eta * np.linalg.norm(b)
         x, _ = krylov.cr(lambda v: a @ v, b, eta, lambda v: jacobi * v)
