@@ -234,9 +234,10 @@ def cr(apply, b: np.ndarray, eta: float, precondition=None) -> tuple[np.ndarray,
     conjugate gradients minimise the error's A-norm and let the residual wander, so a
     loose tolerance on the residual (an inexact step's ``eta``) is met in fewer
     iterations (measured, not guaranteed where P is not the identity: the residual's
-    2-norm may then rise): the hypar of 10224 force densities on its surface takes 422 where
-    conjugate gradients took 554, and 221 where they took 287 on the smooth surface (the
-    same steps and gradients; Saad, Iterative Methods for Sparse Linear Systems, 6.8).
+    2-norm may then rise): the hypar of 10224 force densities on its surface takes 422
+    where conjugate gradients took 554, and 221 where they took 287 on the smooth surface
+    (the same steps and gradients; Saad, Iterative Methods for Sparse Linear Systems,
+    6.8).
     One product with A and one with P per iteration, as CG. To the relative residual
     eta / MARGIN, then recomputed (within eta, finite); the iterations taken.
     NotConverged where it does not get there."""

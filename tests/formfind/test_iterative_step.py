@@ -232,7 +232,6 @@ def test_a_search_by_conjugate_residuals_meets_the_surface_as_the_direct_one(tmp
     assert np.abs(np.log(first.q / direct.q)).max() < 1e-5
 
 
-
 def _cg(a, b, tol):
     """Textbook conjugate gradients to the relative residual tol: the iterations."""
     x, r = np.zeros_like(b), b.copy()

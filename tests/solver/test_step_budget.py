@@ -153,10 +153,11 @@ def _course(history: list[float], it: int | None = None):
 def test_a_residual_that_bumps_on_its_way_down_is_still_on_course():
     """Past its budget a solve goes on while its best residual of the last five accepted
     steps is 3 % below its best before them. A minimiser of Phi need not lower |grad Phi|
-    at every step: the 101 x 101 net's first contact at 10 ms fell from 3838 to 1906 N
-    and then rose to 4959 N on one extrapolated step (Phi still falling), which the rule
-    on the last step alone took for a stall and cut; the step then converged in its
-    halves only after 22 more iterations. A solve that creeps is still cut."""
+    at every step: at the 101 x 101 net's first contact at 10 ms the residual fell from
+    3838 to 1906 N and then rose to 4959 N on one extrapolated step (Phi still falling),
+    which the rule on the last step alone took for a stall and cut; with the later cuts,
+    960 Newton iterations in 29 steps to 0.05 s, against 208 in 7 judged by the best. A
+    solve that creeps is still cut."""
     down = [1e4 * 0.9**k for k in range(30)]
     assert _course(down)
     bumped = down[:-1] + [3.0 * down[-7]]  # the last step above the one five before
