@@ -28,11 +28,13 @@ class RunReport:
     trajectory's size as estimated before the run (0 without a file); cables: per cable of a
     graph case (None for other nets); bodies: per free rigid body (its obstacle index):
     kind, first contact time (None: none), final spin [deg/s] and axis, speed [m/s]
-    (``catenet.run.bodies.BodyWatch.stats``); summary: the summary's numbers
-    (``catenet.model.summary.summarize_result``: largest displacement, reactions, slack
-    edges, peaks, per cable, ...: the /result attributes and the sweep columns); cases: per
-    load case and combination its numbers (with ``converged`` and ``error``); envelope: the
-    extremes over the cases and the cases that give them (``catenet.run.cases.governing``)."""
+    (``catenet.run.bodies.BodyWatch.stats``), and ``unseen`` where the net met it where no
+    barrier looks ("cut", "through": ``catenet.run.crossings.EdgeWatch.met``); summary: the
+    summary's numbers (``catenet.model.summary.summarize_result``: largest displacement,
+    reactions, slack edges, peaks, per cable, ...: the /result attributes and the sweep
+    columns); cases: per load case and combination its numbers (with ``converged`` and
+    ``error``); envelope: the extremes over the cases and the cases that give them
+    (``catenet.run.cases.governing``)."""
 
     delta: float
     size: float
