@@ -35,25 +35,48 @@ def body_paths(x, dx, nodes, body, B, c0):
         scale = max(scale, abs(c0[m]))
     for k in range(K):
         i = nodes[k]
-        u = np.empty(3)
-        du = np.empty(3)
-        for j in range(3):
-            u[j] = x[i, j] - c[j]
-            du[j] = dx[i, j] - dc[j]
-            scale = max(scale, abs(u[j]))
+        u0, u1, u2 = x[i, 0] - c[0], x[i, 1] - c[1], x[i, 2] - c[2]  # (scalars: no
+        d0, d1, d2 = dx[i, 0] - dc[0], dx[i, 1] - dc[1], dx[i, 2] - dc[2]  # allocation)
+        scale = max(scale, abs(u0), abs(u1), abs(u2))
         for m in range(3):
             s = c0[m]
+            s += u0 * A[0, m]
+            s += u1 * A[1, m]
+            s += u2 * A[2, m]
             v = 0.0
+            v += d0 * A[0, m] + u0 * dA[0, m]
+            v += d1 * A[1, m] + u1 * dA[1, m]
+            v += d2 * A[2, m] + u2 * dA[2, m]
             w = 0.0
-            for j in range(3):
-                s += u[j] * A[j, m]
-                v += du[j] * A[j, m] + u[j] * dA[j, m]
-                w += du[j] * dA[j, m]
+            w += d0 * dA[0, m]
+            w += d1 * dA[1, m]
+            w += d2 * dA[2, m]
             X0[k, m] = s
             V[k, m] = v
             W[k, m] = w
             scale = max(scale, abs(s))
     return X0, V, W, scale
+
+
+@njit(cache=True, error_model="numpy")
+def body_room(x, dx, nodes, body, B, c0, start, room):
+    """The largest multiple t of the step dx that keeps every node within ``room`` of
+    its body-frame point ``start``: the least t > 0 with |W| t^2 + |V| t = room -
+    |X0 - start| over the nodes (inf: none); -1 where a node is already beyond its room
+    (``BodyContact._roomy``)."""
+    X0, V, W, _ = body_paths(x, dx, nodes, body, B, c0)
+    best = np.inf
+    for k in range(nodes.shape[0]):
+        e0, e1, e2 = X0[k, 0] - start[k, 0], X0[k, 1] - start[k, 1], X0[k, 2] - start[k, 2]
+        r = room[k] - np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        if r <= 0.0:
+            return -1.0
+        b = np.sqrt(V[k, 0] * V[k, 0] + V[k, 1] * V[k, 1] + V[k, 2] * V[k, 2])
+        a = np.sqrt(W[k, 0] * W[k, 0] + W[k, 1] * W[k, 1] + W[k, 2] * W[k, 2])
+        below = b + np.sqrt(b * b + 4.0 * a * r)  # (the stable root's form)
+        if below > 0.0:
+            best = min(best, 2.0 * r / below)
+    return best
 
 
 @njit(cache=True, error_model="numpy")

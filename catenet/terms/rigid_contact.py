@@ -62,7 +62,7 @@ import math
 
 import numpy as np
 
-from catenet.kernels.bodycap import body_paths, body_step_cap
+from catenet.kernels.bodycap import body_paths, body_room, body_step_cap
 from catenet.kernels.rigid import (
     frame_contact_gradient,
     frame_contact_hessian,
@@ -303,18 +303,12 @@ class BodyContact(Term):
         last iteration, not one of its first, wild steps: the 101 x 101 net's 10 ms step
         was tried four times over, 27 iterations each, to the same failure)."""
         frame = self.frame
-        X0, V, W, _ = body_paths(x, dx, self._far, frame.nodes, frame.B, self.c0)
-        c = np.sqrt(np.einsum("ij,ij->i", X0 - self._far_X, X0 - self._far_X))
-        b = np.sqrt(np.einsum("ij,ij->i", V, V))
-        a = np.sqrt(np.einsum("ij,ij->i", W, W))
-        room = self._room - c
-        if np.any(room <= 0.0):
+        out = float(
+            body_room(x, dx, self._far, frame.nodes, frame.B, self.c0, self._far_X, self._room)
+        )  # (the least t > 0 with |W| t^2 + |V| t = room - |X0 - start|; none: inf)
+        if out < 0.0:  # a node already beyond its room
             self.held = True
             return 0.0
-        # the least t > 0 with a t^2 + b t = room (the stable root's form; none: inf)
-        below = b + np.sqrt(b * b + 4.0 * a * room)
-        t = np.divide(2.0 * room, below, out=np.full(len(room), math.inf), where=below > 0.0)
-        out = float(t.min(initial=math.inf))
         self.held = out < 1.0
         return out
 
