@@ -22,6 +22,11 @@ not change). Each roof twice: on the surface mesh's flat triangles, and ``smooth
 C1 height field through its vertices). Writes DIR/targets.csv (default
 benchmarks/results; with --direct, every damped step by the direct factorisation,
 DIR/targets-direct.csv) and prints the table.
+
+With --first-order the same search from the same start is driven instead by SciPy's
+L-BFGS-B on 1/2 |r|^2, its gradient J^T r one adjoint solve with D's factors (what a
+gradient costs where no damped step is solved: jax_fdm's way), until every node is on the
+surface or FIRST_ORDER_BUDGET gradients: DIR/targets-first-order.csv.
 """
 
 from __future__ import annotations
@@ -42,6 +47,39 @@ from benchmarks.common import write_csv
 SIZES = (24, 72)  # grid side: 1104 and 10224 force densities
 QUICK_SIZES = (8, 24)
 SNOW = 500.0  # N/m^2 on the plan
+FIRST_ORDER_BUDGET = 3000  # --first-order: L-BFGS-B's gradients at most
+
+
+def first_order(search, s0, bounds, budget):
+    """catenet.formfind.design's search from s0 by L-BFGS-B (SciPy) on 1/2 |r|^2, its
+    gradient J^T r one adjoint solve (the Jacobian's operator, never formed): ("met", s)
+    where every target is met, else (how it ended, the best s)."""
+    import numpy as np
+    import scipy.optimize
+
+    from catenet.formfind import design
+
+    class Met(Exception):
+        pass
+
+    def value_and_gradient(s):
+        try:
+            r = search.residual(s)
+        except design._Met as met:
+            raise Met from met
+        jac = search.jacobian(s)
+        return 0.5 * float(r @ r), np.asarray(jac.rmatvec(r))
+
+    box = list(zip(*(np.broadcast_to(b, s0.shape) for b in bounds), strict=True))
+    try:
+        ended = scipy.optimize.minimize(
+            value_and_gradient, s0, jac=True, method="L-BFGS-B", bounds=box,
+            options={"maxfun": FIRST_ORDER_BUDGET, "maxiter": FIRST_ORDER_BUDGET,
+                     "ftol": 0.0, "gtol": 0.0},
+        )  # fmt: skip
+    except Met:
+        return "met", np.frombuffer(search.key or s0.tobytes()).copy()
+    return f"L-BFGS-B: {ended.message}", search.best[1] if search.best else ended.x
 
 
 def roof_row(n: int, smooth: bool = False) -> dict:
@@ -159,13 +197,22 @@ def back_substitution(found, count: int = 50) -> float:
     help="Every damped step by the direct saddle-point factorisation (no conjugate "
     "residuals): the steps as they were before the iterations.",
 )
-def main(out_dir: Path, quick: bool, direct: bool) -> None:
+@click.option(
+    "--first-order",
+    is_flag=True,
+    help="The search by L-BFGS-B on adjoint gradients (one adjoint solve each) in place "
+    "of Levenberg-Marquardt's damped steps.",
+)
+def main(out_dir: Path, quick: bool, direct: bool, first_order: bool) -> None:
     """The hypar on its surface: gradients and time per gradient against a Newton
     iteration."""
     from benchmarks.common import set_threads
-    from catenet.formfind import krylov
+    from catenet.formfind import design, krylov
 
     krylov.ENABLED = not direct
+    if first_order:
+        design._search = globals()["first_order"]
+        design.DENSE = -1  # a gradient is one adjoint solve at every size
 
     set_threads(1)
     roof_row(16)  # (warm: Numba's caches, MKL, the imports of the sparse steps)
@@ -190,7 +237,8 @@ def main(out_dir: Path, quick: bool, direct: bool) -> None:
             f"{r['newton_over_back_substitution']:.0f})"
         )
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_csv(rows, out_dir / ("targets-direct.csv" if direct else "targets.csv"))
+    name = "targets-first-order" if first_order else "targets-direct" if direct else "targets"
+    write_csv(rows, out_dir / f"{name}.csv")
 
 
 if __name__ == "__main__":
