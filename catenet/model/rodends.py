@@ -248,3 +248,20 @@ def support_moments(net, rods, x: np.ndarray) -> np.ndarray | None:
         t = d / np.linalg.norm(d, axis=1)[:, None]
         np.add.at(out, clamps[:, 0], 2.0 * rods.kc[:, None] * np.cross(t, rods.tangent))
     return out
+
+
+def end_bending(ends: RodEnds, rods, nodes: np.ndarray, x: np.ndarray, moment, kappa) -> None:
+    """Adds each 6x6 support's bending moment at its rod end to ``moment`` (N,) [N m], the
+    part of its moment (``end_moments``) across the end edge (its twist about the edge
+    left out), and to ``kappa`` (N,) [1/m] that over the end edge's EI (the ``rods``'
+    hinge at the edge's other node); the larger where a node has one already."""
+    m = end_moments(ends, nodes, x)
+    d = x[ends.other] - x[ends.nodes]
+    t = d / np.linalg.norm(d, axis=1)[:, None]
+    across = np.linalg.norm(m - np.sum(m * t, axis=1)[:, None] * t, axis=1)
+    np.maximum.at(moment, ends.nodes, across)
+    h = rods.hinges
+    for k, (c, o) in enumerate(zip(ends.nodes, ends.other, strict=True)):
+        hit = np.flatnonzero((h[:, 1] == o) & ((h[:, 0] == c) | (h[:, 2] == c)))
+        if hit.size and rods.EI[hit[0]] > 0:
+            kappa[c] = max(kappa[c], across[k] / rods.EI[hit[0]])

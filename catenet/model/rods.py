@@ -236,8 +236,10 @@ def curvature_measures(rods: Rods, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def bending_moment(rods: Rods, x: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """Per node (N,), the bending moment |M| [N m] and the curvature |kappa| [1/m]: at a
     hinge EI |s - s0| / lbar and s / lbar (lbar its Voronoi length), at a clamp the
-    mirrored end's 2 EI |t - t0| / l and 2 |t - t0| / l; 0 where nothing bends (the
-    largest where a node is a hinge of several rods)."""
+    mirrored end's 2 EI |t - t0| / l and 2 |t - t0| / l, at a rotational spring its
+    moment 2 kc |t - t0| and that over the end edge's EI (|t - t0| there is also the
+    spring's own turn); 0 where nothing bends (the largest where a node is a hinge of
+    several rods)."""
     s, d = curvature_measures(rods, x)
     moment = np.zeros(n_nodes)
     kappa = np.zeros(n_nodes)
@@ -245,8 +247,11 @@ def bending_moment(rods: Rods, x: np.ndarray, n_nodes: int) -> tuple[np.ndarray,
     np.maximum.at(moment, j, rods.EI * np.abs(s - rods.s0) / rods.voronoi)
     np.maximum.at(kappa, j, s / rods.voronoi)
     c = rods.clamps[:, 0]
-    np.maximum.at(moment, c, 2.0 * rods.kc * d)
-    np.maximum.at(kappa, c, 2.0 * d / rods.clamp_length)
+    at_clamp = 2.0 * rods.kc * d
+    np.maximum.at(moment, c, at_clamp)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        by_moment = np.where(rods.clamp_EI > 0, at_clamp / rods.clamp_EI, 0.0)
+    np.maximum.at(kappa, c, np.where(rods.rigid, 2.0 * d / rods.clamp_length, by_moment))
     return moment, kappa
 
 

@@ -13,9 +13,8 @@ source of the run's printed summary, the /result attributes and the sweep table'
   tension-only) and ``max_compression_edge``; ``compressed_edges`` (struts in compression);
 - ``max_strain`` (|e|/l0 - 1, 0 when none is stretched) and ``max_strain_edge``;
 - ``slack_edges``: tension-only edges shorter than their rest length (slack);
-- with rods: ``max_bending_moment`` [N m], ``max_bending_moment_node`` and
-  ``max_curvature`` [1/m] there (``catenet.model.rods.bending_moment``); with twisted
-  rods ``max_twisting_moment`` [N m] (the largest |M|) and ``max_twisting_moment_edge``;
+- with rods: ``max_bending_moment`` [N m], its node, ``max_curvature`` [1/m] there
+  (``bending_moments``); twisted: ``max_twisting_moment`` [N m] (the largest |M|), its edge;
 - ``reaction_resultant`` (3,) [N], ``max_reaction`` [N] and ``max_reaction_node``; where
   a support holds a rod end's direction ``max_reaction_moment`` [N m] (the largest |M| of
   ``/result/reaction_moment``) and ``max_reaction_moment_node``;
@@ -44,7 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from catenet.model import measures
+from catenet.model import measures, rodends
 from catenet.model.joints import Joints, joint_bending
 from catenet.model.net import Loads, Net
 from catenet.model.rods import Rods, bending_moment, cable_bending
@@ -393,13 +392,16 @@ def scene_rods(scene: Scene) -> Rods | None:
 
 def bending_moments(scene: Scene, x: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Per node (N,), the bending moment |M| [N m] and the curvature |kappa| [1/m] of the
-    scene's rods (``catenet.model.rods.bending_moment``), at a rigid joint its members'
-    largest (``catenet.model.joints.joint_bending``); None: nothing bends."""
+    scene's rods (``catenet.model.rods.bending_moment``; a 6x6 support's at its rod end,
+    ``catenet.model.rodends.end_bending``), at a rigid joint its members' largest
+    (``catenet.model.joints.joint_bending``); None: nothing bends."""
     rods = scene_rods(scene)
     if rods is None:
         return None
     x = np.asarray(x, dtype=np.float64)
     moment, kappa = bending_moment(rods, x, scene.net.n_nodes)
+    if (springs := scene.net.springs) is not None and springs.ends is not None:
+        rodends.end_bending(springs.ends, rods, scene.net.nodes, x, moment, kappa)  # 6x6 ends
     twist = _twist_term(scene)
     carried = None
     for term in scene.terms:
@@ -461,8 +463,6 @@ def support_moments(scene: Scene, x: np.ndarray) -> np.ndarray | None:
     (``catenet.model.rodends.support_moments``) and a clamp's torque about the rod's axis
     where it holds a twisted rod (``Twist.end_moments``); None where no support holds a
     rod end's direction."""
-    from catenet.model import rodends
-
     x = np.asarray(x, dtype=np.float64)
     out = rodends.support_moments(scene.net, scene_rods(scene), x)
     term = _twist_term(scene)

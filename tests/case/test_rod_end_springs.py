@@ -77,8 +77,11 @@ def run(tmp_path, data) -> dict:
     with h5py.File(tmp_path / "r.h5") as f:
         return {
             k: f[k][:]
-            for k in ("result/x", "mesh/nodes", "result/reaction", "result/reaction_moment")
-        }
+            for k in (
+                "result/x", "mesh/nodes", "result/reaction", "result/reaction_moment",
+                "result/bending_moment", "result/curvature",
+            )
+        }  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -108,6 +111,11 @@ def test_a_cantilever_on_a_coupled_base(tmp_path, axis, angle, side):
     arm = x[-1] - x[0]
     assert np.allclose(moment, -np.cross(arm, load), rtol=0, atol=1e-7 * P * L)
     assert np.abs(out["result/reaction"][1:]).max() == 0.0  # the free nodes hold nothing
+    # the base's bending moment is the rod's at its foot (it read 0 there)
+    across = moment - (moment @ e) * e
+    assert out["result/bending_moment"][0] == pytest.approx(np.linalg.norm(across), rel=1e-9)
+    assert out["result/curvature"][0] == pytest.approx(np.linalg.norm(across) / EI, rel=1e-9)
+    assert out["result/bending_moment"][0] >= out["result/bending_moment"][1:].max()
 
 
 def test_a_stiff_base_is_the_clamp(tmp_path):

@@ -48,6 +48,19 @@ def test_a_cantilever_on_a_rotational_spring(tmp_path, k):
     assert moment[0] == pytest.approx(P * L, rel=1e-3)
 
 
+@pytest.mark.parametrize("nodes", [31, 61, 121])
+def test_the_curvature_at_a_spring_foot_is_its_moment_over_ei(tmp_path, nodes):
+    """At a spring foot the rod's curvature is M / EI whatever the edges: the end
+    edge's turn there is mostly the spring's own, not the rod's bending (it read
+    2 |t - t0| / l, which doubled with every halving of the edges)."""
+    data = {**MAST, "geometry": {**MAST["geometry"], "nodes": nodes}}
+    run(tmp_path, data)
+    with h5py.File(tmp_path / "r.h5") as f:
+        kappa = f["result/curvature"][:]
+    assert kappa[0] == pytest.approx(P * L / EI, rel=1e-3)
+    assert kappa[1] == pytest.approx(P * (L - L / (nodes - 1)) / EI, rel=2e-2)
+
+
 def test_a_stiff_spring_is_the_clamp(tmp_path):
     stiff = {
         **MAST,
