@@ -8,6 +8,8 @@ import difflib
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from catenet.case.keys import BAD, Checker, duplicates, show
 from catenet.case.kinds.base import GeometryConfig, Topology, expand, resolve, with_prefix
 from catenet.case.kinds.graph import GraphConfig
@@ -79,7 +81,8 @@ def check_nodes(
         held = _check_partial(refs, supports, fixed, fixed_key)
         _check_moves(refs, _moved(supports), fixed, fixed_key, held)
         for k, r in enumerate(supports.clamped):
-            refs.known(r, f"supports.clamped[{k}]")
+            if refs.known(r, f"supports.clamped[{k}]"):
+                _check_clamp(refs, f"supports.clamped[{k}]", r, held, supports)
         for k, r in enumerate(supports.rigid_joints):
             refs.known(r, f"supports.rigid_joints[{k}]")
         for k, t in enumerate(supports.twists):
@@ -181,6 +184,30 @@ def _check_partial(
                     guided[i] = f"supports.{kind}[{k}]"
                 held.setdefault(i, f"supports.{kind}[{k}]")
     return held
+
+
+def _check_clamp(
+    refs: _Refs, path: str, ref: NodeRef, held: dict[int, str], supports: SupportsConfig
+) -> None:
+    """A clamped rod end on a roller, slider or a spring along x, y, z: a clamp holds it
+    in place (a 6x6 spring there: its own message, catenet.model.rods)."""
+    springs = enumerate(supports.springs)  # a 6x6's stiffness: 6 or 36 numbers
+    six = {f"supports.spring[{k}]" for k, t in springs if np.size(t.stiffness) in (6, 36)}
+    for i in refs.nodes(ref):
+        if i not in held or held[i] in six:
+            continue
+        shown = ref if isinstance(ref, int) else f"{ref!r} (node {i})"
+        what = held[i]
+        if what.startswith("supports.spring"):
+            hint = f"leave it out of {what} (a clamped end does not move), or hold its "
+            hint += "direction by a 6x6 spring (stiffness with six rows) instead of the clamp"
+        else:
+            hint = f"for an end that slides with its direction held, keep it on {what} "
+            hint += "and hold its direction by a stiff [[supports.rotational]]"
+        refs.ck.add(
+            f"{path} = {shown}: node {i} is on {what} too: a clamp holds a rod end in "
+            f"place as well as its direction; {hint} (docs/howto/rods.md)"
+        )
 
 
 def _moved(supports: SupportsConfig) -> list[tuple[str, NodeRef]]:

@@ -212,6 +212,17 @@ def test_node_sets_and_arrays_of_nodes():
             },
             ["supports.move[0].node = 'end'", "is on supports.roller[0]", "does not move"],
         ),
+        (  # a clamp holds its end in place: it named the geometry's fixed nodes
+            {"slider": [{"nodes": "end", "direction": [1, 0, 0]}], "clamped": ["end"]},
+            [
+                "supports.clamped[0] = 'end' (node 10): node 10 is on supports.slider[0] too",
+                "hold its direction by a stiff [[supports.rotational]]",
+            ],
+        ),
+        (  # a spring on a clamped end held nothing, silently
+            {"spring": [{"nodes": [0], "stiffness": [1, 1, 1]}], "clamped": ["start"]},
+            ["supports.clamped[0] = 'start' (node 0): node 0 is on supports.spring[0] too"],
+        ),
     ],
 )
 def test_bad_supports_are_refused(tmp_path, change, needles):
