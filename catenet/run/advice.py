@@ -327,8 +327,8 @@ def unit_slips(case: Case, net) -> list[str]:
             guess = f"; did you mean {meant:g} ({_si(meant * factors[quantity], quantity)})"
         found.append(
             f"check units: {key} = {float(written):g} {unit} ({units}) is far "
-            f"{'below' if si < low else 'above'} real cables ({low:g} to {high:g} "
-            f"{UNIT_NAMES['SI'][quantity]} in SI){guess}?"
+            f"{'below' if si < low else 'above'} real cables ({low:g} to {high:g} in SI "
+            f"units of {UNIT_NAMES['SI'][quantity]}){guess}?"  # (no relabel: SI stays SI)
         )
     return list(dict.fromkeys(found))
 

@@ -61,6 +61,18 @@ def test_a_modulus_in_the_wrong_unit_fails_the_base_state_naming_it(tmp_path):
     assert "did you mean 1.6e+11" in error  # the likely cause, in the error itself
 
 
+def test_a_slip_in_n_mm_gives_the_real_range_in_si(tmp_path):
+    """In N-mm the written E is named in MPa, the real cables' range in SI stays in Pa
+    (the units' relabelling read it as MPa: a range that held the value it refused)."""
+    case = truss(E=7e10, radius=10.0, density=7.85e-9)
+    case["units"] = "N-mm"
+    case["geometry"]["end"] = [20000, 0, 0]
+    case["load"]["gravity"] = [0.0, 0.0, -9810.0]
+    r = run(tmp_path, case)
+    assert "check units: material.E = 7e+10 MPa (N-mm) is far above real cables" in r.output
+    assert "(1e+06 to 3e+11 in SI units of Pa); did you mean 70000 (70 GPa)?" in r.output
+
+
 def test_a_load_case_in_the_wrong_unit_fails_naming_itself(tmp_path):
     """A plausible base state and a snow load a million times too large (N-mm's N given
     where the case is in MN, say): that case fails (exit 1) naming itself, the wind case
