@@ -76,8 +76,8 @@ def spring6_matrix(stiffness, what: str = "stiffness") -> np.ndarray | None:
     if asym.max() > SYMMETRY * scale:
         i, j = np.unravel_index(int(np.argmax(asym)), k.shape)
         raise ConfigError(
-            f"{what}: not symmetric: row {i} column {j} is {k[i, j]!r}, row {j} column {i} "
-            f"{k[j, i]!r}: {accepted}"
+            f"{what}: not symmetric: row {i} column {j} is {float(k[i, j]):g}, row {j} column {i} "
+            f"{float(k[j, i]):g}: {accepted}"
         )
     k = 0.5 * (k + k.T)
     # the diagonal's scale per row: units differ between the translation and the turn

@@ -150,7 +150,7 @@ def build_rods(
                 "clamped (rigidly) or on a rotational spring, not both"
             )
         nodes = np.asarray(list(springs), dtype=np.int64)
-        more = _clamps(net, EI, hinges, nodes, spring_key)
+        more = _clamps(net, EI, hinges, nodes, spring_key, "a rotational spring's node")
         clamps, tangent, c_ei, c_len = (
             np.ascontiguousarray(np.concatenate([a, b]))
             for a, b in zip((clamps, tangent, c_ei, c_len), more, strict=True)
@@ -171,11 +171,11 @@ def build_rods(
     )
 
 
-def _clamps(net: Net, EI: np.ndarray, hinges: np.ndarray, clamped, key: str):
+def _clamps(net: Net, EI, hinges, clamped, key: str, role: str = "a clamped node"):
     """The clamps' (node, other node) pairs, held tangents, EI and rest lengths; a
-    ConfigError naming each clamped node that is no rod end."""
+    ConfigError naming each clamped node (``role``) that is no rod end."""
     nodes = np.zeros(0, np.int64) if clamped is None else np.asarray(clamped, np.int64)
-    pairs, tangent, edge = rod_ends(net, EI, hinges, nodes, key)
+    pairs, tangent, edge = rod_ends(net, EI, hinges, nodes, key, role)
     return (
         pairs,
         tangent,

@@ -98,7 +98,10 @@ def test_a_spring_holds_no_twist():
     [
         ({"rotational": [{"nodes": [0], "stiffness": -1.0}]}, "supports.rotational[0].stiffness"),
         ({"rotational": [{"nodes": [0]}]}, "supports.rotational[0].stiffness"),
-        ({"rotational": [{"nodes": [30], "stiffness": 1.0}]}, "node 30 is an interior node"),
+        (
+            {"rotational": [{"nodes": [30], "stiffness": 1.0}]},
+            "node 30 is an interior node of a rod: a rotational spring's node must be the end",
+        ),
         (
             {"clamped": [0], "rotational": [{"nodes": [0], "stiffness": 1.0}]},
             "node 0 is in supports.clamped too",
