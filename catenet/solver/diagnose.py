@@ -34,9 +34,10 @@ def has_twist(system: System) -> bool:
     return any(t.name == "twist" for t in system.terms)
 
 
-def bending_nodes(system: System) -> np.ndarray | None:
+def bending_nodes(system: System, ends: bool = False) -> np.ndarray | None:
     """(N,) bool: the nodes where a rod's bending stiffness holds the net sideways (a
-    hinge's interior node, the far node of a clamped end edge); None without rods."""
+    hinge's interior node, the far node of a clamped end edge; ``ends``: a rod's end
+    nodes too); None without rods."""
     if "catenet.terms.bending" not in sys.modules:
         return None  # none exists before its module loads: not loaded to look
     from catenet.terms.bending import Bending
@@ -46,7 +47,7 @@ def bending_nodes(system: System) -> np.ndarray | None:
         return None
     held = np.zeros(system.net.n_nodes, bool)
     for r in rods:
-        held[np.asarray(r.hinges[:, 1], dtype=np.int64)] = True
+        held[np.asarray(r.hinges[:, 1:2] if not ends else r.hinges, dtype=np.int64)] = True
         held[np.asarray(r.clamps[:, 1], dtype=np.int64)] = True
     return held
 

@@ -470,7 +470,7 @@ def describe_collapse(
     from catenet.solver.diagnose import bending_nodes
 
     where = f"nodes {_shown(nodes)}" if nodes.size else "the net"
-    bent = bending_nodes(judge.ws.system)
+    bent = bending_nodes(judge.ws.system, ends=True)  # a strut's end slides as it bows
     fix = (
         f"; {where} move most. The structure is a mechanism or loses its stability "
         "under these loads (a chain of pinned struts, an unbraced joint, a snap-through, "

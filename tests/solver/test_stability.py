@@ -430,3 +430,24 @@ def test_a_rod_beyond_its_euler_load_is_no_mechanism(tmp_path, units):
     r = invoke("run", write(tmp_path, rod(-20.0, 0.0)), "-o", tmp_path / "c.h5", "-q")
     assert r.exit_code == 1, r.output
     assert "a mechanism" in r.output and "give it bending stiffness (material.EI" in r.output
+
+
+def test_a_strut_loaded_on_a_slider_beyond_its_euler_load_is_said_to_buckle(tmp_path):
+    """A pinned rod (EI = 1 N m^2, L = 1 m) pushed along its axis at a slider end by
+    1.05 x pi^2 EI / L^2: the load path collapses as a rod beyond its buckling load, not
+    as a mechanism to be made of one edge (the slider's end moves with the bow, and the
+    message took it for a pinned strut's node)."""
+    case = {
+        "title": "a strut on a slider",
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [1, 0, 0], "nodes": 21},
+        "material": {"EA": 1e5, "EI": 1.0, "tension_only": False},
+        "supports": {
+            "fixed": ["start"],
+            "slider": [{"nodes": "end", "direction": [1, 0, 0]}],
+        },
+        "load": {"point": [{"node": "end", "force": [-1.05 * math.pi**2, 0, 0]}]},
+    }
+    r = invoke("run", write(tmp_path, case), "-o", tmp_path / "s.h5", "-q")
+    assert r.exit_code == 1, r.output
+    assert "exceed a buckling (limit) load of the structure as modelled" in r.output
+    assert "make a strut one edge" not in r.output
