@@ -251,6 +251,8 @@ class Operator:
         rigid = rigidities(system)
         self.k_data = system.hessian(x, skip=rigid).copy()
         self.convex = system.convex
+        # something slides freely (a body, a node on a barrier): zero modes at round-off
+        self.slides = bool(rigid) or any(t.barrier for t in system.terms)
         self.m_data = mass_data(system, mass, blocks)
         self.m_free = system.matrix(self.m_data)  # M on the free DOFs (participation)
         reduce = rigid or system.guides is not None  # bodies, rollers and sliders

@@ -310,12 +310,15 @@ GAP = 1e4  # zero modes in the margin band lie this far below the first real mod
 
 def _zero_modes(lam: np.ndarray, op: Operator) -> np.ndarray:
     """(len(lam),) bool: the zero-frequency modes of the ascending omega^2 ``lam``: those
-    below ``op.zero``, and the lowest j within the margin band |omega^2| < ``op.negative``
-    that a gap of GAP separates from the next (a frictionless body's free slide or turn
-    at an equilibrium held to rtol: its omega^2 is round-off of either sign, 1e-9 of the
-    stiffness scale, where the lowest real mode is orders of magnitude above it)."""
+    below ``op.zero``, and where something slides freely (``op.slides``: a free body, a
+    barrier) the lowest j within the margin band |omega^2| < ``op.negative`` that a gap of
+    GAP separates from the next (a frictionless body's free slide or turn at an
+    equilibrium held to rtol: its omega^2 is round-off of either sign, 1e-9 of the
+    stiffness scale, where the lowest real mode is orders of magnitude above it). Without
+    one, a near-rigid member on springs keeps its modes on them (at 5e-12 of the scale,
+    their band's gap to the member's own modes 1e4 and more)."""
     zero = lam < op.zero
-    band = int(np.count_nonzero(lam < op.negative))
+    band = int(np.count_nonzero(lam < op.negative)) if op.slides else 0
     for j in range(band, 0, -1):
         low = max(float(np.max(np.abs(lam[:j]))), op.zero)
         if j < lam.size and lam[j] > GAP * low:

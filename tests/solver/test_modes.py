@@ -486,3 +486,32 @@ def test_modes_at_the_eigensolver_s_round_off_pass_and_inaccurate_ones_do_not():
     assert wrong["residual"] > modes.RESIDUAL_TOL and wrong["roundoff_ratio"] > 1e3
     with pytest.raises(ConvergenceError, match="inaccurate"):
         modes._check_found(SimpleNamespace(stats=wrong, count=3), 3)
+
+
+@pytest.mark.parametrize("stiff", [1e2, 1e3])
+def test_a_near_rigid_girder_keeps_its_modes_on_its_bearings(stiff):
+    """A 6 m girder (253 kg) on bearings at both ends (springs 1e7, 1e7, 5e6 N/m along
+    x, y, z) bounces, sways and rocks on them as a rigid body: sqrt(2 k / m) and
+    sqrt(2 k (L/2)^2 / I) / (2 pi) for its bounce and rocking (I its lumped masses'),
+    to its own stiffness's share. As a
+    near-rigid transfer girder (EA 9e11 N, EI 1.75e12 N m^2) these modes lie at 5e-12
+    of the stiffness scale, below the margin band of round-off zero modes by a gap of
+    1e4: they were dropped as "a mechanism of the taut edges", and the girder's own
+    12 kHz mode came first."""
+    from catenet.case import build, parse_case
+
+    case = {
+        "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [6, 0, 0], "nodes": 61},
+        "material": {"EA": 9e8 * stiff, "area": 5.38e-3, "density": 7850.0, "EI": 1.75e9 * stiff},
+        "supports": {"fixed": [], "spring": [{"nodes": ["start", "end"], "stiffness": [1e7, 1e7, 5e6]}]},
+    }  # fmt: skip
+    modes = catenet.modes(build(parse_case(case)), k=5)
+    mass = 7850.0 * 5.38e-3 * 6.0
+    assert modes.zero_modes == 0
+    bounce, sway = math.sqrt(2 * 5e6 / mass), math.sqrt(2 * 1e7 / mass)
+    share = np.full(61, 1.0 / 60)
+    share[[0, -1]] /= 2  # the lumped masses' moment of inertia about the middle
+    inertia = mass * np.sum(share * (np.linspace(0.0, 6.0, 61) - 3.0) ** 2)
+    rocking = [math.sqrt(2 * k * 9.0 / inertia) for k in (5e6, 1e7)]
+    expected = np.sort([bounce, sway, sway, *rocking]) / (2 * math.pi)
+    np.testing.assert_allclose(modes.frequency, expected, rtol=2e-2 / stiff)  # its own give
