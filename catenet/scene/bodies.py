@@ -228,10 +228,14 @@ def _collisions(
     """The terms that stop ``ball`` (centre ``node``) at the other obstacles, exact for
     its shape: a plane moved out by the radius, a fixed sphere grown by it, another ball
     (of a later index) as a ball of the summed radii, a box, capsule or mesh (fixed or
-    moving) grown by it (``catenet.terms.collide``). Raises ConfigError for a ball that
-    starts inside or on one of them."""
+    moving) grown by it (``catenet.terms.collide``); their stiffness holds the ball's
+    weight and, where they start apart (beyond the barrier's distance), takes the energy
+    the two bring: their motion's and their fall across the scene's size or their gap,
+    the larger (``impact_stiffness``).
+    Raises ConfigError for a ball that starts inside or on one of them."""
+    from catenet.scene.movers import StruckBy, impact_energy
     from catenet.terms.body import Ball
-    from catenet.terms.contact import default_stiffness
+    from catenet.terms.contact import default_stiffness, impact_stiffness
 
     node, radius = record.node, record.radius
     weight = max(record.mass * scale.g, scale.per_node, scale.stiff * _dhat(ball, size))
@@ -239,21 +243,34 @@ def _collisions(
     for other in sorted(others, key=lambda o: o.index):
         i = other.index
         dhat = min(_dhat(ball, size), _dhat(other, size))
+
+        def barrier(
+            kappa: float, other: Fixed | Mover = other, i: int = i, dhat: float = dhat
+        ) -> Any:  # each has gap(x)
+            if isinstance(other, Mover):
+                return Ball(
+                    [centres[i]], node, radius + other.shape.reach, kappa=kappa, dhat=dhat,
+                    n_nodes=net.n_nodes,
+                )  # fmt: skip
+            return other.term([node], kappa, dhat, offset=radius)  # the shape grown by r
+
         kappa = default_stiffness(weight, dhat)
-        term: Any  # each has gap(x)
-        if isinstance(other, Mover):
-            term = Ball(
-                [centres[i]], node, radius + other.shape.reach, kappa=kappa, dhat=dhat,
-                n_nodes=net.n_nodes,
-            )  # fmt: skip
-        else:  # the centre against the shape grown by the radius
-            term = other.term([node], kappa, dhat, offset=radius)
-        gap = float(term.gap(net.nodes)[0])
+        gap = float(barrier(kappa).gap(net.nodes)[0])
         if not gap > 0.0:
             raise ConfigError(
                 f"{ball.path} (kind 'sphere'): starts inside or touching obstacle[{i}] "
                 f"(kind {other.shape.kind!r}; gap {gap:.3g} m between their surfaces): "
                 "move one of them"
             )
+        mass = getattr(other, "mass", None) or 0.0  # (a fixed obstacle has none)
+        pair = ((ball, record.mass), (other, mass))
+        fall = sum(impact_energy(o, m, scale.g, max(size, gap)) for o, m in pair)
+        if gap >= dhat:  # (one placed within the barrier rests on it: no launch)
+            kappa = max(kappa, impact_stiffness(fall, dhat))
+        term = barrier(kappa)
+        head, carry = (centres[i], (node,)) if isinstance(other, Mover) else (node, ())
+        both = record.mass * mass / (record.mass + mass) if mass > 0 else record.mass
+        who = f"{ball.path} (kind 'sphere') and obstacle[{other.index}] (kind {other.shape.kind!r})"
+        term.struck_by = StruckBy(head, carry, both, who)
         out.append(term)
     return out

@@ -58,6 +58,33 @@ class Fixed:
         return placed_barrier(self.shape, self.contact, nodes, kappa, dhat, offset)
 
 
+@dataclass(frozen=True)
+class StruckBy:
+    """A solid's own barrier with an obstacle or another solid (``term.struck_by``): the
+    solid that strikes (``head``: its first node, whose momentum scale it is judged
+    by), the other's nodes (``carry``: none for a fixed obstacle), the mass [kg] that
+    strikes (the pair's reduced mass) and ``who`` (the pair in messages)."""
+
+    head: int
+    carry: tuple[int, ...]
+    mass: float
+    who: str
+
+
+def impact_energy(owner: Mover | Fixed, mass: float, gravity: float, height: float) -> float:
+    """An upper bound [J] of the energy a solid brings to an impact: its initial motion's
+    (its spin about a radius of its size) and its weight's work over ``height`` (0 for a
+    fixed obstacle or a solid without mass)."""
+    if not isinstance(owner, Mover) or mass <= 0:
+        return 0.0
+    v = np.asarray(owner.velocity or (0.0, 0.0, 0.0), dtype=np.float64)
+    w = np.asarray(owner.angular_velocity or (0.0, 0.0, 0.0), dtype=np.float64)
+    points, _, radius = owner.shape.outline()
+    reach = float(np.linalg.norm(points - points.mean(axis=0), axis=1).max()) + radius
+    kinetic = 0.5 * mass * (float(v @ v) + float(w @ w) * reach * reach)
+    return kinetic + mass * gravity * height
+
+
 def placed_barrier(
     shape: Shape, contact: Contact, nodes: Any, kappa: float, dhat: float, offset: float = 0.0
 ) -> Term:

@@ -197,7 +197,7 @@ def _terms(
     edges = None if radius is None else _edges(body, frame, net, radius, kappa, dhat, label, shown)
     if edges is not None:
         terms.append(edges)
-    terms += _planes(body, record, fixed, net, dhat, load, shown)
+    terms += _planes(body, record, fixed, net, dhat, (load, g, size), shown)
     if contact.friction > 0:  # Coulomb friction rides on the barrier
         from catenet.terms.friction import Friction
         from catenet.terms.rigid_contact import BodyFriction
@@ -283,16 +283,22 @@ def _planes(
     fixed: tuple[Fixed, ...],
     net: Net,
     dhat: float,
-    load: float,
+    scales: tuple[float, float, float],
     shown: Shown,
 ) -> list[Term]:
     """The barrier of every plane obstacle on the body's vertices (``BodyPlane``: a
     box's corners, a mesh's vertices, a sphere's or a capsule's centre or axis ends grown
     by its radius), its distance and stiffness the plane's keys, else the body's own
-    distance and a stiffness that holds the body's weight on four vertices."""
+    distance and a stiffness that holds the body's weight on four vertices (or the load
+    of ``scales``: load [N], |g|, the scene's size) and, where the body starts beyond
+    that distance, takes the energy it brings: its motion's and its fall across the
+    scene's size or its gap, the larger (``impact_stiffness``)."""
+    from catenet.scene.movers import StruckBy, impact_energy
     from catenet.scene.shapes.plane import Plane
     from catenet.terms.body_plane import BodyPlane
-    from catenet.terms.contact import default_stiffness
+    from catenet.terms.contact import default_stiffness, impact_stiffness
+
+    load, g, size = scales
 
     kind = body.shape.kind
     vertices, _, radius = body.shape.outline()  # the shape lies within them grown by radius
@@ -302,15 +308,19 @@ def _planes(
             continue
         k = plane.index
         distance = plane.contact.distance if plane.contact.distance is not None else dhat
-        kappa = plane.contact.stiffness
-        if kappa is None:
-            kappa = default_stiffness(max(load, record.mass * 9.81 / 4.0), distance)
+        given = plane.contact.stiffness
+        kappa = given or default_stiffness(max(load, record.mass * 9.81 / 4.0), distance)
         label = f"{body.path} (a free {kind}) on obstacle[{k}] (plane)"
-        term = BodyPlane(
-            record.frame, vertices, plane.shape.point, plane.shape.normal, radius=radius,
-            kappa=kappa, dhat=distance, n_nodes=net.n_nodes, label=label,
-        )  # fmt: skip
-        gap = term.gap(net.nodes)
+
+        def barrier(
+            kappa: float, plane: Any = plane, distance: float = distance, label: str = label
+        ) -> BodyPlane:
+            return BodyPlane(
+                record.frame, vertices, plane.shape.point, plane.shape.normal, radius=radius,
+                kappa=kappa, dhat=distance, n_nodes=net.n_nodes, label=label,
+            )  # fmt: skip
+
+        gap = barrier(kappa).gap(net.nodes)
         if not np.all(gap > 0.0):
             v = int(np.argmin(gap))
             raise ConfigError(
@@ -318,5 +328,11 @@ def _planes(
                 f"{shown(np.round(vertices[v], 12).tolist())} starts in or on obstacle[{k}] "
                 f"(plane) (gap {gap[v]:.3g} m): move the body or the plane"
             )
+        if given is None and float(np.min(gap)) >= distance:  # (within: it rests there)
+            fall = impact_energy(body, record.mass, g, max(size, float(np.min(gap))))
+            kappa = max(kappa, impact_stiffness(fall, distance))
+        term = barrier(kappa)
+        head = int(record.frame.nodes[0])  # its bounces resolved (catenet/solver/strikes.py)
+        term.struck_by = StruckBy(head, (), record.mass, label)
         out.append(term)
     return out

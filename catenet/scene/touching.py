@@ -8,7 +8,10 @@ pair's activation distance is the smaller of the two ``distance``s (each default
 for the net: DISTANCE_SHARE of the scene), its stiffness the larger given ``stiffness``,
 else the default barrier stiffness (``default_stiffness``) for the largest of the loads
 the pair may carry: a body's weight on four points and the force that stops the pair's
-initial kinetic energy within half the activation distance.
+initial kinetic energy within half the activation distance, and, where the pair starts
+apart (beyond that distance), at least the stiffness that takes what the pair brings
+(their motion's and their fall across the scene's size or their gap, the larger)
+before a quarter of the distance (``impact_stiffness``).
 Coulomb friction where either gives it: the larger ``friction`` of the two, the smaller
 ``slip`` given (else the activation distance), on the points' sides
 (``BodyTouchFriction``; edge on edge is frictionless). Bodies that start touching are
@@ -17,6 +20,7 @@ refused (a ConfigError naming both).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -90,8 +94,9 @@ def touch_terms(
     """The BodyTouch term of every pair of a free body with a later free body, a ball or
     a fixed obstacle but a plane (module docstring). Raises ConfigError for a pair that
     starts touching."""
+    from catenet.scene.movers import StruckBy, impact_energy
     from catenet.scene.shapes.plane import Plane
-    from catenet.terms.contact import default_stiffness
+    from catenet.terms.contact import default_stiffness, impact_stiffness
     from catenet.terms.touch import BodyTouch, BodyTouchFriction
 
     g = 0.0 if loads.gravity is None else float(np.linalg.norm(loads.gravity))
@@ -114,8 +119,8 @@ def touch_terms(
                 kappa = max(given)
             else:
                 load = max(ma, mb) * max(g, 9.81) / 4.0
-                load = max(load, 2.0 * (_kinetic(oa, ma) + _kinetic(ob, mb)) / dhat)
-                kappa = default_stiffness(load, dhat)
+                moving = impact_energy(oa, ma, 0.0, 0.0) + impact_energy(ob, mb, 0.0, 0.0)
+                kappa = default_stiffness(max(load, 2.0 * moving / dhat), dhat)
             term = BodyTouch(a, b, kappa=kappa, dhat=dhat, n_nodes=net.n_nodes)
             gap = term.gap(net.nodes)
             if not gap > 0.0:
@@ -123,6 +128,14 @@ def touch_terms(
                     f"{a.label}: it meets {b.label} at the start (gap {gap:.3g} m): "
                     "two solids must not overlap at the start; move them apart"
                 )
+            if not given and gap >= dhat:  # what they bring across their gap
+                apart = gap if math.isfinite(gap) else _apart(a, b, net.nodes)
+                h = max(size, float(apart))
+                fall = impact_energy(oa, ma, g, h) + impact_energy(ob, mb, g, h)
+                if (stiffer := impact_stiffness(fall, dhat)) > kappa:
+                    term = BodyTouch(a, b, kappa=stiffer, dhat=dhat, n_nodes=net.n_nodes)
+            both = ma * mb / (ma + mb) if mb > 0 else ma  # bounces resolved (solver/strikes)
+            term.struck_by = StruckBy(int(a.nodes[0]), tuple(b.nodes.tolist()), both, term.label)
             terms.append(term)
             mu = max(ca.friction, cb.friction)
             if mu > 0.0:
@@ -132,15 +145,7 @@ def touch_terms(
     return terms
 
 
-def _kinetic(owner: Mover | Fixed, mass: float) -> float:
-    """The kinetic energy [J] of a solid's initial motion, its spin about a radius of
-    its size (an upper bound for the solid's)."""
-    from catenet.scene.movers import Mover
-
-    if not isinstance(owner, Mover) or mass <= 0:
-        return 0.0
-    v = np.asarray(owner.velocity or (0.0, 0.0, 0.0), dtype=np.float64)
-    w = np.asarray(owner.angular_velocity or (0.0, 0.0, 0.0), dtype=np.float64)
-    points, _, radius = owner.shape.outline()
-    reach = float(np.linalg.norm(points - points.mean(axis=0), axis=1).max()) + radius
-    return 0.5 * mass * (float(v @ v) + float(w @ w) * reach * reach)
+def _apart(a: Solid, b: Solid, x: np.ndarray) -> float:
+    """How far apart two solids are at x (N, 3) [m]: the distance of their points'
+    centres (their gap where it is beyond the pair's reach)."""
+    return float(np.linalg.norm(a.place(x).mean(axis=0) - b.place(x).mean(axis=0)))

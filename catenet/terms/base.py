@@ -68,7 +68,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -128,6 +128,7 @@ class Term:
     holds = False  # a support's term (springs): its force is a reaction, not a contact
     owner: int | None = None  # the obstacle, ball or free body (its index k) it is part of
     barrier = False  # a contact barrier: its stiffness turns positions' round-off into force's
+    struck_by: Any = None  # a solid's own barrier: catenet.scene.movers.StruckBy (its bounces)
     label = ""  # the obstacle, ball or body it is, in messages ("obstacle[0] (kind 'box')")
     key = ""  # the case key of its activation distance ("obstacle[0].distance"), if it has one
 

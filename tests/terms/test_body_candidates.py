@@ -242,14 +242,21 @@ def _kicked(candidates: bool) -> tuple[np.ndarray, int]:
     return 6.0 * result.v[scene.rigid[0].frame.nodes].mean(axis=0), result.steps
 
 
-def test_a_box_struck_while_it_lies_on_the_net_takes_the_same_steps(caplog):
+def test_a_box_struck_while_it_lies_on_the_net_takes_the_same_steps(caplog, monkeypatch):
     """The lying box's last step's motion is nothing, so its candidates are the nodes
     within the reach; struck by the second box at t = 0.224 s it moves far in one 4 ms
     step, and the nodes' room held Newton back until the step failed. The step is now
     taken again at its length with wider radii (``TimeStepper.widened``): the same
     fixed steps and the same answer as the contact over every node (before: the step
-    was halved and the lying box ended 0.24 m away, 49 % faster)."""
+    was halved and the lying box ended 0.24 m away, 49 % faster). The boxes' pair
+    keeps the barrier this case was built with (the stiffness that takes their fall
+    across their gap, ``impact_stiffness``, left out: 1.25 times stiffer, the struck box
+    moves less far in that step and the widening is not needed)."""
     import logging
+
+    from catenet.terms import contact
+
+    monkeypatch.setattr(contact, "impact_stiffness", lambda energy, dhat: 0.0)
 
     with caplog.at_level(logging.INFO, logger="catenet.solver.dynamic"):
         p1, steps1 = _kicked(True)
