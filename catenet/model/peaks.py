@@ -13,11 +13,20 @@ between them, and that top (value and time) is the peak where it is larger. A se
 order scheme's states lie on such parabolas to its own accuracy, so the top is as good as
 the steps: on a safety net's impact at fixed steps of 5 ms the top of the parabola
 lands within 0.3 % of the fine-step peak tension where the largest state is 2 % below.
+Where the two steps differ by more than EVEN the states' own maxima stand: a mooring line
+whose fairlead stops after being pulled had a parabola over steps of 1.2 and 0.28 s
+report 269 kN at 7.87 s where the tension then was at most 234 kN.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+#: The parabola through three states is read only where their two steps differ by at
+#: most this ratio: steps chosen by accuracy grow at most twofold where the motion is
+#: smooth, and are cut short where it is not (a support that stops, a contact), where a
+#: parabola through unequal steps across the kink invents a top.
+EVEN = 2.5
 
 
 class Peaks:
@@ -109,8 +118,8 @@ def _top(
     (the module docstring)."""
     (t_a, t_b, t_c), (a, b, c) = times, values
     h1, h2 = t_b - t_a, t_c - t_b
-    if not (h1 > 0.0 and h2 > 0.0):
-        return
+    if not (h1 > 0.0 and h2 > 0.0) or max(h1, h2) > EVEN * min(h1, h2):
+        return  # (steps cut short: where the motion is not smooth, the samples' own)
     k = np.flatnonzero((b > a) & (b >= c) & (b >= peak))
     if not len(k):
         return

@@ -120,6 +120,25 @@ def test_the_bounce_at_default_settings_keeps_its_period_within_0_05_percent():
     assert z.min() > 0.0
 
 
+def test_no_peak_is_read_between_steps_of_unequal_length_across_a_kink():
+    """A tension that rises at 1 N/s to t = 8 (a fairlead pulled, then stopped) and falls
+    at 10 N/s after, sampled at 6.8, 8.0 and 8.28 (a step cut short at the kink): the
+    parabola through them tops at 10.1 N at t = 7.47, where the tension was 7.47 N;
+    with steps that differ more than Peaks' EVEN the samples stand."""
+
+    def tension(t: float) -> float:
+        return t if t <= 8.0 else 8.0 - 10.0 * (t - 8.0)
+
+    found = Peaks(np.zeros((1, 3)), 1, between=True)
+    for t in (6.8, 8.0, 8.28):
+        found.observe(t, np.zeros((1, 3)), np.array([tension(t)]))
+    assert found.tension[0] == pytest.approx(8.0) and found.tension_time[0] == 8.0
+    even = Peaks(np.zeros((1, 3)), 1, between=True)  # the same at equal steps: read
+    for t in (7.6, 8.0, 8.4):
+        even.observe(t, np.zeros((1, 3)), np.array([math.sin(t)]))
+    assert even.tension[0] > math.sin(8.0)
+
+
 def test_peaks_between_steps_lie_on_the_parabola_through_three_states():
     """A tension sin(t) sampled at steps of 0.4 (peak 1 at pi / 2, between samples): the
     peak between the steps within 0.1 % of 1 and its time within 0.01, where the largest
