@@ -332,10 +332,11 @@ def _balance(row, scale: float) -> str:
     k, u, c, w, d, rest = (float(v) for v in row)
     largest = max(abs(k), abs(u), abs(c), abs(w), 1e-300)
     largest = scale if scale > 0 else largest  # (nan: not known)
+    what = "loss" if rest <= 0.0 else "gain"
     return (
         f"{'energy':<12} kinetic {k:.4g} J, elastic {u:.4g} J, contact {c:.4g} J; work in "
         f"{w:.4g} J, dissipated {d:.4g} J; numerical {rest:.3g} J ({rest / largest:+.2%} of "
-        "the run's largest energy: the integrator's own loss, /trajectory/energy)"
+        f"the run's largest energy: the integrator's own {what}, /trajectory/energy)"
     )
 
 
