@@ -397,10 +397,10 @@ class ErrorControl:
             return True
         log.info("t = %.6g: step %.3g beyond the tolerance (%.3g); retrying with %.3g",
                  stepper.t, h_step, error, self.h)  # fmt: skip
-        if self.spent():
+        if self.spent():  # (the message ends "the last failed step": this one)
             raise ConvergenceError(
-                self.spent_message(stepper.t), iterations=stepper.iterations,
-                state=stepper.x.copy(),
+                f"{self.spent_message(stepper.t)}: {h_step:.3g} s, its error {error:.3g} times "
+                "the tolerance", iterations=stepper.iterations, state=stepper.x.copy(),
             )  # fmt: skip
         return False
 

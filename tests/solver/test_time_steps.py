@@ -5,6 +5,8 @@ stepper (a step's predictor, its Newton solve, the retry with fresh factorisatio
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -232,3 +234,32 @@ def test_a_step_cut_below_the_smallest_step_fails_with_the_last_state():
     with pytest.raises(cn.ConvergenceError, match="failed even with h") as info:
         stepper.cut(control, 0.01 / 2**MAX_CUTS, "forced", None)
     assert np.array_equal(info.value.state, stepper.x)
+
+
+def test_a_run_whose_accurate_steps_are_spent_says_which_step_failed(monkeypatch):
+    """Steps chosen by accuracy whose tries run out on a step beyond the tolerance: the
+    message ends on that step, its length and its error (it ended "...; the last failed
+    step", the sentence cut)."""
+    from catenet.case import build, parse_case
+    from catenet.errors import ConvergenceError
+    from catenet.solver import adaptive
+    from catenet.solver.path import Settings, solve
+
+    monkeypatch.setattr(adaptive, "MAX_TRIES", 3)
+    monkeypatch.setattr(adaptive, "ALLOWANCE", 0)
+    case = parse_case({
+        "geometry": {"kind": "graph", "nodes": [[0, 0, 0], [1.0, 0, 0]], "edges": [[0, 1]],
+                     "fixed": [0]},
+        "material": {"EA": 1e4, "area": 1e-4, "density": 1e4},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "solver": {"method": "dynamic", "t_end": 2.0, "tolerance": 1e-6, "damping": 0.0},
+    })  # fmt: skip
+    with pytest.raises(ConvergenceError) as caught:
+        solve(build(case), Settings.of(case.solver))
+    message = str(caught.value)
+    assert "would not finish in reasonable time" in message
+    assert re.search(
+        r"the last failed step: [0-9.e+-]+ s, its error [0-9.e+-]+ times the "
+        r"tolerance$",
+        message,
+    ), message
