@@ -47,9 +47,10 @@ IMPACT_SHARE = 0.25
 def impact_stiffness(energy: float, dhat: float) -> float:
     """kappa [N/m] at which the barrier's energy kappa b(d), b(d) = -(d - dhat)^2 ln(d /
     dhat), reaches ``energy`` [J] at the gap d = IMPACT_SHARE dhat: a solid that brings
-    that much stops (and turns back) before then (0 for no energy)."""
+    that much stops (and turns back) before then (0 for no energy, or none finite)."""
     s = IMPACT_SHARE
-    return max(energy, 0.0) / (dhat * dhat * (1.0 - s) ** 2 * math.log(1.0 / s))
+    kappa = max(energy, 0.0) / (dhat * dhat * (1.0 - s) ** 2 * math.log(1.0 / s))
+    return kappa if math.isfinite(kappa) else 0.0  # (beyond floats: the other stiffness)
 
 
 class Obstacle(Term):

@@ -76,4 +76,4 @@ def test_the_impact_stiffness_takes_the_energy_at_its_share_of_the_distance():
     kappa = impact_stiffness(energy, dhat)
     d = IMPACT_SHARE * dhat
     assert kappa * -((d - dhat) ** 2) * math.log(d / dhat) == pytest.approx(energy, rel=1e-12)
-    assert impact_stiffness(0.0, dhat) == 0.0
+    assert impact_stiffness(0.0, dhat) == 0.0 and impact_stiffness(math.inf, dhat) == 0.0
