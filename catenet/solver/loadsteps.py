@@ -19,6 +19,7 @@ from catenet.errors import (
     with_last_good,
 )
 from catenet.model.net import Loads, Net
+from catenet.solver.amplified import warn_amplified
 from catenet.solver.result import Result, finish
 from catenet.solver.rung import StepSettings, can_relax, hangs_slack, relax_to_rest
 from catenet.solver.stability import (
@@ -120,7 +121,9 @@ def continuation(
         x = r.x
         if on_step is not None:
             on_step(float(factor), r)
-    warn_state(ws, net, results[-1])  # once, on where the path ends (not on each solve)
+    # a buckling load passed on the way (amplified.py): its state is no neutral one
+    far = judge.start_x is not None and warn_amplified(ws, net, loads, judge.start_x, results[-1])
+    warn_state(ws, net, results[-1], neutral=not far)  # once, where the path ends
     return results
 
 

@@ -185,16 +185,16 @@ def _judge_stability(
             )
 
 
-def warn_state(ws: Workspace, net: Net, out: Result) -> None:
-    """Warnings on the equilibrium ``out``: unstable (its ``diagnosis``), or free nodes
-    hanging on slack edges only."""
+def warn_state(ws: Workspace, net: Net, out: Result, neutral: bool = True) -> None:
+    """Warnings on the equilibrium ``out``: unstable (its ``diagnosis``), neutral (unless
+    not ``neutral``), or free nodes hanging on slack edges only."""
     if out.stable is False:
         log.warning(
             "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
             "(any disturbance makes the net or a body move away): %s",
             out.diagnosis,
         )
-    elif out.stable is None and out.diagnosis:
+    elif out.stable is None and out.diagnosis and neutral:
         log.warning("the equilibrium is neutral: %s", out.diagnosis)
     _warn_loose(ws, net, out)
 
