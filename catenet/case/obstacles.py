@@ -35,6 +35,7 @@ from catenet.case.rigid_keys import FreeKeys, density_key, inertia_key
 from catenet.case.sections import history_key
 from catenet.case.shapes import (
     SHAPED,
+    STIFFNESS_DOC,
     MeshObstacle,
     Shaped,
     _accuracy,
@@ -52,7 +53,7 @@ class PlaneObstacle(Shaped, Declared):
     distance: float | None = _distance()
     accuracy: float = _accuracy()
     stiffness: float | None = real(
-        None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
+        None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC
     )
     friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
     slip: float | None = real(
@@ -79,7 +80,7 @@ class SphereObstacle(Shaped, FreeKeys, Declared):
     distance: float | None = _distance()
     accuracy: float = _accuracy()
     stiffness: float | None = real(
-        None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)"
+        None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC
     )
     friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
     slip: float | None = real(

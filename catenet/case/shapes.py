@@ -26,6 +26,13 @@ if TYPE_CHECKING:
     from catenet.scene.shapes import Shape
 
 
+#: obstacle[k].stiffness's description (every kind's)
+STIFFNESS_DOC = (
+    "barrier stiffness (default: from the loads; a ball or free body against the ground, "
+    "an obstacle or another solid: also the energy it can bring, docs/guide/bodies.md)"
+)
+
+
 def _distance():
     return real(
         None,
@@ -47,7 +54,7 @@ def _accuracy():
 
 
 def _stiffness():
-    return real(None, gt=0, write="given", unit="N/m", doc="barrier stiffness (from the loads)")
+    return real(None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC)
 
 
 def _friction():

@@ -228,8 +228,9 @@ def _collisions(
     """The terms that stop ``ball`` (centre ``node``) at the other obstacles, exact for
     its shape: a plane moved out by the radius, a fixed sphere grown by it, another ball
     (of a later index) as a ball of the summed radii, a box, capsule or mesh (fixed or
-    moving) grown by it (``catenet.terms.collide``); their stiffness holds the ball's
-    weight and, where they start apart (beyond the barrier's distance), takes the energy
+    moving) grown by it (``catenet.terms.collide``); their stiffness the larger
+    ``stiffness`` the two give, else one that holds the ball's weight and, where they
+    start apart (beyond the barrier's distance), takes the energy
     the two bring: their motion's and their fall across the scene's size or their gap,
     the larger (``impact_stiffness``).
     Raises ConfigError for a ball that starts inside or on one of them."""
@@ -254,7 +255,8 @@ def _collisions(
                 )  # fmt: skip
             return other.term([node], kappa, dhat, offset=radius)  # the shape grown by r
 
-        kappa = default_stiffness(weight, dhat)
+        given = [k for k in (ball.contact.stiffness, other.contact.stiffness) if k]
+        kappa = max(given) if given else default_stiffness(weight, dhat)  # (as for bodies)
         gap = float(barrier(kappa).gap(net.nodes)[0])
         if not gap > 0.0:
             raise ConfigError(
@@ -265,7 +267,7 @@ def _collisions(
         mass = getattr(other, "mass", None) or 0.0  # (a fixed obstacle has none)
         pair = ((ball, record.mass), (other, mass))
         fall = sum(impact_energy(o, m, scale.g, max(size, gap)) for o, m in pair)
-        if gap >= dhat:  # (one placed within the barrier rests on it: no launch)
+        if gap >= dhat and not given:  # (one placed within the barrier rests on it)
             kappa = max(kappa, impact_stiffness(fall, dhat))
         term = barrier(kappa)
         head, carry = (centres[i], (node,)) if isinstance(other, Mover) else (node, ())

@@ -77,3 +77,17 @@ def test_the_impact_stiffness_takes_the_energy_at_its_share_of_the_distance():
     d = IMPACT_SHARE * dhat
     assert kappa * -((d - dhat) ** 2) * math.log(d / dhat) == pytest.approx(energy, rel=1e-12)
     assert impact_stiffness(0.0, dhat) == 0.0 and impact_stiffness(math.inf, dhat) == 0.0
+
+
+def test_a_stiffness_given_holds_a_ball_against_the_ground():
+    """A ball's barrier with an obstacle takes the larger ``stiffness`` the two give, as a
+    pair of bodies does (it took the weight's stiffness whatever was given)."""
+    case = dropped(SOLIDS["ball"])
+    case["obstacle"][0]["stiffness"] = 3e8
+    scene = build(parse_case(case))
+    (ground,) = [t for t in scene.terms if t.struck_by is not None]
+    assert ground.kappa == 3e8
+    default = build(parse_case(dropped(SOLIDS["ball"])))
+    (ground,) = [t for t in default.terms if t.struck_by is not None]
+    fall = 5.0 * G * max(default.size, DROP)  # its fall across its gap (2 m)
+    assert ground.kappa == pytest.approx(impact_stiffness(fall, ground.dhat), rel=1e-3)
