@@ -5,7 +5,7 @@ A strut bowed by L/100000 and loaded at 1.006 times its Euler load has a stable
 equilibrium, the post-buckled elastica, bowed 200 mm: Newton finds it, and its stiffness
 there is positive. So does a portal 1 mm out of plumb at 1.06 times its sway buckling
 load, swayed 1.62 m. Nothing in that state says that the loads passed a buckling load
-on the way, but its displacement does: it is 77 and hundreds of times Newton's first,
+on the way, but its displacement does: it is about 200 times Newton's first,
 linear step from the start, -K0^-1 g0, where a structure that stiffens as it moves (a
 cable, a net, a cantilever bending far) stays within that step or near it and an
 imperfect strut below 0.9 of its Euler load within twice it (its bow's amplification

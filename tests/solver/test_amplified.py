@@ -51,6 +51,7 @@ def test_a_strut_past_its_euler_load_is_said_to_have_passed_a_buckling_load(capl
     (far,) = [m for m in said if "as far as the loads' linear response" in m]
     assert "passed a buckling (limit) load" in far
     assert not [m for m in said if "the equilibrium is neutral" in m]  # (it said so)
+    assert "moved 195 times as far" in far  # (docs/guide/stability.md quotes it)
 
 
 @pytest.mark.parametrize("share", [0.5, 0.9])
