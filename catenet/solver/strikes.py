@@ -33,8 +33,8 @@ obstacle or another solid carries ``struck_by`` (``catenet.scene.movers.StruckBy
 solid that strikes, the other's nodes, the pair's reduced mass); its gaps are its
 points', its mass the pair's, and its bounce is stepped through in tau / SOLID_BOUNCE,
 the run's momentum being the solid's own (a 5 kg ball dropped 2 m on the ground lost 3 %
-of its energy in a bounce at the error estimate's steps and at 16 to a bounce, 0.1 % at
-64; tests/solver/test_impacts.py).
+of its energy in a bounce at the error estimate's steps and at 16 to a bounce, 0.07 %
+at 64; tests/solver/test_impacts.py).
 
 ``Strikes.step`` finds a step's strikes: nodes outside dhat at its start and within it at
 its end, their normal speed the rate of their gap along the predictor x + s h v at s = 0
