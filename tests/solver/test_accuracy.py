@@ -152,3 +152,18 @@ def test_peaks_between_steps_lie_on_the_parabola_through_three_states():
     assert found.tension_time[0] == pytest.approx(math.pi / 2, abs=1e-2)
     assert sampled.tension[0] == pytest.approx(max(np.sin(times)))
     assert sampled.tension[0] < 0.995
+
+
+def test_the_bounce_converges_as_its_steps_halve(monkeypatch):
+    """The bounce's constant steps (a SOLID_BOUNCE-th of it) converge: the period's error
+    at 16, 32, 64 and 128 steps to a bounce, 0.85 %, 0.14 %, 0.018 %, 0.0014 % measured,
+    falls more than fourfold per halving."""
+    from catenet.solver import strikes
+
+    period = 2.0 * math.sqrt(2.0 * FALL / G)
+    errors = []
+    for per in (16, 32, 64, 128):
+        monkeypatch.setattr(strikes, "SOLID_BOUNCE", per)
+        t, _, v, _ = run_bounce()
+        errors.append(abs(apexes(t, v)[0] / period - 1.0))
+    assert all(b < a / 4.0 for a, b in zip(errors, errors[1:], strict=False)), errors
