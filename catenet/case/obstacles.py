@@ -52,9 +52,7 @@ class PlaneObstacle(Shaped, Declared):
     normal: tuple = vec3((0.0, 0.0, 1.0), doc="plane: normal pointing to the free side")
     distance: float | None = _distance()
     accuracy: float = _accuracy()
-    stiffness: float | None = real(
-        None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC
-    )
+    stiffness: float | None = real(None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC)
     friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
     slip: float | None = real(
         None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"
@@ -79,9 +77,7 @@ class SphereObstacle(Shaped, FreeKeys, Declared):
     radius: float = real(gt=0, missing="the radius [m] (> 0)", unit="m", doc="sphere: radius")
     distance: float | None = _distance()
     accuracy: float = _accuracy()
-    stiffness: float | None = real(
-        None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC
-    )
+    stiffness: float | None = real(None, gt=0, write="given", unit="N/m", doc=STIFFNESS_DOC)
     friction: float = real(0.0, ge=0, write="given", doc="Coulomb coefficient mu_f (0: none)")
     slip: float | None = real(
         None, gt=0, write="given", unit="m", doc="friction: sticking below this slip (distance)"

@@ -61,7 +61,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from catenet.solver.adaptive import Bodies
+    from catenet.solver.scales import Bodies
     from catenet.terms import Term
 
 log = logging.getLogger(__name__)

@@ -1,0 +1,161 @@
+"""What the error of a step chosen by accuracy is measured against (catenet/solver/adaptive.py,
+whose docstring says why): the net's edges, for the error in strain, and the free bodies,
+balls and heavy lumped masses, for the error in momentum."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.model.net import Net
+    from catenet.solver.stepper import TimeStepper
+
+FLOOR = 1e-2  # X and V at least this share of L and of sqrt(|g| L), L / (t_end - t0)
+STILL = 1e-6  # a body's momentum scale at least this share of its mass times V's floor
+HEAVY = 10.0  # a node's lumped mass this many times a typical node's: a body (``_heavy``)
+
+
+class Edges:
+    """A net's edges for the strain error (catenet/solver/adaptive.py): node pairs (M, 2), rest
+    lengths, which are tension-only; ``where`` maps a free DOF's error into the net's
+    (N * 3) flat positions."""
+
+    def __init__(self, net: Net, free: np.ndarray):
+        self.i, self.j = net.edges[:, 0], net.edges[:, 1]
+        self.l0 = np.asarray(net.rest_length, dtype=np.float64)
+        self.only = np.asarray(net.law.tension_only, dtype=bool)
+        self.free = free
+        self.n = len(net.nodes)
+
+    def strain(self, x: np.ndarray) -> float:
+        """The largest strain of an edge in state x (N, 3), 0 for none."""
+        if not len(self.l0):
+            return 0.0
+        d = x[self.j] - x[self.i]
+        return max(0.0, float(np.max(np.sqrt(np.einsum("ij,ij->i", d, d)) / self.l0 - 1.0)))
+
+    def error(self, x: np.ndarray, ex: np.ndarray) -> float:
+        """The RMS error in strain along the edges taut in state x (N, 3) (weighted by
+        their rest lengths), from the error ``ex`` of the free DOFs' positions."""
+        if not len(self.l0):
+            return 0.0
+        full = np.zeros(3 * self.n)
+        full[self.free] = ex
+        e = full.reshape(-1, 3)
+        d = x[self.j] - x[self.i]
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        length[length == 0.0] = 1.0
+        de = np.abs(np.einsum("ij,ij->i", d, e[self.j] - e[self.i])) / (length * self.l0)
+        taut = ~self.only | (length / self.l0 - 1.0 + de > 0.0)
+        w = self.l0 * taut  # the RMS along the taut rope
+        tot = float(w.sum())
+        return math.sqrt(float(np.dot(w, de * de)) / tot) if tot > 0 else 0.0
+
+
+class Bodies:
+    """The free bodies and balls of a run for the momentum error (catenet/solver/adaptive.py): each
+    one's free-DOF positions (k, 3) in the free DOFs' vector (a free body's four frame
+    nodes, a ball's node), its masses, and its momentum scale ``largest``: the largest
+    momentum |sum m v| it has had, at least FLOOR of the run's largest ``flow`` (the sum
+    of every free node's |m v|: the momentum its parts carry), and before anything moves
+    ``floor`` times its mass; never below STILL of that (a body resting on a net from its
+    static equilibrium: round-off's motion alone, whose momentum error no step length
+    can bring below round-off's). A body's momentum error counts with it the net's nodes
+    inside its barrier (``hold``): momentum passing to and fro between a body and the
+    nodes it holds (a box's net chattering on its barrier) is no error of the motion."""
+
+    def __init__(self, stepper: TimeStepper, floor: float):
+        from catenet.terms.body import Ball
+        from catenet.terms.rigid import Rigidity
+        from catenet.terms.rigid_contact import BodyContact
+
+        net, free = stepper.net, stepper.free
+        where = np.full(3 * len(net.nodes), -1)
+        where[free] = np.arange(len(free))
+        frames = [
+            np.asarray(t.frame.nodes) for t in stepper.system.terms if isinstance(t, Rigidity)
+        ]
+        framed = set(int(k) for nodes in frames for k in nodes)
+        balls = [np.array([k]) for k in range(net.n_net, len(net.nodes)) if k not in framed]
+        balls += [np.array([k]) for k in _heavy(net, free, framed)]
+        self.dofs = []
+        self.heads: list[int] = []  # each one's first node (a frame's centre, a ball's)
+        for nodes in frames + balls:
+            dofs = where[3 * nodes[:, None] + np.arange(3)]
+            if np.all(dofs >= 0):
+                self.dofs.append(dofs)
+                self.heads.append(int(nodes[0]))
+        m = stepper.m_free
+        self.mass = [m[d] for d in self.dofs]
+        self.m_free, self.where = m, where
+        self.barriers: list[list[Any]] = [[] for _ in self.dofs]  # each one's, with the net
+        for t in stepper.system.terms:
+            head = -1
+            if isinstance(t, BodyContact) and t.dhat > 0:
+                head = int(np.asarray(t.frame.nodes)[0])
+            elif isinstance(t, Ball):
+                head = int(t.center)
+            if head in self.heads:
+                self.barriers[self.heads.index(head)].append(t)
+        self.held = [np.zeros(0, dtype=np.int64) for _ in self.dofs]  # (``hold``)
+        self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
+        self.least = [STILL * p for p in self.largest]
+        self.own = [0.0] * len(self.dofs)  # each one's largest |sum m v| so far
+        self.flow = 0.0  # the largest sum of the free nodes' |m v| so far
+        self.node_mass = m[::3]  # (the free DOFs come in threes, a node's x, y, z)
+
+    def momenta(self, v: np.ndarray) -> list[float]:
+        """|sum m v| of each body from the free DOFs' velocities (or their errors) v."""
+        return [
+            float(np.linalg.norm(np.sum(ms * v[d], axis=0)))
+            for d, ms in zip(self.dofs, self.mass, strict=True)
+        ]
+
+    def saw(self, v: np.ndarray) -> None:
+        """The velocities v (free DOFs) of an accepted step: the scales grow."""
+        self.own = [max(a, b) for a, b in zip(self.own, self.momenta(v), strict=True)]
+        speeds = np.sqrt(np.einsum("ij,ij->i", v.reshape(-1, 3), v.reshape(-1, 3)))
+        self.flow = max(self.flow, float(np.dot(self.node_mass, speeds)))
+        if self.flow > 0.0:
+            self.largest = [
+                max(p, FLOOR * self.flow, q) for p, q in zip(self.own, self.least, strict=True)
+            ]
+
+    def hold(self, x0: np.ndarray, x1: np.ndarray) -> None:
+        """The free DOFs (k, 3) of the net's nodes within each body's barrier (dhat) at
+        a step's start x0 or end x1 (N, 3): the nodes it holds (``error``)."""
+        for k, terms in enumerate(self.barriers):
+            near = [np.asarray(t.nodes)[(t.gap(x0) < t.dhat) | (t.gap(x1) < t.dhat)] for t in terms]
+            nodes = np.unique(np.concatenate(near)) if near else np.zeros(0, dtype=np.int64)
+            dofs = self.where[3 * nodes[:, None] + np.arange(3)]
+            self.held[k] = dofs[np.all(dofs >= 0, axis=1)]
+
+    def error(self, ev: np.ndarray) -> float:
+        """The largest error in a body's momentum, with the nodes it holds (``hold``),
+        over its largest momentum so far."""
+        errors = []
+        for d, ms, held in zip(self.dofs, self.mass, self.held, strict=True):
+            error = np.sum(ms * ev[d], axis=0) + np.sum(self.m_free[held] * ev[held], axis=0)
+            errors.append(float(np.linalg.norm(error)))
+        return max((e / p for e, p in zip(errors, self.largest, strict=True)), default=0.0)
+
+
+def _heavy(net: Net, free: np.ndarray, framed: set[int]) -> list[int]:
+    """The net's nodes whose lumped mass (``[[mass]]``) is HEAVY times a typical moving
+    node's mass or more (the lower median of the free nodes' masses; for a net with one
+    free node, its own cables' share): a weight on a rope, a net's corner masses, each a
+    body for the momentum error (catenet/solver/adaptive.py). A mass added to every node is the
+    net's own."""
+    if net.point_mass is None:
+        return []
+    moving = np.unique(free // 3)
+    moving = moving[moving < net.n_net]
+    if not len(moving):
+        return []
+    mass, point = net.mass[moving], net.point_mass[moving]
+    typical = float(np.sort(mass)[(len(mass) - 1) // 2]) if len(mass) > 1 else mass[0] - point[0]
+    heavy = point >= HEAVY * typical
+    return [int(k) for k, h in zip(moving, heavy, strict=True) if h and int(k) not in framed]
