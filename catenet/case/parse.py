@@ -46,7 +46,7 @@ from catenet.case.sections import (
 from catenet.case.sine import check_move
 from catenet.case.supports import check_fixed
 from catenet.case.targets import parse_targets
-from catenet.case.timing import default_t_end, newmark_refused, resolve_steps
+from catenet.case.timing import default_t_end, newmark_refused, resolve_steps, time_dependence
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.case.vessel import check_vessel
 from catenet.case.water import parse_water
@@ -252,7 +252,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         solver = dataclasses.replace(solver, t_end=t_end)
     if isinstance(solver, SolverConfig):
         contact = (isinstance(obstacles, tuple) and bool(obstacles)) or solver.self_contact
-        solver = resolve_steps(solver, contact)  # fixed or adaptive steps, the integrator
+        moving = bool(time_dependence(load, supports, solver, obstacles, masses))
+        solver = resolve_steps(solver, contact or moving)  # fixed or adaptive steps
         if dynamic and contact and solver.integrator == "newmark":
             ck.add(newmark_refused(obstacles))
     if dynamic:

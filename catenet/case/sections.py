@@ -324,7 +324,7 @@ class SolverConfig(Declared):
         gt=0,
         lt=1,
         write="given",
-        shown="none: fixed steps; `3e-3` with contact and no dt",
+        shown="none: fixed steps; `3e-3` with contact or motion in time, and no dt",
         doc="dynamic, a number for t_end: steps chosen by accuracy: each step's local error "
         "in positions, strains and bodies' momenta, as a share of how far the motion goes, "
         "the largest strain and momentum (docs/howto/dynamic-runs.md)",
@@ -351,7 +351,7 @@ class SolverConfig(Declared):
         None,  # not given: bdf2 where steps adapt, else implicit Euler (parse.py)
         INTEGRATORS,
         write="given",
-        shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance (or contact and no dt)',
+        shown='`"implicit_euler"`; `"bdf2"` with solver.tolerance (or its default)',
         doc="dynamic: the paper's implicit Euler (first order, damps numerically), "
         "newmark (second order; refused with contact) or bdf2 (second order, L-stable: right in "
         "contact)",

@@ -60,7 +60,7 @@ def default_t_end(load: Any, supports: Any, solver: Any, obstacles: Any, masses:
     return T_END if time_dependence(load, supports, solver, obstacles, masses) else REST
 
 
-def resolve_steps(solver: SolverConfig, contact: bool = False) -> SolverConfig:
+def resolve_steps(solver: SolverConfig, transient: bool = False) -> SolverConfig:
     """A dynamic case's steps as the run takes them (its t_end decided): a run with a
     number for t_end and a ``tolerance`` adapts its steps to it (``dt``: the first step,
     else FIRST_SHARE of t_end, at most ``dt_max``) with bdf2 unless ``integrator`` says
@@ -68,12 +68,15 @@ def resolve_steps(solver: SolverConfig, contact: bool = False) -> SolverConfig:
     0.01 s) with implicit Euler unless ``integrator`` says otherwise
     (``catenet.solver.settings.steps_given``, as a Settings made in Python).
 
-    A run to a time with ``contact`` (an obstacle, a ball, a free body or self-contact)
-    that gives neither ``dt`` nor ``tolerance`` takes the default tolerance
-    (``catenet.solver.adaptive.TOLERANCE``): its impacts are what it is run for, and
-    fixed steps of a guessed size step over them (docs/howto/dynamic-runs.md)."""
+    A ``transient`` run to a time (one with contact: an obstacle, a ball, a free body or
+    self-contact; or whose motion is the answer: ``time_dependence``) that gives neither
+    ``dt`` nor ``tolerance`` takes the default tolerance
+    (``catenet.solver.adaptive.TOLERANCE``): its impacts and peaks are what it is run
+    for, and fixed steps of a guessed size step over them or damp them
+    (docs/howto/dynamic-runs.md). Dynamic relaxation (nothing depends on time) keeps
+    the paper's implicit Euler at 0.01 s."""
     if (
-        contact
+        transient
         and solver.method == "dynamic"
         and isinstance(solver.t_end, (int, float))
         and solver.dt is None

@@ -13,6 +13,8 @@ import math
 import h5py
 import pytest
 
+from catenet.case import parse_case
+from catenet.solver.adaptive import TOLERANCE
 from tests.solver.test_energy import energy, invoke, write
 
 G = 9.81
@@ -46,12 +48,12 @@ def peak_closed_form() -> float:
     return k * d
 
 
-@pytest.mark.parametrize("tolerance", [3e-3, 3e-4])
+@pytest.mark.parametrize("tolerance", [None, 3e-4])
 def test_a_weight_dropped_on_a_slack_rope_keeps_its_energy(tmp_path, tolerance):
-    """At the default tolerance and at 3e-4: the run ends (exit 0), the integrator's
-    energy error within 0.1 % of the largest energy (0.03 % and 0.002 % measured), the
-    peak tension within 0.2 % of the closed form (0.08 %, 0.003 %), the weight back up
-    near where it started."""
+    """At the default (no dt, undamped: steps chosen by accuracy) and at 3e-4: the run
+    ends (exit 0), the integrator's energy error within 0.1 % of the largest energy
+    (0.03 % and 0.002 % measured), the peak tension within 0.2 % of the closed form
+    (0.08 %, 0.003 %), the rope slack again at the end (the weight thrown back up)."""
     case = write(tmp_path, rope(tolerance), "rope")
     out = tmp_path / "rope.h5"
     result = invoke("run", case, "-o", out)
@@ -64,3 +66,32 @@ def test_a_weight_dropped_on_a_slack_rope_keeps_its_energy(tmp_path, tolerance):
         z = float(f["result/x"][-1, 2])
     assert peak == pytest.approx(peak_closed_form(), rel=2e-3)
     assert z > -REST  # slack again, on its way up or down
+
+
+def test_a_run_whose_motion_is_the_answer_steps_by_accuracy_without_dt():
+    """No dt, no contact: an undamped run, a load's history, a support's motion or an
+    initial velocity take the default tolerance and bdf2 (before, implicit Euler at
+    0.01 s: the weight's run lost 68 % of its energy to the steps); a damped one from
+    rest, to a t_end given or to rest, is dynamic relaxation: implicit Euler at 0.01 s;
+    dt given alone keeps fixed steps."""
+    undamped = parse_case(rope(None)).solver
+    assert undamped.tolerance == TOLERANCE and undamped.integrator == "bdf2"
+    history = rope(None)
+    history["solver"]["damping"] = 1.0
+    history["load"]["history"] = [[0.0, 0.0], [0.1, 1.0]]
+    assert parse_case(history).solver.tolerance == TOLERANCE
+    thrown = rope(None)
+    thrown["solver"]["damping"] = 1.0
+    thrown["mass"][0]["velocity"] = [1.0, 0.0, 0.0]
+    assert parse_case(thrown).solver.tolerance == TOLERANCE
+    relaxed = rope(None)
+    relaxed["solver"]["damping"] = 1.0
+    for t_end in (1.0, "rest"):
+        relaxed["solver"]["t_end"] = t_end
+        solver = parse_case(relaxed).solver
+        assert solver.tolerance is None and solver.integrator == "implicit_euler"
+        assert solver.dt == 0.01
+    fixed = rope(None)
+    fixed["solver"]["dt"] = 1e-3
+    solver = parse_case(fixed).solver
+    assert solver.tolerance is None and solver.integrator == "implicit_euler"
