@@ -484,9 +484,12 @@ NARROW_SHARE = 1.0
 
 def between_nodes(scene: Scene) -> list[str]:
     """Warnings for each obstacle, ball or free body (not a plane) narrower than the
-    net's median edge: the net touches solids at its nodes only (the barriers act on
-    nodes), so such a solid can pass between them, or sit across a strand, and no check
-    sees it. None where every edge meets them (``solver.edge_contact``)."""
+    net's median edge and near the net at the start (within the net's size of its
+    bounding box): the net touches solids at its nodes only (the barriers act on
+    nodes), so such a solid can pass between them, or sit across a strand. None where
+    every edge meets them (``solver.edge_contact``). A solid farther off that comes to
+    the net is watched in the run (catenet/run/crossings.py: it warns where an edge cut
+    into one or one passed through)."""
     from catenet.scene.shapes import solid_width
 
     net = scene.net
@@ -494,6 +497,9 @@ def between_nodes(scene: Scene) -> list[str]:
         return []
     ends = net.nodes[net.edges]
     edge = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
+    own = net.nodes[: net.n_net]  # (a body's frame nodes and a ball's follow the net's)
+    low, high = own.min(axis=0), own.max(axis=0)
+    size = float(np.linalg.norm(high - low))
     solids = [(k, shape, "") for k, shape, _ in scene.obstacles]
     solids += [(m.index, m.shape, "a free " if m.free else "a moving ") for m in scene.movers]
     out = []
@@ -501,7 +507,8 @@ def between_nodes(scene: Scene) -> list[str]:
         if shape.kind == "plane":
             continue
         width = solid_width(shape)
-        if width < NARROW_SHARE * edge:
+        gap = float(np.linalg.norm(np.clip(shape.origin, low, high) - shape.origin))
+        if width < NARROW_SHARE * edge and gap - shape.reach < size:
             out.append(
                 f"obstacle[{k}] ({what}{shape.kind}, {width:.3g} m across) is narrower than "
                 f"the net's edges ({edge:.3g} m, the median): the net touches solids at its "

@@ -264,7 +264,9 @@ def test_the_builder_refuses_a_bad_body_naming_it(call, message):
 def test_a_solid_narrower_than_the_cells_is_warned_about():
     """The net touches solids at its nodes only: a free bar 0.1 m across over 1 m cells,
     or a fixed thin pipe, may pass between them, and the run says so
-    (``catenet.run.advice.between_nodes``); a box wider than the cells does not."""
+    (``catenet.run.advice.between_nodes``); a box wider than the cells does not, nor a
+    bar farther from the net than its size (the run's watch says if it comes and cuts
+    in)."""
     from catenet.run.advice import between_nodes
 
     nodes, edges = grid()
@@ -279,6 +281,8 @@ def test_a_solid_narrower_than_the_cells_is_warned_about():
     (warning,) = between_nodes(pipe)
     assert warning.startswith("obstacle[0] (cylinder, 0.2 m across)")
     assert between_nodes(box) == []
+    far = scene.with_body(catenet.Capsule([-2.0, 0.3, 30.0], [2.0, 0.3, 30.0], 0.05), mass=5.0)
+    assert between_nodes(far) == []
     assert between_nodes(scene.with_obstacle(catenet.Plane([0, 0, 0.0], [0, 0, 1.0]))) == []
     # with every edge meeting solids (solver.edge_contact), nothing passes between nodes
     whole = catenet.Scene.of(net, catenet.Loads(), edge_radius=0.0)
