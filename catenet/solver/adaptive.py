@@ -36,8 +36,9 @@ gained 1 to 2.4 % of its energy where only the positions' error chose the steps 
 velocities carried the rope's pull on for a few steps after it went slack, where the
 jerk drops from k v / m to 0) and the run stopped; with its momentum held, 0.03 % at the
 default (tests/solver/test_rope_snap.py). So the default tolerance, 3e-3, asks every
-step to keep its positions within 0.3 % of how far the motion has gone, the strains (the tensions) within 0.3 % of
-the largest and each body's momentum within 3e-4 of its largest. (At 5e-3 the drop
+step to keep its positions within 0.3 % of how far the motion has gone, the strains (the
+tensions) within 0.3 % of the largest and each body's momentum within 3e-4 of its
+largest. (At 5e-3 the drop
 below took about 120 steps for 1.4 %, but the ball of tests/solver/test_accuracy.py
 lost 4.3 % of its bounce's period, under 1 % at 3e-3, when the estimate chose the steps
 through its 0.4 ms bounce; they are now a 64th of it, catenet/solver/strikes.py.)
