@@ -300,8 +300,7 @@ class Obstacles:
             poses = [item.pose(t, f) for t, f in zip(times, frames, strict=True)]
             sets[0][n0:n1] = np.array([c for c, _, _ in poses])
             sets[1][n0:n1] = np.array([R for _, R, _ in poses])
-            for j, (_, _, V) in enumerate(poses):
-                sets[2][n0 + j] = V
+            sets[2][n0:n1] = np.array([V for _, _, V in poses])  # one write: a chunk a frame
             if item.body is not None:
                 motion = [item.state(f) for f in frames]
                 sets[3][n0:n1] = np.array([v for v, _ in motion])

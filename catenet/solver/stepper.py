@@ -479,8 +479,10 @@ def at_rest(
     if not (math.isfinite(tol) and tol > 0 and math.isfinite(residual + inertia)):
         return False, residual, math.inf  # never at rest against a non-finite tolerance
     level = tol
-    if residual > tol and (floor := potential.at_floor(x, r, steps=False)) is not None:
-        level = floor
+    moving = inertia > tol and residual <= inertia  # no floor changes the answer: skipped
+    if residual > tol and not moving:
+        floor = potential.at_floor(x, r, steps=False)
+        level = level if floor is None else floor
     ratio = max(residual / level, inertia / tol)
     return (residual <= level and inertia <= tol), residual, ratio
 
