@@ -75,6 +75,7 @@ class Ledger:
         self.row = np.zeros(len(COLUMNS))
         self.judged = True
         self.largest = 0.0
+        self.motion = 0.0  # the largest kinetic energy (``catenet.run.integrator_advice``)
         self.remedy = REMEDIES[""]  # what an EnergyError advises (``begin``)
         self._start = 0.0
         self._work = 0.0
@@ -99,6 +100,7 @@ class Ledger:
         self.floor = 0.0
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
         self.largest = max(abs(k), abs(u), abs(c))
+        self.motion = k
         self.remedy = REMEDIES.get(stepper.scheme.name, REMEDIES[""])
 
     def step(
@@ -152,6 +154,7 @@ class Ledger:
         self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
         self.floor = max(self.floor, _floor(stepper, x_new, h))
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
+        self.motion = max(self.motion, k)
 
     def check(self, t: float) -> None:
         """EnergyError where the remainder shows energy created beyond the tolerance."""

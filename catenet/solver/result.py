@@ -96,7 +96,8 @@ class Result:
     energy : a dynamic run's energy balance at its end [J], in the order of
         ``catenet.solver.energy.COLUMNS`` (kinetic, elastic, contact, external_work,
         dissipated, numerical), or None; energy_scale : the largest of the run's kinetic,
-        elastic, contact energies and work [J] (what the energy verdict measures against)
+        elastic, contact energies and work [J] (what the energy verdict measures against);
+        energy_motion : its largest kinetic energy [J]
     """
 
     x: np.ndarray
@@ -126,6 +127,7 @@ class Result:
     stability: str = ""
     energy: np.ndarray | None = None
     energy_scale: float = float("nan")
+    energy_motion: float = float("nan")
 
 
 def finish(
