@@ -322,7 +322,7 @@ class ErrorControl:
         if len(v):
             self.reach = max(self.reach, _rms(u, mass))
             if self.bodies is not None:
-                self.bodies.saw(v)
+                self.bodies.saw(v, x)
         if self.edges is not None:
             self.strain = max(self.strain, self.edges.strain(x))
         if self.events is not None:

@@ -291,7 +291,7 @@ class Watch:
     ) -> None:  # fmt: skip
         """An accepted step of ``h`` from (x, v) at time t to (x_new, v_new), all (N, 3)."""
         strike = self.strikes.step(x, v, x_new, h, self.bodies.largest, 0.0)
-        self.bodies.saw(v_new.reshape(-1)[self.free])
+        self.bodies.saw(v_new.reshape(-1)[self.free], x_new)
         if strike is None or strike.owner < 0 or h <= strike.longest * (1.0 + 1e-9):
             return
         self.missed[strike.owner] = self.missed.get(strike.owner, 0.0) + strike.carried
