@@ -7,7 +7,8 @@ where not; the next step is sized so that its error comes out at SAFETY of the t
 The error of a step is the largest of
 
     |error in x| / (tolerance X),   |error in strain| / (tolerance S),
-    |error in a body's momentum| / (MOMENTUM tolerance P)
+    |error in a body's momentum| / (MOMENTUM tolerance P),
+    |error in a free body's spin| / (MOMENTUM tolerance max(P, its largest spin))
 
 with X the motion's reach (the largest mass-weighted RMS displacement from the start so
 far, over the free DOFs; at least FLOOR of the net's size L, its bounding box's
@@ -16,7 +17,9 @@ body's or ball's largest momentum |sum m v| so far (at least its mass times FLOO
 sqrt(|g| L) or L / (t_end - t0) until anything moves, then at least FLOOR of the
 largest momentum the run's parts carry, the sum of every free node's |m v|: an 8 t
 target at rest, struck by a net thrown at 2 m/s, measures its error against the net's
-momentum, not against 1 % of its own mass at the scene's speed). The strain error of
+momentum, not against 1 % of its own mass at the scene's speed); a spin is |sum m r x
+v| / rho, about the body's centre over its radius of gyration (catenet/solver/scales.py).
+The strain error of
 an edge is the positions' error projected on the edge over its rest length; its RMS
 over the edges taut at the step's end
 (or within their error of it; every edge that is not tension-only), weighted by their
