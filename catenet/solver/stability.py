@@ -167,12 +167,16 @@ class PathJudge:
         self.top = 0.0  # the largest nodal load at load factor 1
         self._modes: tuple[np.ndarray, np.ndarray] | None = None  # a state's zero modes
         self._seen: list[tuple[np.ndarray, Tangent]] = []  # the last two states judged
+        self._start: tuple[np.ndarray, Tangent] | None = None  # the start's (``start_tangent``)
         self.collapsed: str = ""  # what happened, once a collapse was followed through
 
     # --- what each state says ----------------------------------------------------------
     def tangent(self, x: np.ndarray) -> Tangent:
         """The tangent's verdict at x, kept for the last two states asked (a step's end is
-        the next step's start, and each is asked again by the unloading test)."""
+        the next step's start, and each is asked again by the unloading test) and for the
+        path's start (``start_tangent``'s verdict, whatever was asked since)."""
+        if self._start is not None and np.array_equal(self._start[0], x):
+            return self._start[1]
         for seen, verdict in self._seen:
             if np.array_equal(seen, x):
                 return verdict
@@ -201,10 +205,12 @@ class PathJudge:
     def start_tangent(self, x: np.ndarray) -> Tangent:
         """The tangent at a loaded path's start x, neutral where its verdict is round-off's
         (``_at_rest_length``; unloaded, the given geometry is the verdict's subject)."""
+        self._start = None
         t = self.tangent(x)
         if self.loaded and self._at_rest_length(x, t):
             t = replace(t, verdict=NEUTRAL)
             self._seen = [(s, t if np.array_equal(s, x) else v) for s, v in self._seen]
+        self._start = (np.array(x, copy=True), t)
         return t
 
     def step(self, prev: np.ndarray, f0: float, f1: float, x1: np.ndarray, last: bool) -> str:
