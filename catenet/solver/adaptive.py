@@ -78,8 +78,9 @@ counted on the box alone.
 
 Measured (``python -m benchmarks accuracy``; docs/howto/dynamic-runs.md) on the drop of
 benchmarks/peers/mujoco_drop.toml without its dt (the box's momentum at 0.4 s; bdf2 at
-fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 150 steps, 16.27 kg m/s (182 steps,
-16.22, with the body's momentum error counted without the nodes it holds); on the
+fixed 0.31 ms steps: 16.17 kg m/s, at 39 us 16.53): 153 steps, 16.26 kg m/s (150 and
+16.27 before its spin was held; 182 steps, 16.22, with the body's momentum error counted
+without the nodes it holds); on the
 safety net of benchmarks/safety_net.toml and two other drop tests.
 """
 
