@@ -191,12 +191,11 @@ def test_a_tolerance_dt_min_cannot_meet_is_warned_about_once(caplog):
     assert min(lengths[:-1]) >= 5e-3 * (1 - 1e-12)
 
 
-def test_a_body_at_rest_measures_its_momentum_error_against_the_runs_momentum():
-    """A 1 t ball at rest beside a cable whose free nodes move at 2 m/s: the ball's
-    momentum scale is 1 % of the momentum the parts carry (sum of |m v|), not 1 % of its
-    own mass at the scene's speed; once it moves, its own largest momentum."""
+def solid_beside_a_cable(solid: dict):
+    """The bdf2 stepper at its start and the error control (tolerance 1e-3) of a free
+    ``solid`` (an [[obstacle]] table) beside a cable fixed at both ends, undamped."""
     from catenet.case import build
-    from catenet.solver.adaptive import FLOOR, ErrorControl
+    from catenet.solver.adaptive import ErrorControl
     from catenet.solver.integrators import make
     from catenet.solver.path import workspace
     from catenet.solver.stepper import TimeStepper
@@ -206,15 +205,26 @@ def test_a_body_at_rest_measures_its_momentum_error_against_the_runs_momentum():
                      "nodes": 5},
         "material": {"E": 1e6, "radius": 0.01, "density": 1000.0},
         "supports": {"fixed": ["start", "end"]},
-        "obstacle": [{"kind": "sphere", "center": [0.0, 0.0, 1.0], "radius": 0.5,
-                      "mass": 1000.0, "angular_velocity": [0.0, 0.0, 0.0]}],
+        "obstacle": [solid],
         "solver": {"method": "dynamic", "damping": 0.0, "t_end": 1.0},
     })  # fmt: skip
     scene = build(case)
     stepper = TimeStepper(scene.net, scene.loads, workspace(scene, cn.Settings.of(case.solver)),
                           make("bdf2"), 0.0, rtol=1e-8, max_iter=25, reuse=False)  # fmt: skip
     stepper.begin(None, None, 0.0, None, None)
-    control = ErrorControl.of(stepper, 1e-3, 0.0, 1.0, 5e-3, None, None)
+    return stepper, ErrorControl.of(stepper, 1e-3, 0.0, 1.0, 5e-3, None, None)
+
+
+def test_a_body_at_rest_measures_its_momentum_error_against_the_runs_momentum():
+    """A 1 t ball at rest beside a cable whose free nodes move at 2 m/s: the ball's
+    momentum scale is 1 % of the momentum the parts carry (sum of |m v|), not 1 % of its
+    own mass at the scene's speed; once it moves, its own largest momentum."""
+    from catenet.solver.adaptive import FLOOR
+
+    stepper, control = solid_beside_a_cable({
+        "kind": "sphere", "center": [0.0, 0.0, 1.0], "radius": 0.5, "mass": 1000.0,
+        "angular_velocity": [0.0, 0.0, 0.0],
+    })  # fmt: skip
     bodies = control.bodies
     assert bodies is not None and len(bodies.dofs) == 1
     at_rest = bodies.largest[0]

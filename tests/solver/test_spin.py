@@ -18,36 +18,17 @@ import pytest
 
 import catenet as cn
 from catenet.case import build, parse_case
-
-
-def spinning_box_control():
-    """The steps' error control of a free 100 kg box beside a cable, at rest."""
-    from catenet.solver.adaptive import ErrorControl
-    from catenet.solver.integrators import make
-    from catenet.solver.path import workspace
-    from catenet.solver.stepper import TimeStepper
-
-    case = parse_case({
-        "geometry": {"kind": "cable", "start": [5.0, 0.0, 0.0], "end": [6.0, 0.0, 0.0],
-                     "nodes": 5},
-        "material": {"E": 1e6, "radius": 0.01, "density": 1000.0},
-        "supports": {"fixed": ["start", "end"]},
-        "obstacle": [{"kind": "box", "center": [0.0, 0.0, 0.0], "half_size": [0.5, 0.3, 0.2],
-                      "mass": 100.0, "angular_velocity": [0.0, 0.0, 0.0]}],
-        "solver": {"method": "dynamic", "damping": 0.0, "t_end": 1.0},
-    })  # fmt: skip
-    scene = build(case)
-    stepper = TimeStepper(scene.net, scene.loads, workspace(scene, cn.Settings.of(case.solver)),
-                          make("bdf2"), 0.0, rtol=1e-8, max_iter=25, reuse=False)  # fmt: skip
-    stepper.begin(None, None, 0.0, None, None)
-    return stepper, ErrorControl.of(stepper, 1e-3, 0.0, 1.0, 5e-3, None, None)
+from tests.solver.test_adaptive import solid_beside_a_cable
 
 
 def test_an_error_that_turns_a_body_counts_as_its_momentums_would():
     """The box's frame nodes' velocity error a pure turn about its centre, omega x r
     (no net momentum): its error is |sum m r x (omega x r)| / rho over the scale, the
     scale its momentum's until it spins faster; a pure shift counts as before."""
-    stepper, control = spinning_box_control()
+    stepper, control = solid_beside_a_cable({
+        "kind": "box", "center": [0.0, 0.0, 0.0], "half_size": [0.5, 0.3, 0.2], "mass": 100.0,
+        "angular_velocity": [0.0, 0.0, 0.0],
+    })  # fmt: skip
     bodies = control.bodies
     assert bodies is not None and len(bodies.dofs) == 1
     dofs = bodies.dofs[0]
