@@ -28,22 +28,22 @@ def integrator_loss(case: Case, result) -> str | None:
     ending at t_end before it rests (a transient: damped as the user asked, not as the
     step does), whose integrator removed more than LOSS_WARN of the run's largest energy
     on its own (the balance's ``numerical`` column: not damping, not friction), or more
-    than MOTION_WARN of its largest kinetic energy: its motion after an impact, a rebound,
-    peak forces, depend on the step. Measured on the drop of
-    benchmarks/peers/mujoco_drop.toml (benchmarks/drop.py): implicit Euler at the default
-    10 ms loses 49 % and the box leaves with 47 % too little momentum; at 2.5 ms 22 % and
-    15 %; bdf2 at 10 ms loses 10.5 % (the net's ringing, which it cannot resolve) with the
-    box within 1 %. The motion's share tells where the run's largest energy is mostly
-    held still (a mooring line's weight and stretch): a chain pulled 3 m by its fairlead,
-    its steps chosen by the default tolerance, lost 49 % of its largest kinetic energy
-    (3.5 % of the largest energy) and its peak tension came out 9 % low (at 1e-4 the
-    loss is 6.6 % and the peak within 1 %: not warned); a
-    roof net under a gust 83 % (15 %), its kinetic energy's peak half the converged one;
-    the 2 t mass dropped on benchmarks/cable_net_kn.toml 18 %, its peak rope tension 7 %
-    off (7.8 % at 3e-4 too: a snap the steps do not converge on). At the default
-    tolerance the drop loses 12 % of its kinetic energy (the box within
-    1 %), the safety net and tennis net of benchmarks/ 1.5 and 2.6 %, the thrown net and
-    the capture under 1 %."""
+    than MOTION_WARN of its largest kinetic energy: its motion after an impact, a
+    rebound, peak forces, depend on the step. Measured on the drop of
+    benchmarks/peers/mujoco_drop.toml (benchmarks/drop.py): implicit Euler at the
+    default 10 ms loses 49 % and the box leaves with 47 % too little momentum; at 2.5 ms
+    22 % and 15 %; bdf2 at 10 ms loses 10.5 % (the net's ringing, which it cannot
+    resolve) with the box within 1 %. The motion's share tells where the run's largest
+    energy is mostly held still (a mooring line's weight and stretch): a chain pulled 3
+    m by its fairlead, its steps chosen by the default tolerance, lost 49 % of its
+    largest kinetic energy (3.5 % of the largest energy) and its peak tension came out 8
+    % low against 3e-5's (at 1e-4 the loss is 6.6 % and the peak within 1 %: not
+    warned); a roof net
+    under a gust 83 % (15 %), its kinetic energy's peak half the converged one; the 2 t
+    mass dropped on benchmarks/cable_net_kn.toml 18 %, its peak rope tension 7 % off
+    (7.8 % at 3e-4 too: a snap the steps do not converge on). At the default tolerance
+    the drop loses 12 % of its kinetic energy (the box within 1 %), the safety net and
+    tennis net of benchmarks/ 1.5 and 2.6 %, the thrown net and the capture under 1 %."""
     solver = case.solver
     energy, scale = result.energy, result.energy_scale
     if solver.method != "dynamic" or solver.t_end == "rest" or energy is None:
