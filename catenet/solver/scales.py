@@ -19,9 +19,9 @@ HEAVY = 10.0  # a node's lumped mass this many times a typical node's: a body (`
 
 
 class Edges:
-    """A net's edges for the strain error (catenet/solver/adaptive.py): node pairs (M, 2), rest
-    lengths, which are tension-only; ``where`` maps a free DOF's error into the net's
-    (N * 3) flat positions."""
+    """A net's edges for the strain error (catenet/solver/adaptive.py): node pairs
+    (M, 2), rest lengths, which are tension-only; ``free`` maps a free DOF's error into
+    the net's (N * 3) flat positions."""
 
     def __init__(self, net: Net, free: np.ndarray):
         self.i, self.j = net.edges[:, 0], net.edges[:, 1]
@@ -56,22 +56,23 @@ class Edges:
 
 
 class Bodies:
-    """The free bodies and balls of a run for the momentum error (catenet/solver/adaptive.py): each
-    one's free-DOF positions (k, 3) in the free DOFs' vector (a free body's four frame
-    nodes, a ball's node), its masses, and its momentum scale ``largest``: the largest
-    momentum |sum m v| it has had, at least FLOOR of the run's largest ``flow`` (the sum
-    of every free node's |m v|: the momentum its parts carry), and before anything moves
-    ``floor`` times its mass; never below STILL of that (a body resting on a net from its
-    static equilibrium: round-off's motion alone, whose momentum error no step length
-    can bring below round-off's). A body's momentum error counts with it the net's nodes
-    inside its barrier (``hold``): momentum passing to and fro between a body and the
-    nodes it holds (a box's net chattering on its barrier) is no error of the motion.
+    """The free bodies and balls of a run for the momentum error
+    (catenet/solver/adaptive.py): each one's free-DOF positions (k, 3) in the free DOFs'
+    vector (a free body's four frame nodes, a ball's node), its masses, and its momentum
+    scale ``largest``: the largest momentum |sum m v| it has had, at least FLOOR of the
+    run's largest ``flow`` (the sum of every free node's |m v|: the momentum its parts
+    carry), and before anything moves ``floor`` times its mass; never below STILL of
+    that (a body resting on a net from its static equilibrium: round-off's motion alone,
+    whose momentum error no step length can bring below round-off's). A body's momentum
+    error counts with it the net's nodes inside its barrier (``hold``): momentum passing
+    to and fro between a body and the nodes it holds (a box's net chattering on its
+    barrier) is no error of the motion.
 
     A free body's spin is held as its momentum is: its angular momentum about its centre
     of mass over its radius of gyration, |sum m r x v| / rho (rho^2 = sum m |r|^2 / sum
     m, r from the centre: a momentum), its error against ``turning``, the larger of its
-    largest spin so far and its momentum's scale (a box dropped flat, which never
-    spins, took 424 steps against 150 with its spin's error measured against FLOOR of
+    largest spin so far and its momentum's scale (a box dropped flat, which never spins,
+    took 424 steps against 150 with its spin's error measured against FLOOR of
     ``flow``). A pipe dropped across a net with edge contact, yawed by the cords, spun
     on at the default tolerance with three times the energy of its converged spin and
     rebounded 12 % slow, where only its momentum was held (tests/solver/test_spin.py)."""
@@ -177,7 +178,7 @@ class Bodies:
 
 def _centre(m: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     """The centre of mass of nodes of masses m (k,) at y (k, 3), and their radius of
-    gyration about it (at least round-off's share of their extent, never 0)."""
+    gyration about it (never 0)."""
     centre = m @ y / m.sum()
     r = y - centre
     rho = math.sqrt(float(m @ np.einsum("ij,ij->i", r, r)) / float(m.sum()))
@@ -195,8 +196,8 @@ def _heavy(net: Net, free: np.ndarray, framed: set[int]) -> list[int]:
     """The net's nodes whose lumped mass (``[[mass]]``) is HEAVY times a typical moving
     node's mass or more (the lower median of the free nodes' masses; for a net with one
     free node, its own cables' share): a weight on a rope, a net's corner masses, each a
-    body for the momentum error (catenet/solver/adaptive.py). A mass added to every node is the
-    net's own."""
+    body for the momentum error (catenet/solver/adaptive.py). A mass added to every node
+    is the net's own."""
     if net.point_mass is None:
         return []
     moving = np.unique(free // 3)
@@ -205,5 +206,5 @@ def _heavy(net: Net, free: np.ndarray, framed: set[int]) -> list[int]:
         return []
     mass, point = net.mass[moving], net.point_mass[moving]
     typical = float(np.sort(mass)[(len(mass) - 1) // 2]) if len(mass) > 1 else mass[0] - point[0]
-    heavy = point >= HEAVY * typical
+    heavy = (point > 0.0) & (point >= HEAVY * typical)
     return [int(k) for k, h in zip(moving, heavy, strict=True) if h and int(k) not in framed]
