@@ -56,9 +56,10 @@ class Edges:
 
 
 class Bodies:
-    """The free bodies and balls of a run for the momentum error
-    (catenet/solver/adaptive.py): each one's free-DOF positions (k, 3) in the free DOFs'
-    vector (a free body's four frame nodes, a ball's node), its masses, and its momentum
+    """The free bodies, balls and heavy lumped masses (``_heavy``) of a run for the
+    momentum error (catenet/solver/adaptive.py): each one's free-DOF positions (k, 3) in
+    the free DOFs' vector (a free body's four frame nodes, a ball's or a mass's node),
+    its masses, and its momentum
     scale ``largest``: the largest momentum |sum m v| it has had, at least FLOOR of the
     run's largest ``flow`` (the sum of every free node's |m v|: the momentum its parts
     carry), and before anything moves ``floor`` times its mass; never below STILL of
