@@ -238,13 +238,16 @@ class EdgeWatch:
         for k, shape, _ in scene.obstacles:
             if shape.kind == "plane":
                 continue
+            width = solid_width(shape)
+            if not (math.isfinite(width) and width > 0.0):
+                continue  # its extent lost to round-off where it lies (1e19 m off): unmeasured
             label = f"obstacle[{k}] (a {shape.kind})"
             term = moving.get(k)
             if term is None:
-                solid = _Solid(k, label, shape, solid_width(shape), _as_is, _fixed(shape.origin))
+                solid = _Solid(k, label, shape, width, _as_is, _fixed(shape.origin))
             else:
                 label = f"obstacle[{k}] (a moving {shape.kind})"
-                solid = _Solid(k, label, shape, solid_width(shape), _moved(term), _moving(term))
+                solid = _Solid(k, label, shape, width, _moved(term), _moving(term))
             self.solids.append(solid)
         self._bodies(scene)
 

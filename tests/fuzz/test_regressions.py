@@ -307,6 +307,22 @@ def test_a_denormal_barrier_distance_is_named(tmp_path, name):
     assert "obstacle[0].distance = 5e-324: the barrier's stiffness would be inf" in text
 
 
+def test_a_solid_whose_extent_round_off_loses(tmp_path):
+    """The box of ball_off_box.toml moved to x = 2^63 (the suite's fuzz found it): its
+    outline's extent was lost to round-off there, the edges' watch built a barrier of
+    zero reach, and the run ended with an internal error. That solid is now left
+    unwatched, and the run ends as any other."""
+    from fuzzing import CONFIGS
+
+    case = (CONFIGS / "contact" / "ball_off_box.toml").read_text()
+    result, text = run(
+        tmp_path, "-o", tmp_path / "o.h5", "--set", "obstacle.0.center.0=9223372036854775807",
+        "--set", "solver.t_end=0.05", case=case,
+    )  # fmt: skip
+    assert judge(result, tmp_path).good, text
+    assert "internal error" not in text
+
+
 def test_a_far_node_of_a_cable_graph(tmp_path):
     """A mooring line's fairlead moved to x = 1e99 (the quick tier found it): the cable
     split into 2e99 edges was cast to int64 garbage and built; now the size guard refuses
