@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from catenet.solver.energy import COLUMNS
 from catenet.solver.result import Outcome
 
 if TYPE_CHECKING:
@@ -57,8 +58,9 @@ def integrator_loss(case: Case, result) -> str | None:
     if not scale > 0.0:
         return None
     lost = -float(energy[-1]) / scale
-    motion = float(getattr(result, "energy_motion", float("nan"))) + max(float(energy[4]), 0.0)
-    moved = -float(energy[-1]) / motion if motion > 0.0 else 0.0  # (energy[4]: dissipated)
+    took = max(float(energy[COLUMNS.index("dissipated")]), 0.0)  # damping, drag, friction
+    motion = float(getattr(result, "energy_motion", float("nan"))) + took
+    moved = -float(energy[-1]) / motion if motion > 0.0 else 0.0
     if not (lost > LOSS_WARN or moved > MOTION_WARN):
         return None
     name = solver.integrator
