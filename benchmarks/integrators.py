@@ -4,7 +4,7 @@ the paper's damping study (App. A, Fig. A.9).
 Three parts, one CSV (``kind`` column):
 
 - ``analysis``: the damping ratio and relative period error each scheme adds to an
-  undamped mode at h omega (``catenet.solver.integrators.numerical_damping``, from the
+  undamped mode at h omega (``catenet.solver.spectral.numerical_damping``, from the
   eigenvalues of the scheme's amplification matrix): implicit Euler, newmark with
   rho_inf = 1 (average acceleration), the default and 0.5;
 - ``measured``: the same ratio measured on the solver: a pretensioned string (10
@@ -137,7 +137,8 @@ def settling(mu: str, name: str) -> dict:
 
 
 def run(out_dir: Path, *, quick: bool = False, progress=no_progress, threads: int = 1) -> Study:
-    from catenet.solver.integrators import RHO_INF, numerical_damping
+    from catenet.solver.integrators import RHO_INF
+    from catenet.solver.spectral import numerical_damping
 
     set_threads(threads)
     warm_up()

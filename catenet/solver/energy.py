@@ -9,7 +9,8 @@ stretching, the rods' bending: ``structural`` terms) and the elastic supports' s
 (``holds``); C every other conservative term's energy (barriers of obstacles, bodies and
 strands, a free body's rigidity); W the work of the applied forces, sum over steps of
 1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
-move), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} - Phi_n)
+move) (the part of R that holds a dashpot or the water at the media's own rule, as their
+losses: ``_through_media``), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} - Phi_n)
 (``driven`` terms); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
 with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
 the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), against
@@ -94,7 +95,8 @@ class Ledger:
         self._driven = [t for t in system.terms if t.driven]  # a turned rod end's work
         self._force = self._applied(stepper).copy()
         k, u, c, reaction = self._state(stepper, stepper.x, stepper.v)
-        self._reaction = reaction
+        self._held = self._through_media(stepper, stepper.x)
+        self._reaction = reaction - self._held
         self._start = k + u + c
         self._work = self._dissipated = 0.0
         self.floor = 0.0
@@ -119,9 +121,15 @@ class Ledger:
         self._work += 0.5 * float(np.sum((self._force + force) * dx))  # own load moves
         k, u, c, reaction = self._state(stepper, x_new, v_new)
         fixed = net.fixed
-        self._work += 0.5 * float(np.sum((self._reaction + reaction)[fixed] * dx[fixed]))
+        trapezoid = stepper.scheme.name != "implicit_euler"  # the media's rule (``losses``)
+        held = self._through_media(stepper, x_new)  # what holds the media at a support
+        reaction -= held  # works by their rule, as the losses it enters: the rest by the
+        through = 0.5 * (held + self._held) if trapezoid else held  # trapezoid
+        work = 0.5 * (self._reaction + reaction) + through
+        self._work += float(np.sum(work[fixed] * dx[fixed]))
         self._force[:] = force
         self._reaction[:] = reaction
+        self._held = held
         flat = dx.reshape(-1)[stepper.free]
         vel = v_new.reshape(-1)[stepper.free]
         if stepper.scheme.name != "implicit_euler":  # the step's mean velocity
@@ -146,8 +154,7 @@ class Ledger:
         for term in self._driven:
             self._work += term.driven_work(x_old, x_new)
         for term in self._media:
-            mean = stepper.scheme.name != "implicit_euler"
-            lost, put = term.losses(x_old, x_new, h, mean)
+            lost, put = term.losses(x_old, x_new, h, trapezoid)
             self._dissipated += lost
             self._work += put
         remainder = k + u + c - self._start - self._work + self._dissipated
@@ -175,6 +182,21 @@ class Ledger:
             )
 
     # --- the parts -------------------------------------------------------------------
+    def _through_media(self, stepper: TimeStepper, x: np.ndarray) -> np.ndarray:
+        """The part of the supports' force on the net at x (N, 3; 0 at free nodes) that
+        holds the media (a dashpot, the water): its work is booked by the media's own
+        rule, as their losses are (implicit Euler's: at the step's end; a support that
+        starts at once pulls its dashpot at once), the rest's by the trapezoid."""
+        out = np.zeros_like(x)
+        if not self._media:
+            return out
+        force = np.zeros_like(x)
+        for term in self._media:
+            term.held_force(x, force)
+        fixed = stepper.net.fixed
+        out[fixed] = -force[fixed]
+        return out
+
     def _applied(self, stepper: TimeStepper) -> np.ndarray:
         return np.asarray(stepper.potential.force, dtype=np.float64)
 
@@ -225,11 +247,13 @@ def held_energy(system: System, x: np.ndarray, v: np.ndarray | None) -> np.ndarr
 
 def _stored(system: System, energies: list[float]) -> tuple[float, float]:
     """(elastic, contact) energy of the system's terms' ``energies`` (at one x): the
-    edges' stretching and the rods' bending, and every other term's that is not lagged
-    (friction dissipates)."""
+    edges' stretching and the rods' bending, and every other term's that is neither
+    lagged (friction dissipates) nor a medium (the water's drag and added mass, an
+    axial dashpot: their step's potential is the scheme's, not energy the net holds;
+    their kinetic energy and losses are booked by themselves)."""
     elastic = contact = 0.0
     for term, e in zip(system.terms, energies, strict=True):
-        if term.lagged:
+        if term.lagged or term.medium:
             continue
         if term is system.stretch or term.structural or term.holds:  # springs: elastic
             elastic += float(e)

@@ -131,6 +131,10 @@ class Scheme(Protocol):
         self, y_k: np.ndarray, v_k: np.ndarray, h: float
     ) -> tuple[float, np.ndarray, float, np.ndarray]: ...
 
+    def held(
+        self, x_end: np.ndarray, x: np.ndarray, v: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray: ...
@@ -181,6 +185,16 @@ class ImplicitEuler:
         its free DOFs y: (k, c, k_a, c_a) (after ``weights``; water's drag and added
         mass, catenet/terms/water.py)."""
         return 1.0 / h, y_k, 1.0 / h**2, y_k + h * v_k
+
+    def held(
+        self, x_end: np.ndarray, x: np.ndarray, v: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The velocity and acceleration at the step's end of DOFs on a prescribed path
+        (the supports: at x_end there, (x, v) at the start) by the scheme's own formula,
+        (x_end - x) / h and its change over h: a support and the free node beside it
+        moving as one have no relative velocity (an edge's dashpot, catenet/terms/axial.py)."""
+        v_end = (x_end - x) / h
+        return v_end, (v_end - v) / h
 
     keep = False  # keep the last state for ``estimate`` (steps chosen by accuracy)
     _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
@@ -307,6 +321,15 @@ class Newmark:
         c = self._p - (v_k + h * (1.0 - gamma) * a_n) / k
         return k, c, ka, self._p - am * a_n / ka
 
+    def held(
+        self, x_end: np.ndarray, x: np.ndarray, v: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A support's velocity and acceleration as ``ImplicitEuler.held``: its mean
+        velocity over the step (first order: the scheme keeps no acceleration of the
+        supports)."""
+        v_end = (x_end - x) / h
+        return v_end, (v_end - v) / h
+
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray:
@@ -352,6 +375,8 @@ class BDF2:
         self._older: tuple[np.ndarray, np.ndarray, float] | None = None  # ... of step n-2
         self._bar: tuple[np.ndarray, np.ndarray, float] | None = None  # this step's x, v, b
         self._bdf = False  # this step is a BDF2 step (not implicit Euler's)
+        self._c = (1.0, 0.0)  # this step's (c1, c2)
+        self._held: tuple[np.ndarray, np.ndarray] | None = None  # supports' x, v at n-1
         self.b = 0.0  # the step's b: v_{n+1} = (x_{n+1} - x_bar) / b (``weights``)
 
     def begin(
@@ -364,7 +389,7 @@ class BDF2:
         a0: np.ndarray | None = None,
     ) -> None:
         """A run starts with one implicit Euler step."""
-        self._prev = self._older = None
+        self._prev = self._older = self._held = None
 
     def _coefficients(
         self, y_k: np.ndarray, v_k: np.ndarray, h: float
@@ -379,6 +404,7 @@ class BDF2:
         c2 = omega * omega / (1.0 + 2.0 * omega)
         c1 = 1.0 + c2  # = (1 + omega)^2 / (1 + 2 omega)
         b = h * (1.0 + omega) / (1.0 + 2.0 * omega)
+        self._c = (c1, c2)
         return c1 * y_k - c2 * y_p, c1 * v_k - c2 * v_p, b
 
     def predict(self, x_trial: np.ndarray, v: np.ndarray, free: np.ndarray, h: float) -> None:
@@ -412,18 +438,39 @@ class BDF2:
         y_bar, v_bar, b = self._bar
         return 1.0 / b, y_bar, 1.0 / b**2, y_bar + b * v_bar
 
+    def held(
+        self, x_end: np.ndarray, x: np.ndarray, v: np.ndarray, h: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The velocity and acceleration at the step's end of DOFs on a prescribed path
+        (``ImplicitEuler.held``) by this step's formula, (x_end - x_bar) / b and (v_end -
+        v_bar) / b with x_bar, v_bar from their own last two states: a support's velocity
+        is second order, as the free nodes' are (its mean over the step lags by h / 2: the
+        dashpot of a chain's last edge took the difference for a stretch rate, 50 kN at a
+        surged fairlead)."""
+        if not self._bdf or self._held is None:
+            v_end = (x_end - x) / h
+            return v_end, (v_end - v) / h
+        (x_p, v_p), (c1, c2), b = self._held, self._c, self.b
+        v_end = (x_end - (c1 * x - c2 * x_p)) / b
+        return v_end, (v_end - (c1 * v - c2 * v_p)) / b
+
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray:
-        """The new velocities, (x_{n+1} - x_bar) / b on the free DOFs; supports' are
-        their mean over the step. Step n becomes the scheme's previous step."""
+        """The new velocities, (x_{n+1} - x_bar) / b on the free DOFs, the supports' by
+        the same formula (``held``). Step n becomes the scheme's previous step."""
         assert self._bar is not None  # weights() came first
         y_bar, _, b = self._bar
-        out: np.ndarray = (x_new - x) / h
-        out.reshape(-1)[free] = (x_new.reshape(-1)[free] - y_bar) / b
+        flat, start, speed = x_new.reshape(-1), x.reshape(-1), v.reshape(-1)
+        out = np.empty_like(flat)
+        out[free] = (flat[free] - y_bar) / b
+        fixed = np.ones(len(flat), dtype=bool)
+        fixed[free] = False
+        out[fixed] = self.held(flat[fixed], start[fixed], speed[fixed], h)[0]
         self._older = self._prev
-        self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
-        return out
+        self._prev = (start[free].copy(), speed[free].copy(), float(h))
+        self._held = (start[fixed].copy(), speed[fixed].copy())
+        return out.reshape(x_new.shape)
 
     def estimate(
         self, y_new: np.ndarray, y_k: np.ndarray, v_k: np.ndarray, h: float
@@ -462,46 +509,3 @@ def make(name: str = "implicit_euler", rho_inf: float = RHO_INF) -> Scheme:
     if name == "bdf2":
         return BDF2()
     raise ConfigError(f"solver.integrator = {name!r}: must be one of {', '.join(INTEGRATORS)}")
-
-
-def amplification(
-    name: str, h_omega: float, xi: float = 0.0, rho_inf: float = RHO_INF
-) -> np.ndarray:
-    """The matrix taking a scheme's state to the next for one oscillator
-    x'' + 2 xi omega x' + omega^2 x = 0 at step h omega, with omega = 1 and h = h omega:
-    (x, v) for implicit Euler, (x, v, a) for newmark (its spectral analysis: the principal
-    eigenvalues give the numerical damping and period error, the others the dissipation of
-    the unresolved modes)."""
-    s, z = float(h_omega), float(xi)
-    if name == "implicit_euler":
-        # (1 + 2 z s + s^2) v1 = v0 - s x0; x1 = x0 + s v1
-        d = 1.0 + 2.0 * z * s + s * s
-        v_x, v_v = -s / d, 1.0 / d
-        return np.array([[1.0 + s * v_x, s * v_v], [v_x, v_v]])
-    nm = make(name, rho_inf)
-    assert isinstance(nm, Newmark)  # (implicit Euler's is above; newmark's the other)
-    out = np.empty((3, 3))
-    for col, (x0, v0, a0) in enumerate(np.eye(3)):
-        p = x0 + s * v0 + s * s * (0.5 - nm.beta) * a0
-        # (1 - am) a1 + am a0 + 2 z v1 + x1 = 0 with x1 = p + beta s^2 a1 and
-        # v1 = v0 + s ((1 - gamma) a0 + gamma a1)
-        lhs = (1.0 - nm.alpha_m) + 2.0 * z * s * nm.gamma + nm.beta * s * s
-        rhs = -(nm.alpha_m * a0 + 2.0 * z * (v0 + s * (1.0 - nm.gamma) * a0) + p)
-        a1 = rhs / lhs
-        v1 = v0 + s * ((1.0 - nm.gamma) * a0 + nm.gamma * a1)
-        out[:, col] = (p + nm.beta * s * s * a1, v1, a1)
-    return out
-
-
-def numerical_damping(name: str, h_omega: float, rho_inf: float = RHO_INF) -> tuple[float, float]:
-    """(damping ratio, relative period error) that the scheme adds to an undamped mode at
-    step h omega: from its principal eigenvalues r exp(+-i Omega h),
-    xi = -ln(r) / (Omega h) and T_numerical / T - 1 = h omega / (Omega h) - 1; for an
-    overdamped (real) principal root the ratio is 1 and the period infinite."""
-    lam = np.linalg.eigvals(amplification(name, h_omega, 0.0, rho_inf))
-    pair = lam[np.abs(lam.imag) > 1e-14]
-    if pair.size == 0:
-        return 1.0, math.inf
-    top = pair[np.argmax(np.abs(pair))]
-    angle = abs(math.atan2(top.imag, top.real))
-    return -math.log(abs(top)) / angle, h_omega / angle - 1.0

@@ -267,7 +267,13 @@ class TimeStepper:
         """Gives the water's terms the step's velocity and acceleration as affine maps of
         its positions (``Scheme.motion``)."""
         kv, c, ka, c_a = self.scheme.motion(y_k, v_k, h_step)
+        fixed = self.net.fixed  # the supports: the scheme's velocity on their own path
+        end = self.x_trial[fixed].reshape(-1)  # (``Scheme.held``), as the maps give it
+        start, speed = self.x[fixed].reshape(-1), self.v[fixed].reshape(-1)
+        v_end, a_end = self.scheme.held(end, start, speed, h_step)
         centre, centre_a = self.x.copy(), self.x.copy()
+        centre[fixed] = (end - v_end / kv).reshape(-1, 3)
+        centre_a[fixed] = (end - a_end / ka).reshape(-1, 3)
         centre.reshape(-1)[self.free] = c
         centre_a.reshape(-1)[self.free] = c_a
         for term in self.media:

@@ -22,8 +22,9 @@ from catenet.errors import ConfigError
 from catenet.run import advice
 from catenet.run.runner import run_case
 from catenet.solver.dynamic import solve_dynamic
-from catenet.solver.integrators import RHO_INF, amplification, make, numerical_damping
+from catenet.solver.integrators import RHO_INF, make
 from catenet.solver.path import Settings, Start, solve
+from catenet.solver.spectral import amplification, numerical_damping
 from catenet.solver.static import Workspace
 
 # --------------------------------------------------------------------------- scenes
