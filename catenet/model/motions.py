@@ -1,6 +1,7 @@
 """Prescribed support motions: where the supports are at a time (``support_positions``,
-the body of ``Loads.support_positions``), and a vessel's rigid motion that carries
-several supports at once (``Vessel``).
+the body of ``Loads.support_positions``), when a motion or load turns a corner
+(``corners``), and a vessel's rigid motion that carries several supports at once
+(``Vessel``).
 
 A vessel moves as a rigid body by six motions: surge, sway and heave (translations along
 its x, y and z axes [m]) and roll, pitch and yaw (rotations about them [rad]), about a
@@ -131,3 +132,22 @@ def support_positions(loads: Loads, net: Net, time: float | None, factor: float)
             moved[nodes] = True
         s = np.where(moved[net.fixed], full[net.fixed], s)
     return x + s[:, None] * d
+
+
+def corners(loads: Loads) -> np.ndarray:
+    """The times at which a prescribed motion or load turns a corner (sorted): each point
+    of a history or of a vessel's motion table (linear between them) and the end of a
+    support's linear ramp. Steps chosen by accuracy end on them (a pulse between two step
+    ends was stepped over whole; catenet/solver/adaptive.py)."""
+    times: list[float] = []
+    histories = [h for _, h in (*loads.parts, *loads.support_history)]
+    if loads.gravity is not None and loads.gravity_history is not None:
+        histories.append(loads.gravity_history)
+    for h in histories:
+        times.extend(getattr(h, "times", ()))
+    for _, vessel in loads.vessels:
+        if vessel.table is not None:
+            times.extend(vessel.table[:, 0])
+    if loads.support_displacement is not None and loads.ramp_time is not None:
+        times.extend(loads.ramp_time[loads.ramp_time > 0.0])
+    return np.unique(np.asarray(times, dtype=np.float64))

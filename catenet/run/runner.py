@@ -89,7 +89,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
     from catenet.case import build
     from catenet.output import check_output_path
-    from catenet.run import advice
+    from catenet.run import advice, history_advice
     from catenet.run.cases import pick
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -118,7 +118,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     if hopeless:  # no static equilibrium to find: say so at once, not after minutes
         raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
-    notes += advice.ignored_contact_radius(case)
+    notes += advice.ignored_contact_radius(case) + history_advice.stepped_over(case)
     for message in notes + advice.between_nodes(scene):
         log.warning("%s", message)
     trajectory = None

@@ -46,6 +46,13 @@ below took about 120 steps for 1.4 %, but the ball of tests/solver/test_accuracy
 lost 4.3 % of its bounce's period, under 1 % at 3e-3, when the estimate chose the steps
 through its 0.4 ms bounce; they are now a 64th of it, catenet/solver/strikes.py.)
 
+The corners of what the case prescribes are landed on too: every point of a load's,
+gravity's, a support's, a vessel's, an obstacle's or a turned rod end's history, and the
+end of a support's ramp (``Loads.corners``, ``Term.corners``). A step takes a history at
+its end only: one across a corner smooths it, and one across a pulse steps over it whole
+(a 20 ms pulse on a hanging weight, at rest before it: the steps had grown to 0.3 s and
+the weight never moved, tests/solver/test_corners.py).
+
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
 that the impact is resolved from its first instant. Nodes that strike a free body or a
@@ -193,6 +200,7 @@ class ErrorControl:
         self.events: Events | None = None  # contact events landed on (``of``)
         self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
         self.crossing = math.inf  # the longest step no solid passes a strand in (``ahead``)
+        self.corners = np.empty(0)  # times a prescribed motion or load turns a corner (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
         self.dt_max = span if dt_max is None else float(dt_max)
@@ -245,6 +253,11 @@ class ErrorControl:
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
         out.events = Events(stepper.system.terms, stepper.x)
+        corners = [t for term in stepper.system.terms for t in term.corners()]
+        if hasattr(stepper.loads, "corners"):  # (a load case's frozen loads have none)
+            corners.extend(stepper.loads.corners())
+        every = np.unique(np.asarray(corners, dtype=np.float64))
+        out.corners = every[(every > t0) & (every < t_end)]
         spacing = float(np.median(net.rest_length)) if net.n_edges else 0.0
         out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass, spacing)
         out.ahead(stepper.x, stepper.v)
@@ -355,10 +368,22 @@ class ErrorControl:
         if self.strikes is not None:
             self.crossing = max(self.dt_min, self.strikes.crossing(x, v, self.h))
 
+    def _corner(self, t: float) -> float | None:
+        """The first corner of a prescribed motion or load after t (None: none)."""
+        k = int(np.searchsorted(self.corners, t + self._near(t), side="right"))
+        return float(self.corners[k]) if k < len(self.corners) else None
+
+    def _near(self, t: float) -> float:
+        """How close to a corner a time lies on it (round-off of the times' sums)."""
+        return 1e-12 * max(abs(t), self.t_end - self.t0)
+
     def step(self, t: float) -> float:
-        """The next step from t: h, cut short at t_end, or half what is left where h would
-        leave a sliver shorter than itself."""
-        left = self.t_end - t
+        """The next step from t: h, cut short at t_end or at the next corner of a
+        prescribed motion or load (landed on: the step across a fairlead's stop took the
+        chain's jolt within it), or half what is left where h would leave a sliver
+        shorter than itself."""
+        corner = self._corner(t)
+        left = (self.t_end if corner is None else corner) - t
         self.h = min(self.h, self.crossing)  # no solid past a strand within the step
         if self.strikes is not None:  # a bounce goes on: its steps resolve it
             self.h = min(self.h, self.strikes.cap(t))
@@ -430,4 +455,7 @@ class ErrorControl:
     def advance(self, t: float, h_step: float) -> float:
         """The time after the step of ``h_step`` from t (t_end exactly at the end)."""
         end = t + h_step
-        return self.t_end if h_step == self.t_end - t or end >= self.t_end * (1 - 1e-12) else end
+        if h_step == self.t_end - t or end >= self.t_end * (1 - 1e-12):
+            return self.t_end
+        corner = self._corner(t)
+        return corner if corner is not None and abs(end - corner) <= self._near(t) else end

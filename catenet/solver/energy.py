@@ -10,10 +10,11 @@ stretching, the rods' bending: ``structural`` terms) and the elastic supports' s
 strands, a free body's rigidity); W the work of the applied forces, sum over steps of
 1/2 (f_n + f_{n+1}) . (x_{n+1} - x_n), and of the supports, 1/2 (R_n + R_{n+1}) . (their
 move) (the part of R that holds a dashpot or the water at the media's own rule, as their
-losses: ``_through_media``), and of a rod end turned along a history, 1/2 (M_n + M_{n+1}) (Phi_{n+1} - Phi_n)
-(``driven`` terms); D the work done against the mass-proportional damping, mu m v . (x_{n+1} - x_n)
-with v the scheme's own: v_{n+1} for implicit Euler (its discrete energy identity),
-the step's mean (v_n + v_{n+1}) / 2 for newmark (the trapezoidal rule's), against
+losses: ``_through_media``), and of a rod end turned along a history, 1/2 (M_n +
+M_{n+1}) (Phi_{n+1} - Phi_n) (``driven`` terms); D the work done against the
+mass-proportional damping, mu m v . (x_{n+1} - x_n) with v the scheme's own: v_{n+1}
+for implicit Euler (its discrete energy identity), the step's mean (v_n + v_{n+1}) / 2
+for newmark and bdf2 (the trapezoidal rule's), against
 friction, g_f(x_{n+1}) . (x_{n+1} - x_n) (lagged friction's force; on an obstacle on a
 prescribed motion, g_f . (dx - D) with D its surface's displacement where the nodes
 are, ``Moving.drive``, and its work through friction -g_f . D booked in W), and against the

@@ -282,6 +282,11 @@ class Term:
         short): a term whose exact Hessian lets Newton overshoot gives a safer matrix while
         on (a free body's contact: projected blocks). Gradient and energy never change."""
 
+    def corners(self) -> tuple[float, ...]:
+        """The times at which a prescribed motion of the term turns a corner (its history's
+        points): steps chosen by accuracy end on them (catenet/solver/adaptive.py)."""
+        return ()
+
     def begin_step(self, x: np.ndarray, time: float | None, start: float | None = None) -> None:
         """Called before every static load step (``time`` None) and every dynamic time
         step (``time``: the step's end, ``start``: its start, the time of x) with the

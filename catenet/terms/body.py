@@ -116,6 +116,10 @@ class Path:
     def __call__(self, t: float) -> np.ndarray:
         return self.start + self.velocity * self.distance(t)
 
+    def corners(self) -> tuple[float, ...]:
+        """The times its velocity turns a corner: the history's points."""
+        return () if self.history is None else tuple(self.history.times)
+
 
 @register("guide")
 class Guide(Term):
@@ -144,6 +148,9 @@ class Guide(Term):
 
     def settle_time(self) -> float:
         return 0.0  # as before: the path's end decides nothing of a run to rest
+
+    def corners(self) -> tuple[float, ...]:
+        return self.path.corners()
 
     def begin_step(self, x, time, start=None) -> None:
         self._span = None

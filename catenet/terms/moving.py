@@ -127,6 +127,9 @@ class Moving(Term):
     def settle_time(self) -> float:
         return 0.0  # a run with a moving obstacle goes to its t_end (not to rest)
 
+    def corners(self) -> tuple[float, ...]:
+        return self.path.corners()
+
     def driven_work(self, x_old, x_new) -> float:
         """The work [J] of the obstacle's motion on the net over the last step (module
         docstring): the trapezoid of the barrier's forces times the displacement of the

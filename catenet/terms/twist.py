@@ -180,6 +180,10 @@ class Twist(Term):
         """The last point of the turned ends' histories (0: none)."""
         return max([h.end for _, _, h in self.imposed if h is not None], default=0.0)
 
+    def corners(self) -> tuple[float, ...]:
+        """The points of the turned ends' histories."""
+        return tuple(t for _, _, h in self.imposed if h is not None for t in h.times)
+
     def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
         """1/2 (M_n + M_n+1) (Phi_n+1 - Phi_n), summed over the segments, for the step of
         the last ``begin_step``."""

@@ -1,0 +1,70 @@
+"""What a dynamic run at fixed steps is told about its histories before it runs: a load's or
+a motion's history is taken at the ends of the steps only (its factor at t + h), so a
+piece of it shorter than a step can fall between two step ends and be stepped over whole.
+A 20 ms force pulse on a hanging 10 kg weight, at fixed 50 ms steps: the weight never
+moved and the run ended "converged". Steps chosen by accuracy land on every point of a
+history (catenet/solver/adaptive.py, ``corners``) and are not warned."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
+
+
+def histories(case: Case) -> list[tuple[str, np.ndarray]]:
+    """Every history of a case with its key path and the times of its points: the loads'
+    and load cases', the supports' moves and twists, the vessels' motion tables and the
+    obstacles' prescribed motions."""
+    out: list[tuple[str, Any]] = []
+
+    def loads(prefix: str, load) -> None:
+        out.append((f"{prefix}.history", load.history))
+        for name, items in (("point", load.points), ("line", load.lines), ("area", load.areas)):
+            out.extend((f"{prefix}.{name}[{k}].history", p.history) for k, p in enumerate(items))
+
+    loads("load", case.load)
+    for k, load_case in enumerate(case.load_cases):
+        loads(f"load_case[{k}]", load_case)
+    supports = case.supports
+    out.extend((f"supports.move[{k}].history", m.history) for k, m in enumerate(supports.moves))
+    out.extend((f"supports.twist[{k}].history", t.history) for k, t in enumerate(supports.twists))
+    out.extend((f"supports.vessel[{k}].motion", v.motion) for k, v in enumerate(supports.vessels))
+    out.extend(
+        (f"obstacle[{k}].history", getattr(o, "history", None))
+        for k, o in enumerate(case.obstacles)
+    )
+    return [
+        (path, np.asarray([row[0] for row in points], dtype=np.float64))
+        for path, points in out
+        if points
+    ]
+
+
+def stepped_over(case: Case) -> list[str]:
+    """Messages for the histories of a dynamic run at fixed steps (no ``solver.tolerance``)
+    with a piece between two points, within the run, shorter than ``solver.dt``."""
+    solver = case.solver
+    if solver.method != "dynamic" or solver.tolerance is not None or not solver.dt:
+        return []
+    dt = float(solver.dt)
+    t_end = solver.t_end if isinstance(solver.t_end, (int, float)) else np.inf
+    out = []
+    for path, times in histories(case):
+        pieces = np.diff(times)
+        inside = (times[1:] > 0.0) & (times[:-1] < t_end)
+        short = np.flatnonzero(inside & (pieces < dt))
+        if not len(short):
+            continue
+        k = int(short[np.argmin(pieces[short])])
+        out.append(
+            f"{path}: its points at t = {times[k]:.6g} and {times[k + 1]:.6g} s lie "
+            f"{pieces[k]:.3g} s apart, less than solver.dt = {dt:g} s: fixed steps take "
+            "the history at their ends only and can step over such a piece whole (a pulse "
+            f"missed); give solver.dt <= {pieces[k]:.3g} s, or leave dt out and give "
+            "solver.tolerance (steps chosen by accuracy land on every point)"
+        )
+    return out
