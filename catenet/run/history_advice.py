@@ -3,7 +3,9 @@ a motion's history is taken at the ends of the steps only (its factor at t + h),
 piece of it shorter than a step can fall between two step ends and be stepped over whole.
 A 20 ms force pulse on a hanging 10 kg weight, at fixed 50 ms steps: the weight never
 moved and the run ended "converged". Steps chosen by accuracy land on every point of a
-history (catenet/solver/adaptive.py, ``corners``) and are not warned."""
+history (catenet/solver/adaptive.py, ``corners``) and are not warned. A sine motion
+(a support's, a vessel's) is warned below PER_PERIOD fixed steps a period: its motion is
+sampled, not resolved (at two steps a period a sine is not there at all)."""
 
 from __future__ import annotations
 
@@ -13,6 +15,9 @@ import numpy as np
 
 if TYPE_CHECKING:
     from catenet.case.parse import Case
+
+#: The fewest fixed steps a period of a prescribed sine motion is taken in unwarned.
+PER_PERIOD = 10
 
 
 def histories(case: Case) -> list[tuple[str, np.ndarray]]:
@@ -52,7 +57,7 @@ def stepped_over(case: Case) -> list[str]:
         return []
     dt = float(solver.dt)
     t_end = solver.t_end if isinstance(solver.t_end, (int, float)) else np.inf
-    out = []
+    out = _sines(case, dt)
     for path, times in histories(case):
         pieces = np.diff(times)
         inside = (times[1:] > 0.0) & (times[:-1] < t_end)
@@ -68,3 +73,25 @@ def stepped_over(case: Case) -> list[str]:
             "solver.tolerance (steps chosen by accuracy land on every point)"
         )
     return out
+
+
+def _sines(case: Case, dt: float) -> list[str]:
+    """Messages for the prescribed sines with fewer than PER_PERIOD steps of ``dt`` a
+    period."""
+    periods = [
+        (f"supports.move[{k}].sine.period", m.sine.period)
+        for k, m in enumerate(case.supports.moves)
+        if m.sine is not None
+    ]
+    periods += [
+        (f"supports.vessel[{k}].sine[{j}].period", w.period)
+        for k, v in enumerate(case.supports.vessels)
+        for j, w in enumerate(v.sines)
+    ]
+    return [
+        f"{path} = {period:g} s: {period / dt:.3g} steps of solver.dt = {dt:g} s a period, "
+        f"fewer than {PER_PERIOD}: the motion is sampled, not followed; give solver.dt <= "
+        f"{period / PER_PERIOD:.3g} s, or leave dt out and give solver.tolerance"
+        for path, period in periods
+        if period < PER_PERIOD * dt
+    ]

@@ -103,3 +103,23 @@ def test_the_corners_of_loads_and_prescribed_paths():
     path = Path([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], History([[0.0, 1.0], [0.7, 0.0]]))
     assert path.corners() == (0.0, 0.7)
     assert Path([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]).corners() == ()
+
+
+def test_a_sine_motion_at_too_few_fixed_steps_a_period_is_warned():
+    """A support's or a vessel's sine at fewer than PER_PERIOD fixed steps a period is
+    warned with its key path and a dt that follows it; steps chosen by accuracy are not."""
+    from catenet.case import parse_case
+    from catenet.run.history_advice import PER_PERIOD, stepped_over
+
+    case = struck({"dt": 0.05})
+    del case["load"]["point"]
+    case["supports"] = {
+        "move": [{"node": 0, "sine": {"amplitude": [0.1, 0.0, 0.0], "period": 0.3}}]
+    }
+    (message,) = stepped_over(parse_case(case))
+    assert message.startswith("supports.move[0].sine.period = 0.3 s: 6 steps")
+    assert f"solver.dt <= {0.3 / PER_PERIOD:.3g} s" in message
+    case["solver"]["dt"] = 0.03
+    assert stepped_over(parse_case(case)) == []
+    del case["solver"]["dt"]
+    assert stepped_over(parse_case(case)) == []  # steps chosen by accuracy
