@@ -9,7 +9,6 @@ the node an initial ``velocity`` in dynamic runs. A table may give a velocity al
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -87,24 +86,3 @@ def point_masses(masses, net, names, sets) -> tuple[np.ndarray | None, np.ndarra
             given[i] = k
             v[i] = m.velocity
     return (pm if pm.any() else None), (v if given else None)
-
-
-def damped_flight(masses, damping: float, t_end: float) -> str | None:
-    """The warning of a dynamic run to ``t_end`` whose ``[[mass]]`` tables throw nodes
-    (a velocity that is not 0) while ``solver.damping`` was not given: the default
-    mass-proportional damping mu slows the net against fixed space, e^(-mu t) of a free
-    flight's speed left at t (free bodies are not damped: they would fly on, the net
-    lag behind). None where nothing is thrown."""
-    if not (damping > 0 and math.isfinite(t_end) and t_end > 0) or not isinstance(masses, tuple):
-        return None
-    thrown = [k for k, m in enumerate(masses) if m.velocity is not None and any(m.velocity)]
-    if not thrown:
-        return None
-    left = math.exp(-damping * t_end)
-    return (
-        f"mass[{thrown[0]}].velocity: the net is thrown, and solver.damping, not given, is "
-        f"{damping:g} 1/s (the default), which damps the net's motion against fixed space: "
-        f"in free flight its nodes keep e^(-{damping:g} t) of their speed, {left:.2g} of "
-        f"it at t_end = {t_end:g} s (free bodies are not damped). Give solver.damping = 0 "
-        "for a net in flight, or the damping you mean (docs/howto/dynamic-runs.md)"
-    )

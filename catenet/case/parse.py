@@ -28,9 +28,8 @@ from catenet.case.keys import (
     value,
 )
 from catenet.case.kinds import KINDS, GeometryConfig
-from catenet.case.kinds.warn import warn_once
 from catenet.case.loadcases import check_method, parse_combinations, parse_load_cases
-from catenet.case.masses import damped_flight, parse_masses
+from catenet.case.masses import parse_masses
 from catenet.case.nodes import check_nodes
 from catenet.case.obstacles import parse_obstacles
 from catenet.case.sections import (
@@ -243,8 +242,11 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         _check_mass(ck, data, material, solver, load)
     dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
     given = data.get("solver")
-    if water not in (None, BAD) and dynamic and "damping" not in (given or {}):
-        solver = dataclasses.replace(solver, damping=0.0)  # the water damps, not mu M
+    if dynamic and "damping" not in (given or {}):
+        if water not in (None, BAD):
+            solver = dataclasses.replace(solver, damping=0.0)  # the water damps, not mu M
+        elif time_dependence(load, supports, solver, obstacles, masses):
+            solver = dataclasses.replace(solver, damping=0.0)  # its motion is the answer
     if isinstance(solver, SolverConfig) and not dynamic and solver.max_iter is None:
         solver = dataclasses.replace(solver, max_iter=STATIC_MAX_ITER)  # a time step's: None
     if dynamic and solver.t_end is None:  # not given (a static case's stays None)
@@ -258,9 +260,6 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
             ck.add(newmark_refused(obstacles))
     if dynamic:
         _check_time_steps(ck, solver)
-        if "damping" not in (given or {}) and isinstance(solver.t_end, (int, float)):
-            if thrown := damped_flight(masses, solver.damping, float(solver.t_end)):
-                warn_once(thrown)
 
     # Node references need the node count (and, for square nets, the built topology):
     # only once the geometry itself is sound.

@@ -344,8 +344,8 @@ class SolverConfig(Declared):
         Settings.damping,
         ge=0,
         unit="1/s",
-        shown="`1.0`; `0.0` with [water]",
-        doc="dynamic: mass damping mu",
+        shown="`1.0` where nothing depends on time; `0.0` where anything does, or with [water]",
+        doc="dynamic: mass damping mu (of the paper's dynamic relaxation)",
     )
     integrator: str | None = choice(
         None,  # not given: bdf2 where steps adapt, else implicit Euler (parse.py)

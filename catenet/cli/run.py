@@ -353,6 +353,7 @@ def _line_records(path: Path) -> list:
 
 
 def _summary(case, result, path: Path | None) -> None:
+    from catenet.case.timing import time_dependence
     from catenet.cli.summary import (
         cases_table,
         envelope_lines,
@@ -377,10 +378,13 @@ def _summary(case, result, path: Path | None) -> None:
         detail = f"{detail}; post-collapse: the path collapsed on its way here".lstrip("; ")
     if case.solver.method == "dynamic" and not result.equilibrium:
         advice = "raise solver.t_end"
-        if case.solver.damping == 0:  # its default end time: 10 s (catenet/case/timing.py)
-            advice = "an undamped run never rests: give solver.t_end or damping"
-        elif _prescribed(case):  # the rest test is off while anything is driven
+        why = time_dependence(case.load, case.supports, case.solver, case.obstacles, case.masses)
+        if _prescribed(case):  # the rest test is off while anything is driven
             advice = "obstacles on prescribed motions: the run ends at solver.t_end, not at rest"
+        elif why:  # a transient: its motion to t_end is the answer (catenet/case/timing.py)
+            advice = f"a transient ({why}): its motion to solver.t_end is the answer"
+            if why == "solver.damping = 0":
+                advice += "; undamped, it never rests"
         detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
     spent = f"{result.iterations} Newton iterations"
     if result.nested is not None:  # a nested start: the coarse net's too

@@ -56,6 +56,20 @@ def test_the_default_is_rest_where_nothing_depends_on_time():
 def test_anything_that_depends_on_time_keeps_ten_seconds(path, value):
     case = parse_case(with_(cable(), path, value))
     assert case.solver.t_end == 10.0
+    # ... and no damping it did not ask for: its motion is the answer (a pendulum struck
+    # by a pulse swung out half as far at the paper's 1 1/s)
+    assert case.solver.damping == 0.0
+
+
+def test_damping_is_the_papers_only_in_dynamic_relaxation():
+    """solver.damping's default: 1 1/s where nothing depends on time (dynamic relaxation,
+    to rest or to a t_end given), 0 where the motion is the answer or in water; a given
+    value is kept."""
+    assert parse_case(cable()).solver.damping == 1.0
+    assert parse_case(cable(t_end=5.0)).solver.damping == 1.0
+    moving = with_(cable(), "load.history", [[0.0, 0.0], [1.0, 1.0]])
+    assert parse_case(moving).solver.damping == 0.0
+    assert parse_case(with_(moving, "solver.damping", 0.5)).solver.damping == 0.5
 
 
 def test_a_support_moved_at_once_does_not_depend_on_time():

@@ -44,8 +44,8 @@ def test_an_undamped_case_without_t_end_runs_10_s_and_says_why_it_never_rests(tm
     )
     assert r.exit_code == 0, r.output
     assert (
-        "not yet at equilibrium: an undamped run never rests: give solver.t_end or damping"
-        in r.stdout
+        "not yet at equilibrium: a transient (solver.damping = 0): its motion to solver.t_end "
+        "is the answer; undamped, it never rests" in r.stdout
     )
     with h5py.File(out, "r") as h5:
         assert h5["result"].attrs["time"] == 10.0 and not h5["result"].attrs["equilibrium"]
