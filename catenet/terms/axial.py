@@ -35,6 +35,7 @@ class AxialDamping(Term):
 
     medium = True  # has begin_run, set_motion, kinetic, losses (catenet.terms.base)
     lagged = False
+    structural = True  # the ropes' own force (their tensions hold it): no contact
 
     def __init__(self, net: Net, c: np.ndarray):
         c = np.asarray(c, dtype=np.float64)
