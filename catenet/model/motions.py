@@ -1,7 +1,8 @@
 """Prescribed support motions: where the supports are at a time (``support_positions``,
 the body of ``Loads.support_positions``), when a motion or load turns a corner
-(``corners``), and a vessel's rigid motion that carries several supports at once
-(``Vessel``).
+(``corners``), the periods of its sines (``periods``) and how fast it drives the
+supports (``drive_speed``), and a vessel's rigid motion that carries several supports at
+once (``Vessel``).
 
 A vessel moves as a rigid body by six motions: surge, sway and heave (translations along
 its x, y and z axes [m]) and roll, pitch and yaw (rotations about them [rad]), about a
@@ -151,3 +152,43 @@ def corners(loads: Loads) -> np.ndarray:
     if loads.support_displacement is not None and loads.ramp_time is not None:
         times.extend(loads.ramp_time[loads.ramp_time > 0.0])
     return np.unique(np.asarray(times, dtype=np.float64))
+
+
+def periods(loads: Loads) -> np.ndarray:
+    """The periods [s] of the prescribed sines: a support's ``sine``, a vessel's sines."""
+    out = [getattr(h, "period", None) for _, h in loads.support_history]
+    for _, vessel in loads.vessels:
+        out.extend(vessel.sines[:, 0])
+    return np.asarray([p for p in out if p is not None], dtype=np.float64)
+
+
+def drive_speed(loads: Loads, net: Net) -> float:
+    """A bound [m/s] on how fast the prescribed motions move a support: a history's
+    steepest piece or a sine's 2 pi a / T times the displacement it scales, a ramp's
+    displacement over its time, a vessel's motions' rates (its rotations' times the
+    farthest support's arm)."""
+    speeds = [0.0]
+    d = loads.support_displacement
+    if d is not None:
+        size = np.linalg.norm(d, axis=1)
+        timed = np.zeros(net.n_nodes, dtype=bool)
+        for nodes, h in loads.support_history:
+            timed[nodes] = True
+            if hasattr(h, "period"):
+                rate = 2.0 * math.pi / h.period + (math.pi / h.ramp if h.ramp > 0 else 0.0)
+            else:
+                rate = float(np.max(np.abs(np.diff(h.factors) / np.diff(h.times)), initial=0.0))
+            speeds.append(rate * float(np.max(size[nodes], initial=0.0)))
+        if loads.ramp_time is not None:
+            ramped = ~timed & (loads.ramp_time > 0.0)
+            speeds.extend((size[ramped] / loads.ramp_time[ramped]).tolist())
+    for nodes, vessel in loads.vessels:
+        arm = float(np.max(np.linalg.norm(net.nodes[nodes] - vessel.reference, axis=1)))
+        rates = np.zeros(6)
+        if vessel.table is not None and len(vessel.table) > 1:
+            slope = np.diff(vessel.table[:, 1:], axis=0) / np.diff(vessel.table[:, :1], axis=0)
+            rates = np.max(np.abs(slope), axis=0)
+        for row in vessel.sines:
+            rates = rates + np.abs(row[1:7]) * 2.0 * math.pi / row[0]
+        speeds.append(float(np.linalg.norm(rates[:3]) + np.linalg.norm(rates[3:]) * arm))
+    return max(speeds)

@@ -15,7 +15,7 @@ from catenet.errors import ConfigError
 from catenet.model.guides import Elastic, Guides
 from catenet.model.laws import Law
 from catenet.model.limits import MAGNITUDE, too_large
-from catenet.model.motions import corners, support_positions
+from catenet.model.motions import support_positions
 
 
 def _as_array(name: str, value, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -512,10 +512,6 @@ class Loads:
         if self.gravity is not None and self.gravity_history is not None:
             ends.append(self.gravity_history.end)
         return max([t, *ends])
-
-    def corners(self) -> np.ndarray:
-        """When a prescribed motion or load turns a corner (``motions.corners``)."""
-        return corners(self)
 
     @property
     def has_histories(self) -> bool:

@@ -48,10 +48,18 @@ through its 0.4 ms bounce; they are now a 64th of it, catenet/solver/strikes.py.
 
 The corners of what the case prescribes are landed on too: every point of a load's,
 gravity's, a support's, a vessel's, an obstacle's or a turned rod end's history, and the
-end of a support's ramp (``Loads.corners``, ``Term.corners``). A step takes a history at
+end of a support's ramp (``motions.corners``, ``Term.corners``). A step takes a history at
 its end only: one across a corner smooths it, and one across a pulse steps over it whole
 (a 20 ms pulse on a hanging weight, at rest before it: the steps had grown to 0.3 s and
-the weight never moved, tests/solver/test_corners.py).
+the weight never moved, tests/solver/test_corners.py). A step after a corner starts again
+at the run's first step (``first``) at most, and the scheme restarts its supports'
+velocities there (``Scheme.corner``). A prescribed sine (a support's, a
+vessel's) of period T is followed by steps of at most T / (SINE_STEPS sqrt(TOLERANCE /
+tolerance)): the error estimate sees the net's response, not the motion that drives it,
+and a response too small to matter against the net's size (a taut wire shaken by 0.5 mm
+at one end) let the steps grow to 30 periods and sample the sine (its amplitude 64 %
+low). bdf2's error in a forced steady state falls with (h / T)^2: 1.5 %, 0.37 %, 0.07 % at
+40, 64 and 100 steps a period on that wire.
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
@@ -100,6 +108,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.model import motions
 from catenet.solver.events import Events
 from catenet.solver.integrators import BDF2, ImplicitEuler
 from catenet.solver.scales import FLOOR, Bodies, Edges
@@ -119,6 +128,7 @@ SHRINK_MIN = 0.2  # a rejected step shrinks at most fivefold
 FIRST_SHARE = 1e-3  # the first step, of the run's span (t_end - t0)
 ADAPTIVE = ("implicit_euler", "bdf2")  # the schemes that estimate their error
 STRAIN_FLOOR = 1e-4  # S at least this strain (0.01 %)
+SINE_STEPS = 64  # the fewest steps a period of a prescribed sine at the default tolerance
 MOMENTUM = 0.1  # a body's momentum error against this share of the tolerance
 MAX_TRIES = 100_000  # a run that needs more steps fails (a tolerance too tight for it)
 
@@ -201,6 +211,7 @@ class ErrorControl:
         self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
         self.crossing = math.inf  # the longest step no solid passes a strand in (``ahead``)
         self.corners = np.empty(0)  # times a prescribed motion or load turns a corner (``of``)
+        self.scheme: ImplicitEuler | BDF2 | None = None  # told of each corner (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
         self.dt_max = span if dt_max is None else float(dt_max)
@@ -245,17 +256,21 @@ class ErrorControl:
         scheme.keep = True
         net = stepper.net
         size, gravity = _scene(stepper)
+        sines = motions.periods(stepper.loads)
+        if len(sines):  # followed, not sampled (module docstring)
+            longest = float(np.min(sines)) / (SINE_STEPS * math.sqrt(TOLERANCE / tolerance))
+            dt_max = longest if dt_max is None else min(dt_max, longest)
         out = cls(
             t0, t_end, order=scheme.order, tolerance=tolerance, first=first, dt_max=dt_max,
             dt_min=dt_min, size=size, gravity=gravity,
         )  # fmt: skip
         out.edges = Edges(net, stepper.free)
+        out.scheme = scheme
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
         out.events = Events(stepper.system.terms, stepper.x)
         corners = [t for term in stepper.system.terms for t in term.corners()]
-        if hasattr(stepper.loads, "corners"):  # (a load case's frozen loads have none)
-            corners.extend(stepper.loads.corners())
+        corners.extend(motions.corners(stepper.loads))
         every = np.unique(np.asarray(corners, dtype=np.float64))
         out.corners = every[(every > t0) & (every < t_end)]
         spacing = float(np.median(net.rest_length)) if net.n_edges else 0.0
@@ -458,4 +473,9 @@ class ErrorControl:
         if h_step == self.t_end - t or end >= self.t_end * (1 - 1e-12):
             return self.t_end
         corner = self._corner(t)
-        return corner if corner is not None and abs(end - corner) <= self._near(t) else end
+        if corner is None or abs(end - corner) > self._near(t):
+            return end
+        if self.scheme is not None:  # its supports' velocities restart there
+            self.scheme.corner()
+        self.h = min(self.h, self.dt)  # at most the run's first step, after a turn
+        return corner

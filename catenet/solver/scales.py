@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from catenet.model.motions import drive_speed
+
 if TYPE_CHECKING:
     from catenet.model.net import Net
     from catenet.solver.stepper import TimeStepper
@@ -76,7 +78,13 @@ class Bodies:
     took 424 steps against 150 with its spin's error measured against FLOOR of
     ``flow``). A pipe dropped across a net with edge contact, yawed by the cords, spun
     on at the default tolerance with three times the energy of its converged spin and
-    rebounded 12 % slow, where only its momentum was held (tests/solver/test_spin.py)."""
+    rebounded 12 % slow, where only its momentum was held (tests/solver/test_spin.py).
+
+    Where supports move on a prescribed path, a body's momentum scale is never below
+    FLOOR of its mass times the path's speed (``motions.drive_speed``): a weight hung at
+    rest from its static equilibrium (its scale round-off's) whose support started to
+    rise through a dashpot, or was shaken by a sine, had its first steps' momentum error
+    measured against round-off, and the steps shrank until the run failed."""
 
     def __init__(self, stepper: TimeStepper, floor: float):
         from catenet.terms.body import Ball
@@ -113,8 +121,13 @@ class Bodies:
             if head in self.heads:
                 self.barriers[self.heads.index(head)].append(t)
         self.held = [np.zeros(0, dtype=np.int64) for _ in self.dofs]  # (``hold``)
+        drive = drive_speed(stepper.loads, net)  # the supports' prescribed speed
         self.largest = [floor * float(ms[:, 0].sum()) for ms in self.mass]
-        self.least = [STILL * p for p in self.largest]
+        self.least = [
+            max(STILL * p, FLOOR * drive * float(ms[:, 0].sum()))
+            for p, ms in zip(self.largest, self.mass, strict=True)
+        ]
+        self.largest = [max(p, q) for p, q in zip(self.largest, self.least, strict=True)]
         self.own = [0.0] * len(self.dofs)  # each one's largest |sum m v| so far
         self.spun = [0.0] * len(self.dofs)  # ... and spin, |sum m r x v| / rho
         self.turning = list(self.largest)  # the spins' scale, as ``largest`` the momenta's
