@@ -205,10 +205,11 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     ctx = Context(kind=kind)
     material = parse_material(ck, data.get("material", MISSING), ctx, geometry)
     supports = parse_table(ck, data.get("supports", {}), SupportsConfig, "supports", ctx)
-    if isinstance(supports, SupportsConfig):
-        check_fixed(ck, supports)  # [] only with rollers, sliders or springs
     load = parse_table(ck, data.get("load", {}), LoadConfig, "load", ctx)
     solver = parse_solver(ck, data.get("solver", {}), ctx)
+    if isinstance(supports, SupportsConfig):  # [] only with rollers, sliders or springs,
+        flight = isinstance(solver, SolverConfig) and solver.method == "dynamic"
+        check_fixed(ck, supports, flight)  # or in a dynamic run (a net flying free)
     output = parse_output(ck, data.get("output", {}), ctx, source)
     obstacles = parse_obstacles(ck, data.get("obstacle"), ctx, base_dir)
     masses = parse_masses(ck, data.get("mass"), ctx)

@@ -46,6 +46,21 @@ def cable_dict() -> dict:
     }
 
 
+def static_cable_dict() -> dict:
+    """The cable, solved statically (where a net needs a support)."""
+    return {**cable_dict(), "solver": {"method": "static"}}
+
+
+def test_a_dynamic_cable_may_fly_free_with_no_support():
+    """supports.fixed = [] holds no node: refused in a static run (nothing holds the
+    net), accepted in a dynamic one, where a net may fly free (docs/reference/contract.md);
+    its nodes then all move."""
+    case = {**cable_dict(), "supports": {"fixed": []}}
+    del case["load"]
+    scene = build(parse_case(case))
+    assert not scene.net.fixed.any()
+
+
 def square_dict() -> dict:
     return {
         "geometry": {
@@ -403,7 +418,12 @@ BAD_VALUES = [
         "load.point[0].force = [0, 0, nan]: must be [x, y, z]",
     ),
     (cable_dict, "load.point.0.force", DELETE, "load.point[0].force: missing"),
-    (cable_dict, "supports.fixed", [], "supports.fixed = []: must be a non-empty array of nodes"),
+    (
+        static_cable_dict,
+        "supports.fixed",
+        [],
+        "supports.fixed = []: must be a non-empty array of nodes",
+    ),
     (cable_dict, "supports.fixed", [0, "start"], "node 0 appears more than once"),
     (
         cable_dict,
