@@ -33,31 +33,46 @@ def test_derivatives_against_finite_differences():
     assert grad_err < 1e-7 and hess_err < 1e-7
 
 
-def oscillator(zeta: float, integrator: str = "bdf2", periods: float = 6.0, per: int = 400):
-    """A mass m on a bilateral bar (k = EA / l0) with a dashpot c / l0 = 2 zeta sqrt(k m),
-    pulled 1 mm along the bar and let go: the mass's displacement over time."""
-    ea, l0, m = 1e6, 1.0, 10.0
-    k = ea / l0
-    c = 2.0 * zeta * math.sqrt(k * m) * l0
-    net = cable([0, 0, 0], [l0, 0, 0], 2, Material(EA=ea, line_density=2 * m / l0))
+EA, L0, MASS = 1e6, 1.0, 10.0  # the damped bar's (``bar``)
+OMEGA = math.sqrt(EA / L0 / MASS)
+
+
+def bar(zeta: float, loads: Loads) -> Scene:
+    """A mass MASS on a bilateral bar (k = EA / l0) fixed at x = 0, with a dashpot c / l0 =
+    2 zeta sqrt(k m) (its damping ratio zeta), under ``loads``."""
+    c = 2.0 * zeta * math.sqrt(EA / L0 * MASS) * L0
+    net = cable([0, 0, 0], [L0, 0, 0], 2, Material(EA=EA, line_density=2 * MASS / L0))
     net = net.replace(fixed=np.array([True, False]), tension_only=np.array([False]))
-    scene = Scene.of(net, Loads()).with_terms(AxialDamping(net, np.array([c])))
-    x0 = net.nodes.copy()
+    return Scene.of(net, loads).with_terms(AxialDamping(net, np.array([c])))
+
+
+def oscillator(zeta: float, integrator: str = "bdf2", periods: float = 6.0, per: int = 400):
+    """The damped bar's mass (``bar``) pulled 1 mm along the bar and let go: its
+    displacement over time."""
+    l0 = L0
+    scene = bar(zeta, Loads())
+    x0 = scene.net.nodes.copy()
     x0[1, 0] += 1e-3
-    omega = math.sqrt(k / m)
-    period = 2 * math.pi / omega
+    period = 2 * math.pi / OMEGA
+    r, steps = run(scene, integrator, period / per, periods * period, Start(x=x0))
+    return r, [(t, x[1, 0] - l0, e) for t, x, e in steps], period
+
+
+def run(scene: Scene, integrator: str, dt: float, t_end: float, start: Start | None = None):
+    """The undamped (solver.damping = 0) run of a scene at fixed steps: its result and each
+    step's (time, x, energy balance)."""
     rows = []
     r = solve(
         scene,
         method="dynamic",
-        dt=period / per,
-        t_end=periods * period,
+        dt=dt,
+        t_end=t_end,
         damping=0.0,
         integrator=integrator,
-        start=Start(x=x0),
-        on_step=lambda s: rows.append((s.time, s.x[1, 0] - l0, s.energy.copy())) and False,
+        start=start,
+        on_step=lambda s: rows.append((s.time, s.x.copy(), s.energy.copy())) and False,
     )
-    return r, rows, period
+    return r, rows
 
 
 def test_a_damped_oscillator_decays_at_its_logarithmic_decrement():
@@ -78,27 +93,13 @@ def shaken(integrator: str, per: int, zeta: float = 0.5, periods: float = 8.0):
     bar's omega): the mass's largest displacement from the support over the last two
     periods, and the closed form of the steady state, A Omega^2 / sqrt((omega^2 -
     Omega^2)^2 + (2 zeta omega Omega)^2)."""
-    ea, l0, m, amplitude = 1e6, 1.0, 10.0, 1e-3
-    omega = math.sqrt(ea / l0 / m)
-    c = 2.0 * zeta * math.sqrt(ea / l0 * m) * l0
-    net = cable([0, 0, 0], [l0, 0, 0], 2, Material(EA=ea, line_density=2 * m / l0))
-    net = net.replace(fixed=np.array([True, False]), tension_only=np.array([False]))
+    amplitude, omega, l0 = 1e-3, OMEGA, L0
     shake = np.zeros((2, 3))
     shake[0, 0] = amplitude
     period = 2.0 * math.pi / (0.5 * omega)
     loads = Loads(support_displacement=shake, support_history=[(np.array([0]), Sine(period))])
-    scene = Scene.of(net, loads).with_terms(AxialDamping(net, np.array([c])))
-    rows = []
-    r = solve(
-        scene,
-        method="dynamic",
-        dt=period / per,
-        t_end=periods * period,
-        damping=0.0,
-        integrator=integrator,
-        on_step=lambda s: rows.append((s.time, s.x[1, 0] - s.x[0, 0] - l0)) and False,
-    )
-    t, u = np.array(rows).T
+    r, steps = run(bar(zeta, loads), integrator, period / per, periods * period)
+    t, u = np.array([(t, x[1, 0] - x[0, 0] - l0) for t, x, _ in steps]).T
     late = t > (periods - 2.0) * period
     ratio = 0.5 * omega
     closed = amplitude * ratio**2 / math.hypot(omega**2 - ratio**2, 2 * zeta * omega * ratio)
