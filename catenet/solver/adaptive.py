@@ -51,10 +51,10 @@ gravity's, a support's, a vessel's, an obstacle's or a turned rod end's history,
 end of a support's ramp (``motions.corners``, ``Term.corners``). A step takes a history at
 its end only: one across a corner smooths it, and one across a pulse steps over it whole
 (a 20 ms pulse on a hanging weight, at rest before it: the steps had grown to 0.3 s and
-the weight never moved, tests/solver/test_corners.py). A step after a corner starts again
-at the run's first step (``first``) at most, and the scheme restarts its supports'
-velocities there (``Scheme.corner``). A prescribed sine (a support's, a
-vessel's) of period T is followed by steps of at most T / (SINE_STEPS sqrt(TOLERANCE /
+the weight never moved, tests/solver/test_corners.py). The scheme restarts its supports'
+velocities there (``Scheme.corner``); the step after a corner is judged as any other
+(the estimate through it is what shortens the steps where the motion turns). A
+prescribed sine (a support's, a vessel's) of period T is followed by steps of at most T / (SINE_STEPS sqrt(TOLERANCE /
 tolerance)): the error estimate sees the net's response, not the motion that drives it,
 and a response too small to matter against the net's size (a taut wire shaken by 0.5 mm
 at one end) let the steps grow to 30 periods and sample the sine (its amplitude 64 %
@@ -477,5 +477,4 @@ class ErrorControl:
             return end
         if self.scheme is not None:  # its supports' velocities restart there
             self.scheme.corner()
-        self.h = min(self.h, self.dt)  # at most the run's first step, after a turn
         return corner
