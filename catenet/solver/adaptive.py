@@ -54,8 +54,8 @@ its end only: one across a corner smooths it, and one across a pulse steps over 
 the weight never moved, tests/solver/test_corners.py). The scheme restarts its supports'
 velocities there (``Scheme.corner``); the step after a corner is judged as any other
 (the estimate through it is what shortens the steps where the motion turns). A
-prescribed sine (a support's, a vessel's) of period T is followed by steps of at most T / (SINE_STEPS sqrt(TOLERANCE /
-tolerance)): the error estimate sees the net's response, not the motion that drives it,
+prescribed sine (a support's, a vessel's) of period T is followed by steps of at most
+T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's response, not the motion that drives it,
 and a response too small to matter against the net's size (a taut wire shaken by 0.5 mm
 at one end) let the steps grow to 30 periods and sample the sine (its amplitude 64 %
 low). bdf2's error in a forced steady state falls with (h / T)^2: 1.5 %, 0.37 %, 0.07 % at
