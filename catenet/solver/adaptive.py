@@ -55,11 +55,11 @@ the weight never moved, tests/solver/test_corners.py). The scheme restarts its s
 velocities there (``Scheme.corner``); the step after a corner is judged as any other
 (the estimate through it is what shortens the steps where the motion turns). A
 prescribed sine (a support's, a vessel's) of period T is followed by steps of at most
-T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's response, not the motion that drives it,
-and a response too small to matter against the net's size (a taut wire shaken by 0.5 mm
-at one end) let the steps grow to 30 periods and sample the sine (its amplitude 64 %
-low). bdf2's error in a forced steady state falls with (h / T)^2: 1.5 %, 0.37 %, 0.07 % at
-40, 64 and 100 steps a period on that wire.
+T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's
+response, not the motion that drives it, and a response too small to matter against the
+net's size (a taut wire shaken by 0.5 mm at one end) let the steps grow to 30 periods and
+sample the sine (its amplitude 64 % low). bdf2's error in a forced steady state falls
+with (h / T)^2: 1.5 %, 0.37 %, 0.07 % at 40, 64 and 100 steps a period on that wire.
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
