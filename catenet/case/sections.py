@@ -309,7 +309,10 @@ class SolverConfig(Declared):
     """How to solve: see docs/DESIGN.md (solver section) for the meaning of each key."""
 
     method: str = choice(
-        Settings.method, METHODS, doc="equilibrium directly, or the paper's damped implicit Euler"
+        Settings.method,
+        METHODS,
+        doc="equilibrium directly, or in time: the paper's damped implicit Euler to rest, "
+        "bdf2 at steps chosen by accuracy where anything depends on time (solver.integrator)",
     )
     dt: float = real(
         None,  # not given: catenet/case/parse.py decides (fixed, or the first adaptive step)
