@@ -184,8 +184,7 @@ class Bodies:
             out = max(out, float(np.linalg.norm(moved)) / scale)
             if y is not None and len(d) > 1:  # its spin, with the nodes it holds
                 centre, rho = _centre(ms[:, 0], y[d])
-                spin = np.sum(ms * np.cross(y[d] - centre, ev[d]), axis=0)
-                spin += np.sum(mh * np.cross(y[held] - centre, ev[held]), axis=0)
+                spin = _turn(ms, y[d], ev[d], centre) + _turn(mh, y[held], ev[held], centre)
                 out = max(out, float(np.linalg.norm(spin)) / rho / turning)
         return out
 
@@ -199,11 +198,16 @@ def _centre(m: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     return centre, max(rho, 1e-300)
 
 
+def _turn(ms: np.ndarray, y: np.ndarray, v: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """sum m (y - centre) x v (3,) of DOFs of masses ms (k, 3) at y with velocities v."""
+    return np.sum(ms * np.cross(y - centre, v), axis=0)
+
+
 def _spin(ms: np.ndarray, y: np.ndarray, v: np.ndarray) -> float:
     """A body's spin |sum m r x v| / rho from its DOFs' masses ms (k, 3), positions y
     and velocities v (k, 3)."""
     centre, rho = _centre(ms[:, 0], y)
-    return float(np.linalg.norm(np.sum(ms * np.cross(y - centre, v), axis=0))) / rho
+    return float(np.linalg.norm(_turn(ms, y, v, centre))) / rho
 
 
 def _heavy(net: Net, free: np.ndarray, framed: set[int]) -> list[int]:
