@@ -93,6 +93,9 @@ class Ledger:
         self.judged = True
         self._friction = [t for t in system.terms if t.lagged and not t.medium]
         self._media = [t for t in system.terms if t.medium]  # water: its own losses
+        loads = stepper.loads  # their supports' part only where a support can move
+        moving = loads.moves_supports or bool(loads.vessels)
+        self._pulled = self._media if moving and stepper.net.fixed.any() else []
         self._weighs = [t for t in system.terms if t.weighs]  # buoyancy under gravity's history
         self._factors = [t.factor for t in self._weighs]
         self._driven = [t for t in system.terms if t.driven]  # a turned rod end's work
@@ -198,10 +201,10 @@ class Ledger:
         rule, as their losses are (implicit Euler's: at the step's end; a support that
         starts at once pulls its dashpot at once), the rest's by the trapezoid."""
         out = np.zeros_like(x)
-        if not self._media:
+        if not self._pulled:  # no support moves: no work through them (one gradient less)
             return out
         force = np.zeros_like(x)
-        for term in self._media:
+        for term in self._pulled:
             term.held_force(x, force)
         fixed = stepper.net.fixed
         out[fixed] = -force[fixed]

@@ -200,7 +200,8 @@ def _centre(m: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _turn(ms: np.ndarray, y: np.ndarray, v: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """sum m (y - centre) x v (3,) of DOFs of masses ms (k, 3) at y with velocities v."""
-    return np.sum(ms * np.cross(y - centre, v), axis=0)
+    out: np.ndarray = np.sum(ms * np.cross(y - centre, v), axis=0)
+    return out
 
 
 def _spin(ms: np.ndarray, y: np.ndarray, v: np.ndarray) -> float:
