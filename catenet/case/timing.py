@@ -28,7 +28,7 @@ T_END = 10.0
 def time_dependence(load: Any, supports: Any, solver: Any, obstacles: Any, masses: Any) -> str:
     """The first key of the case (its path as the user writes it) that makes the motion
     depend on time, or "" when none does. Sections that failed their checks are skipped."""
-    for path, history in _histories(load):
+    for path, history in load_histories(load):
         if history is not None:
             return f"{path}.history"
     moves = supports.moves if isinstance(supports, SupportsConfig) else ()
@@ -104,12 +104,13 @@ def newmark_refused(obstacles: Any) -> str:
     )
 
 
-def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:
-    """(key path, history) of the load and each of its point, line and area loads (none
-    for a load that failed its checks)."""
+def load_histories(load: Any, prefix: str = "load") -> Iterator[tuple[str, tuple | None]]:
+    """(key path, history) of the load (its path ``prefix``: a load case's
+    ``load_case[k]``) and each of its point, line and area loads (none for a load that
+    failed its checks)."""
     if not isinstance(load, LoadConfig):
         return
-    yield "load", load.history
+    yield prefix, load.history
     parts = (
         ("point", [point.history for point in load.points]),
         ("line", [line.history for line in load.lines]),
@@ -117,4 +118,4 @@ def _histories(load: Any) -> Iterator[tuple[str, tuple | None]]:
     )
     for name, histories in parts:
         for k, history in enumerate(histories):
-            yield f"load.{name}[{k}]", history
+            yield f"{prefix}.{name}[{k}]", history

@@ -107,13 +107,9 @@ def ignored_histories(case: Case) -> list[str]:
     ``[[mass]]`` (point masses still weigh under gravity)."""
     if case.solver.method != "static":
         return []
-    paths = ["load.history"] if case.load.history is not None else []
-    loads = (
-        ("load.point", [point.history for point in case.load.points]),
-        ("load.line", [line.history for line in case.load.lines]),
-    )
-    for name, histories in loads:
-        paths += [f"{name}[{k}].history" for k, h in enumerate(histories) if h is not None]
+    from catenet.case.timing import load_histories
+
+    paths = [f"{p}.history" for p, h in load_histories(case.load) if h is not None]
     moves = case.supports.moves
     paths += [f"supports.move[{k}].history" for k, m in enumerate(moves) if m.history is not None]
     out = [

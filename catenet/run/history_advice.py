@@ -24,16 +24,11 @@ def histories(case: Case) -> list[tuple[str, np.ndarray]]:
     """Every history of a case with its key path and the times of its points: the loads'
     and load cases', the supports' moves and twists, the vessels' motion tables and the
     obstacles' prescribed motions."""
-    out: list[tuple[str, Any]] = []
+    from catenet.case.timing import load_histories
 
-    def loads(prefix: str, load) -> None:
-        out.append((f"{prefix}.history", load.history))
-        for name, items in (("point", load.points), ("line", load.lines), ("area", load.areas)):
-            out.extend((f"{prefix}.{name}[{k}].history", p.history) for k, p in enumerate(items))
-
-    loads("load", case.load)
+    out: list[tuple[str, Any]] = [(f"{p}.history", h) for p, h in load_histories(case.load)]
     for k, load_case in enumerate(case.load_cases):
-        loads(f"load_case[{k}]", load_case)
+        out.extend((f"{p}.history", h) for p, h in load_histories(load_case, f"load_case[{k}]"))
     supports = case.supports
     out.extend((f"supports.move[{k}].history", m.history) for k, m in enumerate(supports.moves))
     out.extend((f"supports.twist[{k}].history", t.history) for k, t in enumerate(supports.twists))
