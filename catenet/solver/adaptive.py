@@ -58,8 +58,8 @@ prescribed sine (a support's, a vessel's) of period T is followed by steps of at
 T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's
 response, not the motion that drives it, and a response too small to matter against the
 net's size (a taut wire shaken by 0.5 mm at one end) let the steps grow to 30 periods and
-sample the sine (its amplitude 64 % low). bdf2's error in a forced steady state falls
-with (h / T)^2: 1.5 %, 0.37 %, 0.07 % at 40, 64 and 100 steps a period on that wire.
+sample the sine (its amplitude 64 % low; within 1 % now, tests/solver/test_corners.py).
+bdf2's error in a forced steady state falls with (h / T)^2.
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
