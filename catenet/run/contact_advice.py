@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from catenet.model.net import Net
+from catenet.solver.events import contact_terms
 
 #: A frictionless contact force along the cable beyond this share of its tension is warned.
 WRAP_SHARE = 0.02
@@ -53,13 +54,21 @@ def wrap_share(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray
     return float(share[k]), int(pushed[k]), float(along[k])
 
 
-def wrap_warning(net: Net, terms, x, tension, contact) -> str | None:
+def wrap_warning(net: Net, terms, x, tension) -> str | None:
     """The warning where a frictionless scene's contact pushes along a cable at a node by
     more than WRAP_SHARE of its tension (module docstring), else None. Scenes with
-    friction are not judged (friction pushes along the cable by design)."""
-    if contact is None or any("friction" in t.name for t in terms):
+    friction are not judged (friction pushes along the cable by design); the contact is
+    the barriers' alone (obstacles, balls, bodies, strands: the water's drag along a
+    sinking rope is no contact, and against a free rope's round-off tension it was
+    warned)."""
+    barriers = contact_terms(terms)
+    if not barriers or any("friction" in t.name for t in terms):
         return None
-    found = wrap_share(net, np.asarray(x), np.asarray(tension), np.asarray(contact))
+    x = np.asarray(x, dtype=np.float64)
+    contact = np.zeros_like(x)
+    for term in barriers:
+        term.gradient(x, contact)
+    found = wrap_share(net, x, np.asarray(tension), -contact)
     if found is None or not found[0] > WRAP_SHARE:
         return None
     share, node, along = found

@@ -324,9 +324,7 @@ def _report(
     from catenet.model.joints import turn_warning, twisting_members
     from catenet.run.contact_advice import wrap_warning
 
-    if wrapped := wrap_warning(
-        scene.net, ws.system.terms, result.x, result.tension, result.contact_force
-    ):
+    if wrapped := wrap_warning(scene.net, ws.system.terms, result.x, result.tension):
         log.warning("%s", wrapped)
     for term in ws.system.terms:
         turned = term.name == "joints" and turn_warning(
