@@ -121,55 +121,89 @@ class Ledger:
         h: float,
     ) -> None:
         """The accepted step from x_old to x_new (velocities v_new after it) of length h."""
+        k, u, c, work, dissipated = self._balance(stepper, x_old, x_new, v_new, h, True)
+        self._work, self._dissipated = work, dissipated
+        remainder = k + u + c - self._start - work + dissipated
+        self.row[:] = (k, u, c, work, dissipated, remainder)
+        self.floor = max(self.floor, _floor(stepper, x_new, h))
+        self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(work))
+        self.motion = max(self.motion, k)
+        self.steps += 1
+
+    def change(
+        self,
+        stepper: TimeStepper,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        v_new: np.ndarray,
+        h: float,
+    ) -> tuple[float, float]:
+        """What the step from x_old to x_new would do, nothing booked (steps chosen by
+        accuracy, catenet/solver/adaptive.py): the change of the remainder (the energy
+        the integrator would create, < 0 where it removes some) and the motion's energy
+        after it (the largest kinetic energy and what damping, drag and friction took)."""
+        k, u, c, work, dissipated = self._balance(stepper, x_old, x_new, v_new, h, False)
+        remainder = k + u + c - self._start - work + dissipated
+        return remainder - float(self.row[-1]), max(self.motion, k) + max(dissipated, 0.0)
+
+    def _balance(
+        self,
+        stepper: TimeStepper,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        v_new: np.ndarray,
+        h: float,
+        commit: bool,
+    ) -> tuple[float, float, float, float, float]:
+        """(kinetic, elastic, contact, work, dissipated) after the step from x_old to
+        x_new; ``commit``: the step is accepted, and the ledger and the media keep what
+        the next step's trapezoids start from."""
         net = stepper.net
         dx = x_new - x_old
         free = ~net.fixed
         force = self._applied(stepper)  # its work at a moving support too: the node's
-        self._work += 0.5 * float(np.sum((self._force + force) * dx))  # own load moves
+        work = self._work + 0.5 * float(np.sum((self._force + force) * dx))  # own load
         k, u, c, reaction = self._state(stepper, x_new, v_new)
         fixed = net.fixed
         trapezoid = stepper.scheme.name != "implicit_euler"  # the media's rule (``losses``)
         held = self._through_media(stepper, x_new)  # what holds the media at a support
         reaction -= held  # works by their rule, as the losses it enters: the rest by the
         through = 0.5 * (held + self._held) if trapezoid else held  # trapezoid
-        work = 0.5 * (self._reaction + reaction) + through
-        self._work += float(np.sum(work[fixed] * dx[fixed]))
-        self._force[:] = force
-        self._reaction[:] = reaction
-        self._held = held
+        pull = 0.5 * (self._reaction + reaction) + through
+        work += float(np.sum(pull[fixed] * dx[fixed]))
+        if commit:
+            self._force[:] = force
+            self._reaction[:] = reaction
+            self._held = held
         flat = dx.reshape(-1)[stepper.free]
         vel = v_new.reshape(-1)[stepper.free]
         if stepper.scheme.name != "implicit_euler":  # the step's mean velocity
             vel = 0.5 * (vel + stepper.v.reshape(-1)[stepper.free])
         damping = stepper.damping * stepper.m_free * vel
-        self._dissipated += float(np.dot(damping, flat))
+        dissipated = self._dissipated + float(np.dot(damping, flat))
         for term in self._friction:
             g = np.zeros_like(x_new)
             term.gradient(x_new, g)
             on = term.rides_on
             drive = on.drive(x_old, x_new) if on is not None and on.moving else None
             if drive is None:
-                self._dissipated += float(np.sum(g[free] * dx[free]))
+                dissipated += float(np.sum(g[free] * dx[free]))
             else:  # on a moving obstacle: its work through friction, the rest the slip's
-                self._dissipated += float(np.sum(g[free] * (dx - drive)[free]))
-                self._work -= float(np.sum(g[free] * drive[free]))
+                dissipated += float(np.sum(g[free] * (dx - drive)[free]))
+                work -= float(np.sum(g[free] * drive[free]))
         for i, term in enumerate(self._weighs):  # its energy's change with gravity, at
             if term.factor != self._factors[i]:  # the step's mean (as gravity's work)
                 mean = 0.5 * (term.unit_energy(x_old) + term.unit_energy(x_new))
-                self._work += (term.factor - self._factors[i]) * mean
-                self._factors[i] = term.factor
+                work += (term.factor - self._factors[i]) * mean
+                if commit:
+                    self._factors[i] = term.factor
         for term in self._driven:
-            self._work += term.driven_work(x_old, x_new)
+            work += term.driven_work(x_old, x_new, commit)
         for term in self._media:
-            lost, put = term.losses(x_old, x_new, h, trapezoid)
-            self._dissipated += lost
-            self._work += put
-        remainder = k + u + c - self._start - self._work + self._dissipated
-        self.row[:] = (k, u, c, self._work, self._dissipated, remainder)
-        self.floor = max(self.floor, _floor(stepper, x_new, h))
-        self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(self._work))
-        self.motion = max(self.motion, k)
-        self.steps += 1
+            lost, put = term.losses(x_old, x_new, h, trapezoid, commit)
+            dissipated += lost
+            work += put
+        return k, u, c, work, dissipated
 
     def check(self, t: float) -> None:
         """EnergyError where the remainder shows energy created beyond the tolerance. The

@@ -95,6 +95,10 @@ class Events:
         log.info("contact event at %.3g of the step of %.3g s: landed on", share, h)
         return share
 
+    def touching(self, x: np.ndarray) -> bool:
+        """Whether a barrier touches at the last accepted state or at x (N, 3)."""
+        return any(self.state) or any(self._state(x))
+
     def take(self, x: np.ndarray) -> None:
         """The accepted step's end (x) is the contact state from now on; the events it
         ended counted."""

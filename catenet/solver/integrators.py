@@ -68,14 +68,12 @@ it faster than it came and the rebound does not converge with h; at 0.5 it does
 that a_n carries from step to step, losing only a factor rho_inf per step, and the one-
 sided barrier pushes back on each swing toward the obstacle and lets the swings away go.
 
-The scheme's acceleration a_n is part of its state. A run starts at t = 0 with the
-physical acceleration M^-1 (f - grad E - mu M v). With rho_inf < 1 the a_n of later
-steps is a filtered acceleration, not the physical one, so the result file of a newmark
-run stores it with every frame (/trajectory/a, /result/a) and a restart goes on from it:
-the restarted run repeats the uninterrupted one to round-off. A file without it (an
-implicit Euler run, or an older file) restarts from the physical acceleration, which
-with rho_inf = 1 is the scheme's own a_n and otherwise differs from it by a transient of
-the size of the discretisation error.
+The scheme's acceleration a_n is part of its state. A run starts with the physical
+acceleration M^-1 (f - grad E - mu M v); with rho_inf < 1 later a_n are filtered, so a
+newmark run's file stores them (/trajectory/a, /result/a) and a restart goes on from
+them, repeating the uninterrupted run to round-off. A file without them restarts from
+the physical acceleration (the scheme's own at rho_inf = 1; else a transient of the
+size of the discretisation error).
 """
 
 from __future__ import annotations
@@ -205,14 +203,20 @@ class ImplicitEuler:
     _prev: tuple[np.ndarray, np.ndarray, float] | None = None  # y, v, h of the last step
     b = 0.0  # the step's b: v_{n+1} = (x_{n+1} - x_n) / b (``weights``)
 
+    def velocities(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray:
+        """The velocities at the end of the step from x to x_new (Eq. 10c), nothing kept."""
+        v_new: np.ndarray = (x_new - x) / h
+        return v_new
+
     def accept(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray:
         """The velocities of the accepted step (Eq. 10c)."""
         if self.keep:
             self._prev = (x.reshape(-1)[free].copy(), v.reshape(-1)[free].copy(), float(h))
-        v_new: np.ndarray = (x_new - x) / h
-        return v_new
+        return self.velocities(x_new, x, v, free, h)
 
     def estimate(
         self, y_new: np.ndarray, y_k: np.ndarray, v_k: np.ndarray, h: float
@@ -396,7 +400,7 @@ class BDF2:
         a0: np.ndarray | None = None,
     ) -> None:
         """A run starts with one implicit Euler step."""
-        self._held = None  # EXPERIMENT A
+        self._prev = self._older = self._held = None
 
     def _coefficients(
         self, y_k: np.ndarray, v_k: np.ndarray, h: float
@@ -460,11 +464,11 @@ class BDF2:
         v_end = (x_end - (c1 * x - c2 * x_p)) / b
         return v_end, (v_end - (c1 * v - c2 * v_p)) / b
 
-    def accept(
+    def velocities(
         self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
     ) -> np.ndarray:
-        """The new velocities, (x_{n+1} - x_bar) / b on the free DOFs, the supports' by
-        the same formula (``held``). Step n becomes the scheme's previous step."""
+        """The velocities at the step's end, (x_{n+1} - x_bar) / b on the free DOFs, the
+        supports' by the same formula (``held``), nothing kept."""
         assert self._bar is not None  # weights() came first
         y_bar, _, b = self._bar
         flat, start, speed = x_new.reshape(-1), x.reshape(-1), v.reshape(-1)
@@ -473,10 +477,19 @@ class BDF2:
         fixed = np.ones(len(flat), dtype=bool)
         fixed[free] = False
         out[fixed] = self.held(flat[fixed], start[fixed], speed[fixed], h)[0]
+        return out.reshape(x_new.shape)
+
+    def accept(
+        self, x_new: np.ndarray, x: np.ndarray, v: np.ndarray, free: np.ndarray, h: float
+    ) -> np.ndarray:
+        """The new velocities (``velocities``). Step n becomes the scheme's previous step."""
+        out = self.velocities(x_new, x, v, free, h)
+        start, speed = x.reshape(-1), v.reshape(-1)
+        fixed = np.isin(np.arange(len(start)), free, invert=True)
         self._older = self._prev
         self._prev = (start[free].copy(), speed[free].copy(), float(h))
         self._held = (start[fixed].copy(), speed[fixed].copy())
-        return out.reshape(x_new.shape)
+        return out
 
     def corner(self) -> None:
         """A corner of a prescribed motion at the state's time (a support that stops or

@@ -1,6 +1,7 @@
 """What the error of a step chosen by accuracy is measured against (catenet/solver/adaptive.py,
-whose docstring says why): the net's edges, for the error in strain, and the free bodies,
-balls and heavy lumped masses, for the error in momentum."""
+whose docstring says why): the net's edges, for the error in strain, the free bodies,
+balls and heavy lumped masses, for the error in momentum, and the motion's energy, for
+the energy the integrator creates or removes."""
 
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ if TYPE_CHECKING:
 FLOOR = 1e-2  # X and V at least this share of L and of sqrt(|g| L), L / (t_end - t0)
 STILL = 1e-6  # a body's momentum scale at least this share of its mass times V's floor
 HEAVY = 10.0  # a node's lumped mass this many times a typical node's: a body (``_heavy``)
+ENERGY = 5e-2  # the integrator's own energy over a run, of the motion's, at the default
+LEAST = 1e-3  # a step's energy allowance at least this share of the run's (``Energy``)
 
 
 class Edges:
@@ -55,6 +58,33 @@ class Edges:
         w = self.l0 * taut  # the RMS along the taut rope
         tot = float(w.sum())
         return math.sqrt(float(np.dot(w, de * de)) / tot) if tot > 0 else 0.0
+
+
+class Energy:
+    """The energy a run's steps chosen by accuracy may let the integrator create or
+    remove (catenet/solver/adaptive.py): ``share`` of the motion's energy over the run
+    (ENERGY at the default tolerance, in proportion to the tolerance), spent no faster
+    than evenly over its span, except what earlier steps left unspent; each step at
+    least LEAST of a span's allowance, so that a loss that no shorter step makes much
+    smaller (a cord that snaps taut within the step) does not shrink the steps to
+    nothing. The motion's energy is the largest kinetic energy so far and what damping,
+    drag and friction took (the warning's, ``catenet.run.integrator_advice``)."""
+
+    def __init__(self, t0: float, t_end: float, share: float):
+        self.t0, self.span, self.share = float(t0), float(t_end - t0), float(share)
+
+    def error(self, change: float, motion: float, spent: float, noise: float, t: float,
+              h: float) -> float:  # fmt: skip
+        """A step's energy error over its allowance: ``change`` the energy it creates
+        (< 0: removes), ``motion`` the motion's energy after it, ``spent`` what the run's
+        integrator created or removed before it (the balance's remainder), ``noise`` the
+        energies' round-off (no error below it), the step from t of h."""
+        if not abs(change) > noise:
+            return 0.0
+        run = self.share * motion
+        evenly = run * max(h / self.span, LEAST)
+        saved = run * (t + h - self.t0) / self.span - abs(spent)
+        return abs(change) / max(evenly, saved, noise)
 
 
 class Bodies:

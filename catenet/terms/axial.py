@@ -129,14 +129,21 @@ class AxialDamping(Term):
         return 0.0
 
     def losses(
-        self, x_old: np.ndarray, x_new: np.ndarray, h: float, mean: bool = False
+        self,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        h: float,
+        mean: bool = False,
+        commit: bool = True,
     ) -> tuple[float, float]:
         """(dissipated, 0) of the step from x_old to x_new: the dashpots' work against the
         motion, -F . dx (F the force at the step's end, or the mean of its two ends for
-        the second-order schemes)."""
+        the second-order schemes; ``commit``: the step is accepted, its end's force the
+        next step's start)."""
         g = np.zeros_like(x_new)
         self.gradient(x_new, g)
         force = -g
         used = 0.5 * (force + self._force) if mean else force
-        self._force = force
+        if commit:
+            self._force = force
         return -float(np.sum(used * (x_new - x_old))), 0.0

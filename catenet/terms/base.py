@@ -42,7 +42,7 @@ Optional capabilities, declared so that solvers ask no term what it has:
   axial damping, ``catenet.terms.axial``): the
   stepper gives it the scheme's velocity and acceleration maps every step, the energy
   balance its kinetic energy and losses.
-- ``driven`` (with ``begin_run``, ``driven_work(x_old, x_new)`` and ``settle_time()``): a
+- ``driven`` (with ``begin_run``, ``driven_work(x_old, x_new, commit)`` and ``settle_time()``): a
   term whose energy a prescribed history of its own changes (a rod end turned along a
   history, ``catenet.terms.twist``): a dynamic run starts it at its start time, runs at
   least to where its history ends before it stops at rest, and the energy balance counts
@@ -240,9 +240,10 @@ class Term:
         """(``driven`` terms) The time after which its history no longer changes."""
         raise NotImplementedError(f"{type(self).__name__} is not driven")
 
-    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
-        """(``driven`` terms) The work [J] its own history did in the accepted step from
-        x_old to x_new (the step of the last ``begin_step``)."""
+    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray, commit: bool = True) -> float:
+        """(``driven`` terms) The work [J] its own history did in the step from x_old to
+        x_new (the step of the last ``begin_step``); ``commit``: the step is accepted (else
+        nothing of it is kept: a step judged before it is taken)."""
         raise NotImplementedError(f"{type(self).__name__} is not driven")
 
     def drive(self, x_old: np.ndarray, x_new: np.ndarray) -> np.ndarray | None:
@@ -264,9 +265,15 @@ class Term:
         raise NotImplementedError(f"{type(self).__name__} is no medium")
 
     def losses(
-        self, x_old: np.ndarray, x_new: np.ndarray, h: float, mean: bool = False
+        self,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        h: float,
+        mean: bool = False,
+        commit: bool = True,
     ) -> tuple[float, float]:
-        """(``medium`` terms) (dissipated, work) of the accepted step x_old -> x_new."""
+        """(``medium`` terms) (dissipated, work) of the step x_old -> x_new; ``commit``:
+        the step is accepted (its end force is the next step's start)."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
 
     def held_force(self, x: np.ndarray, out: np.ndarray) -> None:

@@ -159,7 +159,7 @@ class Guide(Term):
             if start is not None:
                 self._span = (float(start), float(time))
 
-    def driven_work(self, x_old, x_new) -> float:
+    def driven_work(self, x_old, x_new, commit=True) -> float:
         """The path's work [J] on the net over the last step: the spring's force on the
         ball times the anchor's displacement, the trapezoid of the step's start and end
         (the work rate of k |x_c - c(t)|^2 / 2 is -k (x_c - c) . c'(t)), as an obstacle
@@ -172,7 +172,7 @@ class Guide(Term):
         a0, a1 = self.path(self._span[0]), self.path(self._span[1])
         f1 = -self.k * (x_new[self.center] - a1)
         if not self._loaded:  # the first step: its end's force throughout
-            self._loaded = True
+            self._loaded = commit
             return float(f1 @ (a1 - a0))
         f0 = -self.k * (x_old[self.center] - a0)
         return 0.5 * float((f0 + f1) @ (a1 - a0))

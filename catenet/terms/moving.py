@@ -130,7 +130,7 @@ class Moving(Term):
     def corners(self) -> tuple[float, ...]:
         return self.path.corners()
 
-    def driven_work(self, x_old, x_new) -> float:
+    def driven_work(self, x_old, x_new, commit=True) -> float:
         """The work [J] of the obstacle's motion on the net over the last step (module
         docstring): the trapezoid of the barrier's forces times the displacement of the
         obstacle's points where the nodes are, at the step's start and end."""

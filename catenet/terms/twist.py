@@ -184,7 +184,7 @@ class Twist(Term):
         """The points of the turned ends' histories."""
         return tuple(t for _, _, h in self.imposed if h is not None for t in h.times)
 
-    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray) -> float:
+    def driven_work(self, x_old: np.ndarray, x_new: np.ndarray, commit: bool = True) -> float:
         """1/2 (M_n + M_n+1) (Phi_n+1 - Phi_n), summed over the segments, for the step of
         the last ``begin_step``."""
         if self._start is None or self._time is None:

@@ -282,13 +282,19 @@ class WaterForce(Term):
         return 0.5 * float(np.einsum("ni,nij,nj->", v, self.added, v))
 
     def losses(
-        self, x_old: np.ndarray, x_new: np.ndarray, h: float, mean: bool = False
+        self,
+        x_old: np.ndarray,
+        x_new: np.ndarray,
+        h: float,
+        mean: bool = False,
+        commit: bool = True,
     ) -> tuple[float, float]:
         """(dissipated, work) of the step from x_old to x_new of length h: the drag's
         work against the motion relative to the water, -F.(dx - h U) (>= 0 for implicit
         Euler), and the water's work on the net, F.(h U) of the drag and the flow's
         inertia force's F_w.dx. ``mean``: F the mean of the step's two ends (the
-        second-order schemes' rule, as the ledger takes their damping)."""
+        second-order schemes' rule, as the ledger takes their damping); ``commit``: the
+        step is accepted (its end's force starts the next step's mean)."""
         g = np.zeros_like(x_new)
         if self.kv == 0.0:
             force = self.still * self.factor
@@ -298,7 +304,8 @@ class WaterForce(Term):
             )
             force = -g
         used = 0.5 * (force + self._drag) if mean else force
-        self._drag = force
+        if commit:
+            self._drag = force
         dx = x_new - x_old
         carried = h * self.flow
         dissipated = -float(np.sum(used * (dx - carried)))

@@ -61,7 +61,7 @@ def test_the_falling_rod_meets_the_plane_at_free_falls_time():
     PyElastica's elastic contact (nu = 0, 0.15 s): its first contact within two steps of
     it and the energy kept to 1e-2."""
     t_free = math.sqrt(2.0 * pd.HEIGHT / pd.GRAVITY)
-    cat = pd.catenet_drop({}, t_after=0.15)
+    cat = pd.catenet_drop({})  # its energy read in the rebound's flight (T_AFTER)
     assert cat["before"] < t_free <= cat["contact"]
     assert cat["gap"] > 0.0
     assert 0.0 < cat["kept"] <= 1.0 + 1e-3

@@ -66,14 +66,16 @@ def test_the_paths_work_is_the_force_on_the_ball_times_the_paths_displacement():
     """The booking of two steps by hand: the first the end's force on the ball times the
     anchor's displacement (the spring holds nothing at the start: the ball's weight and
     the net's push come within the step's first instants), then the trapezoid of the
-    spring's force at the step's start and end; a static load step books nothing."""
+    spring's force at the step's start and end; a static load step books nothing. A step
+    judged before it is taken (``commit=False``) books the same and keeps nothing."""
     path = Path(np.zeros(3), np.array([0.0, 0.0, -1.0]))
     guide = Guide(0, path, 1e3, n_nodes=1)
     x0, x1, x2 = (np.array([[0.0, 0.0, z]]) for z in (0.0, -0.09, -0.19))
     guide.begin_run(x0, 0.0)
     guide.begin_step(x0, 0.1, 0.0)
     f1 = -1e3 * (x1[0] - path(0.1))
-    assert guide.driven_work(x0, x1) == pytest.approx(f1 @ (path(0.1) - path(0.0)))
+    for commit in (False, True):  # judged, then taken: both the first step's booking
+        assert guide.driven_work(x0, x1, commit) == pytest.approx(f1 @ (path(0.1) - path(0.0)))
     guide.begin_step(x1, 0.2, 0.1)
     f2 = -1e3 * (x2[0] - path(0.2))
     assert guide.driven_work(x1, x2) == pytest.approx(0.5 * (f1 + f2) @ (path(0.2) - path(0.1)))
