@@ -287,6 +287,8 @@ class ErrorControl:
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
         out.events = Events(stepper.system.terms, stepper.x)
+        if stepper.loads.gravity is not None and out.events.terms:  # a fall's first touch
+            out.events.pull = np.where(net.fixed[:, None], 0.0, stepper.loads.gravity)
         corners = [t for term in stepper.system.terms for t in term.corners()]
         corners.extend(motions.corners(stepper.loads))
         every = np.unique(np.asarray(corners, dtype=np.float64))

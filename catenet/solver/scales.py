@@ -72,13 +72,18 @@ class Energy:
 
     def __init__(self, t0: float, t_end: float, share: float):
         self.t0, self.span, self.share = float(t0), float(t_end - t0), float(share)
+        self.start: float | None = None  # the remainder at the first step judged
 
     def error(self, change: float, motion: float, spent: float, noise: float, t: float,
               h: float) -> float:  # fmt: skip
         """A step's energy error over its allowance: ``change`` the energy it creates
         (< 0: removes), ``motion`` the motion's energy after it, ``spent`` what the run's
-        integrator created or removed before it (the balance's remainder), ``noise`` the
+        integrator created or removed before it (the balance's remainder; what it held
+        at the first step judged is the scheme's start's, not counted), ``noise`` the
         energies' round-off (no error below it), the step from t of h."""
+        if self.start is None:  # the scheme's start (implicit Euler's first step) is
+            self.start = spent  # not spent: a ball falling from rest lost a quarter of
+        spent -= self.start  # its motion in it, and the next steps shrank to 4 us
         if not abs(change) > noise:
             return 0.0
         run = self.share * motion

@@ -57,12 +57,14 @@ def test_the_imperfect_strut_deflects_alike():
 
 def test_the_falling_rod_meets_the_plane_at_free_falls_time():
     """catenet's default steps: the first step in contact brackets the free fall's
-    time, the rod's underside never reaches the plane and the impact creates no energy;
+    time and ends within 0.1 ms of it (the touch is looked for along the predictor
+    bent by gravity: along the straight one it was 0.7 ms late, and 3 ms after steps of
+    80 ms), the rod's underside never reaches the plane and the impact creates no energy;
     PyElastica's elastic contact (nu = 0, 0.15 s): its first contact within two steps of
     it and the energy kept to 1e-2."""
     t_free = math.sqrt(2.0 * pd.HEIGHT / pd.GRAVITY)
     cat = pd.catenet_drop({})  # its energy read in the rebound's flight (T_AFTER)
-    assert cat["before"] < t_free <= cat["contact"]
+    assert cat["before"] < t_free <= cat["contact"] < t_free + 1e-4  # landed on it
     assert cat["gap"] > 0.0
     assert 0.0 < cat["kept"] <= 1.0 + 1e-3
     pytest.importorskip("elastica")

@@ -85,9 +85,14 @@ def test_the_energy_allowance_is_spread_over_the_run_and_keeps_what_was_saved():
     """A run of 10 s at the default share: a step of 0.1 s may move ENERGY / 100 of the
     motion's energy; one of a thousandth of that still LEAST of the run's (a cord's snap
     that no shorter step shrinks); what earlier steps left unspent may be spent at once;
-    nothing below the energies' round-off counts."""
+    nothing below the energies' round-off counts; what the run had lost by its first step
+    judged (implicit Euler's first step: a quarter of a falling ball's motion, after
+    which the steps shrank to 4 us) is not spent."""
     energy = Energy(0.0, 10.0, ENERGY)
     motion = 2.0
+    assert energy.error(0.0, motion, -0.5, 0.0, 0.0, 0.1) == 0.0  # the first step judged:
+    assert energy.start == -0.5  # what the scheme's start lost is not counted as spent
+    energy.start = 0.0
     evenly = ENERGY * motion * 0.01
     assert energy.error(evenly, motion, 0.0, 0.0, 0.0, 0.1) == pytest.approx(1.0)
     assert energy.error(-evenly, motion, 0.0, 0.0, 0.0, 0.1) == pytest.approx(1.0)  # gained
