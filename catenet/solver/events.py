@@ -85,7 +85,7 @@ class Events:
         looked for along the predictor x + s h v (the barrier stops the step's own path
         at its end, where it is already inside dhat) and, from a state touching nothing,
         along it bent by gravity, x + s h v + (s h)^2 / 2 ``pull`` (a rod falling 55 ms
-        onto a plane touched 9 ms before the straight predictor said; gravity moves no
+        onto a plane touched 10 ms before the straight predictor said; gravity moves no
         free node against another); a release along the step's path."""
         if not self.terms:
             return None
