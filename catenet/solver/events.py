@@ -102,10 +102,12 @@ class Events:
         log.info("contact event at %.3g of the step of %.3g s: landed on", share, h)
         return share
 
-    def touching(self, x: np.ndarray) -> bool:
-        """Whether a barrier touches at x (N, 3) or at either of the last two accepted
+    def touching(self, x: np.ndarray) -> list[Term]:
+        """The barriers that touch at x (N, 3) or at either of the last two accepted
         states (bdf2's step reaches back over both)."""
-        return any(self.state) or any(self.before) or any(self._state(x))
+        now = self._state(x)
+        return [t for t, a, b, c in zip(self.terms, self.before, self.state, now, strict=True)
+                if a or b or c]  # fmt: skip
 
     def take(self, x: np.ndarray) -> None:
         """The accepted step's end (x) is the contact state from now on; the events it
