@@ -361,7 +361,8 @@ class ErrorControl:
     def energy_error(self, stepper: TimeStepper, h_step: float) -> float:
         """The energy the converged step of ``h_step`` of a TimeStepper would let its
         integrator create or remove, over its allowance (``Energy``; module docstring);
-        0 where no balance is kept or a barrier touches."""
+        0 where no balance is kept or where a barrier touches and its nodes do not rest
+        on fixed obstacles (``resting``)."""
         ledger, scheme = stepper.ledger, stepper.scheme
         if self.energy is None or ledger is None or not ledger.judged:
             return 0.0
