@@ -43,7 +43,7 @@ def integrator_loss(case: Case, result) -> str | None:
     benchmarks/cable_net_kn.toml lost 18 %, its peak rope tension 7 % off. Steps chosen
     by accuracy hold the integrator's energy where no barrier touches
     (catenet/solver/adaptive.py): the gust at the default tolerance loses 4 %, the drop
-    12 % (in contact), the safety net and tennis net of benchmarks/ 1.5 and 2.6 %, the
+    12 % (in contact), the safety net and tennis net of benchmarks/ 1.6 and 2.6 %, the
     thrown net and the capture under 1 %; the moorings of configs/water/ 0.3 to 7 % at
     their dt, where drag takes far more than the motion holds at any time (against the
     largest kinetic energy alone, a chain in waves over 300 s had lost 11 times it)."""
