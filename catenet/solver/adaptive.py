@@ -308,9 +308,9 @@ class ErrorControl:
         out.scheme = scheme
         out.bodies = Bodies(stepper, out.speed)
         out.strain = max(STRAIN_FLOOR, out.edges.strain(stepper.x))
-        out.events = Events(stepper.system.terms, stepper.x)
-        if stepper.loads.gravity is not None and out.events.terms:  # a fall's first touch
-            out.events.pull = np.where(net.fixed[:, None], 0.0, stepper.loads.gravity)
+        g = stepper.loads.gravity  # bends a fall's predicted first touch
+        pull = None if g is None else np.where(net.fixed[:, None], 0.0, g)
+        out.events = Events(stepper.system.terms, stepper.x, pull)
         corners = [t for term in stepper.system.terms for t in term.corners()]
         corners.extend(motions.corners(stepper.loads))
         every = np.unique(np.asarray(corners, dtype=np.float64))

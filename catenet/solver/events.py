@@ -49,13 +49,13 @@ class Events:
     its steps (module docstring): ``landing`` after a converged step, ``take`` once a
     step is accepted. ``touches`` and ``releases`` count the events landed on."""
 
-    def __init__(self, terms: Sequence[Term], x: np.ndarray):
+    def __init__(self, terms: Sequence[Term], x: np.ndarray, pull: np.ndarray | None = None):
         self.terms = contact_terms(terms)
         self.state = self._state(x)
         self.before = self.state  # the accepted state's before it (``touching``)
         self.touches = 0
         self.releases = 0
-        self.pull: np.ndarray | None = None  # gravity's acceleration on the free nodes
+        self.pull = pull  # gravity's acceleration on the free nodes (None: no gravity)
 
     def _state(self, x: np.ndarray) -> tuple[bool, ...]:
         """Whether each term touches at x (a barrier energy that is not 0: a node inside,

@@ -474,7 +474,7 @@ class BDF2:
         flat, start, speed = x_new.reshape(-1), x.reshape(-1), v.reshape(-1)
         out = np.empty_like(flat)
         out[free] = (flat[free] - y_bar) / b
-        fixed = np.ones(len(flat), dtype=bool)
+        self._fixed = fixed = np.ones(len(flat), dtype=bool)  # the supports (``accept``)
         fixed[free] = False
         out[fixed] = self.held(flat[fixed], start[fixed], speed[fixed], h)[0]
         return out.reshape(x_new.shape)
@@ -485,7 +485,7 @@ class BDF2:
         """The new velocities (``velocities``). Step n becomes the scheme's previous step."""
         out = self.velocities(x_new, x, v, free, h)
         start, speed = x.reshape(-1), v.reshape(-1)
-        fixed = np.isin(np.arange(len(start)), free, invert=True)
+        fixed = self._fixed  # (``velocities``' mask of this very step)
         self._older = self._prev
         self._prev = (start[free].copy(), speed[free].copy(), float(h))
         self._held = (start[fixed].copy(), speed[fixed].copy())
