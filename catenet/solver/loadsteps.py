@@ -83,6 +83,12 @@ def continuation(
     loaded = bool(np.any(loads.external_force(net, 1.0))) or loads.moves_supports
     judge.begin(good.x, loaded)
     settings = StepSettings(rtol=rtol, max_iter=max_iter, workspace=ws, warn=False)
+    if judge.start_unstable and not judge.balanced(good.x, rtol):
+        settled = _settled(judge, net, loads, good.x, settings)
+        if settled is not None:  # the path starts at the equilibrium the given geometry
+            good = LastGood(settled, 0.0)  # only approximates
+            x = settled
+            judge.begin(settled, loaded)
     for k, factor in enumerate(factors):
         if k >= 2:  # secant predictor through the last two equilibria
             x = predict([r.x for r in results[-2:]], factors[k - 2 : k], factor)
@@ -125,6 +131,33 @@ def continuation(
     far = judge.start_x is not None and warn_amplified(ws, net, loads, judge.start_x, results[-1])
     warn_state(ws, net, results[-1], neutral=not far)  # once, where the path ends
     return results
+
+
+#: A given geometry that is no equilibrium is judged at the stable one Newton finds from
+#: it under its prestress where no bilateral edge turns more than this between them [rad]
+SETTLE_TURN = 0.1
+
+
+def _settled(
+    judge: PathJudge, net: Net, loads: Loads, x: np.ndarray, settings: StepSettings
+) -> np.ndarray | None:
+    """The stable equilibrium under the prestress alone (load factor 0) that Newton
+    finds from a given geometry x that is unstable and no equilibrium, else None. Such
+    a geometry is no state of the structure, and its tangent's verdict says nothing of
+    the structure's stability: a guyed mast whose guys' nodes were moved by 6 mm (one
+    guy's top edge slack there) was called a mechanism at its strut's top, where the
+    equilibrium an iteration away is stable. A mechanism keeps its verdict: Newton finds
+    no equilibrium, or an unstable one, or one whose bilateral edges turned beyond
+    SETTLE_TURN from the geometry given (a mechanism's drift: a frame on pinned feet
+    turned over them; the nodes of slack tension-only edges may move as they please)."""
+    try:
+        found = solve_static(net, loads, x0=x, factor=0.0, accepted=x, **settings).x
+    except ConvergenceError:
+        return None
+    turned = judge.turned(x, found)
+    if turned > SETTLE_TURN or judge.tangent(found).verdict != STABLE:
+        return None
+    return found
 
 
 def _verdict(judge: PathJudge, r: Result) -> str:

@@ -339,6 +339,10 @@ class PathJudge:
         step = (x1 - x0).reshape(-1)[self.ws.system.free_dofs]
         return bool(np.linalg.norm(modes @ (modes.T @ step)) > ALONG * self.size)
 
+    def turned(self, a: np.ndarray, b: np.ndarray) -> float:
+        """The largest angle [rad] a bilateral edge turns through from a to b (0: none)."""
+        return float(np.max(self._angles(a, b)[self.bilateral], initial=0.0))
+
     def balanced(self, x: np.ndarray, rtol: float) -> bool:
         """Whether x is an equilibrium at load factor 0 (the given geometry under its
         prestress alone), to rtol of its force scale or its round-off floor."""
