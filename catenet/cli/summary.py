@@ -115,9 +115,10 @@ def state_lines(
             f"{'reactions':<{W}} resultant {vector(s['reaction_resultant'])} N; largest "
             f"{s['max_reaction']:.6g} N at node {s['max_reaction_node']}"
         )
-    if s.get("max_reaction_moment", 0.0) > 0.0:
+    if s.get("max_reaction_moment", 0.0) > 0.0:  # labelled where no force line came
+        label = "" if s["max_reaction_node"] >= 0 else "reactions"
         lines.append(
-            f"{'':<{W}} moment largest {s['max_reaction_moment']:.6g} N m at node "
+            f"{label:<{W}} moment largest {s['max_reaction_moment']:.6g} N m at node "
             f"{s['max_reaction_moment_node']} (a rod end's support)"
         )
     contact = _contact_line(s, water)

@@ -144,6 +144,10 @@ def cable_stats(net: Net, x: np.ndarray, tension: np.ndarray, edge_cable: np.nda
 
 #: A node's position along the chord's plan within [0, 1] to this: its vertical meets it.
 PLAN_TOL = 1e-9
+#: The steepest chord [degrees from the horizontal] whose vertical sag is measured: a
+#: node's vertical distance from a chord at angle a is its normal one over cos(a), and a
+#: post 2.5 m high bent 2.5 mm read 370 mm "above" its chord, whatever its load.
+STEEPEST = 80.0
 
 
 def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None:
@@ -154,8 +158,10 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
     along the chord's plan, ``rise`` the largest height of one above it (a cable lifted
     over its chord); both nan where the vertical through a node meets the chord's plan
     outside its ends (a vertical chord; a rope hung 0.1 mm off the vertical that sways
-    5.6 mm read 557 m of vertical sag); ``node`` where the normal sag is, ``ends`` the
-    chord's end nodes. None where the edges are not one chain."""
+    5.6 mm read 557 m of vertical sag) or where the chord is steeper than STEEPEST (a
+    column, a post: their vertical distances are their normal ones blown up); ``node``
+    where the normal sag is, ``ends`` the chord's end nodes. None where the edges are not
+    one chain."""
     e = net.edges if edges is None else net.edges[np.asarray(edges, dtype=np.int64)]
     if len(e) == 0:
         return None
@@ -174,7 +180,7 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
     k = int(np.argmax(normal))
     plan = chord[:2]
     vertical = rise = math.nan
-    steep = float(np.linalg.norm(plan)) <= 1e-9 * length  # a vertical chord, to round-off
+    steep = float(np.linalg.norm(plan)) <= math.cos(math.radians(STEEPEST)) * length
     s = None if steep else (p[:, :2] @ plan) / float(plan @ plan)
     if s is not None and np.all((s >= -PLAN_TOL) & (s <= 1.0 + PLAN_TOL)):
         drop = s * chord[2] - p[:, 2]

@@ -99,3 +99,19 @@ def test_a_steep_chord_has_no_vertical_sag_where_the_vertical_misses_it():
     assert stay["normal"] == pytest.approx(0.1, rel=1e-12)
     assert stay["vertical"] == pytest.approx(0.1 * math.sqrt(2.0), rel=1e-12)
     assert stay["rise"] == 0.0
+
+
+def test_a_post_bent_sideways_has_no_vertical_sag_or_rise():
+    """A post 2.5 m high whose top moved 16.7 mm sideways and whose middle bowed 2.5 mm
+    off its chord: the chord stands 89.6 degrees from the horizontal, and the vertical
+    distance of the middle from it, 370 mm "above it" in the summary, was the normal
+    2.5 mm over cos(89.6 degrees), whatever the load. Beyond 80 degrees no vertical sag is
+    measured; a chord at 79 degrees still has one."""
+    x = np.array([[0.0, 0.0, 0.0], [0.00835 + 0.0025, 0.0, 1.25], [0.0167, 0.0, 2.5]])
+    post = sag(SimpleNamespace(edges=np.array([[0, 1], [1, 2]])), x)
+    assert post["normal"] == pytest.approx(0.0025, rel=1e-3)
+    assert math.isnan(post["vertical"]) and math.isnan(post["rise"])
+    run = 2.5 / math.tan(math.radians(79.0))
+    x = np.array([[0.0, 0.0, 0.0], [0.5 * run, 0.0, 1.25 - 0.01], [run, 0.0, 2.5]])
+    stay = sag(SimpleNamespace(edges=np.array([[0, 1], [1, 2]])), x)
+    assert stay["vertical"] == pytest.approx(0.01, rel=1e-12)
