@@ -17,7 +17,7 @@ TOKENS: dict[str, dict[str, str]] = {
 }
 
 _UNIT = "N m|N/m|1/m|m/s\\^2|m/s|m\\^2|m|N|kg|Pa|J"
-_AFTER_NUMBER = re.compile(rf"(?<=[\d\])]) ({_UNIT})(?=$|[\s,;:)(])")
+_AFTER_NUMBER = re.compile(rf"(?<=[\d\])]) ({_UNIT})(?=$|[\s,;:)(])(?! in SI)")
 _BRACKETED = re.compile(r"\[([A-Za-z][A-Za-z0-9/^ ]*)\]")
 _NAME = re.compile(r"[A-Za-z]+")
 
@@ -35,7 +35,8 @@ def unit_in(unit: str, units: str) -> str:
 
 def relabel(lines: list[str], units: str) -> list[str]:
     """``lines`` with each unit name after a number or a vector (``1.5 m``, ``[0, 0, 1] m``)
-    and each bracketed unit (``[N]``, ``[N/m]``) named as in ``units``."""
+    and each bracketed unit (``[N]``, ``[N/m]``) named as in ``units``; a value that says
+    it is in SI (``9.81 m/s^2 in SI``) stays as it is."""
     if units not in TOKENS:
         return lines
 

@@ -324,7 +324,7 @@ def unit_slips(case: Case, net) -> list[str]:
         found.append(
             f"check units: {key} = {float(written):g} {unit} ({units}) is far "
             f"{'below' if si < low else 'above'} real cables ({low:g} to {high:g} in SI "
-            f"units of {UNIT_NAMES['SI'][quantity]}){guess}?"  # (no relabel: SI stays SI)
+            f"units of {UNIT_NAMES['SI'][quantity]}){guess}?"  # ("in SI": not relabelled)
         )
     return list(dict.fromkeys(found))
 
@@ -339,8 +339,8 @@ def _si(value: float, quantity: str) -> str:
         return f"{value * 1e6:g} mm^2"
     if quantity == "radius":
         return f"{value * 1e3:g} mm"
-    if quantity == "gravity":
-        return f"{value:g} m/s^2"
+    if quantity == "gravity":  # (said to be SI: an N-mm case's labels leave it so)
+        return f"{value:g} m/s^2 in SI"
     return f"{value / 1e3:g} kN"
 
 

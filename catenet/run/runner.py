@@ -288,6 +288,7 @@ def _implausible(run: Plan, result) -> str:
     message = f"implausible (check units and supports): {what}"
     if slips:  # the likely cause
         message = f"{message}; {slips[0]}"
+    message = _in_units(message, run.case)  # (a slip's SI values say "in SI": kept)
     result.converged, result.outcome, result.message = False, Outcome.FAILED, message
     return message
 

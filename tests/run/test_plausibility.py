@@ -111,6 +111,31 @@ def test_slips_in_each_unit_system_are_named_with_what_was_meant(units, material
     assert any(key in s and f"({meant})?" in s for s in slips), slips
 
 
+def test_an_implausible_state_in_n_mm_is_named_in_mm_and_its_si_hints_stay_si(tmp_path):
+    """The N-mm stay with its density in kg/m^3 (7850 t/mm^3 read as written): the error
+    names the move and the size in mm (they read "1.65e+09 m, more than the structure's
+    size 3000 m"), the hint for the density's SI value stays in kg/m^3; with gravity
+    written as in SI (9.81), the hint says 9810 is 9.81 m/s^2 in SI (it read "9.81
+    mm/s^2", the value the case had written)."""
+    case = truss(E=160e3, radius=10.0, density=7850.0)
+    case["units"] = "N-mm"
+    case["geometry"]["end"] = [20000, 0, 0]
+    case["load"]["gravity"] = [0.0, 0.0, -9810.0]
+    case.pop("load_case")
+    r = run(tmp_path / "density", case)
+    assert r.exit_code == 1, r.output
+    (error,) = [line for line in r.output.splitlines() if line.startswith("catenet: error")]
+    moved = re.search(
+        r"moves [0-9.e+-]+ (\S+), more than the structure's size [0-9.e+-]+ (\w+)", error
+    )
+    assert moved is not None and moved.groups() == ("mm", "mm"), error
+    assert "(7850 kg/m^3)" in error
+    case["material"]["density"] = 7.85e-9
+    case["load"]["gravity"] = [0.0, 0.0, -9.81]
+    r = run(tmp_path / "gravity", case)
+    assert "did you mean 9810 (9.81 m/s^2 in SI)?" in r.output, r.output
+
+
 @pytest.mark.parametrize(
     "units, gravity, slip",
     [
