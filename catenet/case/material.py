@@ -388,7 +388,8 @@ def _bending_rules(ck: Checker, m: dict, v: dict) -> None:
     if v["EI"] == "section" and ("E" not in m or "radius" not in m):
         ck.add(
             'material.EI = "section": needs material.E and material.radius (a round '
-            "section; a tube: inner_radius too), or give EI in N m^2"
+            "section; a tube: inner_radius too), or give EI as a number (force times "
+            "length^2 in the case's units)"
         )
         v["EI"] = BAD
     ri = v["inner_radius"]
@@ -412,7 +413,8 @@ def _twist_rules(ck: Checker, m: dict, v: dict) -> None:
     if v["GJ"] == "section" and ("G" not in m or "radius" not in m):
         ck.add(
             'material.GJ = "section": needs material.G (the shear modulus) and '
-            "material.radius (a tube: inner_radius too), or give GJ in N m^2"
+            "material.radius (a tube: inner_radius too), or give GJ as a number (force "
+            "times length^2 in the case's units)"
         )
         v["GJ"] = BAD
     if v["GJ"] not in (0.0, BAD) and v["EI"] in (0.0, None):

@@ -106,6 +106,38 @@ def test_graph_cables_bend_each_along_itself():
     assert not scene.net.law.tension_only[rod_edges].any()
 
 
+@pytest.mark.parametrize(
+    "own, area",
+    [
+        ({"area": 2.0e-4, "EI": 0.0}, 2.0e-4),  # a tie of given area (no round section)
+        ({"radius": 0.008}, math.pi * 0.008**2),  # a solid bar
+        ({"radius": 0.06, "inner_radius": 0.05}, math.pi * (0.06**2 - 0.05**2)),  # a tube
+    ],
+)
+def test_a_cables_own_section_drops_the_cases_tube(own, area):
+    """A tube (radius 60 mm, inner_radius 54 mm) in [material] and a tie of its own
+    section beside it: the tie's area or radius replaces the tube's inner radius too (it
+    was refused: "a tube needs its outer radius: give material.radius"), unless the tie
+    gives an inner radius of its own."""
+    data = {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[0, 0, 0], [0, 0, 4], [2, 0, 4]],
+            "fixed": [0, 2],
+            "cable": [
+                {"name": "post", "nodes": [0, 1]},
+                {"name": "tie", "nodes": [1, 2], "material": {"E": 2.0e11, **own}},
+            ],
+        },
+        "material": {"E": 2.1e11, "radius": 0.06, "inner_radius": 0.054, "EI": "section"},
+    }
+    scene = build(parse_case(data))
+    tie = scene.cables.edge == 1
+    assert scene.net.EA[tie] == pytest.approx(2.0e11 * area, rel=1e-12)
+    post = math.pi * (0.06**2 - 0.054**2) * 2.1e11
+    assert scene.net.EA[~tie] == pytest.approx(post, rel=1e-12)
+
+
 def test_square_net_cables_bend_along_their_lines():
     data = {
         "geometry": {"kind": "square_net", "n": 4, "alpha": 0.3, "size": 1.0, "edge_length": 0.1},

@@ -417,12 +417,15 @@ def cable_mesh(
 # --------------------------------------------------------------------------- materials
 
 
-#: Keys of [material] that a cable's key replaces (a cable giving EA drops E, ...).
+#: Keys of [material] that a cable's key replaces (a cable giving EA drops E, ...): a
+#: cable's own section (radius or area) drops the case's tube (inner_radius), unless it
+#: gives one itself (a solid tie beside tubes was refused as "a tube needs its outer
+#: radius").
 _REPLACES = {
     "E": ("EA", "table"),
     "EA": ("E", "table"),
-    "radius": ("area",),
-    "area": ("radius",),
+    "radius": ("area", "inner_radius"),
+    "area": ("radius", "inner_radius"),
     "table": ("E", "EA"),
 }
 
@@ -434,7 +437,8 @@ def merged_material(base: dict, over: Mapping[str, Any]) -> dict:
     out = dict(base)
     for k, v in over.items():
         for other in _REPLACES.get(k, ()):
-            out.pop(other, None)
+            if other not in over:  # (the case's key, not one the cable gives too)
+                out.pop(other, None)
         if k == "law" and v != "table":
             out.pop("table", None)
         if k == "law" and v == "table":
