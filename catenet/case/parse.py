@@ -51,6 +51,7 @@ from catenet.case.vessel import check_vessel
 from catenet.case.water import parse_water
 from catenet.case.written import plain
 from catenet.errors import ConfigError
+from catenet.model.units import relabel
 from catenet.solver.settings import STATIC_MAX_ITER
 
 #: The unit systems a case may name (top-level ``units``).
@@ -269,8 +270,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         for k, lc in enumerate(load_cases if isinstance(load_cases, tuple) else ()):
             check_nodes(ck, geometry, None, lc, prefix=f"load_case[{k}]")
 
-    if ck.problems:
-        raise ConfigError(ck.problems)
+    if ck.problems:  # the keys' units as the case's ``units`` name them ([kN] in kN-m)
+        raise ConfigError(relabel(ck.problems, units if isinstance(units, str) else "SI"))
     assert geometry is not None  # (else a problem says why)
     return Case(
         title=title,

@@ -27,6 +27,8 @@ from catenet.errors import ConfigError
 from catenet.model.limits import carried
 from catenet.model.water import G_STANDARD, Hydro, Water, Wave, jonswap
 
+#: A wave higher than this times its water's depth breaks (McCowan's limit, 0.78)
+BREAKING = 0.78
 MAX_SPEED = 1e6  # m/s: the water's speeds a case may give (the drag's energy goes as u^3)
 CURRENT = "[[z, ux, uy], ...]: at least one row of three finite numbers, z all different"
 
@@ -139,7 +141,27 @@ def parse_water(ck: Checker, value: Any, ctx: Context) -> WaterConfig | None | A
                 f"{MAX_SPEED:g} m/s (drag ~ u^3)"
             )
             return BAD
+    breaking = _breaking(heights, w.depth, "water.depth")
+    if breaking:
+        ck.add(breaking)
+        return BAD
     return w
+
+
+def _breaking(heights: list, depth: float | None, where: str) -> str:
+    """Why a wave of ``heights`` (path, height, period) cannot run in water of ``depth``
+    (named by ``where``): higher than BREAKING times it, it breaks (and linear waves'
+    speeds grow as 1 / depth: a depth of 1e-300 m made them infinite); "" where all can."""
+    if depth is None:
+        return ""
+    for path, height, _ in heights:
+        if not height <= BREAKING * depth:
+            return (
+                f"{path}: height {height:g} m in {where} = {depth:g} m: a wave higher "
+                f"than {BREAKING:g} times its depth breaks (linear waves need it lower: "
+                "a deeper water.depth or a lower wave)"
+            )
+    return ""
 
 
 def water_model(config: WaterConfig, gravity: Any, obstacles: tuple) -> Water:
@@ -172,6 +194,14 @@ def water_model(config: WaterConfig, gravity: Any, obstacles: tuple) -> Water:
         )
         periods.append(config.tp)
     ramp = config.ramp if config.ramp is not None else max(periods, default=0.0)
+    depth = config.depth if config.depth is not None else seabed_depth(config, obstacles)
+    if config.depth is None:  # (a given depth was checked with the table)
+        heights = [(f"water.wave[{k}]", w.height, w.period) for k, w in enumerate(config.waves)]
+        if config.spectrum is not None:
+            heights.append(("water.hs", config.hs, config.tp))
+        breaking = _breaking(heights, depth, "the seabed's depth (a plane obstacle)")
+        if breaking:
+            raise ConfigError(breaking)
     current = None if config.current is None else np.array(config.current, dtype=np.float64)
     return Water(
         density=config.density,
@@ -179,7 +209,7 @@ def water_model(config: WaterConfig, gravity: Any, obstacles: tuple) -> Water:
         g=g,
         current=current,
         waves=tuple(waves),
-        depth=config.depth if config.depth is not None else seabed_depth(config, obstacles),
+        depth=depth,
         ramp=ramp,
     )
 

@@ -64,6 +64,10 @@ def command(
         if not quiet:
             _summary(written)
         if unconverged := _unconverged(written):
+            from catenet.model.units import relabel
+
+            units = (getattr(written.scene, "case", None) or written.case).units or "SI"
+            unconverged = relabel([unconverged], units)[0]  # its forces in the case's units
             click.echo(f"catenet: error: {unconverged}", err=True)
             sys.exit(EXIT_FAILED)
     sys.exit(EXIT_OK)

@@ -186,7 +186,7 @@ def _profiles(k: np.ndarray, zp: np.ndarray, depth: float | None) -> tuple[np.nd
     if depth is None:
         return top, top
     bottom = np.exp(-k * (zp + 2.0 * depth))
-    scale = 1.0 / (1.0 - np.exp(-2.0 * k * depth))
+    scale = -1.0 / np.expm1(-2.0 * k * depth)  # (to round-off where k h is small)
     return (top + bottom) * scale, (top - bottom) * scale
 
 

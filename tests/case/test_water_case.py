@@ -241,6 +241,10 @@ node = "end"
         ({"water": "density = -1"}, "water.density"),
         ({"water": "current = [[0, 1e100, 0]]"}, "a speed beyond"),
         ({"water": 'spectrum = "jonswap"\nhs = 1e100\ntp = 1.0'}, "water.hs: height"),
+        (
+            {"water": 'depth = 1e-300\nspectrum = "jonswap"\nhs = 2.0\ntp = 8.0'},
+            "water.hs: height 2 m in water.depth = 1e-300 m: a wave higher than 0.78",
+        ),
         ({"water": 'spectrum = "jonswap"\nhs = 1.0\ntp = 1.0\ngamma = 1e100'}, "water.gamma"),
         (
             {"material": "EA = 1e6", "load": "", "solver": 'method = "static"'},
@@ -292,3 +296,34 @@ def test_modes_in_water_take_the_materials_added_mass():
     water = 1025.0 * 1e-3 * scene.net.rest_length
     assert np.allclose(line[:, 0], 0.8 * water, rtol=1e-14)
     assert np.allclose(line[:, 1], 0.3 * water, rtol=1e-14)
+
+
+def test_a_wave_higher_than_its_seabeds_depth_allows_exits_2(tmp_path):
+    """A 2 m wave over a seabed (a plane obstacle) 1 m below the still level breaks: the
+    seabed's depth is checked as a given water.depth is (McCowan's 0.78; a depth of
+    1e-300 m made the waves' speeds infinite and the run failed at t = 0)."""
+    text = BASE.format(
+        material="EA = 1e6\narea = 1e-3\ndensity = 7850.0",
+        water='spectrum = "jonswap"\nhs = 2.0\ntp = 8.0',
+        load="gravity = [0, 0, -9.81]",
+        solver='method = "dynamic"\nt_end = 0.1',
+        move="sine = { amplitude = [0.1, 0, 0], period = 1.0 }",
+    ).replace("end = [0, 0, -10.0]", "end = [2.0, 0, -0.5]")
+    text = text.replace("start = [0, 0, -50.0]", "start = [-2.0, 0, -0.5]")
+    text += '[[obstacle]]\nkind = "plane"\npoint = [0, 0, -1.0]\nnormal = [0, 0, 1]\n'
+    path = tmp_path / "case.toml"
+    path.write_text(text)
+    r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5"), "-q"])
+    assert r.exit_code == 2, r.output
+    assert "water.hs: height 2 m in the seabed's depth (a plane obstacle) = 1 m" in r.stderr
+
+
+def test_shallow_water_kinematics_to_round_off():
+    """Where k h is far below round-off's share of 1 (a depth of 1e-60 m) the profiles
+    are the shallow-water limit, the surface's horizontal speed a omega / (k h) cos(theta)
+    (1 - exp(-2 k h) lost its digits there)."""
+    g, depth, omega, a = 9.81, 1e-60, 0.8, 1e-61
+    k = wave_number(omega, g, depth)
+    water = Water(1025.0, g=g, waves=(Wave(a, omega, 0.0, 0.0),), depth=depth)
+    v, _ = water.flow(np.array([[0.0, 0.0, 0.0]]), 0.0)
+    assert v[0, 0] == pytest.approx(a * omega / math.tanh(k * depth), rel=1e-12)

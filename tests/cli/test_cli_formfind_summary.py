@@ -5,6 +5,7 @@ range (checked on a chain whose shape is known in closed form)."""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 from click.testing import CliRunner
@@ -109,3 +110,18 @@ def test_the_formfind_summary_names_the_cases_units(tmp_path):
     assert mm["target[0]"].startswith("node 'middle' z: -1 mm (target -1 mm,")
     header = (tmp_path / "N-mm.toml").read_text().split("\n\n")[0]
     assert "#   target[0] node 'middle' z: -1 mm (target -1 mm, miss" in header
+
+
+def test_the_errors_name_the_cases_units(tmp_path):
+    """In kN-m the search that runs away names its tensions in kN (it said "tensions up
+    to ... N" under a summary in kN), and a bad key's message its unit in kN (it said
+    "a tension > 0 [N]")."""
+    case = tmp_path / "kn.toml"
+    case.write_text('units = "kN-m"\n' + CHAIN + '\n[[target]]\nnode = "middle"\nz = 1.0\n')
+    res = CliRunner().invoke(main, ["formfind", str(case), "-o", str(tmp_path / "c.h5")])
+    assert res.exit_code == 1, res.output
+    assert re.search(r"tensions up to [0-9.e+-]+ kN\)", res.stderr), res.stderr
+    bad = ["--set", 'target=[{cable = "chain", tension = [60.0, 20.0]}]']
+    res = CliRunner().invoke(main, ["formfind", str(case), "-o", str(tmp_path / "d.h5"), *bad])
+    assert res.exit_code == 2, res.output
+    assert "must be a tension > 0 [kN] or a range" in res.stderr, res.stderr
