@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from catenet.formfind.fdm import FormFound
 
 PREFIX = "formfind."
+ROUNDOFF = 64  # a nodal force within this many round-offs of the largest load is none
 
 
 def to_case(found: FormFound, case=None, *, output_file: str | None = None, scene=None) -> dict:
@@ -50,6 +51,8 @@ def to_case(found: FormFound, case=None, *, output_file: str | None = None, scen
     if case is not None and case.load.gravity is not None:
         load["gravity"] = list(case.load.gravity)
         const -= _weight(net, rest, case.load.gravity)
+        scale = float(np.abs(found.load).max(initial=0.0))  # the weight's round-off left
+        const[np.abs(const) <= ROUNDOFF * np.finfo(float).eps * scale] = 0.0  # is no load
     points: list[dict[str, Any]] = []
     if structured:
         points, const = _kept_points(case, scene, const)
@@ -200,7 +203,7 @@ def _kept_points(case, scene, const: np.ndarray) -> tuple[list, np.ndarray]:
                 ref = item["node"] = int(scene.names[ref])
             for i in scene.sets[ref] if isinstance(ref, str) else (ref,):
                 rest[i] -= pt.force
-    rest[np.abs(rest) <= 64 * np.finfo(float).eps * scale] = 0.0  # the round-off left
+    rest[np.abs(rest) <= ROUNDOFF * np.finfo(float).eps * scale] = 0.0  # the round-off left
     return points, rest
 
 

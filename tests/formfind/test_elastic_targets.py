@@ -245,3 +245,23 @@ def test_prestress_belongs_to_the_elastic_method(tmp_path):
     assert r.exit_code == 2 and "formfind.vary = 'prestress': only with method" in r.output
     r, _ = invoke(tmp_path, stay({"node": "midpoint", "z": -2.0}, vary="prestress"))
     assert r.exit_code == 2 and "no cable of this case has a prestress > 0" in r.output
+
+
+def test_the_written_stay_carries_only_the_loads_it_was_given(tmp_path):
+    """A stay under its own weight alone, its sag given: the case written has gravity and
+    no point load (the weight recomputed from the rest lengths found left forces of 1e-13
+    N at its nodes, written as [[load.point]] entries the case never had), and it
+    reproduces the shape."""
+    import h5py
+
+    data = stay({"node": "midpoint", "z": -2.0})
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    written = tomllib.loads(out.with_suffix(".toml").read_text())
+    assert written["load"] == {"gravity": [0, 0, -9.81]}
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][10, 2] + 2.0) <= 1e-9
