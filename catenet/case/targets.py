@@ -6,9 +6,11 @@ set: each of its nodes, the value one for all or one per node), a surface the no
 on (``surface``, a triangle mesh file taken as a height field, optionally ``within`` a
 vertical distance of it) or a cable's tension
 (``cable`` with ``tension``: every edge of the cable, or of each cable a pattern matches;
-a number, or a range ``[low, high]``), or a support's reaction (``support``, a fixed node
-or a set of them, with ``reaction = [Rx, Ry, Rz]`` or any of ``reaction_x``, ``reaction_y``,
-``reaction_z``: the force the support exerts on the net). Each weighs
+a number, or a range ``[low, high]``) or its length (``cable`` with ``length``: the sum
+of its edges' lengths in the shape found, a number or a range), or a support's reaction
+(``support``, a fixed node or a set of them, with ``reaction = [Rx, Ry, Rz]`` or any of
+``reaction_x``, ``reaction_y``, ``reaction_z``: the force the support exerts on the net).
+Each weighs
 in the least squares with ``weight``; ``hard = true`` makes it a bound that must be met.
 The nodes and cables are resolved on
 the built net (``catenet.formfind.goals``), where a fixed node is refused.
@@ -67,7 +69,17 @@ def _point(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 def _tension(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     """A tension > 0, or a range [low, high] with 0 <= low < high."""
-    need = "must be a tension > 0 [N] or a range [low, high] with 0 <= low < high"
+    return _positive_or_range(ck, v, path, "a tension > 0 [N]")
+
+
+def _length(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """A length > 0, or a range [low, high] with 0 <= low < high."""
+    return _positive_or_range(ck, v, path, "a length > 0 [m]")
+
+
+def _positive_or_range(ck: Checker, v: Any, path: str, what: str) -> Any:
+    """A number > 0 (``what``), or a range [low, high] with 0 <= low < high."""
+    need = f"must be {what} or a range [low, high] with 0 <= low < high"
     if isinstance(v, (list, tuple)):
         vals = [as_float(c) for c in v]
         if len(v) != 2 or any(c is None or not carried(c) for c in vals):
@@ -156,6 +168,15 @@ class TargetConfig(Declared):
         unit="N",
         doc="cable: the tension of each of its edges (or the range it stays in)",
     )
+    length: Any = key(
+        _length,
+        "a number > 0 or a range [low, high]",
+        None,
+        write="given",
+        unit="m",
+        doc="cable: its length in the shape found, the sum of its edges' (of each cable a "
+        "pattern matches), or the range it stays in",
+    )
     support: Any = _node_key(
         None,
         write="given",
@@ -177,9 +198,9 @@ class TargetConfig(Declared):
 
     @property
     def kind(self) -> str:
-        """'x', 'y', 'z', 'point', 'surface', 'tension', 'reaction' or 'reaction_x' ...
-        (the first given)."""
-        for k in (*AXES, "point", "surface", "tension", "reaction", *REACTIONS):
+        """'x', 'y', 'z', 'point', 'surface', 'tension', 'length', 'reaction' or
+        'reaction_x' ... (the first given)."""
+        for k in (*AXES, "point", "surface", "tension", "length", "reaction", *REACTIONS):
             if getattr(self, k) is not None:
                 return k
         return ""
@@ -212,7 +233,7 @@ class TargetConfig(Declared):
             )
             return f"support {self.support!r} {what}"
         if self.cable is not None:
-            return f"cable {self.cable!r} tension"
+            return f"cable {self.cable!r} {'length' if self.length is not None else 'tension'}"
         what = "point" if self.point is not None else " ".join(self.axes)
         if self.surface is not None:
             what = f"on {Path(self.surface).name}{' (smooth)' if self.smooth else ''}"
@@ -266,9 +287,10 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
         )
         return False
     if tgt.node is not None:
-        if tgt.tension is not None:
-            ck.add(f"{path}.tension = {show(raw['tension'])}: a cable's target: give cable")
-            return False
+        for one in ("tension", "length"):
+            if getattr(tgt, one) is not None:
+                ck.add(f"{path}.{one} = {show(raw[one])}: a cable's target: give cable")
+                return False
         if not node_keys:
             ck.add(
                 f"{path}: node = {show(tgt.node)} needs x, y, z, point or surface: what it reaches"
@@ -282,8 +304,16 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
     if node_keys:
         ck.add(f"{path}.{node_keys[0]} = {show(raw[node_keys[0]])}: a node's target: give node")
         return False
-    if tgt.tension is None:
-        ck.add(f"{path}: cable = {tgt.cable!r} needs tension: a number > 0 or [low, high]")
+    if tgt.tension is None and tgt.length is None:
+        ck.add(
+            f"{path}: cable = {tgt.cable!r} needs tension or length: a number > 0 or [low, high]"
+        )
+        return False
+    if tgt.tension is not None and tgt.length is not None:
+        ck.add(
+            f"{path}.length = {show(raw['length'])}: give a cable's tension and its length "
+            "in targets of their own"
+        )
         return False
     return True
 
@@ -293,7 +323,9 @@ def _support(ck: Checker, tgt: TargetConfig, raw: dict, path: str, given: list) 
     if tgt.support is None:
         ck.add(f"{path}.{given[0]} = {show(raw[given[0]])}: a support's target: give support")
         return False
-    other = [k for k in ("node", "cable", *AXES, "point", "surface", "tension") if k in raw]
+    other = [
+        k for k in ("node", "cable", *AXES, "point", "surface", "tension", "length") if k in raw
+    ]
     if other:
         ck.add(
             f"{path}.{other[0]} = {show(raw[other[0]])}: support takes reaction (or "

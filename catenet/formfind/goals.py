@@ -3,8 +3,9 @@ derivatives.
 
 Each ``[[target]]`` becomes rows of one vector: a node's coordinate (a row per node and
 axis: the value a = x_i,c), an edge's tension (a row per edge of the cable: a = q_e L_e,
-the force density method's tension; N = q L with q = N / L in the elastic equilibrium)
-or a support's reaction (a row per fixed node and component: its partial derivatives
+the force density method's tension; N = q L with q = N / L in the elastic equilibrium),
+a cable's length (a row per cable: a = sum of L_e over its edges, a "chain") or a
+support's reaction (a row per fixed node and component: its partial derivatives
 are ``catenet.formfind.reactions``' and ``catenet.formfind.elastic``'s). A row asks a in [lo, hi]
 (lo = hi: a value); its miss is m = a - clip(a, lo, hi) and its residual r = w m / s,
 with the target's weight w and its scale s (the net's size for positions, the target
@@ -13,7 +14,8 @@ and forces weigh alike. A row is met when |m| <= tol s.
 
 The partial derivatives, with u_e = x_b - x_a and L = |u_e|: da/dx_i,c = 1 for a
 position; for a tension dN/dp_e = N_p (the edge's parameter: q, with N_p = L_e; or the
-rest length) and dN/dx_b = -dN/dx_a = N_L u_e / L_e (N_L = q_e; EA / l0 elastic). Inside its
+rest length) and dN/dx_b = -dN/dx_a = N_L u_e / L_e (N_L = q_e; EA / l0 elastic); for a
+length da/dx_b = -da/dx_a = u_e / L_e summed over its edges (no parameter's). Inside its
 range a row's residual is flat (its derivative 0).
 """
 
@@ -36,8 +38,10 @@ if TYPE_CHECKING:
 @dataclass
 class Goals:
     """The rows of every target: ``node``/``axis`` (positions, -1 for tensions),
-    ``edge`` (tensions, -1 for positions), the range ``lo``..``hi``, the scale, the
-    weight (``w``: weight / scale), ``hard`` and which target (``of``) each row is."""
+    ``edge`` (tensions, -1 for positions), ``chain`` (a length: its index in ``chains``,
+    the edges of one cable, and ``cable``, that cable's; -1 for the others), the range
+    ``lo``..``hi``, the scale, the weight (``w``: weight / scale), ``hard`` and which
+    target (``of``) each row is."""
 
     targets: tuple
     node: np.ndarray
@@ -52,7 +56,9 @@ class Goals:
     tol: float
     surface: np.ndarray  # per row: the index in ``surfaces`` (-1: none)
     reacts: np.ndarray  # per row: a support's reaction (node, axis) (bool)
+    chain: np.ndarray  # per row: the index in ``chains`` (-1: none)
     surfaces: tuple = ()
+    chains: tuple = ()  # per length row's chain: (its cable's index, its edges)
 
     @property
     def rows(self) -> int:
@@ -63,14 +69,17 @@ class Goals:
     ) -> np.ndarray:
         """The value of every row at the shape x with force densities q (tension q L) and
         the supports' ``reaction`` (N, 3) (reaction rows: NaN without)."""
-        pos = self.edge < 0
+        pos = (self.edge < 0) & (self.chain < 0)
         a = np.empty(self.rows)
         a[pos] = x[self.node[pos], self.axis[pos]]
+        for j in np.flatnonzero(self.chain >= 0):
+            a[j] = float(np.sum(length[self.chains[self.chain[j]][1]]))
         if self.reacts.any():
             r = self.reacts
             a[r] = np.nan if reaction is None else reaction[self.node[r], self.axis[r]]
-        e = self.edge[~pos]
-        a[~pos] = q[e] * length[e]
+        ten = self.edge >= 0
+        e = self.edge[ten]
+        a[ten] = q[e] * length[e]
         for k, field in enumerate(self.surfaces):
             rows = np.flatnonzero(self.surface == k)
             a[rows] = field.offset(x[self.node[rows]])[0]
@@ -100,7 +109,7 @@ class Goals:
         n3 = 3 * int(np.count_nonzero(index >= 0))
         slope = self.slope(a)
         rows_x, cols_x, vals_x = [], [], []
-        pos = np.flatnonzero((self.edge < 0) & ~self.reacts)  # (a surface's dz too)
+        pos = np.flatnonzero((self.edge < 0) & ~self.reacts & (self.chain < 0))  # (a surface's dz)
         rows_x.append(pos)
         cols_x.append(3 * index[self.node[pos]] + self.axis[pos])
         vals_x.append(slope[pos])
@@ -125,6 +134,17 @@ class Goals:
                 rows_x.append(ten[free])
                 cols_x.append(3 * f[free] + c)
                 vals_x.append(sign * g[free, c])
+        for j in np.flatnonzero(self.chain >= 0):  # d(sum L_e) = sum u_e / L_e (dx_b - dx_a)
+            along = net.edges[self.chains[self.chain[j]][1]]
+            v = x[along[:, 1]] - x[along[:, 0]]
+            t = slope[j] * v / np.linalg.norm(v, axis=1)[:, None]
+            for end, sign in ((along[:, 0], -1.0), (along[:, 1], 1.0)):
+                f = index[end]
+                free = f >= 0
+                for c in range(3):
+                    rows_x.append(np.full(int(free.sum()), j))
+                    cols_x.append(3 * f[free] + c)
+                    vals_x.append(sign * t[free, c])
         r = self.rows
         d_x = sp.csr_matrix(
             (np.concatenate(vals_x), (np.concatenate(rows_x), np.concatenate(cols_x))),
@@ -150,7 +170,7 @@ class Goals:
         """The goals of these rows only (a mask)."""
         per_row = (
             *("node", "axis", "edge", "lo", "hi", "scale", "w", "hard", "of", "surface"),
-            "reacts",
+            *("reacts", "chain"),
         )
         return Goals(**{**self.__dict__, **{k: getattr(self, k)[rows] for k in per_row}})
 
@@ -160,9 +180,9 @@ class _Rows:
 
     def __init__(self):
         names = ("node", "axis", "edge", "lo", "hi", "sc", "w", "hard", "of", "surface")
-        self.cols: dict[str, list] = {k: [] for k in (*names, "reacts")}
+        self.cols: dict[str, list] = {k: [] for k in (*names, "reacts", "chain")}
 
-    def add(self, k, t, node, axis, edge, lo, hi, scale, surface=-1, reacts=False):
+    def add(self, k, t, node, axis, edge, lo, hi, scale, surface=-1, reacts=False, chain=-1):
         n, cols = len(lo), self.cols
         for name, v in (("node", node), ("axis", axis), ("edge", edge)):
             cols[name].append(np.broadcast_to(np.asarray(v, dtype=np.int64), (n,)))
@@ -172,6 +192,7 @@ class _Rows:
             cols[name].append(np.full(n, v))
         cols["surface"].append(np.full(n, surface))
         cols["reacts"].append(np.full(n, reacts))
+        cols["chain"].append(np.full(n, chain))
 
 
 def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
@@ -180,9 +201,17 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
     values that do not match the nodes, a support target on a free node."""
     rows = _Rows()
     surfaces: list = []
+    chains: list = []
     for k, t in enumerate(targets):
         if t.support is not None:
             _support_rows(rows, k, t, scene)
+            continue
+        if t.cable is not None and t.length is not None:
+            lo, hi = t.length if isinstance(t.length, tuple) else (t.length, t.length)
+            edge = np.asarray(scene.cables.edge) if scene.cables is not None else None
+            for c in _cables(k, t, scene):
+                chains.append((c, np.flatnonzero(edge == c)))
+                rows.add(k, t, -1, -1, -1, [lo], [hi], hi, chain=len(chains) - 1)
             continue
         if t.cable is not None:
             edges = _cable_edges(k, t, scene)
@@ -216,8 +245,10 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
         scale=arr["sc"],
         hard=arr["hard"].astype(bool),
         reacts=arr["reacts"].astype(bool),
+        chain=arr["chain"],
         tol=tol,
         surfaces=tuple(surfaces),
+        chains=tuple(chains),
     )
 
 
@@ -313,6 +344,13 @@ def _per_node(k: int, what: str, t, value, nodes: np.ndarray) -> np.ndarray:
 
 
 def _cable_edges(k: int, t, scene) -> np.ndarray:
+    """The edges of the cables a target's ``cable`` (a name or pattern) matches."""
+    return np.flatnonzero(np.isin(np.asarray(scene.cables.edge), _cables(k, t, scene)))
+
+
+def _cables(k: int, t, scene) -> list[int]:
+    """The indices of the cables a target's ``cable`` (a name or pattern) matches;
+    ConfigError where there are none."""
     path = f"target[{k}].cable"
     cables = scene.cables
     if cables is None or not cables.names:
@@ -325,7 +363,7 @@ def _cable_edges(k: int, t, scene) -> np.ndarray:
         raise ConfigError(
             f"{path} = {t.cable!r}: matches no cable (the cables: {', '.join(cables.names)})"
         )
-    return np.flatnonzero(np.isin(np.asarray(cables.edge), hits))
+    return hits
 
 
 __all__ = ["Goals", "resolve_goals"]

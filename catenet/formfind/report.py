@@ -3,10 +3,10 @@ result file's ``/result/targets/<k>`` groups and ``/result/force_density`` (``wr
 and the lines of the written case's header (``header_lines``).
 
 ``/result/targets/<k>`` (k: the target's index in [[target]]) has the attrs ``kind``
-("x", "y", "z", "point", "surface", "tension", "reaction" or "reaction_x" ...), ``about``
-(what it is about, as the summary says), ``nodes`` or ``edges`` (the nodes, supports
-included, or edges it concerns), ``target`` (one value per node
-or edge; a range: ``low`` and ``high``), ``achieved`` (the same shape), ``miss`` (the
+("x", "y", "z", "point", "surface", "tension", "length", "reaction" or "reaction_x" ...),
+``about`` (what it is about, as the summary says), ``nodes``, ``edges`` or ``cables`` (the
+nodes, supports included, the edges or the cables it concerns), ``target`` (one value per
+node, edge or cable; a range: ``low`` and ``high``), ``achieved`` (the same shape), ``miss`` (the
 largest |miss|, 0 within a range), ``weight``, ``hard`` and ``met`` (to formfind.tol);
 ``/result/targets`` itself: ``met`` (all), ``message``, ``variables``, ``vary``,
 ``evaluations`` and ``gradients``; method "elastic" adds ``found`` (the variables found:
@@ -32,7 +32,7 @@ class Row:
     about: str
     kind: str
     unit: str
-    where: np.ndarray  # nodes (positions) or edges (tensions)
+    where: np.ndarray  # nodes (positions), edges (tensions) or cables (lengths)
     lo: np.ndarray
     hi: np.ndarray
     achieved: np.ndarray
@@ -73,9 +73,11 @@ def rows(design) -> list[Row]:
     out = []
     for k, t in enumerate(g.targets):
         sel = np.flatnonzero(g.of == k)
-        tension = t.cable is not None
-        force = tension or t.support is not None
-        where = g.edge[sel] if tension else g.node[sel]
+        length = t.cable is not None and t.length is not None
+        force = (t.cable is not None and not length) or t.support is not None
+        where = g.edge[sel] if t.cable is not None else g.node[sel]
+        if length:  # (a row per cable: its index)
+            where = np.array([g.chains[c][0] for c in g.chain[sel]], dtype=np.int64)
         where = where[: len(sel) // _axes(t)]  # (rows by axis: x of every node, y ...)
         out.append(
             Row(
@@ -151,7 +153,8 @@ def write(path: str | Path, found) -> None:
 def _write_row(g, row: Row) -> None:
     g.attrs["kind"] = row.kind
     g.attrs["about"] = row.about
-    g.attrs["edges" if row.kind == "tension" else "nodes"] = row.where.astype(np.int64)
+    where = {"tension": "edges", "length": "cables"}.get(row.kind, "nodes")
+    g.attrs[where] = row.where.astype(np.int64)
     if np.array_equal(row.lo, row.hi):
         g.attrs["target"] = row.lo
     else:

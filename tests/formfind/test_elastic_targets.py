@@ -76,14 +76,16 @@ TARGETS = [
     {"cable": "guy_lee*", "tension": [0.0, 10.0e3]},  # above the range: its slope counts
     {"support": 2, "reaction": [-1.0e3, 0.0, 9.0e3]},
     {"support": 3, "reaction_z": -1.0e4, "weight": 2.0},
+    {"cable": "guy*", "length": 30.0},  # a row per guy
 ]
 
 
 @pytest.mark.parametrize("vary", ["prestress", "cables", "edges"])
 def test_the_elastic_adjoint_jacobian_of_every_target_is_the_finite_differences_one(vary):
-    """dr/ds of positions, tensions (a value and a range) and reactions (a vector, one
-    component) by solves with the tangent stiffness, against central differences of the
-    equilibria, for the guys' prestress, a rest-length factor per cable and per edge."""
+    """dr/ds of positions, tensions (a value and a range), the guys' lengths and reactions
+    (a vector, one component) by solves with the tangent stiffness, against central
+    differences of the equilibria, for the guys' prestress, a rest-length factor per cable
+    and per edge."""
     eq, goals, s = equilibria(mast(*TARGETS, vary=vary), seed=1)
 
     def residual(s):
@@ -265,3 +267,45 @@ def test_the_written_stay_carries_only_the_loads_it_was_given(tmp_path):
     assert run.exit_code == 0, run.output
     with h5py.File(tmp_path / "run.h5") as h5:
         assert abs(h5["result/x"][10, 2] + 2.0) <= 1e-9
+
+
+def test_a_stay_whose_length_is_given_has_the_elastic_catenary_rest_length(tmp_path):
+    """The stay's length in its equilibrium asked (100.2 m across 100 m: its edges
+    stretched and sagging): the rest length found is the exact discrete elastic chain's
+    whose stretched length is 100.2 m to 1e-8; the result file's target names the cable
+    and its length, and `catenet run` on the case written keeps it."""
+    import h5py
+    from scipy.optimize import brentq
+
+    from catenet.validate.analytic import discrete_catenary
+
+    def stretched(L0: float) -> float:
+        c = discrete_catenary(L0, 1e8, W, 100.0, 20)
+        return float(np.sum(np.hypot(np.diff(c.x), np.diff(c.z))))
+
+    data = stay({"cable": "*", "length": 100.2})
+    data["geometry"] = {
+        "kind": "graph",
+        "nodes": [[0, 0, 0], [100, 0, 0]],
+        "fixed": [0, 1],
+        "edge_length": 5.0,
+        "cable": [{"name": "stay", "nodes": [0, 1]}],
+    }
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    assert "cable '*' length: 100.2 m (target 100.2 m, miss" in r.output and "met)" in r.output
+    f = formfind_scene(build(parse_case(data)))
+    exact = brentq(lambda L0: stretched(L0) - 100.2, 99.0, 100.2, xtol=1e-14)
+    assert abs(f.net.rest_length.sum() - exact) <= 1e-8 * exact
+    with h5py.File(out) as h5:
+        t = h5["result/targets/0"].attrs
+        assert t["kind"] == "length" and list(t["cables"]) == [0] and bool(t["met"])
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        x = h5["result/x"][()]
+    edges = build(parse_case(data)).net.edges
+    length = np.linalg.norm(x[edges[:, 1]] - x[edges[:, 0]], axis=1).sum()
+    assert abs(length - 100.2) <= 1e-9 * 100.2  # (formfind.tol of the target)

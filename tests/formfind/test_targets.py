@@ -1,11 +1,13 @@
 """Form finding by targets ([[target]], `catenet formfind`): the adjoint Jacobian against
 finite differences, the spider net whose centre lies 3 m below its ring, targets met at
 the start, incompatible targets (the weighted least-squares compromise, closed form),
-hard bounds, tensions, bounds on the force densities, nodes on a surface, and bad input.
+hard bounds, tensions, cables' lengths, bounds on the force densities, nodes on a surface,
+and bad input.
 """
 
 from __future__ import annotations
 
+import math
 import tomllib
 
 import h5py
@@ -77,16 +79,18 @@ TARGETS = [
     {"cable": "ring1", "tension": [0.0, 100.0]},  # above the range: its slope counts
     {"cable": "radial3", "tension": 900.0},
     {"support": 40, "reaction": [100.0, -200.0, 900.0]},  # (its load and weight too)
+    {"cable": "ring1", "length": 40.0},
+    {"cable": "radial*", "length": [0.0, 1.0], "weight": 0.5},  # a row per cable, above
 ]
 
 
 @pytest.mark.parametrize("gravity", [True, False])
 @pytest.mark.parametrize("vary", ["edges", "cables"])
 def test_the_adjoint_jacobian_is_the_finite_differences_one(gravity, vary):
-    """J = dr/ds of positions, tensions and a support's reaction by adjoint solves (whole,
-    and as the sparse operator's products) against central differences of the residual,
-    with and without self-weight (whose derivative with the shape and q enters the
-    adjoint), per edge and per cable."""
+    """J = dr/ds of positions, tensions, cables' lengths and a support's reaction by
+    adjoint solves (whole, and as the sparse operator's products) against central
+    differences of the residual, with and without self-weight (whose derivative with the
+    shape and q enters the adjoint), per edge and per cable."""
     from catenet.formfind.adjoint import SparseJacobian, jacobian_operator
 
     load = (
@@ -327,6 +331,11 @@ def test_a_roof_of_a_thousand_force_densities_lies_on_its_surface(tmp_path):
         ({"node": "centre", "z": [1.0, 2.0]}, {}, "has 2 values for the 1 nodes"),
         ({"cable": "guy*", "tension": 1.0}, {}, "target[0].cable = 'guy*': matches no cable"),
         ({"cable": "ring1", "tension": [5.0, 1.0]}, {}, "target[0].tension = [5.0, 1.0]"),
+        ({"cable": "ring1", "length": -1.0}, {}, "target[0].length = -1.0: must be a length > 0"),
+        ({"cable": "ring1", "length": 4.0, "tension": 1.0}, {}, "in targets of their own"),
+        ({"node": 0, "length": 4.0}, {}, "target[0].length = 4.0: a cable's target"),
+        ({"cable": "ring1"}, {}, "needs tension or length"),
+        ({"support": 40, "length": 4.0, "reaction_z": 1.0}, {}, "target[0].length = 4.0"),
         ({"node": 0, "surface": "nowhere.obj"}, {}, "target[0].surface = 'nowhere.obj': no such"),
         ({"node": 0, "z": 1.0, "within": 0.1}, {}, "target[0].within = 0.1: only with surface"),
         ({"node": 0, "z": 1.0, "smooth": True}, {}, "target[0].smooth = true: only with surface"),
@@ -432,3 +441,45 @@ def test_elastic_form_finding_needs_targets(tmp_path):
     del data["target"]
     r, _ = invoke(tmp_path, data)
     assert r.exit_code == 2 and "formfind.method = 'elastic': finds rest lengths" in r.output
+
+
+def test_a_chain_whose_length_is_given_has_the_hand_force_density(tmp_path):
+    """A 10 m chain of 1 m edges, one force density for it (vary = "cables"), 40 N at its
+    middle, its length asked to be 10.5 m: two straight halves of 5.25 m, so the middle
+    sags z = sqrt(5.25^2 - 5^2) and holds 40 N when 2 q z = 40 N m (q = 100 / z N/m); the
+    result file's target names cable 0 and the length found."""
+    text = CHAIN_LENGTH
+    case = tmp_path / "chain.toml"
+    case.write_text(text)
+    out = tmp_path / "c.h5"
+    r = CliRunner().invoke(main, ["formfind", str(case), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    z = math.sqrt(5.25**2 - 25.0)
+    with h5py.File(out) as h5:
+        assert h5["result/force_density"][()] == pytest.approx(100.0 / z, rel=1e-9)
+        t = h5["result/targets/0"].attrs
+        assert t["kind"] == "length" and list(t["cables"]) == [0]
+        assert float(t["achieved"][0]) == pytest.approx(10.5, rel=1e-9)
+
+
+CHAIN_LENGTH = """
+[geometry]
+kind = "graph"
+nodes = [[0, 0, 0], [5, 0, 0], [10, 0, 0]]
+fixed = [0, 2]
+edge_length = 1.0
+sets = { middle = [1] }
+[[geometry.cable]]
+name = "chain"
+nodes = [0, 1, 2]
+[material]
+EA = 1.0e6
+[load]
+point = [{ node = "middle", force = [0, 0, -40.0] }]
+[formfind]
+force_density = 100.0
+vary = "cables"
+[[target]]
+cable = "chain"
+length = 10.5
+"""
