@@ -198,6 +198,7 @@ def water_model(config: WaterConfig, gravity: Any, obstacles: tuple) -> Water:
     if config.depth is None:  # (a given depth was checked with the table)
         heights = [(f"water.wave[{k}]", w.height, w.period) for k, w in enumerate(config.waves)]
         if config.spectrum is not None:
+            assert config.hs is not None and config.tp is not None  # parse_water
             heights.append(("water.hs", config.hs, config.tp))
         breaking = _breaking(heights, depth, "the seabed's depth (a plane obstacle)")
         if breaking:

@@ -66,7 +66,8 @@ def command(
         if unconverged := _unconverged(written):
             from catenet.model.units import relabel
 
-            units = (getattr(written.scene, "case", None) or written.case).units or "SI"
+            source = getattr(written.scene, "case", None) or written.case
+            units = getattr(source, "units", None) or "SI"
             unconverged = relabel([unconverged], units)[0]  # its forces in the case's units
             click.echo(f"catenet: error: {unconverged}", err=True)
             sys.exit(EXIT_FAILED)

@@ -195,6 +195,7 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) ->
             message = f"{why} on the hard targets alone"
     evaluations = shape.factorizations - 1
     at_bound = int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+    message = compromise(message, at_bound)
     out = Design(
         goals=goals,
         achieved=a,
@@ -220,6 +221,21 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) ->
     return out
 
 
+#: How a search that met not every target ended (its stationary point)
+COMPROMISE = "least-squares compromise: the targets are not all compatible"
+
+
+def compromise(message: str, at_bound: int) -> str:
+    """The compromise's message said where bounds hold variables (their share of why the
+    targets are not met: a single target can be met without them)."""
+    if not message.startswith(COMPROMISE) or not at_bound:
+        return message
+    return (
+        "least-squares compromise within the bounds: the targets are not all met there "
+        f"({at_bound} variables at a bound)" + message[len(COMPROMISE) :]
+    )
+
+
 def _search(search: _Search, s0: np.ndarray, bounds, budget: int) -> tuple[str, np.ndarray]:
     """(how it ended, s) of Levenberg-Marquardt from s0 (``catenet.formfind.levenberg``)."""
     try:
@@ -230,7 +246,7 @@ def _search(search: _Search, s0: np.ndarray, bounds, budget: int) -> tuple[str, 
     s = ended.s if best is None else best[1]
     if ended.why == "max_iter":
         return "formfind.max_iter reached", s
-    return "least-squares compromise: the targets are not all compatible", s
+    return COMPROMISE, s
 
 
 def formfind_targets(
@@ -342,8 +358,12 @@ def _unmet_message(d: Design, k: int) -> str:
     worst = rows[np.argmax(np.abs(d.miss()[rows]))]
     lo, hi = d.goals.lo[worst], d.goals.hi[worst]
     want = f"{lo:.9g}" if lo == hi else f"[{lo:.9g}, {hi:.9g}]"
+    fix = (
+        "relax it, widen formfind.force_density_min/max or drop hard"
+        if d.at_bound
+        else "relax it or the targets it conflicts with, or drop hard (no bound holds it)"
+    )
     return (
         f"target[{k}] ({t.describe()}, hard = true): cannot be met to formfind.tol: reaches "
-        f"{d.achieved[worst]:.9g}, target {want} ({d.message}): relax it, widen "
-        "formfind.force_density_min/max or drop hard"
+        f"{d.achieved[worst]:.9g}, target {want} ({d.message}): {fix}"
     )

@@ -247,6 +247,7 @@ class _Met(Exception):
 
 def _search(eq: _Equilibria, goals, max_iter: int):
     """(s, how it ended, gradients) of Levenberg-Marquardt within the bounds."""
+    from catenet.formfind.design import COMPROMISE
     from catenet.formfind.levenberg import levenberg
 
     gradients = [0]
@@ -271,7 +272,7 @@ def _search(eq: _Equilibria, goals, max_iter: int):
         return np.frombuffer(eq.key or s.tobytes()).copy(), "met", gradients[0]
     if ended.why == "max_iter":
         return ended.s, "formfind.max_iter reached", gradients[0]
-    return ended.s, "least-squares compromise: the targets are not all compatible", gradients[0]
+    return ended.s, COMPROMISE, gradients[0]
 
 
 def _lengths(net, x: np.ndarray) -> np.ndarray:
@@ -280,7 +281,7 @@ def _lengths(net, x: np.ndarray) -> np.ndarray:
 
 def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
     """The FormFound at the equilibrium of s: q = N / L, every edge taut."""
-    from catenet.formfind.design import Design
+    from catenet.formfind.design import Design, compromise
     from catenet.formfind.fdm import FormFound
 
     net, scene, x = eq(s)
@@ -302,7 +303,7 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
         vary=vary,
         evaluations=eq.solves - 1,
         gradients=gradients,
-        message=message,
+        message=compromise(message, v.at_bound(s)),
         at_bound=v.at_bound(s),
     )
     d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind)

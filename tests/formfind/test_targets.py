@@ -217,7 +217,22 @@ def test_a_hard_bound_that_cannot_be_met_exits_2(tmp_path):
     r, out = invoke(tmp_path, spider(formfind={"force_density": 500.0, **bounds}, target=targets))
     assert r.exit_code == 2, r.output
     assert "target[1] (cable 'radial*' tension, hard = true): cannot be met" in r.output
+    assert "within the bounds" in r.output and "widen formfind.force_density_min" in r.output
     assert not out.exists()
+
+
+def test_two_hard_targets_that_contradict_each_other_blame_no_bound(tmp_path):
+    """The centre asked both 3 m and 4 m down, both hard, no bound given: the error says
+    the targets conflict (it advised widening force density bounds nobody had set)."""
+    targets = [
+        {"node": "centre", "z": -3.0, "hard": True},
+        {"node": "centre", "z": -4.0, "hard": True},
+    ]
+    r, out = invoke(tmp_path, spider(formfind={"force_density": 500.0}, target=targets))
+    assert r.exit_code == 2, r.output
+    assert "the targets are not all compatible" in r.output
+    assert "relax it or the targets it conflicts with, or drop hard" in r.output
+    assert "widen" not in r.output and not out.exists()
 
 
 def test_tensions_and_a_position_are_met_and_kept_by_the_case_written(tmp_path):
