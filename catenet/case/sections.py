@@ -66,7 +66,8 @@ class SupportsConfig(Declared):
 
     fixed: tuple[NodeRef, ...] | None = key(
         fixed_list,
-        "an array of nodes (indices or names; empty where rollers, sliders or springs hold)",
+        "an array of nodes (indices or names; empty where clamps, rollers, sliders or "
+        "springs hold)",
         None,
         write="changed",
         shown="the geometry's own",

@@ -84,16 +84,17 @@ def fixed_list(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
 
 
 def check_fixed(ck: Checker, supports: Any, flight: bool = False) -> None:
-    """``supports.fixed = []`` only where rollers, sliders or springs hold the net, or
-    in a dynamic run (``flight``: a net may fly free)."""
-    partial = supports.rollers or supports.sliders or supports.springs
+    """``supports.fixed = []`` only where clamps, rollers, sliders or springs hold the
+    net, or in a dynamic run (``flight``: a net may fly free). (A clamped rod end is held
+    in place: a cantilever needs no fixed node beside its clamp.)"""
+    partial = supports.clamped or supports.rollers or supports.sliders or supports.springs
     if supports.fixed == () and not partial and not flight:
         ck.bad(
             "supports.fixed",
             [],
-            "must be a non-empty array of nodes ([] only where [[supports.roller]], "
-            "[[supports.slider]] or [[supports.spring]] hold the net, or in a dynamic "
-            "run: a net flying free)",
+            "must be a non-empty array of nodes ([] only where supports.clamped, "
+            "[[supports.roller]], [[supports.slider]] or [[supports.spring]] hold the "
+            "net, or in a dynamic run: a net flying free)",
         )
 
 

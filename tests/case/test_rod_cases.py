@@ -24,6 +24,7 @@ CANTILEVER = {
 
 
 def _invoke(tmp_path, data, *args, command="run"):
+    tmp_path.mkdir(parents=True, exist_ok=True)
     case = tmp_path / "case.toml"
     case.write_text(dumps_toml(data))
     return CliRunner().invoke(main, [command, str(case), "-o", str(tmp_path / "r.h5"), *args])
@@ -51,6 +52,18 @@ def test_tube_cantilever_small_deflection_and_moment(tmp_path):
     assert moment[0] == pytest.approx(50.0 * tip[0], rel=2e-3)
     assert moment[-1] == 0.0  # a free end carries none
     assert kappa[10] == pytest.approx(moment[10] / EI, rel=1e-9)
+
+
+def test_a_clamp_alone_holds_a_cantilever(tmp_path):
+    """supports.fixed = [] with the clamp the only support: the clamp holds its node in
+    place, so the cantilever is supported (it was refused: "[] only where rollers,
+    sliders or springs hold the net") and bends as with the node fixed too."""
+    both = _invoke(tmp_path / "both", CANTILEVER)
+    data = {**CANTILEVER, "supports": {"fixed": [], "clamped": ["start"]}}
+    alone = _invoke(tmp_path / "alone", data)
+    assert both.exit_code == 0 and alone.exit_code == 0, (both.output, alone.output)
+    with h5py.File(tmp_path / "both" / "r.h5") as f, h5py.File(tmp_path / "alone" / "r.h5") as g:
+        assert np.array_equal(f["result/x"][:], g["result/x"][:])
 
 
 def test_modes_include_the_bending_stiffness(tmp_path):
