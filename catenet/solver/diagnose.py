@@ -166,6 +166,27 @@ def _held_by_terms(system: System) -> np.ndarray:
     return held
 
 
+def unpinned_parts(net: Net) -> np.ndarray:
+    """(N,) bool: the nodes of the net's connected parts (by every edge) that no fixed
+    node and no spring holds: rollers and sliders at most, which leave the part's
+    translations and turns in their planes or along their lines free (a ring floating on
+    a table)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    n = net.n_nodes
+    e = net.edges
+    graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    pinned = net.fixed.copy()
+    if net.springs is not None:
+        pinned[net.springs.held_nodes] = True
+    anchored = np.zeros(label.max() + 1, bool)
+    anchored[label[pinned]] = True
+    out: np.ndarray = ~anchored[label]
+    return out
+
+
 def floating_parts(net: Net, tension: np.ndarray, x: np.ndarray, held: np.ndarray) -> np.ndarray:
     """(N,) bool: free nodes in a part of the net that only slack edges join to its
     supports (a rigid-body motion costs nothing). Taut: an edge in tension, at exactly
@@ -216,12 +237,19 @@ def describe_zero_modes(
         if np.isin(own, nodes).any():
             named.append(label)
     nodes = nodes[~rigid[nodes]]
+    whole = unpinned_parts(net) & ~loose & ~floating & ~body
     groups = [
         (nodes[body[nodes]], "are the centres of rigid bodies that touch nothing"),
         (nodes[loose[nodes]], "hang on slack edges only"),
         (nodes[floating[nodes]], "form a part that only slack edges join to the supports"),
         (
-            nodes[~loose[nodes] & ~floating[nodes] & ~body[nodes]],
+            nodes[whole[nodes]],
+            "form a part that no fixed node or spring holds: it moves as a whole (the "
+            "translations and turns its rollers or sliders leave free), a rigid-body "
+            "motion",
+        ),
+        (
+            nodes[~loose[nodes] & ~floating[nodes] & ~body[nodes] & ~whole[nodes]],
             "are a mechanism of the taut edges (untensioned straight edges or a chain "
             "that turns freely"
             + (
@@ -250,6 +278,8 @@ def describe_zero_modes(
             return head + bodies
         head += bodies + "; "
     where = "; ".join(parts) if parts else "the net"
+    if len(parts) == 1 and nodes[whole[nodes]].size == len(nodes):  # rigid motion alone
+        return f"{head}{where}: a fixed node or a spring stops it, where it should not move"
     return f"{head}{where}: give them tension (prestress, a load) or a support"
 
 
