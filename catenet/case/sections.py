@@ -50,7 +50,11 @@ from catenet.solver.relax import REST
 from catenet.solver.settings import INITIAL_STATES, MAX_ITER_SHOWN, METHODS, STARTS, Settings
 
 LINEAR = ("auto", "pardiso", "scipy")
-MAX_ITER = "Newton iterations of one solve: a static equilibrium (a load step) or one time step"
+MAX_ITER = (
+    "Newton iterations of one solve: a static equilibrium (a load step) or one time step "
+    "(a step that fails is cut back and solved again, each part with its own budget: the "
+    "summary counts them all)"
+)
 
 Vec3 = tuple[float, float, float]
 NodeRef = int | str

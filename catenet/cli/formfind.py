@@ -40,17 +40,19 @@ def command(
 ) -> None:
     """Find the shape of CASE.toml's net that carries the forces its [formfind] table
     asks for (force densities, target forces or target lengths), or the force densities
-    that reach its [[target]] tables (nodes' positions, nodes on a surface, cables'
-    tensions: each target's achieved value is reported), and write the result file
+    or rest lengths that reach its [[target]] tables (nodes' positions, nodes on a
+    surface, cables' tensions and lengths, supports' reactions: each target's achieved
+    value is reported), and write the result file
     OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
     lengths that carry those forces, which `catenet run OUT.toml` reproduces.
 
     \b
-    Exit status: 0 found (targets not all met: the weighted least-squares compromise,
-    with a warning); 1 failed while running, or the target search did not converge
-    within formfind.max_iter (its last iterate written); 2 bad input (case file, --set
-    values, paths, force densities that make nodes coincide, targets that cannot be met,
-    hard targets unmet).
+    Exit status: 0 found ([[target]]s not all met: the weighted least-squares
+    compromise, with a warning); 1 failed while running, or the target search did not
+    converge within formfind.max_iter or its force densities ran away (its last iterate
+    written); 2 bad input (case file, --set values, paths, force densities that make
+    nodes coincide, target forces or lengths of method "forces" or "lengths" that cannot
+    be met, hard targets unmet).
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):
