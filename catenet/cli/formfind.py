@@ -229,6 +229,8 @@ def shape_lines(f, scene) -> list[str]:
     for name, nodes in sets.items():
         if str(name).startswith("cable:") or not len(nodes):
             continue
+        if f.net.fixed[np.asarray(nodes, dtype=np.int64)].all():
+            continue  # (supports: form finding does not move them)
         z = x[np.asarray(nodes, dtype=np.int64), 2]
         rise = float(z.mean()) - base
         what = "rise" if rise >= 0 else "sag"

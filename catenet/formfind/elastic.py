@@ -46,6 +46,7 @@ class _Equilibria:
         self.x = scene.net.nodes.copy()
         self.key: bytes | None = None
         self.solves = 0
+        self.backend = "scipy"  # the equilibria's linear solver, once one is solved
 
     def __call__(self, s: np.ndarray):
         """(net, scene, x) at s; the state is kept for the Jacobian."""
@@ -58,6 +59,7 @@ class _Equilibria:
             scene = dataclasses.replace(self.scene, net=net)
             result = solve(scene, self.settings, start=Start(x=self.x))
             self.solves += 1
+            self.backend = result.stats.backend or self.backend  # (the equilibria's)
             if not result.converged:
                 raise ConvergenceError(f"the equilibrium did not converge: {result.message}")
             self.x = np.asarray(result.x).copy()
@@ -316,7 +318,7 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
         iterations=d.evaluations,
         factorizations=eq.solves,
         residual=float(np.max(np.abs(d.miss()) / goals.scale)),
-        backend="scipy",
+        backend=f"{eq.backend}; the adjoint by SciPy's SuperLU",
         design=d,
     )
 
