@@ -25,16 +25,22 @@ from catenet.case.keys import (
     integer,
     key,
     names,
+    node,
     parse_keys,
     real,
     show,
+    tables,
 )
 
 FORMFIND_METHODS = ("linear", "forces", "lengths", "elastic")
 
 #: What the targets ([[target]]) vary: a force density (elastic: a rest-length factor) per
-#: edge, or one per cable; elastic also the prestress of the cables that have one.
-VARY = ("edges", "cables", "prestress")
+#: edge, or one per cable; elastic also the prestress of the cables that have one, or
+#: its [[formfind.support]] offsets alone ("supports": the rest lengths kept).
+VARY = ("edges", "cables", "prestress", "supports")
+
+#: The offsets a [[formfind.support]] may give, one design variable each.
+OFFSETS = ("dx", "dy", "dz")
 
 #: The bounds of each kind of design variable: force densities, the elastic method's
 #: rest-length factors and prestress.
@@ -77,6 +83,46 @@ def _number_or_per_edge(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     if f is None or not (carried(f) and f > 0):
         return ck.bad(path, v, "must be a number, finite and > 0, or an array of them per edge")
     return f
+
+
+def _offset_range(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
+    """[low, high], low < high, finite: how far a support may move along one axis."""
+    if isinstance(v, (list, tuple)) and len(v) == 2:
+        lo, hi = (as_float(c) for c in v)
+        if lo is not None and hi is not None and carried(lo) and carried(hi) and lo < hi:
+            return (lo, hi)
+    return ck.bad(
+        path, v, "must be [low, high] with low < high: how far the support may move along "
+        "this axis from where it is given [m]"
+    )  # fmt: skip
+
+
+def _offset(axis: str) -> Any:
+    return key(
+        _offset_range,
+        "[low, high]",
+        None,
+        write="given",
+        unit="m",
+        doc=f"its offset along {axis} from where it is given, a design variable in the range given",
+    )
+
+
+@dataclass(frozen=True)
+class SupportMoveConfig(Declared):
+    """A support the elastic method's target search may move ([[formfind.support]]): a
+    fixed node (or a set of them, moved as one) and, per axis it may move along, the
+    range of its offset from where it is given (one design variable per axis)."""
+
+    node: Any = node(doc="the fixed node (index, name or node set: moved as one)")
+    dx: Any = _offset("x")
+    dy: Any = _offset("y")
+    dz: Any = _offset("z")
+
+    @property
+    def axes(self) -> tuple[int, ...]:
+        """The axes it moves along (0, 1, 2 for x, y, z)."""
+        return tuple(c for c, k in enumerate(OFFSETS) if getattr(self, k) is not None)
 
 
 #: The table form of a per-edge value, as messages show it.
@@ -132,7 +178,8 @@ class FormfindConfig(Declared):
         shown='"edges" (elastic: "cables")',
         doc="[[target]]: the design variables: a force density (elastic: a rest-length "
         "factor) per edge, or one per cable (and per own edge of a graph); elastic: "
-        '"prestress", the prestress of each cable that has one',
+        '"prestress", the prestress of each cable that has one; "supports": only the '
+        "offsets of [[formfind.support]]",
     )
     force_density_min: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="[[target]]: the least force density"
@@ -151,6 +198,12 @@ class FormfindConfig(Declared):
     )
     prestress_max: float | None = real(
         None, gt=0, write="given", unit="N", doc='elastic, vary = "prestress": the largest'
+    )
+    supports: tuple = tables(
+        SupportMoveConfig,
+        name="support",
+        doc="elastic: supports the search moves ([[formfind.support]]: node, dx, dy, dz "
+        'ranges), besides the rest lengths or prestress (vary = "supports": alone)',
     )
 
 
@@ -179,6 +232,7 @@ def parse_formfind(
             "remove formfind.method (or the targets)"
         )
     _bounds(ck, f, v, method)
+    _supports(ck, f, v, method)
     if not targets:
         for k in ("vary", *(b for pair in BOUNDS.values() for b in pair)):
             if k in f:
@@ -203,6 +257,26 @@ def parse_formfind(
     return FormfindConfig(**v)
 
 
+def _supports(ck: Checker, f: dict, v: dict, method: Any) -> None:
+    """[[formfind.support]] only with the elastic method, each moving along some axis;
+    vary = "supports" only with them."""
+    moves = v["supports"]
+    if moves is BAD or method is BAD:
+        return
+    if moves and method != "elastic":
+        ck.add(
+            f"formfind.support = {show(f['support'])}: only with method = 'elastic' (the "
+            "force density method keeps its supports where they are given)"
+        )
+    for k, m in enumerate(moves):
+        if not m.axes:
+            ck.add(f"formfind.support[{k}]: needs dx, dy or dz: the range it may move along")
+    if v["vary"] == "supports" and not moves:
+        ck.add(
+            "formfind.vary = 'supports': needs [[formfind.support]] tables (the supports that move)"
+        )
+
+
 def _bounds(ck: Checker, f: dict, v: dict, method: Any) -> None:
     """Each pair of bounds in order, and only with the variables they bound."""
     for low, high in BOUNDS.values():
@@ -219,7 +293,7 @@ def _bounds(ck: Checker, f: dict, v: dict, method: Any) -> None:
         )
     varies = "force_density"
     if elastic:
-        varies = "prestress" if v["vary"] == "prestress" else "rest_length_factor"
+        varies = {"prestress": "prestress", "supports": ""}.get(v["vary"], "rest_length_factor")
     for kind, pair in BOUNDS.items():
         for k in pair:
             if k in f and kind != varies and not (kind == "force_density" and elastic):

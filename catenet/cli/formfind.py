@@ -188,10 +188,13 @@ def _targets(f) -> list[str]:
             f"{d.variables} prestresses (one per cable): {float(t.min()):.9g} .. "
             f"{float(t.max()):.9g} N{bound}"
         )
+    elif f.method == "elastic" and d.vary == "supports":
+        design = f"{d.variables} support offsets{bound}"
     elif f.method == "elastic":
         rest = f.net.rest_length
+        moved = d.extra.get("moved", 0)
         design = (
-            f"{d.variables} rest-length factors (one per {what}): rest lengths "
+            f"{d.variables - moved} rest-length factors (one per {what}): rest lengths "
             f"{float(rest.min()):.9g} .. {float(rest.max()):.9g} m, "
             f"{float(rest.sum()):.12g} m in all{bound}"
         )
@@ -201,6 +204,11 @@ def _targets(f) -> list[str]:
             f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m{bound}"
         )
     out = [f"{'design':<12} {design}"]
+    moved = d.extra.get("moved", 0)  # the supports moved: the last of the variables
+    if moved:
+        names, values = d.extra["names"][-moved:], d.extra["values"][-moved:]
+        for name, value in zip(names, values, strict=True):
+            out.append(f"{'moved':<12} {name}: {float(value):+.9g} m")
     out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
     return out
 

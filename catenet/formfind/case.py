@@ -67,6 +67,7 @@ def formfind_scene(scene) -> FormFound:
             tol=cfg.tol,
             max_iter=cfg.max_iter,
             prefix=PREFIX,
+            moves=cfg.supports,
         )
     if scene.case.targets:
         from catenet.formfind.design import formfind_targets

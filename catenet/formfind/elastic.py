@@ -55,9 +55,15 @@ class _Equilibria:
         key = s.tobytes()
         if key != self.key:
             self.key = None
-            net = self.scene.net.replace(rest_length=self.variables.rest(s))
+            v = self.variables
+            net = self.scene.net.replace(rest_length=v.rest(s))
+            start = self.x
+            if v.moves:  # the supports where s puts them (the free nodes start as last)
+                nodes = v.positions(s)
+                net = net.replace(nodes=nodes)
+                start = np.where(net.fixed[:, None], nodes, self.x)
             scene = dataclasses.replace(self.scene, net=net)
-            result = solve(scene, self.settings, start=Start(x=self.x))
+            result = solve(scene, self.settings, start=Start(x=start))
             self.solves += 1
             self.backend = result.stats.backend or self.backend  # (the equilibria's)
             if not result.converged:
@@ -97,15 +103,47 @@ class _Equilibria:
             d_x, d_l0 = d_x + rx, d_l0 + rl
         dl0_ds = self.variables.jacobian(s)
         rhs = (_dr_dl0(net, x, scene.loads.gravity, index) @ dl0_ds).toarray()
+        direct = (d_l0 @ dl0_ds).toarray()
+        if self.variables.moves:  # the supports' offsets: their columns
+            _moved_columns(self.variables, goals, a, net, scene, x, n, dn_dl, dn_dl0, index,
+                           rhs, direct)  # fmt: skip
         try:
             lu = splu(k)
         except RuntimeError:
             raise SingularSystemError("the tangent stiffness is singular") from None
-        direct = (d_l0 @ dl0_ds).toarray()
         if d_x.shape[0] <= rhs.shape[1]:
             y = lu.solve(d_x.T.toarray(), trans="T")
             return direct - (rhs.T @ y).T
         return np.asarray(direct - d_x @ lu.solve(rhs))
+
+
+def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, rhs, direct) -> None:
+    """Fills the support offsets' columns of ``rhs`` (dR_f/ds: the free nodes' residual
+    as a support moves, K_fs dx_s) and ``direct`` (dr/ds at fixed free nodes: tensions,
+    lengths and reactions that the support's own position enters)."""
+    every = np.arange(net.n_nodes)  # (every node a column: the supports' too)
+    d_all, _ = goals.partials(x, n / _lengths(net, x), a, every, net, dn=(dn_dl, dn_dl0))
+    if goals.reacts.any():
+        rx, _ = _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, every)
+        d_all = d_all + rx
+    ends = net.edges
+    u = x[ends[:, 1]] - x[ends[:, 0]]
+    length = np.linalg.norm(u, axis=1)
+    t = u / length[:, None]
+    free = index >= 0
+    for j in range(len(v.moves)):
+        col = v.n_rest + j
+        dx = v.moved(j)  # (N, 3): only supports move
+        direct[:, col] = d_all @ dx.ravel()
+        stretch = dx[ends[:, 1]] - dx[ends[:, 0]]  # each edge's change of u
+        along = np.einsum("ij,ij->i", t, stretch)
+        # d(N t) = dN/dL (t.du) t + N / L (du - t (t.du)): the pull on the second end
+        pull = (dn_dl * along)[:, None] * t + (n / length)[:, None] * (stretch - along[:, None] * t)
+        change = np.zeros_like(x)  # d grad U at every node
+        for c in range(3):
+            change[:, c] += np.bincount(ends[:, 1], pull[:, c], net.n_nodes)
+            change[:, c] -= np.bincount(ends[:, 0], pull[:, c], net.n_nodes)
+        rhs[:, col] = change[free].ravel()
 
 
 def _forces(net, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -150,16 +188,22 @@ def _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, index):
             vals_l.append(
                 slope[j] * (sign * dn_dl0[e] * t[e, c] - 0.5 * net.line_density[e] * g[c])
             )
-            # d(grad_i)/dx_other = -K_e (row c), at the other end where it is free
-            k = other >= 0
-            e, f = e[k], other[k]
+            # d(grad_i)/dx_other = -K_e (row c), at the other end where it has a column
+            # (a free node's; every node's for a support that moves: and then its own,
+            # d(grad_i)/dx_i = +K_e)
+            own = index[i]
             for d in range(3):
                 block = dn_dl[e] * t[e, c] * t[e, d] + n[e] / length[e] * (
                     (c == d) - t[e, c] * t[e, d]
                 )
-                rows_x.append(np.full(len(e), j))
-                cols_x.append(3 * f + d)
-                vals_x.append(-slope[j] * block)
+                k = other >= 0
+                rows_x.append(np.full(int(k.sum()), j))
+                cols_x.append(3 * other[k] + d)
+                vals_x.append(-slope[j] * block[k])
+                if own >= 0:
+                    rows_x.append(np.full(len(e), j))
+                    cols_x.append(np.full(len(e), 3 * own + d))
+                    vals_x.append(slope[j] * block)
     shape = (goals.rows, 3 * int(np.count_nonzero(index >= 0)))
     cat = np.concatenate
     d_x = sp.csr_matrix((cat(vals_x), (cat(rows_x), cat(cols_x))), shape=shape)
@@ -197,11 +241,12 @@ def _dr_dl0(net, x, gravity, index):
 
 
 def formfind_elastic(
-    scene, *, targets, vary, tol, max_iter, bounds=(None, None), prefix="formfind."
+    scene, *, targets, vary, tol, max_iter, bounds=(None, None), prefix="formfind.", moves=()
 ):
     """The rest lengths (factors per cable or edge, or cables' prestress, within
-    ``bounds``) whose elastic equilibrium reaches ``targets``: a FormFound (method
-    "elastic") at that equilibrium, its ``design``."""
+    ``bounds``) and the positions of the supports ``moves`` lets move (the case's
+    [[formfind.support]]) whose elastic equilibrium reaches ``targets``: a FormFound
+    (method "elastic") at that equilibrium, its ``design``."""
     from catenet.formfind.goals import resolve_goals
     from catenet.formfind.variables import Variables
     from catenet.solver.settings import Settings
@@ -214,10 +259,15 @@ def formfind_elastic(
             "target takes a net of cables under loads and gravity only (this case has "
             "obstacles, rods or springs)"
         )
+    if moves and scene.terms:
+        raise ConfigError(
+            f"{prefix}support = {moves[0].node!r}: a support the search moves takes a net of "
+            "cables under loads and gravity only (this case has obstacles, rods or springs)"
+        )
     settings = dataclasses.replace(Settings.of(scene.case.solver), method="static", steps=1)
     size = float(np.linalg.norm(np.ptp(scene.net.nodes, axis=0))) or 1.0
     goals = resolve_goals(targets, scene, size, tol)
-    variables = Variables(scene, vary, bounds, prefix)
+    variables = Variables(scene, vary, bounds, prefix, moves)
     eq = _Equilibria(scene, settings, variables)
     s, message, gradients = _search(eq, goals, max_iter)
     found = _found(eq, goals, s, message, gradients, vary)
@@ -236,11 +286,10 @@ def formfind_elastic(
 
 
 def _bounds_named(vary: str) -> str:
-    return (
-        "formfind.prestress_min/max"
-        if vary == "prestress"
-        else ("formfind.rest_length_factor_min/max")
-    )
+    return {
+        "prestress": "formfind.prestress_min/max",
+        "supports": "the ranges of [[formfind.support]]",
+    }.get(vary, "formfind.rest_length_factor_min/max")
 
 
 class _Met(Exception):
@@ -308,7 +357,7 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
         message=compromise(message, v.at_bound(s)),
         at_bound=v.at_bound(s),
     )
-    d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind)
+    d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind, moved=len(v.moves))
     return FormFound(
         net=net,
         x=x,

@@ -26,17 +26,25 @@ if TYPE_CHECKING:
 
 
 class Variables:
-    """s -> rest lengths; ``groups`` (M,) the variable of each edge (-1: none), ``start``
-    and ``bounds`` (lo, hi) in s, ``names`` (one per variable: the cable's, where named)."""
+    """s -> rest lengths and support positions; ``groups`` (M,) the rest-length variable
+    of each edge (-1: none), ``moves`` the supports' (nodes, axis, name), their variables
+    after the rest lengths' (``n_rest``) as offsets over the net's size; ``start`` and
+    ``bounds`` (lo, hi) in s, ``names`` (one per variable: the cable's, where named, and
+    each support offset's)."""
 
-    def __init__(self, scene, vary: str, bounds: tuple, prefix: str = "formfind."):
+    def __init__(
+        self, scene, vary: str, bounds: tuple, prefix: str = "formfind.", moves: tuple = ()
+    ):
         from catenet.formfind.design import _groups
 
         net = scene.net
         self.kind = "prestress" if vary == "prestress" else "factor"
         self.base = net.rest_length.copy()
         self.names: list[str] = []
-        if self.kind == "prestress":
+        if vary == "supports":  # (the rest lengths kept)
+            self.groups = np.full(net.n_edges, -1, dtype=np.int64)
+            start = np.zeros(0)
+        elif self.kind == "prestress":
             self.groups, t0, self.names = _prestressed(scene, prefix)
             ends = net.nodes[net.edges[:, 1]] - net.nodes[net.edges[:, 0]]
             self.length = np.linalg.norm(ends, axis=1)
@@ -49,31 +57,56 @@ class Variables:
             if vary == "cables" and scene.cables is not None and scene.cables.names:
                 self.names = list(scene.cables.names)
             start = np.zeros(int(self.groups.max()) + 1)
-        self.n = len(start)
+        self.n_rest = len(start)
         lo = -np.inf if bounds[0] is None else math.log(bounds[0])
         hi = np.inf if bounds[1] is None else math.log(bounds[1])
-        self.bounds = (np.full(self.n, lo), np.full(self.n, hi))
-        self.start = np.clip(start, lo, hi)
+        low, high = [np.full(self.n_rest, lo)], [np.full(self.n_rest, hi)]
+        starts = [np.clip(start, lo, hi)]
+        self.nodes0 = net.nodes.copy()
+        self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
+        self.moves = _moves(scene, moves, prefix)
+        for _, _, _, (a, b) in self.moves:  # (offsets over the size: s's scale)
+            low.append(np.array([a / self.size]))
+            high.append(np.array([b / self.size]))
+            starts.append(np.array([min(max(0.0, a), b) / self.size]))
+        self.names += [name for _, _, name, _ in self.moves]
+        self.bounds = (np.concatenate(low), np.concatenate(high))
+        self.start = np.concatenate(starts)
+        self.n = len(self.start)
         self.on = self.groups >= 0
 
     def rest(self, s: np.ndarray) -> np.ndarray:
         """The rest lengths (M,) at s."""
         l0 = self.base.copy()
         g = self.groups[self.on]
-        v = np.exp(np.clip(s, -700.0, 700.0))[g]
+        v = np.exp(np.clip(s[: self.n_rest], -700.0, 700.0))[g]
         if self.kind == "prestress":
             l0[self.on] = self.length[self.on] / (1.0 + v / self.EA[self.on])
         else:
             l0[self.on] = self.base[self.on] * v
         return l0
 
+    def positions(self, s: np.ndarray) -> np.ndarray:
+        """The nodes (N, 3) at s: the supports moved by their offsets."""
+        x = self.nodes0.copy()
+        for j, (nodes, c, _, _) in enumerate(self.moves):
+            x[nodes, c] += self.size * s[self.n_rest + j]
+        return x
+
+    def moved(self, j: int) -> np.ndarray:
+        """dx/ds (N, 3) of the j-th support offset."""
+        nodes, c, _, _ = self.moves[j]
+        out = np.zeros_like(self.nodes0)
+        out[nodes, c] = self.size
+        return out
+
     def jacobian(self, s: np.ndarray) -> sp.csr_matrix:
-        """dl0/ds (M, n), sparse."""
+        """dl0/ds (M, n), sparse (the support offsets' columns empty)."""
         import scipy.sparse as sp
 
         e = np.flatnonzero(self.on)
         g = self.groups[e]
-        v = np.exp(s)[g]
+        v = np.exp(s[: self.n_rest])[g]
         if self.kind == "prestress":
             ea, length = self.EA[e], self.length[e]
             d = -length / ea / (1.0 + v / ea) ** 2 * v  # dl0/dT T
@@ -82,12 +115,34 @@ class Variables:
         return sp.csr_matrix((d, (e, g)), shape=(len(self.groups), self.n))
 
     def values(self, s: np.ndarray) -> np.ndarray:
-        """The variables themselves: the factors, or the prestresses [N]."""
-        return np.exp(s)
+        """The variables themselves: the factors, or the prestresses [N], then the
+        supports' offsets [m]."""
+        return np.concatenate([np.exp(s[: self.n_rest]), self.size * s[self.n_rest :]])
 
     def at_bound(self, s: np.ndarray) -> int:
         lo, hi = self.bounds
         return int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+
+
+def _moves(scene, moves: tuple, prefix: str) -> list:
+    """(nodes, axis, name, (low, high)) of each support offset of [[formfind.support]]:
+    its nodes must be fixed (ConfigError naming the key otherwise)."""
+    from catenet.formfind.goals import _node_set
+
+    out = []
+    for k, m in enumerate(moves):
+        path = f"{prefix}support[{k}].node"
+        nodes = _node_set(path, m.node, scene)
+        free = nodes[~scene.net.fixed[nodes]]
+        if free.size:
+            raise ConfigError(
+                f"{path} = {m.node!r}: node {int(free[0])} is free: a support the search "
+                "moves is a fixed node (free nodes move with the equilibrium)"
+            )
+        for c in m.axes:
+            axis = "xyz"[c]
+            out.append((nodes, c, f"support {m.node!r} d{axis}", getattr(m, f"d{axis}")))
+    return out
 
 
 def _prestressed(scene, prefix: str) -> tuple[np.ndarray, np.ndarray, list[str]]:

@@ -63,10 +63,13 @@ def equilibria(data: dict, seed: int):
     scene = build(case)
     settings = Settings.of(case.solver)
     goals = resolve_goals(case.targets, scene, 30.0, 1e-30)
-    variables = Variables(scene, case.formfind.vary or "cables", (None, None))
+    variables = Variables(
+        scene, case.formfind.vary or "cables", (None, None), moves=case.formfind.supports
+    )
     eq = _Equilibria(scene, settings, variables)
     rng = np.random.default_rng(seed)
-    scale = 0.02 if variables.kind == "prestress" else 1e-4  # (the strut: 1e-4 is 2 MN)
+    scale = np.full(variables.n, 0.02 if variables.kind == "prestress" else 1e-4)  # (strut: 2 MN)
+    scale[variables.n_rest :] = 1e-4  # (the supports' offsets over the size: 3 mm)
     return eq, goals, variables.start + scale * rng.standard_normal(variables.n)
 
 
@@ -80,13 +83,25 @@ TARGETS = [
 ]
 
 
-@pytest.mark.parametrize("vary", ["prestress", "cables", "edges"])
-def test_the_elastic_adjoint_jacobian_of_every_target_is_the_finite_differences_one(vary):
+MOVES = [  # the windward anchor (a reaction target's support too), every anchor as one
+    {"node": 2, "dx": [-3.0, 3.0], "dz": [-1.0, 1.0]},
+    {"node": "anchors", "dy": [-2.0, 2.0]},
+]
+
+
+@pytest.mark.parametrize(
+    "vary, moves",
+    [("prestress", False), ("cables", False), ("edges", False), ("prestress", True),
+     ("supports", True)],
+)  # fmt: skip
+def test_the_elastic_adjoint_jacobian_of_every_target_is_the_finite_differences_one(vary, moves):
     """dr/ds of positions, tensions (a value and a range), the guys' lengths and reactions
     (a vector, one component) by solves with the tangent stiffness, against central
     differences of the equilibria, for the guys' prestress, a rest-length factor per cable
-    and per edge."""
-    eq, goals, s = equilibria(mast(*TARGETS, vary=vary), seed=1)
+    and per edge, and the anchors' positions (with the prestress, and alone: the
+    reactions at a support that moves, the guys' tensions and lengths as it does)."""
+    extra = {"support": MOVES} if moves else {}
+    eq, goals, s = equilibria(mast(*TARGETS, vary=vary, **extra), seed=1)
 
     def residual(s):
         return goals.w * goals.miss(eq.achieved(s, goals))
@@ -231,6 +246,22 @@ def test_bounds_hold_the_prestress_and_the_rest_length_factors():
             {"vary": "prestress", "rest_length_factor_max": 2.0},
             "formfind.rest_length_factor_max = 2.0: bounds rest-length factors",
         ),
+        ({"node": "top", "x": 0.0}, {"vary": "supports"}, "needs [[formfind.support]] tables"),
+        (
+            {"node": "top", "x": 0.0},
+            {"support": [{"node": "top", "dx": [-1.0, 1.0]}]},
+            "formfind.support[0].node = 'top': node 1 is free",
+        ),
+        (
+            {"node": "top", "x": 0.0},
+            {"support": [{"node": 2}]},
+            "formfind.support[0]: needs dx, dy or dz",
+        ),
+        (
+            {"node": "top", "x": 0.0},
+            {"support": [{"node": 2, "dz": [1.0, -1.0]}]},
+            "formfind.support[0].dz = [1.0, -1.0]: must be [low, high] with low < high",
+        ),
     ],
 )
 def test_bad_elastic_targets_exit_2_with_one_message(tmp_path, target, extra, message):
@@ -238,6 +269,45 @@ def test_bad_elastic_targets_exit_2_with_one_message(tmp_path, target, extra, me
     assert r.exit_code == 2, r.output
     assert message in r.output, r.output
     assert "Traceback" not in r.output and not out.exists()
+
+
+def test_supports_move_in_the_elastic_method_only(tmp_path):
+    data = mast({"node": "top", "x": 0.0}, support=[{"node": 2, "dx": [-1.0, 1.0]}])
+    data["formfind"]["method"] = "linear"
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2 and "formfind.support = " in r.output
+    assert "only with method = 'elastic'" in r.output
+
+
+def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tmp_path):
+    """The stay of 100 m rest length (vary = "supports": its rest lengths kept), its far
+    anchor free to move along x: the span found is the exact discrete elastic chain's
+    whose sag is 2 m, to 1e-9 of it; the summary names the offset, the result file
+    holds it, and `catenet run` on the case written keeps the sag."""
+    import h5py
+    from scipy.optimize import brentq
+
+    from catenet.validate.analytic import discrete_catenary
+
+    data = stay({"node": "midpoint", "z": -2.0}, vary="supports")
+    data["formfind"]["support"] = [{"node": "end", "dx": [-5.0, 5.0]}]
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    assert "moved        support 'end' dx: -" in r.output and "met)" in r.output
+    span = brentq(
+        lambda L: discrete_catenary(100.0, 1e8, W, L, 20).sag - 2.0, 99.0, 99.999, xtol=1e-14
+    )
+    with h5py.File(out) as h5:
+        g = h5["result/targets"].attrs
+        assert list(g["names"]) == ["support 'end' dx"]
+        assert g["found"][0] == pytest.approx(span - 100.0, rel=1e-9)
+        assert h5["result/x"][20, 0] == pytest.approx(span, rel=1e-12)
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][10, 2] + 2.0) <= 1e-9 * 100.0
 
 
 def test_prestress_belongs_to_the_elastic_method(tmp_path):
