@@ -173,8 +173,15 @@ def header_lines(found) -> list[str]:
     if found.method == "elastic":
         what = "prestresses" if d.extra.get("kind") == "prestress" else "rest-length factors"
     by = "edge" if d.vary == "edges" else "cable"
-    lines = [f"Targets ({d.message}; {d.variables} {what} by {by}):"]
+    moved = int(d.extra.get("moved", 0))
+    varied = [f"{d.variables - moved} {what} by {by}"] if d.variables > moved else []
+    if moved:
+        varied.append(f"{moved} support offsets")
+    lines = [f"Targets ({d.message}; {' and '.join(varied)}):"]
     lines += [f"  target[{r.k}] {r.line()}" for r in rows(d)]
+    if moved:
+        names, values = d.extra["names"][-moved:], d.extra["values"][-moved:]
+        lines += [f"  moved {n}: {float(v):+.9g} m" for n, v in zip(names, values, strict=True)]
     return lines
 
 

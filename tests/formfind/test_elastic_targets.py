@@ -302,6 +302,8 @@ def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tm
         assert list(g["names"]) == ["support 'end' dx"]
         assert g["found"][0] == pytest.approx(span - 100.0, rel=1e-9)
         assert h5["result/x"][20, 0] == pytest.approx(span, rel=1e-12)
+    header = out.with_suffix(".toml").read_text().split("\n\n")[0]
+    assert "(met; 1 support offsets):" in header and "#   moved support 'end' dx: -" in header
     run = CliRunner().invoke(
         main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
     )
