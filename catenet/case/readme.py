@@ -86,8 +86,8 @@ def keys_table() -> str:
     rows += _rows("formfind", declared(FormfindConfig))  # catenet formfind only
     rows.append(
         "| `[[target]]` | an array of tables | none | catenet formfind: a node's position, "
-        "nodes on a surface, a cable's tension or (elastic) a support's reaction to reach by "
-        "the force densities, rest lengths or prestress |"
+        "nodes on a surface, a cable's tension or length, or a support's reaction to reach "
+        "by the force densities, rest lengths, prestress or supports' positions |"
     )
     rows += _rows("target[k]", declared(TargetConfig))
     for name, obstacle in OBSTACLES.items():

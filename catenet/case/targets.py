@@ -127,7 +127,10 @@ class TargetConfig(Declared):
         doc="the node (index, name or node set) to place; with surface, none: every free node",
     )
     cable: str | None = text(
-        None, nonempty=True, write="given", doc='the cable (name or pattern "guy*") to tension'
+        None,
+        nonempty=True,
+        write="given",
+        doc='the cable (name or pattern "guy*") whose tension or length is asked',
     )
     x: Any = _coord("x")
     y: Any = _coord("y")

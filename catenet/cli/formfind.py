@@ -84,27 +84,40 @@ def _unconverged(written) -> str:
 
     f = written.found
     d = f.design
-    if d is None or d.all_met:
-        return ""
-    if d.message == RAN_AWAY:
-        why = f"the force densities ran away (beyond {RUNAWAY:.0e} times their start)"
-    elif d.message == "formfind.max_iter reached":
-        why = (
-            "the target search did not converge within formfind.max_iter = "
-            f"{written.scene.case.formfind.max_iter} iterations"
+    if d is not None and d.extra.get("implausible"):  # (met or not: no cable's state)
+        return (
+            f"{d.extra['implausible']} (its last iterate written): check the targets, or "
+            "bound the rest lengths (formfind.rest_length_factor_min / _max)"
         )
-    else:
+    if d is None or d.all_met:
         return ""
     bounds = (
         "formfind.rest_length_factor_min / _max, or prestress_min / _max"
         if f.method == "elastic"
         else "formfind.force_density_min / _max"
     )
+    if d.extra.get("moved"):
+        bounds += ", or the ranges of [[formfind.support]]"
+    if d.message == RAN_AWAY:
+        why = f"the force densities ran away (beyond {RUNAWAY:.0e} times their start)"
+        more = ""
+    elif d.message == "formfind.max_iter reached":
+        why = (
+            "the target search did not converge within formfind.max_iter = "
+            f"{written.scene.case.formfind.max_iter} iterations"
+        )
+        more = (
+            "a larger formfind.max_iter where the misses were still falling (targets that "
+            "two variables move alike, a rest length and an anchor's position for a sag "
+            "and a pull, converge slowly); "
+        )
+    else:
+        return ""
     return (
         f"{why} (its last iterate written, its targets NOT met: tensions up to "
-        f"{float(f.force.max()):.3g} N): a target that only ever larger or smaller forces "
-        "approach (a node asked to lie where the loads cannot hold it) has no optimum; "
-        f"check the targets, or bound the search ({bounds})"
+        f"{float(f.force.max()):.3g} N): {more}a target that only ever larger or smaller "
+        "forces approach (a node asked to lie where the loads cannot hold it) has no "
+        f"optimum; check the targets, or bound the search ({bounds})"
     )
 
 
@@ -182,17 +195,17 @@ def _targets(f) -> list[str]:
     d = f.design
     what = "edge" if d.vary == "edges" else "cable"
     bound = f", {d.at_bound} at a bound" if d.at_bound else ""
+    moved = d.extra.get("moved", 0)  # the supports' offsets: the last of the variables
     if f.method == "elastic" and d.extra.get("kind") == "prestress":
-        t = d.extra["values"]
+        t = d.extra["values"][: len(d.extra["values"]) - moved]
         design = (
-            f"{d.variables} prestresses (one per cable): {float(t.min()):.9g} .. "
+            f"{d.variables - moved} prestresses (one per cable): {float(t.min()):.9g} .. "
             f"{float(t.max()):.9g} N{bound}"
         )
     elif f.method == "elastic" and d.vary == "supports":
         design = f"{d.variables} support offsets{bound}"
     elif f.method == "elastic":
         rest = f.net.rest_length
-        moved = d.extra.get("moved", 0)
         design = (
             f"{d.variables - moved} rest-length factors (one per {what}): rest lengths "
             f"{float(rest.min()):.9g} .. {float(rest.max()):.9g} m, "
@@ -204,7 +217,6 @@ def _targets(f) -> list[str]:
             f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m{bound}"
         )
     out = [f"{'design':<12} {design}"]
-    moved = d.extra.get("moved", 0)  # the supports moved: the last of the variables
     if moved:
         names, values = d.extra["names"][-moved:], d.extra["values"][-moved:]
         for name, value in zip(names, values, strict=True):

@@ -119,8 +119,8 @@ class _Equilibria:
 
 def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, rhs, direct) -> None:
     """Fills the support offsets' columns of ``rhs`` (dR_f/ds: the free nodes' residual
-    as a support moves, K_fs dx_s) and ``direct`` (dr/ds at fixed free nodes: tensions,
-    lengths and reactions that the support's own position enters)."""
+    as a support moves, K_fs dx_s) and ``direct`` (dr/ds with the free nodes held: the
+    tensions, lengths and reactions that the support's own position enters)."""
     every = np.arange(net.n_nodes)  # (every node a column: the supports' too)
     d_all, _ = goals.partials(x, n / _lengths(net, x), a, every, net, dn=(dn_dl, dn_dl0))
     if goals.reacts.any():
@@ -261,8 +261,9 @@ def formfind_elastic(
         )
     if moves and scene.terms:
         raise ConfigError(
-            f"{prefix}support = {moves[0].node!r}: a support the search moves takes a net of "
-            "cables under loads and gravity only (this case has obstacles, rods or springs)"
+            f"{prefix}support[0].node = {moves[0].node!r}: a support the search moves takes a "
+            "net of cables under loads and gravity only (this case has obstacles, rods or "
+            "springs)"
         )
     settings = dataclasses.replace(Settings.of(scene.case.solver), method="static", steps=1)
     size = float(np.linalg.norm(np.ptp(scene.net.nodes, axis=0))) or 1.0
@@ -326,6 +327,30 @@ def _search(eq: _Equilibria, goals, max_iter: int):
     return ended.s, COMPROMISE, gradients[0]
 
 
+#: Strains beyond this many times their law's range are no cable's (as `catenet run`
+#: judges a state: ``catenet.run.advice.implausible``)
+IMPLAUSIBLE = 10.0
+
+
+def _implausible(net, x: np.ndarray) -> str:
+    """Why the equilibrium found is no cable's: an edge strained beyond IMPLAUSIBLE times
+    its law's range (a cable's length asked below its chord: the rest lengths shrink until
+    the linear law stretches them to it); "" where every strain is plausible."""
+    from catenet.model import measures
+
+    eps = measures.strain(net, x)
+    limit = net.law.max_strain()
+    worst = int(np.argmax(eps / limit))
+    if not eps[worst] > IMPLAUSIBLE * limit[worst]:
+        return ""
+    return (
+        f"the rest lengths found strain edge {worst} by {float(eps[worst]):.3g}, beyond "
+        f"{IMPLAUSIBLE:g} times its law's range ({float(limit[worst]):.3g}): no cable "
+        "reaches that state (a length asked below its chord, or a sag or a pull that only "
+        "such a stretch gives)"
+    )
+
+
 def _lengths(net, x: np.ndarray) -> np.ndarray:
     return np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
 
@@ -358,6 +383,7 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
         at_bound=v.at_bound(s),
     )
     d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind, moved=len(v.moves))
+    d.extra["implausible"] = _implausible(net, x)
     return FormFound(
         net=net,
         x=x,

@@ -38,7 +38,7 @@ class Variables:
         from catenet.formfind.design import _groups
 
         net = scene.net
-        self.kind = "prestress" if vary == "prestress" else "factor"
+        self.kind = {"prestress": "prestress", "supports": "offset"}.get(vary, "factor")
         self.base = net.rest_length.copy()
         self.names: list[str] = []
         if vary == "supports":  # (the rest lengths kept)
@@ -126,10 +126,12 @@ class Variables:
 
 def _moves(scene, moves: tuple, prefix: str) -> list:
     """(nodes, axis, name, (low, high)) of each support offset of [[formfind.support]]:
-    its nodes must be fixed (ConfigError naming the key otherwise)."""
+    its nodes must be fixed, each moved along an axis by one entry at most (ConfigError
+    naming the key otherwise)."""
     from catenet.formfind.goals import _node_set
 
     out = []
+    seen: dict[tuple[int, int], int] = {}  # (node, axis): the entry that moves it
     for k, m in enumerate(moves):
         path = f"{prefix}support[{k}].node"
         nodes = _node_set(path, m.node, scene)
@@ -139,6 +141,15 @@ def _moves(scene, moves: tuple, prefix: str) -> list:
                 f"{path} = {m.node!r}: node {int(free[0])} is free: a support the search "
                 "moves is a fixed node (free nodes move with the equilibrium)"
             )
+        for c in m.axes:
+            for i in nodes.tolist():
+                if (i, c) in seen:
+                    raise ConfigError(
+                        f"{path} = {m.node!r}: node {i} moves along {'xyz'[c]} in "
+                        f"{prefix}support[{seen[i, c]}] too: each support's offset along an "
+                        "axis is one entry's"
+                    )
+                seen[i, c] = k
         for c in m.axes:
             axis = "xyz"[c]
             out.append((nodes, c, f"support {m.node!r} d{axis}", getattr(m, f"d{axis}")))

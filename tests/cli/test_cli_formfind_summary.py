@@ -72,6 +72,7 @@ def test_a_target_no_force_density_reaches_fails_with_its_last_iterate_written(t
         assert res.exit_code == 1, res.output
         assert res.stderr.startswith("catenet: error: ") and why in res.stderr
         assert "formfind.force_density_min / _max" in res.stderr
+        assert ("a larger formfind.max_iter" in res.stderr) is (max_iter == 5)
         assert "compromise" not in res.stderr  # the warning of a stationary compromise
         assert (tmp_path / "c.h5").is_file() and (tmp_path / "c.toml").is_file()
         assert ("NOT met" in res.stdout) is not bool(quiet)

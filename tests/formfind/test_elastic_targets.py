@@ -262,6 +262,11 @@ def test_bounds_hold_the_prestress_and_the_rest_length_factors():
             {"support": [{"node": 2, "dz": [1.0, -1.0]}]},
             "formfind.support[0].dz = [1.0, -1.0]: must be [low, high] with low < high",
         ),
+        (
+            {"node": "top", "x": 0.0},
+            {"support": [{"node": "anchors", "dz": [-1, 1]}, {"node": 3, "dz": [-1, 1]}]},
+            "formfind.support[1].node = 3: node 3 moves along z in formfind.support[0] too",
+        ),
     ],
 )
 def test_bad_elastic_targets_exit_2_with_one_message(tmp_path, target, extra, message):
@@ -299,7 +304,7 @@ def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tm
     )
     with h5py.File(out) as h5:
         g = h5["result/targets"].attrs
-        assert list(g["names"]) == ["support 'end' dx"]
+        assert list(g["names"]) == ["support 'end' dx"] and g["found_kind"] == "offset"
         assert g["found"][0] == pytest.approx(span - 100.0, rel=1e-9)
         assert h5["result/x"][20, 0] == pytest.approx(span, rel=1e-12)
     header = out.with_suffix(".toml").read_text().split("\n\n")[0]
@@ -310,6 +315,42 @@ def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tm
     assert run.exit_code == 0, run.output
     with h5py.File(tmp_path / "run.h5") as h5:
         assert abs(h5["result/x"][10, 2] + 2.0) <= 1e-9 * 100.0
+
+
+def test_the_guys_prestress_and_an_anchors_height_are_reported_apart(tmp_path):
+    """The mast's four guys' prestress and its windward anchor's height found together:
+    the summary counts four prestresses in N (the offset in m was counted as a fifth)
+    and names the anchor's offset on its own line."""
+    data = mast(
+        {"node": "top", "x": 0.0},
+        {"support": "foot", "reaction_z": 9.0e4},
+        vary="prestress",
+        support=[{"node": 2, "dz": [-2.0, 2.0]}],
+    )
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.output.splitlines() if x.startswith("design"))
+    low = float(line.split(": ")[1].split(" .. ")[0])
+    assert "4 prestresses (one per cable): " in line and low > 1e3, line
+    assert "moved        support 2 dz: " in r.output
+
+
+def test_a_length_below_its_chord_is_no_compromise(tmp_path):
+    """The stay asked 99 m long across its 100 m span: the rest lengths shrink until the
+    linear law stretches them to it (strains far beyond its range, which `catenet run`
+    then refuses); formfind says so and exits 1 (it exited 0, a "compromise")."""
+    data = stay({"cable": "*", "length": 99.0})
+    data["geometry"] = {
+        "kind": "graph",
+        "nodes": [[0, 0, 0], [100, 0, 0]],
+        "fixed": [0, 1],
+        "edge_length": 5.0,
+        "cable": [{"name": "stay", "nodes": [0, 1]}],
+    }
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 1, r.output
+    assert "beyond 10 times its law's range" in r.output and "below its chord" in r.output
+    assert out.exists()  # (its last iterate written)
 
 
 def test_prestress_belongs_to_the_elastic_method(tmp_path):
