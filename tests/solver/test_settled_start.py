@@ -114,12 +114,14 @@ def _top(out) -> np.ndarray:
 
 @pytest.mark.parametrize("shift", [1e-4, 1e-3])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_a_guyed_mast_moved_off_its_equilibrium_is_no_mechanism(tmp_path, shift, seed):
-    """From every start the run ends stable at the equilibrium of the mast given on its
-    chords (its top to 1e-6 m), exit 0: no mechanism, no collapse."""
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_guyed_mast_moved_off_its_equilibrium_is_no_mechanism(tmp_path, shift, seed, threads):
+    """From every start, on one thread and two, the run ends stable at the equilibrium of
+    the mast given on its chords (its top to 1e-6 m), exit 0: no mechanism, no collapse."""
     ref, ref_out = _run(tmp_path, _mast(), "ref")
     assert ref.exit_code == 0, ref.output
-    done, out = _run(tmp_path, _mast(shift, seed), "moved")
+    text = _mast(shift, seed) + f"\n[solver]\nthreads = {threads}\n"
+    done, out = _run(tmp_path, text, "moved")
     assert done.exit_code == 0, done.output
     assert "mechanism" not in done.output and "collapse" not in done.output
     with h5py.File(out, "r") as f:
