@@ -37,6 +37,19 @@ def stay(*targets, **formfind) -> dict:
     }
 
 
+def named_stay(*targets, **formfind) -> dict:
+    """The stay as a graph of one cable named "stay" (a cable target names it), 5 m edges."""
+    data = stay(*targets, **formfind)
+    data["geometry"] = {
+        "kind": "graph",
+        "nodes": [[0, 0, 0], [100, 0, 0]],
+        "fixed": [0, 1],
+        "edge_length": 5.0,
+        "cable": [{"name": "stay", "nodes": [0, 1]}],
+    }
+    return data
+
+
 def mast(*targets, **formfind) -> dict:
     """configs/structures/guyed_mast.toml under its own weight too, form-found."""
     data = tomllib.loads(MAST.read_text())
@@ -339,14 +352,7 @@ def test_a_length_below_its_chord_is_no_compromise(tmp_path):
     """The stay asked 99 m long across its 100 m span: the rest lengths shrink until the
     linear law stretches them to it (strains far beyond its range, which `catenet run`
     then refuses); formfind says so and exits 1 (it exited 0, a "compromise")."""
-    data = stay({"cable": "*", "length": 99.0})
-    data["geometry"] = {
-        "kind": "graph",
-        "nodes": [[0, 0, 0], [100, 0, 0]],
-        "fixed": [0, 1],
-        "edge_length": 5.0,
-        "cable": [{"name": "stay", "nodes": [0, 1]}],
-    }
+    data = named_stay({"cable": "*", "length": 99.0})
     r, out = invoke(tmp_path, data)
     assert r.exit_code == 1, r.output
     assert "beyond 10 times its law's range" in r.output and "below its chord" in r.output
@@ -396,14 +402,7 @@ def test_a_stay_whose_length_is_given_has_the_elastic_catenary_rest_length(tmp_p
         c = discrete_catenary(L0, 1e8, W, 100.0, 20)
         return float(np.sum(np.hypot(np.diff(c.x), np.diff(c.z))))
 
-    data = stay({"cable": "*", "length": 100.2})
-    data["geometry"] = {
-        "kind": "graph",
-        "nodes": [[0, 0, 0], [100, 0, 0]],
-        "fixed": [0, 1],
-        "edge_length": 5.0,
-        "cable": [{"name": "stay", "nodes": [0, 1]}],
-    }
+    data = named_stay({"cable": "*", "length": 100.2})
     r, out = invoke(tmp_path, data)
     assert r.exit_code == 0, r.output
     assert "cable '*' length: 100.2 m (target 100.2 m, miss" in r.output and "met)" in r.output

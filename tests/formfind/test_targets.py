@@ -21,6 +21,7 @@ from catenet.case import build, dumps_toml, parse_case
 from catenet.cli import main
 from catenet.errors import ConfigError
 from catenet.formfind.case import formfind_scene
+from tests.cli.test_cli_formfind_summary import CHAIN
 
 SPIDER = CONFIGS / "formfind" / "spider.toml"
 
@@ -477,24 +478,6 @@ def test_a_chain_whose_length_is_given_has_the_hand_force_density(tmp_path):
         assert float(t["achieved"][0]) == pytest.approx(10.5, rel=1e-9)
 
 
-CHAIN_LENGTH = """
-[geometry]
-kind = "graph"
-nodes = [[0, 0, 0], [5, 0, 0], [10, 0, 0]]
-fixed = [0, 2]
-edge_length = 1.0
-sets = { middle = [1] }
-[[geometry.cable]]
-name = "chain"
-nodes = [0, 1, 2]
-[material]
-EA = 1.0e6
-[load]
-point = [{ node = "middle", force = [0, 0, -40.0] }]
-[formfind]
-force_density = 100.0
-vary = "cables"
-[[target]]
-cable = "chain"
-length = 10.5
-"""
+CHAIN_LENGTH = CHAIN.replace("force_density = 100.0", 'force_density = 100.0\nvary = "cables"') + (
+    '\n[[target]]\ncable = "chain"\nlength = 10.5\n'
+)  # (the summary's chain of tests/cli, one force density, its length asked)
