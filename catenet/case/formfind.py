@@ -104,7 +104,9 @@ def _offset(axis: str) -> Any:
         None,
         write="given",
         unit="m",
-        doc=f"its offset along {axis} from where it is given, a design variable in the range given",
+        doc=(
+            f"its offset along {axis} from where it is given, a design variable in the range given"
+        ),
     )
 
 
@@ -202,8 +204,8 @@ class FormfindConfig(Declared):
     supports: tuple = tables(
         SupportMoveConfig,
         name="support",
-        doc="elastic: supports the search moves ([[formfind.support]]: node, dx, dy, dz "
-        'ranges), besides the rest lengths or prestress (vary = "supports": alone)',
+        doc="elastic: supports the search moves (node, and dx, dy, dz ranges), besides the "
+        'rest lengths or prestress (vary = "supports": alone)',
     )
 
 
