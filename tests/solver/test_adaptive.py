@@ -45,11 +45,15 @@ def spring(integrator: str, tolerance: float, **keys) -> tuple[float, int, list[
     return abs(r.x[1, 0] - (1.02 + 0.01 * math.cos(20.0))), r.steps, list(np.diff(times))
 
 
-@pytest.mark.parametrize("integrator, order", [("bdf2", 2), ("implicit_euler", 1)])
-def test_the_error_falls_with_the_tolerance_at_the_schemes_order(integrator, order):
+@pytest.mark.parametrize(
+    "integrator, order, loosest", [("bdf2", 2, 1e-3), ("implicit_euler", 1, 1e-2)]
+)
+def test_the_error_falls_with_the_tolerance_at_the_schemes_order(integrator, order, loosest):
     """Per tenfold tighter tolerance the steps grow about 10^(1/(p+1)) times (2.2 for
-    bdf2, 3.2 for implicit Euler) and the error at the end falls."""
-    runs = [spring(integrator, tol) for tol in (1e-3, 1e-4, 1e-5)]
+    bdf2, 3.2 for implicit Euler) and the error at the end falls. (Implicit Euler from
+    1e-2: at 1e-5 it took 58 526 steps and a tenth of the suite's time, for the same
+    ratios as at 1e-2 to 1e-4: 6302 / 1949 and 19 366 / 6302 steps.)"""
+    runs = [spring(integrator, tol) for tol in (loosest, loosest / 10, loosest / 100)]
     errors = [e for e, _, _ in runs]
     steps = [n for _, n, _ in runs]
     expected = 10 ** (1 / (order + 1))
