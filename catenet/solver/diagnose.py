@@ -171,18 +171,16 @@ def unpinned_parts(net: Net) -> np.ndarray:
     node and no spring holds: rollers and sliders at most, which leave the part's
     translations and turns in their planes or along their lines free (a ring floating on
     a table)."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    n = net.n_nodes
-    e = net.edges
-    graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
     pinned = net.fixed.copy()
     if net.springs is not None:
         pinned[net.springs.held_nodes] = True
+    return _unanchored(net.components(), pinned)
+
+
+def _unanchored(label: np.ndarray, anchors: np.ndarray) -> np.ndarray:
+    """(N,) bool: the nodes of the parts (``label`` per node) that hold no anchor."""
     anchored = np.zeros(label.max() + 1, bool)
-    anchored[label[pinned]] = True
+    anchored[label[anchors]] = True
     out: np.ndarray = ~anchored[label]
     return out
 
@@ -192,18 +190,12 @@ def floating_parts(net: Net, tension: np.ndarray, x: np.ndarray, held: np.ndarra
     supports (a rigid-body motion costs nothing). Taut: an edge in tension, at exactly
     zero strain (its axial stiffness counts) or bilateral; ``held`` nodes (another term
     holds them) count as supports."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
+    from catenet.model.net import components
 
     length = np.linalg.norm(x[net.edges[:, 1]] - x[net.edges[:, 0]], axis=1)
     taut = (tension > 0) | (length >= net.rest_length) | ~net.law.tension_only
-    e = net.edges[taut]
-    n = net.n_nodes
-    graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
-    anchored = np.zeros(label.max() + 1, bool)
-    anchored[label[net.supported | held]] = True
-    floating: np.ndarray = ~anchored[label] & ~net.fixed
+    label = components(net.n_nodes, net.edges[taut])
+    floating: np.ndarray = _unanchored(label, net.supported | held) & ~net.fixed
     return floating
 
 
