@@ -327,25 +327,20 @@ def _search(eq: _Equilibria, goals, max_iter: int):
     return ended.s, COMPROMISE, gradients[0]
 
 
-#: Strains beyond this many times their law's range are no cable's (as `catenet run`
-#: judges a state: ``catenet.run.advice.implausible``)
-IMPLAUSIBLE = 10.0
-
-
 def _implausible(net, x: np.ndarray) -> str:
-    """Why the equilibrium found is no cable's: an edge strained beyond IMPLAUSIBLE times
-    its law's range (a cable's length asked below its chord: the rest lengths shrink until
-    the linear law stretches them to it); "" where every strain is plausible."""
-    from catenet.model import measures
+    """Why the equilibrium found is no cable's, as `catenet run` judges a state: an edge
+    strained beyond IMPLAUSIBLE times its law's range (``catenet.model.measures``; a
+    cable's length asked below its chord: the rest lengths shrink until the linear law
+    stretches them to it); "" where every strain is plausible."""
+    from catenet.model.measures import IMPLAUSIBLE, implausible_edge, strain
 
-    eps = measures.strain(net, x)
-    limit = net.law.max_strain()
-    worst = int(np.argmax(eps / limit))
-    if not eps[worst] > IMPLAUSIBLE * limit[worst]:
+    worst = implausible_edge(net, x)
+    if worst < 0:
         return ""
+    eps, limit = strain(net, x)[worst], net.law.max_strain()[worst]
     return (
-        f"the rest lengths found strain edge {worst} by {float(eps[worst]):.3g}, beyond "
-        f"{IMPLAUSIBLE:g} times its law's range ({float(limit[worst]):.3g}): no cable "
+        f"the rest lengths found strain edge {worst} by {float(eps):.3g}, beyond "
+        f"{IMPLAUSIBLE:g} times its law's range ({float(limit):.3g}): no cable "
         "reaches that state (a length asked below its chord, or a sag or a pull that only "
         "such a stretch gives)"
     )

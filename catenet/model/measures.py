@@ -21,6 +21,19 @@ def strain(net: Net, x: np.ndarray) -> np.ndarray:
     return np.linalg.norm(e, axis=1) / net.rest_length - 1.0
 
 
+#: A strain beyond this many times its law's range is no cable's: a state that holds one
+#: (a unit slip, a length asked below its chord) is implausible
+IMPLAUSIBLE = 10.0
+
+
+def implausible_edge(net: Net, x: np.ndarray) -> int:
+    """The edge strained furthest beyond IMPLAUSIBLE times its law's range at x, relative
+    to that range; -1 where none is."""
+    ratio = strain(net, x) / net.law.max_strain()
+    worst = int(np.argmax(ratio)) if len(ratio) else -1
+    return worst if worst >= 0 and ratio[worst] > IMPLAUSIBLE else -1
+
+
 def tension(net: Net, x: np.ndarray, law=None) -> np.ndarray:
     """Axial force of every edge [N] under its law (0 when slack and tension-only)."""
     return edge_tension(x, net.edges, net.rest_length, net.EA, net.law if law is None else law)

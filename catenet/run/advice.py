@@ -359,16 +359,16 @@ def _power_of_1000(si: float, low: float, high: float, typical: float) -> int:
 
 def implausible(net, x: np.ndarray, size: float) -> tuple[str, bool]:
     """(message, extreme) for a state at ``x``: strains beyond the material law's range
-    or a displacement beyond the structure's size; ``extreme``: beyond 10x either, which
-    no cable structure survives (a unit slip, an unrestrained mechanism)."""
-    from catenet.model import measures
+    or a displacement beyond the structure's size; ``extreme``: beyond IMPLAUSIBLE times
+    either (``catenet.model.measures``), which no cable structure survives (a unit slip, an
+    unrestrained mechanism)."""
+    from catenet.model.measures import IMPLAUSIBLE, implausible_edge
 
     parts, extreme = [], False
     beyond = strain_beyond_law(net, x)
     if beyond:
         parts.append(beyond)
-        eps = measures.strain(net, x)
-        extreme = bool(np.any(eps > 10.0 * net.law.max_strain()))
+        extreme = implausible_edge(net, x) >= 0
     free = ~net.fixed
     if np.any(free):
         move = np.linalg.norm(x[free] - net.nodes[free], axis=1)
@@ -378,7 +378,7 @@ def implausible(net, x: np.ndarray, size: float) -> tuple[str, bool]:
             parts.append(
                 f"node {node} moves {worst:.4g} m, more than the structure's size {size:.4g} m"
             )
-            extreme = extreme or worst > 10.0 * size
+            extreme = extreme or worst > IMPLAUSIBLE * size
     return "; ".join(parts), extreme
 
 
