@@ -112,7 +112,7 @@ def _top(out) -> np.ndarray:
         return np.asarray(f["/result/x"][1])
 
 
-@pytest.mark.parametrize("shift", [1e-4, 1e-3])
+@pytest.mark.parametrize("shift", [1e-12, 1e-4, 1e-3])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("threads", [1, 2])
 def test_a_guyed_mast_moved_off_its_equilibrium_is_no_mechanism(tmp_path, shift, seed, threads):
