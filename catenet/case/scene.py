@@ -18,6 +18,7 @@ from catenet.case.guard import guard_material, guard_scales
 from catenet.case.keys import Checker, show
 from catenet.case.kinds.base import expand, with_prefix
 from catenet.case.kinds.cables import line_force
+from catenet.case.kinds.warn import warn_once
 from catenet.case.masses import point_masses
 from catenet.case.material import model_material
 from catenet.case.parse import Case
@@ -36,9 +37,10 @@ from catenet.case.shapes import check_motion
 from catenet.case.supports import with_partial_supports
 from catenet.errors import ConfigError
 from catenet.model import builders as geo
-from catenet.model.areas import area_load, with_chains
+from catenet.model.areas import area_load, beyond_outline, with_chains
 from catenet.model.histories import History, Sine
 from catenet.model.net import Loads, Net
+from catenet.model.units import relabel
 from catenet.scene.scene import Scene
 
 if TYPE_CHECKING:  # the strands' kernels load only for a case with self-contact
@@ -270,10 +272,36 @@ def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: in
         covered[[i for r in refs for i in expand(r, names, sets or {})]] = True
         covered = with_chains(covered, case.geometry.given_nodes(net), net.edges)
         path = f"load.area[{k}].nodes = {show(ar.nodes)}"
+    covered[net.n_net :] = False  # (the bodies' centres)
     try:
-        return area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction).force
+        load = area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction)
     except ConfigError as exc:
         raise ConfigError([f"{path}: {p}" for p in exc.problems]) from None
+    _warn_beyond(path, net, covered, load, case.units)
+    return load.force
+
+
+def _warn_beyond(path: str, net: Net, covered: np.ndarray, load: Any, units: str) -> None:
+    """Warns of covered nodes no edge joins outside the loaded outline: the pressure
+    between them and the net loads no node, and the resultant is less than the user
+    may have reckoned (``catenet.model.areas.beyond_outline``)."""
+    lonely, area = beyond_outline(net.nodes, net.edges, covered, load)
+    if not len(lonely):
+        return
+    listed = ", ".join(str(int(i)) for i in lonely[:6]) + (", ..." if len(lonely) > 6 else "")
+    share = 100.0 * area / (load.area + area)
+    warn_once(
+        relabel(
+            [
+                f"{path}: {len(lonely)} nodes that no edge joins (nodes {listed}) lie outside "
+                f"the outline the load covers: the pressure on the {area:.4g} m^2 between "
+                f"them and the net loads no node ({share:.3g} % of the {load.area + area:.4g} "
+                f"m^2 they enclose; {load.area:.4g} m^2 is loaded): join them by edges (a "
+                "border cable) if the net is to carry it"
+            ],
+            units,
+        )[0]
+    )
 
 
 def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:

@@ -362,3 +362,45 @@ def with_chains(covered: np.ndarray, given: int, edges: np.ndarray) -> np.ndarra
     out = covered.copy()
     out[made] |= touched[lab[made]] & ~open_[lab[made]]
     return out
+
+
+def beyond_outline(nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, load: AreaLoad):
+    """The covered nodes that no edge among the covered ones joins and that lie outside
+    the convex hull of the joined ones in the plane ``load`` was drawn in (an (K,) int
+    array), and the area [m^2] they add to that hull: pressure there loads no node (a
+    grid's corner where no cable ends). (empty, 0.0) where there are none."""
+    nodes = np.asarray(nodes, dtype=np.float64)
+    edges = np.asarray(edges, dtype=np.int64)
+    sub = edges[covered[edges[:, 0]] & covered[edges[:, 1]]]
+    joined = np.zeros(len(nodes), dtype=bool)
+    joined[sub.ravel()] = True
+    lonely = np.flatnonzero(covered & ~joined)
+    if not len(lonely) or not joined.any():
+        return lonely[:0], 0.0
+    n = load.normal
+    e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    basis = np.array([e1, np.cross(n, e1)])
+    inner = nodes[joined] @ basis.T
+    outer = nodes[lonely] @ basis.T
+    scale = float(np.linalg.norm(np.ptp(np.vstack([inner, outer]), axis=0)))
+    grown = _hull_area(np.vstack([inner, outer])) - _hull_area(inner)
+    if not grown > 1e-6 * scale**2:
+        return lonely[:0], 0.0
+    from scipy.spatial import Delaunay
+
+    try:
+        outside = Delaunay(inner).find_simplex(outer, tol=1e-9 * scale) < 0
+    except Exception:  # (the joined nodes on a line: every lonely node is outside)
+        outside = np.ones(len(lonely), dtype=bool)
+    return lonely[outside], float(grown)
+
+
+def _hull_area(points: np.ndarray) -> float:
+    """The area of the convex hull of ``points`` (K, 2); 0 where they span no area."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return float(ConvexHull(points).volume)
+    except (QhullError, ValueError):
+        return 0.0

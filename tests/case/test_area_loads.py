@@ -233,3 +233,50 @@ def test_bad_area_loads_and_regions_name_the_key(tmp_path, sets, area, message):
     data = with_area(hypar_roof(), **{"pressure": 1.0, **area})
     data["geometry"]["sets"].update(sets)
     assert message in run_bad(tmp_path, data)
+
+
+def _grid_without_corners(n: int = 5, h: float = 1.0) -> dict:
+    """A flat n x n grid whose cables run from border to border, its border nodes held:
+    the grid's four corner nodes are joined by no edge."""
+    at = [[i * h, j * h, 0.0] for j in range(n) for i in range(n)]
+    edges = [[j * n + i, j * n + i + 1] for j in range(1, n - 1) for i in range(n - 1)]
+    edges += [[j * n + i, (j + 1) * n + i] for i in range(1, n - 1) for j in range(n - 1)]
+    border = [j * n + i for j in range(n) for i in range(n) if i in (0, n - 1) or j in (0, n - 1)]
+    return {
+        "geometry": {"kind": "graph", "nodes": at, "edges": edges, "fixed": border},
+        "material": {"EA": 1e6, "prestress": 1000.0},
+    }
+
+
+@pytest.mark.parametrize("units, h, area", [("SI", 1.0, "2 m^2"), ("N-mm", 1000.0, "2e+06 mm^2")])
+def test_corner_nodes_no_edge_joins_are_said_to_take_no_load(caplog, units, h, area):
+    """A grid's corners where no cable ends lie outside the loaded outline: the run says
+    how much of the plan their outline encloses is loaded on no node."""
+    from catenet.case.kinds import warn
+
+    warn._WARNED.clear()
+    data = with_area(_grid_without_corners(h=h), pressure=1000.0 / h**2)
+    data["units"] = units
+    with caplog.at_level("WARNING", logger="catenet.case"):
+        f = force(data)
+    assert f[:, 2].sum() == pytest.approx(-14_000.0, rel=1e-12)  # 14 of the 16 m^2
+    text = " ".join(r.getMessage() for r in caplog.records)
+    assert "4 nodes that no edge joins (nodes 0, 4, 20, 24)" in text
+    assert f"the pressure on the {area} between them" in text and "(12.5 % of the" in text
+
+
+def test_joined_corners_and_a_part_of_the_net_give_no_such_warning(caplog):
+    from catenet.case.kinds import warn
+
+    warn._WARNED.clear()
+    grid = _grid_without_corners()
+    n = 5
+    grid["geometry"]["edges"] += [[0, 1], [0, n], [n - 2, n - 1], [n - 1, 2 * n - 1]]
+    grid["geometry"]["edges"] += [[20, 21], [15, 20], [23, 24], [19, 24]]
+    part = with_area(_grid_without_corners(), pressure=1000.0, nodes=[6, 7, 8, 11, 12, 13])
+    with caplog.at_level("WARNING", logger="catenet.case"):
+        whole = force(with_area(grid, pressure=1000.0))
+        force(part)
+        force(with_area(hypar_roof(half=6.0, rise=1.5, edge_length=0.6), pressure=800.0))
+    assert whole[:, 2].sum() == pytest.approx(-16_000.0, rel=1e-12)
+    assert "no edge joins" not in caplog.text
