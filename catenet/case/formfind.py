@@ -112,7 +112,7 @@ def _offset(axis: str) -> Any:
 
 @dataclass(frozen=True)
 class SupportMoveConfig(Declared):
-    """A support the elastic method's target search may move ([[formfind.support]]): a
+    """A support the target search may move ([[formfind.support]]): a
     fixed node (or a set of them, moved as one) and, per axis it may move along, the
     range of its offset from where it is given (one design variable per axis)."""
 
@@ -181,7 +181,7 @@ class FormfindConfig(Declared):
         doc="[[target]]: the design variables: a force density (elastic: a rest-length "
         "factor) per edge, or one per cable (and per own edge of a graph); elastic: "
         '"prestress", the prestress of each cable that has one; "supports": only the '
-        "offsets of [[formfind.support]]",
+        "offsets of [[formfind.support]] (the force densities or rest lengths kept)",
     )
     force_density_min: float | None = real(
         None, gt=0, write="given", unit="N/m", doc="[[target]]: the least force density"
@@ -204,8 +204,8 @@ class FormfindConfig(Declared):
     supports: tuple = tables(
         SupportMoveConfig,
         name="support",
-        doc="elastic: supports the search moves (node, and dx, dy, dz ranges), besides the "
-        'rest lengths or prestress (vary = "supports": alone)',
+        doc="[[target]]: supports the search moves (node, and dx, dy, dz ranges), besides "
+        'the force densities, rest lengths or prestress (vary = "supports": alone)',
     )
 
 
@@ -234,7 +234,7 @@ def parse_formfind(
             "remove formfind.method (or the targets)"
         )
     _bounds(ck, f, v, method)
-    _supports(ck, f, v, method)
+    _supports(ck, f, v, method, targets)
     if not targets:
         for k in ("vary", *(b for pair in BOUNDS.values() for b in pair)):
             if k in f:
@@ -259,16 +259,22 @@ def parse_formfind(
     return FormfindConfig(**v)
 
 
-def _supports(ck: Checker, f: dict, v: dict, method: Any) -> None:
-    """[[formfind.support]] only with the elastic method, each moving along some axis;
-    vary = "supports" only with them."""
+def _supports(ck: Checker, f: dict, v: dict, method: Any, targets: bool) -> None:
+    """[[formfind.support]] only in a target search (method "elastic", or "linear" with
+    [[target]]), each moving along some axis; vary = "supports" only with them."""
     moves = v["supports"]
     if moves is BAD or method is BAD:
         return
-    if moves and method != "elastic":
+    if moves and method not in ("elastic", "linear"):
         ck.add(
-            f"formfind.support = {show(f['support'])}: only with method = 'elastic' (the "
-            "force density method keeps its supports where they are given)"
+            f"formfind.support = {show(f['support'])}: only in a search for [[target]] "
+            f"(method = 'elastic' or 'linear'; this is {method!r})"
+        )
+    elif moves and method == "linear" and not targets:
+        ck.add(
+            f"formfind.support = {show(f['support'])}: the supports move to meet "
+            "[[target]] tables: add them (form finding alone keeps its supports where the "
+            "geometry puts them)"
         )
     for k, m in enumerate(moves):
         if not m.axes:
@@ -293,7 +299,7 @@ def _bounds(ck: Checker, f: dict, v: dict, method: Any) -> None:
             "formfind.vary = 'prestress': only with method = 'elastic' (the force density "
             "method varies the force densities)"
         )
-    varies = "force_density"
+    varies = "" if v["vary"] == "supports" else "force_density"
     if elastic:
         varies = {"prestress": "prestress", "supports": ""}.get(v["vary"], "rest_length_factor")
     for kind, pair in BOUNDS.items():

@@ -202,8 +202,8 @@ def _targets(f) -> list[str]:
             f"{d.variables - moved} prestresses (one per cable): {float(t.min()):.9g} .. "
             f"{float(t.max()):.9g} N{bound}"
         )
-    elif f.method == "elastic" and d.vary == "supports":
-        design = f"{d.variables} support offsets{bound}"
+    elif d.vary == "supports":
+        design = f"{d.variables} support offset{'s' if d.variables > 1 else ''}{bound}"
     elif f.method == "elastic":
         rest = f.net.rest_length
         design = (
@@ -213,7 +213,7 @@ def _targets(f) -> list[str]:
         )
     else:
         design = (
-            f"{d.variables} force densities (one per {what}): "
+            f"{d.variables - moved} force densities (one per {what}): "
             f"{float(f.q.min()):.6g} .. {float(f.q.max()):.6g} N/m{bound}"
         )
     out = [f"{'design':<12} {design}"]

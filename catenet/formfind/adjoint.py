@@ -17,7 +17,8 @@ is with the factors of D that the shape was just found with (each coordinate one
 back-substitution): without self-weight A is I_3 (x) D; with it, A y = w is the fixed
 point y = (I_3 (x) D)^-1 (w + G_x y), whose rate is that of the self-weight's own fixed
 point in finding the shape (``catenet.formfind.fdm``), so it converges where the shape
-did. Nothing is differenced and nothing more is factorised.
+did; where it converges slowly (``SLOW``), A is factorised once by SuperLU. Nothing is
+differenced.
 """
 
 from __future__ import annotations
@@ -37,6 +38,10 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 FIXED_POINT_ITER = 200  # the self-weight's share of an adjoint solve: iterations at most
+# A fixed point whose change falls by less than SLOW per iteration (after SLOW_AFTER of
+# them) needs more than 50 for round-off: the adjoint is then factorised by SuperLU (where
+# the weight dominates the force densities: the shape's own fixed point is slow there too).
+SLOW, SLOW_AFTER = 0.5, 3
 
 
 class Adjoint:
@@ -112,12 +117,16 @@ class Adjoint:
         if gx is None:
             return y
         scale = float(np.max(np.abs(y), initial=0.0))
-        for _ in range(FIXED_POINT_ITER):
+        last = np.inf
+        for k in range(FIXED_POINT_ITER):
             new = self._by_coordinate(w + (gx @ y).reshape(w.shape))
             change = float(np.max(np.abs(new - y), initial=0.0))
             y = new
             if change <= 1e-14 * max(scale, float(np.max(np.abs(y), initial=0.0)), 1e-300):
                 return y
+            if k >= SLOW_AFTER and change > SLOW * last:  # (the weight dominates: LU)
+                break
+            last = change
         return self._superlu(w, trans)
 
     def _superlu(self, w: np.ndarray, trans: bool) -> np.ndarray:

@@ -82,6 +82,7 @@ def formfind_scene(scene) -> FormFound:
             max_iter=cfg.max_iter,
             linear=scene.case.solver.linear,
             prefix=PREFIX,
+            moves=cfg.supports,
         )
     return formfind(
         scene,

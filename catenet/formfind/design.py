@@ -32,6 +32,7 @@ from catenet.formfind.adjoint import (
     jacobian_operator,
     new_steps,
 )
+from catenet.formfind.anchors import Anchors, Bordered, support_moves
 from catenet.formfind.goals import Goals
 from catenet.formfind.levenberg import levenberg
 
@@ -78,14 +79,20 @@ class Design:
 class _Search:
     """The residual and its Jacobian as functions of s, sharing one state per s."""
 
-    def __init__(self, shape, goals: Goals, groups: np.ndarray, base: np.ndarray):
+    def __init__(self, shape, goals: Goals, groups, base: np.ndarray, anchors=None):
         import scipy.sparse as sp
 
-        n_var = len(base)
-        self.base = base[groups]  # log q of each edge at s = 0
-        self.shape, self.goals = shape, goals
         m = shape.net.n_edges
-        self.p = sp.csr_matrix((np.ones(m), (np.arange(m), groups)), shape=(m, n_var))
+        self.shape, self.goals = shape, goals
+        if groups is None:  # (the force densities kept: the supports' offsets alone)
+            self.base = base
+            self.p = sp.csr_matrix((m, 0))
+        else:
+            self.base = base[groups]  # log q of each edge at s = 0
+            n_var = len(base)
+            self.p = sp.csr_matrix((np.ones(m), (np.arange(m), groups)), shape=(m, n_var))
+        self.nq = self.p.shape[1]
+        self.anchors = anchors or Anchors(shape.net, [], self.nq, shape.size)
         self.key: bytes | None = None
         self.now: tuple = (None, None, None, None)  # (q, x, load, lengths) of ``key``
         self.groups = groups
@@ -102,8 +109,8 @@ class _Search:
         key = s.tobytes()
         if key != self.key or self.shape.factored is not self.now[0]:
             self.key = None  # (also where a damped step refactorised D at another state)
-            q = np.exp(np.clip(self.base + self.p @ s, -700.0, 700.0))
-            x, load = self.shape(q)
+            q = np.exp(np.clip(self.base + self.p @ s[: self.nq], -700.0, 700.0))
+            x, load = self.shape(q, self.anchors.positions(s))
             u = x[self.shape.net.edges[:, 1]] - x[self.shape.net.edges[:, 0]]
             self.now = (q, x, load, np.linalg.norm(u, axis=1))
             self.key = key  # (the shape's factors are this state's)
@@ -152,30 +159,43 @@ class _Search:
         self.gradients += 1
         adj = Adjoint(self.shape, q, x)
         d_x, d_q = self.partials(x, q, a)
+        cols = self.anchors.columns(self, adj, x, q, a, d_x) if self.anchors.n else None
+        if not self.nq:
+            return cols
         dq_ds = sp.diags(q) @ self.p
         if min(d_x.shape[0], dq_ds.shape[1]) <= DENSE:
-            return jacobian_dense(adj, d_x, d_q, dq_ds)
+            j = jacobian_dense(adj, d_x, d_q, dq_ds)
+            return j if cols is None else np.hstack([j, cols])
         if isinstance(self.last, SparseJacobian):  # (its direct step's layout, if made)
             self.layout = self.last.layout or self.layout
         op = jacobian_operator(
             adj, d_x, d_q, dq_ds, self.groups, self.layout, self.steps, self.kept
         )
         self.last = op
-        return op
+        return op if cols is None else Bordered(op, cols)
 
 
-def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) -> Design:
-    """The force densities (one per group: ``groups`` (M,) the variable of each edge) that
-    reach ``goals`` from ``q0`` (M,), q within ``bounds`` (low, high; None: open), at
-    most ``max_iter`` evaluations; the state reached is ``Design.extra["state"]``."""
-    n_var = int(groups.max()) + 1
+def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str, moves=()) -> Design:
+    """The force densities (one per group: ``groups`` (M,) the variable of each edge;
+    None: q0 kept) and the offsets of the supports ``moves`` (``catenet.formfind.
+    anchors``) that reach ``goals`` from ``q0`` (M,), q within ``bounds`` (low, high;
+    None: open), at most ``max_iter`` evaluations; the state reached is
+    ``Design.extra["state"]``."""
     log_lo = -np.inf if bounds[0] is None else math.log(bounds[0])
     log_hi = np.inf if bounds[1] is None else math.log(bounds[1])
-    base = np.bincount(groups, np.log(q0), n_var) / np.bincount(groups, minlength=n_var)
-    base = np.clip(base, log_lo, log_hi)  # the start; s = log q - base
-    lo, hi = log_lo - base, log_hi - base
-    s = np.zeros(n_var)
-    search = _Search(shape, goals, groups, base)
+    if groups is None:
+        base, n_q = np.log(q0), 0
+    else:
+        n_q = int(groups.max()) + 1
+        base = np.bincount(groups, np.log(q0), n_q) / np.bincount(groups, minlength=n_q)
+        base = np.clip(base, log_lo, log_hi)  # the start; s = log q - base
+    anchors = Anchors(shape.net, list(moves), n_q, shape.size)
+    a_lo, a_hi, a_start = anchors.bounds()
+    lo = np.concatenate([np.full(n_q, log_lo) - base[:n_q], a_lo])
+    hi = np.concatenate([np.full(n_q, log_hi) - base[:n_q], a_hi])
+    s = np.concatenate([np.zeros(n_q), a_start])
+    n_var = len(s)
+    search = _Search(shape, goals, groups, base, anchors)
     q, x, load, a = search.state(s)
     outside = goals.outside(a)
     if outside is not None:
@@ -210,6 +230,13 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str) ->
         at_bound=at_bound,
     )
     out.extra["state"] = (q, x, load)
+    if anchors.n:  # the variables found: the force densities (N/m), then the offsets (m)
+        out.extra.update(
+            values=np.concatenate([np.exp(base[:n_q] + s[:n_q]), anchors.offsets(s)]),
+            names=[""] * n_q + [name for _, _, name, _ in anchors.moves],
+            kind="force_density" if n_q else "offset",
+            moved=anchors.n,
+        )
     if search.last is not None:  # how the damped steps went (benchmarks read it)
         lay = search.last.layout or search.layout
         out.extra["steps"] = {
@@ -260,11 +287,13 @@ def formfind_targets(
     max_iter=100,
     linear="auto",
     prefix="formfind.",
+    moves=(),
 ):
-    """The shape of a case's ``scene`` whose force densities reach ``targets`` (the
-    case's [[target]] tables): a FormFound with method "targets" and its ``design``.
-    ``q``: the start (one number, one per edge; None: ``_default_start``). ConfigError
-    for bad input and hard targets unmet."""
+    """The shape of a case's ``scene`` whose force densities (and the offsets of the
+    supports ``moves``: [[formfind.support]]) reach ``targets`` (the case's [[target]]
+    tables): a FormFound with method "targets" and its ``design``. ``q``: the start (one
+    number, one per edge; None: ``_default_start``); ``vary = "supports"`` keeps it.
+    ConfigError for bad input and hard targets unmet."""
     import time
 
     from catenet.formfind.fdm import FormFound, _Shape, _zero_lengths, per_edge
@@ -281,11 +310,12 @@ def formfind_targets(
     if not shape.pattern.n_free:
         raise ConfigError("target: every node is fixed: nothing to form find")
     goals = resolve_goals(targets, scene, shape.size, tol)
-    groups = _groups(scene, vary, prefix)
+    groups = None if vary == "supports" else _groups(scene, vary, prefix)
     q0 = per_edge(q, net.n_edges, q_name, required=False)
     if q0 is None:
         q0 = np.full(net.n_edges, _default_start(shape))
-    d = design(shape, goals, q0, groups, bounds, max_iter, vary)
+    moved = support_moves(scene, moves, prefix)
+    d = design(shape, goals, q0, groups, bounds, max_iter, vary, moved)
     q, x, load = d.extra.pop("state")
     if not d.all_met and float(np.max(np.abs(np.log(q / q0)))) > np.log(RUNAWAY):
         d.message = RAN_AWAY

@@ -241,10 +241,11 @@ class _Shape:
             return np.column_stack([solver.solve(np.ascontiguousarray(c)) for c in b.T])
         return out
 
-    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions (N, 3) and the loads (N, 3) at them, for force densities q."""
+    def __call__(self, q: np.ndarray, nodes=None) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (N, 3) and the loads (N, 3) at them, for force densities q, the
+        fixed nodes where ``nodes`` (N, 3) puts them (None: the net's)."""
         net, p = self.net, self.pattern
-        x = net.nodes.copy()
+        x = (net.nodes if nodes is None else nodes).copy()
         load = self.force.copy()
         if self.solver is None:
             return x, load

@@ -26,8 +26,10 @@ def reaction(net, x: np.ndarray, q: np.ndarray, load: np.ndarray) -> np.ndarray:
     return out
 
 
-def partials(goals, a, shape, x, q, index):
-    """(dr/dx_f, dr/dq) of the reaction rows of ``goals`` (the others 0), sparse."""
+def partials(goals, a, shape, x, q, index, own: bool = False):
+    """(dr/dx_f, dr/dq) of the reaction rows of ``goals`` (the others 0), sparse; with
+    ``own`` the columns of each support's own node too (where ``index`` gives it one: a
+    support that moves), dR_i/dx_i = q_e I + g (dl0/dL)/2 rho (-+n_e) per edge at it."""
     import scipy.sparse as sp
 
     from catenet.formfind.newton import weight_coefficients
@@ -50,14 +52,16 @@ def partials(goals, a, shape, x, q, index):
             rq.append(np.full(len(e), j))
             cq.append(e)
             vq.append(slope[j] * (sign * u[e, c] - g[c] * wc[e]))
-            f = index[net.edges[e, 1 - end]]
-            k = f >= 0
-            e, f = e[k], f[k]
-            for d in range(3):  # the other end is the first (sign +) or the second (-)
-                weight = g[c] * wa[e] * (-sign) * n[e, d]
-                rx.append(np.full(len(e), j))
-                cx.append(3 * f + d)
-                vx.append(slope[j] * (-q[e] * (c == d) - weight))
+            for other in (True, False) if own else (True,):
+                f = index[net.edges[e, 1 - end] if other else np.full(len(e), i)]
+                k = f >= 0
+                ek, f = e[k], f[k]
+                turn = 1.0 if other else -1.0  # (its own node moves u the other way)
+                for d in range(3):  # the other end is the first (sign +) or the second (-)
+                    weight = g[c] * wa[ek] * (-sign) * n[ek, d]
+                    rx.append(np.full(len(ek), j))
+                    cx.append(3 * f + d)
+                    vx.append(slope[j] * turn * (-q[ek] * (c == d) - weight))
     cat = np.concatenate
     n3 = 3 * int(np.count_nonzero(index >= 0))
     d_x = sp.csr_matrix((cat(vx), (cat(rx), cat(cx))), shape=(goals.rows, n3))

@@ -9,9 +9,10 @@ nodes, supports included, the edges or the cables it concerns), ``target`` (one 
 node, edge or cable; a range: ``low`` and ``high``), ``achieved`` (the same shape), ``miss`` (the
 largest |miss|, 0 within a range), ``weight``, ``hard`` and ``met`` (to formfind.tol);
 ``/result/targets`` itself: ``met`` (all), ``message``, ``variables``, ``vary``,
-``evaluations`` and ``gradients``; method "elastic" adds ``found`` (the variables found:
-rest-length factors or prestresses [N]), ``found_kind`` ("factor" or "prestress") and,
-where the cables are named, ``names``.
+``evaluations`` and ``gradients``; method "elastic", and the force density method where
+supports move, add ``found`` (the variables found: rest-length factors, prestresses [N]
+or force densities [N/m], then the supports' offsets [m]), ``found_kind`` ("factor",
+"prestress", "force_density" or "offset": the offsets alone) and, where named, ``names``.
 """
 
 from __future__ import annotations
@@ -176,7 +177,7 @@ def header_lines(found) -> list[str]:
     moved = int(d.extra.get("moved", 0))
     varied = [f"{d.variables - moved} {what} by {by}"] if d.variables > moved else []
     if moved:
-        varied.append(f"{moved} support offsets")
+        varied.append(f"{moved} support offset{'s' if moved > 1 else ''}")
     lines = [f"Targets ({d.message}; {' and '.join(varied)}):"]
     lines += [f"  target[{r.k}] {r.line()}" for r in rows(d)]
     if moved:

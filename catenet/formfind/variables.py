@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.formfind.anchors import Anchors, support_moves
 
 if TYPE_CHECKING:
     import scipy.sparse as sp
@@ -64,11 +65,12 @@ class Variables:
         starts = [np.clip(start, lo, hi)]
         self.nodes0 = net.nodes.copy()
         self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
-        self.moves = _moves(scene, moves, prefix)
-        for _, _, _, (a, b) in self.moves:  # (offsets over the size: s's scale)
-            low.append(np.array([a / self.size]))
-            high.append(np.array([b / self.size]))
-            starts.append(np.array([min(max(0.0, a), b) / self.size]))
+        self.moves = support_moves(scene, moves, prefix)
+        self.anchors = Anchors(net, self.moves, self.n_rest, self.size)
+        a_lo, a_hi, a_start = self.anchors.bounds()  # (offsets over the size: s's scale)
+        low.append(a_lo)
+        high.append(a_hi)
+        starts.append(a_start)
         self.names += [name for _, _, name, _ in self.moves]
         self.bounds = (np.concatenate(low), np.concatenate(high))
         self.start = np.concatenate(starts)
@@ -88,10 +90,8 @@ class Variables:
 
     def positions(self, s: np.ndarray) -> np.ndarray:
         """The nodes (N, 3) at s: the supports moved by their offsets."""
-        x = self.nodes0.copy()
-        for j, (nodes, c, _, _) in enumerate(self.moves):
-            x[nodes, c] += self.size * s[self.n_rest + j]
-        return x
+        x = self.anchors.positions(s)
+        return self.nodes0.copy() if x is None else x
 
     def moved(self, j: int) -> np.ndarray:
         """dx/ds (N, 3) of the j-th support offset."""
@@ -117,43 +117,11 @@ class Variables:
     def values(self, s: np.ndarray) -> np.ndarray:
         """The variables themselves: the factors, or the prestresses [N], then the
         supports' offsets [m]."""
-        return np.concatenate([np.exp(s[: self.n_rest]), self.size * s[self.n_rest :]])
+        return np.concatenate([np.exp(s[: self.n_rest]), self.anchors.offsets(s)])
 
     def at_bound(self, s: np.ndarray) -> int:
         lo, hi = self.bounds
         return int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
-
-
-def _moves(scene, moves: tuple, prefix: str) -> list:
-    """(nodes, axis, name, (low, high)) of each support offset of [[formfind.support]]:
-    its nodes must be fixed, each moved along an axis by one entry at most (ConfigError
-    naming the key otherwise)."""
-    from catenet.formfind.goals import _node_set
-
-    out = []
-    seen: dict[tuple[int, int], int] = {}  # (node, axis): the entry that moves it
-    for k, m in enumerate(moves):
-        path = f"{prefix}support[{k}].node"
-        nodes = _node_set(path, m.node, scene)
-        free = nodes[~scene.net.fixed[nodes]]
-        if free.size:
-            raise ConfigError(
-                f"{path} = {m.node!r}: node {int(free[0])} is free: a support the search "
-                "moves is a fixed node (free nodes move with the equilibrium)"
-            )
-        for c in m.axes:
-            for i in nodes.tolist():
-                if (i, c) in seen:
-                    raise ConfigError(
-                        f"{path} = {m.node!r}: node {i} moves along {'xyz'[c]} in "
-                        f"{prefix}support[{seen[i, c]}] too: each support's offset along an "
-                        "axis is one entry's"
-                    )
-                seen[i, c] = k
-        for c in m.axes:
-            axis = "xyz"[c]
-            out.append((nodes, c, f"support {m.node!r} d{axis}", getattr(m, f"d{axis}")))
-    return out
 
 
 def _prestressed(scene, prefix: str) -> tuple[np.ndarray, np.ndarray, list[str]]:

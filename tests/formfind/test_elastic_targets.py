@@ -289,12 +289,14 @@ def test_bad_elastic_targets_exit_2_with_one_message(tmp_path, target, extra, me
     assert "Traceback" not in r.output and not out.exists()
 
 
-def test_supports_move_in_the_elastic_method_only(tmp_path):
-    data = mast({"node": "top", "x": 0.0}, support=[{"node": 2, "dx": [-1.0, 1.0]}])
-    data["formfind"]["method"] = "linear"
+def test_supports_move_only_in_a_search_for_targets(tmp_path):
+    """The force density method moves supports for [[target]] tables
+    (tests/formfind/test_targets_supports.py); form finding alone keeps them."""
+    data = mast(support=[{"node": 2, "dx": [-1.0, 1.0]}])
+    data["formfind"].update(method="linear", force_density=1.0e3)
     r, _ = invoke(tmp_path, data)
     assert r.exit_code == 2 and "formfind.support = " in r.output
-    assert "only with method = 'elastic'" in r.output
+    assert "the supports move to meet [[target]] tables: add them" in r.output
 
 
 def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tmp_path):
@@ -321,7 +323,7 @@ def test_a_stay_whose_anchor_moves_for_its_sag_has_the_elastic_catenarys_span(tm
         assert g["found"][0] == pytest.approx(span - 100.0, rel=1e-9)
         assert h5["result/x"][20, 0] == pytest.approx(span, rel=1e-12)
     header = out.with_suffix(".toml").read_text().split("\n\n")[0]
-    assert "(met; 1 support offsets):" in header and "#   moved support 'end' dx: -" in header
+    assert "(met; 1 support offset):" in header and "#   moved support 'end' dx: -" in header
     run = CliRunner().invoke(
         main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
     )

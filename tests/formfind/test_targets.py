@@ -481,3 +481,29 @@ def test_a_chain_whose_length_is_given_has_the_hand_force_density(tmp_path):
 CHAIN_LENGTH = CHAIN.replace("force_density = 100.0", 'force_density = 100.0\nvary = "cables"') + (
     '\n[[target]]\ncable = "chain"\nlength = 10.5\n'
 )  # (the summary's chain of tests/cli, one force density, its length asked)
+
+
+def test_a_slow_self_weight_fixed_point_gives_way_to_one_factorisation():
+    """Where the weight outweighs the force densities (the spider at 30 N/m under its
+    own weight) the adjoint's fixed point converges slowly: after a few iterations A is
+    factorised once instead (formfind/adjoint.py, SLOW), and the solve is exact; at
+    500 N/m the fixed point does it alone."""
+    import scipy.sparse as sp
+
+    from catenet.formfind.adjoint import SLOW_AFTER, Adjoint
+    from catenet.formfind.fdm import _Shape
+
+    scene = build(parse_case(spider(load={"gravity": [0, 0, -9.81]})))
+    net = scene.net
+    w = np.random.default_rng(0).standard_normal(3 * int(np.count_nonzero(~net.fixed)))
+    for q, slow in ((30.0, True), (500.0, False)):
+        shape = _Shape(net, np.zeros((net.n_nodes, 3)), scene.loads.gravity, "auto", "q")
+        x, _ = shape(np.full(net.n_edges, q))
+        before = shape.solves
+        adj = Adjoint(shape, np.full(net.n_edges, q), x)
+        y = adj.solve(w)
+        a = sp.csr_matrix((adj.a_coo()[0], adj.a_coo()[1:]), shape=(len(w), len(w)))
+        assert np.abs(a @ y - w).max() <= 1e-13 * np.abs(w).max()
+        assert (adj._lu is not None) == slow
+        if slow:  # (3 coordinates a solve)
+            assert shape.solves - before <= 3 * (SLOW_AFTER + 2)
