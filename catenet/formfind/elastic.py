@@ -21,8 +21,11 @@ one solve with K per variable or per row, whichever are fewer. The rows: nodes'
 positions and surfaces (r_l0 = 0); an edge's tension N (r_x: dN/dx_b = EA / l0 t,
 r_l0 = -EA L / l0^2); a support's reaction R_i = grad_i U - F_i at a fixed node (r_x:
 minus the edge's stiffness block K_e = N_L t t^T + N / L (I - t t^T) for each free
-neighbour; r_l0 = +-dN/dl0 t - rho A g / 2). Levenberg-Marquardt within the bounds
-(``levenberg``) drives it.
+neighbour; r_l0 = +-dN/dl0 t - rho A g / 2). A support's offset (``[[formfind.support]]``)
+moves its nodes by dx_s: dR = K_fs dx_s, K_fs the columns at the support of the Hessian
+over every node (the stretching and the scene's terms: a rod's bending at its end, a
+capsule pressing on the support's edge), and the targets its own position enters change
+directly. Levenberg-Marquardt within the bounds (``levenberg``) drives it.
 """
 
 from __future__ import annotations
@@ -126,24 +129,26 @@ def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, rhs, dir
     if goals.reacts.any():
         rx, _ = _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, every)
         d_all = d_all + rx
-    ends = net.edges
-    u = x[ends[:, 1]] - x[ends[:, 0]]
-    length = np.linalg.norm(u, axis=1)
-    t = u / length[:, None]
-    free = index >= 0
+    k_all = _every_node_hessian(net, scene, x)
+    rows = np.flatnonzero(np.repeat(index >= 0, 3))  # (the free DOFs, 3 f + c)
     for j in range(len(v.moves)):
         col = v.n_rest + j
-        dx = v.moved(j)  # (N, 3): only supports move
-        direct[:, col] = d_all @ dx.ravel()
-        stretch = dx[ends[:, 1]] - dx[ends[:, 0]]  # each edge's change of u
-        along = np.einsum("ij,ij->i", t, stretch)
-        # d(N t) = dN/dL (t.du) t + N / L (du - t (t.du)): the pull on the second end
-        pull = (dn_dl * along)[:, None] * t + (n / length)[:, None] * (stretch - along[:, None] * t)
-        change = np.zeros_like(x)  # d grad U at every node
-        for c in range(3):
-            change[:, c] += np.bincount(ends[:, 1], pull[:, c], net.n_nodes)
-            change[:, c] -= np.bincount(ends[:, 0], pull[:, c], net.n_nodes)
-        rhs[:, col] = change[free].ravel()
+        dx = v.moved(j).ravel()  # (only supports move)
+        direct[:, col] = d_all @ dx
+        rhs[:, col] = (k_all @ dx)[rows]
+
+
+def _every_node_hessian(net, scene, x: np.ndarray):
+    """The Hessian (3N, 3N) of the net's energy, its stretching and the scene's terms
+    (rods' bending and twist, obstacles), over every node as if none were held: its
+    free rows' columns at a support are K_fs, the change of the free nodes' forces as
+    the support moves."""
+    from catenet.solver.system import System
+    from catenet.terms.stretch import Stretch
+
+    loose = net.replace(fixed=np.zeros(net.n_nodes, dtype=bool), flies=True)
+    system = System(loose, (Stretch(loose), *scene.terms), upper=False)
+    return system.matrix(system.hessian(x))
 
 
 def _forces(net, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -258,12 +263,6 @@ def formfind_elastic(
             f"target[{supports[0]}].support = {targets[supports[0]].support!r}: a reaction "
             "target takes a net of cables under loads and gravity only (this case has "
             "obstacles, rods or springs)"
-        )
-    if moves and scene.terms:
-        raise ConfigError(
-            f"{prefix}support[0].node = {moves[0].node!r}: a support the search moves takes a "
-            "net of cables under loads and gravity only (this case has obstacles, rods or "
-            "springs)"
         )
     settings = dataclasses.replace(Settings.of(scene.case.solver), method="static", steps=1)
     size = float(np.linalg.norm(np.ptp(scene.net.nodes, axis=0))) or 1.0

@@ -423,3 +423,76 @@ def test_a_stay_whose_length_is_given_has_the_elastic_catenary_rest_length(tmp_p
     edges = build(parse_case(data)).net.edges
     length = np.linalg.norm(x[edges[:, 1]] - x[edges[:, 0]], axis=1).sum()
     assert abs(length - 100.2) <= 1e-9 * 100.2  # (formfind.tol of the target)
+
+
+# ------------------------------------------------------------------- with rods and obstacles
+
+
+def rod_mast(*targets, **formfind) -> dict:
+    """The guyed mast as a rod: 10 edges of EI = 2e7 N m^2 (its Euler load 490 kN over
+    its 64 kN), pinned at its foot."""
+    data = mast(*targets, **formfind)
+    rod = data["geometry"]["cable"][0]
+    rod["edge_length"] = 2.0
+    rod["material"] = {"EA": 2.0e10, "tension_only": False, "EI": 2.0e7}
+    return data
+
+
+def draped_stay(*targets, **formfind) -> dict:
+    """The stay over a fixed ball near its first anchor, every edge a capsule
+    (``solver.edge_contact``): the ball presses on the edge from the anchor."""
+    data = stay(*targets, **formfind)
+    data["obstacle"] = [{"kind": "sphere", "center": [4.0, 0.0, -1.25], "radius": 1.0}]
+    data["obstacle"][0]["distance"] = 0.05
+    data["solver"]["edge_contact"] = True
+    return data
+
+
+@pytest.mark.parametrize("scene", ["rod", "obstacle"])
+def test_supports_move_with_rods_and_obstacles_by_the_exact_jacobian(scene):
+    """A support's offset enters through every term's stiffness at it (the rod's bending
+    at the mast's foot end, the capsule pressing on the anchor's edge): the Jacobian's
+    columns against central differences (h = 1e-7: their truncation error at 1e-6 is
+    2e-7 here, the Jacobian exact)."""
+    if scene == "rod":
+        targets = ({"node": "top", "point": [0.05, 0.0, 20.0]}, {"cable": "guy_*", "length": 26.0})
+        data = rod_mast(*targets, vary="prestress", support=MOVES)
+    else:
+        targets = ({"node": 10, "z": -2.0}, {"node": 2, "z": -0.4})
+        data = draped_stay(*targets, vary="cables", support=[{"node": 0, "dz": [-1, 1]}])
+    eq, goals, s = equilibria(data, seed=1)
+    assert eq(s)[1].terms  # (the bending or the contact is on)
+
+    def residual(s):
+        return goals.w * goals.miss(eq.achieved(s, goals))
+
+    j = eq.jacobian(s, goals)
+    h = 1e-7
+    fd = np.column_stack(
+        [(residual(s + h * e) - residual(s - h * e)) / (2 * h) for e in np.eye(len(s))]
+    )
+    moved = np.arange(eq.variables.n_rest, len(s))
+    assert np.abs(fd[:, moved]).max() > 1e-3 * np.abs(fd).max()
+    assert np.abs(j - fd).max() <= 1e-8 * np.abs(fd).max()
+
+
+def test_a_rod_masts_windward_anchor_moves_to_hold_its_top_plumb(tmp_path):
+    """The rod mast under its 10 kN wind, its windward anchor free along x and z: the
+    anchor found brings the top back over its foot; `catenet run` on the case written
+    holds it there."""
+    import h5py
+
+    data = rod_mast({"node": "top", "x": 0.0}, vary="supports")
+    data["formfind"]["support"] = [{"node": 2, "dx": [-5.0, 5.0], "dz": [-3.0, 3.0]}]
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    assert "moved        support 2 dx: " in r.output and "met)" in r.output
+    with h5py.File(out) as h5:  # (docs/howto/form-finding-targets.md: 12.7 mm out, 16.8 down)
+        found = h5["result/targets"].attrs["found"]
+        assert found == pytest.approx([-0.0126640, -0.0167968], abs=1e-7)
+    run = CliRunner().invoke(
+        main, ["run", str(out.with_suffix(".toml")), "-o", str(tmp_path / "run.h5")]
+    )
+    assert run.exit_code == 0, run.output
+    with h5py.File(tmp_path / "run.h5") as h5:
+        assert abs(h5["result/x"][1, 0]) <= 1e-8 * 30.0
