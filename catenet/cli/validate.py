@@ -37,10 +37,15 @@ def command(output: Path | None, quiet: bool, verbose: int, debug: bool) -> None
          elastic catenary at N = 11 .. 161 nodes: error <= 2 (h/L)^2 and observed
          order (polyfit of log err on log h) in [1.8, 2.2]; the deviation from the
          inextensible Eq. 15 is reported as information.
+    (iii) every material law on a bar pulled along its axis: the paper's strain at
+         F = 1e-4 EA (1e-3), 50 % strain at each law's force for it (1e-9).
     (iv) rods (EI = 1 N m^2, L = 1 m): Euler buckling of a pinned strut (1e-3 at 50
          edges), a cantilever's tip under an end load against the elastica (1e-4 of L
          at 100 edges), first natural frequencies (simply supported, cantilever,
-         clamped-clamped: 1e-3).
+         clamped-clamped: 1e-3), a thin ring under a diametral load (Roark: both
+         diameters' changes and the moment under the load, 1e-3 at 400 edges).
+    (v)  the OC3-Hywind spar's three mooring lines on a frictionless seabed: the
+         published surge, heave and yaw restoring stiffness (1e-3 at 150 edges a line).
     (vi) twisted rods (EI = 1, GJ = 0.8 N m^2): a straight rod's twisting moment
          (exact), a helix under end force and moment (Love; 1e-3 at 200 edges),
          Greenhill's critical twist of a clamped rod (1e-3 at 100 edges), Michell's
