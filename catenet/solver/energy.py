@@ -123,8 +123,7 @@ class Ledger:
         """The accepted step from x_old to x_new (velocities v_new after it) of length h."""
         k, u, c, work, dissipated = self._balance(stepper, x_old, x_new, v_new, h, True)
         self._work, self._dissipated = work, dissipated
-        remainder = k + u + c - self._start - work + dissipated
-        self.row[:] = (k, u, c, work, dissipated, remainder)
+        self.row[:] = (k, u, c, work, dissipated, self._remainder(k + u + c, work, dissipated))
         self.floor = max(self.floor, _floor(stepper, x_new, h))
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(work))
         self.motion = max(self.motion, k)
@@ -143,8 +142,14 @@ class Ledger:
         the integrator would create, < 0 where it removes some) and the motion's energy
         after it (the largest kinetic energy and what damping, drag and friction took)."""
         k, u, c, work, dissipated = self._balance(stepper, x_old, x_new, v_new, h, False)
-        remainder = k + u + c - self._start - work + dissipated
+        remainder = self._remainder(k + u + c, work, dissipated)
         return remainder - float(self.row[-1]), max(self.motion, k) + max(dissipated, 0.0)
+
+    def _remainder(self, held: float, work: float, dissipated: float) -> float:
+        """The integrator's own energy: what the net and bodies hold (``held``, kinetic,
+        elastic and contact) beyond the start's, less the work done on them, plus what
+        damping, drag and friction took."""
+        return held - self._start - work + dissipated
 
     def _balance(
         self,
