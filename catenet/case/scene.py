@@ -274,7 +274,7 @@ def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: in
         path = f"load.area[{k}].nodes = {show(ar.nodes)}"
     covered[net.n_net :] = False  # (the bodies' centres)
     try:
-        load = area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction)
+        load = area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction, net.fixed)
     except ConfigError as exc:
         raise ConfigError([f"{path}: {p}" for p in exc.problems]) from None
     _warn_beyond(path, net, covered, load, case.units)

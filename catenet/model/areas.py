@@ -2,8 +2,9 @@
 area.
 
 The surface is made of the net's own cells. The edges among the covered nodes are drawn
-in a plane (the plan for a load on plan; the net's mean plane, fitted by least squares,
-for a load normal to the surface) and their faces found as in any planar map: at every
+in a plane (the plan; for a load normal to the surface whose drawing in plan crosses
+itself or covers no area, a facade, the net's mean plane, fitted by least squares) and
+their faces found as in any planar map: at every
 node the edges are sorted by angle and each face is walked keeping it on the left. The
 bounded faces are the cells (the quadrilaterals between crossing cables, with the nodes
 that split their sides, or a mesh's triangles and polygons). The open cells at the
@@ -11,7 +12,8 @@ border of a cable net, between two cable ends that no edge joins, are closed fir
 the outer boundary, between each two consecutive cable ends (nodes of one edge), the
 outline runs along the convex chain of the boundary nodes between them, so that the
 outline passes through the outer nodes, supports included, and follows a concave border
-where the net has one.
+where the net has one; a support on the boundary is such an end too (an L's inner
+corner, where two cables end).
 
 Each cell is split into triangles from its centroid (one per side); a triangle's share
 goes half to each end of its side. On a square cell every corner takes a quarter, on a
@@ -39,21 +41,31 @@ TOL = 1e-9
 @dataclass(frozen=True)
 class AreaLoad:
     """An area load lumped to nodes: ``force`` (N, 3) [N], the covered ``area`` [m^2]
-    (plan area on plan, surface area normal to the surface) and the ``normal`` of the
-    plane it was drawn in (positive pressure pushes against it)."""
+    (plan area on plan, surface area normal to the surface), the ``normal`` of the
+    plane it was drawn in (positive pressure pushes against it), that plane's ``basis``
+    (2, 3) and the ``outline``: each part's border, its nodes in order (clockwise)."""
 
     force: np.ndarray
     area: float
     normal: np.ndarray
+    basis: np.ndarray
+    outline: tuple
 
 
 def area_load(
-    nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, pressure: float, direction: str
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    covered: np.ndarray,
+    pressure: float,
+    direction: str,
+    anchors: np.ndarray | None = None,
 ) -> AreaLoad:
     """The nodal forces of ``pressure`` [Pa] over the cells of the edges between
     ``covered`` nodes (an (N,) mask), on plan (-z, per plan area) or normal to the
-    surface. ConfigError (without a key path: the caller adds it) when they cover no
-    area or their drawing in the plane crosses itself."""
+    surface; ``anchors`` (N,) the supports, through which the outline of the open border
+    cells passes (a notch's corner where two cables end). ConfigError (without a key
+    path: the caller adds it) when they cover no area or their drawing in the plane
+    crosses itself."""
     if direction not in DIRECTIONS:
         raise ValueError(f"direction {direction!r}: must be one of {DIRECTIONS}")
     nodes = np.asarray(nodes, dtype=np.float64)
@@ -66,8 +78,30 @@ def area_load(
         raise ConfigError(_no_area(False))
     xyz = nodes[used]
     local = np.searchsorted(used, sub)
+    ends = None if anchors is None else np.asarray(anchors, dtype=bool)[used]
+    planes = ("plan",) if direction == "plan" else ("plan", "fitted")
+    for k, plane in enumerate(planes):  # a normal load: drawn in plan where it can be
+        try:
+            normal, basis, faces, scale = _drawn(xyz, local, used, plane, direction, ends)
+            break
+        except ConfigError:
+            if k + 1 == len(planes):
+                raise
+    force, area = _lump(xyz, faces, pressure, direction)
+    if not area > (TOL * scale) ** 2:
+        raise ConfigError(_no_area(False))
+    out = np.zeros((len(nodes), 3))
+    out[used] = force
+    loops = tuple(used[_loop(faces, int(f))] for f in np.flatnonzero(faces.area <= 0.0))
+    return AreaLoad(out, area, normal, basis, loops)
+
+
+def _drawn(xyz, local, used, plane: str, direction: str, ends):
+    """(normal, basis, faces, scale) of the net drawn in ``plane`` ("plan" or "fitted",
+    the nodes' least-squares plane), its open border cells closed; ConfigError where the
+    drawing covers no area, puts two nodes on one point or crosses itself."""
     scale3 = float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0)))
-    normal, basis = _plane(xyz, direction, scale3)
+    normal, basis = _plane(xyz, plane, scale3)
     q = (xyz - xyz.mean(axis=0)) @ basis.T
     scale = float(np.linalg.norm(np.ptp(q, axis=0)))  # the extent in the plane
     if not scale > 0:
@@ -76,13 +110,7 @@ def area_load(
     if np.linalg.svd(q - q.mean(axis=0), compute_uv=False)[-1] <= TOL * scale:
         raise ConfigError(_no_area(direction == "plan" and upright))
     _distinct(q, used, scale)
-    faces = _closed_faces(q, local, scale)
-    force, area = _lump(xyz, q, faces, normal, pressure, direction)
-    if not area > (TOL * scale) ** 2:
-        raise ConfigError(_no_area(False))
-    out = np.zeros((len(nodes), 3))
-    out[used] = force
-    return AreaLoad(out, area, normal)
+    return normal, basis, _closed_faces(q, local, scale, ends), scale
 
 
 def _no_area(upright: bool) -> str:
@@ -169,10 +197,11 @@ def _faces(q: np.ndarray, edges: np.ndarray) -> _Faces:
     return _Faces(origin, dest, face, area, nxt)
 
 
-def _closed_faces(q: np.ndarray, edges: np.ndarray, scale: float) -> _Faces:
-    """The faces after closing the open cells at the border, checked to be a plane
-    drawing (Euler's formula; one outside per part). Edges in several parts (parallel
-    cables without cross ties) or without a cell: the Delaunay triangles of the nodes."""
+def _closed_faces(q: np.ndarray, edges: np.ndarray, scale: float, ends=None) -> _Faces:
+    """The faces after closing the open cells at the border (``ends``: the supports, the
+    outline's corners), checked to be a plane drawing (Euler's formula; one outside per
+    part). Edges in several parts (parallel cables without cross ties) or without a
+    cell: the Delaunay triangles of the nodes."""
     tol = (TOL * scale) ** 2
     parts = int(components(len(q), edges).max()) + 1
     faces = _faces(q, edges)
@@ -181,7 +210,7 @@ def _closed_faces(q: np.ndarray, edges: np.ndarray, scale: float) -> _Faces:
     extra = []
     have = {tuple(sorted(e)) for e in edges.tolist()}
     for f in np.flatnonzero(faces.area <= tol):
-        for a, b in _outline(q, faces, int(f), scale):
+        for a, b in _outline(q, faces, int(f), scale, ends):
             if (min(a, b), max(a, b)) not in have:
                 have.add((min(a, b), max(a, b)))
                 extra.append((a, b))
@@ -219,6 +248,11 @@ def _delaunay(q: np.ndarray) -> _Faces:
     return _Faces(origin, dest, face, np.abs(signed), nxt)
 
 
+def _loop(faces: _Faces, f: int) -> np.ndarray:
+    """The nodes of face ``f`` in the order it is walked (local indices)."""
+    return faces.origin[np.asarray(_walk(faces, f), dtype=np.int64)]
+
+
 def _walk(faces: _Faces, f: int) -> list[int]:
     """The half-edges of face ``f`` in order."""
     h0 = int(np.flatnonzero(faces.face == f)[0])
@@ -230,16 +264,22 @@ def _walk(faces: _Faces, f: int) -> list[int]:
     return out
 
 
-def _outline(q: np.ndarray, faces: _Faces, f: int, scale: float) -> list[tuple[int, int]]:
+def _outline(
+    q: np.ndarray, faces: _Faces, f: int, scale: float, ends=None
+) -> list[tuple[int, int]]:
     """The edges that close the open cells along the outside ``f`` of a part: between
-    each two consecutive ends (nodes of one edge) along its boundary, the convex chain of
-    the boundary nodes that lie outward of the chord between them."""
+    each two consecutive ends along its boundary, the convex chain of the boundary nodes
+    that lie outward of the chord between them. The ends: the nodes of one edge (a
+    cable ending at the border), and where there are such, the supports (``ends``) on
+    the boundary too, so that a notch's corner, where two cables end, stays a corner."""
     walk = _walk(faces, f)
     nodes = [int(faces.origin[h]) for h in walk]
     size = len(nodes)
     tips = sorted((k + 1) % size for k, h in enumerate(walk) if faces.next[h] == (h ^ 1))
     if len(tips) < 2:
         return []
+    if ends is not None:
+        tips = sorted(set(tips) | {k for k, i in enumerate(nodes) if ends[i]})
     out = []
     for t, k0 in enumerate(tips):
         k1 = tips[(t + 1) % len(tips)]
@@ -310,7 +350,7 @@ def _hull(q: np.ndarray, pts: np.ndarray) -> list[int]:
 # --------------------------------------------------------------------------- lumping
 
 
-def _lump(xyz, q, faces: _Faces, normal, pressure, direction):
+def _lump(xyz, faces: _Faces, pressure, direction):
     """Each cell's triangles from its centroid, half of each to each end of its side:
     forces (n, 3) and the covered area."""
     cell = faces.area[faces.face] > 0
@@ -366,41 +406,47 @@ def with_chains(covered: np.ndarray, given: int, edges: np.ndarray) -> np.ndarra
 
 def beyond_outline(nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, load: AreaLoad):
     """The covered nodes that no edge among the covered ones joins and that lie outside
-    the convex hull of the joined ones in the plane ``load`` was drawn in (an (K,) int
-    array), and the area [m^2] they add to that hull: pressure there loads no node (a
-    grid's corner where no cable ends). (empty, 0.0) where there are none."""
+    the outline ``load`` covers, in the plane it was drawn in (an (K,) int array), and
+    the area [m^2] between them and the outline: for each, the triangle it makes with
+    the outline's nearest side, what joining it there would add. Pressure there loads
+    no node (a grid's corner where no cable ends). (empty, 0.0) where there are none."""
     nodes = np.asarray(nodes, dtype=np.float64)
     edges = np.asarray(edges, dtype=np.int64)
     sub = edges[covered[edges[:, 0]] & covered[edges[:, 1]]]
     joined = np.zeros(len(nodes), dtype=bool)
     joined[sub.ravel()] = True
     lonely = np.flatnonzero(covered & ~joined)
-    if not len(lonely) or not joined.any():
+    loops = [loop for loop in load.outline if len(loop) >= 3]
+    if not len(lonely) or not loops:
         return lonely[:0], 0.0
-    n = load.normal
-    e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    basis = np.array([e1, np.cross(n, e1)])
-    inner = nodes[joined] @ basis.T
-    outer = nodes[lonely] @ basis.T
-    scale = float(np.linalg.norm(np.ptp(np.vstack([inner, outer]), axis=0)))
-    grown = _hull_area(np.vstack([inner, outer])) - _hull_area(inner)
-    if not grown > 1e-6 * scale**2:
-        return lonely[:0], 0.0
-    from scipy.spatial import Delaunay
-
-    try:
-        outside = Delaunay(inner).find_simplex(outer, tol=1e-9 * scale) < 0
-    except Exception:  # (the joined nodes on a line: every lonely node is outside)
-        outside = np.ones(len(lonely), dtype=bool)
-    return lonely[outside], float(grown)
+    plane = nodes @ load.basis.T
+    out, area = [], 0.0
+    for i in lonely.tolist():
+        p = plane[i]
+        if any(_inside(plane[loop], p) for loop in loops):
+            continue
+        best = min((_side(plane[loop], p) for loop in loops), key=lambda t: t[0])
+        out.append(i)
+        area += best[1]
+    return np.asarray(out, dtype=np.int64), float(area)
 
 
-def _hull_area(points: np.ndarray) -> float:
-    """The area of the convex hull of ``points`` (K, 2); 0 where they span no area."""
-    from scipy.spatial import ConvexHull, QhullError
+def _inside(polygon: np.ndarray, p: np.ndarray) -> bool:
+    """Whether the point p lies inside the closed ``polygon`` (K, 2) (even-odd rule)."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    crosses = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return bool(np.count_nonzero(crosses & (x > p[0])) % 2)
 
-    try:
-        return float(ConvexHull(points).volume)
-    except (QhullError, ValueError):
-        return 0.0
+
+def _side(polygon: np.ndarray, p: np.ndarray) -> tuple[float, float]:
+    """(distance, triangle area) of p to the nearest side of the closed ``polygon``."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    d = b - a
+    t = np.clip(
+        np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0
+    )
+    dist = np.linalg.norm(a + t[:, None] * d - p, axis=1)
+    k = int(np.argmin(dist))
+    return float(dist[k]), 0.5 * abs(float(d[k, 0] * (p - a[k])[1] - d[k, 1] * (p - a[k])[0]))
