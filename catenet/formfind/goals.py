@@ -34,6 +34,10 @@ from catenet.errors import ConfigError
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
+#: A range row within this share of its scale of a bound counts in the Jacobian
+#: (``Goals.slope``).
+EDGE = 1e-4
+
 
 @dataclass
 class Goals:
@@ -93,8 +97,12 @@ class Goals:
         return np.abs(self.miss(a)) <= self.tol * self.scale
 
     def slope(self, a: np.ndarray) -> np.ndarray:
-        """dr/da per row: the weight, 0 inside a range."""
-        out = (a < self.lo) | (a > self.hi) | (self.lo == self.hi)
+        """dr/da per row: the weight, 0 inside a range, except within ``EDGE`` of its
+        scale of a bound: a value the search has pushed onto its bound is held there by
+        its Jacobian's row (an active constraint), else the next step, blind to it,
+        crosses it and is refused, and the search crawls along the bound."""
+        band = EDGE * self.scale
+        out = (a < self.lo + band) | (a > self.hi - band) | (self.lo == self.hi)
         return np.where(out, self.w, 0.0)
 
     def partials(

@@ -509,3 +509,49 @@ def test_a_sag_and_a_pull_met_by_rest_length_and_anchor_follow_their_valley():
     d = formfind_scene(build(parse_case(data))).design
     assert d.all_met and d.message == "met"
     assert d.gradients <= 25 and d.evaluations <= 45
+
+
+def model_net(dx) -> dict:
+    """A 1.2 m model net in N-mm: three cables each way at 300 mm, 100 N of prestress,
+    20 N at its centre, its east bar moved by dx (mm); targets: the centre 12 mm down,
+    the middle cables' tensions in [150, 250] N."""
+    at = [(i, j) for j in range(5) for i in range(5) if 0 < i < 4 or 0 < j < 4]
+    nodes = [[300.0 * i, 300.0 * j, 0.0] for i, j in at]
+    k = {p: n for n, p in enumerate(at)}
+    cables = [{"name": f"x{j}", "nodes": [k[i, j] for i in range(5)]} for j in (1, 2, 3)]
+    cables += [{"name": f"y{i}", "nodes": [k[i, j] for j in range(5)]} for i in (1, 2, 3)]
+    rim = [k[p] for p in at if p[0] in (0, 4) or p[1] in (0, 4)]
+    return {
+        "units": "N-mm",
+        "geometry": {
+            "kind": "graph",
+            "nodes": nodes,
+            "cable": cables,
+            "sets": {"east": [k[4, j] for j in (1, 2, 3)], "centre": [k[2, 2]]},
+        },
+        "material": {"E": 2.0e5, "radius": 0.5, "density": 7.85e-9, "prestress": 100.0},
+        "supports": {"fixed": rim},
+        "load": {"gravity": [0, 0, -9810.0], "point": [{"node": "centre", "force": [0, 0, -20.0]}]},
+        "formfind": {
+            "method": "elastic",
+            "rest_length_factor_min": 0.995,
+            "rest_length_factor_max": 1.005,
+            "support": [{"node": "east", "dx": dx}],
+        },
+        "target": [
+            {"node": "centre", "z": -12.0},
+            {"cable": "x2", "tension": [150.0, 250.0]},
+            {"cable": "y2", "tension": [150.0, 250.0]},
+        ],
+    }
+
+
+@pytest.mark.parametrize("dx", [[-20.0, 20.0], [1.0, 20.0]])
+def test_a_tension_range_pushed_onto_its_bound_holds_there_while_the_rest_is_met(dx):
+    """From the east bar's range [1, 20] mm (its start 1 mm out), y2's tension reaches
+    its lower bound of 150 N while the centre is still 0.08 mm high: its row, 0 inside
+    the range, had let every next step cross the bound, each refused, and the search
+    crawled along it to max_iter, 'not met'. Within 1e-4 of its scale of a bound a
+    range row counts in the Jacobian (goals.EDGE) and the targets are met."""
+    d = formfind_scene(build(parse_case(model_net(dx)))).design
+    assert d.all_met and d.message == "met" and d.gradients <= 20
