@@ -273,14 +273,17 @@ def _support_rows(rows: _Rows, k: int, t, scene) -> None:
             "node's (a support of geometry's fixed nodes)"
         )
     values = [t.reaction_of(c) for c in t.components]
-    scale = max(max(abs(v) for v in values), _load_scale(scene))
+    largest, load = max(abs(v) for v in values), _load_scale(scene)
+    scale = max(largest, 1e-6 * load) if largest > 0 else load
     for c, v in zip(t.components, values, strict=True):
         n = len(nodes)
         rows.add(k, t, nodes, c, -1, np.full(n, v), np.full(n, v), scale, reacts=True)
 
 
 def _load_scale(scene) -> float:
-    """A force scale of the net: 1e-6 of its weight and loads (1e-6 N without)."""
+    """A force scale of the net: its weight and loads (1 N without): a reaction's scale
+    where it is asked to be 0 (1e-6 of it had asked 1e-15 of the load, below the
+    round-off of the tensions that make the reaction), and 1e-6 of it at least."""
     net, loads = scene.net, scene.loads
     total = 0.0
     if loads is not None and loads.gravity is not None:
@@ -288,7 +291,7 @@ def _load_scale(scene) -> float:
         total += g * float(np.sum(net.line_density * net.rest_length))
     if loads is not None and loads.force is not None:
         total += float(np.abs(loads.force).sum())
-    return 1e-6 * total if total > 0 else 1e-6
+    return total if total > 0 else 1.0
 
 
 def _surface(k: int, t, net, nodes: np.ndarray):
