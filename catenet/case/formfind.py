@@ -92,8 +92,8 @@ def _offset_range(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
         if lo is not None and hi is not None and carried(lo) and carried(hi) and lo < hi:
             return (lo, hi)
     return ck.bad(
-        path, v, "must be [low, high] with low < high: how far the support may move along "
-        "this axis from where it is given [m]"
+        path, v, "must be [low, high] with low < high, both finite: how far the support may "
+        "move along this axis from where it is given [m]"
     )  # fmt: skip
 
 

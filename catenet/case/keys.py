@@ -284,9 +284,9 @@ class Key:
     so their dataclass field has no default. ``write`` says when ``to_dict`` writes the
     key: "always", "given" (not when None or empty), "changed" (not when it is the
     default: keys added later, so that older resolved cases read the same) or "never".
-    ``missing`` is what the message for an absent required key asks for; ``shown`` is the
-    default as the README shows it, when it is not a plain value. A ``null`` key given as
-    None (from Python or a JSON file) is as absent.
+    ``missing`` is what the message for an absent required key asks for (its ``doc`` if
+    not given); ``shown`` is the default as the README shows it, when it is not a plain
+    value. A ``null`` key given as None (from Python or a JSON file) is as absent.
     """
 
     check: Check
@@ -418,7 +418,7 @@ def value(ck: Checker, tbl: Mapping, k: Key, prefix: str, ctx: Context) -> Any:
     if k.name in tbl and not (k.null and tbl[k.name] is None):
         return k.check(ck, tbl[k.name], path, ctx)
     if k.default is REQUIRED:
-        ck.add(f"{path}: missing: {k.missing}")
+        ck.add(f"{path}: missing: {k.missing or k.doc or k.accepted}")
         return BAD
     return None if k.computed else k.default
 

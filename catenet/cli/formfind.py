@@ -194,8 +194,10 @@ def _targets(f) -> list[str]:
 
     d = f.design
     what = "edge" if d.vary == "edges" else "cable"
-    bound = f", {d.at_bound} at a bound" if d.at_bound else ""
     moved = d.extra.get("moved", 0)  # the supports' offsets: the last of the variables
+    offsets = list(d.extra.get("offsets_at_bound", ()))
+    main = d.at_bound - sum(offsets)
+    bound = f", {main} at a bound" if main else ""
     if f.method == "elastic" and d.extra.get("kind") == "prestress":
         t = d.extra["values"][: len(d.extra["values"]) - moved]
         design = (
@@ -219,8 +221,9 @@ def _targets(f) -> list[str]:
     out = [f"{'design':<12} {design}"]
     if moved:
         names, values = d.extra["names"][-moved:], d.extra["values"][-moved:]
-        for name, value in zip(names, values, strict=True):
-            out.append(f"{'moved':<12} {name}: {float(value):+.9g} m")
+        for name, value, held in zip(names, values, offsets or [False] * moved, strict=True):
+            at = " (at a bound of its range)" if held else ""
+            out.append(f"{'moved':<12} {name}: {float(value):+.9g} m{at}")
     out += [f"{f'target[{r.k}]':<12} {r.line()}" for r in report.rows(d)]
     return out
 

@@ -214,7 +214,8 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str, mo
         if why != "met":
             message = f"{why} on the hard targets alone"
     evaluations = shape.factorizations - 1
-    at_bound = int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+    bound = (s <= lo + 1e-12) | (s >= hi - 1e-12)
+    at_bound = int(np.count_nonzero(bound))
     message = compromise(message, at_bound)
     out = Design(
         goals=goals,
@@ -236,6 +237,7 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str, mo
             names=[""] * n_q + [name for _, _, name, _ in anchors.moves],
             kind="force_density" if n_q else "offset",
             moved=anchors.n,
+            offsets_at_bound=bound[n_q:].tolist(),
         )
     if search.last is not None:  # how the damped steps went (benchmarks read it)
         lay = search.last.layout or search.layout
@@ -259,7 +261,8 @@ def compromise(message: str, at_bound: int) -> str:
         return message
     return (
         "least-squares compromise within the bounds: the targets are not all met there "
-        f"({at_bound} variables at a bound)" + message[len(COMPROMISE) :]
+        f"({at_bound} variable{'s' if at_bound > 1 else ''} at a bound)"
+        + message[len(COMPROMISE) :]
     )
 
 
@@ -388,9 +391,12 @@ def _unmet_message(d: Design, k: int) -> str:
     worst = rows[np.argmax(np.abs(d.miss()[rows]))]
     lo, hi = d.goals.lo[worst], d.goals.hi[worst]
     want = f"{lo:.9g}" if lo == hi else f"[{lo:.9g}, {hi:.9g}]"
+    offsets = int(sum(d.extra.get("offsets_at_bound", ())))
+    widen = ["formfind.force_density_min/max"] if d.at_bound > offsets else []
+    widen += ["the ranges of [[formfind.support]]"] if offsets else []
     fix = (
-        "relax it, widen formfind.force_density_min/max or drop hard"
-        if d.at_bound
+        f"relax it, widen {' or '.join(widen)} or drop hard"
+        if widen
         else "relax it or the targets it conflicts with, or drop hard (no bound holds it)"
     )
     return (

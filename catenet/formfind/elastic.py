@@ -377,6 +377,7 @@ def _found(eq: _Equilibria, goals, s, message: str, gradients: int, vary: str):
         at_bound=v.at_bound(s),
     )
     d.extra.update(values=v.values(s), names=list(v.names), kind=v.kind, moved=len(v.moves))
+    d.extra["offsets_at_bound"] = v.bound(s)[v.n_rest :].tolist()
     d.extra["implausible"] = _implausible(net, x)
     return FormFound(
         net=net,

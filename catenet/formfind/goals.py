@@ -336,8 +336,9 @@ def _nodes(k: int, t, scene) -> np.ndarray:
     if fixed.size:
         which = f"node {int(fixed[0])} is" if nodes.size == 1 else f"nodes {fixed[:5].tolist()} are"
         raise ConfigError(
-            f"{path} = {show(t.node)}: {which} fixed (a support): form finding does not move "
-            "it: target free nodes"
+            f"{path} = {show(t.node)}: {which} fixed (a support): a position target is a "
+            "free node's (a support stays where it is given, or within the range of its "
+            "[[formfind.support]])"
         )
     return nodes
 

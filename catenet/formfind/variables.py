@@ -71,7 +71,9 @@ class Variables:
         low.append(a_lo)
         high.append(a_hi)
         starts.append(a_start)
-        self.names += [name for _, _, name, _ in self.moves]
+        if self.moves:  # (names line up with the values, "" unnamed: the offsets' last)
+            self.names += [""] * (self.n_rest - len(self.names))
+            self.names += [name for _, _, name, _ in self.moves]
         self.bounds = (np.concatenate(low), np.concatenate(high))
         self.start = np.concatenate(starts)
         self.n = len(self.start)
@@ -120,8 +122,12 @@ class Variables:
         return np.concatenate([np.exp(s[: self.n_rest]), self.anchors.offsets(s)])
 
     def at_bound(self, s: np.ndarray) -> int:
+        return int(np.count_nonzero(self.bound(s)))
+
+    def bound(self, s: np.ndarray) -> np.ndarray:
+        """Per variable: whether it is at one of its bounds."""
         lo, hi = self.bounds
-        return int(np.count_nonzero((s <= lo + 1e-12) | (s >= hi - 1e-12)))
+        return (s <= lo + 1e-12) | (s >= hi - 1e-12)
 
 
 def _prestressed(scene, prefix: str) -> tuple[np.ndarray, np.ndarray, list[str]]:

@@ -272,8 +272,18 @@ def test_bounds_hold_the_prestress_and_the_rest_length_factors():
         ),
         (
             {"node": "top", "x": 0.0},
+            {"support": [{"dx": [-1.0, 1.0]}]},
+            "formfind.support[0].node: missing: the fixed node (index, name or node set",
+        ),
+        (
+            {"node": "top", "x": 0.0},
+            {"support": [{"node": 2, "dx": [-1.0, float("inf")]}]},
+            "formfind.support[0].dx = [-1.0, inf]: must be [low, high] with low < high, both",
+        ),
+        (
+            {"node": "top", "x": 0.0},
             {"support": [{"node": 2, "dz": [1.0, -1.0]}]},
-            "formfind.support[0].dz = [1.0, -1.0]: must be [low, high] with low < high",
+            "formfind.support[0].dz = [1.0, -1.0]: must be [low, high] with low < high, both",
         ),
         (
             {"node": "top", "x": 0.0},
@@ -569,3 +579,18 @@ def test_a_reaction_asked_to_be_zero_is_met_beyond_round_off():
     )
     d = formfind_scene(build(parse_case(data))).design
     assert d.all_met and d.message == "met" and d.gradients <= 10
+
+
+def test_the_names_line_up_with_the_variables_found(tmp_path):
+    """A single cable (no named cables: one factor for all) and its anchor: `found` holds
+    the factor and the offset, `names` an empty name and the offset's (it had held the
+    offset's name alone, so that a reader pairing them mislabelled the factor)."""
+    import h5py
+
+    data = stay({"node": "midpoint", "z": -2.0}, {"support": 0, "reaction_x": -58.0e3})
+    data["formfind"].update(vary="cables", support=[{"node": "end", "dx": [-5.0, 5.0]}])
+    r, out = invoke(tmp_path, data)
+    assert r.exit_code == 0, r.output
+    with h5py.File(out) as h5:
+        g = h5["result/targets"].attrs
+        assert len(g["found"]) == 2 and list(g["names"]) == ["", "support 'end' dx"]

@@ -260,3 +260,69 @@ def test_force_density_bounds_with_the_offsets_alone_are_refused(tmp_path):
     r, _ = invoke(tmp_path, data)
     assert r.exit_code == 2 and "formfind.force_density_max = 10000.0: bounds the force" in r.output
     assert "not varied here" in r.output
+
+
+def hung_cable(dx) -> dict:
+    """A 40 m cable of ten 4 m edges under 2 kN at each inner node, one force density for
+    it; its far anchor moves along it by dx for the middle 3 m down and a 45 kN pull at
+    the near one. By hand: the pull H = q h (h the edges' horizontal length) and the
+    middle's sag, the simple beam's moment 12.5 P h over H, give h = 3 H / (12.5 P) =
+    5.4 m (dx = +14 m) and q = H / h = 8333.33 N/m."""
+    return {
+        "geometry": {
+            "kind": "graph",
+            "nodes": [[4.0 * i, 0.0, 0.0] for i in range(11)],
+            "cable": [{"name": "main", "nodes": list(range(11))}],
+            "sets": {"mid": [5]},
+        },
+        "material": {"EA": 1.0e8},
+        "supports": {"fixed": [0, 10]},
+        "load": {"point": [{"node": i, "force": [0, 0, -2000.0]} for i in range(1, 10)]},
+        "formfind": {
+            "force_density": 1.0e4,
+            "vary": "cables",
+            "support": [{"node": 10, "dx": dx}],
+        },
+        "target": [{"node": "mid", "z": -3.0}, {"support": 0, "reaction_x": -45000.0}],
+    }
+
+
+def test_an_offset_held_at_its_range_is_said_so_on_its_own_line(tmp_path):
+    """The cable's targets are met by hand at dx = +14 m; dx in [0, 10] m holds the
+    anchor at 10 m (a compromise). The offset's line says it is at a bound, the force
+    density's line does not (the offset had been counted as a force density at a
+    bound)."""
+    r, _ = invoke(tmp_path, hung_cable([0.0, 10.0]))
+    assert r.exit_code == 0, r.output
+    line = r.output.split("design       ")[1].split("\n")[0]
+    assert line.startswith("1 force densities (one per cable)") and "at a bound" not in line
+    assert "moved        support 10 dx: +10 m (at a bound of its range)" in r.output
+    assert "(1 variable at a bound)" in r.output
+
+
+def test_the_hung_cables_anchor_is_found_by_hand(tmp_path):
+    r, out = invoke(tmp_path, hung_cable([-20.0, 20.0]))
+    assert r.exit_code == 0, r.output
+    with h5py.File(out) as h5:
+        found = h5["result/targets"].attrs["found"]
+        assert found[0] == pytest.approx(45000.0 / 5.4, rel=1e-9)
+        assert found[1] == pytest.approx(14.0, abs=1e-8)
+
+
+def test_a_hard_target_the_offsets_range_stops_names_that_range(tmp_path):
+    """The force densities kept, the ring allowed only up (dz in [0.5, 2] m): the
+    centre cannot come 3 m below, and the message names the range that stops it (it had
+    named formfind.force_density_min/max, which nothing here varies)."""
+    data = spider(
+        geometry=with_sets(),
+        target=[{"node": "centre", "z": -3.0, "hard": True}],
+        formfind={
+            "force_density": 500.0,
+            "vary": "supports",
+            "support": [{"node": "ring", "dz": [0.5, 2.0]}],
+        },
+    )
+    r, _ = invoke(tmp_path, data)
+    assert r.exit_code == 2, r.output
+    assert "widen the ranges of [[formfind.support]] or drop hard" in r.output
+    assert "force_density_min" not in r.output
