@@ -236,7 +236,8 @@ class AreaLoadConfig(Declared):
         None,
         write="given",
         shown="the whole net",
-        doc="the part it covers: the area inside the outline through these nodes' outer ones",
+        doc="the part it covers: the cells of the edges between these nodes (list every node "
+        "of the part, not its corners alone), inside the outline through its outer ones",
     )
     history: tuple | None = history_key("dynamic: pressure times factor(t) (none: load.history)")
 

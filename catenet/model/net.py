@@ -325,7 +325,8 @@ class Net:
         lonely = lonely[lonely < self.n_nodes - self.bodies]  # a body's centre has none
         if lonely.size:
             problems.append(
-                f"nodes {lonely[:10].tolist()}: belong to no edge: every free node needs an edge"
+                f"nodes {lonely[:10].tolist()}: belong to no edge: every free node needs an "
+                "edge (join them to the net, fix them, e.g. as posts, or leave them out)"
             )
         if self.flies:  # a free flight: parts without support are the point
             if problems:

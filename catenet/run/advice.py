@@ -248,6 +248,7 @@ MATERIAL_RANGES = {
     "area": (1e-9, 1.0),  # m^2: a 0.03 mm fibre to a 1.1 m bridge cable
     "gravity": (1.0, 30.0),  # m/s^2: the Moon's 1.6 to Jupiter's 25
     "radius": (2e-5, 0.6),  # m
+    "pressure": (1.0, 1e5),  # Pa: an area load, from a model's 1 Pa to 100 kPa
 }
 # What one unit of each quantity is in SI, per unit system (top-level ``units``).
 UNIT_FACTORS: dict[str, dict[str, float]] = {
@@ -255,6 +256,8 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "kN-m": {"E": 1e3, "density": 1e3, "EA": 1e3, "area": 1.0, "radius": 1.0, "gravity": 1.0},
     "N-mm": {"E": 1e6, "density": 1e12, "EA": 1.0, "area": 1e-6, "radius": 1e-3, "gravity": 1e-3},
 }
+for _units, _factor in (("SI", 1.0), ("kN-m", 1e3), ("N-mm", 1e6)):  # (a pressure: as E)
+    UNIT_FACTORS[_units]["pressure"] = _factor
 # ... and the names of those units, as the case writes them
 UNIT_NAMES: dict[str, dict[str, str]] = {
     "SI": {
@@ -264,6 +267,7 @@ UNIT_NAMES: dict[str, dict[str, str]] = {
         "area": "m^2",
         "radius": "m",
         "gravity": "m/s^2",
+        "pressure": "Pa",
     },
     "kN-m": {
         "E": "kPa",
@@ -272,6 +276,7 @@ UNIT_NAMES: dict[str, dict[str, str]] = {
         "area": "m^2",
         "radius": "m",
         "gravity": "m/s^2",
+        "pressure": "kPa",
     },
     "N-mm": {
         "E": "MPa",
@@ -280,6 +285,7 @@ UNIT_NAMES: dict[str, dict[str, str]] = {
         "area": "mm^2",
         "radius": "mm",
         "gravity": "mm/s^2",
+        "pressure": "MPa",
     },
 }
 
@@ -287,7 +293,8 @@ UNIT_NAMES: dict[str, dict[str, str]] = {
 def unit_slips(case: Case, net) -> list[str]:
     """Warnings for material numbers far outside real cable materials (steel, stainless,
     aramid, polyester, polyamide, HMPE, chain) in the case's ``units``: E, density and
-    each edge's EA, each with the power of 1000 that would bring it into range."""
+    each edge's EA, and for area loads' pressures far outside real ones, each with the
+    power of 1000 that would bring it into range."""
     units = case.units or "SI"
     factors = UNIT_FACTORS.get(units, UNIT_FACTORS["SI"])
     names = UNIT_NAMES.get(units, UNIT_NAMES["SI"])
@@ -304,6 +311,11 @@ def unit_slips(case: Case, net) -> list[str]:
     gravity = case.load.gravity
     if gravity is not None:
         checks.append(("gravity", float(np.linalg.norm(gravity)), "|load.gravity|"))
+    for k, area in enumerate(case.load.areas):
+        checks.append(("pressure", abs(area.pressure), f"load.area[{k}].pressure"))
+    for i, lc in enumerate(case.load_cases):
+        for k, area in enumerate(lc.areas):
+            checks.append(("pressure", abs(area.pressure), f"load_case[{i}].area[{k}].pressure"))
     ea = np.asarray(net.EA, dtype=np.float64)
     if ea.size and material.E is None:  # E's own check says it else
         checks.append(("EA", float(np.min(ea)), "EA (the least of the edges')"))
@@ -323,10 +335,14 @@ def unit_slips(case: Case, net) -> list[str]:
             guess = f"; did you mean {meant:g} ({_si(meant * factors[quantity], quantity)})"
         found.append(
             f"check units: {key} = {float(written):g} {unit} ({units}) is far "
-            f"{'below' if si < low else 'above'} real cables ({low:g} to {high:g} in SI "
-            f"units of {UNIT_NAMES['SI'][quantity]}){guess}?"  # ("in SI": not relabelled)
+            f"{'below' if si < low else 'above'} {_REAL.get(quantity, 'real cables')} "
+            f"({low:g} to {high:g} in SI units of {UNIT_NAMES['SI'][quantity]}){guess}?"
+            # ("in SI": not relabelled)
         )
     return list(dict.fromkeys(found))
+
+
+_REAL = {"pressure": "real area loads"}  # (what a quantity is measured against)
 
 
 def _si(value: float, quantity: str) -> str:
@@ -341,11 +357,21 @@ def _si(value: float, quantity: str) -> str:
         return f"{value * 1e3:g} mm"
     if quantity == "gravity":  # (said to be SI: an N-mm case's labels leave it so)
         return f"{value:g} m/s^2 in SI"
+    if quantity == "pressure":
+        return f"{value / 1e3:g} kPa in SI"
     return f"{value / 1e3:g} kN"
 
 
 # the middle of each range, in SI
-TYPICAL = {"E": 1e11, "density": 2000.0, "EA": 1e6, "area": 1e-4, "radius": 5e-3, "gravity": 9.81}
+TYPICAL = {
+    "E": 1e11,
+    "density": 2000.0,
+    "EA": 1e6,
+    "area": 1e-4,
+    "radius": 5e-3,
+    "gravity": 9.81,
+    "pressure": 1e3,
+}
 
 
 def _power_of_1000(si: float, low: float, high: float, typical: float) -> int:

@@ -160,6 +160,34 @@ def test_gravity_in_the_wrong_length_unit_is_a_slip(units, gravity, slip):
         assert slips == [], slips
 
 
+@pytest.mark.parametrize(
+    "units, pressure, slip",
+    [
+        ("SI", 0.8, "load.area[0].pressure = 0.8 Pa (SI) is far below real area loads"),
+        ("kN-m", 800.0, "load.area[0].pressure = 800 kPa (kN-m) is far above real area loads"),
+        ("N-mm", 500.0, "load.area[0].pressure = 500 MPa (N-mm) is far above real area loads"),
+        ("SI", 800.0, ""),
+        ("kN-m", 0.8, ""),
+        ("N-mm", 8e-4, ""),
+    ],
+)
+def test_an_area_load_in_the_wrong_unit_is_a_slip(units, pressure, slip):
+    """Snow of 0.8 kN/m^2 written 0.8 in SI (185 N on a roof, no word), or 800 in kN-m (a
+    strain of 0.74, then 'use a large-strain law'): a pressure far outside 1 Pa to 100
+    kPa is named before the run, with what was likely meant."""
+    from meshes import hypar_roof
+
+    case = hypar_roof(half=6.0, rise=1.5, edge_length=0.6)
+    case["units"] = units
+    case["load"] = {"area": [{"pressure": pressure}]}
+    parsed = parse_case(case)
+    slips = [s for s in unit_slips(parsed, build(parsed).net) if "pressure" in s]
+    if slip:
+        assert len(slips) == 1 and slip in slips[0] and "did you mean" in slips[0], slips
+    else:
+        assert slips == [], slips
+
+
 def test_the_bundled_cases_have_no_unit_slip():
     paths = sorted((ROOT / "configs").rglob("*.toml"))
     paths.append(ROOT / "catenet" / "data" / "default.toml")
