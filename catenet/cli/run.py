@@ -378,6 +378,12 @@ def _summary(case, result, path: Path | None) -> None:
         detail = f"{detail}; post-collapse: the path collapsed on its way here".lstrip("; ")
     if case.solver.method == "dynamic" and not result.equilibrium:
         advice = "raise solver.t_end"
+        if case.solver.damping == 1.0 and case.water is None:  # (the relaxation's default)
+            advice += (
+                " (nothing here depends on time, so the run relaxes to rest: damped by "
+                "solver.damping = 1 1/s, the default; for the free motion give "
+                "solver.damping = 0)"
+            )
         why = time_dependence(case.load, case.supports, case.solver, case.obstacles, case.masses)
         if _prescribed(case):  # the rest test is off while anything is driven
             advice = "obstacles on prescribed motions: the run ends at solver.t_end, not at rest"

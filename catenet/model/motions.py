@@ -154,6 +154,26 @@ def corners(loads: Loads) -> np.ndarray:
     return np.unique(np.asarray(times, dtype=np.float64))
 
 
+def ramps(loads: Loads) -> np.ndarray:
+    """The (start, end) times (R, 2) of the pieces of the loads' histories (a load's,
+    gravity's) along which the factor changes: a step across such a piece takes its load
+    at the piece's end (a ramp up from rest, taken in one step, gave the pulse's whole
+    impulse for its rising half; catenet/solver/adaptive.py)."""
+    histories = [h for _, h in loads.parts]
+    if loads.gravity is not None and loads.gravity_history is not None:
+        histories.append(loads.gravity_history)
+    out = [
+        (float(a), float(b))
+        for h in histories
+        if isinstance(getattr(h, "times", None), np.ndarray)
+        for a, b, fa, fb in zip(
+            h.times[:-1], h.times[1:], h.factors[:-1], h.factors[1:], strict=True
+        )
+        if fa != fb
+    ]
+    return np.asarray(sorted(set(out)), dtype=np.float64).reshape(-1, 2)
+
+
 def periods(loads: Loads) -> np.ndarray:
     """The periods [s] of the prescribed sines: a support's ``sine``, a vessel's sines."""
     out = [getattr(h, "period", None) for _, h in loads.support_history]

@@ -50,7 +50,7 @@ through its 0.4 ms bounce; they are now a 64th of it, catenet/solver/strikes.py.
 The energy a step lets the integrator create or remove on its own (the balance's
 remainder, catenet/solver/energy.py: ``Ledger.change`` before the step is taken) is
 held where no barrier touches at its start or end (or where nodes only rest on fixed
-obstacles, ``resting``): the run may move ENERGY (5 %) of the
+obstacles, ``scales.resting``): the run may move ENERGY (5 %) of the
 motion's energy at the default tolerance, in proportion to the tolerance, spread evenly
 over its span with what earlier steps saved, and each step at least LEAST of the run's
 allowance (``scales.Energy``). The positions' error is local: bdf2 damps within a few
@@ -62,7 +62,7 @@ low, now within 1 % (tests/run/test_integrator_loss.py). Where the nodes a barri
 carry the motion they chatter on it, a loss no step resolves (the drop below and a rod
 landing on the ground, judged there, shrank their steps to round-off): such contact is
 left to the momenta and to the strikes. Nodes resting on fixed obstacles are judged
-(``resting``: a chain lying on the seabed).
+(``scales.resting``: a chain lying on the seabed).
 
 The corners of what the case prescribes are landed on too: every point of a load's,
 gravity's, a support's, a vessel's, an obstacle's or a turned rod end's history, and the
@@ -77,7 +77,11 @@ T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's
 response, not the motion that drives it, and a response too small to matter against the
 net's size (a taut wire shaken by 0.5 mm at one end) let the steps grow to 30 periods and
 sample the sine (its amplitude 64 % low; within 1 % now, tests/solver/test_corners.py).
-bdf2's error in a forced steady state falls with (h / T)^2.
+bdf2's error in a forced steady state falls with (h / T)^2. For the same reason a
+piece of a load's history along which the factor changes is taken in RAMP_STEPS steps
+or more: the steps grown over a rest took a pulse's rise in one, which takes the load
+at its end, so its rising half twice (a weight struck after 1 s at rest 2.2 % fast, a
+string 41 % too far; 0.05 % now).
 
 Contact events (a first touch, a release) are landed on (catenet/solver/events.py): a
 converged step across one is tried again ending there, before its error is judged, so
@@ -130,10 +134,9 @@ from catenet.model import motions
 from catenet.solver.energy import ROUNDOFF
 from catenet.solver.events import Events
 from catenet.solver.integrators import BDF2, ImplicitEuler
-from catenet.solver.scales import ENERGY, FLOOR, Bodies, Edges, Energy
+from catenet.solver.scales import ENERGY, FLOOR, Bodies, Edges, Energy, resting
 from catenet.solver.stepping import ALLOWANCE
 from catenet.solver.strikes import Strikes, Watch
-from catenet.terms import Term
 
 if TYPE_CHECKING:
     from catenet.solver.newton import NewtonResult
@@ -149,8 +152,8 @@ FIRST_SHARE = 1e-3  # the first step, of the run's span (t_end - t0)
 ADAPTIVE = ("implicit_euler", "bdf2")  # the schemes that estimate their error
 STRAIN_FLOOR = 1e-4  # S at least this strain (0.01 %)
 SINE_STEPS = 64  # the fewest steps a period of a prescribed sine at the default tolerance
+RAMP_STEPS = 16  # the fewest steps a load history's changing piece at the default tolerance
 MOMENTUM = 0.1  # a body's momentum error against this share of the tolerance
-RESTING = 0.1  # nodes on fixed obstacles carrying at most this share of the kinetic energy
 MAX_TRIES = 100_000  # a run that needs more steps fails (a tolerance too tight for it)
 
 
@@ -194,23 +197,6 @@ def watch(stepper: TimeStepper, t0: float, t_end: float) -> Watch | None:
     return None if strikes is None else Watch(strikes, bodies, stepper.free)
 
 
-def resting(touching: list[Term], mass: np.ndarray, x: np.ndarray, v: np.ndarray) -> bool:
-    """Whether the barriers ``touching`` hold nodes at rest on fixed obstacles: each a
-    fixed obstacle, the nodes within its reach at x (N, 3) carrying at most RESTING of
-    the kinetic energy (velocities v, masses ``mass``): a chain lying on the seabed,
-    where the energy is judged (its snatch came out 28 % low without), not a rod
-    landing on the ground or a box on a net, whose nodes chatter on the barrier."""
-    from catenet.terms.contact import Obstacle  # (a run without contact never loads it)
-
-    kinetic = mass * np.einsum("ij,ij->i", v, v)
-    held = np.zeros(len(mass), dtype=bool)
-    for term in touching:
-        if not isinstance(term, Obstacle) or term.driven:
-            return False
-        held[term.nodes[term.gap(x) < term.dhat]] = True
-    return float(kinetic[held].sum()) <= RESTING * float(kinetic.sum())
-
-
 def _rms(a: np.ndarray, mass: np.ndarray) -> float:
     """sqrt(sum m a^2 / sum m): a mass-weighted RMS over the free DOFs."""
     total = float(np.sum(mass))
@@ -250,6 +236,7 @@ class ErrorControl:
         self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
         self.crossing = math.inf  # the longest step no solid passes a strand in (``ahead``)
         self.corners = np.empty(0)  # times a prescribed motion or load turns a corner (``of``)
+        self.ramps = np.empty((0, 2))  # the loads' changing pieces, resolved (``of``)
         self.scheme: ImplicitEuler | BDF2 | None = None  # told of each corner (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
@@ -315,6 +302,8 @@ class ErrorControl:
         corners.extend(motions.corners(stepper.loads))
         every = np.unique(np.asarray(corners, dtype=np.float64))
         out.corners = every[(every > t0) & (every < t_end)]
+        ramps = motions.ramps(stepper.loads)
+        out.ramps = ramps[(ramps[:, 1] > t0) & (ramps[:, 0] < t_end)]
         spacing = float(np.median(net.rest_length)) if net.n_edges else 0.0
         out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass, spacing)
         out.ahead(stepper.x, stepper.v)
@@ -363,7 +352,7 @@ class ErrorControl:
         """The energy the converged step of ``h_step`` of a TimeStepper would let its
         integrator create or remove, over its allowance (``Energy``; module docstring);
         0 where no balance is kept or where a barrier touches and its nodes do not rest
-        on fixed obstacles (``resting``)."""
+        on fixed obstacles (``scales.resting``)."""
         ledger, scheme = stepper.ledger, stepper.scheme
         if self.energy is None or ledger is None or not ledger.judged:
             return 0.0
@@ -450,6 +439,17 @@ class ErrorControl:
         k = int(np.searchsorted(self.corners, t + self._near(t), side="right"))
         return float(self.corners[k]) if k < len(self.corners) else None
 
+    def _ramp(self, t: float) -> float:
+        """The longest step from t within a piece of a load's history along which it
+        changes: RAMP_STEPS of them over the piece at the default tolerance (more at a
+        tighter one, as a sine's); inf outside such pieces."""
+        near = self._near(t)
+        on = (self.ramps[:, 0] <= t + near) & (t + near < self.ramps[:, 1])
+        if not on.any():
+            return math.inf
+        piece = float(np.min(self.ramps[on, 1] - self.ramps[on, 0]))
+        return piece / (RAMP_STEPS * math.sqrt(TOLERANCE / self.tolerance))
+
     def _near(self, t: float) -> float:
         """How close to a corner a time lies on it (round-off of the times' sums)."""
         return 1e-12 * max(abs(t), self.t_end - self.t0)
@@ -461,7 +461,7 @@ class ErrorControl:
         shorter than itself."""
         corner = self._corner(t)
         left = (self.t_end if corner is None else corner) - t
-        self.h = min(self.h, self.crossing)  # no solid past a strand within the step
+        self.h = min(self.h, self.crossing, self._ramp(t))  # (no solid past a strand)
         if self.strikes is not None:  # a bounce goes on: its steps resolve it
             self.h = min(self.h, self.strikes.cap(t))
         self.least = self.dt_min  # the shortest this step may be (judge)

@@ -233,3 +233,26 @@ def test_rods_are_named_rods_with_their_largest_bending_moment(tmp_path):
     for name in ("column", "beam"):
         row = s["cables"][name]
         assert row["rod"] and row["max_bending_moment"] == pytest.approx(200.0, rel=2e-3)
+
+
+@pytest.mark.parametrize("damping, said", [(None, True), (0.0, False)])
+def test_a_release_with_nothing_in_time_says_it_is_damped_by_default(tmp_path, damping, said):
+    """A pendulum let go from 30 degrees with only t_end given: nothing depends on time,
+    so the run relaxes with the default damping of 1 1/s. The summary says so and how to
+    get the free motion; it had said only "raise solver.t_end"."""
+    case = {
+        "geometry": {"kind": "graph", "nodes": [[0.0, 0.0, 0.0], [1.0, 0.0, -1.7320508]],
+                     "edges": [[0, 1]], "fixed": [0]},
+        "material": {"EA": 1e7, "area": 1e-5, "density": 1000.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "mass": [{"node": 1, "mass": 10.0}],
+        "solver": {"method": "dynamic", "t_end": 1.0},
+    }  # fmt: skip
+    if damping is not None:
+        case["solver"]["damping"] = damping
+    path = tmp_path / "pendulum.toml"
+    path.write_text(dumps_toml(case))
+    r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "p.h5")])
+    assert r.exit_code == 0, r.output
+    text = "damped by solver.damping = 1 1/s, the default; for the free motion give"
+    assert (text in r.output) == said, r.output
