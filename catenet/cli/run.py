@@ -326,17 +326,23 @@ def _timing(case) -> bool | str:
     return "rest" if case.solver.t_end == "rest" else True
 
 
-def _balance(row, scale: float) -> str:
+def _balance(row, scale: float, motion: float = float("nan")) -> str:
     """The summary's line of a dynamic run's energy balance [J]; its numerical part as a
-    share of ``scale``, the run's largest energy (the last row's where not known)."""
+    share of ``scale``, the run's largest energy (the last row's where not known), and of
+    the motion's energy (``motion``, its largest kinetic energy, with what damping, drag
+    and friction took) where that is under a tenth of it (a prestressed net's small
+    motion, whose loss the largest energy's share hides as -0.00 %)."""
     k, u, c, w, d, rest = (float(v) for v in row)
     largest = max(abs(k), abs(u), abs(c), abs(w), 1e-300)
     largest = scale if scale > 0 else largest  # (nan: not known)
     what = "loss" if rest <= 0.0 else "gain"
+    moving = motion + max(d, 0.0)
+    of_motion = f", {rest / moving:+.2%} of the motion's" if 0 < moving < 0.1 * largest else ""
     return (
         f"{'energy':<12} kinetic {k:.4g} J, elastic {u:.4g} J, contact {c:.4g} J; work in "
         f"{w:.4g} J, dissipated {d:.4g} J; numerical {rest:.3g} J ({rest / largest:+.2%} of "
-        f"the run's largest energy: the integrator's own {what}, /trajectory/energy)"
+        f"the run's largest energy{of_motion}: the integrator's own {what}, "
+        "/trajectory/energy)"
     )
 
 
@@ -405,7 +411,7 @@ def _summary(case, result, path: Path | None) -> None:
         _times(result),
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)
-        lines.insert(-1, _balance(result.energy, result.energy_scale))
+        lines.insert(-1, _balance(result.energy, result.energy_scale, result.energy_motion))
     for k, b in sorted(s.bodies.items()):  # free rigid bodies and balls, one line each
         head = f"{'body':<12} obstacle[{k}] ({b['kind']}): "
         touch = _touch(b, case)

@@ -256,3 +256,15 @@ def test_a_release_with_nothing_in_time_says_it_is_damped_by_default(tmp_path, d
     assert r.exit_code == 0, r.output
     text = "damped by solver.damping = 1 1/s, the default; for the free motion give"
     assert (text in r.output) == said, r.output
+
+
+def test_the_energy_line_gives_the_loss_against_the_motion_where_it_is_small():
+    """A prestressed string's small motion: its largest energy is the prestress's, so the
+    integrator's loss read -0.00 % of it; its share of the motion's energy is given
+    beside it (where the motion is under a tenth of the largest)."""
+    from catenet.cli.run import _balance
+
+    row = [3.6e-5, 0.3183, 0.0, 6.58e-5, 0.0, -7.16e-6]
+    line = _balance(row, 0.3183, 4.5e-5)
+    assert "(-0.00% of the run's largest energy, -15.91% of the motion's:" in line
+    assert "of the motion's" not in _balance(row, 0.3183, 0.2)
