@@ -261,7 +261,8 @@ def test_a_release_with_nothing_in_time_says_it_is_damped_by_default(tmp_path, d
 def test_the_energy_line_gives_the_loss_against_the_motion_where_it_is_small():
     """A prestressed string's small motion: its largest energy is the prestress's, so the
     integrator's loss read -0.00 % of it; its share of the motion's energy is given
-    beside it (where the motion is under a tenth of the largest)."""
+    beside it (where the motion is under a tenth of the largest; the example of
+    docs/howto/dynamic-runs.md)."""
     from catenet.cli.run import _balance
 
     row = [3.6e-5, 0.3183, 0.0, 6.58e-5, 0.0, -7.16e-6]
