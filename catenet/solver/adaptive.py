@@ -57,7 +57,7 @@ allowance (``scales.Energy``). The positions' error is local: bdf2 damps within 
 steps a mode it does not resolve, whose error is small from then on, so the steps never
 come back to it. A 10 m wire at 10 kN struck by a 20 N step at midspan came out 13.5 %
 low at the default (22 steps; 5.8 % at 1e-4) with 130 % of its motion's energy gone; 0.3
-% in 917 steps now (tests/solver/test_energy_steps.py), and a roof net's gust peak 5 %
+% in 980 steps now (tests/solver/test_energy_steps.py), and a roof net's gust peak 5 %
 low, now within 1 % (tests/run/test_integrator_loss.py). Where the nodes a barrier holds
 carry the motion they chatter on it, a loss no step resolves (the drop below and a rod
 landing on the ground, judged there, shrank their steps to round-off): such contact is
