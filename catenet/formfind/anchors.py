@@ -101,7 +101,7 @@ class Anchors:
         d_all, _ = goals.partials(x, q, a, every, net)
         if goals.reacts.any():
             rx, _ = reactions.partials(goals, a, shape, x, q, every, own=True)
-            d_all = (d_all + rx).tocsc()
+            d_all = d_all + rx
         d_all = d_all.tocsc()
         index = shape.pattern.index
         ea, eb = net.edges[:, 0], net.edges[:, 1]
