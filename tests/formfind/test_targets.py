@@ -120,17 +120,22 @@ def test_the_adjoint_jacobian_is_the_finite_differences_one(gravity, vary):
     d_x, d_q = search.partials(x, q, a)
     op = jacobian_operator(adj, d_x, d_q, sp.diags(q) @ search.p)
     assert isinstance(op, SparseJacobian)
-    by_columns = np.column_stack([op.matvec(e) for e in np.eye(len(s))])
-    by_rows = np.vstack([op.rmatvec(e) for e in np.eye(search.goals.rows)])
-    assert np.abs(by_columns - whole).max() <= 1e-10 * scale
-    assert np.abs(by_rows - whole).max() <= 1e-10 * scale
-    # The damped step of the saddle-point system is the SVD's.
-    r = search.residual(s)
     keep = np.ones(len(s), dtype=bool)
     keep[::3] = False
+    assert_operator_is(op, whole, search.residual(s), keep)
+
+
+def assert_operator_is(op, whole: np.ndarray, r: np.ndarray, keep: np.ndarray) -> None:
+    """The Jacobian operator ``op``'s products are the whole Jacobian's, and its damped
+    step (the variables not ``keep`` held) is the SVD's."""
+    scale = np.abs(whole).max()
+    by_columns = np.column_stack([op.matvec(e) for e in np.eye(whole.shape[1])])
+    by_rows = np.vstack([op.rmatvec(e) for e in np.eye(whole.shape[0])])
+    assert np.abs(by_columns - whole).max() <= 1e-10 * scale
+    assert np.abs(by_rows - whole).max() <= 1e-10 * scale
     mu = 1e-3 * scale**2
     u, sv, vt = np.linalg.svd(whole[:, keep], full_matrices=False)
-    expected = np.zeros(len(s))
+    expected = np.zeros(whole.shape[1])
     expected[keep] = -(vt.T @ (sv / (sv**2 + mu) * (u.T @ r)))
     step = op.damped(r, mu, keep)
     assert np.abs(step - expected).max() <= 1e-8 * np.abs(expected).max()
