@@ -56,7 +56,9 @@ def centre_z(f) -> float:
 
 def search_at(data: dict, seed: int = 0):
     """The search of a case's targets (its residual and Jacobian as functions of s) and
-    a point s near its start."""
+    a point s near its start (its supports' offsets, [[formfind.support]], within a few
+    cm)."""
+    from catenet.formfind.anchors import Anchors, support_moves
     from catenet.formfind.design import _groups, _Search
     from catenet.formfind.fdm import _Shape
     from catenet.formfind.goals import resolve_goals
@@ -69,9 +71,13 @@ def search_at(data: dict, seed: int = 0):
     goals = resolve_goals(case.targets, scene, shape.size, 1e-30)  # (never met)
     groups = _groups(scene, case.formfind.vary, "formfind.")
     n = int(groups.max()) + 1
+    moves = support_moves(scene, case.formfind.supports, "formfind.")
+    anchors = Anchors(net, moves, n, shape.size)
     rng = np.random.default_rng(seed)
-    search = _Search(shape, goals, groups, np.log(500.0) + 0.3 * rng.standard_normal(n))
-    return search, 0.2 * rng.standard_normal(n)
+    base = np.log(500.0) + 0.3 * rng.standard_normal(n)
+    search = _Search(shape, goals, groups, base, anchors)
+    s = np.concatenate([0.2 * rng.standard_normal(n), 2e-3 * rng.standard_normal(anchors.n)])
+    return search, s
 
 
 TARGETS = [

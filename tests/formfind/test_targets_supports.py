@@ -15,7 +15,7 @@ from scenes import hypar_on_surface as hypar
 from catenet.case import build, dumps_toml, parse_case
 from catenet.cli import main
 from catenet.formfind.case import formfind_scene
-from tests.formfind.test_targets import TARGETS, assert_operator_is, invoke, spider
+from tests.formfind.test_targets import TARGETS, assert_operator_is, invoke, search_at, spider
 
 RING = [37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48]  # the spider's fixed outer ring
 
@@ -28,28 +28,9 @@ def with_sets(**more) -> dict:
 
 
 def search_with_moves(data: dict, seed: int = 0):
-    """The search of a case's targets with its supports' offsets, and a point s near
-    its start (the offsets within a few cm)."""
-    from catenet.formfind.anchors import Anchors, support_moves
-    from catenet.formfind.design import _groups, _Search
-    from catenet.formfind.fdm import _Shape
-    from catenet.formfind.goals import resolve_goals
-
-    case = parse_case(data)
-    scene = build(case)
-    net, loads = scene.net, scene.loads
-    force = np.zeros((net.n_nodes, 3)) if loads.force is None else np.array(loads.force)
-    shape = _Shape(net, force, loads.gravity, "auto", "q")
-    goals = resolve_goals(case.targets, scene, shape.size, 1e-30)  # (never met)
-    groups = _groups(scene, case.formfind.vary, "formfind.")
-    n = int(groups.max()) + 1
-    moves = support_moves(scene, case.formfind.supports, "formfind.")
-    anchors = Anchors(net, moves, n, shape.size)
-    rng = np.random.default_rng(seed)
-    base = np.log(500.0) + 0.3 * rng.standard_normal(n)
-    search = _Search(shape, goals, groups, base, anchors)
-    s = np.concatenate([0.2 * rng.standard_normal(n), 2e-3 * rng.standard_normal(anchors.n)])
-    return search, s, n
+    """test_targets.search_at's search and point, and the number of force densities."""
+    search, s = search_at(data, seed)
+    return search, s, search.nq
 
 
 MOVES = [  # a support with a reaction target (its own node's term), a set moved as one
