@@ -39,10 +39,10 @@ def command(
     debug: bool,
 ) -> None:
     """Find the shape of CASE.toml's net that carries the forces its [formfind] table
-    asks for (force densities, target forces or target lengths), or the force densities
-    or rest lengths that reach its [[target]] tables (nodes' positions, nodes on a
-    surface, cables' tensions and lengths, supports' reactions: each target's achieved
-    value is reported), and write the result file
+    asks for (force densities, target forces or target lengths), or the force densities,
+    rest lengths or supports' positions ([[formfind.support]]) that reach its [[target]]
+    tables (nodes' positions, nodes on a surface, cables' tensions and lengths, supports'
+    reactions: each target's achieved value is reported), and write the result file
     OUT.h5 and the graph case OUT.toml beside it: form-found positions and the rest
     lengths that carry those forces, which `catenet run OUT.toml` reproduces.
 
