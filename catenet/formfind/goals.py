@@ -101,7 +101,7 @@ class Goals:
         scale of a bound: a value the search has pushed onto its bound is held there by
         its Jacobian's row (an active constraint), else the next step, blind to it,
         crosses it and is refused, and the search crawls along the bound."""
-        band = EDGE * self.scale
+        band = np.minimum(EDGE * self.scale, 0.25 * (self.hi - self.lo))  # (a narrow range)
         out = (a < self.lo + band) | (a > self.hi - band) | (self.lo == self.hi)
         return np.where(out, self.w, 0.0)
 

@@ -155,23 +155,23 @@ def corners(loads: Loads) -> np.ndarray:
 
 
 def ramps(loads: Loads) -> np.ndarray:
-    """The (start, end) times (R, 2) of the pieces of the loads' histories (a load's,
-    gravity's) along which the factor changes: a step across such a piece takes its load
-    at the piece's end (a ramp up from rest, taken in one step, gave the pulse's whole
-    impulse for its rising half; catenet/solver/adaptive.py)."""
+    """The pieces of the loads' histories (a load's, gravity's) along which the factor
+    changes, (R, 3): start and end times and the change's share of the history's largest
+    |factor|. A step across such a piece takes its load at the piece's end (a ramp up
+    from rest, taken in one step, gave the pulse's whole impulse for its rising half;
+    catenet/solver/adaptive.py)."""
     histories = [h for _, h in loads.parts]
     if loads.gravity is not None and loads.gravity_history is not None:
         histories.append(loads.gravity_history)
-    out = [
-        (float(a), float(b))
-        for h in histories
-        if isinstance(getattr(h, "times", None), np.ndarray)
-        for a, b, fa, fb in zip(
-            h.times[:-1], h.times[1:], h.factors[:-1], h.factors[1:], strict=True
-        )
-        if fa != fb
-    ]
-    return np.asarray(sorted(set(out)), dtype=np.float64).reshape(-1, 2)
+    out = set()
+    for h in histories:
+        if not isinstance(getattr(h, "times", None), np.ndarray):
+            continue  # (a sine: smooth)
+        top = float(np.max(np.abs(h.factors)))
+        change = np.abs(np.diff(h.factors))
+        for k in np.flatnonzero(change > 0):
+            out.add((float(h.times[k]), float(h.times[k + 1]), float(change[k]) / top))
+    return np.asarray(sorted(out), dtype=np.float64).reshape(-1, 3)
 
 
 def periods(loads: Loads) -> np.ndarray:

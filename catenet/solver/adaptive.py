@@ -78,8 +78,9 @@ response, not the motion that drives it, and a response too small to matter agai
 net's size (a taut wire shaken by 0.5 mm at one end) let the steps grow to 30 periods and
 sample the sine (its amplitude 64 % low; within 1 % now, tests/solver/test_corners.py).
 bdf2's error in a forced steady state falls with (h / T)^2. For the same reason a
-piece of a load's history along which the factor changes is taken in RAMP_STEPS steps
-or more: the steps grown over a rest took a pulse's rise in one, which takes the load
+piece of a load's history that changes the factor by its whole range is taken in
+RAMP_STEPS steps (a smaller change in proportion fewer, at least one):
+the steps grown over a rest took a pulse's rise in one, which takes the load
 at its end, so its rising half twice (a weight struck after 1 s at rest 2.2 % fast, a
 string 41 % too far; 0.05 % now).
 
@@ -236,7 +237,7 @@ class ErrorControl:
         self.strikes: Strikes | None = None  # nodes striking bodies, resolved (``of``)
         self.crossing = math.inf  # the longest step no solid passes a strand in (``ahead``)
         self.corners = np.empty(0)  # times a prescribed motion or load turns a corner (``of``)
-        self.ramps = np.empty((0, 2))  # the loads' changing pieces, resolved (``of``)
+        self.ramps = np.empty((0, 3))  # the loads' changing pieces, resolved (``of``)
         self.scheme: ImplicitEuler | BDF2 | None = None  # told of each corner (``of``)
         self.t0, self.t_end, self.order = t0, t_end, int(order)
         self.tolerance = float(tolerance)
@@ -441,14 +442,18 @@ class ErrorControl:
 
     def _ramp(self, t: float) -> float:
         """The longest step from t within a piece of a load's history along which it
-        changes: RAMP_STEPS of them over the piece at the default tolerance (more at a
-        tighter one, as a sine's); inf outside such pieces."""
+        changes: RAMP_STEPS of them over a piece that changes the load by its whole
+        range at the default tolerance, in proportion fewer for a smaller change (one
+        step of a record's sample that hardly changes), more at a tighter tolerance;
+        never below dt_min; inf outside such pieces."""
         near = self._near(t)
         on = (self.ramps[:, 0] <= t + near) & (t + near < self.ramps[:, 1])
         if not on.any():
             return math.inf
-        piece = float(np.min(self.ramps[on, 1] - self.ramps[on, 0]))
-        return piece / (RAMP_STEPS * math.sqrt(TOLERANCE / self.tolerance))
+        pieces = self.ramps[on]
+        steps = RAMP_STEPS * pieces[:, 2] * math.sqrt(TOLERANCE / self.tolerance)
+        longest = float(np.min((pieces[:, 1] - pieces[:, 0]) / np.maximum(steps, 1.0)))
+        return max(self.dt_min, longest)
 
     def _near(self, t: float) -> float:
         """How close to a corner a time lies on it (round-off of the times' sums)."""

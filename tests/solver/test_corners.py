@@ -87,6 +87,31 @@ def test_a_pulse_from_rest_gives_its_impulse_however_long_the_rest(tmp_path):
     assert v[after, 1, 0] == pytest.approx(50.0 * RISE / mass, rel=2e-3)
 
 
+def test_a_pulses_steps_keep_to_dt_min(tmp_path):
+    """The pulse's 16 steps a rise are never shorter than solver.dt_min = 4 ms: the 20
+    ms pulse takes 6 steps (landing on its three points), not 56 of 0.26 ms."""
+    solver = {"dt": 0.005, "dt_min": 0.004, "tolerance": 1e-3, "t_end": 1.2}
+    case = write(tmp_path, struck(solver), "dtmin")
+    out = tmp_path / "dtmin.h5"
+    result = invoke("run", case, "-o", out, "--set", "output.every=1")
+    assert result.exit_code == 0, result.output
+    with h5py.File(out, "r") as f:
+        t = f["trajectory/time"][()]
+    inside = (t[1:] > 1.0) & (t[1:] <= 1.0 + 2 * RISE + 1e-12)
+    assert 3 <= int(np.count_nonzero(inside)) <= 8
+
+
+def test_a_records_small_changes_take_few_steps():
+    """A load history's piece takes RAMP_STEPS steps where it changes the load by its
+    whole range, in proportion fewer where it changes it less (a sampled record)."""
+    from catenet.solver.adaptive import ErrorControl
+
+    control = ErrorControl(0.0, 1.0, order=2)
+    control.ramps = np.array([[0.0, 0.16, 1.0], [0.16, 0.32, 0.125]])
+    assert control._ramp(0.05) == pytest.approx(0.01)  # 16 steps over the whole range
+    assert control._ramp(0.2) == pytest.approx(0.08)  # 2 over an eighth of it
+
+
 def test_fixed_steps_longer_than_a_piece_of_a_history_are_warned(tmp_path):
     """At fixed 50 ms steps the pulse falls between two step ends: the run is warned before
     it runs, with the history's key path, its two points and a dt that resolves them; at
