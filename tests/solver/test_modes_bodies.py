@@ -157,8 +157,9 @@ def test_squeezed_box_bounce_and_rocking_closed_forms():
     # The bounce within 1e-9; the rocking modes within 1e-5: their stiffness is what is
     # left of the strings' axial and the barrier's stiffness (4e5 and 2e4 N/m at levers of
     # 0.1 m) after the massless nodes are condensed out, about 1 N m, so the state's
-    # round-off moves them by up to 2.2e-6 (measured: the exact start on two processors
-    # and starts moved by 1e-12 and 1e-9 of the size, -2.2e-6 to +6.4e-7).
+    # round-off moves them by up to 2.2e-6 (measured on an Intel processor: the exact
+    # start and starts moved by 1e-12 and 1e-9 of the size, -2.2e-6 to +6.4e-7; within
+    # 1e-6 on the AMD one where the test was written).
     got = np.sort(modes.omega2)
     bounce_k = int(np.argmin(np.abs(expected - bounce)))
     assert got[bounce_k] == pytest.approx(bounce, rel=1e-9), (modes.omega2, expected)
