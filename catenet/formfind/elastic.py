@@ -85,16 +85,15 @@ class _Equilibria:
         """dr/ds (rows, variables) at the equilibrium of s."""
         from scipy.sparse.linalg import splu
 
-        from catenet.solver.workspace import Workspace
-
         net, scene, x = self(s)
         if np.any(net.law.kind != 0):
             raise ConfigError("formfind.method = 'elastic': takes the linear law only")
-        ws = Workspace(net, linear="scipy", terms=scene.terms)
-        k = ws.system.matrix(ws.system.hessian(x)).tocsc()
         index = np.full(net.n_nodes, -1, dtype=np.int64)
         free = np.flatnonzero(~net.fixed)
         index[free] = np.arange(len(free))
+        k_all = _every_node_hessian(net, scene, x)  # (K: its free block; K_fs: columns)
+        dofs = np.flatnonzero(np.repeat(index >= 0, 3))  # (the free DOFs, 3 f + c)
+        k = k_all[dofs][:, dofs].tocsc()
         n, length = _forces(net, x)
         taut = (length > net.rest_length) | ~np.asarray(net.law.tension_only, dtype=bool)
         dn_dl = np.where(taut, net.EA / net.rest_length, 0.0)
@@ -109,7 +108,7 @@ class _Equilibria:
         direct = (d_l0 @ dl0_ds).toarray()
         if self.variables.moves:  # the supports' offsets: their columns
             _moved_columns(self.variables, goals, a, net, scene, x, n, dn_dl, dn_dl0, index,
-                           rhs, direct)  # fmt: skip
+                           k_all[dofs], rhs, direct)  # fmt: skip
         try:
             lu = splu(k)
         except RuntimeError:
@@ -120,7 +119,7 @@ class _Equilibria:
         return np.asarray(direct - d_x @ lu.solve(rhs))
 
 
-def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, rhs, direct) -> None:
+def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, k_f, rhs, direct):
     """Fills the support offsets' columns of ``rhs`` (dR_f/ds: the free nodes' residual
     as a support moves, K_fs dx_s) and ``direct`` (dr/ds with the free nodes held: the
     tensions, lengths and reactions that the support's own position enters)."""
@@ -129,13 +128,11 @@ def _moved_columns(v, goals, a, net, scene, x, n, dn_dl, dn_dl0, index, rhs, dir
     if goals.reacts.any():
         rx, _ = _reaction_partials(goals, a, net, scene, x, n, dn_dl, dn_dl0, every)
         d_all = d_all + rx
-    k_all = _every_node_hessian(net, scene, x)
-    rows = np.flatnonzero(np.repeat(index >= 0, 3))  # (the free DOFs, 3 f + c)
     for j in range(len(v.moves)):
         col = v.n_rest + j
         dx = v.moved(j).ravel()  # (only supports move)
         direct[:, col] = d_all @ dx
-        rhs[:, col] = (k_all @ dx)[rows]
+        rhs[:, col] = k_f @ dx  # (k_f: the free rows of the Hessian over every node)
 
 
 def _every_node_hessian(net, scene, x: np.ndarray):
