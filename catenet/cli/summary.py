@@ -263,24 +263,26 @@ def cases_table(cases: dict, n_edges: int) -> list[str]:
     compression, the slack edges and the largest reaction, SI units."""
     util = any(math.isfinite(s.get("max_utilisation", math.nan)) for s in cases.values())
     head = (
-        f"{'load case':<16} {'loads [N]':>11} {'max displ. [m]':>14} {'node':>6} "
+        f"{'load case':<16} {'load z [N]':>11} {'horiz. [N]':>10} {'max displ. [m]':>14} "
+        f"{'node':>6} "
         f"{'max tension [N]':>15} {'edge':>6} {'compr. [N]':>11} {'slack':>6} "
         f"{'max reaction [N]':>16}" + (f" {'utilisation':>11}" if util else "") + "  converged"
     )
     rows = [head]
     for name, s in cases.items():
-        applied = math.hypot(*s.get("applied_resultant", [0.0, 0.0, 0.0]))
+        fx, fy, fz = s.get("applied_resultant", [0.0, 0.0, 0.0])
         use = f" {s.get('max_utilisation', math.nan):>11.4g}" if util else ""
         rows.append(
-            f"{name:<16} {applied:>11.6g} {s['max_displacement']:>14.6g} "
+            f"{name:<16} {fz:>11.6g} {math.hypot(fx, fy):>10.6g} {s['max_displacement']:>14.6g} "
             f"{s['max_displacement_node']:>6} {s['max_tension']:>15.6g} "
             f"{s['max_tension_edge']:>6} {s['max_compression']:>11.6g} {s['slack_edges']:>6} "
             f"{s['max_reaction']:>16.6g}{use}  "
             + ("yes" if s["converged"] else f"no: {s['error']}")
         )
     rows.append(
-        f"{'':<16} (loads: the resultant of each case's applied loads, the base state's "
-        f"included; slack: edges of {n_edges}; each solved from the base state above; "
+        f"{'':<16} (load z, horiz.: the resultant of each case's applied loads, its z "
+        "component (up +) and its horizontal size, the base state's included; slack: "
+        f"edges of {n_edges}; each solved from the base state above; "
         "results in /cases/<name>/, envelopes in /envelope/)"
     )
     return rows

@@ -111,13 +111,17 @@ def most_moved(net: Net, x: np.ndarray) -> int:
     return int(free[np.argmax(displacement(net, x)[free])])
 
 
-TIE = 1e-12  # values this close (relative) to the extreme tie: the first of them is named
+# Values this close (relative) to the extreme tie: the first of them is named. A solve's
+# convergence, not only round-off, sets it: a symmetric hypar's mirror edges came out
+# 2e-9 apart, the larger one on one processor the other's mirror on another.
+TIE = 1e-7
 
 
 def first_extreme(values: np.ndarray, idx: np.ndarray, largest: bool = True) -> int:
     """The first index of ``idx`` whose value is the largest (smallest) of them, values
-    within TIE of it counted as equal: symmetric members that differ at round-off (two
-    guys of a mast) name the same one on every machine and in every run."""
+    within TIE of it counted as equal: symmetric members that differ by the solve's
+    convergence or round-off (two guys of a mast) name the same one on every machine and
+    in every run."""
     v = np.asarray(values, dtype=np.float64)[idx]
     best = float(np.max(v) if largest else np.min(v))
     slack = TIE * abs(best)

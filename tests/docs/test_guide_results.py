@@ -27,7 +27,8 @@ def test_the_page_runs_as_written(tmp_path, monkeypatch):
     for line in (
         "peak tension 402.841 N at t = 0.45 s (edge 0); the final state's max tension is "
         "0.238085 N",
-        "ULS_x                  15000      0.0260416      1         32508.6      1     63981.3",
+        "ULS_x                      0      15000      0.0260416      1         32508.6      1     "
+        "63981.3",
         "probe        node 1 moves [0.01736, 0, -7.527e-06] m",
     ):
         assert line in printed

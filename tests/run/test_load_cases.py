@@ -124,13 +124,35 @@ def test_one_case_alone_equals_it_among_all(tmp_path):
     )
     assert r.exit_code == 0, r.output
     assert "ULS_x" in r.output and "wind_y " not in r.output
-    assert "load case          loads [N] max displ. [m]" in r.output
+    assert "load case         load z [N] horiz. [N] max displ. [m]" in r.output
     r = CliRunner().invoke(
         main, ["run", str(_write(tmp_path, mast())), "--case", "snow", "-o", str(tmp_path / "d.h5")]
     )
     assert r.exit_code == 2
     assert "--case 'snow': no [[load_case]] or [[combination]] is named so" in r.output
     assert not (tmp_path / "d.h5").exists()
+
+
+def test_the_cases_table_tells_uplift_from_a_downward_load(tmp_path):
+    """The table's load column is the resultant's signed z component (up +) and its
+    horizontal size, not its length: snow (500 Pa down) and an uplift (800 Pa) on a
+    12 m square's 144 m^2 read -72 kN and +115.2 kN; a sideways point load reads as
+    horizontal."""
+    case = {
+        "geometry": {"kind": "square_net", "n": 6, "size": 12.0, "edge_length": 12.0, "alpha": 0.0},
+        "material": {"EA": 1e6, "prestress": 2000.0},
+        "load_case": [
+            {"name": "snow", "area": [{"pressure": 500.0}]},
+            {"name": "uplift", "area": [{"pressure": -800.0}]},
+            {"name": "side", "point": [{"node": 14, "force": [300.0, -400.0, 0.0]}]},
+        ],
+    }
+    r = CliRunner().invoke(main, ["run", str(_write(tmp_path, case)), "-o", str(tmp_path / "u.h5")])
+    assert r.exit_code == 0, r.output
+    rows = {line.split()[0]: line.split() for line in r.output.splitlines() if line}
+    assert [float(v) for v in rows["snow"][1:3]] == [-72000.0, 0.0]
+    assert [float(v) for v in rows["uplift"][1:3]] == [115200.0, 0.0]
+    assert [float(v) for v in rows["side"][1:3]] == [0.0, 500.0]
 
 
 def _write(tmp_path, data):
