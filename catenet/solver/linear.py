@@ -63,9 +63,8 @@ class MklRuntime:
         self._pt_type = (ctypes.c_int64, np.int64) if wide else (ctypes.c_int32, np.int32)
         i32 = ctypes.POINTER(ctypes.c_int32)
         fn = lib.pardiso
-        fn.argtypes = [ctypes.POINTER(self._pt_type[0]), i32, i32, i32, i32, i32,
-                       ctypes.c_void_p, i32, i32, i32, i32, i32, i32,
-                       ctypes.c_void_p, ctypes.c_void_p, i32]  # fmt: skip
+        p = ctypes.c_void_p  # arrays by address (PardisoSolver._pardiso)
+        fn.argtypes = [p, i32, i32, i32, i32, i32, p, p, p, p, i32, p, i32, p, p, i32]
         fn.restype = None
         self._mkl_pardiso = fn
 
@@ -300,6 +299,14 @@ class LinearSolver:
     def _node_list(self, dofs: ArrayLike) -> list[int]:
         return sorted({int(self.dof_node[d]) for d in np.asarray(dofs).ravel()})[:20]
 
+    def _address(self, a: np.ndarray) -> int:
+        """The address of an array that stays (the handle, the pattern, iparm), once per
+        array: the entry holds the array, so that its id names it for good."""
+        held = self._addresses.get(id(a))
+        if held is None or held[0] is not a:
+            held = self._addresses[id(a)] = (a, a.ctypes.data)
+        return held[1]
+
     def analyse(self, data: np.ndarray) -> None:
         """Symbolic analysis of the pattern (a no-op where the backend has none)."""
         self._analysed = True
@@ -350,7 +357,6 @@ class PardisoSolver(LinearSolver):
             raise ValueError("symmetric PARDISO types need the upper triangle, 11 the full matrix")
         self._wrapper = mkl_runtime()
         self._call = self._wrapper._mkl_pardiso
-        self._pt_type = self._wrapper._pt_type[0]
         self.pt = np.zeros(64, dtype=self._wrapper._pt_type[1])  # PARDISO's handle, ours alone
         self.kind = self.mtype  # the type of the handle in use (2 for definite matrices)
         self._handles: dict[int, tuple[np.ndarray, bool]] = {}  # the other types' handles
@@ -370,32 +376,27 @@ class PardisoSolver(LinearSolver):
         iparm[34] = 1  # zero-based indices: the CSR arrays are passed as they are
         self.iparm = iparm
         self._error = ctypes.c_int32(0)
+        self._phase, self._mtype = ctypes.c_int32(0), ctypes.c_int32(0)
+        self._c_one, self._c_zero, self._c_n = (ctypes.c_int32(v) for v in (1, 0, self.n))
+        self._addresses: dict[int, tuple[np.ndarray, int]] = {}
         self._x = np.empty(self.n)
         self._b = np.empty(self.n)
         self._dummy = np.zeros(1)
 
     def _pardiso(self, phase: int, data: np.ndarray, b: np.ndarray, x: np.ndarray) -> None:
-        i32 = ctypes.POINTER(ctypes.c_int32)
-        f64 = ctypes.POINTER(ctypes.c_double)
+        # The call's arguments by address: the handle's, the pattern's and iparm's cached
+        # per array, the scalars in ctypes integers kept for the purpose (a call at a small
+        # system is mostly argument conversion otherwise).
         self._error.value = 0
+        self._phase.value = phase
+        self._mtype.value = self.kind
         self._call(
-            self.pt.ctypes.data_as(ctypes.POINTER(self._pt_type)),
-            ctypes.byref(ctypes.c_int32(1)),
-            ctypes.byref(ctypes.c_int32(1)),
-            ctypes.byref(ctypes.c_int32(self.kind)),
-            ctypes.byref(ctypes.c_int32(phase)),
-            ctypes.byref(ctypes.c_int32(self.n)),
-            data.ctypes.data_as(f64),
-            self.indptr.ctypes.data_as(i32),
-            self.indices.ctypes.data_as(i32),
-            self._perm.ctypes.data_as(i32),
-            ctypes.byref(ctypes.c_int32(1)),
-            self.iparm.ctypes.data_as(i32),
-            ctypes.byref(ctypes.c_int32(0)),
-            b.ctypes.data_as(f64),
-            x.ctypes.data_as(f64),
-            ctypes.byref(self._error),
-        )
+            self._address(self.pt), self._c_one, self._c_one, self._mtype, self._phase,
+            self._c_n, data.ctypes.data, self._address(self.indptr),
+            self._address(self.indices), self._address(self._perm), self._c_one,
+            self._address(self.iparm), self._c_zero, b.ctypes.data, x.ctypes.data,
+            self._error,
+        )  # fmt: skip
         code = self._error.value
         if code != 0:
             nodes = self.weak_nodes() if self._data is not None else []
