@@ -299,14 +299,6 @@ class LinearSolver:
     def _node_list(self, dofs: ArrayLike) -> list[int]:
         return sorted({int(self.dof_node[d]) for d in np.asarray(dofs).ravel()})[:20]
 
-    def _address(self, a: np.ndarray) -> int:
-        """The address of an array that stays (the handle, the pattern, iparm), once per
-        array: the entry holds the array, so that its id names it for good."""
-        held = self._addresses.get(id(a))
-        if held is None or held[0] is not a:
-            held = self._addresses[id(a)] = (a, a.ctypes.data)
-        return held[1]
-
     def analyse(self, data: np.ndarray) -> None:
         """Symbolic analysis of the pattern (a no-op where the backend has none)."""
         self._analysed = True
@@ -411,6 +403,14 @@ class PardisoSolver(LinearSolver):
             raise SingularSystemError(
                 f"PARDISO failed with error {code} in phase {phase}", nodes=nodes
             )
+
+    def _address(self, a: np.ndarray) -> int:
+        """The address of an array that stays (the handle, the pattern, iparm), once per
+        array: the entry holds the array, so that its id names it for good."""
+        held = self._addresses.get(id(a))
+        if held is None or held[0] is not a:
+            held = self._addresses[id(a)] = (a, a.ctypes.data)
+        return int(held[1])
 
     def analyse(self, data: np.ndarray) -> None:
         """Symbolic analysis (ordering and fill-in) of the pattern, once."""
