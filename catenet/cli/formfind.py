@@ -50,9 +50,10 @@ def command(
     Exit status: 0 found ([[target]]s not all met: the weighted least-squares
     compromise, with a warning); 1 failed while running, or the target search did not
     converge within formfind.max_iter or its force densities ran away (its last iterate
-    written); 2 bad input (case file, --set values, paths, force densities that make
-    nodes coincide, target forces or lengths of method "forces" or "lengths" that cannot
-    be met, hard targets unmet).
+    written), or the shape found strains an edge beyond 10 times its law's range (under
+    self-weight: force densities too low for the weight); 2 bad input (case file, --set
+    values, paths, force densities that make nodes coincide, target forces or lengths of
+    method "forces" or "lengths" that cannot be met, hard targets unmet).
     """
     setup_logging(quiet, verbose, debug)
     with errors_to_exit_codes(debug):
@@ -77,20 +78,17 @@ def command(
 
 
 def _unconverged(written) -> str:
-    """Why a target search that ended with targets unmet is no answer: it ran out of
-    iterations, or its force densities ran away ("" for any other end: met, or a
-    least-squares compromise, a stationary point at finite forces)."""
+    """Why a target search's end is no answer: it ran out of iterations, or its force
+    densities ran away, or it stopped (met, or a least-squares compromise) at a state no
+    cable reaches; "" for any other end."""
     from catenet.formfind.design import RAN_AWAY, RUNAWAY
 
     f = written.found
     d = f.design
-    if d is not None and d.extra.get("implausible"):  # (met or not: no cable's state)
-        return (
-            f"{d.extra['implausible']} (its last iterate written): check the targets, or "
-            "bound the rest lengths (formfind.rest_length_factor_min / _max)"
-        )
-    if d is None or d.all_met:
+    if d is None:
         return ""
+    if d.all_met or d.message not in (RAN_AWAY, "formfind.max_iter reached"):
+        return _implausible(d, f.method)
     bounds = (
         "formfind.rest_length_factor_min / _max, or prestress_min / _max"
         if f.method == "elastic"
@@ -101,7 +99,7 @@ def _unconverged(written) -> str:
     if d.message == RAN_AWAY:
         why = f"the force densities ran away (beyond {RUNAWAY:.0e} times their start)"
         more = ""
-    elif d.message == "formfind.max_iter reached":
+    else:  # formfind.max_iter reached
         why = (
             "the target search did not converge within formfind.max_iter = "
             f"{written.scene.case.formfind.max_iter} iterations"
@@ -111,13 +109,26 @@ def _unconverged(written) -> str:
             "two variables move alike, a rest length and an anchor's position for a sag "
             "and a pull, converge slowly); "
         )
-    else:
-        return ""
     return (
         f"{why} (its last iterate written, its targets NOT met: tensions up to "
         f"{float(f.force.max()):.3g} N): {more}a target that only ever larger or smaller "
         "forces approach (a node asked to lie where the loads cannot hold it) has no "
         f"optimum; check the targets, or bound the search ({bounds})"
+    )
+
+
+def _implausible(d, method: str) -> str:
+    """Why a search that ended at a stationary point (its targets met or the
+    compromise) reached no cable's state ("" where it did)."""
+    if not d.extra.get("implausible"):
+        return ""
+    bound = (
+        "the rest lengths (formfind.rest_length_factor_min / _max)"
+        if method == "elastic"
+        else "the force densities (formfind.force_density_min / _max)"
+    )
+    return (
+        f"{d.extra['implausible']} (its last iterate written): check the targets, or bound {bound}"
     )
 
 

@@ -341,6 +341,7 @@ def formfind_targets(
         design=d,
     )
     found.rest_length(q_name)
+    d.extra["implausible"] = found.implausible(shape.weighs)
     found.wall_time = time.perf_counter() - start
     log.info(
         "targets: %s after %d evaluations, %d gradients", d.message, d.evaluations, d.gradients

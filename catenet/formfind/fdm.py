@@ -15,7 +15,11 @@ q refills its values, so PARDISO analyses once and refactorises numerically.
 Gravity acts on the lumped masses of the net the result describes, m = rho A l0 / 2 per
 edge end, and l0 = L / (1 + eps(N)) depends on the shape found: the loads are updated
 from the shape and the shape solved again with the same factorisation until they agree
-to round-off, so that the net written out carries exactly the loads it was found under.
+to round-off (the updates mixed, ``catenet.formfind.anderson``), so that the net written
+out carries exactly the loads it was found under. A shape that only a stretch beyond
+IMPLAUSIBLE times the law's range holds is an error (``FormFound.implausible``): where
+the weight is too large for the force densities, the nodes sink until l0 = L / (1 + q L /
+EA), which tends to EA / q, stops the weight growing.
 
 Target forces: the classical update q <- N / L for a start; then, for target forces
 (q L = N) and target lengths (L = L_target) alike, Newton on s = log q (q stays
@@ -39,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from catenet.errors import ConfigError, ConvergenceError
+from catenet.formfind.anderson import Anderson
 from catenet.formfind.newton import Stalled, newton
 from catenet.formfind.tocase import to_case
 from catenet.model.net import Net
@@ -166,6 +171,33 @@ class FormFound:
             self._rest = rest_lengths(self.net, self.force, self.length, name)
         return self._rest.copy()
 
+    def implausible(self, weighs: bool) -> str:
+        """Why the shape is no cable's, as `catenet run` judges a state: the rest lengths
+        that carry its forces strain an edge beyond IMPLAUSIBLE times its law's range
+        (``catenet.model.measures``); "" where every strain is plausible. ``weighs``: the
+        shape carries its own weight (then such a strain is how the weight stopped
+        growing: each rest length tends to EA / q as its edge lengthens)."""
+        from catenet.model.measures import IMPLAUSIBLE, implausible_edge
+
+        net = self.net.replace(rest_length=self.rest_length())
+        worst = implausible_edge(net, self.x)
+        if worst < 0:
+            return ""
+        eps = float(self.length[worst] / net.rest_length[worst] - 1.0)
+        why = (
+            f"the shape found strains edge {worst} by {eps:.3g} (tension "
+            f"{float(self.force[worst]):.4g} N), beyond {IMPLAUSIBLE:g} times its law's "
+            f"range ({float(net.law.max_strain()[worst]):.3g}): no cable reaches that state"
+        )
+        if weighs:
+            drop = float(np.max(np.abs(self.x - self.net.nodes)))
+            return (
+                f"{why}; under its own weight the nodes sank until the stretch stopped the "
+                f"weight growing (a node {drop:.4g} m from its given place): the weight is "
+                "too large for these force densities: raise them"
+            )
+        return f"{why}: the force densities ask more than the cables carry: lower them"
+
     def to_net(self) -> Net:
         """The net at the form-found shape, with the rest lengths that carry its forces."""
         return self.net.replace(nodes=self.x, rest_length=self.rest_length())
@@ -220,7 +252,7 @@ class _Shape:
         self.factorizations = 0
         self.factored: np.ndarray | None = None  # the q whose D the solver holds
         self.checked = False  # a solve with these factors passed its check
-        self.weight: np.ndarray | None = None  # the last shape's self-weight (the next start)
+        self.masses: np.ndarray | None = None  # the last shape's lumped masses (a start)
         self.kkt_factorizations = 0  # Newton's on the force densities (formfind/newton.py)
         self.solves = 0
         self.size = float(np.linalg.norm(np.ptp(net.nodes, axis=0))) or 1.0
@@ -259,33 +291,41 @@ class _Shape:
         fixed_part[fa] -= q[fa, None] * x[ends[fa, 0]]  # -C_x x_x, weighted
         fixed_part[fb] += q[fb, None] * x[ends[fb, 1]]
         rhs_fixed = -p.spread(fixed_part)
-        if self.weighs and self.weight is not None:  # (from the last shape's weight)
-            load = self.force + self.weight
+        g = None if not self.weighs else np.asarray(self.gravity, dtype=np.float64)
+        mass = np.zeros(net.n_nodes)  # the lumped masses the loads carry (the unknown)
+        if g is not None and self.masses is not None:  # (from the last shape's)
+            mass = self.masses
+            load = self.force + mass[:, None] * g[None, :]
+        mixing = Anderson()
         for _ in range(GRAVITY_ITER):
             x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
-            if not self.weighs:
+            if g is None:
                 return x, load
-            weight = self._weight(x, q)
-            new = self.force + weight
-            change = float(np.max(np.abs(new - load)))
-            load = new
-            if change <= 1e-14 * max(float(np.max(np.abs(new))), 1e-300):
+            new = self._masses(x, q)
+            weight = new[:, None] * g[None, :]
+            change = float(np.max(np.abs(self.force + weight - load)))
+            if change <= 1e-14 * max(float(np.max(np.abs(self.force + weight))), 1e-300):
+                load = self.force + weight
                 x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
-                self.weight = weight
+                self.masses = new
                 return x, load
+            mass = mixing.mix(mass, new)
+            load = self.force + mass[:, None] * g[None, :]
         raise ConvergenceError(
             f"form finding: the self-weight did not settle after {GRAVITY_ITER} load "
             "updates (the weight is too large for these force densities): raise them"
         )
 
-    def _weight(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def _masses(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The nodes' lumped masses (N,) at x: rho l0 / 2 per edge end, l0 the rest
+        length that carries q L under the net's law."""
         net = self.net
         length = _lengths(net, x)
         l0 = rest_lengths(net, q * length, length, self.q_name)
         half = 0.5 * net.line_density * l0
         mass = np.bincount(net.edges[:, 0], half, net.n_nodes)
         mass += np.bincount(net.edges[:, 1], half, net.n_nodes)
-        return mass[:, None] * np.asarray(self.gravity)[None, :]
+        return mass
 
 
 def _lengths(net: Net, x: np.ndarray) -> np.ndarray:
@@ -368,6 +408,9 @@ def formfind(
         stats={"solves": shape.solves, "n_free": shape.pattern.n_free},
     )
     found.rest_length(q_name)  # the law must carry every force: say so now (kept)
+    why = found.implausible(shape.weighs)
+    if why:
+        raise ConvergenceError(f"form finding: {why}")
     found.wall_time = time.perf_counter() - start
     log.info(
         "form found (%s): %d factorisations, %d solves, %.3g s",
