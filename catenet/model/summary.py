@@ -111,10 +111,8 @@ def most_moved(net: Net, x: np.ndarray) -> int:
     return int(free[np.argmax(displacement(net, x)[free])])
 
 
-# Values this close (relative) to the extreme tie: the first of them is named. A solve's
-# convergence, not only round-off, sets it: a symmetric hypar's mirror edges came out
-# 2e-9 apart, the larger one on one processor the other's mirror on another.
-TIE = 1e-7
+TIE = 1e-7  # values this close (relative) to the extreme tie (a solve's tolerance: mirror
+# edges of a symmetric hypar came out 2e-9 apart): the first of them is named
 
 
 def first_extreme(values: np.ndarray, idx: np.ndarray, largest: bool = True) -> int:
