@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import types
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -256,7 +257,9 @@ def _probe(case: Case, built: Any) -> int:
     return int(expand(ref, built.names, built.sets or {})[0])
 
 
-def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: int) -> np.ndarray:
+def _area_force(
+    case: Case, net: Net, names: dict, sets: Any, size: float, k: int, quiet: bool = False
+) -> np.ndarray:
     """The nodal forces of load.area[k] (catenet/model/areas.py); the paper's pressure
     on a square net as a whole (its own lumping of p L^2)."""
     ar = case.load.areas[k]
@@ -277,7 +280,8 @@ def _area_force(case: Case, net: Net, names: dict, sets: Any, size: float, k: in
         load = area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction, net.fixed)
     except ConfigError as exc:
         raise ConfigError([f"{path}: {p}" for p in exc.problems]) from None
-    _warn_beyond(path, net, covered, load, case.units)
+    if not quiet:
+        _warn_beyond(path, net, covered, load, case.units)
     return load.force
 
 
@@ -304,7 +308,24 @@ def _warn_beyond(path: str, net: Net, covered: np.ndarray, load: Any, units: str
     )
 
 
-def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any) -> Loads:
+def loads_at(scene: Scene, nodes: np.ndarray, rest_length: np.ndarray) -> np.ndarray | None:
+    """The case's constant [load] forces (N, 3) on its net moved to ``nodes`` with
+    ``rest_length``: area loads lumped on that shape, line loads along those rest
+    lengths, point loads and a square net's pressure as built (form finding's loads on
+    the shape it found); None where the case has neither area nor line loads (its loads
+    do not follow the shape)."""
+    case = scene.case
+    if case is None or not (case.load.areas or case.load.lines):
+        return None
+    net = scene.net.replace(nodes=nodes, rest_length=rest_length)
+    built = types.SimpleNamespace(sets=scene.sets, at_nodes=scene.at_nodes, cables=scene.cables)
+    loads = _loads(case, net, scene.names, scene.size, built, quiet=True)
+    return np.zeros((net.n_nodes, 3)) if loads.force is None else loads.force
+
+
+def _loads(
+    case: Case, net: Net, names: dict[str, int], size: float, built: Any, quiet: bool = False
+) -> Loads:
     """The loads: pressure, point loads (on a node, each node of a node set, or the node
     at a position along a cable), line loads along cables (lumped as the self-weight),
     gravity and support motion."""
@@ -339,7 +360,7 @@ def _loads(case: Case, net: Net, names: dict[str, int], size: float, built: Any)
             on = built.cables.edge == built.cables.names.index(ln.cable)
         line_force(net, on, ln.force, target(ln.history))
     for k, ar in enumerate(ld.areas):
-        target(ar.history)[:] += _area_force(case, net, names, sets, size, k)
+        target(ar.history)[:] += _area_force(case, net, names, sets, size, k, quiet)
     force = constant if constant.any() else None
     parts = tuple((f, History(h)) for h, f in timed.items() if f.any())
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from catenet.case.keys import show
-from catenet.errors import ConfigError
+from catenet.errors import ConfigError, ConvergenceError
+from catenet.formfind import advice
 from catenet.formfind.fdm import FormFound, formfind
 from catenet.formfind.tocase import PREFIX, to_case
 
@@ -34,8 +35,45 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
+#: Form finding again with area and line loads lumped on the shape found, until they
+#: change by at most FOLLOW_TOL of the largest (FOLLOW_ITER times at most)
+FOLLOW_TOL, FOLLOW_ITER = 1e-9, 50
+
+
 def formfind_scene(scene) -> FormFound:
-    """The shape of a case's scene as its [formfind] table says."""
+    """The shape of a case's scene as its [formfind] table says. By the force density
+    method, area loads and line loads act on the shape found: the loads of the given
+    geometry are lumped again on each shape found and the shape found again under them
+    (the given geometry is only the start), until they agree to FOLLOW_TOL (a warning
+    where they do not within FOLLOW_ITER)."""
+    from catenet.case.scene import loads_at
+
+    found = _formfind_once(scene)
+    if scene.case.formfind is None or scene.case.formfind.method == "elastic":
+        return found
+    change = 0.0
+    for _ in range(FOLLOW_ITER):
+        follow = loads_at(scene, found.x, found.rest_length(PREFIX + "force_density"))
+        if follow is None:
+            return found
+        used = scene.loads.force if scene.loads.force is not None else 0.0 * follow
+        change = float(np.max(np.abs(follow - used), initial=0.0))
+        if change <= FOLLOW_TOL * float(np.max(np.abs(follow), initial=0.0)):
+            return found
+        scene = dataclasses.replace(scene, loads=dataclasses.replace(scene.loads, force=follow))
+        found = _formfind_once(scene)
+    log.warning(
+        "form finding: the area and line loads lumped on the shape found still changed by "
+        "%.3g N at a node after %d shapes: the shape carries the last of them",
+        change,
+        FOLLOW_ITER,
+    )
+    return found
+
+
+def _formfind_once(scene) -> FormFound:
+    """The shape of a case's scene as its [formfind] table says, under its loads as
+    built."""
     cfg = scene.case.formfind
     if cfg is None:
         raise ConfigError(
@@ -191,7 +229,14 @@ def write_formfind(case: Case, out: str | Path | None = None) -> Written:
         if source.is_file() and p.exists() and p.resolve() == source.resolve():
             raise ConfigError(f"output file {str(p)!r}: is the case file itself: give another -o")
     scene = build(case)
-    found = formfind_scene(scene)
+    for slip in advice.slips(case, scene):  # a material no cable is made of
+        log.warning("%s", slip)
+    try:
+        found = formfind_scene(scene)
+    except (ConfigError, ConvergenceError) as exc:  # (in the case's units)
+        raise advice.explained(exc, case, scene) from None
+    for message in advice.warnings(found, case):
+        log.warning("%s", message)
     run_file = str(out.with_name(out.stem + "_run" + out.suffix))
     data = to_case(found, case, output_file=run_file, scene=scene)
     written = parse_case(data, source=str(toml_path), base_dir=toml_path.parent)

@@ -175,8 +175,9 @@ class FormFound:
         """Why the shape is no cable's, as `catenet run` judges a state: the rest lengths
         that carry its forces strain an edge beyond IMPLAUSIBLE times its law's range
         (``catenet.model.measures``); "" where every strain is plausible. ``weighs``: the
-        shape carries its own weight (then such a strain is how the weight stopped
-        growing: each rest length tends to EA / q as its edge lengthens)."""
+        shape carries its own weight (then such a strain on an edge longer than the
+        structure is how the weight stopped growing: each rest length tends to EA / q as
+        its edge lengthens; on a shorter one the force densities' own tension)."""
         from catenet.model.measures import IMPLAUSIBLE, implausible_edge
 
         net = self.net.replace(rest_length=self.rest_length())
@@ -189,12 +190,13 @@ class FormFound:
             f"{float(self.force[worst]):.4g} N), beyond {IMPLAUSIBLE:g} times its law's "
             f"range ({float(net.law.max_strain()[worst]):.3g}): no cable reaches that state"
         )
-        if weighs:
-            drop = float(np.max(np.abs(self.x - self.net.nodes)))
+        size = float(np.linalg.norm(np.ptp(self.net.nodes, axis=0))) or 1.0
+        if weighs and self.length[worst] > size:  # (a long edge: the weight stretched it)
             return (
                 f"{why}; under its own weight the nodes sank until the stretch stopped the "
-                f"weight growing (a node {drop:.4g} m from its given place): the weight is "
-                "too large for these force densities: raise them"
+                f"weight growing (edge {worst} is {float(self.length[worst]):.4g} m long, "
+                f"the structure {size:.4g} m across): the weight is too large for these "
+                "force densities: raise them"
             )
         return f"{why}: the force densities ask more than the cables carry: lower them"
 

@@ -114,3 +114,56 @@ tension = 2.0e7
     assert out.exists() and "(its last iterate written)" in r.stderr
     assert "strains edge" in r.stderr and "by 20 (tension 2e+07 N)" in r.stderr
     assert "formfind.force_density_min / _max" in r.stderr
+
+
+CABLE = """
+{units}
+[geometry]
+kind = "cable"
+start = [0, 0, 0]
+end = [{span}, 0, 0]
+nodes = 21
+[material]
+E = {E}
+radius = {r}
+density = {rho}
+[load]
+gravity = [0, 0, {g}]
+[formfind]
+force_density = {q}
+"""
+SI = {"units": "", "span": 100.0, "E": 160e9, "r": 0.02, "rho": 7850.0, "g": -9.81}
+KN = {**SI, "units": 'units = "kN-m"', "E": 160e6, "rho": 7.85}
+
+
+def _formfind(tmp_path, keys, **more):
+    (tmp_path / "c.toml").write_text(CABLE.format(**{**keys, **more}))
+    r = CliRunner().invoke(
+        main, ["formfind", str(tmp_path / "c.toml"), "-o", str(tmp_path / "f.h5")]
+    )
+    return r.exit_code, r.output + r.stderr
+
+
+def test_the_messages_name_the_cause_the_units_and_a_unit_slip(tmp_path):
+    """A steel strand of 100 m (EA = 201 MN, 96.8 N/m). Too high a force density under
+    gravity (strain q L / EA = 0.62) is the force densities' tension: "lower them" (it
+    said "raise them" where gravity was given); too low a one in kN-m names its tension
+    in kN (it said N); a density of 7850 in kN-m is named as the likely slip."""
+    code, text = _formfind(tmp_path, SI, q=2.5e7)
+    assert code == 1 and "strains edge 0 by 0.622" in text and "lower them" in text, text
+    code, text = _formfind(tmp_path, KN, q=0.01)
+    assert code == 1 and "(tension 1.76e+07 kN)" in text and "raise them" in text, text
+    code, text = _formfind(tmp_path, {**KN, "rho": 7850.0}, q=4.0)
+    assert code == 1 and "raise them; check units: material.density = 7850" in text, text
+
+
+def test_a_shape_far_beyond_its_span_or_the_laws_range_is_warned_of(tmp_path):
+    """q = 100 N/m holds the strand 84 km below a 100 m span (an equilibrium: warned);
+    q = 1e7 N/m strains it 0.25, beyond the linear law's 0.05 (warned, as `catenet run`
+    warns of the written case); q = 4000 N/m (6.08 m of sag) is quiet."""
+    code, text = _formfind(tmp_path, SI, q=100.0)
+    assert code == 0 and "844 times its supports' span (100 m)" in text, text
+    code, text = _formfind(tmp_path, SI, q=1e7)
+    assert code == 0 and "strain 0.249 at edge" in text and "beyond the material law" in text
+    code, text = _formfind(tmp_path, SI, q=4000.0)
+    assert code == 0 and "WARNING" not in text, text
