@@ -5,14 +5,41 @@ Storage: the band's lower triangle by rows, ``L[j, d]`` = entry (j + d, j) for
 d = 0 .. p (row j of the array holds column j of the matrix, contiguous in d); the
 border C (n1, nb) and D (nb, nb, lower triangle) dense. The factors overwrite them:
 L the band's Cholesky factor, C the block Y = L^-1 C, D the Cholesky factor of the Schur
-complement D - Y^T Y. No LAPACK: plain loops, which for the narrow bands of a net cost
-what LAPACK's unblocked band routine costs, without importing SciPy.
+complement D - Y^T Y.
+
+The band's factorisation is LAPACK's dpbtrf (``band_cholesky``: blocked, as SciPy
+ships it; the array is its lower band storage in Fortran order, AB(1 + d, j) = L[j, d],
+so it is passed as it is), or plain loops (``band_cholesky_loops``), which a narrow band
+(p up to about 20) costs about as much and a drop's net (p = 60) about three times.
+SciPy's LAPACK is reached by its address (``scipy.linalg.cython_lapack``), known to
+LLVM under ``DPBTRF`` once ``lapack_ready`` has run, so that the kernel stays cached.
 """
 
 from __future__ import annotations
 
+import llvmlite.binding as llvm
 import numpy as np
-from numba import njit
+from numba import njit, types
+
+DPBTRF = "catenet_dpbtrf"  # the symbol LAPACK's dpbtrf is known to LLVM by
+_VOID = types.voidptr
+_dpbtrf = types.ExternalFunction(DPBTRF, types.void(_VOID, _VOID, _VOID, _VOID, _VOID, _VOID))
+_ready: list[bool] = []
+
+
+def lapack_ready() -> bool:
+    """Makes SciPy's dpbtrf known to LLVM (once); False where it cannot be found."""
+    if not _ready:
+        try:
+            from numba.extending import get_cython_function_address
+
+            address = get_cython_function_address("scipy.linalg.cython_lapack", "dpbtrf")
+        except (ImportError, ValueError, AttributeError):
+            _ready.append(False)
+        else:
+            llvm.add_symbol(DPBTRF, address)
+            _ready.append(True)
+    return _ready[0]
 
 
 @njit(cache=True)
@@ -79,10 +106,30 @@ def cuthill_mckee(indptr, indices):
 
 @njit(cache=True)
 def band_cholesky(L, C, D):
-    """Factorises the bordered band in place (module docstring); False where a pivot is
-    not positive (the matrix is not positive definite). Right-looking, the trailing
-    rows updated by each column in turn (contiguous rows of L); the border's rows below
-    its first non-zero row only (those above stay zero in Y)."""
+    """Factorises the bordered band in place (module docstring), the band by LAPACK's
+    dpbtrf (``lapack_ready`` first); False where a pivot is not positive (the matrix is
+    not positive definite, or not finite)."""
+    n1, w = L.shape
+    if not L.flags.c_contiguous:  # (LAPACK reads the storage as it lies)
+        return band_cholesky_loops(L, C, D)
+    if n1:
+        args = np.empty(4, dtype=np.int32)  # n, kd, ldab, info
+        args[0], args[1], args[2], args[3] = n1, w - 1, w, 0
+        lower = np.full(1, 76, dtype=np.uint8)  # "L"
+        _dpbtrf(lower.ctypes, args[0:].ctypes, args[1:].ctypes, L.ctypes, args[2:].ctypes,
+                args[3:].ctypes)  # fmt: skip
+        if args[3] != 0:
+            return False
+        for j in range(n1):  # (dpbtrf passes a NaN pivot on)
+            if not np.isfinite(L[j, 0]):
+                return False
+    return _border(L, C, D)
+
+
+@njit(cache=True)
+def band_cholesky_loops(L, C, D):
+    """``band_cholesky`` by plain loops: right-looking, the trailing rows updated by
+    each column in turn (contiguous rows of L)."""
     n1, w = L.shape
     p = w - 1
     for j in range(n1):
@@ -101,6 +148,16 @@ def band_cholesky(L, C, D):
                 jd = j + d
                 for e in range(d, m + 1):
                     L[jd, e - d] -= L[j, e] * v
+    return _border(L, C, D)
+
+
+@njit(cache=True)
+def _border(L, C, D):
+    """The border's factors after the band's (L factorised): Y = L^-1 C, over the rows
+    below C's first non-zero row only (those above stay zero in Y), and the Cholesky
+    factor of the Schur complement; False where it is not positive definite."""
+    n1, w = L.shape
+    p = w - 1
     nb = D.shape[0]
     if nb == 0:
         return True

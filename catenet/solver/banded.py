@@ -1,5 +1,5 @@
-"""The small-system solver: a bordered band factorised in Numba (no LAPACK call), PARDISO
-where it does not serve.
+"""The small-system solver: a bordered band factorised in a Numba kernel, PARDISO where
+it does not serve.
 
 Below BAND_MAX_DOF unknowns PARDISO's fixed cost per call (its handle, its checks, its
 threads' set-up: about 0.3 ms) outweighs the arithmetic of a net's matrix, whose rows
@@ -11,8 +11,8 @@ the others (BORDER_DEGREE) are taken out as a border, so the matrix is
     [ A  C ]    A (n1 x n1) banded, C (n1 x nb), D (nb x nb) dense,
     [ C' D ]
 
-factorised as A = L L', Y = L^-1 C and the Schur complement S = D - Y'Y = R R'
-(``catenet.kernels.banded``: plain loops, no SciPy to import).
+factorised as A = L L' (LAPACK's band Cholesky, dpbtrf, as SciPy ships it), Y = L^-1 C
+and the Schur complement S = D - Y'Y = R R' (``catenet.kernels.banded``).
 ``benchmarks/solvers_small.py`` measures both solvers on the nets of the drop and sets
 BAND_MAX_DOF.
 
@@ -28,7 +28,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from catenet.kernels.banded import band_cholesky, band_solve, cuthill_mckee
+from catenet.kernels.banded import (
+    band_cholesky,
+    band_cholesky_loops,
+    band_solve,
+    cuthill_mckee,
+    lapack_ready,
+)
 from catenet.solver.linear import LinearSolver
 
 #: Whether solver.linear = "auto" takes the band below BAND_MAX_DOF. Every path that
@@ -126,7 +132,8 @@ class BandSolver(LinearSolver):
         band.reshape(-1)[lay.band_of] = data[lay.band_at]
         C.reshape(-1)[lay.c_of] = data[lay.c_at]
         D.reshape(-1)[lay.d_of] = data[lay.d_at]
-        self._factored = bool(band_cholesky(band, C, D))
+        factorize = band_cholesky if lapack_ready() else band_cholesky_loops
+        self._factored = bool(factorize(band, C, D))
         if not self._factored:  # not positive definite: PARDISO's (its errors too)
             self.fallback.factorize(data, definite=self._definite)
         else:

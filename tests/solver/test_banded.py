@@ -105,3 +105,66 @@ def test_catenet_run_takes_the_band_as_the_api_does(tmp_path):
     solver = seen["ws"].solver
     assert isinstance(solver, BandSolver) and solver.stats["band"] > 0
     assert done.converged and done.report.backend == "pardiso"
+
+
+def _bordered(n1: int, p: int, nb: int, seed: int = 0):
+    """A positive definite bordered band (its band storage, C, D) and the whole matrix."""
+    rng = np.random.default_rng(seed)
+    L = 0.1 * rng.standard_normal((n1, p + 1))
+    L[:, 0] = 2.0 * p
+    for j in range(n1):
+        L[j, n1 - j :] = 0.0  # (entries past the matrix's end)
+    C = np.zeros((n1, nb))
+    C[n1 // 2 :] = 0.1 * rng.standard_normal((n1 - n1 // 2, nb))
+    D = 10.0 * p * np.eye(nb)
+    A = np.zeros((n1 + nb, n1 + nb))
+    for d in range(p + 1):
+        A[np.arange(d, n1), np.arange(n1 - d)] = L[: n1 - d, d]
+    A[n1:, :n1] = C.T
+    A[n1:, n1:] = D
+    return L, C, D, A + np.tril(A, -1).T
+
+
+@pytest.mark.parametrize("n1, p, nb", [(40, 5, 0), (363, 60, 12), (200, 33, 3)])
+def test_the_bands_factors_by_lapack_and_by_loops_agree_and_solve_the_matrix(n1, p, nb):
+    """The band's Cholesky factor by LAPACK's dpbtrf (blocked) and by plain loops agree
+    to round-off, and the bordered solve with either solves the whole matrix."""
+    from catenet.kernels.banded import (
+        band_cholesky,
+        band_cholesky_loops,
+        band_solve,
+        lapack_ready,
+    )
+
+    assert lapack_ready()
+    L, C, D, A = _bordered(n1, p, nb)
+    b = np.random.default_rng(1).normal(size=n1 + nb)
+    order = np.arange(n1 + nb)
+    factors = []
+    for factorize in (band_cholesky, band_cholesky_loops):
+        f = (L.copy(), C.copy(), D.copy())
+        assert factorize(*f)
+        x = band_solve(*f, order, b)
+        assert np.abs(A @ x - b).max() <= 1e-13 * np.abs(b).max()
+        factors.append(f)
+    for got, loops in zip(factors[0], factors[1], strict=True):
+        assert np.abs(got - loops).max(initial=0.0) <= 1e-14 * np.abs(loops).max(initial=1.0)
+
+
+@pytest.mark.parametrize("bad", [-1.0, np.nan])
+def test_a_pivot_that_is_not_positive_fails_both_factorisations(bad):
+    """A negative or NaN diagonal is no Cholesky factor: False (the solver then takes
+    PARDISO), by LAPACK (which passes a NaN pivot on: checked after it) as by loops; a
+    band stored out of order (not C-contiguous) is factorised by the loops."""
+    from catenet.kernels.banded import band_cholesky, band_cholesky_loops
+
+    L, C, D, _ = _bordered(50, 4, 2)
+    L[7, 0] = bad
+    assert not band_cholesky(L.copy(), C.copy(), D.copy())
+    assert not band_cholesky_loops(L.copy(), C.copy(), D.copy())
+    good, _, _, _ = _bordered(50, 4, 0)
+    strided = np.asfortranarray(good)
+    assert band_cholesky(strided, np.zeros((50, 0)), np.zeros((0, 0)))
+    expected = good.copy()
+    band_cholesky_loops(expected, np.zeros((50, 0)), np.zeros((0, 0)))
+    assert np.array_equal(strided, expected)
