@@ -319,7 +319,7 @@ def loads_at(scene: Scene, nodes: np.ndarray, rest_length: np.ndarray) -> np.nda
         return None
     net = scene.net.replace(nodes=nodes, rest_length=rest_length)
     built = types.SimpleNamespace(sets=scene.sets, at_nodes=scene.at_nodes, cables=scene.cables)
-    loads = _loads(case, net, scene.names, scene.size, built, quiet=True)
+    loads = _loads(case, net, dict(scene.names), scene.size, built, quiet=True)
     return np.zeros((net.n_nodes, 3)) if loads.force is None else loads.force
 
 
