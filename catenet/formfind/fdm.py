@@ -447,8 +447,8 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
         )
         return x, load, _mean_kept(shape, method, q, q0), iterations + spent, miss
     except Stalled as exc:
-        if exc.best is None or m > LSQ_EDGES:
-            raise _unmet(net, method, target, exc, tol, name, spent) from None
+        if exc.best is None or m > LSQ_EDGES or exc.why == "max_iter":
+            raise _unmet(net, method, target, exc, tol, name, spent, max_iter) from None
         log.info("form finding: Newton stalled (%s): least squares", exc.why)
         stall = exc
     cache: dict = {}
@@ -489,19 +489,20 @@ def _targets(shape: _Shape, method, target, q0, tol, max_iter, name):
         ftol=1e-15,
         xtol=1e-15,
         gtol=1e-15,
-        max_nfev=max_iter,
+        max_nfev=max(max_iter - spent - stall.iterations, 1),  # (what the budget leaves)
     )
     c = state(fit.x)
     miss = float(np.max(np.abs(residual(fit.x))))
     if not miss <= tol:
         best = (c["x"], c["load"], c["q"], np.log1p(residual(fit.x)))
-        stall = Stalled(stall.why, best, stall.iterations + int(fit.nfev))
-        raise _unmet(net, method, target, stall, tol, name, spent)
+        why = "max_iter" if fit.status == 0 else stall.why  # (0: out of evaluations)
+        stall = Stalled(why, best, stall.iterations + int(fit.nfev))
+        raise _unmet(net, method, target, stall, tol, name, spent, max_iter)
     q, x, load = c["q"], c["x"], c["load"]
     return x, load, _mean_kept(shape, method, q, q0), int(fit.nfev) + spent, miss
 
 
-def _unmet(net, method, target, stall, tol, name, spent) -> ConfigError:
+def _unmet(net, method, target, stall, tol, name, spent, max_iter) -> ConfigError:
     """The message for targets not met: the worst edge at the best state reached."""
     prefix = name[: name.rfind(".") + 1]
     if stall.best is None:
@@ -514,7 +515,7 @@ def _unmet(net, method, target, stall, tol, name, spent) -> ConfigError:
     miss = float(abs(math.expm1(r[worst])))
     iterations = stall.iterations + spent
     if stall.why == "max_iter":
-        why = f"{prefix}max_iter = {iterations} reached: raise it"
+        why = f"{prefix}max_iter = {max_iter} reached: raise it"
     else:
         why = f"{stall.why}: the targets are not compatible"
     return ConfigError(

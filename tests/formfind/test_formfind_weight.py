@@ -167,3 +167,23 @@ def test_a_shape_far_beyond_its_span_or_the_laws_range_is_warned_of(tmp_path):
     assert code == 0 and "strain 0.249 at edge" in text and "beyond the material law" in text
     code, text = _formfind(tmp_path, SI, q=4000.0)
     assert code == 0 and "WARNING" not in text, text
+
+
+def test_target_forces_under_weight_that_no_shape_meets_name_the_budget_given(tmp_path):
+    """Equal tensions of 20 kN in every edge of a hanging strand cannot be met (equal
+    tensions and a constant horizontal force make every edge equally steep, which its
+    weight forbids). The search stops at the budget given (it had said "after 149
+    iterations; formfind.max_iter = 149 reached" at the default 100: Newton's budget
+    and the least squares' whole one again) or, given room, names the targets as not
+    compatible."""
+    case = CABLE.format(**SI, q=4000.0) + 'method = "forces"\nforce = 20000.0\n'
+    (tmp_path / "c.toml").write_text(case)
+    for budget, why in ((100, "formfind.max_iter = 100 reached"), (300, "not compatible")):
+        r = CliRunner().invoke(
+            main,
+            ["formfind", str(tmp_path / "c.toml"), "-o", str(tmp_path / "f.h5"),
+             "--set", f"formfind.max_iter={budget}"],
+        )  # fmt: skip
+        assert r.exit_code == 2 and why in r.stderr, r.stderr
+        done = int(r.stderr.split(" iterations;")[0].rsplit("after ", 1)[1])
+        assert done <= budget + 1
