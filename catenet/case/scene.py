@@ -237,7 +237,10 @@ def _load_cases(case: Case, net: Net, built: Any) -> tuple:
             case, load=lc, supports=dataclasses.replace(case.supports, moves=(), vessels=())
         )
         try:
-            loads = _loads(sub, net, built.names, float(built.size), built._replace(at_nodes=at))
+            loads = _loads(
+                sub, net, built.names, float(built.size), built._replace(at_nodes=at),
+                where=f"load_case[{k}].",
+            )  # fmt: skip
         except ConfigError as exc:
             raise ConfigError(
                 [p.replace("load.", f"load_case[{k}].", 1) for p in exc.problems]
@@ -258,8 +261,9 @@ def _probe(case: Case, built: Any) -> int:
 
 
 def _area_force(
-    case: Case, net: Net, names: dict, sets: Any, size: float, k: int, quiet: bool = False
-) -> np.ndarray:
+    case: Case, net: Net, names: dict, sets: Any, size: float, k: int, quiet: bool = False,
+    where: str = "load.",
+) -> np.ndarray:  # fmt: skip
     """The nodal forces of load.area[k] (catenet/model/areas.py); the paper's pressure
     on a square net as a whole (its own lumping of p L^2)."""
     ar = case.load.areas[k]
@@ -268,13 +272,13 @@ def _area_force(
         if own is not None:
             return own
         covered = np.ones(net.n_nodes, dtype=bool)
-        path = f"load.area[{k}] (on the whole net)"
+        path = f"{where}area[{k}] (on the whole net)"
     else:
         refs = (ar.nodes,) if isinstance(ar.nodes, str) else ar.nodes
         covered = np.zeros(net.n_nodes, dtype=bool)
         covered[[i for r in refs for i in expand(r, names, sets or {})]] = True
         covered = with_chains(covered, case.geometry.given_nodes(net), net.edges)
-        path = f"load.area[{k}].nodes = {show(ar.nodes)}"
+        path = f"{where}area[{k}].nodes = {show(ar.nodes)}"
     covered[net.n_net :] = False  # (the bodies' centres)
     try:
         load = area_load(net.nodes, net.edges, covered, ar.pressure, ar.direction, net.fixed)
@@ -324,8 +328,9 @@ def loads_at(scene: Scene, nodes: np.ndarray, rest_length: np.ndarray) -> np.nda
 
 
 def _loads(
-    case: Case, net: Net, names: dict[str, int], size: float, built: Any, quiet: bool = False
-) -> Loads:
+    case: Case, net: Net, names: dict[str, int], size: float, built: Any, quiet: bool = False,
+    where: str = "load.",
+) -> Loads:  # fmt: skip
     """The loads: pressure, point loads (on a node, each node of a node set, or the node
     at a position along a cable), line loads along cables (lumped as the self-weight),
     gravity and support motion."""
@@ -360,7 +365,7 @@ def _loads(
             on = built.cables.edge == built.cables.names.index(ln.cable)
         line_force(net, on, ln.force, target(ln.history))
     for k, ar in enumerate(ld.areas):
-        target(ar.history)[:] += _area_force(case, net, names, sets, size, k, quiet)
+        target(ar.history)[:] += _area_force(case, net, names, sets, size, k, quiet, where)
     force = constant if constant.any() else None
     parts = tuple((f, History(h)) for h, f in timed.items() if f.any())
     gravity = None if ld.gravity is None else np.array(ld.gravity, dtype=np.float64)

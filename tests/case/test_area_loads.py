@@ -265,6 +265,20 @@ def test_corner_nodes_no_edge_joins_are_said_to_take_no_load(caplog, units, h, a
     assert f"the pressure on the {area} between them" in text and "(12.5 % of the" in text
 
 
+def test_a_load_cases_area_warning_names_the_load_case(caplog):
+    """The same corners under a [[load_case]]'s area load: the warning names
+    load_case[0].area[0] (it said load.area[0], a key the case does not have)."""
+    from catenet.case.kinds import warn
+
+    warn._WARNED.clear()
+    data = _grid_without_corners()
+    data["load_case"] = [{"name": "snow", "area": [{"pressure": 1000.0}]}]
+    with caplog.at_level("WARNING", logger="catenet.case"):
+        build(parse_case(data))
+    assert "load_case[0].area[0] (on the whole net): 4 nodes that no edge joins" in caplog.text
+    assert "load.area" not in caplog.text
+
+
 def test_joined_corners_and_a_part_of_the_net_give_no_such_warning(caplog):
     from catenet.case.kinds import warn
 
