@@ -97,7 +97,9 @@ def _unconverged(written) -> str:
     if d.extra.get("moved"):
         bounds += ", or the ranges of [[formfind.support]]"
     if d.message == RAN_AWAY:
-        why = f"the force densities ran away (beyond {RUNAWAY:.0e} times their start)"
+        ran = float(d.extra.get("ran", RUNAWAY))
+        way = f"to {ran:.3g} times" if ran > 1.0 else f"down to {ran:.3g} of"
+        why = f"the force densities ran away ({way} their start, beyond {RUNAWAY:.0e})"
         more = ""
     else:  # formfind.max_iter reached
         why = (
@@ -186,7 +188,12 @@ def _summary(written) -> None:
         f"{'case':<12} {case.title or case.source}",
         *relabel(lines, units),
         f"{'output':<12} {written.result_file}",
-        f"{'case file':<12} {written.case_file} (catenet run {written.case_file})",
+        f"{'case file':<12} {written.case_file} "
+        + (
+            "(the last iterate: no answer)"
+            if _unconverged(written)
+            else f"(catenet run {written.case_file})"
+        ),
     ]
     click.echo("\n".join(lines))
     if f.design is not None and not f.design.all_met and not _unconverged(written):

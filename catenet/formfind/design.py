@@ -320,8 +320,10 @@ def formfind_targets(
     moved = support_moves(scene, moves, prefix)
     d = design(shape, goals, q0, groups, bounds, max_iter, vary, moved)
     q, x, load = d.extra.pop("state")
-    if not d.all_met and float(np.max(np.abs(np.log(q / q0)))) > np.log(RUNAWAY):
+    ratio = np.log(q / q0)
+    if not d.all_met and float(np.max(np.abs(ratio))) > np.log(RUNAWAY):
         d.message = RAN_AWAY
+        d.extra["ran"] = float(np.exp(ratio[np.argmax(np.abs(ratio))]))  # q / q0 at most
     _zero_lengths(net, x, shape.size, q_name)
     unmet = goals.hard & ~d.met
     if unmet.any():
