@@ -295,9 +295,9 @@ class _Shape:
         rhs_fixed = -p.spread(fixed_part)
         g = None if not self.weighs else np.asarray(self.gravity, dtype=np.float64)
         mass = np.zeros(net.n_nodes)  # the lumped masses the loads carry (the unknown)
-        if g is not None and self.masses is not None:  # (from the last shape's)
-            mass = self.masses
-            load = self.force + mass[:, None] * g[None, :]
+        if g is not None:  # from the last shape's, else the given net's rest lengths' (a
+            mass = self._start_masses() if self.masses is None else self.masses  # pendant:
+            load = self.force + mass[:, None] * g[None, :]  # not its unloaded point)
         mixing = Anderson()
         for _ in range(GRAVITY_ITER):
             x[p.free_nodes] = self.solve(load[p.free_nodes] + rhs_fixed)
@@ -318,10 +318,20 @@ class _Shape:
             "updates (the weight is too large for these force densities): raise them"
         )
 
+    def _start_masses(self) -> np.ndarray:
+        """The given net's lumped masses: rho l0 / 2 per edge end of its rest lengths."""
+        net = self.net
+        half = 0.5 * net.line_density * net.rest_length
+        return np.bincount(net.edges[:, 0], half, net.n_nodes) + np.bincount(
+            net.edges[:, 1], half, net.n_nodes
+        )
+
     def _masses(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The nodes' lumped masses (N,) at x: rho l0 / 2 per edge end, l0 the rest
-        length that carries q L under the net's law."""
+        length that carries q L under the net's law (ConfigError for edges of zero
+        length: nodes that coincide carry no length to weigh)."""
         net = self.net
+        _zero_lengths(net, x, self.size, self.q_name)
         length = _lengths(net, x)
         l0 = rest_lengths(net, q * length, length, self.q_name)
         half = 0.5 * net.line_density * l0

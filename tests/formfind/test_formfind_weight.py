@@ -187,3 +187,37 @@ def test_target_forces_under_weight_that_no_shape_meets_name_the_budget_given(tm
         assert r.exit_code == 2 and why in r.stderr, r.stderr
         done = int(r.stderr.split(" iterations;")[0].rsplit("after ", 1)[1])
         assert done <= budget + 1
+
+
+def test_a_pendant_hangs_by_its_own_weight_or_its_nodes_coincide(tmp_path):
+    """One edge hanging from a support, nothing but its weight (rho g = 24.2 N/m): its
+    free end carries half the weight of l0 = L / (1 + q L / EA), so q L = rho g l0 / 2
+    has L = EA (rho g / (2 q) - 1) / q for q below rho g / 2 and only L = 0 above. At
+    q = 10 N/m: N = EA (rho g / 20 - 1) = 20965 N (found from the given edge's weight:
+    from the unloaded point, L = 0, it never left); at 100 N/m the nodes coincide (it
+    said "would carry N = 0 N, which its law cannot carry": lower the force densities)."""
+    pendant = """
+[geometry]
+kind = "graph"
+nodes = [[0, 0, 0], [0, 0, -1]]
+edges = [[0, 1]]
+fixed = [0]
+[material]
+EA = 1e5
+radius = 0.01
+density = 7850.0
+[load]
+gravity = [0, 0, -9.81]
+[formfind]
+force_density = {q}
+"""
+    rho_g = 7850.0 * 9.81 * np.pi * 0.01**2
+    (tmp_path / "p.toml").write_text(pendant.format(q=10.0))
+    net, loads = (lambda s: (s.net, s.loads))(build(load_case(tmp_path / "p.toml")))
+    found = formfind(net, 10.0, loads=loads)
+    assert found.force[0] == pytest.approx(1e5 * (rho_g / 20.0 - 1.0), rel=1e-9)
+    (tmp_path / "p.toml").write_text(pendant.format(q=100.0))
+    r = CliRunner().invoke(
+        main, ["formfind", str(tmp_path / "p.toml"), "-o", str(tmp_path / "f.h5")]
+    )
+    assert r.exit_code == 2 and "edges of zero length: 0 (nodes [0, 1])" in r.stderr, r.stderr
