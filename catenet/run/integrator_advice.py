@@ -81,8 +81,9 @@ def integrator_loss(case: Case, result) -> str | None:
     share = f"{lost:.0%} of the run's largest energy"
     if not lost > LOSS_WARN:
         share = (
-            f"{moved:.0%} of the motion's energy (its largest kinetic energy and what "
-            f"damping, drag and friction took; {lost:.1%} of the largest)"
+            f"{moved:.0%} of the motion's energy (its largest kinetic energy, in its centre "
+            "of mass's frame where nothing holds the net, and what damping, drag and "
+            f"friction took; {lost:.1%} of the largest)"
         )
     return (
         f"the integrator ({name}, {steps}) removed {share} on "

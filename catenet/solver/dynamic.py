@@ -194,7 +194,7 @@ def _result(stepper: TimeStepper, ledger: Ledger, run: Outcome, start: float) ->
         outcome=run,
         energy=ledger.row.copy(),
         energy_scale=ledger.largest,
-        energy_motion=ledger.motion,
+        energy_motion=ledger.internal,
     )
 
 

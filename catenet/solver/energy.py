@@ -78,7 +78,12 @@ class Ledger:
         self.row = np.zeros(len(COLUMNS))
         self.judged = True
         self.largest = 0.0
-        self.motion = 0.0  # the largest kinetic energy (``catenet.run.integrator_advice``)
+        self.motion = 0.0  # the largest kinetic energy (steps chosen by accuracy)
+        # ... in the centre of mass's frame where nothing outside the net and its bodies
+        # holds them (a thrown net: its flight's energy no step can lose is not counted;
+        # ``catenet.run.integrator_advice``'s share of the motion's energy)
+        self.internal = 0.0
+        self._axes: np.ndarray | None = None  # each free DOF's axis, where that frame is
         self.remedy = REMEDIES[""]  # what an EnergyError advises (``begin``)
         self.steps = 0  # the accepted steps so far (``check``'s GRACE)
         self._start = 0.0
@@ -109,6 +114,8 @@ class Ledger:
         self.row[:] = (k, u, c, 0.0, 0.0, 0.0)
         self.largest = max(abs(k), abs(u), abs(c))
         self.motion = k
+        self._axes = stepper.free % 3 if _held_by_nothing(stepper) else None
+        self.internal = self._internal(stepper, stepper.v, k)
         self.steps = 0
         self.remedy = REMEDIES.get(stepper.scheme.name, REMEDIES[""])
 
@@ -127,6 +134,7 @@ class Ledger:
         self.floor = max(self.floor, _floor(stepper, x_new, h))
         self.largest = max(self.largest, abs(k), abs(u), abs(c), abs(work))
         self.motion = max(self.motion, k)
+        self.internal = max(self.internal, self._internal(stepper, v_new, k))
         self.steps += 1
 
     def change(
@@ -144,6 +152,20 @@ class Ledger:
         k, u, c, work, dissipated = self._balance(stepper, x_old, x_new, v_new, h, False)
         remainder = self._remainder(k + u + c, work, dissipated)
         return remainder - float(self.row[-1]), max(self.motion, k) + max(dissipated, 0.0)
+
+    def _internal(self, stepper: TimeStepper, v: np.ndarray, kinetic: float) -> float:
+        """The kinetic energy in the centre of mass's frame (``kinetic`` itself where
+        something outside holds the net): less sum over the axes of P^2 / 2 M."""
+        if self._axes is None:
+            return kinetic
+        m, vel = stepper.m_free, v.reshape(-1)[stepper.free]
+        flight = 0.0
+        for axis in range(3):
+            on = self._axes == axis
+            mass = float(np.sum(m[on]))
+            if mass > 0.0:
+                flight += 0.5 * float(np.dot(m[on], vel[on])) ** 2 / mass
+        return kinetic - flight
 
     def _remainder(self, held: float, work: float, dissipated: float) -> float:
         """The integrator's own energy: what the net and bodies hold (``held``, kinetic,
@@ -269,6 +291,26 @@ class Ledger:
         fixed = stepper.net.fixed
         reaction[fixed] = grad[fixed] - potential.force[fixed]
         return (kinetic, *_stored(system, energies), reaction)
+
+
+def _held_by_nothing(stepper: TimeStepper) -> bool:
+    """No fixed node, no moving support, and no term that ties the net to the world (an
+    obstacle, fixed or moving, a body's plane, a roller, a spring or support term, the
+    water): the net and its bodies fly free, and a uniform motion of them all is no
+    motion an integrator can lose."""
+    from catenet.terms.axial import AxialDamping
+    from catenet.terms.body import Guide
+    from catenet.terms.body_plane import BodyPlane
+    from catenet.terms.contact import Obstacle
+
+    if stepper.net.fixed.any() or stepper.loads.moves_supports or stepper.loads.vessels:
+        return False
+    for term in stepper.system.terms:
+        if isinstance(term, (Obstacle, BodyPlane, Guide)) or term.holds or term.moving:
+            return False
+        if term.medium and not isinstance(term, AxialDamping):
+            return False
+    return True
 
 
 def _floor(stepper: TimeStepper, x: np.ndarray, h: float) -> float:
