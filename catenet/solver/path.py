@@ -320,7 +320,33 @@ def equilibrium_start(scene: Scene, settings: Settings, ws: Workspace, t0: float
         max_iter=settings.static_iterations,
         workspace=ws,
     )
-    return np.array(found[-1].x, dtype=np.float64)
+    x = np.array(found[-1].x, dtype=np.float64)
+    _relocated(scene, x)
+    return x
+
+
+#: A free body or ball moved by the start's equilibrium more than this share of the
+#: scene's size was placed elsewhere than it rests: said (its fall is no part of the run)
+MOVED = 0.25
+
+
+def _relocated(scene: Scene, x: np.ndarray) -> None:
+    """Warns where the equilibrium start moved a free body or ball far from where it was
+    given: a body given above the net to be dropped onto it now rests on it at t0."""
+    net = scene.net
+    if net.n_nodes == net.n_net:
+        return
+    moved = np.linalg.norm(x[net.n_net :] - net.nodes[net.n_net :], axis=1)
+    far = float(moved.max())
+    if not far > MOVED * float(scene.size):
+        return
+    log.warning(
+        "solver.initial_state = 'equilibrium' moved a free body %.4g m from where it was "
+        "given, to where it rests with the net: the run starts from there, at rest (a body "
+        "given above the net to fall onto it does not fall); to drop it, start from the "
+        "given geometry (initial_state = 'given')",
+        far,
+    )
 
 
 @dataclass

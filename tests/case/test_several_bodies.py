@@ -183,6 +183,34 @@ def test_a_box_started_at_equilibrium_rests_on_the_ground_undamped():
     assert max(fastest) < 1e-6, max(fastest)
 
 
+def test_an_equilibrium_start_that_moves_a_body_far_says_so(caplog):
+    """A 5 kg ball given 2 m above a net, with ``initial_state = "equilibrium"``: the start
+    rests it on the net (2.045 m lower), so the drop the case describes never happens;
+    the run says so (it ended at rest after one step in silence). The box above, 4 mm
+    from where it rests, is not warned of."""
+    case = {
+        "geometry": {"kind": "square_net", "n": 10, "alpha": 0.0, "size": 1.0,
+                     "edge_length": 0.05},
+        "material": {"E": 2.0e9, "radius": 0.002, "density": 1140.0},
+        "load": {"gravity": [0.0, 0.0, -9.81]},
+        "obstacle": [{"kind": "sphere", "center": [0.0, 0.0, 2.15], "radius": 0.15,
+                      "mass": 5.0}],
+        "solver": {"method": "dynamic", "initial_state": "equilibrium", "t_end": 0.1},
+    }  # fmt: skip
+    scene = build(parse_case(case))
+    with caplog.at_level("WARNING", logger="catenet.solver.path"):
+        solve(scene, Settings.of(scene.case.solver))
+    assert "moved a free body 2.04" in caplog.text and "does not fall" in caplog.text
+    caplog.clear()
+    near = ground_case(1.2, damping=0.0, t_end=0.02, dt=0.01, initial_state="equilibrium")
+    near["obstacle"][1].pop("velocity")
+    near["obstacle"][1]["center"] = [1.2, 0.0, -0.15 + 0.05 + 0.004]
+    scene = build(parse_case(near))
+    with caplog.at_level("WARNING", logger="catenet.solver.path"):
+        solve(scene, Settings.of(scene.case.solver))
+    assert "moved a free body" not in caplog.text
+
+
 def test_body_plane_derivatives_and_step_cap():
     """Gradient and Hessian of the body-plane barrier against finite differences, at a
     turned, slightly strained box with three corners within reach; the step cap is the
