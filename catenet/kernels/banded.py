@@ -9,8 +9,9 @@ complement D - Y^T Y.
 
 The band's factorisation is LAPACK's dpbtrf (``band_cholesky``: blocked, as SciPy
 ships it; the array is its lower band storage in Fortran order, AB(1 + d, j) = L[j, d],
-so it is passed as it is), or plain loops (``band_cholesky_loops``), which a narrow band
-(p up to about 20) costs about as much and a drop's net (p = 60) about three times.
+so it is passed as it is), or plain loops (``band_cholesky_loops``), which took 1.16x to
+1.6x its time on the steps' matrices of benchmarks/solvers_small.py (384 to 1155
+unknowns, half widths 32 to 56; docs/performance.md).
 SciPy's LAPACK is reached by its address (``scipy.linalg.cython_lapack``), known to
 LLVM under ``DPBTRF`` once ``lapack_ready`` has run, so that the kernel stays cached.
 """
