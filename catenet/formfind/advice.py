@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from catenet.errors import CatenetError
+from catenet.errors import CatenetError, ConfigError
 from catenet.model.units import relabel
 
 #: A shape this many times its supports' span across is warned of (``catenet run``'s
@@ -25,8 +25,15 @@ def slips(case, scene) -> list[str]:
 
 def explained(exc: CatenetError, case, scene) -> CatenetError:
     """``exc`` with its message in the case's units and the likely unit slip after it."""
-    message = relabel([str(exc)], case.units or "SI")[0]
+    units = case.units or "SI"
     found = slips(case, scene)
+    if isinstance(exc, ConfigError):  # (its problems are what is printed)
+        exc.problems = relabel(exc.problems, units)
+        if found:
+            exc.problems[-1] = f"{exc.problems[-1]}; {found[0]}"
+        exc.args = ("\n".join(exc.problems),)
+        return exc
+    message = relabel([str(exc)], units)[0]
     if found:
         message = f"{message}; {found[0]}"
     exc.args = (message, *exc.args[1:])
