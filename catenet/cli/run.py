@@ -407,7 +407,14 @@ def _summary(case, result, path: Path | None) -> None:
         f"{result.steps} {'time' if case.solver.method == 'dynamic' else 'load'} "
         f"step{'' if result.steps == 1 else 's'}, "
         f"residual {result.residual:.3g} N)",
-        *state_lines(numbers, _timing(case), len(result.tension), warn, case.water is not None),
+        *state_lines(
+            numbers,
+            _timing(case),
+            len(result.tension),
+            warn,
+            case.water is not None,
+            case.solver.method == "dynamic" and case.solver.initial_state == "equilibrium",
+        ),  # fmt: skip
         _times(result),
     ]
     if result.energy is not None:  # a dynamic run's balance (catenet.solver.energy)

@@ -35,12 +35,15 @@ def _more(peak: float, final: float) -> bool:
 
 
 def state_lines(
-    s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False, water: bool = False
-) -> list[str]:
+    s: dict, dynamic: bool | str, n_edges: int, warn_strain: bool = False, water: bool = False,
+    settled: bool = False,
+) -> list[str]:  # fmt: skip
     """The summary's lines for the numbers ``s`` (``summarize_result`` plus
     ``delta_over_L`` and ``size``) of a run (``dynamic``: times in s, else load factors;
     "rest": a run to rest, whose peaks are on the relaxation's pseudo-time path;
-    ``water``: a case in water, whose contact forces include its buoyancy and drag)."""
+    ``water``: a case in water, whose contact forces include its buoyancy and drag;
+    ``settled``: a dynamic run from its static equilibrium, whose displacements are
+    still measured from the given geometry)."""
     probe = s["probe"]
     how = "the free node that moves most; " if s.get("probe_auto") else ""
     lines = [
@@ -72,6 +75,8 @@ def state_lines(
             f"; peak over the run {peak:.6g} m at node {s['peak_displacement_node']} "
             f"({_when(s['peak_displacement_time'], dynamic)})"
         )
+    if settled:  # (a peak at a time the motion hardly moves the node: its sag's)
+        line += " (from the given geometry: the run starts from its static equilibrium)"
     lines.append(line)
     edge = f" (edge {s['max_tension_edge']})" if s["max_tension_edge"] >= 0 else ""
     strain = f" (edge {s['max_strain_edge']})" if s["max_strain_edge"] >= 0 else ""

@@ -511,3 +511,23 @@ def test_dynamic_failure_keeps_the_last_good_step(tmp_path, write_case, monkeypa
         free = ~h5["mesh/fixed"][()]
         np.testing.assert_allclose(x[free, 2], -4e-3)
     check_xdmf(out.with_suffix(".xdmf"))
+
+
+@pytest.mark.parametrize("start, noted", [("equilibrium", True), ("given", False)])
+def test_displacements_of_a_run_from_its_equilibrium_say_their_reference(tmp_path, start, noted):
+    """A cable drawn straight and hung at rest by ``initial_state = "equilibrium"``: its
+    displacements (contract: from the given geometry) are mostly its sag at t = 0, which
+    the summary says, not a motion of the run."""
+    case = tmp_path / "hung.toml"
+    case.write_text(
+        '[geometry]\nkind = "cable"\nstart = [0, 0, 0]\nend = [10, 0, 0]\nnodes = 11\n'
+        "[material]\nE = 1e9\nradius = 0.01\ndensity = 1000.0\nprestress = 100.0\n"
+        "[load]\ngravity = [0, 0, -9.81]\n"
+        f'[solver]\nmethod = "dynamic"\ninitial_state = "{start}"\nt_end = 0.05\n'
+    )
+    r = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "h.h5")])
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.output.splitlines() if x.startswith("max displ."))
+    assert (
+        "(from the given geometry: the run starts from its static equilibrium)" in line
+    ) is noted
