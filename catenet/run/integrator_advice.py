@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from catenet.solver.energy import COLUMNS
+from catenet.solver.energy import COLUMNS, ROUNDOFF
 from catenet.solver.result import Outcome
 
 if TYPE_CHECKING:
@@ -59,7 +59,8 @@ def integrator_loss(case: Case, result) -> str | None:
     lost = -float(energy[-1]) / scale
     took = max(float(energy[COLUMNS.index("dissipated")]), 0.0)  # damping, drag, friction
     motion = float(getattr(result, "energy_motion", float("nan"))) + took
-    moved = -float(energy[-1]) / motion if motion > 0.0 else 0.0
+    noise = -float(energy[-1]) <= ROUNDOFF * scale  # (the energies' round-off: a net at
+    moved = -float(energy[-1]) / motion if motion > 0.0 and not noise else 0.0  # rest)
     if not (lost > LOSS_WARN or moved > MOTION_WARN):
         return None
     name = solver.integrator
