@@ -414,11 +414,10 @@ class TimeStepper:
             # is its forces' round-off (a gust's history landed on its end, 1e-14 N of
             # 100 N left by the time's round-off, stopped a run at fixed steps)
             raise ConvergenceError(
-                f"the time step to t = {self.t + h_step:.6g} s ends with a force imbalance "
-                f"of {newton.residual:.3g} N, the round-off of its forces (a motion far "
-                f"faster than the step: a body spun beyond what dt resolves), above the "
-                f"loads ({loads:.3g} N): no digit of this answer is sure; use a smaller "
-                "solver.dt or check the initial velocities and angular velocities",
+                f"the time step of {h_step:.3g} s to t = {self.t + h_step:.6g} s ends with "
+                f"a force imbalance of {newton.residual:.3g} N, the round-off of its "
+                f"forces, above the loads ({loads:.3g} N): no digit of this answer is "
+                f"sure; {_why_roundoff(control)}",
                 iterations=self.iterations,
                 state=self.x.copy(),
             )
@@ -526,3 +525,23 @@ def _along_guides(guides: Guides, v: np.ndarray) -> None:
             k, int(np.count_nonzero(lost > 0)) - 1, float(lost.max()),
         )  # fmt: skip
     v[guides.nodes] = free
+
+
+def _why_roundoff(control: StepControl | RestControl | ErrorControl) -> str:
+    """What a step whose forces' round-off exceeds its loads most likely means: steps
+    chosen by accuracy that shrank until a step's inertia (m / h^2) turned the positions'
+    round-off into forces beyond the loads (a tolerance tighter than the model allows,
+    at a corner of a prescribed motion), or a motion far faster than a step (a body spun
+    beyond what dt resolves)."""
+    if isinstance(control, ErrorControl):
+        return (
+            "the steps chosen by accuracy shrank until a step's inertia turned the "
+            "positions' round-off into forces beyond the loads (a solver.tolerance tighter "
+            "than this model allows, or a motion far faster than the steps: a body spun "
+            "beyond them): use a larger solver.tolerance or solver.dt_min, or check the "
+            "initial velocities and angular velocities"
+        )
+    return (
+        "a motion far faster than the step (a body spun beyond what dt resolves): use a "
+        "smaller solver.dt or check the initial velocities and angular velocities"
+    )

@@ -209,6 +209,12 @@ def test_a_drop_with_a_box_spun_beyond_its_step_is_not_an_answer(tmp_path):
     assert r.exit_code == 1, r.output
     assert "the round-off of its forces" in r.output and "above the loads" in r.output
     assert "converged    yes" not in r.output
+    assert "use a smaller solver.dt" in r.output  # (fixed steps)
+    del case["solver"]["dt"]  # steps chosen by accuracy: they shrink to round-off
+    r = run(tmp_path, case)
+    assert r.exit_code == 1 and "the round-off of its forces" in r.output, r.output
+    assert "the steps chosen by accuracy shrank" in r.output
+    assert "use a larger solver.tolerance or solver.dt_min" in r.output
 
 
 def mooring(prestrain: float) -> dict:
