@@ -532,8 +532,13 @@ def _unmet(net, method, target, stall, tol, name, spent, max_iter) -> ConfigErro
         f"{name}: cannot be met to {prefix}tol = {tol:g}: edge {worst} (nodes "
         f"{net.edges[worst].tolist()}) has {what} {got:.9g}, target {target[worst]:.9g} "
         f"(relative miss {miss:.2e} after {iterations} iterations; {why}): give reachable "
-        "targets (an edge between fixed nodes keeps its length; a free node's edges "
-        "must close up)"
+        + (
+            "targets (an edge between fixed nodes keeps its length; a free node's edges "
+            "must close up)"
+            if method == "lengths"
+            else "targets (at each free node the tensions must balance its load: a cable "
+            "under its weight or a load cannot carry one tension throughout)"
+        )
     )
 
 

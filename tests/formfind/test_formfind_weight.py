@@ -190,6 +190,8 @@ def test_target_forces_under_weight_that_no_shape_meets_name_the_budget_given(tm
         assert r.exit_code == 2 and why in r.stderr, r.stderr
         done = int(r.stderr.split(" iterations;")[0].rsplit("after ", 1)[1])
         assert done <= budget + 1
+        assert "the tensions must balance its load" in r.stderr  # (not lengths' closing)
+        assert "must close up" not in r.stderr
 
 
 def test_a_pendant_hangs_by_its_own_weight_or_its_nodes_coincide(tmp_path):
