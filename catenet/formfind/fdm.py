@@ -16,10 +16,8 @@ Gravity acts on the lumped masses of the net the result describes, m = rho A l0 
 edge end, and l0 = L / (1 + eps(N)) depends on the shape found: the loads are updated
 from the shape and the shape solved again with the same factorisation until they agree
 to round-off (the updates mixed, ``catenet.formfind.anderson``), so that the net written
-out carries exactly the loads it was found under. A shape that only a stretch beyond
-IMPLAUSIBLE times the law's range holds is an error (``FormFound.implausible``): where
-the weight is too large for the force densities, the nodes sink until l0 = L / (1 + q L /
-EA), which tends to EA / q, stops the weight growing.
+out carries exactly the loads it was found under. A shape only a stretch beyond
+IMPLAUSIBLE times the law's range holds is an error (``FormFound.implausible``).
 
 Target forces: the classical update q <- N / L for a start; then, for target forces
 (q L = N) and target lengths (L = L_target) alike, Newton on s = log q (q stays
@@ -532,14 +530,15 @@ def _unmet(net, method, target, stall, tol, name, spent, max_iter) -> ConfigErro
         f"{name}: cannot be met to {prefix}tol = {tol:g}: edge {worst} (nodes "
         f"{net.edges[worst].tolist()}) has {what} {got:.9g}, target {target[worst]:.9g} "
         f"(relative miss {miss:.2e} after {iterations} iterations; {why}): give reachable "
-        + (
-            "targets (an edge between fixed nodes keeps its length; a free node's edges "
-            "must close up)"
-            if method == "lengths"
-            else "targets (at each free node the tensions must balance its load: a cable "
-            "under its weight or a load cannot carry one tension throughout)"
-        )
+        f"targets ({HINTS[method == 'lengths']})"
     )
+
+
+HINTS = (  # what makes target forces (lengths) unreachable
+    "at each free node the tensions must balance its load: a cable under its weight or a "
+    "load cannot carry one tension throughout",
+    "an edge between fixed nodes keeps its length; a free node's edges must close up",
+)
 
 
 def _mean_kept(shape: _Shape, method: str, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
