@@ -318,11 +318,7 @@ class _Shape:
 
     def _start_masses(self) -> np.ndarray:
         """The given net's lumped masses: rho l0 / 2 per edge end of its rest lengths."""
-        net = self.net
-        half = 0.5 * net.line_density * net.rest_length
-        return np.bincount(net.edges[:, 0], half, net.n_nodes) + np.bincount(
-            net.edges[:, 1], half, net.n_nodes
-        )
+        return _lumped(self.net, self.net.rest_length)
 
     def _masses(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The nodes' lumped masses (N,) at x: rho l0 / 2 per edge end, l0 the rest
@@ -331,11 +327,15 @@ class _Shape:
         net = self.net
         _zero_lengths(net, x, self.size, self.q_name)
         length = _lengths(net, x)
-        l0 = rest_lengths(net, q * length, length, self.q_name)
-        half = 0.5 * net.line_density * l0
-        mass = np.bincount(net.edges[:, 0], half, net.n_nodes)
-        mass += np.bincount(net.edges[:, 1], half, net.n_nodes)
-        return mass
+        return _lumped(net, rest_lengths(net, q * length, length, self.q_name))
+
+
+def _lumped(net: Net, l0: np.ndarray) -> np.ndarray:
+    """Per node (N,), rho l0 / 2 of its edges (``Net.mass`` without point masses)."""
+    half = 0.5 * net.line_density * l0
+    return np.bincount(net.edges[:, 0], half, net.n_nodes) + np.bincount(
+        net.edges[:, 1], half, net.n_nodes
+    )
 
 
 def _lengths(net: Net, x: np.ndarray) -> np.ndarray:
