@@ -229,7 +229,7 @@ class Ledger:
         for term in self._media:
             lost, put = term.losses(x_old, x_new, h, trapezoid, commit)
             dissipated += lost
-            work += put
+            work += put + term.relagged(stepper.v, commit)  # (stepper.v: the step's start)
         return k, u, c, work, dissipated
 
     def check(self, t: float) -> None:

@@ -264,6 +264,13 @@ class Term:
         """(``medium`` terms) (N, 3, 3) the mass it adds at each node [kg]."""
         raise NotImplementedError(f"{type(self).__name__} is no medium")
 
+    def relagged(self, v: np.ndarray, commit: bool = True) -> float:
+        """(``medium`` terms) The kinetic energy that this step's mass blocks, lagged at
+        its start, give the velocities v (N, 3) of its start beyond the blocks the last
+        accepted step was booked with: the lagged model's own work, no integrator's
+        (``commit``: the step is accepted). 0 for a medium whose mass never changes."""
+        return 0.0
+
     def losses(
         self,
         x_old: np.ndarray,
