@@ -19,6 +19,8 @@ from numba import njit
 from catenet.kernels.rigid import frame_state
 from catenet.kernels.shapes import BOX, box_max_step, capsule_max_step, shape_feature
 
+EPS = float(np.finfo(np.float64).eps)
+
 
 @njit(cache=True, error_model="numpy")
 def body_paths(x, dx, nodes, body, B, c0):
@@ -91,6 +93,39 @@ def _ray(kind, geom, P, D, grow):
 
 
 @njit(cache=True, error_model="numpy")
+def _least_gap(kind, geom, Xc, Vc, Wc, t, Pc, low, n, P3):
+    """The least gap of the candidates' paths at t (their points Pc moved there), the
+    same number as the least of every gap: a gap is evaluated only where its bound in
+    ``low`` does not exceed the least found so far. The bound is the gap last evaluated
+    less how far the point has moved since (a distance to a shape, less a radius, grows
+    no faster than its point moves) and 64 round-offs of its coordinates' and the
+    shape's size; ``low`` keeps each gap evaluated and the others' bounds. (A node
+    thrown at 9e18 m/s past a box: 60 pieces of 65 candidates in each of 11 500 caps,
+    2 ms each; 0.2 ms now, the same caps.)"""
+    m = Xc.shape[0]
+    size = np.max(np.abs(geom))
+    first = 0
+    for j in range(m):
+        moved = 0.0
+        far = size
+        for a in range(3):
+            p = Xc[j, a] + t * Vc[j, a] + t * t * Wc[j, a]
+            moved += (p - Pc[j, a]) ** 2
+            far = max(far, abs(p), abs(Pc[j, a]))
+            Pc[j, a] = p
+        low[j] -= np.sqrt(moved) * (1.0 + 1e-9) + 64.0 * EPS * far
+        if low[j] < low[first]:
+            first = j
+    low[first] = shape_feature(kind, Pc[first], geom, n, P3)  # the likeliest least
+    best = min(np.inf, low[first])  # (a NaN gap is passed over, as min passed it over)
+    for j in range(m):
+        if j != first and not low[j] > best:
+            low[j] = shape_feature(kind, Pc[j], geom, n, P3)
+            best = min(best, low[j])
+    return best
+
+
+@njit(cache=True, error_model="numpy")
 def body_step_cap(kind, geom, X0, V, W, scale, dhat, share, pieces, floor_share, roundoff,
                   slack, far):  # fmt: skip
     """The first contact of the paths X0 + t V + t^2 W (K, 3) with the shape (``kind``,
@@ -133,15 +168,14 @@ def body_step_cap(kind, geom, X0, V, W, scale, dhat, share, pieces, floor_share,
             Xc[j, a] = X0[take[j], a]
             Vc[j, a] = V[take[j], a]
             Wc[j, a] = W[take[j], a]
-    Pc = np.empty((m, 3))
+    Pc = Xc.copy()
     D = np.empty((m, 3))
+    low = np.empty(m)  # each candidate's gap at Pc, or a bound below it (_least_gap)
+    for j in range(m):
+        low[j] = gap[take[j]]
     t = 0.0
     for _ in range(pieces):
-        g_c = np.inf
-        for j in range(m):
-            for a in range(3):
-                Pc[j, a] = Xc[j, a] + t * Vc[j, a] + t * t * Wc[j, a]
-            g_c = min(g_c, shape_feature(kind, Pc[j], geom, n, P3))
+        g_c = _least_gap(kind, geom, Xc, Vc, Wc, t, Pc, low, n, P3)
         delta = min(share * (g_c - floor), 0.5 * dhat)
         if not delta > 0.0:  # a node at the floor already (or NaN): no safe advance
             return t

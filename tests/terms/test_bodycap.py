@@ -72,3 +72,37 @@ def test_a_turning_box_caps_before_any_node_enters():
             assert touch.gap(x + t * dx).min() > 0.0
         assert walk >= 0.5 * cap and cap >= 0.5 * walk  # both near the first contact
     assert capped > 10
+
+
+@pytest.mark.parametrize("kind", ["box", "capsule"])
+def test_the_least_gap_by_bounds_is_the_least_of_every_gap(kind):
+    """``_least_gap`` evaluates a candidate's gap only where its bound (its last gap less
+    how far it has moved) does not exceed the least so far: over pieces of random
+    quadratic paths that pass into and out of the shape, one fast point among slow ones
+    (the case that made it), the same number as the least of every gap, to the bit."""
+    from catenet.kernels.bodycap import _least_gap
+    from catenet.kernels.shapes import BOX, CAPSULE, shape_feature
+
+    rng = np.random.default_rng(11)
+    if kind == "box":
+        axes = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        geom = np.concatenate([[0.3, -0.2, 0.1], axes.ravel(), [0.5, 0.4, 0.3], [0.05]])
+        code = BOX
+    else:
+        geom = np.array([-0.4, 0.0, 0.1, 0.5, 0.2, -0.1, 0.25])
+        code = CAPSULE
+    n, P3 = np.empty(3), np.empty((3, 3))
+    for _ in range(40):
+        X = rng.normal(0.0, 1.0, (30, 3))
+        V = rng.normal(0.0, 0.3, (30, 3))
+        W = rng.normal(0.0, 0.05, (30, 3))
+        V[0] *= 10.0 ** rng.integers(0, 12)  # one fast point
+        low = np.array([shape_feature(code, X[j], geom, n, P3) for j in range(30)])
+        P = X.copy()
+        for t in np.cumsum(rng.uniform(0.0, 0.3, 12)):
+            least = _least_gap(code, geom, X, V, W, t, P, low, n, P3)
+            points = X + t * V + t * t * W
+            every = [shape_feature(code, points[j], geom, n, P3) for j in range(30)]
+            assert least == min(every)
+            assert np.array_equal(P, points)
+            assert np.all(low <= np.array(every))
