@@ -197,9 +197,15 @@ def _summary(written) -> None:
     ]
     click.echo("\n".join(lines))
     if f.design is not None and not f.design.all_met and not _unconverged(written):
+        from catenet.formfind.design import BLOCKED
+
+        shape = (
+            "the nearest the search got with force densities that give a shape"
+            if f.design.message.startswith(BLOCKED)
+            else "the weighted least-squares compromise"
+        )
         click.echo(
-            "catenet: warning: the targets are not all met: the shape is the weighted "
-            "least-squares compromise (misses above)",
+            f"catenet: warning: the targets are not all met: the shape is {shape} (misses above)",
             err=True,
         )
 

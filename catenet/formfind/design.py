@@ -102,6 +102,7 @@ class _Search:
         self.steps = new_steps()  # how the damped steps went
         self.kept: dict = {}  # factors kept between states (the iterative step's)
         self.last: SparseJacobian | None = None  # the last sparse Jacobian
+        self.blocked: str | None = None  # why a state tried since the best had no shape
 
     def state(self, s: np.ndarray):
         """(q, x, load, a) at s: the shape solved once per s (the goals' values ``a``
@@ -118,6 +119,7 @@ class _Search:
             r = self.goals.w * self.goals.miss(a)
             if np.all(np.isfinite(r)) and (self.best is None or r @ r < self.best[0]):
                 self.best = (float(r @ r), s.copy())
+                self.blocked = None
         q, x, load, length = self.now
         return q, x, load, self._achieved(x, q, load, length)
 
@@ -144,7 +146,8 @@ class _Search:
     def residual(self, s: np.ndarray) -> np.ndarray:
         try:
             q, x, load, a = self.state(s)
-        except (SingularSystemError, ConvergenceError, ConfigError):
+        except (SingularSystemError, ConvergenceError, ConfigError) as exc:
+            self.blocked = str(exc)
             return np.full(self.goals.rows, 1e150)  # no shape there: the step is refused
         if not np.all(np.isfinite(a)):
             return np.full(self.goals.rows, 1e150)  # a node off a surface's plan: refused
@@ -252,6 +255,8 @@ def design(shape, goals: Goals, q0, groups, bounds, max_iter: int, vary: str, mo
 
 #: How a search that met not every target ended (its stationary point)
 COMPROMISE = "least-squares compromise: the targets are not all compatible"
+#: How a search ended that stopped at its best where a step on from it found no shape
+BLOCKED = "stopped where the force densities toward the targets give no shape"
 
 
 def compromise(message: str, at_bound: int) -> str:
@@ -276,7 +281,15 @@ def _search(search: _Search, s0: np.ndarray, bounds, budget: int) -> tuple[str, 
     s = ended.s if best is None else best[1]
     if ended.why == "max_iter":
         return "formfind.max_iter reached", s
+    if search.blocked is not None:  # a step on from the best found no shape
+        return f"{BLOCKED}: {_first_clause(search.blocked)}", s
     return COMPROMISE, s
+
+
+def _first_clause(message: str) -> str:
+    """A shape's error as a clause: without its prefix and its advice."""
+    clause = message.removeprefix("form finding: ")
+    return clause.split(": raise")[0].split(": lower")[0].rstrip(". ")
 
 
 def formfind_targets(

@@ -177,6 +177,24 @@ def test_the_spider_net_centre_lies_3_m_below_its_ring_by_one_command(tmp_path):
         assert abs(h5["result/x"][0, 2] + 3.0) < 1e-3
 
 
+def test_a_target_beyond_the_shapes_the_weight_allows_is_no_compromise(tmp_path):
+    """The spider's centre asked 5 km down: below about 13 N/m the net's weight no longer
+    settles (or settles kilometres down), so the search stops at -134 m where a step on
+    finds no shape. It said "least-squares compromise: the targets are not all
+    compatible" of its one target; it says why it stopped now, exit 0 with a warning."""
+    r, out = invoke(tmp_path, spider(target=[{"node": "centre", "z": -5000.0}]))
+    assert r.exit_code == 0, r.output
+    assert (
+        "stopped where the force densities toward the targets give no shape: the "
+        "self-weight did not settle" in r.output
+    )
+    assert "compatible" not in r.output and "least-squares compromise" not in r.output
+    assert "the nearest the search got with force densities that give a shape" in r.output
+    with h5py.File(out) as h5:
+        assert -1000.0 < h5["result/x"][0, 2] < -10.0
+        assert not bool(h5["result/targets"].attrs["met"])
+
+
 def test_a_target_met_at_the_start_costs_no_iteration():
     """The centre's z of the start's own shape as the target: no step, one factorisation."""
     start = found(spider(formfind={"method": "linear", "force_density": 500.0}, target=[]))
