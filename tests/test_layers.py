@@ -13,6 +13,7 @@ MAX_LINES, and the solver's public entry points load no case-file module.
 from __future__ import annotations
 
 import ast
+import functools
 import subprocess
 import sys
 from collections import defaultdict
@@ -82,7 +83,11 @@ def imports(path: Path) -> list[tuple[str, int]]:
     return found
 
 
-GRAPH = {me: imports(path) for me, path in MODULES.items()}
+@functools.cache
+def graph() -> dict[str, list[tuple[str, int]]]:
+    """Each module's catenet imports (read once, by the tests that need it, not at
+    collection: every pytest process collects this file)."""
+    return {me: imports(path) for me, path in MODULES.items()}
 
 
 def test_every_module_is_in_a_layer():
@@ -93,7 +98,7 @@ def test_every_module_is_in_a_layer():
 
 def test_every_import_goes_down_the_layers():
     wrong = []
-    for me, found in GRAPH.items():
+    for me, found in graph().items():
         mine = layer(me)
         for target, line in found:
             theirs = layer(target)
@@ -104,7 +109,7 @@ def test_every_import_goes_down_the_layers():
 
 def test_no_import_cycles():
     edges = defaultdict(set)
-    for me, found in GRAPH.items():
+    for me, found in graph().items():
         edges[me].update(t for t, _ in found if t in MODULES and t != me)
     index: dict[str, int] = {}
     low: dict[str, int] = {}
