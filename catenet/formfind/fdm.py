@@ -44,6 +44,7 @@ from catenet.errors import ConfigError, ConvergenceError
 from catenet.formfind.anderson import Anderson
 from catenet.formfind.newton import Stalled, newton
 from catenet.formfind.tocase import to_case
+from catenet.model.measures import line_mass
 from catenet.model.net import Net
 
 if TYPE_CHECKING:
@@ -318,7 +319,7 @@ class _Shape:
 
     def _start_masses(self) -> np.ndarray:
         """The given net's lumped masses: rho l0 / 2 per edge end of its rest lengths."""
-        return _lumped(self.net, self.net.rest_length)
+        return line_mass(self.net, self.net.rest_length)
 
     def _masses(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The nodes' lumped masses (N,) at x: rho l0 / 2 per edge end, l0 the rest
@@ -327,15 +328,7 @@ class _Shape:
         net = self.net
         _zero_lengths(net, x, self.size, self.q_name)
         length = _lengths(net, x)
-        return _lumped(net, rest_lengths(net, q * length, length, self.q_name))
-
-
-def _lumped(net: Net, l0: np.ndarray) -> np.ndarray:
-    """Per node (N,), rho l0 / 2 of its edges (``Net.mass`` without point masses)."""
-    half = 0.5 * net.line_density * l0
-    return np.bincount(net.edges[:, 0], half, net.n_nodes) + np.bincount(
-        net.edges[:, 1], half, net.n_nodes
-    )
+        return line_mass(net, rest_lengths(net, q * length, length, self.q_name))
 
 
 def _lengths(net: Net, x: np.ndarray) -> np.ndarray:

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from catenet.errors import ConfigError
+from catenet.model.measures import line_mass
 
 if TYPE_CHECKING:
     from catenet.formfind.fdm import FormFound
@@ -233,7 +234,4 @@ def _timed(case, scene, structured: bool, load: dict) -> list[dict]:
 
 
 def _weight(net, rest: np.ndarray, gravity) -> np.ndarray:
-    half = 0.5 * net.line_density * rest
-    mass = np.bincount(net.edges[:, 0], half, net.n_nodes)
-    mass += np.bincount(net.edges[:, 1], half, net.n_nodes)
-    return mass[:, None] * np.asarray(gravity, dtype=np.float64)[None, :]
+    return line_mass(net, rest)[:, None] * np.asarray(gravity, dtype=np.float64)[None, :]

@@ -208,3 +208,12 @@ def sag(net: Net, x: np.ndarray, edges: np.ndarray | None = None) -> dict | None
         "node": int(nodes[k]),
         "ends": (int(ends[0]), int(ends[1])),
     }
+
+
+def line_mass(net: Net, rest_length: np.ndarray) -> np.ndarray:
+    """Per node (N,), rho l0 / 2 of its edges at the rest lengths given [kg]: ``Net.mass``
+    without the point masses, for rest lengths that change (form finding's self-weight,
+    at every load update; by bincount, not through a new Net)."""
+    half = 0.5 * net.line_density * rest_length
+    ends = net.edges
+    return np.bincount(ends[:, 0], half, net.n_nodes) + np.bincount(ends[:, 1], half, net.n_nodes)
