@@ -98,7 +98,7 @@ class MaterialConfig(Declared):
         gt=0,
         unit="kg/m^3",
         write="changed",
-        doc="modes: the water's density (with added_mass)",
+        doc="modes: the water's density (with added_mass; default: sea water's, in its units)",
     )
     cd_n: float = real(
         1.2,

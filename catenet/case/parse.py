@@ -48,7 +48,7 @@ from catenet.case.targets import parse_targets
 from catenet.case.timing import default_t_end, newmark_refused, resolve_steps, time_dependence
 from catenet.case.toml import apply_overrides, dumps_toml, parse_toml, read_case_bytes
 from catenet.case.vessel import check_vessel
-from catenet.case.water import parse_water
+from catenet.case.water import parse_water, sea_water
 from catenet.case.written import plain
 from catenet.errors import ConfigError
 from catenet.model.units import relabel
@@ -219,7 +219,13 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     design = None
     if "design" in data:
         design = parse_table(ck, data["design"], DesignConfig, "design", ctx)
-    water = parse_water(ck, data.get("water"), ctx)
+    system = units if isinstance(units, str) else "SI"
+    water = parse_water(ck, data.get("water"), ctx, system)
+    given = data.get("material")
+    if isinstance(material, MaterialConfig) and "water_density" not in (
+        given if isinstance(given, dict) else {}
+    ):  # modes' added mass: sea water's in the case's units, as [water]'s
+        material = dataclasses.replace(material, water_density=sea_water(system))
     for k, mv in enumerate(supports.moves if isinstance(supports, SupportsConfig) else ()):
         check_move(ck, mv, f"supports.move[{k}]")
     for k, vs in enumerate(supports.vessels if isinstance(supports, SupportsConfig) else ()):

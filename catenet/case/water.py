@@ -4,6 +4,7 @@ depth, current, regular waves and a JONSWAP sea), and its terms on the built net
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -71,7 +72,9 @@ class WaterConfig(Declared):
     """Water around the net: buoyancy, drag and added mass on every wetted edge
     (the material's cd_n, cd_t, ca_n, ca_t, hydro_diameter; docs/howto/mooring-dynamics.md)."""
 
-    density: float = real(1025.0, gt=0, unit="kg/m^3", doc="the water's density")
+    density: float = real(
+        1025.0, gt=0, unit="kg/m^3", doc="the water's density (default: sea water's, in its units)"
+    )
     surface: float = real(0.0, unit="m", doc="z of the still water level")
     depth: float | None = real(
         None,
@@ -116,13 +119,29 @@ class WaterConfig(Declared):
     )
 
 
-def parse_water(ck: Checker, value: Any, ctx: Context) -> WaterConfig | None | Any:
-    """The ``[water]`` table (absent: None) and the rules between its keys."""
+#: A tonne per the unit of volume, in kg/m^3: the unit of density of each unit system
+TONNE = {"kN-m": 1e3, "N-mm": 1e12}
+
+
+def sea_water(units: str) -> float:
+    """Sea water's density, 1025 kg/m^3, in ``units`` (a case's): the default of
+    water.density and material.water_density."""
+    return 1025.0 / TONNE.get(units, 1.0)
+
+
+def parse_water(
+    ck: Checker, value: Any, ctx: Context, units: str = "SI"
+) -> WaterConfig | None | Any:
+    """The ``[water]`` table (absent: None) and the rules between its keys; its density
+    left out is sea water's, 1025 kg/m^3, in the case's ``units`` (1.025 t/m^3 in kN-m:
+    1025 there made every line 1000 times buoyant)."""
     if value is None:
         return None
     w = parse_table(ck, value, WaterConfig, "water", ctx)
     if w is BAD:
         return BAD
+    if isinstance(value, dict) and "density" not in value:
+        w = dataclasses.replace(w, density=sea_water(units))
     spectral = [k for k in ("hs", "tp") if getattr(w, k) is not None]
     if w.spectrum is None and spectral:
         ck.add(f"water.{spectral[0]}: only with water.spectrum = 'jonswap' (none is given)")

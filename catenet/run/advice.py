@@ -249,6 +249,7 @@ MATERIAL_RANGES = {
     "gravity": (1.0, 30.0),  # m/s^2: the Moon's 1.6 to Jupiter's 25
     "radius": (2e-5, 0.6),  # m
     "pressure": (1.0, 1e5),  # Pa: an area load, from a model's 1 Pa to 100 kPa
+    "water": (900.0, 1300.0),  # kg/m^3: fresh water to brine (a density: its units)
 }
 # What one unit of each quantity is in SI, per unit system (top-level ``units``).
 UNIT_FACTORS: dict[str, dict[str, float]] = {
@@ -308,6 +309,10 @@ def unit_slips(case: Case, net) -> list[str]:
     density = material.density
     if density:
         checks.append(("density", density, "material.density"))
+    if case.water is not None:
+        checks.append(("water", case.water.density, "water.density"))
+    if material.added_mass:  # (modes' added mass)
+        checks.append(("water", material.water_density, "material.water_density"))
     gravity = case.load.gravity
     if gravity is not None:
         checks.append(("gravity", float(np.linalg.norm(gravity)), "|load.gravity|"))
@@ -324,25 +329,26 @@ def unit_slips(case: Case, net) -> list[str]:
         if written is None or not written > 0:
             continue
         low, high = MATERIAL_RANGES[quantity]
-        si = float(written) * factors[quantity]
+        kind = "density" if quantity == "water" else quantity  # (its units)
+        si = float(written) * factors[kind]
         if low <= si <= high:
             continue
-        unit = names[quantity]
+        unit = names[kind]
         shift = _power_of_1000(si, low, high, TYPICAL[quantity])
         guess = ""
         if shift:
             meant = float(written) * 10.0**shift
-            guess = f"; did you mean {meant:g} ({_si(meant * factors[quantity], quantity)})"
+            guess = f"; did you mean {meant:g} ({_si(meant * factors[kind], kind)})"
         found.append(
             f"check units: {key} = {float(written):g} {unit} ({units}) is far "
             f"{'below' if si < low else 'above'} {_REAL.get(quantity, 'real cables')} "
-            f"({low:g} to {high:g} in SI units of {UNIT_NAMES['SI'][quantity]}){guess}?"
+            f"({low:g} to {high:g} in SI units of {UNIT_NAMES['SI'][kind]}){guess}?"
             # ("in SI": not relabelled)
         )
     return list(dict.fromkeys(found))
 
 
-_REAL = {"pressure": "real area loads"}  # (what a quantity is measured against)
+_REAL = {"pressure": "real area loads", "water": "real water"}  # (measured against)
 
 
 def _si(value: float, quantity: str) -> str:
@@ -371,6 +377,7 @@ TYPICAL = {
     "radius": 5e-3,
     "gravity": 9.81,
     "pressure": 1e3,
+    "water": 1025.0,
 }
 
 

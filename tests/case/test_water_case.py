@@ -359,3 +359,40 @@ def test_a_rope_jerked_through_water_runs_at_a_tight_tolerance():
     assert times[-1] > 1.04
     kinetic, elastic, contact, work, lost, left = rows[-1]
     assert kinetic > 1.0 and -1e-2 * max(abs(contact), work) < left <= 0.0
+
+
+def _wire(units: str, **water) -> dict:
+    """A 76 mm wire catenary in 120 m of water (the fairlead 5 m down), in ``units``
+    (SI, kN-m or N-mm): the same line in each."""
+    length, force, mass = {"SI": (1.0, 1.0, 1.0), "kN-m": (1.0, 1e-3, 1e-3),
+                           "N-mm": (1e3, 1.0, 1e-3)}[units]  # fmt: skip
+    case = line_case()
+    case["units"] = units
+    case["geometry"] = {"kind": "cable", "start": [0.0, 0.0, -120.0 * length],
+                        "end": [400.0 * length, 0.0, -5.0 * length], "length": 450.0 * length,
+                        "nodes": 31}  # fmt: skip
+    case["material"] = {"EA": 5.6e8 * force, "area": 3.5e-3 * length**2,
+                        "density": 7850.0 * mass / length**3,
+                        "hydro_diameter": 0.076 * length}  # fmt: skip
+    case["load"] = {"gravity": [0.0, 0.0, -9.81 * length]}
+    case["water"] = dict(water)
+    return case
+
+
+@pytest.mark.parametrize("units", ["kN-m", "N-mm"])
+def test_the_waters_density_left_out_is_sea_waters_in_the_cases_units(units):
+    """water.density (and material.water_density, modes' added mass) left out is 1025
+    kg/m^3 in the case's units: 1.025 t/m^3 in kN-m, 1.025e-9 t/mm^3 in N-mm. In kN-m it
+    was 1025 t/m^3: a wire catenary 1000 times buoyant came out at 22 MN, silently.
+    Given as 1025 there, a unit slip is warned, as a material's density is."""
+    from catenet.run.advice import unit_slips
+
+    _, _, si = run(_wire("SI"))
+    c, _, r = run(_wire(units))
+    scale = {"kN-m": 1e3, "N-mm": 1.0}[units]  # N per the case's force unit
+    assert float(r.tension.max()) * scale == pytest.approx(float(si.tension.max()), rel=1e-9)
+    assert c.water.density == pytest.approx(1025.0 / {"kN-m": 1e3, "N-mm": 1e12}[units])
+    assert c.material.water_density == c.water.density
+    slipped = parse_case(_wire(units, density=1025.0))
+    said = unit_slips(slipped, build(slipped).net)
+    assert any("check units: water.density = 1025" in s for s in said), said
