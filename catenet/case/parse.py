@@ -221,9 +221,9 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
         design = parse_table(ck, data["design"], DesignConfig, "design", ctx)
     system = units if isinstance(units, str) else "SI"
     water = parse_water(ck, data.get("water"), ctx, system)
-    given = data.get("material")
+    table = data.get("material")
     if isinstance(material, MaterialConfig) and "water_density" not in (
-        given if isinstance(given, dict) else {}
+        table if isinstance(table, dict) else {}
     ):  # modes' added mass: sea water's in the case's units, as [water]'s
         material = dataclasses.replace(material, water_density=sea_water(system))
     for k, mv in enumerate(supports.moves if isinstance(supports, SupportsConfig) else ()):
@@ -251,8 +251,8 @@ def parse_case(data: dict, *, source: str = "<dict>", base_dir: Path | None = No
     dynamic = isinstance(solver, SolverConfig) and solver.method == "dynamic"
     given = data.get("solver")
     if dynamic and "damping" not in (given or {}):
-        if water not in (None, BAD):
-            solver = dataclasses.replace(solver, damping=0.0)  # the water damps, not mu M
+        if water not in (None, BAD) and solver.t_end != "rest":  # (a run to rest: the
+            solver = dataclasses.replace(solver, damping=0.0)  # default's) the water damps
         elif time_dependence(load, supports, solver, obstacles, masses):
             solver = dataclasses.replace(solver, damping=0.0)  # its motion is the answer
     if isinstance(solver, SolverConfig) and not dynamic and solver.max_iter is None:

@@ -396,3 +396,16 @@ def test_the_waters_density_left_out_is_sea_waters_in_the_cases_units(units):
     slipped = parse_case(_wire(units, density=1025.0))
     said = unit_slips(slipped, build(slipped).net)
     assert any("check units: water.density = 1025" in s for s in said), said
+
+
+def test_a_line_in_water_relaxes_to_its_equilibrium():
+    """solver.t_end = "rest" in water: a run to rest keeps the default damping (water
+    alone sets it to 0 for a run whose motion is the answer), so it comes to rest at the
+    static equilibrium. It failed with "solver.damping = 0: an undamped run never rests",
+    a damping the case never gave."""
+    static = _wire("SI")
+    _, _, s = run(static)
+    relaxed = dict(static, solver={"method": "dynamic", "t_end": "rest"})
+    c, _, r = run(relaxed)
+    assert c.solver.damping > 0.0 and r.converged
+    assert np.abs(r.x - s.x).max() < 1e-4 * np.abs(s.x).max()
