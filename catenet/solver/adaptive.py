@@ -72,7 +72,7 @@ its end only: one across a corner smooths it, and one across a pulse steps over 
 the weight never moved, tests/solver/test_corners.py). The scheme restarts its supports'
 velocities there (``Scheme.corner``); the step after a corner is judged as any other
 (the estimate through it is what shortens the steps where the motion turns). A
-prescribed sine (a support's, a vessel's) of period T is followed by steps of at most
+prescribed sine (a support's, a vessel's, a wave's) of period T is followed by steps of at most
 T / (SINE_STEPS sqrt(TOLERANCE / tolerance)): the error estimate sees the net's
 response, not the motion that drives it, and a response too small to matter against the
 net's size (a taut wire shaken by 0.5 mm at one end) let the steps grow to 30 periods and
@@ -283,7 +283,8 @@ class ErrorControl:
         scheme.keep = True
         net = stepper.net
         size, gravity = _scene(stepper)
-        sines = motions.periods(stepper.loads)
+        waves = [p for term in stepper.system.terms for p in term.periods()]
+        sines = np.concatenate([motions.periods(stepper.loads), waves])
         if len(sines):  # followed, not sampled (module docstring)
             longest = float(np.min(sines)) / (SINE_STEPS * math.sqrt(TOLERANCE / tolerance))
             dt_max = longest if dt_max is None else min(dt_max, longest)

@@ -296,6 +296,11 @@ class Term:
         short): a term whose exact Hessian lets Newton overshoot gives a safer matrix while
         on (a free body's contact: projected blocks). Gradient and energy never change."""
 
+    def periods(self) -> tuple[float, ...]:
+        """The periods [s] of the term's own sines (the water's waves): steps chosen by
+        accuracy follow them as a support's sine (catenet/solver/adaptive.py)."""
+        return ()
+
     def corners(self) -> tuple[float, ...]:
         """The times at which a prescribed motion of the term turns a corner (its history's
         points): steps chosen by accuracy end on them (catenet/solver/adaptive.py)."""

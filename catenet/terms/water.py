@@ -48,6 +48,11 @@ from catenet.kernels.water import (
 from catenet.model.water import Hydro, Water, added_mass_blocks
 from catenet.terms.base import Term, node_block_pattern, register
 
+#: A wave whose amplitude is at least this share of the largest's sets the steps chosen
+#: by accuracy (``WaterForce.periods``): a JONSWAP sea's tail at 2.5 times its peak
+#: frequency still does, at 4 times not
+WAVE_SHARE = 0.1
+
 if TYPE_CHECKING:
     from catenet.model.net import Net
 
@@ -282,6 +287,13 @@ class WaterForce(Term):
     def kinetic(self, v: np.ndarray) -> float:
         """1/2 v^T M_a v: the kinetic energy of the water the net carries along."""
         return 0.5 * float(np.einsum("ni,nij,nj->", v, self.added, v))
+
+    def periods(self) -> tuple[float, ...]:
+        """The periods of the waves whose amplitude is at least WAVE_SHARE of the
+        largest's (a sea's tail, too small to drive the line, left out)."""
+        waves = self.water.waves
+        largest = max((w.amplitude for w in waves), default=0.0)
+        return tuple(2.0 * math.pi / w.omega for w in waves if w.amplitude >= WAVE_SHARE * largest)
 
     def relagged(self, v: np.ndarray, commit: bool = True) -> float:
         """1/2 v^T (M_a - M_a') v, M_a' the blocks of the last step booked: the water's
