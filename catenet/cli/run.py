@@ -401,7 +401,7 @@ def _summary(case, result, path: Path | None) -> None:
         elif why:  # a transient: its motion to t_end is the answer (catenet/case/timing.py)
             advice = f"a transient ({why}): its motion to solver.t_end is the answer"
             if why == "solver.damping = 0":
-                advice += "; undamped, it never rests"
+                advice += _damped_by(case)
         detail = f"{detail}; not yet at equilibrium: {advice}".lstrip("; ")
     spent = f"{result.iterations} Newton iterations"
     if result.nested is not None:  # a nested start: the coarse net's too
@@ -478,3 +478,17 @@ def _prescribed(case) -> bool:
 
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_OK", "EXIT_SIGINT", "command"]
+
+
+def _damped_by(case) -> str:
+    """What damps a run at solver.damping = 0: "undamped" where nothing does (the water
+    and the ropes' axial damping do: a line in water was called undamped)."""
+    others = [
+        name
+        for name, on in (
+            ("the water's drag", case.water is not None),
+            ("the ropes' axial damping", bool(case.material.axial_damping)),
+        )
+        if on
+    ]
+    return f"; damped only by {' and '.join(others)}" if others else "; undamped, it never rests"

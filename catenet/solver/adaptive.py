@@ -367,7 +367,7 @@ class ErrorControl:
         change, motion = ledger.change(stepper, x, x_new, v_new, h_step)
         noise = max(ledger.floor, ROUNDOFF * ledger.largest)
         spent = float(ledger.row[-1])
-        return self.energy.error(change, motion, spent, noise, stepper.t, h_step)
+        return self.energy.error(change, motion, spent, noise, stepper.t, h_step, ledger.headroom)
 
     def lands(self, stepper: TimeStepper, h_step: float) -> bool:
         """Whether the converged step of ``h_step`` crosses a contact event it should end

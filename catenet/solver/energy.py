@@ -239,6 +239,12 @@ class Ledger:
             work += put + term.relagged(stepper.v, commit)  # (stepper.v: the step's start)
         return k, u, c, work, dissipated
 
+    @property
+    def headroom(self) -> float:
+        """The energy the integrator may still create before ``check`` stops the run."""
+        allowed = max(max(self.tolerance, ROUNDOFF) * self.largest, self.floor)
+        return allowed - (float(self.row[-1]) - self._ends)
+
     def check(self, t: float) -> None:
         """EnergyError where the remainder shows energy created beyond the tolerance. The
         first GRACE steps of a run are not judged alone: their energies are a

@@ -61,6 +61,9 @@ class Edges:
         return math.sqrt(float(np.dot(w, de * de)) / tot) if tot > 0 else 0.0
 
 
+GAIN = 0.5  # a step may create at most this share of what the energy verdict leaves
+
+
 class Energy:
     """The energy a run's steps chosen by accuracy may let the integrator create or
     remove (catenet/solver/adaptive.py): ``share`` of the motion's energy over the run
@@ -76,7 +79,7 @@ class Energy:
         self.start: float | None = None  # the remainder at the first step judged
 
     def error(self, change: float, motion: float, spent: float, noise: float, t: float,
-              h: float) -> float:  # fmt: skip
+              h: float, headroom: float = math.inf) -> float:  # fmt: skip
         """A step's energy error over its allowance: ``change`` the energy it creates
         (< 0: removes), ``motion`` the motion's energy after it, ``spent`` what the run's
         integrator created or removed before it (the balance's remainder; what it held
@@ -90,7 +93,10 @@ class Energy:
         run = self.share * motion
         evenly = run * max(h / self.span, LEAST)
         saved = run * (t + h - self.t0) / self.span - abs(spent)
-        return abs(change) / max(evenly, saved, noise)
+        ratio = abs(change) / max(evenly, saved, noise)
+        if change > 0.0:  # never more than the verdict leaves (``Ledger.headroom``): a
+            ratio = max(ratio, change / max(GAIN * headroom, noise))  # line let go in
+        return ratio  # water gained 2.4 % of its energy at 0.14 s steps and was stopped
 
 
 class Bodies:

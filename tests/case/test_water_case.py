@@ -463,3 +463,19 @@ def test_steps_chosen_by_accuracy_follow_a_wave():
     assert len(steps) >= 4 * 64
     peak = float(default.peaks.tension.max())
     assert peak == pytest.approx(float(fine.peaks.tension.max()), rel=1e-3)
+
+
+def test_a_transient_in_water_is_not_called_undamped(tmp_path):
+    """A line let go in water (solver.damping 0, as [water] sets it) stopped at its
+    t_end before rest: the summary called it "undamped, it never rests"; the water's drag
+    damps it, and the summary says so."""
+    from catenet.case.toml import dumps_toml
+
+    case = _wire("SI")
+    case["solver"] = {"method": "dynamic", "t_end": 0.5}
+    path = tmp_path / "line.toml"
+    path.write_text(dumps_toml(case))
+    r = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "line.h5")])
+    assert r.exit_code == 0, r.output
+    assert "damped only by the water's drag" in r.output
+    assert "undamped" not in r.output
