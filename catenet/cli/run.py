@@ -477,9 +477,6 @@ def _prescribed(case) -> bool:
     )
 
 
-__all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_OK", "EXIT_SIGINT", "command"]
-
-
 def _damped_by(case) -> str:
     """What damps a run at solver.damping = 0: "undamped" where nothing does (the water
     and the ropes' axial damping do: a line in water was called undamped)."""
@@ -492,3 +489,6 @@ def _damped_by(case) -> str:
         if on
     ]
     return f"; damped only by {' and '.join(others)}" if others else "; undamped, it never rests"
+
+
+__all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_OK", "EXIT_SIGINT", "command"]
