@@ -16,17 +16,32 @@ lands within 0.3 % of the fine-step peak tension where the largest state is 2 % 
 Where the two steps differ by more than EVEN the states' own maxima stand: a mooring line
 whose fairlead stops after being pulled had a parabola over steps of 1.2 and 0.28 s
 report 269 kN at 7.87 s where the tension then was at most 234 kN.
+
+Snaps: a tension-only edge (``only``) that was taut (its tension above ``floor``, a
+strain of TAUT of its EA: not round-off's), went slack and is taut again has snapped;
+``snap_time`` is the first such state's time, ``before_snap`` the largest tension of any
+edge before it and ``snapped`` the edges that snapped. A snatch's peak rides on the
+ropes' axial waves (``catenet.run.integrator_advice.snatch``).
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from catenet.model.net import Net
 
 #: The parabola through three states is read only where their two steps differ by at
 #: most this ratio: steps chosen by accuracy grow at most twofold where the motion is
 #: smooth, and are cut short where it is not (a support that stops, a contact), where a
 #: parabola through unequal steps across the kink invents a top.
 EVEN = 2.5
+
+#: A tension-only edge is taut, for its snaps, above this strain's tension: a free rope
+#: sinking in still water carries round-off's, 1e-7 N on a 20 mm wire.
+TAUT = 1e-6
 
 
 class Peaks:
@@ -39,8 +54,22 @@ class Peaks:
     states. Times are seconds in a dynamic run and load factors in a static one.
     """
 
-    def __init__(self, reference: np.ndarray, n_edges: int, between: bool = False):
+    def __init__(
+        self,
+        reference: np.ndarray,
+        n_edges: int,
+        between: bool = False,
+        only: np.ndarray | None = None,
+        floor: np.ndarray | float = 0.0,
+    ):
         self.reference = np.asarray(reference, dtype=np.float64)
+        self.only = np.zeros(n_edges, dtype=bool) if only is None else np.asarray(only, bool)
+        self.floor = floor  # (a tension at or below it is slack, for the snaps)
+        self.snapped = np.zeros(n_edges, dtype=bool)  # (module docstring: snaps)
+        self.snap_time = np.nan
+        self.before_snap = -np.inf
+        self._taut = np.zeros(n_edges, dtype=bool)  # taut at some state so far
+        self._slack = np.zeros(n_edges, dtype=bool)  # ... and slack since
         n = len(self.reference)
         self.tension = np.full(n_edges, -np.inf)
         self.tension_time = np.full(n_edges, np.nan)
@@ -51,6 +80,12 @@ class Peaks:
         self._u = np.empty(n)
         self.between = between
         self._last: list[tuple[float, np.ndarray, np.ndarray]] = []  # (t, T, u) of 2 states
+
+    @classmethod
+    def of(cls, net: Net) -> Peaks:
+        """The peaks of a run of ``net``, its tension-only edges' snaps counted."""
+        only = net.law.tension_only
+        return cls(net.nodes, net.n_edges, only=only, floor=TAUT * np.asarray(net.EA))
 
     def seed(self, arrays: dict[str, np.ndarray]) -> bool:
         """Goes on from the peaks of an earlier part of the run (``arrays()`` of it, as a
@@ -75,6 +110,8 @@ class Peaks:
     def observe(self, t: float, x: np.ndarray, tension: np.ndarray) -> None:
         """Takes the state x (N, 3) with its edge tensions (M,) at time (load factor) t."""
         tension = np.asarray(tension)
+        if self.only.any():
+            self._snaps(t, tension)
         d = np.asarray(x) - self.reference
         u = np.sqrt(np.einsum("ij,ij->i", d, d), out=self._u)
         if self.between and len(self._last) == 2:
@@ -91,6 +128,19 @@ class Peaks:
         self.seen += 1
         if self.between:
             self._last = [*self._last[-1:], (float(t), tension.copy(), u.copy())]
+
+    def _snaps(self, t: float, tension: np.ndarray) -> None:
+        """The tension-only edges' snaps (module docstring) at the state of time t."""
+        taut = tension > self.floor
+        back = self._slack & taut & self.only
+        if back.any():
+            if not np.isfinite(self.snap_time):
+                self.snap_time = float(t)
+                self.before_snap = float(np.max(self.tension, initial=-np.inf))
+            self.snapped |= back
+            self._slack &= ~back
+        self._slack |= self._taut & ~taut
+        self._taut |= taut
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The peaks as arrays (0 at time 0 for a run that saw no state, and the time of a

@@ -9,7 +9,10 @@ first contact at any rho_inf (docs/howto/dynamic-runs.md)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from catenet.solver.energy import COLUMNS, ROUNDOFF
 from catenet.solver.result import Outcome
@@ -17,6 +20,10 @@ from catenet.solver.result import Outcome
 if TYPE_CHECKING:
     from catenet.case.parse import Case
 
+
+#: A snatch is warned where the largest tension after a snap is this many times the
+#: largest before it, or more: the snap made the run's peak.
+SNATCH_RISE = 1.05
 
 #: The integrator's own loss (a share of the run's largest energy) that earns a warning,
 LOSS_WARN = 0.2
@@ -91,4 +98,39 @@ def integrator_loss(case: Case, result) -> str | None:
         "its own (the energy balance's 'numerical' part; not damping or friction): the "
         "motion, a rebound after an impact and the peak forces depend on the step here; "
         f"check with {remedy} (docs/howto/dynamic-runs.md)"
+    )
+
+
+def snatch(case: Case, result, terms: Sequence) -> str | None:
+    """The warning of a dynamic run to a time whose largest tension came after a rope went
+    slack and snapped taut again (``catenet.model.peaks``: a snap), SNATCH_RISE times the
+    largest before it or more, where nothing damps the snapped ropes' axial waves
+    (``material.axial_damping`` 0 on every snapped edge). A snatch's peak rides on those
+    waves, which the steps do not resolve, and grows as they shrink: the chain lying on
+    the seabed of tests/solver/test_energy_steps.py, its fairlead pulled 5 m and stopped,
+    peaks at 81.4 kN at the default tolerance, 87.5, 91.0 and 93.3 kN at fixed bdf2
+    steps of 2, 1 and 0.5 ms; with axial damping of 3 % at its lowest axial wave (c = 1e6
+    N s) 71.3 kN at the default and 71.9 kN at 1e-3."""
+    solver, peaks = case.solver, getattr(result, "peaks", None)
+    if solver.method != "dynamic" or solver.t_end == "rest" or peaks is None:
+        return None
+    if not np.isfinite(peaks.snap_time) or not len(peaks.tension):
+        return None
+    top = int(np.argmax(peaks.tension))
+    largest, when = float(peaks.tension[top]), float(peaks.tension_time[top])
+    if not (when >= peaks.snap_time and largest >= SNATCH_RISE * max(peaks.before_snap, 0.0)):
+        return None
+    snapped = peaks.snapped
+    for term in terms:
+        if term.name == "axial_damping" and np.all(term.rate[snapped] > 0.0):
+            return None  # the snapped ropes' waves are damped: the peak converges
+    return (
+        f"the largest tension ({largest:.6g} N at t = {when:.4g} s) came after a rope went "
+        f"slack and snapped taut again (first at t = {peaks.snap_time:.4g} s; "
+        f"{int(snapped.sum())} edges snapped), {largest / max(peaks.before_snap, 1e-300):.3g} "
+        "times the largest before it, and nothing damps the ropes' axial waves but the "
+        "integrator: a snatch's peak rides on waves the steps do not resolve, and grows as "
+        "they shrink. Give the ropes their axial damping (material.axial_damping, sized at "
+        "the rope's lowest axial wave: docs/howto/dynamic-runs.md), or take this peak as a "
+        "lower bound"
     )

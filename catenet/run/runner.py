@@ -316,6 +316,8 @@ def _report(
             log.warning("%s", passed)
     if lost := integrator_advice.integrator_loss(case, result):
         log.warning("%s", lost)
+    if snatched := integrator_advice.snatch(case, result, ws.system.terms):
+        log.warning("%s", snatched)
     if any(t.moving for t in ws.system.terms):  # two obstacles squeezing the net's end state
         from catenet.terms.pinch import squeeze_note
 

@@ -85,7 +85,7 @@ def run_steps(scene, settings, ws, writer, *, restart=None, hooks=Hooks(), begin
     first = start.x if start is not None and start.x is not None else None
     crossed.see(start.t if start is not None else 0.0, scene.net.nodes if first is None else first)
     on_step = _stepping(settings, frames, watch, hooks, crossed)
-    peaks = Peaks(scene.net.nodes, scene.net.n_edges)  # kept when the run fails
+    peaks = Peaks.of(scene.net)  # kept when the run fails
     if restart is not None and restart.peaks is not None and peaks.seed(restart.peaks):
         log.info("--restart: the peaks go on from those of %s", restart.path)
     try:

@@ -110,7 +110,7 @@ def solve(
     ws = workspace if workspace is not None else globals()["workspace"](scene, settings)
     start = start or Start()
     if peaks is None:
-        peaks = Peaks(scene.net.nodes, scene.net.n_edges)
+        peaks = Peaks.of(scene.net)
     if settings.method != "dynamic" and any(t.dynamic_only for t in ws.system.terms):
         raise ConfigError(
             "solver.self_contact = true: is for dynamic runs: set solver.method = "

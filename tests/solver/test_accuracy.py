@@ -154,6 +154,21 @@ def test_peaks_between_steps_lie_on_the_parabola_through_three_states():
     assert sampled.tension[0] < 0.995
 
 
+def test_a_snap_is_a_rope_taut_then_slack_then_taut_again():
+    """Peaks' snaps: a tension-only edge that starts slack and tightens has not snapped;
+    one that was taut, went slack and is taut again has, at that state's time, with the
+    largest tension before it; a bilateral edge through zero never snaps."""
+    found = Peaks(np.zeros((1, 3)), 3, only=np.array([True, True, False]))
+    rows = [(0.0, [0.0, 5.0, -1.0]), (1.0, [2.0, 0.0, 1.0]), (2.0, [3.0, 0.0, -1.0]),
+            (3.0, [1.0, 9.0, 2.0]), (4.0, [0.0, 4.0, 0.0])]  # fmt: skip
+    for t, tension in rows:
+        found.observe(t, np.zeros((1, 3)), np.array(tension))
+        if t < 3.0:
+            assert not np.isfinite(found.snap_time)
+    assert found.snap_time == 3.0 and found.before_snap == 5.0
+    assert found.snapped.tolist() == [False, True, False]
+
+
 def test_the_bounce_converges_as_its_steps_halve(monkeypatch):
     """The bounce's constant steps (a SOLID_BOUNCE-th of it) converge: the period's error
     at 16, 32, 64 and 128 steps to a bounce, 0.85 %, 0.14 %, 0.018 %, 0.0014 % measured,

@@ -186,14 +186,29 @@ def test_a_chain_lying_on_the_seabed_keeps_its_snatch_at_the_default_tolerance(t
     """A mooring chain whose bottom lies on the seabed, its fairlead pulled 5 m and
     stopped: its energy is judged though a barrier touches (its nodes rest on a fixed
     obstacle, carrying little of the motion: ``catenet.solver.adaptive.resting``). The
-    snatch after the stop peaks at 87.5 kN at fixed 2 ms bdf2 steps (30 000 steps;
-    76.1 kN at 10 ms); the default came out 63.0 kN in 37 steps, warned that the
-    integrator removed 18 % of the motion's energy. Now within 5 % of it, not warned."""
+    default came out 63.0 kN in 37 steps, warned that the integrator removed 18 % of the
+    motion's energy; now 80 to 85 kN at tolerances from 2.8e-3 to 3.2e-3, not warned so.
+
+    Undamped, the snatch after the stop has no converged peak: 87.5, 91.0 and 93.3 kN at
+    fixed bdf2 steps of 2, 1 and 0.5 ms (the ropes' axial waves, which only the
+    integrator damps). The run says so (``integrator_advice.snatch``). This test asked
+    the default for 87.5 kN within 5 %, which held at 3e-3 by the luck of its steps
+    (81.6 to 84.7 kN at 2.8e-3 to 3.2e-3). With the chain's axial damping sized at its
+    lowest axial wave (3 %: c = 1e6 N s) the peak converges: 72.8 kN at fixed 0.5 ms
+    steps, and the default within 3 % of it, not warned."""
     case = tmp_path / "chain.toml"
     case.write_text(CHAIN)
     done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "c.h5")])
     assert done.exit_code == 0, done.output
     assert "removed" not in done.output, done.output
+    assert "snapped taut again" in done.output, done.output
     with h5py.File(tmp_path / "c.h5") as f:
         peak = float(np.max(f["result/peak_tension"][:]))
-    assert peak == pytest.approx(87.50e3, rel=5e-2)
+    assert peak > 0.85 * 87.50e3  # (63.0 kN when the energy was not judged)
+    damped = ["--set", "material.axial_damping=1e6"]
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "d.h5"), *damped])
+    assert done.exit_code == 0, done.output
+    assert "removed" not in done.output and "snapped" not in done.output, done.output
+    with h5py.File(tmp_path / "d.h5") as f:
+        peak = float(np.max(f["result/peak_tension"][:]))
+    assert peak == pytest.approx(72.80e3, rel=3e-2)
