@@ -6,9 +6,10 @@ every edge, rho_w g A l0 times the share below the still level, that share smoot
 over the cable's hydrodynamic diameter (``catenet.kernels.water``): convex, exact
 gradient and Hessian, bounded whatever the edge's slope.
 
-``WaterForce`` acts at each free node through half of each of its edges (a lumped line,
-as MoorDyn's): with u the node's velocity relative to the water, t the edge's tangent
-and l its stretched length,
+``WaterForce`` acts at each node through half of each of its edges (a lumped line, as
+MoorDyn's; at a support, the drag and the flow's force enter its reaction, as the half
+edges' weight does, the added mass not): with u the node's velocity relative to the
+water, t the edge's tangent and l its stretched length,
 
     drag        -1/2 rho_w d (cd_n |u_n| u_n + pi cd_t |u_t| u_t) l / 2
     added mass  -rho_w A (l0 / 2) (ca_n a_n + ca_t a_t)      (a: the node's acceleration)
@@ -125,7 +126,7 @@ class Buoyancy(Term):
 
 @register("water")
 class WaterForce(Term):
-    """Drag, added mass and the flow's inertia on every free node (module docstring)."""
+    """Drag, added mass and the flow's inertia at every node (module docstring)."""
 
     lagged = True  # static steps: re-solved with the tangents of their equilibrium
     medium = True  # has begin_run, set_motion, kinetic, losses (catenet.terms.base)
@@ -137,9 +138,14 @@ class WaterForce(Term):
         m = net.n_edges
         ends = np.concatenate([net.edges[:, 0], net.edges[:, 1]])
         edge = np.concatenate([np.arange(m), np.arange(m)])
-        keep = free[ends]
-        self.nodes = np.ascontiguousarray(ends[keep], dtype=np.int64)
-        self.edge = edge[keep]
+        # every half edge, a support's too: its drag and the flow's force there go to the
+        # support's reaction, as its weight does (the current on a line between two
+        # supports summed 2.5 % short of q L at 40 edges); its added mass does not (a
+        # support carries no inertia of its own in the reactions)
+        self.nodes = np.ascontiguousarray(ends, dtype=np.int64)
+        self.edge = edge
+        self.carried = free[ends].astype(np.float64)  # 1: the half edge's node is free
+        self.held = np.flatnonzero(net.fixed)
         rho, d = water.density, hydro.diameter[self.edge]
         self.cn0 = 0.5 * rho * hydro.cd_n[self.edge] * d  # per stretched length
         self.ct0 = 0.5 * rho * hydro.cd_t[self.edge] * math.pi * d
@@ -148,8 +154,8 @@ class WaterForce(Term):
         self.mass0 = rho * volume  # the displaced water's mass of each half edge
         self.half = 0.5 * d
         self.free_nodes = np.flatnonzero(free)
-        self.slot = np.full(net.n_nodes, -1, dtype=np.int64)
-        self.slot[self.free_nodes] = np.arange(self.free_nodes.size)
+        self.slot = np.arange(net.n_nodes, dtype=np.int64)  # every node's block (a
+        # support's too: the drag's derivative there; the solver keeps the free rows)
         n = net.n_nodes
         self.factor = 1.0
         self.kv = self.ka = 0.0  # 0: a static step (the cable at rest)
@@ -174,7 +180,9 @@ class WaterForce(Term):
         self.flow, acc = self.water.flow(x, t)
         n = self.net.n_nodes
         mass = self.mass0 * wet
-        self.added = added_mass_blocks(n, self.nodes, self.tang, mass * self.ca_n, mass * self.ca_t)
+        moved = mass * self.carried
+        normal, axial = moved * self.ca_n, moved * self.ca_t
+        self.added = added_mass_blocks(n, self.nodes, self.tang, normal, axial)
         a = acc[self.nodes]
         along = np.sum(a * self.tang, axis=1)
         lateral = a - along[:, None] * self.tang
@@ -224,7 +232,7 @@ class WaterForce(Term):
 
     # --- the term --------------------------------------------------------------------
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        return node_block_pattern(self.free_nodes)
+        return node_block_pattern(self.slot)
 
     def _static_force(self) -> np.ndarray:
         return (self.still + self.inflow) * self.factor
@@ -239,6 +247,9 @@ class WaterForce(Term):
                 x, self.nodes, self.tang, self.cn, self.ct, self.flow, self.centre, self.kv, grad
             )
         )
+        held = self.inflow[self.held]  # the flow's force at the supports
+        grad[self.held] -= held
+        energy -= float(np.sum(held * x[self.held]))
         return energy + float(
             added_gradient(
                 x, self.free_nodes, self.added, self.centre_a, self.ka, self.inflow, grad
@@ -261,7 +272,7 @@ class WaterForce(Term):
             self.slot,
             values,
         )
-        values += self.ka * self.added[self.free_nodes].reshape(-1)
+        values += self.ka * self.added.reshape(-1)
         return True
 
     def roundoff(self, x: np.ndarray, energy: float) -> tuple[float, float]:
@@ -317,9 +328,12 @@ class WaterForce(Term):
         """(dissipated, work) of the step from x_old to x_new of length h: the drag's
         work against the motion relative to the water, -F.(dx - h U) (>= 0 for implicit
         Euler), and the water's work on the net, F.(h U) of the drag and the flow's
-        inertia force's F_w.dx. ``mean``: F the mean of the step's two ends (the
-        second-order schemes' rule, as the ledger takes their damping); ``commit``: the
-        step is accepted (its end's force starts the next step's mean)."""
+        inertia force's F_w.dx; at a support's node all of F.dx is the water's work (the
+        support's reaction carries the force there, and the ledger books its work: the
+        two cancel, as before the drag there entered the reactions). ``mean``: F the
+        mean of the step's two ends (the second-order schemes' rule, as the ledger takes
+        their damping); ``commit``: the step is accepted (its end's force starts the
+        next step's mean)."""
         g = np.zeros_like(x_new)
         if self.kv == 0.0:
             force = self.still * self.factor
@@ -333,6 +347,9 @@ class WaterForce(Term):
             self._drag = force
         dx = x_new - x_old
         carried = h * self.flow
-        dissipated = -float(np.sum(used * (dx - carried)))
-        work = float(np.sum(used * carried)) + float(np.sum(self.inflow * dx))
-        return dissipated, work
+        held = self.held  # at a support's node, all of F.dx is the water's work there
+        moved = used.copy()  # (its reaction pays it: no loss of the net's motion)
+        moved[held] = 0.0
+        dissipated = -float(np.sum(moved * (dx - carried)))
+        work = float(np.sum(moved * carried)) + float(np.sum(self.inflow * dx))
+        return dissipated, work + float(np.sum(used[held] * dx[held]))
