@@ -62,7 +62,7 @@ low, now within 1 % (tests/run/test_integrator_loss.py). Where the nodes a barri
 carry the motion they chatter on it, a loss no step resolves (the drop below and a rod
 landing on the ground, judged there, shrank their steps to round-off): such contact is
 left to the momenta and to the strikes. Nodes resting on fixed obstacles are judged
-(``scales.resting``: a chain lying on the seabed).
+(``scales.resting``: a chain lying on the seabed), a landing's fall not (``landing``).
 
 The corners of what the case prescribes are landed on too: every point of a load's,
 gravity's, a support's, a vessel's, an obstacle's or a turned rod end's history, and the
@@ -135,7 +135,7 @@ from catenet.model import motions
 from catenet.solver.energy import ROUNDOFF
 from catenet.solver.events import Events
 from catenet.solver.integrators import BDF2, ImplicitEuler
-from catenet.solver.scales import ENERGY, FLOOR, Bodies, Edges, Energy, resting
+from catenet.solver.scales import ENERGY, FLOOR, Bodies, Edges, Energy, landing, resting
 from catenet.solver.stepping import ALLOWANCE
 from catenet.solver.strikes import Strikes, Watch
 
@@ -351,10 +351,10 @@ class ErrorControl:
         return False
 
     def energy_error(self, stepper: TimeStepper, h_step: float) -> float:
-        """The energy the converged step of ``h_step`` of a TimeStepper would let its
-        integrator create or remove, over its allowance (``Energy``; module docstring);
-        0 where no balance is kept or where a barrier touches and its nodes do not rest
-        on fixed obstacles (``scales.resting``)."""
+        """The energy the converged step of ``h_step`` would let its integrator create or
+        remove, over its allowance (``Energy``; module docstring); 0 where no balance is
+        kept or a barrier touches whose nodes do not rest on fixed obstacles (``resting``);
+        a loss up to the energy of nodes landing on them is theirs (``landing``)."""
         ledger, scheme = stepper.ledger, stepper.scheme
         if self.energy is None or ledger is None or not ledger.judged:
             return 0.0
@@ -365,6 +365,8 @@ class ErrorControl:
         if touching and not resting(touching, stepper.net.mass, x_new, v_new):
             return 0.0
         change, motion = ledger.change(stepper, x, x_new, v_new, h_step)
+        if touching and change < 0.0:  # (stepper.v: the landing nodes' speed at the start)
+            change = min(0.0, change + landing(touching, stepper.net.mass, x, x_new, stepper.v))
         noise = max(ledger.floor, ROUNDOFF * ledger.largest)
         spent = float(ledger.row[-1])
         return self.energy.error(change, motion, spent, noise, stepper.t, h_step, ledger.headroom)
