@@ -333,15 +333,14 @@ def _balance(row, scale: float, motion: float = float("nan")) -> str:
     and friction took) where that is under a tenth of it (a prestressed net's small
     motion, whose loss the largest energy's share hides as -0.00 %) and the numerical part
     is beyond the energies' round-off (a net at rest: 3e-15 J was "+4810591 %")."""
-    from catenet.solver.energy import ROUNDOFF
+    from catenet.solver.energy import at_roundoff
 
     k, u, c, w, d, rest = (float(v) for v in row)
     largest = max(abs(k), abs(u), abs(c), abs(w), 1e-300)
     largest = scale if scale > 0 else largest  # (nan: not known)
     what = "loss" if rest <= 0.0 else "gain"
     moving = motion + max(d, 0.0)
-    noise = abs(rest) <= ROUNDOFF * largest  # (a remainder at the energies' round-off)
-    small = 0 < moving < 0.1 * largest and not noise
+    small = 0 < moving < 0.1 * largest and not at_roundoff(rest, largest)
     of_motion = f", {rest / moving:+.2%} of the motion's" if small else ""
     return (
         f"{'energy':<12} kinetic {k:.4g} J, elastic {u:.4g} J, contact {c:.4g} J; work in "

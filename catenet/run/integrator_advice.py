@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from catenet.solver.energy import COLUMNS, ROUNDOFF
+from catenet.solver.energy import COLUMNS, at_roundoff
 from catenet.solver.result import Outcome
 
 if TYPE_CHECKING:
@@ -68,8 +68,8 @@ def integrator_loss(case: Case, result) -> str | None:
     lost = -float(energy[-1]) / scale
     took = max(float(energy[COLUMNS.index("dissipated")]), 0.0)  # damping, drag, friction
     motion = float(getattr(result, "energy_motion", float("nan"))) + took
-    noise = -float(energy[-1]) <= ROUNDOFF * scale  # (the energies' round-off: a net at
-    moved = -float(energy[-1]) / motion if motion > 0.0 and not noise else 0.0  # rest)
+    noise = at_roundoff(float(energy[-1]), scale)
+    moved = -float(energy[-1]) / motion if motion > 0.0 and not noise else 0.0
     if not (lost > LOSS_WARN or moved > MOTION_WARN):
         return None
     name = solver.integrator

@@ -306,6 +306,12 @@ class Ledger:
         return (kinetic, *_stored(system, energies), reaction)
 
 
+def at_roundoff(remainder: float, scale: float) -> bool:
+    """Whether a balance's remainder is within the energies' round-off of ``scale`` (a
+    net at rest: 3e-15 J is no loss of the integrator's)."""
+    return abs(remainder) <= ROUNDOFF * scale
+
+
 def _held_by_nothing(stepper: TimeStepper) -> bool:
     """No fixed node, no moving support, and no term that ties the net to the world (an
     obstacle, fixed or moving, a body's plane, a roller, a spring or support term, the
