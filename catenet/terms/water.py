@@ -190,6 +190,7 @@ class WaterForce(Term):
         push += (mass * self.ca_t * along)[:, None] * self.tang
         self.inflow = np.zeros((n, 3))
         np.add.at(self.inflow, self.nodes, push)
+        self._pushed = bool(np.any(self.inflow[self.held]))
         drag = np.zeros((n, 3))
         drag_gradient(x, self.nodes, self.tang, self.cn, self.ct, self.flow, x, 0.0, drag)
         self.still = -drag  # the current's drag on the cable at rest
@@ -247,9 +248,10 @@ class WaterForce(Term):
                 x, self.nodes, self.tang, self.cn, self.ct, self.flow, self.centre, self.kv, grad
             )
         )
-        held = self.inflow[self.held]  # the flow's force at the supports
-        grad[self.held] -= held
-        energy -= float(np.sum(held * x[self.held]))
+        if self._pushed:  # the flow's force at the supports (waves)
+            held = self.inflow[self.held]
+            grad[self.held] -= held
+            energy -= float(np.sum(held * x[self.held]))
         return energy + float(
             added_gradient(
                 x, self.free_nodes, self.added, self.centre_a, self.ka, self.inflow, grad
