@@ -21,10 +21,24 @@ def _bent(angle: float):
     """Three nodes, the cable bent by ``angle`` at node 1, which a face pushes along +y
     (its normal) with 1 kN; tensions 1000 N."""
     x = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [math.cos(angle), -math.sin(angle), 0.0]])
-    net = SimpleNamespace(edges=np.array([[0, 1], [1, 2]]), n_nodes=3)  # what it reads
+    net = SimpleNamespace(edges=np.array([[0, 1], [1, 2]]), n_nodes=3, EA=np.full(2, 1e6))
     contact = np.zeros((3, 3))
     contact[1] = [0.0, 1000.0, 0.0]
     return net, x, np.array([1000.0, 1000.0]), contact
+
+
+def test_a_tension_at_round_off_is_not_judged():
+    """A steel rod lying on the floor carries round-off's tension (7e-9 N on EA = 1.6e7
+    N): a push of 1.2e-7 N along it was warned as 1630 % of its tension. Below a strain
+    of TAUT no share is read; just above it, it is."""
+    from catenet.model.peaks import TAUT
+
+    net, x, _, contact = _bent(0.5)
+    net.EA = np.full(2, 1.6e7)
+    contact[1] *= 1.2e-7 / 1000.0
+    assert wrap_share(net, x, np.array([7e-9, 7e-9]), contact) is None
+    above = np.full(2, 1.01 * TAUT * 1.6e7)
+    assert wrap_share(net, x, above, contact) is not None
 
 
 def test_the_share_is_the_contact_force_along_the_bisector_over_the_tension():
