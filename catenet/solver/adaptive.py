@@ -191,10 +191,10 @@ def _speed(size: float, gravity: float, span: float) -> float:
 
 
 def watch(stepper: TimeStepper, t0: float, t_end: float) -> Watch | None:
-    """The strikes on free bodies and balls that fixed steps step over, said once
-    (catenet/solver/strikes.py); None for a run without a body or ball."""
+    """The strikes on free bodies, balls and fixed obstacles that fixed steps step over,
+    said once (catenet/solver/strikes.py); None for a run without any."""
     bodies = Bodies(stepper, _speed(*_scene(stepper), t_end - t0))
-    strikes = Strikes.of(stepper.system.terms, bodies, stepper.net.mass)
+    strikes = Strikes.of(stepper.system.terms, bodies, stepper.net.mass, ground=True)
     return None if strikes is None else Watch(strikes, bodies, stepper.free)
 
 
@@ -307,7 +307,7 @@ class ErrorControl:
         ramps = motions.ramps(stepper.loads)
         out.ramps = ramps[(ramps[:, 1] > t0) & (ramps[:, 0] < t_end)]
         spacing = float(np.median(net.rest_length)) if net.n_edges else 0.0
-        out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass, spacing)
+        out.strikes = Strikes.of(stepper.system.terms, out.bodies, net.mass, spacing, True)
         out.ahead(stepper.x, stepper.v)
         return out
 
@@ -384,13 +384,13 @@ class ErrorControl:
         return True
 
     def strikes_short(self, stepper: TimeStepper, h_step: float) -> bool:
-        """Whether the converged step of ``h_step`` holds strikes on a body that it is too
-        long to resolve (catenet/solver/strikes.py): then the next try, and the steps for
-        one bounce after it, are that short."""
-        if self.strikes is None or self.bodies is None:
+        """Whether the converged step of ``h_step`` holds strikes on a body or a fixed
+        obstacle that it is too long to resolve (catenet/solver/strikes.py): then the next
+        try, and the steps for one bounce after it, are that short."""
+        if (bodies := self.bodies) is None or self.strikes is None:
             return False
         strike = self.strikes.step(stepper.x, stepper.v, stepper.x_trial, h_step,
-                                   self.bodies.largest, self.tolerance)  # fmt: skip
+                                   bodies.largest, self.tolerance, bodies.flow)  # fmt: skip
         if strike is None:
             return False
         longest = max(strike.longest, self.least)

@@ -135,6 +135,8 @@ def solve_dynamic(
     run = stepper.run(control, rest=stop_at_equilibrium, on_step=on_step, on_rest=on_rest)
     if stepper.watch is not None:
         stepper.watch.report()
+    if isinstance(control, ErrorControl) and control.strikes is not None:
+        control.strikes.landings()
     return _result(stepper, balance, run, start)
 
 

@@ -90,6 +90,7 @@ class Ledger:
         self.internal = 0.0
         self._axes: np.ndarray | None = None  # each free DOF's axis, where that frame is
         self.remedy = REMEDIES[""]  # what an EnergyError advises (``begin``)
+        self.weak = ""  # ... first: a barrier too weak for a landing (fixed steps' Watch)
         self.steps = 0  # the accepted steps so far (``check``'s GRACE)
         self._start = 0.0
         self._work = 0.0
@@ -265,7 +266,8 @@ class Ledger:
                 f"({w:.4g} J) and the losses to damping and friction ({d:.4g} J) allow "
                 f"{k + u + c - remainder:.4g} J: {remainder:.4g} J appeared from nothing, "
                 f"more than solver.energy_tolerance = {self.tolerance:g} of the largest "
-                f"energy ({self.largest:.4g} J). Not an answer: use {self.remedy}"
+                f"energy ({self.largest:.4g} J). Not an answer: use "
+                f"{self.weak + ', or ' if self.weak else ''}{self.remedy}"
             )
 
     # --- the parts -------------------------------------------------------------------

@@ -424,6 +424,10 @@ class TimeStepper:
         v = self.scheme.accept(self.x_trial, self.x, self.v, self.free, h_step)
         if self.net.guides is not None:  # round-off kept off the guides (no drift)
             self._on_guides(v)
+        if self.watch is not None:  # strikes that fixed steps step over; a weak barrier
+            self.watch.step(self.x, self.v, self.x_trial, v, h_step, self.t)
+            if self.ledger is not None:  # (what its EnergyError advises first)
+                self.ledger.weak = self.watch.strikes.advice()
         if self.ledger is not None:  # judged before the step becomes the state
             self.ledger.step(self, self.x, self.x_trial, v, h_step)
             try:
@@ -432,8 +436,6 @@ class TimeStepper:
                 exc.iterations = self.iterations
                 exc.state = self.x.copy()
                 raise
-        if self.watch is not None:  # strikes on a body that fixed steps step over
-            self.watch.step(self.x, self.v, self.x_trial, v, h_step, self.t)
         self.v = v
         store_acceleration(self.scheme, self.a_out, self.free)
         self.x[:] = self.x_trial
