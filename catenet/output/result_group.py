@@ -4,7 +4,7 @@ tensions (per cable too: ``cable_max_tension``, ..., and with the run's peaks
 the run's peaks over every step (``peak_tension``, ``peak_tension_time``,
 ``least_tension``, ``peak_displacement``, ``peak_displacement_time``), a case with rods'
 ``bending_moment`` and ``curvature`` per node (``twisting_moment`` per edge where they
-twist; ``reaction_moment`` per node where a support holds a rod end's direction: a
+twist; ``reaction_moment`` per node, 0 but where a support holds a rod end's direction: a
 clamp, a rotational or a 6x6 spring), velocities and the newmark scheme's acceleration
 where the run keeps them, each
 edge's ``utilisation`` (and ``peak_utilisation`` from its peak tension; per cable
@@ -87,6 +87,8 @@ def write_result_group(
     reaction = res.reaction if res.reaction is not None else np.zeros_like(res.x)
     g.create_dataset("reaction", data=np.asarray(reaction, dtype=np.float64))
     moments = summary.support_moments(scene, res.x)
+    if moments is None and bent is not None:  # rods, no end held in direction: all 0
+        moments = np.zeros_like(res.x)
     if moments is not None:  # at rod ends held in direction, 0 elsewhere [N m]
         g.create_dataset("reaction_moment", data=moments)
     if scene.design is not None and scene.design.anchored:  # |R| / capacity per node

@@ -51,3 +51,40 @@ def test_a_shafts_torque_at_its_supports_is_labelled_reactions(tmp_path):
     line = next(x for x in done.output.splitlines() if "moment largest" in x)
     assert line.startswith("reactions")
     assert float(line.split("moment largest")[1].split()[0]) == pytest.approx(torque, rel=1e-5)
+
+
+BEAM = """
+[geometry]
+kind = "cable"
+start = [0.0, 0.0, 0.0]
+end = [2.0, 0.0, 0.0]
+nodes = 21
+
+[material]
+E = 210e9
+radius = 0.02
+EI = "section"
+prestress = 1000.0
+
+[[load.point]]
+node = "midpoint"
+force = [0.0, 0.0, -500.0]
+"""
+
+
+def test_a_rod_case_without_held_ends_writes_zero_moments(tmp_path):
+    """/result/reaction_moment is (N, 3) in every case with rods (contract), zeros where no
+    support holds a rod end's direction: a pinned beam's file had none, and a script
+    reading it failed with a KeyError."""
+    import h5py
+    import numpy as np
+
+    case = tmp_path / "beam.toml"
+    case.write_text(BEAM)
+    done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "b.h5")])
+    assert done.exit_code == 0, done.output
+    with h5py.File(tmp_path / "b.h5") as f:
+        moment = f["result/reaction_moment"][()]
+        assert moment.shape == f["result/x"].shape
+        assert np.all(moment == 0.0)
+        assert np.abs(f["result/bending_moment"][()]).max() > 0.0
