@@ -169,7 +169,15 @@ def _check_partial(
                 continue
             for i in refs.nodes(ref):
                 shown = ref if isinstance(ref, int) else f"{ref!r} (node {i})"
-                if i in fixed:
+                if i in fixed and _turns(part):
+                    refs.ck.add(
+                        f"{path} = {shown}: node {i} is fixed already ({fixed_key}): its "
+                        "position is held, and a 6x6 spring there would hold its rotation "
+                        "alone: give that as [[supports.rotational]] (a rod end's direction "
+                        "held by a rotational spring), or leave the node out of the fixed "
+                        "nodes (supports.fixed) for the spring to hold both"
+                    )
+                elif i in fixed:
                     refs.ck.add(
                         f"{path} = {shown}: node {i} is fixed already ({fixed_key}): a fixed "
                         f"node is held in every direction, a {kind} there would hold nothing: "
@@ -184,6 +192,11 @@ def _check_partial(
                     guided[i] = f"supports.{kind}[{k}]"
                 held.setdefault(i, f"supports.{kind}[{k}]")
     return held
+
+
+def _turns(part) -> bool:
+    """Whether a support table is a spring with rotational rows (a 6x6 or six entries)."""
+    return np.size(getattr(part, "stiffness", None)) in (6, 36)
 
 
 def _check_clamp(

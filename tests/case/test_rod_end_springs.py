@@ -168,6 +168,8 @@ def test_bad_6x6_springs_exit_2(tmp_path, change, says):
         ({"fixed": ["end"], "rotational": [{"nodes": ["start"], "stiffness": 1.0}]}, {},
          "supports.rotational too"),
         ({"fixed": ["start"]}, {}, "node 0 is fixed already"),
+        ({"fixed": ["start"]}, {}, "would hold its rotation alone: give that as "
+         "[[supports.rotational]]"),  # (it said a spring there would hold nothing)
         ({"fixed": ["end"], "stiffness": COUPLED.tolist()}, {"GJ": 1.0},
          "the end of a rod that twists"),
         ({"fixed": ["end"]}, {"EI": 0.0}, "node 0 is on no edge with EI > 0"),
