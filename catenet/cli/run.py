@@ -221,9 +221,10 @@ def _name_last_good(exc: CatenetError, dynamic: bool) -> None:
         at = None if good is None else good.time
         label = ""
         if at is not None:
-            label = f"t = {at:.6g} s, " if dynamic else f"load factor {at:.6g}, "
+            label = f", t = {at:.6g} s" if dynamic else f", load factor {at:.6g}"
         exc.args = (
-            f"{exc}\n  the last good state is in {written} (/result, {label}converged = false)",
+            f"{exc}\n  the last good state is in {written} (/result{label}; the file marks "
+            "the run converged = false)",
         )
 
 
