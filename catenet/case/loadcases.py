@@ -101,6 +101,7 @@ def parse_load_cases(ck: Checker, value: Any, ctx: Context) -> tuple | Any:
         timed = [(path, lc.history)]
         timed += [(f"{path}.point[{j}]", p.history) for j, p in enumerate(lc.points)]
         timed += [(f"{path}.line[{j}]", p.history) for j, p in enumerate(lc.lines)]
+        timed += [(f"{path}.area[{j}]", a.history) for j, a in enumerate(lc.areas)]
         for where, history in timed:
             if history is not None:
                 ck.add(

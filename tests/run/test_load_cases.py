@@ -192,6 +192,10 @@ def test_bad_load_cases_exit_2_with_the_key_path(tmp_path):
         ),
         ("load_case", 0, "snow"): (1.0, "load_case[0].snow: unknown key"),
         ("load_case", 0, "history"): ([[0, 0], [1, 1]], "load_case[0].history: a load case is"),
+        ("load_case", 0, "area"): (  # (it was applied in full, in silence)
+            [{"pressure": 100.0, "history": [[0, 0], [1, 0.5]]}],
+            "load_case[0].area[0].history: a load case is",
+        ),
         ("load_case", 1, "gravity"): ([0, 0, -9.81], "load_case[1].gravity = [0, 0, -9.81]"),
     }
     for (table, k, key), (value, message) in bad.items():
