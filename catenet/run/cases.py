@@ -284,8 +284,9 @@ def _write_cases(path, scene, case, runs: list[CaseRun]) -> None:
             attrs: dict = {"kind": "combination" if run.combination else "load_case"}
             if run.name in combos:
                 attrs["factors"] = json.dumps(combos[run.name])
-            if run.error:
+            if run.error:  # (an implausible equilibrium too: its state is no answer)
                 attrs["error"] = run.error
+                attrs.update(converged=False, outcome="failed", message=run.error)
             attrs["warnings"] = "\n".join(run.warnings)  # one a line, "" when none
             applied = run.numbers.get("applied_resultant")  # the case's loads, not the base's
             if applied is not None:

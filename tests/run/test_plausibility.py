@@ -84,6 +84,13 @@ def test_a_load_case_in_the_wrong_unit_fails_naming_itself(tmp_path):
     assert "load case snow: strain" in r.output and "no: implausible" in r.output
     assert "load case wind: strain" not in r.output
     assert "load case snow failed" in r.output
+    import h5py
+
+    with h5py.File(tmp_path / "out.h5") as f:  # the file says so too (it said converged)
+        snow, wind = f["cases/snow"].attrs, f["cases/wind"].attrs
+        assert not snow["converged"] and snow["outcome"] == "failed"
+        assert str(snow["message"]).startswith("implausible")
+        assert wind["converged"]
 
 
 def test_the_same_truss_in_the_right_unit_says_nothing(tmp_path):
