@@ -18,6 +18,7 @@ import datetime
 import difflib
 import math
 import numbers
+import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -256,7 +257,9 @@ class Checker:
     def array_of_tables(self, v: Any, path: str) -> list:
         if isinstance(v, (list, tuple)) and all(isinstance(t, Mapping) for t in v):
             return list(v)
-        self.bad(path, v, f"must be an array of tables ([[{path}]])")
+        header = re.sub(r"\[\d+\]", "", path)  # TOML's header names no index
+        under = f" after its [[{header.rsplit('.', 1)[0]}]]" if header != path else ""
+        self.bad(path, v, f"must be an array of tables ([[{header}]]{under})")
         return []
 
 

@@ -129,9 +129,11 @@ def parse_combinations(ck: Checker, value: Any, ctx: Context, cases: Any) -> tup
         for name, f in combo.factors.items():
             if name not in known:
                 listed = ", ".join(map(repr, known)) if known else "none"
+                nested = any(isinstance(t, Mapping) and t.get("name") == name for t in value)
+                why = " (a combination: combinations combine load cases, not combinations)"
                 ck.add(
-                    f"{path}.factors.{name} = {show(f)}: no [[load_case]] is named {name!r} "
-                    f"(the load cases: {listed})"
+                    f"{path}.factors.{name} = {show(f)}: no [[load_case]] is named {name!r}"
+                    f"{why if nested else ''} (the load cases: {listed})"
                 )
                 out[-1] = BAD
     if isinstance(cases, tuple):

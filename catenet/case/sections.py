@@ -247,9 +247,11 @@ def _pressure(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     kind = ctx.kind
     if p not in (BAD, 0.0) and kind is not None and not kind.pressure:
         takes = " or ".join(repr(name) for name, cls in KINDS.items() if cls.pressure)
+        table = path.rsplit(".", 1)[0]  # load, or load_case[k]
         ck.add(
             f"{path} = {p!r}: only for geometry.kind = {takes} "
-            f"(this is {kind.kind!r}): use [[load.point]] or load.gravity"
+            f"(this is {kind.kind!r}): give a pressure as {table}.area (area loads on the "
+            f"net's cells), or use {table}.point or {table}.gravity"
         )
     return p
 

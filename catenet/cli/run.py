@@ -255,9 +255,10 @@ def _exit_code(
         _summary(case, result, path)
     failed = [r.name for r in result.cases if not r.converged]
     if failed:
+        which = "its message in /cases/<name>" if quiet else "its row above"
         click.echo(
             f"catenet: error: load case {', '.join(failed)} failed (did not "
-            "converge, collapsed or implausible: its row above says which; its "
+            f"converge, collapsed or implausible: {which} says which; its "
             "last good state is in /cases/<name>, converged = false)",
             err=True,
         )

@@ -1078,3 +1078,19 @@ def test_toml_writer_keeps_every_float_bit_for_bit(x, nested):
     assert math.copysign(1.0, back["x"]) == math.copysign(1.0, x) and back["x"] == x
     assert back["t"]["nested"] == nested
     assert math.isnan(tomllib.loads(C.dumps_toml({"x": math.nan}))["x"])
+
+
+def test_an_array_of_tables_is_asked_for_by_its_toml_header():
+    """A nested array of tables written as a table is told the TOML header that makes it
+    one: [[load_case.area]] after its [[load_case]] (it said [[load_case[0].area]], no
+    TOML); a top-level one by its own name."""
+    from catenet.case.keys import Checker
+
+    ck = Checker()
+    assert ck.array_of_tables({"pressure": 1.0}, "load_case[0].area") == []
+    assert ck.array_of_tables({"node": 1}, "load.point") == []
+    assert ck.problems == [
+        "load_case[0].area = {'pressure': 1.0}: must be an array of tables "
+        "([[load_case.area]] after its [[load_case]])",
+        "load.point = {'node': 1}: must be an array of tables ([[load.point]])",
+    ]

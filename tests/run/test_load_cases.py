@@ -211,6 +211,30 @@ def test_bad_load_cases_exit_2_with_the_key_path(tmp_path):
     assert any("[[load_case]] and [[combination]] are static" in p for p in info.value.problems)
 
 
+def test_a_combination_of_a_combination_and_a_graphs_pressure_are_told_what_to_do():
+    """A combination naming a combination is told combinations are not nested (it read as
+    if no such name existed); a load case's pressure on a graph is pointed to the case's
+    own area loads (it was pointed to [[load.point]])."""
+    data = mast()
+    data["combination"].append({"name": "twice", "factors": {"ULS_x": 2.0}})
+    with pytest.raises(ConfigError) as info:
+        parse_case(data)
+    assert info.value.problems == [
+        "combination[3].factors.ULS_x = 2.0: no [[load_case]] is named 'ULS_x' (a "
+        "combination: combinations combine load cases, not combinations) (the load cases: "
+        "'wind_x', 'wind_y')"
+    ]
+    data = mast()
+    data["load_case"][0]["pressure"] = 100.0
+    with pytest.raises(ConfigError) as info:
+        parse_case(data)
+    assert any(
+        "give a pressure as load_case[0].area (area loads on the net's cells), or use "
+        "load_case[0].point or load_case[0].gravity" in p
+        for p in info.value.problems
+    ), info.value.problems
+
+
 def test_resolved_case_keeps_the_load_cases(tmp_path):
     case = parse_case(mast())
     again = parse_case(tomllib.loads(case.to_toml()))
