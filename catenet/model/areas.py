@@ -50,6 +50,7 @@ class AreaLoad:
     normal: np.ndarray
     basis: np.ndarray
     outline: tuple
+    surface: bool = False  # its area is the surface's (normal to it), not the plan's
 
 
 def area_load(
@@ -93,7 +94,7 @@ def area_load(
     out = np.zeros((len(nodes), 3))
     out[used] = force
     loops = tuple(used[_loop(faces, int(f))] for f in np.flatnonzero(faces.area <= 0.0))
-    return AreaLoad(out, area, normal, basis, loops)
+    return AreaLoad(out, area, normal, basis, loops, direction == "normal")
 
 
 def _drawn(xyz, local, used, plane: str, direction: str, ends):
@@ -408,8 +409,10 @@ def beyond_outline(nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, lo
     """The covered nodes that no edge among the covered ones joins and that lie outside
     the outline ``load`` covers, in the plane it was drawn in (an (K,) int array), and
     the area [m^2] between them and the outline: for each, the triangle it makes with
-    the outline's nearest side, what joining it there would add. Pressure there loads
-    no node (a grid's corner where no cable ends). (empty, 0.0) where there are none."""
+    the outline's nearest side, what joining it there would add (on the surface for a
+    load normal to it, as its ``area``; on the plane for one on plan: a 30 degree roof's
+    corners were summed on plan against its loaded surface). Pressure there loads no
+    node (a grid's corner where no cable ends). (empty, 0.0) where there are none."""
     nodes = np.asarray(nodes, dtype=np.float64)
     edges = np.asarray(edges, dtype=np.int64)
     sub = edges[covered[edges[:, 0]] & covered[edges[:, 1]]]
@@ -425,9 +428,13 @@ def beyond_outline(nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, lo
         p = plane[i]
         if any(_inside(plane[loop], p) for loop in loops):
             continue
-        best = min((_side(plane[loop], p) for loop in loops), key=lambda t: t[0])
+        dist, k, loop = min(((*_side(plane[loop], p), loop) for loop in loops),
+                            key=lambda t: t[0])  # fmt: skip
+        a, b = (nodes[loop[k]], nodes[loop[(k + 1) % len(loop)]]) if load.surface else (
+            plane[loop[k]], plane[loop[(k + 1) % len(loop)]])  # fmt: skip
+        c = nodes[i] if load.surface else p
         out.append(i)
-        area += best[1]
+        area += 0.5 * float(np.linalg.norm(np.cross(b - a, c - a)))
     return np.asarray(out, dtype=np.int64), float(area)
 
 
@@ -440,8 +447,9 @@ def _inside(polygon: np.ndarray, p: np.ndarray) -> bool:
     return bool(np.count_nonzero(crosses & (x > p[0])) % 2)
 
 
-def _side(polygon: np.ndarray, p: np.ndarray) -> tuple[float, float]:
-    """(distance, triangle area) of p to the nearest side of the closed ``polygon``."""
+def _side(polygon: np.ndarray, p: np.ndarray) -> tuple[float, int]:
+    """(distance, index) of the nearest side of the closed ``polygon`` (K, 2) to p: the
+    side from its vertex index to the next."""
     a, b = polygon, np.roll(polygon, -1, axis=0)
     d = b - a
     t = np.clip(
@@ -449,4 +457,4 @@ def _side(polygon: np.ndarray, p: np.ndarray) -> tuple[float, float]:
     )
     dist = np.linalg.norm(a + t[:, None] * d - p, axis=1)
     k = int(np.argmin(dist))
-    return float(dist[k]), 0.5 * abs(float(d[k, 0] * (p - a[k])[1] - d[k, 1] * (p - a[k])[0]))
+    return float(dist[k]), k

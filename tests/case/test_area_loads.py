@@ -6,6 +6,7 @@ the key path named)."""
 from __future__ import annotations
 
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -385,3 +386,25 @@ def test_a_normal_load_on_half_a_saddle_is_the_pressure_times_its_vector_area():
     whole = force(with_area(data, pressure=500.0, direction="normal"))
     other = force(with_area(data, pressure=500.0, direction="normal", nodes=east))
     assert np.abs(half + other - whole).max() <= 1e-9 * np.abs(whole).max()
+
+
+def test_posts_at_a_sloped_nets_corners_are_measured_on_its_surface(caplog):
+    """The L and its posts above on a 30 degree slope (z = x tan 30), under a pressure
+    normal to it: the triangles between the posts and the outline lie on the slope, as
+    the loaded area does (22.5 and 85.5 m^2 over cos 30: 25.98 and 98.73 m^2), their
+    share 20.8 % as on the level. They had been summed on plan against the loaded
+    surface (a newcomer's monopitch: 7.3 % where 8.3 %)."""
+    from catenet.case.kinds import warn
+
+    warn._WARNED.clear()
+    slope = math.tan(math.radians(30.0))
+    data = _cables(L_LINES, 3.0, z=lambda x, y: slope * x)
+    posts = [[0.0, 0.0], [12.0, 0.0], [0.0, 12.0], [12.0, 6.0], [6.0, 12.0]]
+    n = len(data["geometry"]["nodes"])
+    data["geometry"]["nodes"] += [[x, y, slope * x] for x, y in posts]
+    data["geometry"]["fixed"] += list(range(n, n + 5))
+    with caplog.at_level("WARNING", logger="catenet.case"):
+        force(with_area(data, pressure=1000.0, direction="normal"))
+    c = math.cos(math.radians(30.0))
+    assert f"the {22.5 / c:.4g} m^2 between them" in caplog.text
+    assert f"(20.8 % of the {108.0 / c:.4g} m^2 they enclose; {85.5 / c:.4g} m^2" in caplog.text
