@@ -22,15 +22,17 @@ MAX_SPECTRUM_ROWS = 80  # frequencies of the spectrum table, from 0 up
 
 
 def lines_tables(states: States) -> list[Table]:
-    """The lines' tables of a dynamic run with named cables (none otherwise)."""
-    if states.method != "dynamic":
+    """The lines' tables of a dynamic run in water with named cables (none otherwise: a
+    roof net's cables have no anchor, touchdown or fairlead, as the run's summary
+    shows lines in water only)."""
+    water = states.case.get("water") if isinstance(states.case, dict) else None
+    if states.method != "dynamic" or not isinstance(water, dict):
         return []
     history = lines_history(states.path)
     if history is None:
         return []
     tables = [lines_table(history)]
-    water = states.case.get("water") if isinstance(states.case, dict) else None
-    if isinstance(water, dict) and water.get("spectrum"):
+    if water.get("spectrum"):
         tables.append(spectrum_table(history))
     return tables
 

@@ -149,3 +149,38 @@ t_end = 3.0
     lines = rep.output.split("Lines over time")[1].splitlines()
     row = next(r for r in lines if r.startswith("| cable |"))
     assert row.split("|")[6].strip() == str(events.size)
+
+
+def test_a_roof_nets_cables_have_no_lines_table(tmp_path):
+    """A dynamic run out of water with named cables (a rope swinging under its weight):
+    its report has no "Lines over time" (an anchor's uplift, a touchdown, a fairlead's
+    spectrum mean nothing there; a roof net's report showed them), as the run's summary
+    shows lines in water only."""
+    case = tmp_path / "rope.toml"
+    case.write_text(
+        """
+[geometry]
+kind = "graph"
+nodes = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]]
+edge_length = 0.5
+fixed = [0]
+[[geometry.cable]]
+name = "rope"
+nodes = [0, 1]
+[material]
+EA = 1e5
+density = 1000.0
+area = 1e-4
+[load]
+gravity = [0.0, 0.0, -9.81]
+[solver]
+method = "dynamic"
+t_end = 0.2
+"""
+    )
+    out = tmp_path / "r.h5"
+    res = CliRunner().invoke(main, ["run", str(case), "-o", str(out), "-q"])
+    assert res.exit_code == 0, res.output
+    rep = CliRunner().invoke(main, ["report", str(out), "-o", "-"])
+    assert rep.exit_code == 0, rep.output
+    assert "Lines over time" not in rep.output
