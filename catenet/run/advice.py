@@ -203,9 +203,10 @@ def format_bytes(n: float) -> str:
     return f"{n:.3g} TiB"  # pragma: no cover
 
 
-def strain_beyond_law(net, x: np.ndarray) -> str | None:
+def strain_beyond_law(net, x: np.ndarray, units: str = "SI") -> str | None:
     """A message when edges at positions ``x`` are strained beyond the range their law is
-    meant for (``catenet.model.laws.LAWS[name].max_strain``; a table's last point), else None."""
+    meant for (``catenet.model.laws.LAWS[name].max_strain``; a table's last point), else None;
+    in kN-m or N-mm, a load in N as a cause (a line load in N/m strained a strand 24 %)."""
     from catenet.model import measures
     from catenet.model.laws import LAWS, TABLE
 
@@ -224,13 +225,14 @@ def strain_beyond_law(net, x: np.ndarray) -> str | None:
         count, of = int(np.count_nonzero(on)), int(np.count_nonzero(net.law.kind == kind))
         parts.append(f"{count} of {of} edges of the {name} law (meant for strains <= {bound:.3g})")
     kinds = set(int(k) for k in np.unique(net.law.kind[over]))
-    if kinds == {TABLE}:
-        advice = "extend material.table to larger strains or lower the load"
-    else:
-        advice = (
-            "use a large-strain law (material.law = 'neo_hookean') or lower the load; the "
-            "result is not physical as it stands"
-        )
+    advice = "extend material.table to larger strains or lower the load"
+    if kinds != {TABLE}:
+        advice = "use a large-strain law (material.law = 'neo_hookean') or lower the load"
+    slip = {"kN-m": "kN and kN/m, not N and N/m", "N-mm": "N and N/mm, not N/m"}.get(units)
+    if slip:  # the load's unit slip that strains a case's cables a thousandfold too far
+        advice += f", or check that the loads are in the case's units ({slip})"
+    if kinds != {TABLE}:
+        advice += "; the result is not physical as it stands"
     return (
         f"strain {float(eps[worst]):.3g} at edge {worst} is beyond the material law's range: "
         f"{', '.join(parts)}: {advice}"

@@ -304,7 +304,7 @@ def _report(
     from catenet.run import advice, integrator_advice
 
     scene, case = run.scene, run.case
-    beyond = advice.strain_beyond_law(scene.net, result.x)
+    beyond = advice.strain_beyond_law(scene.net, result.x, case.units or "SI")
     if unphysical:  # the run's error says it all
         pass
     elif beyond:
