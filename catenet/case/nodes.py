@@ -196,7 +196,8 @@ def _check_partial(
 
 def _turns(part) -> bool:
     """Whether a support table is a spring with rotational rows (a 6x6 or six entries)."""
-    return np.size(getattr(part, "stiffness", None)) in (6, 36)
+    stiffness = getattr(part, "stiffness", ())
+    return np.size(() if stiffness is None else stiffness) in (6, 36)
 
 
 def _check_clamp(
