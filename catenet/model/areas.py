@@ -432,9 +432,10 @@ def beyond_outline(nodes: np.ndarray, edges: np.ndarray, covered: np.ndarray, lo
                             key=lambda t: t[0])  # fmt: skip
         a, b = (nodes[loop[k]], nodes[loop[(k + 1) % len(loop)]]) if load.surface else (
             plane[loop[k]], plane[loop[(k + 1) % len(loop)]])  # fmt: skip
-        c = nodes[i] if load.surface else p
+        u, w = b - a, (nodes[i] if load.surface else p) - a
+        twice = np.cross(u, w) if load.surface else u[0] * w[1] - u[1] * w[0]
         out.append(i)
-        area += 0.5 * float(np.linalg.norm(np.cross(b - a, c - a)))
+        area += 0.5 * float(np.linalg.norm(twice))
     return np.asarray(out, dtype=np.int64), float(area)
 
 
