@@ -95,6 +95,13 @@ def integrator_loss(case: Case, result) -> str | None:
             "of mass's frame where nothing holds the net, and what damping, drag and "
             f"friction took; {lost:.1%} of the largest)"
         )
+    if landed := getattr(result, "landed", ""):  # the landings' stiffness, not the step
+        return (
+            f"the integrator ({name}, {steps}) removed {share} on its own (the energy "
+            "balance's 'numerical' part): nodes landed on a barrier too weak to hold them "
+            "and stopped within the step (the warning above), which no step or tolerance "
+            f"changes; give {landed}"
+        )
     return (
         f"the integrator ({name}, {steps}) removed {share} on "
         "its own (the energy balance's 'numerical' part; not damping or friction): the "

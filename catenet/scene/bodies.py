@@ -118,7 +118,8 @@ def _add_balls(
             i = int(inside[0])
             raise ConfigError(
                 f"{ball.path} (kind 'sphere'): node {i} at {shown(net.nodes[i].tolist())} "
-                f"starts inside or on it (gap {gap[i]:.3g} m), {inside.size} nodes in all: "
+                f"starts inside or on it (gap {gap[i]:.3g} m), "
+                f"{inside.size} node{'' if inside.size == 1 else 's'} in all: "
                 "an obstacle must not overlap the initial net; move it or the net"
             )
         mass = float(np.sum(net.mass)) if ball.mass is None else float(ball.mass)

@@ -266,6 +266,7 @@ def check_clear(
         i = int(nodes[inside[0]])
         raise ConfigError(
             f"{label}: node {i} at {shown(net.nodes[i].tolist())} starts inside or on it "
-            f"(gap {gap[inside[0]]:.3g} m), {inside.size} nodes in all: {what} must not "
+            f"(gap {gap[inside[0]]:.3g} m), {inside.size} node{'' if inside.size == 1 else 's'} "
+            f"in all: {what} must not "
             "overlap the initial net; move it or the net"
         )

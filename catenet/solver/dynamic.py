@@ -133,11 +133,15 @@ def solve_dynamic(
     stepper.begin(x0, v0, t0, a0, a_out)
     control = _control(stepper, dt, t0, t_end, max_steps, (tolerance, dt_max, dt_min))
     run = stepper.run(control, rest=stop_at_equilibrium, on_step=on_step, on_rest=on_rest)
+    strikes = stepper.watch.strikes if stepper.watch is not None else None
     if stepper.watch is not None:
         stepper.watch.report()
     if isinstance(control, ErrorControl) and control.strikes is not None:
-        control.strikes.landings()
-    return _result(stepper, balance, run, start)
+        strikes = control.strikes
+        strikes.landings()
+    result = _result(stepper, balance, run, start)
+    result.landed = "" if strikes is None else strikes.advice()  # (the integrator's advice)
+    return result
 
 
 def _check_rest(t_end: float | str, damping: float, stop_at_equilibrium: bool) -> None:

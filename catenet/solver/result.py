@@ -128,6 +128,7 @@ class Result:
     energy: np.ndarray | None = None
     energy_scale: float = float("nan")
     energy_motion: float = float("nan")
+    landed: str = ""  # a fixed obstacle's barrier too weak for a landing: the stiffness
 
 
 def finish(

@@ -141,6 +141,8 @@ def test_a_rod_dropped_on_a_floor_bounces_where_the_barrier_holds_it(tmp_path):
     assert done.exit_code == 0, done.output
     said = re.search(r"give obstacle\[0\]\.stiffness >= (\S+) N/m", done.output)
     assert said is not None, done.output
+    assert "which no step or tolerance changes" in done.output  # (the integrator's loss:
+    assert "a smaller solver.tolerance" not in done.output  # it advised the tolerance)
     stiffness = float(said.group(1))
     assert 1e9 < stiffness < 1e10
     done = CliRunner().invoke(
