@@ -280,9 +280,10 @@ class Strikes:
                 continue
             if owner < 0 and not (solid is None and carried > GROUND * flow):
                 continue
-            arrive = np.maximum(speed, 2.0 * (old[hit] - new[hit]) / h - speed)  # (at the
-            if owner < 0 and self._too_weak(term, mass, arrive):  # step's end, uniformly
-                continue  # accelerated) no bounce its barrier holds: the landing is inelastic
+            if owner < 0:  # a fixed obstacle: its nodes' speed at the step's end (uniformly
+                arrive = np.maximum(speed, 2.0 * (old[hit] - new[hit]) / h - speed)  # sped)
+                if self._too_weak(term, mass, arrive):
+                    continue  # no bounce its barrier holds: the landing is inelastic
             with np.errstate(divide="ignore", invalid="ignore"):  # (no speed: at 0)
                 at = np.clip((old[hit] - term.dhat) / (speed * h), 0.0, 1.0)
             first = float(np.min(np.nan_to_num(at, nan=0.0, posinf=0.0)))
