@@ -66,6 +66,17 @@ def _rows(prefix: str, keys: tuple[Key, ...]) -> list[str]:
     return rows
 
 
+def _static(row: str) -> str:
+    """A load case's row, its loads' histories refused (a load case is static)."""
+    path = row.split("|")[1].strip()
+    if not path.endswith(".history`"):
+        return row
+    return (
+        f"| {path} | refused (exit 2) | none | a load case is a static analysis from the "
+        "base state: its loads take no history (give time histories in [load]) |"
+    )
+
+
 def keys_table() -> str:
     """The Markdown table of every case key: accepted values, default and meaning."""
     kinds = ", ".join(map(repr, KINDS))
@@ -100,7 +111,7 @@ def keys_table() -> str:
     )
     rows += _rows("mass[k]", declared(MassConfig))
     rows.append(f"| `[[load_case]]` | an array of tables | none | {_doc(LoadCaseConfig)} |")
-    rows += _rows("load_case[k]", declared(LoadCaseConfig))
+    rows += [_static(row) for row in _rows("load_case[k]", declared(LoadCaseConfig))]
     rows.append(f"| `[[combination]]` | an array of tables | none | {_doc(CombinationConfig)} |")
     rows += _rows("combination[k]", declared(CombinationConfig))
     return "\n".join(rows)
