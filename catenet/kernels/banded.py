@@ -106,13 +106,15 @@ def cuthill_mckee(indptr, indices):
 
 
 @njit(cache=True)
-def band_cholesky(L, C, D):
+def band_cholesky(L, C, D, zero=0.0):
     """Factorises the bordered band in place (module docstring), the band by LAPACK's
     dpbtrf (``lapack_ready`` first); False where a pivot is not positive (the matrix is
-    not positive definite, or not finite)."""
+    not positive definite, or not finite) or not above ``zero`` times the largest
+    diagonal entry (a matrix singular to round-off, as PARDISO's pivots measure it)."""
     n1, w = L.shape
     if not L.flags.c_contiguous:  # (LAPACK reads the storage as it lies)
-        return band_cholesky_loops(L, C, D)
+        return band_cholesky_loops(L, C, D, zero)
+    least = zero * _largest(L, D)
     if n1:
         args = np.empty(4, dtype=np.int32)  # n, kd, ldab, info
         args[0], args[1], args[2], args[3] = n1, w - 1, w, 0
@@ -122,20 +124,33 @@ def band_cholesky(L, C, D):
         if args[3] != 0:
             return False
         for j in range(n1):  # (dpbtrf passes a NaN pivot on)
-            if not np.isfinite(L[j, 0]):
+            piv = L[j, 0] * L[j, 0]
+            if not np.isfinite(piv) or not piv > least:
                 return False
-    return _border(L, C, D)
+    return _border(L, C, D, least)
 
 
 @njit(cache=True)
-def band_cholesky_loops(L, C, D):
+def _largest(L, D):
+    """The largest diagonal entry of the bordered band (before its factorisation)."""
+    out = 0.0
+    for j in range(L.shape[0]):
+        out = max(out, L[j, 0])
+    for j in range(D.shape[0]):
+        out = max(out, D[j, j])
+    return out
+
+
+@njit(cache=True)
+def band_cholesky_loops(L, C, D, zero=0.0):
     """``band_cholesky`` by plain loops: right-looking, the trailing rows updated by
     each column in turn (contiguous rows of L)."""
     n1, w = L.shape
     p = w - 1
+    least = zero * _largest(L, D)
     for j in range(n1):
         piv = L[j, 0]
-        if not piv > 0.0:
+        if not piv > max(least, 0.0):
             return False
         piv = np.sqrt(piv)
         L[j, 0] = piv
@@ -149,14 +164,15 @@ def band_cholesky_loops(L, C, D):
                 jd = j + d
                 for e in range(d, m + 1):
                     L[jd, e - d] -= L[j, e] * v
-    return _border(L, C, D)
+    return _border(L, C, D, least)
 
 
 @njit(cache=True)
-def _border(L, C, D):
+def _border(L, C, D, least):
     """The border's factors after the band's (L factorised): Y = L^-1 C, over the rows
     below C's first non-zero row only (those above stay zero in Y), and the Cholesky
-    factor of the Schur complement; False where it is not positive definite."""
+    factor of the Schur complement; False where it is not positive definite or a pivot is
+    none (not above ``least``)."""
     n1, w = L.shape
     p = w - 1
     nb = D.shape[0]
@@ -190,7 +206,7 @@ def _border(L, C, D):
         s = D[j, j]
         for k in range(j):
             s -= D[j, k] * D[j, k]
-        if not s > 0.0:
+        if not s > max(least, 0.0):
             return False
         D[j, j] = np.sqrt(s)
         for i in range(j + 1, nb):

@@ -48,6 +48,13 @@ BAND_MAX_DOF = 700  # the band below this many unknowns (benchmarks/solvers_smal
 BORDER_DEGREE = 6.0  # a row with more entries than this many times the median: border
 BORDER_MAX = 48  # at most this many border rows (else PARDISO)
 BAND_COST = 0.25  # the band's n1 p^2 at most this share of a dense factorisation's n^3
+BAND_SMALL = 20_000  # ... or at most this many (microseconds: a system so small that a
+# PARDISO call costs more than its dense arithmetic: a spring's 3 unknowns took 0.08 ms a
+# solve through PARDISO, a tenth of its time step)
+SMALL_ZERO = 1e-8  # such a system's pivot below this share of its largest diagonal entry
+# is none: PARDISO's own threshold (it perturbs the pivot and the solver says the system is
+# singular), which a Cholesky factorisation does not see (a block on a capsule's top, its
+# spring unloaded: a pivot of 1e-22 against 5 passed, and Newton stepped along it)
 
 
 class BandLayout:
@@ -86,9 +93,17 @@ class BandLayout:
 
     def worth(self) -> bool:
         """Whether the band serves: few border rows and a band far below the dense
-        matrix's cost."""
+        matrix's cost, or a system so small that its arithmetic costs less than a PARDISO
+        call (``small``)."""
         n = self.n
-        return self.nb <= BORDER_MAX and self.n1 * (self.p + 1) ** 2 <= BAND_COST * n**3
+        return self.nb <= BORDER_MAX and (
+            self.n1 * (self.p + 1) ** 2 <= BAND_COST * n**3 or self.small
+        )
+
+    @property
+    def small(self) -> bool:
+        """Whether the system is so small that PARDISO's call costs more than its band."""
+        return self.n1 * (self.p + 1) ** 2 <= BAND_SMALL
 
 
 class BandSolver(LinearSolver):
@@ -133,7 +148,7 @@ class BandSolver(LinearSolver):
         C.reshape(-1)[lay.c_of] = data[lay.c_at]
         D.reshape(-1)[lay.d_of] = data[lay.d_at]
         factorize = band_cholesky if lapack_ready() else band_cholesky_loops
-        self._factored = bool(factorize(band, C, D))
+        self._factored = bool(factorize(band, C, D, SMALL_ZERO if lay.small else 0.0))
         if not self._factored:  # not positive definite: PARDISO's (its errors too)
             self.fallback.factorize(data, definite=self._definite)
         else:

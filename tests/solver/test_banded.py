@@ -83,6 +83,34 @@ def test_a_singular_flat_net_raises_as_pardiso_does():
         ws.solver.solve(np.ones(ws.system.n_free))
 
 
+def test_a_system_of_a_few_unknowns_takes_the_band_and_its_round_off_pivots_pardiso():
+    """A spring's three unknowns: dense, so no band "worth" its cost against a dense
+    factorisation, but a PARDISO call cost 0.08 ms a solve there, far above the arithmetic:
+    the band serves. A pivot at round-off of the largest diagonal entry (a direction
+    without stiffness beside a stiff one) goes to PARDISO, which says the system is
+    singular, as it does where it solves alone."""
+    import catenet as cn
+    from catenet.solver.banded import small_solver
+
+    nodes = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    net = cn.Net.from_arrays(nodes, [[0, 1]], EA=100.0, fixed=[0])
+    s = Workspace(net).system
+    assert isinstance(Workspace(net).solver, BandSolver) and s.n_free == 3
+    assert len(s.indices) == 6  # the upper triangle of a dense 3 x 3
+    args = (s.indptr, s.indices)
+    dof_node = np.repeat([1], 3)  # symmetric indefinite behind it (a step with contact)
+    pardiso = make_solver("pardiso", *args, upper=True, dof_node=dof_node, mtype=-2)
+    band = small_solver(*args, upper=True, dof_node=dof_node, fallback=pardiso)
+    assert isinstance(band, BandSolver)
+    band.factorize(np.array([5.0, 0.0, 0.0, 1e-3, 0.0, 2.0]))
+    assert band.stats["band"] == 1
+    assert np.allclose(band.solve(np.array([5.0, 1e-3, 2.0])), 1.0)
+    with pytest.raises(SingularSystemError):  # 1e-22 against 5: none
+        band.factorize(np.array([5.0, 0.0, 0.0, 1e-22, 0.0, 2.0]))
+        band.solve(np.ones(3))
+    assert band.stats["band"] == 1  # (PARDISO raised it)
+
+
 def test_pardiso_alone_above_the_threshold_or_when_asked():
     sq, _ = paper_net(34)  # about 1e4 DOF
     assert Workspace(sq.net).system.n_free > BAND_MAX_DOF
