@@ -320,16 +320,27 @@ NEUTRAL_SAYS = {
 DRIVES = 1e-3  # a load whose share along a mode without stiffness is above this drives it
 
 
-def describe_neutral(mode: np.ndarray, loose: np.ndarray, where: str = "rest") -> str:
+def describe_neutral(
+    mode: np.ndarray, loose: np.ndarray, where: str = "rest", whole: np.ndarray | None = None
+) -> str:
     """What a neutral state's ``mode`` without stiffness (N, 3) moves: the nodes, and
     what to do; "" where it moves only ``loose`` nodes (hanging on slack edges only:
     their own warning says it). ``where`` (``NEUTRAL_SAYS``): an end state ("rest"), or
     the last equilibrium of a path that Newton could not take further ("failed"), whose
-    mode the loads drive ("driven")."""
+    mode the loads drive ("driven"). ``whole``: the nodes of parts that no fixed node or
+    spring holds (``unpinned_parts``); a mode within them is such a part's rigid motion."""
     nodes = mode_nodes(mode)
     if not np.setdiff1d(nodes, loose).size:
         return ""
     what = NEUTRAL_SAYS[where]
+    if whole is not None and whole[nodes].all():
+        return (
+            f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most "
+            f"in it), {what}: a part that no fixed node or spring holds moves in it as a "
+            "whole (the translations and turns its rollers or sliders leave free, a "
+            "rigid-body motion); fix a node of it, or hold it with a spring or a roller "
+            "across that motion"
+        )
     return (
         f"its stiffness has a mode without resistance (nodes {_shown(nodes)} move most in "
         f"it), {what}: a part that turns freely (a frame on pinned "

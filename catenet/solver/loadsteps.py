@@ -20,6 +20,7 @@ from catenet.errors import (
 )
 from catenet.model.net import Loads, Net
 from catenet.solver.amplified import warn_amplified
+from catenet.solver.endstate import warn_state
 from catenet.solver.result import Result, finish
 from catenet.solver.rung import StepSettings, can_relax, hangs_slack, relax_to_rest
 from catenet.solver.stability import (
@@ -34,7 +35,7 @@ from catenet.solver.stability import (
     describe_collapse,
 )
 from catenet.solver.start import predict, start_state
-from catenet.solver.static import solve_static, warn_state
+from catenet.solver.static import solve_static
 from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)

@@ -13,16 +13,9 @@ import time
 
 import numpy as np
 
-from catenet.model.measures import loose_nodes, slack_strain, strain
+from catenet.model.measures import slack_strain, strain
 from catenet.model.net import Loads, Net
-from catenet.solver.diagnose import (
-    bending_nodes,
-    describe_neutral,
-    describe_unstable,
-    describe_unstable_bodies,
-    has_twist,
-)
-from catenet.solver.modal import body_frames, stable_with_bodies
+from catenet.solver.endstate import judge_stability, warn_state
 from catenet.solver.newton import NewtonResult, _c_start, raise_unconverged, solve_newton
 from catenet.solver.potential import Potential
 from catenet.solver.result import Outcome, Result, finish
@@ -36,7 +29,6 @@ from catenet.solver.start import (
     turned_over,
     unstressed,
 )
-from catenet.solver.tangent import NEUTRAL, STABLE, UNSTABLE, kept_tangent
 from catenet.solver.workspace import Workspace, check_rtol
 from catenet.terms import Inertia, Stretch, Term
 
@@ -115,7 +107,7 @@ def solve_static(
         outcome=_outcome(result),
     )
     if result.converged:
-        _judge_stability(ws, net, potential, x, out)
+        judge_stability(ws, net, x, out)
     if warn:
         warn_state(ws, net, out)
     return out
@@ -166,56 +158,6 @@ def _check_converged(
         raise_unconverged(result, "static equilibrium", state=begin, hint=hint)
 
 
-def _judge_stability(
-    ws: Workspace, net: Net, potential: Potential, x: np.ndarray, out: Result
-) -> None:
-    """The equilibrium's stability into ``out`` (``stable``, ``diagnosis``), where it can
-    be lost: free bodies, or bilateral edges."""
-    bodies = body_frames(ws.system)  # a free body may rest unstably on any net
-    if bodies or not net.law.all_tension_only:
-        out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, x, out)
-        if out.stable is False:
-            out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
-                ws.system.stretch,
-                x,
-                ~net.fixed,
-                twisted=has_twist(ws.system),
-                bent=bending_nodes(ws.system),
-                factor=out.time,
-            )
-
-
-def warn_state(ws: Workspace, net: Net, out: Result, neutral: bool = True) -> None:
-    """Warnings on the equilibrium ``out``: unstable (its ``diagnosis``), neutral (unless
-    not ``neutral``), or free nodes hanging on slack edges only."""
-    if out.stable is False:
-        log.warning(
-            "the equilibrium is unstable: the stiffness matrix has negative eigenvalues "
-            "(any disturbance makes the net or a body move away): %s",
-            out.diagnosis,
-        )
-    elif out.stable is None and out.diagnosis and neutral:
-        log.warning("the equilibrium is neutral: %s", out.diagnosis)
-    _warn_loose(ws, net, out)
-
-
-def _warn_loose(ws: Workspace, net: Net, out: Result) -> None:
-    """A warning where free nodes hang on slack edges only and no other term holds them."""
-    loose = loose_nodes(net, out.tension)
-    for term in ws.system.terms:  # nodes that another term (a spring, contact) holds
-        pattern = term.pattern() if term.edge_net is None else None
-        if pattern is not None and loose.size:
-            loose = np.setdiff1d(loose, pattern[0] // 3)
-    if loose.size:
-        log.warning(
-            "%d free nodes hang on slack edges only (nodes %s%s): nothing fixes their "
-            "position, the equilibrium there is not unique",
-            loose.size,
-            ", ".join(map(str, loose[:10])),
-            " ..." if loose.size > 10 else "",
-        )
-
-
 def _outcome(result: NewtonResult) -> Outcome:
     """The Outcome of a load step's Newton result: which criterion held, or failed."""
     if not result.converged:
@@ -248,18 +190,6 @@ def _relag(
     if lagged and result.converged:
         log.info("lagged terms still change after %d re-solves of a load step", LAG_ROUNDS)
     return result
-
-
-def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
-    """Whether the stiffness at x is positive definite, decided with the margins of
-    ``catenet.solver.stability`` (None: neutral within them, or cannot tell here). Only
-    bilateral nets can lose stability: tension-only stiffness is never negative. A
-    neutral state's mode without stiffness (dense systems) is named in ``out.diagnosis``
-    where it moves nodes that do not merely hang on slack edges (``_warn_loose``)."""
-    t = kept_tangent(ws.system, ws.solver, x)
-    if t.verdict == NEUTRAL and t.mode is not None:
-        out.diagnosis = describe_neutral(t.mode, loose_nodes(ws.system.net, out.tension))
-    return True if t.verdict == STABLE else False if t.verdict == UNSTABLE else None
 
 
 ROUNDOFF_HINT = 1e-2  # a failure held to a tolerance above this share of |f| is round-off

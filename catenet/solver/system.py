@@ -375,6 +375,18 @@ class System:
             a = a + sp.triu(a, k=1, format="csr").T
         return a.tocsr()
 
+    def dense(self, data: np.ndarray | None = None) -> np.ndarray:
+        """The (reduced) matrix as a dense array, both triangles (without SciPy's sparse
+        module: a small static run's verdict needs it, and its start-up does not)."""
+        data = self.data if data is None else data
+        n = self.n_free
+        out = np.zeros((n, n))
+        rows = np.repeat(np.arange(n), np.diff(self.indptr))
+        np.add.at(out, (rows, self.indices), data)
+        if self.upper:
+            out += np.triu(out, k=1).T
+        return out
+
     def diagonal(self, data: np.ndarray | None = None) -> np.ndarray:
         data = self.data if data is None else data
         return data[self.diag_pos]

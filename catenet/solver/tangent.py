@@ -6,7 +6,7 @@ inertia of the symmetric-indefinite factorisation.
 
 ``kept_tangent`` keeps it for the last two states asked while no term's state changed
 (``catenet.solver.potential.generation``): a load step's end is judged by its static
-solve (``static._stable``) and again by the load path (``PathJudge``), and one dense
+solve (``endstate._stable``) and again by the load path (``PathJudge``), and one dense
 eigen-decomposition serves both.
 """
 
@@ -101,7 +101,7 @@ _KEPT: list[tuple[tuple[int, int], np.ndarray, Tangent]] = []  # the last two (`
 
 
 def _dense(system: System, x: np.ndarray, d: np.ndarray) -> Tangent:
-    k = system.matrix(system.hessian(x).copy()).toarray()
+    k = system.dense(system.hessian(x).copy())
     s = 1.0 / np.sqrt(d)
     a = k * s[:, None] * s[None, :]
     a = 0.5 * (a + a.T)

@@ -274,7 +274,7 @@ def test_nodes_on_slack_edges_only_are_reported(caplog):
     net = cn.cable([-0.5, 0, 0], [0.5, 0, 0], 5, MAT)
     d = np.zeros((5, 3))
     d[0, 0], d[-1, 0] = 0.1, -0.1
-    with caplog.at_level("WARNING", logger="catenet.solver.static"):
+    with caplog.at_level("WARNING", logger="catenet.solver.endstate"):
         r = cn.solve_static(net, cn.Loads(support_displacement=d))
     assert r.converged and not r.tension.any()
     assert "3 free nodes hang on slack edges only" in caplog.text
@@ -294,7 +294,7 @@ def test_an_unstable_equilibrium_is_flagged(linear, caplog):
     )
     d = np.zeros((11, 3))
     d[10, 0] = -0.1
-    with caplog.at_level("WARNING", logger="catenet.solver.static"):
+    with caplog.at_level("WARNING", logger="catenet.solver.endstate"):
         r = cn.solve_static(net, cn.Loads(support_displacement=d), linear=linear)
     assert r.converged and r.stable is False
     assert "unstable" in caplog.text
