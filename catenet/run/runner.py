@@ -28,6 +28,7 @@ from catenet.run.steps import Hooks, NoFile, Solved, run_steps
 if TYPE_CHECKING:
     from catenet.case.parse import Case
     from catenet.output.writer import ResultWriter
+    from catenet.scene import Scene
 
 log = logging.getLogger(__name__)
 
@@ -274,23 +275,29 @@ def _implausible(run: Plan, result) -> str:
     beyond 10x its law's range; in a static run, a node moved beyond 10x the structure's
     size): the message, and the result marked failed (``converged`` false: the equations
     were solved, the model is not what the user meant); "" when it is plausible."""
-    from catenet.run.advice import implausible, unit_slips
     from catenet.solver.result import Outcome
+
+    message = implausible_message(run.case, run.scene, result)
+    if message:
+        result.converged, result.outcome, result.message = False, Outcome.FAILED, message
+    return message
+
+
+def implausible_message(case: Case, scene: Scene, result) -> str:
+    """Why a converged, stable state is implausible (``_implausible``), else ""."""
+    from catenet.run.advice import implausible, unit_slips
 
     if not result.converged or result.stable is False:
         return ""
-    scene = run.scene
-    static = run.case.solver.method == "static"  # thrown nets and bodies fly far
+    static = case.solver.method == "static"  # thrown nets and bodies fly far
     what, extreme = implausible(scene.net, result.x, float(scene.size) if static else 0.0)
     if not extreme:
         return ""
-    slips = unit_slips(run.case, scene.net)
+    slips = unit_slips(case, scene.net)
     message = f"implausible (check units and supports): {what}"
     if slips:  # the likely cause
         message = f"{message}; {slips[0]}"
-    message = _in_units(message, run.case)  # (a slip's SI values say "in SI": kept)
-    result.converged, result.outcome, result.message = False, Outcome.FAILED, message
-    return message
+    return _in_units(message, case)  # (a slip's SI values say "in SI": kept)
 
 
 def _report(

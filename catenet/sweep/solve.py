@@ -1,5 +1,9 @@
 """One job, in whatever process runs it: its load levels solved in turn on one net and
-one Workspace, each from the previous equilibrium, one table row per level.
+one Workspace, each from the previous equilibrium (a net of tension-only edges, which
+cannot lose stability) or along its own load path from the start (bilateral edges: their
+path is judged, and a level beyond a snap-through collapses, as in ``catenet run``; from
+the level before, Newton had jumped to the far branch, called stable), one table row
+per level.
 
 ``make_task`` packs a job as plain picklable data; ``run_job`` runs it and never raises
 for a failing case (every row carries its error). ``_solve`` is the one place that calls
@@ -169,6 +173,8 @@ def _solve_levels(task: dict) -> list[dict]:
 
                 ws = sv.workspace(scene, sv.Settings.of(parsed.solver))
                 ws_net, x_prev, path = net, None, []
+            if not net.law.all_tension_only:  # its path is judged: each level's whole path
+                x_prev, path = None, []
             force = scene.loads.external_force(ws_net)
             if not path:
                 reference = force
@@ -179,6 +185,7 @@ def _solve_levels(task: dict) -> list[dict]:
 
                 x0 = predict([x for _, x in path[-2:]], [s for s, _ in path[-2:]], level_of)
             result = _solve(parsed, scene, ws_net, ws, x0)
+            _plausible(parsed, scene, result)
             x_prev = result.x
             path = path + [(level_of, result.x)] if level_of is not None else []
             if task.get("load_case"):
@@ -300,6 +307,20 @@ def _solve(case, scene, net, ws, x_prev):
             f"dynamic run did not converge: {r.message}", iterations=r.iterations, state=r.x
         )
     return r
+
+
+def _plausible(case, scene, result) -> None:
+    """Raises for a level whose equilibrium ``catenet run`` would not call an answer
+    (exit 1 there): an unstable one, or one no cable structure reaches (a unit slip, a
+    mechanism flown off: ``catenet.run.runner.implausible_message``). Rows of both had
+    said converged."""
+    from catenet.errors import ConvergenceError
+    from catenet.run.runner import implausible_message
+
+    if result.stable is False:
+        raise ConvergenceError(f"the equilibrium found is unstable: {result.diagnosis}")
+    if message := implausible_message(case, scene, result):
+        raise ConvergenceError(f"the result is {message}")
 
 
 def _solve_case(case, scene, ws, base, name: str):
