@@ -80,6 +80,7 @@ class System:
         for term in self.terms:
             if term.grows:
                 term.grew = False
+        self.builds = getattr(self, "builds", 0) + 1  # (views keep the count they saw)
         self._targets: dict[int, tuple[object, np.ndarray]] = {}
         if self.guides is not None or self._entry_count() <= SMALL_PATTERN:
             found = self._unique_pattern()

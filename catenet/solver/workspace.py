@@ -61,21 +61,31 @@ class Workspace:
         """After a time step's ``begin_step``: when a term's pattern grew (``Term.grows``:
         self-contact's new candidate pairs), rebuilds the system's pattern and the linear
         solver (a new symbolic analysis), and points the ``potentials`` at the new
-        solver; whether it did. The solver's counts and times go on from the old one's."""
-        if not self.system.refresh():
-            return False
-        old = self.solver
-        start = time.perf_counter()
-        self.solver = self._make_solver()
-        self.setup_seconds += time.perf_counter() - start
-        for name, count in old.stats.items():
-            self.solver.stats[name] = self.solver.stats.get(name, 0) + count
-        for name, seconds in old.seconds.items():
-            self.solver.seconds[name] = self.solver.seconds.get(name, 0.0) + seconds
-        old.release()
+        solver; whether it did, or changed a potential. The solver's counts and times go
+        on from the old one's. A potential on a view of the system (a run to rest's
+        continuation stage: ``System.with_terms``) built before the last rebuild gets a
+        view of the new pattern: its Hessian did not fit (a run to rest of two crossing
+        wires with self-contact stopped with an internal error)."""
+        rebuilt = self.system.refresh()
+        if rebuilt:
+            old = self.solver
+            start = time.perf_counter()
+            self.solver = self._make_solver()
+            self.setup_seconds += time.perf_counter() - start
+            for name, count in old.stats.items():
+                self.solver.stats[name] = self.solver.stats.get(name, 0) + count
+            for name, seconds in old.seconds.items():
+                self.solver.seconds[name] = self.solver.seconds.get(name, 0.0) + seconds
+            old.release()
+        changed = rebuilt
         for potential in potentials:
-            potential.solver = self.solver
-        return True
+            if potential.system.builds != self.system.builds:  # a view of an older pattern
+                potential.system = self.system.with_terms(potential.system.terms)
+                changed = True
+            if potential.solver is not self.solver:
+                potential.solver = self.solver
+                changed = True
+        return changed
 
     def potential(self, loads: Loads, factor: float = 1.0, steps: Sequence[Term] = ()) -> Potential:
         """The potential of the loads at ``factor`` (and of a time step's ``steps`` terms)."""
