@@ -45,10 +45,17 @@ def movers(case: Any) -> tuple[Mover, ...]:
 
 
 def _check_ball(case: Any, k: int, obs: Any) -> None:
-    if obs.mass is None and case.solver.method != "dynamic":
+    if case.solver.method == "dynamic":
+        return
+    if obs.mass is None:
         raise ConfigError(
             f"obstacle[{k}].velocity = {list(obs.velocity)}: a sphere on a prescribed path "
             "moves in dynamic runs only: set solver.method = 'dynamic', or drop velocity"
+        )
+    if any(obs.velocity or ()):  # a free ball's initial motion, as a free body's
+        raise ConfigError(
+            f"obstacle[{k}].velocity = {list(obs.velocity)}: a free ball's initial motion "
+            "acts in dynamic runs only: set solver.method = 'dynamic', or drop it"
         )
 
 

@@ -212,6 +212,7 @@ def test_a_ball_on_a_prescribed_path_pushes_into_the_net_and_never_swallows_a_no
         ({"center": [0.0, 0.0, 0.1]}, "obstacle[0] (kind 'sphere'): node"),
         ({"history": [[0, 1]], "velocity": None}, "obstacle[0].history: scales the velocity"),
         ({"mass": None, "solver": "static"}, "moves in dynamic runs only"),
+        ({"solver": "static"}, "obstacle[0].velocity = [0.0, 0.0, -1.0]: a free ball's"),
         ({"kind": "plane", "point": [0, 0, -1]}, "obstacle[0].mass"),
     ],
 )
