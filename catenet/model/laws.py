@@ -231,3 +231,24 @@ def table_rows(points, *, path: str = "material.table") -> tuple[np.ndarray, flo
     n = tension / EA
     w = np.concatenate([[0.0], np.cumsum(0.5 * (n[1:] + n[:-1]) * np.diff(strain))])
     return np.column_stack([strain, n, w]), float(EA)
+
+
+def tension_switches(value, n_edges: int, problems: list[str] | None = None) -> np.ndarray:
+    """``tension_only`` as one bool per edge, from a bool or one bool per edge; else a
+    problem in ``problems`` (ConfigError where None). A list of False once counted as
+    True: any non-empty list is."""
+    import reprlib
+
+    arr = np.asarray(value)
+    if arr.dtype == np.bool_ and arr.shape in ((), (n_edges,)):
+        return np.array(np.broadcast_to(arr, (n_edges,)))
+    problem = (
+        f"tension_only = {reprlib.repr(value)}: must be a bool or a sequence of one bool "
+        f"per edge ({n_edges})"
+    )
+    if problems is None:
+        from catenet.errors import ConfigError
+
+        raise ConfigError(problem)
+    problems.append(problem)
+    return np.ones(n_edges, dtype=np.bool_)

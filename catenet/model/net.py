@@ -5,6 +5,7 @@ Both are plain containers of arrays, validated once when built; solvers never ch
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -13,7 +14,7 @@ import numpy as np
 
 from catenet.errors import ConfigError
 from catenet.model.guides import Elastic, Guides
-from catenet.model.laws import Law
+from catenet.model.laws import Law, tension_switches
 from catenet.model.limits import MAGNITUDE, too_large
 from catenet.model.motions import support_positions
 
@@ -86,7 +87,7 @@ class Net:
         fixed,
         rest_length=None,
         line_density=0.0,
-        tension_only: bool = True,
+        tension_only: bool | Sequence[bool] = True,
         law: Law | None = None,
         point_mass=None,
         bodies: int = 0,
@@ -97,7 +98,7 @@ class Net:
         """Build and validate a net. Scalars broadcast over edges; ``fixed`` is a list of
         node indices or an (N,) bool mask; ``rest_length`` defaults to the initial lengths;
         ``law`` (one entry per edge) defaults to the paper's linear law with
-        ``tension_only`` for every edge (ignored where a law is given); ``point_mass``
+        ``tension_only`` (a bool, or one per edge; ignored where a law is given); ``point_mass``
         (N,) [kg] adds to the lumped masses; ``flies``: parts without a support are
         allowed (dynamic runs); ``guides``, ``springs``: rollers and sliders, springs."""
         nodes = _as_array("nodes", nodes, np.float64, (3,))
@@ -149,10 +150,11 @@ class Net:
         if point_mass is not None:
             point_mass = _broadcast("point_mass", point_mass, n, problems, allow_zero=True)
         held = _partial(guides, springs, n, mask, problems)  # rollers, sliders, springs
+        only = tension_switches(tension_only, m, problems)
         if problems:
             raise ConfigError(problems)
         if law is None:
-            law = Law.uniform(m, tension_only=bool(tension_only))
+            law = Law.uniform(m, tension_only=only)
         net = cls(nodes, edges, l0, EA, rho_a, mask, law, point_mass, bodies, bool(flies), *held)
         net._check_supported()
         return net
@@ -220,7 +222,8 @@ class Net:
             if "edges" in changes:
                 fields["law"] = None  # a law per edge does not fit other edges
             elif "tension_only" in changes:  # every edge's switch, the law kept
-                fields["law"] = self.law.with_tension_only(bool(changes["tension_only"]))
+                only = tension_switches(changes["tension_only"], self.n_edges)
+                fields["law"] = self.law.with_tension_only(only)
         fields.update(changes)
         nodes, edges = fields.pop("nodes"), fields.pop("edges")
         return Net.from_arrays(nodes, edges, **fields)

@@ -93,3 +93,30 @@ def test_replace_tension_only_switches_every_edge_of_the_law():
     assert net.replace(tension_only=True).law.tension_only.all()
     assert not net.replace(tension_only=False).law.tension_only.any()
     assert net.replace(tension_only=True).law.kind.tolist() == net.law.kind.tolist()
+
+
+def test_tension_only_per_edge_is_honoured_and_a_wrong_one_refused():
+    """``from_arrays(tension_only=...)`` takes a bool or one per edge (docs/guide/
+    solvers.md); a list of four False was taken as True (a non-empty list is truthy), so a
+    precompressed chain of struts came out slack instead of unstable; a string or a list
+    of the wrong length or of integers is refused, naming the key."""
+    import catenet as cn
+
+    nodes = np.array([[float(i), 0.0, 0.0] for i in range(5)])
+    edges = np.array([[i, i + 1] for i in range(4)])
+    net = cn.Net.from_arrays(nodes, edges, EA=1e6, fixed=[0, 4], tension_only=[False] * 4)
+    assert not net.law.tension_only.any() and not net.tension_only
+    mixed = [True, False, True, False]
+    net = cn.Net.from_arrays(nodes, edges, EA=1e6, fixed=[0, 4], tension_only=mixed)
+    assert net.law.tension_only.tolist() == mixed
+    assert not net.replace(tension_only=False).law.tension_only.any()
+    for bad in ("no", [True, False], [1, 0, 1, 0]):
+        with pytest.raises(cn.ConfigError, match="tension_only = .*: must be a bool or a"):
+            cn.Net.from_arrays(nodes, edges, EA=1e6, fixed=[0, 4], tension_only=bad)
+    with pytest.raises(cn.ConfigError, match="tension_only = 'x'"):
+        net.replace(tension_only="x")
+    chain = cn.Net.from_arrays(
+        nodes, edges, EA=1e6, fixed=[0, 4], rest_length=[1.001] * 4, tension_only=[False] * 4
+    )
+    r = cn.solve_static(chain, cn.Loads())
+    assert r.stable is False and (r.tension < -900.0).all()
