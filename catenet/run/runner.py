@@ -345,21 +345,13 @@ def _report(
     numbers = summary.summarize_result(scene, result)
     cables = scene.cables
     if result.stable is False:  # name the mechanism's nodes and cables
-        from catenet.solver.diagnose import (
-            bending_nodes,
-            describe_unstable,
-            describe_unstable_bodies,
-            has_twist,
-        )
+        from catenet.solver.endstate import diagnose_unstable
 
-        result.diagnosis = describe_unstable_bodies(ws.system, result.x) or describe_unstable(
-            ws.system.stretch,
+        result.diagnosis = diagnose_unstable(
+            ws,
             result.x,
-            ~scene.net.fixed,
             None if cables is None else cables.names,
             None if cables is None else cables.edge,
-            twisted=has_twist(ws.system),
-            bent=bending_nodes(ws.system),
             factor=result.time if case.solver.method == "static" else None,
         )
     per_cable = None

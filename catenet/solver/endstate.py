@@ -6,6 +6,7 @@ the Result and its warnings (docs/guide/stability.md)."""
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -17,6 +18,7 @@ from catenet.solver.diagnose import (
     describe_unstable,
     describe_unstable_bodies,
     has_twist,
+    mode_nodes,
     unpinned_parts,
 )
 from catenet.solver.modal import body_frames, stable_with_bodies
@@ -29,22 +31,42 @@ log = logging.getLogger(__name__)
 
 def judge_stability(ws: Workspace, net: Net, x: np.ndarray, out: Result) -> None:
     """The equilibrium's stability into ``out`` (``stable``, ``diagnosis``), where it can
-    be lost: free bodies, or bilateral edges. A tension-only net cannot lose it, but its
-    end state may be neutral (``_neutral``)."""
+    be lost: free bodies, bilateral edges, or terms that are not convex (a curved
+    obstacle's barrier pushes the nodes pressed on it aside: a rope draped over a
+    frictionless sphere, a ball on a wire, slide off). A tension-only net with convex
+    terms alone cannot lose it, but its end state may be neutral (``_neutral``)."""
     bodies = body_frames(ws.system)  # a free body may rest unstably on any net
-    if not bodies and net.law.all_tension_only:
+    if not bodies and net.law.all_tension_only and all(t.convex for t in ws.system.terms):
         _neutral(ws, x, out)
     else:
         out.stable = stable_with_bodies(ws, x) if bodies else _stable(ws, x, out)
         if out.stable is False:
-            out.diagnosis = describe_unstable_bodies(ws.system, x) or describe_unstable(
-                ws.system.stretch,
-                x,
-                ~net.fixed,
-                twisted=has_twist(ws.system),
-                bent=bending_nodes(ws.system),
-                factor=out.time,
-            )
+            out.diagnosis = diagnose_unstable(ws, x, factor=out.time)
+
+
+def diagnose_unstable(
+    ws: Workspace,
+    x: np.ndarray,
+    cables: Sequence[str] | None = None,
+    cable_of_edge: np.ndarray | None = None,
+    factor: float | None = None,
+) -> str:
+    """What makes the unstable equilibrium at x unstable, and the fix: a free body's
+    rest, a tension-only net pressed on a curved frictionless surface (``_pressed``), or
+    compressed bilateral edges (``describe_unstable``: a mechanism, a buckling)."""
+    system = ws.system
+    if system.net.law.all_tension_only and not body_frames(system):
+        return _pressed(ws, x)
+    return describe_unstable_bodies(system, x) or describe_unstable(
+        system.stretch,
+        x,
+        ~system.net.fixed,
+        cables,
+        cable_of_edge,
+        twisted=has_twist(system),
+        bent=bending_nodes(system),
+        factor=factor,
+    )
 
 
 def warn_state(ws: Workspace, net: Net, out: Result, neutral: bool = True) -> None:
@@ -107,3 +129,24 @@ def _named(ws: Workspace, x: np.ndarray, out: Result) -> Tangent:
             t.mode, loose_nodes(net, out.tension), whole=unpinned_parts(net)
         )
     return t
+
+
+def _pressed(ws: Workspace, x: np.ndarray) -> str:
+    """Why a tension-only net (with balls) is unstable: its only terms that are not
+    convex, the obstacles' and balls' barriers on curved surfaces, push the nodes pressed
+    on them aside more than the net's tension holds them (a rope over a frictionless
+    sphere, a ball on a wire, which were called stable)."""
+    t = kept_tangent(ws.system, ws.solver, x)
+    nodes = mode_nodes(t.mode) if t.mode is not None else np.zeros(0, np.int64)
+    listed = ", ".join(map(str, nodes[:10])) + (" ..." if nodes.size > 10 else "")
+    where = f"nodes {listed}" if nodes.size else "the nodes"
+    names = sorted({term.label for term in ws.system.terms if not term.convex and term.label})
+    on = " and ".join(names) if names else "a curved obstacle"
+    return (
+        f"the stiffness is negative where the net presses on {on} ({where} move most): "
+        "a frictionless curved surface pushes the nodes pressed on it aside more than the "
+        "net's tension holds them, and they would slide off it (a rope over the top of a "
+        "sphere, a ball on a wire); give the contact friction where it takes it "
+        "(obstacle[k].friction), "
+        "hold those nodes (a support, a roller), or let the net rest where it is stable"
+    )
