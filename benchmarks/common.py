@@ -145,12 +145,15 @@ def warm_up() -> None:
     """Compile (or load from the cache) every kernel on a tiny net, so that no timed run
     pays for the JIT, and solve a small square net (about 600 DOF), so that no measured
     run pays for the first solve's fixed allocations either (PARDISO's and MKL's
-    buffers: 2-3 MiB of resident memory that a 5-node cable does not reach)."""
+    buffers: 2-3 MiB of resident memory that a 5-node cable does not reach). The tiny
+    net is solved by PARDISO too ("auto" takes the band for it): its first call's own
+    set-up (10-18 MiB) is no part of a measured solve."""
     from catenet.solver.dynamic import solve_dynamic
     from catenet.solver.static import solve_static
 
     net, loads, _ = midpoint_cable(1.0, nodes=5)
     solve_static(net, loads)
+    solve_static(net, loads, linear="pardiso")
     solve_dynamic(net, loads, dt=0.1, damping=1.0, t_end=0.2)
     square, force = paper_net(10, edge=0.05)
     solve_static(square.net, force)
