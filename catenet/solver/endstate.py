@@ -23,7 +23,15 @@ from catenet.solver.diagnose import (
 )
 from catenet.solver.modal import body_frames, stable_with_bodies
 from catenet.solver.result import Result
-from catenet.solver.tangent import DENSE, NEUTRAL, STABLE, UNSTABLE, Tangent, kept_tangent
+from catenet.solver.tangent import (
+    DENSE,
+    NEUTRAL,
+    STABLE,
+    UNSTABLE,
+    Tangent,
+    definite,
+    kept_tangent,
+)
 from catenet.solver.workspace import Workspace
 
 log = logging.getLogger(__name__)
@@ -116,7 +124,7 @@ def _neutral(ws: Workspace, x: np.ndarray, out: Result) -> None:
     eigenvalues serve (up to DENSE free DOFs). A cable on rollers whose normals leave
     its ends free to slide together (the prestress gone, it hangs doubled) ended
     "converged" in silence, and a load tilted by 1e-9 sent it 4e4 m away."""
-    if ws.system.n_free <= DENSE:
+    if ws.system.n_free <= DENSE and not definite(ws.system, x):
         _named(ws, x, out)
 
 
