@@ -121,3 +121,43 @@ def test_the_waters_drag_along_a_free_rope_is_no_contact(tmp_path):
     done = CliRunner().invoke(main, ["run", str(case), "-o", str(tmp_path / "r.h5")])
     assert done.exit_code == 0, done.output
     assert "WARNING" not in done.output, done.output
+
+
+def _arc(pushes: np.ndarray, *, flip: np.ndarray | None = None):
+    """A cable of len(pushes) + 2 nodes on a half circle of radius 0.1 m, tension 100 N;
+    its inner nodes pushed radially (as a round solid pushes it) and along the cable by
+    ``pushes`` [N] (toward the last node); ``flip``: edges given the other way round."""
+    k = len(pushes) + 2
+    angle = np.linspace(0.0, math.pi, k)
+    x = np.column_stack([0.1 * np.cos(angle), 0.1 * np.sin(angle), np.zeros(k)])
+    edges = np.array([[i, i + 1] for i in range(k - 1)])
+    if flip is not None:
+        edges[flip] = edges[flip][:, ::-1]
+    net = SimpleNamespace(edges=edges, n_nodes=k, EA=np.full(k - 1, 1e6))
+    contact = np.zeros((k, 3))
+    contact[1:-1] = 100.0 * (math.pi / (k - 1)) * x[1:-1] / 0.1  # radial
+    tangent = np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(k)])
+    contact[1:-1] += pushes[:, None] * tangent[1:-1]
+    return net, x, np.full(k - 1, 100.0), contact
+
+
+def test_pushes_along_a_cable_that_add_up_are_warned_where_each_is_small():
+    """Each of 16 nodes pushed along the cable by 1.5 % of its tension (below WRAP_SHARE
+    at each): together 24 %, the tension lost across the wrap (a rope round a cylinder's
+    prisms with edge contact lost 25 %, unwarned). The run is found in either direction
+    and whichever way its edges are given; pushes that cancel, or a radial push alone,
+    are no run's."""
+    from catenet.run.contact_advice import wrap_drift
+
+    pushes = np.full(16, 1.5)
+    net, x, tension, contact = _arc(pushes)
+    assert wrap_share(net, x, tension, contact)[0] < WRAP_SHARE
+    share, first, last, along = wrap_drift(net, x, tension, contact)
+    assert math.isclose(along, 24.0, rel_tol=1e-9) and math.isclose(share, 0.24, rel_tol=1e-9)
+    assert {first, last} == {1, 16}
+    flipped = _arc(pushes, flip=np.arange(0, 17, 3))
+    assert math.isclose(wrap_drift(*flipped)[3], 24.0, rel_tol=1e-9)
+    assert math.isclose(wrap_drift(*_arc(-pushes))[3], 24.0, rel_tol=1e-9)
+    alternating = pushes * np.where(np.arange(16) % 2, 1.0, -1.0)
+    assert wrap_drift(*_arc(alternating))[0] <= 0.015 + 1e-12
+    assert wrap_drift(*_arc(np.zeros(16)))[0] < 1e-12
