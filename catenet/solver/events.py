@@ -44,6 +44,39 @@ def contact_terms(terms: Sequence[Term]) -> tuple[Term, ...]:
     return tuple(t for t in terms if float(getattr(t, "dhat", 0.0) or 0.0) > 0.0)
 
 
+DEEP = 1e-3  # nodes within this share of a barrier's distance are pressed deep into it
+
+
+def deep_contact(terms: Sequence[Term], x: np.ndarray) -> str:
+    """Where the nodes at x are pressed deepest into a keyed barrier, within DEEP of its
+    distance: a sentence naming it and what holds them farther out (a net dropped on a
+    fixed sphere sank to 1e-9 of its barrier's distance, and the run stopped blaming the
+    tolerance); else ''."""
+    deepest = None
+    for term in contact_terms(terms):
+        key, dhat = getattr(term, "key", ""), float(getattr(term, "dhat", 0.0))
+        gap = getattr(term, "gap", None)
+        if not key or gap is None:
+            continue
+        try:
+            least = float(np.min(gap(x), initial=np.inf))
+        except (TypeError, ValueError):
+            continue
+        if least < DEEP * dhat and (deepest is None or least / dhat < deepest[0]):
+            deepest = (least / dhat, least, dhat, key, term.label)
+    if deepest is None:
+        return ""
+    _, least, dhat, key, label = deepest
+    stiff = key.removesuffix(".distance") + ".stiffness"
+    return (
+        f"nodes are pressed to {least:.3g} m of {label}, within a thousandth of its "
+        f"barrier's distance ({dhat:.3g} m, {key}): the barrier is too weak for the "
+        "motion that brings them there (a net landing on it), and its forces' round-off "
+        f"at that depth exceeds the loads; a stiffer barrier ({stiff}) or a longer "
+        f"distance (e.g. {key} = {100.0 * dhat:.3g}, 100x) holds them farther out"
+    )
+
+
 class Events:
     """The contact state of a run's barrier terms (``contact_terms``) and the events of
     its steps (module docstring): ``landing`` after a converged step, ``take`` once a

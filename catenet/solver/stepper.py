@@ -19,6 +19,7 @@ from catenet.model.measures import slack_strain
 from catenet.model.net import Loads, Net
 from catenet.solver.adaptive import ErrorControl
 from catenet.solver.energy import Ledger
+from catenet.solver.events import deep_contact
 from catenet.solver.integrators import Scheme
 from catenet.solver.newton import EXTEND, NewtonResult, Reuse, solve_newton
 from catenet.solver.relax import RestControl, rest_stages
@@ -417,7 +418,7 @@ class TimeStepper:
                 f"the time step of {h_step:.3g} s to t = {self.t + h_step:.6g} s ends with "
                 f"a force imbalance of {newton.residual:.3g} N, the round-off of its "
                 f"forces, above the loads ({loads:.3g} N): no digit of this answer is "
-                f"sure; {_why_roundoff(control)}",
+                f"sure; {deep_contact(self.system.terms, self.x_trial) or _why_roundoff(control)}",
                 iterations=self.iterations,
                 state=self.x.copy(),
             )
