@@ -55,11 +55,15 @@ def deep_contact(terms: Sequence[Term], x: np.ndarray) -> str:
     deepest = None
     for term in contact_terms(terms):
         key, dhat = getattr(term, "key", ""), float(getattr(term, "dhat", 0.0))
-        gap = getattr(term, "gap", None)
-        if not key or gap is None:
+        gap, pairs = getattr(term, "gap", None), getattr(term, "distances", None)
+        if not key or (gap is None and pairs is None):
             continue
         try:
-            least = float(np.min(gap(x), initial=np.inf))
+            if gap is not None:
+                least = float(np.min(gap(x), initial=np.inf))
+            elif pairs is not None:  # the strands' self-contact: its pairs' gaps
+                r2 = float(getattr(term, "gap_r", 0.0))  # (capsules: less 2 r)
+                least = float(np.min(pairs(x, DEEP * dhat + r2), initial=np.inf)) - r2
         except (TypeError, ValueError):
             continue
         if least < DEEP * dhat and (deepest is None or least / dhat < deepest[0]):
@@ -67,13 +71,21 @@ def deep_contact(terms: Sequence[Term], x: np.ndarray) -> str:
     if deepest is None:
         return ""
     _, least, dhat, key, label = deepest
+    longer = f"e.g. {key} = {100.0 * dhat:.3g}, 100x"
+    if key.startswith("solver."):  # the strands' barrier (its stiffness follows the loads)
+        return (
+            f"strands are pressed to {least:.3g} m of each other, within a thousandth of "
+            f"the self-contact's distance ({dhat:.3g} m, {key}): its barrier is too weak "
+            "for the motion that brings them together, and its forces' round-off at that "
+            f"depth exceeds the loads; a longer distance ({longer}) holds them farther apart"
+        )
     stiff = key.removesuffix(".distance") + ".stiffness"
     return (
         f"nodes are pressed to {least:.3g} m of {label}, within a thousandth of its "
         f"barrier's distance ({dhat:.3g} m, {key}): the barrier is too weak for the "
         "motion that brings them there (a net landing on it), and its forces' round-off "
         f"at that depth exceeds the loads; a stiffer barrier ({stiff}) or a longer "
-        f"distance (e.g. {key} = {100.0 * dhat:.3g}, 100x) holds them farther out"
+        f"distance ({longer}) holds them farther out"
     )
 
 

@@ -26,3 +26,22 @@ def test_nodes_pressed_deep_into_a_barrier_are_named_with_what_holds_them_farthe
     plane.key = ""
     x[1, 2] = 5e-7
     assert deep_contact([plane], x) == ""
+
+
+def test_strands_pressed_together_name_the_self_contact_distance():
+    """A heavy rope dropped onto a cord net with self-contact stopped the same way, its
+    strands 2e-11 m apart: the self-contact is named by its distance key."""
+    import catenet as cn
+    from catenet.solver.events import deep_contact
+    from catenet.terms.strands import SelfContact
+
+    nodes = [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 5e-7], [0.0, 1.0, 5e-7]]
+    net = cn.Net.from_arrays(nodes, [[0, 1], [2, 3]], EA=1e3, fixed=[0, 1, 2, 3])
+    term = SelfContact(net, kappa=1.0, dhat=1e-3)
+    term.key, term.label = "solver.self_contact_distance", "the strands' self-contact"
+    said = deep_contact([term], net.nodes)
+    assert said.startswith("strands are pressed to 5e-07 m of each other")
+    assert "solver.self_contact_distance = 0.1, 100x" in said
+    assert (
+        deep_contact([term], net.nodes + [[0, 0, 0], [0, 0, 0], [0, 0, 1e-5], [0, 0, 1e-5]]) == ""
+    )
