@@ -110,8 +110,7 @@ def _warn_loose(ws: Workspace, net: Net, out: Result) -> None:
 
 def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
     """Whether the stiffness at x is positive definite, decided with the margins of
-    ``catenet.solver.stability`` (None: neutral within them, or cannot tell here). Only
-    bilateral nets can lose stability: tension-only stiffness is never negative. A
+    ``catenet.solver.stability`` (None: neutral within them, or cannot tell here). A
     neutral state's mode without stiffness (dense systems) is named in ``out.diagnosis``
     where it moves nodes that do not merely hang on slack edges (``_warn_loose``)."""
     t = _named(ws, x, out)
@@ -119,11 +118,12 @@ def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
 
 
 def _neutral(ws: Workspace, x: np.ndarray, out: Result) -> None:
-    """A tension-only net's end state: its mode without stiffness named in
-    ``out.diagnosis`` where it has one (``stable`` stays None: not judged) and the dense
-    eigenvalues serve (up to DENSE free DOFs). A cable on rollers whose normals leave
-    its ends free to slide together (the prestress gone, it hangs doubled) ended
-    "converged" in silence, and a load tilted by 1e-9 sent it 4e4 m away."""
+    """A tension-only net's end state (its terms convex: never unstable): where its
+    stiffness is not positive definite by one dense Cholesky factorisation (``definite``,
+    up to DENSE free DOFs), its mode without stiffness named in ``out.diagnosis`` by the
+    eigenvalues (``stable`` stays None). A cable on rollers whose normals leave its ends
+    free to slide together (the prestress gone, it hangs doubled) ended "converged" in
+    silence, and a load tilted by 1e-9 sent it 4e4 m away."""
     if ws.system.n_free <= DENSE and not definite(ws.system, x):
         _named(ws, x, out)
 
