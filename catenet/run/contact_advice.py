@@ -91,7 +91,8 @@ def wrap_drift(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray
     for start in range(pushed.size):  # from each run's end (a node without a pushed a)
         if seen[start] or int(a[start]) in where and int(b[start]) in where:
             continue
-        k, back, total, tops, run = start, int(a[start]), 0.0, 0.0, []
+        k: int | None = start
+        back, total, tops, run = int(a[start]), 0.0, 0.0, []
         if int(a[start]) in where:  # entered from b's side: walk toward a
             back = int(b[start])
         while k is not None and not seen[k]:
