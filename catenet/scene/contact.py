@@ -214,11 +214,17 @@ def obstacle_terms(
     edge = None
     rubs: EdgeContact | Moving | None = None  # the edges' barrier friction rides on
     if radius is not None:
-        from catenet.scene.segments import check_edges_clear, edge_barrier, held_edges
+        from catenet.scene.segments import (
+            check_edges_clear,
+            check_outline_clear,
+            edge_barrier,
+            held_edges,
+        )
 
         check_edges_clear(label, shape, radius, dhat, net, shown)
         edge = edge_barrier(shape, net, radius, kappa, dhat)
         if edge is not None:
+            check_outline_clear(label, edge, radius, net, shown)
             edge.stages = tuple(edge.narrowed(stiffness(w), w) for w in widths)
             edge.label, edge.key = label, term.key
             if contact.moving:  # on the obstacle's motion, as its nodes' barrier
