@@ -138,6 +138,17 @@ class BandSolver(LinearSolver):
     def _select(self, definite: bool) -> None:
         self._definite = definite
 
+    def positive_definite(self, data: np.ndarray) -> bool:
+        """Whether the matrix ``data`` (this pattern) is positive definite: its band's
+        Cholesky factorisation in arrays of its own, this solver's factors untouched."""
+        lay = self.layout
+        band, C, D = np.zeros_like(self._band), np.zeros_like(self._C), np.zeros_like(self._D)
+        band.reshape(-1)[lay.band_of] = data[lay.band_at]
+        C.reshape(-1)[lay.c_of] = data[lay.c_at]
+        D.reshape(-1)[lay.d_of] = data[lay.d_at]
+        factorize = band_cholesky if lapack_ready() else band_cholesky_loops
+        return bool(factorize(band, C, D))
+
     def _factorize(self, data: np.ndarray) -> None:
         lay = self.layout
         band, C, D = self._band, self._C, self._D

@@ -119,12 +119,12 @@ def _stable(ws: Workspace, x: np.ndarray, out: Result) -> bool | None:
 
 def _neutral(ws: Workspace, x: np.ndarray, out: Result) -> None:
     """A tension-only net's end state (its terms convex: never unstable): where its
-    stiffness is not positive definite by one dense Cholesky factorisation (``definite``,
-    up to DENSE free DOFs), its mode without stiffness named in ``out.diagnosis`` by the
+    stiffness is not positive definite by one Cholesky factorisation (``definite``, up
+    to DENSE free DOFs), its mode without stiffness named in ``out.diagnosis`` by the
     eigenvalues (``stable`` stays None). A cable on rollers whose normals leave its ends
     free to slide together (the prestress gone, it hangs doubled) ended "converged" in
     silence, and a load tilted by 1e-9 sent it 4e4 m away."""
-    if ws.system.n_free <= DENSE and not definite(ws.system, x):
+    if ws.system.n_free <= DENSE and not definite(ws.system, x, ws.solver):
         _named(ws, x, out)
 
 

@@ -100,18 +100,25 @@ def kept_tangent(system: System, solver: LinearSolver, x: np.ndarray) -> Tangent
 _KEPT: list[tuple[tuple[int, int], np.ndarray, Tangent]] = []  # the last two (``kept_tangent``)
 
 
-def definite(system: System, x: np.ndarray) -> bool:
+def definite(system: System, x: np.ndarray, solver: LinearSolver | None = None) -> bool:
     """Whether the tangent at x is STABLE (S K S - POSITIVE I positive definite), by one
-    dense Cholesky factorisation (up to DENSE free DOFs): a tenth of the eigenvalues'
-    cost, for a net whose stiffness cannot be negative (its end state is checked for a
-    mode without stiffness, whose eigenvalues are computed only where this fails)."""
+    Cholesky factorisation: the band's where ``solver`` is the bordered band (a fraction
+    of a millisecond), else dense (up to DENSE free DOFs; 13 ms at 615 DOF, the
+    eigenvalues' 36). For a net whose stiffness cannot be negative: its end state is
+    checked for a mode without stiffness, whose eigenvalues are computed only where this
+    fails."""
     d = _scale(system)
     s = 1.0 / np.sqrt(d)
-    a = system.dense(system.hessian(np.asarray(x, dtype=np.float64)).copy())
-    a *= s[:, None] * s[None, :]
-    a[np.diag_indices_from(a)] -= POSITIVE
-    if not np.all(np.isfinite(a)):
+    data = system.hessian(np.asarray(x, dtype=np.float64)).copy()
+    rows = np.repeat(np.arange(system.n_free), np.diff(system.indptr))
+    data *= s[rows] * s[system.indices]
+    data[system.diag_pos] -= POSITIVE
+    if not np.all(np.isfinite(data)):
         return False
+    band = getattr(solver, "positive_definite", None)  # (the bordered band's own test)
+    if band is not None:
+        return bool(band(data))
+    a = system.dense(data)
     try:
         np.linalg.cholesky(a)
     except np.linalg.LinAlgError:

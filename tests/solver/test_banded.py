@@ -196,3 +196,23 @@ def test_a_pivot_that_is_not_positive_fails_both_factorisations(bad):
     expected = good.copy()
     band_cholesky_loops(expected, np.zeros((50, 0)), np.zeros((0, 0)))
     assert np.array_equal(strided, expected)
+
+
+def test_the_bands_definiteness_test_agrees_with_a_dense_cholesky_and_keeps_its_factors():
+    """``BandSolver.positive_definite`` (a tension-only net's end state checked for a mode
+    without stiffness, by the band in a fraction of a millisecond where the dense
+    factorisation took 13 ms at 615 DOF): a step's matrix is, the same shifted below its
+    least eigenvalue is not, and the solver's own factorisation solves as before."""
+    ws, data = _step_matrix()
+    band = ws.solver
+    assert isinstance(band, BandSolver)
+    dense = ws.system.dense(data)
+    least = float(np.linalg.eigvalsh(dense)[0])
+    band.factorize(data, definite=False)
+    b = np.random.default_rng(1).normal(size=ws.system.n_free)
+    before = band.solve(b)
+    assert band.positive_definite(data)
+    shifted = data.copy()
+    shifted[ws.system.diag_pos] -= 1.01 * least
+    assert not band.positive_definite(shifted)
+    assert np.array_equal(band.solve(b), before)
