@@ -187,10 +187,11 @@ def self_contact(solver, net: Net, loads: Loads, radius: float | None = None) ->
         load = float(np.mean(net.EA / edges)) * dhat
     if not radius:
         term = SelfContact(net, kappa=default_strand_stiffness(load, dhat), dhat=dhat)
-        term.key, term.label = "solver.self_contact_distance", "the strands' self-contact"
-        return term
-    term = SelfContact(net, kappa=default_stiffness(load, dhat), dhat=dhat, radius=radius)
+    else:
+        term = SelfContact(net, kappa=default_stiffness(load, dhat), dhat=dhat, radius=radius)
     term.key, term.label = "solver.self_contact_distance", "the strands' self-contact"
+    if not radius:
+        return term
     near = term.distances(net.nodes, 2.0 * radius)
     if near.size:
         raise ConfigError(

@@ -67,12 +67,12 @@ def deep_contact(terms: Sequence[Term], x: np.ndarray) -> str:
         except (TypeError, ValueError):
             continue
         if least < DEEP * dhat and (deepest is None or least / dhat < deepest[0]):
-            deepest = (least / dhat, least, dhat, key, term.label)
+            deepest = (least / dhat, least, dhat, key, term.label, gap is None)
     if deepest is None:
         return ""
-    _, least, dhat, key, label = deepest
+    _, least, dhat, key, label, strands = deepest
     longer = f"e.g. {key} = {100.0 * dhat:.3g}, 100x"
-    if key.startswith("solver."):  # the strands' barrier (its stiffness follows the loads)
+    if strands:  # the strands' barrier (no stiffness key: it follows the loads)
         return (
             f"strands are pressed to {least:.3g} m of each other, within a thousandth of "
             f"the self-contact's distance ({dhat:.3g} m, {key}): its barrier is too weak "
