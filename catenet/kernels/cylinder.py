@@ -47,15 +47,11 @@ def cylinder_feature(x, c, e, h, r, n, H):
     """Signed distance of point x to the cylinder (centre c, unit axis e, half length h,
     radius r); fills n (outward unit gradient) and H (hess d) when outside (module
     docstring). Returns max(dr, dz) <= 0 inside."""
-    z = 0.0
-    for j in range(3):
-        z += (x[j] - c[j]) * e[j]
-    w = np.empty(3)
-    rho = 0.0
-    for j in range(3):
-        w[j] = x[j] - c[j] - z * e[j]
-        rho += w[j] * w[j]
-    rho = np.sqrt(rho)
+    y0, y1, y2 = x[0] - c[0], x[1] - c[1], x[2] - c[2]  # scalars: no array per node
+    e0, e1, e2 = e[0], e[1], e[2]
+    z = y0 * e0 + y1 * e1 + y2 * e2
+    w0, w1, w2 = y0 - z * e0, y1 - z * e1, y2 - z * e2
+    rho = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     dr = rho - r
     dz = abs(z) - h
     if dr <= 0.0 and dz <= 0.0:
@@ -67,8 +63,7 @@ def cylinder_feature(x, c, e, h, r, n, H):
             for k in range(3):
                 H[j, k] = 0.0
         return dz
-    for j in range(3):
-        w[j] /= rho  # the radial unit vector
+    w = (w0 / rho, w1 / rho, w2 / rho)  # the radial unit vector
     if dz <= 0.0:  # beside the curved side
         for j in range(3):
             n[j] = w[j]
@@ -80,10 +75,7 @@ def cylinder_feature(x, c, e, h, r, n, H):
     d = np.sqrt(dr * dr + dz * dz)  # off a rim: the distance to the rim circle
     for j in range(3):
         n[j] = (dr * w[j] + dz * s * e[j]) / d
-    t = np.empty(3)
-    t[0] = e[1] * w[2] - e[2] * w[1]
-    t[1] = e[2] * w[0] - e[0] * w[2]
-    t[2] = e[0] * w[1] - e[1] * w[0]
+    t = (e1 * w[2] - e2 * w[1], e2 * w[0] - e0 * w[2], e0 * w[1] - e1 * w[0])
     turn = 1.0 - r / rho
     for j in range(3):
         for k in range(3):

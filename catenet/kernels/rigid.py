@@ -351,9 +351,7 @@ def frame_contact_gradient(kind, geom, kappa, dhat, x, nodes, body, B, c0, grad)
         total += kappa * b
         if not d > 0.0:
             continue
-        g = np.empty(3)
-        for m in range(3):
-            g[m] = kappa * db * n[m]
+        g = (kappa * db * n[0], kappa * db * n[1], kappa * db * n[2])  # no array per node
         for i in range(3):
             f = A[i, 0] * g[0] + A[i, 1] * g[1] + A[i, 2] * g[2]
             grad[nodes[k], i] += f

@@ -81,38 +81,43 @@ def _fold(P, n, f):
 
 
 @njit(cache=True, error_model="numpy")
-def box_feature(x, center, axes, half, n, P):
-    """Signed distance of point x to the box (center, axes: columns are the box's unit
-    axes, half sizes); fills n (outward unit gradient, world) and P (the projection of
-    the nearest feature, world) when outside. Returns max(|q| - h) <= 0 inside."""
-    q = np.empty(3)
-    u = np.empty(3)
-    outside = np.zeros(3)
+def box_feature(x, geom, n, P):
+    """Signed distance of point x to the box ``geom`` (packed as BOX says: centre, axes
+    as columns of the row-major 3x3, half sizes); fills n (outward unit gradient, world)
+    and P (the projection of the nearest feature, world) when outside. Returns
+    max(|q| - h) <= 0 inside. Scalars only: called per node, the arrays and views it
+    made per call cost eight times the distance."""
+    c0, c1, c2 = geom[0], geom[1], geom[2]
+    rows = ((geom[3], geom[4], geom[5]), (geom[6], geom[7], geom[8]), (geom[9], geom[10], geom[11]))
+    x0, x1, x2 = x[0], x[1], x[2]
     inside = -np.inf
-    for a in range(3):
-        s = 0.0
-        for j in range(3):
-            s += axes[j, a] * (x[j] - center[j])
-        q[a] = s
-        e = abs(s) - half[a]
-        inside = max(inside, e)
-        if e > 0.0:
-            u[a] = e if s > 0.0 else -e
-            outside[a] = 1.0
-        else:
-            u[a] = 0.0
+    y0, y1, y2 = x0 - c0, x1 - c1, x2 - c2
+    u0, o0, inside = _box_axis(y0, y1, y2, geom[3], geom[6], geom[9], geom[12], inside)
+    u1, o1, inside = _box_axis(y0, y1, y2, geom[4], geom[7], geom[10], geom[13], inside)
+    u2, o2, inside = _box_axis(y0, y1, y2, geom[5], geom[8], geom[11], geom[14], inside)
     if inside <= 0.0:
         return inside
-    d = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    d = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
     for j in range(3):
-        n[j] = (axes[j, 0] * u[0] + axes[j, 1] * u[1] + axes[j, 2] * u[2]) / d
+        a0, a1, a2 = rows[j]
+        n[j] = (a0 * u0 + a1 * u1 + a2 * u2) / d
         for c in range(3):
-            P[j, c] = (
-                axes[j, 0] * outside[0] * axes[c, 0]
-                + axes[j, 1] * outside[1] * axes[c, 1]
-                + axes[j, 2] * outside[2] * axes[c, 2]
-            )
+            b0, b1, b2 = rows[c]
+            P[j, c] = a0 * o0 * b0 + a1 * o1 * b1 + a2 * o2 * b2
     return d
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _box_axis(y0, y1, y2, a0, a1, a2, half, inside):
+    """Along the box's axis (a0, a1, a2), of the point y from the centre: its signed
+    excess beyond the face (0 within the slab), 1.0 where it is beyond, and the largest
+    |q_a| - h_a so far (``inside``)."""
+    s = a0 * y0 + a1 * y1 + a2 * y2
+    e = abs(s) - half
+    inside = max(inside, e)
+    if e > 0.0:
+        return (e if s > 0.0 else -e), 1.0, inside
+    return 0.0, 0.0, inside
 
 
 @njit(cache=True, error_model="numpy")
@@ -204,28 +209,24 @@ def _misses(q, v, half, r, upto):
 
 
 @njit(cache=True, error_model="numpy")
-def capsule_feature(x, a, b, radius, n, P):
-    """Signed distance of x to the capsule (segment a-b, radius); fills n and P."""
-    w = np.empty(3)
-    ww = 0.0
-    s = 0.0
-    for j in range(3):
-        w[j] = b[j] - a[j]
-        ww += w[j] * w[j]
-        s += (x[j] - a[j]) * w[j]
-    s /= ww
+def capsule_feature(x, geom, n, P):
+    """Signed distance of x to the capsule ``geom`` (packed as CAPSULE says: ends a and
+    b, radius); fills n and P (scalars and indices only, as ``box_feature``)."""
+    w0, w1, w2 = geom[3] - geom[0], geom[4] - geom[1], geom[5] - geom[2]
+    ww = w0 * w0 + w1 * w1 + w2 * w2
+    s = ((x[0] - geom[0]) * w0 + (x[1] - geom[1]) * w1 + (x[2] - geom[2]) * w2) / ww
     middle = 0.0 < s < 1.0
     s = min(max(s, 0.0), 1.0)
-    rho = 0.0
-    for j in range(3):
-        n[j] = x[j] - a[j] - s * w[j]
-        rho += n[j] * n[j]
-    rho = np.sqrt(rho)
-    d = rho - radius
+    n[0] = x[0] - geom[0] - s * w0
+    n[1] = x[1] - geom[1] - s * w1
+    n[2] = x[2] - geom[2] - s * w2
+    rho = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    d = rho - geom[6]
     if d <= 0.0 or rho == 0.0:
         return d
     for j in range(3):
         n[j] /= rho
+    w = (w0, w1, w2)
     for j in range(3):
         for c in range(3):
             P[j, c] = (1.0 if j == c else 0.0) - (w[j] * w[c] / ww if middle else 0.0)
@@ -288,12 +289,12 @@ def shape_feature(kind, x, geom, n, P):
     """The gap of point x to the box or capsule ``geom`` (packed as BOX or CAPSULE says),
     with its unit gradient n and projection P (module docstring)."""
     if kind == BOX:
-        d = box_feature(x, geom[0:3], geom[3:12].reshape((3, 3)), geom[12:15], n, P)
+        d = box_feature(x, geom, n, P)
         g = d - geom[15]
         if geom[15] > 0.0 and g > 0.0:
             _fold(P, n, g / d)  # the rounded box: curvature over d, not g
         return g
-    return capsule_feature(x, geom[0:3], geom[3:6], geom[6], n, P)
+    return capsule_feature(x, geom, n, P)
 
 
 @njit(cache=True, error_model="numpy")

@@ -242,7 +242,11 @@ def _centre(m: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _turn(ms: np.ndarray, y: np.ndarray, v: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """sum m (y - centre) x v (3,) of DOFs of masses ms (k, 3) at y with velocities v."""
-    out: np.ndarray = np.sum(ms * np.cross(y - centre, v), axis=0)
+    r = y - centre
+    ry, rz, vy, vz = r[:, 1], r[:, 2], v[:, 1], v[:, 2]  # (``np.cross``'s set-up costs
+    rx, vx = r[:, 0], v[:, 0]  # more than its arithmetic, once per step and body)
+    turn = np.array([ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx])
+    out: np.ndarray = np.einsum("ij,ji->j", ms, turn)
     return out
 
 
