@@ -1,10 +1,12 @@
 """Contact along the whole edge: the net's edges as capsules against a solid's outline.
 
 A net edge (x_i, x_j) of contact radius r meets a solid whose surface is its outline
-(``catenet.scene.shapes``: points Y, edges between them and a radius R: a box's corners
-and edges, a capsule's axis, a sphere's centre, a mesh's vertices and edges). Each point
-is linear in a few nodes, Y = W x_b (a free body's four nodes, a ball's centre; none for
-a fixed obstacle). Two features of the pair are barriers on their gap d - R - r:
+(``catenet.scene.shapes``: points Y, edges between them and a radius R per feature: a
+box's corners and edges, a capsule's axis, a sphere's centre, a mesh's vertices and
+edges, a cylinder's core capsule and its end bands' prisms). Each point is linear in a
+few nodes, Y = W x_b (a free body's four nodes, a ball's centre; none for a fixed
+obstacle). Two features of the pair are barriers on their gap d - rf with rf = R + r
+the feature's (``rf``, per feature: the outline edges, then the lone points):
 
 - every outline edge against the net edge: the strands' mollified edge-edge barrier
   (``catenet.kernels.strands.edge_energy``: exact gradient and Hessian in every regime
@@ -101,10 +103,12 @@ def point_energy(P, reach2, r, dhat, kappa, g, H, want):
 
 
 @njit(cache=True, error_model="numpy")
-def _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, want):
-    """The barrier of net edge e and outline feature f (``_points``)."""
+def _pair(x, edges, rest, Y, F, flen, lone, e, f, rf, dhat, kappa, g, H, want):
+    """The barrier of net edge e and outline feature f (``_points``) on their gap
+    d - rf[f] (the feature's radius and the net's contact radius)."""
     P = np.empty(12)
     kind = _points(x, edges, e, Y, F, lone, f, P)
+    r = rf[f]
     reach = r + dhat
     if kind == POINT:
         return point_energy(P, reach * reach, r, dhat, kappa, g, H, want)
@@ -115,7 +119,7 @@ def _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, want):
 @njit(cache=True, error_model="numpy")
 def _feature_boxes(Y, dY, F, lone, reach, upto):
     """Each feature's box (lo, hi) (T, 3), swept along Y + t dY for t in [0, upto] and
-    grown by ``reach``."""
+    grown by its ``reach`` (T,)."""
     total = F.shape[0] + lone.shape[0]
     lo = np.empty((total, 3))
     hi = np.empty((total, 3))
@@ -125,8 +129,8 @@ def _feature_boxes(Y, dY, F, lone, reach, upto):
             q = p
         for a in range(3):
             v = (Y[p, a], Y[q, a], Y[p, a] + upto * dY[p, a], Y[q, a] + upto * dY[q, a])
-            lo[f, a] = min(min(v[0], v[1]), min(v[2], v[3])) - reach
-            hi[f, a] = max(max(v[0], v[1]), max(v[2], v[3])) + reach
+            lo[f, a] = min(min(v[0], v[1]), min(v[2], v[3])) - reach[f]
+            hi[f, a] = max(max(v[0], v[1]), max(v[2], v[3])) + reach[f]
     return lo, hi
 
 
@@ -214,10 +218,10 @@ def _grid(lo, hi):
 @njit(cache=True, error_model="numpy")
 def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
     """The pairs (net edge, feature) (K, 2) whose boxes, swept along x + t dx and
-    Y + t dY for t in [0, upto] and grown by ``reach``, overlap: every pair that can come
-    within reach in that motion (features: the outline edges, then the lone points).
-    The features' boxes are binned in a uniform grid, so each net edge tests only the
-    features of the cells its box covers."""
+    Y + t dY for t in [0, upto] and the feature's grown by its ``reach`` (T,), overlap:
+    every pair that can come within reach in that motion (features: the outline edges,
+    then the lone points). The features' boxes are binned in a uniform grid, so each net
+    edge tests only the features of the cells its box covers."""
     lo, hi = _feature_boxes(Y, dY, F, lone, reach, upto)
     total = lo.shape[0]
     out = np.empty((16, 2), dtype=np.int64)
@@ -271,7 +275,7 @@ def near_pairs(x, dx, edges, Y, dY, F, lone, reach, upto):
 
 
 @njit(cache=True, error_model="numpy")
-def segment_gradient(x, edges, rest, Y, W, bnodes, F, flen, lone, pairs, r, dhat, kappa, grad):
+def segment_gradient(x, edges, rest, Y, W, bnodes, F, flen, lone, pairs, rf, dhat, kappa, grad):
     """Adds the barrier's gradient of the ``pairs`` to grad (N, 3) (the solid's share
     through W to its nodes ``bnodes``); returns the energy."""
     g = np.empty(12)
@@ -281,7 +285,7 @@ def segment_gradient(x, edges, rest, Y, W, bnodes, F, flen, lone, pairs, r, dhat
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
         energy = _pair(
-            x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(False)
+            x, edges, rest, Y, F, flen, lone, e, f, rf, dhat, kappa, g, H, np.bool_(False)
         )
         if energy == 0.0:
             continue
@@ -302,7 +306,7 @@ def segment_gradient(x, edges, rest, Y, W, bnodes, F, flen, lone, pairs, r, dhat
 
 
 @njit(cache=True, error_model="numpy")
-def segment_hessian(x, edges, rest, Y, W, nb, F, flen, lone, pairs, r, dhat, kappa, values):
+def segment_hessian(x, edges, rest, Y, W, nb, F, flen, lone, pairs, rf, dhat, kappa, values):
     """Writes the blocks of the module docstring into ``values`` (all of them: zeros
     where no pair acts); returns how many pairs act."""
     values[:] = 0.0
@@ -318,7 +322,8 @@ def segment_hessian(x, edges, rest, Y, W, nb, F, flen, lone, pairs, r, dhat, kap
     active = 0
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
-        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(True))
+        want = np.bool_(True)
+        energy = _pair(x, edges, rest, Y, F, flen, lone, e, f, rf, dhat, kappa, g, H, want)
         if energy == 0.0 or not np.isfinite(energy):
             continue
         active += 1
@@ -355,9 +360,9 @@ def segment_hessian(x, edges, rest, Y, W, nb, F, flen, lone, pairs, r, dhat, kap
 
 
 @njit(cache=True, error_model="numpy")
-def segment_gaps(x, edges, Y, F, lone, r, out):
-    """out[k] (M,): the least gap d - r of net edge k to the outline's features (its
-    edges and lone points; inf without features)."""
+def segment_gaps(x, edges, Y, F, lone, rf, out):
+    """out[k] (M,): the least gap d - rf[f] of net edge k to the outline's features f
+    (its edges and lone points; inf without features)."""
     g = np.empty(12)
     H = np.empty((1, 1))
     P = np.empty(12)
@@ -366,26 +371,27 @@ def segment_gaps(x, edges, Y, F, lone, r, out):
         best = np.inf
         for f in range(total):
             kind = _points(x, edges, e, Y, F, lone, f, P)
-            best = min(best, np.sqrt(sqdist(P, kind, g, H, np.bool_(False))) - r)
+            best = min(best, np.sqrt(sqdist(P, kind, g, H, np.bool_(False))) - rf[f])
         out[e] = best
 
 
 @njit(cache=True, error_model="numpy")
-def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, r, t_max):
+def segment_ccd(x, dx, edges, Y, dY, F, lone, pairs, rf, t_max):
     """The first time in (0, t_max] at which a pair, moving with dx and dY, may come
-    within r (the additive CCD's conservative time); inf when none does."""
+    within its feature's rf[f] (the additive CCD's conservative time); inf when none
+    does."""
     P, dP = np.empty(12), np.empty(12)
     t = np.inf
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
         kind = _points(x, edges, e, Y, F, lone, f, P)
         _points(dx, edges, e, dY, F, lone, f, dP)
-        t = min(t, accd(P, dP, min(t, t_max), r, kind, True))
+        t = min(t, accd(P, dP, min(t, t_max), rf[f], kind, True))
     return t
 
 
 @njit(cache=True, error_model="numpy")
-def pair_forces(x, edges, rest, Y, F, flen, lone, pairs, r, dhat, kappa, force, share):
+def pair_forces(x, edges, rest, Y, F, flen, lone, pairs, rf, dhat, kappa, force, share):
     """Per pair (K,): the force of the solid on the net edge (force (K, 3): minus the
     barrier's gradient on its two nodes) and the share of it on its second node
     (share (K,): where along the edge the force acts, in [0, 1]; 0 out of reach)."""
@@ -394,7 +400,7 @@ def pair_forces(x, edges, rest, Y, F, flen, lone, pairs, r, dhat, kappa, force, 
     for k in range(pairs.shape[0]):
         e, f = pairs[k, 0], pairs[k, 1]
         energy = _pair(
-            x, edges, rest, Y, F, flen, lone, e, f, r, dhat, kappa, g, H, np.bool_(False)
+            x, edges, rest, Y, F, flen, lone, e, f, rf, dhat, kappa, g, H, np.bool_(False)
         )
         total = 0.0
         for a in range(3):

@@ -62,8 +62,9 @@ def wrap_drift(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray
     (two edges meet at each) along which the frictionless ``contact`` (N, 3) adds up to
     the largest push along the cable relative to its tension there: the tension the
     contact changes along the run, each node's push below WRAP_SHARE perhaps (a rope
-    wrapped half round a cylinder's circumscribed prisms with edge contact lost 25 % of
-    its tension, about 1 % at each corner, unwarned); None where no run is pushed."""
+    wrapped half round a polygon, a cylinder's circumscribed prisms as edge contact met
+    it before its exact core, lost 25 % of its tension, about 1 % at each corner,
+    unwarned); None where no run is pushed."""
     edges = np.asarray(net.edges)
     if not len(edges):
         return None
@@ -132,11 +133,11 @@ def wrap_warning(net: Net, terms, x, tension) -> str | None:
             f"nodes {node} to {last}: the frictionless contact along them pushes along the "
             f"cable with {100.0 * share:.3g} % of its tension in all ({along:.4g} N), a "
             "little at each node: the tension changes by as much where nothing should "
-            "change it. The cable catches on the corners of the solid's outline (a "
-            "cylinder's prisms of 32 sides with solver.edge_contact: use a capsule, whose "
-            "round side is exact, or node contact with short edges) or its edges are too "
-            "long to follow the shape; refine the cable where it wraps the obstacle "
-            "(docs/howto/contact.md)"
+            "change it. The cable catches on the corners of the solid's outline (with "
+            "solver.edge_contact, a cylinder's prisms of 32 sides within its radius of an "
+            "end: wrap it nearer the middle, or use a capsule, or node contact with short "
+            "edges) or its edges are too long to follow the shape; refine the cable where "
+            "it wraps the obstacle (docs/howto/contact.md)"
         )
     share, node, along = found
     return (

@@ -224,10 +224,10 @@ def _edges(
     """The barrier of the net's edges, capsules of radius r, and the body's outline,
     its points riding on the four nodes (``catenet.scene.touching.body_solid``'s
     weights); ConfigError where an edge starts within r of the body."""
-    from catenet.scene.segments import check_edges_clear, edge_barrier
+    from catenet.scene.segments import check_edges_clear, edge_barrier, edge_outline
 
     check_edges_clear(label, body.shape, r, dhat, net, shown)
-    points = body.shape.outline().points
+    points = edge_outline(body.shape)[0]
     weights = 0.25 + (points - frame.center) @ frame.B.T
     term = edge_barrier(body.shape, net, r, kappa, dhat, weights, frame.nodes)
     assert term is not None  # a free body is no plane

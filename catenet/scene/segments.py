@@ -56,13 +56,26 @@ def edge_barrier(
 
     if shape.kind == "plane":
         return None
-    points, lines, radius = shape.outline()
+    points, lines, radius = edge_outline(shape)
     edges = contact_edges(net) if edges is None else edges
     rest = np.linalg.norm(net.nodes[edges[:, 1]] - net.nodes[edges[:, 0]], axis=1)
     return EdgeContact(
         edges, rest, points, lines, radius, r=r, kappa=kappa, dhat=dhat,
         n_nodes=net.n_nodes, weights=weights, bnodes=bnodes,
     )  # fmt: skip
+
+
+def edge_outline(shape: Shape) -> tuple[np.ndarray, np.ndarray, float | np.ndarray]:
+    """The outline the net's edges meet: the shape's own (``Shape.outline``), but a
+    cylinder's exact core and end bands (``Cylinder.edge_outline``: on its prisms alone a
+    frictionless rope wrapped half round it lost a quarter of its tension at their
+    corners). Points, lines and their radius (one, or one per line)."""
+    from catenet.scene.shapes.cylinder import Cylinder
+
+    if isinstance(shape, Cylinder):
+        return shape.edge_outline()
+    points, lines, radius = shape.outline()
+    return points, lines, radius
 
 
 def check_edges_clear(
@@ -92,10 +105,10 @@ def check_edges_clear(
 
 def check_outline_clear(label: str, edge: EdgeContact, r: float, net: Net, shown: Shown) -> None:
     """ConfigError where an edge of the net starts within r of the solid's outline though
-    clear of the solid (``check_edges_clear``): a cylinder's circumscribed prisms stand up
-    to 0.5 % of its radius beyond its round side, and a rope given 2.5 mm off a cylinder
-    with a 2 mm contact radius started 1.98 mm from a prism's corner, where its barrier is
-    infinite: the run stagnated, blaming Newton."""
+    clear of the solid (``check_edges_clear``): a cylinder's circumscribed prisms (its end
+    bands', ``edge_outline``) stand up to 0.5 % of its radius beyond its round side, and
+    a rope given 2.5 mm off a cylinder with a 2 mm contact radius started 1.98 mm from a
+    prism's corner, where its barrier is infinite: the run stagnated, blaming Newton."""
     gaps = edge.gap(net.nodes)
     if not gaps.size or gaps.min() > 0.0:
         return
@@ -104,7 +117,8 @@ def check_outline_clear(label: str, edge: EdgeContact, r: float, net: Net, shown
     raise ConfigError(
         f"{label}: the edge {i}-{j} from {shown(net.nodes[i].tolist())} to "
         f"{shown(net.nodes[j].tolist())} passes within the contact radius {r:.3g} m of its "
-        "outline at the start (the edges meet a cylinder's circumscribed prisms of 32 "
-        "sides, up to 0.5 % of its radius beyond its round side: docs/guide/edge-contact.md): "
-        "an obstacle must not overlap the initial net; move it or the net"
+        "outline at the start (near a cylinder's ends the edges meet circumscribed prisms "
+        "of 32 sides, up to 0.5 % of its radius beyond its round side: "
+        "docs/guide/edge-contact.md): an obstacle must not overlap the initial net; move "
+        "it or the net"
     )

@@ -14,15 +14,18 @@ contact (Li et al. 2020):
   net edge (the point-segment distance minus R + r).
 
 Guarantee: no point of any edge comes within r of the solid. A segment that moves from
-outside a polyhedron (box, mesh; a cylinder's circumscribed prisms) into it first
-touches it with an end (the node barrier) or across an edge of the polyhedron (the
-edge barrier): a segment parallel to a face touches it along its length, so at its end
-or at the face's edges. A sphere's or capsule's distance to a segment is the distance of
-the centre or the axis to it, minus R. Each barrier is infinite at contact; the step
-cap (``max_step``) is the node barrier's exact first contact and, for the edges, the
-strands' additive continuous collision detection of every pair within reach of the
-step's motion (a body's outline points move linearly with its four nodes), so no step
-carries a segment through a thin shape or over a corner.
+outside a polyhedron (box, mesh) into it first touches it with an end (the node barrier)
+or across an edge of the polyhedron (the edge barrier): a segment parallel to a face
+touches it along its length, so at its end or at the face's edges. A sphere's or
+capsule's distance to a segment is the distance of the centre or the axis to it, minus
+R. A cylinder is the union of its core capsule (exact) and its two end bands, each
+within a circumscribed prism (``catenet.scene.shapes.cylinder.Cylinder.edge_outline``;
+a drum no longer than its diameter: one prism), each feature with its own radius.
+Each barrier is infinite at contact; the step cap (``max_step``) is the node barrier's
+exact first contact and, for the edges, the strands' additive continuous collision
+detection of every pair within reach of the step's motion (a body's outline points move
+linearly with its four nodes), so no step carries a segment through a thin shape or over
+a corner.
 
 Where the closest points of two edges are not unique (an edge parallel to a box's
 edge), the edge-edge barrier fades out below about 1.8 degrees and the end point-edge
@@ -74,7 +77,9 @@ class EdgeContact(Term):
     and a solid's outline: ``points`` (V, 3) at t = 0 with ``weights`` (V, nb) on its
     nodes ``bnodes`` (nb: 0 for a fixed obstacle, 1 for a ball, 4 for a free body;
     points = weights @ x[bnodes]), outline ``lines`` (E, 2) and radius ``R`` (module
-    docstring); stiffness ``kappa`` [N/m], activation distance ``dhat`` [m]."""
+    docstring): one for every feature, or one per feature (the lines, then the points on
+    no line in their order: a cylinder's core capsule beside its prisms' edges);
+    stiffness ``kappa`` [N/m], activation distance ``dhat`` [m]."""
 
     bounds_step = True
     barrier = True  # its stiffness in the round-off floor (Term.stiff_roundoff)
@@ -82,7 +87,7 @@ class EdgeContact(Term):
     convex = False
     role = "internal"
 
-    def __init__(self, edges, rest, points, lines, R: float, *, r: float, kappa: float,
+    def __init__(self, edges, rest, points, lines, R, *, r: float, kappa: float,
                  dhat: float, n_nodes: int, weights=None, bnodes=None):  # fmt: skip
         if not (math.isfinite(kappa) and kappa > 0 and math.isfinite(dhat) and dhat > 0):
             raise ValueError(f"edge_contact: kappa = {kappa!r}, dhat = {dhat!r}: must be > 0")
@@ -102,8 +107,10 @@ class EdgeContact(Term):
             np.zeros((len(self.points), 0)) if weights is None else weights, dtype=np.float64
         ).reshape(len(self.points), nb)
         self.kappa, self.dhat = float(kappa), float(dhat)
-        self.r = float(r) + float(R)  # the gap is d - R - r
-        self.radius, self.R = float(r), float(R)
+        n_features = len(self.lines) + len(self.lone)
+        self.R = np.broadcast_to(np.asarray(R, dtype=np.float64), (n_features,)).copy()
+        self.radius = float(r)
+        self.rf = np.ascontiguousarray(self.R + self.radius)  # the gap is d - R - r
         self.n_nodes = int(n_nodes)
         self.flen = np.linalg.norm(
             self.points[self.lines[:, 1]] - self.points[self.lines[:, 0]], axis=1
@@ -131,7 +138,7 @@ class EdgeContact(Term):
         return np.ascontiguousarray(self.weights @ np.asarray(dx)[self.bnodes])
 
     def _pairs(self, x, Y) -> np.ndarray:
-        reach = self.r + self.dhat
+        reach = self.rf + self.dhat
         return near_pairs(x, self._zero, self.edges, Y, self._dY, self.lines, self.lone, reach, 0.0)
 
     def gap(self, x) -> np.ndarray:
@@ -139,7 +146,7 @@ class EdgeContact(Term):
         radii (the node barrier holds its ends against the faces)."""
         out = np.empty(len(self.edges))
         x = np.ascontiguousarray(x, dtype=np.float64)
-        segment_gaps(x, self.edges, self.place(x), self.lines, self.lone, self.r, out)
+        segment_gaps(x, self.edges, self.place(x), self.lines, self.lone, self.rf, out)
         return out
 
     # ---- energy -----------------------------------------------------------------------
@@ -149,7 +156,7 @@ class EdgeContact(Term):
 
     def gradient(self, x, grad) -> float:
         Y, pairs, rest = self._args(x)
-        args = (self.lines, self.flen, self.lone, pairs, self.r, self.dhat, self.kappa, grad)
+        args = (self.lines, self.flen, self.lone, pairs, self.rf, self.dhat, self.kappa, grad)
         return segment_gradient(x, self.edges, rest, Y, self.weights, self.bnodes, *args)
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
@@ -170,7 +177,7 @@ class EdgeContact(Term):
     def hessian(self, x, values) -> bool:
         Y, pairs, rest = self._args(x)
         nb = len(self.bnodes)
-        args = (self.lines, self.flen, self.lone, pairs, self.r, self.dhat, self.kappa, values)
+        args = (self.lines, self.flen, self.lone, pairs, self.rf, self.dhat, self.kappa, values)
         return segment_hessian(x, self.edges, rest, Y, self.weights, nb, *args) > 0
 
     # ---- the step cap -----------------------------------------------------------------
@@ -180,11 +187,11 @@ class EdgeContact(Term):
     def max_step_within(self, x, dx, upto: float) -> float:
         upto = min(float(upto), T_FAR)
         Y, dY = self.place(x), self._motion(dx)
-        args = (self.edges, Y, dY, self.lines, self.lone, self.r, upto)
+        args = (self.edges, Y, dY, self.lines, self.lone, self.rf, upto)
         pairs = near_pairs(x, dx, *args)
         if not len(pairs):
             return math.inf
-        return segment_ccd(x, dx, self.edges, Y, dY, self.lines, self.lone, pairs, self.r, upto)
+        return segment_ccd(x, dx, self.edges, Y, dY, self.lines, self.lone, pairs, self.rf, upto)
 
 
 def pushes(contact: EdgeContact, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -196,7 +203,7 @@ def pushes(contact: EdgeContact, x) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     pairs = c._pairs(x, Y)
     force = np.zeros((len(pairs), 3))
     share = np.zeros(len(pairs))
-    args = (c.lines, c.flen, c.lone, pairs, c.r, c.dhat, c.kappa, force, share)
+    args = (c.lines, c.flen, c.lone, pairs, c.rf, c.dhat, c.kappa, force, share)
     pair_forces(x, c.edges, c.rest, Y, *args)
     size = np.linalg.norm(force, axis=1)
     on = size > 0.0

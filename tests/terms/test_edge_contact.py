@@ -1,8 +1,9 @@
 """Contact along the whole edge (solver.edge_contact, ``catenet.terms.segments``): finite
 differences of the edge barrier against every outline (a box's edges in each regime of
 the segment distance, nearly parallel ones in the mollifier's, a sphere's centre, a
-capsule's axis, a cylinder's prisms, a mesh's edges; riding on a ball's node and on a
-free body's four nodes), the step cap across a box's edge and a thin plate, and the
+capsule's axis, a cylinder's core capsule and its end bands' prisms (a drum's prisms
+whole), a mesh's edges; riding on a ball's node and on a free body's four nodes), the
+step cap across a box's edge and a thin plate, and the
 closed form of a taut two-edge cable drawn over a box's edge: the first edge rests on
 the edge in its middle, straight and tangent to the capsule of the contact radius
 about the box's edge, its node where the tensions balance by hand; friction along the
@@ -21,6 +22,7 @@ from scipy.optimize import brentq
 import catenet
 from catenet.model.measures import tension
 from catenet.model.net import Loads, Net
+from catenet.scene.segments import edge_outline
 from catenet.scene.shapes.box import Box
 from catenet.scene.shapes.capsule import Capsule
 from catenet.scene.shapes.cylinder import Cylinder
@@ -37,7 +39,7 @@ DHAT = 0.05
 
 
 def _term(shape, x, **kw) -> EdgeContact:
-    points, lines, radius = shape.outline()
+    points, lines, radius = edge_outline(shape)
     rest = [float(np.linalg.norm(x[1] - x[0]))]
     args = dict(r=R, kappa=10.0, dhat=DHAT, n_nodes=len(x))
     return EdgeContact([[0, 1]], rest, points, lines, radius, **(args | kw))
@@ -45,6 +47,7 @@ def _term(shape, x, **kw) -> EdgeContact:
 
 BOX = Box([0.0, 0.0, 0.0], [0.3, 0.2, 0.1])
 CAPSULE = Capsule([-0.3, 0, 0], [0.3, 0, 0], 0.1)
+CYLINDER = Cylinder([0, 0, -0.2], [0, 0, 0.2], 0.1)  # its core capsule from z = -0.1 to 0.1
 CASES = {
     # box: across its top edge (both parameters free), past a corner (one clamped),
     # nearly parallel to its top edge (the mollifier), ends clamped against a corner
@@ -56,7 +59,9 @@ CASES = {
     "sphere, end": (Sphere([0, 0, 0], 0.3), [[0.05, 0.0, 0.33], [0.4, 0.1, 0.5]]),
     "capsule": (CAPSULE, [[-0.1, -0.1, 0.115], [0.1, 0.12, 0.12]]),
     "capsule parallel": (CAPSULE, [[-0.1, 0, 0.13], [0.1, 0.0005, 0.131]]),
-    "cylinder": (Cylinder([0, 0, -0.2], [0, 0, 0.2], 0.1), [[0.12, -0.1, 0.2], [0.1, 0.1, 0.25]]),
+    "cylinder, end band": (CYLINDER, [[0.12, -0.1, 0.2], [0.1, 0.1, 0.25]]),
+    "cylinder, round side": (CYLINDER, [[0.115, -0.1, 0.0], [0.112, 0.1, 0.02]]),
+    "drum": (Cylinder([0, 0, -0.05], [0, 0, 0.05], 0.1), [[0.115, -0.1, 0.0], [0.112, 0.1, 0.02]]),
     "cube mesh": (Mesh(CUBE_V, CUBE_T, np.zeros(3)), [[-0.3, 0.3, 1.03], [0.3, 0.6, 1.035]]),
 }  # fmt: skip
 

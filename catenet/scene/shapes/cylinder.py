@@ -129,6 +129,34 @@ class Cylinder(AboutSegment):
         edges = np.concatenate([*rims, np.stack([k, k + OUTLINE], axis=1)])
         return Outline(points, edges, 0.0)
 
+    def edge_outline(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What the net's edges meet (``solver.edge_contact``): points, lines and a radius
+        per line. Longer than its diameter: its core capsule, the axis shortened by the
+        radius R at both ends and grown by R (its round side exact over the middle: a rope
+        wrapped round it slides on it as on a capsule), and the circumscribed prisms of
+        its two end bands, each R long (their rims, the rings where the core reaches its
+        full radius, the generators between them), which hold what the core's round ends
+        leave of the cylinder. Else (a drum no longer than its diameter) the
+        circumscribed prisms whole (``outline``)."""
+        R = self.radius
+        if self.length <= 2.0 * R:
+            points, lines, _ = self.outline()
+            return points, lines, np.zeros(len(lines))
+        x, y, e = axis_frame(self.start, self.end).T
+        u = 2 * np.pi * (np.arange(OUTLINE) + 0.5) / OUTLINE
+        ring = (np.cos(u)[:, None] * x + np.sin(u)[:, None] * y) * (R / math.cos(math.pi / OUTLINE))
+        core = np.array([self.start + R * e, self.end - R * e])
+        levels = [self.start, core[0], core[1], self.end]
+        points = np.concatenate([*(level + ring for level in levels), core])
+        k = np.arange(OUTLINE)
+        rims = [np.stack([k, (k + 1) % OUTLINE], axis=1) + j * OUTLINE for j in range(4)]
+        sides = [np.stack([k, k + OUTLINE], axis=1) + j * OUTLINE for j in (0, 2)]
+        axis = np.array([[4 * OUTLINE, 4 * OUTLINE + 1]])
+        lines = np.concatenate([*rims, *sides, axis]).astype(np.int64)
+        radii = np.zeros(len(lines))
+        radii[-1] = R
+        return points, lines, radii
+
     def mass_properties(self) -> MassProperties:
         """Axes (x', y', axis): inertia r^2/4 + L^2/12 across, r^2/2 about the axis."""
         r, L = self.radius, self.length
