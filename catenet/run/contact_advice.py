@@ -7,16 +7,22 @@ along the surface's normal there, which is not square to the cable: the edges on
 side of the node carry different tensions in the discrete equilibrium. A cord of 25 mm
 edges dragged round a box blade's 3 mm-rounded corners read 8.9 % above the hand tension
 of its path, "converged"; 3 mm edges 3.9 %; a round blade of 10 mm within 0.8 %. The
-runner warns above WRAP_SHARE, naming the node and how much.
+runner warns above WRAP_SHARE, naming the node and how much. And a friction coefficient
+no surface pair has (``unlikely_friction``) is warned before the run.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from catenet.model.net import Net
 from catenet.model.peaks import TAUT
 from catenet.solver.events import contact_terms
+
+if TYPE_CHECKING:
+    from catenet.case.parse import Case
 
 #: A frictionless contact force along the cable beyond this share of its tension is warned.
 WRAP_SHARE = 0.02
@@ -147,3 +153,23 @@ def wrap_warning(net: Net, terms, x, tension) -> str | None:
         "tensions on either side differ by about as much; refine the cable where it "
         "wraps the obstacle (docs/howto/contact.md)"
     )
+
+
+#: Coulomb coefficients above this are no surface pair's (rope on steel 0.1-0.3, rubber
+#: on concrete up to about 1): a typo or a percentage, most likely.
+FRICTION_HIGH = 2.0
+
+
+def unlikely_friction(case: Case) -> list[str]:
+    """A message per obstacle whose ``friction`` exceeds FRICTION_HIGH (``friction = 50``
+    for 0.5 was taken as given: the contact sticks until the pull is 50 times its normal
+    force)."""
+    return [
+        f"obstacle[{k}].friction = {obs.friction!r}: Coulomb coefficients of real surfaces "
+        f"lie below about {FRICTION_HIGH:g} (a rope on steel 0.1-0.3, rubber on concrete "
+        f"up to about 1); with {obs.friction!r} the contact sticks until the pull along it "
+        f"is {obs.friction!r} times its normal force. A percentage or a typo? (0.5 is "
+        "written friction = 0.5)"
+        for k, obs in enumerate(case.obstacles)
+        if getattr(obs, "friction", 0.0) > FRICTION_HIGH
+    ]

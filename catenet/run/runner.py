@@ -90,7 +90,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
     earns before it runs; ConfigError for the first problem. Arguments as ``run_case``'s."""
     from catenet.case import build
     from catenet.output import check_output_path
-    from catenet.run import advice, history_advice
+    from catenet.run import advice, contact_advice, history_advice
     from catenet.run.cases import pick
     from catenet.solver import path as sv
     from catenet.solver.linear import resolve_backend
@@ -120,6 +120,7 @@ def plan(case: Case, out=None, *, restart=None, scene=None, load_case=None) -> P
         raise ConfigError(hopeless)
     notes = advice.ignored_solver_keys(solver) + advice.ignored_histories(case)
     notes += advice.ignored_contact_radius(case) + history_advice.stepped_over(case)
+    notes += contact_advice.unlikely_friction(case)
     for message in notes + advice.between_nodes(scene):
         log.warning("%s", message)
     trajectory = None

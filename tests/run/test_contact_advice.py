@@ -161,3 +161,32 @@ def test_pushes_along_a_cable_that_add_up_are_warned_where_each_is_small():
     alternating = pushes * np.where(np.arange(16) % 2, 1.0, -1.0)
     assert wrap_drift(*_arc(alternating))[0] <= 0.015 + 1e-12
     assert wrap_drift(*_arc(np.zeros(16)))[0] < 1e-12
+
+
+def test_a_friction_coefficient_no_surface_has_is_warned(write_case, tmp_path):
+    """``friction = 50`` (for 0.5) was taken as given, in silence: the rope stuck until
+    the pull was 50 times its normal force. Above FRICTION_HIGH the run warns, naming the
+    key; 0.5 is not warned."""
+    text = """
+title = "a rope on a rough plate"
+[geometry]
+kind = "cable"
+start = [-1.0, 0.0, 0.1]
+end = [1.0, 0.0, 0.1]
+nodes = 11
+[material]
+EA = 1e5
+prestress = 10.0
+[load]
+point = [{ node = "midpoint", force = [0.0, 0.0, -50.0] }]
+[[obstacle]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+friction = FRICTION
+"""
+    for mu, warned in (("50.0", True), ("0.5", False)):
+        path = write_case(text.replace("FRICTION", mu))
+        res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+        assert res.exit_code == 0, res.output
+        said = f"obstacle[0].friction = {mu}: Coulomb coefficients of real surfaces" in res.output
+        assert said is warned, res.output
