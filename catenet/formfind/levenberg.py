@@ -18,11 +18,12 @@ SciPy's trust region methods keep such steps on their trust radius, and so conve
 linearly there. mu starts at ``MU_FIRST`` of the square of J's Frobenius norm (or of its
 largest singular value, by power iterations, for the sparse form), grows by 4 after a
 step that does not lower f and falls by 3 after one that does (never below ``MU_MIN`` of
-that scale). No variable moves by more than ``MAX_STEP`` in one step (log q: a factor
-e); the step is clipped to the bounds. After a refused trial (until a step is taken at
-its first trial) a whole Jacobian's step gets its geodesic acceleration (``_accelerated``:
-one more residual along the step), which bends Gauss-Newton's steps along a narrow
-curved valley of the misses instead of out of it.
+that scale), each time relative to the scale of the J the step is taken with. No
+variable moves by more than ``MAX_STEP`` in one step (log q: a factor e); the step is
+clipped to the bounds. After a refused trial (until a step is taken at its first trial)
+a whole Jacobian's step gets its geodesic acceleration (``_accelerated``: one more
+residual along the step), which bends Gauss-Newton's steps along a narrow curved valley
+of the misses instead of out of it.
 
 It ends when ``residual`` raises (the caller's test: every target met), when the
 evaluations reach ``budget``, or when no step lowers f by more than ``FTOL`` of it (or
@@ -64,7 +65,7 @@ def levenberg(
     lo, hi = bounds
     r = residual(s)
     f = 0.5 * float(r @ r)
-    evaluations, mu, scale = 1, 0.0, 0.0
+    evaluations, rel, top = 1, MU_FIRST, None
     first = float(np.linalg.norm(r))
     eta = ETA_PATH
     refused = False  # the last iteration's first trial was refused (a valley)
@@ -75,9 +76,17 @@ def levenberg(
         held = ((s <= lo) & (g > 0)) | ((s >= hi) & (g < 0))
         if not np.any(g[~held]):
             return Ended("stationary", s, evaluations)
-        if not scale:  # (once: J's largest singular value squared)
-            scale = (float(np.linalg.norm(jac)) if dense else _largest(jac)) ** 2 or 1.0
-            mu = MU_FIRST * scale
+        # mu relative to this J's size (its Frobenius norm, or its largest singular value
+        # by power iterations from the last one's vector), squared: a scale kept from the
+        # first J held a search from a start far off (a weighing cable's depth a
+        # thousand times its target) to steps of gradient descent as J shrank a
+        # hundred-thousandfold
+        if dense:
+            scale = float(np.linalg.norm(jac)) ** 2 or 1.0
+        else:
+            size, top = _largest(jac, top)
+            scale = size**2 or 1.0
+        mu = rel * scale
         tries = 0
         while True:
             if evaluations >= budget:
@@ -101,6 +110,7 @@ def levenberg(
             mu *= 4.0
             if mu > MU_MAX * scale:
                 return Ended("stationary", s, evaluations)
+        rel = mu / scale
         done = f - f_new <= FTOL * f
         eta = min(
             max(ETA_PATH * first / max(float(np.linalg.norm(r_new)), 1e-300), ETA_MIN), ETA_MAX
@@ -109,7 +119,7 @@ def levenberg(
         refused = tries > 1  # (steps taken at once: no valley, no acceleration)
         if done:
             return Ended("stationary", s, evaluations)
-        mu = max(mu / 3.0, MU_MIN * scale)
+        rel = max(rel / 3.0, MU_MIN)
 
 
 def _step(
@@ -164,16 +174,23 @@ def _accelerated(residual, jac, s, r, v, mu: float, keep, bounds) -> tuple[np.nd
     return v + 0.5 * a, 1
 
 
-def _largest(jac, count: int = 8) -> float:
-    """J's largest singular value, by a few power iterations on J^T J."""
-    v = np.random.default_rng(0).standard_normal(jac.shape[1])
+def _largest(jac, start: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """J's largest singular value, by power iterations on J^T J: 8 from a random vector,
+    2 from ``start`` (the last J's top vector: a step changes J little); and the vector."""
+    fresh = start is None or len(start) != jac.shape[1]
+    count = 8 if fresh else 2
+    v = (
+        np.random.default_rng(0).standard_normal(jac.shape[1])
+        if start is None or fresh
+        else start.copy()
+    )
     top = 0.0
     for _ in range(count):
-        v /= np.linalg.norm(v)
+        v /= np.linalg.norm(v) or 1.0
         w = jac.rmatvec(jac.matvec(v))
         top = float(np.sqrt(np.linalg.norm(w)))
         v = w
-    return top
+    return top, v / (np.linalg.norm(v) or 1.0)
 
 
 __all__ = ["Ended", "levenberg"]
