@@ -241,6 +241,8 @@ class Checker:
         geometry kind (its config class; None when the geometry is broken)."""
         names = kind.node_names if kind is not None else ()
         alts = f" or one of {', '.join(map(repr, names))}" if names else ""
+        if kind is not None and kind.node_sets:  # (a set's name: checked later)
+            alts += " or a node set's name"
         if isinstance(v, str):
             if kind is None:  # the geometry is broken: names cannot be checked
                 return BAD

@@ -286,7 +286,8 @@ def _consistent(ck: Checker, tgt: TargetConfig, raw: dict, path: str) -> bool:
         both = tgt.node is not None
         ck.add(
             f"{path}: {'gives both node and cable' if both else 'gives neither node nor cable'}"
-            ": give node (with x, y, z or point) or cable (with tension)"
+            ": give node (with x, y, z, point or surface), cable (with tension or length) "
+            "or support (with reaction), or surface alone (every free node)"
         )
         return False
     if tgt.node is not None:

@@ -216,13 +216,12 @@ def resolve_goals(targets, scene, size: float, tol: float) -> Goals:
             continue
         if t.cable is not None and t.length is not None:
             lo, hi = t.length if isinstance(t.length, tuple) else (t.length, t.length)
-            edge = np.asarray(scene.cables.edge) if scene.cables is not None else None
-            for c in _cables(k, t, scene):
-                chains.append((c, np.flatnonzero(edge == c)))
+            for c, edges in _cable_groups(k, t, scene):
+                chains.append((c, edges))
                 rows.add(k, t, -1, -1, -1, [lo], [hi], hi, chain=len(chains) - 1)
             continue
         if t.cable is not None:
-            edges = _cable_edges(k, t, scene)
+            edges = np.concatenate([e for _, e in _cable_groups(k, t, scene)])
             lo, hi = t.tension if isinstance(t.tension, tuple) else (t.tension, t.tension)
             n = len(edges)
             rows.add(k, t, -1, -1, edges, np.full(n, lo), np.full(n, hi), hi)
@@ -355,27 +354,28 @@ def _per_node(k: int, what: str, t, value, nodes: np.ndarray) -> np.ndarray:
     return v
 
 
-def _cable_edges(k: int, t, scene) -> np.ndarray:
-    """The edges of the cables a target's ``cable`` (a name or pattern) matches."""
-    return np.flatnonzero(np.isin(np.asarray(scene.cables.edge), _cables(k, t, scene)))
-
-
-def _cables(k: int, t, scene) -> list[int]:
-    """The indices of the cables a target's ``cable`` (a name or pattern) matches;
-    ConfigError where there are none."""
+def _cable_groups(k: int, t, scene) -> list[tuple[int, np.ndarray]]:
+    """The cables a target's ``cable`` (a name or pattern) matches: (index, its edges)
+    each. A net without named cables (a ``kind = "cable"`` case, a graph without
+    ``[[geometry.cable]]``) is one cable, all its edges, which ``cable = "*"`` names;
+    ConfigError for any other name there, or a pattern that matches no cable."""
     path = f"target[{k}].cable"
     cables = scene.cables
     if cables is None or not cables.names:
+        if t.cable == "*":
+            return [(0, np.arange(scene.net.n_edges))]
         raise ConfigError(
             f"{path} = {t.cable!r}: this net has no named cables (a graph's "
-            "[[geometry.cable]] names them)"
+            "[[geometry.cable]] names them); a net without them is one cable, all its "
+            'edges: cable = "*"'
         )
     hits = [c for c, n in enumerate(cables.names) if fnmatch.fnmatchcase(n, t.cable)]
     if not hits:
         raise ConfigError(
             f"{path} = {t.cable!r}: matches no cable (the cables: {', '.join(cables.names)})"
         )
-    return hits
+    edge = np.asarray(cables.edge)
+    return [(c, np.flatnonzero(edge == c)) for c in hits]
 
 
 __all__ = ["Goals", "resolve_goals"]
