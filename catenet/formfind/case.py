@@ -282,11 +282,29 @@ def _header(case: Case, found: FormFound, out: Path) -> str:
 
         lines = relabel(report.header_lines(found), case.units or "SI")
         targets = "".join(f"# {line}\n" for line in lines)
+    claim = (
+        "# The last iterate of a target search that found no answer (below: `catenet "
+        "formfind` says why): no design, kept to show where the search went."
+        if no_answer(found)
+        else "# `catenet run` on this case, without further load, reproduces the shape "
+        "and the forces."
+    )
     return (
         f"# Form found by `catenet formfind {src}` (method = {found.method!r}; result file "
-        f"{out}).\n# `catenet run` on this case, without further load, reproduces the shape "
-        f"and the forces.\n{targets}\n"
+        f"{out}).\n{claim}\n{targets}\n"
     )
+
+
+def no_answer(found: FormFound) -> bool:
+    """Whether a target search ended in no answer: out of iterations or run away with
+    targets unmet, or at a state no cable reaches (strains beyond its law's range)."""
+    from catenet.formfind.design import RAN_AWAY
+
+    d = found.design
+    if d is None:
+        return False
+    ran = not d.all_met and d.message in (RAN_AWAY, "formfind.max_iter reached")
+    return ran or bool(d.extra.get("implausible"))
 
 
 def _result(found: FormFound, scene, wall_time: float):

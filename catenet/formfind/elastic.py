@@ -293,12 +293,21 @@ class _Met(Exception):
     """Every target met."""
 
 
+class _RanAway(Exception):
+    """The search came closer to the targets at a state no cable reaches."""
+
+
+#: How a search ended that ran to strains no cable has (``_implausible`` says which)
+RAN_AWAY = "ran to strains no cable has"
+
+
 def _search(eq: _Equilibria, goals, max_iter: int):
     """(s, how it ended, gradients) of Levenberg-Marquardt within the bounds."""
     from catenet.formfind.design import COMPROMISE
     from catenet.formfind.levenberg import levenberg
 
     gradients = [0]
+    least = [np.inf]  # the least 1/2 |r|^2 so far
 
     def residual(s):
         try:
@@ -307,7 +316,13 @@ def _search(eq: _Equilibria, goals, max_iter: int):
             return np.full(goals.rows, 1e150)  # no equilibrium there: the step is refused
         if goals.met(a).all():
             raise _Met
-        return goals.w * goals.miss(a)
+        r = goals.w * goals.miss(a)
+        f = 0.5 * float(r @ r)
+        if f < least[0]:
+            least[0] = f
+            if _implausible(*eq(s)[::2]):  # closer to the targets only by strains no
+                raise _RanAway  # cable has: it runs away (a sag above the supports)
+        return r
 
     def jacobian(s):
         gradients[0] += 1
@@ -318,6 +333,8 @@ def _search(eq: _Equilibria, goals, max_iter: int):
         ended = levenberg(residual, jacobian, s, eq.variables.bounds, max_iter)
     except _Met:
         return np.frombuffer(eq.key or s.tobytes()).copy(), "met", gradients[0]
+    except _RanAway:  # (the implausible state, reported as such: ``_found``)
+        return np.frombuffer(eq.key or s.tobytes()).copy(), RAN_AWAY, gradients[0]
     if ended.why == "max_iter":
         return ended.s, "formfind.max_iter reached", gradients[0]
     return ended.s, COMPROMISE, gradients[0]
