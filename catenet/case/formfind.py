@@ -179,7 +179,8 @@ class FormfindConfig(Declared):
         write="given",
         shown='"edges" (elastic: "cables")',
         doc="[[target]]: the design variables: a force density (elastic: a rest-length "
-        "factor) per edge, or one per cable (and per own edge of a graph); elastic: "
+        "factor) per edge, or one per cable (and per own edge of a graph; a net without "
+        "named cables is one cable); elastic: "
         '"prestress", the prestress of each cable that has one; "supports": only the '
         "offsets of [[formfind.support]] (the force densities or rest lengths kept)",
     )

@@ -382,16 +382,14 @@ def _default_start(shape) -> float:
 
 def _groups(scene, vary: str, prefix: str) -> np.ndarray:
     """The design variable of each edge: its own (``edges``), or its cable's (``cables``:
-    a graph's own edges keep one each)."""
+    a graph's own edges keep one each; a net without named cables is one cable, as in
+    the elastic method: a ``kind = "cable"`` stay's one force density)."""
     m = scene.net.n_edges
     if vary == "edges":
         return np.arange(m)
     cables = scene.cables
     if cables is None or not cables.names:
-        raise ConfigError(
-            f"{prefix}vary = 'cables': this net has no named cables (a graph's "
-            "[[geometry.cable]]): vary = 'edges'"
-        )
+        return np.zeros(m, dtype=np.int64)
     edge = np.asarray(cables.edge)
     n = len(cables.names)
     own = edge < 0

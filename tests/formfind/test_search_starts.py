@@ -6,7 +6,9 @@
   damping kept from the first, steep Jacobian) and ended at max_iter, exit 1, the mid
   node kilometres down; it meets the target now at the hand's force density;
 - a target on the tension of a ``kind = "cable"`` stay crashed (an internal error):
-  ``cable = "*"`` names its one cable, another name is refused naming the key;
+  ``cable = "*"`` names its one cable, another name is refused naming the key; its one
+  force density is ``vary = "cables"`` (a force density per edge ran its inner edges to
+  nothing, a kink of 1e-7 m edges);
 - an elastic stay asked to hang above its supports ran its rest lengths to nothing and
   ended at max_iter (the written case said it reproduced a design): it stops where the
   strains leave any cable's, exit 1, and the written case says it is no design."""
@@ -100,20 +102,28 @@ def test_a_weighing_stay_found_from_a_force_density_far_too_small(tmp_path, unit
     assert np.allclose(q, hand_force_density(1.8), rtol=1e-6)
 
 
-def test_a_tension_target_on_a_single_cable_case(tmp_path):
+@pytest.mark.parametrize(
+    "formfind",
+    [{"method": "elastic"}, {"force_density": 1000.0, "vary": "cables"}],
+    ids=["elastic", "force densities"],
+)
+def test_a_tension_target_on_a_single_cable_case(tmp_path, formfind):
     """A guy given as ``kind = "cable"`` with every edge's tension asked within [21, 24]
-    kN: ``cable = "*"`` is its one cable (met, elastic); a name is refused, exit 2."""
+    kN: ``cable = "*"`` is its one cable, met by its one rest-length factor or its one
+    force density (``vary = "cables"``, refused before on a net without named cables);
+    a name is refused, exit 2."""
     case = {
         "title": "a guy's tension",
         "geometry": {"kind": "cable", "start": [0, 0, 0], "end": [30, 0, 40], "nodes": 11},
         "material": {"EA": 5e7, "density": 7850.0, "radius": 0.015},
         "load": {"gravity": [0, 0, -9.81]},
-        "formfind": {"method": "elastic"},
+        "formfind": formfind,
         "target": [{"cable": "*", "tension": [21000.0, 24000.0]}],
     }
     r, _ = run(tmp_path, case)
     assert r.exit_code == 0, r.output
     assert "target[0]    cable '*' tension" in r.output and "met)" in r.output
+    assert "1 rest-length factors" in r.output or "1 force densities" in r.output
     case["target"][0]["cable"] = "guy"
     r, _ = run(tmp_path, case)
     assert r.exit_code == 2, r.output
