@@ -320,8 +320,9 @@ def _search(eq: _Equilibria, goals, max_iter: int):
         f = 0.5 * float(r @ r)
         if f < least[0]:
             least[0] = f
-            if _implausible(*eq(s)[::2]):  # closer to the targets only by strains no
-                raise _RanAway  # cable has: it runs away (a sag above the supports)
+            net, _, x = eq(s)
+            if _implausible(net, x):  # closer to the targets only by strains no cable
+                raise _RanAway  # has: it runs away (a sag above the supports)
         return r
 
     def jacobian(s):

@@ -177,13 +177,10 @@ def _accelerated(residual, jac, s, r, v, mu: float, keep, bounds) -> tuple[np.nd
 def _largest(jac, start: np.ndarray | None = None) -> tuple[float, np.ndarray]:
     """J's largest singular value, by power iterations on J^T J: 8 from a random vector,
     2 from ``start`` (the last J's top vector: a step changes J little); and the vector."""
-    fresh = start is None or len(start) != jac.shape[1]
-    count = 8 if fresh else 2
-    v = (
-        np.random.default_rng(0).standard_normal(jac.shape[1])
-        if start is None or fresh
-        else start.copy()
-    )
+    if start is None or len(start) != jac.shape[1]:
+        count, v = 8, np.random.default_rng(0).standard_normal(jac.shape[1])
+    else:
+        count, v = 2, start.copy()
     top = 0.0
     for _ in range(count):
         v /= np.linalg.norm(v) or 1.0
