@@ -68,9 +68,12 @@ def build(case: Case) -> Scene:
     """The net, loads, probe node and length scale of a case."""
     try:
         return _build(case)
-    except ConfigError as exc:
+    except ConfigError as exc:  # (its lengths and forces named in the case's units)
+        from catenet.model.units import relabel
+
         key = "supports.fixed" if case.supports.fixed is not None else "geometry.fixed"
-        raise ConfigError([with_prefix(p, key) for p in exc.problems]) from None
+        problems = [with_prefix(p, key) for p in exc.problems]
+        raise ConfigError(relabel(problems, case.units or "SI")) from None
 
 
 def _build(case: Case) -> Scene:

@@ -209,7 +209,7 @@ def obstacle_terms(
         term = moving(shape.barrier(nodes, kappa, dhat, grow), shape, contact, label=label)
         term.stages = ()
     term.label, term.key = label, f"{path}.distance"  # (its stages keep neither)
-    check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown)  # a barrier
+    check_clear(label, "an obstacle", cast(Gaps, term), nodes, net, shown, grow)  # a barrier
     out = [term]
     edge = None
     rubs: EdgeContact | Moving | None = None  # the edges' barrier friction rides on
@@ -258,21 +258,35 @@ def obstacle_terms(
 
 
 def check_clear(
-    label: str, what: str, shape: Gaps, nodes: np.ndarray, net: Net, shown: Shown = shown_as_is
+    label: str,
+    what: str,
+    shape: Gaps,
+    nodes: np.ndarray,
+    net: Net,
+    shown: Shown = shown_as_is,
+    grown: float = 0.0,
 ) -> None:
     """ConfigError where a node of ``nodes`` (those ``shape`` acts on, in its order) starts
     inside or on ``shape`` (``label``: the obstacle in messages, ``what``: "an obstacle",
     "a body"): its gap is not above ON_ROUNDOFF round-offs of its coordinates and
-    ON_SHARE of the barrier's distance."""
+    ON_SHARE of the barrier's distance. ``grown``: the edges' contact radius the shape is
+    grown by (a node outside the solid but within it is told so)."""
     gap = shape.gap(net.nodes)
     scale = np.abs(net.nodes[nodes]).max(axis=1) if len(nodes) else np.zeros(0)
     on = np.maximum(ON_ROUNDOFF * np.finfo(np.float64).eps * scale, ON_SHARE * shape.dhat)
     inside = np.flatnonzero(~(gap > on))
     if inside.size:
         i = int(nodes[inside[0]])
+        where, fix = f"starts inside or on it (gap {gap[inside[0]]:.3g} m)", ""
+        if grown > 0.0 and gap[inside[0]] + grown > 0.0:  # outside the solid itself
+            where = (
+                f"starts {gap[inside[0]] + grown:.3g} m off it, within the contact radius "
+                f"{grown:.3g} m (material.contact_radius, else material.radius, with "
+                "solver.edge_contact)"
+            )
+            fix = ", or give a smaller contact radius"
         raise ConfigError(
-            f"{label}: node {i} at {shown(net.nodes[i].tolist())} starts inside or on it "
-            f"(gap {gap[inside[0]]:.3g} m), {inside.size} node{'' if inside.size == 1 else 's'} "
-            f"in all: {what} must not "
-            "overlap the initial net; move it or the net"
+            f"{label}: node {i} at {shown(net.nodes[i].tolist())} {where}, {inside.size} "
+            f"node{'' if inside.size == 1 else 's'} in all: {what} must not overlap the "
+            f"initial net; move it or the net{fix}"
         )

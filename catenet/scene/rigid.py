@@ -185,7 +185,7 @@ def _terms(
     touch.key = f"{body.path}.distance"
     touch.width = solid_width(body.shape)  # how far it may move in a step near the net
     label = f"{body.path} (kind {kind!r}, a free body)"
-    check_clear(label, "a body", shape, nodes, net, shown)
+    check_clear(label, "a body", shape, nodes, net, shown, 0.0 if radius is None else radius)
     spin = 0.25 * frame.mass * float(np.sum(frame.points**2))  # tr J [kg m^2]
     reach = frame.reach  # about the body's size
     ea = float(np.max(net.EA)) if net.n_edges else stiff * size

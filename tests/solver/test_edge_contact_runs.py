@@ -405,3 +405,55 @@ def test_a_rope_over_a_cylinders_flat_end_rests_on_it(tmp_path):
     gaps = post.barrier(np.arange(len(points)), 1.0, 1.0).gap(points)
     assert gaps.min() > 0.002 * (1 - 1e-6)
     assert x[0, 2] == x[-1, 2] == pytest.approx(-0.05)  # bent down over the rims
+
+
+def _within(k: float, units: str, cable_radius: float | None = None) -> dict:
+    """A rope whose cord (radius 5 mm, its contact radius) is given 3 mm off a pipe of
+    radius 0.1 m, lengths times ``k`` (1 in SI, 1000 in N-mm); ``cable_radius``: the
+    rope as a graph's cable with its own material.contact_radius instead."""
+    case = {
+        "title": "a rope over a pipe, its cord 3 mm off it",
+        "units": units,
+        "geometry": {"kind": "cable", "start": [-k, 0.0, 0.0], "end": [k, 0.0, 0.0], "nodes": 21},
+        "material": {"E": 1e9, "radius": 0.005 * k, "prestress": 100.0},
+        "obstacle": [
+            {"kind": "cylinder", "start": [0.0, -0.3 * k, -0.103 * k],
+             "end": [0.0, 0.3 * k, -0.103 * k], "radius": 0.1 * k},
+        ],
+        "solver": {"edge_contact": True},
+    }  # fmt: skip
+    if cable_radius is not None:
+        case["geometry"] = {
+            "kind": "graph", "nodes": [[-k, 0.0, 0.3 * k], [k, 0.0, 0.3 * k]], "fixed": [0, 1],
+            "cable": [{"name": "a", "nodes": [0, 1], "material": {"contact_radius": cable_radius}}],
+        }  # fmt: skip
+    return case
+
+
+@pytest.mark.parametrize(("units", "k"), [("SI", 1.0), ("N-mm", 1000.0)])
+def test_a_node_within_the_contact_radius_is_told_so_in_the_cases_units(tmp_path, units, k):
+    """The node 3 mm off the pipe, within the cord's 5 mm contact radius: the message said
+    it "starts inside or on it (gap -0.002 m)", and in N-mm "gap -2 m", "the contact
+    radius 5 m"; it names the contact radius and the case's units now."""
+    from catenet.case import dumps_toml
+
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(_within(k, units)))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 2, res.output
+    unit, off, radius = ("m", "0.003", "0.005") if units == "SI" else ("mm", "3", "5")
+    assert f"starts {off} {unit} off it, within the contact radius {radius} {unit}" in res.output
+    assert "material.contact_radius" in res.output and "inside or on it" not in res.output
+
+
+def test_a_cables_own_contact_radius_is_refused(tmp_path):
+    """``geometry.cable[k].material.contact_radius`` was accepted and ignored (one radius
+    holds for every edge of the net): exit 2 naming the key."""
+    from catenet.case import dumps_toml
+
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(_within(1.0, "SI", cable_radius=0.02)))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 2, res.output
+    expected = "geometry.cable[0].material.contact_radius = 0.02: the [material] table's key"
+    assert expected in res.output

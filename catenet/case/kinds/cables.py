@@ -32,6 +32,7 @@ from catenet.case.keys import (
     parse_keys,
     plain,
     real,
+    show,
     text,
 )
 from catenet.case.kinds.regions import Region, check_region, resolve
@@ -78,6 +79,11 @@ class NodeSets(Declared):
         return {k: (v.to_dict() if isinstance(v, Region) else list(v)) for k, v in self.items}
 
 
+#: [material] keys that hold for the whole net, not per cable: the edges' contact radius
+#: (``solver.edge_contact``: one capsule radius for every edge of the net)
+NET_WIDE = ("contact_radius",)
+
+
 def _material_names() -> tuple[str, ...]:
     return names(MaterialConfig)
 
@@ -88,6 +94,13 @@ def _check_material(ck: Checker, v: Any, path: str, ctx: Context) -> Any:
     if t is None:
         return BAD
     ck.keys(t, path, _material_names(), " of [material]")
+    for k in NET_WIDE:  # (a cable's was accepted and ignored)
+        if k in t:
+            ck.add(
+                f"{path}.{k} = {show(t[k])}: the [material] table's key, for every cable of "
+                f"the net (material.{k}), not a cable's"
+            )
+            return BAD
     given = tuple(k for k in t if k in _material_names())
     if not given:
         return Overrides()
