@@ -186,3 +186,42 @@ def test_a_net_at_rest_is_not_judged_by_its_round_off(caplog, tmp_path):
     energy = next(x for x in r.output.splitlines() if x.startswith("energy"))
     assert "of the motion's" not in energy and "the integrator's own" in energy
     assert "removed" not in r.output + r.stderr
+
+
+def test_a_slow_push_whose_motion_holds_next_to_nothing_is_not_warned(caplog, tmp_path):
+    """An oblique, turning cylinder sweeping slowly through a coarse rope (kN-m): its
+    motion's energy is a hundred-thousandth of the rope's stretch, and the integrator's
+    loss, 0.01 % of the largest, was warned as "1079 % of the motion's energy". Below
+    MOTION_MATTERS of the largest energy the motion is no yardstick."""
+    from catenet.case import parse_case
+
+    case = parse_case(
+        {
+            "title": "an oblique, turning cylinder sweeps through a coarse rope",
+            "units": "kN-m",
+            "geometry": {
+                "kind": "cable",
+                "start": [-1.0, 0.0, 0.0],
+                "end": [1.0, 0.0, 0.0],
+                "nodes": 9,
+            },
+            "material": {"EA": 5000.0, "radius": 0.006, "density": 1.0, "prestress": 1.0},
+            "obstacle": [
+                {
+                    "kind": "cylinder",
+                    "start": [0.05, -0.25, -0.25],
+                    "end": [0.15, 0.25, -0.05],
+                    "radius": 0.04,
+                    "velocity": [0.0, 0.0, 0.6],
+                    "angular_velocity": [0.0, 0.0, 2.0],
+                }
+            ],
+            "solver": {"method": "dynamic", "t_end": 0.5, "dt": 0.005, "edge_contact": True},
+        }  # fmt: skip
+    )
+    with caplog.at_level(logging.WARNING):
+        result = run_case(case, tmp_path / "sweep.h5")
+    motion = result.energy_motion + max(float(result.energy[COLUMNS.index("dissipated")]), 0.0)
+    assert motion < advice.MOTION_MATTERS * result.energy_scale  # next to nothing moves
+    assert -float(result.energy[-1]) > 1.0 * motion  # the loss, well above the motion's
+    assert not [r for r in caplog.records if "on its own" in r.getMessage()]
