@@ -155,6 +155,105 @@ def wrap_warning(net: Net, terms, x, tension) -> str | None:
     )
 
 
+#: A tension ratio across a frictional contact beyond exp(mu theta) by this share is warned,
+CAPSTAN_SLACK = 0.05
+#: ... where the contact forces along the run are at most this many times what the
+#: cable's turn there presses on it (T theta at each node).
+WRAPPED = 1.25
+
+
+def capstan_excess(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray, mu: float):
+    """(ratio, bound, first node, last node) of the run of consecutive cable nodes (two
+    edges meet at each) pushed by ``contact`` (N, 3) whose tensions on either side differ
+    most beyond the capstan bound exp(mu theta), theta the cable's turn over the run's
+    nodes (Coulomb friction cannot hold more on any surface: a sharp corner's (1 + mu s)
+    / (1 - mu s), s the sine of half its turn, is less); only runs whose contact forces
+    the cable's turn explains (within WRAPPED: a rope on a rough floor is pressed by its
+    weight, and friction there holds what the weight allows); None where no run is
+    judged."""
+    edges = np.asarray(net.edges)
+    degree = np.bincount(edges.ravel(), minlength=net.n_nodes)
+    push = np.linalg.norm(contact, axis=1)
+    inner = (push > 0.0) & (degree == 2)
+    at: dict[int, list[int]] = {}
+    for e, (i, j) in enumerate(edges.tolist()):
+        at.setdefault(i, []).append(e)
+        at.setdefault(j, []).append(e)
+    ea = np.asarray(net.EA, dtype=np.float64)
+    seen = np.zeros(net.n_nodes, bool)
+    best = None
+    for start in np.flatnonzero(inner).tolist():
+        if seen[start]:
+            continue
+        run: list[int] = [start]
+        ends: list[int] = []
+        seen[start] = True
+        for e in at[start]:  # walk both ways along the cable from the run's first node
+            node, edge, side = start, e, []
+            while True:
+                other = int(edges[edge, 1] if edges[edge, 0] == node else edges[edge, 0])
+                if not inner[other] or seen[other]:
+                    break
+                seen[other] = True
+                side.append(other)
+                node, edge = other, next(f for f in at[other] if f != edge)
+            run = side[::-1] + run if not ends else run + side
+            ends.append(edge)
+        t_in, t_out = (float(tension[e]) for e in ends)
+        if min(t_in, t_out) <= TAUT * float(ea[ends].max()):
+            continue
+        turns = [_turn(x, edges, at[n], n) for n in run]
+        tops = [float(np.max(np.abs(tension[at[n]]))) for n in run]
+        pulled = sum(t * top for t, top in zip(turns, tops, strict=True))
+        if float(push[run].sum()) > WRAPPED * pulled:  # pressed by loads, not the turn
+            continue
+        ratio, bound = max(t_in, t_out) / min(t_in, t_out), float(np.exp(mu * sum(turns)))
+        if best is None or ratio / bound > best[0] / best[1]:
+            best = (ratio, bound, run[0], run[-1])
+    return best
+
+
+def _turn(x: np.ndarray, edges: np.ndarray, two: list[int], node: int) -> float:
+    """The cable's turn [rad] at ``node`` between its ``two`` edges."""
+    a, b = (int(edges[e, 0] if edges[e, 1] == node else edges[e, 1]) for e in two)
+    u, v = x[node] - x[a], x[b] - x[node]
+    nu, nv = float(np.linalg.norm(u)), float(np.linalg.norm(v))
+    if nu == 0.0 or nv == 0.0:
+        return 0.0
+    return float(np.arccos(np.clip(u @ v / (nu * nv), -1.0, 1.0)))
+
+
+def capstan_warning(net: Net, terms, x, tension) -> str | None:
+    """The warning where friction holds a cable's tensions on either side of a run of
+    contact further apart than Coulomb's law allows, exp(mu theta) beyond CAPSTAN_SLACK
+    (the largest ``mu`` of the scene's frictions); else None. A rope hauled over a box's
+    sharp edges with friction 0.3 ended at rest holding three times the most friction can
+    hold (100 exp(0.3 pi) N on a 100 N load), with node contact 26 times, in silence: at
+    a sharp corner the contact's forces and their lagged friction overshoot."""
+    mus = [float(t.mu) for t in terms if "friction" in t.name and hasattr(t, "mu")]
+    barriers = contact_terms(terms)
+    if not mus or not barriers or not net.n_edges:
+        return None
+    x = np.asarray(x, dtype=np.float64)
+    contact = np.zeros_like(x)
+    for term in barriers:
+        term.gradient(x, contact)
+    found = capstan_excess(net, x, np.asarray(tension), contact, max(mus))
+    if found is None or not found[0] > found[1] * (1.0 + CAPSTAN_SLACK):
+        return None
+    ratio, bound, first, last = found
+    return (
+        f"nodes {first} to {last}: the tensions on either side of the frictional contact "
+        f"along them differ by a factor {ratio:.3g}, beyond Coulomb's capstan bound "
+        f"exp(mu theta) = {bound:.3g} for mu = {max(mus):.3g} and the cable's turn there: "
+        "the contact holds more than its normal forces allow. Over a solid's sharp edges "
+        "the discrete rope meets a corner at a node or (solver.edge_contact) at a point of "
+        "an edge, whose forces and lagged friction overshoot there; round the corner (a "
+        "capsule, a rounded box), refine the rope well below the corner's size, and "
+        "check the tensions (docs/howto/contact.md)"
+    )
+
+
 #: Coulomb coefficients above this are no surface pair's (rope on steel 0.1-0.3, rubber
 #: on concrete up to about 1): a typo or a percentage, most likely.
 FRICTION_HIGH = 2.0

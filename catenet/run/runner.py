@@ -333,10 +333,12 @@ def _report(
         if squeezed := squeeze_note(ws.system.terms, result.x, float(result.time), top):
             log.warning("%s", squeezed)
     from catenet.model.joints import turn_warning, twisting_members
-    from catenet.run.contact_advice import wrap_warning
+    from catenet.run.contact_advice import capstan_warning, wrap_warning
 
     if wrapped := wrap_warning(scene.net, ws.system.terms, result.x, result.tension):
         log.warning("%s", wrapped)
+    if held := capstan_warning(scene.net, ws.system.terms, result.x, result.tension):
+        log.warning("%s", held)
     for term in ws.system.terms:
         turned = term.name == "joints" and turn_warning(
             term.joints, result.x, scene.net, scene.cables, *twisting_members(ws.system.terms)

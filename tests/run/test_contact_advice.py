@@ -190,3 +190,33 @@ friction = FRICTION
         assert res.exit_code == 0, res.output
         said = f"obstacle[0].friction = {mu}: Coulomb coefficients of real surfaces" in res.output
         assert said is warned, res.output
+
+
+def _corner(t_in: float, t_out: float, pressed: float = 0.0):
+    """A cable over a corner: nodes 0-1-2-3 along x, turned down by 90 degrees at node 2
+    (2-3 along -z); tensions t_in on 0-1 and 1-2, t_out on 2-3; node 2 pushed by the
+    contact the turn asks for (and ``pressed`` more, straight down: a load's)."""
+    x = np.array([[-2.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    net = SimpleNamespace(
+        edges=np.array([[0, 1], [1, 2], [2, 3]]), n_nodes=4, EA=np.full(3, 1e6), n_edges=3
+    )
+    contact = np.zeros((4, 3))
+    contact[2] = [-t_in, 0.0, t_out + pressed]  # the corner's push, against the two pulls
+    return net, x, np.array([t_in, t_in, t_out]), contact
+
+
+def test_friction_holding_beyond_the_capstan_bound_is_found():
+    """A rope hauled over a box's sharp edges with friction 0.3 ended at rest holding
+    762 N on a 100 N load, in silence, where 100 exp(0.3 pi) = 257 N is the most Coulomb
+    friction can hold. Across a run of contact the tensions may differ by exp(mu theta)
+    at most, theta the cable's turn there: 3 over a right angle is found (bound 1.6),
+    1.5 is not; a rope pressed by its load more than by its turn (on a floor) is not
+    judged."""
+    from catenet.run.contact_advice import capstan_excess
+
+    ratio, bound, first, last = capstan_excess(*_corner(100.0, 300.0), 0.3)
+    assert math.isclose(ratio, 3.0) and math.isclose(bound, math.exp(0.3 * math.pi / 2))
+    assert first == last == 2
+    ratio, bound, _, _ = capstan_excess(*_corner(100.0, 150.0), 0.3)
+    assert ratio < bound
+    assert capstan_excess(*_corner(100.0, 300.0, pressed=2000.0), 0.3) is None
