@@ -26,6 +26,8 @@ if TYPE_CHECKING:
 
 #: A frictionless contact force along the cable beyond this share of its tension is warned.
 WRAP_SHARE = 0.02
+#: A run's pushes that add up to this many times the largest node's are told as the run's.
+RUN_OVER = 1.25
 
 
 def wrap_share(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray):
@@ -129,22 +131,30 @@ def wrap_warning(net: Net, terms, x, tension) -> str | None:
     contact = np.zeros_like(x)
     for term in barriers:
         term.gradient(x, contact)
-    found = wrap_share(net, x, np.asarray(tension), -contact)
-    if found is None or not found[0] > WRAP_SHARE:
-        run = wrap_drift(net, x, np.asarray(tension), -contact)
-        if run is None or not run[0] > WRAP_SHARE:
-            return None
-        share, node, last, along = run
+    return wrap_message(net, x, np.asarray(tension), -contact)
+
+
+def wrap_message(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray):
+    """``wrap_warning``'s message for the frictionless ``contact`` (N, 3) on the nodes: the
+    run of nodes whose pushes add up beyond RUN_OVER times the largest node's, else that
+    node, beyond WRAP_SHARE of the tension; None for neither."""
+    found = wrap_share(net, x, tension, contact)
+    run = wrap_drift(net, x, tension, contact)
+    node_share = found[0] if found is not None else 0.0
+    if run is not None and run[0] > max(WRAP_SHARE, RUN_OVER * node_share):  # (pushes
+        share, node, last, along = run  # that add up along a run: the tension they change)
         return (
             f"nodes {node} to {last}: the frictionless contact along them pushes along the "
-            f"cable with {100.0 * share:.3g} % of its tension in all ({along:.4g} N), a "
-            "little at each node: the tension changes by as much where nothing should "
-            "change it. The cable catches on the corners of the solid's outline (with "
-            "solver.edge_contact, a cylinder's prisms of 32 sides within its radius of an "
-            "end: wrap it nearer the middle, or use a capsule, or node contact with short "
-            "edges) or its edges are too long to follow the shape; refine the cable where "
-            "it wraps the obstacle (docs/howto/contact.md)"
+            f"cable with {100.0 * share:.3g} % of its tension in all ({along:.4g} N; at "
+            f"most {100.0 * node_share:.3g} % at one node): the tension changes by as much "
+            "where nothing should change it. The cable catches on the corners of the "
+            "solid's outline (with solver.edge_contact, a cylinder's prisms of 32 sides "
+            "within its radius of an end: wrap it nearer the middle, or use a capsule, or "
+            "node contact with short edges) or its edges are too long to follow the shape; "
+            "refine the cable where it wraps the obstacle (docs/howto/contact.md)"
         )
+    if found is None or not found[0] > WRAP_SHARE:
+        return None
     share, node, along = found
     return (
         f"node {node}: the frictionless contact there pushes along the cable with "

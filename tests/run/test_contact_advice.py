@@ -220,3 +220,19 @@ def test_friction_holding_beyond_the_capstan_bound_is_found():
     ratio, bound, _, _ = capstan_excess(*_corner(100.0, 150.0), 0.3)
     assert ratio < bound
     assert capstan_excess(*_corner(100.0, 300.0, pressed=2000.0), 0.3) is None
+
+
+def test_pushes_that_add_up_are_told_as_the_run_beside_a_large_one():
+    """One node pushed along the cable by 3 % of its tension and 15 more by 1.5 % each:
+    the message named the one node's 3 %, where the tension changes by 25.5 % across
+    the run; the run's sum is told where it exceeds RUN_OVER times the node's."""
+    from catenet.run.contact_advice import wrap_message
+
+    pushes = np.full(16, 1.5)
+    pushes[7] = 3.0
+    said = wrap_message(*_arc(pushes))
+    assert said is not None and said.startswith("nodes 1 to 16")
+    assert "25.5 % of its tension in all" in said and "at most 3 % at one node" in said
+    single = np.zeros(16)
+    single[7] = 3.0
+    assert wrap_message(*_arc(single)).startswith("node 8: ")
