@@ -86,7 +86,7 @@ def box_feature(x, geom, n, P):
     as columns of the row-major 3x3, half sizes); fills n (outward unit gradient, world)
     and P (the projection of the nearest feature, world) when outside. Returns
     max(|q| - h) <= 0 inside. Scalars only: called per node, the arrays and views it
-    made per call cost eight times the distance."""
+    made per call cost more than the distance itself."""
     c0, c1, c2 = geom[0], geom[1], geom[2]
     rows = ((geom[3], geom[4], geom[5]), (geom[6], geom[7], geom[8]), (geom[9], geom[10], geom[11]))
     x0, x1, x2 = x[0], x[1], x[2]
