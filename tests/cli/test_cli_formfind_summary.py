@@ -75,6 +75,8 @@ def test_a_target_no_force_density_reaches_fails_with_its_last_iterate_written(t
         assert ("a larger formfind.max_iter" in res.stderr) is (max_iter == 5)
         assert "compromise" not in res.stderr  # the warning of a stationary compromise
         assert (tmp_path / "c.h5").is_file() and (tmp_path / "c.toml").is_file()
+        written = (tmp_path / "c.toml").read_text()  # its header claims no design
+        assert "found no answer" in written and "reproduces the shape" not in written
         assert ("NOT met" in res.stdout) is not bool(quiet)
         assert "(catenet run" not in res.stdout  # (no answer to run)
         assert ("(the last iterate: no answer)" in res.stdout) is not bool(quiet)
