@@ -67,53 +67,79 @@ def wrap_share(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray
 
 def wrap_drift(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray):
     """(share, first node, last node, drift) of the run of consecutive pushed cable nodes
-    (two edges meet at each) along which the frictionless ``contact`` (N, 3) adds up to
-    the largest push along the cable relative to its tension there: the tension the
-    contact changes along the run, each node's push below WRAP_SHARE perhaps (a rope
-    wrapped half round a polygon, a cylinder's circumscribed prisms as edge contact met
-    it before its exact core, lost 25 % of its tension, about 1 % at each corner,
-    unwarned); None where no run is pushed."""
+    (``cable_runs``) along which the frictionless ``contact`` (N, 3) adds up, from the
+    run's first node, to the largest push along the cable relative to its tension there:
+    the tension the contact changes along the run, each node's push below WRAP_SHARE
+    perhaps (a rope wrapped half round a polygon, a cylinder's circumscribed prisms as
+    edge contact met it before its exact core, lost 25 % of its tension, about 1 % at
+    each corner, unwarned); None where no run is pushed."""
+    pushed = np.linalg.norm(contact, axis=1) > 0.0
+    if not len(net.edges) or np.count_nonzero(pushed) < 2:
+        return None
     edges = np.asarray(net.edges)
-    if not len(edges):
-        return None
+    ea = np.asarray(net.EA, dtype=np.float64)
+    best = None
+    runs, at = cable_runs(net, pushed)
+    for run, (enter, leave) in runs:
+        back = _other(edges, enter, run[0])  # the cable's node before the run
+        total, tops = 0.0, 0.0
+        for k, node in enumerate(run):
+            ahead = run[k + 1] if k + 1 < len(run) else _other(edges, leave, node)
+            t = x[ahead] - x[back]  # the cable's direction at the node, along the run
+            size = float(np.linalg.norm(t))
+            total += float(contact[node] @ t) / size if size > 0.0 else 0.0
+            two = at[node]
+            top = float(np.max(np.abs(tension[two])))
+            tops = max(tops, top if top > TAUT * float(ea[two].max()) else 0.0)
+            if tops > 0.0 and (best is None or abs(total) / tops > best[0]):
+                best = (abs(total) / tops, run[0], node, abs(total))
+            back = node
+    return best
+
+
+def cable_runs(
+    net: Net, pushed: np.ndarray
+) -> tuple[list[tuple[list[int], tuple[int, int]]], dict[int, list[int]]]:
+    """The runs of consecutive cable nodes (two edges meet at each) that ``pushed`` (N,)
+    marks, each its nodes in order along the cable (from its lower end node) and its
+    (entering, leaving) edges; and the two edges at each node of the runs."""
+    edges = np.asarray(net.edges)
     degree = np.bincount(edges.ravel(), minlength=net.n_nodes)
-    pushed = np.flatnonzero((degree == 2) & (np.linalg.norm(contact, axis=1) > 0.0))
-    if pushed.size < 2:
-        return None
+    inner = np.asarray(pushed, dtype=bool) & (degree == 2)
+    nodes = np.flatnonzero(inner)
     ends = np.concatenate([edges[:, 0], edges[:, 1]])
     order = np.argsort(ends, kind="stable")
-    first = np.searchsorted(ends[order], pushed)
-    e1, e2 = order[first] % len(edges), order[first + 1] % len(edges)
-    a = np.where(edges[e1, 1] == pushed, edges[e1, 0], edges[e1, 1])
-    b = np.where(edges[e2, 0] == pushed, edges[e2, 1], edges[e2, 0])
-    ea = np.asarray(net.EA, dtype=np.float64)
-    top = np.maximum(np.abs(tension[e1]), np.abs(tension[e2]))
-    top[top <= TAUT * np.maximum(ea[e1], ea[e2])] = 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = x[b] - x[a]  # the cable's direction at the node, from a to b
-        t /= np.linalg.norm(t, axis=1)[:, None]
-        along = np.einsum("ij,ij->i", contact[pushed], t)
-    along[~np.isfinite(along)] = 0.0
-    where = {int(node): k for k, node in enumerate(pushed)}
-    seen = np.zeros(pushed.size, bool)
-    best = None
-    for start in range(pushed.size):  # from each run's end (a node without a pushed a)
-        if seen[start] or int(a[start]) in where and int(b[start]) in where:
+    first = np.searchsorted(ends[order], nodes)
+    two = np.stack([order[first], order[first + 1]], axis=1) % len(edges)
+    at = {int(n): [int(a), int(b)] for n, (a, b) in zip(nodes, two, strict=True)}
+    seen = np.zeros(net.n_nodes, bool)
+    out: list[tuple[list[int], tuple[int, int]]] = []
+    for start in nodes.tolist():
+        if seen[start]:
             continue
-        k: int | None = start
-        back, total, tops, run = int(a[start]), 0.0, 0.0, []
-        if int(a[start]) in where:  # entered from b's side: walk toward a
-            back = int(b[start])
-        while k is not None and not seen[k]:
-            seen[k] = True
-            run.append(k)
-            forward = int(b[k]) if int(a[k]) == back else int(a[k])
-            total += along[k] if forward == int(b[k]) else -along[k]
-            tops = max(tops, float(top[k]))
-            if tops > 0.0 and (best is None or abs(total) / tops > best[0]):
-                best = (abs(total) / tops, int(pushed[run[0]]), int(pushed[k]), abs(total))
-            back, k = int(pushed[k]), where.get(forward)
-    return best
+        seen[start] = True
+        run: list[int] = [start]
+        ends_of: list[int] = []
+        for e in at[start]:  # walk both ways along the cable from the run's first node
+            node, edge, side = start, e, []
+            while True:
+                other = _other(edges, edge, node)
+                if not inner[other] or seen[other]:
+                    break
+                seen[other] = True
+                side.append(other)
+                node, edge = other, next(f for f in at[other] if f != edge)
+            run = side[::-1] + run if not ends_of else run + side
+            ends_of.append(edge)
+        if run[0] > run[-1]:  # (told from its lower node)
+            run, ends_of = run[::-1], ends_of[::-1]
+        out.append((run, (ends_of[0], ends_of[1])))
+    return out, at
+
+
+def _other(edges: np.ndarray, edge: int, node: int) -> int:
+    """The node at the other end of ``edge`` from ``node``."""
+    return int(edges[edge, 1] if edges[edge, 0] == node else edges[edge, 0])
 
 
 def wrap_warning(net: Net, terms, x, tension) -> str | None:
@@ -128,10 +154,15 @@ def wrap_warning(net: Net, terms, x, tension) -> str | None:
     if not barriers or any("friction" in t.name for t in terms):
         return None
     x = np.asarray(x, dtype=np.float64)
-    contact = np.zeros_like(x)
+    return wrap_message(net, x, np.asarray(tension), _pushes(barriers, x))
+
+
+def _pushes(barriers, x: np.ndarray) -> np.ndarray:
+    """(N, 3) the forces of the ``barriers`` on the nodes at x."""
+    force = np.zeros_like(x)
     for term in barriers:
-        term.gradient(x, contact)
-    return wrap_message(net, x, np.asarray(tension), -contact)
+        term.gradient(x, force)
+    return -force
 
 
 def wrap_message(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.ndarray):
@@ -182,35 +213,13 @@ def capstan_excess(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.nda
     weight, and friction there holds what the weight allows); None where no run is
     judged."""
     edges = np.asarray(net.edges)
-    degree = np.bincount(edges.ravel(), minlength=net.n_nodes)
     push = np.linalg.norm(contact, axis=1)
-    inner = (push > 0.0) & (degree == 2)
-    at: dict[int, list[int]] = {}
-    for e, (i, j) in enumerate(edges.tolist()):
-        at.setdefault(i, []).append(e)
-        at.setdefault(j, []).append(e)
     ea = np.asarray(net.EA, dtype=np.float64)
-    seen = np.zeros(net.n_nodes, bool)
     best = None
-    for start in np.flatnonzero(inner).tolist():
-        if seen[start]:
-            continue
-        run: list[int] = [start]
-        ends: list[int] = []
-        seen[start] = True
-        for e in at[start]:  # walk both ways along the cable from the run's first node
-            node, edge, side = start, e, []
-            while True:
-                other = int(edges[edge, 1] if edges[edge, 0] == node else edges[edge, 0])
-                if not inner[other] or seen[other]:
-                    break
-                seen[other] = True
-                side.append(other)
-                node, edge = other, next(f for f in at[other] if f != edge)
-            run = side[::-1] + run if not ends else run + side
-            ends.append(edge)
+    runs, at = cable_runs(net, push > 0.0)
+    for run, ends in runs:
         t_in, t_out = (float(tension[e]) for e in ends)
-        if min(t_in, t_out) <= TAUT * float(ea[ends].max()):
+        if min(t_in, t_out) <= TAUT * float(ea[list(ends)].max()):
             continue
         turns = [_turn(x, edges, at[n], n) for n in run]
         tops = [float(np.max(np.abs(tension[at[n]]))) for n in run]
@@ -225,7 +234,7 @@ def capstan_excess(net: Net, x: np.ndarray, tension: np.ndarray, contact: np.nda
 
 def _turn(x: np.ndarray, edges: np.ndarray, two: list[int], node: int) -> float:
     """The cable's turn [rad] at ``node`` between its ``two`` edges."""
-    a, b = (int(edges[e, 0] if edges[e, 1] == node else edges[e, 1]) for e in two)
+    a, b = (_other(edges, e, node) for e in two)
     u, v = x[node] - x[a], x[b] - x[node]
     nu, nv = float(np.linalg.norm(u)), float(np.linalg.norm(v))
     if nu == 0.0 or nv == 0.0:
@@ -245,10 +254,7 @@ def capstan_warning(net: Net, terms, x, tension) -> str | None:
     if not mus or not barriers or not net.n_edges:
         return None
     x = np.asarray(x, dtype=np.float64)
-    contact = np.zeros_like(x)
-    for term in barriers:
-        term.gradient(x, contact)
-    found = capstan_excess(net, x, np.asarray(tension), contact, max(mus))
+    found = capstan_excess(net, x, np.asarray(tension), _pushes(barriers, x), max(mus))
     if found is None or not found[0] > found[1] * (1.0 + CAPSTAN_SLACK):
         return None
     ratio, bound, first, last = found
