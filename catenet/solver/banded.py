@@ -141,25 +141,29 @@ class BandSolver(LinearSolver):
     def positive_definite(self, data: np.ndarray) -> bool:
         """Whether the matrix ``data`` (this pattern) is positive definite: its band's
         Cholesky factorisation in arrays of its own, this solver's factors untouched."""
-        lay = self.layout
         band, C, D = np.zeros_like(self._band), np.zeros_like(self._C), np.zeros_like(self._D)
+        return self._cholesky(data, band, C, D, 0.0)
+
+    def _cholesky(
+        self, data: np.ndarray, band: np.ndarray, C: np.ndarray, D: np.ndarray, zero: float
+    ) -> bool:
+        """The bordered band's Cholesky factorisation of ``data`` (this pattern) in the
+        zeroed arrays band, C, D; whether it succeeded (no pivot at or below ``zero`` of
+        the largest diagonal entry)."""
+        lay = self.layout
         band.reshape(-1)[lay.band_of] = data[lay.band_at]
         C.reshape(-1)[lay.c_of] = data[lay.c_at]
         D.reshape(-1)[lay.d_of] = data[lay.d_at]
         factorize = band_cholesky if lapack_ready() else band_cholesky_loops
-        return bool(factorize(band, C, D))
+        return bool(factorize(band, C, D, zero))
 
     def _factorize(self, data: np.ndarray) -> None:
-        lay = self.layout
         band, C, D = self._band, self._C, self._D
         band.fill(0.0)
         C.fill(0.0)
         D.fill(0.0)
-        band.reshape(-1)[lay.band_of] = data[lay.band_at]
-        C.reshape(-1)[lay.c_of] = data[lay.c_at]
-        D.reshape(-1)[lay.d_of] = data[lay.d_at]
-        factorize = band_cholesky if lapack_ready() else band_cholesky_loops
-        self._factored = bool(factorize(band, C, D, SMALL_ZERO if lay.small else 0.0))
+        zero = SMALL_ZERO if self.layout.small else 0.0
+        self._factored = self._cholesky(data, band, C, D, zero)
         if not self._factored:  # not positive definite: PARDISO's (its errors too)
             self.fallback.factorize(data, definite=self._definite)
         else:
