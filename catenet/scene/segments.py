@@ -66,14 +66,14 @@ def edge_barrier(
 
 
 def edge_outline(shape: Shape) -> tuple[np.ndarray, np.ndarray, float | np.ndarray]:
-    """The outline the net's edges meet: the shape's own (``Shape.outline``), but a
-    cylinder's exact core and end bands (``Cylinder.edge_outline``: on its prisms alone a
-    frictionless rope wrapped half round it lost a quarter of its tension at their
-    corners). Points, lines and their radius (one, or one per line)."""
-    from catenet.scene.shapes.cylinder import Cylinder
-
-    if isinstance(shape, Cylinder):
-        return shape.edge_outline()
+    """The outline the net's edges meet: the shape's own ``edge_outline`` where it has one
+    (a cylinder's exact core and end bands: on its prisms alone a frictionless rope
+    wrapped half round it lost a quarter of its tension at their corners), else its
+    ``outline``. Points, lines and their radius (one, or one per line)."""
+    own = getattr(shape, "edge_outline", None)
+    if own is not None:
+        out: tuple[np.ndarray, np.ndarray, float | np.ndarray] = own()
+        return out
     points, lines, radius = shape.outline()
     return points, lines, radius
 

@@ -8,6 +8,9 @@
 - ``outline()``: the points, edges and radius that stand for its surface where it
   touches another solid or a plane as a free body (``catenet.terms.touch``,
   ``catenet.terms.body_plane``); the shape lies within the outline grown by the radius.
+  ``edge_outline()`` (optional): what the net's edges meet with ``solver.edge_contact``
+  where that differs, with a radius per line (``catenet.scene.segments.edge_outline``;
+  a cylinder's exact core capsule and its end bands' prisms).
 - ``mass_properties()``: volume, centre of mass, inertia per unit mass in its body axes,
   and those axes (columns), at uniform density.
 - ``surface_mesh(cover)``: outward vertices and faces (quads or triangles) for drawing
