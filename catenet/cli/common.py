@@ -128,6 +128,21 @@ class _OwnLog(logging.Filter):
         return own or record.levelno >= self.others
 
 
+class _Said(logging.Formatter):
+    """catenet's own warnings and errors read as its error messages do (``catenet: warning:
+    ...``); its debug lines and other libraries' records keep their level and logger."""
+
+    def __init__(self) -> None:
+        super().__init__("%(levelname)s %(name)s: %(message)s")
+
+    def format(self, record: logging.LogRecord) -> str:
+        own = record.name == "catenet" or record.name.startswith("catenet.")
+        if own and record.levelno >= logging.WARNING:
+            said = "error" if record.levelno >= logging.ERROR else "warning"
+            return f"catenet: {said}: {record.getMessage()}"
+        return super().format(record)
+
+
 def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) -> None:
     """Log to stderr: warnings; -v catenet's debug lines too; -vv or --debug every
     library's; -q errors only."""
@@ -139,9 +154,8 @@ def setup_logging(quiet: bool = False, verbose: int = 0, debug: bool = False) ->
     others = logging.DEBUG if (debug or verbose >= 2) and not quiet else max(level, logging.WARNING)
     handler = logging.StreamHandler(sys.stderr)
     handler.addFilter(_OwnLog(others))
-    logging.basicConfig(
-        level=level, format="%(levelname)s %(name)s: %(message)s", handlers=[handler], force=True
-    )
+    handler.setFormatter(_Said())
+    logging.basicConfig(level=level, handlers=[handler], force=True)
     logging.getLogger("numba").setLevel(logging.WARNING)
     logging.getLogger("matplotlib").setLevel(logging.WARNING)
 

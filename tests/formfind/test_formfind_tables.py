@@ -301,7 +301,7 @@ def test_the_written_case_keeps_the_units_it_was_found_in(tmp_path, units):
     assert written["units"] == units
     r = CliRunner().invoke(main, ["run", str(tmp_path / "f.toml"), "-o", str(tmp_path / "r.h5")])
     assert r.exit_code == 0, r.output
-    assert "check units" not in r.output and "WARNING" not in r.output
+    assert "check units" not in r.output and "warning:" not in r.output
     with h5py.File(tmp_path / "r.h5") as h5:
         tension = h5["result/tension"][()]
         z = h5["result/x"][0, 2]

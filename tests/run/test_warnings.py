@@ -99,7 +99,7 @@ def test_the_cli_shows_the_angle_warning_on_stderr(tmp_path, write_case):
     warn._WARNED.clear()
     r = invoke("run", write_case(STATIC), "-o", tmp_path / "a.h5", "--set", "geometry.alpha=30")
     assert r.exit_code == 0, r.output
-    assert "WARNING" in r.stderr and "looks like degrees" in r.stderr
+    assert "catenet: warning:" in r.stderr and "looks like degrees" in r.stderr
 
 
 # ------------------------------------------------------------------------------ strains
@@ -115,7 +115,7 @@ def test_strain_beyond_the_linear_law_is_warned_about(tmp_path, write_case, capl
     assert result.report.strain_warning == msg and not result.report.implausible
     r = invoke("run", write_case(STATIC), "-o", tmp_path / "c.h5", "--set", "load.pressure=1e4")
     assert r.exit_code == 0
-    assert "beyond the material law's range" in r.stdout and "WARNING" in r.stderr
+    assert "beyond the material law's range" in r.stdout and "catenet: warning:" in r.stderr
 
 
 def test_a_strain_no_cable_reaches_fails_the_run(tmp_path, write_case, caplog):
@@ -204,7 +204,7 @@ def test_ignored_keys_are_warned_before_the_run(tmp_path, write_case):
     assert r.exit_code == 0, r.output
     assert "solver.steps = 4: ignored with solver.method = 'dynamic'" in r.stderr
     r = invoke("run", write_case(DYNAMIC), "-o", tmp_path / "e.h5")
-    assert r.exit_code == 0 and "WARNING" not in r.stderr
+    assert r.exit_code == 0 and "warning:" not in r.stderr
 
 
 # ------------------------------------------------------------------------- trajectory

@@ -1,0 +1,26 @@
+"""How a command's log reads on stderr: catenet's warnings and errors as its error messages
+do, its debug lines and other libraries' records with their level and logger."""
+
+from __future__ import annotations
+
+import logging
+
+from catenet.cli.common import _Said
+
+
+def _line(name: str, level: int, message: str) -> str:
+    record = logging.LogRecord(name, level, __file__, 1, message, None, None)
+    return _Said().format(record)
+
+
+def test_catenets_warnings_and_errors_read_as_its_error_messages():
+    said = _line("catenet.run.runner", logging.WARNING, "the integrator removed 49%")
+    assert said == "catenet: warning: the integrator removed 49%"
+    assert _line("catenet", logging.ERROR, "no answer") == "catenet: error: no answer"
+
+
+def test_debug_lines_and_other_libraries_keep_their_level_and_logger():
+    debug = _line("catenet.solver.newton", logging.DEBUG, "it 3")
+    assert debug == "DEBUG catenet.solver.newton: it 3"
+    assert _line("h5py", logging.WARNING, "odd") == "WARNING h5py: odd"
+    assert _line("catenetx", logging.WARNING, "odd") == "WARNING catenetx: odd"
