@@ -296,7 +296,7 @@ def make_sweep(
 
 def _validate(case, base, settings, source, base_dir, problems) -> None:
     try:
-        data = case.apply_overrides(base, overrides(settings))
+        data = case.apply_overrides(base, overrides(settings), written=True)
         case.parse_case(data, source=source, base_dir=base_dir)
     except ConfigError as exc:
         where = ", ".join(f"{k}={toml_literal(v)}" for k, v in settings)

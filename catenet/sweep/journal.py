@@ -162,7 +162,7 @@ def _cell(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
-        return repr(value)
+        return repr(float(value))  # as Python prints it, whatever the user's spelling
     if isinstance(value, list | dict):
         return json.dumps(value)
     return str(value)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from typing import Any
 
+from catenet.case.written import WrittenFloat
 from catenet.errors import ConfigError
 
 LOAD_PREFIX = "load."
@@ -94,9 +95,10 @@ def evaluate(text: str) -> float | int:
 
 
 def _toml_scalar(text: str):
-    """``text`` read as a TOML value; raises ValueError when it is not one."""
+    """``text`` read as a TOML value (a float keeps its text for messages: ``-1e0``, not
+    ``-1.0``); raises ValueError when it is not one."""
     try:
-        value = tomllib.loads(f"v = {text}")["v"]
+        value = tomllib.loads(f"v = {text}", parse_float=WrittenFloat)["v"]
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(str(exc)) from exc
     if _has_datetime(value):

@@ -358,6 +358,7 @@ def test_figures_and_report_of_a_small_sweep(small_case, tmp_path):
         ("geometry.n=11", "geometry.n = 11"),
         ("geometry.colour=1", "unknown key"),
         ("load.pressure=1:1:0", "sign"),
+        ("material.E=-1e0", "--param material.E=-1e0: material.E = -1e0: must be"),
     ],
 )
 def test_bad_params_exit_2_with_a_clear_message(small_case, tmp_path, param, message):
@@ -367,6 +368,19 @@ def test_bad_params_exit_2_with_a_clear_message(small_case, tmp_path, param, mes
     assert result.exit_code == 2, result.output
     assert message in result.output
     assert "Traceback" not in result.output
+
+
+def test_a_value_keeps_its_spelling_in_messages_and_prints_plain_in_the_table(small_case, tmp_path):
+    """``1_000e4`` is quoted as written where a message names it; the table holds the
+    number as Python prints it (a CSV reader reads ``10000000.0``, not ``1_000e4``)."""
+    param = sw.parse_param("material.E=1_000e4")
+    assert str(param.values[0]) == "1_000e4" and param.values[0] == 1e7
+    result = CliRunner().invoke(
+        sweep_command, [str(small_case), "--param", "material.E=1_000e4", "-o", str(tmp_path), "-q"]
+    )
+    assert result.exit_code == 0, result.output
+    rows = read_csv(tmp_path)
+    assert rows and {row["material.E"] for row in rows} == {"10000000.0"}
 
 
 def test_cli_interrupted_and_resumed(tmp_path):
