@@ -129,17 +129,17 @@ class _OwnLog(logging.Filter):
 
 
 class _Said(logging.Formatter):
-    """catenet's own warnings and errors read as its error messages do (``catenet: warning:
-    ...``); its debug lines and other libraries' records keep their level and logger."""
+    """catenet's own warnings read as its error messages do (``catenet: warning: ...``);
+    its other records (debug lines, an error on the way to the one ``catenet: error:``
+    line a failed command ends with) and other libraries' keep their level and logger."""
 
     def __init__(self) -> None:
         super().__init__("%(levelname)s %(name)s: %(message)s")
 
     def format(self, record: logging.LogRecord) -> str:
         own = record.name == "catenet" or record.name.startswith("catenet.")
-        if own and record.levelno >= logging.WARNING:
-            said = "error" if record.levelno >= logging.ERROR else "warning"
-            return f"catenet: {said}: {record.getMessage()}"
+        if own and record.levelno == logging.WARNING:
+            return f"catenet: warning: {record.getMessage()}"
         return super().format(record)
 
 

@@ -1,5 +1,5 @@
-"""How a command's log reads on stderr: catenet's warnings and errors as its error messages
-do, its debug lines and other libraries' records with their level and logger."""
+"""How a command's log reads on stderr: catenet's warnings as its error messages do, its
+other records and other libraries' with their level and logger."""
 
 from __future__ import annotations
 
@@ -13,10 +13,14 @@ def _line(name: str, level: int, message: str) -> str:
     return _Said().format(record)
 
 
-def test_catenets_warnings_and_errors_read_as_its_error_messages():
+def test_catenets_warnings_read_as_its_error_messages():
     said = _line("catenet.run.runner", logging.WARNING, "the integrator removed 49%")
     assert said == "catenet: warning: the integrator removed 49%"
-    assert _line("catenet", logging.ERROR, "no answer") == "catenet: error: no answer"
+
+
+def test_a_failed_command_ends_with_one_error_line_its_logged_errors_keep_their_logger():
+    said = _line("catenet.run.cases", logging.ERROR, "the base state is implausible")
+    assert said == "ERROR catenet.run.cases: the base state is implausible"
 
 
 def test_debug_lines_and_other_libraries_keep_their_level_and_logger():
