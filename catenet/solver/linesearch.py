@@ -156,11 +156,23 @@ class LineSearch:
 
     def _lengthen(self, full: Trial) -> tuple[Trial, Trial, Trial | None]:
         """Steps 4, 16, ... times as long while Phi falls and the slope stays steep:
-        the best step, and the bracket's ends (hi None: the last step is flat)."""
+        the best step, and the bracket's ends (hi None: the last step is flat, or a
+        longer one would overshoot by an obstacle).
+
+        A step lengthened as a whole also lengthens its stiff directions. Away from
+        solids that costs a few iterations and gains a long way (a slack net falling
+        freely, a mechanism swinging through). With an obstacle within the lengthened
+        step's reach, a lengthening that raises the residual above the start's is not
+        taken: its stiff directions press nodes into barriers whose stiffness grows without
+        bound (a frictionless rope over a box's sharp edges, 3 mm edges: 53 000 Newton
+        iterations, lengthened 16-fold and pulled back again and again; 571 without)."""
         best = lo = full
         hi = None
         for _ in range(MAX_EXPANSIONS):
             trial = self.at(4.0 * lo.alpha)
+            overshoots = trial.ok and trial.evaluation.gnorm > self.start.gnorm
+            if overshoots and math.isfinite(self.cap):
+                break  # the full (or last) step stands
             if trial.ok and trial.slope < 0.0:
                 best = lo = trial
                 if self.flat(trial.slope):
