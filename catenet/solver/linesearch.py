@@ -170,7 +170,8 @@ class LineSearch:
         hi = None
         for _ in range(MAX_EXPANSIONS):
             trial = self.at(4.0 * lo.alpha)
-            overshoots = trial.ok and trial.evaluation.gnorm > self.start.gnorm
+            ev = trial.evaluation
+            overshoots = trial.ok and ev is not None and ev.gnorm > self.start.gnorm
             if overshoots and math.isfinite(self.cap):
                 break  # the full (or last) step stands
             if trial.ok and trial.slope < 0.0:
