@@ -264,9 +264,10 @@ def capstan_warning(net: Net, terms, x, tension) -> str | None:
         f"exp(mu theta) = {bound:.3g} for mu = {max(mus):.3g} and the cable's turn there: "
         "the contact holds more than its normal forces allow. Over a solid's sharp edges "
         "the discrete rope meets a corner at a node or (solver.edge_contact) at a point of "
-        "an edge, whose forces and lagged friction overshoot there; round the corner (a "
-        "capsule, a rounded box), refine the rope well below the corner's size, and "
-        "check the tensions (docs/howto/contact.md)"
+        "an edge, whose forces and lagged friction overshoot there where its edges are "
+        "longer than its contact radius; refine the rope below that radius where it turns "
+        "(it then follows the grown solid's rounded edge), or round the corner (a capsule "
+        "along it), and check the tensions (docs/howto/contact.md)"
     )
 
 
