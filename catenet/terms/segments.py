@@ -244,6 +244,8 @@ class EdgeFriction(Term):
         self.weight = np.zeros(0)
         self.anchor = np.zeros((0, 3))
         self._anchors: dict[tuple[int, int], np.ndarray] = {}
+        self._start: np.ndarray | None = None  # the accepted state of the step (begin_step)
+        self._carry: tuple | None = None  # a moving obstacle's (c0, c1, turn) over the step
 
     def pattern(self) -> tuple[np.ndarray, np.ndarray]:
         de = (3 * self.contact.edges[:, :, None] + np.arange(3)).reshape(-1, 6)
@@ -294,14 +296,28 @@ class EdgeFriction(Term):
         behind = self.slip / np.where(moved, slid, 1.0)
         anchor[moved] = y[moved] - behind[moved, None] * u[moved]
         self.anchor = np.ascontiguousarray(anchor)
+        self._start, self._carry = np.array(x, dtype=np.float64), None
         if obs is not None:  # the obstacle's rigid motion over the step
             c0, R0 = obs.pose(start)
             c1, R1 = obs.pose(time)
             turn = R1 @ R0.T
+            self._carry = (c0, c1, turn)
             self.anchor = np.ascontiguousarray(c1 + (self.anchor - c0) @ turn.T)
             self.normal = np.ascontiguousarray(self.normal @ turn.T)
             obs.set_pose(time)  # where the step is solved
         self._remember(keys)
+
+    def _started(self, pairs: np.ndarray, share: np.ndarray) -> np.ndarray:
+        """Where the material points (edge, s) of ``pairs`` were at the step's start (on a
+        moving obstacle, carried with it over the step, as the anchors are): a pair first
+        pushing at a static step's equilibrium slid there from that point."""
+        e = self.contact.edges[pairs[:, 0]]
+        x0 = self._start
+        y0 = (1.0 - share[:, None]) * x0[e[:, 0]] + share[:, None] * x0[e[:, 1]]
+        if self._carry is not None:
+            c0, c1, turn = self._carry
+            y0 = c1 + (y0 - c0) @ turn.T
+        return np.ascontiguousarray(y0)
 
     def _remember(self, keys: list) -> None:
         rows = np.concatenate([self.anchor, self.share[:, None]], axis=1)
@@ -309,7 +325,10 @@ class EdgeFriction(Term):
 
     def relag(self, x) -> float:
         """Normal forces and normals taken at x (the pairs that push there; the anchors
-        and material points of the known pairs kept, a new pair's where it is): the
+        and material points of the known pairs kept, a new pair's anchor where its
+        material point was at the step's start, as a node's is: it slid from there, and
+        friction acts against that slip; anchored where it is, a rope first pressed on a
+        solid in a static step kept its frictionless equilibrium, friction or not): the
         largest change of a pair's normal force, relative to the largest one."""
         before = {(int(e), int(f)): w for (e, f), w in zip(self.pairs, self.weight, strict=True)}
         top = float(self.weight.max(initial=0.0))
@@ -318,8 +337,7 @@ class EdgeFriction(Term):
         self.pairs, self.normal = pairs, np.ascontiguousarray(normal)
         self.weight = self.mu * lam
         self.share = share.copy()
-        y = self._points(x)
-        anchor = y.copy()
+        anchor = self._started(pairs, self.share) if self._start is not None else self._points(x)
         for i, k in enumerate(keys):
             h = self._anchors.get(k)
             if h is not None:

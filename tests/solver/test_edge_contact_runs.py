@@ -361,6 +361,29 @@ def test_a_frictionless_rope_wrapped_round_a_pipe_keeps_its_tension(tmp_path, ki
     assert radial.min() < 0.1 + 0.002 + 1e-3  # and on it
 
 
+@pytest.mark.parametrize("steps", [1, 3])
+def test_friction_on_the_edges_holds_the_capstan_ratio_in_one_load_step(tmp_path, steps):
+    """The rope half round the pipe with friction 0.2 on it: pulled by 100 N, it slides
+    toward the pull until the held end keeps 100 exp(-0.2 pi) = 53.3 N, in one static
+    load step as in several. In one step the edges' friction anchored each pair first
+    pushing at the step's equilibrium where it was, so it held nothing: 100 N, no warning
+    (a node's friction anchors at the step's start, where the edge slid from)."""
+    import h5py
+
+    from catenet.case import dumps_toml
+
+    case = _wrap("cylinder")
+    case["obstacle"][0]["friction"] = 0.2
+    case["solver"]["steps"] = steps
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 0, res.output
+    with h5py.File(tmp_path / "o.h5") as f:
+        reaction = f["result/reaction"][()][0]
+    assert np.linalg.norm(reaction) == pytest.approx(100.0 * math.exp(-0.2 * math.pi), rel=1e-2)
+
+
 def test_a_rope_over_a_cylinders_flat_end_rests_on_it(tmp_path):
     """A taut rope (50 N) given 1 cm over the flat top of a post (radius 0.1 m, its top at
     z = 0), its ends then moved 6 cm down, pressed down by 2 N at each node: over the top
