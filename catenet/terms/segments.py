@@ -313,6 +313,7 @@ class EdgeFriction(Term):
         pushing at a static step's equilibrium slid there from that point."""
         e = self.contact.edges[pairs[:, 0]]
         x0 = self._start
+        assert x0 is not None  # begin_step came first
         y0 = (1.0 - share[:, None]) * x0[e[:, 0]] + share[:, None] * x0[e[:, 1]]
         if self._carry is not None:
             c0, c1, turn = self._carry

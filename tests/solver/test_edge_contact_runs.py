@@ -363,11 +363,10 @@ def test_a_frictionless_rope_wrapped_round_a_pipe_keeps_its_tension(tmp_path, ki
 
 @pytest.mark.parametrize("steps", [1, 3])
 def test_friction_on_the_edges_holds_the_capstan_ratio_in_one_load_step(tmp_path, steps):
-    """The rope half round the pipe with friction 0.2 on it: pulled by 100 N, it slides
-    toward the pull until the held end keeps 100 exp(-0.2 pi) = 53.3 N, in one static
-    load step as in several. In one step the edges' friction anchored each pair first
-    pushing at the step's equilibrium where it was, so it held nothing: 100 N, no warning
-    (a node's friction anchors at the step's start, where the edge slid from)."""
+    """The rope half round the pipe with friction 0.2, pulled by 100 N, slides until the
+    held end keeps 100 exp(-0.2 pi) = 53.3 N, in one static load step as in several (in
+    one, the edges' friction held nothing: 100 N, no warning; a pair first pushing at
+    the step's equilibrium was anchored there, not where it slid from)."""
     import h5py
 
     from catenet.case import dumps_toml
@@ -533,10 +532,9 @@ def test_a_frictionless_rope_over_a_boxs_sharp_edges_settles_in_hundreds_of_iter
 
 
 def test_a_finer_rope_over_the_sharp_edges_needs_the_budget_its_error_advises(tmp_path):
-    """With 2 mm edges the slide onto the box takes one solve about 360 iterations: at the
-    default budget (200) the run fails (after minutes of cut-back load steps, not run
-    here) and advises a larger solver.max_iter; with it, the rope settles and holds the
-    load within 1.5 % (edge-contact guide)."""
+    """2 mm edges: the slide onto the box takes one solve about 360 iterations (the
+    default budget, 200, fails after minutes, not run here, advising a larger one); with
+    it the rope holds the load within 1.5 % (edge-contact guide)."""
     import h5py
 
     from catenet.case import dumps_toml
