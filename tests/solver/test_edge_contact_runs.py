@@ -361,26 +361,33 @@ def test_a_frictionless_rope_wrapped_round_a_pipe_keeps_its_tension(tmp_path, ki
     assert radial.min() < 0.1 + 0.002 + 1e-3  # and on it
 
 
+def _held(tmp_path, case: dict) -> tuple[int, float]:
+    """``catenet run`` of ``case`` (exit 0): its Newton iterations and the force that
+    holds its node 0."""
+    import h5py
+
+    from catenet.case import dumps_toml
+
+    path = tmp_path / "case.toml"
+    path.write_text(dumps_toml(case))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+    assert res.exit_code == 0, res.output
+    with h5py.File(tmp_path / "o.h5") as f:
+        iterations = int(f["result"].attrs["iterations"])
+        return iterations, float(np.linalg.norm(f["result/reaction"][()][0]))
+
+
 @pytest.mark.parametrize("steps", [1, 3])
 def test_friction_on_the_edges_holds_the_capstan_ratio_in_one_load_step(tmp_path, steps):
     """The rope half round the pipe with friction 0.2, pulled by 100 N, slides until the
     held end keeps 100 exp(-0.2 pi) = 53.3 N, in one static load step as in several (in
     one, the edges' friction held nothing: 100 N, no warning; a pair first pushing at
     the step's equilibrium was anchored there, not where it slid from)."""
-    import h5py
-
-    from catenet.case import dumps_toml
-
     case = _wrap("cylinder")
     case["obstacle"][0]["friction"] = 0.2
     case["solver"]["steps"] = steps
-    path = tmp_path / "case.toml"
-    path.write_text(dumps_toml(case))
-    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
-    assert res.exit_code == 0, res.output
-    with h5py.File(tmp_path / "o.h5") as f:
-        reaction = f["result/reaction"][()][0]
-    assert np.linalg.norm(reaction) == pytest.approx(100.0 * math.exp(-0.2 * math.pi), rel=1e-2)
+    _, held = _held(tmp_path, case)
+    assert held == pytest.approx(100.0 * math.exp(-0.2 * math.pi), rel=1e-2)
 
 
 def test_a_rope_over_a_cylinders_flat_end_rests_on_it(tmp_path):
@@ -516,35 +523,15 @@ def test_a_frictionless_rope_over_a_boxs_sharp_edges_settles_in_hundreds_of_iter
     grown box's rounded edges and keeps its tension, 100 N, within 1 % at the held end.
     The line search lengthened steps 16-fold toward the box's barrier and pulled them
     back again and again: 53 156 Newton iterations (4 minutes); now about 550."""
-    import h5py
-
-    from catenet.case import dumps_toml
-
-    path = tmp_path / "case.toml"
-    path.write_text(dumps_toml(_over_a_box(0.003)))
-    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
-    assert res.exit_code == 0, res.output
-    with h5py.File(tmp_path / "o.h5") as f:
-        iterations = int(f["result"].attrs["iterations"])
-        reaction = f["result/reaction"][()][0]
+    iterations, held = _held(tmp_path, _over_a_box(0.003))
     assert iterations < 2000, iterations
-    assert np.linalg.norm(reaction) == pytest.approx(100.0, rel=1e-2)
+    assert held == pytest.approx(100.0, rel=1e-2)
 
 
 def test_a_finer_rope_over_the_sharp_edges_needs_the_budget_its_error_advises(tmp_path):
     """2 mm edges: the slide onto the box takes one solve about 360 iterations (the
     default budget, 200, fails after minutes, not run here, advising a larger one); with
     it the rope holds the load within 1.5 % (edge-contact guide)."""
-    import h5py
-
-    from catenet.case import dumps_toml
-
     case = _over_a_box(0.002)
     case["solver"]["max_iter"] = 2000
-    path = tmp_path / "case.toml"
-    path.write_text(dumps_toml(case))
-    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.h5")])
-    assert res.exit_code == 0, res.output
-    with h5py.File(tmp_path / "o.h5") as f:
-        reaction = f["result/reaction"][()][0]
-    assert np.linalg.norm(reaction) == pytest.approx(100.0, rel=1.5e-2)
+    assert _held(tmp_path, case)[1] == pytest.approx(100.0, rel=1.5e-2)
