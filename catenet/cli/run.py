@@ -302,9 +302,12 @@ class Relaxation:
 
 
 def _where(case, result) -> str:
+    """Where an interrupted run stopped: its time or load factor and the steps it had
+    finished (the state may lie inside the next one: "step 1 of 2" at load factor 0.94
+    named the finished step as the one it was in)."""
     if case.solver.method == "dynamic":
-        return f"t = {result.time:.6g} s (step {result.steps})"
-    return f"load factor {result.time:.6g} (step {result.steps} of {case.solver.steps})"
+        return f"t = {result.time:.6g} s ({result.steps} time steps done)"
+    return f"load factor {result.time:.6g} ({result.steps} of {case.solver.steps} load steps done)"
 
 
 def _times(result) -> str:

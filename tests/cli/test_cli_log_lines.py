@@ -28,3 +28,17 @@ def test_debug_lines_and_other_libraries_keep_their_level_and_logger():
     assert debug == "DEBUG catenet.solver.newton: it 3"
     assert _line("h5py", logging.WARNING, "odd") == "WARNING h5py: odd"
     assert _line("catenetx", logging.WARNING, "odd") == "WARNING catenetx: odd"
+
+
+def test_an_interrupted_run_names_the_steps_it_finished_not_one_it_was_in():
+    """Stopped at load factor 0.9375 after the first of two load steps: "1 of 2 load steps
+    done" (it said "step 1 of 2", the step it had finished, at a factor inside step 2)."""
+    from types import SimpleNamespace as NS
+
+    from catenet.cli.run import _where
+
+    static = NS(solver=NS(method="static", steps=2))
+    said = _where(static, NS(time=0.9375, steps=1))
+    assert said == "load factor 0.9375 (1 of 2 load steps done)"
+    dynamic = NS(solver=NS(method="dynamic", steps=1))
+    assert _where(dynamic, NS(time=0.25, steps=40)) == "t = 0.25 s (40 time steps done)"
