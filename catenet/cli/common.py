@@ -124,8 +124,12 @@ class _OwnLog(logging.Filter):
         self.others = others
 
     def filter(self, record: logging.LogRecord) -> bool:
-        own = record.name == "catenet" or record.name.startswith("catenet.")
-        return own or record.levelno >= self.others
+        return _own(record) or record.levelno >= self.others
+
+
+def _own(record: logging.LogRecord) -> bool:
+    """Whether ``record`` is catenet's (its logger or a module's)."""
+    return record.name == "catenet" or record.name.startswith("catenet.")
 
 
 class _Said(logging.Formatter):
@@ -137,8 +141,7 @@ class _Said(logging.Formatter):
         super().__init__("%(levelname)s %(name)s: %(message)s")
 
     def format(self, record: logging.LogRecord) -> str:
-        own = record.name == "catenet" or record.name.startswith("catenet.")
-        if own and record.levelno == logging.WARNING:
+        if _own(record) and record.levelno == logging.WARNING:
             return f"catenet: warning: {record.getMessage()}"
         return super().format(record)
 
